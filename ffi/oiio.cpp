@@ -1,0 +1,1 @@
+#include "oiio.h"

@@ -1,0 +1,2 @@
+/* A small C API over OpenImageIO, implemented in oiio.cpp. */
+#pragma once

@@ -1,0 +1,469 @@
+//! The Embree backend: a safe wrapper over the system Embree (3 or 4, chosen by build.rs) and
+//! the [`Accel`](super::Accel) implementation on top of it. This module and `sys` hold the only
+//! unsafe Embree code; the differences between Embree 3 and 4 stay inside `query`.
+
+mod sys;
+
+use super::{Accel, Hit};
+use crate::math::{Ray, Vec3, Vec4};
+use crate::scene::{Geometry, Scene as SceneDesc};
+use crate::{Error, Result};
+use std::ffi::{c_char, c_void, CStr, CString};
+use std::sync::{Arc, Mutex};
+
+/// The Embree device plus the messages its error callback collected.
+struct DeviceInner {
+    raw: sys::RTCDevice,
+    /// Boxed so the address handed to Embree as the callback's user pointer never moves.
+    errors: Box<Mutex<Vec<String>>>,
+}
+
+// SAFETY: an Embree device may be used from any thread; the error list is behind a mutex.
+unsafe impl Send for DeviceInner {}
+unsafe impl Sync for DeviceInner {}
+
+impl Drop for DeviceInner {
+    fn drop(&mut self) {
+        // SAFETY: `raw` is a live device; scenes hold an Arc to us, so none outlives it.
+        unsafe { sys::rtcReleaseDevice(self.raw) }
+    }
+}
+
+impl DeviceInner {
+    /// Turns errors Embree reported since the last check into a `Result`.
+    fn check(&self, during: &str) -> Result<()> {
+        let mut errors = self.errors.lock().unwrap_or_else(|e| e.into_inner());
+        if errors.is_empty() {
+            Ok(())
+        } else {
+            let message = format!("{during}: {}", errors.join("; "));
+            errors.clear();
+            Err(Error::Embree(message))
+        }
+    }
+}
+
+/// Called by Embree on every error. It must not unwind into C: it only records the message.
+unsafe extern "C" fn record_error(user: *mut c_void, code: sys::RTCError, text: *const c_char) {
+    if user.is_null() {
+        return;
+    }
+    // SAFETY: `user` is the `Mutex<Vec<String>>` registered in `Device::with_config`, alive as
+    // long as the device; `text` is a NUL-terminated string or null.
+    let errors = unsafe { &*(user as *const Mutex<Vec<String>>) };
+    let text = if text.is_null() {
+        String::new()
+    } else {
+        unsafe { CStr::from_ptr(text) }
+            .to_string_lossy()
+            .into_owned()
+    };
+    if let Ok(mut list) = errors.lock() {
+        list.push(format!("{} ({})", text, error_name(code)));
+    }
+}
+
+fn error_name(code: sys::RTCError) -> &'static str {
+    match code {
+        sys::RTC_ERROR_NONE => "no error",
+        sys::RTC_ERROR_INVALID_ARGUMENT => "invalid argument",
+        sys::RTC_ERROR_INVALID_OPERATION => "invalid operation",
+        sys::RTC_ERROR_OUT_OF_MEMORY => "out of memory",
+        sys::RTC_ERROR_UNSUPPORTED_CPU => "unsupported CPU",
+        sys::RTC_ERROR_CANCELLED => "cancelled",
+        _ => "unknown error",
+    }
+}
+
+/// An Embree device.
+#[derive(Clone)]
+pub struct Device {
+    inner: Arc<DeviceInner>,
+}
+
+impl Device {
+    pub fn new() -> Result<Device> {
+        Device::with_config("")
+    }
+
+    /// A device with an Embree configuration string (e.g. `"threads=2,verbose=1"`).
+    pub fn with_config(config: &str) -> Result<Device> {
+        let config = CString::new(config)
+            .map_err(|_| Error::Embree("device configuration contains a NUL byte".into()))?;
+        // SAFETY: `config` is a valid C string for the duration of the call.
+        let raw = unsafe { sys::rtcNewDevice(config.as_ptr()) };
+        if raw.is_null() {
+            // SAFETY: a null device asks for the error of the last failed device creation.
+            let code = unsafe { sys::rtcGetDeviceError(std::ptr::null_mut()) };
+            return Err(Error::Embree(format!(
+                "creating a device with configuration {:?} failed ({})",
+                config,
+                error_name(code)
+            )));
+        }
+        let errors: Box<Mutex<Vec<String>>> = Box::default();
+        let user = &*errors as *const Mutex<Vec<String>> as *mut c_void;
+        // SAFETY: `raw` is live; `user` stays valid until the device is released in Drop.
+        unsafe { sys::rtcSetDeviceErrorFunction(raw, Some(record_error), user) };
+        Ok(Device {
+            inner: Arc::new(DeviceInner { raw, errors }),
+        })
+    }
+
+    /// The version of the Embree library in use, such as "3.13.5".
+    pub fn version(&self) -> String {
+        // SAFETY: `raw` is a live device; the property query has no other preconditions.
+        let v =
+            unsafe { sys::rtcGetDeviceProperty(self.inner.raw, sys::RTC_DEVICE_PROPERTY_VERSION) };
+        format!("{}.{}.{}", v / 10000, (v / 100) % 100, v % 100)
+    }
+}
+
+/// A geometry id within a scene.
+pub type GeometryId = u32;
+
+/// An Embree scene. Changes take `&mut self`; queries take `&self` and may run from many
+/// threads at once. Queries on a scene changed since its last commit find nothing.
+pub struct Scene {
+    raw: sys::RTCScene,
+    device: Arc<DeviceInner>,
+    committed: bool,
+    next_id: GeometryId,
+}
+
+// SAFETY: Embree allows concurrent queries on a committed scene; every change goes through
+// `&mut self`, so no change can race a query.
+unsafe impl Send for Scene {}
+unsafe impl Sync for Scene {}
+
+impl Drop for Scene {
+    fn drop(&mut self) {
+        // SAFETY: `raw` is a live scene owned by us.
+        unsafe { sys::rtcReleaseScene(self.raw) }
+    }
+}
+
+impl Scene {
+    pub fn new(device: &Device) -> Result<Scene> {
+        // SAFETY: the device is live.
+        let raw = unsafe { sys::rtcNewScene(device.inner.raw) };
+        device.inner.check("creating a scene")?;
+        if raw.is_null() {
+            return Err(Error::Embree("creating a scene failed".into()));
+        }
+        // SAFETY: `raw` is a live scene. Robust traversal avoids cracks between triangles.
+        unsafe {
+            sys::rtcSetSceneFlags(raw, sys::RTC_SCENE_FLAG_ROBUST);
+            sys::rtcSetSceneBuildQuality(raw, sys::RTC_BUILD_QUALITY_HIGH);
+        }
+        Ok(Scene {
+            raw,
+            device: device.inner.clone(),
+            committed: false,
+            next_id: 0,
+        })
+    }
+
+    /// Adds a triangle mesh; returns its geometry id (ids count up from 0 in attach order).
+    pub fn attach_triangles(
+        &mut self,
+        positions: &[Vec3],
+        indices: &[[u32; 3]],
+    ) -> Result<GeometryId> {
+        check_indices(positions.len(), indices.iter().flatten())?;
+        self.attach(
+            sys::RTC_GEOMETRY_TYPE_TRIANGLE,
+            positions,
+            (indices.as_flattened(), sys::RTC_FORMAT_UINT3, 3),
+        )
+    }
+
+    /// Adds planar quads (each split by Embree into two triangles, with u, v across the quad).
+    pub fn attach_quads(&mut self, positions: &[Vec3], indices: &[[u32; 4]]) -> Result<GeometryId> {
+        check_indices(positions.len(), indices.iter().flatten())?;
+        self.attach(
+            sys::RTC_GEOMETRY_TYPE_QUAD,
+            positions,
+            (indices.as_flattened(), sys::RTC_FORMAT_UINT4, 4),
+        )
+    }
+
+    /// Adds spheres given as (centre x, y, z, radius), using Embree's sphere geometry.
+    pub fn attach_spheres(&mut self, spheres: &[Vec4]) -> Result<GeometryId> {
+        if let Some(s) = spheres.iter().find(|s| !s.is_finite() || s.w <= 0.0) {
+            return Err(Error::Embree(format!(
+                "invalid sphere {s}: needs finite values and a positive radius"
+            )));
+        }
+        let geometry = self.new_geometry(sys::RTC_GEOMETRY_TYPE_SPHERE_POINT)?;
+        // SAFETY: `geometry` is live; Embree allocates (and pads) a buffer of exactly
+        // `spheres.len()` FLOAT4 items, which we fill before committing.
+        unsafe {
+            let buf = sys::rtcSetNewGeometryBuffer(
+                geometry,
+                sys::RTC_BUFFER_TYPE_VERTEX,
+                0,
+                sys::RTC_FORMAT_FLOAT4,
+                16,
+                spheres.len(),
+            ) as *mut f32;
+            if !buf.is_null() {
+                std::ptr::copy_nonoverlapping(
+                    spheres.as_ptr() as *const f32,
+                    buf,
+                    spheres.len() * 4,
+                );
+            }
+        }
+        self.finish_geometry(geometry)
+    }
+
+    fn new_geometry(&mut self, kind: sys::RTCGeometryType) -> Result<sys::RTCGeometry> {
+        // SAFETY: the device is live.
+        let geometry = unsafe { sys::rtcNewGeometry(self.device.raw, kind) };
+        self.device.check("creating a geometry")?;
+        if geometry.is_null() {
+            return Err(Error::Embree("creating a geometry failed".into()));
+        }
+        Ok(geometry)
+    }
+
+    fn attach(
+        &mut self,
+        kind: sys::RTCGeometryType,
+        positions: &[Vec3],
+        (indices, index_format, per_prim): (&[u32], sys::RTCFormat, usize),
+    ) -> Result<GeometryId> {
+        if let Some(p) = positions.iter().find(|p| !p.is_finite()) {
+            return Err(Error::Embree(format!("vertex {p} is not finite")));
+        }
+        let geometry = self.new_geometry(kind)?;
+        // SAFETY: `geometry` is live. Embree allocates both buffers with the sizes given
+        // (padding the vertex buffer for its 16-byte loads); we copy exactly that many items.
+        unsafe {
+            let vb = sys::rtcSetNewGeometryBuffer(
+                geometry,
+                sys::RTC_BUFFER_TYPE_VERTEX,
+                0,
+                sys::RTC_FORMAT_FLOAT3,
+                12,
+                positions.len(),
+            ) as *mut f32;
+            let ib = sys::rtcSetNewGeometryBuffer(
+                geometry,
+                sys::RTC_BUFFER_TYPE_INDEX,
+                0,
+                index_format,
+                4 * per_prim,
+                indices.len() / per_prim,
+            ) as *mut u32;
+            if !vb.is_null() && !ib.is_null() {
+                std::ptr::copy_nonoverlapping(
+                    positions.as_ptr() as *const f32,
+                    vb,
+                    positions.len() * 3,
+                );
+                std::ptr::copy_nonoverlapping(indices.as_ptr(), ib, indices.len());
+            }
+        }
+        self.finish_geometry(geometry)
+    }
+
+    /// Commits a filled geometry, attaches it under the next id and drops our reference.
+    fn finish_geometry(&mut self, geometry: sys::RTCGeometry) -> Result<GeometryId> {
+        let id = self.next_id;
+        // SAFETY: `geometry` and the scene are live; the scene keeps its own reference.
+        unsafe {
+            sys::rtcCommitGeometry(geometry);
+            sys::rtcAttachGeometryByID(self.raw, geometry, id);
+            sys::rtcReleaseGeometry(geometry);
+        }
+        self.device.check("adding a geometry")?;
+        self.next_id += 1;
+        self.committed = false;
+        Ok(id)
+    }
+
+    /// Builds the acceleration structure; queries are valid from then until the next change.
+    pub fn commit(&mut self) -> Result<()> {
+        // SAFETY: the scene is live and no query can run during `&mut self`.
+        unsafe { sys::rtcCommitScene(self.raw) };
+        self.device.check("committing the scene")?;
+        self.committed = true;
+        Ok(())
+    }
+
+    /// The closest hit along the ray within `[tmin, tmax]`.
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        if !self.committed {
+            return None;
+        }
+        let mut rayhit = sys::RTCRayHit {
+            ray: to_rtc_ray(ray),
+            ..Default::default()
+        };
+        rayhit.hit.geomID = sys::RTC_INVALID_GEOMETRY_ID;
+        rayhit.hit.instID.fill(sys::RTC_INVALID_GEOMETRY_ID);
+        query::intersect(self.raw, &mut rayhit);
+        let h = rayhit.hit;
+        (h.geomID != sys::RTC_INVALID_GEOMETRY_ID).then(|| Hit {
+            t: rayhit.ray.tfar,
+            u: h.u,
+            v: h.v,
+            ng: Vec3::new(h.Ng_x, h.Ng_y, h.Ng_z),
+            geom_id: h.geomID,
+            prim_id: h.primID,
+        })
+    }
+
+    /// Whether anything lies along the ray within `[tmin, tmax]`.
+    pub fn occluded(&self, ray: &Ray) -> bool {
+        if !self.committed {
+            return false;
+        }
+        let mut r = to_rtc_ray(ray);
+        query::occluded(self.raw, &mut r);
+        // Embree marks an occluded ray by setting tfar to -inf.
+        r.tfar == f32::NEG_INFINITY
+    }
+}
+
+fn check_indices<'a>(
+    vertex_count: usize,
+    mut indices: impl Iterator<Item = &'a u32>,
+) -> Result<()> {
+    match indices.find(|&&i| i as usize >= vertex_count) {
+        Some(i) => Err(Error::Embree(format!(
+            "index {i} is out of range for {vertex_count} vertices"
+        ))),
+        None => Ok(()),
+    }
+}
+
+fn to_rtc_ray(ray: &Ray) -> sys::RTCRay {
+    sys::RTCRay {
+        org_x: ray.origin.x,
+        org_y: ray.origin.y,
+        org_z: ray.origin.z,
+        tnear: ray.tmin,
+        dir_x: ray.dir.x,
+        dir_y: ray.dir.y,
+        dir_z: ray.dir.z,
+        time: 0.0,
+        tfar: ray.tmax,
+        // Embree 4's default geometry mask is 1, Embree 3's all ones: all ones hits both.
+        mask: u32::MAX,
+        id: 0,
+        flags: 0,
+    }
+}
+
+/// The single-ray queries, whose signatures differ between Embree 3 and 4.
+#[cfg(embree3)]
+mod query {
+    use super::sys;
+
+    /// What `rtcInitIntersectContext` does; it is header-inline, so not in the library.
+    fn context() -> sys::RTCIntersectContext {
+        let mut ctx = sys::RTCIntersectContext {
+            flags: sys::RTC_INTERSECT_CONTEXT_FLAG_INCOHERENT,
+            filter: None,
+            ..Default::default()
+        };
+        ctx.instID.fill(sys::RTC_INVALID_GEOMETRY_ID);
+        ctx
+    }
+
+    pub fn intersect(scene: sys::RTCScene, rayhit: &mut sys::RTCRayHit) {
+        let mut ctx = context();
+        // SAFETY: the scene is committed and live; `rayhit` is aligned by its Rust type.
+        unsafe { sys::rtcIntersect1(scene, &mut ctx, rayhit) }
+    }
+
+    pub fn occluded(scene: sys::RTCScene, ray: &mut sys::RTCRay) {
+        let mut ctx = context();
+        // SAFETY: as in `intersect`.
+        unsafe { sys::rtcOccluded1(scene, &mut ctx, ray) }
+    }
+}
+
+#[cfg(embree4)]
+mod query {
+    use super::sys;
+
+    pub fn intersect(scene: sys::RTCScene, rayhit: &mut sys::RTCRayHit) {
+        // SAFETY: the scene is committed and live; null arguments select Embree's defaults.
+        unsafe { sys::rtcIntersect1(scene, rayhit, std::ptr::null_mut()) }
+    }
+
+    pub fn occluded(scene: sys::RTCScene, ray: &mut sys::RTCRay) {
+        // SAFETY: as in `intersect`.
+        unsafe { sys::rtcOccluded1(scene, ray, std::ptr::null_mut()) }
+    }
+}
+
+/// Sets flush-to-zero and denormals-are-zero on the calling thread, as Embree recommends for
+/// every thread that traces rays (denormals slow traversal down by orders of magnitude).
+pub fn set_flush_denormals() {
+    #[cfg(target_arch = "x86_64")]
+    #[allow(deprecated)]
+    // SAFETY: reading and writing MXCSR only changes this thread's float rounding flags.
+    unsafe {
+        use std::arch::x86_64::{_mm_getcsr, _mm_setcsr};
+        _mm_setcsr(_mm_getcsr() | 0x8040);
+    }
+}
+
+/// Whether flush-to-zero and denormals-are-zero are on for the calling thread.
+pub fn flush_denormals_enabled() -> bool {
+    #[cfg(target_arch = "x86_64")]
+    #[allow(deprecated)]
+    // SAFETY: reading MXCSR has no side effects.
+    unsafe {
+        std::arch::x86_64::_mm_getcsr() & 0x8040 == 0x8040
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    true
+}
+
+/// The version string of the Embree library raylink runs on.
+pub fn version() -> Result<String> {
+    Ok(Device::new()?.version())
+}
+
+/// [`Accel`] over an Embree scene holding one geometry per scene shape.
+pub struct EmbreeAccel {
+    scene: Scene,
+    _device: Device,
+}
+
+impl EmbreeAccel {
+    pub fn build(desc: &SceneDesc) -> Result<EmbreeAccel> {
+        let device = Device::new()?;
+        let mut scene = Scene::new(&device)?;
+        for shape in &desc.shapes {
+            match &shape.geometry {
+                Geometry::Sphere { center, radius } => {
+                    scene.attach_spheres(&[center.extend(*radius)])?
+                }
+                Geometry::Triangles(m) => scene.attach_triangles(&m.positions, &m.indices)?,
+                Geometry::Quads(q) => scene.attach_quads(&q.positions, &q.indices)?,
+            };
+        }
+        scene.commit()?;
+        Ok(EmbreeAccel {
+            scene,
+            _device: device,
+        })
+    }
+}
+
+impl Accel for EmbreeAccel {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.scene.intersect(ray)
+    }
+
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.scene.occluded(ray)
+    }
+}

@@ -1,0 +1,51 @@
+//! The one error type of the library. Every message is a single line that names the file
+//! (or option) and the problem, ready to print after `raylink: error: `.
+
+use std::path::PathBuf;
+
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// A scene, mesh or other input file is malformed; `detail` names the line or field.
+    #[error("{}: {detail}", path.display())]
+    Input { path: PathBuf, detail: String },
+    /// An image could not be written or read.
+    #[error("{}: {detail}", path.display())]
+    Image { path: PathBuf, detail: String },
+    /// A command-line option or render setting is invalid.
+    #[error("{0}")]
+    Options(String),
+    /// Embree reported an error.
+    #[error("embree: {0}")]
+    Embree(String),
+    #[error("{}: {source}", path.display())]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+}
+
+impl Error {
+    pub fn input(path: impl Into<PathBuf>, detail: impl Into<String>) -> Self {
+        Error::Input {
+            path: path.into(),
+            detail: detail.into(),
+        }
+    }
+
+    pub fn image(path: impl Into<PathBuf>, detail: impl Into<String>) -> Self {
+        Error::Image {
+            path: path.into(),
+            detail: detail.into(),
+        }
+    }
+
+    pub fn io(path: impl Into<PathBuf>, source: std::io::Error) -> Self {
+        Error::Io {
+            path: path.into(),
+            source,
+        }
+    }
+}
+
+pub type Result<T, E = Error> = std::result::Result<T, E>;

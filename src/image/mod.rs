@@ -1,0 +1,59 @@
+//! Images in memory and on disk. Files go through OpenImageIO (`oiio`, the only unsafe
+//! OpenImageIO code); `output` chooses encoding by extension and writes atomically.
+
+pub mod oiio;
+pub mod output;
+
+use crate::math::Rgb;
+
+/// A linear RGB float image, row-major, top row first.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Image {
+    pub width: u32,
+    pub height: u32,
+    pub pixels: Vec<Rgb>,
+}
+
+impl Image {
+    pub fn new(width: u32, height: u32) -> Self {
+        Image {
+            width,
+            height,
+            pixels: vec![Rgb::ZERO; width as usize * height as usize],
+        }
+    }
+
+    pub fn get(&self, x: u32, y: u32) -> Rgb {
+        self.pixels[(y * self.width + x) as usize]
+    }
+
+    pub fn set(&mut self, x: u32, y: u32, c: Rgb) {
+        self.pixels[(y * self.width + x) as usize] = c;
+    }
+
+    /// Root-mean-square difference over all channels of all pixels.
+    pub fn rmse(&self, other: &Image) -> f32 {
+        assert_eq!((self.width, self.height), (other.width, other.height));
+        let sum: f64 = self
+            .pixels
+            .iter()
+            .zip(&other.pixels)
+            .map(|(a, b)| {
+                let d = *a - *b;
+                d.dot(d) as f64
+            })
+            .sum();
+        (sum / (3.0 * self.pixels.len() as f64)).sqrt() as f32
+    }
+}
+
+/// A value attached to an image file (EXR header attribute).
+#[derive(Clone, Debug, PartialEq)]
+pub enum MetaValue {
+    Str(String),
+    Int(i32),
+    Float(f32),
+}
+
+/// Named metadata, in the order it should be written.
+pub type Metadata = Vec<(String, MetaValue)>;

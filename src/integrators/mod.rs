@@ -1,0 +1,3 @@
+//! Light-transport techniques, one module each.
+
+pub mod whitted;

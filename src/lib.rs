@@ -1,0 +1,21 @@
+//! raylink: a global-illumination renderer.
+//!
+//! The layers, bottom up:
+//! - [`accel`]: one intersection interface; the Embree backend is the only place that talks to Embree.
+//! - [`scene`]: the scene description every reader produces (camera, materials, shapes, lights).
+//! - [`image`]: images and their files, written and read through OpenImageIO.
+//! - [`integrators`]: one module per light-transport technique.
+//! - [`render`]: tiles, threads, pixel sampling, progress and statistics.
+
+pub mod accel;
+pub mod error;
+pub mod image;
+pub mod integrators;
+pub mod math;
+pub mod render;
+pub mod scene;
+
+pub use error::{Error, Result};
+
+/// Version of this crate, as printed by `raylink --version`.
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");

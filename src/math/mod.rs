@@ -1,0 +1,75 @@
+//! Vectors (glam), rays, orthonormal frames and random streams.
+
+mod random;
+
+pub use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
+pub use random::Rng;
+
+/// Linear RGB radiance or reflectance.
+pub type Rgb = Vec3;
+
+/// A ray segment `origin + t * dir` for `t` in `[tmin, tmax]`. `dir` need not be unit length.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    pub origin: Vec3,
+    pub dir: Vec3,
+    pub tmin: f32,
+    pub tmax: f32,
+}
+
+impl Ray {
+    pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        Ray {
+            origin,
+            dir,
+            tmin: 0.0,
+            tmax: f32::INFINITY,
+        }
+    }
+
+    /// The segment from `from` to `to`, both ends excluded by a relative epsilon; for shadow rays.
+    pub fn segment(from: Vec3, to: Vec3) -> Self {
+        Ray {
+            origin: from,
+            dir: to - from,
+            tmin: 0.0,
+            tmax: 1.0 - SHADOW_EPSILON,
+        }
+    }
+
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + self.dir * t
+    }
+}
+
+/// Fraction of a shadow segment left out at the light's end, so the light's own surface
+/// does not occlude it.
+pub const SHADOW_EPSILON: f32 = 1e-4;
+
+/// Moves a point off a surface along the geometric normal, on the side `dir` points to, by an
+/// amount that scales with the point's magnitude (float spacing grows with it). Offsetting the
+/// origin rather than relying on `tmin` keeps both intersection backends in agreement.
+pub fn offset_origin(p: Vec3, ng: Vec3, dir: Vec3) -> Vec3 {
+    let scale = 1e-4 * (1.0 + p.abs().max_element());
+    if ng.dot(dir) >= 0.0 {
+        p + ng * scale
+    } else {
+        p - ng * scale
+    }
+}
+
+/// Luminance of linear Rec.709 RGB.
+pub fn luminance(c: Rgb) -> f32 {
+    0.2126 * c.x + 0.7152 * c.y + 0.0722 * c.z
+}
+
+/// An orthonormal basis whose z axis is `n` (Duff et al. 2017, branchless).
+pub fn frame(n: Vec3) -> (Vec3, Vec3) {
+    let sign = 1.0f32.copysign(n.z);
+    let a = -1.0 / (sign + n.z);
+    let b = n.x * n.y * a;
+    (
+        Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x),
+        Vec3::new(b, sign + n.y * n.y * a, -n.y),
+    )
+}

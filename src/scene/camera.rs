@@ -1,0 +1,80 @@
+use crate::math::{Ray, Vec3};
+
+/// A pinhole perspective camera. As in pbrt, `fov_deg` spans the shorter image axis.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Camera {
+    pub position: Vec3,
+    pub look_at: Vec3,
+    pub up: Vec3,
+    pub fov_deg: f32,
+    pub width: u32,
+    pub height: u32,
+}
+
+impl Camera {
+    /// The ray through the continuous raster position (x right, y down, pixel (0,0) spans
+    /// [0,1]x[0,1]).
+    pub fn ray(&self, x: f32, y: f32) -> Ray {
+        let basis = self.basis();
+        basis.ray(x, y)
+    }
+
+    /// Precomputes the camera frame; use it when generating many rays.
+    pub fn basis(&self) -> CameraBasis {
+        let forward = (self.look_at - self.position).normalize();
+        let right = forward.cross(self.up).normalize();
+        let up = right.cross(forward);
+        let (w, h) = (self.width as f32, self.height as f32);
+        let half = (self.fov_deg.to_radians() * 0.5).tan() / w.min(h);
+        CameraBasis {
+            origin: self.position,
+            forward,
+            right: right * half * 2.0,
+            down: -up * half * 2.0,
+            center: (w * 0.5, h * 0.5),
+        }
+    }
+}
+
+/// The camera frame scaled so that one raster unit maps to one pixel on the image plane at
+/// distance 1.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraBasis {
+    pub origin: Vec3,
+    pub forward: Vec3,
+    right: Vec3,
+    down: Vec3,
+    center: (f32, f32),
+}
+
+impl CameraBasis {
+    pub fn ray(&self, x: f32, y: f32) -> Ray {
+        let dir = self.forward + self.right * (x - self.center.0) + self.down * (y - self.center.1);
+        Ray::new(self.origin, dir.normalize())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn centre_ray_looks_at_target_and_fov_spans_short_axis() {
+        let cam = Camera {
+            position: Vec3::new(0.0, 1.0, 5.0),
+            look_at: Vec3::new(0.0, 1.0, 0.0),
+            up: Vec3::Y,
+            fov_deg: 90.0,
+            width: 200,
+            height: 100,
+        };
+        let centre = cam.ray(100.0, 50.0);
+        assert!((centre.dir - Vec3::NEG_Z).length() < 1e-6);
+        // Top edge of the shorter (vertical) axis is 45 degrees up.
+        let top = cam.ray(100.0, 0.0);
+        assert!((top.dir.angle_between(Vec3::NEG_Z).to_degrees() - 45.0).abs() < 1e-3);
+        assert!(top.dir.y > 0.0);
+        // Raster x grows to the right (+x when looking down -z with y up).
+        assert!(cam.ray(150.0, 50.0).dir.x > 0.0);
+    }
+}

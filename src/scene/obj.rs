@@ -1,0 +1,1 @@
+//! Wavefront OBJ + MTL meshes, through tobj.
