@@ -1,1 +1,138 @@
-//! Rendering engine.
+//! The rendering engine: the image is cut into tiles rendered in parallel by rayon. Every
+//! image sample draws from a random stream keyed by (seed, sample position), never by thread
+//! or tile, so an image is the same bit for bit for any thread count and tile order.
+
+mod sampling;
+
+pub use sampling::PixelSampling;
+
+use crate::accel::embree::set_flush_denormals;
+use crate::image::Image;
+use crate::integrators::{Context, Integrator, RayStats};
+use crate::math::Rgb;
+use crate::{Error, Result};
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use std::io::IsTerminal;
+use std::time::Instant;
+
+/// Side of the square tiles the image is cut into.
+pub const TILE_SIZE: u32 = 16;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct RenderOptions {
+    pub width: u32,
+    pub height: u32,
+    pub sampling: PixelSampling,
+    /// Worker threads; `None` uses every core.
+    pub threads: Option<usize>,
+    pub seed: u64,
+    /// Show a progress bar (only ever drawn on a terminal).
+    pub progress: bool,
+}
+
+/// What a render did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct RenderStats {
+    pub seconds: f64,
+    pub rays: RayStats,
+    /// Image samples (camera rays) taken.
+    pub samples: u64,
+}
+
+impl RenderStats {
+    pub fn mrays_per_second(&self) -> f64 {
+        self.rays.total() as f64 / self.seconds.max(1e-9) / 1e6
+    }
+
+    /// The closing summary line.
+    pub fn summary(&self) -> String {
+        format!(
+            "rendered in {:.2} s: {} rays ({} camera samples), {:.2} Mrays/s",
+            self.seconds,
+            self.rays.total(),
+            self.samples,
+            self.mrays_per_second()
+        )
+    }
+}
+
+/// A rectangle of pixels, `[x0, x1) × [y0, y1)`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Tile {
+    pub x0: u32,
+    pub y0: u32,
+    pub x1: u32,
+    pub y1: u32,
+}
+
+pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
+    (0..height.div_ceil(TILE_SIZE))
+        .flat_map(|ty| {
+            (0..width.div_ceil(TILE_SIZE)).map(move |tx| Tile {
+                x0: tx * TILE_SIZE,
+                y0: ty * TILE_SIZE,
+                x1: ((tx + 1) * TILE_SIZE).min(width),
+                y1: ((ty + 1) * TILE_SIZE).min(height),
+            })
+        })
+        .collect()
+}
+
+/// Renders the image seen by the scene's camera (at the options' resolution).
+pub fn render(ctx: &Context, integrator: &dyn Integrator, options: &RenderOptions) -> Result<(Image, RenderStats)> {
+    options.sampling.validate()?;
+    if options.width == 0 || options.height == 0 {
+        return Err(Error::Options("the image needs a width and height of at least 1".into()));
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(options.threads.unwrap_or(0))
+        .start_handler(|_| set_flush_denormals())
+        .build()
+        .map_err(|e| Error::Options(format!("cannot start render threads: {e}")))?;
+
+    let mut camera = ctx.scene.camera.clone();
+    camera.width = options.width;
+    camera.height = options.height;
+    let basis = camera.basis();
+    let tiles = tiles(options.width, options.height);
+    let progress = progress_bar(options.progress, tiles.len() as u64);
+
+    let start = Instant::now();
+    let results: Vec<(Vec<Rgb>, RayStats, u64)> = pool.install(|| {
+        tiles
+            .par_iter()
+            .map(|tile| {
+                let result = sampling::render_tile(ctx, integrator, &basis, &options.sampling, options.seed, tile);
+                progress.inc(1);
+                result
+            })
+            .collect()
+    });
+    progress.finish_and_clear();
+
+    let mut image = Image::new(options.width, options.height);
+    let mut stats = RenderStats::default();
+    for (tile, (pixels, rays, samples)) in tiles.iter().zip(results) {
+        let w = tile.x1 - tile.x0;
+        for (i, c) in pixels.into_iter().enumerate() {
+            image.set(tile.x0 + i as u32 % w, tile.y0 + i as u32 / w, c);
+        }
+        stats.rays.add(&rays);
+        stats.samples += samples;
+    }
+    stats.seconds = start.elapsed().as_secs_f64();
+    Ok((image, stats))
+}
+
+fn progress_bar(wanted: bool, tiles: u64) -> ProgressBar {
+    if !wanted || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(tiles);
+    bar.set_style(
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% tiles, ETA {eta}")
+            .expect("the progress template is valid"),
+    );
+    bar
+}

@@ -2,7 +2,7 @@
 //! integrators never know which file it came from. Geometry is stored in world space:
 //! readers apply transforms when they load.
 
-mod camera;
+pub mod camera;
 mod geometry;
 pub mod light;
 mod material;

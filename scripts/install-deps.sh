@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# Installs the Debian packages raylink builds against: Embree (libembree-dev: Embree 3 on
+# Debian 12, Embree 4 on Debian 13), OpenImageIO, libclang for bindgen, and a C++ compiler.
+set -euo pipefail
+packages=(build-essential pkg-config libclang-dev libembree-dev libopenimageio-dev)
+sudo=""
+if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
+missing=()
+for p in "${packages[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+if [ ${#missing[@]} -gt 0 ]; then
+  export DEBIAN_FRONTEND=noninteractive
+  $sudo apt-get update
+  $sudo apt-get install -y --no-install-recommends "${missing[@]}"
+fi

@@ -1,0 +1,191 @@
+//! How pixels are sampled: Whitted's adaptive corner subdivision, or regular supersampling.
+
+use super::Tile;
+use crate::integrators::{Context, Integrator, RayStats, Sample};
+use crate::math::{Rgb, Rng};
+use crate::scene::camera::CameraBasis;
+use crate::{Error, Result};
+use std::collections::HashMap;
+
+/// Deepest subdivision the adaptive sampler allows (a 256x256 lattice per pixel).
+pub const MAX_ADAPTIVE_DEPTH: u32 = 8;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum PixelSampling {
+    /// Whitted's adaptive anti-aliasing: samples at the corners of the pixel square; a square
+    /// whose corners differ by more than `threshold` (or see different objects) is split into
+    /// four, recursively, down to `max_depth` levels; sub-squares are weighted by area.
+    Adaptive { threshold: f32, max_depth: u32 },
+    /// `n`×`n` samples on a regular grid inside each pixel, averaged (a box filter).
+    Uniform { n: u32 },
+}
+
+impl Default for PixelSampling {
+    fn default() -> Self {
+        PixelSampling::Adaptive {
+            threshold: 0.05,
+            max_depth: 3,
+        }
+    }
+}
+
+impl PixelSampling {
+    pub fn validate(&self) -> Result<()> {
+        match *self {
+            PixelSampling::Adaptive { threshold, max_depth } => {
+                if !(threshold >= 0.0 && threshold.is_finite()) {
+                    return Err(Error::Options(format!(
+                        "--aa-threshold must be a non-negative number, got {threshold}"
+                    )));
+                }
+                if max_depth > MAX_ADAPTIVE_DEPTH {
+                    return Err(Error::Options(format!(
+                        "--aa-depth must be at most {MAX_ADAPTIVE_DEPTH}, got {max_depth}"
+                    )));
+                }
+            }
+            PixelSampling::Uniform { n } => {
+                if n == 0 || n > 64 {
+                    return Err(Error::Options(format!(
+                        "uniform supersampling takes 1 to 64 samples per pixel side, got {n}"
+                    )));
+                }
+            }
+        }
+        Ok(())
+    }
+}
+
+struct TileRenderer<'a> {
+    ctx: &'a Context<'a>,
+    integrator: &'a dyn Integrator,
+    camera: &'a CameraBasis,
+    seed: u64,
+    stats: RayStats,
+    samples: u64,
+}
+
+impl TileRenderer<'_> {
+    /// One image sample at raster position (x, y), whose random stream is keyed by `key`.
+    fn sample(&mut self, x: f32, y: f32, key: &[u64]) -> Sample {
+        let mut rng = Rng::for_key(self.seed, key);
+        self.samples += 1;
+        let ray = self.camera.ray(x, y);
+        self.integrator.radiance(self.ctx, &ray, &mut rng, &mut self.stats)
+    }
+}
+
+/// Renders one tile; returns its pixels (row-major), rays traced and samples taken.
+pub(super) fn render_tile(
+    ctx: &Context,
+    integrator: &dyn Integrator,
+    camera: &CameraBasis,
+    sampling: &PixelSampling,
+    seed: u64,
+    tile: &Tile,
+) -> (Vec<Rgb>, RayStats, u64) {
+    let mut r = TileRenderer {
+        ctx,
+        integrator,
+        camera,
+        seed,
+        stats: RayStats::default(),
+        samples: 0,
+    };
+    let mut pixels = Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize);
+    match *sampling {
+        PixelSampling::Uniform { n } => {
+            let inv = 1.0 / n as f32;
+            for y in tile.y0..tile.y1 {
+                for x in tile.x0..tile.x1 {
+                    let mut sum = Rgb::ZERO;
+                    for j in 0..n {
+                        for i in 0..n {
+                            let px = x as f32 + (i as f32 + 0.5) * inv;
+                            let py = y as f32 + (j as f32 + 0.5) * inv;
+                            let key = [x as u64, y as u64, (j * n + i) as u64];
+                            sum += r.sample(px, py, &key).radiance;
+                        }
+                    }
+                    pixels.push(sum * (inv * inv));
+                }
+            }
+        }
+        PixelSampling::Adaptive { threshold, max_depth } => {
+            let mut adaptive = Adaptive {
+                renderer: r,
+                threshold,
+                max_depth,
+                scale: 1 << max_depth,
+                cache: HashMap::new(),
+            };
+            for y in tile.y0..tile.y1 {
+                for x in tile.x0..tile.x1 {
+                    let s = adaptive.scale;
+                    pixels.push(adaptive.square(x * s, y * s, s, 0));
+                }
+            }
+            r = adaptive.renderer;
+        }
+    }
+    (pixels, r.stats, r.samples)
+}
+
+/// Whitted's adaptive sampler. Sample points lie on a lattice `scale` = 2^max_depth times
+/// finer than the pixels; a point's value depends only on its lattice position, so points
+/// shared by neighbouring squares are traced once per tile, and results do not depend on
+/// how the image is tiled.
+struct Adaptive<'a> {
+    renderer: TileRenderer<'a>,
+    threshold: f32,
+    max_depth: u32,
+    scale: u32,
+    cache: HashMap<(u32, u32), Sample>,
+}
+
+impl Adaptive<'_> {
+    fn point(&mut self, lx: u32, ly: u32) -> Sample {
+        if let Some(s) = self.cache.get(&(lx, ly)) {
+            return *s;
+        }
+        let inv = 1.0 / self.scale as f32;
+        let s = self
+            .renderer
+            .sample(lx as f32 * inv, ly as f32 * inv, &[lx as u64, ly as u64, u64::MAX]);
+        self.cache.insert((lx, ly), s);
+        s
+    }
+
+    /// The mean value over the square with lower corner (lx, ly) and side `size` (lattice units).
+    fn square(&mut self, lx: u32, ly: u32, size: u32, level: u32) -> Rgb {
+        let corners = [
+            self.point(lx, ly),
+            self.point(lx + size, ly),
+            self.point(lx, ly + size),
+            self.point(lx + size, ly + size),
+        ];
+        if level < self.max_depth && self.differ(&corners) {
+            let h = size / 2;
+            return 0.25
+                * (self.square(lx, ly, h, level + 1)
+                    + self.square(lx + h, ly, h, level + 1)
+                    + self.square(lx, ly + h, h, level + 1)
+                    + self.square(lx + h, ly + h, h, level + 1));
+        }
+        corners.iter().map(|c| c.radiance).sum::<Rgb>() * 0.25
+    }
+
+    /// Whether the corner values are not "nearly equal": they see different objects, or some
+    /// channel differs by more than the threshold after compressing highlights (x/(1+x)), so
+    /// that contrast is judged as it will be displayed.
+    fn differ(&self, corners: &[Sample; 4]) -> bool {
+        let first = corners[0].object;
+        if corners.iter().any(|c| c.object != first) {
+            return true;
+        }
+        let compressed = corners.map(|c| c.radiance / (Rgb::ONE + c.radiance.max(Rgb::ZERO)));
+        let lo = compressed.iter().fold(Rgb::splat(f32::INFINITY), |a, c| a.min(*c));
+        let hi = compressed.iter().fold(Rgb::splat(f32::NEG_INFINITY), |a, c| a.max(*c));
+        (hi - lo).max_element() > self.threshold
+    }
+}

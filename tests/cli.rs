@@ -1,0 +1,165 @@
+//! The `raylink` binary end to end: renders, version, and every bad input through the CLI.
+
+use raylink::image::output::read_image;
+use raylink::image::MetaValue;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn raylink(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_raylink"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("the raylink binary runs")
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+fn files_in(dir: &Path) -> Vec<PathBuf> {
+    let mut v: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
+    v.sort();
+    v
+}
+
+/// Asserts a run failed with exit code 2 and a single `raylink: error:` line containing
+/// every one of `needles`.
+fn assert_clean_failure(out: &Output, needles: &[&str]) {
+    let err = stderr(out);
+    assert_eq!(out.status.code(), Some(2), "stderr: {err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), 1, "expected one line, got: {err}");
+    assert!(lines[0].starts_with("raylink: error: "), "{err}");
+    for n in needles {
+        assert!(lines[0].contains(n), "{n:?} not in: {err}");
+    }
+    assert!(!err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn version_names_embree_and_openimageio() {
+    let out = raylink(&["--version"]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains(env!("CARGO_PKG_VERSION")), "{text}");
+    assert!(text.contains("Embree 3.") || text.contains("Embree 4."), "{text}");
+    assert!(text.contains("OpenImageIO 2.") || text.contains("OpenImageIO 3."), "{text}");
+}
+
+#[test]
+fn renders_both_example_scenes_to_exr_and_png_with_metadata() {
+    let dir = tempfile::tempdir().unwrap();
+    for scene in ["scenes/cornell-box.toml", "scenes/whitted.toml"] {
+        let exr = dir.path().join("out.exr");
+        let png = dir.path().join("out.png");
+        let out = raylink(&[
+            "render",
+            scene,
+            "-o",
+            exr.to_str().unwrap(),
+            "-o",
+            png.to_str().unwrap(),
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--seed",
+            "9",
+            "--quiet",
+        ]);
+        assert!(out.status.success(), "{scene}: {}", stderr(&out));
+        let (image, meta) = read_image(&exr).unwrap();
+        assert_eq!((image.width, image.height), (64, 48));
+        let mean: f32 = image.pixels.iter().map(|p| p.element_sum()).sum::<f32>() / image.pixels.len() as f32;
+        assert!(mean > 0.01 && mean.is_finite(), "{scene}: mean {mean}");
+        let get = |k: &str| meta.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone());
+        assert_eq!(get("raylink:integrator"), Some(MetaValue::Str("whitted".into())));
+        assert_eq!(get("raylink:seed"), Some(MetaValue::Str("9".into())));
+        assert_eq!(get("raylink:scene"), Some(MetaValue::Str(scene.into())));
+        assert!(matches!(get("raylink:render_seconds"), Some(MetaValue::Float(s)) if s >= 0.0));
+        let (png_image, _) = read_image(&png).unwrap();
+        assert_eq!((png_image.width, png_image.height), (64, 48));
+        // Nothing but the two outputs is left behind.
+        assert_eq!(files_in(dir.path()), vec![exr.clone(), png.clone()]);
+    }
+}
+
+/// Every case in tests/bad_scenes: exit code 2, one line naming the file and the problem
+/// (the `# expect:` substring on the case's first line), no output file.
+#[test]
+fn bad_scenes_fail_cleanly_through_the_cli() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut cases: Vec<_> = files_in(&root.join("tests/bad_scenes"))
+        .into_iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    cases.sort();
+    assert!(cases.len() >= 15, "only {} bad scene cases", cases.len());
+    let dir = tempfile::tempdir().unwrap();
+    let output = dir.path().join("never.exr");
+    for case in cases {
+        let text = std::fs::read_to_string(&case).unwrap();
+        let expect = text
+            .lines()
+            .next()
+            .and_then(|l| l.strip_prefix("# expect:"))
+            .unwrap_or_else(|| panic!("{} lacks an # expect: line", case.display()))
+            .trim()
+            .to_string();
+        let name = case.file_name().unwrap().to_str().unwrap();
+        let out = raylink(&["render", case.to_str().unwrap(), "-o", output.to_str().unwrap(), "--quiet"]);
+        assert_clean_failure(&out, &[name, &expect]);
+        assert!(files_in(dir.path()).is_empty(), "{name} left files behind");
+    }
+}
+
+#[test]
+fn missing_scene_file_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = raylink(&["render", "scenes/no-such-scene.toml", "-o", dir.path().join("x.exr").to_str().unwrap()]);
+    assert_clean_failure(&out, &["no-such-scene.toml"]);
+    assert!(files_in(dir.path()).is_empty());
+}
+
+#[test]
+fn bad_options_are_rejected_before_rendering() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("x.exr");
+    let exr = exr.to_str().unwrap();
+    let missing_dir = dir.path().join("no/such/dir/x.exr");
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (vec!["--spp", "5"], "--spp"),
+        (vec!["--threads", "0"], "--threads"),
+        (vec!["--width", "0"], "--width"),
+        (vec!["--aa-depth", "99"], "--aa-depth"),
+        (vec!["--aa-threshold", "NaN"], "--aa-threshold"),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["render", "scenes/whitted.toml", "-o", exr, "--quiet"];
+        args.extend(extra);
+        assert_clean_failure(&raylink(&args), &[needle]);
+    }
+    let out = raylink(&["render", "scenes/whitted.toml", "-o", missing_dir.to_str().unwrap()]);
+    assert_clean_failure(&out, &["x.exr"]);
+    let bmp = dir.path().join("x.bmp");
+    let out = raylink(&["render", "scenes/whitted.toml", "-o", bmp.to_str().unwrap()]);
+    assert_clean_failure(&out, &["x.bmp"]);
+    assert!(files_in(dir.path()).is_empty());
+}
+
+#[test]
+fn a_failed_run_leaves_an_existing_output_untouched() {
+    let dir = tempfile::tempdir().unwrap();
+    let precious = dir.path().join("precious.exr");
+    std::fs::write(&precious, b"the user's earlier render").unwrap();
+    let bad = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad_scenes");
+    let case = files_in(&bad)
+        .into_iter()
+        .find(|p| p.extension().is_some_and(|e| e == "toml"))
+        .unwrap();
+    let out = raylink(&["render", case.to_str().unwrap(), "-o", precious.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2));
+    assert_eq!(std::fs::read(&precious).unwrap(), b"the user's earlier render");
+    assert_eq!(files_in(dir.path()), vec![precious]);
+}
