@@ -1,2 +1,101 @@
-/* A small C API over OpenImageIO, implemented in oiio.cpp. */
+/* A small C API over OpenImageIO (2.2 or later), implemented in oiio.cpp.
+ *
+ * Rules for every function here:
+ * - no C++ exception escapes (each entry point catches everything);
+ * - failures are reported by the return value, with a NUL-terminated one-or-more-line message
+ *   written to the caller's buffer `err` of `err_len` bytes (truncated to fit; `err` may be
+ *   NULL when `err_len` is 0);
+ * - strings passed in are NUL-terminated UTF-8 and only borrowed for the duration of the call.
+ */
 #pragma once
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* How pixels are stored in the file (the data passed in or read out is always float). */
+enum {
+    RAYLINK_OIIO_FLOAT = 0,
+    RAYLINK_OIIO_HALF = 1,
+    RAYLINK_OIIO_UINT8 = 2,
+    RAYLINK_OIIO_UINT16 = 3,
+    /* Only returned by raylink_oiio_image_pixel_type: any other stored type. */
+    RAYLINK_OIIO_OTHER = -1
+};
+
+/* Kinds of metadata attribute. */
+enum {
+    RAYLINK_OIIO_ATTR_STRING = 0,
+    RAYLINK_OIIO_ATTR_INT = 1,
+    RAYLINK_OIIO_ATTR_FLOAT = 2
+};
+
+/* One metadata attribute to write: `name` and, depending on `type`, `string_value`,
+ * `int_value` or `float_value`. */
+typedef struct RaylinkOiioAttr {
+    const char *name;
+    int type;
+    const char *string_value;
+    int int_value;
+    float float_value;
+} RaylinkOiioAttr;
+
+/* Writes a `width` x `height` image of `nchannels` interleaved float channels (`data` holds
+ * width * height * nchannels floats, row-major, top row first) to `path`, with the writer for
+ * `format` (an OpenImageIO format name such as "openexr", "png", "jpeg", "tiff", "hdr", or an
+ * extension such as "exr"), independently of the extension of `path`. `channel_names` holds
+ * `nchannels` names. The attributes become file metadata where the format supports them.
+ * `pixel_type` (RAYLINK_OIIO_FLOAT/HALF/UINT8/UINT16) is the type stored in the file.
+ * Returns 0 on success, nonzero on failure. On failure a partly written file may remain at
+ * `path`: the caller removes it. */
+int raylink_oiio_write(const char *path, const char *format, int width, int height,
+                       int nchannels, const float *data, const char *const *channel_names,
+                       const RaylinkOiioAttr *attrs, size_t nattrs, int pixel_type, char *err,
+                       size_t err_len);
+
+/* An image read from a file; free it with raylink_oiio_image_free. */
+typedef struct RaylinkOiioImage RaylinkOiioImage;
+
+/* Reads the first subimage (top mip level) of the file at `path`, all channels, converted to
+ * float. Returns NULL on failure (message in `err`). */
+RaylinkOiioImage *raylink_oiio_read(const char *path, char *err, size_t err_len);
+
+void raylink_oiio_image_free(RaylinkOiioImage *image);
+
+int raylink_oiio_image_width(const RaylinkOiioImage *image);
+int raylink_oiio_image_height(const RaylinkOiioImage *image);
+int raylink_oiio_image_nchannels(const RaylinkOiioImage *image);
+
+/* The stored pixel type (RAYLINK_OIIO_FLOAT etc., RAYLINK_OIIO_OTHER for anything else). */
+int raylink_oiio_image_pixel_type(const RaylinkOiioImage *image);
+
+/* The name of the OpenImageIO reader that read the file ("openexr", "png", ...). The string
+ * lives as long as the image. */
+const char *raylink_oiio_image_format(const RaylinkOiioImage *image);
+
+/* The name of channel `index` (0 <= index < nchannels), or NULL if out of range. The string
+ * lives as long as the image. */
+const char *raylink_oiio_image_channel_name(const RaylinkOiioImage *image, int index);
+
+/* width * height * nchannels floats, interleaved, row-major, top row first; they live as long
+ * as the image. */
+const float *raylink_oiio_image_pixels(const RaylinkOiioImage *image);
+
+/* The number of metadata attributes kept: scalar strings, integers that fit in an int, and
+ * scalar floating-point values (converted to float). Arrays, matrices and other types are
+ * skipped. */
+size_t raylink_oiio_image_nattrs(const RaylinkOiioImage *image);
+
+/* Attribute `index`: fills `*attr` (the strings live as long as the image). Returns 0, or
+ * nonzero if `index` is out of range. */
+int raylink_oiio_image_attr(const RaylinkOiioImage *image, size_t index, RaylinkOiioAttr *attr);
+
+/* The version of the OpenImageIO library in use at run time, e.g. "2.4.7". The string is
+ * static. */
+const char *raylink_oiio_version(void);
+
+#ifdef __cplusplus
+}
+#endif

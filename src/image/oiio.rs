@@ -1,1 +1,608 @@
-//! Safe wrapper over the C API in ffi/oiio.h.
+//! Safe wrapper over the C API in `ffi/oiio.h` (compiled from `ffi/oiio.cpp` by `build.rs`).
+//! This is the only module with unsafe OpenImageIO code. Every function validates its input
+//! (sizes, NUL bytes) before crossing into C++, and reports failures as [`Error::Image`]
+//! naming the file, never by panicking.
+
+use std::ffi::{c_char, c_int, CStr, CString};
+use std::path::Path;
+
+use super::{MetaValue, Metadata};
+use crate::error::{Error, Result};
+
+/// How pixels are stored in a file. Data in memory is always `f32`; OpenImageIO converts
+/// (floats are mapped to integers by scaling `[0, 1]` to the full range and clamping).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PixelType {
+    Float,
+    Half,
+    U8,
+    U16,
+}
+
+impl PixelType {
+    fn code(self) -> c_int {
+        match self {
+            PixelType::Float => sys::RAYLINK_OIIO_FLOAT,
+            PixelType::Half => sys::RAYLINK_OIIO_HALF,
+            PixelType::U8 => sys::RAYLINK_OIIO_UINT8,
+            PixelType::U16 => sys::RAYLINK_OIIO_UINT16,
+        }
+    }
+
+    fn from_code(code: c_int) -> Option<PixelType> {
+        match code {
+            sys::RAYLINK_OIIO_FLOAT => Some(PixelType::Float),
+            sys::RAYLINK_OIIO_HALF => Some(PixelType::Half),
+            sys::RAYLINK_OIIO_UINT8 => Some(PixelType::U8),
+            sys::RAYLINK_OIIO_UINT16 => Some(PixelType::U16),
+            _ => None,
+        }
+    }
+}
+
+/// An image as read from a file: all channels, converted to float.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RawImage {
+    pub width: u32,
+    pub height: u32,
+    /// Channel names, e.g. `["R", "G", "B"]`.
+    pub channels: Vec<String>,
+    /// `width * height * channels.len()` values, interleaved, row-major, top row first.
+    pub data: Vec<f32>,
+    /// Scalar string, integer (fitting `i32`) and floating-point attributes of the file,
+    /// including OpenImageIO's own (`"compression"`, `"oiio:ColorSpace"`, ...). Arrays and
+    /// other types are left out.
+    pub metadata: Metadata,
+    /// The OpenImageIO reader that read the file: `"openexr"`, `"png"`, `"jpeg"`, ...
+    pub format: String,
+    /// How the pixels are stored in the file, if it is one of the [`PixelType`]s.
+    pub pixel_type: Option<PixelType>,
+}
+
+impl RawImage {
+    /// The value of metadata attribute `name`, if present.
+    pub fn meta(&self, name: &str) -> Option<&MetaValue> {
+        self.metadata
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, value)| value)
+    }
+}
+
+/// Writes an image of `channels.len()` interleaved float channels to `path`, encoded by the
+/// OpenImageIO writer for `format` (`"openexr"`, `"png"`, `"jpeg"`, `"tiff"`, `"hdr"`, or an
+/// extension such as `"exr"`) whatever the extension of `path`; `metadata` becomes file
+/// attributes where the format supports them. On failure a partly written file may be left
+/// at `path`: the caller removes it (see [`super::output::write_image`], which does).
+#[allow(clippy::too_many_arguments)]
+pub fn write(
+    path: &Path,
+    format: &str,
+    width: u32,
+    height: u32,
+    channels: &[&str],
+    data: &[f32],
+    metadata: &Metadata,
+    pixel: PixelType,
+) -> Result<()> {
+    let fail = |detail: String| Error::image(path, detail);
+    let c_path = path_to_cstring(path)?;
+    let c_format = cstring(path, "format name", format)?;
+    let nchannels = c_int::try_from(channels.len())
+        .ok()
+        .filter(|&n| n > 0)
+        .ok_or_else(|| fail(format!("cannot write {} channels", channels.len())))?;
+    let (w, h) = match (c_int::try_from(width), c_int::try_from(height)) {
+        (Ok(w), Ok(h)) if w > 0 && h > 0 => (w, h),
+        _ => {
+            return Err(fail(format!(
+                "cannot write an image of {width}x{height} pixels"
+            )))
+        }
+    };
+    let expected = (width as usize)
+        .checked_mul(height as usize)
+        .and_then(|n| n.checked_mul(channels.len()));
+    if expected != Some(data.len()) {
+        return Err(fail(format!(
+            "internal error: {} values given for {width}x{height} pixels of {} channels",
+            data.len(),
+            channels.len()
+        )));
+    }
+    let c_channels = channels
+        .iter()
+        .map(|name| cstring(path, "channel name", name))
+        .collect::<Result<Vec<_>>>()?;
+    let channel_ptrs: Vec<*const c_char> = c_channels.iter().map(|c| c.as_ptr()).collect();
+
+    // Owned C strings first, then the attribute structs borrowing them.
+    let mut c_meta = Vec::with_capacity(metadata.len());
+    for (name, value) in metadata {
+        let c_name = cstring(path, "metadata name", name)?;
+        let c_value = match value {
+            MetaValue::Str(s) => Some(cstring(path, &format!("metadata {name}"), s)?),
+            _ => None,
+        };
+        c_meta.push((c_name, c_value, value));
+    }
+    let attrs: Vec<sys::RaylinkOiioAttr> = c_meta
+        .iter()
+        .map(|(name, string, value)| sys::RaylinkOiioAttr {
+            name: name.as_ptr(),
+            type_: match value {
+                MetaValue::Str(_) => sys::RAYLINK_OIIO_ATTR_STRING,
+                MetaValue::Int(_) => sys::RAYLINK_OIIO_ATTR_INT,
+                MetaValue::Float(_) => sys::RAYLINK_OIIO_ATTR_FLOAT,
+            },
+            string_value: string.as_ref().map_or(std::ptr::null(), |s| s.as_ptr()),
+            int_value: match value {
+                MetaValue::Int(i) => *i,
+                _ => 0,
+            },
+            float_value: match value {
+                MetaValue::Float(f) => *f,
+                _ => 0.0,
+            },
+        })
+        .collect();
+
+    let mut err = ErrorBuffer::new();
+    // SAFETY: every pointer is valid for the duration of the call: `c_path`, `c_format` and the
+    // strings behind `channel_ptrs` and `attrs` are owned CStrings that outlive it;
+    // `channel_ptrs` holds exactly `nchannels` pointers, `attrs` `attrs.len()` structs, and
+    // `data` exactly `w * h * nchannels` floats (checked above). The C side only reads them,
+    // writes at most `err.len()` bytes into `err`, and catches every C++ exception.
+    let status = unsafe {
+        sys::raylink_oiio_write(
+            c_path.as_ptr(),
+            c_format.as_ptr(),
+            w,
+            h,
+            nchannels,
+            data.as_ptr(),
+            channel_ptrs.as_ptr(),
+            attrs.as_ptr(),
+            attrs.len(),
+            pixel.code(),
+            err.as_mut_ptr(),
+            err.len(),
+        )
+    };
+    if status != 0 {
+        return Err(fail(err.message()));
+    }
+    Ok(())
+}
+
+/// Reads the first subimage of the file at `path`, all channels converted to float.
+pub fn read(path: &Path) -> Result<RawImage> {
+    let c_path = path_to_cstring(path)?;
+    let mut err = ErrorBuffer::new();
+    // SAFETY: `c_path` is a NUL-terminated string alive for the call; `err` is a writable
+    // buffer of `err.len()` bytes. The C side catches every C++ exception and returns either
+    // null or an image that we own and free exactly once (by `Handle`'s Drop).
+    let ptr = unsafe { sys::raylink_oiio_read(c_path.as_ptr(), err.as_mut_ptr(), err.len()) };
+    if ptr.is_null() {
+        return Err(Error::image(path, err.message()));
+    }
+    Ok(Handle(ptr).to_raw())
+}
+
+/// The version of the OpenImageIO library in use, e.g. `"2.4.7"`.
+pub fn version() -> String {
+    // SAFETY: the function takes no arguments, catches all exceptions, and returns a pointer
+    // to a static NUL-terminated string (never null).
+    let ptr = unsafe { sys::raylink_oiio_version() };
+    // SAFETY: `ptr` is non-null, NUL-terminated and static (see above).
+    unsafe { CStr::from_ptr(ptr) }
+        .to_string_lossy()
+        .into_owned()
+}
+
+/// Owns a `RaylinkOiioImage`; frees it on drop.
+struct Handle(*mut sys::RaylinkOiioImage);
+
+impl Drop for Handle {
+    fn drop(&mut self) {
+        // SAFETY: `self.0` came non-null from `raylink_oiio_read` and is freed only here, once.
+        unsafe { sys::raylink_oiio_image_free(self.0) }
+    }
+}
+
+impl Handle {
+    fn to_raw(&self) -> RawImage {
+        let h = self.0;
+        // SAFETY (all the accessor calls below): `h` is a live image owned by `self`, and the
+        // accessors only read it. Returned strings and the pixel array live as long as the
+        // image, and are copied into owned Rust values before `self` is dropped.
+        let (width, height, nchannels, pixel_type, format) = unsafe {
+            (
+                sys::raylink_oiio_image_width(h),
+                sys::raylink_oiio_image_height(h),
+                sys::raylink_oiio_image_nchannels(h),
+                sys::raylink_oiio_image_pixel_type(h),
+                owned_string(sys::raylink_oiio_image_format(h)),
+            )
+        };
+        // The C side guarantees positive sizes; convert without trusting it blindly.
+        let to_u32 = |v: c_int| u32::try_from(v).unwrap_or(0);
+        let (width, height) = (to_u32(width), to_u32(height));
+        let nchannels = usize::try_from(nchannels).unwrap_or(0);
+        let channels = (0..nchannels)
+            // SAFETY: see above; `c` < nchannels, and a null return is handled.
+            .map(|c| unsafe { owned_string(sys::raylink_oiio_image_channel_name(h, c as c_int)) })
+            .collect();
+        let len = width as usize * height as usize * nchannels;
+        let data = if len == 0 {
+            Vec::new()
+        } else {
+            // SAFETY: the C side holds exactly width * height * nchannels floats, alive as
+            // long as `self`; we copy them out immediately.
+            unsafe { std::slice::from_raw_parts(sys::raylink_oiio_image_pixels(h), len) }.to_vec()
+        };
+        // SAFETY: see above.
+        let nattrs = unsafe { sys::raylink_oiio_image_nattrs(h) };
+        let mut metadata = Metadata::with_capacity(nattrs);
+        for index in 0..nattrs {
+            let mut attr = sys::RaylinkOiioAttr {
+                name: std::ptr::null(),
+                type_: 0,
+                string_value: std::ptr::null(),
+                int_value: 0,
+                float_value: 0.0,
+            };
+            // SAFETY: `index` < nattrs and `attr` is a valid struct to fill; on success its
+            // string pointers are null or NUL-terminated strings owned by the image.
+            if unsafe { sys::raylink_oiio_image_attr(h, index, &mut attr) } != 0 {
+                continue;
+            }
+            // SAFETY: as just said.
+            let name = unsafe { owned_string(attr.name) };
+            let value = match attr.type_ {
+                // SAFETY: as just said.
+                sys::RAYLINK_OIIO_ATTR_STRING => {
+                    MetaValue::Str(unsafe { owned_string(attr.string_value) })
+                }
+                sys::RAYLINK_OIIO_ATTR_INT => MetaValue::Int(attr.int_value),
+                sys::RAYLINK_OIIO_ATTR_FLOAT => MetaValue::Float(attr.float_value),
+                _ => continue,
+            };
+            metadata.push((name, value));
+        }
+        RawImage {
+            width,
+            height,
+            channels,
+            data,
+            metadata,
+            format,
+            pixel_type: PixelType::from_code(pixel_type),
+        }
+    }
+}
+
+/// Copies a C string (lossily as UTF-8); null gives an empty string.
+///
+/// # Safety
+/// `ptr` must be null or point to a NUL-terminated string valid for the call.
+unsafe fn owned_string(ptr: *const c_char) -> String {
+    if ptr.is_null() {
+        return String::new();
+    }
+    // SAFETY: non-null and NUL-terminated by the caller's contract.
+    unsafe { CStr::from_ptr(ptr) }
+        .to_string_lossy()
+        .into_owned()
+}
+
+fn cstring(path: &Path, what: &str, s: &str) -> Result<CString> {
+    CString::new(s).map_err(|_| Error::image(path, format!("{what} {s:?} contains a NUL byte")))
+}
+
+fn path_to_cstring(path: &Path) -> Result<CString> {
+    #[cfg(unix)]
+    let bytes = {
+        use std::os::unix::ffi::OsStrExt;
+        path.as_os_str().as_bytes().to_vec()
+    };
+    #[cfg(not(unix))]
+    let bytes = path
+        .to_str()
+        .ok_or_else(|| Error::image(path, "the path is not valid UTF-8"))?
+        .as_bytes()
+        .to_vec();
+    if bytes.is_empty() {
+        return Err(Error::image(path, "empty path"));
+    }
+    CString::new(bytes).map_err(|_| Error::image(path, "the path contains a NUL byte"))
+}
+
+/// A buffer for the C side's error messages.
+struct ErrorBuffer(Vec<u8>);
+
+impl ErrorBuffer {
+    fn new() -> Self {
+        ErrorBuffer(vec![0; 2048])
+    }
+
+    fn as_mut_ptr(&mut self) -> *mut c_char {
+        self.0.as_mut_ptr().cast()
+    }
+
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    /// The message as one line: OpenImageIO's messages may span several.
+    fn message(&self) -> String {
+        let end = self.0.iter().position(|&b| b == 0).unwrap_or(self.0.len());
+        let text = String::from_utf8_lossy(&self.0[..end]);
+        let line = text
+            .lines()
+            .map(str::trim)
+            .filter(|l| !l.is_empty())
+            .collect::<Vec<_>>()
+            .join("; ");
+        if line.is_empty() {
+            "OpenImageIO failed without a message".to_string()
+        } else {
+            line
+        }
+    }
+}
+
+/// Declarations matching `ffi/oiio.h`.
+mod sys {
+    use std::ffi::{c_char, c_float, c_int};
+
+    pub const RAYLINK_OIIO_FLOAT: c_int = 0;
+    pub const RAYLINK_OIIO_HALF: c_int = 1;
+    pub const RAYLINK_OIIO_UINT8: c_int = 2;
+    pub const RAYLINK_OIIO_UINT16: c_int = 3;
+
+    pub const RAYLINK_OIIO_ATTR_STRING: c_int = 0;
+    pub const RAYLINK_OIIO_ATTR_INT: c_int = 1;
+    pub const RAYLINK_OIIO_ATTR_FLOAT: c_int = 2;
+
+    #[repr(C)]
+    pub struct RaylinkOiioAttr {
+        pub name: *const c_char,
+        pub type_: c_int,
+        pub string_value: *const c_char,
+        pub int_value: c_int,
+        pub float_value: c_float,
+    }
+
+    /// Opaque.
+    #[repr(C)]
+    pub struct RaylinkOiioImage {
+        _private: [u8; 0],
+    }
+
+    extern "C" {
+        #[allow(clippy::too_many_arguments)]
+        pub fn raylink_oiio_write(
+            path: *const c_char,
+            format: *const c_char,
+            width: c_int,
+            height: c_int,
+            nchannels: c_int,
+            data: *const c_float,
+            channel_names: *const *const c_char,
+            attrs: *const RaylinkOiioAttr,
+            nattrs: usize,
+            pixel_type: c_int,
+            err: *mut c_char,
+            err_len: usize,
+        ) -> c_int;
+        pub fn raylink_oiio_read(
+            path: *const c_char,
+            err: *mut c_char,
+            err_len: usize,
+        ) -> *mut RaylinkOiioImage;
+        pub fn raylink_oiio_image_free(image: *mut RaylinkOiioImage);
+        pub fn raylink_oiio_image_width(image: *const RaylinkOiioImage) -> c_int;
+        pub fn raylink_oiio_image_height(image: *const RaylinkOiioImage) -> c_int;
+        pub fn raylink_oiio_image_nchannels(image: *const RaylinkOiioImage) -> c_int;
+        pub fn raylink_oiio_image_pixel_type(image: *const RaylinkOiioImage) -> c_int;
+        pub fn raylink_oiio_image_format(image: *const RaylinkOiioImage) -> *const c_char;
+        pub fn raylink_oiio_image_channel_name(
+            image: *const RaylinkOiioImage,
+            index: c_int,
+        ) -> *const c_char;
+        pub fn raylink_oiio_image_pixels(image: *const RaylinkOiioImage) -> *const c_float;
+        pub fn raylink_oiio_image_nattrs(image: *const RaylinkOiioImage) -> usize;
+        pub fn raylink_oiio_image_attr(
+            image: *const RaylinkOiioImage,
+            index: usize,
+            attr: *mut RaylinkOiioAttr,
+        ) -> c_int;
+        pub fn raylink_oiio_version() -> *const c_char;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn version_looks_like_a_version() {
+        let v = version();
+        let parts: Vec<&str> = v.split('.').collect();
+        assert_eq!(parts.len(), 3, "{v}");
+        assert!(parts.iter().all(|p| p.parse::<u32>().is_ok()), "{v}");
+        assert!(parts[0].parse::<u32>().unwrap() >= 2, "{v}");
+    }
+
+    #[test]
+    fn nul_bytes_are_errors_not_panics() {
+        let dir = tempfile::tempdir().unwrap();
+        let ok = dir.path().join("a.exr");
+        let data = [0.0f32; 3];
+        let meta = Metadata::new();
+        let bad_path = Path::new("a\0b.exr");
+        let e = write(
+            bad_path,
+            "exr",
+            1,
+            1,
+            &["R", "G", "B"],
+            &data,
+            &meta,
+            PixelType::Float,
+        );
+        assert!(e.unwrap_err().to_string().contains("NUL"));
+        assert!(read(bad_path).unwrap_err().to_string().contains("NUL"));
+        let e = write(
+            &ok,
+            "ex\0r",
+            1,
+            1,
+            &["R", "G", "B"],
+            &data,
+            &meta,
+            PixelType::Float,
+        );
+        assert!(e.unwrap_err().to_string().contains("NUL"));
+        let e = write(
+            &ok,
+            "exr",
+            1,
+            1,
+            &["R", "G\0", "B"],
+            &data,
+            &meta,
+            PixelType::Float,
+        );
+        assert!(e.unwrap_err().to_string().contains("NUL"));
+        let meta = vec![("a\0b".to_string(), MetaValue::Int(1))];
+        let e = write(
+            &ok,
+            "exr",
+            1,
+            1,
+            &["R", "G", "B"],
+            &data,
+            &meta,
+            PixelType::Float,
+        );
+        assert!(e.unwrap_err().to_string().contains("NUL"));
+        let meta = vec![("a".to_string(), MetaValue::Str("x\0y".into()))];
+        let e = write(
+            &ok,
+            "exr",
+            1,
+            1,
+            &["R", "G", "B"],
+            &data,
+            &meta,
+            PixelType::Float,
+        );
+        assert!(e.unwrap_err().to_string().contains("NUL"));
+        assert!(!ok.exists());
+    }
+
+    #[test]
+    fn bad_sizes_are_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.exr");
+        let meta = Metadata::new();
+        let rgb = ["R", "G", "B"];
+        let e = write(
+            &path,
+            "exr",
+            2,
+            2,
+            &rgb,
+            &[0.0; 11],
+            &meta,
+            PixelType::Float,
+        );
+        assert!(e.unwrap_err().to_string().contains("11 values"));
+        let e = write(&path, "exr", 0, 2, &rgb, &[], &meta, PixelType::Float);
+        assert!(e.unwrap_err().to_string().contains("0x2"));
+        let e = write(&path, "exr", 1, 1, &[], &[], &meta, PixelType::Float);
+        assert!(e.is_err());
+        let huge = u32::MAX;
+        let e = write(
+            &path,
+            "exr",
+            huge,
+            1,
+            &rgb,
+            &[0.0; 3],
+            &meta,
+            PixelType::Float,
+        );
+        assert!(e.is_err());
+        assert!(!path.exists());
+    }
+
+    #[test]
+    fn unknown_format_reports_oiio_error() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("a.exr");
+        let e = write(
+            &path,
+            "nosuchformat",
+            1,
+            1,
+            &["Y"],
+            &[0.5],
+            &Metadata::new(),
+            PixelType::Float,
+        )
+        .unwrap_err()
+        .to_string();
+        assert!(e.contains("nosuchformat"), "{e}");
+        assert!(e.starts_with(&path.display().to_string()), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+        assert!(!path.exists());
+    }
+
+    #[test]
+    fn reading_a_missing_or_bad_file_fails_cleanly() {
+        let dir = tempfile::tempdir().unwrap();
+        let missing = dir.path().join("missing.exr");
+        let e = read(&missing).unwrap_err().to_string();
+        assert!(e.starts_with(&missing.display().to_string()), "{e}");
+        let garbage = dir.path().join("garbage.exr");
+        std::fs::write(&garbage, b"this is not an image").unwrap();
+        let e = read(&garbage).unwrap_err().to_string();
+        assert!(e.starts_with(&garbage.display().to_string()), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+    }
+
+    #[test]
+    fn format_is_independent_of_the_extension() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join(".x.png.tmp-1");
+        let data = [0.0f32, 0.5, 1.0, 0.25];
+        let meta = Metadata::new();
+        write(&path, "png", 2, 2, &["Y"], &data, &meta, PixelType::U8).unwrap();
+        let raw = read(&path).unwrap();
+        assert_eq!(raw.format, "png");
+        assert_eq!(raw.pixel_type, Some(PixelType::U8));
+        assert_eq!((raw.width, raw.height), (2, 2));
+        assert_eq!(raw.channels, vec!["Y".to_string()]);
+        assert_eq!(raw.data[0], 0.0);
+        assert_eq!(raw.data[2], 1.0);
+        // 0.5 * 255 = 127.5 rounds to 128. (OIIO reads level k as k * (1/255), which may
+        // differ from k / 255 in the last bit.)
+        assert!(
+            (raw.data[1] - 128.0 / 255.0).abs() < 1e-6,
+            "{}",
+            raw.data[1]
+        );
+        // "exr" as an extension-like name, "tiff" as a format name.
+        let exr = dir.path().join("noext");
+        write(&exr, "exr", 2, 2, &["Y"], &data, &meta, PixelType::Float).unwrap();
+        assert_eq!(read(&exr).unwrap().format, "openexr");
+        let tif = dir.path().join("tif.exr");
+        write(&tif, "tiff", 2, 2, &["Y"], &data, &meta, PixelType::U16).unwrap();
+        let raw = read(&tif).unwrap();
+        assert_eq!(raw.format, "tiff");
+        assert_eq!(raw.pixel_type, Some(PixelType::U16));
+    }
+}

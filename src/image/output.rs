@@ -1,1 +1,477 @@
-//! Writing render results: format by extension, tone mapping for 8-bit formats, atomic writes.
+//! Writing render results: the format follows the output extension (case-insensitive),
+//! 8-bit formats get exposure and the sRGB transfer function, and every write goes to a
+//! temporary file in the target's directory that is renamed over the target only once it is
+//! complete, so a failed write never leaves a partial file or clobbers an existing one.
+//!
+//! | extension | stored as |
+//! |---|---|
+//! | `.exr` | linear RGB, half or float ([`OutputOptions::half`]), metadata as header attributes |
+//! | `.hdr` | linear RGB (RGBE: 8-bit mantissas, shared exponent; negatives and NaN become 0, values clamp at 1e38) |
+//! | `.tif`, `.tiff` | linear RGB, 32-bit float |
+//! | `.png` | `2^exposure`, sRGB-encoded, clamped to `[0, 1]`, 8 bits |
+//! | `.jpg`, `.jpeg` | as PNG, JPEG quality 95 |
+
+use std::fs;
+use std::io;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+use super::oiio::{self, PixelType};
+use super::{Image, MetaValue, Metadata};
+use crate::error::{Error, Result};
+use crate::math::Rgb;
+
+/// The supported output formats.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    Exr,
+    Hdr,
+    Tiff,
+    Png,
+    Jpeg,
+}
+
+const SUPPORTED: &str = "use .exr, .hdr, .tif, .png or .jpg";
+
+impl Format {
+    /// The format for `path`'s extension (case-insensitive), or an error naming the path.
+    pub fn from_path(path: &Path) -> Result<Format> {
+        let Some(ext) = path.extension() else {
+            return Err(Error::image(
+                path,
+                format!("no file extension to choose the output format from ({SUPPORTED})"),
+            ));
+        };
+        let ext = ext.to_string_lossy();
+        match ext.to_ascii_lowercase().as_str() {
+            "exr" => Ok(Format::Exr),
+            "hdr" => Ok(Format::Hdr),
+            "tif" | "tiff" => Ok(Format::Tiff),
+            "png" => Ok(Format::Png),
+            "jpg" | "jpeg" => Ok(Format::Jpeg),
+            _ => Err(Error::image(
+                path,
+                format!("unsupported output format .{ext} ({SUPPORTED})"),
+            )),
+        }
+    }
+
+    /// The OpenImageIO writer's name.
+    pub fn oiio_name(self) -> &'static str {
+        match self {
+            Format::Exr => "openexr",
+            Format::Hdr => "hdr",
+            Format::Tiff => "tiff",
+            Format::Png => "png",
+            Format::Jpeg => "jpeg",
+        }
+    }
+
+    /// True for the 8-bit display formats (PNG, JPEG), which get exposure and sRGB encoding.
+    pub fn is_display(self) -> bool {
+        matches!(self, Format::Png | Format::Jpeg)
+    }
+}
+
+/// How to encode an image.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct OutputOptions {
+    /// Exposure in stops for the 8-bit formats (PNG, JPEG): values are multiplied by
+    /// `2^exposure` before sRGB encoding. The linear formats store the values unchanged.
+    pub exposure: f32,
+    /// Store EXR pixels as half floats instead of 32-bit floats.
+    pub half: bool,
+}
+
+impl Default for OutputOptions {
+    /// No exposure change, lossless 32-bit float EXR.
+    fn default() -> Self {
+        OutputOptions {
+            exposure: 0.0,
+            half: false,
+        }
+    }
+}
+
+/// Checks, before rendering, that an image can be written to `path`: the extension is
+/// supported, `path` is not a directory, and its parent directory exists, is a directory and
+/// is writable (tested by creating and removing a temporary file).
+pub fn check_output_path(path: &Path) -> Result<()> {
+    if path.is_dir() {
+        return Err(Error::image(path, "is a directory, not an image file"));
+    }
+    Format::from_path(path)?;
+    let dir = parent_dir(path);
+    match fs::metadata(dir) {
+        Ok(meta) if meta.is_dir() => {}
+        Ok(_) => {
+            return Err(Error::image(
+                path,
+                format!("{} is not a directory", dir.display()),
+            ))
+        }
+        Err(e) if e.kind() == io::ErrorKind::NotFound => {
+            return Err(Error::image(
+                path,
+                format!("directory {} does not exist", dir.display()),
+            ))
+        }
+        Err(e) => {
+            return Err(Error::image(
+                path,
+                format!("cannot access directory {}: {e}", dir.display()),
+            ))
+        }
+    }
+    let probe = dir.join(format!(
+        ".raylink-probe-{}-{}",
+        std::process::id(),
+        unique()
+    ));
+    match fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
+        Ok(file) => {
+            drop(file);
+            // Best effort: a probe that cannot be removed is harmless.
+            let _ = fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => Err(Error::image(
+            path,
+            format!("directory {} is not writable ({e})", dir.display()),
+        )),
+    }
+}
+
+/// Writes `image` to `path` in the format its extension names, with `metadata` as file
+/// attributes (EXR header attributes; other formats keep what they can). The file is written
+/// to a hidden temporary file next to `path` and renamed over it only on success: on any
+/// failure the temporary file is removed and an existing `path` is left untouched.
+pub fn write_image(
+    path: &Path,
+    image: &Image,
+    metadata: &Metadata,
+    options: &OutputOptions,
+) -> Result<()> {
+    check_output_path(path)?;
+    let format = Format::from_path(path)?;
+    let expected = image.width as usize * image.height as usize;
+    if image.width == 0 || image.height == 0 || image.pixels.len() != expected {
+        return Err(Error::image(
+            path,
+            format!(
+                "internal error: cannot write a {}x{} image with {} pixels",
+                image.width,
+                image.height,
+                image.pixels.len()
+            ),
+        ));
+    }
+
+    let mut attributes = metadata.clone();
+    let (data, pixel) = if format.is_display() {
+        attributes.push(("oiio:ColorSpace".into(), MetaValue::Str("sRGB".into())));
+        if format == Format::Jpeg {
+            attributes.push(("Compression".into(), MetaValue::Str("jpeg:95".into())));
+        }
+        let scale = options.exposure.exp2();
+        (display_values(&image.pixels, scale), PixelType::U8)
+    } else {
+        let pixel = if format == Format::Exr && options.half {
+            PixelType::Half
+        } else {
+            PixelType::Float
+        };
+        let mut values = linear_values(&image.pixels);
+        if format == Format::Hdr {
+            // OpenImageIO's RGBE encoder mangles what RGBE cannot hold: a negative channel
+            // comes back as garbage (-0.5 as 0.5), a channel above ~1.7e38 zeroes the pixel.
+            for v in &mut values {
+                *v = hdr_value(*v);
+            }
+        }
+        (values, pixel)
+    };
+
+    let temp = TempFile::new(temp_path(path));
+    oiio::write(
+        &temp.path,
+        format.oiio_name(),
+        image.width,
+        image.height,
+        &["R", "G", "B"],
+        &data,
+        &attributes,
+        pixel,
+    )
+    .map_err(|e| retarget(e, &temp.path, path))?;
+    fs::rename(&temp.path, path).map_err(|e| {
+        Error::image(
+            path,
+            format!(
+                "cannot move the finished image into place from {}: {e}",
+                temp.path.display()
+            ),
+        )
+    })?;
+    temp.disarm();
+    Ok(())
+}
+
+/// Reads an image as RGB: `R`, `G`, `B` channels if present, otherwise one channel is
+/// replicated, two (grey and alpha) use the first, and more use the first three (dropping
+/// alpha). Values are returned as stored: PNG and JPEG values are sRGB-encoded (apply
+/// [`srgb_decode`] for linear values). Also returns the file's metadata.
+pub fn read_image(path: &Path) -> Result<(Image, Metadata)> {
+    let raw = oiio::read(path)?;
+    let n = raw.channels.len();
+    let find = |name: &str| raw.channels.iter().position(|c| c == name);
+    let picks = match (find("R"), find("G"), find("B")) {
+        (Some(r), Some(g), Some(b)) => [r, g, b],
+        _ if n < 3 => [0, 0, 0],
+        _ => [0, 1, 2],
+    };
+    let pixels = raw
+        .data
+        .chunks_exact(n)
+        .map(|p| Rgb::new(p[picks[0]], p[picks[1]], p[picks[2]]))
+        .collect();
+    let image = Image {
+        width: raw.width,
+        height: raw.height,
+        pixels,
+    };
+    Ok((image, raw.metadata))
+}
+
+/// The sRGB transfer function (IEC 61966-2-1), linear to encoded; values outside `[0, 1]`
+/// follow the same formula (negative values stay on the linear segment), NaN stays NaN.
+pub fn srgb_encode(linear: f32) -> f32 {
+    if linear <= 0.003_130_8 {
+        linear * 12.92
+    } else {
+        1.055 * linear.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// The inverse of [`srgb_encode`], encoded to linear.
+pub fn srgb_decode(encoded: f32) -> f32 {
+    if encoded <= 0.040_45 {
+        encoded / 12.92
+    } else {
+        ((encoded + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+/// One channel for an 8-bit display format: scaled, sRGB-encoded, clamped and quantised to
+/// a multiple of 1/255 (round to nearest), so the conversion to 8 bits is exact. NaN gives 0.
+pub fn display_value(linear: f32, scale: f32) -> f32 {
+    let encoded = srgb_encode(linear * scale);
+    if encoded.is_nan() {
+        return 0.0;
+    }
+    (encoded.clamp(0.0, 1.0) * 255.0).round() / 255.0
+}
+
+/// One channel for RGBE (`.hdr`): negatives and NaN become 0, large values clamp to 1e38.
+pub fn hdr_value(linear: f32) -> f32 {
+    if linear.is_nan() {
+        0.0
+    } else {
+        linear.clamp(0.0, HDR_MAX)
+    }
+}
+
+/// Below 2^127, the largest power of two RGBE's exponent byte can hold.
+const HDR_MAX: f32 = 1.0e38;
+
+fn display_values(pixels: &[Rgb], scale: f32) -> Vec<f32> {
+    pixels
+        .iter()
+        .flat_map(|p| [p.x, p.y, p.z])
+        .map(|v| display_value(v, scale))
+        .collect()
+}
+
+fn linear_values(pixels: &[Rgb]) -> Vec<f32> {
+    pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect()
+}
+
+/// The directory holding `path` (`.` for a bare file name).
+fn parent_dir(path: &Path) -> &Path {
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() => dir,
+        _ => Path::new("."),
+    }
+}
+
+fn unique() -> u64 {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    COUNTER.fetch_add(1, Ordering::Relaxed)
+}
+
+/// `.NAME.raylink-tmp-PID-N` next to `path`: hidden, unique per process and per write.
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    parent_dir(path).join(format!(
+        ".{name}.raylink-tmp-{}-{}",
+        std::process::id(),
+        unique()
+    ))
+}
+
+/// Errors from writing the temporary file are reported against the real target (the temporary
+/// name would only confuse).
+fn retarget(error: Error, temp: &Path, target: &Path) -> Error {
+    match error {
+        Error::Image { detail, .. } => {
+            let temp_name = temp.display().to_string();
+            Error::image(
+                target,
+                detail.replace(&temp_name, &target.display().to_string()),
+            )
+        }
+        other => other,
+    }
+}
+
+/// A temporary file removed on drop unless disarmed (also on panic).
+struct TempFile {
+    path: PathBuf,
+    armed: bool,
+}
+
+impl TempFile {
+    fn new(path: PathBuf) -> Self {
+        TempFile { path, armed: true }
+    }
+
+    fn disarm(mut self) {
+        self.armed = false;
+    }
+}
+
+impl Drop for TempFile {
+    fn drop(&mut self) {
+        if self.armed {
+            // Best effort: it may never have been created.
+            let _ = fs::remove_file(&self.path);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn formats_by_extension_case_insensitive() {
+        let f = |p: &str| Format::from_path(Path::new(p));
+        assert_eq!(f("a.exr").unwrap(), Format::Exr);
+        assert_eq!(f("dir/a.EXR").unwrap(), Format::Exr);
+        assert_eq!(f("a.Hdr").unwrap(), Format::Hdr);
+        assert_eq!(f("a.tif").unwrap(), Format::Tiff);
+        assert_eq!(f("a.TIFF").unwrap(), Format::Tiff);
+        assert_eq!(f("a.png").unwrap(), Format::Png);
+        assert_eq!(f("a.jpg").unwrap(), Format::Jpeg);
+        assert_eq!(f("a.JPEG").unwrap(), Format::Jpeg);
+        assert_eq!(
+            f("x.bmp").unwrap_err().to_string(),
+            "x.bmp: unsupported output format .bmp (use .exr, .hdr, .tif, .png or .jpg)"
+        );
+        assert!(f("x")
+            .unwrap_err()
+            .to_string()
+            .starts_with("x: no file extension"));
+        assert!(f("x.png.gz").is_err());
+    }
+
+    #[test]
+    fn srgb_known_values() {
+        assert_eq!(srgb_encode(0.0), 0.0);
+        assert!((srgb_encode(1.0) - 1.0).abs() < 1e-6);
+        // Reference values from the IEC 61966-2-1 formula evaluated in double precision.
+        assert!((srgb_encode(0.5) - 0.735_357).abs() < 1e-6);
+        assert!((srgb_encode(0.18) - 0.461_356_1).abs() < 1e-6);
+        assert!((srgb_encode(0.002) - 0.025_84).abs() < 1e-7);
+        assert!((srgb_decode(0.5) - 0.214_041_14).abs() < 1e-6);
+    }
+
+    #[test]
+    fn srgb_round_trips_and_is_monotonic() {
+        let mut previous = -1.0;
+        for i in 0..=1000 {
+            let x = i as f32 / 1000.0;
+            let e = srgb_encode(x);
+            assert!(e > previous, "not increasing at {x}");
+            previous = e;
+            assert!((srgb_decode(e) - x).abs() < 1e-5, "{x}");
+        }
+        // The two pieces meet (continuity at the breakpoint).
+        let b = 0.003_130_8f32;
+        assert!((b * 12.92 - (1.055 * b.powf(1.0 / 2.4) - 0.055)).abs() < 1e-5);
+    }
+
+    #[test]
+    fn display_values_clamp_and_quantise() {
+        assert_eq!(display_value(0.0, 1.0), 0.0);
+        assert_eq!(display_value(1.0, 1.0), 1.0);
+        assert_eq!(display_value(7.0, 1.0), 1.0);
+        assert_eq!(display_value(-3.0, 1.0), 0.0);
+        assert_eq!(display_value(f32::NAN, 1.0), 0.0);
+        assert_eq!(display_value(f32::INFINITY, 1.0), 1.0);
+        // 0.5 linear -> 0.7354 encoded -> 187.52 -> 188.
+        assert_eq!(display_value(0.5, 1.0), 188.0 / 255.0);
+        // One stop of exposure doubles the linear value.
+        assert_eq!(display_value(0.25, 2.0), display_value(0.5, 1.0));
+    }
+
+    #[test]
+    fn temp_paths_are_hidden_unique_and_alongside() {
+        let a = temp_path(Path::new("out/x.exr"));
+        let b = temp_path(Path::new("out/x.exr"));
+        assert_ne!(a, b);
+        assert_eq!(a.parent(), Some(Path::new("out")));
+        let name = a.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(name.starts_with(".x.exr.raylink-tmp-"), "{name}");
+        assert_eq!(temp_path(Path::new("x.png")).parent(), Some(Path::new(".")));
+    }
+
+    #[test]
+    fn check_output_path_messages() {
+        let dir = tempfile::tempdir().unwrap();
+        let missing = dir.path().join("out").join("x.exr");
+        let e = check_output_path(&missing).unwrap_err().to_string();
+        assert_eq!(
+            e,
+            format!(
+                "{}: directory {} does not exist",
+                missing.display(),
+                dir.path().join("out").display()
+            )
+        );
+        let file = dir.path().join("file");
+        fs::write(&file, b"x").unwrap();
+        let under_file = file.join("x.png");
+        let e = check_output_path(&under_file).unwrap_err().to_string();
+        assert!(e.ends_with("file is not a directory"), "{e}");
+        let as_dir = dir.path().join("d.exr");
+        fs::create_dir(&as_dir).unwrap();
+        let e = check_output_path(&as_dir).unwrap_err().to_string();
+        assert!(e.ends_with("is a directory, not an image file"), "{e}");
+        check_output_path(&dir.path().join("ok.PNG")).unwrap();
+        // No probe files are left behind.
+        let mut names: Vec<_> = fs::read_dir(dir.path())
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        names.sort();
+        assert_eq!(names, vec!["d.exr", "file"]);
+    }
+}
