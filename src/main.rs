@@ -195,7 +195,9 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
     let height = args.height.unwrap_or(scene.camera.height);
     for (name, v) in [("--width", width), ("--height", height)] {
         if v == 0 || v > 65536 {
-            return Err(Error::Options(format!("{name} must be between 1 and 65536, got {v}")).into());
+            return Err(
+                Error::Options(format!("{name} must be between 1 and 65536, got {v}")).into(),
+            );
         }
     }
 
@@ -220,17 +222,35 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
     let (image, stats) = render(&ctx, integrator.as_ref(), &options)?;
 
     let metadata: Metadata = vec![
-        ("Software".into(), MetaValue::Str(format!("raylink {}", raylink::VERSION))),
-        ("raylink:scene".into(), MetaValue::Str(args.scene.display().to_string())),
-        ("raylink:integrator".into(), MetaValue::Str("whitted".into())),
-        ("raylink:sampling".into(), MetaValue::Str(format!("{sampling:?}"))),
+        (
+            "Software".into(),
+            MetaValue::Str(format!("raylink {}", raylink::VERSION)),
+        ),
+        (
+            "raylink:scene".into(),
+            MetaValue::Str(args.scene.display().to_string()),
+        ),
+        (
+            "raylink:integrator".into(),
+            MetaValue::Str("whitted".into()),
+        ),
+        (
+            "raylink:sampling".into(),
+            MetaValue::Str(format!("{sampling:?}")),
+        ),
         (
             "raylink:samples_per_pixel".into(),
             MetaValue::Float(stats.samples as f32 / (width as f32 * height as f32)),
         ),
         ("raylink:seed".into(), MetaValue::Str(args.seed.to_string())),
-        ("raylink:render_seconds".into(), MetaValue::Float(stats.seconds as f32)),
-        ("raylink:rays".into(), MetaValue::Str(stats.rays.total().to_string())),
+        (
+            "raylink:render_seconds".into(),
+            MetaValue::Float(stats.seconds as f32),
+        ),
+        (
+            "raylink:rays".into(),
+            MetaValue::Str(stats.rays.total().to_string()),
+        ),
     ];
     let out_options = OutputOptions {
         exposure: args.exposure,

@@ -14,14 +14,19 @@ const ADAPTIVE_TOLERANCE: f32 = 0.01;
 
 fn clamped(image: &Image) -> Image {
     Image {
-        pixels: image.pixels.iter().map(|p| p.clamp(raylink::math::Vec3::ZERO, raylink::math::Vec3::ONE)).collect(),
+        pixels: image
+            .pixels
+            .iter()
+            .map(|p| p.clamp(raylink::math::Vec3::ZERO, raylink::math::Vec3::ONE))
+            .collect(),
         ..image.clone()
     }
 }
 
 #[test]
 fn adaptive_traces_fewer_rays_than_4x4_and_stays_close_to_16x16() {
-    let scene = Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/whitted.toml")).unwrap();
+    let scene =
+        Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/whitted.toml")).unwrap();
     let accel = accel::build(&scene, Backend::Embree).unwrap();
     let ctx = Context::new(&scene, accel.as_ref());
     let whitted = Whitted::new(WhittedOptions::default());
@@ -44,15 +49,24 @@ fn adaptive_traces_fewer_rays_than_4x4_and_stays_close_to_16x16() {
         threshold: f32::INFINITY,
         max_depth: 0,
     });
-    let (e_uniform, e_adaptive, e_corners) =
-        (uniform.rmse(&reference), adaptive.rmse(&reference), corners.rmse(&reference));
+    let (e_uniform, e_adaptive, e_corners) = (
+        uniform.rmse(&reference),
+        adaptive.rmse(&reference),
+        corners.rmse(&reference),
+    );
     eprintln!(
         "rays: adaptive {} vs 4x4 {}; RMSE to 16x16: adaptive {e_adaptive:.5}, 4x4 {e_uniform:.5}, corners only {e_corners:.5}",
         adaptive_stats.rays.total(),
         uniform_stats.rays.total()
     );
     assert!(adaptive_stats.rays.total() < uniform_stats.rays.total());
-    assert!(e_adaptive < ADAPTIVE_TOLERANCE, "adaptive RMSE {e_adaptive}");
+    assert!(
+        e_adaptive < ADAPTIVE_TOLERANCE,
+        "adaptive RMSE {e_adaptive}"
+    );
     // Subdividing must actually pay: adaptive beats the unsubdivided corner average.
-    assert!(e_adaptive < 0.5 * e_corners, "adaptive {e_adaptive} vs corners {e_corners}");
+    assert!(
+        e_adaptive < 0.5 * e_corners,
+        "adaptive {e_adaptive} vs corners {e_corners}"
+    );
 }

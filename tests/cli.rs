@@ -18,7 +18,10 @@ fn stderr(out: &Output) -> String {
 }
 
 fn files_in(dir: &Path) -> Vec<PathBuf> {
-    let mut v: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
+    let mut v: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
     v.sort();
     v
 }
@@ -43,8 +46,14 @@ fn version_names_embree_and_openimageio() {
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains(env!("CARGO_PKG_VERSION")), "{text}");
-    assert!(text.contains("Embree 3.") || text.contains("Embree 4."), "{text}");
-    assert!(text.contains("OpenImageIO 2.") || text.contains("OpenImageIO 3."), "{text}");
+    assert!(
+        text.contains("Embree 3.") || text.contains("Embree 4."),
+        "{text}"
+    );
+    assert!(
+        text.contains("OpenImageIO 2.") || text.contains("OpenImageIO 3."),
+        "{text}"
+    );
 }
 
 #[test]
@@ -71,10 +80,14 @@ fn renders_both_example_scenes_to_exr_and_png_with_metadata() {
         assert!(out.status.success(), "{scene}: {}", stderr(&out));
         let (image, meta) = read_image(&exr).unwrap();
         assert_eq!((image.width, image.height), (64, 48));
-        let mean: f32 = image.pixels.iter().map(|p| p.element_sum()).sum::<f32>() / image.pixels.len() as f32;
+        let mean: f32 =
+            image.pixels.iter().map(|p| p.element_sum()).sum::<f32>() / image.pixels.len() as f32;
         assert!(mean > 0.01 && mean.is_finite(), "{scene}: mean {mean}");
         let get = |k: &str| meta.iter().find(|(n, _)| n == k).map(|(_, v)| v.clone());
-        assert_eq!(get("raylink:integrator"), Some(MetaValue::Str("whitted".into())));
+        assert_eq!(
+            get("raylink:integrator"),
+            Some(MetaValue::Str("whitted".into()))
+        );
         assert_eq!(get("raylink:seed"), Some(MetaValue::Str("9".into())));
         assert_eq!(get("raylink:scene"), Some(MetaValue::Str(scene.into())));
         assert!(matches!(get("raylink:render_seconds"), Some(MetaValue::Float(s)) if s >= 0.0));
@@ -108,7 +121,13 @@ fn bad_scenes_fail_cleanly_through_the_cli() {
             .trim()
             .to_string();
         let name = case.file_name().unwrap().to_str().unwrap();
-        let out = raylink(&["render", case.to_str().unwrap(), "-o", output.to_str().unwrap(), "--quiet"]);
+        let out = raylink(&[
+            "render",
+            case.to_str().unwrap(),
+            "-o",
+            output.to_str().unwrap(),
+            "--quiet",
+        ]);
         assert_clean_failure(&out, &[name, &expect]);
         assert!(files_in(dir.path()).is_empty(), "{name} left files behind");
     }
@@ -117,7 +136,12 @@ fn bad_scenes_fail_cleanly_through_the_cli() {
 #[test]
 fn missing_scene_file_is_named() {
     let dir = tempfile::tempdir().unwrap();
-    let out = raylink(&["render", "scenes/no-such-scene.toml", "-o", dir.path().join("x.exr").to_str().unwrap()]);
+    let out = raylink(&[
+        "render",
+        "scenes/no-such-scene.toml",
+        "-o",
+        dir.path().join("x.exr").to_str().unwrap(),
+    ]);
     assert_clean_failure(&out, &["no-such-scene.toml"]);
     assert!(files_in(dir.path()).is_empty());
 }
@@ -140,7 +164,12 @@ fn bad_options_are_rejected_before_rendering() {
         args.extend(extra);
         assert_clean_failure(&raylink(&args), &[needle]);
     }
-    let out = raylink(&["render", "scenes/whitted.toml", "-o", missing_dir.to_str().unwrap()]);
+    let out = raylink(&[
+        "render",
+        "scenes/whitted.toml",
+        "-o",
+        missing_dir.to_str().unwrap(),
+    ]);
     assert_clean_failure(&out, &["x.exr"]);
     let bmp = dir.path().join("x.bmp");
     let out = raylink(&["render", "scenes/whitted.toml", "-o", bmp.to_str().unwrap()]);
@@ -158,8 +187,16 @@ fn a_failed_run_leaves_an_existing_output_untouched() {
         .into_iter()
         .find(|p| p.extension().is_some_and(|e| e == "toml"))
         .unwrap();
-    let out = raylink(&["render", case.to_str().unwrap(), "-o", precious.to_str().unwrap()]);
+    let out = raylink(&[
+        "render",
+        case.to_str().unwrap(),
+        "-o",
+        precious.to_str().unwrap(),
+    ]);
     assert_eq!(out.status.code(), Some(2));
-    assert_eq!(std::fs::read(&precious).unwrap(), b"the user's earlier render");
+    assert_eq!(
+        std::fs::read(&precious).unwrap(),
+        b"the user's earlier render"
+    );
     assert_eq!(files_in(dir.path()), vec![precious]);
 }

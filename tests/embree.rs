@@ -12,10 +12,7 @@ fn ray(o: [f32; 3], d: [f32; 3]) -> Ray {
 fn scene(device: &Device) -> Scene {
     let mut s = Scene::new(device).unwrap();
     let t = s
-        .attach_triangles(
-            &[Vec3::ZERO, Vec3::X, Vec3::Y],
-            &[[0, 1, 2]],
-        )
+        .attach_triangles(&[Vec3::ZERO, Vec3::X, Vec3::Y], &[[0, 1, 2]])
         .unwrap();
     let sp = s.attach_spheres(&[Vec4::new(5.0, 0.0, 0.0, 1.0)]).unwrap();
     let quad = |y: f32| {
@@ -27,7 +24,9 @@ fn scene(device: &Device) -> Scene {
         ]
     };
     let positions: Vec<Vec3> = quad(0.0).into_iter().chain(quad(2.0)).collect();
-    let q = s.attach_quads(&positions, &[[0, 1, 2, 3], [4, 5, 6, 7]]).unwrap();
+    let q = s
+        .attach_quads(&positions, &[[0, 1, 2, 3], [4, 5, 6, 7]])
+        .unwrap();
     assert_eq!((t, sp, q), (0, 1, 2));
     s.commit().unwrap();
     s
@@ -37,10 +36,15 @@ fn scene(device: &Device) -> Scene {
 fn triangle_hit_reports_t_barycentrics_ids_and_winding_normal() {
     let device = Device::new().unwrap();
     let s = scene(&device);
-    let hit = s.intersect(&ray([0.25, 0.125, 2.0], [0.0, 0.0, -1.0])).expect("hit");
+    let hit = s
+        .intersect(&ray([0.25, 0.125, 2.0], [0.0, 0.0, -1.0]))
+        .expect("hit");
     assert!((hit.t - 2.0).abs() < 1e-6, "t = {}", hit.t);
     // u weights vertex 1 (x axis), v vertex 2 (y axis).
-    assert!((hit.u - 0.25).abs() < 1e-6 && (hit.v - 0.125).abs() < 1e-6, "{hit:?}");
+    assert!(
+        (hit.u - 0.25).abs() < 1e-6 && (hit.v - 0.125).abs() < 1e-6,
+        "{hit:?}"
+    );
     assert_eq!((hit.geom_id, hit.prim_id), (0, 0));
     // (v1 - v0) x (v2 - v0) = x × y = +z.
     let n = hit.ng.normalize();
@@ -51,8 +55,12 @@ fn triangle_hit_reports_t_barycentrics_ids_and_winding_normal() {
 fn misses_and_range_limits() {
     let device = Device::new().unwrap();
     let s = scene(&device);
-    assert!(s.intersect(&ray([0.75, 0.75, 2.0], [0.0, 0.0, -1.0])).is_none());
-    assert!(s.intersect(&ray([0.25, 0.25, 2.0], [0.0, 0.0, 1.0])).is_none());
+    assert!(s
+        .intersect(&ray([0.75, 0.75, 2.0], [0.0, 0.0, -1.0]))
+        .is_none());
+    assert!(s
+        .intersect(&ray([0.25, 0.25, 2.0], [0.0, 0.0, 1.0]))
+        .is_none());
     let mut short = ray([0.25, 0.25, 2.0], [0.0, 0.0, -1.0]);
     short.tmax = 1.5;
     assert!(s.intersect(&short).is_none());
@@ -64,27 +72,45 @@ fn misses_and_range_limits() {
 fn sphere_hits_from_outside_and_inside_with_outward_normal() {
     let device = Device::new().unwrap();
     let s = scene(&device);
-    let outside = s.intersect(&ray([5.0, 0.0, 4.0], [0.0, 0.0, -1.0])).expect("hit");
+    let outside = s
+        .intersect(&ray([5.0, 0.0, 4.0], [0.0, 0.0, -1.0]))
+        .expect("hit");
     assert_eq!(outside.geom_id, 1);
     assert!((outside.t - 3.0).abs() < 1e-5, "t = {}", outside.t);
     assert!((outside.ng.normalize() - Vec3::Z).length() < 1e-4);
-    let inside = s.intersect(&ray([5.0, 0.0, 0.0], [1.0, 0.0, 0.0])).expect("hit");
+    let inside = s
+        .intersect(&ray([5.0, 0.0, 0.0], [1.0, 0.0, 0.0]))
+        .expect("hit");
     assert!((inside.t - 1.0).abs() < 1e-5, "t = {}", inside.t);
-    assert!((inside.ng.normalize() - Vec3::X).length() < 1e-4, "ng = {}", inside.ng);
+    assert!(
+        (inside.ng.normalize() - Vec3::X).length() < 1e-4,
+        "ng = {}",
+        inside.ng
+    );
 }
 
 #[test]
 fn quads_report_their_primitive() {
     let device = Device::new().unwrap();
     let s = scene(&device);
-    let first = s.intersect(&ray([0.0, 0.5, 0.5], [-1.0, 0.0, 0.0])).expect("hit");
-    let second = s.intersect(&ray([0.0, 2.5, 0.5], [-1.0, 0.0, 0.0])).expect("hit");
+    let first = s
+        .intersect(&ray([0.0, 0.5, 0.5], [-1.0, 0.0, 0.0]))
+        .expect("hit");
+    let second = s
+        .intersect(&ray([0.0, 2.5, 0.5], [-1.0, 0.0, 0.0]))
+        .expect("hit");
     assert_eq!((first.geom_id, first.prim_id), (2, 0));
     assert_eq!((second.geom_id, second.prim_id), (2, 1));
     assert!((first.t - 3.0).abs() < 1e-6);
     // Winding (0,0,0)->(0,0,1)->(0,1,1): (v1-v0) x (v2-v0) = z × (y+z) = -x.
-    assert!((first.ng.normalize() + Vec3::X).length() < 1e-5, "ng = {}", first.ng);
-    assert!(s.intersect(&ray([0.0, 1.5, 0.5], [-1.0, 0.0, 0.0])).is_none());
+    assert!(
+        (first.ng.normalize() + Vec3::X).length() < 1e-5,
+        "ng = {}",
+        first.ng
+    );
+    assert!(s
+        .intersect(&ray([0.0, 1.5, 0.5], [-1.0, 0.0, 0.0]))
+        .is_none());
 }
 
 #[test]
@@ -112,7 +138,9 @@ fn uncommitted_changes_hide_the_scene_until_commit() {
 
 #[test]
 fn invalid_calls_surface_as_errors() {
-    let err = Device::with_config("threads=banana").err().expect("bad config is an error");
+    let err = Device::with_config("threads=banana")
+        .err()
+        .expect("bad config is an error");
     assert!(err.to_string().contains("embree"), "{err}");
     let device = Device::new().unwrap();
     let mut s = Scene::new(&device).unwrap();
@@ -142,7 +170,10 @@ fn queries_agree_across_threads() {
             .chunks(250)
             .map(|chunk| scope.spawn(|| chunk.iter().map(|r| s.intersect(r)).collect::<Vec<_>>()))
             .collect();
-        handles.into_iter().flat_map(|h| h.join().unwrap()).collect()
+        handles
+            .into_iter()
+            .flat_map(|h| h.join().unwrap())
+            .collect()
     });
     assert_eq!(serial, parallel);
 }

@@ -119,7 +119,10 @@ fn diffuse_plane_under_point_light_matches_lambert() {
         let cos = to.normalize().y;
         let expected = kd / PI * intensity * cos / to.length_squared() + kd * scene.ambient;
         let got = image.get(x, y);
-        assert!(close(got, expected, 1e-4), "pixel ({x},{y}): {got} vs {expected}");
+        assert!(
+            close(got, expected, 1e-4),
+            "pixel ({x},{y}): {got} vs {expected}"
+        );
         checked += 1;
     }
     assert_eq!(checked, 5);
@@ -345,9 +348,15 @@ fn busy_scene() -> Scene {
             ..Material::default()
         },
     );
-    for (center, m) in [(Vec3::new(-0.8, 0.7, 0.0), glossy), (Vec3::new(0.8, 0.7, 0.5), frosted)] {
+    for (center, m) in [
+        (Vec3::new(-0.8, 0.7, 0.0), glossy),
+        (Vec3::new(0.8, 0.7, 0.5), frosted),
+    ] {
         scene.shapes.push(Shape {
-            geometry: Geometry::Sphere { center, radius: 0.7 },
+            geometry: Geometry::Sphere {
+                center,
+                radius: 0.7,
+            },
             material: m,
         });
     }
@@ -415,6 +424,9 @@ fn image_is_bit_identical_for_any_thread_count() {
             seed: 43,
             progress: false,
         };
-        assert_ne!(render(&ctx, &whitted, &other).unwrap().0.pixels, images[0].0.pixels);
+        assert_ne!(
+            render(&ctx, &whitted, &other).unwrap().0.pixels,
+            images[0].0.pixels
+        );
     }
 }

@@ -70,7 +70,10 @@ impl Whitted {
         let Some(sp) = ctx.intersect(ray, stats) else {
             return (ctx.scene.background, u32::MAX);
         };
-        (self.shade(ctx, ray, &sp, depth, weight, rng, stats), sp.shape as u32)
+        (
+            self.shade(ctx, ray, &sp, depth, weight, rng, stats),
+            sp.shape as u32,
+        )
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -89,7 +92,11 @@ impl Whitted {
         // The paper's convention: N points to the side the ray comes from, and the index of
         // refraction is inverted when the ray leaves the medium.
         let entering = d.dot(sp.ng) < 0.0;
-        let (ng, n) = if entering { (sp.ng, sp.ns) } else { (-sp.ng, -sp.ns) };
+        let (ng, n) = if entering {
+            (sp.ng, sp.ns)
+        } else {
+            (-sp.ng, -sp.ns)
+        };
         let eta = if entering { 1.0 / m.ior } else { m.ior };
         let view = -d;
 
@@ -113,7 +120,10 @@ impl Whitted {
             (false, _) => 0.0,
         };
         let (ks, kt) = if fresnel {
-            (m.specular * reflectance, m.transmission * (1.0 - reflectance))
+            (
+                m.specular * reflectance,
+                m.transmission * (1.0 - reflectance),
+            )
         } else {
             (m.specular, m.transmission)
         };
@@ -126,7 +136,14 @@ impl Whitted {
         }
         // T is zero under total internal reflection (the paper's imaginary kf).
         if kt_weight > self.options.cutoff && refracted.is_some() {
-            let dir = self.perturbed(n, ng, m.roughness, rng, |n| refract(d, n, eta).unwrap_or(d), -1.0);
+            let dir = self.perturbed(
+                n,
+                ng,
+                m.roughness,
+                rng,
+                |n| refract(d, n, eta).unwrap_or(d),
+                -1.0,
+            );
             let r = Ray::new(offset_origin(sp.p, ng, dir), dir);
             color += kt * self.trace(ctx, &r, depth + 1, kt_weight, rng, stats).0;
         }
@@ -155,12 +172,18 @@ impl Whitted {
         let mut color = Rgb::ZERO;
         for light in &ctx.scene.lights {
             let (wi, irradiance, target) = match *light {
-                Light::Point { position, intensity } => {
+                Light::Point {
+                    position,
+                    intensity,
+                } => {
                     let to = position - p;
                     let d2 = to.length_squared();
                     (to / d2.sqrt(), intensity / d2, Some(position))
                 }
-                Light::Directional { direction, irradiance } => (-direction.normalize(), irradiance, None),
+                Light::Directional {
+                    direction,
+                    irradiance,
+                } => (-direction.normalize(), irradiance, None),
             };
             let cos = n.dot(wi);
             if cos <= 0.0 || ng.dot(wi) <= 0.0 {
@@ -175,7 +198,8 @@ impl Whitted {
             if highlight_on {
                 // Energy-normalised Blinn-Phong lobe: (n+8)/(8π)·(N·H)^n.
                 let h = (wi + view).normalize();
-                let spec = (m.phong_exponent + 8.0) / (8.0 * PI) * n.dot(h).max(0.0).powf(m.phong_exponent);
+                let spec = (m.phong_exponent + 8.0) / (8.0 * PI)
+                    * n.dot(h).max(0.0).powf(m.phong_exponent);
                 color += m.specular * spec * e;
             }
         }

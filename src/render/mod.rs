@@ -80,10 +80,16 @@ pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
 }
 
 /// Renders the image seen by the scene's camera (at the options' resolution).
-pub fn render(ctx: &Context, integrator: &dyn Integrator, options: &RenderOptions) -> Result<(Image, RenderStats)> {
+pub fn render(
+    ctx: &Context,
+    integrator: &dyn Integrator,
+    options: &RenderOptions,
+) -> Result<(Image, RenderStats)> {
     options.sampling.validate()?;
     if options.width == 0 || options.height == 0 {
-        return Err(Error::Options("the image needs a width and height of at least 1".into()));
+        return Err(Error::Options(
+            "the image needs a width and height of at least 1".into(),
+        ));
     }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(options.threads.unwrap_or(0))
@@ -103,7 +109,14 @@ pub fn render(ctx: &Context, integrator: &dyn Integrator, options: &RenderOption
         tiles
             .par_iter()
             .map(|tile| {
-                let result = sampling::render_tile(ctx, integrator, &basis, &options.sampling, options.seed, tile);
+                let result = sampling::render_tile(
+                    ctx,
+                    integrator,
+                    &basis,
+                    &options.sampling,
+                    options.seed,
+                    tile,
+                );
                 progress.inc(1);
                 result
             })
@@ -131,8 +144,10 @@ fn progress_bar(wanted: bool, tiles: u64) -> ProgressBar {
     }
     let bar = ProgressBar::new(tiles);
     bar.set_style(
-        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% tiles, ETA {eta}")
-            .expect("the progress template is valid"),
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% tiles, ETA {eta}",
+        )
+        .expect("the progress template is valid"),
     );
     bar
 }

@@ -32,7 +32,10 @@ impl Default for PixelSampling {
 impl PixelSampling {
     pub fn validate(&self) -> Result<()> {
         match *self {
-            PixelSampling::Adaptive { threshold, max_depth } => {
+            PixelSampling::Adaptive {
+                threshold,
+                max_depth,
+            } => {
                 if !(threshold >= 0.0 && threshold.is_finite()) {
                     return Err(Error::Options(format!(
                         "--aa-threshold must be a non-negative number, got {threshold}"
@@ -71,7 +74,8 @@ impl TileRenderer<'_> {
         let mut rng = Rng::for_key(self.seed, key);
         self.samples += 1;
         let ray = self.camera.ray(x, y);
-        self.integrator.radiance(self.ctx, &ray, &mut rng, &mut self.stats)
+        self.integrator
+            .radiance(self.ctx, &ray, &mut rng, &mut self.stats)
     }
 }
 
@@ -111,7 +115,10 @@ pub(super) fn render_tile(
                 }
             }
         }
-        PixelSampling::Adaptive { threshold, max_depth } => {
+        PixelSampling::Adaptive {
+            threshold,
+            max_depth,
+        } => {
             let mut adaptive = Adaptive {
                 renderer: r,
                 threshold,
@@ -149,9 +156,11 @@ impl Adaptive<'_> {
             return *s;
         }
         let inv = 1.0 / self.scale as f32;
-        let s = self
-            .renderer
-            .sample(lx as f32 * inv, ly as f32 * inv, &[lx as u64, ly as u64, u64::MAX]);
+        let s = self.renderer.sample(
+            lx as f32 * inv,
+            ly as f32 * inv,
+            &[lx as u64, ly as u64, u64::MAX],
+        );
         self.cache.insert((lx, ly), s);
         s
     }
@@ -184,8 +193,12 @@ impl Adaptive<'_> {
             return true;
         }
         let compressed = corners.map(|c| c.radiance / (Rgb::ONE + c.radiance.max(Rgb::ZERO)));
-        let lo = compressed.iter().fold(Rgb::splat(f32::INFINITY), |a, c| a.min(*c));
-        let hi = compressed.iter().fold(Rgb::splat(f32::NEG_INFINITY), |a, c| a.max(*c));
+        let lo = compressed
+            .iter()
+            .fold(Rgb::splat(f32::INFINITY), |a, c| a.min(*c));
+        let hi = compressed
+            .iter()
+            .fold(Rgb::splat(f32::NEG_INFINITY), |a, c| a.max(*c));
         (hi - lo).max_element() > self.threshold
     }
 }
