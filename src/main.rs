@@ -6,7 +6,9 @@ use raylink::image::output::{check_output_path, write_image, OutputOptions};
 use raylink::image::{MetaValue, Metadata};
 use raylink::integrators::whitted::{Whitted, WhittedOptions};
 use raylink::integrators::{Context, Integrator};
-use raylink::render::{render, PixelSampling, RenderOptions};
+use raylink::render::{
+    render, PixelSampling, RenderOptions, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD,
+};
 use raylink::scene::Scene;
 use raylink::{accel, Error};
 use std::path::PathBuf;
@@ -70,10 +72,10 @@ struct RenderArgs {
     #[arg(long, value_enum)]
     aa: Option<AntiAliasing>,
     /// Adaptive anti-aliasing: largest corner difference accepted without subdividing.
-    #[arg(long, default_value_t = 0.05)]
+    #[arg(long, default_value_t = DEFAULT_AA_THRESHOLD)]
     aa_threshold: f32,
     /// Adaptive anti-aliasing: deepest subdivision level (each level halves the square).
-    #[arg(long, default_value_t = 3)]
+    #[arg(long, default_value_t = DEFAULT_AA_DEPTH)]
     aa_depth: u32,
     /// Maximum depth of the ray tree.
     #[arg(long, default_value_t = 8)]
@@ -120,7 +122,17 @@ impl From<Error> for Failure {
 }
 
 fn main() -> ExitCode {
-    let matches = Cli::command().version(version_string()).get_matches();
+    // Starting Embree to ask its version costs a few tenths of a second: only pay it when
+    // the version is what was asked for.
+    let asks_version = std::env::args_os()
+        .skip(1)
+        .any(|a| a == "--version" || a == "-V");
+    let version = if asks_version {
+        version_string()
+    } else {
+        raylink::VERSION.to_string()
+    };
+    let matches = Cli::command().version(version).get_matches();
     let cli = match Cli::from_arg_matches(&matches) {
         Ok(cli) => cli,
         Err(e) => e.exit(),

@@ -9,8 +9,9 @@ use raylink::scene::Scene;
 use std::path::Path;
 
 /// Largest RMSE (display values, clamped to [0, 1]) accepted between the adaptive image and
-/// the 16x16-supersampled reference.
-const ADAPTIVE_TOLERANCE: f32 = 0.01;
+/// the 16x16-supersampled reference at 160x120. At this size most of the checkerboard is
+/// sub-pixel, so 4x4 supersampling itself is 0.006 away and 2x2 0.017.
+const ADAPTIVE_TOLERANCE: f32 = 0.012;
 
 fn clamped(image: &Image) -> Image {
     Image {
@@ -46,7 +47,7 @@ fn adaptive_traces_fewer_rays_than_4x4_and_stays_close_to_16x16() {
     let (uniform, uniform_stats) = run(PixelSampling::Uniform { n: 4 });
     let (adaptive, adaptive_stats) = run(PixelSampling::default());
     let (corners, _) = run(PixelSampling::Adaptive {
-        threshold: f32::INFINITY,
+        threshold: 0.0,
         max_depth: 0,
     });
     let (e_uniform, e_adaptive, e_corners) = (

@@ -4,7 +4,7 @@
 
 mod sampling;
 
-pub use sampling::PixelSampling;
+pub use sampling::{PixelSampling, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD, MAX_ADAPTIVE_DEPTH};
 
 use crate::accel::embree::set_flush_denormals;
 use crate::image::Image;

