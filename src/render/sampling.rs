@@ -5,7 +5,7 @@ use crate::integrators::{Context, Integrator, RayStats, Sample};
 use crate::math::{Rgb, Rng};
 use crate::scene::camera::CameraBasis;
 use crate::{Error, Result};
-use std::collections::HashMap;
+use rustc_hash::FxHashMap;
 
 /// Deepest subdivision the adaptive sampler allows (a 256x256 lattice per pixel).
 pub const MAX_ADAPTIVE_DEPTH: u32 = 8;
@@ -130,7 +130,7 @@ pub(super) fn render_tile(
                 threshold,
                 max_depth,
                 scale: 1 << max_depth,
-                cache: HashMap::new(),
+                cache: FxHashMap::default(),
             };
             for y in tile.y0..tile.y1 {
                 for x in tile.x0..tile.x1 {
@@ -153,7 +153,7 @@ struct Adaptive<'a> {
     threshold: f32,
     max_depth: u32,
     scale: u32,
-    cache: HashMap<(u32, u32), Sample>,
+    cache: FxHashMap<(u32, u32), Sample>,
 }
 
 impl Adaptive<'_> {

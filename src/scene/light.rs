@@ -31,9 +31,18 @@ enum AreaKind {
     },
     /// Triangles with a cumulative area table for choosing one proportionally to its area.
     Triangles {
-        tris: Vec<[Vec3; 3]>,
+        tris: Vec<LightTriangle>,
         cdf: Vec<f32>,
     },
+}
+
+/// A triangle prepared for sampling: a vertex, two edges and the unit normal.
+#[derive(Clone, Debug)]
+struct LightTriangle {
+    a: Vec3,
+    ab: Vec3,
+    ac: Vec3,
+    n: Vec3,
 }
 
 /// A point on a light with its unit normal (the side that emits).
@@ -56,12 +65,21 @@ impl AreaLight {
                 let kind = match s.geometry {
                     Geometry::Sphere { center, radius } => AreaKind::Sphere { center, radius },
                     ref g => {
-                        let tris = g.triangles();
+                        let tris: Vec<LightTriangle> = g
+                            .triangles()
+                            .into_iter()
+                            .map(|[a, b, c]| LightTriangle {
+                                a,
+                                ab: b - a,
+                                ac: c - a,
+                                n: (b - a).cross(c - a).normalize_or_zero(),
+                            })
+                            .collect();
                         let mut total = 0.0;
                         let cdf = tris
                             .iter()
-                            .map(|[a, b, c]| {
-                                total += 0.5 * (*b - *a).cross(*c - *a).length();
+                            .map(|t| {
+                                total += 0.5 * t.ab.cross(t.ac).length();
                                 total
                             })
                             .collect();
@@ -99,14 +117,82 @@ impl AreaLight {
                 // Reuse the leftover of u.x within the chosen triangle's interval.
                 let lo = if i == 0 { 0.0 } else { cdf[i - 1] };
                 let ux = ((target - lo) / (cdf[i] - lo).max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
-                let [a, b, c] = tris[i];
+                let t = &tris[i];
+                // Uniform over the triangle (Shirley's square-root warp).
                 let su = ux.sqrt();
-                let (b0, b1) = (1.0 - su, u.y * su);
+                let (b1, b2) = (su * (1.0 - u.y), su * u.y);
                 LightPoint {
-                    p: a * b0 + b * b1 + c * (1.0 - b0 - b1),
-                    n: (b - a).cross(c - a).normalize(),
+                    p: t.a + t.ab * b1 + t.ac * b2,
+                    n: t.n,
                 }
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::{Camera, Material, QuadMesh, Shape};
+
+    /// Samples over an L-shaped emitter made of two quads of areas 2 and 1 land on it,
+    /// uniformly: the sample mean is the area-weighted centroid.
+    #[test]
+    fn area_samples_are_uniform_over_the_shape() {
+        let quad = |x0: f32, x1: f32| {
+            [
+                Vec3::new(x0, 0.0, 0.0),
+                Vec3::new(x0, 0.0, 1.0),
+                Vec3::new(x1, 0.0, 1.0),
+                Vec3::new(x1, 0.0, 0.0),
+            ]
+        };
+        let positions: Vec<Vec3> = quad(0.0, 2.0).into_iter().chain(quad(2.0, 3.0)).collect();
+        let scene = Scene {
+            source: "t".into(),
+            camera: Camera {
+                position: Vec3::Z,
+                look_at: Vec3::ZERO,
+                up: Vec3::Y,
+                fov_deg: 45.0,
+                width: 1,
+                height: 1,
+            },
+            materials: vec![Material {
+                emission: Rgb::ONE,
+                ..Material::default()
+            }],
+            shapes: vec![Shape {
+                geometry: Geometry::Quads(QuadMesh {
+                    positions,
+                    indices: vec![[0, 1, 2, 3], [4, 5, 6, 7]],
+                }),
+                material: 0,
+            }],
+            lights: vec![],
+            ambient: Rgb::ZERO,
+            background: Rgb::ZERO,
+        };
+        let lights = AreaLight::collect(&scene);
+        assert_eq!(lights.len(), 1);
+        assert!((lights[0].area - 3.0).abs() < 1e-6);
+        let mut rng = crate::math::Rng::for_key(5, &[]);
+        let n = 200_000;
+        let mut mean = Vec3::ZERO;
+        let mut right = 0;
+        for _ in 0..n {
+            let s = lights[0].sample(Vec2::new(rng.uniform(), rng.uniform()));
+            assert!(
+                s.p.y.abs() < 1e-6 && (0.0..=3.0).contains(&s.p.x) && (0.0..=1.0).contains(&s.p.z)
+            );
+            assert!((s.n - Vec3::Y).length() < 1e-6, "normal {}", s.n);
+            mean += s.p / n as f32;
+            right += (s.p.x > 2.0) as u32;
+        }
+        assert!(
+            (mean - Vec3::new(1.5, 0.0, 0.5)).length() < 0.01,
+            "mean {mean}"
+        );
+        assert!((right as f32 / n as f32 - 1.0 / 3.0).abs() < 0.005);
     }
 }
