@@ -192,7 +192,9 @@ impl Adaptive<'_> {
 
     /// Whether the corner values are not "nearly equal": they see different objects, or some
     /// channel differs by more than the threshold after compressing highlights (x/(1+x)), so
-    /// that contrast is judged as it will be displayed.
+    /// that contrast is judged as it will be displayed. Comparing first-hit objects stands in
+    /// for the paper's enlarged bounding spheres, which flag squares that a small object
+    /// may cross; Embree hides bounding volumes, and silhouettes are what they were for.
     fn differ(&self, corners: &[Sample; 4]) -> bool {
         let first = corners[0].object;
         if corners.iter().any(|c| c.object != first) {
