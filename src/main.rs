@@ -9,7 +9,7 @@ use raylink::integrators::{Context, Integrator};
 use raylink::render::{
     render, PixelSampling, RenderOptions, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD,
 };
-use raylink::scene::Scene;
+use raylink::scene::{Scene, MAX_RESOLUTION};
 use raylink::{accel, Error};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -103,27 +103,17 @@ struct RenderArgs {
     quiet: bool,
 }
 
-/// Why a run failed: the message and the exit code it maps to.
-struct Failure(Error);
-
-impl Failure {
-    fn exit_code(&self) -> u8 {
-        match self.0 {
-            Error::Input { .. } | Error::Options(_) | Error::Io { .. } => 2,
-            _ => 1,
-        }
-    }
-}
-
-impl From<Error> for Failure {
-    fn from(e: Error) -> Self {
-        Failure(e)
+/// The exit code of a failed run: 2 for bad input or options, 1 for the rest.
+fn exit_code(error: &Error) -> u8 {
+    match error {
+        Error::Input { .. } | Error::Options(_) | Error::Io { .. } => 2,
+        _ => 1,
     }
 }
 
 fn main() -> ExitCode {
-    // Starting Embree to ask its version costs a few tenths of a second: only pay it when
-    // the version is what was asked for.
+    // Only --version needs Embree's version; don't start a device (and its thread pool) for
+    // every other command.
     let asks_version = std::env::args_os()
         .skip(1)
         .any(|a| a == "--version" || a == "-V");
@@ -142,9 +132,9 @@ fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(failure) => {
-            eprintln!("raylink: error: {}", failure.0);
-            ExitCode::from(failure.exit_code())
+        Err(error) => {
+            eprintln!("raylink: error: {error}");
+            ExitCode::from(exit_code(&error))
         }
     }
 }
@@ -156,6 +146,14 @@ fn version_string() -> String {
         raylink::VERSION,
         raylink::image::oiio::version()
     )
+}
+
+/// The name the integrator goes by on the command line.
+fn integrator_name(name: IntegratorName) -> String {
+    name.to_possible_value()
+        .expect("integrator names are never skipped")
+        .get_name()
+        .to_string()
 }
 
 fn pixel_sampling(args: &RenderArgs) -> Result<PixelSampling, Error> {
@@ -191,12 +189,12 @@ fn pixel_sampling(args: &RenderArgs) -> Result<PixelSampling, Error> {
     }
 }
 
-fn run_render(args: RenderArgs) -> Result<(), Failure> {
+fn run_render(args: RenderArgs) -> raylink::Result<()> {
     // Everything that can be checked is checked before the (possibly long) render.
     let sampling = pixel_sampling(&args)?;
     sampling.validate()?;
     if args.threads == Some(0) {
-        return Err(Error::Options("--threads must be at least 1".into()).into());
+        return Err(Error::Options("--threads must be at least 1".into()));
     }
     for out in &args.outputs {
         // A bad output path is a bad option: report it before any work is done.
@@ -206,10 +204,10 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
     let width = args.width.unwrap_or(scene.camera.width);
     let height = args.height.unwrap_or(scene.camera.height);
     for (name, v) in [("--width", width), ("--height", height)] {
-        if v == 0 || v > 65536 {
-            return Err(
-                Error::Options(format!("{name} must be between 1 and 65536, got {v}")).into(),
-            );
+        if !(1..=MAX_RESOLUTION).contains(&v) {
+            return Err(Error::Options(format!(
+                "{name} must be between 1 and {MAX_RESOLUTION}, got {v}"
+            )));
         }
     }
 
@@ -244,7 +242,7 @@ fn run_render(args: RenderArgs) -> Result<(), Failure> {
         ),
         (
             "raylink:integrator".into(),
-            MetaValue::Str("whitted".into()),
+            MetaValue::Str(integrator_name(args.integrator)),
         ),
         (
             "raylink:sampling".into(),

@@ -1,5 +1,8 @@
 use crate::math::{Ray, Vec3};
 
+/// Largest image width or height accepted, from a scene file or the command line.
+pub const MAX_RESOLUTION: u32 = 65536;
+
 /// A pinhole perspective camera. As in pbrt, `fov_deg` spans the shorter image axis.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Camera {

@@ -9,7 +9,7 @@ mod material;
 pub mod obj;
 pub mod toml;
 
-pub use camera::Camera;
+pub use camera::{Camera, MAX_RESOLUTION};
 pub use geometry::{Geometry, QuadMesh, Shape, SurfacePoint, TriangleMesh};
 pub use light::Light;
 pub use material::{Material, Texture};

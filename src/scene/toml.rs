@@ -8,7 +8,10 @@
 //! `line 12: shapes[2].radius: must be positive, got -1`.
 
 use super::obj;
-use super::{Camera, Geometry, Light, Material, QuadMesh, Scene, Shape, Texture, TriangleMesh};
+use super::{
+    Camera, Geometry, Light, Material, QuadMesh, Scene, Shape, Texture, TriangleMesh,
+    MAX_RESOLUTION,
+};
 use crate::math::{Mat3, Mat4, Rgb, Vec2, Vec3};
 use crate::Error;
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
@@ -584,8 +587,6 @@ fn direction(v: Vec3) -> Result<Vec3, String> {
 }
 
 /// Largest image side accepted.
-const MAX_RESOLUTION: u32 = 65536;
-
 fn resolution(v: u32) -> Result<u32, String> {
     if (1..=MAX_RESOLUTION).contains(&v) {
         Ok(v)
