@@ -114,12 +114,9 @@ impl Whitted {
         let fresnel = self.options.fresnel || m.fresnel;
         let cos_i = view.dot(n).clamp(0.0, 1.0);
         let refracted = refract(d, n, eta);
-        let reflectance = match (fresnel, refracted) {
-            (true, Some(_)) => fresnel_dielectric(cos_i, eta),
-            (true, None) => 1.0, // total internal reflection
-            (false, _) => 0.0,
-        };
         let (ks, kt) = if fresnel {
+            // 1 under total internal reflection: everything goes to ks·S.
+            let reflectance = fresnel_dielectric(cos_i, eta);
             (
                 m.specular * reflectance,
                 m.transmission * (1.0 - reflectance),
@@ -262,11 +259,11 @@ impl Whitted {
         target: Option<Vec3>,
         stats: &mut RayStats,
     ) -> Rgb {
-        let origin = offset_origin(p, ng, wi);
-        let mut ray = match target {
-            Some(t) => Ray::segment(origin, t),
-            None => Ray::new(origin, wi),
+        let towards_light = |from: Vec3| match target {
+            Some(end) => Ray::segment(from, end),
+            None => Ray::new(from, wi),
         };
+        let mut ray = towards_light(offset_origin(p, ng, wi));
         if !ctx.occluded(&ray, stats) {
             return Rgb::ONE;
         }
@@ -284,11 +281,7 @@ impl Whitted {
             if t.max_element() < self.options.cutoff {
                 return Rgb::ZERO;
             }
-            let next = offset_origin(hit.p, hit.ng, ray.dir);
-            ray = match target {
-                Some(end) => Ray::segment(next, end),
-                None => Ray::new(next, wi),
-            };
+            ray = towards_light(offset_origin(hit.p, hit.ng, ray.dir));
         }
         Rgb::ZERO
     }

@@ -62,8 +62,10 @@ impl AreaLight {
             .filter(|(_, s)| scene.materials[s.material].is_emissive())
             .filter_map(|(i, s)| {
                 let radiance = scene.materials[s.material].emission;
-                let kind = match s.geometry {
-                    Geometry::Sphere { center, radius } => AreaKind::Sphere { center, radius },
+                let (kind, area) = match s.geometry {
+                    Geometry::Sphere { center, radius } => {
+                        (AreaKind::Sphere { center, radius }, s.geometry.area())
+                    }
                     ref g => {
                         let tris: Vec<LightTriangle> = g
                             .triangles()
@@ -83,10 +85,9 @@ impl AreaLight {
                                 total
                             })
                             .collect();
-                        AreaKind::Triangles { tris, cdf }
+                        (AreaKind::Triangles { tris, cdf }, total)
                     }
                 };
-                let area = s.geometry.area();
                 (area > 0.0).then_some(AreaLight {
                     shape: i,
                     radiance,
