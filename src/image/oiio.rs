@@ -439,67 +439,38 @@ mod tests {
     fn nul_bytes_are_errors_not_panics() {
         let dir = tempfile::tempdir().unwrap();
         let ok = dir.path().join("a.exr");
-        let data = [0.0f32; 3];
-        let meta = Metadata::new();
+        let rgb = ["R", "G", "B"];
+        // A 1x1 float write where exactly one of the strings carries a NUL byte.
+        let write_nul = |path: &Path, format: &str, channels: &[&str], meta: &Metadata| {
+            let e = write(
+                path,
+                format,
+                1,
+                1,
+                channels,
+                &[0.0; 3],
+                meta,
+                PixelType::Float,
+            );
+            assert!(e.unwrap_err().to_string().contains("NUL"));
+        };
         let bad_path = Path::new("a\0b.exr");
-        let e = write(
-            bad_path,
-            "exr",
-            1,
-            1,
-            &["R", "G", "B"],
-            &data,
-            &meta,
-            PixelType::Float,
-        );
-        assert!(e.unwrap_err().to_string().contains("NUL"));
+        write_nul(bad_path, "exr", &rgb, &Metadata::new());
         assert!(read(bad_path).unwrap_err().to_string().contains("NUL"));
-        let e = write(
-            &ok,
-            "ex\0r",
-            1,
-            1,
-            &["R", "G", "B"],
-            &data,
-            &meta,
-            PixelType::Float,
-        );
-        assert!(e.unwrap_err().to_string().contains("NUL"));
-        let e = write(
+        write_nul(&ok, "ex\0r", &rgb, &Metadata::new());
+        write_nul(&ok, "exr", &["R", "G\0", "B"], &Metadata::new());
+        write_nul(
             &ok,
             "exr",
-            1,
-            1,
-            &["R", "G\0", "B"],
-            &data,
-            &meta,
-            PixelType::Float,
+            &rgb,
+            &vec![("a\0b".to_string(), MetaValue::Int(1))],
         );
-        assert!(e.unwrap_err().to_string().contains("NUL"));
-        let meta = vec![("a\0b".to_string(), MetaValue::Int(1))];
-        let e = write(
+        write_nul(
             &ok,
             "exr",
-            1,
-            1,
-            &["R", "G", "B"],
-            &data,
-            &meta,
-            PixelType::Float,
+            &rgb,
+            &vec![("a".to_string(), MetaValue::Str("x\0y".into()))],
         );
-        assert!(e.unwrap_err().to_string().contains("NUL"));
-        let meta = vec![("a".to_string(), MetaValue::Str("x\0y".into()))];
-        let e = write(
-            &ok,
-            "exr",
-            1,
-            1,
-            &["R", "G", "B"],
-            &data,
-            &meta,
-            PixelType::Float,
-        );
-        assert!(e.unwrap_err().to_string().contains("NUL"));
         assert!(!ok.exists());
     }
 
