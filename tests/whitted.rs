@@ -28,6 +28,7 @@ fn empty_scene() -> Scene {
         lights: Vec::new(),
         ambient: Rgb::ZERO,
         background: Rgb::ZERO,
+        settings: Default::default(),
     }
 }
 

@@ -104,7 +104,7 @@ impl Whitted {
         if entering {
             color += m.emission; // one-sided emitters, facing their geometric normal
         }
-        let kd = m.diffuse.eval(sp.p);
+        let kd = m.diffuse.eval(sp.p, sp.uv);
         color += m.ambient.unwrap_or(kd) * ctx.scene.ambient;
         color += self.direct(ctx, m, kd, sp.p, ng, n, view, rng, stats);
 

@@ -173,6 +173,7 @@ mod tests {
             lights: vec![],
             ambient: Rgb::ZERO,
             background: Rgb::ZERO,
+            settings: Default::default(),
         };
         let lights = AreaLight::collect(&scene);
         assert_eq!(lights.len(), 1);

@@ -1,4 +1,4 @@
-use crate::math::{Rgb, Vec3};
+use crate::math::{Rgb, Vec2, Vec3};
 
 /// A surface in Whitted's model (eq. 2 of the paper): I = ka·Ia + kd Σ(N·Lj) + ks S + kt T,
 /// with a Phong highlight for point lights, plus emission for area lights.
@@ -66,7 +66,8 @@ pub enum Texture {
 }
 
 impl Texture {
-    pub fn eval(&self, p: Vec3) -> Rgb {
+    /// The colour at world position `p` with surface coordinates `uv`.
+    pub fn eval(&self, p: Vec3, _uv: Vec2) -> Rgb {
         match *self {
             Texture::Constant(c) => c,
             Texture::Checker { even, odd, size } => {

@@ -7,12 +7,14 @@ mod geometry;
 pub mod light;
 mod material;
 pub mod obj;
+pub mod settings;
 pub mod toml;
 
 pub use camera::{Camera, MAX_RESOLUTION};
 pub use geometry::{Geometry, QuadMesh, Shape, SurfacePoint, TriangleMesh};
 pub use light::Light;
 pub use material::{Material, Texture};
+pub use settings::RenderSettings;
 
 use crate::math::Rgb;
 use std::path::{Path, PathBuf};
@@ -31,6 +33,8 @@ pub struct Scene {
     pub ambient: Rgb,
     /// Radiance of rays that leave the scene.
     pub background: Rgb,
+    /// Render settings given in the file; command-line options override them.
+    pub settings: RenderSettings,
 }
 
 impl Scene {

@@ -785,6 +785,7 @@ impl<'a> Builder<'a> {
             lights,
             ambient,
             background,
+            settings: Default::default(),
         })
     }
 
