@@ -4,13 +4,16 @@
 //! - [`accel`]: one intersection interface; the Embree backend is the only place that talks to Embree.
 //! - [`scene`]: the scene description every reader produces (camera, materials, shapes, lights).
 //! - [`image`]: images and their files, written and read through OpenImageIO.
+//! - [`bsdf`]: scattering at surfaces (evaluate, sample, density) for the Monte Carlo integrators.
 //! - [`integrators`]: one module per light-transport technique.
 //! - [`render`]: tiles, threads, pixel sampling, progress and statistics.
 
 pub mod accel;
+pub mod bsdf;
 pub mod error;
 pub mod image;
 pub mod integrators;
+pub mod lights;
 pub mod math;
 pub mod render;
 pub mod scene;

@@ -2,10 +2,16 @@
 //! (0 success, 1 a failure while rendering or writing, 2 bad input or options).
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand, ValueEnum};
+use raylink::image::filter::Filter;
 use raylink::image::output::{check_output_path, write_image, OutputOptions};
 use raylink::image::{MetaValue, Metadata};
+use raylink::integrators::bdpt::{Bdpt, BdptOptions};
+use raylink::integrators::light::{LightOptions, LightTracer};
+use raylink::integrators::path::{PathOptions, PathTracer, DEFAULT_MAX_DEPTH, MAX_DEPTH_LIMIT};
 use raylink::integrators::whitted::{Whitted, WhittedOptions};
-use raylink::integrators::{Context, Integrator};
+use raylink::integrators::{Context, MonteCarlo};
+use raylink::render::aov::{render_aovs, Aov};
+use raylink::render::progressive::{render_progressive, ProgressiveOptions, MAX_SPP};
 use raylink::render::{
     render, PixelSampling, RenderOptions, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD,
 };
@@ -33,10 +39,23 @@ enum Command {
     Render(RenderArgs),
 }
 
-#[derive(Clone, Copy, ValueEnum)]
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
 enum IntegratorName {
     /// Whitted 1980: recursive reflection, refraction and shadows.
     Whitted,
+    /// Path tracing with next-event estimation and multiple importance sampling.
+    Path,
+    /// Light (particle) tracing: paths from the lights, connected to the camera.
+    Light,
+    /// Bidirectional path tracing, all strategies combined by multiple importance sampling.
+    Bdpt,
+}
+
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum FilterName {
+    Box,
+    Triangle,
+    Gaussian,
 }
 
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
@@ -56,18 +75,39 @@ struct RenderArgs {
     #[arg(short, long = "output", required = true, value_name = "FILE")]
     outputs: Vec<PathBuf>,
     /// Light-transport technique.
-    #[arg(long, value_enum, default_value = "whitted")]
-    integrator: IntegratorName,
+    /// (default: the scene's, else whitted).
+    #[arg(long, value_enum)]
+    integrator: Option<IntegratorName>,
     /// Image width in pixels (default: the scene's).
     #[arg(long)]
     width: Option<u32>,
     /// Image height in pixels (default: the scene's).
     #[arg(long)]
     height: Option<u32>,
-    /// Samples per pixel for uniform supersampling; must be a square (1, 4, 9, 16, ...).
-    /// Giving it selects --aa uniform.
+    /// Samples per pixel (default: the scene's, else 16). For the Whitted integrator it
+    /// selects uniform supersampling and must be a square (1, 4, 9, 16, ...).
     #[arg(long)]
     spp: Option<u32>,
+    /// Monte Carlo integrators: render whole sample passes until this many seconds have
+    /// passed (--spp, if given, still caps the samples).
+    #[arg(long, value_name = "SECONDS")]
+    time_limit: Option<f64>,
+    /// Monte Carlo integrators: write the outputs after a pass when this many seconds have
+    /// passed since the last write, so a long render can be watched.
+    #[arg(long, value_name = "SECONDS")]
+    write_interval: Option<f64>,
+    /// Monte Carlo integrators: pixel reconstruction filter (default: the scene's, else a
+    /// Gaussian of radius 1.5 and sigma 0.5, as in pbrt).
+    #[arg(long, value_enum)]
+    filter: Option<FilterName>,
+    /// Radius of the pixel filter in pixels (default 0.5 for box, 2 for triangle, 1.5 for
+    /// Gaussian).
+    #[arg(long)]
+    filter_radius: Option<f32>,
+    /// Also write auxiliary images of the first surface seen (albedo, normal, depth) as
+    /// STEM.albedo.exr, STEM.normal.exr and STEM.depth.exr beside the first output.
+    #[arg(long)]
+    aov: bool,
     /// Anti-aliasing: adaptive (default) or uniform supersampling.
     #[arg(long, value_enum)]
     aa: Option<AntiAliasing>,
@@ -77,12 +117,13 @@ struct RenderArgs {
     /// Adaptive anti-aliasing: deepest subdivision level (each level halves the square).
     #[arg(long, default_value_t = DEFAULT_AA_DEPTH)]
     aa_depth: u32,
-    /// Maximum depth of the ray tree.
-    #[arg(long, default_value_t = 8)]
-    max_depth: u32,
-    /// Shadow rays per area light at each shading point.
-    #[arg(long, default_value_t = 16)]
-    area_samples: u32,
+    /// Maximum depth of the ray tree (Whitted) or number of bounces (Monte Carlo; 1 is
+    /// direct lighting only). Default: the scene's, else 8.
+    #[arg(long)]
+    max_depth: Option<u32>,
+    /// Whitted: shadow rays per area light at each shading point (default 16).
+    #[arg(long)]
+    area_samples: Option<u32>,
     /// Weight reflection and transmission by Fresnel's law on every material.
     #[arg(long)]
     fresnel: bool,
@@ -156,8 +197,8 @@ fn integrator_name(name: IntegratorName) -> String {
         .to_string()
 }
 
-fn pixel_sampling(args: &RenderArgs) -> Result<PixelSampling, Error> {
-    let aa = args.aa.unwrap_or(if args.spp.is_some() {
+fn pixel_sampling(args: &RenderArgs, spp: Option<u32>) -> Result<PixelSampling, Error> {
+    let aa = args.aa.unwrap_or(if spp.is_some() {
         AntiAliasing::Uniform
     } else {
         AntiAliasing::Adaptive
@@ -177,7 +218,7 @@ fn pixel_sampling(args: &RenderArgs) -> Result<PixelSampling, Error> {
             })
         }
         AntiAliasing::Uniform => {
-            let spp = args.spp.unwrap_or(16);
+            let spp = spp.unwrap_or(16);
             let n = (spp as f64).sqrt().round() as u32;
             if spp == 0 || n * n != spp {
                 return Err(Error::Options(format!(
@@ -189,10 +230,55 @@ fn pixel_sampling(args: &RenderArgs) -> Result<PixelSampling, Error> {
     }
 }
 
+/// The integrator: the command line's, else the scene's, else Whitted.
+fn choose_integrator(args: &RenderArgs, scene: &Scene) -> Result<IntegratorName, Error> {
+    if let Some(i) = args.integrator {
+        return Ok(i);
+    }
+    match scene.settings.integrator.as_deref() {
+        None => Ok(IntegratorName::Whitted),
+        Some(name) => IntegratorName::from_str(name, true).map_err(|_| {
+            Error::input(
+                &scene.source,
+                format!("unknown integrator \"{name}\" in the scene's render settings"),
+            )
+        }),
+    }
+}
+
+/// The pixel filter: the command line's, else the scene's, else pbrt's Gaussian.
+fn choose_filter(args: &RenderArgs, scene: &Scene) -> Result<Filter, Error> {
+    let filter = match args.filter {
+        None => {
+            let f = scene.settings.filter.unwrap_or_default();
+            match args.filter_radius {
+                None => f,
+                Some(radius) => match f {
+                    Filter::Box { .. } => Filter::Box { radius },
+                    Filter::Triangle { .. } => Filter::Triangle { radius },
+                    Filter::Gaussian { sigma, .. } => Filter::Gaussian { radius, sigma },
+                },
+            }
+        }
+        Some(FilterName::Box) => Filter::Box {
+            radius: args.filter_radius.unwrap_or(0.5),
+        },
+        Some(FilterName::Triangle) => Filter::Triangle {
+            radius: args.filter_radius.unwrap_or(2.0),
+        },
+        Some(FilterName::Gaussian) => Filter::Gaussian {
+            radius: args.filter_radius.unwrap_or(1.5),
+            sigma: 0.5,
+        },
+    };
+    filter
+        .validate()
+        .map_err(|e| Error::Options(format!("--filter: {e}")))?;
+    Ok(filter)
+}
+
 fn run_render(args: RenderArgs) -> raylink::Result<()> {
     // Everything that can be checked is checked before the (possibly long) render.
-    let sampling = pixel_sampling(&args)?;
-    sampling.validate()?;
     if args.threads == Some(0) {
         return Err(Error::Options("--threads must be at least 1".into()));
     }
@@ -210,28 +296,56 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
             )));
         }
     }
-
-    let integrator: Box<dyn Integrator> = match args.integrator {
-        IntegratorName::Whitted => Box::new(Whitted::new(WhittedOptions {
-            max_depth: args.max_depth.max(1),
-            area_samples: args.area_samples,
-            fresnel: args.fresnel,
-            ..WhittedOptions::default()
-        })),
+    let integrator = choose_integrator(&args, &scene)?;
+    let spp = args.spp.or(scene.settings.spp);
+    let max_depth = args
+        .max_depth
+        .or(scene.settings.max_depth)
+        .unwrap_or(DEFAULT_MAX_DEPTH);
+    if max_depth > MAX_DEPTH_LIMIT {
+        return Err(Error::Options(format!(
+            "--max-depth must be at most {MAX_DEPTH_LIMIT}, got {max_depth}"
+        )));
+    }
+    let monte_carlo: Option<Box<dyn MonteCarlo>> = match integrator {
+        IntegratorName::Whitted => None,
+        IntegratorName::Path => Some(Box::new(PathTracer::new(PathOptions { max_depth }))),
+        IntegratorName::Light => Some(Box::new(LightTracer::new(LightOptions { max_depth }))),
+        IntegratorName::Bdpt => Some(Box::new(Bdpt::new(BdptOptions { max_depth }))),
     };
+    let whitted_only = [
+        ("--aa", args.aa.is_some()),
+        ("--area-samples", args.area_samples.is_some()),
+        ("--fresnel", args.fresnel),
+    ];
+    let monte_carlo_only = [
+        ("--time-limit", args.time_limit.is_some()),
+        ("--write-interval", args.write_interval.is_some()),
+        ("--filter", args.filter.is_some()),
+        ("--filter-radius", args.filter_radius.is_some()),
+    ];
+    let misplaced = if monte_carlo.is_some() {
+        whitted_only.iter().find(|o| o.1)
+    } else {
+        monte_carlo_only.iter().find(|o| o.1)
+    };
+    if let Some((option, _)) = misplaced {
+        return Err(Error::Options(format!(
+            "{option} does not apply to the {} integrator",
+            integrator_name(integrator)
+        )));
+    }
+    if integrator == IntegratorName::Bdpt {
+        Bdpt::check_scene(&scene).map_err(|e| Error::input(&args.scene, e))?;
+    }
+    let filter = choose_filter(&args, &scene)?;
     let accel = accel::build(&scene, accel::Backend::Embree)?;
     let ctx = Context::new(&scene, accel.as_ref());
-    let options = RenderOptions {
-        width,
-        height,
-        sampling,
-        threads: args.threads,
-        seed: args.seed,
-        progress: !args.quiet,
+    let out_options = OutputOptions {
+        exposure: args.exposure,
+        half: args.half,
     };
-    let (image, stats) = render(&ctx, integrator.as_ref(), &options)?;
-
-    let metadata: Metadata = vec![
+    let mut metadata: Metadata = vec![
         (
             "Software".into(),
             MetaValue::Str(format!("raylink {}", raylink::VERSION)),
@@ -242,17 +356,95 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
         ),
         (
             "raylink:integrator".into(),
-            MetaValue::Str(integrator_name(args.integrator)),
+            MetaValue::Str(integrator_name(integrator)),
         ),
-        (
-            "raylink:sampling".into(),
-            MetaValue::Str(format!("{sampling:?}")),
-        ),
+        ("raylink:seed".into(), MetaValue::Str(args.seed.to_string())),
+        ("raylink:max_depth".into(), MetaValue::Int(max_depth as i32)),
+    ];
+
+    let (image, stats) = match &monte_carlo {
+        None => {
+            let sampling = pixel_sampling(&args, spp)?;
+            sampling.validate()?;
+            let whitted = Whitted::new(WhittedOptions {
+                max_depth: max_depth.max(1),
+                area_samples: args.area_samples.unwrap_or(16),
+                fresnel: args.fresnel,
+                ..WhittedOptions::default()
+            });
+            let options = RenderOptions {
+                width,
+                height,
+                sampling,
+                threads: args.threads,
+                seed: args.seed,
+                progress: !args.quiet,
+            };
+            metadata.push((
+                "raylink:sampling".into(),
+                MetaValue::Str(format!("{sampling:?}")),
+            ));
+            render(&ctx, &whitted, &options)?
+        }
+        Some(estimator) => {
+            if let Some(t) = args.write_interval {
+                if !(t.is_finite() && t >= 0.0) {
+                    return Err(Error::Options(format!(
+                        "--write-interval must be a non-negative number of seconds, got {t}"
+                    )));
+                }
+            }
+            let options = ProgressiveOptions {
+                width,
+                height,
+                spp: spp.unwrap_or(if args.time_limit.is_some() {
+                    MAX_SPP
+                } else {
+                    16
+                }),
+                time_limit: args.time_limit,
+                threads: args.threads,
+                seed: args.seed,
+                progress: !args.quiet,
+                filter,
+            };
+            metadata.push((
+                "raylink:filter".into(),
+                MetaValue::Str(format!("{filter:?}")),
+            ));
+            let mut last_write = std::time::Instant::now();
+            let (film, stats) = render_progressive(&ctx, estimator.as_ref(), &options, |film| {
+                let due = args
+                    .write_interval
+                    .is_some_and(|t| last_write.elapsed().as_secs_f64() >= t);
+                if due && film.spp < options.spp {
+                    let mut meta = metadata.clone();
+                    meta.push((
+                        "raylink:samples_per_pixel".into(),
+                        MetaValue::Float(film.spp as f32),
+                    ));
+                    meta.push(("raylink:partial".into(), MetaValue::Int(1)));
+                    for out in &args.outputs {
+                        write_image(out, &film.image(), &meta, &out_options)?;
+                    }
+                    last_write = std::time::Instant::now();
+                }
+                Ok(())
+            })?;
+            if film.invalid > 0 && !args.quiet {
+                eprintln!(
+                    "raylink: warning: {} samples were not finite and were dropped",
+                    film.invalid
+                );
+            }
+            (film.image(), stats)
+        }
+    };
+    metadata.extend([
         (
             "raylink:samples_per_pixel".into(),
             MetaValue::Float(stats.samples as f32 / (width as f32 * height as f32)),
         ),
-        ("raylink:seed".into(), MetaValue::Str(args.seed.to_string())),
         (
             "raylink:render_seconds".into(),
             MetaValue::Float(stats.seconds as f32),
@@ -261,13 +453,18 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
             "raylink:rays".into(),
             MetaValue::Str(stats.rays.total().to_string()),
         ),
-    ];
-    let out_options = OutputOptions {
-        exposure: args.exposure,
-        half: args.half,
-    };
+    ]);
     for out in &args.outputs {
         write_image(out, &image, &metadata, &out_options)?;
+    }
+    if args.aov {
+        let aovs = render_aovs(&ctx, width, height, filter, args.seed, args.threads)?;
+        let first = &args.outputs[0];
+        let stem = first.file_stem().unwrap_or_default().to_string_lossy();
+        for (aov, img) in Aov::ALL.iter().zip(&aovs) {
+            let path = first.with_file_name(format!("{stem}.{}.exr", aov.name()));
+            write_image(&path, img, &metadata, &out_options)?;
+        }
     }
     if !args.quiet {
         eprintln!("{}", stats.summary());

@@ -1,6 +1,7 @@
 //! Images in memory and on disk. Files go through OpenImageIO (`oiio`, the only unsafe
 //! OpenImageIO code); `output` chooses encoding by extension and writes atomically.
 
+pub mod compare;
 pub mod filter;
 pub mod oiio;
 pub mod output;

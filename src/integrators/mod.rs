@@ -1,10 +1,16 @@
 //! Light-transport techniques, one module each. They all see the scene through [`Context`]:
 //! the scene description, the intersection backend (never named) and the area lights.
 
+pub mod bdpt;
+pub mod light;
+pub mod path;
 pub mod whitted;
 
 use crate::accel::Accel;
+use crate::lights::LightSet;
+use crate::math::sobol::Sampler;
 use crate::math::{Ray, Rgb, Rng};
+use crate::scene::camera::CameraBasis;
 use crate::scene::light::AreaLight;
 use crate::scene::{Scene, SurfacePoint};
 
@@ -13,14 +19,19 @@ pub struct Context<'a> {
     pub scene: &'a Scene,
     accel: &'a dyn Accel,
     pub area_lights: Vec<AreaLight>,
+    /// Every emitter, for the Monte Carlo integrators.
+    pub lights: LightSet,
 }
 
 impl<'a> Context<'a> {
     pub fn new(scene: &'a Scene, accel: &'a dyn Accel) -> Self {
+        let area_lights = AreaLight::collect(scene);
+        let lights = LightSet::new(scene, &area_lights);
         Context {
             scene,
             accel,
-            area_lights: AreaLight::collect(scene),
+            area_lights,
+            lights,
         }
     }
 
@@ -69,4 +80,31 @@ pub struct Sample {
 pub trait Integrator: Sync {
     /// `rng` is the random stream of this image sample, derived from (seed, sample position).
     fn radiance(&self, ctx: &Context, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Sample;
+}
+
+/// A contribution that lands anywhere on the film (from a light path reaching the camera),
+/// at raster position (`x`, `y`). `value` is the path's contribution to the measurement of a
+/// pixel with a unit-integral filter centred there: the film spreads it with the filter and
+/// divides by the number of paths.
+#[derive(Clone, Copy, Debug)]
+pub struct Splat {
+    pub x: f32,
+    pub y: f32,
+    pub value: Rgb,
+}
+
+/// A Monte Carlo technique: one call per pixel sample.
+pub trait MonteCarlo: Sync {
+    /// The estimate of radiance along `ray` (the pixel's camera ray for this sample), and any
+    /// contributions to other pixels pushed onto `splats`. `sampler` gives this sample's
+    /// low-discrepancy values.
+    fn sample(
+        &self,
+        ctx: &Context,
+        camera: &CameraBasis,
+        ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+        splats: &mut Vec<Splat>,
+    ) -> Rgb;
 }

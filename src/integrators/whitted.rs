@@ -15,6 +15,7 @@
 //! (radiance is constant along rays in vacuum).
 
 use super::{Context, Integrator, RayStats, Sample};
+pub use crate::math::optics::{fresnel_dielectric, reflect, refract};
 use crate::math::{frame, offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
 use crate::scene::{Light, Material, SurfacePoint};
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -317,35 +318,6 @@ impl Integrator for Whitted {
         let (radiance, object) = self.trace(ctx, ray, 0, 1.0, rng, stats);
         Sample { radiance, object }
     }
-}
-
-/// Mirror direction of unit `d` about unit `n`.
-pub fn reflect(d: Vec3, n: Vec3) -> Vec3 {
-    d - 2.0 * d.dot(n) * n
-}
-
-/// Snell refraction of unit `d` through a surface with unit normal `n` facing the incoming
-/// side; `eta` = n_incident / n_transmitted. `None` under total internal reflection.
-pub fn refract(d: Vec3, n: Vec3, eta: f32) -> Option<Vec3> {
-    let cos_i = -d.dot(n);
-    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
-    if sin2_t > 1.0 {
-        return None;
-    }
-    let cos_t = (1.0 - sin2_t).sqrt();
-    Some((eta * d + (eta * cos_i - cos_t) * n).normalize())
-}
-
-/// Unpolarised Fresnel reflectance of a dielectric interface; `eta` = n_i / n_t.
-pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
-    let sin2_t = eta * eta * (1.0 - cos_i * cos_i).max(0.0);
-    if sin2_t >= 1.0 {
-        return 1.0;
-    }
-    let cos_t = (1.0 - sin2_t).sqrt();
-    let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
-    let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    0.5 * (rs * rs + rp * rp)
 }
 
 #[cfg(test)]

@@ -1,6 +1,9 @@
 //! Vectors (glam), rays, orthonormal frames and random streams.
 
+pub mod optics;
 mod random;
+pub mod sobol;
+pub mod warp;
 
 pub use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 pub use random::Rng;

@@ -2,6 +2,8 @@
 //! image sample draws from a random stream keyed by (seed, sample position), never by thread
 //! or tile, so an image is the same bit for bit for any thread count and tile order.
 
+pub mod aov;
+pub mod progressive;
 mod sampling;
 
 pub use sampling::{PixelSampling, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD, MAX_ADAPTIVE_DEPTH};
@@ -91,18 +93,14 @@ pub fn render(
             "the image needs a width and height of at least 1".into(),
         ));
     }
-    let pool = rayon::ThreadPoolBuilder::new()
-        .num_threads(options.threads.unwrap_or(0))
-        .start_handler(|_| set_flush_denormals())
-        .build()
-        .map_err(|e| Error::Options(format!("cannot start render threads: {e}")))?;
+    let pool = thread_pool(options.threads)?;
 
     let mut camera = ctx.scene.camera.clone();
     camera.width = options.width;
     camera.height = options.height;
     let basis = camera.basis();
     let tiles = tiles(options.width, options.height);
-    let progress = progress_bar(options.progress, tiles.len() as u64);
+    let progress = progress_bar(options.progress, tiles.len() as u64, "tiles");
 
     let start = Instant::now();
     let results: Vec<(Vec<Rgb>, RayStats, u64)> = pool.install(|| {
@@ -138,15 +136,28 @@ pub fn render(
     Ok((image, stats))
 }
 
-fn progress_bar(wanted: bool, tiles: u64) -> ProgressBar {
+/// The render threads: `None` uses every core; each thread flushes denormals to zero.
+fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads.unwrap_or(0))
+        .start_handler(|_| set_flush_denormals())
+        .build()
+        .map_err(|e| Error::Options(format!("cannot start render threads: {e}")))
+}
+
+/// A progress bar over `total` units (a spinner when the total is unknown, i.e. 0).
+fn progress_bar(wanted: bool, total: u64, unit: &str) -> ProgressBar {
     if !wanted || !std::io::stderr().is_terminal() {
         return ProgressBar::hidden();
     }
-    let bar = ProgressBar::new(tiles);
+    if total == 0 {
+        return ProgressBar::new_spinner();
+    }
+    let bar = ProgressBar::new(total);
     bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {wide_bar} {percent:>3}% tiles, ETA {eta}",
-        )
+        ProgressStyle::with_template(&format!(
+            "{{spinner}} [{{elapsed_precise}}] {{wide_bar}} {{pos}}/{{len}} {unit}, ETA {{eta}}"
+        ))
         .expect("the progress template is valid"),
     );
     bar

@@ -35,6 +35,7 @@ impl Camera {
             right: right * half * 2.0,
             down: -up * half * 2.0,
             center: (w * 0.5, h * 0.5),
+            margin: 0.5,
         }
     }
 }
@@ -48,9 +49,37 @@ pub struct CameraBasis {
     right: Vec3,
     down: Vec3,
     center: (f32, f32),
+    /// How far outside the image (in pixels) a point still counts as seen: the radius of
+    /// the pixel filter, which the renderer sets.
+    pub margin: f32,
 }
 
 impl CameraBasis {
+    /// Where the world point `p` projects on the film (in pixels, possibly outside the
+    /// image) and the cosine between the camera axis and the direction to `p`; `None` behind
+    /// the camera.
+    pub fn raster(&self, p: Vec3) -> Option<(f32, f32, f32)> {
+        let d = p - self.origin;
+        let z = d.dot(self.forward);
+        if z <= 0.0 {
+            return None;
+        }
+        let q = d / z;
+        let x = self.center.0 + q.dot(self.right) / self.right.length_squared();
+        let y = self.center.1 + q.dot(self.down) / self.down.length_squared();
+        Some((x, y, z / d.length()))
+    }
+
+    /// Width and height of the film in pixels.
+    pub fn film_size(&self) -> (f32, f32) {
+        (2.0 * self.center.0, 2.0 * self.center.1)
+    }
+
+    /// Area of one pixel on the image plane at unit distance in front of the pinhole.
+    pub fn pixel_area(&self) -> f32 {
+        self.right.length() * self.down.length()
+    }
+
     pub fn ray(&self, x: f32, y: f32) -> Ray {
         let dir = self.forward + self.right * (x - self.center.0) + self.down * (y - self.center.1);
         Ray::new(self.origin, dir.normalize())

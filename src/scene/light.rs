@@ -98,6 +98,14 @@ impl AreaLight {
             .collect()
     }
 
+    /// Centre and radius when the light is a sphere (which can be sampled by solid angle).
+    pub fn sphere(&self) -> Option<(Vec3, f32)> {
+        match self.kind {
+            AreaKind::Sphere { center, radius } => Some((center, radius)),
+            AreaKind::Triangles { .. } => None,
+        }
+    }
+
     /// A point uniformly distributed over the light's area for `u` uniform in [0,1)².
     pub fn sample(&self, u: Vec2) -> LightPoint {
         match &self.kind {

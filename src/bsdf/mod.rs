@@ -1,0 +1,319 @@
+//! Scattering at surfaces for the physically based integrators. A [`Bsdf`] is made from a
+//! scene [`Material`] at a surface point and interprets its coefficients as lobes:
+//!
+//! - `diffuse` kd: Lambertian reflection kd/π;
+//! - `specular` ks: reflection, a perfect mirror when `roughness` is 0, otherwise a GGX
+//!   microfacet lobe with α = `roughness`;
+//! - `transmission` kt with `ior`: smooth refraction;
+//! - `fresnel`: ks is weighted by the dielectric Fresnel reflectance F, kt by 1 − F and kd by
+//!   (1 − F(θi))(1 − F(θo)) (a coated surface), which makes ks = kt = 1 a glass.
+//!
+//! Every BSDF can evaluate, sample, and give the density of its samples, for both transport
+//! directions (Veach's thesis, ch. 5): in [`Transport::Radiance`] refraction scales radiance
+//! by (ηi/ηt)², and in [`Transport::Importance`] the shading-normal correction
+//! |wo·ns||wi·ng| / (|wo·ng||wi·ns|) keeps the adjoint BSDF consistent.
+
+mod microfacet;
+
+pub use microfacet::Ggx;
+
+use crate::math::optics::{fresnel_dielectric, refract};
+use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
+use crate::math::{frame, luminance, Rgb, Vec2, Vec3};
+use crate::scene::{Material, SurfacePoint};
+use std::f32::consts::FRAC_1_PI;
+
+/// Which quantity a path carries: radiance (paths from the camera) or importance (paths from
+/// the lights).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Transport {
+    Radiance,
+    Importance,
+}
+
+/// A sampled scattering direction.
+#[derive(Clone, Copy, Debug)]
+pub struct BsdfSample {
+    pub wi: Vec3,
+    /// f·|cos θi| / pdf: what the path throughput is multiplied by.
+    pub weight: Rgb,
+    /// Density of `wi` in solid angle (for a delta lobe, the probability of choosing it).
+    pub pdf: f32,
+    /// Whether the direction came from a perfectly specular lobe.
+    pub delta: bool,
+}
+
+/// The BSDF at one surface point.
+#[derive(Clone, Copy, Debug)]
+pub struct Bsdf {
+    /// Shading frame: tangent, bitangent, normal (the normal on the side of `ng`).
+    t: Vec3,
+    b: Vec3,
+    n: Vec3,
+    ng: Vec3,
+    kd: Rgb,
+    ks: Rgb,
+    kt: Rgb,
+    /// Index of refraction inside (the side opposite `ng`) relative to outside.
+    ior: f32,
+    ggx: Option<Ggx>,
+    fresnel: bool,
+}
+
+/// Lobe selection probabilities for a given outgoing direction.
+struct Lobes {
+    diffuse: f32,
+    specular: f32,
+    transmit: f32,
+    /// Fresnel reflectance at the outgoing direction (1 when Fresnel is off).
+    f: f32,
+    /// n_incident / n_transmitted for light leaving along wo's side.
+    eta: f32,
+}
+
+impl Bsdf {
+    /// The BSDF of `m` at `sp`. Opaque surfaces reflect on both sides: when `wo` (the
+    /// direction the path arrived from, pointing away) is behind the geometric normal, the
+    /// frame is flipped to face it. Transmissive surfaces keep their orientation, which tells
+    /// inside from outside.
+    pub fn new(m: &Material, sp: &SurfacePoint, wo: Vec3) -> Bsdf {
+        let transmissive = m.transmission.max_element() > 0.0;
+        let (mut n, mut ng) = (sp.ns, sp.ng);
+        if !transmissive && wo.dot(ng) < 0.0 {
+            n = -n;
+            ng = -ng;
+        }
+        let (t, b) = frame(n);
+        let alpha = m.roughness.clamp(0.0, 1.0);
+        Bsdf {
+            t,
+            b,
+            n,
+            ng,
+            kd: m.diffuse.eval(sp.p, sp.uv),
+            ks: m.specular,
+            kt: m.transmission,
+            ior: m.ior,
+            // Below this α the lobe is numerically a mirror.
+            ggx: (alpha >= 1e-3).then_some(Ggx { alpha }),
+            fresnel: m.fresnel,
+        }
+    }
+
+    fn local(&self, v: Vec3) -> Vec3 {
+        Vec3::new(v.dot(self.t), v.dot(self.b), v.dot(self.n))
+    }
+
+    fn world(&self, v: Vec3) -> Vec3 {
+        self.t * v.x + self.b * v.y + self.n * v.z
+    }
+
+    /// Whether scattering can be anything but a perfect mirror or refraction.
+    pub fn has_non_delta(&self) -> bool {
+        self.kd.max_element() > 0.0 || (self.ggx.is_some() && self.ks.max_element() > 0.0)
+    }
+
+    /// The diffuse reflectance (for albedo outputs).
+    pub fn albedo(&self) -> Rgb {
+        self.kd + self.ks + self.kt
+    }
+
+    /// The shading normal, on the side the BSDF faces.
+    pub fn shading_normal(&self) -> Vec3 {
+        self.n
+    }
+
+    fn lobes(&self, lo: Vec3) -> Lobes {
+        let outside = lo.z >= 0.0;
+        let eta = if outside { 1.0 / self.ior } else { self.ior };
+        let f = if self.fresnel {
+            fresnel_dielectric(lo.z.abs(), eta)
+        } else {
+            1.0
+        };
+        let rest = if self.fresnel { 1.0 - f } else { 1.0 };
+        let diffuse = luminance(self.kd) * rest;
+        let specular = luminance(self.ks) * f;
+        let transmit = luminance(self.kt) * rest;
+        let total = diffuse + specular + transmit;
+        let norm = if total > 0.0 { 1.0 / total } else { 0.0 };
+        Lobes {
+            diffuse: diffuse * norm,
+            specular: specular * norm,
+            transmit: transmit * norm,
+            f,
+            eta,
+        }
+    }
+
+    fn fresnel_at(&self, cos: f32, eta: f32) -> f32 {
+        if self.fresnel {
+            fresnel_dielectric(cos, eta)
+        } else {
+            1.0
+        }
+    }
+
+    /// Correction for shading normals in importance transport (1 for radiance).
+    fn adjoint(&self, wo: Vec3, wi: Vec3, lo: Vec3, li: Vec3, mode: Transport) -> f32 {
+        match mode {
+            Transport::Radiance => 1.0,
+            Transport::Importance => {
+                let den = wo.dot(self.ng).abs() * li.z.abs();
+                if den == 0.0 {
+                    0.0
+                } else {
+                    lo.z.abs() * wi.dot(self.ng).abs() / den
+                }
+            }
+        }
+    }
+
+    /// f(wo, wi)·|cos θi| for the non-delta lobes (with the adjoint correction in importance
+    /// transport). Both directions point away from the surface.
+    pub fn eval(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Rgb {
+        let (go, gi) = (wo.dot(self.ng), wi.dot(self.ng));
+        // Only reflection is non-delta: both directions on one side, geometrically and for
+        // the shading normal alike (otherwise light would leak through the surface).
+        if go * gi <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let (mut lo, mut li) = (self.local(wo), self.local(wi));
+        if lo.z * go <= 0.0 || li.z * gi <= 0.0 {
+            return Rgb::ZERO;
+        }
+        let eta = if lo.z >= 0.0 {
+            1.0 / self.ior
+        } else {
+            self.ior
+        };
+        if lo.z < 0.0 {
+            // Seen from inside a transmissive surface: mirror both to the upper side.
+            lo = -lo;
+            li = -li;
+        }
+        let mut f = Rgb::ZERO;
+        if self.kd.max_element() > 0.0 {
+            let coat = if self.fresnel {
+                (1.0 - fresnel_dielectric(lo.z, eta)) * (1.0 - fresnel_dielectric(li.z, eta))
+            } else {
+                1.0
+            };
+            f += self.kd * (FRAC_1_PI * coat);
+        }
+        if let Some(ggx) = self.ggx {
+            if self.ks.max_element() > 0.0 {
+                let h = (lo + li).normalize();
+                let fr = self.fresnel_at(lo.dot(h), eta);
+                f += self.ks * (ggx.d(h) * ggx.g(lo, li) * fr / (4.0 * lo.z * li.z));
+            }
+        }
+        f * li.z * self.adjoint(wo, wi, lo, li, mode)
+    }
+
+    /// Density (solid angle) with which [`Bsdf::sample`] produces `wi` from `wo` through a
+    /// non-delta lobe.
+    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        let (go, gi) = (wo.dot(self.ng), wi.dot(self.ng));
+        if go * gi <= 0.0 {
+            return 0.0;
+        }
+        let (mut lo, mut li) = (self.local(wo), self.local(wi));
+        if lo.z * go <= 0.0 || li.z * gi <= 0.0 {
+            return 0.0;
+        }
+        let lobes = self.lobes(lo);
+        if lo.z < 0.0 {
+            lo = -lo;
+            li = -li;
+        }
+        let mut pdf = lobes.diffuse * cosine_hemisphere_pdf(li.z);
+        if let Some(ggx) = self.ggx {
+            if lobes.specular > 0.0 {
+                let h = (lo + li).normalize();
+                pdf += lobes.specular * ggx.visible_pdf(lo, h) / (4.0 * lo.dot(h).abs());
+            }
+        }
+        pdf
+    }
+
+    /// Samples a direction `wi` from `wo`; `u_lobe` picks the lobe and `u` the direction.
+    pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2, mode: Transport) -> Option<BsdfSample> {
+        let lo_raw = self.local(wo);
+        if lo_raw.z == 0.0 {
+            return None;
+        }
+        let lobes = self.lobes(lo_raw);
+        let side = lo_raw.z.signum();
+        // Work with wo on the upper side.
+        let lo = lo_raw * side;
+        let go = wo.dot(self.ng);
+        if u_lobe < lobes.diffuse || (u_lobe < lobes.diffuse + lobes.specular && self.ggx.is_some())
+        {
+            // A non-delta lobe: the weight comes from the whole mixture.
+            let li = if u_lobe < lobes.diffuse {
+                cosine_hemisphere(u)
+            } else {
+                let h = self.ggx?.sample_visible(lo, u);
+                let li = 2.0 * lo.dot(h) * h - lo;
+                if li.z <= 0.0 {
+                    return None;
+                }
+                li
+            };
+            let wi = self.world(li * side);
+            if wi.dot(self.ng) * go <= 0.0 {
+                return None;
+            }
+            let pdf = self.pdf(wo, wi);
+            let f = self.eval(wo, wi, mode);
+            if pdf <= 0.0 || f == Rgb::ZERO {
+                return None;
+            }
+            return Some(BsdfSample {
+                wi,
+                weight: f / pdf,
+                pdf,
+                delta: false,
+            });
+        }
+        if u_lobe < lobes.diffuse + lobes.specular {
+            // Perfect mirror.
+            let li = Vec3::new(-lo.x, -lo.y, lo.z);
+            let wi = self.world(li * side);
+            let gi = wi.dot(self.ng);
+            if gi * go <= 0.0 {
+                return None;
+            }
+            let weight = self.ks * lobes.f / lobes.specular;
+            let adj = self.adjoint(wo, wi, lo, li, mode);
+            return Some(BsdfSample {
+                wi,
+                weight: weight * adj,
+                pdf: lobes.specular,
+                delta: true,
+            });
+        }
+        if lobes.transmit <= 0.0 {
+            return None;
+        }
+        // Smooth refraction.
+        let li = refract(-lo, Vec3::Z, lobes.eta)?;
+        let wi = self.world(li * side);
+        if wi.dot(self.ng) * go >= 0.0 {
+            return None;
+        }
+        let rest = if self.fresnel { 1.0 - lobes.f } else { 1.0 };
+        let mut weight = self.kt * rest / lobes.transmit;
+        if mode == Transport::Radiance {
+            weight *= lobes.eta * lobes.eta;
+        }
+        weight *= self.adjoint(wo, wi, lo, li, mode);
+        Some(BsdfSample {
+            wi,
+            weight,
+            pdf: lobes.transmit,
+            delta: true,
+        })
+    }
+}

@@ -1,0 +1,543 @@
+//! Bidirectional path tracing (Veach & Guibas; Lafortune & Willems): a camera subpath and a
+//! light subpath are built for every pixel sample, and every pair of their prefixes is
+//! connected (s light vertices and t camera vertices), including s = 0 (the camera path hits
+//! an emitter) and t = 1 (a light vertex connected to the camera and splatted, as in light
+//! tracing). The strategies are combined by multiple importance sampling with the power
+//! heuristic, computed from the forward and reverse area densities of every vertex as in
+//! pbrt. Finite emitters only (area and point lights): directional lights and the
+//! background have no position to start a subpath from, and are left to the path tracer.
+
+use super::light::connect_to_camera;
+use super::{Context, MonteCarlo, RayStats, Splat};
+use crate::bsdf::{Bsdf, Transport};
+use crate::lights::Emitter;
+use crate::math::sobol::Sampler;
+use crate::math::warp::cosine_hemisphere;
+use crate::math::{frame, offset_origin, Ray, Rgb, Vec3};
+use crate::scene::camera::CameraBasis;
+use crate::scene::Scene;
+use std::f32::consts::PI;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BdptOptions {
+    /// Maximum number of bounces of a full path.
+    pub max_depth: u32,
+}
+
+pub struct Bdpt {
+    options: BdptOptions,
+}
+
+impl Bdpt {
+    pub fn new(options: BdptOptions) -> Self {
+        Bdpt { options }
+    }
+
+    /// Whether BDPT can render a scene: it needs every emitter to have a position.
+    pub fn check_scene(scene: &Scene) -> Result<(), String> {
+        if !scene
+            .lights
+            .iter()
+            .all(|l| matches!(l, crate::scene::Light::Point { .. }))
+            || scene.background.max_element() > 0.0
+        {
+            return Err(
+                "the bdpt integrator supports area and point lights only; this scene has a \
+                 directional light or a background: use --integrator path"
+                    .into(),
+            );
+        }
+        Ok(())
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Kind {
+    Camera,
+    /// A light subpath's first vertex: emitter index, and whether it is a point light.
+    Light {
+        light: usize,
+        point: bool,
+    },
+    Surface,
+}
+
+#[derive(Clone, Copy, Debug)]
+struct Vertex {
+    kind: Kind,
+    p: Vec3,
+    /// Geometric normal (zero for the camera and point lights).
+    n: Vec3,
+    bsdf: Option<Bsdf>,
+    /// Emitted radiance of the surface (for s = 0), with its emitter index.
+    emission: Rgb,
+    light: Option<usize>,
+    beta: Rgb,
+    /// Scattered by a delta lobe.
+    delta: bool,
+    pdf_fwd: f32,
+    pdf_rev: f32,
+}
+
+impl Vertex {
+    fn new(kind: Kind, p: Vec3, n: Vec3, beta: Rgb) -> Vertex {
+        Vertex {
+            kind,
+            p,
+            n,
+            bsdf: None,
+            emission: Rgb::ZERO,
+            light: None,
+            beta,
+            delta: false,
+            pdf_fwd: 0.0,
+            pdf_rev: 0.0,
+        }
+    }
+
+    fn connectible(&self) -> bool {
+        match self.kind {
+            Kind::Surface => self.bsdf.is_some_and(|b| b.has_non_delta()),
+            _ => true,
+        }
+    }
+
+    fn is_delta_light(&self) -> bool {
+        matches!(self.kind, Kind::Light { point: true, .. })
+    }
+
+    /// Converts a solid-angle density at this vertex towards `next` into an area density at
+    /// `next`.
+    fn area_density(&self, pdf: f32, next: &Vertex) -> f32 {
+        let d = next.p - self.p;
+        let dist2 = d.length_squared();
+        if dist2 == 0.0 {
+            return 0.0;
+        }
+        let mut pdf = pdf / dist2;
+        if next.n != Vec3::ZERO {
+            pdf *= next.n.dot(d / dist2.sqrt()).abs();
+        }
+        pdf
+    }
+
+    /// Area density at `next` of sampling it from this vertex (reached from `prev`).
+    fn pdf(
+        &self,
+        ctx: &Context,
+        camera: &CameraBasis,
+        prev: Option<&Vertex>,
+        next: &Vertex,
+    ) -> f32 {
+        let w = (next.p - self.p).normalize();
+        let pdf = match self.kind {
+            Kind::Camera => camera_pdf_dir(camera, w),
+            Kind::Light { .. } => return self.pdf_light(ctx, next),
+            Kind::Surface => match (self.bsdf, prev) {
+                (Some(b), Some(prev)) => b.pdf((prev.p - self.p).normalize(), w),
+                _ => 0.0,
+            },
+        };
+        self.area_density(pdf, next)
+    }
+
+    /// Area density at `next` of a light path leaving this emitter vertex towards it.
+    fn pdf_light(&self, ctx: &Context, next: &Vertex) -> f32 {
+        let w = (next.p - self.p).normalize();
+        let pdf_dir = match self.kind {
+            Kind::Light { point: true, .. } => 1.0 / (4.0 * PI),
+            _ => w.dot(self.n).max(0.0) / PI,
+        };
+        let _ = ctx;
+        self.area_density(pdf_dir, next)
+    }
+
+    /// Area density of choosing this emitter point when starting a light path.
+    fn pdf_light_origin(&self, ctx: &Context) -> f32 {
+        let light = match self.kind {
+            Kind::Light { light, .. } => light,
+            _ => match self.light {
+                Some(l) => l,
+                None => return 0.0,
+            },
+        };
+        match &ctx.lights.emitters[light] {
+            Emitter::Area(a) => ctx.lights.pmf(light) / a.area,
+            Emitter::Point { .. } => ctx.lights.pmf(light),
+            _ => 0.0,
+        }
+    }
+
+    /// f·|cos| towards `next` (the connection step), for a surface or light vertex.
+    fn f(&self, prev: Option<&Vertex>, next: &Vertex, mode: Transport) -> Rgb {
+        let w = (next.p - self.p).normalize();
+        match (self.kind, self.bsdf, prev) {
+            (Kind::Surface, Some(b), Some(prev)) => b.eval((prev.p - self.p).normalize(), w, mode),
+            _ => Rgb::ZERO,
+        }
+    }
+}
+
+/// Density in solid angle of the camera generating a ray along `w`: uniform over the film at
+/// unit distance, 1 / (A_film cos³θ). Zero outside the film.
+fn camera_pdf_dir(camera: &CameraBasis, w: Vec3) -> f32 {
+    match camera.raster(camera.origin + w) {
+        Some((x, y, cos)) => {
+            let (fw, fh) = camera.film_size();
+            let m = camera.margin;
+            if x < -m || y < -m || x >= fw + m || y >= fh + m {
+                return 0.0;
+            }
+            1.0 / (camera.pixel_area() * fw * fh * cos * cos * cos)
+        }
+        None => 0.0,
+    }
+}
+
+/// Extends `path` by a random walk from `ray` with throughput `beta` and solid-angle density
+/// `pdf` for the ray's direction; at most `max` more vertices.
+#[allow(clippy::too_many_arguments)]
+fn random_walk(
+    ctx: &Context,
+    mut ray: Ray,
+    mut beta: Rgb,
+    mut pdf: f32,
+    max: u32,
+    mode: Transport,
+    path: &mut Vec<Vertex>,
+    sampler: &mut Sampler,
+    stats: &mut RayStats,
+) {
+    let mut bounces = 0;
+    while bounces < max {
+        let Some(sp) = ctx.intersect(&ray, stats) else {
+            break;
+        };
+        let m = &ctx.scene.materials[sp.material];
+        let wo = -ray.dir;
+        let bsdf = Bsdf::new(m, &sp, wo);
+        let mut v = Vertex::new(Kind::Surface, sp.p, sp.ng, beta);
+        v.bsdf = Some(bsdf);
+        if m.is_emissive() {
+            v.emission = m.emission;
+            v.light = ctx.lights.light_of_shape(sp.shape);
+        }
+        let prev = path.last().expect("a walk starts from a vertex");
+        v.pdf_fwd = prev.area_density(pdf, &v);
+        path.push(v);
+        bounces += 1;
+        if bounces >= max {
+            break;
+        }
+        let u = sampler.next_2d();
+        let Some(bs) = bsdf.sample(wo, u.x, sampler.next_2d(), mode) else {
+            break;
+        };
+        let n = path.len();
+        let mut pdf_rev = bsdf.pdf(bs.wi, wo);
+        pdf = bs.pdf;
+        if bs.delta {
+            path[n - 1].delta = true;
+            pdf = 0.0;
+            pdf_rev = 0.0;
+        }
+        beta *= bs.weight;
+        let (cur, prev) = (path[n - 1], path[n - 2]);
+        path[n - 2].pdf_rev = cur.area_density(pdf_rev, &prev);
+        ray = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi);
+        if beta == Rgb::ZERO {
+            break;
+        }
+    }
+}
+
+fn remap0(x: f32) -> f32 {
+    if x != 0.0 {
+        x
+    } else {
+        1.0
+    }
+}
+
+impl Bdpt {
+    /// The multiple importance sampling weight of the strategy (s, t) for the path made of
+    /// `light[..s]` and `camera[..t]`, with `sampled` replacing the connection vertex that
+    /// strategy sampled anew (the camera for t = 1).
+    #[allow(clippy::too_many_arguments)]
+    fn mis_weight(
+        &self,
+        ctx: &Context,
+        camera_basis: &CameraBasis,
+        light: &[Vertex],
+        camera: &[Vertex],
+        s: usize,
+        t: usize,
+    ) -> f32 {
+        if s + t == 2 {
+            return 1.0;
+        }
+        let mut lv: Vec<Vertex> = light[..s].to_vec();
+        let mut cv: Vec<Vertex> = camera[..t].to_vec();
+        // The connection vertices are connected, so not delta for this strategy.
+        if s > 0 {
+            lv[s - 1].delta = false;
+        }
+        if t > 0 {
+            cv[t - 1].delta = false;
+        }
+        // Reverse densities of the connection vertices and their predecessors.
+        if t > 0 {
+            let pt = cv[t - 1];
+            let pt_minus = if t > 1 { Some(cv[t - 2]) } else { None };
+            cv[t - 1].pdf_rev = if s > 0 {
+                let qs_minus = if s > 1 { Some(&lv[s - 2]) } else { None };
+                lv[s - 1].pdf(ctx, camera_basis, qs_minus, &pt)
+            } else {
+                pt.pdf_light_origin(ctx)
+            };
+            if let Some(ptm) = pt_minus {
+                cv[t - 2].pdf_rev = if s > 0 {
+                    pt.pdf(ctx, camera_basis, Some(&lv[s - 1]), &ptm)
+                } else {
+                    pt.pdf_light(ctx, &ptm)
+                };
+            }
+        }
+        if s > 0 {
+            let qs = lv[s - 1];
+            let pt = cv[t - 1];
+            let pt_minus = if t > 1 { Some(&cv[t - 2]) } else { None };
+            lv[s - 1].pdf_rev = pt.pdf(ctx, camera_basis, pt_minus, &qs);
+            if s > 1 {
+                let qsm = lv[s - 2];
+                lv[s - 2].pdf_rev = qs.pdf(ctx, camera_basis, Some(&pt), &qsm);
+            }
+        }
+        let mut sum = 0.0f32;
+        let mut r = 1.0f32;
+        for i in (1..t).rev() {
+            r *= remap0(cv[i].pdf_rev) / remap0(cv[i].pdf_fwd);
+            if !cv[i].delta && !cv[i - 1].delta {
+                sum += r * r;
+            }
+        }
+        r = 1.0;
+        for i in (0..s).rev() {
+            r *= remap0(lv[i].pdf_rev) / remap0(lv[i].pdf_fwd);
+            let delta_before = if i > 0 {
+                lv[i - 1].delta
+            } else {
+                lv[0].is_delta_light()
+            };
+            if !lv[i].delta && !delta_before {
+                sum += r * r;
+            }
+        }
+        1.0 / (1.0 + sum)
+    }
+}
+
+impl MonteCarlo for Bdpt {
+    fn sample(
+        &self,
+        ctx: &Context,
+        camera: &CameraBasis,
+        camera_ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+        splats: &mut Vec<Splat>,
+    ) -> Rgb {
+        let max_depth = self.options.max_depth;
+        // Camera subpath.
+        let mut cam_path: Vec<Vertex> = Vec::with_capacity(max_depth as usize + 2);
+        cam_path.push(Vertex::new(
+            Kind::Camera,
+            camera.origin,
+            Vec3::ZERO,
+            Rgb::ONE,
+        ));
+        let pdf_cam = camera_pdf_dir(camera, camera_ray.dir);
+        random_walk(
+            ctx,
+            *camera_ray,
+            Rgb::ONE,
+            pdf_cam,
+            max_depth + 1,
+            Transport::Radiance,
+            &mut cam_path,
+            sampler,
+            stats,
+        );
+        // Light subpath.
+        let mut light_path: Vec<Vertex> = Vec::with_capacity(max_depth as usize + 1);
+        let u_choose = sampler.next_2d();
+        let u_pos = sampler.next_2d();
+        let u_dir = sampler.next_2d();
+        if let Some((light, p, n, pdf_pos, point, le)) = sample_light_point(ctx, u_choose.x, u_pos)
+        {
+            let mut v0 = Vertex::new(Kind::Light { light, point }, p, n, le / pdf_pos);
+            v0.pdf_fwd = pdf_pos;
+            v0.emission = le;
+            let (dir, pdf_dir, cos) = if point {
+                let d = crate::math::warp::uniform_sphere(u_dir);
+                (d, 1.0 / (4.0 * PI), 1.0)
+            } else {
+                let (t, b) = frame(n);
+                let l = cosine_hemisphere(u_dir);
+                (t * l.x + b * l.y + n * l.z, l.z / PI, l.z)
+            };
+            light_path.push(v0);
+            if pdf_dir > 0.0 {
+                let origin = if point { p } else { offset_origin(p, n, dir) };
+                random_walk(
+                    ctx,
+                    Ray::new(origin, dir),
+                    le * (cos / (pdf_pos * pdf_dir)),
+                    pdf_dir,
+                    max_depth,
+                    Transport::Importance,
+                    &mut light_path,
+                    sampler,
+                    stats,
+                );
+            }
+        }
+
+        let mut radiance = Rgb::ZERO;
+        for t in 1..=cam_path.len() {
+            for s in 0..=light_path.len() {
+                let depth = s as i64 + t as i64 - 2;
+                if depth < 0 || depth > max_depth as i64 {
+                    continue;
+                }
+                match (s, t) {
+                    (0, _) => {
+                        // The camera path found an emitter.
+                        let pt = &cam_path[t - 1];
+                        if pt.kind != Kind::Surface || pt.light.is_none() {
+                            continue;
+                        }
+                        let to_prev = cam_path[t - 2].p - pt.p;
+                        if to_prev.dot(pt.n) <= 0.0 {
+                            continue;
+                        }
+                        let l = pt.beta * pt.emission;
+                        if l == Rgb::ZERO {
+                            continue;
+                        }
+                        let w = self.mis_weight(ctx, camera, &light_path, &cam_path, 0, t);
+                        radiance += l * w;
+                    }
+                    (_, 1) => {
+                        // A light vertex seen by the camera: splatted.
+                        let qs = &light_path[s - 1];
+                        if !qs.connectible() {
+                            continue;
+                        }
+                        let Some(c) = connect_to_camera(ctx, camera, qs.p, qs.n, stats) else {
+                            continue;
+                        };
+                        let value = if s == 1 {
+                            if qs.is_delta_light() {
+                                continue;
+                            }
+                            let cos_l = c.dir.dot(qs.n);
+                            if cos_l <= 0.0 {
+                                continue;
+                            }
+                            qs.beta * (cos_l * c.importance)
+                        } else {
+                            let cam_v =
+                                Vertex::new(Kind::Camera, camera.origin, Vec3::ZERO, Rgb::ONE);
+                            qs.beta
+                                * qs.f(Some(&light_path[s - 2]), &cam_v, Transport::Importance)
+                                * c.importance
+                        };
+                        if value == Rgb::ZERO {
+                            continue;
+                        }
+                        let mut cam_only = cam_path.clone();
+                        cam_only.truncate(1);
+                        let w = self.mis_weight(ctx, camera, &light_path, &cam_only, s, 1);
+                        splats.push(Splat {
+                            x: c.x,
+                            y: c.y,
+                            value: value * w,
+                        });
+                    }
+                    _ => {
+                        let (qs, pt) = (&light_path[s - 1], &cam_path[t - 1]);
+                        if !qs.connectible() || !pt.connectible() {
+                            continue;
+                        }
+                        let pt_prev = &cam_path[t - 2];
+                        let fp = pt.f(Some(pt_prev), qs, Transport::Radiance);
+                        if fp == Rgb::ZERO {
+                            continue;
+                        }
+                        let d = qs.p - pt.p;
+                        let dist2 = d.length_squared();
+                        let wdir = d / dist2.sqrt();
+                        let fq = if s == 1 {
+                            // Emission of the light vertex towards pt.
+                            if qs.is_delta_light() {
+                                qs.emission
+                            } else {
+                                let cos_l = -wdir.dot(qs.n);
+                                if cos_l <= 0.0 {
+                                    continue;
+                                }
+                                qs.emission * cos_l
+                            }
+                        } else {
+                            qs.f(Some(&light_path[s - 2]), pt, Transport::Importance)
+                        };
+                        let beta_q = if s == 1 {
+                            Rgb::splat(1.0 / qs.pdf_fwd)
+                        } else {
+                            qs.beta
+                        };
+                        let l = beta_q * fq * fp * pt.beta / dist2;
+                        if l == Rgb::ZERO {
+                            continue;
+                        }
+                        let from = offset_origin(pt.p, pt.n, wdir);
+                        let to = if qs.n == Vec3::ZERO {
+                            qs.p
+                        } else {
+                            offset_origin(qs.p, qs.n, -wdir)
+                        };
+                        if ctx.occluded(&Ray::segment(from, to), stats) {
+                            continue;
+                        }
+                        let w = self.mis_weight(ctx, camera, &light_path, &cam_path, s, t);
+                        radiance += l * w;
+                    }
+                }
+            }
+        }
+        radiance
+    }
+}
+
+/// A point on a finite emitter chosen by power: (emitter, point, normal, area density with
+/// the choice, is a point light, emitted radiance or intensity).
+fn sample_light_point(
+    ctx: &Context,
+    u_choose: f32,
+    u: crate::math::Vec2,
+) -> Option<(usize, Vec3, Vec3, f32, bool, Rgb)> {
+    let (i, _) = ctx.lights.choose(u_choose)?;
+    let sel = ctx.lights.pmf(i);
+    match &ctx.lights.emitters[i] {
+        Emitter::Area(a) => {
+            let lp = a.sample(u);
+            Some((i, lp.p, lp.n, sel / a.area, false, a.radiance))
+        }
+        Emitter::Point {
+            position,
+            intensity,
+        } => Some((i, *position, Vec3::ZERO, sel, true, *intensity)),
+        _ => None,
+    }
+}

@@ -1,0 +1,156 @@
+//! Light tracing: the shooting estimator, which solves the potential (importance) equation's
+//! adjoint problem (Dutré, Lafortune & Willems). Paths start on the lights, chosen by power,
+//! and every vertex is connected to the pinhole camera through the camera's importance W_e;
+//! each connection is splatted onto the film where it lands. One light path is traced per
+//! pixel sample, so a render with N samples per pixel traces N·width·height light paths.
+
+use super::path::russian_roulette;
+use super::{Context, MonteCarlo, RayStats, Splat};
+use crate::bsdf::{Bsdf, Transport};
+use crate::math::sobol::Sampler;
+use crate::math::{offset_origin, Ray, Rgb, Vec3};
+use crate::scene::camera::CameraBasis;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightOptions {
+    /// Maximum number of bounces, counted as for the path tracer (a path of the same length
+    /// from the camera would bounce this often).
+    pub max_depth: u32,
+}
+
+pub struct LightTracer {
+    options: LightOptions,
+}
+
+impl LightTracer {
+    pub fn new(options: LightOptions) -> Self {
+        LightTracer { options }
+    }
+}
+
+/// A point seen by the camera: where it lands on the film and the factor that turns
+/// "radiance leaving the point towards the camera, times |cos| at the point" into a splat:
+/// W_e·cos θ_c / d² = 1 / (A_pixel cos³θ_c d²) for a pinhole with an image plane at unit
+/// distance (pbrt's We = 1/(A cos⁴θ) times the camera-side cosine).
+pub(crate) struct CameraConnection {
+    pub x: f32,
+    pub y: f32,
+    /// Unit direction from the point to the camera.
+    pub dir: Vec3,
+    pub importance: f32,
+}
+
+/// Connects point `p` (geometric normal `ng`) to the camera: `None` if it is outside the
+/// film (widened by the filter radius) or hidden.
+pub(crate) fn connect_to_camera(
+    ctx: &Context,
+    camera: &CameraBasis,
+    p: Vec3,
+    ng: Vec3,
+    stats: &mut RayStats,
+) -> Option<CameraConnection> {
+    let (x, y, cos_c) = camera.raster(p)?;
+    let (w, h) = camera.film_size();
+    let margin = camera.margin;
+    if x < -margin || y < -margin || x >= w + margin || y >= h + margin {
+        return None;
+    }
+    let to_cam = camera.origin - p;
+    let dist2 = to_cam.length_squared();
+    let dir = to_cam / dist2.sqrt();
+    let shadow = Ray::segment(offset_origin(p, ng, dir), camera.origin);
+    if ctx.occluded(&shadow, stats) {
+        return None;
+    }
+    let importance = 1.0 / (camera.pixel_area() * cos_c * cos_c * cos_c * dist2);
+    Some(CameraConnection {
+        x,
+        y,
+        dir,
+        importance,
+    })
+}
+
+impl MonteCarlo for LightTracer {
+    fn sample(
+        &self,
+        ctx: &Context,
+        camera: &CameraBasis,
+        camera_ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+        splats: &mut Vec<Splat>,
+    ) -> Rgb {
+        let lights = &ctx.lights;
+        // The background seen directly cannot be reached from the lights' side: the camera
+        // ray supplies it.
+        let mut direct = Rgb::ZERO;
+        if lights.background_light().is_some() && ctx.intersect(camera_ray, stats).is_none() {
+            direct = lights.background_radiance();
+        }
+        let u_choose = sampler.next_2d();
+        let u_pos = sampler.next_2d();
+        let u_dir = sampler.next_2d();
+        let Some(es) = lights.sample_le(u_choose.x, u_pos, u_dir) else {
+            return direct;
+        };
+        // The light's own point seen by the camera (area lights only: points, directions and
+        // the background cannot be hit by camera rays either).
+        if !es.delta_pos && !es.delta_dir && es.n != Vec3::ZERO && !ctx.lights.is_infinite(es.light)
+        {
+            if let Some(c) = connect_to_camera(ctx, camera, es.p, es.n, stats) {
+                let cos_l = c.dir.dot(es.n);
+                if cos_l > 0.0 {
+                    splats.push(Splat {
+                        x: c.x,
+                        y: c.y,
+                        value: es.radiance * (cos_l * c.importance / es.pdf_pos),
+                    });
+                }
+            }
+        }
+        let cos0 = if es.delta_dir || es.delta_pos || ctx.lights.is_infinite(es.light) {
+            1.0
+        } else {
+            es.n.dot(es.dir).abs()
+        };
+        let mut beta = es.radiance * (cos0 / (es.pdf_pos * es.pdf_dir));
+        let mut ray = if es.delta_pos || ctx.lights.is_infinite(es.light) {
+            Ray::new(es.p, es.dir)
+        } else {
+            Ray::new(offset_origin(es.p, es.n, es.dir), es.dir)
+        };
+        let mut depth = 0;
+        while depth < self.options.max_depth {
+            let Some(sp) = ctx.intersect(&ray, stats) else {
+                break;
+            };
+            depth += 1;
+            let m = &ctx.scene.materials[sp.material];
+            let wo = -ray.dir;
+            let bsdf = Bsdf::new(m, &sp, wo);
+            if bsdf.has_non_delta() {
+                if let Some(c) = connect_to_camera(ctx, camera, sp.p, sp.ng, stats) {
+                    let f = bsdf.eval(wo, c.dir, Transport::Importance);
+                    if f != Rgb::ZERO {
+                        splats.push(Splat {
+                            x: c.x,
+                            y: c.y,
+                            value: beta * f * c.importance,
+                        });
+                    }
+                }
+            }
+            let u = sampler.next_1d();
+            let Some(bs) = bsdf.sample(wo, u, sampler.next_2d(), Transport::Importance) else {
+                break;
+            };
+            beta *= bs.weight;
+            ray = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi);
+            if !russian_roulette(&mut beta, depth, sampler) {
+                break;
+            }
+        }
+        direct
+    }
+}

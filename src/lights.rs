@@ -1,0 +1,443 @@
+//! Light sampling for the Monte Carlo integrators: every emitter of a scene (area lights,
+//! point and directional lights, and the constant background as an infinite light) behind one
+//! interface. Emitters are chosen in proportion to their power. Two kinds of sampling:
+//! towards a point being shaded (`sample_li`, next-event estimation, with `pdf_li` for
+//! multiple importance sampling), and emission of a light path (`sample_le`, with `pdf_le`).
+
+use crate::math::warp::{
+    concentric_disk, cosine_hemisphere, uniform_cone, uniform_cone_pdf, uniform_sphere,
+    UNIFORM_SPHERE_PDF,
+};
+use crate::math::{frame, luminance, Rgb, Vec2, Vec3};
+use crate::scene::light::AreaLight;
+use crate::scene::{Light, Scene};
+use std::f32::consts::PI;
+
+#[derive(Clone, Debug)]
+pub enum Emitter {
+    Area(AreaLight),
+    Point {
+        position: Vec3,
+        intensity: Rgb,
+    },
+    /// Light travelling along `direction` (unit).
+    Directional {
+        direction: Vec3,
+        irradiance: Rgb,
+    },
+    /// Constant radiance arriving from every direction not blocked by the scene.
+    Background {
+        radiance: Rgb,
+    },
+}
+
+impl Emitter {
+    /// Whether the emitter is a point or a direction (cannot be hit by a ray).
+    pub fn is_delta(&self) -> bool {
+        matches!(self, Emitter::Point { .. } | Emitter::Directional { .. })
+    }
+}
+
+/// A sample of incident light at a shaded point.
+#[derive(Clone, Copy, Debug)]
+pub struct LightSample {
+    /// Radiance arriving along `-wi` (for delta lights, the irradiance-like equivalent).
+    pub radiance: Rgb,
+    /// Unit direction from the shaded point to the light.
+    pub wi: Vec3,
+    /// The point on the light (for area and point lights) or a point far away along `wi`.
+    pub p: Vec3,
+    /// Density in solid angle at the shaded point, including the choice of emitter; for delta
+    /// lights the choice probability.
+    pub pdf: f32,
+    pub delta: bool,
+}
+
+/// The start of a light path.
+#[derive(Clone, Copy, Debug)]
+pub struct EmissionSample {
+    pub p: Vec3,
+    /// Surface normal at `p` (zero for point lights and for infinite lights the direction).
+    pub n: Vec3,
+    pub dir: Vec3,
+    pub radiance: Rgb,
+    /// Area density of `p` (including the choice of emitter); for a point light, the choice
+    /// probability.
+    pub pdf_pos: f32,
+    /// Solid-angle density of `dir`; for a directional light 1.
+    pub pdf_dir: f32,
+    /// `p` is a single point (point lights).
+    pub delta_pos: bool,
+    /// `dir` is a single direction (directional lights).
+    pub delta_dir: bool,
+    /// Index of the emitter.
+    pub light: usize,
+}
+
+pub struct LightSet {
+    pub emitters: Vec<Emitter>,
+    /// Probability of choosing each emitter, and their cumulative sums.
+    pmf: Vec<f32>,
+    cdf: Vec<f32>,
+    /// For each scene shape, its emitter index if it is an area light.
+    shape_light: Vec<Option<u32>>,
+    background: Option<usize>,
+    /// A sphere bounding the scene: infinite and directional lights emit from its disk.
+    pub center: Vec3,
+    pub radius: f32,
+}
+
+impl LightSet {
+    pub fn new(scene: &Scene, area_lights: &[AreaLight]) -> LightSet {
+        let (center, radius) = bounding_sphere(scene);
+        let mut emitters: Vec<Emitter> = area_lights.iter().cloned().map(Emitter::Area).collect();
+        for light in &scene.lights {
+            emitters.push(match *light {
+                Light::Point {
+                    position,
+                    intensity,
+                } => Emitter::Point {
+                    position,
+                    intensity,
+                },
+                Light::Directional {
+                    direction,
+                    irradiance,
+                } => Emitter::Directional {
+                    direction: direction.normalize(),
+                    irradiance,
+                },
+            });
+        }
+        let mut background = None;
+        if scene.background.max_element() > 0.0 {
+            background = Some(emitters.len());
+            emitters.push(Emitter::Background {
+                radiance: scene.background,
+            });
+        }
+        let power: Vec<f32> = emitters
+            .iter()
+            .map(|e| match e {
+                Emitter::Area(a) => PI * a.area * luminance(a.radiance),
+                Emitter::Point { intensity, .. } => 4.0 * PI * luminance(*intensity),
+                Emitter::Directional { irradiance, .. } => {
+                    PI * radius * radius * luminance(*irradiance)
+                }
+                Emitter::Background { radiance } => {
+                    4.0 * PI * PI * radius * radius * luminance(*radiance)
+                }
+            })
+            .map(|p| p.max(0.0))
+            .collect();
+        let total: f32 = power.iter().sum();
+        let pmf: Vec<f32> = if total > 0.0 {
+            power.iter().map(|p| p / total).collect()
+        } else {
+            vec![0.0; power.len()]
+        };
+        let mut acc = 0.0;
+        let cdf = pmf
+            .iter()
+            .map(|p| {
+                acc += p;
+                acc
+            })
+            .collect();
+        let mut shape_light = vec![None; scene.shapes.len()];
+        for (i, e) in emitters.iter().enumerate() {
+            if let Emitter::Area(a) = e {
+                shape_light[a.shape] = Some(i as u32);
+            }
+        }
+        LightSet {
+            emitters,
+            pmf,
+            cdf,
+            shape_light,
+            background,
+            center,
+            radius,
+        }
+    }
+
+    pub fn is_empty(&self) -> bool {
+        !self.cdf.last().is_some_and(|&c| c > 0.0)
+    }
+
+    /// Probability of choosing emitter `i`.
+    pub fn pmf(&self, i: usize) -> f32 {
+        self.pmf[i]
+    }
+
+    /// The emitter index of an emissive shape.
+    pub fn light_of_shape(&self, shape: usize) -> Option<usize> {
+        self.shape_light[shape].map(|i| i as usize)
+    }
+
+    /// Whether emitter `i` is infinitely far away (directional or background).
+    pub fn is_infinite(&self, i: usize) -> bool {
+        matches!(
+            self.emitters[i],
+            Emitter::Directional { .. } | Emitter::Background { .. }
+        )
+    }
+
+    pub fn background_light(&self) -> Option<usize> {
+        self.background
+    }
+
+    /// Radiance of the background seen along a ray that leaves the scene.
+    pub fn background_radiance(&self) -> Rgb {
+        match self.background {
+            Some(i) => match self.emitters[i] {
+                Emitter::Background { radiance } => radiance,
+                _ => Rgb::ZERO,
+            },
+            None => Rgb::ZERO,
+        }
+    }
+
+    /// Chooses an emitter by power; returns it and the leftover of `u`, rescaled to [0,1).
+    pub fn choose(&self, u: f32) -> Option<(usize, f32)> {
+        if self.is_empty() {
+            return None;
+        }
+        let total = *self.cdf.last().unwrap();
+        let target = u * total;
+        let i = self
+            .cdf
+            .partition_point(|&c| c <= target)
+            .min(self.cdf.len() - 1);
+        let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        let rest = ((target - lo) / self.pmf[i].max(f32::MIN_POSITIVE)).clamp(0.0, 0.999_999_9);
+        (self.pmf[i] > 0.0).then_some((i, rest))
+    }
+
+    /// Samples light arriving at `p` (next-event estimation).
+    pub fn sample_li(&self, p: Vec3, u_choose: f32, u: Vec2) -> Option<LightSample> {
+        let (i, _) = self.choose(u_choose)?;
+        let sel = self.pmf[i];
+        match &self.emitters[i] {
+            Emitter::Area(a) => {
+                if let Some((c, r)) = a.sphere() {
+                    let to_c = c - p;
+                    let d2 = to_c.length_squared();
+                    if d2 > r * r * 1.0001 {
+                        // Outside: uniform over the cone the sphere subtends.
+                        let sin2 = r * r / d2;
+                        let cos_max = (1.0 - sin2).max(0.0).sqrt();
+                        let w = to_c / d2.sqrt();
+                        let (t, b) = frame(w);
+                        let l = uniform_cone(u, cos_max);
+                        let wi = (t * l.x + b * l.y + w * l.z).normalize();
+                        // The nearer intersection of the ray with the sphere.
+                        let tc = to_c.dot(wi);
+                        let disc = (r * r - (d2 - tc * tc)).max(0.0);
+                        let q = p + wi * (tc - disc.sqrt());
+                        return Some(LightSample {
+                            radiance: a.radiance,
+                            wi,
+                            p: q,
+                            pdf: sel * uniform_cone_pdf(cos_max),
+                            delta: false,
+                        });
+                    }
+                }
+                let lp = a.sample(u);
+                let d = lp.p - p;
+                let dist2 = d.length_squared();
+                if dist2 == 0.0 {
+                    return None;
+                }
+                let wi = d / dist2.sqrt();
+                let cos_l = -wi.dot(lp.n);
+                if cos_l <= 0.0 {
+                    return None;
+                }
+                Some(LightSample {
+                    radiance: a.radiance,
+                    wi,
+                    p: lp.p,
+                    pdf: sel * dist2 / (cos_l * a.area),
+                    delta: false,
+                })
+            }
+            Emitter::Point {
+                position,
+                intensity,
+            } => {
+                let d = *position - p;
+                let dist2 = d.length_squared();
+                Some(LightSample {
+                    radiance: *intensity / dist2,
+                    wi: d / dist2.sqrt(),
+                    p: *position,
+                    pdf: sel,
+                    delta: true,
+                })
+            }
+            Emitter::Directional {
+                direction,
+                irradiance,
+            } => Some(LightSample {
+                radiance: *irradiance,
+                wi: -*direction,
+                p: p - *direction * (4.0 * self.radius + (p - self.center).length()),
+                pdf: sel,
+                delta: true,
+            }),
+            Emitter::Background { radiance } => {
+                let wi = uniform_sphere(u);
+                Some(LightSample {
+                    radiance: *radiance,
+                    wi,
+                    p: p + wi * (4.0 * self.radius + (p - self.center).length()),
+                    pdf: sel * UNIFORM_SPHERE_PDF,
+                    delta: false,
+                })
+            }
+        }
+    }
+
+    /// Density (solid angle at `p`, with the choice of emitter) with which `sample_li` picks
+    /// the point `q` with normal `n` on area light `i`.
+    pub fn pdf_li(&self, i: usize, p: Vec3, q: Vec3, n: Vec3) -> f32 {
+        let sel = self.pmf[i];
+        match &self.emitters[i] {
+            Emitter::Area(a) => {
+                if let Some((c, r)) = a.sphere() {
+                    let d2 = (c - p).length_squared();
+                    if d2 > r * r * 1.0001 {
+                        let cos_max = (1.0 - r * r / d2).max(0.0).sqrt();
+                        return sel * uniform_cone_pdf(cos_max);
+                    }
+                }
+                let d = q - p;
+                let dist2 = d.length_squared();
+                let cos_l = -(d / dist2.sqrt()).dot(n);
+                if cos_l <= 0.0 {
+                    0.0
+                } else {
+                    sel * dist2 / (cos_l * a.area)
+                }
+            }
+            Emitter::Background { .. } => sel * UNIFORM_SPHERE_PDF,
+            _ => 0.0,
+        }
+    }
+
+    /// Starts a light path.
+    pub fn sample_le(&self, u_choose: f32, u_pos: Vec2, u_dir: Vec2) -> Option<EmissionSample> {
+        let (i, _) = self.choose(u_choose)?;
+        let sel = self.pmf[i];
+        let disk = |dir: Vec3| {
+            // A point on the disk of the bounding sphere facing `dir`, upstream of the scene.
+            let (t, b) = frame(dir);
+            let d = concentric_disk(u_pos) * self.radius;
+            self.center + t * d.x + b * d.y - dir * self.radius
+        };
+        let s = match &self.emitters[i] {
+            Emitter::Area(a) => {
+                let lp = a.sample(u_pos);
+                let (t, b) = frame(lp.n);
+                let l = cosine_hemisphere(u_dir);
+                EmissionSample {
+                    p: lp.p,
+                    n: lp.n,
+                    dir: t * l.x + b * l.y + lp.n * l.z,
+                    radiance: a.radiance,
+                    pdf_pos: sel / a.area,
+                    pdf_dir: l.z / PI,
+                    delta_pos: false,
+                    delta_dir: false,
+                    light: i,
+                }
+            }
+            Emitter::Point {
+                position,
+                intensity,
+            } => EmissionSample {
+                p: *position,
+                n: Vec3::ZERO,
+                dir: uniform_sphere(u_dir),
+                radiance: *intensity,
+                pdf_pos: sel,
+                pdf_dir: UNIFORM_SPHERE_PDF,
+                delta_pos: true,
+                delta_dir: false,
+                light: i,
+            },
+            Emitter::Directional {
+                direction,
+                irradiance,
+            } => EmissionSample {
+                p: disk(*direction),
+                n: *direction,
+                dir: *direction,
+                radiance: *irradiance,
+                pdf_pos: sel / (PI * self.radius * self.radius),
+                pdf_dir: 1.0,
+                delta_pos: false,
+                delta_dir: true,
+                light: i,
+            },
+            Emitter::Background { radiance } => {
+                let dir = -uniform_sphere(u_dir);
+                EmissionSample {
+                    p: disk(dir),
+                    n: dir,
+                    dir,
+                    radiance: *radiance,
+                    pdf_pos: sel / (PI * self.radius * self.radius),
+                    pdf_dir: UNIFORM_SPHERE_PDF,
+                    delta_pos: false,
+                    delta_dir: false,
+                    light: i,
+                }
+            }
+        };
+        (s.pdf_dir > 0.0).then_some(s)
+    }
+
+    /// Densities with which `sample_le` starts a path at `p` (normal `n`) on area light `i`
+    /// going along `dir`: (area density with the choice, solid-angle density).
+    pub fn pdf_le_area(&self, i: usize, n: Vec3, dir: Vec3) -> (f32, f32) {
+        match &self.emitters[i] {
+            Emitter::Area(a) => (self.pmf[i] / a.area, dir.dot(n).max(0.0) / PI),
+            Emitter::Background { .. } => (
+                self.pmf[i] / (PI * self.radius * self.radius),
+                UNIFORM_SPHERE_PDF,
+            ),
+            _ => (0.0, 0.0),
+        }
+    }
+}
+
+/// A sphere around every shape and the camera.
+fn bounding_sphere(scene: &Scene) -> (Vec3, f32) {
+    let mut lo = scene.camera.position;
+    let mut hi = lo;
+    for s in &scene.shapes {
+        match &s.geometry {
+            crate::scene::Geometry::Sphere { center, radius } => {
+                lo = lo.min(*center - Vec3::splat(*radius));
+                hi = hi.max(*center + Vec3::splat(*radius));
+            }
+            crate::scene::Geometry::Triangles(m) => {
+                for p in &m.positions {
+                    lo = lo.min(*p);
+                    hi = hi.max(*p);
+                }
+            }
+            crate::scene::Geometry::Quads(q) => {
+                for p in &q.positions {
+                    lo = lo.min(*p);
+                    hi = hi.max(*p);
+                }
+            }
+        }
+    }
+    let center = 0.5 * (lo + hi);
+    (center, (0.5 * (hi - lo).length()).max(1e-3))
+}

@@ -1,0 +1,287 @@
+//! The Monte Carlo render loop: whole sample passes over the image until the sample count or
+//! the time limit is reached. Sample `i` of pixel (x, y) always draws the same sample values
+//! (keyed by seed, pixel and `i`), each pixel sums its samples in index order, and splats
+//! from light paths are merged in tile order, so the image is the same bit for bit for any
+//! thread count.
+
+use super::{progress_bar, tiles, RenderStats, Tile};
+use crate::image::filter::{Filter, FilterSampler};
+use crate::image::Image;
+use crate::integrators::{Context, MonteCarlo, RayStats, Splat};
+use crate::math::sobol::Sampler;
+use crate::math::{Rgb, Vec2};
+use crate::scene::camera::CameraBasis;
+use crate::{Error, Result};
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// Upper bound on samples per pixel.
+pub const MAX_SPP: u32 = 1 << 20;
+/// Tiles rendered between two merges of their splats (bounds the memory splats take).
+const TILE_GROUP: usize = 64;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct ProgressiveOptions {
+    pub width: u32,
+    pub height: u32,
+    /// Samples per pixel; with a time limit, the most that will be taken.
+    pub spp: u32,
+    /// Stop after the last whole pass that fits in this many seconds.
+    pub time_limit: Option<f64>,
+    pub threads: Option<usize>,
+    pub seed: u64,
+    pub progress: bool,
+    pub filter: Filter,
+}
+
+/// The accumulated film.
+pub struct Film {
+    width: u32,
+    height: u32,
+    filter: Filter,
+    /// 1 / ∫ filter over the plane, in pixel units.
+    filter_norm: f64,
+    /// Per pixel: the sum of its camera-sample estimates.
+    sums: Vec<[f64; 3]>,
+    /// Per pixel: splatted contributions, filter-weighted.
+    splats: Vec<[f64; 3]>,
+    /// Samples per pixel taken so far.
+    pub spp: u32,
+    /// Samples that returned NaN or infinity and were dropped.
+    pub invalid: u64,
+}
+
+impl Film {
+    fn new(width: u32, height: u32, filter: Filter) -> Film {
+        // ∫ filter by the midpoint rule on a fine grid.
+        let r = filter.radius();
+        let n = 256;
+        let h = 2.0 * r / n as f32;
+        let mut integral = 0.0f64;
+        for i in 0..n {
+            for j in 0..n {
+                let d = Vec2::new(-r + (i as f32 + 0.5) * h, -r + (j as f32 + 0.5) * h);
+                integral += filter.eval(d) as f64;
+            }
+        }
+        integral *= (h * h) as f64;
+        let pixels = width as usize * height as usize;
+        Film {
+            width,
+            height,
+            filter,
+            filter_norm: 1.0 / integral,
+            sums: vec![[0.0; 3]; pixels],
+            splats: vec![[0.0; 3]; pixels],
+            spp: 0,
+            invalid: 0,
+        }
+    }
+
+    fn add_splat(&mut self, s: &Splat) {
+        let r = self.filter.radius();
+        let x0 = ((s.x - r - 0.5).ceil().max(0.0)) as i64;
+        let x1 = ((s.x + r - 0.5).floor()).min(self.width as f32 - 1.0) as i64;
+        let y0 = ((s.y - r - 0.5).ceil().max(0.0)) as i64;
+        let y1 = ((s.y + r - 0.5).floor()).min(self.height as f32 - 1.0) as i64;
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let d = Vec2::new(x as f32 + 0.5 - s.x, y as f32 + 0.5 - s.y);
+                let w = self.filter.eval(d) as f64 * self.filter_norm;
+                if w > 0.0 {
+                    let p = &mut self.splats[y as usize * self.width as usize + x as usize];
+                    p[0] += w * s.value.x as f64;
+                    p[1] += w * s.value.y as f64;
+                    p[2] += w * s.value.z as f64;
+                }
+            }
+        }
+    }
+
+    /// The image after the samples taken so far.
+    pub fn image(&self) -> Image {
+        let mut image = Image::new(self.width, self.height);
+        if self.spp == 0 {
+            return image;
+        }
+        let per_sample = 1.0 / self.spp as f64;
+        // Light paths: one per pixel sample over the whole image.
+        let per_path = per_sample / (self.width as f64 * self.height as f64);
+        for (i, px) in image.pixels.iter_mut().enumerate() {
+            let (s, l) = (self.sums[i], self.splats[i]);
+            *px = Rgb::new(
+                (s[0] * per_sample + l[0] * per_path) as f32,
+                (s[1] * per_sample + l[1] * per_path) as f32,
+                (s[2] * per_sample + l[2] * per_path) as f32,
+            );
+        }
+        image
+    }
+}
+
+/// What one tile produced in one pass.
+struct TileResult {
+    sums: Vec<[f64; 3]>,
+    splats: Vec<Splat>,
+    rays: RayStats,
+    invalid: u64,
+}
+
+fn render_tile(
+    ctx: &Context,
+    integrator: &dyn MonteCarlo,
+    camera: &CameraBasis,
+    options: &ProgressiveOptions,
+    filter: &FilterSampler,
+    tile: &Tile,
+    samples: std::ops::Range<u32>,
+) -> TileResult {
+    let mut result = TileResult {
+        sums: Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize),
+        splats: Vec::new(),
+        rays: RayStats::default(),
+        invalid: 0,
+    };
+    for y in tile.y0..tile.y1 {
+        for x in tile.x0..tile.x1 {
+            let mut sum = [0.0f64; 3];
+            for i in samples.clone() {
+                let mut sampler = Sampler::new(options.seed, &[x as u64, y as u64], i);
+                let offset = filter.sample(sampler.next_2d());
+                let ray = camera.ray(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
+                let before = result.splats.len();
+                let l = integrator.sample(
+                    ctx,
+                    camera,
+                    &ray,
+                    &mut sampler,
+                    &mut result.rays,
+                    &mut result.splats,
+                );
+                let splats_ok = result.splats[before..]
+                    .iter()
+                    .all(|s| s.value.is_finite() && s.x.is_finite() && s.y.is_finite());
+                if !l.is_finite() || !splats_ok {
+                    // A numerical failure on one sample must not poison the pixel.
+                    result.splats.truncate(before);
+                    result.invalid += 1;
+                    continue;
+                }
+                sum[0] += l.x as f64;
+                sum[1] += l.y as f64;
+                sum[2] += l.z as f64;
+            }
+            result.sums.push(sum);
+        }
+    }
+    result
+}
+
+/// The sizes of successive passes: 1, 1, 2, 4, 8, 16, 16, ... (early images come quickly,
+/// later passes are long enough to keep every thread busy).
+fn next_pass(done: u32, target: u32) -> u32 {
+    done.clamp(1, 16).min(target - done)
+}
+
+/// Renders with a Monte Carlo integrator. `after_pass` sees the image after every pass (for
+/// writing intermediate files); an error from it stops the render.
+pub fn render_progressive(
+    ctx: &Context,
+    integrator: &dyn MonteCarlo,
+    options: &ProgressiveOptions,
+    mut after_pass: impl FnMut(&Film) -> Result<()>,
+) -> Result<(Film, RenderStats)> {
+    if options.width == 0 || options.height == 0 {
+        return Err(Error::Options(
+            "the image needs a width and height of at least 1".into(),
+        ));
+    }
+    if options.spp == 0 || options.spp > MAX_SPP {
+        return Err(Error::Options(format!(
+            "--spp must be between 1 and {MAX_SPP}, got {}",
+            options.spp
+        )));
+    }
+    if let Some(t) = options.time_limit {
+        if !(t.is_finite() && t > 0.0) {
+            return Err(Error::Options(format!(
+                "--time-limit must be a positive number of seconds, got {t}"
+            )));
+        }
+    }
+    options.filter.validate().map_err(Error::Options)?;
+    let pool = super::thread_pool(options.threads)?;
+    let mut camera = ctx.scene.camera.clone();
+    camera.width = options.width;
+    camera.height = options.height;
+    let mut basis = camera.basis();
+    basis.margin = options.filter.radius();
+    let filter_sampler = FilterSampler::new(options.filter);
+    let tiles = tiles(options.width, options.height);
+    let mut film = Film::new(options.width, options.height, options.filter);
+    let mut stats = RenderStats::default();
+    let progress = progress_bar(
+        options.progress,
+        if options.time_limit.is_some() {
+            0
+        } else {
+            options.spp as u64
+        },
+        "samples",
+    );
+    let start = Instant::now();
+    while film.spp < options.spp {
+        let n = next_pass(film.spp, options.spp);
+        let pass_start = Instant::now();
+        let samples = film.spp..film.spp + n;
+        for group in tiles.chunks(TILE_GROUP) {
+            let results: Vec<TileResult> = pool.install(|| {
+                group
+                    .par_iter()
+                    .map(|tile| {
+                        render_tile(
+                            ctx,
+                            integrator,
+                            &basis,
+                            options,
+                            &filter_sampler,
+                            tile,
+                            samples.clone(),
+                        )
+                    })
+                    .collect()
+            });
+            for (tile, r) in group.iter().zip(results) {
+                let w = tile.x1 - tile.x0;
+                for (i, s) in r.sums.iter().enumerate() {
+                    let (x, y) = (tile.x0 + i as u32 % w, tile.y0 + i as u32 / w);
+                    let p = &mut film.sums[(y * options.width + x) as usize];
+                    p[0] += s[0];
+                    p[1] += s[1];
+                    p[2] += s[2];
+                }
+                for s in &r.splats {
+                    film.add_splat(s);
+                }
+                stats.rays.add(&r.rays);
+                film.invalid += r.invalid;
+            }
+        }
+        film.spp += n;
+        stats.samples += n as u64 * options.width as u64 * options.height as u64;
+        progress.inc(n as u64);
+        after_pass(&film)?;
+        if let Some(limit) = options.time_limit {
+            // Stop when another pass like the last one would overrun the limit.
+            let elapsed = start.elapsed().as_secs_f64();
+            let pass = pass_start.elapsed().as_secs_f64();
+            let next = next_pass(film.spp, options.spp.max(film.spp + 1)) as f64 / n as f64;
+            if elapsed + pass * next > limit {
+                break;
+            }
+        }
+    }
+    progress.finish_and_clear();
+    stats.seconds = start.elapsed().as_secs_f64();
+    Ok((film, stats))
+}

@@ -1,0 +1,280 @@
+//! Sampling tests for every BSDF: a chi-square test of the sampled directions against the
+//! density the BSDF reports, the density integrating to the fraction of non-delta samples,
+//! and sample weights equal to eval/pdf.
+
+use raylink::bsdf::{Bsdf, Transport};
+use raylink::math::{Rgb, Rng, Vec2, Vec3};
+use raylink::scene::{Material, SurfacePoint, Texture};
+
+const THETA_BINS: usize = 20;
+const PHI_BINS: usize = 40;
+
+fn point() -> SurfacePoint {
+    SurfacePoint {
+        p: Vec3::ZERO,
+        ng: Vec3::Z,
+        ns: Vec3::Z,
+        uv: Vec2::ZERO,
+        t: 1.0,
+        shape: 0,
+        material: 0,
+    }
+}
+
+fn bin_of(w: Vec3) -> usize {
+    let c = ((w.z + 1.0) * 0.5 * THETA_BINS as f32) as usize;
+    let phi = w.y.atan2(w.x).rem_euclid(std::f32::consts::TAU);
+    let p = (phi / std::f32::consts::TAU * PHI_BINS as f32) as usize;
+    c.min(THETA_BINS - 1) * PHI_BINS + p.min(PHI_BINS - 1)
+}
+
+/// ∫ pdf over each (cos θ, φ) bin by the midpoint rule (dω = d cos θ dφ).
+fn integrate_pdf(bsdf: &Bsdf, wo: Vec3) -> Vec<f64> {
+    let sub = 24;
+    let mut out = vec![0.0; THETA_BINS * PHI_BINS];
+    for (i, o) in out.iter_mut().enumerate() {
+        let (ct, cp) = (i / PHI_BINS, i % PHI_BINS);
+        let dz = 2.0 / (THETA_BINS * sub) as f64;
+        let dphi = std::f64::consts::TAU / (PHI_BINS * sub) as f64;
+        let mut sum = 0.0;
+        for a in 0..sub {
+            let z = -1.0 + (ct * sub + a) as f64 * dz + 0.5 * dz;
+            let r = (1.0 - z * z).max(0.0).sqrt();
+            for b in 0..sub {
+                let phi = (cp * sub + b) as f64 * dphi + 0.5 * dphi;
+                let w = Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
+                sum += bsdf.pdf(wo, w) as f64;
+            }
+        }
+        *o = sum * dz * dphi;
+    }
+    out
+}
+
+/// Upper-tail probability of the chi-square distribution (Wilson-Hilferty approximation).
+fn chi2_tail(x: f64, dof: f64) -> f64 {
+    let k = 2.0 / (9.0 * dof);
+    let z = ((x / dof).powf(1.0 / 3.0) - (1.0 - k)) / k.sqrt();
+    0.5 * libm_erfc(z / std::f64::consts::SQRT_2)
+}
+
+fn libm_erfc(x: f64) -> f64 {
+    // Abramowitz-Stegun 7.1.26 is not accurate in the tail; use the continued product form.
+    let z = x.abs();
+    let t = 1.0 / (1.0 + 0.5 * z);
+    let r = t
+        * (-z * z - 1.26551223
+            + t * (1.00002368
+                + t * (0.37409196
+                    + t * (0.09678418
+                        + t * (-0.18628806
+                            + t * (0.27886807
+                                + t * (-1.13520398
+                                    + t * (1.48851587 + t * (-0.82215223 + t * 0.17087277)))))))))
+            .exp();
+    if x >= 0.0 {
+        r
+    } else {
+        2.0 - r
+    }
+}
+
+/// Runs the three checks for one material and outgoing direction.
+fn check(name: &str, m: &Material, wo: Vec3) {
+    let wo = wo.normalize();
+    let bsdf = Bsdf::new(m, &point(), wo);
+    let n = 400_000;
+    let mut counts = vec![0.0f64; THETA_BINS * PHI_BINS];
+    let mut rng = Rng::for_key(17, &[name.len() as u64]);
+    let mut non_delta = 0usize;
+    for _ in 0..n {
+        let u_lobe = rng.uniform();
+        let u = Vec2::new(rng.uniform(), rng.uniform());
+        let Some(s) = bsdf.sample(wo, u_lobe, u, Transport::Radiance) else {
+            continue;
+        };
+        assert!((s.wi.length() - 1.0).abs() < 1e-3, "{name}: wi not unit");
+        if s.delta {
+            continue;
+        }
+        non_delta += 1;
+        counts[bin_of(s.wi)] += 1.0;
+        // The weight is eval/pdf.
+        let expect = bsdf.eval(wo, s.wi, Transport::Radiance) / bsdf.pdf(wo, s.wi);
+        assert!(
+            (s.weight - expect).abs().max_element() <= 1e-3 * expect.max_element().max(1.0),
+            "{name}: weight {} vs eval/pdf {}",
+            s.weight,
+            expect
+        );
+    }
+    let expected: Vec<f64> = integrate_pdf(&bsdf, wo)
+        .iter()
+        .map(|p| p * n as f64)
+        .collect();
+    // The density integrates to the share of samples that came from non-delta lobes.
+    let integral: f64 = expected.iter().sum::<f64>() / n as f64;
+    let share = non_delta as f64 / n as f64;
+    assert!(
+        (integral - share).abs() < 0.01,
+        "{name}: ∫pdf = {integral:.4} but {share:.4} of samples were non-delta"
+    );
+    // Chi-square, pooling bins with small expected counts (Mitsuba's approach).
+    let (mut chi2, mut dof, mut pool_e, mut pool_o) = (0.0, 0.0, 0.0, 0.0);
+    for (o, e) in counts.iter().zip(&expected) {
+        if *e < 5.0 {
+            pool_e += e;
+            pool_o += o;
+        } else {
+            chi2 += (o - e) * (o - e) / e;
+            dof += 1.0;
+        }
+    }
+    if pool_e > 5.0 {
+        chi2 += (pool_o - pool_e) * (pool_o - pool_e) / pool_e;
+        dof += 1.0;
+    } else {
+        assert!(
+            pool_o < 20.0,
+            "{name}: {pool_o} samples where the pdf is ~0"
+        );
+    }
+    dof -= 1.0;
+    let p = chi2_tail(chi2, dof);
+    // 1% significance, Šidák-corrected for the number of cases in this file.
+    let alpha = 1.0 - (1.0f64 - 0.01).powf(1.0 / 24.0);
+    eprintln!("{name}: chi2 {chi2:.1} dof {dof} p {p:.3}");
+    assert!(
+        p > alpha,
+        "{name}: chi-square {chi2:.1} with {dof} dof, p = {p:.2e}"
+    );
+}
+
+fn material(f: impl FnOnce(&mut Material)) -> Material {
+    let mut m = Material {
+        diffuse: Texture::Constant(Rgb::ZERO),
+        ..Material::default()
+    };
+    f(&mut m);
+    m
+}
+
+fn directions() -> [Vec3; 3] {
+    [
+        Vec3::new(0.0, 0.0, 1.0),
+        Vec3::new(0.6, 0.1, 0.8),
+        Vec3::new(-0.9, 0.3, 0.15),
+    ]
+}
+
+#[test]
+fn lambertian() {
+    let m = material(|m| m.diffuse = Texture::Constant(Rgb::new(0.8, 0.5, 0.2)));
+    for (i, wo) in directions().into_iter().enumerate() {
+        check(&format!("lambert{i}"), &m, wo);
+        // Seen from below, an opaque surface reflects on that side.
+        check(&format!("lambert-back{i}"), &m, -wo);
+    }
+}
+
+#[test]
+fn ggx_conductor() {
+    for alpha in [0.2, 0.5] {
+        let m = material(|m| {
+            m.specular = Rgb::new(0.9, 0.7, 0.5);
+            m.roughness = alpha;
+        });
+        for (i, wo) in directions().into_iter().enumerate() {
+            check(&format!("ggx{alpha}-{i}"), &m, wo);
+        }
+    }
+}
+
+#[test]
+fn coated_diffuse_and_mirror_mixtures() {
+    let coated = material(|m| {
+        m.diffuse = Texture::Constant(Rgb::new(0.6, 0.2, 0.2));
+        m.specular = Rgb::ONE;
+        m.fresnel = true;
+        m.roughness = 0.3;
+    });
+    let mirror_mix = material(|m| {
+        m.diffuse = Texture::Constant(Rgb::splat(0.5));
+        m.specular = Rgb::splat(0.3);
+    });
+    for (i, wo) in directions().into_iter().enumerate() {
+        check(&format!("coated{i}"), &coated, wo);
+        check(&format!("mirror-mix{i}"), &mirror_mix, wo);
+    }
+}
+
+/// A smooth dielectric is all delta: the expected weight of a sample is R + T·(ηi/ηt)² in
+/// radiance transport and R + T in importance transport, i.e. energy is conserved for
+/// importance and radiance follows the (η)² law.
+#[test]
+fn glass_weights() {
+    let glass = material(|m| {
+        m.specular = Rgb::ONE;
+        m.transmission = Rgb::ONE;
+        m.fresnel = true;
+        m.ior = 1.5;
+    });
+    for wo in [Vec3::new(0.3, 0.0, 0.95), Vec3::new(0.3, 0.0, -0.95)] {
+        let wo = wo.normalize();
+        let bsdf = Bsdf::new(&glass, &point(), wo);
+        let eta = if wo.z > 0.0 { 1.0 / 1.5 } else { 1.5 };
+        let f = raylink::math::optics::fresnel_dielectric(wo.z.abs(), eta);
+        let mut rng = Rng::for_key(3, &[]);
+        let n = 100_000;
+        let (mut rad, mut imp, mut refl) = (0.0f64, 0.0f64, 0usize);
+        for _ in 0..n {
+            let (ul, u) = (rng.uniform(), Vec2::new(rng.uniform(), rng.uniform()));
+            let s = bsdf.sample(wo, ul, u, Transport::Radiance).unwrap();
+            assert!(s.delta);
+            rad += s.weight.x as f64 / n as f64;
+            if s.wi.z * wo.z > 0.0 {
+                refl += 1;
+                // Mirror direction.
+                assert!((s.wi - Vec3::new(-wo.x, -wo.y, wo.z)).length() < 1e-4);
+            } else {
+                // Snell's law.
+                let sin_o = (1.0 - wo.z * wo.z).sqrt();
+                let sin_i = (1.0 - s.wi.z * s.wi.z).sqrt();
+                assert!((sin_o * eta - sin_i).abs() < 1e-4);
+            }
+            let s = bsdf.sample(wo, ul, u, Transport::Importance).unwrap();
+            imp += s.weight.x as f64 / n as f64;
+        }
+        let share = refl as f64 / n as f64;
+        assert!(
+            (share - f as f64).abs() < 0.01,
+            "reflected share {share} vs F {f}"
+        );
+        let expect_rad = f + (1.0 - f) * eta * eta;
+        assert!(
+            (rad - expect_rad as f64).abs() < 1e-3,
+            "radiance weight {rad} vs {expect_rad}"
+        );
+        assert!((imp - 1.0).abs() < 1e-3, "importance weight {imp}");
+    }
+}
+
+/// Reciprocity: f(wo, wi) cos θo ... the BRDF itself is symmetric; eval includes cos θi.
+#[test]
+fn brdfs_are_reciprocal() {
+    let coated = material(|m| {
+        m.diffuse = Texture::Constant(Rgb::new(0.6, 0.2, 0.2));
+        m.specular = Rgb::splat(0.8);
+        m.fresnel = true;
+        m.roughness = 0.3;
+    });
+    let mut rng = Rng::for_key(8, &[]);
+    for _ in 0..1000 {
+        let a = raylink::math::warp::cosine_hemisphere(Vec2::new(rng.uniform(), rng.uniform()));
+        let b = raylink::math::warp::cosine_hemisphere(Vec2::new(rng.uniform(), rng.uniform()));
+        let bsdf = Bsdf::new(&coated, &point(), a);
+        let fab = bsdf.eval(a, b, Transport::Radiance) / b.z;
+        let fba = bsdf.eval(b, a, Transport::Radiance) / a.z;
+        assert!((fab - fba).abs().max_element() < 1e-4 * fab.max_element().max(1.0));
+    }
+}
