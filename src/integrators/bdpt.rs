@@ -8,6 +8,7 @@
 //! background have no position to start a subpath from, and are left to the path tracer.
 
 use super::light::connect_to_camera;
+use super::path::russian_roulette;
 use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
 use crate::lights::Emitter;
@@ -245,7 +246,9 @@ fn random_walk(
         let (cur, prev) = (path[n - 1], path[n - 2]);
         path[n - 2].pdf_rev = cur.area_density(pdf_rev, &prev);
         ray = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi);
-        if beta == Rgb::ZERO {
+        // Russian roulette keeps long subpaths rare; the MIS weights need not know about it
+        // (they still sum to one over the strategies of a path).
+        if beta == Rgb::ZERO || !russian_roulette(&mut beta, bounces, sampler) {
             break;
         }
     }
@@ -407,7 +410,10 @@ impl MonteCarlo for Bdpt {
         for t in 1..=cam_path.len() {
             for s in 0..=light_path.len() {
                 let depth = s as i64 + t as i64 - 2;
-                if depth < 0 || depth > max_depth as i64 {
+                // (s, t) = (1, 1), the light's own point splatted to the camera, is left out:
+                // (0, 2), the camera ray hitting the light, renders visible lights alone
+                // (both would need weights, and the first is by far the noisier).
+                if depth < 0 || depth > max_depth as i64 || (s == 1 && t == 1) {
                     continue;
                 }
                 match (s, t) {
