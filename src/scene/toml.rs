@@ -785,7 +785,9 @@ impl<'a> Builder<'a> {
             lights,
             ambient,
             background,
+            environment: None,
             settings: Default::default(),
+            warnings: Vec::new(),
         })
     }
 
