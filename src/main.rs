@@ -31,6 +31,18 @@ struct Cli {
 enum Command {
     /// Render a scene to one or more image files.
     Render(RenderArgs),
+    /// Convert a scene (.pbrt or .toml) to a native TOML scene; meshes are written as PLY
+    /// files in a NAME.meshes folder beside it.
+    Convert(ConvertArgs),
+}
+
+#[derive(clap::Args)]
+struct ConvertArgs {
+    /// The scene file (.pbrt or .toml).
+    scene: PathBuf,
+    /// The TOML scene to write.
+    #[arg(short, long = "output", value_name = "FILE")]
+    output: PathBuf,
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -49,7 +61,7 @@ enum AntiAliasing {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// The scene file (.toml).
+    /// The scene file (.toml or .pbrt).
     scene: PathBuf,
     /// Output image; the extension picks the format (.exr .hdr .tif .png .jpg). Repeat for
     /// several formats of the same render.
@@ -129,6 +141,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Render(args) => run_render(args),
+        Command::Convert(args) => run_convert(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -137,6 +150,25 @@ fn main() -> ExitCode {
             ExitCode::from(exit_code(&error))
         }
     }
+}
+
+/// The reader's warnings (what it replaced by a substitute), one line each.
+fn print_warnings(scene: &Scene) {
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+}
+
+fn run_convert(args: ConvertArgs) -> raylink::Result<()> {
+    if args.output.extension().and_then(|e| e.to_str()) != Some("toml") {
+        return Err(Error::Options(format!(
+            "{}: the output of convert must be a .toml file",
+            args.output.display()
+        )));
+    }
+    let scene = Scene::load(&args.scene)?;
+    print_warnings(&scene);
+    raylink::scene::convert::write_toml(&scene, &args.output)
 }
 
 fn version_string() -> String {
@@ -201,6 +233,7 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
         check_output_path(out).map_err(|e| Error::Options(e.to_string()))?;
     }
     let scene = Scene::load(&args.scene)?;
+    print_warnings(&scene);
     let width = args.width.unwrap_or(scene.camera.width);
     let height = args.height.unwrap_or(scene.camera.height);
     for (name, v) in [("--width", width), ("--height", height)] {
