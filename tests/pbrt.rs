@@ -118,3 +118,47 @@ fn bitterli_pbrt_renders_like_the_toml_cornell_box_and_the_reference() {
         );
     }
 }
+
+/// The substring a bad case's message must contain, from its first line `# expect: ...`.
+fn expectation(path: &Path) -> String {
+    let text = std::fs::read_to_string(path).unwrap();
+    text.lines()
+        .next()
+        .and_then(|l| l.strip_prefix("# expect: "))
+        .unwrap_or_else(|| panic!("{}: first line must be `# expect: ...`", path.display()))
+        .trim_end()
+        .to_string()
+}
+
+fn bad_cases() -> Vec<PathBuf> {
+    let dir = root().join("tests/bad_pbrt");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "pbrt"))
+        .collect();
+    files.sort();
+    files
+}
+
+#[test]
+fn bad_pbrt_files_fail_with_one_line_naming_file_line_and_problem() {
+    let files = bad_cases();
+    assert!(files.len() >= 20, "only {} cases", files.len());
+    let mut failures = Vec::new();
+    for path in &files {
+        let expect = expectation(path);
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        match std::panic::catch_unwind(|| Scene::load(path)) {
+            Err(_) => failures.push(format!("{name}: panicked")),
+            Ok(Ok(_)) => failures.push(format!("{name}: loaded, expected an error")),
+            Ok(Err(e)) => {
+                let msg = e.to_string();
+                if msg.contains('\n') || !msg.contains(&name) || !msg.contains(&expect) {
+                    failures.push(format!("{name}: `{expect}` not in:\n      {msg}"));
+                }
+            }
+        }
+    }
+    assert!(failures.is_empty(), "\n  {}", failures.join("\n  "));
+}

@@ -1027,26 +1027,27 @@ impl<'a> Builder<'a> {
             None => None,
             Some(f) => {
                 let radius = f.radius;
-                let filter =
-                    match f.kind.as_str() {
-                        "box" => Filter::Box {
-                            radius: radius.unwrap_or(0.5),
-                        },
-                        "triangle" => Filter::Triangle {
-                            radius: radius.unwrap_or(2.0),
-                        },
-                        "gaussian" => Filter::Gaussian {
-                            radius: radius.unwrap_or(1.5),
-                            sigma: f.sigma.unwrap_or(0.5),
-                        },
-                        other => return Err(ctx.fail(
+                let filter = match f.kind.as_str() {
+                    "box" => Filter::Box {
+                        radius: radius.unwrap_or(0.5),
+                    },
+                    "triangle" => Filter::Triangle {
+                        radius: radius.unwrap_or(2.0),
+                    },
+                    "gaussian" => Filter::Gaussian {
+                        radius: radius.unwrap_or(1.5),
+                        sigma: f.sigma.unwrap_or(0.5),
+                    },
+                    other => {
+                        return Err(ctx.fail(
                             &site,
                             "filter.type",
                             format!(
                                 "must be \"box\", \"triangle\" or \"gaussian\", got \"{other}\""
                             ),
-                        )),
-                    };
+                        ))
+                    }
+                };
                 if f.sigma.is_some() && !matches!(filter, Filter::Gaussian { .. }) {
                     return Err(ctx.fail(
                         &site,

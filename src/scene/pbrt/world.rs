@@ -756,6 +756,12 @@ impl Loader {
         let ctm = self.state.ctm;
         let in_object = self.object.is_some();
         let m = if in_object { ctm } else { self.mirror * ctm };
+        let det = glam::DMat3::from_mat4(m).determinant();
+        if !det.is_finite() || det.abs() < 1e-30 {
+            return Err(loc.error(format!(
+                "{st}: the transform is singular (determinant {det})"
+            )));
+        }
         let reverse = self.state.reverse_orientation;
         // Meshes: normals carried as normals (negated by ReverseOrientation); without
         // normals, the winding flips with ReverseOrientation XOR a mirroring transform.
