@@ -162,3 +162,404 @@ fn bad_pbrt_files_fail_with_one_line_naming_file_line_and_problem() {
     }
     assert!(failures.is_empty(), "\n  {}", failures.join("\n  "));
 }
+
+// ------------------------------------------------------------------------------------------
+// Statements on small scenes.
+
+/// A camera whose image is not mirrored with respect to raylink's (pbrt's `Scale -1 1 1`
+/// idiom), so the world is not mirrored either.
+const HEADER: &str = "Scale -1 1 1\nLookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\nWorldBegin\n";
+const TRI: &str =
+    "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n";
+
+/// Loads pbrt text written to a file `main.pbrt` in `dir` (with `files` beside it).
+fn load_in(dir: &Path, text: &str, files: &[(&str, &[u8])]) -> raylink::Result<Scene> {
+    for (name, data) in files {
+        let p = dir.join(name);
+        std::fs::create_dir_all(p.parent().unwrap()).unwrap();
+        std::fs::write(p, data).unwrap();
+    }
+    let main = dir.join("main.pbrt");
+    std::fs::write(&main, text).unwrap();
+    Scene::load(&main)
+}
+
+fn load(text: &str) -> Scene {
+    let dir = tempfile::tempdir().unwrap();
+    load_in(dir.path(), text, &[]).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn world(body: &str) -> Scene {
+    load(&format!("{HEADER}{body}"))
+}
+
+/// The vertices of the scene's first triangle, in world space.
+fn first_triangle(s: &Scene) -> [Vec3; 3] {
+    s.shapes[0].geometry.triangles()[0]
+}
+
+fn close(a: Vec3, b: Vec3) -> bool {
+    (a - b).length() < 1e-5
+}
+
+fn assert_maps(body: &str, expected: [Vec3; 3]) {
+    let s = world(&format!("{body}\n{TRI}"));
+    let got = first_triangle(&s);
+    // The winding may have been reversed (a mirroring transform): compare as sets.
+    for e in expected {
+        assert!(
+            got.iter().any(|g| close(*g, e)),
+            "{body}: {e} not in {got:?}"
+        );
+    }
+}
+
+#[test]
+fn transforms_match_hand_computed_matrices() {
+    let v = Vec3::new;
+    assert_maps(
+        "Translate 1 2 3",
+        [v(1., 2., 3.), v(2., 2., 3.), v(1., 3., 3.)],
+    );
+    assert_maps("Scale 2 3 4", [v(0., 0., 0.), v(2., 0., 0.), v(0., 3., 0.)]);
+    assert_maps(
+        "Rotate 90 0 0 1",
+        [v(0., 0., 0.), v(0., 1., 0.), v(-1., 0., 0.)],
+    );
+    assert_maps(
+        "Rotate 90 1 0 0",
+        [v(0., 0., 0.), v(1., 0., 0.), v(0., 0., 1.)],
+    );
+    // Later statements act first: p' = T (R p).
+    assert_maps(
+        "Translate 1 0 0 Rotate 90 0 0 1",
+        [v(1., 0., 0.), v(1., 1., 0.), v(0., 0., 0.)],
+    );
+    // LookAt is world-to-camera: eye (0,0,5) looking down -z puts world +x at camera -x.
+    assert_maps(
+        "LookAt 0 0 5  0 0 0  0 1 0",
+        [v(0., 0., 5.), v(-1., 0., 5.), v(0., 1., 5.)],
+    );
+    // Matrices are given column by column; both syntaxes (bracketed or bare).
+    assert_maps(
+        "ConcatTransform [1 0 0 0  0 1 0 0  0 0 1 0  5 6 7 1]",
+        [v(5., 6., 7.), v(6., 6., 7.), v(5., 7., 7.)],
+    );
+    assert_maps(
+        "Translate 9 9 9 Transform 2 0 0 0  0 2 0 0  0 0 2 0  0 0 0 1",
+        [v(0., 0., 0.), v(2., 0., 0.), v(0., 2., 0.)],
+    );
+    assert_maps(
+        "Translate 1 0 0 CoordinateSystem \"a\" Identity Translate 0 5 0 CoordSysTransform \"a\"",
+        [v(1., 0., 0.), v(2., 0., 0.), v(1., 1., 0.)],
+    );
+    assert_maps(
+        "AttributeBegin Translate 1 0 0 AttributeEnd TransformBegin Scale 3 3 3 TransformEnd",
+        [v(0., 0., 0.), v(1., 0., 0.), v(0., 1., 0.)],
+    );
+    // "camera" is the camera's space: the eye is at (0,0,5), looking down -z, with camera
+    // +x along world +x (the LookAt's -x, mirrored by the Scale -1 1 1).
+    assert_maps(
+        "CoordSysTransform \"camera\"",
+        [v(0., 0., 5.), v(1., 0., 5.), v(0., 1., 5.)],
+    );
+    // ActiveTransform EndTime: transforms for the end of the shutter are ignored.
+    assert_maps(
+        "ActiveTransform EndTime Translate 5 5 5 ActiveTransform All",
+        [v(0., 0., 0.), v(1., 0., 0.), v(0., 1., 0.)],
+    );
+}
+
+#[test]
+fn both_parameter_syntaxes_and_comments() {
+    let a = world("Shape \"sphere\" \"float radius\" 2 # a comment\n");
+    let b = world("Shape \"sphere\" \"float radius\" [ 2 ]\n");
+    for s in [&a, &b] {
+        assert_eq!(
+            s.shapes[0].geometry,
+            Geometry::Sphere {
+                center: Vec3::ZERO,
+                radius: 2.0
+            }
+        );
+    }
+    let s = world(
+        "AreaLightSource \"diffuse\" \"rgb L\" [1 2 3] \"bool twosided\" \"false\" \"float scale\" 2\n\
+         Shape \"sphere\"\n",
+    );
+    assert_eq!(s.materials[0].emission, Rgb::new(2.0, 4.0, 6.0));
+}
+
+#[test]
+fn orientation_follows_pbrt() {
+    let normal = |s: &Scene| {
+        let [a, b, c] = first_triangle(s);
+        (b - a).cross(c - a).normalize()
+    };
+    assert!(close(normal(&world(TRI)), Vec3::Z));
+    assert!(close(
+        normal(&world(&format!("ReverseOrientation {TRI}"))),
+        Vec3::NEG_Z
+    ));
+    // A mirroring transform keeps the normal's side (normals transform as normals).
+    assert!(close(
+        normal(&world(&format!("Scale 1 1 -1 {TRI}"))),
+        Vec3::NEG_Z
+    ));
+    assert!(close(
+        normal(&world(&format!("Scale -1 1 1 {TRI}"))),
+        Vec3::Z
+    ));
+    // With per-vertex normals, the geometric normal faces them.
+    let with_n = "Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \
+                  \"integer indices\" [0 1 2] \"normal N\" [0 0 -1 0 0 -1 0 0 -1]\n";
+    assert!(close(normal(&world(with_n)), Vec3::NEG_Z));
+    assert!(close(
+        normal(&world(&format!("ReverseOrientation {with_n}"))),
+        Vec3::Z
+    ));
+    // Quadrics: a disk faces +z, turned by ReverseOrientation.
+    assert!(close(normal(&world("Shape \"disk\"\n")), Vec3::Z));
+    assert!(close(
+        normal(&world("ReverseOrientation Shape \"disk\"\n")),
+        Vec3::NEG_Z
+    ));
+}
+
+#[test]
+fn shapes_spheres_disks_bilinear_patches_and_instances() {
+    let s = world("Translate 1 2 3 Scale 2 2 2 Shape \"sphere\" \"float radius\" 0.5\n");
+    assert_eq!(
+        s.shapes[0].geometry,
+        Geometry::Sphere {
+            center: Vec3::new(1.0, 2.0, 3.0),
+            radius: 1.0
+        }
+    );
+    // A non-uniform scale makes an ellipsoid: tessellated, with about its area.
+    let s = world("Scale 1 1 2 Shape \"sphere\"\n");
+    assert!(matches!(s.shapes[0].geometry, Geometry::Triangles(_)));
+    let area = s.shapes[0].geometry.area();
+    assert!((area - 21.48).abs() < 0.3, "ellipsoid area {area}");
+    let s =
+        world("Shape \"disk\" \"float radius\" 2 \"float innerradius\" 1 \"float height\" 0.5\n");
+    let area = s.shapes[0].geometry.area();
+    assert!((area / (3.0 * std::f32::consts::PI) - 1.0).abs() < 0.01);
+    // A planar bilinear patch is a quad; its vertex order (p00 p10 p01 p11) becomes a polygon.
+    let s = world("Shape \"bilinearmesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0 1 1 0]\n");
+    let Geometry::Quads(q) = &s.shapes[0].geometry else {
+        panic!("{:?}", s.shapes[0].geometry)
+    };
+    assert_eq!(q.indices, vec![[0, 1, 3, 2]]);
+    assert!((s.shapes[0].geometry.area() - 1.0).abs() < 1e-6);
+    // Instances are world-space copies under each instance's transform.
+    let s = world(&format!(
+        "ObjectBegin \"tri\" Translate 0 0 1 {TRI} ObjectEnd\n\
+         AttributeBegin Translate 10 0 0 ObjectInstance \"tri\" AttributeEnd\n\
+         ObjectInstance \"tri\"\n"
+    ));
+    assert_eq!(s.shapes.len(), 2);
+    assert!(close(first_triangle(&s)[0], Vec3::new(10.0, 0.0, 1.0)));
+    assert!(close(
+        s.shapes[1].geometry.triangles()[0][0],
+        Vec3::new(0.0, 0.0, 1.0)
+    ));
+    // loopsubdiv: the base mesh, with a warning naming the line.
+    let s = world("Shape \"loopsubdiv\" \"integer levels\" 3 \"point3 P\" [0 0 0 1 0 0 0 1 0]\n");
+    assert_eq!(s.shapes.len(), 1);
+    assert!(
+        s.warnings[0].ends_with(
+            ":5: Shape \"loopsubdiv\" is not supported; using its base mesh without subdivision"
+        ),
+        "{:?}",
+        s.warnings
+    );
+}
+
+#[test]
+fn materials_map_to_raylink_fields() {
+    let s = world(&format!(
+        "Material \"conductor\" {TRI}\
+         Material \"conductor\" \"spectrum eta\" \"metal-Au-eta\" \"spectrum k\" \"metal-Au-k\" \"float roughness\" 0.25 {TRI}\
+         Material \"dielectric\" \"float eta\" 1.33 {TRI}\
+         Material \"coateddiffuse\" \"rgb reflectance\" [0.2 0.3 0.4] \"float roughness\" 0.04 \"bool remaproughness\" false {TRI}\
+         Material \"diffuse\" {TRI}\
+         MakeNamedMaterial \"m\" \"string type\" \"diffuse\" \"rgb reflectance\" [0.1 0.2 0.3]\n\
+         NamedMaterial \"m\" {TRI}"
+    ));
+    let m = &s.materials;
+    assert_eq!(m.len(), 6);
+    // Copper's normal-incidence reflectance: reddish.
+    assert!(
+        m[0].specular.x > 0.9 && m[0].specular.z < 0.6,
+        "{}",
+        m[0].specular
+    );
+    assert_eq!(m[0].diffuse, raylink::scene::Texture::Constant(Rgb::ZERO));
+    assert!(!m[0].fresnel);
+    // Gold, roughness remapped to alpha = sqrt(0.25).
+    assert!(m[1].specular.x > m[1].specular.z);
+    assert!((m[1].roughness - 0.5).abs() < 1e-6);
+    assert_eq!(
+        (m[2].specular, m[2].transmission, m[2].ior, m[2].fresnel),
+        (Rgb::ONE, Rgb::ONE, 1.33, true)
+    );
+    assert_eq!(
+        m[3].diffuse,
+        raylink::scene::Texture::Constant(Rgb::new(0.2, 0.3, 0.4))
+    );
+    assert!((m[3].roughness - 0.04).abs() < 1e-6 && m[3].fresnel && m[3].specular == Rgb::ONE);
+    assert_eq!(
+        m[4].diffuse,
+        raylink::scene::Texture::Constant(Rgb::splat(0.5))
+    );
+    assert_eq!(m[5].name, "m");
+    // Unsupported material types: a warning and a substitute.
+    let s = world(&format!("Material \"hair\" \"float eumelanin\" 1.3 {TRI}"));
+    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+    assert!(s.warnings[0].contains(":5: material \"hair\" is not supported"));
+}
+
+#[test]
+fn lights_and_environment() {
+    let s = world(&format!(
+        "AttributeBegin Translate 0 1 0 LightSource \"point\" \"rgb I\" [1 2 3] \"float scale\" 2 \"point3 from\" [1 0 0] AttributeEnd\n\
+         LightSource \"distant\" \"point3 from\" [0 0 0] \"point3 to\" [0 -1 0] \"blackbody L\" 6500\n\
+         LightSource \"infinite\" \"rgb L\" [0.1 0.2 0.3]\n{TRI}"
+    ));
+    assert_eq!(
+        s.lights[0],
+        raylink::scene::Light::Point {
+            position: Vec3::new(1.0, 1.0, 0.0),
+            intensity: Rgb::new(2.0, 4.0, 6.0)
+        }
+    );
+    let raylink::scene::Light::Directional {
+        direction,
+        irradiance,
+    } = s.lights[1]
+    else {
+        panic!()
+    };
+    assert!(close(direction, Vec3::NEG_Y));
+    assert!((raylink::math::luminance(irradiance) - 1.0).abs() < 0.03);
+    assert_eq!(s.background, Rgb::new(0.1, 0.2, 0.3));
+
+    // An equal-area environment map: the texel of +z (the centre) is read back for +z.
+    let dir = tempfile::tempdir().unwrap();
+    let mut image = Image::new(8, 8);
+    for p in &mut image.pixels {
+        *p = Rgb::splat(0.25);
+    }
+    image.set(4, 4, Rgb::new(4.0, 5.0, 6.0));
+    raylink::image::output::write_image(
+        &dir.path().join("sky.exr"),
+        &image,
+        &vec![],
+        &Default::default(),
+    )
+    .unwrap();
+    let s = load_in(
+        dir.path(),
+        &format!("{HEADER}LightSource \"infinite\" \"string filename\" \"sky.exr\" \"float scale\" 2\n{TRI}"),
+        &[],
+    )
+    .unwrap();
+    let env = s.environment.as_ref().expect("environment map");
+    assert_eq!(env.eval(Vec3::Z), Rgb::new(8.0, 10.0, 12.0));
+    assert_eq!(env.eval(Vec3::X), Rgb::splat(0.5));
+}
+
+#[test]
+fn textures_checkerboard_and_imagemap() {
+    let dir = tempfile::tempdir().unwrap();
+    // 2x1 sRGB PNG: left texel mid-grey (sRGB 0.5 -> linear 0.214), right white.
+    let mut image = Image::new(2, 1);
+    image.set(
+        0,
+        0,
+        Rgb::splat(raylink::image::output::srgb_decode(128.0 / 255.0)),
+    );
+    image.set(1, 0, Rgb::ONE);
+    raylink::image::output::write_image(
+        &dir.path().join("t.png"),
+        &image,
+        &vec![],
+        &Default::default(),
+    )
+    .unwrap();
+    let s = load_in(
+        dir.path(),
+        &format!(
+            "{HEADER}Texture \"c\" \"spectrum\" \"checkerboard\" \"float uscale\" 4 \"float vscale\" 4 \
+             \"rgb tex1\" [1 0 0] \"rgb tex2\" [0 0 1]\n\
+             Texture \"img\" \"spectrum\" \"imagemap\" \"string filename\" \"t.png\"\n\
+             Material \"diffuse\" \"texture reflectance\" \"c\" {TRI}\
+             Material \"diffuse\" \"texture reflectance\" \"img\" {TRI}"
+        ),
+        &[],
+    )
+    .unwrap();
+    let uv = raylink::math::Vec2::new;
+    let checker = &s.materials[0].diffuse;
+    assert_eq!(checker.eval(Vec3::ZERO, uv(0.1, 0.1)), Rgb::X);
+    assert_eq!(checker.eval(Vec3::ZERO, uv(0.3, 0.1)), Rgb::Z);
+    let img = &s.materials[1].diffuse;
+    let left = img.eval(Vec3::ZERO, uv(0.25, 0.5));
+    assert!(
+        (left.x - raylink::image::output::srgb_decode(128.0 / 255.0)).abs() < 1e-3,
+        "{left}"
+    );
+    assert!((img.eval(Vec3::ZERO, uv(0.75, 0.5)).x - 1.0).abs() < 1e-3);
+}
+
+#[test]
+fn include_import_and_cycles() {
+    let dir = tempfile::tempdir().unwrap();
+    let s = load_in(
+        dir.path(),
+        &format!("{HEADER}Include \"parts/tri.pbrt\"\nImport \"parts/tri.pbrt\"\n"),
+        &[("parts/tri.pbrt", TRI.as_bytes())],
+    )
+    .unwrap();
+    assert_eq!(s.shapes.len(), 2);
+    let e = load_in(
+        dir.path(),
+        &format!("{HEADER}{TRI}Include \"parts/a.pbrt\"\n"),
+        &[
+            ("parts/a.pbrt", b"Include \"b.pbrt\"\n"),
+            ("parts/b.pbrt", b"\n\nInclude \"a.pbrt\"\n"),
+        ],
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.contains(
+            "b.pbrt: line 3, column 1: include cycle: a.pbrt includes b.pbrt includes a.pbrt"
+        ),
+        "{e}"
+    );
+}
+
+/// pbrt's camera space is left-handed; a plain LookAt shows world +x (seen from +z) on the
+/// left of the image, the `Scale -1 1 1` idiom on the right. raylink reproduces both.
+#[test]
+fn camera_handedness_is_pbrt_s() {
+    let lamp = "AreaLightSource \"diffuse\" \"rgb L\" [5 5 5]\n\
+                Shape \"trianglemesh\" \"point3 P\" [0.5 -0.5 0  1.5 -0.5 0  1.5 0.5 0  0.5 0.5 0] \
+                \"integer indices\" [0 1 2 0 2 3]\n";
+    for (prefix, lit_side_left) in [("", true), ("Scale -1 1 1\n", false)] {
+        let s = load(&format!(
+            "{prefix}LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n\
+             Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 32\nWorldBegin\n{lamp}"
+        ));
+        let image = whitted_render(&s, 32);
+        let (left, right) = (band(&image, 0.0, 0.5), band(&image, 0.5, 1.0));
+        assert_eq!(
+            left.x > right.x,
+            lit_side_left,
+            "{prefix:?}: left {left}, right {right}"
+        );
+        assert!(left.x.max(right.x) > 1.0);
+    }
+}
