@@ -692,6 +692,17 @@ impl Xform {
         (self.normal * n).normalize_or_zero()
     }
 
+    /// Moves a mesh's positions and (unit) normals; the caller reverses the winding when
+    /// `flips`.
+    fn place(&self, positions: &mut [Vec3], normals: &mut Option<Vec<Vec3>>) {
+        for p in positions {
+            *p = self.point(*p);
+        }
+        for n in normals.iter_mut().flatten() {
+            *n = self.normal(*n);
+        }
+    }
+
     /// Some(s) when the linear part is a rotation (or mirror) times the uniform scale s.
     fn uniform_scale(&self) -> Option<f32> {
         let l = Mat3::from_mat4(self.m);
@@ -1079,14 +1090,7 @@ impl<'a> Builder<'a> {
         let ctx = self.ctx;
         let path = self.dir.join(file);
         let mut mesh = super::ply::read(&path).map_err(|e| ctx.fail(site, "file", e))?;
-        for p in &mut mesh.positions {
-            *p = xf.point(*p);
-        }
-        if let Some(normals) = &mut mesh.normals {
-            for n in normals {
-                *n = xf.normal(*n);
-            }
-        }
+        xf.place(&mut mesh.positions, &mut mesh.normals);
         if xf.flips {
             for t in &mut mesh.triangles {
                 t.swap(1, 2);
@@ -1451,14 +1455,7 @@ impl<'a> Builder<'a> {
                     })?,
             };
             let mut mesh = group.mesh;
-            for p in &mut mesh.positions {
-                *p = xf.point(*p);
-            }
-            if let Some(normals) = &mut mesh.normals {
-                for n in normals {
-                    *n = xf.normal(*n);
-                }
-            }
+            xf.place(&mut mesh.positions, &mut mesh.normals);
             if xf.flips {
                 for t in &mut mesh.indices {
                     t.swap(1, 2);

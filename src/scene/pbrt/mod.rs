@@ -496,25 +496,15 @@ impl Loader {
                 self.texture(&name, &ty, &class, &p, &loc)?;
                 self.report_unused(kw, &class, &p, &loc);
             }
-            "Shape" => {
+            "Shape" | "LightSource" | "AreaLightSource" => {
                 let ty = c.string(&loc, kw)?;
                 let p = c.params(&loc)?;
                 self.require_world(&loc, kw)?;
-                self.shape(&ty, &p, &loc)?;
-                self.report_unused(kw, &ty, &p, &loc);
-            }
-            "LightSource" => {
-                let ty = c.string(&loc, kw)?;
-                let p = c.params(&loc)?;
-                self.require_world(&loc, kw)?;
-                self.light(&ty, &p, &loc)?;
-                self.report_unused(kw, &ty, &p, &loc);
-            }
-            "AreaLightSource" => {
-                let ty = c.string(&loc, kw)?;
-                let p = c.params(&loc)?;
-                self.require_world(&loc, kw)?;
-                self.area_light(&ty, &p, &loc)?;
+                match kw {
+                    "Shape" => self.shape(&ty, &p, &loc)?,
+                    "LightSource" => self.light(&ty, &p, &loc)?,
+                    _ => self.area_light(&ty, &p, &loc)?,
+                }
                 self.report_unused(kw, &ty, &p, &loc);
             }
             "Include" | "Import" => {

@@ -259,14 +259,7 @@ impl Loader {
                 for q in ["thickness", "albedo", "g", "maxdepth", "nsamples"] {
                     p.ignore(q);
                 }
-                Material {
-                    diffuse: self.texture_param(p, "reflectance", diffuse_default, st, loc)?,
-                    specular: Rgb::ONE,
-                    fresnel: true,
-                    ior: self.eta(p, "eta", 1.5, st, loc)?,
-                    roughness: self.roughness(p, "", st, loc)?,
-                    ..base
-                }
+                self.coated_diffuse(base, p, 1.5, st, loc)?
             }
             "conductor" => {
                 let f0 = self.conductor(p, "", st, loc)?;
@@ -333,14 +326,7 @@ impl Loader {
                 for q in ["mfp", "sigma_a", "sigma_s", "scale", "g", "name"] {
                     p.ignore(q);
                 }
-                Material {
-                    diffuse: self.texture_param(p, "reflectance", diffuse_default, st, loc)?,
-                    specular: Rgb::ONE,
-                    fresnel: true,
-                    ior: self.eta(p, "eta", 1.33, st, loc)?,
-                    roughness: self.roughness(p, "", st, loc)?,
-                    ..base
-                }
+                self.coated_diffuse(base, p, 1.33, st, loc)?
             }
             "interface" => {
                 substitute(self, "using an invisible (index-matched) surface");
@@ -395,6 +381,25 @@ impl Loader {
             }
         }
         Ok(m)
+    }
+
+    /// A diffuse base under a dielectric coat: Fresnel-weighted specular over diffuse.
+    fn coated_diffuse(
+        &mut self,
+        base: Material,
+        p: &Params,
+        eta: f32,
+        st: &str,
+        loc: &Loc,
+    ) -> crate::Result<Material> {
+        Ok(Material {
+            diffuse: self.texture_param(p, "reflectance", Rgb::splat(0.5), st, loc)?,
+            specular: Rgb::ONE,
+            fresnel: true,
+            ior: self.eta(p, "eta", eta, st, loc)?,
+            roughness: self.roughness(p, "", st, loc)?,
+            ..base
+        })
     }
 
     /// raylink's specular coefficient is a colour, not a texture: a textured one uses its
