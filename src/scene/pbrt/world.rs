@@ -235,8 +235,14 @@ impl Loader {
             format!("MakeNamedMaterial \"{name}\"")
         };
         let st = st.as_str();
+        // Anonymous materials are named after their statement, for messages and TOML keys.
+        let name = if name.is_empty() {
+            format!("{ty}-line{}", loc.line)
+        } else {
+            name.to_string()
+        };
         let base = Material {
-            name: name.to_string(),
+            name: name.clone(),
             diffuse: Texture::Constant(Rgb::ZERO),
             ambient: None,
             specular: Rgb::ZERO,
@@ -349,7 +355,7 @@ impl Loader {
                 );
                 match pick.and_then(|n| self.named_materials.get(&n).copied()) {
                     Some(i) => Material {
-                        name: name.to_string(),
+                        name,
                         ..self.materials[i].clone()
                     },
                     None => {
