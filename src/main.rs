@@ -19,7 +19,7 @@ use std::process::ExitCode;
     name = "raylink",
     about = "A global-illumination renderer over Embree",
     long_about = "raylink renders scenes described in TOML files (see docs/scene-format.md) \
-                  with Whitted ray tracing, writing EXR, HDR, TIFF, PNG or JPEG through OpenImageIO.\n\n\
+                  or pbrt-v4 files (docs/pbrt.md) with Whitted ray tracing, writing EXR, HDR, TIFF, PNG or JPEG through OpenImageIO.\n\n\
                   Example:\n  raylink render scenes/cornell-box.toml -o cornell.exr -o cornell.png"
 )]
 struct Cli {

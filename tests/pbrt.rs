@@ -843,3 +843,20 @@ fn converted_textures_environment_and_settings_round_trip() {
         raylink::scene::Texture::Image(_)
     ));
 }
+
+/// The pbrt examples in scenes/ load without warnings and render.
+#[test]
+fn pbrt_examples_in_scenes_load_cleanly() {
+    let mut n = 0;
+    for entry in std::fs::read_dir(root().join("scenes")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().is_some_and(|e| e == "pbrt") {
+            let s = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+            assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+            let image = whitted_render(&s, 24);
+            assert!(image.pixels.iter().all(|p| p.is_finite()));
+            n += 1;
+        }
+    }
+    assert!(n >= 1);
+}
