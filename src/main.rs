@@ -25,7 +25,7 @@ use std::process::ExitCode;
     name = "raylink",
     about = "A global-illumination renderer over Embree",
     long_about = "raylink renders scenes described in TOML files (see docs/scene-format.md) \
-                  with Whitted ray tracing, writing EXR, HDR, TIFF, PNG or JPEG through OpenImageIO.\n\n\
+                  or pbrt-v4 files (docs/pbrt.md) with Whitted ray tracing, writing EXR, HDR, TIFF, PNG or JPEG through OpenImageIO.\n\n\
                   Example:\n  raylink render scenes/cornell-box.toml -o cornell.exr -o cornell.png"
 )]
 struct Cli {
@@ -37,6 +37,18 @@ struct Cli {
 enum Command {
     /// Render a scene to one or more image files.
     Render(RenderArgs),
+    /// Convert a scene (.pbrt or .toml) to a native TOML scene; meshes are written as PLY
+    /// files in a NAME.meshes folder beside it.
+    Convert(ConvertArgs),
+}
+
+#[derive(clap::Args)]
+struct ConvertArgs {
+    /// The scene file (.pbrt or .toml).
+    scene: PathBuf,
+    /// The TOML scene to write.
+    #[arg(short, long = "output", value_name = "FILE")]
+    output: PathBuf,
 }
 
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
@@ -68,7 +80,7 @@ enum AntiAliasing {
 
 #[derive(clap::Args)]
 struct RenderArgs {
-    /// The scene file (.toml).
+    /// The scene file (.toml or .pbrt).
     scene: PathBuf,
     /// Output image; the extension picks the format (.exr .hdr .tif .png .jpg). Repeat for
     /// several formats of the same render.
@@ -170,6 +182,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Render(args) => run_render(args),
+        Command::Convert(args) => run_convert(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -178,6 +191,25 @@ fn main() -> ExitCode {
             ExitCode::from(exit_code(&error))
         }
     }
+}
+
+/// The reader's warnings (what it replaced by a substitute), one line each.
+fn print_warnings(scene: &Scene) {
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+}
+
+fn run_convert(args: ConvertArgs) -> raylink::Result<()> {
+    if args.output.extension().and_then(|e| e.to_str()) != Some("toml") {
+        return Err(Error::Options(format!(
+            "{}: the output of convert must be a .toml file",
+            args.output.display()
+        )));
+    }
+    let scene = Scene::load(&args.scene)?;
+    print_warnings(&scene);
+    raylink::scene::convert::write_toml(&scene, &args.output)
 }
 
 fn version_string() -> String {
@@ -287,6 +319,7 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
         check_output_path(out).map_err(|e| Error::Options(e.to_string()))?;
     }
     let scene = Scene::load(&args.scene)?;
+    print_warnings(&scene);
     let width = args.width.unwrap_or(scene.camera.width);
     let height = args.height.unwrap_or(scene.camera.height);
     for (name, v) in [("--width", width), ("--height", height)] {

@@ -213,3 +213,89 @@ fn a_failed_run_leaves_an_existing_output_untouched() {
     );
     assert_eq!(files_in(dir.path()), vec![precious]);
 }
+
+/// Every case in tests/bad_pbrt through the CLI: exit code 2, one line naming the file, line
+/// and problem, no output file, no panic.
+#[test]
+fn bad_pbrt_files_fail_cleanly_through_the_cli() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let cases: Vec<_> = files_in(&root.join("tests/bad_pbrt"))
+        .into_iter()
+        .filter(|p| p.extension().is_some_and(|e| e == "pbrt"))
+        .collect();
+    assert!(cases.len() >= 20, "only {} bad pbrt cases", cases.len());
+    std::thread::scope(|scope| {
+        for chunk in cases.chunks(cases.len().div_ceil(4)) {
+            scope.spawn(move || {
+                for case in chunk {
+                    check_bad_scene(case);
+                }
+            });
+        }
+    });
+}
+
+/// `raylink render scene.pbrt` prints the reader's warnings as `warning: FILE:LINE: ...`
+/// and renders; `raylink convert` writes a TOML scene that renders the same image.
+#[test]
+fn pbrt_scenes_render_with_warnings_and_convert_to_toml() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.pbrt");
+    std::fs::write(
+        &scene,
+        "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\nWorldBegin\n\
+         LightSource \"point\" \"rgb I\" [10 10 10] \"point3 from\" [0 0 4]\n\
+         Shape \"sphere\" \"float radius\" 1\nShape \"curve\" \"point3 P\" [0 0 0 1 1 1 2 2 2 3 3 3]\n",
+    )
+    .unwrap();
+    let exr = dir.path().join("a.exr");
+    let args = |out: &Path, input: &Path| {
+        vec![
+            "render".to_string(),
+            input.display().to_string(),
+            "-o".into(),
+            out.display().to_string(),
+            "--width".into(),
+            "24".into(),
+            "--height".into(),
+            "16".into(),
+            "--quiet".into(),
+        ]
+    };
+    let run = |a: Vec<String>| raylink(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let out = run(args(&exr, &scene));
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert_eq!(
+        err.trim_end(),
+        format!(
+            "warning: {}:6: Shape \"curve\" is not supported; the shape is left out",
+            scene.display()
+        )
+    );
+    let toml = dir.path().join("s.toml");
+    let out = raylink(&[
+        "convert",
+        scene.to_str().unwrap(),
+        "-o",
+        toml.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let exr2 = dir.path().join("b.exr");
+    let out = run(args(&exr2, &toml));
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (a, _) = read_image(&exr).unwrap();
+    let (b, _) = read_image(&exr2).unwrap();
+    assert_eq!(a.pixels, b.pixels);
+    // A failed conversion writes nothing.
+    let bad = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad_pbrt/unknown-statement.pbrt");
+    let never = dir.path().join("never.toml");
+    let out = raylink(&[
+        "convert",
+        bad.to_str().unwrap(),
+        "-o",
+        never.to_str().unwrap(),
+    ]);
+    assert_clean_failure(&out, &["unknown-statement.pbrt", "line 5"]);
+    assert!(!never.exists());
+}

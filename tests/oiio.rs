@@ -91,7 +91,11 @@ fn varied_values(count: usize) -> Vec<f32> {
     ];
     while values.len() < count {
         let exponent = (rng.next_u32() % 77) as i32 - 38;
-        let sign = if rng.next_u32() % 2 == 0 { 1.0 } else { -1.0 };
+        let sign = if rng.next_u32().is_multiple_of(2) {
+            1.0
+        } else {
+            -1.0
+        };
         values.push(sign * (1.0 + 9.0 * rng.unit()) * 10f32.powi(exponent));
     }
     values
@@ -134,7 +138,11 @@ fn exr_half_round_trip_within_half_precision() {
     while values.len() < 3 * 32 * 8 {
         // Magnitudes from 2^-14 (smallest normal half) to 2^15, both signs.
         let magnitude = (rng.unit() * 29.0 - 14.0).exp2();
-        let sign = if rng.next_u32() % 2 == 0 { 1.0 } else { -1.0 };
+        let sign = if rng.next_u32().is_multiple_of(2) {
+            1.0
+        } else {
+            -1.0
+        };
         values.push(sign * magnitude);
     }
     let image = image_from(32, 8, &values);
@@ -178,7 +186,7 @@ fn png_round_trip_within_8_bit_quantisation() {
     values.extend([0.003_130_8, 1e-4, 0.001, 0.04, 0.18, 0.5, 0.99, 1.0]);
     let in_range = values.len();
     values.extend([1.0001, 1.5, 7.0, 1e6, f32::INFINITY]);
-    while values.len() % 3 != 0 {
+    while !values.len().is_multiple_of(3) {
         values.push(0.25);
     }
     let n = values.len() / 3;

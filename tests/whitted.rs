@@ -29,6 +29,8 @@ fn empty_scene() -> Scene {
         ambient: Rgb::ZERO,
         background: Rgb::ZERO,
         settings: Default::default(),
+        environment: None,
+        warnings: Vec::new(),
     }
 }
 

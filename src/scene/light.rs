@@ -182,6 +182,8 @@ mod tests {
             ambient: Rgb::ZERO,
             background: Rgb::ZERO,
             settings: Default::default(),
+            environment: None,
+            warnings: Vec::new(),
         };
         let lights = AreaLight::collect(&scene);
         assert_eq!(lights.len(), 1);

@@ -1,4 +1,6 @@
+use super::texture::{ImageTexture, UvMapping};
 use crate::math::{Rgb, Vec2, Vec3};
+use std::sync::Arc;
 
 /// A surface in Whitted's model (eq. 2 of the paper): I = ka·Ia + kd Σ(N·Lj) + ks S + kt T,
 /// with a Phong highlight for point lights, plus emission for area lights.
@@ -63,11 +65,20 @@ pub enum Texture {
         odd: Rgb,
         size: f32,
     },
+    /// A checkerboard over the surface's (u, v) (pbrt's 2-D `checkerboard`): `even` where
+    /// floor(s) + floor(t) is even for (s, t) = `mapping`(u, v).
+    UvChecker {
+        even: Rgb,
+        odd: Rgb,
+        mapping: UvMapping,
+    },
+    /// An image looked up by (u, v).
+    Image(Arc<ImageTexture>),
 }
 
 impl Texture {
     /// The colour at world position `p` with surface coordinates `uv`.
-    pub fn eval(&self, p: Vec3, _uv: Vec2) -> Rgb {
+    pub fn eval(&self, p: Vec3, uv: Vec2) -> Rgb {
         match *self {
             Texture::Constant(c) => c,
             Texture::Checker { even, odd, size } => {
@@ -79,6 +90,15 @@ impl Texture {
                     odd
                 }
             }
+            Texture::UvChecker { even, odd, mapping } => {
+                let st = mapping.map(uv).floor();
+                if (st.x + st.y).rem_euclid(2.0) < 0.5 {
+                    even
+                } else {
+                    odd
+                }
+            }
+            Texture::Image(ref image) => image.eval(uv),
         }
     }
 
@@ -86,7 +106,10 @@ impl Texture {
     pub fn max_value(&self) -> Rgb {
         match *self {
             Texture::Constant(c) => c,
-            Texture::Checker { even, odd, .. } => even.max(odd),
+            Texture::Checker { even, odd, .. } | Texture::UvChecker { even, odd, .. } => {
+                even.max(odd)
+            }
+            Texture::Image(ref image) => image.max_value(),
         }
     }
 }

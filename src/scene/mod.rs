@@ -3,14 +3,20 @@
 //! readers apply transforms when they load.
 
 pub mod camera;
+pub mod convert;
+pub mod environment;
 mod geometry;
 pub mod light;
 mod material;
 pub mod obj;
+pub mod pbrt;
+pub mod ply;
 pub mod settings;
+pub mod texture;
 pub mod toml;
 
 pub use camera::{Camera, MAX_RESOLUTION};
+pub use environment::Environment;
 pub use geometry::{Geometry, QuadMesh, Shape, SurfacePoint, TriangleMesh};
 pub use light::Light;
 pub use material::{Material, Texture};
@@ -18,6 +24,7 @@ pub use settings::RenderSettings;
 
 use crate::math::Rgb;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -31,10 +38,16 @@ pub struct Scene {
     pub lights: Vec<Light>,
     /// Whitted's ambient intensity Ia; a material's ambient coefficient scales it.
     pub ambient: Rgb,
-    /// Radiance of rays that leave the scene.
+    /// Radiance of rays that leave the scene, where `environment` is `None`.
     pub background: Rgb,
+    /// An environment map lighting the scene from infinitely far away; rays that leave the
+    /// scene take their radiance from it instead of `background`.
+    pub environment: Option<Arc<Environment>>,
     /// Render settings given in the file; command-line options override them.
     pub settings: RenderSettings,
+    /// What the reader could not represent exactly and replaced by the closest substitute,
+    /// one line each, `FILE:LINE: message` (for `raylink render` to print).
+    pub warnings: Vec<String>,
 }
 
 impl Scene {
@@ -42,9 +55,10 @@ impl Scene {
     pub fn load(path: &Path) -> crate::Result<Scene> {
         match path.extension().and_then(|e| e.to_str()) {
             Some("toml") => toml::read(path),
+            Some("pbrt") => pbrt::read(path),
             _ => Err(crate::Error::input(
                 path,
-                "unknown scene format: expected a .toml scene file",
+                "unknown scene format: expected a .toml or .pbrt scene file",
             )),
         }
     }

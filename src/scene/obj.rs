@@ -369,7 +369,7 @@ fn convert(m: &tobj::Material, mtl: &Path) -> crate::Result<Material> {
     }
     let refracts = m
         .illumination_model
-        .map_or(true, |i| REFRACTING_ILLUM.contains(&i));
+        .is_none_or(|i| REFRACTING_ILLUM.contains(&i));
     let tf = param3("Tf")?;
     let transmission = match (tf, dissolve) {
         (Some(tf), _) if refracts => colour("Tf", Some(tf), Rgb::ZERO)?,

@@ -7,11 +7,14 @@
 //! starts with the line number and names the field, e.g.
 //! `line 12: shapes[2].radius: must be positive, got -1`.
 
+use super::environment::Environment;
 use super::obj;
+use super::texture::{Encoding, ImageTexture, UvMapping};
 use super::{
-    Camera, Geometry, Light, Material, QuadMesh, Scene, Shape, Texture, TriangleMesh,
-    MAX_RESOLUTION,
+    Camera, Geometry, Light, Material, QuadMesh, RenderSettings, Scene, Shape, Texture,
+    TriangleMesh, MAX_RESOLUTION,
 };
+use crate::image::filter::Filter;
 use crate::math::{Mat3, Mat4, Rgb, Vec2, Vec3};
 use crate::Error;
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
@@ -49,6 +52,33 @@ struct FileDesc {
     shapes: Vec<Spanned<ShapeDesc>>,
     #[serde(default)]
     lights: Vec<Spanned<LightDesc>>,
+    render: Option<Spanned<RenderDesc>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RenderDesc {
+    integrator: Option<String>,
+    spp: Option<u32>,
+    max_depth: Option<u32>,
+    filter: Option<FilterDesc>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct FilterDesc {
+    #[serde(rename = "type")]
+    kind: String,
+    radius: Option<f32>,
+    sigma: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EnvironmentDesc {
+    file: String,
+    scale: Option<Splat3>,
+    transform: Option<OneOrMany<TransformOp>>,
 }
 
 #[derive(Deserialize)]
@@ -67,6 +97,7 @@ struct CameraDesc {
 struct WorldDesc {
     ambient: Option<Splat3>,
     background: Option<Splat3>,
+    environment: Option<EnvironmentDesc>,
 }
 
 #[derive(Deserialize)]
@@ -85,13 +116,40 @@ struct MaterialDesc {
 
 enum DiffuseDesc {
     Colour(Vec3),
-    Checker(CheckerDesc),
+    Texture(TextureTable),
+}
+
+/// `{ checker = {..} }`, `{ uv_checker = {..} }` or `{ image = {..} }`.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TextureTable {
+    checker: Option<CheckerDesc>,
+    uv_checker: Option<UvCheckerDesc>,
+    image: Option<ImageDesc>,
 }
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct CheckerTable {
-    checker: CheckerDesc,
+struct UvCheckerDesc {
+    even: Splat3,
+    odd: Splat3,
+    uscale: Option<f32>,
+    vscale: Option<f32>,
+    udelta: Option<f32>,
+    vdelta: Option<f32>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ImageDesc {
+    file: String,
+    encoding: Option<String>,
+    scale: Option<f32>,
+    invert: Option<bool>,
+    uscale: Option<f32>,
+    vscale: Option<f32>,
+    udelta: Option<f32>,
+    vdelta: Option<f32>,
 }
 
 #[derive(Deserialize)]
@@ -110,6 +168,7 @@ enum ShapeKind {
     Polygon,
     Mesh,
     Obj,
+    Ply,
 }
 
 impl ShapeKind {
@@ -120,6 +179,7 @@ impl ShapeKind {
             ShapeKind::Polygon => "polygon",
             ShapeKind::Mesh => "mesh",
             ShapeKind::Obj => "obj",
+            ShapeKind::Ply => "ply",
         }
     }
 
@@ -129,7 +189,7 @@ impl ShapeKind {
             ShapeKind::Sphere => &["center", "radius"],
             ShapeKind::Quad | ShapeKind::Polygon => &["vertices"],
             ShapeKind::Mesh => &["positions", "indices", "normals", "uvs"],
-            ShapeKind::Obj => &["file"],
+            ShapeKind::Obj | ShapeKind::Ply => &["file"],
         }
     }
 }
@@ -330,7 +390,10 @@ impl<'de> Deserialize<'de> for DiffuseDesc {
         impl<'de> Visitor<'de> for Vis {
             type Value = DiffuseDesc;
             fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("a number, an array of 3 numbers or a table { checker = { .. } }")
+                f.write_str(
+                    "a number, an array of 3 numbers or a table { checker = { .. } }, \
+                     { uv_checker = { .. } } or { image = { .. } }",
+                )
             }
             fn visit_i64<E: de::Error>(self, v: i64) -> Result<DiffuseDesc, E> {
                 Splat3Visitor.visit_i64(v).map(DiffuseDesc::Colour)
@@ -345,8 +408,8 @@ impl<'de> Deserialize<'de> for DiffuseDesc {
                 Splat3Visitor.visit_seq(seq).map(DiffuseDesc::Colour)
             }
             fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<DiffuseDesc, A::Error> {
-                CheckerTable::deserialize(de::value::MapAccessDeserializer::new(map))
-                    .map(|t| DiffuseDesc::Checker(t.checker))
+                TextureTable::deserialize(de::value::MapAccessDeserializer::new(map))
+                    .map(DiffuseDesc::Texture)
             }
         }
         d.deserialize_any(Vis)
@@ -629,6 +692,17 @@ impl Xform {
         (self.normal * n).normalize_or_zero()
     }
 
+    /// Moves a mesh's positions and (unit) normals; the caller reverses the winding when
+    /// `flips`.
+    fn place(&self, positions: &mut [Vec3], normals: &mut Option<Vec<Vec3>>) {
+        for p in positions {
+            *p = self.point(*p);
+        }
+        for n in normals.iter_mut().flatten() {
+            *n = self.normal(*n);
+        }
+    }
+
     /// Some(s) when the linear part is a rotation (or mirror) times the uniform scale s.
     fn uniform_scale(&self) -> Option<f32> {
         let l = Mat3::from_mat4(self.m);
@@ -735,10 +809,18 @@ impl<'a> Builder<'a> {
         };
         let camera = self.camera(camera)?;
 
+        let settings = match file.render {
+            Some(r) => self.render(r)?,
+            None => RenderSettings::default(),
+        };
+        let mut environment = None;
         let (ambient, background) = match file.world {
             Some(world) => {
                 let site = self.site("world".into(), world.span());
-                let world = world.into_inner();
+                let mut world = world.into_inner();
+                if let Some(env) = world.environment.take() {
+                    environment = Some(std::sync::Arc::new(self.environment(&site, env)?));
+                }
                 let get = |v: Option<Splat3>, key: &str| -> crate::Result<Rgb> {
                     v.map_or(Ok(Rgb::ZERO), |c| {
                         colour(c.0).map_err(|m| ctx.fail(&site, key, m))
@@ -785,7 +867,9 @@ impl<'a> Builder<'a> {
             lights,
             ambient,
             background,
-            settings: Default::default(),
+            environment,
+            settings,
+            warnings: Vec::new(),
         })
     }
 
@@ -844,11 +928,7 @@ impl<'a> Builder<'a> {
         let diffuse = match desc.diffuse {
             None => d.diffuse,
             Some(DiffuseDesc::Colour(c)) => Texture::Constant(colour(c).map_err(fail("diffuse"))?),
-            Some(DiffuseDesc::Checker(c)) => Texture::Checker {
-                even: colour(c.even.0).map_err(fail("diffuse.checker.even"))?,
-                odd: colour(c.odd.0).map_err(fail("diffuse.checker.odd"))?,
-                size: positive(c.size.unwrap_or(1.0)).map_err(fail("diffuse.checker.size"))?,
-            },
+            Some(DiffuseDesc::Texture(t)) => self.texture(site, t)?,
         };
         let ambient = match desc.ambient {
             None => None,
@@ -868,6 +948,177 @@ impl<'a> Builder<'a> {
             fresnel: desc.fresnel.unwrap_or(d.fresnel),
             emission: col(desc.emission, "emission", d.emission)?,
         })
+    }
+
+    fn texture(&self, site: &Site, t: TextureTable) -> crate::Result<Texture> {
+        let ctx = self.ctx;
+        let fail = |key: &'static str| move |m: String| ctx.fail(site, key, m);
+        let count = [
+            t.checker.is_some(),
+            t.uv_checker.is_some(),
+            t.image.is_some(),
+        ]
+        .iter()
+        .filter(|&&b| b)
+        .count();
+        if count != 1 {
+            return Err(ctx.fail(
+                site,
+                "diffuse",
+                "a texture table takes exactly one of checker, uv_checker or image",
+            ));
+        }
+        let mapping = |us: Option<f32>, vs: Option<f32>, ud: Option<f32>, vd: Option<f32>| {
+            let f = |v: Option<f32>, d: f32| finite(v.unwrap_or(d));
+            Ok::<_, String>(UvMapping {
+                scale: Vec2::new(f(us, 1.0)?, f(vs, 1.0)?),
+                offset: Vec2::new(f(ud, 0.0)?, f(vd, 0.0)?),
+            })
+        };
+        if let Some(c) = t.checker {
+            return Ok(Texture::Checker {
+                even: colour(c.even.0).map_err(fail("diffuse.checker.even"))?,
+                odd: colour(c.odd.0).map_err(fail("diffuse.checker.odd"))?,
+                size: positive(c.size.unwrap_or(1.0)).map_err(fail("diffuse.checker.size"))?,
+            });
+        }
+        if let Some(c) = t.uv_checker {
+            return Ok(Texture::UvChecker {
+                even: colour(c.even.0).map_err(fail("diffuse.uv_checker.even"))?,
+                odd: colour(c.odd.0).map_err(fail("diffuse.uv_checker.odd"))?,
+                mapping: mapping(c.uscale, c.vscale, c.udelta, c.vdelta)
+                    .map_err(fail("diffuse.uv_checker"))?,
+            });
+        }
+        let i = t.image.expect("counted above");
+        let path = self.dir.join(&i.file);
+        let encoding = match i.encoding {
+            None => Encoding::default_for(&path),
+            Some(e) => Encoding::parse(&e).ok_or_else(|| {
+                ctx.fail(
+                    site,
+                    "diffuse.image.encoding",
+                    format!("must be \"linear\", \"sRGB\" or \"gamma G\", got \"{e}\""),
+                )
+            })?,
+        };
+        let scale = non_negative(i.scale.unwrap_or(1.0)).map_err(fail("diffuse.image.scale"))?;
+        let mapping =
+            mapping(i.uscale, i.vscale, i.udelta, i.vdelta).map_err(fail("diffuse.image"))?;
+        let image = ImageTexture::load(
+            &path,
+            i.file.into(),
+            encoding,
+            scale,
+            i.invert.unwrap_or(false),
+            mapping,
+        )
+        .map_err(|e| ctx.fail(site, "diffuse.image.file", e))?;
+        Ok(Texture::Image(std::sync::Arc::new(image)))
+    }
+
+    fn environment(&self, site: &Site, desc: EnvironmentDesc) -> crate::Result<Environment> {
+        let ctx = self.ctx;
+        let xf = self.transform(site, desc.transform)?;
+        let scale = colour(desc.scale.map_or(Vec3::ONE, |s| s.0))
+            .map_err(|m| ctx.fail(site, "environment.scale", m))?;
+        let path = self.dir.join(&desc.file);
+        Environment::load(&path, desc.file.into(), Mat3::from_mat4(xf.m), scale)
+            .map_err(|e| ctx.fail(site, "environment.file", e))
+    }
+
+    fn render(&self, desc: Spanned<RenderDesc>) -> crate::Result<RenderSettings> {
+        let ctx = self.ctx;
+        let site = self.site("render".into(), desc.span());
+        let desc = desc.into_inner();
+        if desc.spp == Some(0) {
+            return Err(ctx.fail(&site, "spp", "must be at least 1"));
+        }
+        let filter = match desc.filter {
+            None => None,
+            Some(f) => {
+                let radius = f.radius;
+                let filter = match f.kind.as_str() {
+                    "box" => Filter::Box {
+                        radius: radius.unwrap_or(0.5),
+                    },
+                    "triangle" => Filter::Triangle {
+                        radius: radius.unwrap_or(2.0),
+                    },
+                    "gaussian" => Filter::Gaussian {
+                        radius: radius.unwrap_or(1.5),
+                        sigma: f.sigma.unwrap_or(0.5),
+                    },
+                    other => {
+                        return Err(ctx.fail(
+                            &site,
+                            "filter.type",
+                            format!(
+                                "must be \"box\", \"triangle\" or \"gaussian\", got \"{other}\""
+                            ),
+                        ))
+                    }
+                };
+                if f.sigma.is_some() && !matches!(filter, Filter::Gaussian { .. }) {
+                    return Err(ctx.fail(
+                        &site,
+                        "filter.sigma",
+                        "only a gaussian filter takes sigma",
+                    ));
+                }
+                filter
+                    .validate()
+                    .map_err(|m| ctx.fail(&site, "filter", m))?;
+                Some(filter)
+            }
+        };
+        Ok(RenderSettings {
+            integrator: desc.integrator,
+            spp: desc.spp,
+            max_depth: desc.max_depth,
+            filter,
+        })
+    }
+
+    fn ply(
+        &self,
+        site: &Site,
+        file: &str,
+        material: usize,
+        xf: &Xform,
+    ) -> crate::Result<Vec<Shape>> {
+        let ctx = self.ctx;
+        let path = self.dir.join(file);
+        let mut mesh = super::ply::read(&path).map_err(|e| ctx.fail(site, "file", e))?;
+        xf.place(&mut mesh.positions, &mut mesh.normals);
+        if xf.flips {
+            for t in &mut mesh.triangles {
+                t.swap(1, 2);
+            }
+            for q in &mut mesh.quads {
+                q.swap(1, 3);
+            }
+        }
+        let shapes: Vec<Shape> = mesh
+            .into_geometry()
+            .into_iter()
+            .map(|geometry| Shape { geometry, material })
+            .collect();
+        if shapes.iter().any(|s| !geometry_is_finite(&s.geometry)) {
+            return Err(ctx.fail(
+                site,
+                "transform",
+                "moves the shape out of the range of finite numbers",
+            ));
+        }
+        if shapes.iter().all(|s| s.geometry.area() <= 0.0) {
+            return Err(ctx.fail(
+                site,
+                "file",
+                format!("{}: the mesh has no faces with area", path.display()),
+            ));
+        }
+        Ok(shapes)
     }
 
     fn material_index(&self, site: &Site, name: &str) -> crate::Result<usize> {
@@ -1051,6 +1302,11 @@ impl<'a> Builder<'a> {
                 let file = desc.file.unwrap_or_default();
                 return self.obj(site, &file, material, &xf);
             }
+            ShapeKind::Ply => {
+                required(desc.file.is_some(), "file")?;
+                let file = desc.file.unwrap_or_default();
+                return self.ply(site, &file, material.unwrap_or_default(), &xf);
+            }
         };
         if !geometry_is_finite(&geometry) {
             return Err(ctx.fail(
@@ -1199,14 +1455,7 @@ impl<'a> Builder<'a> {
                     })?,
             };
             let mut mesh = group.mesh;
-            for p in &mut mesh.positions {
-                *p = xf.point(*p);
-            }
-            if let Some(normals) = &mut mesh.normals {
-                for n in normals {
-                    *n = xf.normal(*n);
-                }
-            }
+            xf.place(&mut mesh.positions, &mut mesh.normals);
             if xf.flips {
                 for t in &mut mesh.indices {
                     t.swap(1, 2);

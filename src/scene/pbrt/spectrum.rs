@@ -1,0 +1,219 @@
+//! Spectra as RGB. pbrt-v4 renders spectrally; raylink renders linear sRGB. RGB values pass
+//! through unchanged (pbrt-v4 normalises an RGB illuminant so that RGB (1, 1, 1) is the
+//! colour space's white of luminance 1). Named spectra come from small tables of RGB
+//! approximations; sampled spectra and blackbodies are integrated against an analytic fit of
+//! the CIE 1931 matching functions (Wyman, Sloan and Shirley 2013).
+
+use crate::math::Rgb;
+
+/// What a spectrum stands for, which decides how it becomes RGB.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Kind {
+    /// A reflectance in [0, 1]: integrated, then adapted so that a constant 1 is white.
+    Reflectance,
+    /// An emitter: integrated and normalised to luminance 1 (pbrt-v4 divides light spectra
+    /// by their luminance and applies `scale`).
+    Illuminant,
+    /// An index of refraction or absorption: sampled at one wavelength per channel.
+    Unbounded,
+}
+
+/// Wavelengths (nm) standing for R, G and B when a spectrum is sampled per channel.
+const RGB_WAVELENGTHS: [f64; 3] = [610.0, 550.0, 465.0];
+
+/// (eta, k) of conductors at the R, G, B wavelengths, for pbrt-v4's named metal spectra.
+const METALS: &[(&str, [f32; 3], [f32; 3])] = &[
+    (
+        "Cu",
+        [0.200438, 0.924033, 1.10221],
+        [3.91295, 2.45285, 2.14219],
+    ),
+    (
+        "Au",
+        [0.143119, 0.374957, 1.44248],
+        [3.98316, 2.38572, 1.60322],
+    ),
+    (
+        "Ag",
+        [0.155265, 0.116723, 0.138342],
+        [4.82835, 3.12225, 2.14696],
+    ),
+    (
+        "Al",
+        [1.65746, 0.880369, 0.521229],
+        [9.22387, 6.26952, 4.837],
+    ),
+    ("CuZn", [0.444, 0.527, 1.094], [3.695, 2.765, 1.829]),
+    ("MgO", [1.732, 1.736, 1.745], [0.0, 0.0, 0.0]),
+    ("TiO2", [2.557, 2.651, 2.811], [0.0, 0.0, 0.0]),
+];
+
+/// Refractive indices (at the sodium d line) of pbrt-v4's named glasses.
+const GLASSES: &[(&str, f32)] = &[
+    ("BK7", 1.5168),
+    ("BAF10", 1.6700),
+    ("FK51A", 1.4866),
+    ("LASF9", 1.8503),
+    ("F5", 1.6034),
+    ("SF5", 1.6727),
+    ("F10", 1.7283),
+    ("SF10", 1.7283),
+    ("F11", 1.7847),
+    ("SF11", 1.7847),
+];
+
+/// An RGB value for a named pbrt-v4 spectrum, and whether it is only an approximation worth
+/// a warning. `None` for names raylink does not know.
+pub fn named(name: &str) -> Option<(Rgb, bool)> {
+    if let Some(rest) = name.strip_prefix("metal-") {
+        let (metal, part) = rest.rsplit_once('-')?;
+        let &(_, eta, k) = METALS.iter().find(|m| m.0 == metal)?;
+        return match part {
+            "eta" => Some((Rgb::from(eta), false)),
+            "k" => Some((Rgb::from(k), false)),
+            _ => None,
+        };
+    }
+    if let Some(glass) = name.strip_prefix("glass-") {
+        let &(_, ior) = GLASSES.iter().find(|g| g.0 == glass)?;
+        return Some((Rgb::splat(ior), false));
+    }
+    match name {
+        // sRGB's white is D65: RGB (1, 1, 1).
+        "stdillum-D65" => Some((Rgb::ONE, false)),
+        "stdillum-A" => Some((blackbody(2856.0), false)),
+        n if n.starts_with("stdillum-") || n.starts_with("illum-") => Some((Rgb::ONE, true)),
+        _ => None,
+    }
+}
+
+/// pbrt-v4's default conductor: copper.
+pub fn copper() -> (Rgb, Rgb) {
+    (Rgb::from(METALS[0].1), Rgb::from(METALS[0].2))
+}
+
+/// A piecewise-linear spectrum given as (wavelength, value) pairs, as RGB.
+pub fn sampled(pairs: &[f64], kind: Kind) -> Rgb {
+    let pts: Vec<(f64, f64)> = pairs.chunks_exact(2).map(|p| (p[0], p[1])).collect();
+    let eval = |l: f64| -> f64 {
+        let Some(first) = pts.first() else { return 0.0 };
+        if l <= first.0 {
+            return first.1;
+        }
+        for w in pts.windows(2) {
+            if l <= w[1].0 {
+                let t = (l - w[0].0) / (w[1].0 - w[0].0).max(1e-12);
+                return w[0].1 + t * (w[1].1 - w[0].1);
+            }
+        }
+        pts.last().map_or(0.0, |p| p.1)
+    };
+    match kind {
+        Kind::Unbounded => Rgb::from(RGB_WAVELENGTHS.map(|l| eval(l) as f32)),
+        _ => integrate(eval, kind),
+    }
+}
+
+/// A blackbody emitter of temperature `kelvin`, normalised to luminance 1.
+pub fn blackbody(kelvin: f64) -> Rgb {
+    let t = kelvin.max(1.0);
+    integrate(
+        |l| {
+            let l = l * 1e-9;
+            const C: f64 = 299_792_458.0;
+            const H: f64 = 6.626_070_15e-34;
+            const KB: f64 = 1.380_649e-23;
+            2.0 * H * C * C / (l.powi(5) * ((H * C / (l * KB * t)).exp() - 1.0))
+        },
+        Kind::Illuminant,
+    )
+}
+
+fn lobe(l: f64, mu: f64, s1: f64, s2: f64) -> f64 {
+    let s = if l < mu { s1 } else { s2 };
+    (-0.5 * ((l - mu) / s).powi(2)).exp()
+}
+
+fn cie_xyz(l: f64) -> [f64; 3] {
+    [
+        1.056 * lobe(l, 599.8, 37.9, 31.0) + 0.362 * lobe(l, 442.0, 16.0, 26.7)
+            - 0.065 * lobe(l, 501.1, 20.4, 26.2),
+        0.821 * lobe(l, 568.8, 46.9, 40.5) + 0.286 * lobe(l, 530.9, 16.3, 31.1),
+        1.217 * lobe(l, 437.0, 11.8, 36.0) + 0.681 * lobe(l, 459.0, 26.0, 13.8),
+    ]
+}
+
+fn xyz_to_srgb([x, y, z]: [f64; 3]) -> [f64; 3] {
+    [
+        3.240_454_2 * x - 1.537_138_5 * y - 0.498_531_4 * z,
+        -0.969_266_0 * x + 1.876_010_8 * y + 0.041_556_0 * z,
+        0.055_643_4 * x - 0.204_025_9 * y + 1.057_225_2 * z,
+    ]
+}
+
+/// XYZ of `f` over 360–830 nm, scaled so that a constant 1 has Y = 1.
+fn xyz_of(f: impl Fn(f64) -> f64) -> [f64; 3] {
+    let mut xyz = [0.0; 3];
+    let mut norm = 0.0;
+    let mut l = 360.0;
+    while l <= 830.0 {
+        let c = cie_xyz(l);
+        let v = f(l);
+        for i in 0..3 {
+            xyz[i] += v * c[i];
+        }
+        norm += c[1];
+        l += 2.0;
+    }
+    xyz.map(|v| v / norm)
+}
+
+fn integrate(f: impl Fn(f64) -> f64, kind: Kind) -> Rgb {
+    let xyz = xyz_of(f);
+    let rgb = xyz_to_srgb(xyz);
+    let out = match kind {
+        Kind::Illuminant => {
+            let y = xyz[1].max(1e-30);
+            rgb.map(|c| c / y)
+        }
+        _ => {
+            // Adapt from the equal-energy white to RGB (1, 1, 1).
+            let white = xyz_to_srgb(xyz_of(|_| 1.0));
+            [0, 1, 2].map(|i| rgb[i] / white[i])
+        }
+    };
+    Rgb::from(out.map(|c| c.max(0.0) as f32))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn constant_reflectance_is_white_and_blackbodies_have_unit_luminance() {
+        let white = sampled(&[300.0, 0.5, 900.0, 0.5], Kind::Reflectance);
+        assert!(
+            (white - Rgb::splat(0.5)).abs().max_element() < 1e-4,
+            "{white}"
+        );
+        for t in [2000.0, 6500.0, 10000.0] {
+            let c = blackbody(t);
+            let y = crate::math::luminance(c);
+            assert!((y - 1.0).abs() < 0.03, "{t} K: {c} (Y {y})");
+        }
+        // Warm light is red-heavy, a hot one blue-heavy.
+        assert!(blackbody(2000.0).x > blackbody(2000.0).z);
+        assert!(blackbody(12000.0).z > blackbody(12000.0).x);
+    }
+
+    #[test]
+    fn named_spectra() {
+        let (eta, _) = named("metal-Au-eta").unwrap();
+        assert!((eta.x - 0.143119).abs() < 1e-6);
+        assert_eq!(named("glass-BK7").unwrap().0, Rgb::splat(1.5168));
+        assert_eq!(named("stdillum-D65").unwrap().0, Rgb::ONE);
+        assert!(named("metal-Unobtainium-eta").is_none());
+        let eta = sampled(&[400.0, 1.0, 700.0, 2.0], Kind::Unbounded);
+        assert!((eta.y - (1.0 + 150.0 / 300.0) as f32).abs() < 1e-5);
+    }
+}
