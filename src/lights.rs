@@ -9,9 +9,11 @@ use crate::math::warp::{
     UNIFORM_SPHERE_PDF,
 };
 use crate::math::{frame, luminance, Rgb, Vec2, Vec3};
+use crate::scene::environment::equal_area_square_to_sphere;
 use crate::scene::light::AreaLight;
-use crate::scene::{Light, Scene};
+use crate::scene::{Environment, Light, Scene};
 use std::f32::consts::PI;
+use std::sync::Arc;
 
 #[derive(Clone, Debug)]
 pub enum Emitter {
@@ -25,10 +27,80 @@ pub enum Emitter {
         direction: Vec3,
         irradiance: Rgb,
     },
-    /// Constant radiance arriving from every direction not blocked by the scene.
+    /// Radiance arriving from every direction not blocked by the scene: a constant, or an
+    /// environment map.
     Background {
         radiance: Rgb,
+        map: Option<Arc<EnvironmentSampler>>,
     },
+}
+
+/// An environment map prepared for importance sampling. Its equal-area parameterisation
+/// makes every texel the same solid angle (4π / texels), so choosing texels in proportion to
+/// luminance and a point uniformly inside gives a piecewise-constant density over directions.
+#[derive(Debug)]
+pub struct EnvironmentSampler {
+    pub env: Arc<Environment>,
+    cdf: Vec<f32>,
+    total: f32,
+    /// Mean radiance over directions.
+    pub mean: Rgb,
+}
+
+impl EnvironmentSampler {
+    fn new(env: Arc<Environment>) -> Self {
+        let mut total = 0.0f64;
+        let mut sum = Rgb::ZERO;
+        let cdf = env
+            .image
+            .pixels
+            .iter()
+            .map(|p| {
+                let v = p.max(Rgb::ZERO) * env.scale;
+                sum += v;
+                // A floor keeps every direction possible, so MIS never meets a zero density.
+                total += (luminance(v) + 1e-4) as f64;
+                total as f32
+            })
+            .collect();
+        let n = env.image.pixels.len().max(1) as f32;
+        EnvironmentSampler {
+            cdf,
+            total: total as f32,
+            mean: sum / n,
+            env,
+        }
+    }
+
+    fn texel_weight(&self, i: usize) -> f32 {
+        let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        self.cdf[i] - lo
+    }
+
+    /// A direction and its solid-angle density.
+    fn sample(&self, u: Vec2) -> (Vec3, f32) {
+        let target = u.x * self.total;
+        let i = self
+            .cdf
+            .partition_point(|&c| c <= target)
+            .min(self.cdf.len() - 1);
+        let n = self.env.image.width;
+        let (x, y) = ((i as u32 % n) as f32, (i as u32 / n) as f32);
+        let lo = if i == 0 { 0.0 } else { self.cdf[i - 1] };
+        let fx = ((target - lo) / self.texel_weight(i).max(f32::MIN_POSITIVE)).clamp(0.0, 0.999);
+        let p = Vec2::new((x + fx) / n as f32, (y + u.y) / n as f32);
+        let dir = (self.env.transform * equal_area_square_to_sphere(p)).normalize();
+        (dir, self.pdf_texel(i))
+    }
+
+    fn pdf_texel(&self, i: usize) -> f32 {
+        let texels = self.cdf.len() as f32;
+        self.texel_weight(i) / self.total * texels / (4.0 * PI)
+    }
+
+    fn pdf(&self, dir: Vec3) -> f32 {
+        self.env.texel(dir).map_or(0.0, |i| self.pdf_texel(i))
+    }
 }
 
 impl Emitter {
@@ -110,10 +182,17 @@ impl LightSet {
             });
         }
         let mut background = None;
-        if scene.background.max_element() > 0.0 {
+        if let Some(env) = &scene.environment {
+            background = Some(emitters.len());
+            emitters.push(Emitter::Background {
+                radiance: Rgb::ZERO,
+                map: Some(Arc::new(EnvironmentSampler::new(env.clone()))),
+            });
+        } else if scene.background.max_element() > 0.0 {
             background = Some(emitters.len());
             emitters.push(Emitter::Background {
                 radiance: scene.background,
+                map: None,
             });
         }
         let power: Vec<f32> = emitters
@@ -124,8 +203,9 @@ impl LightSet {
                 Emitter::Directional { irradiance, .. } => {
                     PI * radius * radius * luminance(*irradiance)
                 }
-                Emitter::Background { radiance } => {
-                    4.0 * PI * PI * radius * radius * luminance(*radiance)
+                Emitter::Background { radiance, map } => {
+                    let mean = map.as_ref().map_or(*radiance, |m| m.mean);
+                    4.0 * PI * PI * radius * radius * luminance(mean)
                 }
             })
             .map(|p| p.max(0.0))
@@ -187,14 +267,14 @@ impl LightSet {
         self.background
     }
 
-    /// Radiance of the background seen along a ray that leaves the scene.
-    pub fn background_radiance(&self) -> Rgb {
-        match self.background {
-            Some(i) => match self.emitters[i] {
-                Emitter::Background { radiance } => radiance,
-                _ => Rgb::ZERO,
+    /// Radiance of the background seen along a ray that leaves the scene in direction `dir`.
+    pub fn background_radiance(&self, dir: Vec3) -> Rgb {
+        match self.background.map(|i| &self.emitters[i]) {
+            Some(Emitter::Background { radiance, map }) => match map {
+                Some(m) => m.env.eval(dir),
+                None => *radiance,
             },
-            None => Rgb::ZERO,
+            _ => Rgb::ZERO,
         }
     }
 
@@ -287,13 +367,19 @@ impl LightSet {
                 pdf: sel,
                 delta: true,
             }),
-            Emitter::Background { radiance } => {
-                let wi = uniform_sphere(u);
+            Emitter::Background { radiance, map } => {
+                let (wi, pdf, radiance) = match map {
+                    Some(m) => {
+                        let (wi, pdf) = m.sample(u);
+                        (wi, pdf, m.env.eval(wi))
+                    }
+                    None => (uniform_sphere(u), UNIFORM_SPHERE_PDF, *radiance),
+                };
                 Some(LightSample {
-                    radiance: *radiance,
+                    radiance,
                     wi,
                     p: p + wi * (4.0 * self.radius + (p - self.center).length()),
-                    pdf: sel * UNIFORM_SPHERE_PDF,
+                    pdf: sel * pdf,
                     delta: false,
                 })
             }
@@ -322,7 +408,12 @@ impl LightSet {
                     sel * dist2 / (cos_l * a.area)
                 }
             }
-            Emitter::Background { .. } => sel * UNIFORM_SPHERE_PDF,
+            Emitter::Background { map, .. } => {
+                // For the background, `q - p` is the direction.
+                sel * map
+                    .as_ref()
+                    .map_or(UNIFORM_SPHERE_PDF, |m| m.pdf((q - p).normalize()))
+            }
             _ => 0.0,
         }
     }
@@ -382,15 +473,22 @@ impl LightSet {
                 delta_dir: true,
                 light: i,
             },
-            Emitter::Background { radiance } => {
-                let dir = -uniform_sphere(u_dir);
+            Emitter::Background { radiance, map } => {
+                let (to_light, pdf_dir, radiance) = match map {
+                    Some(m) => {
+                        let (w, pdf) = m.sample(u_dir);
+                        (w, pdf, m.env.eval(w))
+                    }
+                    None => (uniform_sphere(u_dir), UNIFORM_SPHERE_PDF, *radiance),
+                };
+                let dir = -to_light;
                 EmissionSample {
                     p: disk(dir),
                     n: dir,
                     dir,
-                    radiance: *radiance,
+                    radiance,
                     pdf_pos: sel / (PI * self.radius * self.radius),
-                    pdf_dir: UNIFORM_SPHERE_PDF,
+                    pdf_dir,
                     delta_pos: false,
                     delta_dir: false,
                     light: i,

@@ -299,3 +299,159 @@ fn pbrt_scenes_render_with_warnings_and_convert_to_toml() {
     assert_clean_failure(&out, &["unknown-statement.pbrt", "line 5"]);
     assert!(!never.exists());
 }
+
+fn meta_value(meta: &raylink::image::Metadata, key: &str) -> Option<MetaValue> {
+    meta.iter().find(|(n, _)| n == key).map(|(_, v)| v.clone())
+}
+
+/// The Monte Carlo integrators from the command line: sample counts, the scene's render
+/// settings, a time limit, auxiliary outputs, and options that belong to another integrator.
+#[test]
+fn monte_carlo_integrators_from_the_cli() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("mc.exr");
+    let exr_s = exr.to_str().unwrap();
+    for integrator in ["path", "light", "bdpt"] {
+        let out = raylink(&[
+            "render",
+            "scenes/cornell-box.toml",
+            "--integrator",
+            integrator,
+            "--spp",
+            "3",
+            "--width",
+            "32",
+            "--height",
+            "32",
+            "-o",
+            exr_s,
+            "--quiet",
+        ]);
+        assert!(out.status.success(), "{integrator}: {}", stderr(&out));
+        let (image, meta) = read_image(&exr).unwrap();
+        assert!(image.pixels.iter().all(|p| p.is_finite()));
+        assert_eq!(
+            meta_value(&meta, "raylink:integrator"),
+            Some(MetaValue::Str(integrator.into()))
+        );
+        assert_eq!(
+            meta_value(&meta, "raylink:samples_per_pixel"),
+            Some(MetaValue::Float(3.0))
+        );
+    }
+    // The scene's [render] table picks the integrator and sample count.
+    let out = raylink(&[
+        "render",
+        "scenes/cornell-spheres.toml",
+        "--width",
+        "24",
+        "--height",
+        "24",
+        "-o",
+        exr_s,
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (_, meta) = read_image(&exr).unwrap();
+    assert_eq!(
+        meta_value(&meta, "raylink:integrator"),
+        Some(MetaValue::Str("path".into()))
+    );
+    assert_eq!(
+        meta_value(&meta, "raylink:samples_per_pixel"),
+        Some(MetaValue::Float(64.0))
+    );
+    // A time limit renders whole passes: at least one, and fewer than the cap.
+    let out = raylink(&[
+        "render",
+        "scenes/cornell-box.toml",
+        "--integrator",
+        "path",
+        "--time-limit",
+        "0.5",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "-o",
+        exr_s,
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (_, meta) = read_image(&exr).unwrap();
+    match meta_value(&meta, "raylink:samples_per_pixel") {
+        Some(MetaValue::Float(spp)) => assert!((1.0..1e6).contains(&spp), "spp {spp}"),
+        other => panic!("samples_per_pixel: {other:?}"),
+    }
+    // Auxiliary outputs beside the first output.
+    let out = raylink(&[
+        "render",
+        "scenes/cornell-box.toml",
+        "--integrator",
+        "path",
+        "--spp",
+        "1",
+        "--aov",
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "-o",
+        exr_s,
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (depth, _) = read_image(&dir.path().join("mc.depth.exr")).unwrap();
+    // The camera is 6.8 m from the box's centre: depths lie between 5 and 10 m.
+    assert!(
+        depth.pixels.iter().all(|p| p.x > 5.0 && p.x < 10.0),
+        "depths"
+    );
+    let (normal, _) = read_image(&dir.path().join("mc.normal.exr")).unwrap();
+    assert!(normal.pixels.iter().all(|n| n.length() <= 1.001));
+    let (albedo, _) = read_image(&dir.path().join("mc.albedo.exr")).unwrap();
+    assert!(albedo.pixels.iter().all(|a| a.max_element() <= 1.0));
+
+    let missing = dir.path().join("never.exr");
+    let missing_s = missing.to_str().unwrap();
+    for (args, needle) in [
+        (
+            vec!["--integrator", "path", "--aa", "adaptive"],
+            "--aa does not apply",
+        ),
+        (
+            vec!["--integrator", "whitted", "--time-limit", "3"],
+            "--time-limit does not apply",
+        ),
+        (vec!["--integrator", "path", "--spp", "0"], "--spp"),
+        (
+            vec!["--integrator", "path", "--time-limit", "-1"],
+            "--time-limit",
+        ),
+        (
+            vec!["--integrator", "path", "--filter-radius", "0"],
+            "filter radius",
+        ),
+        (
+            vec!["--integrator", "path", "--max-depth", "100000"],
+            "--max-depth",
+        ),
+    ] {
+        let mut all = vec!["render", "scenes/cornell-box.toml", "-o", missing_s];
+        all.extend(args);
+        assert_clean_failure(&raylink(&all), &[needle]);
+        assert!(!missing.exists());
+    }
+    // BDPT needs lights with a position.
+    assert_clean_failure(
+        &raylink(&[
+            "render",
+            "scenes/whitted.toml",
+            "--integrator",
+            "bdpt",
+            "-o",
+            missing_s,
+        ]),
+        &["whitted.toml", "bdpt"],
+    );
+}

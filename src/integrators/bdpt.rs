@@ -41,6 +41,7 @@ impl Bdpt {
             .iter()
             .all(|l| matches!(l, crate::scene::Light::Point { .. }))
             || scene.background.max_element() > 0.0
+            || scene.environment.is_some()
         {
             return Err(
                 "the bdpt integrator supports area and point lights only; this scene has a \

@@ -86,7 +86,7 @@ impl MonteCarlo for LightTracer {
         // ray supplies it.
         let mut direct = Rgb::ZERO;
         if lights.background_light().is_some() && ctx.intersect(camera_ray, stats).is_none() {
-            direct = lights.background_radiance();
+            direct = lights.background_radiance(camera_ray.dir);
         }
         let u_choose = sampler.next_2d();
         let u_pos = sampler.next_2d();

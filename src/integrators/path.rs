@@ -8,7 +8,7 @@ use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
 use crate::math::sobol::Sampler;
 use crate::math::warp::power_heuristic;
-use crate::math::{offset_origin, Ray, Rgb};
+use crate::math::{offset_origin, Ray, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
 
 /// Default number of bounces (pbrt's convention: 1 is direct lighting only).
@@ -81,11 +81,14 @@ impl MonteCarlo for PathTracer {
         loop {
             let Some(sp) = ctx.intersect(&ray, stats) else {
                 if let Some(bg) = lights.background_light() {
-                    let le = lights.background_radiance();
+                    let le = lights.background_radiance(ray.dir);
                     let w = if specular {
                         1.0
                     } else {
-                        power_heuristic(bsdf_pdf, lights.pdf_li(bg, prev_p, prev_p, ray.dir))
+                        power_heuristic(
+                            bsdf_pdf,
+                            lights.pdf_li(bg, prev_p, prev_p + ray.dir, Vec3::ZERO),
+                        )
                     };
                     radiance += beta * le * w;
                 }

@@ -49,6 +49,10 @@ fn sobol_dim1(mut index: u32) -> u32 {
     x
 }
 
+/// Dimension pairs drawn from the scrambled Sobol sequence (the pixel filter and the first
+/// three bounces of a path); later pairs are independent hashed values.
+pub const SOBOL_PAIRS: u32 = 10;
+
 const TO_UNIT: f32 = 1.0 / 4294967296.0;
 /// The largest f32 below one.
 pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
@@ -72,6 +76,15 @@ impl Sampler {
     pub fn next_2d(&mut self) -> Vec2 {
         let h = mix64(self.key ^ (self.dimension as u64).wrapping_mul(0xd1b5_4a32_d192_ed03));
         self.dimension += 1;
+        if self.dimension > SOBOL_PAIRS {
+            // Deep in a path, stratification no longer pays for its cost: hashed values.
+            let r = mix64(h ^ (self.index as u64).wrapping_mul(0x9e37_79b9_7f4a_7c15));
+            return Vec2::new(
+                ((r >> 40) as f32 * (1.0 / (1u32 << 24) as f32)).min(ONE_MINUS_EPSILON),
+                (((r >> 8) & 0xff_ffff) as f32 * (1.0 / (1u32 << 24) as f32))
+                    .min(ONE_MINUS_EPSILON),
+            );
+        }
         // Shuffle the index (a nested uniform scramble), then scramble both coordinates.
         let index = nested_uniform_scramble(self.index, h as u32);
         let x = nested_uniform_scramble(index.reverse_bits(), (h >> 32) as u32);
@@ -97,7 +110,7 @@ mod tests {
     #[test]
     fn every_pair_is_stratified() {
         for pixel in 0..4u64 {
-            for dim in 0..6 {
+            for dim in 0..SOBOL_PAIRS {
                 let mut seen = [false; 64];
                 for i in 0..64 {
                     let mut s = Sampler::new(3, &[pixel], i);

@@ -67,16 +67,23 @@ impl Environment {
 
     /// Radiance seen by a ray that leaves the scene travelling in direction `dir`.
     pub fn eval(&self, dir: Vec3) -> Rgb {
+        match self.texel(dir) {
+            Some(i) => self.image.pixels[i].max(Rgb::ZERO) * self.scale,
+            None => Rgb::ZERO,
+        }
+    }
+
+    /// Index of the texel (nearest, as pbrt-v4's ImageInfiniteLight) seen along `dir`.
+    pub fn texel(&self, dir: Vec3) -> Option<usize> {
         let w = (self.world_to_light * dir).normalize_or_zero();
         if w == Vec3::ZERO {
-            return Rgb::ZERO;
+            return None;
         }
         let uv = equal_area_sphere_to_square(w);
-        // Nearest texel, as pbrt-v4's ImageInfiniteLight.
         let n = self.image.width;
         let x = ((uv.x * n as f32) as u32).min(n - 1);
         let y = ((uv.y * n as f32) as u32).min(n - 1);
-        self.image.get(x, y).max(Rgb::ZERO) * self.scale
+        Some((y * n + x) as usize)
     }
 }
 
