@@ -6,7 +6,11 @@ use crate::math::Rgb;
 
 /// Averages `image` onto a `width`×`height` grid; each dimension must divide evenly.
 pub fn box_downsample(image: &Image, width: u32, height: u32) -> Option<Image> {
-    if width == 0 || height == 0 || image.width % width != 0 || image.height % height != 0 {
+    if width == 0
+        || height == 0
+        || !image.width.is_multiple_of(width)
+        || !image.height.is_multiple_of(height)
+    {
         return None;
     }
     let (fx, fy) = (image.width / width, image.height / height);
