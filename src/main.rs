@@ -102,7 +102,7 @@ struct RenderArgs {
     spp: Option<u32>,
     /// Monte Carlo integrators: render whole sample passes until this many seconds have
     /// passed (--spp, if given, still caps the samples).
-    #[arg(long, value_name = "SECONDS")]
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true)]
     time_limit: Option<f64>,
     /// Monte Carlo integrators: write the outputs after a pass when this many seconds have
     /// passed since the last write, so a long render can be watched.
