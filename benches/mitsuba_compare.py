@@ -6,7 +6,11 @@ sample count with their path integrators and the same path length (Mitsuba's max
 counts the camera segment: it is 7 bounces, raylink's --max-depth 7). Throughput is camera
 paths per second of render time (scene loading excluded for both). Errors are RMSEs against
 Tungsten's converged render, box-downsampled, with the light's pixels excluded (as in
-tests/monte_carlo.rs). Each renderer runs --reps times; medians are reported.
+tests/monte_carlo.rs). Both use a box pixel filter: Mitsuba splats each sample into every
+pixel its filter covers (a tent shares samples between neighbours and lowers per-pixel noise
+while correlating pixels), raylink samples its filter by importance (each pixel keeps its
+own samples), so only the box filter compares the estimators themselves. Each renderer runs
+--reps times; medians are reported.
 
 Setup: python3 -m venv /tmp/mi && /tmp/mi/bin/pip install mitsuba
 Run:   cargo build --release --example compare && /tmp/mi/bin/python benches/mitsuba_compare.py
@@ -47,13 +51,15 @@ def main():
 
     mi_times, mi_errors = [], []
     for rep in range(args.reps):
-        scene = mi.load_file(os.path.join(SHARED, "mitsuba-scene_v3.xml"), spp=args.spp,
-                             resx=args.size, resy=args.size, max_depth=args.max_depth)
+        with open(os.path.join(SHARED, "mitsuba-scene_v3.xml")) as f:
+            xml = f.read().replace('<rfilter type="tent" />', '<rfilter type="box" />')
+        scene = mi.load_string(xml, spp=args.spp, resx=args.size, resy=args.size,
+                               max_depth=args.max_depth)
         start = time.perf_counter()
         image = mi.render(scene, seed=rep)
         mi_times.append(time.perf_counter() - start)
         path = os.path.join(tmp, f"mitsuba{rep}.exr")
-        mi.util.write_bitmap(path, image)
+        mi.Bitmap(image).write(path)  # synchronous (write_bitmap may return before the file exists)
         mi_errors.append(rmse(path, reference, args.size))
 
     rl_times, rl_errors = [], []
@@ -63,8 +69,8 @@ def main():
         out = subprocess.run(
             [binary, "render", os.path.join(ROOT, "scenes/cornell-box.toml"), "--integrator",
              "path", "--width", str(args.size), "--height", str(args.size), "--spp",
-             str(args.spp), "--max-depth", str(args.max_depth - 1), "--filter", "triangle",
-             "--filter-radius", "1", "--seed", str(rep), "-o", path],
+             str(args.spp), "--max-depth", str(args.max_depth - 1), "--filter", "box", "--seed", str(rep),
+             "-o", path],
             check=True, capture_output=True, text=True).stderr
         rl_times.append(float(re.search(r"rendered in ([0-9.]+) s", out).group(1)))
         rl_errors.append(rmse(path, reference, args.size))

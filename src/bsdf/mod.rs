@@ -58,6 +58,8 @@ pub struct Bsdf {
     ior: f32,
     ggx: Option<Ggx>,
     fresnel: bool,
+    /// Only the Lambertian lobe: the common case takes a short path.
+    lambertian: bool,
 }
 
 /// Lobe selection probabilities for a given outgoing direction.
@@ -85,6 +87,8 @@ impl Bsdf {
         }
         let (t, b) = frame(n);
         let alpha = m.roughness.clamp(0.0, 1.0);
+        let lambertian =
+            !m.fresnel && m.specular.max_element() <= 0.0 && m.transmission.max_element() <= 0.0;
         Bsdf {
             t,
             b,
@@ -97,6 +101,7 @@ impl Bsdf {
             // Below this α the lobe is numerically a mirror.
             ggx: (alpha >= 1e-3).then_some(Ggx { alpha }),
             fresnel: m.fresnel,
+            lambertian,
         }
     }
 
@@ -222,6 +227,9 @@ impl Bsdf {
         if lo.z * go <= 0.0 || li.z * gi <= 0.0 {
             return 0.0;
         }
+        if self.lambertian {
+            return cosine_hemisphere_pdf(li.z.abs());
+        }
         let lobes = self.lobes(lo);
         if lo.z < 0.0 {
             lo = -lo;
@@ -242,6 +250,20 @@ impl Bsdf {
         let lo_raw = self.local(wo);
         if lo_raw.z == 0.0 {
             return None;
+        }
+        if self.lambertian {
+            let li = cosine_hemisphere(u) * lo_raw.z.signum();
+            let wi = self.world(li);
+            if wi.dot(self.ng) * wo.dot(self.ng) <= 0.0 || li.z == 0.0 {
+                return None;
+            }
+            // f·cos/pdf = kd (times the adjoint correction).
+            return Some(BsdfSample {
+                wi,
+                weight: self.kd * self.adjoint(wo, wi, lo_raw, li, mode),
+                pdf: cosine_hemisphere_pdf(li.z.abs()),
+                delta: false,
+            });
         }
         let lobes = self.lobes(lo_raw);
         let side = lo_raw.z.signum();

@@ -35,9 +35,15 @@ fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
     laine_karras(x.reverse_bits(), seed).reverse_bits()
 }
 
-/// Sobol's second dimension (primitive polynomial x + 1).
-fn sobol_dim1(mut index: u32) -> u32 {
+/// Sobol's second dimension (primitive polynomial x + 1), by the direction number of each
+/// index bit.
+const fn sobol_dim1_bits(mut index: u32, first_bit: u32) -> u32 {
     let mut v = 1u32 << 31;
+    let mut k = 0;
+    while k < first_bit {
+        v ^= v >> 1;
+        k += 1;
+    }
     let mut x = 0;
     while index != 0 {
         if index & 1 != 0 {
@@ -47,6 +53,31 @@ fn sobol_dim1(mut index: u32) -> u32 {
         v ^= v >> 1;
     }
     x
+}
+
+/// The second dimension is linear over GF(2) in the index bits: the value is the XOR of
+/// one table entry per index byte (a shuffled index has all 32 bits set at random, so a
+/// bit-by-bit loop would take 32 steps).
+const SOBOL_DIM1_TABLE: [[u32; 256]; 4] = {
+    let mut t = [[0u32; 256]; 4];
+    let mut byte = 0;
+    while byte < 4 {
+        let mut b = 0;
+        while b < 256 {
+            t[byte][b] = sobol_dim1_bits(b as u32, 8 * byte as u32);
+            b += 1;
+        }
+        byte += 1;
+    }
+    t
+};
+
+fn sobol_dim1(index: u32) -> u32 {
+    let t = &SOBOL_DIM1_TABLE;
+    t[0][(index & 0xff) as usize]
+        ^ t[1][((index >> 8) & 0xff) as usize]
+        ^ t[2][((index >> 16) & 0xff) as usize]
+        ^ t[3][(index >> 24) as usize]
 }
 
 /// Dimension pairs drawn from the scrambled Sobol sequence (the pixel filter and the first
@@ -104,6 +135,15 @@ impl Sampler {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn table_matches_the_bitwise_definition() {
+        let mut rng = crate::math::Rng::for_key(2, &[]);
+        for _ in 0..10_000 {
+            let i = rng.next_u32();
+            assert_eq!(sobol_dim1(i), sobol_dim1_bits(i, 0));
+        }
+    }
 
     /// 64 samples of any dimension pair fill the 8x8 strata of the square exactly once
     /// (Owen scrambling of a (0,2)-sequence keeps it a (0,m,2)-net).

@@ -122,7 +122,14 @@ impl AreaLight {
             AreaKind::Triangles { tris, cdf } => {
                 let total = *cdf.last().expect("area lights have triangles");
                 let target = u.x * total;
-                let i = cdf.partition_point(|&c| c <= target).min(tris.len() - 1);
+                // Most emitters are a quad or a few triangles: a scan beats a binary search.
+                let i = if cdf.len() <= 8 {
+                    cdf.iter()
+                        .position(|&c| c > target)
+                        .unwrap_or(tris.len() - 1)
+                } else {
+                    cdf.partition_point(|&c| c <= target).min(tris.len() - 1)
+                };
                 // Reuse the leftover of u.x within the chosen triangle's interval.
                 let lo = if i == 0 { 0.0 } else { cdf[i - 1] };
                 let ux = ((target - lo) / (cdf[i] - lo).max(f32::MIN_POSITIVE)).clamp(0.0, 1.0);
