@@ -430,11 +430,12 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
             let options = ProgressiveOptions {
                 width,
                 height,
-                spp: spp.unwrap_or(if args.time_limit.is_some() {
-                    MAX_SPP
-                } else {
-                    16
-                }),
+                // With a time limit only an explicit --spp caps the samples.
+                spp: match (args.spp, args.time_limit) {
+                    (Some(n), _) => n,
+                    (None, Some(_)) => MAX_SPP,
+                    (None, None) => spp.unwrap_or(16),
+                },
                 time_limit: args.time_limit,
                 threads: args.threads,
                 seed: args.seed,
