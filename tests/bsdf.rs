@@ -55,28 +55,7 @@ fn integrate_pdf(bsdf: &Bsdf, wo: Vec3) -> Vec<f64> {
 fn chi2_tail(x: f64, dof: f64) -> f64 {
     let k = 2.0 / (9.0 * dof);
     let z = ((x / dof).powf(1.0 / 3.0) - (1.0 - k)) / k.sqrt();
-    0.5 * libm_erfc(z / std::f64::consts::SQRT_2)
-}
-
-fn libm_erfc(x: f64) -> f64 {
-    // Abramowitz-Stegun 7.1.26 is not accurate in the tail; use the continued product form.
-    let z = x.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let r = t
-        * (-z * z - 1.26551223
-            + t * (1.00002368
-                + t * (0.37409196
-                    + t * (0.09678418
-                        + t * (-0.18628806
-                            + t * (0.27886807
-                                + t * (-1.13520398
-                                    + t * (1.48851587 + t * (-0.82215223 + t * 0.17087277)))))))))
-            .exp();
-    if x >= 0.0 {
-        r
-    } else {
-        2.0 - r
-    }
+    0.5 * raylink::math::erfc(z / std::f64::consts::SQRT_2)
 }
 
 /// Runs the three checks for one material and outgoing direction.

@@ -3,7 +3,7 @@
 //! distribution, so every sample has weight one and a pixel depends only on its own samples.
 //! Tiles stay independent and the image is the same for any thread count.
 
-use crate::math::Vec2;
+use crate::math::{erfc, Vec2};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Filter {
@@ -136,28 +136,6 @@ fn gaussian_1d(x: f32, radius: f32, sigma: f32) -> f32 {
 
 fn normal_cdf(x: f32) -> f64 {
     0.5 * erfc(-(x as f64) / std::f64::consts::SQRT_2)
-}
-
-/// Complementary error function (Numerical Recipes' erfcc, |error| < 1.2e-7).
-fn erfc(x: f64) -> f64 {
-    let z = x.abs();
-    let t = 1.0 / (1.0 + 0.5 * z);
-    let r = t
-        * (-z * z - 1.265_512_23
-            + t * (1.000_023_68
-                + t * (0.374_091_96
-                    + t * (0.096_784_18
-                        + t * (-0.186_288_06
-                            + t * (0.278_868_07
-                                + t * (-1.135_203_98
-                                    + t * (1.488_515_87
-                                        + t * (-0.822_152_23 + t * 0.170_872_77)))))))))
-            .exp();
-    if x >= 0.0 {
-        r
-    } else {
-        2.0 - r
-    }
 }
 
 /// Quantile of the standard normal: Acklam's rational approximation refined by one Halley
