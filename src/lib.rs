@@ -1,13 +1,16 @@
 //! raylink: a global-illumination renderer.
 //!
 //! The layers, bottom up:
-//! - [`accel`]: one intersection interface; the Embree backend is the only place that talks to Embree.
+//! - [`accel`]: one intersection interface; the Embree backend is the only place that talks to Embree, and
+//!   `accel::bvh` is the pure-Rust backend (obvhs).
 //! - [`scene`]: the scene description every reader produces (camera, materials, shapes, lights).
 //! - [`image`]: images and their files, written and read through OpenImageIO.
 //! - [`integrators`]: one module per light-transport technique.
 //! - [`render`]: tiles, threads, pixel sampling, progress and statistics.
+//! - [`bench`]: `raylink bench`, Embree against the pure-Rust BVH.
 
 pub mod accel;
+pub mod bench;
 pub mod error;
 pub mod image;
 pub mod integrators;

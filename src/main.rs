@@ -31,6 +31,8 @@ struct Cli {
 enum Command {
     /// Render a scene to one or more image files.
     Render(RenderArgs),
+    /// Compare the intersection backends: build time, memory and Mrays/s on a ladder of scenes.
+    Bench(raylink::bench::BenchArgs),
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -58,6 +60,10 @@ struct RenderArgs {
     /// Light-transport technique.
     #[arg(long, value_enum, default_value = "whitted")]
     integrator: IntegratorName,
+    /// Intersection backend: Embree, or the pure-Rust BVH (obvhs). Images match up to
+    /// floating-point ties.
+    #[arg(long, value_enum, default_value = "embree")]
+    accel: accel::Backend,
     /// Image width in pixels (default: the scene's).
     #[arg(long)]
     width: Option<u32>,
@@ -129,6 +135,7 @@ fn main() -> ExitCode {
     };
     let result = match cli.command {
         Command::Render(args) => run_render(args),
+        Command::Bench(args) => raylink::bench::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -219,7 +226,7 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
             ..WhittedOptions::default()
         })),
     };
-    let accel = accel::build(&scene, accel::Backend::Embree)?;
+    let accel = accel::build(&scene, args.accel)?;
     let ctx = Context::new(&scene, accel.as_ref());
     let options = RenderOptions {
         width,
