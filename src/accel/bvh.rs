@@ -55,7 +55,7 @@ struct Prim {
     p: [Vec3A; 3],
 }
 
-/// Which shape and primitive a slot answers for.
+/// Which shape and primitive a slot answers for, and how.
 #[derive(Clone, Copy, Debug)]
 struct Meta {
     geom_id: u32,
@@ -63,12 +63,21 @@ struct Meta {
     kind: Kind,
 }
 
+/// A primitive's ids, read only for the final hit.
+#[derive(Clone, Copy, Debug)]
+struct Ids {
+    geom_id: u32,
+    prim_id: u32,
+}
+
 /// [`Accel`] over obvhs's CWBVH.
 pub struct BvhAccel {
     bvh: CwBvh,
-    /// Primitives in BVH leaf order (`bvh.primitive_indices` already applied).
+    /// Primitives in BVH leaf order (`bvh.primitive_indices` already applied), with their
+    /// kinds (read for every test, so kept apart from the ids, read once per query).
     prims: Vec<Prim>,
-    meta: Vec<Meta>,
+    kinds: Vec<Kind>,
+    ids: Vec<Ids>,
 }
 
 fn to_a(p: Vec3) -> Vec3A {
@@ -268,7 +277,8 @@ impl BvhAccel {
         let mut accel = BvhAccel {
             bvh: CwBvh::default(),
             prims: Vec::new(),
-            meta: Vec::new(),
+            kinds: Vec::new(),
+            ids: Vec::new(),
         };
         accel.rebuild(scene)?;
         Ok(accel)
@@ -281,8 +291,9 @@ impl BvhAccel {
         let (prims, meta) = collect_prims(scene);
         if prims.is_empty() {
             self.bvh = CwBvh::default();
-            self.prims = prims;
-            self.meta = meta;
+            self.prims.clear();
+            self.kinds.clear();
+            self.ids.clear();
             return Ok(());
         }
         let aabbs: Vec<Aabb> = prims
@@ -309,7 +320,17 @@ impl BvhAccel {
         );
         let order = &bvh.primitive_indices;
         self.prims = order.iter().map(|&i| prims[i as usize]).collect();
-        self.meta = order.iter().map(|&i| meta[i as usize]).collect();
+        self.kinds = order.iter().map(|&i| meta[i as usize].kind).collect();
+        self.ids = order
+            .iter()
+            .map(|&i| {
+                let m = meta[i as usize];
+                Ids {
+                    geom_id: m.geom_id,
+                    prim_id: m.prim_id,
+                }
+            })
+            .collect();
         self.bvh = bvh;
         Ok(())
     }
@@ -319,7 +340,8 @@ impl BvhAccel {
         self.bvh.nodes.capacity() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>()
             + self.bvh.primitive_indices.capacity() * 4
             + self.prims.capacity() * std::mem::size_of::<Prim>()
-            + self.meta.capacity() * std::mem::size_of::<Meta>()
+            + self.kinds.capacity() * std::mem::size_of::<Kind>()
+            + self.ids.capacity() * std::mem::size_of::<Ids>()
     }
 
     /// Number of primitives in the tree (a quad counts as two triangles).
@@ -369,7 +391,7 @@ impl Accel for BvhAccel {
         let mut tmax = ray.tmax;
         let mut best = None;
         self.traverse(org, dir, ray.tmax, |i| {
-            let t = self.prims[i].hit_t(self.meta[i].kind, org, dir, ray.tmin, tmax);
+            let t = self.prims[i].hit_t(self.kinds[i], org, dir, ray.tmin, tmax);
             // A hit exactly at the current tmax replaces the last one, as in Embree.
             if t <= tmax && t.is_finite() {
                 tmax = t;
@@ -380,8 +402,8 @@ impl Accel for BvhAccel {
             }
         });
         let i = best?;
-        let m = self.meta[i];
-        let (u, v, ng) = self.prims[i].details(m.kind, org, dir, ray.tmin, tmax);
+        let m = self.ids[i];
+        let (u, v, ng) = self.prims[i].details(self.kinds[i], org, dir, ray.tmin, tmax);
         Some(Hit {
             t: tmax,
             u,
@@ -396,7 +418,7 @@ impl Accel for BvhAccel {
         let (org, dir) = (to_a(ray.origin), to_a(ray.dir));
         let mut hit = false;
         self.traverse(org, dir, ray.tmax, |i| {
-            let t = self.prims[i].hit_t(self.meta[i].kind, org, dir, ray.tmin, ray.tmax);
+            let t = self.prims[i].hit_t(self.kinds[i], org, dir, ray.tmin, ray.tmax);
             hit = t.is_finite();
             if hit {
                 Visit::Stop

@@ -245,7 +245,7 @@ pub fn build_timed(scene: &Scene, backend: Backend, pool: &rayon::ThreadPool) ->
     }
 }
 
-/// Runs the whole bench and returns its rows (in scene, threads, backend, kind order).
+/// Runs the whole bench and returns its rows (in scene, threads, kind, backend order).
 /// `progress` receives one line per step.
 pub fn measure(config: &BenchConfig, progress: &mut dyn FnMut(&str)) -> Result<Vec<Row>> {
     let pools = config
@@ -270,35 +270,39 @@ pub fn measure(config: &BenchConfig, progress: &mut dyn FnMut(&str)) -> Result<V
             )
         };
         for (pool, &threads) in pools.iter().zip(&config.threads) {
-            for &backend in &config.backends {
-                progress(&format!("{name}: {backend}, {threads} thread(s): building"));
-                let mut build_s = Vec::new();
-                let mut built: Option<Built> = None;
-                for _ in 0..config.build_reps {
+            // Backends take turns, build by build and run by run, so that a change in the
+            // machine's load (it may be shared) hits them alike and their ratios stay fair.
+            progress(&format!("{name}, {threads} thread(s): building"));
+            let mut build_ms = vec![Vec::new(); config.backends.len()];
+            let mut built: Vec<Option<Built>> = config.backends.iter().map(|_| None).collect();
+            for _ in 0..config.build_reps {
+                for (b, &backend) in config.backends.iter().enumerate() {
                     // Drop the previous structure first so that builds do not overlap in memory.
-                    drop(built.take());
-                    let b = build_timed(&scene, backend, pool)?;
-                    build_s.push(b.seconds * 1e3);
-                    built = Some(b);
+                    drop(built[b].take());
+                    let new = build_timed(&scene, backend, pool)?;
+                    build_ms[b].push(new.seconds * 1e3);
+                    built[b] = Some(new);
                 }
-                let built = built.expect("at least one build");
-                let build_ms = Spread::of(&build_s);
-                for kind in RayKind::ALL {
-                    let rays = sets.get(kind);
-                    progress(&format!(
-                        "{name}: {backend}, {threads} thread(s): {} {kind} rays",
-                        rays.len()
-                    ));
-                    let mut hits = 0;
-                    for _ in 0..config.warmup {
-                        hits = trace(pool, built.accel.as_ref(), rays, kind).1;
+            }
+            let built: Vec<Built> = built.into_iter().flatten().collect();
+            for kind in RayKind::ALL {
+                let rays = sets.get(kind);
+                progress(&format!(
+                    "{name}, {threads} thread(s): {} {kind} rays",
+                    rays.len()
+                ));
+                let mut hits = vec![0; built.len()];
+                let mut mrays = vec![Vec::new(); built.len()];
+                for rep in 0..config.warmup + config.reps {
+                    for (b, structure) in built.iter().enumerate() {
+                        let (seconds, h) = trace(pool, structure.accel.as_ref(), rays, kind);
+                        hits[b] = h;
+                        if rep >= config.warmup {
+                            mrays[b].push(rays.len() as f64 / seconds.max(1e-9) / 1e6);
+                        }
                     }
-                    let mut mrays = Vec::new();
-                    for _ in 0..config.reps {
-                        let (seconds, h) = trace(pool, built.accel.as_ref(), rays, kind);
-                        hits = h;
-                        mrays.push(rays.len() as f64 / seconds.max(1e-9) / 1e6);
-                    }
+                }
+                for (b, &backend) in config.backends.iter().enumerate() {
                     rows.push(Row {
                         scene: name.clone(),
                         primitives,
@@ -306,10 +310,10 @@ pub fn measure(config: &BenchConfig, progress: &mut dyn FnMut(&str)) -> Result<V
                         threads,
                         kind,
                         rays: rays.len(),
-                        hits,
-                        mrays_per_s: Spread::of(&mrays),
-                        build_ms,
-                        memory_bytes: built.memory_bytes,
+                        hits: hits[b],
+                        mrays_per_s: Spread::of(&mrays[b]),
+                        build_ms: Spread::of(&build_ms[b]),
+                        memory_bytes: built[b].memory_bytes,
                     });
                 }
             }
