@@ -263,29 +263,22 @@ fn colour(backend: Backend, thread_index: usize) -> RGBColor {
     }
 }
 
-/// Log-scale bounds around the values, with some room.
-fn log_range(values: impl Iterator<Item = f64>) -> std::ops::Range<f64> {
-    let (lo, hi) = values
-        .filter(|v| *v > 0.0 && v.is_finite())
-        .fold((f64::MAX, f64::MIN), |(lo, hi), v| (lo.min(v), hi.max(v)));
-    if lo > hi {
-        return 0.1..10.0;
-    }
-    lo / 1.5..hi * 1.5
+/// One panel of the chart: its title, unit, the value plotted, which rows (a ray kind; build
+/// times are the same on every kind's rows, so the camera rows), and whether the axis is
+/// logarithmic.
+struct Panel {
+    title: &'static str,
+    unit: &'static str,
+    value: fn(&Row) -> Spread,
+    kind: RayKind,
+    log: bool,
 }
 
-/// Four panels: Mrays/s of each ray kind, and build time, per scene of the ladder, one line
-/// per (backend, threads) with min–max bars.
+/// Four panels: Mrays/s of each ray kind (linear, from zero) and build time (logarithmic), per
+/// scene of the ladder, one line per (backend, threads) with min–max bars.
 pub fn svg(rows: &[Row], config: &BenchConfig, path: &Path) -> Result<()> {
     draw(rows, config, path).map_err(|e| Error::io(path, std::io::Error::other(e.to_string())))
 }
-
-type Metric = (
-    &'static str,
-    &'static str,
-    fn(&Row) -> Spread,
-    Option<RayKind>,
-);
 
 fn draw(
     rows: &[Row],
@@ -302,52 +295,73 @@ fn draw(
         ),
         ("sans-serif", 22),
     )?;
-    let metrics: [Metric; 4] = [
-        (
-            "camera rays",
-            "Mrays/s",
-            |r| r.mrays_per_s,
-            Some(RayKind::Camera),
-        ),
-        (
-            "shadow rays",
-            "Mrays/s",
-            |r| r.mrays_per_s,
-            Some(RayKind::Shadow),
-        ),
-        (
-            "diffuse-bounce rays",
-            "Mrays/s",
-            |r| r.mrays_per_s,
-            Some(RayKind::Diffuse),
-        ),
-        ("build time", "ms", |r| r.build_ms, None),
+    let throughput = |title, kind| Panel {
+        title,
+        unit: "Mrays/s",
+        value: |r: &Row| r.mrays_per_s,
+        kind,
+        log: false,
+    };
+    let panels = [
+        throughput("camera rays", RayKind::Camera),
+        throughput("shadow rays", RayKind::Shadow),
+        throughput("diffuse-bounce rays", RayKind::Diffuse),
+        Panel {
+            title: "build time",
+            unit: "ms (log scale)",
+            value: |r: &Row| r.build_ms,
+            kind: RayKind::Camera,
+            log: true,
+        },
     ];
     let scenes = &config.scenes;
-    for (area, (caption, unit, value, kind)) in body.split_evenly((2, 2)).iter().zip(metrics) {
-        let kind_rows: Vec<&Row> = rows
+    for (area, panel) in body.split_evenly((2, 2)).iter().zip(panels) {
+        // Log panels plot log10 of the value on a linear axis labelled with the value.
+        let y = |v: f64| if panel.log { v.max(1e-9).log10() } else { v };
+        let panel_rows: Vec<&Row> = rows.iter().filter(|r| r.kind == panel.kind).collect();
+        let (lo, hi) = panel_rows
             .iter()
-            .filter(|r| r.kind == kind.unwrap_or(RayKind::Camera))
-            .collect();
-        let y = log_range(kind_rows.iter().flat_map(|r| [value(r).min, value(r).max]));
+            .map(|r| (panel.value)(r))
+            .fold((f64::MAX, f64::MIN), |(lo, hi), s| {
+                (lo.min(y(s.min)), hi.max(y(s.max)))
+            });
+        let range = match (panel.log, lo <= hi) {
+            (_, false) => 0.0..1.0,
+            (true, true) => lo.floor()..hi.ceil().max(lo.floor() + 1.0),
+            (false, true) => 0.0..hi * 1.15,
+        };
+        let decades = (range.end - range.start).round() as usize + 1;
         let mut chart = ChartBuilder::on(area)
-            .caption(caption, ("sans-serif", 18))
+            .caption(panel.title, ("sans-serif", 18))
             .margin(12)
             .x_label_area_size(35)
             .y_label_area_size(60)
-            .build_cartesian_2d((0..scenes.len()).into_segmented(), y.log_scale())?;
-        let label = |v: &SegmentValue<usize>| match v {
+            .build_cartesian_2d((0..scenes.len() - 1).into_segmented(), range)?;
+        let x_label = |v: &SegmentValue<usize>| match v {
             SegmentValue::CenterOf(i) | SegmentValue::Exact(i) => {
                 scenes.get(*i).cloned().unwrap_or_default()
             }
             SegmentValue::Last => String::new(),
         };
-        chart
-            .configure_mesh()
-            .x_labels(scenes.len())
-            .x_label_formatter(&label)
-            .y_desc(unit)
-            .draw()?;
+        let y_label = |v: &f64| {
+            let label = sig(if panel.log { 10f64.powf(*v) } else { *v });
+            match label.contains('.') {
+                true => label
+                    .trim_end_matches('0')
+                    .trim_end_matches('.')
+                    .to_string(),
+                false => label,
+            }
+        };
+        let mut mesh = chart.configure_mesh();
+        mesh.x_labels(scenes.len())
+            .x_label_formatter(&x_label)
+            .y_label_formatter(&y_label)
+            .y_desc(panel.unit);
+        if panel.log {
+            mesh.y_labels(decades);
+        }
+        mesh.draw()?;
         for &backend in &config.backends {
             for (ti, &threads) in config.threads.iter().enumerate() {
                 let c = colour(backend, ti);
@@ -355,15 +369,15 @@ fn draw(
                     .iter()
                     .enumerate()
                     .filter_map(|(i, s)| {
-                        kind_rows
+                        panel_rows
                             .iter()
                             .find(|r| r.scene == *s && r.backend == backend && r.threads == threads)
-                            .map(|r| (SegmentValue::CenterOf(i), value(r)))
+                            .map(|r| (SegmentValue::CenterOf(i), (panel.value)(r)))
                     })
                     .collect();
                 chart
                     .draw_series(LineSeries::new(
-                        points.iter().map(|(x, s)| (x.clone(), s.median)),
+                        points.iter().map(|(x, s)| (x.clone(), y(s.median))),
                         c.stroke_width(2),
                     ))?
                     .label(format!("{backend}, {threads} thread(s)"))
@@ -373,11 +387,11 @@ fn draw(
                 chart.draw_series(
                     points
                         .iter()
-                        .map(|(x, s)| Circle::new((x.clone(), s.median), 4, c.filled())),
+                        .map(|(x, s)| Circle::new((x.clone(), y(s.median)), 4, c.filled())),
                 )?;
                 chart.draw_series(points.iter().map(|(x, s)| {
                     PathElement::new(
-                        vec![(x.clone(), s.min), (x.clone(), s.max)],
+                        vec![(x.clone(), y(s.min)), (x.clone(), y(s.max))],
                         c.stroke_width(2),
                     )
                 }))?;
@@ -385,7 +399,11 @@ fn draw(
         }
         chart
             .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
+            .position(if panel.log {
+                SeriesLabelPosition::UpperLeft
+            } else {
+                SeriesLabelPosition::UpperRight
+            })
             .background_style(WHITE.mix(0.85))
             .border_style(BLACK)
             .draw()?;
