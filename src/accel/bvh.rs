@@ -10,7 +10,8 @@
 //! - spheres: Embree's point-sphere test: the nearer root in `[tmin, tmax]`, else the farther
 //!   one; Ng points outwards; u = v = 0; prim_id 0.
 //!
-//! Primitive data is stored in BVH leaf order, so a leaf indexes it directly.
+//! Primitives are stored in BVH leaf order, so a leaf indexes them directly, as three indices
+//! into the scene's shared vertices.
 
 use super::{Accel, Hit};
 use crate::math::{Ray, Vec3};
@@ -49,7 +50,8 @@ enum Kind {
     Sphere,
 }
 
-/// One primitive's geometry: three vertices, or a sphere's centre and radius.
+/// One primitive's geometry, gathered from the shared vertices: three vertices, or a
+/// sphere's centre and radius.
 #[derive(Clone, Copy, Debug)]
 struct Prim {
     p: [Vec3A; 3],
@@ -73,9 +75,14 @@ struct Ids {
 /// [`Accel`] over obvhs's CWBVH.
 pub struct BvhAccel {
     bvh: CwBvh,
-    /// Primitives in BVH leaf order (`bvh.primitive_indices` already applied), with their
-    /// kinds (read for every test, so kept apart from the ids, read once per query).
-    prims: Vec<Prim>,
+    /// Every shape's vertices, shared by its primitives as in the meshes (a sphere has two:
+    /// its centre and (radius, 0, 0)). Indexing them, as Embree's robust mode does, keeps the
+    /// primitive data small: a third of what three vertices per triangle take.
+    vertices: Vec<Vec3A>,
+    /// Each primitive's three vertex indices, in BVH leaf order (`bvh.primitive_indices`
+    /// already applied), with their kinds (read for every test, so kept apart from the ids,
+    /// read once per query).
+    prims: Vec<[u32; 3]>,
     kinds: Vec<Kind>,
     ids: Vec<Ids>,
 }
@@ -88,41 +95,42 @@ fn to_vec3(p: Vec3A) -> Vec3 {
     Vec3::new(p.x, p.y, p.z)
 }
 
-/// The scene's primitives in shape order (the BVH reorders them).
-fn collect_prims(scene: &Scene) -> (Vec<Prim>, Vec<Meta>) {
+/// The scene's vertices, and its primitives in shape order (the BVH reorders them).
+fn collect_prims(scene: &Scene) -> (Vec<Vec3A>, Vec<[u32; 3]>, Vec<Meta>) {
+    let mut vertices = Vec::new();
     let mut prims = Vec::new();
     let mut meta = Vec::new();
     for (geom_id, shape) in scene.shapes.iter().enumerate() {
-        let geom_id = geom_id as u32;
-        let mut push = |p: [Vec3; 3], prim_id: usize, kind: Kind| {
-            prims.push(Prim { p: p.map(to_a) });
+        let base = vertices.len() as u32;
+        let mut push = |p: [u32; 3], prim_id: usize, kind: Kind| {
+            prims.push(p.map(|k| base + k));
             meta.push(Meta {
-                geom_id,
+                geom_id: geom_id as u32,
                 prim_id: prim_id as u32,
                 kind,
             });
         };
         match &shape.geometry {
-            Geometry::Sphere { center, radius } => push(
-                [*center, Vec3::new(*radius, 0.0, 0.0), Vec3::ZERO],
-                0,
-                Kind::Sphere,
-            ),
+            Geometry::Sphere { center, radius } => {
+                push([0, 1, 1], 0, Kind::Sphere);
+                vertices.extend([to_a(*center), Vec3A::new(*radius, 0.0, 0.0)]);
+            }
             Geometry::Triangles(m) => {
-                for i in 0..m.indices.len() {
-                    push(m.triangle(i), i, Kind::Triangle);
+                for (i, t) in m.indices.iter().enumerate() {
+                    push(*t, i, Kind::Triangle);
                 }
+                vertices.extend(m.positions.iter().map(|p| to_a(*p)));
             }
             Geometry::Quads(q) => {
-                for i in 0..q.indices.len() {
-                    let [v0, v1, v2, v3] = q.quad(i);
+                for (i, &[v0, v1, v2, v3]) in q.indices.iter().enumerate() {
                     push([v0, v1, v3], i, Kind::QuadFirst);
                     push([v2, v3, v1], i, Kind::QuadSecond);
                 }
+                vertices.extend(q.positions.iter().map(|p| to_a(*p)));
             }
         }
     }
-    (prims, meta)
+    (vertices, prims, meta)
 }
 
 impl Prim {
@@ -276,6 +284,7 @@ impl BvhAccel {
     pub fn build(scene: &Scene) -> Result<BvhAccel> {
         let mut accel = BvhAccel {
             bvh: CwBvh::default(),
+            vertices: Vec::new(),
             prims: Vec::new(),
             kinds: Vec::new(),
             ids: Vec::new(),
@@ -288,7 +297,8 @@ impl BvhAccel {
     /// (moved vertices, added or removed shapes). obvhs's PLOC builder is fast enough to
     /// rebuild every frame, which keeps the tree as good as a fresh one (a refit would not).
     pub fn rebuild(&mut self, scene: &Scene) -> Result<()> {
-        let (prims, meta) = collect_prims(scene);
+        let (vertices, prims, meta) = collect_prims(scene);
+        self.vertices = vertices;
         if prims.is_empty() {
             self.bvh = CwBvh::default();
             self.prims.clear();
@@ -299,7 +309,7 @@ impl BvhAccel {
         let aabbs: Vec<Aabb> = prims
             .iter()
             .zip(&meta)
-            .map(|(p, m)| p.aabb(m.kind))
+            .map(|(p, m)| self.gather(p).aabb(m.kind))
             .collect();
         if let Some(i) = aabbs
             .iter()
@@ -313,12 +323,13 @@ impl BvhAccel {
                 ),
             ));
         }
-        let bvh = build_cwbvh(
+        let mut bvh = build_cwbvh(
             &aabbs,
             BvhBuildParams::medium_build(),
             &mut Duration::default(),
         );
-        let order = &bvh.primitive_indices;
+        // Leaves index the reordered arrays directly, so the order itself is not kept.
+        let order = std::mem::take(&mut bvh.primitive_indices);
         self.prims = order.iter().map(|&i| prims[i as usize]).collect();
         self.kinds = order.iter().map(|&i| meta[i as usize].kind).collect();
         self.ids = order
@@ -335,13 +346,22 @@ impl BvhAccel {
         Ok(())
     }
 
-    /// Bytes held by the BVH nodes, the primitive order and the primitive data.
+    /// Bytes held by the BVH nodes and the primitive data (vertices, indices, kinds, ids).
     pub fn memory_bytes(&self) -> usize {
         self.bvh.nodes.capacity() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>()
             + self.bvh.primitive_indices.capacity() * 4
-            + self.prims.capacity() * std::mem::size_of::<Prim>()
+            + self.vertices.capacity() * std::mem::size_of::<Vec3A>()
+            + self.prims.capacity() * std::mem::size_of::<[u32; 3]>()
             + self.kinds.capacity() * std::mem::size_of::<Kind>()
             + self.ids.capacity() * std::mem::size_of::<Ids>()
+    }
+
+    /// A primitive's vertices.
+    #[inline(always)]
+    fn gather(&self, p: &[u32; 3]) -> Prim {
+        Prim {
+            p: p.map(|k| self.vertices[k as usize]),
+        }
     }
 
     /// Number of primitives in the tree (a quad counts as two triangles).
@@ -391,7 +411,9 @@ impl Accel for BvhAccel {
         let mut tmax = ray.tmax;
         let mut best = None;
         self.traverse(org, dir, ray.tmax, |i| {
-            let t = self.prims[i].hit_t(self.kinds[i], org, dir, ray.tmin, tmax);
+            let t = self
+                .gather(&self.prims[i])
+                .hit_t(self.kinds[i], org, dir, ray.tmin, tmax);
             // A hit exactly at the current tmax replaces the last one, as in Embree.
             if t <= tmax && t.is_finite() {
                 tmax = t;
@@ -403,7 +425,9 @@ impl Accel for BvhAccel {
         });
         let i = best?;
         let m = self.ids[i];
-        let (u, v, ng) = self.prims[i].details(self.kinds[i], org, dir, ray.tmin, tmax);
+        let (u, v, ng) =
+            self.gather(&self.prims[i])
+                .details(self.kinds[i], org, dir, ray.tmin, tmax);
         Some(Hit {
             t: tmax,
             u,
@@ -418,7 +442,9 @@ impl Accel for BvhAccel {
         let (org, dir) = (to_a(ray.origin), to_a(ray.dir));
         let mut hit = false;
         self.traverse(org, dir, ray.tmax, |i| {
-            let t = self.prims[i].hit_t(self.kinds[i], org, dir, ray.tmin, ray.tmax);
+            let t = self
+                .gather(&self.prims[i])
+                .hit_t(self.kinds[i], org, dir, ray.tmin, ray.tmax);
             hit = t.is_finite();
             if hit {
                 Visit::Stop
