@@ -11,7 +11,7 @@ use raylink::integrators::whitted::{Whitted, WhittedOptions};
 use raylink::integrators::Context;
 use raylink::math::{Ray, Rgb, Rng, Vec3};
 use raylink::render::{render, PixelSampling, RenderOptions};
-use raylink::scene::{Camera, Geometry, Material, QuadMesh, Scene, Shape, TriangleMesh};
+use raylink::scene::{Camera, Geometry, Material, QuadMesh, Scene, Shape};
 use std::path::Path;
 
 fn load(name: &str) -> Scene {
@@ -56,15 +56,7 @@ fn mixed_scene() -> Scene {
             indices.push([0, i as u32, i as u32 + 1]);
         }
     }
-    shapes.push(Shape {
-        geometry: Geometry::Triangles(TriangleMesh {
-            positions,
-            normals: None,
-            uvs: None,
-            indices,
-        }),
-        material: 0,
-    });
+    shapes.push(scenes::mesh_shape(positions, indices));
     for (c, r) in [
         (Vec3::new(-1.0, 1.0, 0.5), 0.6),
         (Vec3::new(-0.6, 1.2, 0.6), 0.5),

@@ -76,8 +76,8 @@ struct Ids {
 pub struct BvhAccel {
     bvh: CwBvh,
     /// Every shape's vertices, shared by its primitives as in the meshes (a sphere has two:
-    /// its centre and (radius, 0, 0)). Indexing them, as Embree's robust mode does, keeps the
-    /// primitive data small: a third of what three vertices per triangle take.
+    /// its centre and (radius, 0, 0)). Indexing them keeps the primitive data small (meshes
+    /// share each vertex among about six triangles), which saves memory traffic.
     vertices: Vec<Vec3A>,
     /// Each primitive's three vertex indices, in BVH leaf order (`bvh.primitive_indices`
     /// already applied), with their kinds (read for every test, so kept apart from the ids,

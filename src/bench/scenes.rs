@@ -267,7 +267,13 @@ pub fn terrain(triangles: usize) -> Scene {
             indices.push([at(i, j), at(i + 1, j + 1), at(i, j + 1)]);
         }
     }
-    scene.shapes.push(Shape {
+    scene.shapes.push(mesh_shape(positions, indices));
+    scene
+}
+
+/// A triangle mesh without normals or uvs, in material 0.
+pub fn mesh_shape(positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Shape {
+    Shape {
         geometry: Geometry::Triangles(TriangleMesh {
             positions,
             normals: None,
@@ -275,8 +281,7 @@ pub fn terrain(triangles: usize) -> Scene {
             indices,
         }),
         material: 0,
-    });
-    scene
+    }
 }
 
 #[cfg(test)]
