@@ -1,14 +1,17 @@
 //! raylink: a global-illumination renderer.
 //!
 //! The layers, bottom up:
-//! - [`accel`]: one intersection interface; the Embree backend is the only place that talks to Embree.
+//! - [`accel`]: one intersection interface; the Embree backend is the only place that talks to Embree, and
+//!   `accel::bvh` is the pure-Rust backend (obvhs).
 //! - [`scene`]: the scene description every reader produces (camera, materials, shapes, lights).
 //! - [`image`]: images and their files, written and read through OpenImageIO.
 //! - [`bsdf`]: scattering at surfaces (evaluate, sample, density) for the Monte Carlo integrators.
 //! - [`integrators`]: one module per light-transport technique.
 //! - [`render`]: tiles, threads, pixel sampling, progress and statistics.
+//! - [`bench`]: `raylink bench`, Embree against the pure-Rust BVH.
 
 pub mod accel;
+pub mod bench;
 pub mod bsdf;
 pub mod error;
 pub mod image;

@@ -40,6 +40,8 @@ enum Command {
     /// Convert a scene (.pbrt or .toml) to a native TOML scene; meshes are written as PLY
     /// files in a NAME.meshes folder beside it.
     Convert(ConvertArgs),
+    /// Compare the intersection backends: build time, memory and Mrays/s on a ladder of scenes.
+    Bench(raylink::bench::BenchArgs),
 }
 
 #[derive(clap::Args)]
@@ -90,6 +92,10 @@ struct RenderArgs {
     /// (default: the scene's, else whitted).
     #[arg(long, value_enum)]
     integrator: Option<IntegratorName>,
+    /// Intersection backend: Embree, or the pure-Rust BVH (obvhs). Images match up to
+    /// floating-point ties.
+    #[arg(long, value_enum, default_value = "embree")]
+    accel: accel::Backend,
     /// Image width in pixels (default: the scene's).
     #[arg(long)]
     width: Option<u32>,
@@ -183,6 +189,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => run_render(args),
         Command::Convert(args) => run_convert(args),
+        Command::Bench(args) => raylink::bench::run(&args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -372,7 +379,7 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
         Bdpt::check_scene(&scene).map_err(|e| Error::input(&args.scene, e))?;
     }
     let filter = choose_filter(&args, &scene)?;
-    let accel = accel::build(&scene, accel::Backend::Embree)?;
+    let accel = accel::build(&scene, args.accel)?;
     let ctx = Context::new(&scene, accel.as_ref());
     let out_options = OutputOptions {
         exposure: args.exposure,

@@ -1,6 +1,7 @@
 //! The intersection interface. Integrators query the scene through [`Accel`] and never see
 //! which backend answers.
 
+pub mod bvh;
 pub mod embree;
 
 use crate::math::{Ray, Vec3};
@@ -30,16 +31,38 @@ pub trait Accel: Send + Sync {
     fn occluded(&self, ray: &Ray) -> bool;
 }
 
-/// Which intersection backend to build.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+/// Which intersection backend to build (`--accel` on the command line).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum)]
 pub enum Backend {
+    /// The system Embree.
     #[default]
     Embree,
+    /// obvhs's compressed wide BVH, pure Rust.
+    Bvh,
+}
+
+impl Backend {
+    pub const ALL: [Backend; 2] = [Backend::Embree, Backend::Bvh];
+
+    /// The name used on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Backend::Embree => "embree",
+            Backend::Bvh => "bvh",
+        }
+    }
+}
+
+impl std::fmt::Display for Backend {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
 }
 
 /// Builds the acceleration structure for a scene's shapes; shape `i` gets geometry id `i`.
 pub fn build(scene: &Scene, backend: Backend) -> crate::Result<Box<dyn Accel>> {
     match backend {
         Backend::Embree => Ok(Box::new(embree::EmbreeAccel::build(scene)?)),
+        Backend::Bvh => Ok(Box::new(bvh::BvhAccel::build(scene)?)),
     }
 }

@@ -9,13 +9,17 @@ use crate::math::{Ray, Vec3, Vec4};
 use crate::scene::{Geometry, Scene as SceneDesc};
 use crate::{Error, Result};
 use std::ffi::{c_char, c_void, CStr, CString};
+use std::sync::atomic::{AtomicI64, Ordering};
 use std::sync::{Arc, Mutex};
 
-/// The Embree device plus the messages its error callback collected.
+/// The Embree device plus the messages its error callback collected and the bytes its memory
+/// monitor counted.
 struct DeviceInner {
     raw: sys::RTCDevice,
     /// Boxed so the address handed to Embree as the callback's user pointer never moves.
     errors: Box<Mutex<Vec<String>>>,
+    /// Bytes Embree has allocated and not freed (boxed for the same reason).
+    memory: Box<AtomicI64>,
 }
 
 // SAFETY: an Embree device may be used from any thread; the error list is behind a mutex.
@@ -63,6 +67,18 @@ unsafe extern "C" fn record_error(user: *mut c_void, code: sys::RTCError, text: 
     }
 }
 
+/// Called by Embree before every allocation (positive `bytes`) and after every release
+/// (negative); returning true lets the allocation proceed.
+unsafe extern "C" fn track_memory(user: *mut c_void, bytes: isize, _post: bool) -> bool {
+    if !user.is_null() {
+        // SAFETY: `user` is the `AtomicI64` registered in `Device::with_config`, alive as long
+        // as the device.
+        let memory = unsafe { &*(user as *const AtomicI64) };
+        memory.fetch_add(bytes as i64, Ordering::Relaxed);
+    }
+    true
+}
+
 fn error_name(code: sys::RTCError) -> &'static str {
     match code {
         sys::RTC_ERROR_NONE => "no error",
@@ -103,11 +119,27 @@ impl Device {
         }
         let errors: Box<Mutex<Vec<String>>> = Box::default();
         let user = &*errors as *const Mutex<Vec<String>> as *mut c_void;
-        // SAFETY: `raw` is live; `user` stays valid until the device is released in Drop.
-        unsafe { sys::rtcSetDeviceErrorFunction(raw, Some(record_error), user) };
+        let memory: Box<AtomicI64> = Box::default();
+        let memory_user = &*memory as *const AtomicI64 as *mut c_void;
+        // SAFETY: `raw` is live; both user pointers stay valid until the device is released
+        // in Drop.
+        unsafe {
+            sys::rtcSetDeviceErrorFunction(raw, Some(record_error), user);
+            sys::rtcSetDeviceMemoryMonitorFunction(raw, Some(track_memory), memory_user);
+        }
         Ok(Device {
-            inner: Arc::new(DeviceInner { raw, errors }),
+            inner: Arc::new(DeviceInner {
+                raw,
+                errors,
+                memory,
+            }),
         })
+    }
+
+    /// Bytes the device has allocated and not yet freed (Embree's memory monitor): buffers,
+    /// acceleration structures and the allocators' reserved blocks.
+    pub fn memory_bytes(&self) -> i64 {
+        self.inner.memory.load(Ordering::Relaxed)
     }
 
     /// The version of the Embree library in use, such as "3.13.5".
@@ -434,12 +466,18 @@ pub fn version() -> Result<String> {
 /// [`Accel`] over an Embree scene holding one geometry per scene shape.
 pub struct EmbreeAccel {
     scene: Scene,
-    _device: Device,
+    device: Device,
 }
 
 impl EmbreeAccel {
     pub fn build(desc: &SceneDesc) -> Result<EmbreeAccel> {
-        let device = Device::new()?;
+        EmbreeAccel::build_on(desc, Device::new()?)
+    }
+
+    /// Builds on a given device (for example one made with `threads=1` to build on one thread).
+    /// The accel should own its device alone for [`memory_bytes`](Self::memory_bytes) to be
+    /// its own.
+    pub fn build_on(desc: &SceneDesc, device: Device) -> Result<EmbreeAccel> {
         let mut scene = Scene::new(&device)?;
         for shape in &desc.shapes {
             match &shape.geometry {
@@ -451,10 +489,12 @@ impl EmbreeAccel {
             };
         }
         scene.commit()?;
-        Ok(EmbreeAccel {
-            scene,
-            _device: device,
-        })
+        Ok(EmbreeAccel { scene, device })
+    }
+
+    /// Bytes allocated by Embree for this accel's device: its buffers, BVH and allocator blocks.
+    pub fn memory_bytes(&self) -> usize {
+        self.device.memory_bytes().max(0) as usize
     }
 }
 

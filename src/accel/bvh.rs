@@ -1,0 +1,457 @@
+//! The pure-Rust backend: obvhs's compressed wide BVH (CWBVH: eight children per node,
+//! quantised child boxes, 80 bytes a node) over every primitive of the scene, with primitive
+//! tests written to answer as Embree does, so that images match between backends:
+//!
+//! - triangles: Embree's robust (Plücker) test: edge functions computed from the vertices
+//!   relative to the ray origin, so neighbouring triangles agree on their shared edge
+//!   (watertight); u, v are the weights of vertices 1 and 2; Ng = (v1 − v0) × (v2 − v0);
+//! - quads: split as Embree splits them, into (v0, v1, v3) and (v2, v3, v1), reporting the
+//!   quad index and Embree's quad parameterisation (u along v0→v1, v along v0→v3);
+//! - spheres: Embree's point-sphere test: the nearer root in `[tmin, tmax]`, else the farther
+//!   one; Ng points outwards; u = v = 0; prim_id 0.
+//!
+//! Primitives are stored in BVH leaf order, so a leaf indexes them directly, as three indices
+//! into the scene's shared vertices.
+
+use super::{Accel, Hit};
+use crate::math::{Ray, Vec3};
+use crate::scene::{Geometry, Scene};
+use crate::Result;
+use obvhs::aabb::Aabb;
+use obvhs::cwbvh::builder::build_cwbvh;
+use obvhs::cwbvh::CwBvh;
+use obvhs::ray::Ray as TraversalRay;
+use obvhs::BvhBuildParams;
+// The `traverse!` macro names obvhs's `UVec2` at the call site.
+use obvhs_glam::{UVec2, Vec3A};
+use std::time::Duration;
+
+/// obvhs's node test ignores `ray.tmin` and clamps the entry distance to 1e-4 instead, which
+/// would skip boxes holding hits closer than 1e-4 ray lengths (a shadow ray's direction spans
+/// its whole segment). Traversal therefore runs on a copy of the ray whose direction is
+/// scaled by this power of two: every t is scaled by its inverse exactly, and the clamp falls
+/// to 1e-4 × 2⁻²⁰ ≈ 1e-10. Primitive tests use the original ray.
+const TRAVERSAL_DIR_SCALE: f32 = 1.0 / (1u32 << 20) as f32;
+
+/// Largest magnitude of a traversal inverse direction: keeps slab distances finite (no
+/// inf − inf in the node test) for scenes within ±1e6; a direction component below 1e-30
+/// (after scaling) already puts the slabs beyond any reachable t.
+const MAX_INV_DIR: f32 = 1e30;
+
+/// What a primitive slot holds, and how its hit is reported.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    Triangle,
+    /// Triangle (v0, v1, v3) of a quad: u, v as computed.
+    QuadFirst,
+    /// Triangle (v2, v3, v1) of a quad: u, v mirrored (1 − u, 1 − v) into the quad's.
+    QuadSecond,
+    /// `p[0]` is the centre, `p[1].x` the radius.
+    Sphere,
+}
+
+/// One primitive's geometry, gathered from the shared vertices: three vertices, or a
+/// sphere's centre and radius.
+#[derive(Clone, Copy, Debug)]
+struct Prim {
+    p: [Vec3A; 3],
+}
+
+/// Which shape and primitive a slot answers for, and how.
+#[derive(Clone, Copy, Debug)]
+struct Meta {
+    geom_id: u32,
+    prim_id: u32,
+    kind: Kind,
+}
+
+/// A primitive's ids, read only for the final hit.
+#[derive(Clone, Copy, Debug)]
+struct Ids {
+    geom_id: u32,
+    prim_id: u32,
+}
+
+/// [`Accel`] over obvhs's CWBVH.
+pub struct BvhAccel {
+    bvh: CwBvh,
+    /// Every shape's vertices, shared by its primitives as in the meshes (a sphere has two:
+    /// its centre and (radius, 0, 0)). Indexing them keeps the primitive data small (meshes
+    /// share each vertex among about six triangles), which saves memory traffic.
+    vertices: Vec<Vec3A>,
+    /// Each primitive's three vertex indices, in BVH leaf order (`bvh.primitive_indices`
+    /// already applied), with their kinds (read for every test, so kept apart from the ids,
+    /// read once per query).
+    prims: Vec<[u32; 3]>,
+    kinds: Vec<Kind>,
+    ids: Vec<Ids>,
+}
+
+fn to_a(p: Vec3) -> Vec3A {
+    Vec3A::new(p.x, p.y, p.z)
+}
+
+fn to_vec3(p: Vec3A) -> Vec3 {
+    Vec3::new(p.x, p.y, p.z)
+}
+
+/// The scene's vertices, and its primitives in shape order (the BVH reorders them).
+fn collect_prims(scene: &Scene) -> (Vec<Vec3A>, Vec<[u32; 3]>, Vec<Meta>) {
+    let mut vertices = Vec::new();
+    let mut prims = Vec::new();
+    let mut meta = Vec::new();
+    for (geom_id, shape) in scene.shapes.iter().enumerate() {
+        let base = vertices.len() as u32;
+        let mut push = |p: [u32; 3], prim_id: usize, kind: Kind| {
+            prims.push(p.map(|k| base + k));
+            meta.push(Meta {
+                geom_id: geom_id as u32,
+                prim_id: prim_id as u32,
+                kind,
+            });
+        };
+        match &shape.geometry {
+            Geometry::Sphere { center, radius } => {
+                push([0, 1, 1], 0, Kind::Sphere);
+                vertices.extend([to_a(*center), Vec3A::new(*radius, 0.0, 0.0)]);
+            }
+            Geometry::Triangles(m) => {
+                for (i, t) in m.indices.iter().enumerate() {
+                    push(*t, i, Kind::Triangle);
+                }
+                vertices.extend(m.positions.iter().map(|p| to_a(*p)));
+            }
+            Geometry::Quads(q) => {
+                for (i, &[v0, v1, v2, v3]) in q.indices.iter().enumerate() {
+                    push([v0, v1, v3], i, Kind::QuadFirst);
+                    push([v2, v3, v1], i, Kind::QuadSecond);
+                }
+                vertices.extend(q.positions.iter().map(|p| to_a(*p)));
+            }
+        }
+    }
+    (vertices, prims, meta)
+}
+
+impl Prim {
+    fn aabb(&self, kind: Kind) -> Aabb {
+        match kind {
+            Kind::Sphere => {
+                let r = Vec3A::splat(self.p[1].x);
+                Aabb::new(self.p[0] - r, self.p[0] + r)
+            }
+            _ => Aabb::from_points(&self.p),
+        }
+    }
+
+    /// The hit distance in `[tmin, tmax]`, or infinity for a miss.
+    #[inline(always)]
+    fn hit_t(&self, kind: Kind, org: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> f32 {
+        let t = match kind {
+            Kind::Sphere => sphere(self.p[0], self.p[1].x, org, dir, tmin, tmax).map(|h| h.0),
+            _ => triangle(&self.p, org, dir).map(|h| h.t),
+        };
+        match t {
+            Some(t) if t >= tmin && t <= tmax => t,
+            _ => f32::INFINITY,
+        }
+    }
+
+    /// u, v and Ng of a hit found by `hit_t` (recomputed with the same arithmetic).
+    fn details(
+        &self,
+        kind: Kind,
+        org: Vec3A,
+        dir: Vec3A,
+        tmin: f32,
+        tmax: f32,
+    ) -> (f32, f32, Vec3A) {
+        match kind {
+            Kind::Sphere => {
+                let (_, ng) = sphere(self.p[0], self.p[1].x, org, dir, tmin, tmax)
+                    .expect("the sphere was hit");
+                (0.0, 0.0, ng)
+            }
+            _ => {
+                let h = triangle(&self.p, org, dir).expect("the triangle was hit");
+                let rcp = if h.uvw == 0.0 { 0.0 } else { 1.0 / h.uvw };
+                let (u, v) = ((h.u * rcp).min(1.0), (h.v * rcp).min(1.0));
+                match kind {
+                    Kind::QuadSecond => (1.0 - u, 1.0 - v, h.ng),
+                    _ => (u, v, h.ng),
+                }
+            }
+        }
+    }
+}
+
+/// A triangle hit before normalisation: edge functions U, V (weights of v1, v2, unscaled),
+/// their sum with W, the distance, and Ng.
+struct TriangleHit {
+    u: f32,
+    v: f32,
+    uvw: f32,
+    t: f32,
+    ng: Vec3A,
+}
+
+/// Embree's robust ray-triangle test (Plücker coordinates), both faces. The distance is
+/// returned unclipped; the caller checks it against the ray's interval.
+#[inline(always)]
+fn triangle(p: &[Vec3A; 3], org: Vec3A, dir: Vec3A) -> Option<TriangleHit> {
+    let v0 = p[0] - org;
+    let v1 = p[1] - org;
+    let v2 = p[2] - org;
+    let e0 = v2 - v0;
+    let e1 = v0 - v1;
+    let e2 = v1 - v2;
+    let u = e0.cross(v2 + v0).dot(dir);
+    let v = e1.cross(v0 + v1).dot(dir);
+    let w = e2.cross(v1 + v2).dot(dir);
+    let uvw = u + v + w;
+    let eps = f32::EPSILON * uvw.abs();
+    let inside = u.min(v).min(w) >= -eps || u.max(v).max(w) <= eps;
+    if !inside {
+        return None;
+    }
+    // e0 × e1 = (v2 − v0) × (v0 − v1) = (v1 − v0) × (v2 − v0).
+    let ng = e0.cross(e1);
+    let den = ng.dot(dir);
+    if den == 0.0 {
+        return None;
+    }
+    let t = v0.dot(ng) / den;
+    t.is_finite().then_some(TriangleHit { u, v, uvw, t, ng })
+}
+
+/// Embree's ray-sphere test: the entry point if it lies in `[tmin, tmax]`, else the exit point;
+/// returns t and the outward normal (hit point minus centre, unnormalised).
+#[inline(always)]
+fn sphere(
+    center: Vec3A,
+    radius: f32,
+    org: Vec3A,
+    dir: Vec3A,
+    tmin: f32,
+    tmax: f32,
+) -> Option<(f32, Vec3A)> {
+    let rd2 = 1.0 / dir.dot(dir);
+    let c0 = center - org;
+    let proj = c0.dot(dir) * rd2;
+    let perp = c0 - proj * dir;
+    let l2 = perp.dot(perp);
+    let r2 = radius * radius;
+    if l2 > r2 || l2.is_nan() {
+        return None;
+    }
+    let td = ((r2 - l2) * rd2).sqrt();
+    let (t_in, t_out) = (proj - td, proj + td);
+    if t_in >= tmin && t_in <= tmax {
+        Some((t_in, -td * dir - perp))
+    } else if t_out >= tmin && t_out <= tmax {
+        Some((t_out, td * dir - perp))
+    } else {
+        None
+    }
+}
+
+/// The ray obvhs's node test traverses with (see [`TRAVERSAL_DIR_SCALE`]). The inverse
+/// direction takes its sign from the same `< 0.0` test obvhs uses to order slabs, so a
+/// component of −0.0 is treated as +0.0 throughout (obvhs's own `Ray::new` gives it a
+/// negative inverse, which makes the slabs empty and misses everything).
+#[inline(always)]
+fn traversal_ray(org: Vec3A, dir: Vec3A, tmax: f32) -> TraversalRay {
+    let d = dir * TRAVERSAL_DIR_SCALE;
+    let inv = |c: f32| {
+        if c < 0.0 {
+            -1.0 / (-c).max(1.0 / MAX_INV_DIR)
+        } else {
+            1.0 / c.max(1.0 / MAX_INV_DIR)
+        }
+    };
+    TraversalRay {
+        origin: org,
+        direction: d,
+        inv_direction: Vec3A::new(inv(d.x), inv(d.y), inv(d.z)),
+        tmin: 0.0,
+        tmax: tmax / TRAVERSAL_DIR_SCALE,
+    }
+}
+
+impl BvhAccel {
+    /// Builds the BVH over every shape of the scene (shape `i` answers as geometry `i`). The
+    /// build runs on the current rayon pool.
+    pub fn build(scene: &Scene) -> Result<BvhAccel> {
+        let mut accel = BvhAccel {
+            bvh: CwBvh::default(),
+            vertices: Vec::new(),
+            prims: Vec::new(),
+            kinds: Vec::new(),
+            ids: Vec::new(),
+        };
+        accel.rebuild(scene)?;
+        Ok(accel)
+    }
+
+    /// Rebuilds the BVH from the scene's current geometry: the entry point for animation
+    /// (moved vertices, added or removed shapes). obvhs's PLOC builder is fast enough to
+    /// rebuild every frame, which keeps the tree as good as a fresh one (a refit would not).
+    pub fn rebuild(&mut self, scene: &Scene) -> Result<()> {
+        let (vertices, prims, meta) = collect_prims(scene);
+        self.vertices = vertices;
+        if prims.is_empty() {
+            self.bvh = CwBvh::default();
+            self.prims.clear();
+            self.kinds.clear();
+            self.ids.clear();
+            return Ok(());
+        }
+        let aabbs: Vec<Aabb> = prims
+            .iter()
+            .zip(&meta)
+            .map(|(p, m)| self.gather(p).aabb(m.kind))
+            .collect();
+        if let Some(i) = aabbs
+            .iter()
+            .position(|b| !(b.min.is_finite() && b.max.is_finite()))
+        {
+            return Err(crate::Error::input(
+                &scene.source,
+                format!(
+                    "primitive {} of shape {} is not finite",
+                    meta[i].prim_id, meta[i].geom_id
+                ),
+            ));
+        }
+        let mut bvh = build_cwbvh(
+            &aabbs,
+            BvhBuildParams::medium_build(),
+            &mut Duration::default(),
+        );
+        // Leaves index the reordered arrays directly, so the order itself is not kept.
+        let order = std::mem::take(&mut bvh.primitive_indices);
+        self.prims = order.iter().map(|&i| prims[i as usize]).collect();
+        self.kinds = order.iter().map(|&i| meta[i as usize].kind).collect();
+        self.ids = order
+            .iter()
+            .map(|&i| {
+                let m = meta[i as usize];
+                Ids {
+                    geom_id: m.geom_id,
+                    prim_id: m.prim_id,
+                }
+            })
+            .collect();
+        self.bvh = bvh;
+        Ok(())
+    }
+
+    /// Bytes held by the BVH nodes and the primitive data (vertices, indices, kinds, ids).
+    pub fn memory_bytes(&self) -> usize {
+        self.bvh.nodes.capacity() * std::mem::size_of::<obvhs::cwbvh::node::CwBvhNode>()
+            + self.bvh.primitive_indices.capacity() * 4
+            + self.vertices.capacity() * std::mem::size_of::<Vec3A>()
+            + self.prims.capacity() * std::mem::size_of::<[u32; 3]>()
+            + self.kinds.capacity() * std::mem::size_of::<Kind>()
+            + self.ids.capacity() * std::mem::size_of::<Ids>()
+    }
+
+    /// A primitive's vertices.
+    #[inline(always)]
+    fn gather(&self, p: &[u32; 3]) -> Prim {
+        Prim {
+            p: p.map(|k| self.vertices[k as usize]),
+        }
+    }
+
+    /// Number of primitives in the tree (a quad counts as two triangles).
+    pub fn primitive_count(&self) -> usize {
+        self.prims.len()
+    }
+}
+
+/// What a primitive visit tells the traversal.
+enum Visit {
+    Continue,
+    /// A hit at this distance: only nearer ones matter now.
+    Shorten(f32),
+    Stop,
+}
+
+impl BvhAccel {
+    /// Walks the primitives of every leaf the ray's box tests reach, calling `visit` with
+    /// the primitive's slot.
+    #[inline(always)]
+    fn traverse(&self, org: Vec3A, dir: Vec3A, tmax: f32, mut visit: impl FnMut(usize) -> Visit) {
+        let mut tray = traversal_ray(org, dir, tmax);
+        let mut state = self.bvh.new_traversal(tray.direction);
+        let mut node;
+        // The macro's primitive loop is nested in its node loop: leave both by the label.
+        'walk: {
+            obvhs::traverse!(
+                self.bvh,
+                node,
+                state,
+                node.intersect_ray(&tray, state.oct_inv4),
+                {
+                    match visit(state.primitive_id as usize) {
+                        Visit::Continue => {}
+                        Visit::Shorten(t) => tray.tmax = t / TRAVERSAL_DIR_SCALE,
+                        Visit::Stop => break 'walk,
+                    }
+                }
+            );
+        }
+    }
+}
+
+impl Accel for BvhAccel {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        let (org, dir) = (to_a(ray.origin), to_a(ray.dir));
+        let mut tmax = ray.tmax;
+        let mut best = None;
+        self.traverse(org, dir, ray.tmax, |i| {
+            let t = self
+                .gather(&self.prims[i])
+                .hit_t(self.kinds[i], org, dir, ray.tmin, tmax);
+            // A hit exactly at the current tmax replaces the last one, as in Embree.
+            if t <= tmax && t.is_finite() {
+                tmax = t;
+                best = Some(i);
+                Visit::Shorten(t)
+            } else {
+                Visit::Continue
+            }
+        });
+        let i = best?;
+        let m = self.ids[i];
+        let (u, v, ng) =
+            self.gather(&self.prims[i])
+                .details(self.kinds[i], org, dir, ray.tmin, tmax);
+        Some(Hit {
+            t: tmax,
+            u,
+            v,
+            ng: to_vec3(ng),
+            geom_id: m.geom_id,
+            prim_id: m.prim_id,
+        })
+    }
+
+    fn occluded(&self, ray: &Ray) -> bool {
+        let (org, dir) = (to_a(ray.origin), to_a(ray.dir));
+        let mut hit = false;
+        self.traverse(org, dir, ray.tmax, |i| {
+            let t = self
+                .gather(&self.prims[i])
+                .hit_t(self.kinds[i], org, dir, ray.tmin, ray.tmax);
+            hit = t.is_finite();
+            if hit {
+                Visit::Stop
+            } else {
+                Visit::Continue
+            }
+        });
+        hit
+    }
+}
