@@ -302,7 +302,15 @@ impl Whitted {
         if roughness > 0.0 {
             let (t, b) = frame(n);
             for _ in 0..PERTURB_TRIES {
-                let np = (n + (t * rng.normal() + b * rng.normal()) * roughness).normalize();
+                // A microfacet normal from the GGX distribution D(h) cos θh with α =
+                // roughness, the same meaning the Monte Carlo BSDFs give it:
+                // tan²θ = α² u / (1 − u).
+                let u = rng.uniform();
+                let tan2 = roughness * roughness * u / (1.0 - u).max(1e-7);
+                let cos = 1.0 / (1.0 + tan2).sqrt();
+                let sin = (1.0 - cos * cos).max(0.0).sqrt();
+                let phi = std::f32::consts::TAU * rng.uniform();
+                let np = (n * cos + (t * phi.cos() + b * phi.sin()) * sin).normalize();
                 let dir = direction(np);
                 if dir.dot(ng) * side > 0.0 {
                     return dir;

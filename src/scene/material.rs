@@ -19,8 +19,10 @@ pub struct Material {
     pub ior: f32,
     /// Exponent n of the Phong highlight.
     pub phong_exponent: f32,
-    /// Standard deviation (radians) of the random normal perturbation: glossy reflection and
-    /// frosted transmission. 0 is a perfect mirror or clear glass.
+    /// Microfacet roughness, GGX α: the Monte Carlo integrators use a GGX reflection lobe;
+    /// Whitted's integrator draws the normal of each reflected or refracted ray from the GGX
+    /// distribution (glossy reflection, frosted transmission). 0 is a perfect mirror or
+    /// clear glass.
     pub roughness: f32,
     /// When true, ks and kt are weighted by the Fresnel reflectance at the hit.
     pub fresnel: bool,
