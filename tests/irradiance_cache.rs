@@ -228,3 +228,51 @@ fn cache_files_are_reused_and_checked() {
     assert!(file::load(&path, &scene, &ic).is_err());
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The command line: a second view with --cache-file loads the values and computes none in
+/// its overture; a foreign file is a one-line error naming it, exit status 2.
+#[test]
+fn cli_cache_file() {
+    let dir = std::env::temp_dir().join(format!("raylink-ic-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let cache = dir.join("box.ic");
+    let run = |out: &str, cache: &Path| {
+        std::process::Command::new(env!("CARGO_BIN_EXE_raylink"))
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .args(["render", "scenes/cornell-box.toml", "--integrator"])
+            .args([
+                "irradiance-cache",
+                "--width",
+                "16",
+                "--height",
+                "16",
+                "--spp",
+                "1",
+            ])
+            .args(["--ab", "1", "--ic-samples", "32", "--cache-file"])
+            .arg(cache)
+            .arg("-o")
+            .arg(dir.join(out))
+            .output()
+            .unwrap()
+    };
+    let first = run("a.exr", &cache);
+    let err = String::from_utf8_lossy(&first.stderr).into_owned();
+    assert!(first.status.success(), "{err}");
+    assert!(err.contains("(0 loaded,"), "{err}");
+    let second = run("b.exr", &cache);
+    let err = String::from_utf8_lossy(&second.stderr).into_owned();
+    assert!(second.status.success(), "{err}");
+    assert!(err.contains(" 0 computed by the overture"), "{err}");
+    let bad = dir.join("bad.ic");
+    std::fs::write(&bad, b"not a cache at all").unwrap();
+    let third = run("c.exr", &bad);
+    let err = String::from_utf8_lossy(&third.stderr).into_owned();
+    assert_eq!(third.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("bad.ic") && err.trim().lines().count() == 1,
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    std::fs::remove_dir_all(&dir).unwrap();
+}
