@@ -276,3 +276,41 @@ fn cli_cache_file() {
     assert!(!err.contains("panicked"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// Benchmark (ignored): the Cornell box at 256x256 against Tungsten's reference, irradiance
+/// cache and path tracer, with times. `cargo test --test irradiance_cache -- --ignored
+/// --nocapture`.
+#[test]
+#[ignore]
+fn cornell_256_benchmark() {
+    let scene = Scene::load(&manifest("scenes/cornell-box.toml")).unwrap();
+    let reference = tungsten_256();
+    let mask = bright_mask(&reference, 1.0);
+    for (ab, ar, samples) in [(5, 16.0, 512), (8, 32.0, 1024)] {
+        let ic = IcOptions {
+            bounces: ab,
+            ar,
+            samples,
+            ..IcOptions::default()
+        };
+        let run = render_ic(&scene, ic, &options(256, 256, 16, None), None, |_, _| {});
+        let e = rmse(&run.image, &reference, Some(&mask));
+        eprintln!(
+            "IC ab {ab} ar {ar} ad {samples}: RMSE {e:.5} in {:.2} s, {} values",
+            run.seconds, run.records
+        );
+    }
+    for spp in [64, 256] {
+        let start = Instant::now();
+        let accel = accel::build(&scene, Backend::Embree).unwrap();
+        let ctx = Context::new(&scene, accel.as_ref());
+        let pt = PathTracer::new(PathOptions { max_depth: 64 });
+        let (film, _) =
+            render_progressive(&ctx, &pt, &options(256, 256, spp, None), |_| Ok(())).unwrap();
+        let e = rmse(&film.image(), &reference, Some(&mask));
+        eprintln!(
+            "path {spp} spp: RMSE {e:.5} in {:.2} s",
+            start.elapsed().as_secs_f64()
+        );
+    }
+}
