@@ -6,6 +6,7 @@ use raylink::image::filter::Filter;
 use raylink::image::output::{check_output_path, write_image, OutputOptions};
 use raylink::image::{MetaValue, Metadata};
 use raylink::integrators::bdpt::{Bdpt, BdptOptions};
+use raylink::integrators::irradiance_cache::{self as ic, IcOptions, IrradianceCache};
 use raylink::integrators::light::{LightOptions, LightTracer};
 use raylink::integrators::path::{PathOptions, PathTracer, DEFAULT_MAX_DEPTH, MAX_DEPTH_LIMIT};
 use raylink::integrators::whitted::{Whitted, WhittedOptions};
@@ -63,6 +64,9 @@ enum IntegratorName {
     Light,
     /// Bidirectional path tracing, all strategies combined by multiple importance sampling.
     Bdpt,
+    /// Ward's irradiance caching: direct and specular as in the path tracer, indirect
+    /// diffuse light from cached irradiance values.
+    IrradianceCache,
 }
 
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
@@ -160,6 +164,21 @@ struct RenderArgs {
     /// No progress bar and no summary line.
     #[arg(short, long)]
     quiet: bool,
+    /// Irradiance cache: diffuse bounces, each with its own value set.
+    #[arg(long, default_value_t = ic::DEFAULT_BOUNCES)]
+    ab: u32,
+    /// Irradiance cache: accuracy a (values are used where the estimated error is below a).
+    #[arg(long, default_value_t = ic::DEFAULT_ACCURACY)]
+    ic_accuracy: f32,
+    /// Irradiance cache: rays per primary value at the first bounce (halved per bounce).
+    #[arg(long, default_value_t = ic::DEFAULT_SAMPLES)]
+    ic_samples: u32,
+    /// Irradiance cache: a value's R is at least the scene's size / ar.
+    #[arg(long, default_value_t = ic::DEFAULT_AR)]
+    ar: f32,
+    /// Irradiance cache: load values from this file if it exists, and write the cache to it.
+    #[arg(long, value_name = "FILE")]
+    cache_file: Option<PathBuf>,
 }
 
 /// The exit code of a failed run: 2 for bad input or options, 1 for the rest.
@@ -352,6 +371,11 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
         IntegratorName::Path => Some(Box::new(PathTracer::new(PathOptions { max_depth }))),
         IntegratorName::Light => Some(Box::new(LightTracer::new(LightOptions { max_depth }))),
         IntegratorName::Bdpt => Some(Box::new(Bdpt::new(BdptOptions { max_depth }))),
+        // Replaced by the irradiance cache once the scene's context exists (it fills its
+        // cache before rendering).
+        IntegratorName::IrradianceCache => {
+            Some(Box::new(PathTracer::new(PathOptions { max_depth })))
+        }
     };
     let whitted_only = [
         ("--aa", args.aa.is_some()),
@@ -453,8 +477,22 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
                 "raylink:filter".into(),
                 MetaValue::Str(format!("{filter:?}")),
             ));
+            let built;
+            let estimator: &dyn MonteCarlo = if integrator == IntegratorName::IrradianceCache {
+                if args.time_limit.is_some() {
+                    return Err(Error::Options(
+                        "--time-limit does not apply to the irradiance-cache integrator (its \
+                         overture traces every sample first): give --spp"
+                            .into(),
+                    ));
+                }
+                built = irradiance_cache(&args, &scene, &ctx, &options)?;
+                &built
+            } else {
+                estimator.as_ref()
+            };
             let mut last_write = std::time::Instant::now();
-            let (film, stats) = render_progressive(&ctx, estimator.as_ref(), &options, |film| {
+            let (film, stats) = render_progressive(&ctx, estimator, &options, |film| {
                 let due = args
                     .write_interval
                     .is_some_and(|t| last_write.elapsed().as_secs_f64() >= t);
@@ -511,4 +549,45 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
         eprintln!("{}", stats.summary());
     }
     Ok(())
+}
+
+/// Builds the irradiance cache (loading and writing --cache-file) for a width×height view.
+fn irradiance_cache(
+    args: &RenderArgs,
+    scene: &Scene,
+    ctx: &Context,
+    render: &ProgressiveOptions,
+) -> Result<IrradianceCache, Error> {
+    let options = IcOptions {
+        bounces: args.ab,
+        accuracy: args.ic_accuracy,
+        samples: args.ic_samples,
+        ar: args.ar,
+        ..IcOptions::default()
+    };
+    options.validate().map_err(Error::Options)?;
+    let loaded = match &args.cache_file {
+        Some(f) if f.exists() => Some(ic::file::load(f, scene, &options)?),
+        _ => None,
+    };
+    let mut camera = scene.camera.clone();
+    camera.width = render.width;
+    camera.height = render.height;
+    let mut basis = camera.basis();
+    basis.margin = render.filter.radius();
+    let start = std::time::Instant::now();
+    let integrator = IrradianceCache::build(ctx, &basis, render, options, loaded);
+    if !args.quiet {
+        eprintln!(
+            "irradiance cache: {} values ({} loaded, {} computed by the overture in {:.2} s)",
+            integrator.cache().len(),
+            integrator.stats.loaded,
+            integrator.stats.overture_primaries,
+            start.elapsed().as_secs_f64()
+        );
+    }
+    if let Some(f) = &args.cache_file {
+        ic::file::save(f, integrator.cache(), scene, &options)?;
+    }
+    Ok(integrator)
 }

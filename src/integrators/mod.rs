@@ -2,6 +2,7 @@
 //! the scene description, the intersection backend (never named) and the area lights.
 
 pub mod bdpt;
+pub mod irradiance_cache;
 pub mod light;
 pub mod path;
 pub mod whitted;
