@@ -43,6 +43,13 @@ enum Command {
     Convert(ConvertArgs),
     /// Compare the intersection backends: build time, memory and Mrays/s on a ladder of scenes.
     Bench(raylink::bench::BenchArgs),
+    /// Packaging: write the man page (raylink.1) and the bash, zsh and fish completions
+    /// generated from this command line into DIR.
+    #[command(hide = true)]
+    GenerateAssets {
+        /// The directory to write into (created if missing).
+        dir: PathBuf,
+    },
 }
 
 #[derive(clap::Args)]
@@ -209,6 +216,7 @@ fn main() -> ExitCode {
         Command::Render(args) => run_render(args),
         Command::Convert(args) => run_convert(args),
         Command::Bench(args) => raylink::bench::run(&args),
+        Command::GenerateAssets { dir } => generate_assets(&dir),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -236,6 +244,24 @@ fn run_convert(args: ConvertArgs) -> raylink::Result<()> {
     let scene = Scene::load(&args.scene)?;
     print_warnings(&scene);
     raylink::scene::convert::write_toml(&scene, &args.output)
+}
+
+/// Writes the man pages DIR/man/raylink.1 and raylink-SUBCOMMAND.1 (clap_mangen) and the
+/// completions DIR/completions/{raylink.bash,_raylink,raylink.fish} (clap_complete), all from
+/// the same `Cli` the program parses.
+fn generate_assets(dir: &std::path::Path) -> raylink::Result<()> {
+    use clap_complete::{generate_to, Shell};
+    let mut cmd = Cli::command().version(raylink::VERSION);
+    let man = dir.join("man");
+    std::fs::create_dir_all(&man).map_err(|e| Error::io(&man, e))?;
+    clap_mangen::generate_to(cmd.clone(), &man).map_err(|e| Error::io(&man, e))?;
+    let completions = dir.join("completions");
+    std::fs::create_dir_all(&completions).map_err(|e| Error::io(&completions, e))?;
+    for shell in [Shell::Bash, Shell::Zsh, Shell::Fish] {
+        generate_to(shell, &mut cmd, "raylink", &completions)
+            .map_err(|e| Error::io(&completions, e))?;
+    }
+    Ok(())
 }
 
 fn version_string() -> String {

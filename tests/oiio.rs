@@ -436,7 +436,8 @@ fn failed_write_does_not_clobber_an_existing_file() {
         message.starts_with(&format!("{}: ", path.display())),
         "{message}"
     );
-    assert!(message.contains("PNG"), "{message}");
+    // OpenImageIO 2.4 says "PNG", 2.5 (Debian 13) "png image resolution may not exceed".
+    assert!(message.to_lowercase().contains("png"), "{message}");
     assert!(!message.contains('\n'), "{message}");
     assert_eq!(fs::read(&path).unwrap(), original);
     assert_eq!(dir_names(dir.path()), ["x.png"]);
