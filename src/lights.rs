@@ -514,28 +514,10 @@ impl LightSet {
 
 /// A sphere around every shape and the camera.
 fn bounding_sphere(scene: &Scene) -> (Vec3, f32) {
-    let mut lo = scene.camera.position;
-    let mut hi = lo;
-    for s in &scene.shapes {
-        match &s.geometry {
-            crate::scene::Geometry::Sphere { center, radius } => {
-                lo = lo.min(*center - Vec3::splat(*radius));
-                hi = hi.max(*center + Vec3::splat(*radius));
-            }
-            crate::scene::Geometry::Triangles(m) => {
-                for p in &m.positions {
-                    lo = lo.min(*p);
-                    hi = hi.max(*p);
-                }
-            }
-            crate::scene::Geometry::Quads(q) => {
-                for p in &q.positions {
-                    lo = lo.min(*p);
-                    hi = hi.max(*p);
-                }
-            }
-        }
-    }
+    let eye = scene.camera.position;
+    let (lo, hi) = scene
+        .bounds()
+        .map_or((eye, eye), |(lo, hi)| (lo.min(eye), hi.max(eye)));
     let center = 0.5 * (lo + hi);
     (center, (0.5 * (hi - lo).length()).max(1e-3))
 }

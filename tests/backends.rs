@@ -95,7 +95,7 @@ fn mixed_scene() -> Scene {
 /// Random rays: origins uniform in the scene's bounds grown by a quarter on each side,
 /// directions uniform on the sphere (and some exactly along an axis, with signed zeros).
 fn random_rays(scene: &Scene, count: usize, seed: u64) -> Vec<Ray> {
-    let (lo, hi) = scenes::bounds(scene).unwrap();
+    let (lo, hi) = scene.bounds().unwrap();
     let pad = (hi - lo) * 0.25 + Vec3::splat(1e-3);
     let (lo, hi) = (lo - pad, hi + pad);
     let mut rng = Rng::for_key(seed, &[]);
@@ -136,7 +136,7 @@ fn same_t(a: f32, b: f32, ray: &Ray, scene_size: f32) -> bool {
 }
 
 fn scene_size(scene: &Scene) -> f32 {
-    scenes::bounds(scene).map_or(1.0, |(lo, hi)| (hi - lo).length())
+    scene.bounds().map_or(1.0, |(lo, hi)| (hi - lo).length())
 }
 
 /// What a comparison of closest hits found.

@@ -128,7 +128,7 @@ fn light_point(
 
 /// A point above the scene's bounds, for scenes without lights.
 fn fallback_light(scene: &Scene) -> Vec3 {
-    match super::scenes::bounds(scene) {
+    match scene.bounds() {
         Some((lo, hi)) => {
             let c = (lo + hi) * 0.5;
             Vec3::new(c.x, hi.y + (hi - lo).length(), c.z)

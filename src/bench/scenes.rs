@@ -95,27 +95,6 @@ pub fn primitive_count(scene: &Scene) -> usize {
         .sum()
 }
 
-/// The smallest box around every shape, or None for a scene without shapes.
-pub fn bounds(scene: &Scene) -> Option<(Vec3, Vec3)> {
-    let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
-    for shape in &scene.shapes {
-        match &shape.geometry {
-            Geometry::Sphere { center, radius } => {
-                lo = lo.min(*center - *radius);
-                hi = hi.max(*center + *radius);
-            }
-            Geometry::Triangles(TriangleMesh { positions, .. })
-            | Geometry::Quads(QuadMesh { positions, .. }) => {
-                for p in positions {
-                    lo = lo.min(*p);
-                    hi = hi.max(*p);
-                }
-            }
-        }
-    }
-    (lo.x <= hi.x).then_some((lo, hi))
-}
-
 fn base_scene(name: String, camera: Camera, light: Vec3) -> Scene {
     Scene {
         source: name.into(),

@@ -22,7 +22,7 @@ pub use light::Light;
 pub use material::{Material, Texture};
 pub use settings::RenderSettings;
 
-use crate::math::Rgb;
+use crate::math::{Rgb, Vec3};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -51,6 +51,27 @@ pub struct Scene {
 }
 
 impl Scene {
+    /// The axis-aligned box around every shape, `None` without shapes.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for shape in &self.shapes {
+            match &shape.geometry {
+                Geometry::Sphere { center, radius } => {
+                    lo = lo.min(*center - *radius);
+                    hi = hi.max(*center + *radius);
+                }
+                Geometry::Triangles(TriangleMesh { positions, .. })
+                | Geometry::Quads(QuadMesh { positions, .. }) => {
+                    for p in positions {
+                        lo = lo.min(*p);
+                        hi = hi.max(*p);
+                    }
+                }
+            }
+        }
+        (lo.x <= hi.x).then_some((lo, hi))
+    }
+
     /// Reads a scene file, choosing the reader by extension.
     pub fn load(path: &Path) -> crate::Result<Scene> {
         match path.extension().and_then(|e| e.to_str()) {

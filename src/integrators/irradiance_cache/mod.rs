@@ -147,7 +147,7 @@ impl Cache {
 
 /// The global cube: the scene's bounding box made cubic, enlarged by 1%.
 pub fn scene_cube(scene: &Scene) -> (Vec3, f32) {
-    match crate::bench::scenes::bounds(scene) {
+    match scene.bounds() {
         Some((lo, hi)) => {
             let side = (hi - lo).max_element().max(1e-3) * 1.01;
             (0.5 * (lo + hi), side)
