@@ -8,8 +8,9 @@ use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
 use crate::math::sobol::Sampler;
 use crate::math::warp::power_heuristic;
-use crate::math::{offset_origin, Ray, Rgb, Vec3};
+use crate::math::{offset_origin, Ray, Rgb, Vec2, Vec3};
 use crate::scene::camera::CameraBasis;
+use crate::scene::SurfacePoint;
 
 /// Default number of bounces (pbrt's convention: 1 is direct lighting only).
 pub const DEFAULT_MAX_DEPTH: u32 = 8;
@@ -57,6 +58,36 @@ pub(crate) fn russian_roulette(beta: &mut Rgb, depth: u32, sampler: &mut Sampler
     }
     *beta /= q;
     true
+}
+
+/// Next-event estimation at a non-specular vertex: one light sample, tested for shadow and
+/// weighted against BSDF sampling by the power heuristic; returns f·L·w / pdf.
+pub(crate) fn sample_direct(
+    ctx: &Context,
+    bsdf: &Bsdf,
+    sp: &SurfacePoint,
+    wo: Vec3,
+    u_choice: f32,
+    u_light: Vec2,
+    stats: &mut RayStats,
+) -> Rgb {
+    let Some(ls) = ctx.lights.sample_li(sp.p, u_choice, u_light) else {
+        return Rgb::ZERO;
+    };
+    let f = bsdf.eval(wo, ls.wi, Transport::Radiance);
+    if f == Rgb::ZERO || ls.pdf <= 0.0 {
+        return Rgb::ZERO;
+    }
+    let shadow = Ray::segment(offset_origin(sp.p, sp.ng, ls.wi), ls.p);
+    if ctx.occluded(&shadow, stats) {
+        return Rgb::ZERO;
+    }
+    let w = if ls.delta {
+        1.0
+    } else {
+        power_heuristic(ls.pdf, bsdf.pdf(wo, ls.wi))
+    };
+    f * ls.radiance * (w / ls.pdf)
 }
 
 impl MonteCarlo for PathTracer {
@@ -113,20 +144,7 @@ impl MonteCarlo for PathTracer {
             let u_choice = sampler.next_2d();
             let u_light = sampler.next_2d();
             if bsdf.has_non_delta() {
-                if let Some(ls) = lights.sample_li(sp.p, u_choice.x, u_light) {
-                    let f = bsdf.eval(wo, ls.wi, Transport::Radiance);
-                    if f != Rgb::ZERO && ls.pdf > 0.0 {
-                        let shadow = Ray::segment(offset_origin(sp.p, sp.ng, ls.wi), ls.p);
-                        if !ctx.occluded(&shadow, stats) {
-                            let w = if ls.delta {
-                                1.0
-                            } else {
-                                power_heuristic(ls.pdf, bsdf.pdf(wo, ls.wi))
-                            };
-                            radiance += beta * f * ls.radiance * (w / ls.pdf);
-                        }
-                    }
-                }
+                radiance += beta * sample_direct(ctx, &bsdf, &sp, wo, u_choice.x, u_light, stats);
             }
             let u_dir = sampler.next_2d();
             let Some(bs) = bsdf.sample(wo, u_choice.y, u_dir, Transport::Radiance) else {

@@ -36,6 +36,7 @@ pub mod file;
 pub mod octree;
 pub mod record;
 
+use super::path::sample_direct;
 use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
 use crate::image::filter::FilterSampler;
@@ -374,20 +375,8 @@ fn shade(
         // Direct light, light-sampling half of the MIS pair (the BSDF half is below).
         let u_choice = rng.uniform();
         let u_light = Vec2::new(rng.uniform(), rng.uniform());
-        if !direct {
-        } else if let Some(ls) = lights.sample_li(sp.p, u_choice, u_light) {
-            let f = bsdf.eval(wo, ls.wi, Transport::Radiance);
-            if f != Rgb::ZERO && ls.pdf > 0.0 {
-                let shadow = Ray::segment(offset_origin(sp.p, sp.ng, ls.wi), ls.p);
-                if !ctx.occluded(&shadow, walk.stats) {
-                    let w = if ls.delta {
-                        1.0
-                    } else {
-                        power_heuristic(ls.pdf, bsdf.pdf(wo, ls.wi))
-                    };
-                    l += f * ls.radiance * (w / ls.pdf);
-                }
-            }
+        if direct {
+            l += sample_direct(ctx, &bsdf, sp, wo, u_choice, u_light, walk.stats);
         }
         // Indirect diffuse: ρ/π · E.
         let kd = m.diffuse.eval(sp.p, sp.uv);
