@@ -2,19 +2,9 @@
 
 use raylink::image::output::read_image;
 use std::collections::BTreeSet;
-use std::process::{Command, Output};
 
-fn raylink(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raylink"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the raylink binary runs")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+mod common;
+use common::{raylink, stderr};
 
 #[test]
 fn render_with_each_backend_gives_the_same_image() {

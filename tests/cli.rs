@@ -3,19 +3,10 @@
 use raylink::image::output::read_image;
 use raylink::image::MetaValue;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
-fn raylink(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_raylink"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("the raylink binary runs")
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
-}
+mod common;
+use common::{raylink, stderr};
 
 fn files_in(dir: &Path) -> Vec<PathBuf> {
     let mut v: Vec<_> = std::fs::read_dir(dir)
