@@ -186,6 +186,10 @@ struct RenderArgs {
     /// Irradiance cache: load values from this file if it exists, and write the cache to it.
     #[arg(long, value_name = "FILE")]
     cache_file: Option<PathBuf>,
+    /// Irradiance cache: mark the pixels of the first-bounce values the camera sees (red),
+    /// as in figure 5b of Ward et al. 1988.
+    #[arg(long)]
+    show_cache_points: bool,
 }
 
 /// The exit code of a failed run: 2 for bad input or options, 1 for the rest.
@@ -425,6 +429,18 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
             integrator_name(integrator)
         )));
     }
+    let cache_only = [
+        ("--cache-file", args.cache_file.is_some()),
+        ("--show-cache-points", args.show_cache_points),
+    ];
+    if integrator != IntegratorName::IrradianceCache {
+        if let Some((option, _)) = cache_only.iter().find(|o| o.1) {
+            return Err(Error::Options(format!(
+                "{option} applies only to the irradiance-cache integrator, not {}",
+                integrator_name(integrator)
+            )));
+        }
+    }
     if integrator == IntegratorName::Bdpt {
         Bdpt::check_scene(&scene).map_err(|e| Error::input(&args.scene, e))?;
     }
@@ -504,6 +520,7 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
                 MetaValue::Str(format!("{filter:?}")),
             ));
             let built;
+            let mut cache_view = None;
             let estimator: &dyn MonteCarlo = if integrator == IntegratorName::IrradianceCache {
                 if args.time_limit.is_some() {
                     return Err(Error::Options(
@@ -513,6 +530,7 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
                     ));
                 }
                 built = irradiance_cache(&args, &scene, &ctx, &options)?;
+                cache_view = Some(&built);
                 &built
             } else {
                 estimator.as_ref()
@@ -542,7 +560,15 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
                     film.invalid
                 );
             }
-            (film.image(), stats)
+            let mut image = film.image();
+            if let Some(ic) = cache_view.filter(|_| args.show_cache_points) {
+                let shown =
+                    ic.show_points(&ctx, &mut image, raylink::math::Rgb::new(1.0, 0.0, 0.0));
+                if !args.quiet {
+                    eprintln!("marked {shown} irradiance cache values");
+                }
+            }
+            (image, stats)
         }
     };
     metadata.extend([
@@ -602,7 +628,7 @@ fn irradiance_cache(
     let mut basis = camera.basis();
     basis.margin = render.filter.radius();
     let start = std::time::Instant::now();
-    let integrator = IrradianceCache::build(ctx, &basis, render, options, loaded);
+    let integrator = IrradianceCache::build(ctx, &basis, render, options, loaded)?;
     if !args.quiet {
         eprintln!(
             "irradiance cache: {} values ({} loaded, {} computed by the overture in {:.2} s)",

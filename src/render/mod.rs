@@ -137,7 +137,7 @@ pub fn render(
 }
 
 /// The render threads: `None` uses every core; each thread flushes denormals to zero.
-fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
+pub(crate) fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new()
         .num_threads(threads.unwrap_or(0))
         .start_handler(|_| set_flush_denormals())

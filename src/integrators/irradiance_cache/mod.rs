@@ -19,17 +19,20 @@
 //! - **Bounces** (section 3.4): one octree per level 0..ab; level k uses a·1.4^k and
 //!   samples/2^k rays; at level ab, E is the constant `ambient` irradiance.
 //!
-//! **Determinism.** The cache is filled by an *overture* on one thread: it traces exactly
-//! the camera rays of the final render (same sampler keys and filter offsets), pixel by pixel
-//! in scanline order and sample by sample, with their specular continuations, but without
-//! the direct lighting of the first surfaces; every primary value it computes (at all levels)
-//! is inserted. The final render, on all threads, then reads the cache only: since the
-//! overture looked up every first-level point the render will, first-level lookups find S
-//! non-empty; a lookup that still finds S empty (a specular path that took another lobe)
-//! computes a primary value for that point and uses it without storing it (counted as
-//! `misses`). Primary values draw their random numbers from a stream keyed by
-//! (seed, position, level), so every value depends only on the cache contents and the point:
-//! the image is the same for any thread count. A cache loaded from a file is used as the
+//! **Determinism.** The cache is filled by an *overture* that traces exactly the camera rays
+//! of the final render (same sampler keys and filter offsets), with their specular
+//! continuations but without the direct lighting of the first surfaces, and stores every
+//! primary value it computes (at all levels). It runs in phases (see [`overture_schedule`]):
+//! coarse to fine over the image, each phase a set of image tiles that run in parallel, each
+//! tile looking values up in the cache as it stood before the phase plus the tile's own new
+//! values; after the phase the tiles' values are added in tile order. The schedule depends
+//! only on the image size and sample count, so the cache is the same for any thread count.
+//! The final render then reads the cache only: since the overture looked up every
+//! first-level point the render will, first-level lookups find S non-empty; a lookup that
+//! still finds S empty (a specular path that took another lobe) computes a primary value for
+//! that point and uses it without storing it (counted as `misses`). Primary values draw
+//! their random numbers from a stream keyed by (seed, position, level), so every value
+//! depends only on the cache contents and the point. A cache loaded from a file is the
 //! starting contents of the overture.
 
 pub mod file;
@@ -40,14 +43,17 @@ use super::path::sample_direct;
 use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
 use crate::image::filter::FilterSampler;
+use crate::image::Image;
 use crate::math::sobol::Sampler;
 use crate::math::warp::power_heuristic;
 use crate::math::{offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
 use crate::render::progressive::ProgressiveOptions;
 use crate::scene::camera::CameraBasis;
 use crate::scene::{Scene, SurfacePoint};
+use crate::Result;
 use octree::Octree;
-use record::Record;
+use rayon::prelude::*;
+use record::{weighted_average, Record};
 use std::f32::consts::{FRAC_1_PI, PI};
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -144,6 +150,88 @@ impl Cache {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+
+    /// Adds another cache's values (over the same cube), level by level, in their order.
+    fn absorb(&mut self, other: Cache) {
+        for (mine, theirs) in self.levels.iter_mut().zip(other.levels) {
+            for rec in theirs.records() {
+                mine.insert(*rec);
+            }
+        }
+    }
+}
+
+/// The side of an overture tile in pixels.
+const TILE: u32 = 32;
+/// The first wave's pixel spacing.
+const COARSEST_STRIDE: u32 = 16;
+
+/// The camera samples (x, y, sample index) of one overture task: the pixels of a rectangle
+/// whose coordinates are multiples of `stride`, samples 0..spp of each.
+#[derive(Clone, Copy, Debug)]
+struct Chunk {
+    x: (u32, u32),
+    y: (u32, u32),
+    stride: u32,
+    spp: u32,
+}
+
+impl Chunk {
+    /// In scanline order, samples innermost.
+    fn samples(self) -> impl Iterator<Item = (u32, u32, u32)> {
+        let Chunk { x, y, stride, spp } = self;
+        let first = move |lo: u32| lo.div_ceil(stride) * stride;
+        (first(y.0)..y.1)
+            .step_by(stride as usize)
+            .flat_map(move |py| {
+                (first(x.0)..x.1)
+                    .step_by(stride as usize)
+                    .flat_map(move |px| (0..spp).map(move |i| (px, py, i)))
+            })
+    }
+}
+
+/// The overture's schedule: a list of phases, each a list of chunks that run in parallel
+/// against the cache as it stood before the phase; their new values are added in chunk
+/// order after it. The schedule depends only on the image size and sample count, never on
+/// the number of threads, so neither does the cache.
+///
+/// It goes from coarse to fine, as Radiance's rpict overture does: first one chunk over every
+/// 16th pixel (one sample each), which computes the values the whole image shares (most of
+/// the deeper bounce levels); then every 8th, 4th, 2nd pixel with one sample, then every
+/// sample of the final render. Each of these waves splits the image into 32×32 tiles and
+/// runs them in four phases, a 2×2 checkerboard, so that tiles running together are never
+/// neighbours: two chunks compute a value for the same place only when both see it, which
+/// for first-level values happens only across depth discontinuities and mirrors.
+fn overture_schedule(width: u32, height: u32, spp: u32) -> Vec<Vec<Chunk>> {
+    let mut phases = vec![vec![Chunk {
+        x: (0, width),
+        y: (0, height),
+        stride: COARSEST_STRIDE,
+        spp: 1,
+    }]];
+    let mut stride = COARSEST_STRIDE / 2;
+    while stride >= 1 {
+        let spp = if stride == 1 { spp } else { 1 };
+        for colour in 0..4 {
+            let tiles = (0..height.div_ceil(TILE))
+                .flat_map(|ty| (0..width.div_ceil(TILE)).map(move |tx| (tx, ty)));
+            let phase: Vec<Chunk> = tiles
+                .filter(|&(tx, ty)| (tx % 2) + 2 * (ty % 2) == colour)
+                .map(|(tx, ty)| Chunk {
+                    x: (tx * TILE, ((tx + 1) * TILE).min(width)),
+                    y: (ty * TILE, ((ty + 1) * TILE).min(height)),
+                    stride,
+                    spp,
+                })
+                .collect();
+            if !phase.is_empty() {
+                phases.push(phase);
+            }
+        }
+        stride /= 2;
+    }
+    phases
 }
 
 /// The global cube: the scene's bounding box made cubic, enlarged by 1%.
@@ -157,10 +245,16 @@ pub fn scene_cube(scene: &Scene) -> (Vec3, f32) {
     }
 }
 
-/// Where values come from during one walk: growing (the overture) or read-only.
+/// Where values come from during one walk.
 enum Store<'a> {
-    Grow(&'a mut Cache),
+    /// Read-only (the final render): a value computed for an empty S is used, not stored.
     Frozen(&'a Cache),
+    /// One overture chunk: looks values up in the shared cache as it stood at the start of
+    /// the wave and in the chunk's own new values, and stores what it computes in the latter.
+    Overlay {
+        base: &'a Cache,
+        local: &'a mut Cache,
+    },
 }
 
 struct Walk<'a> {
@@ -173,10 +267,15 @@ struct Walk<'a> {
 }
 
 impl Walk<'_> {
-    fn cache(&self) -> &Cache {
+    /// The secondary method at `level`, over every value this walk can see.
+    fn interpolate(&self, level: usize, p: Vec3, n: Vec3) -> Option<Rgb> {
         match &self.store {
-            Store::Grow(c) => c,
-            Store::Frozen(c) => c,
+            Store::Frozen(c) => c.levels[level].interpolate(p, n),
+            Store::Overlay { base, local } => {
+                let mut pairs = base.levels[level].accepted(p, n);
+                pairs.extend(local.levels[level].accepted(p, n));
+                weighted_average(&pairs)
+            }
         }
     }
 }
@@ -204,6 +303,8 @@ pub struct IcStats {
 /// The irradiance-caching integrator, with its cache filled.
 pub struct IrradianceCache {
     params: Params,
+    /// The view the overture traced.
+    camera: CameraBasis,
     cache: Cache,
     pub stats: IcStats,
     /// Primary values computed (not stored) by the final render.
@@ -219,7 +320,7 @@ impl IrradianceCache {
         render: &ProgressiveOptions,
         options: IcOptions,
         cache: Option<Cache>,
-    ) -> IrradianceCache {
+    ) -> Result<IrradianceCache> {
         let seed = render.seed;
         let (_, side) = scene_cube(ctx.scene);
         let params = Params {
@@ -230,41 +331,91 @@ impl IrradianceCache {
         };
         let mut cache = cache.unwrap_or_else(|| Cache::new(ctx.scene, &options));
         let loaded = cache.len() as u64;
-        let mut rays = RayStats::default();
-        let mut walk = Walk {
-            store: Store::Grow(&mut cache),
-            primaries: 0,
-            stats: &mut rays,
-            overture: true,
-        };
         let filter = FilterSampler::new(render.filter);
-        for y in 0..render.height {
-            for x in 0..render.width {
-                for i in 0..render.spp {
-                    // As render::progressive and `sample` below draw them.
-                    let mut sampler = Sampler::new(seed, &[x as u64, y as u64], i);
-                    let offset = filter.sample(sampler.next_2d());
-                    let ray = camera.ray(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
-                    let mut rng = sample_rng(seed, &mut sampler);
-                    trace(ctx, &params, &mut walk, &ray, 0, true, 0, &mut rng);
-                }
+        let (mut primaries, mut rays) = (0, 0);
+        let pool = crate::render::thread_pool(render.threads)?;
+        for phase in overture_schedule(render.width, render.height, render.spp) {
+            // Each chunk sees the cache as it stood before the wave plus its own values;
+            // the chunks' values are then added in chunk order. Nothing depends on which
+            // thread ran what.
+            let chunks: Vec<(Cache, u64, RayStats)> = pool.install(|| {
+                phase
+                    .into_par_iter()
+                    .map(|chunk| {
+                        let mut local = Cache::new(ctx.scene, &options);
+                        let mut stats = RayStats::default();
+                        let mut walk = Walk {
+                            store: Store::Overlay {
+                                base: &cache,
+                                local: &mut local,
+                            },
+                            primaries: 0,
+                            stats: &mut stats,
+                            overture: true,
+                        };
+                        for (x, y, i) in chunk.samples() {
+                            // As render::progressive and `sample` below draw them.
+                            let mut sampler = Sampler::new(seed, &[x as u64, y as u64], i);
+                            let offset = filter.sample(sampler.next_2d());
+                            let ray =
+                                camera.ray(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
+                            let mut rng = sample_rng(seed, &mut sampler);
+                            trace(ctx, &params, &mut walk, &ray, 0, true, 0, &mut rng);
+                        }
+                        let n = walk.primaries;
+                        (local, n, stats)
+                    })
+                    .collect()
+            });
+            for (local, n, stats) in chunks {
+                cache.absorb(local);
+                primaries += n;
+                rays += stats.total();
             }
         }
-        let overture_primaries = walk.primaries;
-        IrradianceCache {
+        let overture_primaries = primaries;
+        Ok(IrradianceCache {
             params,
+            camera: *camera,
             cache,
             stats: IcStats {
                 loaded,
                 overture_primaries,
-                overture_rays: rays.total(),
+                overture_rays: rays,
             },
             misses: AtomicU64::new(0),
-        }
+        })
     }
 
     pub fn cache(&self) -> &Cache {
         &self.cache
+    }
+
+    /// Marks the first-level values the camera sees in `image` (the paper's figure 5b): each
+    /// value's pixel becomes `colour`. Values hidden from the eye are left out.
+    pub fn show_points(&self, ctx: &Context, image: &mut Image, colour: Rgb) -> usize {
+        let Some(level) = self.cache.levels.first() else {
+            return 0;
+        };
+        let mut stats = RayStats::default();
+        let mut shown = 0;
+        for rec in level.records() {
+            let Some((x, y, _)) = self.camera.raster(rec.p) else {
+                continue;
+            };
+            if !(x >= 0.0 && y >= 0.0 && x < image.width as f32 && y < image.height as f32) {
+                continue;
+            }
+            // Lifted off its surface toward the eye, so that the surface does not hide it.
+            let to_eye = (self.camera.origin - rec.p).normalize();
+            let ray = Ray::segment(offset_origin(rec.p, rec.n, to_eye), self.camera.origin);
+            if ctx.occluded(&ray, &mut stats) {
+                continue;
+            }
+            image.set(x as u32, y as u32, colour);
+            shown += 1;
+        }
+        shown
     }
 
     /// Primary values the final render computed without storing them.
@@ -372,7 +523,9 @@ fn shade(
     // The overture skips direct light where it is not cached (but draws the same numbers).
     let direct = !(walk.overture && level == 0);
     if non_delta {
-        // Direct light, light-sampling half of the MIS pair (the BSDF half is below).
+        // Direct light, light-sampling half of the MIS pair (the BSDF half is below). (Light
+        // sampling alone, as Radiance does, saves a third of the rays of a primary value but
+        // is far noisier where emitters are large and near, e.g. the furnace test.)
         let u_choice = rng.uniform();
         let u_light = Vec2::new(rng.uniform(), rng.uniform());
         if direct {
@@ -450,13 +603,13 @@ fn indirect(
     if level >= params.options.bounces {
         return params.options.ambient;
     }
-    if let Some(e) = walk.cache().levels[level as usize].interpolate(p, n) {
+    if let Some(e) = walk.interpolate(level as usize, p, n) {
         return e;
     }
     let rec = primary(ctx, params, walk, p, n, ng, level);
     walk.primaries += 1;
-    if let Store::Grow(cache) = &mut walk.store {
-        cache.levels[level as usize].insert(rec);
+    if let Store::Overlay { local, .. } = &mut walk.store {
+        local.levels[level as usize].insert(rec);
     }
     rec.e
 }

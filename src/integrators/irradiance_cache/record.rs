@@ -29,6 +29,12 @@ impl Record {
     /// Whether the value belongs to S at P for accuracy `a`: w_i > 1/a and d_i(P) ≥ 0 (the
     /// search of section 3.3). Returns the weight when it does.
     pub fn accept(&self, p: Vec3, n: Vec3, a: f32) -> Option<f32> {
+        // w_i > 1/a implies |P − Pi| < a·Ri: most values in the nodes a search visits fail
+        // this, without the square roots of the weight.
+        let domain = a * self.r;
+        if (p - self.p).length_squared() >= domain * domain {
+            return None;
+        }
         let w = self.weight(p, n);
         (w > 1.0 / a && self.front_distance(p, n) >= 0.0).then_some(w)
     }
