@@ -630,12 +630,21 @@ fn irradiance_cache(
     let start = std::time::Instant::now();
     let integrator = IrradianceCache::build(ctx, &basis, render, options, loaded)?;
     if !args.quiet {
+        let stats = &integrator.stats;
         eprintln!(
-            "irradiance cache: {} values ({} loaded, {} computed by the overture in {:.2} s)",
+            "irradiance cache: {} values ({} loaded, {} computed by the overture in {:.2} s, \
+             {:.0} rays each); per bounce level: {:?}",
             integrator.cache().len(),
-            integrator.stats.loaded,
-            integrator.stats.overture_primaries,
-            start.elapsed().as_secs_f64()
+            stats.loaded,
+            stats.overture_primaries,
+            start.elapsed().as_secs_f64(),
+            stats.overture_rays as f64 / stats.overture_primaries.max(1) as f64,
+            integrator
+                .cache()
+                .levels
+                .iter()
+                .map(|l| l.len())
+                .collect::<Vec<_>>()
         );
     }
     if let Some(f) = &args.cache_file {

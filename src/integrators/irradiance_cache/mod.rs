@@ -53,7 +53,7 @@ use crate::scene::{Scene, SurfacePoint};
 use crate::Result;
 use octree::Octree;
 use rayon::prelude::*;
-use record::{weighted_average, Record};
+use record::{Record, WeightedSum};
 use std::f32::consts::{FRAC_1_PI, PI};
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -272,9 +272,10 @@ impl Walk<'_> {
         match &self.store {
             Store::Frozen(c) => c.levels[level].interpolate(p, n),
             Store::Overlay { base, local } => {
-                let mut pairs = base.levels[level].accepted(p, n);
-                pairs.extend(local.levels[level].accepted(p, n));
-                weighted_average(&pairs)
+                let mut sum = WeightedSum::default();
+                base.levels[level].accumulate(p, n, &mut sum);
+                local.levels[level].accumulate(p, n, &mut sum);
+                sum.average()
             }
         }
     }

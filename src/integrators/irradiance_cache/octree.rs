@@ -9,7 +9,7 @@
 //! it the paper's rule visits about 1.5³ children per level, which made lookups most of the
 //! render time on dense caches.
 
-use super::record::{weighted_average, Record};
+use super::record::{Record, WeightedSum};
 use crate::math::{Rgb, Vec3, Vec4};
 
 const NO_CHILDREN: u32 = u32::MAX;
@@ -154,10 +154,24 @@ impl Octree {
     /// Indices of the values in S at P (w_i > 1/a and d_i ≥ 0), with their weights, by the
     /// recursive search of section 3.3.
     pub fn search(&self, p: Vec3, n: Vec3, out: &mut Vec<(u32, f32)>) {
-        self.visit(0, p, n, out);
+        self.visit(0, p, n, &mut |i, w| out.push((i, w)));
     }
 
-    fn visit(&self, node: usize, p: Vec3, n: Vec3, out: &mut Vec<(u32, f32)>) {
+    /// Adds the values in S at P to `sum` (the secondary method, eq. 5), in the order the
+    /// search meets them. That order depends only on the order the values were inserted in
+    /// (which fixes the tree), and a cache file keeps it.
+    pub fn accumulate(&self, p: Vec3, n: Vec3, sum: &mut WeightedSum) {
+        self.visit(0, p, n, &mut |i, w| sum.add(w, self.records[i as usize].e));
+    }
+
+    /// The secondary method: the weighted average over S (eq. 5), or None when S is empty.
+    pub fn interpolate(&self, p: Vec3, n: Vec3) -> Option<Rgb> {
+        let mut sum = WeightedSum::default();
+        self.accumulate(p, n, &mut sum);
+        sum.average()
+    }
+
+    fn visit(&self, node: usize, p: Vec3, n: Vec3, found: &mut impl FnMut(u32, f32)) {
         let nd = &self.nodes[node];
         let contents = &self.contents[node];
         for (&i, sphere) in contents.values.iter().zip(&contents.spheres) {
@@ -165,7 +179,7 @@ impl Octree {
                 continue;
             }
             if let Some(w) = self.records[i as usize].accept(p, n, self.a) {
-                out.push((i, w));
+                found(i, w);
             }
         }
         if nd.children == NO_CHILDREN {
@@ -179,26 +193,9 @@ impl Octree {
             if child.reach > 0.0
                 && distance_to_cube(p, child.center, child.half) <= child.half.min(child.reach)
             {
-                self.visit(c, p, n, out);
+                self.visit(c, p, n, found);
             }
         }
-    }
-
-    /// The secondary method: the weighted average over S (eq. 5), or None when S is empty.
-    pub fn interpolate(&self, p: Vec3, n: Vec3) -> Option<Rgb> {
-        weighted_average(&self.accepted(p, n))
-    }
-
-    /// The values in S at P as (weight, irradiance) pairs, in insertion order, so that the
-    /// average does not depend on the tree's shape.
-    pub fn accepted(&self, p: Vec3, n: Vec3) -> Vec<(f32, Rgb)> {
-        let mut found = Vec::new();
-        self.search(p, n, &mut found);
-        found.sort_unstable_by_key(|&(i, _)| i);
-        found
-            .iter()
-            .map(|&(i, w)| (w, self.records[i as usize].e))
-            .collect()
     }
 }
 

@@ -43,18 +43,36 @@ impl Record {
 /// Eq. 5: Σ w_i E_i / Σ w_i over the accepted values, in the order given. A value at P itself
 /// (infinite weight) is returned as is. None when nothing was accepted (S is empty).
 pub fn weighted_average(accepted: &[(f32, Rgb)]) -> Option<Rgb> {
-    if accepted.is_empty() {
-        return None;
-    }
-    if let Some(&(_, e)) = accepted.iter().find(|(w, _)| w.is_infinite()) {
-        return Some(e);
-    }
-    let (mut sw, mut se) = (0.0f32, Rgb::ZERO);
+    let mut sum = WeightedSum::default();
     for &(w, e) in accepted {
-        sw += w;
-        se += e * w;
+        sum.add(w, e);
     }
-    Some(se / sw)
+    sum.average()
+}
+
+/// Eq. 5 accumulated one accepted value at a time, so that a search need not collect S.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct WeightedSum {
+    sw: f32,
+    se: Rgb,
+    /// The first value at P itself (infinite weight), which is the answer when present.
+    exact: Option<Rgb>,
+}
+
+impl WeightedSum {
+    pub fn add(&mut self, w: f32, e: Rgb) {
+        if w.is_infinite() {
+            self.exact.get_or_insert(e);
+        } else {
+            self.sw += w;
+            self.se += e * w;
+        }
+    }
+
+    /// The weighted average, or None when nothing was added (S is empty).
+    pub fn average(&self) -> Option<Rgb> {
+        self.exact.or((self.sw > 0.0).then(|| self.se / self.sw))
+    }
 }
 
 #[cfg(test)]

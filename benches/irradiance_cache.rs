@@ -1,0 +1,236 @@
+//! Irradiance caching against path tracing where it should pay: `scenes/indirect-room.toml`,
+//! a room lit only by light bounced off its ceiling (issue 5's benchmark).
+//!
+//! `cargo bench --bench irradiance_cache` renders the room at 256x192 with the irradiance
+//! cache and with the path tracer at doubling sample counts, all on every core, and reports
+//! each one's time and RMSE against a converged path-traced reference (box-downsampled to
+//! 128x96 for the comparison, which halves the reference's own noise), then the time the
+//! path tracer needs to reach the cache's error (interpolated between the two sample counts
+//! that bracket it, error ∝ time^-1/2 between them) and the speedup.
+//!
+//! The reference is `RAYLINK_IC_REFERENCE` if set, else `target/indirect-room-reference.exr`;
+//! when missing it is rendered (4096 spp with another seed, about 15 minutes on 2 cores)
+//! and kept there.
+//!
+//! The same race runs on the Cornell box at 256x256 against Tungsten's render from
+//! `../shared` (box-downsampled, the light's pixels excluded), where issue 5 quotes
+//! Radiance 5.4 at RMSE 0.0056 in 247 s.
+
+use raylink::accel::{self, Backend};
+use raylink::image::compare::{box_downsample, bright_mask, rmse};
+use raylink::image::filter::Filter;
+use raylink::image::output::{read_image, write_image, OutputOptions};
+use raylink::image::Image;
+use raylink::integrators::irradiance_cache::{IcOptions, IrradianceCache};
+use raylink::integrators::path::{PathOptions, PathTracer};
+use raylink::integrators::Context;
+use raylink::render::progressive::{render_progressive, ProgressiveOptions};
+use raylink::scene::Scene;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+const WIDTH: u32 = 256;
+const HEIGHT: u32 = 192;
+const REFERENCE_SPP: u32 = 4096;
+
+fn options(size: (u32, u32), spp: u32, seed: u64) -> ProgressiveOptions {
+    ProgressiveOptions {
+        width: size.0,
+        height: size.1,
+        spp,
+        time_limit: None,
+        threads: None,
+        seed,
+        progress: false,
+        filter: Filter::Box { radius: 0.5 },
+    }
+}
+
+fn half(image: &Image) -> Image {
+    box_downsample(image, image.width / 2, image.height / 2).expect("even size")
+}
+
+fn path_trace(ctx: &Context, size: (u32, u32), spp: u32, seed: u64) -> (Image, f64) {
+    let tracer = PathTracer::new(PathOptions { max_depth: 8 });
+    let start = Instant::now();
+    let o = options(size, spp, seed);
+    let (film, _) = render_progressive(ctx, &tracer, &o, |_| Ok(())).unwrap();
+    (film.image(), start.elapsed().as_secs_f64())
+}
+
+fn room_reference(ctx: &Context) -> Image {
+    let path = std::env::var_os("RAYLINK_IC_REFERENCE")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| {
+            Path::new(env!("CARGO_MANIFEST_DIR")).join("target/indirect-room-reference.exr")
+        });
+    if let Ok((image, _)) = read_image(&path) {
+        eprintln!("reference: {}", path.display());
+        return image;
+    }
+    eprintln!(
+        "rendering the reference ({REFERENCE_SPP} spp) to {}",
+        path.display()
+    );
+    let (image, seconds) = path_trace(ctx, (WIDTH, HEIGHT), REFERENCE_SPP, 99);
+    eprintln!("reference rendered in {seconds:.0} s");
+    let options = OutputOptions {
+        exposure: 0.0,
+        half: false,
+    };
+    write_image(&path, &image, &Vec::new(), &options).unwrap();
+    image
+}
+
+/// One scene's race: the cache at each setting, then the path tracer at doubling sample
+/// counts until it reaches the best cache's error. `compare` maps a render to the
+/// reference's resolution; `mask` excludes reference pixels.
+#[allow(clippy::too_many_arguments)]
+fn race(
+    title: &str,
+    scene: &Scene,
+    size: (u32, u32),
+    reference: &Image,
+    compare: &dyn Fn(&Image) -> Image,
+    mask: Option<&[bool]>,
+    configs: &[(u32, IcOptions)],
+    max_spp: u32,
+) {
+    let accel = accel::build(scene, Backend::Embree).unwrap();
+    let ctx = Context::new(scene, accel.as_ref());
+    let mut camera = scene.camera.clone();
+    camera.width = size.0;
+    camera.height = size.1;
+    let basis = camera.basis();
+    println!("\n### {title}\n");
+    println!("| render | values (per level) | overture rays / value | time (s) | RMSE |");
+    println!("|---|---|---|---|---|");
+    let mut best: Option<(f64, f64)> = None;
+    for &(spp, ic) in configs {
+        let start = Instant::now();
+        let o = options(size, spp, 1);
+        let integrator = IrradianceCache::build(&ctx, &basis, &o, ic, None).unwrap();
+        let overture = start.elapsed().as_secs_f64();
+        let (film, _) = render_progressive(&ctx, &integrator, &o, |_| Ok(())).unwrap();
+        let seconds = start.elapsed().as_secs_f64();
+        let error = rmse(&compare(&film.image()), reference, mask);
+        let stats = integrator.stats;
+        let levels: Vec<usize> = integrator.cache().levels.iter().map(|l| l.len()).collect();
+        println!(
+            "| irradiance cache, a {}, {} rays, ab {}, ar {}, {spp} spp | {} {levels:?} | \
+             {:.0} | {seconds:.2} (overture {overture:.2}) | {error:.5} |",
+            ic.accuracy,
+            ic.samples,
+            ic.bounces,
+            ic.ar,
+            integrator.cache().len(),
+            stats.overture_rays as f64 / stats.overture_primaries.max(1) as f64,
+        );
+        if best.is_none_or(|(t, e)| seconds * error * error < t * e * e) {
+            best = Some((seconds, error));
+        }
+    }
+    let (ic_seconds, target) = best.unwrap();
+
+    let mut previous: Option<(f64, f64)> = None;
+    let mut spp = 16;
+    let mut reached = None;
+    while spp <= max_spp {
+        let (image, seconds) = path_trace(&ctx, size, spp, 1);
+        let error = rmse(&compare(&image), reference, mask);
+        println!("| path tracer, {spp} spp | | | {seconds:.2} | {error:.5} |");
+        if error <= target {
+            // Between the two bracketing runs, error² · time is about constant.
+            reached = Some(match previous {
+                Some((t0, e0)) => {
+                    let f = ((e0 / target).ln() / (e0 / error).ln()).clamp(0.0, 1.0);
+                    t0 * (seconds / t0).powf(f)
+                }
+                None => seconds,
+            });
+            break;
+        }
+        previous = Some((seconds, error));
+        spp *= 2;
+    }
+    match reached {
+        Some(t) => println!(
+            "\npath tracing reaches RMSE {target:.5} in about {t:.1} s: the irradiance cache \
+             ({ic_seconds:.1} s) is {:.1}x faster",
+            t / ic_seconds
+        ),
+        None => println!(
+            "\npath tracing did not reach RMSE {target:.5} by {max_spp} spp: the irradiance \
+             cache ({ic_seconds:.1} s) is faster than every path-traced render above"
+        ),
+    }
+}
+
+fn main() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let scene = Scene::load(&root.join("scenes/indirect-room.toml")).unwrap();
+    let reference = {
+        let accel = accel::build(&scene, Backend::Embree).unwrap();
+        half(&room_reference(&Context::new(&scene, accel.as_ref())))
+    };
+    // Radiance-style settings for an indirectly lit room: many bounces, many rays per
+    // value, and a coarser minimum spacing (ar) than the defaults; the final pass needs few
+    // samples since nothing in view is lit directly.
+    let room = IcOptions {
+        bounces: 7,
+        samples: 2048,
+        accuracy: 0.25,
+        ..IcOptions::default()
+    };
+    race(
+        "Indirectly lit room, 256x192 (RMSE at 128x96)",
+        &scene,
+        (WIDTH, HEIGHT),
+        &reference,
+        &half,
+        None,
+        &[
+            (4, IcOptions { ar: 16.0, ..room }),
+            (4, IcOptions { ar: 8.0, ..room }),
+            (4, IcOptions { ar: 4.0, ..room }),
+        ],
+        REFERENCE_SPP / 4,
+    );
+
+    let cornell = Scene::load(&root.join("scenes/cornell-box.toml")).unwrap();
+    let tungsten = root.join("../shared/scenes/cornell-box-bitterli/TungstenRender.exr");
+    let Ok((tungsten, _)) = read_image(&tungsten) else {
+        eprintln!("no {}: skipping the Cornell box", tungsten.display());
+        return;
+    };
+    let reference = box_downsample(&tungsten, 256, 256).unwrap();
+    let mask = bright_mask(&reference, 1.0);
+    race(
+        "Cornell box, 256x256, against Tungsten (light pixels excluded)",
+        &cornell,
+        (256, 256),
+        &reference,
+        &|image: &Image| image.clone(),
+        Some(&mask),
+        &[
+            (
+                16,
+                IcOptions {
+                    bounces: 5,
+                    ar: 16.0,
+                    ..IcOptions::default()
+                },
+            ),
+            (
+                16,
+                IcOptions {
+                    bounces: 8,
+                    ar: 32.0,
+                    samples: 1024,
+                    ..IcOptions::default()
+                },
+            ),
+        ],
+        256,
+    );
+}
