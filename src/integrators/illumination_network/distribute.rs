@@ -380,8 +380,20 @@ pub fn distribute(net: &Network, scene: &Scene, options: &DistributeOptions) -> 
     let flux_of = |shot_d: &[Rgb], shot_dir: &[Rgb]| {
         let mut f = sum3(shot_d, |i| net.etendue[i]);
         let g = sum3(shot_dir, |i| w[i % slots]);
+        // Extra links of a slot carry the slot's radiance too.
+        let extra: Vec<Rgb> = dir_nodes
+            .iter()
+            .enumerate()
+            .flat_map(|(k, &n)| {
+                net.extra_links(n)
+                    .iter()
+                    .map(move |&[l, _]| (k * slots + l as usize, l))
+            })
+            .map(|(i, l)| shot_dir[i] * w[l as usize])
+            .collect();
+        let h = sum3(&extra, |_| 1.0);
         for c in 0..3 {
-            f[c] += g[c];
+            f[c] += g[c] + h[c];
         }
         f
     };
@@ -467,6 +479,10 @@ pub fn distribute(net: &Network, scene: &Scene, options: &DistributeOptions) -> 
                 }
                 for (o, &wl) in out.iter_mut().zip(&w) {
                     *o /= wl;
+                }
+                // A slot with extra links spreads its flux over all of them.
+                for run in net.extra_links(node as u32).chunk_by(|a, b| a[0] == b[0]) {
+                    out[run[0][0] as usize] /= (1 + run.len()) as f32;
                 }
             });
         diffuse
