@@ -106,7 +106,7 @@ pub struct BuildStats {
     pub escapes: u64,
     /// Link ends beyond the first of their slot at a node (in `extra`).
     pub extra: u64,
-    /// Consecutive hits of a line on the same side (ignored).
+    /// Consecutive hits of a line on the same side or on touching surfaces (no link).
     pub degenerate: u64,
     /// Closest-hit queries (Embree builder).
     pub rays: u64,

@@ -289,6 +289,9 @@ pub fn cast_slot(
     hits
 }
 
+/// Hits closer than this along a line (unit-cube units of p_a) are on touching surfaces.
+pub const COINCIDENT: f32 = 1e-5;
+
 /// Sorts one slot's hits along their lines and links consecutive ones.
 pub fn link_slot(mut hits: Vec<LineHit>) -> SlotLinks {
     hits.sort_unstable_by(|x, y| {
@@ -307,7 +310,9 @@ pub fn link_slot(mut hits: Vec<LineHit>) -> SlotLinks {
             let (x, y) = (w[0].key, w[1].key ^ 1);
             // A line meeting the same side twice in a row (a hit on an edge counted by both
             // of its cells' polygon) carries nothing.
-            if x != y {
+            // Coincident surfaces (a box standing on the floor) touch: no light passes
+            // between them.
+            if x != y && w[1].depth - w[0].depth > COINCIDENT {
                 out.pairs.push([x, y]);
             } else {
                 out.degenerate += 1;
