@@ -788,7 +788,8 @@ fn network(
              network stats: {} links ({:.1} per node), {} escapes, {} extra, {} line-patch \
              intersections ({:.1} M/s), {} closest-hit queries\n\
              network stats: memory {:.1} MB network + {:.1} MB buffers, {} map entries\n\
-             network stats: preprocess {:.3} s, distribution {:.3} s, {} sweeps, unshot {:.2e} of emitted",
+             network stats: preprocess {:.3} s (lines {:.3} s, assembly {:.3} s), distribution {:.3} s, \
+             {} sweeps, unshot {:.2e} of emitted",
             network.patches.polygons.len(),
             network.patches.cells,
             network.nodes(),
@@ -804,6 +805,8 @@ fn network(
             solution.memory() as f64 / 1e6,
             st.map_entries,
             bs.seconds,
+            bs.link_seconds,
+            bs.assemble_seconds,
             st.seconds,
             st.sweeps,
             st.unshot.iter().sum::<f64>() / st.emitted.iter().sum::<f64>().max(1e-300),

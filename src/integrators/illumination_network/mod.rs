@@ -110,7 +110,11 @@ pub struct BuildStats {
     pub degenerate: u64,
     /// Closest-hit queries (Embree builder).
     pub rays: u64,
+    /// Whole preprocess, and its parts: finding and linking the lines (parallel over slots)
+    /// and assembling the node table.
     pub seconds: f64,
+    pub link_seconds: f64,
+    pub assemble_seconds: f64,
 }
 
 /// The illumination network: geometry only (no materials, no light), so it is reused for
@@ -177,6 +181,7 @@ impl Network {
         let bounds = scene.bounds().ok_or("the scene has no shapes")?;
         let space = RaySpace::new(params.slopes, params.step, bounds);
         let patches = Patches::new(scene, &space, params.patch_size)?;
+        let t = Instant::now();
         let (slots, rays) = preprocess::build_links(
             (builder == Builder::Embree).then_some(ctx),
             &space,
@@ -185,20 +190,28 @@ impl Network {
             params.jitter,
             builder,
         );
+        let link_seconds = t.elapsed().as_secs_f64();
+        let t = Instant::now();
         let mut net = Network::assemble(params, space, patches, &slots);
+        net.stats.assemble_seconds = t.elapsed().as_secs_f64();
+        net.stats.link_seconds = link_seconds;
         net.stats.rays = rays.total();
         net.stats.seconds = start.elapsed().as_secs_f64();
         Ok(net)
     }
 
     /// Numbers the nodes (sides with at least one real link, in key order) and fills the
-    /// dense link table.
+    /// dense link table: in parallel over slots, each slot fills its own column (a cache-sized
+    /// array over the nodes), then the columns are transposed into per-node rows in blocks of
+    /// nodes. A second link of a slot at a node goes to the node's extra links. Nothing
+    /// depends on the schedule.
     pub fn assemble(
         params: NetworkParams,
         space: RaySpace,
         patches: Patches,
         slots: &[SlotLinks],
     ) -> Network {
+        use rayon::prelude::*;
         let keys = 2 * patches.cells as usize;
         let mut node_of_key = vec![NONE; keys];
         for s in slots {
@@ -214,46 +227,80 @@ impl Network {
                 key_of_node.push(k as u32);
             }
         }
+        let nodes = key_of_node.len();
         let n_slots = space.slots();
-        let mut links = vec![NONE; key_of_node.len() * n_slots];
-        let mut extra: Vec<(u32, [u32; 2])> = Vec::new();
+        // Per slot: its column over the nodes, its extra (node, [slot, target]) links, and
+        // its escapes.
+        type Column = (Vec<u32>, Vec<(u32, [u32; 2])>, u64);
+        let per_slot: Vec<Column> = slots
+            .par_iter()
+            .enumerate()
+            .map(|(slot, s)| {
+                let mut extra = Vec::new();
+                let mut column = vec![NONE; nodes];
+                let mut put = |node: u32, target: u32| {
+                    let e = &mut column[node as usize];
+                    if *e == NONE {
+                        *e = target;
+                    } else {
+                        extra.push((node, [slot as u32, target]));
+                    }
+                };
+                for &[a, b] in &s.pairs {
+                    let (na, nb) = (node_of_key[a as usize], node_of_key[b as usize]);
+                    put(na, nb);
+                    put(nb, na);
+                }
+                let mut escapes = 0;
+                for &k in &s.escapes {
+                    let n = node_of_key[k as usize];
+                    if n != NONE {
+                        put(n, ESCAPE);
+                        escapes += 1;
+                    }
+                }
+                (column, extra, escapes)
+            })
+            .collect();
+        const BLOCK: usize = 64;
+        let mut links = vec![NONE; nodes * n_slots];
+        links
+            .par_chunks_mut(BLOCK * n_slots)
+            .enumerate()
+            .for_each(|(b, rows)| {
+                let first = b * BLOCK;
+                for (slot, (column, _, _)) in per_slot.iter().enumerate() {
+                    for (k, &t) in column[first..].iter().take(BLOCK).enumerate() {
+                        rows[k * n_slots + slot] = t;
+                    }
+                }
+            });
         let mut stats = BuildStats::default();
-        let mut put = |node: u32, slot: usize, target: u32, extra: &mut Vec<(u32, [u32; 2])>| {
-            let e = &mut links[node as usize * n_slots + slot];
-            if *e == NONE {
-                *e = target;
-            } else {
-                extra.push((node, [slot as u32, target]));
-            }
-        };
-        for (slot, s) in slots.iter().enumerate() {
+        for s in slots {
             stats.intersections += s.intersections;
             stats.degenerate += s.degenerate;
-            for &[a, b] in &s.pairs {
-                let (na, nb) = (node_of_key[a as usize], node_of_key[b as usize]);
-                put(na, slot, nb, &mut extra);
-                put(nb, slot, na, &mut extra);
-                stats.link_ends += 2;
-            }
-            for &k in &s.escapes {
-                let n = node_of_key[k as usize];
-                if n != NONE {
-                    put(n, slot, ESCAPE, &mut extra);
-                    stats.escapes += 1;
-                }
-            }
+            stats.link_ends += 2 * s.pairs.len() as u64;
         }
-        // Extra links grouped by node, in slot order within a node (a stable sort).
-        extra.sort_by_key(|e| e.0);
-        stats.extra = extra.len() as u64;
-        let mut extra_start = vec![0u32; key_of_node.len() + 1];
-        for e in &extra {
-            extra_start[e.0 as usize + 1] += 1;
+        // Extra links grouped by node (a counting sort), in slot order within a node.
+        let mut extra_start = vec![0u32; nodes + 1];
+        for (_, extra, escapes) in &per_slot {
+            stats.escapes += escapes;
+            for e in extra {
+                extra_start[e.0 as usize + 1] += 1;
+            }
         }
         for i in 1..extra_start.len() {
             extra_start[i] += extra_start[i - 1];
         }
-        let extra: Vec<[u32; 2]> = extra.into_iter().map(|e| e.1).collect();
+        let mut fill = extra_start.clone();
+        let mut extra = vec![[0u32; 2]; extra_start[nodes] as usize];
+        for (_, list, _) in &per_slot {
+            for &(n, e) in list {
+                extra[fill[n as usize] as usize] = e;
+                fill[n as usize] += 1;
+            }
+        }
+        stats.extra = extra.len() as u64;
         let etendue = node_etendue(&space, &links, &extra_start, &extra);
         Network {
             params,

@@ -128,6 +128,14 @@ pub fn scan_polygon(
         area += p0.0 * p1.1 - p1.0 * p0.1;
     }
     let sign = if area >= 0.0 { 1.0 } else { -1.0 };
+    // Edge functions e(x) = a·x_u + b·x_v + c, non-negative inside.
+    let edges: Vec<(f32, f32, f32)> = (0..k)
+        .map(|i| {
+            let (p0, p1) = (q[i], q[(i + 1) % k]);
+            let (a, b) = (-(p1.1 - p0.1) * sign, (p1.0 - p0.0) * sign);
+            (a, b, -(a * p0.0 + b * p0.1))
+        })
+        .collect();
     let h = space.step;
     let n = space.intercepts as i64;
     let amp = 0.5 * jitter * h;
@@ -179,10 +187,7 @@ pub fn scan_polygon(
         for ju in ju0..=ju1 {
             let (du, dv) = space.jitter(seed, jitter, slot, ju as u32, jv as u32);
             let x = (space.intercept(ju as u32) + du, cv + dv);
-            let inside = (0..k).all(|i| {
-                let (p0, p1) = (q[i], q[(i + 1) % k]);
-                sign * ((p1.0 - p0.0) * (x.1 - p0.1) - (p1.1 - p0.1) * (x.0 - p0.0)) >= 0.0
-            });
+            let inside = edges.iter().all(|&(a, b, c)| a * x.0 + b * x.1 + c >= 0.0);
             if inside {
                 let line = ju as u32 * space.intercepts + jv as u32;
                 hit(line, x.0, x.1, pa - plane.b * du - plane.c * dv);
@@ -215,14 +220,28 @@ pub fn scan_slot(
         if pg.n == Vec3::ZERO {
             continue;
         }
+        let Some(plane) = SlotPlane::new(pg, family, su, sv) else {
+            continue;
+        };
         let back = u32::from(pg.n.dot(d) <= 0.0);
-        scan_polygon(space, slot, pg, seed, jitter, |line, iu, iv, pa| {
-            let p = line_point(family, su, sv, iu, iv, pa);
+        // The hit point is affine in the intercept: so are (s, t), scaled to cell units.
+        let at = |iu: f32, iv: f32| {
+            let p = line_point(family, su, sv, iu, iv, plane.depth(iu, iv));
             let (s, t) = pg.st(p);
+            (s * pg.ns as f32, t * pg.nt as f32)
+        };
+        let p0 = at(0.0, 0.0);
+        let (pu, pv) = (at(1.0, 0.0), at(0.0, 1.0));
+        let (su_, sv_) = (pu.0 - p0.0, pv.0 - p0.0);
+        let (tu, tv) = (pu.1 - p0.1, pv.1 - p0.1);
+        let (ns, nt) = (pg.ns as i32 - 1, pg.nt as i32 - 1);
+        scan_polygon(space, slot, pg, seed, jitter, |line, iu, iv, pa| {
+            let i = ((p0.0 + su_ * iu + sv_ * iv) as i32).clamp(0, ns) as u32;
+            let j = ((p0.1 + tu * iu + tv * iv) as i32).clamp(0, nt) as u32;
             hits.push(LineHit {
                 line,
                 depth: pa,
-                key: pg.cell_at(s, t) * 2 + back,
+                key: (pg.first_cell + i * pg.nt + j) * 2 + back,
             });
         });
     }
@@ -292,26 +311,60 @@ pub fn cast_slot(
 /// Hits closer than this along a line (unit-cube units of p_a) are on touching surfaces.
 pub const COINCIDENT: f32 = 1e-5;
 
-/// Sorts one slot's hits along their lines and links consecutive ones.
-pub fn link_slot(mut hits: Vec<LineHit>) -> SlotLinks {
-    hits.sort_unstable_by(|x, y| {
-        (x.line, x.depth, x.key)
-            .partial_cmp(&(y.line, y.depth, y.key))
-            .unwrap_or(std::cmp::Ordering::Equal)
-    });
+/// Reusable buffers of [`link_slot`].
+#[derive(Default)]
+pub struct LinkBuffers {
+    counts: Vec<u32>,
+    sorted: Vec<LineHit>,
+}
+
+/// Sorts one slot's hits along their lines (a counting sort by line, then by depth within
+/// each line's few hits) and links consecutive ones. `lines` is the number of lines per slot.
+pub fn link_slot(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) -> SlotLinks {
+    let counts = &mut buf.counts;
+    counts.clear();
+    counts.resize(lines + 1, 0);
+    for h in hits {
+        counts[h.line as usize + 1] += 1;
+    }
+    for i in 1..counts.len() {
+        counts[i] += counts[i - 1];
+    }
+    let sorted = &mut buf.sorted;
+    sorted.clear();
+    sorted.resize(
+        hits.len(),
+        LineHit {
+            line: 0,
+            depth: 0.0,
+            key: 0,
+        },
+    );
+    for h in hits {
+        let at = &mut counts[h.line as usize];
+        sorted[*at as usize] = *h;
+        *at += 1;
+    }
     let mut out = SlotLinks {
         intersections: hits.len() as u64,
         ..SlotLinks::default()
     };
-    for group in hits.chunk_by(|x, y| x.line == y.line) {
+    for group in sorted.chunk_by_mut(|x, y| x.line == y.line) {
+        // Insertion sort: a line meets a handful of patches.
+        for i in 1..group.len() {
+            let mut j = i;
+            while j > 0 && (group[j].depth, group[j].key) < (group[j - 1].depth, group[j - 1].key) {
+                group.swap(j, j - 1);
+                j -= 1;
+            }
+        }
         // Entering the scene: the first side facing −d looks out of it.
         out.escapes.push(group[0].key ^ 1);
         for w in group.windows(2) {
             let (x, y) = (w[0].key, w[1].key ^ 1);
             // A line meeting the same side twice in a row (a hit on an edge counted by both
-            // of its cells' polygon) carries nothing.
-            // Coincident surfaces (a box standing on the floor) touch: no light passes
-            // between them.
+            // of its cells' polygon) carries nothing; coincident surfaces (a box standing on
+            // the floor) touch, and no light passes between them.
             if x != y && w[1].depth - w[0].depth > COINCIDENT {
                 out.pairs.push([x, y]);
             } else {
@@ -334,7 +387,7 @@ pub fn build_links(
 ) -> (Vec<SlotLinks>, RayStats) {
     let results: Vec<(SlotLinks, RayStats)> = (0..space.slots() as u32)
         .into_par_iter()
-        .map(|slot| {
+        .map_init(LinkBuffers::default, |buf, slot| {
             let mut stats = RayStats::default();
             let hits = match (builder, ctx) {
                 (Builder::Embree, Some(ctx)) => {
@@ -342,7 +395,7 @@ pub fn build_links(
                 }
                 _ => scan_slot(space, patches, slot, seed, jitter),
             };
-            (link_slot(hits), stats)
+            (link_slot(&hits, space.lines_per_slot(), buf), stats)
         })
         .collect();
     let mut stats = RayStats::default();
