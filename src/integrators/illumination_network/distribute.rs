@@ -401,6 +401,27 @@ pub fn distribute(net: &Network, scene: &Scene, options: &DistributeOptions) -> 
     let emitted_total: f64 = stats.emitted.iter().sum();
     let mut unshot = stats.emitted;
     let mut in_total = vec![Rgb::ZERO; nodes];
+    let mut padded = vec![Rgb::ZERO; nodes + 1];
+    // Σ w over each node's escaping links.
+    let escape_etendue: Vec<f32> = (0..nodes as u32)
+        .into_par_iter()
+        .map(|i| {
+            let row: f32 = net
+                .row(i)
+                .iter()
+                .zip(&w)
+                .filter(|(&t, _)| t == ESCAPE)
+                .map(|(_, &wl)| wl)
+                .sum();
+            let extra: f32 = net
+                .extra_links(i)
+                .iter()
+                .filter(|e| e[1] == ESCAPE)
+                .map(|e| w[e[0] as usize])
+                .sum();
+            row + extra
+        })
+        .collect();
     let mut escaped = vec![Rgb::ZERO; nodes];
     while unshot.iter().sum::<f64>() > options.tolerance as f64 * emitted_total
         && stats.sweeps < options.max_sweeps
@@ -414,27 +435,47 @@ pub fn distribute(net: &Network, scene: &Scene, options: &DistributeOptions) -> 
             }
             r
         };
-        in_total
-            .par_iter_mut()
-            .zip(escaped.par_iter_mut())
-            .enumerate()
-            .for_each(|(i, (tot, esc))| {
-                let mut sum = Rgb::ZERO;
-                let mut out = Rgb::ZERO;
-                let extra = net
-                    .extra_links(i as u32)
-                    .iter()
-                    .map(|e| (e[0] as usize, e[1]));
-                for (l, j) in net.row(i as u32).iter().copied().enumerate().chain(extra) {
-                    if j < ESCAPE {
-                        sum += radiance(j, l) * w[l];
-                    } else if j == ESCAPE {
-                        out += radiance(i as u32, l) * w[l];
+        if dir_nodes.is_empty() {
+            // All diffuse: a branchless gather, NONE and ESCAPE reading a zero past the end.
+            padded[..nodes].copy_from_slice(&shot_d);
+            in_total
+                .par_iter_mut()
+                .zip(escaped.par_iter_mut())
+                .enumerate()
+                .for_each(|(i, (tot, esc))| {
+                    let mut sum = Rgb::ZERO;
+                    for (&t, &wl) in net.row(i as u32).iter().zip(&w) {
+                        sum += padded[(t as usize).min(nodes)] * wl;
                     }
-                }
-                *tot = sum;
-                *esc = out;
-            });
+                    for &[l, t] in net.extra_links(i as u32) {
+                        sum += padded[(t as usize).min(nodes)] * w[l as usize];
+                    }
+                    *tot = sum;
+                    *esc = shot_d[i] * escape_etendue[i];
+                });
+        } else {
+            in_total
+                .par_iter_mut()
+                .zip(escaped.par_iter_mut())
+                .enumerate()
+                .for_each(|(i, (tot, esc))| {
+                    let mut sum = Rgb::ZERO;
+                    let mut out = Rgb::ZERO;
+                    let extra = net
+                        .extra_links(i as u32)
+                        .iter()
+                        .map(|e| (e[0] as usize, e[1]));
+                    for (l, j) in net.row(i as u32).iter().copied().enumerate().chain(extra) {
+                        if j < ESCAPE {
+                            sum += radiance(j, l) * w[l];
+                        } else if j == ESCAPE {
+                            out += radiance(i as u32, l) * w[l];
+                        }
+                    }
+                    *tot = sum;
+                    *esc = out;
+                });
+        }
         in_buf
             .par_chunks_mut(slots)
             .zip(&dir_nodes)
