@@ -13,7 +13,7 @@
 //! key_of_node: nodes × u32
 //! links: nodes × 3·S² × u32
 //! extra_start: (nodes + 1) × u32, extra: extra links × 2 × u32
-//! checksum u64               FNV-1a of every byte before it
+//! checksum u64               FNV-1a over the 64-bit words of everything before it
 //! ```
 //!
 //! Patches (polygons and cells) are not stored: they are a function of the scene's geometry
@@ -29,6 +29,21 @@ use std::path::Path;
 
 const MAGIC: &[u8; 8] = b"RLNETWK\0";
 pub const VERSION: u32 = 1;
+
+/// The file checksum: FNV-1a over little-endian 64-bit words (the tail zero-padded), eight
+/// times fewer steps than over bytes for files of hundreds of megabytes.
+fn checksum(bytes: &[u8]) -> u64 {
+    let mut h = 0xcbf29ce484222325u64;
+    let mut words = bytes.chunks_exact(8);
+    for w in &mut words {
+        h ^= u64::from_le_bytes(w.try_into().unwrap());
+        h = h.wrapping_mul(0x100000001b3);
+    }
+    let mut tail = [0u8; 8];
+    tail[..words.remainder().len()].copy_from_slice(words.remainder());
+    h ^= u64::from_le_bytes(tail);
+    h.wrapping_mul(0x100000001b3) ^ bytes.len() as u64
+}
 
 fn fnv1a(bytes: &[u8]) -> u64 {
     let mut h = 0xcbf29ce484222325u64;
@@ -86,7 +101,7 @@ pub fn save(path: &Path, net: &Network, scene: &Scene) -> Result<()> {
     {
         b.extend_from_slice(&v.to_le_bytes());
     }
-    let sum = fnv1a(&b);
+    let sum = checksum(&b);
     b.extend_from_slice(&sum.to_le_bytes());
     let name = path
         .file_name()
@@ -142,7 +157,7 @@ pub fn load(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> Res
         return Err(bad("truncated"));
     }
     let (body, tail) = bytes.split_at(bytes.len() - 8);
-    if fnv1a(body) != u64::from_le_bytes(tail.try_into().unwrap()) {
+    if checksum(body) != u64::from_le_bytes(tail.try_into().unwrap()) {
         return Err(bad("checksum mismatch (truncated or corrupt)"));
     }
     let mut r = Reader { rest: &body[12..] };
@@ -199,15 +214,18 @@ pub fn load(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> Res
     if r.rest.len() != want {
         return Err(bad("size does not match the node count"));
     }
-    let words: Vec<u32> = r
-        .rest
-        .chunks_exact(4)
-        .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
-        .collect();
-    let (key_of_node, rest) = words.split_at(nodes);
-    let (links, rest) = rest.split_at(nodes * slots);
-    let (extra_start, rest) = rest.split_at(nodes + 1);
-    let extra: Vec<[u32; 2]> = rest.chunks_exact(2).map(|c| [c[0], c[1]]).collect();
+    let words = |bytes: &[u8]| -> Vec<u32> {
+        use rayon::prelude::*;
+        bytes
+            .par_chunks_exact(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+            .collect()
+    };
+    let (a, rest) = r.rest.split_at(4 * nodes);
+    let (b, rest) = rest.split_at(4 * nodes * slots);
+    let (c, rest) = rest.split_at(4 * (nodes + 1));
+    let (key_of_node, links, extra_start) = (words(a), words(b), words(c));
+    let extra: Vec<[u32; 2]> = words(rest).chunks_exact(2).map(|c| [c[0], c[1]]).collect();
     if extra_start[0] != 0
         || extra_start.windows(2).any(|w| w[0] > w[1])
         || extra_start[nodes] as usize != n_extra
@@ -230,15 +248,15 @@ pub fn load(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> Res
     {
         return Err(bad("a link points past the last node"));
     }
-    let etendue = super::node_etendue(&space, links, extra_start, &extra);
+    let etendue = super::node_etendue(&space, &links, &extra_start, &extra);
     Ok(Network {
         params,
         space,
         patches,
         node_of_key,
-        key_of_node: key_of_node.to_vec(),
-        links: links.to_vec(),
-        extra_start: extra_start.to_vec(),
+        key_of_node,
+        links,
+        extra_start,
         extra,
         etendue,
         stats,
