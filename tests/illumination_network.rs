@@ -236,6 +236,7 @@ fn scan_and_embree_builders_agree() {
     };
     let differ = (a.len() + b.len() - 2 * common) as f64 / a.len() as f64;
     assert!(a.len() > 50_000, "{} link ends", a.len());
+    eprintln!("{:.4}% of {} link ends differ", 100.0 * differ, a.len());
     assert!(differ < 0.002, "{:.4}% of link ends differ", 100.0 * differ);
 }
 
