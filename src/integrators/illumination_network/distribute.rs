@@ -83,6 +83,9 @@ pub struct Solution {
     pub dir_index: Vec<u32>,
     /// Reflected directional radiance per slot, one row of `slots` per directional node.
     pub directional: Vec<Rgb>,
+    /// Radiance that arrived over each slot, one row per directional node (the in-buffers
+    /// accumulated over the sweeps), for rendering.
+    pub incoming: Vec<Rgb>,
     pub stats: DistributeStats,
     /// The emission multiplier the solution was computed with.
     pub light_scale: f32,
@@ -144,7 +147,7 @@ pub fn surfaces(net: &Network, scene: &Scene, light_scale: f32) -> Vec<Surface> 
 
 /// Candidate slots around direction `dir` (unit): every slot within `radius` grid steps of
 /// `dir`'s slope coordinates in each family whose slope range it is near.
-fn candidates(space: &RaySpace, dir: Vec3, radius: i64, out: &mut Vec<u32>) {
+pub(crate) fn candidates(space: &RaySpace, dir: Vec3, radius: i64, out: &mut Vec<u32>) {
     out.clear();
     let s = space.slopes as i64;
     let margin = (radius + 1) as f32 * space.slope_step();
@@ -236,7 +239,7 @@ fn lobe_row(
 }
 
 /// The local-frame vector with cosine `c` to the normal (for the isotropic GGX terms).
-fn local(c: f32) -> Vec3 {
+pub(crate) fn local(c: f32) -> Vec3 {
     Vec3::new((1.0 - c * c).max(0.0).sqrt(), 0.0, c)
 }
 
@@ -251,14 +254,35 @@ fn maps(net: &Network, node: u32, surface: &Surface, twin: u32) -> (SparseMap, S
         ..SparseMap::default()
     };
     let mut transmit = reflect.clone();
+    // A lobe narrower than the slot spacing cannot be sampled by the slots: it is a mirror
+    // (or clear transmission) at this resolution.
+    let sharp = 0.5 * space.slope_step();
     for l in 0..row.len() as u32 {
         // Light arrives only over real links.
         if row[l as usize] < ESCAPE {
             let wi = space.direction_towards(l, n);
             if surface.ks.max_element() > 0.0 {
                 let r = 2.0 * n.dot(wi) * n - wi;
-                if surface.alpha <= 0.0 {
-                    if let Some(o) = nearest_linked(space, row, r, &mut buf) {
+                if surface.alpha <= sharp {
+                    // The linked slots among the four bounding the mirror direction, with
+                    // bilinear weights (so reflections move smoothly with the direction),
+                    // else the nearest linked slot.
+                    let start = reflect.entries.len();
+                    let mut sum = 0.0;
+                    for (o, wgt) in space.bounding_slots(r) {
+                        if row[o as usize] != NONE && wgt > 0.0 {
+                            match reflect.entries[start..].iter_mut().find(|e| e.0 == o) {
+                                Some(e) => e.1 += wgt,
+                                None => reflect.entries.push((o, wgt)),
+                            }
+                            sum += wgt;
+                        }
+                    }
+                    if sum > 0.0 {
+                        for e in &mut reflect.entries[start..] {
+                            e.1 /= sum;
+                        }
+                    } else if let Some(o) = nearest_linked(space, row, r, &mut buf) {
                         reflect.entries.push((o, 1.0));
                     }
                 } else {
@@ -289,7 +313,7 @@ fn maps(net: &Network, node: u32, surface: &Surface, twin: u32) -> (SparseMap, S
             if surface.kt.max_element() > 0.0 && twin != NONE {
                 let trow = net.row(twin);
                 let through = -wi;
-                if surface.alpha <= 0.0 {
+                if surface.alpha <= sharp {
                     let o = if trow[l as usize] != NONE {
                         Some(l)
                     } else {
@@ -373,6 +397,7 @@ pub fn distribute(net: &Network, scene: &Scene, options: &DistributeOptions) -> 
     let mut in_buf = vec![Rgb::ZERO; dir_nodes.len() * slots];
     let mut diffuse = vec![Rgb::ZERO; nodes];
     let mut directional = vec![Rgb::ZERO; dir_nodes.len() * slots];
+    let mut incoming = vec![Rgb::ZERO; dir_nodes.len() * slots];
     let mut stats = DistributeStats {
         map_entries,
         ..DistributeStats::default()
@@ -493,6 +518,28 @@ pub fn distribute(net: &Network, scene: &Scene, options: &DistributeOptions) -> 
                     }
                 }
             });
+        incoming
+            .par_chunks_mut(slots)
+            .zip(in_buf.par_chunks(slots))
+            .zip(&dir_nodes)
+            .for_each(|((acc, flux), &i)| {
+                // Extra links are in slot order: a slot with m links had m times the étendue.
+                let mut runs = net
+                    .extra_links(i)
+                    .chunk_by(|a, b| a[0] == b[0])
+                    .map(|r| (r[0][0] as usize, r.len() + 1))
+                    .peekable();
+                for (l, (a, f)) in acc.iter_mut().zip(flux).enumerate() {
+                    let mut m = 1.0;
+                    if let Some(&(rl, c)) = runs.peek() {
+                        if rl == l {
+                            m = c as f32;
+                            runs.next();
+                        }
+                    }
+                    *a += *f / (w[l] * m);
+                }
+            });
         let arrived = sum3(&in_total, |_| 1.0);
         let esc = sum3(&escaped, |_| 1.0);
         // Reflect: the diffuse bypass, then the directional maps.
@@ -549,6 +596,7 @@ pub fn distribute(net: &Network, scene: &Scene, options: &DistributeOptions) -> 
         diffuse,
         dir_index,
         directional,
+        incoming,
         stats,
         light_scale: options.light_scale,
     }
@@ -570,7 +618,8 @@ fn apply(map: &SparseMap, input: &[Rgb], k: Rgb, out: &mut [Rgb]) {
 impl Solution {
     /// Memory of the buffers (bytes).
     pub fn memory(&self) -> usize {
-        std::mem::size_of::<Rgb>() * (self.diffuse.len() + self.directional.len())
+        std::mem::size_of::<Rgb>()
+            * (self.diffuse.len() + self.directional.len() + self.incoming.len())
             + 4 * self.dir_index.len()
             + std::mem::size_of::<Surface>() * self.surfaces.len()
     }

@@ -215,6 +215,32 @@ impl RaySpace {
         self.slot(f, k(su), k(sv))
     }
 
+    /// The four slots bounding direction `d` (either orientation) in slope space, with
+    /// bilinear weights (figure 6 a); clamped at the edges of `d`'s family.
+    pub fn bounding_slots(&self, d: Vec3) -> [(u32, f32); 4] {
+        let (f, su, sv) = self.slopes_of(d);
+        let (x, y) = (self.slope_coord(su), self.slope_coord(sv));
+        let last = self.slopes as i32 - 1;
+        let (x0, y0) = (x.floor() as i32, y.floor() as i32);
+        let (fx, fy) = (
+            (x - x0 as f32).clamp(0.0, 1.0),
+            (y - y0 as f32).clamp(0.0, 1.0),
+        );
+        let at = |dx: i32, dy: i32| {
+            self.slot(
+                f,
+                (x0 + dx).clamp(0, last) as u32,
+                (y0 + dy).clamp(0, last) as u32,
+            )
+        };
+        [
+            (at(0, 0), (1.0 - fx) * (1.0 - fy)),
+            (at(1, 0), fx * (1.0 - fy)),
+            (at(0, 1), (1.0 - fx) * fy),
+            (at(1, 1), fx * fy),
+        ]
+    }
+
     /// The jitter of a line's intercept, in [−½, ½)² times `amount`·h: a hash of the seed and
     /// the line, so both builders (and any thread) see the same lines.
     #[inline]

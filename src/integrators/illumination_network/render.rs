@@ -5,15 +5,16 @@
 //! - the diffuse out-buffer, bilinearly interpolated: each corner of the hit patch takes the
 //!   average of the (up to four) patches sharing it, and the hit point interpolates the four
 //!   corners (figure 6 b, c);
-//! - for directional patches, the out-buffers of the four slots bounding the eye direction,
-//!   bilinearly interpolated in slope space (figure 6 a), for every patch of the
-//!   8-neighbourhood before the spatial interpolation.
+//! - for directional patches, the radiance that arrived over the links around the mirror
+//!   direction of the eye (bilinearly over the four bounding slots, figure 6 a, or under the
+//!   glossy lobe), for every patch of the 8-neighbourhood before the spatial interpolation.
 //!
 //! Patches without a node on the side seen (no line reached them) are left out of the
 //! averages. The image is a pure function of the network, its solution and the camera.
 
-use super::distribute::Solution;
-use super::{Network, NONE};
+use super::distribute::{candidates, local, Solution};
+use super::{Network, ESCAPE, NONE};
+use crate::bsdf::Ggx;
 use crate::integrators::{Context, Integrator, RayStats, Sample};
 use crate::math::{Ray, Rgb, Rng, Vec3};
 
@@ -24,6 +25,14 @@ pub struct NetworkRenderer<'a> {
 
 impl NetworkRenderer<'_> {
     /// The reflected radiance of a node toward unit direction `wo` (leaving the node).
+    ///
+    /// Directional parts are *gathered* from the radiance that arrived over the node's
+    /// links: a mirror takes the incoming radiance at the reflected direction, interpolated
+    /// over the linked slots among the four bounding it; a glossy lobe averages the incoming
+    /// radiance of the linked slots under the lobe, weighted by lobe × étendue; transmission
+    /// does the same with the other side's incoming radiance around −wo. Reading the
+    /// out-buffer of the eye's slot instead (the paper) shows which slots of each small patch
+    /// happen to have links, a blotchy pattern; the gather only averages over them.
     fn node_radiance(&self, node: u32, wo: Vec3) -> Rgb {
         let sol = self.solution;
         let mut r = sol.diffuse[node as usize];
@@ -31,32 +40,93 @@ impl NetworkRenderer<'_> {
         if k == NONE {
             return r;
         }
-        let space = &self.net.space;
-        let slots = self.net.slots();
-        let row = &sol.directional[k as usize * slots..(k as usize + 1) * slots];
-        let links = self.net.row(node);
-        let (f, su, sv) = space.slopes_of(wo);
-        let (x, y) = (space.slope_coord(su), space.slope_coord(sv));
-        let s = space.slopes as i32 - 1;
-        let (x0, y0) = (x.floor() as i32, y.floor() as i32);
-        let (fx, fy) = (x - x0 as f32, y - y0 as f32);
+        let net = self.net;
+        let sfc = &sol.surfaces[node as usize];
+        let n = net.node_normal(node);
+        if sfc.ks.max_element() > 0.0 {
+            let refl = 2.0 * n.dot(wo) * n - wo;
+            r += sfc.ks
+                * self.gather(node, k, refl, sfc.alpha, |wi| {
+                    let ggx = Ggx {
+                        alpha: sfc.alpha.max(1e-3),
+                    };
+                    let (ci, co) = (n.dot(wi), n.dot(wo));
+                    if ci <= 0.0 || co <= 0.0 {
+                        return 0.0;
+                    }
+                    let h = (wi + wo).normalize();
+                    ggx.d(local(n.dot(h))) * ggx.g(local(co), local(ci)) / (4.0 * ci * co)
+                });
+        }
+        if sfc.kt.max_element() > 0.0 {
+            let key = net.key_of_node[node as usize];
+            let twin = net.node_of_key[(key ^ 1) as usize];
+            if twin != NONE && sol.dir_index[twin as usize] != NONE {
+                let sigma2 = (sfc.alpha * sfc.alpha).max(1e-12);
+                let through = -wo;
+                r += sfc.kt
+                    * self.gather(
+                        twin,
+                        sol.dir_index[twin as usize],
+                        through,
+                        sfc.alpha,
+                        |wi| {
+                            let c = wi.dot(through).clamp(-1.0, 1.0);
+                            let th = c.acos();
+                            (-0.5 * th * th / sigma2).exp()
+                        },
+                    );
+            }
+        }
+        r
+    }
+
+    /// Incoming radiance of directional node `node` (row `k`) around direction `centre`
+    /// (pointing away from the node), as seen through a lobe of width `alpha`.
+    fn gather(
+        &self,
+        node: u32,
+        k: u32,
+        centre: Vec3,
+        alpha: f32,
+        lobe: impl Fn(Vec3) -> f32,
+    ) -> Rgb {
+        let net = self.net;
+        let space = &net.space;
+        let slots = net.slots();
+        let row = &self.solution.incoming[k as usize * slots..(k as usize + 1) * slots];
+        let links = net.row(node);
+        let n = net.node_normal(node);
         let mut sum = Rgb::ZERO;
         let mut wsum = 0.0;
-        for (dx, wx) in [(0, 1.0 - fx), (1, fx)] {
-            for (dy, wy) in [(0, 1.0 - fy), (1, fy)] {
-                let (ku, kv) = ((x0 + dx).clamp(0, s) as u32, (y0 + dy).clamp(0, s) as u32);
-                let l = space.slot(f, ku, kv) as usize;
-                let wgt = wx * wy;
-                if links[l] != NONE && wgt > 0.0 {
-                    sum += row[l] * wgt;
+        if alpha <= 0.5 * space.slope_step() {
+            for (l, wgt) in space.bounding_slots(centre) {
+                if links[l as usize] < ESCAPE && wgt > 0.0 {
+                    sum += row[l as usize] * wgt;
                     wsum += wgt;
+                }
+            }
+        } else {
+            let radius = ((3.0 * alpha * space.slopes as f32 / 2.0).ceil() as i64 + 1)
+                .min(space.slopes as i64);
+            let mut buf = Vec::new();
+            candidates(space, centre, radius, &mut buf);
+            for l in buf {
+                if links[l as usize] < ESCAPE {
+                    let wi = space.direction_towards(l, n);
+                    let wgt = lobe(wi) * space.etendue(l);
+                    if wgt > 0.0 && wgt.is_finite() {
+                        sum += row[l as usize] * wgt;
+                        wsum += wgt;
+                    }
                 }
             }
         }
         if wsum > 0.0 {
-            r += sum / wsum;
+            sum / wsum
+        } else {
+            Rgb::ZERO
         }
-        r
     }
 
     /// Reflected radiance toward the eye at unit-space point `p` of polygon `poly`, side
