@@ -235,6 +235,10 @@ struct NetworkArgs {
     /// Network: print patches, links, intersections, memory and timings.
     #[arg(long)]
     stats: bool,
+    /// Network: compute direct light per pixel (a light sample and a shadow ray) and take only
+    /// the indirect light from the network.
+    #[arg(long)]
+    network_hybrid: bool,
 }
 
 /// The exit code of a failed run: 2 for bad input or options, 1 for the rest.
@@ -535,6 +539,7 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
                 let renderer = net::render::NetworkRenderer {
                     net: &network,
                     solution: &solution,
+                    hybrid: args.network.network_hybrid,
                 };
                 metadata.push((
                     "raylink:sampling".into(),

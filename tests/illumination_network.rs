@@ -349,7 +349,7 @@ fn cornell() -> Scene {
     Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml")).unwrap()
 }
 
-fn network_image(scene: &Scene, p: NetworkParams, size: u32) -> Image {
+fn network_image(scene: &Scene, p: NetworkParams, size: u32, hybrid: bool) -> Image {
     let accel = accel::build(scene, Backend::Embree).unwrap();
     let ctx = Context::new(scene, accel.as_ref());
     let net = Network::build(scene, &ctx, p, Builder::Scan).unwrap();
@@ -357,11 +357,15 @@ fn network_image(scene: &Scene, p: NetworkParams, size: u32) -> Image {
     let renderer = NetworkRenderer {
         net: &net,
         solution: &sol,
+        hybrid,
     };
     let options = RenderOptions {
         width: size,
         height: size,
-        sampling: PixelSampling::Uniform { n: 2 },
+        // The hybrid mode samples the lights: more samples per pixel.
+        sampling: PixelSampling::Uniform {
+            n: if hybrid { 4 } else { 2 },
+        },
         threads: None,
         seed: 1,
         progress: false,
@@ -369,8 +373,9 @@ fn network_image(scene: &Scene, p: NetworkParams, size: u32) -> Image {
     render(&ctx, &renderer, &options).unwrap().0
 }
 
-/// The Cornell box against the path tracer: the relative RMSE of 8×8-pixel block means
-/// (the light excluded) is below 25% at a coarse network and shrinks at a finer one.
+/// The Cornell box against the path tracer: the relative RMSE of 4×4-pixel block means
+/// (the light excluded) is below 25% at a coarse network, shrinks at a finer one, and shrinks
+/// more with the hybrid mode (direct light per pixel) on the coarse network.
 #[test]
 fn cornell_box_approaches_the_path_tracer() {
     let scene = cornell();
@@ -408,15 +413,18 @@ fn cornell_box_approaches_the_path_tracer() {
     };
     let reference = masked(&full);
     let scale = mean(&reference, None).element_sum() as f64 / 3.0;
-    let error = |p: NetworkParams| {
-        let img = masked(&network_image(&scene, p, size));
+    let error = |p: NetworkParams, hybrid: bool| {
+        let img = masked(&network_image(&scene, p, size, hybrid));
         rmse(&img, &reference, None) / scale
     };
-    let coarse = error(params(6, 1.0 / 16.0));
-    let fine = error(params(12, 1.0 / 32.0));
-    eprintln!("relative RMSE: coarse {coarse:.4}, fine {fine:.4}");
+    let coarse = error(params(6, 1.0 / 16.0), false);
+    let fine = error(params(12, 1.0 / 32.0), false);
+    let hybrid = error(params(6, 1.0 / 16.0), true);
+    eprintln!("relative RMSE: coarse {coarse:.4}, fine {fine:.4}, coarse hybrid {hybrid:.4}");
     assert!(coarse < 0.25, "coarse network: {coarse}");
     assert!(fine < 0.8 * coarse, "fine {fine} vs coarse {coarse}");
+    // Direct light per pixel removes the coarse network's blurred shadows.
+    assert!(hybrid < 0.6 * coarse, "hybrid {hybrid} vs coarse {coarse}");
 }
 
 fn tmp_path(dir: &tempfile::TempDir, name: &str) -> String {

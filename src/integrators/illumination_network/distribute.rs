@@ -79,6 +79,9 @@ pub struct Solution {
     pub surfaces: Vec<Surface>,
     /// Reflected radiance of each node's diffuse part (every slot).
     pub diffuse: Vec<Rgb>,
+    /// The part of `diffuse` reflected from light that came straight from the emitters (the
+    /// first sweep), for the hybrid rendering.
+    pub direct: Vec<Rgb>,
     /// For directional nodes: index into `directional` rows, else [`NONE`].
     pub dir_index: Vec<u32>,
     /// Reflected directional radiance per slot, one row of `slots` per directional node.
@@ -396,6 +399,7 @@ pub fn distribute(net: &Network, scene: &Scene, options: &DistributeOptions) -> 
     let mut shot_dir = vec![Rgb::ZERO; dir_nodes.len() * slots];
     let mut in_buf = vec![Rgb::ZERO; dir_nodes.len() * slots];
     let mut diffuse = vec![Rgb::ZERO; nodes];
+    let mut direct = vec![Rgb::ZERO; nodes];
     let mut directional = vec![Rgb::ZERO; dir_nodes.len() * slots];
     let mut incoming = vec![Rgb::ZERO; dir_nodes.len() * slots];
     let mut stats = DistributeStats {
@@ -587,6 +591,9 @@ pub fn distribute(net: &Network, scene: &Scene, options: &DistributeOptions) -> 
             stats.absorbed[c] += arrived[c] - next[c];
         }
         unshot = next;
+        if stats.sweeps == 0 {
+            direct.copy_from_slice(&shot_d);
+        }
         stats.sweeps += 1;
     }
     stats.unshot = unshot;
@@ -594,6 +601,7 @@ pub fn distribute(net: &Network, scene: &Scene, options: &DistributeOptions) -> 
     Solution {
         surfaces,
         diffuse,
+        direct,
         dir_index,
         directional,
         incoming,
@@ -619,7 +627,10 @@ impl Solution {
     /// Memory of the buffers (bytes).
     pub fn memory(&self) -> usize {
         std::mem::size_of::<Rgb>()
-            * (self.diffuse.len() + self.directional.len() + self.incoming.len())
+            * (self.diffuse.len()
+                + self.direct.len()
+                + self.directional.len()
+                + self.incoming.len())
             + 4 * self.dir_index.len()
             + std::mem::size_of::<Surface>() * self.surfaces.len()
     }

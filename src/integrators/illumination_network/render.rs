@@ -16,11 +16,16 @@ use super::distribute::{candidates, local, Solution};
 use super::{Network, ESCAPE, NONE};
 use crate::bsdf::Ggx;
 use crate::integrators::{Context, Integrator, RayStats, Sample};
-use crate::math::{Ray, Rgb, Rng, Vec3};
+use crate::math::{offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
+use crate::scene::SurfacePoint;
+use std::f32::consts::FRAC_1_PI;
 
 pub struct NetworkRenderer<'a> {
     pub net: &'a Network,
     pub solution: &'a Solution,
+    /// Hybrid mode: the diffuse reflection of light coming straight from the emitters is
+    /// computed per pixel with a light sample and a shadow ray; the network gives the rest.
+    pub hybrid: bool,
 }
 
 impl NetworkRenderer<'_> {
@@ -36,6 +41,9 @@ impl NetworkRenderer<'_> {
     fn node_radiance(&self, node: u32, wo: Vec3) -> Rgb {
         let sol = self.solution;
         let mut r = sol.diffuse[node as usize];
+        if self.hybrid {
+            r -= sol.direct[node as usize];
+        }
         let k = sol.dir_index[node as usize];
         if k == NONE {
             return r;
@@ -189,7 +197,7 @@ impl NetworkRenderer<'_> {
 }
 
 impl Integrator for NetworkRenderer<'_> {
-    fn radiance(&self, ctx: &Context, ray: &Ray, _rng: &mut Rng, stats: &mut RayStats) -> Sample {
+    fn radiance(&self, ctx: &Context, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Sample {
         let Some(hit) = ctx.intersect_hit(ray, stats) else {
             return Sample {
                 radiance: ctx.lights.background_radiance(ray.dir),
@@ -208,6 +216,9 @@ impl Integrator for NetworkRenderer<'_> {
                 radiance += m.emission * self.light_scale();
             }
             radiance += self.radiance_at(poly, p, side, wo);
+            if self.hybrid {
+                radiance += direct_diffuse(ctx, ray, &hit, rng, stats);
+            }
         }
         Sample {
             radiance,
@@ -221,4 +232,45 @@ impl NetworkRenderer<'_> {
     fn light_scale(&self) -> f32 {
         self.solution.light_scale
     }
+}
+
+/// The diffuse reflection of direct light at a hit: one light sample, one shadow ray
+/// (kd/π · Le · cosθ / pdf), with kd scaled as the network scales it (kd + ks + kt ≤ 1).
+fn direct_diffuse(
+    ctx: &Context,
+    ray: &Ray,
+    hit: &crate::accel::Hit,
+    rng: &mut Rng,
+    stats: &mut RayStats,
+) -> Rgb {
+    let sp = SurfacePoint::from_hit(&ctx.scene.shapes, ray, hit);
+    let m = &ctx.scene.materials[sp.material];
+    let mut kd = m.diffuse.eval(sp.p, sp.uv);
+    let total = kd + m.specular + m.transmission;
+    for c in 0..3 {
+        if total[c] > 1.0 {
+            kd[c] /= total[c];
+        }
+    }
+    if kd == Rgb::ZERO {
+        return Rgb::ZERO;
+    }
+    let (u, v, w) = (rng.uniform(), rng.uniform(), rng.uniform());
+    let Some(ls) = ctx.lights.sample_li(sp.p, u, Vec2::new(v, w)) else {
+        return Rgb::ZERO;
+    };
+    let n = if sp.ng.dot(ray.dir) < 0.0 {
+        sp.ng
+    } else {
+        -sp.ng
+    };
+    let cos = n.dot(ls.wi);
+    if cos <= 0.0 || ls.pdf <= 0.0 {
+        return Rgb::ZERO;
+    }
+    let shadow = Ray::segment(offset_origin(sp.p, n, ls.wi), ls.p);
+    if ctx.occluded(&shadow, stats) {
+        return Rgb::ZERO;
+    }
+    kd * FRAC_1_PI * ls.radiance * (cos / ls.pdf)
 }
