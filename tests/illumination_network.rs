@@ -558,3 +558,60 @@ fn network_is_independent_of_thread_count() {
     let sol2 = distribute(&two, &scene, &DistributeOptions::default());
     assert_eq!(sol1.diffuse, sol2.diffuse);
 }
+
+/// Two rooms of the unit cube split by a panel at x = ½, lit in the left room: an opaque
+/// panel leaves the right room exactly dark (no link crosses a surface); a clear or frosted
+/// panel (kt = 0.5) lights it, and energy balances (emitted = absorbed + unshot, nothing
+/// escapes).
+#[test]
+fn transmission_carries_light_through_a_panel() {
+    for panel in [
+        "diffuse = 0.5",
+        "diffuse = 0.2\ntransmission = 0.5",
+        "diffuse = 0.2\ntransmission = 0.5\nroughness = 0.3",
+    ] {
+        let mut text = format!(
+            "{CAMERA}\n[materials.m]\ndiffuse = 0.5\n[materials.panel]\n{panel}\n\
+             [materials.lamp]\ndiffuse = 0\nemission = 5\n"
+        );
+        for axis in 0..3 {
+            for side in [0.0, 1.0] {
+                text += &wall(axis, side, "m");
+            }
+        }
+        text += "[[shapes]]\ntype = \"quad\"\nmaterial = \"panel\"\nvertices = [[0.5, 0, 0], [0.5, 1, 0], [0.5, 1, 1], [0.5, 0, 1]]\n";
+        text += "[[shapes]]\ntype = \"quad\"\nmaterial = \"lamp\"\nvertices = [[0.1, 0.02, 0.4], [0.1, 0.02, 0.6], [0.3, 0.02, 0.6], [0.3, 0.02, 0.4]]\n";
+        let s = scene(&text);
+        let net = build(&s, params(6, 1.0 / 16.0), Builder::Scan);
+        let sol = distribute(&net, &s, &DistributeOptions::default());
+        let st = &sol.stats;
+        for c in 0..3 {
+            assert_eq!(st.escaped[c], 0.0);
+            let balance = st.emitted[c] - st.absorbed[c] - st.unshot[c];
+            assert!(balance.abs() < 1e-4 * st.emitted[c], "{panel}: {balance}");
+        }
+        // Light reflected by the surfaces of the right room (x > ½, the panel excluded).
+        let mut right = 0.0;
+        for node in 0..net.nodes() as u32 {
+            let (poly, cell, _) = net.node_place(node);
+            let pg = &net.patches.polygons[poly as usize];
+            let local = cell - pg.first_cell;
+            let centre = pg.o
+                + pg.e1 * ((local / pg.nt) as f32 + 0.5) / pg.ns as f32
+                + pg.e2 * ((local % pg.nt) as f32 + 0.5) / pg.nt as f32;
+            let centre = net.space.to_world(centre);
+            if centre.x > 0.55 {
+                right += sol.diffuse[node as usize].x as f64 * net.etendue[node as usize] as f64;
+            }
+        }
+        eprintln!(
+            "{panel:?}: right room {:.4} of emitted",
+            right / st.emitted[0]
+        );
+        if panel.contains("transmission") {
+            assert!(right > 0.05 * st.emitted[0], "{panel}: {right}");
+        } else {
+            assert_eq!(right, 0.0, "light leaked through an opaque panel");
+        }
+    }
+}
