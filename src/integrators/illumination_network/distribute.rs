@@ -116,13 +116,8 @@ pub fn surfaces(net: &Network, scene: &Scene, light_scale: f32) -> Vec<Surface> 
             let (poly, cell, side) = net.node_place(node);
             let pg = &net.patches.polygons[poly as usize];
             let m = &scene.materials[scene.shapes[pg.shape as usize].material];
-            let local = cell - pg.first_cell;
-            let (i, j) = (local / pg.nt, local % pg.nt);
-            let (s, t) = (
-                (i as f32 + 0.5) / pg.ns as f32,
-                (j as f32 + 0.5) / pg.nt as f32,
-            );
-            let p = net.space.to_world(pg.o + s * pg.e1 + t * pg.e2);
+            let (s, t) = pg.cell_centre(cell);
+            let p = net.space.to_world(pg.point(s, t));
             let kd = m.diffuse.eval(p, Vec2::new(s, t));
             let (mut kd, mut ks, mut kt) = (kd, m.specular, m.transmission);
             let total = kd + ks + kt;

@@ -181,6 +181,15 @@ impl Network {
         let bounds = scene.bounds().ok_or("the scene has no shapes")?;
         let space = RaySpace::new(params.slopes, params.step, bounds);
         let patches = Patches::new(scene, &space, params.patch_size)?;
+        if builder == Builder::Scan {
+            if let Some(p) = patches.polygons.iter().find(|p| p.sphere.is_some()) {
+                return Err(format!(
+                    "shape {} is a sphere: the scan converter projects polygons only; use \
+                     --network-builder embree",
+                    p.shape
+                ));
+            }
+        }
         let t = Instant::now();
         let (slots, rays) = preprocess::build_links(
             (builder == Builder::Embree).then_some(ctx),
@@ -355,8 +364,10 @@ impl Network {
 
     /// The outward unit normal of a node's side.
     pub fn node_normal(&self, node: u32) -> crate::math::Vec3 {
-        let (poly, _, side) = self.node_place(node);
-        let n = self.patches.polygons[poly as usize].n;
+        let (poly, cell, side) = self.node_place(node);
+        let pg = &self.patches.polygons[poly as usize];
+        let (s, t) = pg.cell_centre(cell);
+        let n = pg.normal_at(pg.point(s, t));
         if side == 0 {
             n
         } else {

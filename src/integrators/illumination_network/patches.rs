@@ -27,6 +27,9 @@ pub struct Polygon {
     pub d1: Vec3,
     pub d2: Vec3,
     pub triangle: bool,
+    /// A sphere (unit-cube centre and radius): cells over (φ/2π, θ/π), the normal radial;
+    /// only the Embree builder can find its links.
+    pub sphere: Option<(Vec3, f32)>,
     pub ns: u32,
     pub nt: u32,
     /// Index of the polygon's first cell; cell (i, j) is first_cell + i·nt + j.
@@ -58,6 +61,7 @@ impl Polygon {
             d1,
             d2,
             triangle,
+            sphere: None,
             ns: cells(e1),
             nt: cells(e2),
             first_cell: first,
@@ -68,11 +72,68 @@ impl Polygon {
         self.ns * self.nt
     }
 
-    /// (s, t) of a point of the polygon's plane.
+    /// A sphere's cells: a lat-long grid with edges of about `patch_size`.
+    fn sphere(shape: u32, centre: Vec3, radius: f32, patch_size: f32, first: u32) -> Self {
+        let cells = |l: f32| ((l / patch_size).ceil() as u32).clamp(1, 1 << 12);
+        Polygon {
+            shape,
+            corners: Vec::new(),
+            o: centre,
+            e1: Vec3::ZERO,
+            e2: Vec3::ZERO,
+            n: Vec3::ZERO,
+            d1: Vec3::ZERO,
+            d2: Vec3::ZERO,
+            triangle: false,
+            sphere: Some((centre, radius)),
+            ns: cells(std::f32::consts::TAU * radius),
+            nt: cells(std::f32::consts::PI * radius),
+            first_cell: first,
+        }
+    }
+
+    /// (s, t) of a point of the polygon's plane (of a sphere: φ/2π, θ/π).
     #[inline]
     pub fn st(&self, p: Vec3) -> (f32, f32) {
+        if let Some((c, _)) = self.sphere {
+            let d = (p - c).normalize_or_zero();
+            let phi = d.z.atan2(d.x).rem_euclid(std::f32::consts::TAU);
+            let theta = d.y.clamp(-1.0, 1.0).acos();
+            return (phi / std::f32::consts::TAU, theta / std::f32::consts::PI);
+        }
         let q = p - self.o;
         (self.d1.dot(q), self.d2.dot(q))
+    }
+
+    /// The point at (s, t).
+    pub fn point(&self, s: f32, t: f32) -> Vec3 {
+        if let Some((c, r)) = self.sphere {
+            let (phi, theta) = (s * std::f32::consts::TAU, t * std::f32::consts::PI);
+            return c + r * Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                theta.sin() * phi.sin(),
+            );
+        }
+        self.o + s * self.e1 + t * self.e2
+    }
+
+    /// The front normal at a point of the surface.
+    #[inline]
+    pub fn normal_at(&self, p: Vec3) -> Vec3 {
+        match self.sphere {
+            Some((c, _)) => (p - c).normalize_or_zero(),
+            None => self.n,
+        }
+    }
+
+    /// The centre of a cell, (s, t).
+    pub fn cell_centre(&self, cell: u32) -> (f32, f32) {
+        let local = cell - self.first_cell;
+        (
+            ((local / self.nt) as f32 + 0.5) / self.ns as f32,
+            ((local % self.nt) as f32 + 0.5) / self.nt as f32,
+        )
     }
 
     /// The cell containing (s, t), clamped into the grid.
@@ -85,6 +146,9 @@ impl Polygon {
 
     /// Area of the polygon (unit-cube units).
     pub fn area(&self) -> f32 {
+        if let Some((_, r)) = self.sphere {
+            return 4.0 * std::f32::consts::PI * r * r;
+        }
         let a = self.e1.cross(self.e2).length();
         if self.triangle {
             0.5 * a
@@ -127,26 +191,29 @@ fn merge(t0: [u32; 3], t1: [u32; 3]) -> Option<[u32; 4]> {
 }
 
 impl Patches {
-    /// Cuts the scene's polygons into patches. Spheres have no polygons: an error names the
-    /// first one.
+    /// Cuts the scene's polygons (and spheres) into patches.
     pub fn new(scene: &Scene, space: &RaySpace, patch_size: f32) -> Result<Patches, String> {
         let mut polygons = Vec::new();
         let mut prim_polygon = Vec::new();
-        let mut first = 0u32;
-        let mut push = |polygons: &mut Vec<Polygon>, shape, corners: Vec<Vec3>, tri| {
-            let p = Polygon::new(shape, corners, tri, patch_size, first);
-            first += p.cells();
-            polygons.push(p);
+        // Cells are numbered once every polygon exists.
+        let push = |polygons: &mut Vec<Polygon>, shape, corners: Vec<Vec3>, tri| {
+            polygons.push(Polygon::new(shape, corners, tri, patch_size, 0));
             polygons.len() as u32 - 1
         };
         for (si, shape) in scene.shapes.iter().enumerate() {
             let si = si as u32;
             let mut map = Vec::new();
             match &shape.geometry {
-                Geometry::Sphere { .. } => {
-                    return Err(format!(
-                        "shape {si} is a sphere: illumination networks are built from polygons"
-                    ))
+                Geometry::Sphere { center, radius } => {
+                    let p = Polygon::sphere(
+                        si,
+                        space.to_unit(*center),
+                        radius / space.scale,
+                        patch_size,
+                        0,
+                    );
+                    polygons.push(p);
+                    map.push(polygons.len() as u32 - 1);
                 }
                 Geometry::Triangles(m) => {
                     let pos = |i: u32| space.to_unit(m.positions[i as usize]);
@@ -183,10 +250,15 @@ impl Patches {
             prim_polygon.push(map);
         }
         // Degenerate polygons (zero area) take part in nothing.
-        for p in &mut polygons {
+        for p in polygons.iter_mut().filter(|p| p.sphere.is_none()) {
             if !p.n.is_finite() || p.n == Vec3::ZERO {
                 p.n = Vec3::ZERO;
             }
+        }
+        let mut first = 0u32;
+        for p in &mut polygons {
+            p.first_cell = first;
+            first += p.cells();
         }
         Ok(Patches {
             polygons,

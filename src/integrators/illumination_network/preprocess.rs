@@ -202,7 +202,7 @@ pub fn scan_polygon(
 fn side_key(pg: &Polygon, p: Vec3, d: Vec3) -> u32 {
     let (s, t) = pg.st(p);
     let cell = pg.cell_at(s, t);
-    cell * 2 + u32::from(pg.n.dot(d) <= 0.0)
+    cell * 2 + u32::from(pg.normal_at(p).dot(d) <= 0.0)
 }
 
 /// The scan-conversion hits of one slot.
@@ -292,7 +292,7 @@ pub fn cast_slot(
                 let p = space.to_unit(pw);
                 if let Some((poly, _)) = patches.locate(hit.geom_id, hit.prim_id, p) {
                     let pg = &patches.polygons[poly as usize];
-                    if pg.n != Vec3::ZERO {
+                    if pg.n != Vec3::ZERO || pg.sphere.is_some() {
                         hits.push(LineHit {
                             line,
                             depth: p[a],

@@ -210,7 +210,7 @@ impl Integrator for NetworkRenderer<'_> {
         let mut radiance = Rgb::ZERO;
         if let Some((poly, _)) = net.patches.locate(hit.geom_id, hit.prim_id, p) {
             let pg = &net.patches.polygons[poly as usize];
-            let side = u32::from(pg.n.dot(wo) < 0.0);
+            let side = u32::from(pg.normal_at(p).dot(wo) < 0.0);
             let m = &ctx.scene.materials[ctx.scene.shapes[hit.geom_id as usize].material];
             if side == 0 {
                 radiance += m.emission * self.light_scale();
