@@ -4,8 +4,9 @@
 //! **Reflectance.** Each node's reflectance maps incoming links to outgoing links:
 //! - diffuse kd: the paper's bypass: incoming flux is summed into one accumulator and leaves
 //!   as the same radiance kd·Φ/W on every slot (flux ∝ w);
-//! - specular ks, roughness 0 (mirror): the slot nearest the reflected direction among the
-//!   node's linked or escaping slots;
+//! - specular ks, roughness below half a slope step (mirror at this resolution): the
+//!   reflected direction split bilinearly over the linked (or escaping) ones of its four
+//!   bounding slots, else the nearest linked slot;
 //! - specular ks, roughness α (glossy): a GGX lobe D·G/(4 cosθi cosθo) times the étendue of
 //!   the outgoing slot, over the slots near the reflected direction, normalised;
 //! - transmission kt: the identity onto the other side of the patch (the same line continues),
@@ -20,7 +21,8 @@
 //! previous sweep over its links (links are symmetric, so gathering over a node's own row is
 //! the scatter of its neighbours), then passes it through its reflectance. Each sweep is
 //! parallel over nodes and independent of the thread count. Sweep k carries exactly the
-//! light of k bounces, so the first sweep's output is direct illumination.
+//! light of k bounces, so the first sweep's output is direct illumination (kept for the
+//! hybrid rendering). Networks without directional nodes take a branchless gather.
 
 use super::ray_space::RaySpace;
 use super::{Network, ESCAPE, NONE};

@@ -2,9 +2,11 @@
 //! with Arbitrary Reflectance Functions", 1989): the patch-link model.
 //!
 //! - [`ray_space`]: the uniform 4-D grid of lines and the étendue weight of a line cell.
-//! - [`patches`]: polygons cut into patches; each patch side is a potential network node.
+//! - [`patches`]: polygons (and spheres) cut into patches; each patch side is a potential
+//!   network node.
 //! - [`preprocess`]: lines → links, by incremental scan conversion or by Embree casting.
-//! - [`Network`] (here): the compact network: per node one 32-bit link per slot.
+//! - [`Network`] (here): the compact network: per node one 32-bit link per slot, plus extra
+//!   links for slots that meet the patch more than once.
 //! - [`distribute`]: light carried over the links until convergence, with reflectance maps
 //!   for diffuse (the paper's bypass), mirror, glossy, transmission and frosted surfaces.
 //! - [`render`]: eye rays find the patch; interpolation over patches and slopes (figure 6).
