@@ -81,6 +81,14 @@ enum IntegratorName {
 }
 
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum NetworkOrderName {
+    /// Jacobi sweeps over every node, in parallel.
+    Sweeps,
+    /// Largest unshot flux first, one node at a time (all-diffuse networks).
+    Shoot,
+}
+
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
 enum NetworkBuilderName {
     /// Incremental scan conversion of the polygons (the paper's preprocess).
     Scan,
@@ -235,6 +243,9 @@ struct NetworkArgs {
     /// Network: print patches, links, intersections, memory and timings.
     #[arg(long)]
     stats: bool,
+    /// Network: order of the distribution.
+    #[arg(long, value_enum, default_value = "sweeps")]
+    network_order: NetworkOrderName,
     /// Network: compute direct light per pixel (a light sample and a shadow ray) and take only
     /// the indirect light from the network.
     #[arg(long)]
@@ -777,12 +788,16 @@ fn network(
     let options = net::distribute::DistributeOptions {
         tolerance: a.tolerance,
         light_scale: a.light_scale,
+        order: match a.network_order {
+            NetworkOrderName::Sweeps => net::distribute::Order::Sweeps,
+            NetworkOrderName::Shoot => net::distribute::Order::Shoot,
+        },
         ..Default::default()
     };
     let solution = net::distribute::distribute(&network, scene, &options);
     let st = &solution.stats;
     say(format!(
-        "network: distribution in {:.2} s ({} sweeps)",
+        "network: distribution in {:.2} s ({} sweeps or shots)",
         st.seconds, st.sweeps
     ));
     if a.stats {
