@@ -757,6 +757,12 @@ fn network(
             eprintln!("{line}");
         }
     };
+    if !scene.lights.is_empty() && !a.network_hybrid {
+        eprintln!(
+            "raylink: warning: the network carries only emissive surfaces; the scene's point and \
+             directional lights light it only with --network-hybrid"
+        );
+    }
     let network = match &a.network_file {
         Some(f) if f.exists() => {
             let start = std::time::Instant::now();

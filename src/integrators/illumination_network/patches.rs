@@ -258,7 +258,11 @@ impl Patches {
         let mut first = 0u32;
         for p in &mut polygons {
             p.first_cell = first;
-            first += p.cells();
+            // Side keys (cell·2 + side) are 32-bit.
+            first = first
+                .checked_add(p.cells())
+                .filter(|&n| n < u32::MAX / 2 - 1)
+                .ok_or("too many patches for 32-bit indices: give a larger --patch-size")?;
         }
         Ok(Patches {
             polygons,
