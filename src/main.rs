@@ -11,7 +11,7 @@ use raylink::integrators::irradiance_cache::{self as ic, IcOptions, IrradianceCa
 use raylink::integrators::light::{LightOptions, LightTracer};
 use raylink::integrators::path::{PathOptions, PathTracer, DEFAULT_MAX_DEPTH, MAX_DEPTH_LIMIT};
 use raylink::integrators::whitted::{Whitted, WhittedOptions};
-use raylink::integrators::{Context, MonteCarlo};
+use raylink::integrators::{Context, Integrator, MonteCarlo};
 use raylink::render::aov::{render_aovs, Aov};
 use raylink::render::progressive::{render_progressive, ProgressiveOptions, MAX_SPP};
 use raylink::render::{
@@ -537,47 +537,38 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
         None => {
             let sampling = pixel_sampling(&args, spp)?;
             sampling.validate()?;
-            if integrator == IntegratorName::Network {
-                let options = RenderOptions {
-                    width,
-                    height,
-                    sampling,
-                    threads: args.threads,
-                    seed: args.seed,
-                    progress: !args.quiet,
-                };
-                let (network, solution) = network(&args, &scene, &ctx)?;
-                let renderer = net::render::NetworkRenderer {
-                    net: &network,
-                    solution: &solution,
+            let whitted = Whitted::new(WhittedOptions {
+                max_depth: max_depth.max(1),
+                area_samples: args.area_samples.unwrap_or(16),
+                fresnel: args.fresnel,
+                ..WhittedOptions::default()
+            });
+            let options = RenderOptions {
+                width,
+                height,
+                sampling,
+                threads: args.threads,
+                seed: args.seed,
+                progress: !args.quiet,
+            };
+            metadata.push((
+                "raylink:sampling".into(),
+                MetaValue::Str(format!("{sampling:?}")),
+            ));
+            let built;
+            let renderer;
+            let chosen: &dyn Integrator = if integrator == IntegratorName::Network {
+                built = network(&args, &scene, &ctx)?;
+                renderer = net::render::NetworkRenderer {
+                    net: &built.0,
+                    solution: &built.1,
                     hybrid: args.network.network_hybrid,
                 };
-                metadata.push((
-                    "raylink:sampling".into(),
-                    MetaValue::Str(format!("{sampling:?}")),
-                ));
-                render(&ctx, &renderer, &options)?
+                &renderer
             } else {
-                let whitted = Whitted::new(WhittedOptions {
-                    max_depth: max_depth.max(1),
-                    area_samples: args.area_samples.unwrap_or(16),
-                    fresnel: args.fresnel,
-                    ..WhittedOptions::default()
-                });
-                let options = RenderOptions {
-                    width,
-                    height,
-                    sampling,
-                    threads: args.threads,
-                    seed: args.seed,
-                    progress: !args.quiet,
-                };
-                metadata.push((
-                    "raylink:sampling".into(),
-                    MetaValue::Str(format!("{sampling:?}")),
-                ));
-                render(&ctx, &whitted, &options)?
-            }
+                &whitted
+            };
+            render(&ctx, chosen, &options)?
         }
         Some(estimator) => {
             if let Some(t) = args.write_interval {
