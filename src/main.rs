@@ -6,11 +6,12 @@ use raylink::image::filter::Filter;
 use raylink::image::output::{check_output_path, write_image, OutputOptions};
 use raylink::image::{MetaValue, Metadata};
 use raylink::integrators::bdpt::{Bdpt, BdptOptions};
+use raylink::integrators::illumination_network as net;
 use raylink::integrators::irradiance_cache::{self as ic, IcOptions, IrradianceCache};
 use raylink::integrators::light::{LightOptions, LightTracer};
 use raylink::integrators::path::{PathOptions, PathTracer, DEFAULT_MAX_DEPTH, MAX_DEPTH_LIMIT};
 use raylink::integrators::whitted::{Whitted, WhittedOptions};
-use raylink::integrators::{Context, MonteCarlo};
+use raylink::integrators::{Context, Integrator, MonteCarlo};
 use raylink::render::aov::{render_aovs, Aov};
 use raylink::render::progressive::{render_progressive, ProgressiveOptions, MAX_SPP};
 use raylink::render::{
@@ -74,6 +75,25 @@ enum IntegratorName {
     /// Ward's irradiance caching: direct and specular as in the path tracer, indirect
     /// diffuse light from cached irradiance values.
     IrradianceCache,
+    /// Buckalew & Fussell's illumination networks: a view-independent network of patches and
+    /// links, built once (--network-file), lit by a distribution process.
+    Network,
+}
+
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum NetworkOrderName {
+    /// Jacobi sweeps over every node, in parallel.
+    Sweeps,
+    /// Largest unshot flux first, one node at a time (all-diffuse networks).
+    Shoot,
+}
+
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum NetworkBuilderName {
+    /// Incremental scan conversion of the polygons (the paper's preprocess).
+    Scan,
+    /// Repeated closest-hit queries along every line through the intersection backend.
+    Embree,
 }
 
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
@@ -190,6 +210,50 @@ struct RenderArgs {
     /// as in figure 5b of Ward et al. 1988.
     #[arg(long)]
     show_cache_points: bool,
+    #[command(flatten)]
+    network: NetworkArgs,
+}
+
+/// Options of the illumination-network integrator.
+#[derive(clap::Args)]
+struct NetworkArgs {
+    /// Network: slopes per axis S (3·S² links per patch).
+    #[arg(long, default_value_t = net::DEFAULT_SLOPES)]
+    slopes: u32,
+    /// Network: intercept step h, as a fraction of the scene's largest extent.
+    #[arg(long, default_value_t = net::DEFAULT_STEP)]
+    intercept_step: f32,
+    /// Network: patch edge, as a fraction of the scene's largest extent (default: the
+    /// intercept step).
+    #[arg(long)]
+    patch_size: Option<f32>,
+    /// Network: intercept jitter, a fraction of the intercept step (0 to 1).
+    #[arg(long, default_value_t = 1.0)]
+    network_jitter: f32,
+    /// Network: how links are found.
+    #[arg(long, value_enum, default_value = "scan")]
+    network_builder: NetworkBuilderName,
+    /// Network: stop distributing when the unshot flux is below this fraction of the emitted
+    /// flux.
+    #[arg(long, default_value_t = net::DEFAULT_TOLERANCE)]
+    tolerance: f32,
+    /// Network: load the network from this file if it exists (no preprocess), else build it
+    /// and write it there.
+    #[arg(long, value_name = "FILE")]
+    network_file: Option<PathBuf>,
+    /// Network: multiply every emission by this factor (relighting a saved network).
+    #[arg(long, default_value_t = 1.0)]
+    light_scale: f32,
+    /// Network: print patches, links, intersections, memory and timings.
+    #[arg(long)]
+    network_stats: bool,
+    /// Network: order of the distribution.
+    #[arg(long, value_enum, default_value = "sweeps")]
+    network_order: NetworkOrderName,
+    /// Network: compute direct light per pixel (a light sample and a shadow ray) and take only
+    /// the indirect light from the network.
+    #[arg(long)]
+    network_hybrid: bool,
 }
 
 /// The exit code of a failed run: 2 for bad input or options, 1 for the rest.
@@ -397,7 +461,7 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
         )));
     }
     let monte_carlo: Option<Box<dyn MonteCarlo>> = match integrator {
-        IntegratorName::Whitted => None,
+        IntegratorName::Whitted | IntegratorName::Network => None,
         IntegratorName::Path => Some(Box::new(PathTracer::new(PathOptions { max_depth }))),
         IntegratorName::Light => Some(Box::new(LightTracer::new(LightOptions { max_depth }))),
         IntegratorName::Bdpt => Some(Box::new(Bdpt::new(BdptOptions { max_depth }))),
@@ -440,6 +504,23 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
                 integrator_name(integrator)
             )));
         }
+    }
+    if integrator == IntegratorName::Network {
+        for (option, given) in [
+            ("--area-samples", args.area_samples.is_some()),
+            ("--fresnel", args.fresnel),
+        ] {
+            if given {
+                return Err(Error::Options(format!(
+                    "{option} does not apply to the network integrator"
+                )));
+            }
+        }
+    } else if args.network.network_file.is_some() || args.network.network_stats {
+        return Err(Error::Options(format!(
+            "--network-file and --network-stats apply to the network integrator, not {}",
+            integrator_name(integrator)
+        )));
     }
     if integrator == IntegratorName::Bdpt {
         Bdpt::check_scene(&scene).map_err(|e| Error::input(&args.scene, e))?;
@@ -490,7 +571,20 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
                 "raylink:sampling".into(),
                 MetaValue::Str(format!("{sampling:?}")),
             ));
-            render(&ctx, &whitted, &options)?
+            let built;
+            let renderer;
+            let chosen: &dyn Integrator = if integrator == IntegratorName::Network {
+                built = network(&args, &scene, &ctx)?;
+                renderer = net::render::NetworkRenderer {
+                    net: &built.0,
+                    solution: &built.1,
+                    hybrid: args.network.network_hybrid,
+                };
+                &renderer
+            } else {
+                &whitted
+            };
+            render(&ctx, chosen, &options)?
         }
         Some(estimator) => {
             if let Some(t) = args.write_interval {
@@ -651,4 +745,124 @@ fn irradiance_cache(
         ic::file::save(f, integrator.cache(), scene, &options)?;
     }
     Ok(integrator)
+}
+
+/// Loads (--network-file) or builds the illumination network, then distributes the light.
+fn network(
+    args: &RenderArgs,
+    scene: &Scene,
+    ctx: &Context,
+) -> Result<(net::Network, net::distribute::Solution), Error> {
+    let a = &args.network;
+    let params = net::NetworkParams {
+        slopes: a.slopes,
+        step: a.intercept_step,
+        patch_size: a.patch_size.unwrap_or(a.intercept_step),
+        jitter: a.network_jitter,
+        seed: args.seed,
+    };
+    params.validate().map_err(Error::Options)?;
+    if !(a.tolerance > 0.0 && a.tolerance < 1.0) {
+        return Err(Error::Options(format!(
+            "--tolerance must be between 0 and 1 (exclusive), got {}",
+            a.tolerance
+        )));
+    }
+    if !(a.light_scale.is_finite() && a.light_scale >= 0.0) {
+        return Err(Error::Options(format!(
+            "--light-scale must be a non-negative number, got {}",
+            a.light_scale
+        )));
+    }
+    let builder = match a.network_builder {
+        NetworkBuilderName::Scan => net::Builder::Scan,
+        NetworkBuilderName::Embree => net::Builder::Embree,
+    };
+    let say = |line: String| {
+        if !args.quiet {
+            eprintln!("{line}");
+        }
+    };
+    if !scene.lights.is_empty() && !a.network_hybrid {
+        eprintln!(
+            "raylink: warning: the network carries only emissive surfaces; the scene's point and \
+             directional lights light it only with --network-hybrid"
+        );
+    }
+    let network = match &a.network_file {
+        Some(f) if f.exists() => {
+            let start = std::time::Instant::now();
+            let n = net::file::load(f, scene, Some(&params))?;
+            say(format!(
+                "network: loaded {} in {:.2} s (no preprocess): {} nodes",
+                f.display(),
+                start.elapsed().as_secs_f64(),
+                n.nodes()
+            ));
+            n
+        }
+        _ => {
+            let n = net::Network::build(scene, ctx, params, builder)
+                .map_err(|e| Error::input(&args.scene, e))?;
+            say(format!(
+                "network: preprocess ({:?}) in {:.2} s: {} nodes, {} intersections",
+                builder,
+                n.stats.seconds,
+                n.nodes(),
+                n.stats.intersections
+            ));
+            if let Some(f) = &a.network_file {
+                net::file::save(f, &n, scene)?;
+            }
+            n
+        }
+    };
+    let options = net::distribute::DistributeOptions {
+        tolerance: a.tolerance,
+        light_scale: a.light_scale,
+        order: match a.network_order {
+            NetworkOrderName::Sweeps => net::distribute::Order::Sweeps,
+            NetworkOrderName::Shoot => net::distribute::Order::Shoot,
+        },
+        ..Default::default()
+    };
+    let solution = net::distribute::distribute(&network, scene, &options);
+    let st = &solution.stats;
+    say(format!(
+        "network: distribution in {:.2} s ({} sweeps or shots)",
+        st.seconds, st.sweeps
+    ));
+    if a.network_stats {
+        let bs = &network.stats;
+        let links = bs.link_ends / 2;
+        eprintln!(
+            "network stats: {} polygons, {} patches, {} nodes, {} slots per node\n\
+             network stats: {} links ({:.1} per node), {} escapes, {} extra, {} line-patch \
+             intersections ({:.1} M/s), {} closest-hit queries\n\
+             network stats: memory {:.1} MB network + {:.1} MB buffers, {} map entries\n\
+             network stats: preprocess {:.3} s (lines {:.3} s, assembly {:.3} s), distribution {:.3} s, \
+             {} sweeps, unshot {:.2e} of emitted",
+            network.patches.polygons.len(),
+            network.patches.cells,
+            network.nodes(),
+            network.slots(),
+            links,
+            bs.link_ends as f64 / network.nodes().max(1) as f64,
+            bs.escapes,
+            bs.extra,
+            bs.intersections,
+            bs.intersections as f64 / bs.seconds.max(1e-9) / 1e6,
+            bs.rays,
+            network.memory() as f64 / 1e6,
+            solution.memory() as f64 / 1e6,
+            st.map_entries,
+            bs.seconds,
+            bs.link_seconds,
+            bs.assemble_seconds,
+            st.seconds,
+            st.sweeps,
+            st.unshot.iter().sum::<f64>() / st.emitted.iter().sum::<f64>().max(1e-300),
+        );
+    }
+    Ok((network, solution))
 }

@@ -2,6 +2,7 @@
 //! the scene description, the intersection backend (never named) and the area lights.
 
 pub mod bdpt;
+pub mod illumination_network;
 pub mod irradiance_cache;
 pub mod light;
 pub mod path;
@@ -41,6 +42,13 @@ impl<'a> Context<'a> {
         stats.closest += 1;
         let hit = self.accel.intersect(ray)?;
         Some(SurfacePoint::from_hit(&self.scene.shapes, ray, &hit))
+    }
+
+    /// The closest hit along the ray as the backend reports it (shape and primitive), for
+    /// techniques that keep their own tables per primitive.
+    pub fn intersect_hit(&self, ray: &Ray, stats: &mut RayStats) -> Option<crate::accel::Hit> {
+        stats.closest += 1;
+        self.accel.intersect(ray)
     }
 
     /// Whether anything blocks the ray segment.

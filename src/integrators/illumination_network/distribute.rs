@@ -1,0 +1,778 @@
+//! The distribution process: light shot from the emitting nodes travels over the links until
+//! the flux still to be shot falls below `tolerance` of the emitted flux.
+//!
+//! **Reflectance.** Each node's reflectance maps incoming links to outgoing links:
+//! - diffuse kd: the paper's bypass: incoming flux is summed into one accumulator and leaves
+//!   as the same radiance kd·Φ/W on every slot (flux ∝ w);
+//! - specular ks, roughness below half a slope step (mirror at this resolution): the
+//!   reflected direction split bilinearly over the linked (or escaping) ones of its four
+//!   bounding slots, else the nearest linked slot;
+//! - specular ks, roughness α (glossy): a GGX lobe D·G/(4 cosθi cosθo) times the étendue of
+//!   the outgoing slot, over the slots near the reflected direction, normalised;
+//! - transmission kt: the identity onto the other side of the patch (the same line continues),
+//!   or with roughness α (frosted) a lobe of angular width α around it.
+//!
+//! Every row of a directional map is normalised to 1 and scaled by ks or kt, so a row sums
+//! exactly to the material's albedo (kd + ks + kt is scaled down to at most 1 per channel,
+//! Fresnel weighting is not modelled). Directional maps are built here, not in the
+//! preprocess: they depend on materials, which relighting may change.
+//!
+//! **Order.** Jacobi sweeps: in each sweep every node gathers what its neighbours shot in the
+//! previous sweep over its links (links are symmetric, so gathering over a node's own row is
+//! the scatter of its neighbours), then passes it through its reflectance. Each sweep is
+//! parallel over nodes and independent of the thread count. Sweep k carries exactly the
+//! light of k bounces, so the first sweep's output is direct illumination (kept for the
+//! hybrid rendering). Networks without directional nodes take a branchless gather.
+
+use super::ray_space::RaySpace;
+use super::{Network, ESCAPE, NONE};
+use crate::bsdf::Ggx;
+use crate::math::{Rgb, Vec2, Vec3};
+use crate::scene::Scene;
+use rayon::prelude::*;
+
+/// The surface of one node.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Surface {
+    pub kd: Rgb,
+    pub ks: Rgb,
+    pub kt: Rgb,
+    pub alpha: f32,
+    /// Emitted radiance (fronts of emissive materials only).
+    pub emission: Rgb,
+}
+
+impl Surface {
+    pub fn directional(&self) -> bool {
+        self.ks.max_element() > 0.0 || self.kt.max_element() > 0.0
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct DistributeOptions {
+    /// Stop when the flux still to be shot is below this fraction of the emitted flux.
+    pub tolerance: f32,
+    pub max_sweeps: u32,
+    /// Emission multiplier (relighting).
+    pub light_scale: f32,
+    pub order: Order,
+}
+
+/// The order in which nodes process their light.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Order {
+    /// Jacobi sweeps over all nodes, in parallel.
+    #[default]
+    Sweeps,
+    /// Largest unshot flux first (Southwell iteration, as progressive radiosity), one node at
+    /// a time. Networks with directional nodes use sweeps.
+    Shoot,
+}
+
+impl Default for DistributeOptions {
+    fn default() -> Self {
+        DistributeOptions {
+            tolerance: super::DEFAULT_TOLERANCE,
+            max_sweeps: 100_000,
+            light_scale: 1.0,
+            order: Order::Sweeps,
+        }
+    }
+}
+
+/// A sparse map from in-slots to out-slots, rows normalised to 1.
+#[derive(Clone, Debug, Default)]
+pub struct SparseMap {
+    /// in-slot → range in `entries`; rows of slots without a link are empty.
+    pub offsets: Vec<u32>,
+    pub entries: Vec<(u32, f32)>,
+}
+
+/// The converged network: what rendering reads.
+#[derive(Clone, Debug, Default)]
+pub struct Solution {
+    pub surfaces: Vec<Surface>,
+    /// Reflected radiance of each node's diffuse part (every slot).
+    pub diffuse: Vec<Rgb>,
+    /// The part of `diffuse` reflected from light that came straight from the emitters (the
+    /// first sweep), for the hybrid rendering.
+    pub direct: Vec<Rgb>,
+    /// For directional nodes: index into `directional` rows, else [`NONE`].
+    pub dir_index: Vec<u32>,
+    /// Reflected directional radiance per slot, one row of `slots` per directional node.
+    pub directional: Vec<Rgb>,
+    /// Radiance that arrived over each slot, one row per directional node (the in-buffers
+    /// accumulated over the sweeps), for rendering.
+    pub incoming: Vec<Rgb>,
+    pub stats: DistributeStats,
+    /// The emission multiplier the solution was computed with.
+    pub light_scale: f32,
+}
+
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct DistributeStats {
+    pub sweeps: u32,
+    /// Flux (RGB) emitted, escaped over links that leave the scene, absorbed, and still
+    /// unshot at the end: emitted = escaped + absorbed + unshot.
+    pub emitted: [f64; 3],
+    pub escaped: [f64; 3],
+    pub absorbed: [f64; 3],
+    pub unshot: [f64; 3],
+    /// Entries of the directional maps.
+    pub map_entries: u64,
+    pub seconds: f64,
+}
+
+/// The nodes' surfaces from the scene's materials (diffuse textures are evaluated at the
+/// patch centre).
+pub fn surfaces(net: &Network, scene: &Scene, light_scale: f32) -> Vec<Surface> {
+    (0..net.nodes() as u32)
+        .map(|node| {
+            let (poly, cell, side) = net.node_place(node);
+            let pg = &net.patches.polygons[poly as usize];
+            let m = &scene.materials[scene.shapes[pg.shape as usize].material];
+            let (s, t) = pg.cell_centre(cell);
+            let p = net.space.to_world(pg.point(s, t));
+            let kd = m.diffuse.eval(p, Vec2::new(s, t));
+            let (mut kd, mut ks, mut kt) = (kd, m.specular, m.transmission);
+            let total = kd + ks + kt;
+            for c in 0..3 {
+                if total[c] > 1.0 {
+                    kd[c] /= total[c];
+                    ks[c] /= total[c];
+                    kt[c] /= total[c];
+                }
+            }
+            Surface {
+                kd,
+                ks,
+                kt,
+                alpha: m.roughness,
+                emission: if side == 0 {
+                    m.emission * light_scale
+                } else {
+                    Rgb::ZERO
+                },
+            }
+        })
+        .collect()
+}
+
+/// Candidate slots around direction `dir` (unit): every slot within `radius` grid steps of
+/// `dir`'s slope coordinates in each family whose slope range it is near.
+pub(crate) fn candidates(space: &RaySpace, dir: Vec3, radius: i64, out: &mut Vec<u32>) {
+    out.clear();
+    let s = space.slopes as i64;
+    let margin = (radius + 1) as f32 * space.slope_step();
+    for f in 0..3u32 {
+        let (a, u, v) = super::ray_space::axes(f);
+        if dir[a].abs() < 1e-6 {
+            continue;
+        }
+        let (su, sv) = (dir[u] / dir[a], dir[v] / dir[a]);
+        if su.abs() > 1.0 + margin || sv.abs() > 1.0 + margin {
+            continue;
+        }
+        let (cu, cv) = (
+            space.slope_coord(su).round() as i64,
+            space.slope_coord(sv).round() as i64,
+        );
+        for ku in (cu - radius).max(0)..=(cu + radius).min(s - 1) {
+            for kv in (cv - radius).max(0)..=(cv + radius).min(s - 1) {
+                out.push(space.slot(f, ku as u32, kv as u32));
+            }
+        }
+    }
+}
+
+/// The linked (or escaping) slot of `row` nearest to direction `target`; `None` if the row
+/// has no slot at all.
+fn nearest_linked(space: &RaySpace, row: &[u32], target: Vec3, buf: &mut Vec<u32>) -> Option<u32> {
+    let mut radius = 1;
+    loop {
+        candidates(space, target, radius, buf);
+        let best = buf
+            .iter()
+            .filter(|&&l| row[l as usize] != NONE)
+            .map(|&l| (l, space.direction(l).normalize().dot(target).abs()))
+            .max_by(|a, b| a.1.total_cmp(&b.1).then(b.0.cmp(&a.0)));
+        if let Some((l, _)) = best {
+            return Some(l);
+        }
+        if radius > space.slopes as i64 {
+            return None;
+        }
+        radius *= 2;
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+/// A normalised lobe over the linked slots of `row` around `centre`: weight(l) =
+/// lobe(direction of l)·w_l; falls back to the nearest slot when the lobe misses every slot.
+fn lobe_row(
+    space: &RaySpace,
+    row: &[u32],
+    normal: Vec3,
+    centre: Vec3,
+    alpha: f32,
+    lobe: impl Fn(Vec3) -> f32,
+    buf: &mut Vec<u32>,
+    out: &mut Vec<(u32, f32)>,
+) {
+    // Lobe reach ≈ 3α radians; one slope step is about 2/S radians near a family centre.
+    let radius =
+        ((3.0 * alpha * space.slopes as f32 / 2.0).ceil() as i64 + 1).min(space.slopes as i64);
+    candidates(space, centre, radius, buf);
+    let start = out.len();
+    for &l in buf.iter() {
+        if row[l as usize] == NONE {
+            continue;
+        }
+        let d = space.direction_towards(l, normal);
+        let w = lobe(d) * space.etendue(l);
+        if w > 0.0 && w.is_finite() {
+            out.push((l, w));
+        }
+    }
+    // Keep the 64 largest entries: the tail of a wide lobe carries little light.
+    out[start..].sort_by(|a, b| b.1.total_cmp(&a.1).then(a.0.cmp(&b.0)));
+    let keep = (out.len() - start).min(64);
+    out.truncate(start + keep);
+    let sum: f32 = out[start..].iter().map(|e| e.1).sum();
+    if sum > 0.0 {
+        for e in &mut out[start..] {
+            e.1 /= sum;
+        }
+    } else {
+        out.truncate(start);
+        if let Some(l) = nearest_linked(space, row, centre, buf) {
+            out.push((l, 1.0));
+        }
+    }
+}
+
+/// The local-frame vector with cosine `c` to the normal (for the isotropic GGX terms).
+pub(crate) fn local(c: f32) -> Vec3 {
+    Vec3::new((1.0 - c * c).max(0.0).sqrt(), 0.0, c)
+}
+
+/// Reflection (on the node's own slots) and transmission (onto its twin's slots) maps.
+fn maps(net: &Network, node: u32, surface: &Surface, twin: u32) -> (SparseMap, SparseMap) {
+    let space = &net.space;
+    let row = net.row(node);
+    let n = net.node_normal(node);
+    let mut buf = Vec::new();
+    let mut reflect = SparseMap {
+        offsets: vec![0],
+        ..SparseMap::default()
+    };
+    let mut transmit = reflect.clone();
+    // A lobe narrower than the slot spacing cannot be sampled by the slots: it is a mirror
+    // (or clear transmission) at this resolution.
+    let sharp = 0.5 * space.slope_step();
+    for l in 0..row.len() as u32 {
+        // Light arrives only over real links.
+        if row[l as usize] < ESCAPE {
+            let wi = space.direction_towards(l, n);
+            if surface.ks.max_element() > 0.0 {
+                let r = 2.0 * n.dot(wi) * n - wi;
+                if surface.alpha <= sharp {
+                    // The linked slots among the four bounding the mirror direction, with
+                    // bilinear weights (so reflections move smoothly with the direction),
+                    // else the nearest linked slot.
+                    let start = reflect.entries.len();
+                    let mut sum = 0.0;
+                    for (o, wgt) in space.bounding_slots(r) {
+                        if row[o as usize] != NONE && wgt > 0.0 {
+                            match reflect.entries[start..].iter_mut().find(|e| e.0 == o) {
+                                Some(e) => e.1 += wgt,
+                                None => reflect.entries.push((o, wgt)),
+                            }
+                            sum += wgt;
+                        }
+                    }
+                    if sum > 0.0 {
+                        for e in &mut reflect.entries[start..] {
+                            e.1 /= sum;
+                        }
+                    } else if let Some(o) = nearest_linked(space, row, r, &mut buf) {
+                        reflect.entries.push((o, 1.0));
+                    }
+                } else {
+                    let ggx = Ggx {
+                        alpha: surface.alpha.max(1e-3),
+                    };
+                    let ci = n.dot(wi);
+                    let lobe = |wo: Vec3| {
+                        let co = n.dot(wo);
+                        if co <= 0.0 {
+                            return 0.0;
+                        }
+                        let h = (wi + wo).normalize();
+                        ggx.d(local(n.dot(h))) * ggx.g(local(co), local(ci)) / (4.0 * ci * co)
+                    };
+                    lobe_row(
+                        space,
+                        row,
+                        n,
+                        r,
+                        surface.alpha,
+                        lobe,
+                        &mut buf,
+                        &mut reflect.entries,
+                    );
+                }
+            }
+            if surface.kt.max_element() > 0.0 && twin != NONE {
+                let trow = net.row(twin);
+                let through = -wi;
+                if surface.alpha <= sharp {
+                    let o = if trow[l as usize] != NONE {
+                        Some(l)
+                    } else {
+                        nearest_linked(space, trow, through, &mut buf)
+                    };
+                    if let Some(o) = o {
+                        transmit.entries.push((o, 1.0));
+                    }
+                } else {
+                    // Frosted: a Gaussian spread of angular width α around the straight line.
+                    let sigma2 = surface.alpha * surface.alpha;
+                    let lobe = |wo: Vec3| {
+                        let c = wo.dot(through).clamp(-1.0, 1.0);
+                        if c <= 0.0 {
+                            return 0.0;
+                        }
+                        let th = c.acos();
+                        (-0.5 * th * th / sigma2).exp()
+                    };
+                    lobe_row(
+                        space,
+                        trow,
+                        -n,
+                        through,
+                        surface.alpha,
+                        lobe,
+                        &mut buf,
+                        &mut transmit.entries,
+                    );
+                }
+            }
+        }
+        reflect.offsets.push(reflect.entries.len() as u32);
+        transmit.offsets.push(transmit.entries.len() as u32);
+    }
+    (reflect, transmit)
+}
+
+fn sum3(v: &[Rgb], w: impl Fn(usize) -> f32) -> [f64; 3] {
+    let mut s = [0.0f64; 3];
+    for (i, c) in v.iter().enumerate() {
+        let k = w(i) as f64;
+        for ch in 0..3 {
+            s[ch] += c[ch] as f64 * k;
+        }
+    }
+    s
+}
+
+/// Carries light over the network until convergence.
+pub fn distribute(net: &Network, scene: &Scene, options: &DistributeOptions) -> Solution {
+    let start = std::time::Instant::now();
+    let surfaces = surfaces(net, scene, options.light_scale);
+    let nodes = net.nodes();
+    let slots = net.slots();
+    let w: Vec<f32> = (0..slots as u32).map(|s| net.space.etendue(s)).collect();
+    // Directional nodes and their maps.
+    let mut dir_index = vec![NONE; nodes];
+    let mut dir_nodes = Vec::new();
+    for (i, s) in surfaces.iter().enumerate() {
+        if s.directional() {
+            dir_index[i] = dir_nodes.len() as u32;
+            dir_nodes.push(i as u32);
+        }
+    }
+    let twin_of = |node: u32| {
+        let key = net.key_of_node[node as usize];
+        net.node_of_key[(key ^ 1) as usize]
+    };
+    let maps: Vec<(SparseMap, SparseMap)> = dir_nodes
+        .par_iter()
+        .map(|&n| maps(net, n, &surfaces[n as usize], twin_of(n)))
+        .collect();
+    let map_entries = maps
+        .iter()
+        .map(|(r, t)| (r.entries.len() + t.entries.len()) as u64)
+        .sum();
+
+    if options.order == Order::Shoot && dir_nodes.is_empty() {
+        return shoot(net, surfaces, options, start);
+    }
+    let mut shot_d: Vec<Rgb> = surfaces.iter().map(|s| s.emission).collect();
+    let mut shot_dir = vec![Rgb::ZERO; dir_nodes.len() * slots];
+    let mut in_buf = vec![Rgb::ZERO; dir_nodes.len() * slots];
+    let mut diffuse = vec![Rgb::ZERO; nodes];
+    let mut direct = vec![Rgb::ZERO; nodes];
+    let mut directional = vec![Rgb::ZERO; dir_nodes.len() * slots];
+    let mut incoming = vec![Rgb::ZERO; dir_nodes.len() * slots];
+    let mut stats = DistributeStats {
+        map_entries,
+        ..DistributeStats::default()
+    };
+    let flux_of = |shot_d: &[Rgb], shot_dir: &[Rgb]| {
+        let mut f = sum3(shot_d, |i| net.etendue[i]);
+        let g = sum3(shot_dir, |i| w[i % slots]);
+        // Extra links of a slot carry the slot's radiance too.
+        let extra: Vec<Rgb> = dir_nodes
+            .iter()
+            .enumerate()
+            .flat_map(|(k, &n)| {
+                net.extra_links(n)
+                    .iter()
+                    .map(move |&[l, _]| (k * slots + l as usize, l))
+            })
+            .map(|(i, l)| shot_dir[i] * w[l as usize])
+            .collect();
+        let h = sum3(&extra, |_| 1.0);
+        for c in 0..3 {
+            f[c] += g[c] + h[c];
+        }
+        f
+    };
+    stats.emitted = flux_of(&shot_d, &shot_dir);
+    let emitted_total: f64 = stats.emitted.iter().sum();
+    let mut unshot = stats.emitted;
+    let mut in_total = vec![Rgb::ZERO; nodes];
+    let mut padded = vec![Rgb::ZERO; nodes + 1];
+    // Σ w over each node's escaping links.
+    let escape_etendue: Vec<f32> = (0..nodes as u32)
+        .into_par_iter()
+        .map(|i| {
+            let row: f32 = net
+                .row(i)
+                .iter()
+                .zip(&w)
+                .filter(|(&t, _)| t == ESCAPE)
+                .map(|(_, &wl)| wl)
+                .sum();
+            let extra: f32 = net
+                .extra_links(i)
+                .iter()
+                .filter(|e| e[1] == ESCAPE)
+                .map(|e| w[e[0] as usize])
+                .sum();
+            row + extra
+        })
+        .collect();
+    let mut escaped = vec![Rgb::ZERO; nodes];
+    while unshot.iter().sum::<f64>() > options.tolerance as f64 * emitted_total
+        && stats.sweeps < options.max_sweeps
+    {
+        // Gather: flux arriving over each node's links from what the other ends shot.
+        let radiance = |j: u32, l: usize| {
+            let mut r = shot_d[j as usize];
+            let k = dir_index[j as usize];
+            if k != NONE {
+                r += shot_dir[k as usize * slots + l];
+            }
+            r
+        };
+        if dir_nodes.is_empty() {
+            // All diffuse: a branchless gather, NONE and ESCAPE reading a zero past the end.
+            padded[..nodes].copy_from_slice(&shot_d);
+            in_total
+                .par_iter_mut()
+                .zip(escaped.par_iter_mut())
+                .enumerate()
+                .for_each(|(i, (tot, esc))| {
+                    let mut sum = Rgb::ZERO;
+                    for (&t, &wl) in net.row(i as u32).iter().zip(&w) {
+                        sum += padded[(t as usize).min(nodes)] * wl;
+                    }
+                    for &[l, t] in net.extra_links(i as u32) {
+                        sum += padded[(t as usize).min(nodes)] * w[l as usize];
+                    }
+                    *tot = sum;
+                    *esc = shot_d[i] * escape_etendue[i];
+                });
+        } else {
+            in_total
+                .par_iter_mut()
+                .zip(escaped.par_iter_mut())
+                .enumerate()
+                .for_each(|(i, (tot, esc))| {
+                    let mut sum = Rgb::ZERO;
+                    let mut out = Rgb::ZERO;
+                    let extra = net
+                        .extra_links(i as u32)
+                        .iter()
+                        .map(|e| (e[0] as usize, e[1]));
+                    for (l, j) in net.row(i as u32).iter().copied().enumerate().chain(extra) {
+                        if j < ESCAPE {
+                            sum += radiance(j, l) * w[l];
+                        } else if j == ESCAPE {
+                            out += radiance(i as u32, l) * w[l];
+                        }
+                    }
+                    *tot = sum;
+                    *esc = out;
+                });
+        }
+        in_buf
+            .par_chunks_mut(slots)
+            .zip(&dir_nodes)
+            .for_each(|(buf, &i)| {
+                for (l, (b, &j)) in buf.iter_mut().zip(net.row(i)).enumerate() {
+                    *b = if j < ESCAPE {
+                        radiance(j, l) * w[l]
+                    } else {
+                        Rgb::ZERO
+                    };
+                }
+                for &[l, j] in net.extra_links(i) {
+                    if j < ESCAPE {
+                        buf[l as usize] += radiance(j, l as usize) * w[l as usize];
+                    }
+                }
+            });
+        incoming
+            .par_chunks_mut(slots)
+            .zip(in_buf.par_chunks(slots))
+            .zip(&dir_nodes)
+            .for_each(|((acc, flux), &i)| {
+                // Extra links are in slot order: a slot with m links had m times the étendue.
+                let mut runs = net
+                    .extra_links(i)
+                    .chunk_by(|a, b| a[0] == b[0])
+                    .map(|r| (r[0][0] as usize, r.len() + 1))
+                    .peekable();
+                for (l, (a, f)) in acc.iter_mut().zip(flux).enumerate() {
+                    let mut m = 1.0;
+                    if let Some(&(rl, c)) = runs.peek() {
+                        if rl == l {
+                            m = c as f32;
+                            runs.next();
+                        }
+                    }
+                    *a += *f / (w[l] * m);
+                }
+            });
+        let arrived = sum3(&in_total, |_| 1.0);
+        let esc = sum3(&escaped, |_| 1.0);
+        // Reflect: the diffuse bypass, then the directional maps.
+        shot_d
+            .par_iter_mut()
+            .enumerate()
+            .for_each(|(i, s)| *s = surfaces[i].kd * in_total[i] / net.etendue[i]);
+        shot_dir
+            .par_chunks_mut(slots)
+            .enumerate()
+            .for_each(|(k, out)| {
+                out.fill(Rgb::ZERO);
+                let node = dir_nodes[k] as usize;
+                let (reflect, _) = &maps[k];
+                let own = &in_buf[k * slots..(k + 1) * slots];
+                apply(reflect, own, surfaces[node].ks, out);
+                let twin = twin_of(node as u32);
+                if twin != NONE {
+                    let t = dir_index[twin as usize];
+                    if t != NONE {
+                        let (_, transmit) = &maps[t as usize];
+                        let theirs = &in_buf[t as usize * slots..(t as usize + 1) * slots];
+                        apply(transmit, theirs, surfaces[twin as usize].kt, out);
+                    }
+                }
+                for (o, &wl) in out.iter_mut().zip(&w) {
+                    *o /= wl;
+                }
+                // A slot with extra links spreads its flux over all of them.
+                for run in net.extra_links(node as u32).chunk_by(|a, b| a[0] == b[0]) {
+                    out[run[0][0] as usize] /= (1 + run.len()) as f32;
+                }
+            });
+        diffuse
+            .par_iter_mut()
+            .zip(&shot_d)
+            .for_each(|(d, s)| *d += *s);
+        directional
+            .par_iter_mut()
+            .zip(&shot_dir)
+            .for_each(|(d, s)| *d += *s);
+        let next = flux_of(&shot_d, &shot_dir);
+        for c in 0..3 {
+            stats.escaped[c] += esc[c];
+            stats.absorbed[c] += arrived[c] - next[c];
+        }
+        unshot = next;
+        if stats.sweeps == 0 {
+            direct.copy_from_slice(&shot_d);
+        }
+        stats.sweeps += 1;
+    }
+    stats.unshot = unshot;
+    stats.seconds = start.elapsed().as_secs_f64();
+    Solution {
+        surfaces,
+        diffuse,
+        direct,
+        dir_index,
+        directional,
+        incoming,
+        stats,
+        light_scale: options.light_scale,
+    }
+}
+
+/// out[l'] += k·c·in[l] over a map's entries.
+fn apply(map: &SparseMap, input: &[Rgb], k: Rgb, out: &mut [Rgb]) {
+    for (l, flux) in input.iter().enumerate() {
+        if *flux == Rgb::ZERO {
+            continue;
+        }
+        let (a, b) = (map.offsets[l] as usize, map.offsets[l + 1] as usize);
+        for &(o, c) in &map.entries[a..b] {
+            out[o as usize] += *flux * k * c;
+        }
+    }
+}
+
+impl Solution {
+    /// Memory of the buffers (bytes).
+    pub fn memory(&self) -> usize {
+        std::mem::size_of::<Rgb>()
+            * (self.diffuse.len()
+                + self.direct.len()
+                + self.directional.len()
+                + self.incoming.len())
+            + 4 * self.dir_index.len()
+            + std::mem::size_of::<Surface>() * self.surfaces.len()
+    }
+}
+
+/// Largest-unshot-first shooting for all-diffuse networks: the node with the most unshot flux
+/// sends it over its links; each receiver adds kd·Φ/W to its radiance and to its own unshot
+/// radiance. The emitters shoot first, in node order (their receivers' radiance after that is
+/// the direct light of the hybrid mode), then the largest first, ties to the lower index.
+/// Sequential, so deterministic. `stats.sweeps` counts shots.
+fn shoot(
+    net: &Network,
+    surfaces: Vec<Surface>,
+    options: &DistributeOptions,
+    start: std::time::Instant,
+) -> Solution {
+    let nodes = net.nodes();
+    let w: Vec<f32> = (0..net.slots() as u32)
+        .map(|s| net.space.etendue(s))
+        .collect();
+    let mut unshot: Vec<Rgb> = surfaces.iter().map(|s| s.emission).collect();
+    let mut diffuse = vec![Rgb::ZERO; nodes];
+    let mut stats = DistributeStats::default();
+    let flux = |u: Rgb, i: usize| (u.x + u.y + u.z) as f64 * net.etendue[i] as f64;
+    for (i, u) in unshot.iter().enumerate() {
+        for c in 0..3 {
+            stats.emitted[c] += u[c] as f64 * net.etendue[i] as f64;
+        }
+    }
+    let emitted_total: f64 = stats.emitted.iter().sum();
+    let mut remaining = emitted_total;
+    let shoot_one = |i: usize,
+                     unshot: &mut Vec<Rgb>,
+                     diffuse: &mut Vec<Rgb>,
+                     stats: &mut DistributeStats,
+                     touched: &mut Vec<u32>| {
+        let u = std::mem::replace(&mut unshot[i], Rgb::ZERO);
+        let extra = net
+            .extra_links(i as u32)
+            .iter()
+            .map(|e| (e[0] as usize, e[1]));
+        for (l, j) in net.row(i as u32).iter().copied().enumerate().chain(extra) {
+            if j == NONE {
+                continue;
+            }
+            let f = u * w[l];
+            if j == ESCAPE {
+                for c in 0..3 {
+                    stats.escaped[c] += f[c] as f64;
+                }
+                continue;
+            }
+            let j = j as usize;
+            let kd = surfaces[j].kd;
+            let dl = kd * f / net.etendue[j];
+            diffuse[j] += dl;
+            unshot[j] += dl;
+            for c in 0..3 {
+                stats.absorbed[c] += (f[c] * (1.0 - kd[c])) as f64;
+            }
+            touched.push(j as u32);
+        }
+        stats.sweeps += 1;
+    };
+    let mut touched = Vec::new();
+    let emitters: Vec<usize> = (0..nodes).filter(|&i| unshot[i] != Rgb::ZERO).collect();
+    for i in emitters {
+        shoot_one(i, &mut unshot, &mut diffuse, &mut stats, &mut touched);
+    }
+    let direct = diffuse.clone();
+    // A tournament tree over the nodes' unshot flux: the root is the largest (ties to the
+    // lower index); updating a node costs log N.
+    let size = nodes.next_power_of_two().max(1);
+    let mut tree = vec![(f64::NEG_INFINITY, u32::MAX); 2 * size];
+    let better = |a: (f64, u32), b: (f64, u32)| {
+        if a.0 > b.0 || (a.0 == b.0 && a.1 < b.1) {
+            a
+        } else {
+            b
+        }
+    };
+    for i in 0..nodes {
+        tree[size + i] = (flux(unshot[i], i), i as u32);
+    }
+    for k in (1..size).rev() {
+        tree[k] = better(tree[2 * k], tree[2 * k + 1]);
+    }
+    let update = |tree: &mut Vec<(f64, u32)>, i: usize, f: f64| {
+        let mut k = size + i;
+        tree[k] = (f, i as u32);
+        while k > 1 {
+            k /= 2;
+            tree[k] = better(tree[2 * k], tree[2 * k + 1]);
+        }
+    };
+    let total = |unshot: &[Rgb]| (0..nodes).map(|i| flux(unshot[i], i)).sum::<f64>();
+    let mut since_check = 0usize;
+    remaining = remaining.min(total(&unshot));
+    while remaining > options.tolerance as f64 * emitted_total && tree[1].0 > 0.0 {
+        let i = tree[1].1 as usize;
+        touched.clear();
+        shoot_one(i, &mut unshot, &mut diffuse, &mut stats, &mut touched);
+        update(&mut tree, i, 0.0);
+        touched.sort_unstable();
+        touched.dedup();
+        for &j in &touched {
+            update(&mut tree, j as usize, flux(unshot[j as usize], j as usize));
+        }
+        // The exact remaining flux every 256 shots (cheap next to 256 shots).
+        since_check += 1;
+        if since_check >= 256 {
+            remaining = total(&unshot);
+            since_check = 0;
+        }
+    }
+    stats.unshot = [0, 1, 2].map(|c| {
+        (0..nodes)
+            .map(|i| unshot[i][c] as f64 * net.etendue[i] as f64)
+            .sum()
+    });
+    stats.seconds = start.elapsed().as_secs_f64();
+    Solution {
+        dir_index: vec![NONE; nodes],
+        surfaces,
+        diffuse,
+        direct,
+        directional: Vec::new(),
+        incoming: Vec::new(),
+        stats,
+        light_scale: options.light_scale,
+    }
+}

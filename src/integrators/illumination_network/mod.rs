@@ -1,0 +1,390 @@
+//! Illumination networks (Buckalew & Fussell, "Illumination Networks: Fast Realistic Rendering
+//! with Arbitrary Reflectance Functions", 1989): the patch-link model.
+//!
+//! - [`ray_space`]: the uniform 4-D grid of lines and the étendue weight of a line cell.
+//! - [`patches`]: polygons (and spheres) cut into patches; each patch side is a potential
+//!   network node.
+//! - [`preprocess`]: lines → links, by incremental scan conversion or by Embree casting.
+//! - [`Network`] (here): the compact network: per node one 32-bit link per slot, plus extra
+//!   links for slots that meet the patch more than once.
+//! - [`distribute`]: light carried over the links until convergence, with reflectance maps
+//!   for diffuse (the paper's bypass), mirror, glossy, transmission and frosted surfaces.
+//! - [`render`]: eye rays find the patch; interpolation over patches and slopes (figure 6).
+//! - [`file`]: saving and loading networks, so views and lighting change without a preprocess.
+//!
+//! Units: a link carries *flux*; a slot's étendue w converts between radiance and flux. A
+//! node's étendue W is the sum of w over its slots (linked or escaping), about π·area: a
+//! diffuse node with flux Φ leaving it has radiance Φ/W on every link, which keeps energy
+//! exactly conserved whatever the sampling (the form factors are Σw/W).
+
+pub mod distribute;
+pub mod file;
+pub mod patches;
+pub mod preprocess;
+pub mod ray_space;
+pub mod render;
+
+use crate::integrators::Context;
+use crate::scene::Scene;
+use patches::Patches;
+pub use preprocess::Builder;
+use preprocess::SlotLinks;
+use ray_space::RaySpace;
+use std::time::Instant;
+
+/// No link in this slot (no line of this slope meets the side).
+pub const NONE: u32 = u32::MAX;
+/// The slot's line leaves the scene.
+pub const ESCAPE: u32 = u32::MAX - 1;
+
+pub const DEFAULT_SLOPES: u32 = 12;
+pub const DEFAULT_STEP: f32 = 1.0 / 64.0;
+pub const DEFAULT_TOLERANCE: f32 = 1e-3;
+
+/// What the network's geometry depends on (the file header stores these).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct NetworkParams {
+    /// Slopes per axis (S): 3·S² slots per node.
+    pub slopes: u32,
+    /// Intercept step h, unit-cube units.
+    pub step: f32,
+    /// Patch edge, unit-cube units.
+    pub patch_size: f32,
+    /// Intercept jitter, a fraction of h (0: the regular grid; 1: anywhere in the cell).
+    pub jitter: f32,
+    pub seed: u64,
+}
+
+impl Default for NetworkParams {
+    fn default() -> Self {
+        NetworkParams {
+            slopes: DEFAULT_SLOPES,
+            step: DEFAULT_STEP,
+            patch_size: DEFAULT_STEP,
+            jitter: 1.0,
+            seed: 0,
+        }
+    }
+}
+
+impl NetworkParams {
+    pub fn validate(&self) -> Result<(), String> {
+        if !(1..=128).contains(&self.slopes) {
+            return Err(format!(
+                "--slopes must be between 1 and 128, got {}",
+                self.slopes
+            ));
+        }
+        if !(self.step.is_finite() && self.step >= 1.0 / 4096.0 && self.step <= 1.0) {
+            return Err(format!(
+                "--intercept-step must be between 1/4096 and 1, got {}",
+                self.step
+            ));
+        }
+        if !(self.patch_size.is_finite()
+            && self.patch_size >= 1.0 / 4096.0
+            && self.patch_size <= 1.0)
+        {
+            return Err(format!(
+                "--patch-size must be between 1/4096 and 1, got {}",
+                self.patch_size
+            ));
+        }
+        if !(0.0..=1.0).contains(&self.jitter) {
+            return Err(format!("--jitter must be in [0, 1], got {}", self.jitter));
+        }
+        Ok(())
+    }
+}
+
+/// What a preprocess did.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BuildStats {
+    /// Line-patch intersections found.
+    pub intersections: u64,
+    /// Link ends stored (each link counts at both of its nodes).
+    pub link_ends: u64,
+    /// Slots whose line leaves the scene.
+    pub escapes: u64,
+    /// Link ends beyond the first of their slot at a node (in `extra`).
+    pub extra: u64,
+    /// Consecutive hits of a line on the same side or on touching surfaces (no link).
+    pub degenerate: u64,
+    /// Closest-hit queries (Embree builder).
+    pub rays: u64,
+    /// Whole preprocess, and its parts: finding and linking the lines (parallel over slots)
+    /// and assembling the node table.
+    pub seconds: f64,
+    pub link_seconds: f64,
+    pub assemble_seconds: f64,
+}
+
+/// The illumination network: geometry only (no materials, no light), so it is reused for
+/// new views and new lighting.
+#[derive(Clone, Debug)]
+pub struct Network {
+    pub params: NetworkParams,
+    pub space: RaySpace,
+    pub patches: Patches,
+    /// For each side key (cell·2 + side), its node or [`NONE`].
+    pub node_of_key: Vec<u32>,
+    /// For each node, its side key.
+    pub key_of_node: Vec<u32>,
+    /// nodes × slots: the node at the other end of each slot's link, [`ESCAPE`] or [`NONE`].
+    pub links: Vec<u32>,
+    /// Further links of a slot whose entry in `links` is taken (a patch that meets more than
+    /// one line of a slope): the (slot, target) pairs of node n are
+    /// extra[extra_start[n]..extra_start[n + 1]].
+    pub extra_start: Vec<u32>,
+    pub extra: Vec<[u32; 2]>,
+    /// For each node, W = Σ w over its linked and escaping slots.
+    pub etendue: Vec<f32>,
+    pub stats: BuildStats,
+}
+
+/// W of every node: Σ w over its slots that have a link or an escape.
+pub(crate) fn node_etendue(
+    space: &RaySpace,
+    links: &[u32],
+    extra_start: &[u32],
+    extra: &[[u32; 2]],
+) -> Vec<f32> {
+    let w: Vec<f32> = (0..space.slots() as u32)
+        .map(|s| space.etendue(s))
+        .collect();
+    links
+        .chunks(space.slots())
+        .enumerate()
+        .map(|(n, row)| {
+            let more: f32 = extra[extra_start[n] as usize..extra_start[n + 1] as usize]
+                .iter()
+                .map(|e| w[e[0] as usize])
+                .sum();
+            row.iter()
+                .zip(&w)
+                .filter(|(&t, _)| t != NONE)
+                .map(|(_, &w)| w)
+                .sum::<f32>()
+                + more
+        })
+        .collect()
+}
+
+impl Network {
+    /// Preprocess: patches and links for a scene. The Embree builder casts through `ctx`.
+    pub fn build(
+        scene: &Scene,
+        ctx: &Context,
+        params: NetworkParams,
+        builder: Builder,
+    ) -> Result<Network, String> {
+        params.validate()?;
+        let start = Instant::now();
+        let bounds = scene.bounds().ok_or("the scene has no shapes")?;
+        let space = RaySpace::new(params.slopes, params.step, bounds);
+        let patches = Patches::new(scene, &space, params.patch_size)?;
+        if builder == Builder::Scan {
+            if let Some(p) = patches.polygons.iter().find(|p| p.sphere.is_some()) {
+                return Err(format!(
+                    "shape {} is a sphere: the scan converter projects polygons only; use \
+                     --network-builder embree",
+                    p.shape
+                ));
+            }
+        }
+        let t = Instant::now();
+        let (slots, rays) = preprocess::build_links(
+            (builder == Builder::Embree).then_some(ctx),
+            &space,
+            &patches,
+            params.seed,
+            params.jitter,
+            builder,
+        );
+        let link_seconds = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let mut net = Network::assemble(params, space, patches, &slots);
+        net.stats.assemble_seconds = t.elapsed().as_secs_f64();
+        net.stats.link_seconds = link_seconds;
+        net.stats.rays = rays.total();
+        net.stats.seconds = start.elapsed().as_secs_f64();
+        Ok(net)
+    }
+
+    /// Numbers the nodes (sides with at least one real link, in key order) and fills the
+    /// dense link table: in parallel over slots, each slot fills its own column (a cache-sized
+    /// array over the nodes), then the columns are transposed into per-node rows in blocks of
+    /// nodes. A second link of a slot at a node goes to the node's extra links. Nothing
+    /// depends on the schedule.
+    pub fn assemble(
+        params: NetworkParams,
+        space: RaySpace,
+        patches: Patches,
+        slots: &[SlotLinks],
+    ) -> Network {
+        use rayon::prelude::*;
+        let keys = 2 * patches.cells as usize;
+        let mut node_of_key = vec![NONE; keys];
+        for s in slots {
+            for &[a, b] in &s.pairs {
+                node_of_key[a as usize] = 0;
+                node_of_key[b as usize] = 0;
+            }
+        }
+        let mut key_of_node = Vec::new();
+        for (k, n) in node_of_key.iter_mut().enumerate() {
+            if *n == 0 {
+                *n = key_of_node.len() as u32;
+                key_of_node.push(k as u32);
+            }
+        }
+        let nodes = key_of_node.len();
+        let n_slots = space.slots();
+        // Per slot: its column over the nodes, its extra (node, [slot, target]) links, and
+        // its escapes.
+        type Column = (Vec<u32>, Vec<(u32, [u32; 2])>, u64);
+        let per_slot: Vec<Column> = slots
+            .par_iter()
+            .enumerate()
+            .map(|(slot, s)| {
+                let mut extra = Vec::new();
+                let mut column = vec![NONE; nodes];
+                let mut put = |node: u32, target: u32| {
+                    let e = &mut column[node as usize];
+                    if *e == NONE {
+                        *e = target;
+                    } else {
+                        extra.push((node, [slot as u32, target]));
+                    }
+                };
+                for &[a, b] in &s.pairs {
+                    let (na, nb) = (node_of_key[a as usize], node_of_key[b as usize]);
+                    put(na, nb);
+                    put(nb, na);
+                }
+                let mut escapes = 0;
+                for &k in &s.escapes {
+                    let n = node_of_key[k as usize];
+                    if n != NONE {
+                        put(n, ESCAPE);
+                        escapes += 1;
+                    }
+                }
+                (column, extra, escapes)
+            })
+            .collect();
+        const BLOCK: usize = 64;
+        let mut links = vec![NONE; nodes * n_slots];
+        links
+            .par_chunks_mut(BLOCK * n_slots)
+            .enumerate()
+            .for_each(|(b, rows)| {
+                let first = b * BLOCK;
+                for (slot, (column, _, _)) in per_slot.iter().enumerate() {
+                    for (k, &t) in column[first..].iter().take(BLOCK).enumerate() {
+                        rows[k * n_slots + slot] = t;
+                    }
+                }
+            });
+        let mut stats = BuildStats::default();
+        for s in slots {
+            stats.intersections += s.intersections;
+            stats.degenerate += s.degenerate;
+            stats.link_ends += 2 * s.pairs.len() as u64;
+        }
+        // Extra links grouped by node (a counting sort), in slot order within a node.
+        let mut extra_start = vec![0u32; nodes + 1];
+        for (_, extra, escapes) in &per_slot {
+            stats.escapes += escapes;
+            for e in extra {
+                extra_start[e.0 as usize + 1] += 1;
+            }
+        }
+        for i in 1..extra_start.len() {
+            extra_start[i] += extra_start[i - 1];
+        }
+        let mut fill = extra_start.clone();
+        let mut extra = vec![[0u32; 2]; extra_start[nodes] as usize];
+        for (_, list, _) in &per_slot {
+            for &(n, e) in list {
+                extra[fill[n as usize] as usize] = e;
+                fill[n as usize] += 1;
+            }
+        }
+        stats.extra = extra.len() as u64;
+        let etendue = node_etendue(&space, &links, &extra_start, &extra);
+        Network {
+            params,
+            space,
+            patches,
+            node_of_key,
+            key_of_node,
+            links,
+            extra_start,
+            extra,
+            etendue,
+            stats,
+        }
+    }
+
+    pub fn nodes(&self) -> usize {
+        self.key_of_node.len()
+    }
+
+    pub fn slots(&self) -> usize {
+        self.space.slots()
+    }
+
+    /// The link row of a node.
+    #[inline]
+    pub fn row(&self, node: u32) -> &[u32] {
+        let s = self.slots();
+        &self.links[node as usize * s..(node as usize + 1) * s]
+    }
+
+    /// The extra (slot, target) links of a node.
+    #[inline]
+    pub fn extra_links(&self, node: u32) -> &[[u32; 2]] {
+        let (a, b) = (
+            self.extra_start[node as usize] as usize,
+            self.extra_start[node as usize + 1] as usize,
+        );
+        &self.extra[a..b]
+    }
+
+    /// The polygon, cell and side (0 front, 1 back) of a node.
+    pub fn node_place(&self, node: u32) -> (u32, u32, u32) {
+        let key = self.key_of_node[node as usize];
+        let cell = key / 2;
+        let poly = self
+            .patches
+            .polygons
+            .partition_point(|p| p.first_cell <= cell)
+            - 1;
+        (poly as u32, cell, key & 1)
+    }
+
+    /// The outward unit normal of a node's side.
+    pub fn node_normal(&self, node: u32) -> crate::math::Vec3 {
+        let (poly, cell, side) = self.node_place(node);
+        let pg = &self.patches.polygons[poly as usize];
+        let (s, t) = pg.cell_centre(cell);
+        let n = pg.normal_at(pg.point(s, t));
+        if side == 0 {
+            n
+        } else {
+            -n
+        }
+    }
+
+    /// Bytes held by the network's tables.
+    pub fn memory(&self) -> usize {
+        4 * (self.links.len()
+            + self.node_of_key.len()
+            + self.key_of_node.len()
+            + self.etendue.len()
+            + self.extra_start.len()
+            + 2 * self.extra.len())
+            + self.patches.polygons.len() * std::mem::size_of::<patches::Polygon>()
+    }
+}

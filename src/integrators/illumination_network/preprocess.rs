@@ -1,0 +1,410 @@
+//! The preprocess: which patches each grid line meets, in order along the line, and the links
+//! between consecutive ones.
+//!
+//! **Scan conversion** (the paper's builder). For one slot (slope pair) and one polygon, the
+//! polygon is projected onto the intercept plane along the slot's direction; the lines whose
+//! (jittered) intercepts fall inside the projection meet the polygon. Rows of the intercept
+//! grid are scanned; along a row the intersection coordinate p_a follows the paper's
+//! recurrence: with the plane n·p + D = 0 and δ = n_a + n_u s_u + n_v s_v computed once per
+//! slope and polygon, B' = n_u/δ, C' = n_v/δ, D' = D/δ,
+//!
+//! ```text
+//! p_a = −D' − B'·i_u − C'·i_v at the row's first cell, then p_a ← p_a − B'·h per cell,
+//! ```
+//!
+//! and the line's jitter (a fraction of h on each intercept, hashed from the seed and the
+//! line) adds −B'·δ_u − C'·δ_v. The inside test uses the jittered intercept itself, so both
+//! builders meet exactly the same lines.
+//!
+//! **Embree casting**. The same jittered lines are cast through the intersection backend with
+//! repeated closest-hit queries (for geometry the scan converter cannot project, and as a
+//! cross-check).
+//!
+//! **Links.** The hits of one slot are sorted by (line, p_a); consecutive hits k, k+1 on a line
+//! link the side of k facing +d with the side of k+1 facing −d; the first and last hits have
+//! an *escape* slot (light leaving that way leaves the scene). Work is parallel over slots (the paper's slope queue) and merged in slot order:
+//! the network does not depend on the thread count.
+
+use super::patches::{Patches, Polygon};
+use super::ray_space::{axes, RaySpace};
+use crate::integrators::{Context, RayStats};
+use crate::math::{Ray, Vec3};
+use rayon::prelude::*;
+
+/// A line meeting a patch: the line within its slot, p_a along it, and the key of the side
+/// facing +d (cell·2 + 0 for the front, + 1 for the back).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LineHit {
+    pub line: u32,
+    pub depth: f32,
+    pub key: u32,
+}
+
+/// The links of one slot: pairs of side keys, and sides whose link leaves the scene.
+#[derive(Clone, Debug, Default)]
+pub struct SlotLinks {
+    pub pairs: Vec<[u32; 2]>,
+    pub escapes: Vec<u32>,
+    pub intersections: u64,
+    /// Consecutive hits on the same side (dropped).
+    pub degenerate: u64,
+}
+
+/// Which builder finds the line-patch intersections.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Builder {
+    Scan,
+    Embree,
+}
+
+/// The plane coefficients of one polygon for one slot (the paper's B', C', D').
+#[derive(Clone, Copy, Debug)]
+pub struct SlotPlane {
+    pub b: f32,
+    pub c: f32,
+    pub d: f32,
+}
+
+impl SlotPlane {
+    /// `None` when the slot's lines are parallel to the polygon.
+    pub fn new(pg: &Polygon, family: u32, su: f32, sv: f32) -> Option<SlotPlane> {
+        let (a, u, v) = axes(family);
+        let n = pg.n;
+        let delta = n[a] + n[u] * su + n[v] * sv;
+        if delta.abs() < 1e-6 {
+            return None;
+        }
+        let dd = -n.dot(pg.o);
+        Some(SlotPlane {
+            b: n[u] / delta,
+            c: n[v] / delta,
+            d: dd / delta,
+        })
+    }
+
+    #[inline]
+    pub fn depth(&self, iu: f32, iv: f32) -> f32 {
+        -self.d - self.b * iu - self.c * iv
+    }
+}
+
+/// The point of a line at depth p_a, in unit-cube space.
+#[inline]
+pub fn line_point(family: u32, su: f32, sv: f32, iu: f32, iv: f32, pa: f32) -> Vec3 {
+    let (a, u, v) = axes(family);
+    let mut p = [0.0; 3];
+    p[a] = pa;
+    p[u] = su * pa + iu;
+    p[v] = sv * pa + iv;
+    Vec3::from_array(p)
+}
+
+/// Scan-converts one polygon for one slot: calls `hit(line, iu, iv, p_a)` for every line of
+/// the slot (with jittered intercepts (iu, iv)) that meets the polygon, p_a computed by the
+/// incremental recurrence.
+#[allow(clippy::too_many_arguments)]
+pub fn scan_polygon(
+    space: &RaySpace,
+    slot: u32,
+    pg: &Polygon,
+    seed: u64,
+    jitter: f32,
+    mut hit: impl FnMut(u32, f32, f32, f32),
+) {
+    let (family, su, sv) = space.slot_slopes(slot);
+    let Some(plane) = SlotPlane::new(pg, family, su, sv) else {
+        return;
+    };
+    let (a, u, v) = axes(family);
+    let q: Vec<(f32, f32)> = pg
+        .corners
+        .iter()
+        .map(|c| (c[u] - su * c[a], c[v] - sv * c[a]))
+        .collect();
+    let k = q.len();
+    let mut area = 0.0;
+    for i in 0..k {
+        let (p0, p1) = (q[i], q[(i + 1) % k]);
+        area += p0.0 * p1.1 - p1.0 * p0.1;
+    }
+    let sign = if area >= 0.0 { 1.0 } else { -1.0 };
+    // Edge functions e(x) = a·x_u + b·x_v + c, non-negative inside.
+    let edges: Vec<(f32, f32, f32)> = (0..k)
+        .map(|i| {
+            let (p0, p1) = (q[i], q[(i + 1) % k]);
+            let (a, b) = (-(p1.1 - p0.1) * sign, (p1.0 - p0.0) * sign);
+            (a, b, -(a * p0.0 + b * p0.1))
+        })
+        .collect();
+    let h = space.step;
+    let n = space.intercepts as i64;
+    let amp = 0.5 * jitter * h;
+    let index_lo = |x: f32| (((x + 1.0) / h - 0.5).ceil() as i64).clamp(0, n);
+    let index_hi = |x: f32| (((x + 1.0) / h - 0.5).floor() as i64).clamp(-1, n - 1);
+    let (vmin, vmax) = q
+        .iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p.1), hi.max(p.1))
+        });
+    for jv in index_lo(vmin - amp)..=index_hi(vmax + amp) {
+        let cv = space.intercept(jv as u32);
+        let (blo, bhi) = (cv - amp, cv + amp);
+        // The u-extent of the polygon within the row's band of possible jittered v.
+        let (mut umin, mut umax) = (f32::INFINITY, f32::NEG_INFINITY);
+        for i in 0..k {
+            let (p0, p1) = (q[i], q[(i + 1) % k]);
+            let dv = p1.1 - p0.1;
+            let (t0, t1) = if dv.abs() < 1e-12 {
+                if p0.1 >= blo && p0.1 <= bhi {
+                    (0.0, 1.0)
+                } else {
+                    continue;
+                }
+            } else {
+                let ta = (blo - p0.1) / dv;
+                let tb = (bhi - p0.1) / dv;
+                (ta.min(tb).max(0.0), ta.max(tb).min(1.0))
+            };
+            if t0 > t1 {
+                continue;
+            }
+            for t in [t0, t1] {
+                let x = p0.0 + t * (p1.0 - p0.0);
+                umin = umin.min(x);
+                umax = umax.max(x);
+            }
+        }
+        if umin > umax {
+            continue;
+        }
+        let (ju0, ju1) = (index_lo(umin - amp), index_hi(umax + amp));
+        if ju0 > ju1 {
+            continue;
+        }
+        // The paper's recurrence: one multiply-add at the row start, one add per cell.
+        let step = plane.b * h;
+        let mut pa = plane.depth(space.intercept(ju0 as u32), cv);
+        for ju in ju0..=ju1 {
+            let (du, dv) = space.jitter(seed, jitter, slot, ju as u32, jv as u32);
+            let x = (space.intercept(ju as u32) + du, cv + dv);
+            let inside = edges.iter().all(|&(a, b, c)| a * x.0 + b * x.1 + c >= 0.0);
+            if inside {
+                let line = ju as u32 * space.intercepts + jv as u32;
+                hit(line, x.0, x.1, pa - plane.b * du - plane.c * dv);
+            }
+            pa -= step;
+        }
+    }
+}
+
+/// The side key of a hit on polygon `pg` at unit-space point `p`, facing direction `d`.
+#[inline]
+fn side_key(pg: &Polygon, p: Vec3, d: Vec3) -> u32 {
+    let (s, t) = pg.st(p);
+    let cell = pg.cell_at(s, t);
+    cell * 2 + u32::from(pg.normal_at(p).dot(d) <= 0.0)
+}
+
+/// The scan-conversion hits of one slot.
+pub fn scan_slot(
+    space: &RaySpace,
+    patches: &Patches,
+    slot: u32,
+    seed: u64,
+    jitter: f32,
+) -> Vec<LineHit> {
+    let (family, su, sv) = space.slot_slopes(slot);
+    let d = space.direction(slot);
+    let mut hits = Vec::new();
+    for pg in &patches.polygons {
+        if pg.n == Vec3::ZERO {
+            continue;
+        }
+        let Some(plane) = SlotPlane::new(pg, family, su, sv) else {
+            continue;
+        };
+        let back = u32::from(pg.n.dot(d) <= 0.0);
+        // The hit point is affine in the intercept: so are (s, t), scaled to cell units.
+        let at = |iu: f32, iv: f32| {
+            let p = line_point(family, su, sv, iu, iv, plane.depth(iu, iv));
+            let (s, t) = pg.st(p);
+            (s * pg.ns as f32, t * pg.nt as f32)
+        };
+        let p0 = at(0.0, 0.0);
+        let (pu, pv) = (at(1.0, 0.0), at(0.0, 1.0));
+        let (su_, sv_) = (pu.0 - p0.0, pv.0 - p0.0);
+        let (tu, tv) = (pu.1 - p0.1, pv.1 - p0.1);
+        let (ns, nt) = (pg.ns as i32 - 1, pg.nt as i32 - 1);
+        scan_polygon(space, slot, pg, seed, jitter, |line, iu, iv, pa| {
+            let i = ((p0.0 + su_ * iu + sv_ * iv) as i32).clamp(0, ns) as u32;
+            let j = ((p0.1 + tu * iu + tv * iv) as i32).clamp(0, nt) as u32;
+            hits.push(LineHit {
+                line,
+                depth: pa,
+                key: (pg.first_cell + i * pg.nt + j) * 2 + back,
+            });
+        });
+    }
+    hits
+}
+
+/// The Embree-cast hits of one slot: every line of the slot that crosses the unit cube is
+/// followed through the scene with repeated closest-hit queries.
+pub fn cast_slot(
+    ctx: &Context,
+    space: &RaySpace,
+    patches: &Patches,
+    slot: u32,
+    seed: u64,
+    jitter: f32,
+    stats: &mut RayStats,
+) -> Vec<LineHit> {
+    let (family, su, sv) = space.slot_slopes(slot);
+    let (a, _, _) = axes(family);
+    let d = space.direction(slot);
+    let dir = d.normalize();
+    let h = space.step;
+    let n = space.intercepts as i64;
+    // Intercepts of lines through the unit cube: i = p_u − s·p_a over the cube's corners.
+    let range = |s: f32| {
+        let (lo, hi) = (0.0f32.min(-s), 1.0f32.max(1.0 - s));
+        let amp = 0.5 * jitter * h;
+        let j0 = (((lo - amp + 1.0) / h - 0.5).ceil() as i64).clamp(0, n - 1);
+        let j1 = (((hi + amp + 1.0) / h - 0.5).floor() as i64).clamp(0, n - 1);
+        j0..=j1
+    };
+    let mut hits = Vec::new();
+    let start_depth = -0.5;
+    for ju in range(su) {
+        for jv in range(sv) {
+            let (du, dv) = space.jitter(seed, jitter, slot, ju as u32, jv as u32);
+            let (iu, iv) = (
+                space.intercept(ju as u32) + du,
+                space.intercept(jv as u32) + dv,
+            );
+            let origin = space.to_world(line_point(family, su, sv, iu, iv, start_depth));
+            let mut ray = Ray::new(origin, dir);
+            // Lines through the cube span at most its diagonal in p_a (plus the start).
+            ray.tmax = 3.0 * space.scale * d.length();
+            let line = ju as u32 * space.intercepts + jv as u32;
+            while let Some(hit) = ctx.intersect_hit(&ray, stats) {
+                let pw = ray.at(hit.t);
+                let p = space.to_unit(pw);
+                if let Some((poly, _)) = patches.locate(hit.geom_id, hit.prim_id, p) {
+                    let pg = &patches.polygons[poly as usize];
+                    if pg.n != Vec3::ZERO || pg.sphere.is_some() {
+                        hits.push(LineHit {
+                            line,
+                            depth: p[a],
+                            key: side_key(pg, p, d),
+                        });
+                    }
+                }
+                // Continue just past this hit (a relative epsilon of the scene's size).
+                ray.tmin = hit.t + 1e-5 * space.scale;
+            }
+        }
+    }
+    hits
+}
+
+/// Hits closer than this along a line (unit-cube units of p_a) are on touching surfaces.
+pub const COINCIDENT: f32 = 1e-5;
+
+/// Reusable buffers of [`link_slot`].
+#[derive(Default)]
+pub struct LinkBuffers {
+    counts: Vec<u32>,
+    sorted: Vec<LineHit>,
+}
+
+/// Sorts one slot's hits along their lines (a counting sort by line, then by depth within
+/// each line's few hits) and links consecutive ones. `lines` is the number of lines per slot.
+pub fn link_slot(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) -> SlotLinks {
+    let counts = &mut buf.counts;
+    counts.clear();
+    counts.resize(lines + 1, 0);
+    for h in hits {
+        counts[h.line as usize + 1] += 1;
+    }
+    for i in 1..counts.len() {
+        counts[i] += counts[i - 1];
+    }
+    let sorted = &mut buf.sorted;
+    sorted.clear();
+    sorted.resize(
+        hits.len(),
+        LineHit {
+            line: 0,
+            depth: 0.0,
+            key: 0,
+        },
+    );
+    for h in hits {
+        let at = &mut counts[h.line as usize];
+        sorted[*at as usize] = *h;
+        *at += 1;
+    }
+    let mut out = SlotLinks {
+        intersections: hits.len() as u64,
+        ..SlotLinks::default()
+    };
+    for group in sorted.chunk_by_mut(|x, y| x.line == y.line) {
+        // Insertion sort: a line meets a handful of patches.
+        for i in 1..group.len() {
+            let mut j = i;
+            while j > 0 && (group[j].depth, group[j].key) < (group[j - 1].depth, group[j - 1].key) {
+                group.swap(j, j - 1);
+                j -= 1;
+            }
+        }
+        // Entering the scene: the first side facing −d looks out of it.
+        out.escapes.push(group[0].key ^ 1);
+        for w in group.windows(2) {
+            let (x, y) = (w[0].key, w[1].key ^ 1);
+            // A line meeting the same side twice in a row (a hit on an edge counted by both
+            // of its cells' polygon) carries nothing; coincident surfaces (a box standing on
+            // the floor) touch, and no light passes between them.
+            if x != y && w[1].depth - w[0].depth > COINCIDENT {
+                out.pairs.push([x, y]);
+            } else {
+                out.degenerate += 1;
+            }
+        }
+        out.escapes.push(group[group.len() - 1].key);
+    }
+    out
+}
+
+/// Runs a builder over every slot, in parallel, returning the links in slot order.
+pub fn build_links(
+    ctx: Option<&Context>,
+    space: &RaySpace,
+    patches: &Patches,
+    seed: u64,
+    jitter: f32,
+    builder: Builder,
+) -> (Vec<SlotLinks>, RayStats) {
+    let results: Vec<(SlotLinks, RayStats)> = (0..space.slots() as u32)
+        .into_par_iter()
+        .map_init(LinkBuffers::default, |buf, slot| {
+            let mut stats = RayStats::default();
+            let hits = match (builder, ctx) {
+                (Builder::Embree, Some(ctx)) => {
+                    cast_slot(ctx, space, patches, slot, seed, jitter, &mut stats)
+                }
+                _ => scan_slot(space, patches, slot, seed, jitter),
+            };
+            (link_slot(&hits, space.lines_per_slot(), buf), stats)
+        })
+        .collect();
+    let mut stats = RayStats::default();
+    let links = results
+        .into_iter()
+        .map(|(l, s)| {
+            stats.add(&s);
+            l
+        })
+        .collect();
+    (links, stats)
+}

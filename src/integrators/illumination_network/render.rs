@@ -1,0 +1,276 @@
+//! Rendering from a converged network (figure 6). An eye ray finds the patch it hits through
+//! the intersection backend; the radiance toward the eye is
+//!
+//! - emission, for the front of an emitter (exact, not interpolated);
+//! - the diffuse out-buffer, bilinearly interpolated: each corner of the hit patch takes the
+//!   average of the (up to four) patches sharing it, and the hit point interpolates the four
+//!   corners (figure 6 b, c);
+//! - for directional patches, the radiance that arrived over the links around the mirror
+//!   direction of the eye (bilinearly over the four bounding slots, figure 6 a, or under the
+//!   glossy lobe), for every patch of the 8-neighbourhood before the spatial interpolation.
+//!
+//! Patches without a node on the side seen (no line reached them) are left out of the
+//! averages. The image is a pure function of the network, its solution and the camera.
+
+use super::distribute::{candidates, local, Solution};
+use super::{Network, ESCAPE, NONE};
+use crate::bsdf::Ggx;
+use crate::integrators::{Context, Integrator, RayStats, Sample};
+use crate::math::{offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
+use crate::scene::SurfacePoint;
+use std::f32::consts::FRAC_1_PI;
+
+pub struct NetworkRenderer<'a> {
+    pub net: &'a Network,
+    pub solution: &'a Solution,
+    /// Hybrid mode: the diffuse reflection of light coming straight from the emitters is
+    /// computed per pixel with a light sample and a shadow ray; the network gives the rest.
+    pub hybrid: bool,
+}
+
+impl NetworkRenderer<'_> {
+    /// The reflected radiance of a node toward unit direction `wo` (leaving the node).
+    ///
+    /// Directional parts are *gathered* from the radiance that arrived over the node's
+    /// links: a mirror takes the incoming radiance at the reflected direction, interpolated
+    /// over the linked slots among the four bounding it; a glossy lobe averages the incoming
+    /// radiance of the linked slots under the lobe, weighted by lobe × étendue; transmission
+    /// does the same with the other side's incoming radiance around −wo. Reading the
+    /// out-buffer of the eye's slot instead (the paper) shows which slots of each small patch
+    /// happen to have links, a blotchy pattern; the gather only averages over them.
+    fn node_radiance(&self, node: u32, wo: Vec3) -> Rgb {
+        let sol = self.solution;
+        let mut r = sol.diffuse[node as usize];
+        if self.hybrid {
+            r -= sol.direct[node as usize];
+        }
+        let k = sol.dir_index[node as usize];
+        if k == NONE {
+            return r;
+        }
+        let net = self.net;
+        let sfc = &sol.surfaces[node as usize];
+        let n = net.node_normal(node);
+        if sfc.ks.max_element() > 0.0 {
+            let refl = 2.0 * n.dot(wo) * n - wo;
+            r += sfc.ks
+                * self.gather(node, k, refl, sfc.alpha, |wi| {
+                    let ggx = Ggx {
+                        alpha: sfc.alpha.max(1e-3),
+                    };
+                    let (ci, co) = (n.dot(wi), n.dot(wo));
+                    if ci <= 0.0 || co <= 0.0 {
+                        return 0.0;
+                    }
+                    let h = (wi + wo).normalize();
+                    ggx.d(local(n.dot(h))) * ggx.g(local(co), local(ci)) / (4.0 * ci * co)
+                });
+        }
+        if sfc.kt.max_element() > 0.0 {
+            let key = net.key_of_node[node as usize];
+            let twin = net.node_of_key[(key ^ 1) as usize];
+            if twin != NONE && sol.dir_index[twin as usize] != NONE {
+                let sigma2 = (sfc.alpha * sfc.alpha).max(1e-12);
+                let through = -wo;
+                r += sfc.kt
+                    * self.gather(
+                        twin,
+                        sol.dir_index[twin as usize],
+                        through,
+                        sfc.alpha,
+                        |wi| {
+                            let c = wi.dot(through).clamp(-1.0, 1.0);
+                            let th = c.acos();
+                            (-0.5 * th * th / sigma2).exp()
+                        },
+                    );
+            }
+        }
+        r
+    }
+
+    /// Incoming radiance of directional node `node` (row `k`) around direction `centre`
+    /// (pointing away from the node), as seen through a lobe of width `alpha`.
+    fn gather(
+        &self,
+        node: u32,
+        k: u32,
+        centre: Vec3,
+        alpha: f32,
+        lobe: impl Fn(Vec3) -> f32,
+    ) -> Rgb {
+        let net = self.net;
+        let space = &net.space;
+        let slots = net.slots();
+        let row = &self.solution.incoming[k as usize * slots..(k as usize + 1) * slots];
+        let links = net.row(node);
+        let n = net.node_normal(node);
+        let mut sum = Rgb::ZERO;
+        let mut wsum = 0.0;
+        if alpha <= 0.5 * space.slope_step() {
+            for (l, wgt) in space.bounding_slots(centre) {
+                if links[l as usize] < ESCAPE && wgt > 0.0 {
+                    sum += row[l as usize] * wgt;
+                    wsum += wgt;
+                }
+            }
+        } else {
+            let radius = ((3.0 * alpha * space.slopes as f32 / 2.0).ceil() as i64 + 1)
+                .min(space.slopes as i64);
+            let mut buf = Vec::new();
+            candidates(space, centre, radius, &mut buf);
+            for l in buf {
+                if links[l as usize] < ESCAPE {
+                    let wi = space.direction_towards(l, n);
+                    let wgt = lobe(wi) * space.etendue(l);
+                    if wgt > 0.0 && wgt.is_finite() {
+                        sum += row[l as usize] * wgt;
+                        wsum += wgt;
+                    }
+                }
+            }
+        }
+        if wsum > 0.0 {
+            sum / wsum
+        } else {
+            Rgb::ZERO
+        }
+    }
+
+    /// Reflected radiance toward the eye at unit-space point `p` of polygon `poly`, side
+    /// `side`, leaving in direction `wo`.
+    pub fn radiance_at(&self, poly: u32, p: Vec3, side: u32, wo: Vec3) -> Rgb {
+        let pg = &self.net.patches.polygons[poly as usize];
+        let (s, t) = pg.st(p);
+        let (x, y) = (
+            (s * pg.ns as f32).clamp(0.0, pg.ns as f32),
+            (t * pg.nt as f32).clamp(0.0, pg.nt as f32),
+        );
+        let (i, j) = (
+            (x as u32).min(pg.ns - 1) as i32,
+            (y as u32).min(pg.nt - 1) as i32,
+        );
+        let (fx, fy) = (x - i as f32, y - j as f32);
+        // Values of the 4×4 block around the cell (cells i−1..=i+1), computed once.
+        let mut value = [[None::<Rgb>; 3]; 3];
+        for (a, row) in value.iter_mut().enumerate() {
+            for (b, v) in row.iter_mut().enumerate() {
+                let (ci, cj) = (i + a as i32 - 1, j + b as i32 - 1);
+                if ci < 0 || cj < 0 || ci >= pg.ns as i32 || cj >= pg.nt as i32 {
+                    continue;
+                }
+                let cell = pg.first_cell + ci as u32 * pg.nt + cj as u32;
+                let node = self.net.node_of_key[(cell * 2 + side) as usize];
+                if node != NONE {
+                    *v = Some(self.node_radiance(node, wo));
+                }
+            }
+        }
+        // Corner (ca, cb) of the hit cell averages the cells sharing it.
+        let corner = |ca: usize, cb: usize| {
+            let mut sum = Rgb::ZERO;
+            let mut n = 0;
+            for row in &value[ca..ca + 2] {
+                for v in row[cb..cb + 2].iter().flatten() {
+                    sum += *v;
+                    n += 1;
+                }
+            }
+            (n > 0).then(|| sum / n as f32)
+        };
+        let mut sum = Rgb::ZERO;
+        let mut wsum = 0.0;
+        for (ca, wa) in [(0, 1.0 - fx), (1, fx)] {
+            for (cb, wb) in [(0, 1.0 - fy), (1, fy)] {
+                if let Some(v) = corner(ca, cb) {
+                    sum += v * (wa * wb);
+                    wsum += wa * wb;
+                }
+            }
+        }
+        if wsum > 0.0 {
+            sum / wsum
+        } else {
+            Rgb::ZERO
+        }
+    }
+}
+
+impl Integrator for NetworkRenderer<'_> {
+    fn radiance(&self, ctx: &Context, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Sample {
+        let Some(hit) = ctx.intersect_hit(ray, stats) else {
+            return Sample {
+                radiance: ctx.lights.background_radiance(ray.dir),
+                object: u32::MAX,
+            };
+        };
+        let net = self.net;
+        let p = net.space.to_unit(ray.at(hit.t));
+        let wo = -ray.dir.normalize();
+        let mut radiance = Rgb::ZERO;
+        if let Some((poly, _)) = net.patches.locate(hit.geom_id, hit.prim_id, p) {
+            let pg = &net.patches.polygons[poly as usize];
+            let side = u32::from(pg.normal_at(p).dot(wo) < 0.0);
+            let m = &ctx.scene.materials[ctx.scene.shapes[hit.geom_id as usize].material];
+            if side == 0 {
+                radiance += m.emission * self.light_scale();
+            }
+            radiance += self.radiance_at(poly, p, side, wo);
+            if self.hybrid {
+                radiance += direct_diffuse(ctx, ray, &hit, rng, stats);
+            }
+        }
+        Sample {
+            radiance,
+            object: hit.geom_id,
+        }
+    }
+}
+
+impl NetworkRenderer<'_> {
+    /// The emission scale the solution was computed with (relighting).
+    fn light_scale(&self) -> f32 {
+        self.solution.light_scale
+    }
+}
+
+/// The diffuse reflection of direct light at a hit: one light sample, one shadow ray
+/// (kd/π · Le · cosθ / pdf), with kd scaled as the network scales it (kd + ks + kt ≤ 1).
+fn direct_diffuse(
+    ctx: &Context,
+    ray: &Ray,
+    hit: &crate::accel::Hit,
+    rng: &mut Rng,
+    stats: &mut RayStats,
+) -> Rgb {
+    let sp = SurfacePoint::from_hit(&ctx.scene.shapes, ray, hit);
+    let m = &ctx.scene.materials[sp.material];
+    let mut kd = m.diffuse.eval(sp.p, sp.uv);
+    let total = kd + m.specular + m.transmission;
+    for c in 0..3 {
+        if total[c] > 1.0 {
+            kd[c] /= total[c];
+        }
+    }
+    if kd == Rgb::ZERO {
+        return Rgb::ZERO;
+    }
+    let (u, v, w) = (rng.uniform(), rng.uniform(), rng.uniform());
+    let Some(ls) = ctx.lights.sample_li(sp.p, u, Vec2::new(v, w)) else {
+        return Rgb::ZERO;
+    };
+    let n = if sp.ng.dot(ray.dir) < 0.0 {
+        sp.ng
+    } else {
+        -sp.ng
+    };
+    let cos = n.dot(ls.wi);
+    if cos <= 0.0 || ls.pdf <= 0.0 {
+        return Rgb::ZERO;
+    }
+    let shadow = Ray::segment(offset_origin(sp.p, n, ls.wi), ls.p);
+    if ctx.occluded(&shadow, stats) {
+        return Rgb::ZERO;
+    }
+    kd * FRAC_1_PI * ls.radiance * (cos / ls.pdf)
+}

@@ -1,0 +1,714 @@
+//! Illumination networks (Buckalew & Fussell 1989): the ray space's étendue against π·area,
+//! the incremental intersections against direct ones, the two builders against each other,
+//! energy in closed boxes against Le/(1−ρ), the Cornell box against the path tracer at two
+//! resolutions, and network files (reuse, relighting, bad files) through the CLI.
+
+mod common;
+
+use common::{raylink, stderr};
+use raylink::accel::{self, Backend};
+use raylink::image::compare::{box_downsample, bright_mask, mean, rmse};
+use raylink::image::filter::Filter;
+use raylink::image::output::read_image;
+use raylink::image::Image;
+use raylink::integrators::illumination_network::distribute::{
+    distribute, DistributeOptions, Solution,
+};
+use raylink::integrators::illumination_network::patches::Patches;
+use raylink::integrators::illumination_network::preprocess::{line_point, scan_polygon, Builder};
+use raylink::integrators::illumination_network::ray_space::{axes, RaySpace};
+use raylink::integrators::illumination_network::render::NetworkRenderer;
+use raylink::integrators::illumination_network::{Network, NetworkParams, ESCAPE, NONE};
+use raylink::integrators::path::{PathOptions, PathTracer};
+use raylink::integrators::Context;
+use raylink::math::Vec3;
+use raylink::render::progressive::{render_progressive, ProgressiveOptions};
+use raylink::render::{render, PixelSampling, RenderOptions};
+use raylink::scene::Scene;
+use std::path::Path;
+
+fn scene(text: &str) -> Scene {
+    raylink::scene::toml::from_str(text, Path::new("test.toml")).expect("test scene parses")
+}
+
+const CAMERA: &str = r#"
+[camera]
+position = [0.5, 0.5, 0.95]
+look_at = [0.5, 0.5, 0]
+fov = 60
+width = 16
+height = 16
+"#;
+
+/// A quad facing the inside of the unit cube on face `axis` = `side`.
+fn wall(axis: usize, side: f32, material: &str) -> String {
+    let (u, v) = ((axis + 1) % 3, (axis + 2) % 3);
+    let corner = |a: f32, b: f32| {
+        let mut p = [0.0; 3];
+        p[axis] = side;
+        p[u] = a;
+        p[v] = b;
+        p
+    };
+    let mut vs = vec![
+        corner(0., 0.),
+        corner(1., 0.),
+        corner(1., 1.),
+        corner(0., 1.),
+    ];
+    // Wind so the normal (v1−v0)×(v2−v0) points inside.
+    let n = (Vec3::from(vs[1]) - Vec3::from(vs[0])).cross(Vec3::from(vs[2]) - Vec3::from(vs[0]));
+    if (n[axis] > 0.0) != (side == 0.0) {
+        vs.reverse();
+    }
+    format!("[[shapes]]\ntype = \"quad\"\nmaterial = \"{material}\"\nvertices = {vs:?}\n")
+}
+
+/// The unit cube, closed, every wall of material `m` except the floor (y = 0) of `floor`.
+fn closed_box(materials: &str, m: &str, floor: &str) -> Scene {
+    let mut text = format!("{CAMERA}\n{materials}\n");
+    for axis in 0..3 {
+        for side in [0.0, 1.0] {
+            let mat = if axis == 1 && side == 0.0 { floor } else { m };
+            text += &wall(axis, side, mat);
+        }
+    }
+    scene(&text)
+}
+
+fn params(slopes: u32, step: f32) -> NetworkParams {
+    NetworkParams {
+        slopes,
+        step,
+        patch_size: step,
+        jitter: 1.0,
+        seed: 7,
+    }
+}
+
+fn build(scene: &Scene, p: NetworkParams, builder: Builder) -> Network {
+    let accel = accel::build(scene, Backend::Embree).unwrap();
+    let ctx = Context::new(scene, accel.as_ref());
+    Network::build(scene, &ctx, p, builder).unwrap()
+}
+
+/// The lines of every slot that meet a patch, weighted by their étendue, add up to π·area:
+/// the per-slope weight is the Jacobian of slope-intercept space (1.5%: the boundary of the
+/// projected patch cuts intercept cells).
+#[test]
+fn etendue_of_lines_through_a_patch_is_pi_area() {
+    for (i, verts) in [
+        "[[0.2, 0.3, 0.5], [0.8, 0.3, 0.5], [0.8, 0.7, 0.5], [0.2, 0.7, 0.5]]",
+        "[[0.2, 0.2, 0.2], [0.8, 0.3, 0.4], [0.7, 0.8, 0.9], [0.1, 0.7, 0.7]]",
+    ]
+    .iter()
+    .enumerate()
+    {
+        let s = scene(&format!(
+            "{CAMERA}\n[materials.m]\ndiffuse = 0.5\n[[shapes]]\ntype = \"quad\"\nmaterial = \"m\"\nvertices = {verts}\n"
+        ));
+        // A ray space over a fixed box, so the patch has its own size in the unit cube.
+        let space = RaySpace::new(16, 1.0 / 128.0, (Vec3::ZERO, Vec3::ONE));
+        let patches = Patches::new(&s, &space, 1.0).unwrap();
+        let pg = &patches.polygons[0];
+        let mut sum = 0.0f64;
+        for slot in 0..space.slots() as u32 {
+            let mut count = 0u32;
+            scan_polygon(&space, slot, pg, 3, 1.0, |_, _, _, _| count += 1);
+            sum += count as f64 * space.etendue(slot) as f64;
+        }
+        let exact = std::f64::consts::PI * pg.area() as f64;
+        let err = (sum - exact).abs() / exact;
+        assert!(err < 0.015, "patch {i}: Σw = {sum}, π·A = {exact} ({err})");
+    }
+}
+
+/// The scan converter's incremental p_a equals the directly computed ray-plane intersection,
+/// and it reports exactly the lines whose direct intersection lies inside the polygon (away
+/// from the edges, where rounding decides).
+#[test]
+fn incremental_intersections_equal_direct_ones() {
+    let s = scene(&format!(
+        "{CAMERA}\n[materials.m]\ndiffuse = 0.5\n[[shapes]]\ntype = \"quad\"\nmaterial = \"m\"\nvertices = [[0.1, 0.2, 0.3], [0.9, 0.3, 0.5], [0.8, 0.8, 0.9], [0.0, 0.7, 0.7]]\n"
+    ));
+    let space = RaySpace::new(5, 1.0 / 40.0, (Vec3::ZERO, Vec3::ONE));
+    let patches = Patches::new(&s, &space, 1.0).unwrap();
+    let pg = &patches.polygons[0];
+    let n = space.intercepts;
+    let mut checked = 0;
+    for slot in 0..space.slots() as u32 {
+        let (f, su, sv) = space.slot_slopes(slot);
+        let (a, _, _) = axes(f);
+        let d = space.direction(slot);
+        let mut found = vec![None; (n * n) as usize];
+        scan_polygon(&space, slot, pg, 11, 1.0, |line, iu, iv, pa| {
+            found[line as usize] = Some((iu, iv, pa));
+        });
+        for ju in 0..n {
+            for jv in 0..n {
+                let (du, dv) = space.jitter(11, 1.0, slot, ju, jv);
+                let (iu, iv) = (space.intercept(ju) + du, space.intercept(jv) + dv);
+                let o = line_point(f, su, sv, iu, iv, 0.0);
+                let t = pg.n.dot(pg.o - o) / pg.n.dot(d);
+                let p = o + d * t;
+                let (ps, pt) = pg.st(p);
+                let margin = 1e-4;
+                let inside = ps > margin && pt > margin && ps < 1.0 - margin && pt < 1.0 - margin;
+                let outside =
+                    ps < -margin || pt < -margin || ps > 1.0 + margin || pt > 1.0 + margin;
+                match found[(ju * n + jv) as usize] {
+                    Some((fu, fv, pa)) => {
+                        assert!(
+                            !outside,
+                            "slot {slot} line ({ju}, {jv}) reported but misses"
+                        );
+                        assert_eq!((fu, fv), (iu, iv));
+                        assert!(
+                            (pa - p[a]).abs() < 2e-5,
+                            "slot {slot}: incremental {pa} vs direct {}",
+                            p[a]
+                        );
+                        checked += 1;
+                    }
+                    None => assert!(!inside, "slot {slot} line ({ju}, {jv}) meets but missed"),
+                }
+            }
+        }
+    }
+    assert!(checked > 10_000, "only {checked} intersections checked");
+}
+
+/// A room with a tilted panel: scan conversion and Embree casting of the same jittered lines
+/// give the same links (up to lines through polygon edges, which the two decide differently).
+#[test]
+fn scan_and_embree_builders_agree() {
+    let mut text = format!("{CAMERA}\n[materials.m]\ndiffuse = 0.5\n");
+    for axis in 0..3 {
+        for side in [0.0, 1.0] {
+            text += &wall(axis, side, "m");
+        }
+    }
+    text += "[[shapes]]\ntype = \"quad\"\nmaterial = \"m\"\nvertices = [[0.2, 0.2, 0.3], [0.7, 0.3, 0.4], [0.6, 0.7, 0.8], [0.1, 0.6, 0.7]]\n";
+    let s = scene(&text);
+    let p = params(6, 1.0 / 24.0);
+    let scan = build(&s, p, Builder::Scan);
+    let cast = build(&s, p, Builder::Embree);
+    assert!(cast.stats.rays > 0);
+    // Compare link ends as (side key, slot) → target side key.
+    let ends = |net: &Network| {
+        let mut v = Vec::new();
+        for node in 0..net.nodes() as u32 {
+            let key = net.key_of_node[node as usize];
+            let target = |t: u32| {
+                if t < ESCAPE {
+                    net.key_of_node[t as usize]
+                } else {
+                    t
+                }
+            };
+            for (slot, &t) in net.row(node).iter().enumerate() {
+                if t != NONE {
+                    v.push((key, slot as u32, target(t)));
+                }
+            }
+            for &[slot, t] in net.extra_links(node) {
+                v.push((key, slot, target(t)));
+            }
+        }
+        v.sort_unstable();
+        v
+    };
+    let (a, b) = (ends(&scan), ends(&cast));
+    let common = {
+        let (mut i, mut j, mut c) = (0, 0, 0);
+        while i < a.len() && j < b.len() {
+            match a[i].cmp(&b[j]) {
+                std::cmp::Ordering::Equal => {
+                    c += 1;
+                    i += 1;
+                    j += 1;
+                }
+                std::cmp::Ordering::Less => i += 1,
+                std::cmp::Ordering::Greater => j += 1,
+            }
+        }
+        c
+    };
+    let differ = (a.len() + b.len() - 2 * common) as f64 / a.len() as f64;
+    assert!(a.len() > 50_000, "{} link ends", a.len());
+    eprintln!("{:.4}% of {} link ends differ", 100.0 * differ, a.len());
+    assert!(differ < 0.002, "{:.4}% of link ends differ", 100.0 * differ);
+}
+
+/// Total radiance leaving each node: emission plus the reflected out-buffers.
+fn closed_box_radiance(net: &Network, sol: &Solution) -> (f64, f64, f64) {
+    let w: Vec<f32> = (0..net.slots() as u32)
+        .map(|s| net.space.etendue(s))
+        .collect();
+    let (mut lo, mut hi, mut flux, mut etendue) = (f64::MAX, f64::MIN, 0.0, 0.0);
+    for node in 0..net.nodes() {
+        let sfc = &sol.surfaces[node];
+        let l = (sfc.emission + sol.diffuse[node]).x as f64;
+        lo = lo.min(l);
+        hi = hi.max(l);
+        let mut f = l * net.etendue[node] as f64;
+        let k = sol.dir_index[node];
+        if k != NONE {
+            let row = &sol.directional[k as usize * net.slots()..][..net.slots()];
+            for (l, &t) in net.row(node as u32).iter().enumerate() {
+                if t != NONE {
+                    f += (row[l].x * w[l]) as f64;
+                }
+            }
+            for &[l, _] in net.extra_links(node as u32) {
+                f += (row[l as usize].x * w[l as usize]) as f64;
+            }
+        }
+        flux += f;
+        etendue += net.etendue[node] as f64;
+    }
+    (lo, hi, flux / etendue)
+}
+
+/// A closed diffuse box with albedo ρ and uniform emission Le: every node converges to
+/// Le/(1−ρ) within the tolerance (the network's form factors sum to one exactly).
+#[test]
+fn closed_diffuse_box_converges_to_le_over_one_minus_rho() {
+    let s = closed_box("[materials.m]\ndiffuse = 0.6\nemission = 1\n", "m", "m");
+    let net = build(&s, params(6, 1.0 / 16.0), Builder::Scan);
+    assert_eq!(net.stats.escapes, 0, "a closed box has no escaping links");
+    let tol = 1e-4;
+    let sol = distribute(
+        &net,
+        &s,
+        &DistributeOptions {
+            tolerance: tol,
+            ..Default::default()
+        },
+    );
+    let exact = 1.0 / (1.0 - 0.6);
+    let (lo, hi, _) = closed_box_radiance(&net, &sol);
+    assert!(
+        (lo - exact).abs() / exact < 2.0 * tol as f64
+            && (hi - exact).abs() / exact < 2.0 * tol as f64,
+        "radiance in [{lo}, {hi}], expected {exact}"
+    );
+    // Sweep k adds ρ^k·Le: the count is the geometric series' (log tol / log ρ, ± 1).
+    let expected = ((tol as f64).ln() / 0.6f64.ln()).ceil() as u32;
+    assert!(
+        sol.stats.sweeps.abs_diff(expected) <= 1,
+        "{} sweeps",
+        sol.stats.sweeps
+    );
+}
+
+/// The same box with a mirror floor (ks = ρ, kd = 0) and every surface emitting: the mirror's
+/// rows sum to ρ exactly, so the flux-weighted mean radiance is still Le/(1−ρ), no flux
+/// escapes, and emitted = absorbed + unshot.
+#[test]
+fn mirror_floor_box_conserves_energy() {
+    for floor in [
+        "[materials.floor]\ndiffuse = 0\nspecular = 0.6\nemission = 1\n",
+        "[materials.floor]\ndiffuse = 0.2\nspecular = 0.4\nroughness = 0.2\nemission = 1\n",
+    ] {
+        let s = closed_box(
+            &format!("[materials.m]\ndiffuse = 0.6\nemission = 1\n{floor}"),
+            "m",
+            "floor",
+        );
+        let net = build(&s, params(6, 1.0 / 16.0), Builder::Scan);
+        let tol = 1e-4;
+        let sol = distribute(
+            &net,
+            &s,
+            &DistributeOptions {
+                tolerance: tol,
+                ..Default::default()
+            },
+        );
+        assert!(sol.stats.map_entries > 0);
+        let st = &sol.stats;
+        for c in 0..3 {
+            assert_eq!(st.escaped[c], 0.0);
+            let balance = st.emitted[c] - st.absorbed[c] - st.unshot[c];
+            assert!(
+                balance.abs() < 1e-4 * st.emitted[c],
+                "channel {c}: {balance}"
+            );
+        }
+        let (_, _, mean) = closed_box_radiance(&net, &sol);
+        let exact = 1.0 / (1.0 - 0.6);
+        assert!(
+            (mean - exact).abs() / exact < 2.0 * tol as f64,
+            "{floor}: mean radiance {mean}, expected {exact}"
+        );
+    }
+}
+
+fn cornell() -> Scene {
+    Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml")).unwrap()
+}
+
+fn network_image(scene: &Scene, p: NetworkParams, size: u32, hybrid: bool) -> Image {
+    let accel = accel::build(scene, Backend::Embree).unwrap();
+    let ctx = Context::new(scene, accel.as_ref());
+    let net = Network::build(scene, &ctx, p, Builder::Scan).unwrap();
+    let sol = distribute(&net, scene, &DistributeOptions::default());
+    let renderer = NetworkRenderer {
+        net: &net,
+        solution: &sol,
+        hybrid,
+    };
+    let options = RenderOptions {
+        width: size,
+        height: size,
+        // The hybrid mode samples the lights: more samples per pixel.
+        sampling: PixelSampling::Uniform {
+            n: if hybrid { 4 } else { 2 },
+        },
+        threads: None,
+        seed: 1,
+        progress: false,
+    };
+    render(&ctx, &renderer, &options).unwrap().0
+}
+
+/// The Cornell box against the path tracer: the relative RMSE of 4×4-pixel block means
+/// (the light excluded) is below 25% at a coarse network, shrinks at a finer one, and shrinks
+/// more with the hybrid mode (direct light per pixel) on the coarse network.
+#[test]
+fn cornell_box_approaches_the_path_tracer() {
+    let scene = cornell();
+    let size = 32;
+    let accel = accel::build(&scene, Backend::Embree).unwrap();
+    let ctx = Context::new(&scene, accel.as_ref());
+    let options = ProgressiveOptions {
+        width: size,
+        height: size,
+        spp: 1024,
+        time_limit: None,
+        threads: None,
+        seed: 5,
+        progress: false,
+        filter: Filter::Box { radius: 0.5 },
+    };
+    let (film, _) = render_progressive(
+        &ctx,
+        &PathTracer::new(PathOptions { max_depth: 64 }),
+        &options,
+        |_| Ok(()),
+    )
+    .unwrap();
+    // The light (rendered exactly by both) and its neighbours are left out of the blocks.
+    let full = film.image();
+    let mask = bright_mask(&full, 1.0);
+    let masked = |img: &Image| {
+        let mut img = img.clone();
+        for (p, &m) in img.pixels.iter_mut().zip(&mask) {
+            if m {
+                *p = Vec3::ZERO;
+            }
+        }
+        box_downsample(&img, 8, 8).unwrap()
+    };
+    let reference = masked(&full);
+    let scale = mean(&reference, None).element_sum() as f64 / 3.0;
+    let error = |p: NetworkParams, hybrid: bool| {
+        let img = masked(&network_image(&scene, p, size, hybrid));
+        rmse(&img, &reference, None) / scale
+    };
+    let coarse = error(params(6, 1.0 / 16.0), false);
+    let fine = error(params(12, 1.0 / 32.0), false);
+    let hybrid = error(params(6, 1.0 / 16.0), true);
+    eprintln!("relative RMSE: coarse {coarse:.4}, fine {fine:.4}, coarse hybrid {hybrid:.4}");
+    assert!(coarse < 0.25, "coarse network: {coarse}");
+    assert!(fine < 0.8 * coarse, "fine {fine} vs coarse {coarse}");
+    // Direct light per pixel removes the coarse network's blurred shadows.
+    assert!(hybrid < 0.6 * coarse, "hybrid {hybrid} vs coarse {coarse}");
+}
+
+fn tmp_path(dir: &tempfile::TempDir, name: &str) -> String {
+    dir.path().join(name).to_string_lossy().into_owned()
+}
+
+fn network_render(scene: &str, out: &str, extra: &[&str]) -> std::process::Output {
+    let slopes = if extra.contains(&"--slopes") {
+        &[][..]
+    } else {
+        &["--slopes", "6"][..]
+    };
+    let mut args = vec![
+        "render",
+        scene,
+        "--integrator",
+        "network",
+        "--intercept-step",
+        "0.0625",
+        "--width",
+        "24",
+        "--height",
+        "24",
+        "--spp",
+        "1",
+        "-o",
+        out,
+    ];
+    args.extend_from_slice(slopes);
+    args.extend_from_slice(extra);
+    raylink(&args)
+}
+
+/// Network files: a second view from the saved network runs no preprocess and equals a fresh
+/// build; doubling the lights doubles the image exactly; bad files are one-line errors.
+#[test]
+fn network_files_are_reused_for_views_and_lighting() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = tmp_path(&dir, "cornell.net");
+    let first = network_render(
+        "scenes/cornell-box.toml",
+        &tmp_path(&dir, "a.exr"),
+        &["--network-file", &file],
+    );
+    assert!(first.status.success(), "{}", stderr(&first));
+    assert!(stderr(&first).contains("preprocess"), "{}", stderr(&first));
+    assert!(Path::new(&file).exists());
+
+    // Another view of the same geometry (the camera moved).
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml"),
+    )
+    .unwrap()
+    .replace("position = [0, 1, 6.8]", "position = [0.5, 1.2, 3.5]");
+    let moved = tmp_path(&dir, "moved.toml");
+    std::fs::write(&moved, text).unwrap();
+    let loaded = network_render(&moved, &tmp_path(&dir, "b.exr"), &["--network-file", &file]);
+    assert!(loaded.status.success(), "{}", stderr(&loaded));
+    assert!(
+        stderr(&loaded).contains("no preprocess"),
+        "{}",
+        stderr(&loaded)
+    );
+    assert!(!stderr(&loaded).contains("network: preprocess"));
+    let fresh = network_render(&moved, &tmp_path(&dir, "c.exr"), &[]);
+    assert!(fresh.status.success(), "{}", stderr(&fresh));
+    let img = |name: &str| read_image(&dir.path().join(name)).unwrap().0;
+    assert_eq!(img("b.exr").pixels, img("c.exr").pixels);
+
+    // Relighting: twice the emission, exactly twice the radiance (a power of two is exact).
+    let relit = network_render(
+        &moved,
+        &tmp_path(&dir, "d.exr"),
+        &["--network-file", &file, "--light-scale", "2"],
+    );
+    assert!(relit.status.success(), "{}", stderr(&relit));
+    assert!(stderr(&relit).contains("no preprocess"));
+    let (b, d) = (img("b.exr"), img("d.exr"));
+    assert!(b.pixels.iter().any(|p| p.x > 0.0));
+    for (x, y) in b.pixels.iter().zip(&d.pixels) {
+        assert_eq!(*x * 2.0, *y);
+    }
+
+    // Other parameters, another scene, a corrupt file: errors naming the file, exit 2.
+    let other = network_render(
+        "scenes/cornell-box.toml",
+        &tmp_path(&dir, "e.exr"),
+        &["--network-file", &file, "--slopes", "7"],
+    );
+    assert_eq!(other.status.code(), Some(2));
+    assert!(stderr(&other).contains("cornell.net") && stderr(&other).contains("parameters"));
+    let box_scene = network_render(
+        "scenes/cornell-spheres.toml",
+        &tmp_path(&dir, "f.exr"),
+        &["--network-file", &file],
+    );
+    assert_eq!(box_scene.status.code(), Some(2), "{}", stderr(&box_scene));
+    let mut bytes = std::fs::read(&file).unwrap();
+    let mid = bytes.len() / 2;
+    bytes[mid] ^= 0xff;
+    let corrupt = tmp_path(&dir, "corrupt.net");
+    std::fs::write(&corrupt, &bytes).unwrap();
+    let bad = network_render(
+        "scenes/cornell-box.toml",
+        &tmp_path(&dir, "g.exr"),
+        &["--network-file", &corrupt],
+    );
+    assert_eq!(bad.status.code(), Some(2));
+    assert!(stderr(&bad).contains("corrupt.net") && stderr(&bad).contains("checksum"));
+    assert!(!dir.path().join("g.exr").exists());
+}
+
+/// The network and its image do not depend on the number of threads.
+#[test]
+fn network_is_independent_of_thread_count() {
+    let scene = cornell();
+    let p = params(5, 1.0 / 16.0);
+    let one = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .unwrap()
+        .install(|| build(&scene, p, Builder::Scan));
+    let two = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap()
+        .install(|| build(&scene, p, Builder::Scan));
+    assert_eq!(one.links, two.links);
+    assert_eq!(one.extra, two.extra);
+    let sol1 = distribute(&one, &scene, &DistributeOptions::default());
+    let sol2 = distribute(&two, &scene, &DistributeOptions::default());
+    assert_eq!(sol1.diffuse, sol2.diffuse);
+}
+
+/// Two rooms of the unit cube split by a panel at x = ½, lit in the left room: an opaque
+/// panel leaves the right room exactly dark (no link crosses a surface); a clear or frosted
+/// panel (kt = 0.5) lights it, and energy balances (emitted = absorbed + unshot, nothing
+/// escapes).
+#[test]
+fn transmission_carries_light_through_a_panel() {
+    for panel in [
+        "diffuse = 0.5",
+        "diffuse = 0.2\ntransmission = 0.5",
+        "diffuse = 0.2\ntransmission = 0.5\nroughness = 0.3",
+    ] {
+        let mut text = format!(
+            "{CAMERA}\n[materials.m]\ndiffuse = 0.5\n[materials.panel]\n{panel}\n\
+             [materials.lamp]\ndiffuse = 0\nemission = 5\n"
+        );
+        for axis in 0..3 {
+            for side in [0.0, 1.0] {
+                text += &wall(axis, side, "m");
+            }
+        }
+        text += "[[shapes]]\ntype = \"quad\"\nmaterial = \"panel\"\nvertices = [[0.5, 0, 0], [0.5, 1, 0], [0.5, 1, 1], [0.5, 0, 1]]\n";
+        text += "[[shapes]]\ntype = \"quad\"\nmaterial = \"lamp\"\nvertices = [[0.1, 0.02, 0.4], [0.1, 0.02, 0.6], [0.3, 0.02, 0.6], [0.3, 0.02, 0.4]]\n";
+        let s = scene(&text);
+        let net = build(&s, params(6, 1.0 / 16.0), Builder::Scan);
+        let sol = distribute(&net, &s, &DistributeOptions::default());
+        let st = &sol.stats;
+        for c in 0..3 {
+            assert_eq!(st.escaped[c], 0.0);
+            let balance = st.emitted[c] - st.absorbed[c] - st.unshot[c];
+            assert!(balance.abs() < 1e-4 * st.emitted[c], "{panel}: {balance}");
+        }
+        // Light reflected by the surfaces of the right room (x > ½, the panel excluded).
+        let mut right = 0.0;
+        for node in 0..net.nodes() as u32 {
+            let (poly, cell, _) = net.node_place(node);
+            let pg = &net.patches.polygons[poly as usize];
+            let local = cell - pg.first_cell;
+            let centre = pg.o
+                + pg.e1 * ((local / pg.nt) as f32 + 0.5) / pg.ns as f32
+                + pg.e2 * ((local % pg.nt) as f32 + 0.5) / pg.nt as f32;
+            let centre = net.space.to_world(centre);
+            if centre.x > 0.55 {
+                right += sol.diffuse[node as usize].x as f64 * net.etendue[node as usize] as f64;
+            }
+        }
+        eprintln!(
+            "{panel:?}: right room {:.4} of emitted",
+            right / st.emitted[0]
+        );
+        if panel.contains("transmission") {
+            assert!(right > 0.05 * st.emitted[0], "{panel}: {right}");
+        } else {
+            assert_eq!(right, 0.0, "light leaked through an opaque panel");
+        }
+    }
+}
+
+/// Curved geometry through the Embree builder: a sphere in the closed box (everything of
+/// albedo ρ, emitting Le) converges to Le/(1−ρ) on every node, sphere patches included; the
+/// scan converter refuses spheres with a clear error.
+#[test]
+fn spheres_are_linked_by_the_embree_builder() {
+    let mut text = format!("{CAMERA}\n[materials.m]\ndiffuse = 0.6\nemission = 1\n");
+    for axis in 0..3 {
+        for side in [0.0, 1.0] {
+            text += &wall(axis, side, "m");
+        }
+    }
+    text +=
+        "[[shapes]]\ntype = \"sphere\"\nmaterial = \"m\"\ncenter = [0.5, 0.4, 0.5]\nradius = 0.2\n";
+    let s = scene(&text);
+    let accel = accel::build(&s, Backend::Embree).unwrap();
+    let ctx = Context::new(&s, accel.as_ref());
+    let err = Network::build(&s, &ctx, params(6, 1.0 / 16.0), Builder::Scan).unwrap_err();
+    assert!(err.contains("sphere") && err.contains("embree"), "{err}");
+    let net = Network::build(&s, &ctx, params(6, 1.0 / 16.0), Builder::Embree).unwrap();
+    let sphere_nodes = (0..net.nodes() as u32)
+        .filter(|&n| {
+            net.patches.polygons[net.node_place(n).0 as usize]
+                .sphere
+                .is_some()
+        })
+        .count();
+    assert!(sphere_nodes > 50, "{sphere_nodes} sphere nodes");
+    let tol = 1e-4;
+    let sol = distribute(
+        &net,
+        &s,
+        &DistributeOptions {
+            tolerance: tol,
+            ..Default::default()
+        },
+    );
+    // Fronts only: the inside of the sphere is a closed dark cavity (emission is one-sided).
+    let exact = 1.0 / (1.0 - 0.6);
+    let mut fronts = 0;
+    for node in 0..net.nodes() {
+        let (_, _, side) = net.node_place(node as u32);
+        if side == 0 {
+            let l = (sol.surfaces[node].emission + sol.diffuse[node]).x as f64;
+            assert!(
+                (l - exact).abs() / exact < 2.0 * tol as f64,
+                "node {node}: {l}"
+            );
+            fronts += 1;
+        } else {
+            assert_eq!(sol.diffuse[node], Vec3::ZERO);
+        }
+    }
+    assert!(fronts > 1000);
+}
+
+/// The two distribution orders (parallel sweeps, sequential largest-first shooting) converge
+/// to the same radiances on the Cornell box (flux-weighted L1 difference within a few
+/// tolerances), and shooting's direct part equals the first sweep's.
+#[test]
+fn sweeps_and_shooting_agree() {
+    use raylink::integrators::illumination_network::distribute::Order;
+    let scene = cornell();
+    let net = build(&scene, params(5, 1.0 / 16.0), Builder::Scan);
+    let tol = 1e-4;
+    let run = |order| {
+        distribute(
+            &net,
+            &scene,
+            &DistributeOptions {
+                tolerance: tol,
+                order,
+                ..Default::default()
+            },
+        )
+    };
+    let (a, b) = (run(Order::Sweeps), run(Order::Shoot));
+    assert!(
+        b.stats.sweeps as usize > net.nodes(),
+        "{} shots",
+        b.stats.sweeps
+    );
+    let diff = |x: &[Vec3], y: &[Vec3]| {
+        let (mut d, mut t) = (0.0f64, 0.0f64);
+        for i in 0..net.nodes() {
+            let w = net.etendue[i] as f64;
+            d += w * (x[i] - y[i]).abs().element_sum() as f64;
+            t += w * x[i].element_sum() as f64;
+        }
+        d / t
+    };
+    let total = diff(&a.diffuse, &b.diffuse);
+    let direct = diff(&a.direct, &b.direct);
+    eprintln!("sweeps vs shooting: {total:.2e} (direct {direct:.2e})");
+    assert!(total < 5.0 * tol as f64, "radiance differs by {total}");
+    assert!(direct < 1e-5, "direct light differs by {direct}");
+}
