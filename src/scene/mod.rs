@@ -2,6 +2,7 @@
 //! integrators never know which file it came from. Geometry is stored in world space:
 //! readers apply transforms when they load.
 
+pub mod animation;
 pub mod camera;
 pub mod convert;
 pub mod environment;

@@ -1,0 +1,546 @@
+//! `raylink animate`: renders a keyframed scene's frames with object-space temporal coherence,
+//! optionally checking every frame against a full render (`--verify`) and reporting what was
+//! saved per frame (`--stats`, `--csv`), like Table 2 of the paper.
+
+use super::renderer::{CoherentRenderer, Engine, FrameStats};
+use crate::accel::{self, Backend};
+use crate::image::output::{check_output_path, write_image, OutputOptions};
+use crate::image::{Image, MetaValue, Metadata};
+use crate::integrators::path::{PathOptions, PathTracer, DEFAULT_MAX_DEPTH, MAX_DEPTH_LIMIT};
+use crate::integrators::whitted::{Whitted, WhittedOptions};
+use crate::integrators::{Context, RayStats};
+use crate::render::progressive::{ProgressiveOptions, MAX_SPP};
+use crate::render::{PixelSampling, RenderOptions, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD};
+use crate::scene::animation::Animation;
+use crate::scene::{Light, Scene, MAX_RESOLUTION};
+use crate::{Error, Result};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// The integrators `animate` can render with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum AnimIntegrator {
+    /// Whitted 1980 (adaptive or uniform supersampling).
+    Whitted,
+    /// Path tracing with next-event estimation.
+    Path,
+}
+
+/// Options of `raylink animate`.
+#[derive(Clone, Debug, clap::Args)]
+pub struct AnimateArgs {
+    /// The animated scene (.toml with an [animation] table and keyframes; docs/animation.md).
+    pub scene: PathBuf,
+    /// Output file pattern: `%d` or `%0Nd` is replaced by the frame number
+    /// (e.g. frames/frame_%04d.exr); the extension picks the format.
+    #[arg(short, long = "output", value_name = "PATTERN")]
+    pub output: String,
+    /// Light-transport technique (default: the scene's, else whitted).
+    #[arg(long, value_enum)]
+    pub integrator: Option<AnimIntegrator>,
+    /// Intersection backend.
+    #[arg(long, value_enum, default_value = "embree")]
+    pub accel: Backend,
+    /// Image width in pixels (default: the scene's).
+    #[arg(long)]
+    pub width: Option<u32>,
+    /// Image height in pixels (default: the scene's).
+    #[arg(long)]
+    pub height: Option<u32>,
+    /// Samples per pixel: path tracer (default: the scene's, else 16); Whitted: uniform
+    /// supersampling with this square number of samples instead of adaptive anti-aliasing.
+    #[arg(long)]
+    pub spp: Option<u32>,
+    /// Adaptive anti-aliasing (Whitted): largest corner difference accepted.
+    #[arg(long, default_value_t = DEFAULT_AA_THRESHOLD)]
+    pub aa_threshold: f32,
+    /// Adaptive anti-aliasing (Whitted): deepest subdivision level.
+    #[arg(long, default_value_t = DEFAULT_AA_DEPTH)]
+    pub aa_depth: u32,
+    /// Maximum ray-tree depth (Whitted) or bounces (path). Default: the scene's, else 8.
+    #[arg(long)]
+    pub max_depth: Option<u32>,
+    /// Whitted: shadow rays per area light at each shading point.
+    #[arg(long, default_value_t = 16)]
+    pub area_samples: u32,
+    /// Pixel blocks of the voxel bit tables, COLSxROWS (at most one block per pixel).
+    #[arg(long, default_value = "16x16", value_name = "COLSxROWS")]
+    pub block_table: String,
+    /// Approximate number of voxels of the uniform grid over the animation's extent.
+    #[arg(long, default_value_t = 32768)]
+    pub voxels: u32,
+    /// Render every frame from scratch instead (the traditional frame-by-frame method).
+    #[arg(long, conflicts_with = "verify")]
+    pub no_coherence: bool,
+    /// Also render every frame from scratch, check that the coherent frame is identical bit
+    /// for bit, and report the full render's rays and time. Exits with 1 on a difference.
+    #[arg(long)]
+    pub verify: bool,
+    /// Print per-frame statistics and a summary (rays, pixels retraced, time).
+    #[arg(long)]
+    pub stats: bool,
+    /// Write the per-frame statistics to this CSV file.
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<PathBuf>,
+    /// Worker threads (default: all cores). The images do not depend on it.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Seed of the random streams.
+    #[arg(long, default_value_t = 0)]
+    pub seed: u64,
+    /// Store EXR pixels as half floats.
+    #[arg(long)]
+    pub half: bool,
+    /// Exposure in stops for 8-bit outputs.
+    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    pub exposure: f32,
+    /// No progress lines.
+    #[arg(short, long)]
+    pub quiet: bool,
+}
+
+/// The output file of frame `frame`: `%d` / `%0Nd` replaced by the number.
+pub fn frame_path(pattern: &str, frame: i64) -> Result<PathBuf> {
+    let bad = || {
+        Error::Options(format!(
+            "--output {pattern}: needs one frame number placeholder, %d or %0Nd (e.g. %04d)"
+        ))
+    };
+    let start = pattern.find('%').ok_or_else(bad)?;
+    let rest = &pattern[start + 1..];
+    let end = rest.find('d').ok_or_else(bad)?;
+    let spec = &rest[..end];
+    let width: usize = if spec.is_empty() {
+        0
+    } else if spec.starts_with('0') && spec.chars().all(|c| c.is_ascii_digit()) {
+        spec.parse().map_err(|_| bad())?
+    } else {
+        return Err(bad());
+    };
+    let tail = &rest[end + 1..];
+    if tail.contains('%') {
+        return Err(bad());
+    }
+    Ok(PathBuf::from(format!(
+        "{}{frame:0width$}{tail}",
+        &pattern[..start]
+    )))
+}
+
+fn parse_blocks(s: &str) -> Result<(u32, u32)> {
+    let bad = || {
+        Error::Options(format!(
+            "--block-table {s}: expected COLSxROWS with 1 to 65536 blocks each way, e.g. 16x16"
+        ))
+    };
+    let (c, r) = s.split_once(['x', 'X']).ok_or_else(bad)?;
+    let c: u32 = c.trim().parse().map_err(|_| bad())?;
+    let r: u32 = r.trim().parse().map_err(|_| bad())?;
+    if !(1..=65536).contains(&c) || !(1..=65536).contains(&r) {
+        return Err(bad());
+    }
+    Ok((c, r))
+}
+
+/// Everything that can hold geometry or a light during the sequence.
+fn extent(scene: &Scene) -> Vec<(crate::math::Vec3, crate::math::Vec3)> {
+    let mut boxes: Vec<_> = scene.bounds().into_iter().collect();
+    for l in &scene.lights {
+        if let Light::Point { position, .. } = l {
+            boxes.push((*position, *position));
+        }
+    }
+    boxes
+}
+
+/// One row of the statistics.
+#[derive(Clone, Debug, Default)]
+pub struct FrameRow {
+    pub frame: i64,
+    pub coherent: FrameStats,
+    /// The full render's rays and seconds (with --verify or --no-coherence).
+    pub full: Option<(RayStats, f64)>,
+    pub identical: Option<bool>,
+    pub build_seconds: f64,
+}
+
+/// What a run did, for the summary.
+pub struct Report {
+    pub rows: Vec<FrameRow>,
+    pub pixels_per_frame: u64,
+    pub table_bytes: usize,
+    pub voxels: usize,
+    pub blocks: (u32, u32),
+}
+
+pub fn run(args: &AnimateArgs) -> Result<()> {
+    let report = animate(args)?;
+    if args.stats {
+        print!("{}", summary(&report));
+    }
+    if let Some(csv) = &args.csv {
+        write_atomic(csv, &csv_text(&report))?;
+    }
+    if let Some(r) = report.rows.iter().find(|r| r.identical == Some(false)) {
+        return Err(Error::image(
+            frame_path(&args.output, r.frame)?,
+            "--verify: the coherent frame differs from its full render",
+        ));
+    }
+    Ok(())
+}
+
+fn write_atomic(path: &Path, text: &str) -> Result<()> {
+    let tmp = path.with_extension("csv.tmp");
+    std::fs::write(&tmp, text).map_err(|e| Error::io(&tmp, e))?;
+    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
+}
+
+/// Renders the animation and writes the frames; returns the statistics.
+pub fn animate(args: &AnimateArgs) -> Result<Report> {
+    if args.threads == Some(0) {
+        return Err(Error::Options("--threads must be at least 1".into()));
+    }
+    let blocks = parse_blocks(&args.block_table)?;
+    if args.voxels == 0 || args.voxels > 1 << 24 {
+        return Err(Error::Options(format!(
+            "--voxels must be between 1 and {}, got {}",
+            1 << 24,
+            args.voxels
+        )));
+    }
+    if args.scene.extension().and_then(|e| e.to_str()) != Some("toml") {
+        return Err(Error::input(
+            &args.scene,
+            "animations are read from native .toml scenes (see docs/animation.md)",
+        ));
+    }
+    let anim = Animation::read(&args.scene)?;
+    let frames: Vec<i64> = anim.frame_numbers().collect();
+    let first_path = frame_path(&args.output, frames[0])?;
+    if let Some(dir) = first_path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+    }
+    check_output_path(&first_path).map_err(|e| Error::Options(e.to_string()))?;
+    let scene0 = anim.scene_at(frames[0])?;
+    for w in &scene0.warnings {
+        eprintln!("warning: {w}");
+    }
+    let width = args.width.unwrap_or(scene0.camera.width);
+    let height = args.height.unwrap_or(scene0.camera.height);
+    for (name, v) in [("--width", width), ("--height", height)] {
+        if !(1..=MAX_RESOLUTION).contains(&v) {
+            return Err(Error::Options(format!(
+                "{name} must be between 1 and {MAX_RESOLUTION}, got {v}"
+            )));
+        }
+    }
+    let integrator = match (args.integrator, scene0.settings.integrator.as_deref()) {
+        (Some(i), _) => i,
+        (None, None | Some("whitted")) => AnimIntegrator::Whitted,
+        (None, Some("path")) => AnimIntegrator::Path,
+        (None, Some(other)) => {
+            return Err(Error::input(
+                &args.scene,
+                format!("animate renders with the whitted or path integrator, not \"{other}\""),
+            ))
+        }
+    };
+    let max_depth = args
+        .max_depth
+        .or(scene0.settings.max_depth)
+        .unwrap_or(DEFAULT_MAX_DEPTH);
+    if max_depth > MAX_DEPTH_LIMIT {
+        return Err(Error::Options(format!(
+            "--max-depth must be at most {MAX_DEPTH_LIMIT}, got {max_depth}"
+        )));
+    }
+    let whitted = Whitted::new(WhittedOptions {
+        max_depth: max_depth.max(1),
+        area_samples: args.area_samples,
+        ..WhittedOptions::default()
+    });
+    let path = PathTracer::new(PathOptions { max_depth });
+    let engine = match integrator {
+        AnimIntegrator::Whitted => {
+            let sampling = match args.spp {
+                None => PixelSampling::Adaptive {
+                    threshold: args.aa_threshold,
+                    max_depth: args.aa_depth,
+                },
+                Some(spp) => {
+                    let n = (spp as f64).sqrt().round() as u32;
+                    if spp == 0 || n * n != spp {
+                        return Err(Error::Options(format!(
+                            "--spp must be a square number for Whitted (1, 4, 9, ...), got {spp}"
+                        )));
+                    }
+                    PixelSampling::Uniform { n }
+                }
+            };
+            sampling.validate()?;
+            Engine::Whitted {
+                integrator: &whitted,
+                options: RenderOptions {
+                    width,
+                    height,
+                    sampling,
+                    threads: args.threads,
+                    seed: args.seed,
+                    progress: false,
+                },
+            }
+        }
+        AnimIntegrator::Path => {
+            let spp = args.spp.or(scene0.settings.spp).unwrap_or(16);
+            if spp == 0 || spp > MAX_SPP {
+                return Err(Error::Options(format!(
+                    "--spp must be between 1 and {MAX_SPP}, got {spp}"
+                )));
+            }
+            let filter = scene0.settings.filter.unwrap_or_default();
+            Engine::MonteCarlo {
+                integrator: &path,
+                options: ProgressiveOptions {
+                    width,
+                    height,
+                    spp,
+                    time_limit: None,
+                    threads: args.threads,
+                    seed: args.seed,
+                    progress: false,
+                    filter,
+                },
+            }
+        }
+    };
+
+    // The grid must cover every frame: collect the extents first.
+    let mut boxes = Vec::new();
+    for &f in &frames {
+        boxes.extend(extent(&anim.scene_at(f)?));
+    }
+    let grid = CoherentRenderer::grid_around(&boxes, args.voxels);
+    let layout = super::tables::BlockLayout::new(width, height, blocks.0, blocks.1);
+    let mut coherent = CoherentRenderer::new(grid, layout);
+    let out_options = OutputOptions {
+        exposure: args.exposure,
+        half: args.half,
+    };
+    let mut rows = Vec::new();
+    let mut camera_notice = false;
+    for &f in &frames {
+        let build = Instant::now();
+        let scene = if f == frames[0] {
+            scene0.clone()
+        } else {
+            anim.scene_at(f)?
+        };
+        let accel = accel::build(&scene, args.accel)?;
+        let mut row = FrameRow {
+            frame: f,
+            build_seconds: build.elapsed().as_secs_f64(),
+            ..FrameRow::default()
+        };
+        let image: Image;
+        if args.no_coherence {
+            let start = Instant::now();
+            let ctx = Context::new(&scene, accel.as_ref());
+            let (img, rays) = engine.render_full(&ctx)?;
+            row.full = Some((rays, start.elapsed().as_secs_f64()));
+            image = img;
+        } else {
+            let (img, stats) = coherent.render_frame(&scene, accel.as_ref(), &engine)?;
+            if f != frames[0] && stats.full_reason.is_some() && !camera_notice && !args.quiet {
+                eprintln!(
+                    "notice: frame {f}: every pixel retraced ({}); frames where the camera or \
+                     world changes are rendered in full",
+                    stats.full_reason.as_deref().unwrap_or("")
+                );
+                camera_notice = true;
+            }
+            row.coherent = stats;
+            if args.verify {
+                let start = Instant::now();
+                let ctx = Context::new(&scene, accel.as_ref());
+                let (full, rays) = engine.render_full(&ctx)?;
+                row.full = Some((rays, start.elapsed().as_secs_f64()));
+                let same = full.pixels.len() == img.pixels.len()
+                    && full
+                        .pixels
+                        .iter()
+                        .zip(&img.pixels)
+                        .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits));
+                row.identical = Some(same);
+                if !same {
+                    eprintln!("raylink: error: frame {f}: the coherent render differs from the full render");
+                }
+            }
+            image = img;
+        }
+        let metadata: Metadata = vec![
+            (
+                "Software".into(),
+                MetaValue::Str(format!("raylink {}", crate::VERSION)),
+            ),
+            (
+                "raylink:scene".into(),
+                MetaValue::Str(args.scene.display().to_string()),
+            ),
+            ("raylink:frame".into(), MetaValue::Int(f as i32)),
+            ("raylink:fps".into(), MetaValue::Float(anim.fps as f32)),
+            ("raylink:seed".into(), MetaValue::Str(args.seed.to_string())),
+        ];
+        write_image(&frame_path(&args.output, f)?, &image, &metadata, &out_options)?;
+        if !args.quiet {
+            let r = &row.coherent;
+            if args.no_coherence {
+                eprintln!("frame {f}: rendered in full");
+            } else {
+                eprintln!(
+                    "frame {f}: {} of {} blocks retraced, {} rays, {:.3} s",
+                    r.blocks_retraced,
+                    layout.len(),
+                    r.rays.total(),
+                    r.seconds
+                );
+            }
+        }
+        rows.push(row);
+    }
+    Ok(Report {
+        rows,
+        pixels_per_frame: width as u64 * height as u64,
+        table_bytes: coherent.table_bytes(),
+        voxels: coherent.grid.len(),
+        blocks: (layout.cols, layout.rows),
+    })
+}
+
+/// The per-frame CSV.
+pub fn csv_text(report: &Report) -> String {
+    let mut s = String::from(
+        "frame,coherent_rays,coherent_seconds,pixels_retraced,blocks_retraced,changed_voxels,\
+         bookkeeping_seconds,full_rays,full_seconds,identical,build_seconds\n",
+    );
+    for r in &report.rows {
+        let c = &r.coherent;
+        let (fr, fs) = r
+            .full
+            .map_or((String::new(), String::new()), |(rays, s)| {
+                (rays.total().to_string(), format!("{s:.6}"))
+            });
+        let _ = writeln!(
+            s,
+            "{},{},{:.6},{},{},{},{:.6},{fr},{fs},{},{:.6}",
+            r.frame,
+            c.rays.total(),
+            c.seconds,
+            c.pixels_retraced,
+            c.blocks_retraced,
+            c.changed_voxels,
+            c.bookkeeping_seconds,
+            r.identical.map_or(String::new(), |b| b.to_string()),
+            r.build_seconds
+        );
+    }
+    s
+}
+
+/// A summary like Table 2 of the paper.
+pub fn summary(report: &Report) -> String {
+    let mut s = String::new();
+    let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::NAN };
+    let _ = writeln!(
+        s,
+        "{:>7} {:>12} {:>10} {:>12} {:>8} {:>10} {:>8} {:>9}",
+        "frame", "full rays", "full s", "rays", "ratio", "s", "ratio", "retraced"
+    );
+    let (mut cr, mut cs, mut fr, mut fs, mut px) = (0u64, 0.0, 0u64, 0.0, 0u64);
+    let mut all_full = true;
+    for r in &report.rows {
+        let c = &r.coherent;
+        cr += c.rays.total();
+        cs += c.seconds;
+        px += c.pixels_retraced;
+        let (frays, fsecs) = match r.full {
+            Some((rays, secs)) => (rays.total(), secs),
+            None => {
+                all_full = false;
+                (0, 0.0)
+            }
+        };
+        fr += frays;
+        fs += fsecs;
+        let _ = writeln!(
+            s,
+            "{:>7} {:>12} {:>10.3} {:>12} {:>8.4} {:>10.3} {:>8.4} {:>8.2}%",
+            r.frame,
+            frays,
+            fsecs,
+            c.rays.total(),
+            ratio(c.rays.total() as f64, frays as f64),
+            c.seconds,
+            ratio(c.seconds, fsecs),
+            100.0 * c.pixels_retraced as f64 / report.pixels_per_frame as f64
+        );
+    }
+    let frames = report.rows.len() as u64;
+    let _ = writeln!(
+        s,
+        "{:>7} {:>12} {:>10.3} {:>12} {:>8.4} {:>10.3} {:>8.4} {:>8.2}%",
+        "all",
+        fr,
+        fs,
+        cr,
+        ratio(cr as f64, fr as f64),
+        cs,
+        ratio(cs, fs),
+        100.0 * px as f64 / (report.pixels_per_frame * frames.max(1)) as f64
+    );
+    if all_full && !report.rows.is_empty() {
+        let r0 = &report.rows[0];
+        if let Some((_, f0)) = r0.full {
+            let _ = writeln!(
+                s,
+                "frame-0 overhead: {:+.1}% ({:.3} s coherent, {:.3} s full)",
+                100.0 * (r0.coherent.seconds / f0 - 1.0),
+                r0.coherent.seconds,
+                f0
+            );
+        }
+        let _ = writeln!(
+            s,
+            "ray fraction {:.4}, time fraction {:.4} (time/ray {:.3})",
+            ratio(cr as f64, fr as f64),
+            ratio(cs, fs),
+            ratio(ratio(cs, fs), ratio(cr as f64, fr as f64))
+        );
+    }
+    if let Some(v) = report.rows.iter().map(|r| r.identical).reduce(|a, b| match (a, b) {
+        (Some(x), Some(y)) => Some(x && y),
+        _ => None,
+    }) {
+        if let Some(v) = v {
+            let _ = writeln!(
+                s,
+                "verify: {}",
+                if v {
+                    "every frame identical to its full render"
+                } else {
+                    "DIFFERENCES (see above)"
+                }
+            );
+        }
+    }
+    let _ = writeln!(
+        s,
+        "voxel tables: {} voxels x {}x{} blocks x 2 tables = {:.1} KiB",
+        report.voxels,
+        report.blocks.0,
+        report.blocks.1,
+        report.table_bytes as f64 / 1024.0
+    );
+    s
+}
