@@ -367,11 +367,9 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
                 let (full, rays) = engine.render_full(&ctx)?;
                 row.full = Some((rays, start.elapsed().as_secs_f64()));
                 let same = full.pixels.len() == img.pixels.len()
-                    && full
-                        .pixels
-                        .iter()
-                        .zip(&img.pixels)
-                        .all(|(a, b)| a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits));
+                    && full.pixels.iter().zip(&img.pixels).all(|(a, b)| {
+                        a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)
+                    });
                 row.identical = Some(same);
                 if !same {
                     eprintln!("raylink: error: frame {f}: the coherent render differs from the full render");
@@ -392,7 +390,12 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
             ("raylink:fps".into(), MetaValue::Float(anim.fps as f32)),
             ("raylink:seed".into(), MetaValue::Str(args.seed.to_string())),
         ];
-        write_image(&frame_path(&args.output, f)?, &image, &metadata, &out_options)?;
+        write_image(
+            &frame_path(&args.output, f)?,
+            &image,
+            &metadata,
+            &out_options,
+        )?;
         if !args.quiet {
             let r = &row.coherent;
             if args.no_coherence {
@@ -426,11 +429,9 @@ pub fn csv_text(report: &Report) -> String {
     );
     for r in &report.rows {
         let c = &r.coherent;
-        let (fr, fs) = r
-            .full
-            .map_or((String::new(), String::new()), |(rays, s)| {
-                (rays.total().to_string(), format!("{s:.6}"))
-            });
+        let (fr, fs) = r.full.map_or((String::new(), String::new()), |(rays, s)| {
+            (rays.total().to_string(), format!("{s:.6}"))
+        });
         let _ = writeln!(
             s,
             "{},{},{:.6},{},{},{},{:.6},{fr},{fs},{},{:.6}",
@@ -518,21 +519,17 @@ pub fn summary(report: &Report) -> String {
             ratio(ratio(cs, fs), ratio(cr as f64, fr as f64))
         );
     }
-    if let Some(v) = report.rows.iter().map(|r| r.identical).reduce(|a, b| match (a, b) {
-        (Some(x), Some(y)) => Some(x && y),
-        _ => None,
-    }) {
-        if let Some(v) = v {
-            let _ = writeln!(
-                s,
-                "verify: {}",
-                if v {
-                    "every frame identical to its full render"
-                } else {
-                    "DIFFERENCES (see above)"
-                }
-            );
-        }
+    let verified: Option<Vec<bool>> = report.rows.iter().map(|r| r.identical).collect();
+    if let Some(v) = verified.filter(|v| !v.is_empty()) {
+        let _ = writeln!(
+            s,
+            "verify: {}",
+            if v.iter().all(|&b| b) {
+                "every frame identical to its full render"
+            } else {
+                "DIFFERENCES (see above)"
+            }
+        );
     }
     let _ = writeln!(
         s,

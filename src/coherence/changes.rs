@@ -114,7 +114,9 @@ impl FrameSummary {
             scene.camera, scene.ambient, scene.background
         );
         if let Some(ls) = light_choice {
-            let pmf: Vec<u32> = (0..ls.emitters.len()).map(|i| ls.pmf(i).to_bits()).collect();
+            let pmf: Vec<u32> = (0..ls.emitters.len())
+                .map(|i| ls.pmf(i).to_bits())
+                .collect();
             global += &format!("|{pmf:?}");
             if (0..ls.emitters.len()).any(|i| ls.is_infinite(i)) {
                 // Directional and environment light come from a disk around the scene.

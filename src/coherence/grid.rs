@@ -103,14 +103,17 @@ impl Grid {
                 continue;
             }
             let inv = 1.0 / dir[a];
-            let (mut ta, mut tb) = ((self.lo[a] - origin[a]) * inv, (self.hi[a] - origin[a]) * inv);
+            let (mut ta, mut tb) = (
+                (self.lo[a] - origin[a]) * inv,
+                (self.hi[a] - origin[a]) * inv,
+            );
             if ta > tb {
                 std::mem::swap(&mut ta, &mut tb);
             }
             tin = tin.max(ta);
             tout = tout.min(tb);
         }
-        if !(tin <= tout) {
+        if tin.is_nan() || tout.is_nan() || tin > tout {
             return;
         }
         let mut cell = self.cell_of(origin + dir * tin);

@@ -33,9 +33,10 @@ impl Accel for RecordingAccel<'_> {
         // Whether or not something blocks it, the whole segment to the light is recorded:
         // the blocker may move away, and anything that moves into the segment must be seen.
         let blocked = self.inner.occluded(ray);
-        self.grid.walk(ray.origin, ray.dir, ray.tmin, ray.tmax, |v| {
-            self.tables.set(Table::Shadow, v, self.block)
-        });
+        self.grid
+            .walk(ray.origin, ray.dir, ray.tmin, ray.tmax, |v| {
+                self.tables.set(Table::Shadow, v, self.block)
+            });
         blocked
     }
 }

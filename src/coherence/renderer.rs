@@ -85,10 +85,12 @@ impl Engine<'_> {
                 integrator,
                 options,
             } => {
-                let (film, stats) =
-                    crate::render::progressive::render_progressive(ctx, *integrator, options, |_| {
-                        Ok(())
-                    })?;
+                let (film, stats) = crate::render::progressive::render_progressive(
+                    ctx,
+                    *integrator,
+                    options,
+                    |_| Ok(()),
+                )?;
                 Ok((film.image(), stats.rays))
             }
         }
@@ -109,6 +111,8 @@ pub struct FrameStats {
     pub seconds: f64,
     /// Why the whole frame was retraced, if it was.
     pub full_reason: Option<String>,
+    /// The blocks retraced.
+    pub blocks: Vec<usize>,
 }
 
 /// The incremental renderer's state between frames.
@@ -255,6 +259,7 @@ impl CoherentRenderer {
             stats.pixels_retraced += ((t.x1 - t.x0) * (t.y1 - t.y0)) as u64;
         }
         stats.blocks_retraced = list.len();
+        stats.blocks = list;
         stats.seconds = start.elapsed().as_secs_f64();
         self.previous = Some((summary, image.clone()));
         Ok((image, stats))

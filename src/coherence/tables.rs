@@ -46,7 +46,10 @@ impl BlockLayout {
 
     /// The pixels of block `b`.
     pub fn rect(&self, b: usize) -> Tile {
-        let (c, r) = ((b % self.cols as usize) as u64, (b / self.cols as usize) as u64);
+        let (c, r) = (
+            (b % self.cols as usize) as u64,
+            (b / self.cols as usize) as u64,
+        );
         let edge = |i: u64, n: u64, size: u32| (i * size as u64).div_ceil(n) as u32;
         Tile {
             x0: edge(c, self.cols as u64, self.width),
@@ -144,12 +147,20 @@ impl VoxelTables {
 
     /// Records that a ray of block `block` crossed `voxel`.
     pub fn set(&self, t: Table, voxel: usize, block: usize) {
-        self.table(t)[voxel * self.words + block / 64].fetch_or(1 << (block % 64), Ordering::Relaxed);
+        let word = &self.table(t)[voxel * self.words + block / 64];
+        let bit = 1 << (block % 64);
+        // Most crossings find the bit already set: a load keeps the cache line shared.
+        if word.load(Ordering::Relaxed) & bit == 0 {
+            word.fetch_or(bit, Ordering::Relaxed);
+        }
     }
 
     /// Records that a ray of block `block` found a surface.
     pub fn set_hit(&self, block: usize) {
-        self.hits[block / 64].fetch_or(1 << (block % 64), Ordering::Relaxed);
+        let bit = 1 << (block % 64);
+        if self.hits[block / 64].load(Ordering::Relaxed) & bit == 0 {
+            self.hits[block / 64].fetch_or(bit, Ordering::Relaxed);
+        }
     }
 
     /// OR-s a voxel's table into `into`.
@@ -194,7 +205,12 @@ mod tests {
 
     #[test]
     fn blocks_partition_the_image() {
-        for (w, h, c, r) in [(20, 15, 16, 16), (7, 5, 3, 2), (64, 64, 64, 64), (3, 3, 16, 16)] {
+        for (w, h, c, r) in [
+            (20, 15, 16, 16),
+            (7, 5, 3, 2),
+            (64, 64, 64, 64),
+            (3, 3, 16, 16),
+        ] {
             let l = BlockLayout::new(w, h, c, r);
             let mut seen = vec![usize::MAX; (w * h) as usize];
             for b in 0..l.len() {

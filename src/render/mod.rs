@@ -148,7 +148,14 @@ pub fn render_region(
     camera.width = options.width;
     camera.height = options.height;
     let basis = camera.basis();
-    sampling::render_tile(ctx, integrator, &basis, &options.sampling, options.seed, tile)
+    sampling::render_tile(
+        ctx,
+        integrator,
+        &basis,
+        &options.sampling,
+        options.seed,
+        tile,
+    )
 }
 
 /// The render threads: `None` uses every core; each thread flushes denormals to zero.

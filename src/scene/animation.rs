@@ -142,7 +142,8 @@ impl Animation {
         for t in &anim.tracks {
             if !matches!(t.target, Target::Shape(_)) {
                 for k in &t.keys {
-                    if let Some(key) = TRANSFORM_KEYS.iter().find(|k2| k.values.contains_key(**k2)) {
+                    if let Some(key) = TRANSFORM_KEYS.iter().find(|k2| k.values.contains_key(**k2))
+                    {
                         return Err(fail(format!(
                             "{}: `{key}` keyframes apply to shapes only",
                             t.describe()
@@ -169,16 +170,9 @@ impl Animation {
 
     /// The scene at frame `frame` (keyframes before the first / after the last hold).
     pub fn scene_at(&self, frame: i64) -> Result<Scene> {
-        let table = self.table_at(frame as f64)?;
-        if !self.is_animated() {
-            let text = toml::to_string(&table)
-                .map_err(|e| Error::input(&self.path, format!("cannot re-encode: {e}")))?;
-            return super::toml::from_str(&text, &self.path);
-        }
-        let text = toml::to_string(&table)
-            .map_err(|e| Error::input(&self.path, format!("cannot re-encode: {e}")))?;
+        let text = to_text(&self.table_at(frame as f64)?);
         super::toml::from_str(&text, &self.path).map_err(|e| match e {
-            Error::Input { path, detail } => Error::Input {
+            Error::Input { path, detail } if self.is_animated() => Error::Input {
                 path,
                 detail: format!("frame {frame}: {detail}"),
             },
@@ -210,7 +204,10 @@ impl Animation {
             let Some(Value::Table(entry)) = entry else {
                 return Err(Error::input(
                     &self.path,
-                    format!("{}: keyframes on something that is not a table", track.describe()),
+                    format!(
+                        "{}: keyframes on something that is not a table",
+                        track.describe()
+                    ),
                 ));
             };
             let mut steps = Vec::new();
@@ -384,7 +381,9 @@ fn take_track(entry: &mut Value, target: Target, what: &str, path: &Path) -> Res
     };
     let fail = |msg: String| Error::input(path, format!("{what}.keyframes{msg}"));
     let Value::Array(items) = k else {
-        return Err(fail(": must be an array of tables ([[...keyframes]])".into()));
+        return Err(fail(
+            ": must be an array of tables ([[...keyframes]])".into(),
+        ));
     };
     let mut keys = Vec::new();
     for (i, item) in items.into_iter().enumerate() {
@@ -424,6 +423,46 @@ fn take_track(entry: &mut Value, target: Target, what: &str, path: &Path) -> Res
         return Ok(None);
     }
     Ok(Some(Track { target, keys }))
+}
+
+/// The table as TOML text with every table below the top level written inline, as scene
+/// files write them (the reader borrows keys from the text).
+fn to_text(table: &Table) -> String {
+    fn key(k: &str) -> String {
+        if !k.is_empty()
+            && k.chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+        {
+            k.to_string()
+        } else {
+            Value::String(k.to_string()).to_string()
+        }
+    }
+    fn entries(t: &Table, out: &mut String) {
+        for (k, v) in t {
+            out.push_str(&format!("{} = {v}\n", key(k)));
+        }
+    }
+    let mut out = String::new();
+    let mut sections = String::new();
+    for (k, v) in table {
+        match v {
+            Value::Table(t) => {
+                sections.push_str(&format!("[{}]\n", key(k)));
+                entries(t, &mut sections);
+            }
+            Value::Array(a) if !a.is_empty() && a.iter().all(Value::is_table) => {
+                for item in a {
+                    sections.push_str(&format!("[[{}]]\n", key(k)));
+                    if let Value::Table(t) = item {
+                        entries(t, &mut sections);
+                    }
+                }
+            }
+            _ => out.push_str(&format!("{} = {v}\n", key(k))),
+        }
+    }
+    out + &sections
 }
 
 fn one_line(e: &dyn std::fmt::Display) -> String {
@@ -515,7 +554,10 @@ radius = 1
         let s = a.scene_at(1).unwrap();
         let m = &s.materials[s.shapes[0].material];
         let kd = m.diffuse.eval(Vec3::ZERO, crate::math::Vec2::ZERO);
-        assert!((kd.x - 0.6).abs() < 1e-6 && (kd.y - 0.2).abs() < 1e-6, "{kd}");
+        assert!(
+            (kd.x - 0.6).abs() < 1e-6 && (kd.y - 0.2).abs() < 1e-6,
+            "{kd}"
+        );
         // Hidden from frame 5 (step: visible is not a number).
         assert_eq!(a.scene_at(4).unwrap().shapes.len(), 2);
         assert_eq!(a.scene_at(5).unwrap().shapes.len(), 1);
