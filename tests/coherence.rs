@@ -3,7 +3,7 @@
 
 mod common;
 
-use raylink::accel::{self, Backend};
+use raylink::accel::{self, Backend, Update};
 use raylink::coherence::grid::Grid;
 use raylink::coherence::renderer::{CoherentRenderer, Engine, FrameStats};
 use raylink::coherence::tables::BlockLayout;
@@ -238,9 +238,13 @@ fn run(text: &str, kind: Kind, blocks: (u32, u32)) -> Vec<(FrameStats, Image)> {
     let grid = CoherentRenderer::grid_around(&boxes, 4096);
     let mut r = CoherentRenderer::new(grid, BlockLayout::new(w, h, blocks.0, blocks.1));
     let mut out = Vec::new();
+    // The incremental renderer moves one dynamic structure (Embree refits what moved); each
+    // full render builds its own static one.
+    let mut dynamic = accel::build_dynamic(&scenes[0], Backend::Embree).unwrap();
     for (f, scene) in frames.iter().zip(&scenes) {
+        dynamic.update(scene).unwrap();
+        let (image, stats) = r.render_frame(scene, dynamic.as_ref(), &engine).unwrap();
         let accel = accel::build(scene, Backend::Embree).unwrap();
-        let (image, stats) = r.render_frame(scene, accel.as_ref(), &engine).unwrap();
         let (full, _) = engine
             .render_full(&Context::new(scene, accel.as_ref()))
             .unwrap();
@@ -310,6 +314,32 @@ fn path_moving_object_matches_full_renders() {
     let frames = run(&animated("", MOVING), Kind::Path, (8, 6));
     let n: Vec<usize> = frames.iter().map(|f| f.0.blocks_retraced).collect();
     assert_eq!(n, [48, 48, 48, 0]);
+}
+
+/// A tetrahedron mesh: moved by refitting Embree's BVH, not rebuilding it.
+const MOVING_MESH: &str = r#"
+[[shapes]]
+type = "mesh"
+material = "mirror"
+positions = [[0.5, 0, -0.5], [1.5, 0, -0.5], [1, 0, 0.4], [1, 1.2, -0.2]]
+indices = [[0, 2, 1], [0, 1, 3], [1, 2, 3], [2, 0, 3]]
+
+[[shapes.keyframes]]
+frame = 0
+rotate = { axis = [0, 1, 0], degrees = 0 }
+translate = [0, 0.8, 0]
+[[shapes.keyframes]]
+frame = 2
+rotate = { axis = [0, 1, 0], degrees = 40 }
+translate = [0, 0, 0]
+"#;
+
+#[test]
+fn moving_mesh_matches_full_renders() {
+    for kind in [Kind::Whitted, Kind::Path] {
+        let frames = run(&no_sky(&animated("", MOVING_MESH)), kind, (8, 6));
+        check_moving(&frames, 8 * 6);
+    }
 }
 
 const APPEARING: &str = r#"
@@ -554,4 +584,45 @@ fn cli_rejects_bad_input() {
     );
     assert_eq!(err.lines().count(), 1, "{err}");
     assert!(!dir.path().join("f_0.exr").exists());
+}
+
+// ---------------------------------------------------------------------------------------
+// Embree updates.
+
+#[test]
+fn embree_refits_moved_meshes_and_answers_like_a_fresh_build() {
+    let anim = Animation::from_str(&animated("", MOVING_MESH), Path::new("t.toml")).unwrap();
+    let mut dynamic = accel::build_dynamic(&anim.scene_at(0).unwrap(), Backend::Embree).unwrap();
+    let mut rng = Lcg(11);
+    for (f, expected) in [
+        (1, Update::Refit(1)),
+        (2, Update::Refit(1)),
+        (3, Update::Unchanged),
+    ] {
+        let scene = anim.scene_at(f).unwrap();
+        assert_eq!(dynamic.update(&scene).unwrap(), expected, "frame {f}");
+        let fresh = accel::build(&scene, Backend::Embree).unwrap();
+        let mut hits = 0;
+        for _ in 0..20000 {
+            let o = Vec3::new(
+                rng.next() * 4.0 - 2.0,
+                rng.next() * 3.0,
+                rng.next() * 4.0 - 2.0,
+            );
+            let d = Vec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5);
+            let ray = raylink::math::Ray::new(o, d);
+            let (a, b) = (dynamic.intersect(&ray), fresh.intersect(&ray));
+            assert_eq!(a, b, "frame {f}: {ray:?}");
+            assert_eq!(dynamic.occluded(&ray), fresh.occluded(&ray));
+            hits += a.is_some_and(|h| h.geom_id == 2) as usize;
+        }
+        assert!(hits > 100, "rays hit the moving mesh ({hits})");
+    }
+    // A shape appearing changes the geometry list: the scene is built again.
+    let anim = Animation::from_str(&animated("", APPEARING), Path::new("t.toml")).unwrap();
+    let mut dynamic = accel::build_dynamic(&anim.scene_at(0).unwrap(), Backend::Embree).unwrap();
+    assert_eq!(
+        dynamic.update(&anim.scene_at(1).unwrap()).unwrap(),
+        Update::Rebuilt
+    );
 }

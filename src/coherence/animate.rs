@@ -3,7 +3,7 @@
 //! saved per frame (`--stats`, `--csv`), like Table 2 of the paper.
 
 use super::renderer::{CoherentRenderer, Engine, FrameStats};
-use crate::accel::{self, Backend};
+use crate::accel::{self, Backend, DynamicAccel, Update};
 use crate::image::output::{check_output_path, write_image, OutputOptions};
 use crate::image::{Image, MetaValue, Metadata};
 use crate::integrators::path::{PathOptions, PathTracer, DEFAULT_MAX_DEPTH, MAX_DEPTH_LIMIT};
@@ -162,7 +162,22 @@ pub struct FrameRow {
     /// The full render's rays and seconds (with --verify or --no-coherence).
     pub full: Option<(RayStats, f64)>,
     pub identical: Option<bool>,
+    /// Seconds to make the frame's scene and bring the intersection structure to it.
     pub build_seconds: f64,
+    /// How the coherent renderer's intersection structure followed the scene.
+    pub update: Option<Update>,
+}
+
+/// A borrowed structure as a boxed [`Accel`].
+struct Borrowed<'a>(&'a dyn DynamicAccel);
+
+impl crate::accel::Accel for Borrowed<'_> {
+    fn intersect(&self, ray: &crate::math::Ray) -> Option<crate::accel::Hit> {
+        self.0.intersect(ray)
+    }
+    fn occluded(&self, ray: &crate::math::Ray) -> bool {
+        self.0.occluded(ray)
+    }
 }
 
 /// What a run did, for the summary.
@@ -330,6 +345,7 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
     };
     let mut rows = Vec::new();
     let mut camera_notice = false;
+    let mut dynamic: Option<Box<dyn DynamicAccel>> = None;
     for &f in &frames {
         let build = Instant::now();
         let scene = if f == frames[0] {
@@ -337,10 +353,22 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
         } else {
             anim.scene_at(f)?
         };
-        let accel = accel::build(&scene, args.accel)?;
+        // The coherent renderer updates one structure from frame to frame; the full renders
+        // build their own, as a frame-by-frame renderer would.
+        let mut update = None;
+        let accel: Box<dyn crate::accel::Accel> = if args.no_coherence {
+            accel::build(&scene, args.accel)?
+        } else {
+            match dynamic.as_mut() {
+                None => dynamic = Some(accel::build_dynamic(&scene, args.accel)?),
+                Some(d) => update = Some(d.update(&scene)?),
+            }
+            Box::new(Borrowed(dynamic.as_deref().expect("built above")))
+        };
         let mut row = FrameRow {
             frame: f,
             build_seconds: build.elapsed().as_secs_f64(),
+            update,
             ..FrameRow::default()
         };
         let image: Image;
@@ -363,6 +391,7 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
             row.coherent = stats;
             if args.verify {
                 let start = Instant::now();
+                let accel = accel::build(&scene, args.accel)?;
                 let ctx = Context::new(&scene, accel.as_ref());
                 let (full, rays) = engine.render_full(&ctx)?;
                 row.full = Some((rays, start.elapsed().as_secs_f64()));

@@ -1,19 +1,65 @@
 //! Recording the voxels a pixel block's rays cross without the integrators knowing: a wrapper
 //! around the intersection backend that answers every query through the real backend and
-//! walks the segment it covered (origin to hit, or to the end of the ray) through the grid,
-//! setting the block's bit in each voxel's surface or shadow table.
+//! walks the segment it covered (origin to hit, or to the end of the ray) through the grid.
+//!
+//! The voxels are first gathered in a small bit set private to the task (it stays in the
+//! cache, and the rays of one block cross mostly the same voxels), then set in the shared
+//! voxel tables once per voxel when the task ends.
 
 use super::grid::Grid;
 use super::tables::{Table, VoxelTables};
 use crate::accel::{Accel, Hit};
 use crate::math::Ray;
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 pub struct RecordingAccel<'a> {
-    pub inner: &'a dyn Accel,
-    pub grid: &'a Grid,
-    pub tables: &'a VoxelTables,
-    /// The block whose pixels are being traced.
-    pub block: usize,
+    inner: &'a dyn Accel,
+    grid: &'a Grid,
+    /// Voxels crossed by rays looking for surfaces, and by shadow rays (one bit per voxel).
+    surface: Vec<AtomicU64>,
+    shadow: Vec<AtomicU64>,
+    hit: AtomicBool,
+}
+
+fn mark(set: &[AtomicU64], v: usize) {
+    let (word, bit) = (&set[v / 64], 1u64 << (v % 64));
+    // Only this task writes the set (atomics because `Accel` is shared by reference).
+    if word.load(Ordering::Relaxed) & bit == 0 {
+        word.store(word.load(Ordering::Relaxed) | bit, Ordering::Relaxed);
+    }
+}
+
+impl<'a> RecordingAccel<'a> {
+    pub fn new(inner: &'a dyn Accel, grid: &'a Grid) -> RecordingAccel<'a> {
+        let words = grid.len().div_ceil(64);
+        let zeros = || (0..words).map(|_| AtomicU64::new(0)).collect();
+        RecordingAccel {
+            inner,
+            grid,
+            surface: zeros(),
+            shadow: zeros(),
+            hit: AtomicBool::new(false),
+        }
+    }
+
+    /// Sets `block`'s bit in the tables of every voxel recorded.
+    pub fn flush(self, tables: &VoxelTables, block: usize) {
+        for (table, set) in [
+            (Table::Surface, &self.surface),
+            (Table::Shadow, &self.shadow),
+        ] {
+            for (i, w) in set.iter().enumerate() {
+                let mut w = w.load(Ordering::Relaxed);
+                while w != 0 {
+                    tables.set(table, i * 64 + w.trailing_zeros() as usize, block);
+                    w &= w - 1;
+                }
+            }
+        }
+        if self.hit.load(Ordering::Relaxed) {
+            tables.set_hit(block);
+        }
+    }
 }
 
 impl Accel for RecordingAccel<'_> {
@@ -21,10 +67,10 @@ impl Accel for RecordingAccel<'_> {
         let hit = self.inner.intersect(ray);
         let end = hit.map_or(ray.tmax, |h| h.t);
         if hit.is_some() {
-            self.tables.set_hit(self.block);
+            self.hit.store(true, Ordering::Relaxed);
         }
         self.grid.walk(ray.origin, ray.dir, ray.tmin, end, |v| {
-            self.tables.set(Table::Surface, v, self.block)
+            mark(&self.surface, v)
         });
         hit
     }
@@ -35,7 +81,7 @@ impl Accel for RecordingAccel<'_> {
         let blocked = self.inner.occluded(ray);
         self.grid
             .walk(ray.origin, ray.dir, ray.tmin, ray.tmax, |v| {
-                self.tables.set(Table::Shadow, v, self.block)
+                mark(&self.shadow, v)
             });
         blocked
     }

@@ -233,24 +233,42 @@ impl CoherentRenderer {
         stats.bookkeeping_seconds = start.elapsed().as_secs_f64();
 
         let list: Vec<usize> = blocks.iter().collect();
+        // Blocks are cut into tiles no larger than the full renderer's, so that a frame
+        // that retraces a few blocks still keeps every thread busy (a pixel's value does
+        // not depend on the tiling).
+        let tasks: Vec<(usize, Tile)> = list
+            .iter()
+            .flat_map(|&b| {
+                let r = self.layout.rect(b);
+                crate::render::tiles(r.x1 - r.x0, r.y1 - r.y0)
+                    .into_iter()
+                    .map(move |t| {
+                        (
+                            b,
+                            Tile {
+                                x0: r.x0 + t.x0,
+                                x1: r.x0 + t.x1,
+                                y0: r.y0 + t.y0,
+                                y1: r.y0 + t.y1,
+                            },
+                        )
+                    })
+            })
+            .collect();
         let pool = crate::render::thread_pool(engine.threads())?;
-        let (grid, tables, layout) = (&self.grid, &self.tables, &self.layout);
+        let (grid, tables) = (&self.grid, &self.tables);
         let results: Vec<(Vec<Rgb>, RayStats)> = pool.install(|| {
-            list.par_iter()
-                .map(|&b| {
-                    let recorder = RecordingAccel {
-                        inner: accel,
-                        grid,
-                        tables,
-                        block: b,
-                    };
-                    let ctx = ctx.with_accel(&recorder);
-                    engine.region(&ctx, &layout.rect(b))
+            tasks
+                .par_iter()
+                .map(|(b, tile)| {
+                    let recorder = RecordingAccel::new(accel, grid);
+                    let result = engine.region(&ctx.with_accel(&recorder), tile);
+                    recorder.flush(tables, *b);
+                    result
                 })
                 .collect()
         });
-        for (&b, (pixels, rays)) in list.iter().zip(results) {
-            let t = self.layout.rect(b);
+        for ((_, t), (pixels, rays)) in tasks.iter().zip(results) {
             let w = t.x1 - t.x0;
             for (i, c) in pixels.into_iter().enumerate() {
                 image.set(t.x0 + i as u32 % w, t.y0 + i as u32 / w, c);
