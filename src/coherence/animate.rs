@@ -2,6 +2,7 @@
 //! optionally checking every frame against a full render (`--verify`) and reporting what was
 //! saved per frame (`--stats`, `--csv`), like Table 2 of the paper.
 
+use super::changes::FrameSummary;
 use super::renderer::{CoherentRenderer, Engine, FrameStats};
 use crate::accel::{self, Backend, DynamicAccel, Update};
 use crate::image::output::{check_output_path, write_image, OutputOptions};
@@ -12,7 +13,7 @@ use crate::integrators::{Context, RayStats};
 use crate::render::progressive::{ProgressiveOptions, MAX_SPP};
 use crate::render::{PixelSampling, RenderOptions, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD};
 use crate::scene::animation::Animation;
-use crate::scene::{Light, Scene, MAX_RESOLUTION};
+use crate::scene::MAX_RESOLUTION;
 use crate::{Error, Result};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -143,41 +144,67 @@ fn parse_blocks(s: &str) -> Result<(u32, u32)> {
     Ok((c, r))
 }
 
-/// Everything that can hold geometry or a light during the sequence.
-fn extent(scene: &Scene) -> Vec<(crate::math::Vec3, crate::math::Vec3)> {
-    let mut boxes: Vec<_> = scene.bounds().into_iter().collect();
-    for l in &scene.lights {
-        if let Light::Point { position, .. } = l {
-            boxes.push((*position, *position));
-        }
-    }
-    boxes
-}
-
 /// One row of the statistics.
 #[derive(Clone, Debug, Default)]
 pub struct FrameRow {
     pub frame: i64,
     pub coherent: FrameStats,
-    /// The full render's rays and seconds (with --verify or --no-coherence).
-    pub full: Option<(RayStats, f64)>,
+    /// The coherent frame's time, with the update of the intersection structure.
+    pub time: Time,
+    /// The full render's rays and time, with its build (with --verify or --no-coherence).
+    pub full: Option<(RayStats, Time)>,
     pub identical: Option<bool>,
-    /// Seconds to make the frame's scene and bring the intersection structure to it.
-    pub build_seconds: f64,
     /// How the coherent renderer's intersection structure followed the scene.
     pub update: Option<Update>,
 }
 
-/// A borrowed structure as a boxed [`Accel`].
-struct Borrowed<'a>(&'a dyn DynamicAccel);
+/// Wall-clock and CPU seconds (all threads of the process).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Time {
+    pub wall: f64,
+    pub cpu: f64,
+}
 
-impl crate::accel::Accel for Borrowed<'_> {
-    fn intersect(&self, ray: &crate::math::Ray) -> Option<crate::accel::Hit> {
-        self.0.intersect(ray)
+struct Clock {
+    wall: Instant,
+    cpu: f64,
+}
+
+impl Clock {
+    fn start() -> Clock {
+        Clock {
+            wall: Instant::now(),
+            cpu: cpu_seconds(),
+        }
     }
-    fn occluded(&self, ray: &crate::math::Ray) -> bool {
-        self.0.occluded(ray)
+
+    fn elapsed(&self) -> Time {
+        Time {
+            wall: self.wall.elapsed().as_secs_f64(),
+            cpu: cpu_seconds() - self.cpu,
+        }
     }
+}
+
+/// CPU time of the process so far (user + system, every thread), from /proc/self/stat;
+/// 0 where that cannot be read. Linux counts it in ticks of 1/100 s.
+fn cpu_seconds() -> f64 {
+    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
+        return 0.0;
+    };
+    // Fields after the command name (which is in parentheses and may hold spaces):
+    // state is field 3, utime 14, stime 15.
+    let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else {
+        return 0.0;
+    };
+    let fields: Vec<&str> = rest.split_whitespace().collect();
+    let tick = |i: usize| {
+        fields
+            .get(i)
+            .and_then(|v| v.parse::<f64>().ok())
+            .unwrap_or(0.0)
+    };
+    (tick(11) + tick(12)) / 100.0
 }
 
 /// What a run did, for the summary.
@@ -186,7 +213,13 @@ pub struct Report {
     pub pixels_per_frame: u64,
     pub table_bytes: usize,
     pub voxels: usize,
+    /// Voxels where a change can happen (the only ones recorded).
+    pub active_voxels: usize,
     pub blocks: (u32, u32),
+    /// Seconds spent reading every frame to place the grid before frame 0.
+    pub prepare_seconds: f64,
+    /// The grid's box.
+    pub grid: (crate::math::Vec3, crate::math::Vec3),
 }
 
 pub fn run(args: &AnimateArgs) -> Result<()> {
@@ -331,77 +364,81 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
         }
     };
 
-    // The grid must cover every frame: collect the extents first.
+    // Voxels only need records where something will change: the grid covers the boxes that
+    // the frame-to-frame changes mark (found by reading every frame once first), so its
+    // resolution goes where it matters and rays crossing the still parts cost nothing.
+    let prepare = Instant::now();
     let mut boxes = Vec::new();
-    for &f in &frames {
-        boxes.extend(extent(&anim.scene_at(f)?));
+    let mut previous = FrameSummary::new(&scene0, None);
+    for &f in &frames[1..] {
+        let next = FrameSummary::new(&anim.scene_at(f)?, None);
+        let c = previous.diff(&next);
+        boxes.extend(c.objects.iter().chain(&c.shadows).copied());
+        previous = next;
     }
     let grid = CoherentRenderer::grid_around(&boxes, args.voxels);
+    let prepare_seconds = prepare.elapsed().as_secs_f64();
     let layout = super::tables::BlockLayout::new(width, height, blocks.0, blocks.1);
     let mut coherent = CoherentRenderer::new(grid, layout);
+    coherent.restrict_to(&boxes);
     let out_options = OutputOptions {
         exposure: args.exposure,
         half: args.half,
     };
     let mut rows = Vec::new();
-    let mut camera_notice = false;
+    let mut full_notice = false;
     let mut dynamic: Option<Box<dyn DynamicAccel>> = None;
     for &f in &frames {
-        let build = Instant::now();
         let scene = if f == frames[0] {
             scene0.clone()
         } else {
             anim.scene_at(f)?
         };
-        // The coherent renderer updates one structure from frame to frame; the full renders
-        // build their own, as a frame-by-frame renderer would.
-        let mut update = None;
-        let accel: Box<dyn crate::accel::Accel> = if args.no_coherence {
-            accel::build(&scene, args.accel)?
-        } else {
-            match dynamic.as_mut() {
-                None => dynamic = Some(accel::build_dynamic(&scene, args.accel)?),
-                Some(d) => update = Some(d.update(&scene)?),
-            }
-            Box::new(Borrowed(dynamic.as_deref().expect("built above")))
-        };
         let mut row = FrameRow {
             frame: f,
-            build_seconds: build.elapsed().as_secs_f64(),
-            update,
             ..FrameRow::default()
         };
         let image: Image;
         if args.no_coherence {
-            let start = Instant::now();
-            let ctx = Context::new(&scene, accel.as_ref());
-            let (img, rays) = engine.render_full(&ctx)?;
-            row.full = Some((rays, start.elapsed().as_secs_f64()));
+            let clock = Clock::start();
+            let accel = accel::build(&scene, args.accel)?;
+            let (img, rays) = engine.render_full(&Context::new(&scene, accel.as_ref()))?;
+            row.full = Some((rays, clock.elapsed()));
             image = img;
         } else {
-            let (img, stats) = coherent.render_frame(&scene, accel.as_ref(), &engine)?;
-            if f != frames[0] && stats.full_reason.is_some() && !camera_notice && !args.quiet {
+            // The coherent renderer updates one structure from frame to frame; the full
+            // renders build their own, as a frame-by-frame renderer does.
+            let clock = Clock::start();
+            match dynamic.as_mut() {
+                None => dynamic = Some(accel::build_dynamic(&scene, args.accel)?),
+                Some(d) => row.update = Some(d.update(&scene)?),
+            }
+            let accel = dynamic.as_deref().expect("built above");
+            let (img, stats) = coherent.render_frame(&scene, accel, &engine)?;
+            row.time = clock.elapsed();
+            if f != frames[0] && stats.full_reason.is_some() && !full_notice && !args.quiet {
                 eprintln!(
-                    "notice: frame {f}: every pixel retraced ({}); frames where the camera or \
-                     world changes are rendered in full",
+                    "notice: frame {f}: every pixel retraced ({}); such frames are rendered in \
+                     full",
                     stats.full_reason.as_deref().unwrap_or("")
                 );
-                camera_notice = true;
+                full_notice = true;
             }
             row.coherent = stats;
             if args.verify {
-                let start = Instant::now();
+                let clock = Clock::start();
                 let accel = accel::build(&scene, args.accel)?;
-                let ctx = Context::new(&scene, accel.as_ref());
-                let (full, rays) = engine.render_full(&ctx)?;
-                row.full = Some((rays, start.elapsed().as_secs_f64()));
+                let (full, rays) = engine.render_full(&Context::new(&scene, accel.as_ref()))?;
+                row.full = Some((rays, clock.elapsed()));
                 let same = full.pixels.len() == img.pixels.len()
                     && full.pixels.iter().zip(&img.pixels).all(|(a, b)| {
                         a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)
                     });
                 row.identical = Some(same);
                 if !same {
-                    eprintln!("raylink: error: frame {f}: the coherent render differs from the full render");
+                    eprintln!(
+                        "raylink: error: frame {f}: the coherent render differs from the full render"
+                    );
                 }
             }
             image = img;
@@ -435,7 +472,7 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
                     r.blocks_retraced,
                     layout.len(),
                     r.rays.total(),
-                    r.seconds
+                    row.time.wall
                 );
             }
         }
@@ -446,108 +483,133 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
         pixels_per_frame: width as u64 * height as u64,
         table_bytes: coherent.table_bytes(),
         voxels: coherent.grid.len(),
+        active_voxels: coherent.active_voxels(),
         blocks: (layout.cols, layout.rows),
+        prepare_seconds,
+        grid: (coherent.grid.lo, coherent.grid.hi),
     })
 }
 
 /// The per-frame CSV.
 pub fn csv_text(report: &Report) -> String {
     let mut s = String::from(
-        "frame,coherent_rays,coherent_seconds,pixels_retraced,blocks_retraced,changed_voxels,\
-         bookkeeping_seconds,full_rays,full_seconds,identical,build_seconds\n",
+        "frame,rays,cpu_seconds,wall_seconds,pixels_retraced,blocks_retraced,changed_voxels,\
+         bookkeeping_seconds,accel_update,full_rays,full_cpu_seconds,full_wall_seconds,identical\n",
     );
     for r in &report.rows {
         let c = &r.coherent;
-        let (fr, fs) = r.full.map_or((String::new(), String::new()), |(rays, s)| {
-            (rays.total().to_string(), format!("{s:.6}"))
+        let (fr, fc, fw) = r.full.map_or(Default::default(), |(rays, t)| {
+            (
+                rays.total().to_string(),
+                format!("{:.3}", t.cpu),
+                format!("{:.6}", t.wall),
+            )
         });
+        let update = match r.update {
+            // --no-coherence: no structure is kept.
+            None if r.time.wall == 0.0 => "",
+            None => "built",
+            Some(Update::Unchanged) => "unchanged",
+            Some(Update::Refit(_)) => "refit",
+            Some(Update::Rebuilt) => "rebuilt",
+        };
         let _ = writeln!(
             s,
-            "{},{},{:.6},{},{},{},{:.6},{fr},{fs},{},{:.6}",
+            "{},{},{:.3},{:.6},{},{},{},{:.6},{update},{fr},{fc},{fw},{}",
             r.frame,
             c.rays.total(),
-            c.seconds,
+            r.time.cpu,
+            r.time.wall,
             c.pixels_retraced,
             c.blocks_retraced,
             c.changed_voxels,
             c.bookkeeping_seconds,
             r.identical.map_or(String::new(), |b| b.to_string()),
-            r.build_seconds
         );
     }
     s
 }
 
-/// A summary like Table 2 of the paper.
+/// A summary like Table 2 of the paper: rays and CPU time of the full ("traditional") and the
+/// coherent renders, per frame and for the whole sequence.
 pub fn summary(report: &Report) -> String {
     let mut s = String::new();
     let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::NAN };
     let _ = writeln!(
         s,
-        "{:>7} {:>12} {:>10} {:>12} {:>8} {:>10} {:>8} {:>9}",
-        "frame", "full rays", "full s", "rays", "ratio", "s", "ratio", "retraced"
+        "{:>6} {:>12} {:>9} | {:>12} {:>7} {:>9} {:>7} {:>9} {:>9}",
+        "frame", "full rays", "full cpu", "rays", "ratio", "cpu s", "ratio", "retraced", "wall s"
     );
-    let (mut cr, mut cs, mut fr, mut fs, mut px) = (0u64, 0.0, 0u64, 0.0, 0u64);
-    let mut all_full = true;
+    let (mut cr, mut fr, mut px) = (0u64, 0u64, 0u64);
+    let (mut ct, mut ft) = (Time::default(), Time::default());
+    let mut all_full = !report.rows.is_empty();
     for r in &report.rows {
         let c = &r.coherent;
         cr += c.rays.total();
-        cs += c.seconds;
+        ct.cpu += r.time.cpu;
+        ct.wall += r.time.wall;
         px += c.pixels_retraced;
-        let (frays, fsecs) = match r.full {
-            Some((rays, secs)) => (rays.total(), secs),
-            None => {
-                all_full = false;
-                (0, 0.0)
-            }
-        };
+        let (frays, ftime) = r
+            .full
+            .map_or((0, Time::default()), |(rays, t)| (rays.total(), t));
+        all_full &= r.full.is_some();
         fr += frays;
-        fs += fsecs;
+        ft.cpu += ftime.cpu;
+        ft.wall += ftime.wall;
         let _ = writeln!(
             s,
-            "{:>7} {:>12} {:>10.3} {:>12} {:>8.4} {:>10.3} {:>8.4} {:>8.2}%",
+            "{:>6} {:>12} {:>9.2} | {:>12} {:>7.4} {:>9.2} {:>7.4} {:>8.2}% {:>9.3}",
             r.frame,
             frays,
-            fsecs,
+            ftime.cpu,
             c.rays.total(),
             ratio(c.rays.total() as f64, frays as f64),
-            c.seconds,
-            ratio(c.seconds, fsecs),
-            100.0 * c.pixels_retraced as f64 / report.pixels_per_frame as f64
+            r.time.cpu,
+            ratio(r.time.cpu, ftime.cpu),
+            100.0 * c.pixels_retraced as f64 / report.pixels_per_frame as f64,
+            r.time.wall,
         );
     }
     let frames = report.rows.len() as u64;
     let _ = writeln!(
         s,
-        "{:>7} {:>12} {:>10.3} {:>12} {:>8.4} {:>10.3} {:>8.4} {:>8.2}%",
+        "{:>6} {:>12} {:>9.2} | {:>12} {:>7.4} {:>9.2} {:>7.4} {:>8.2}% {:>9.3}",
         "all",
         fr,
-        fs,
+        ft.cpu,
         cr,
         ratio(cr as f64, fr as f64),
-        cs,
-        ratio(cs, fs),
-        100.0 * px as f64 / (report.pixels_per_frame * frames.max(1)) as f64
+        ct.cpu,
+        ratio(ct.cpu, ft.cpu),
+        100.0 * px as f64 / (report.pixels_per_frame * frames.max(1)) as f64,
+        ct.wall,
     );
-    if all_full && !report.rows.is_empty() {
+    if all_full {
         let r0 = &report.rows[0];
         if let Some((_, f0)) = r0.full {
             let _ = writeln!(
                 s,
-                "frame-0 overhead: {:+.1}% ({:.3} s coherent, {:.3} s full)",
-                100.0 * (r0.coherent.seconds / f0 - 1.0),
-                r0.coherent.seconds,
-                f0
+                "frame-0 overhead: {:+.1}% CPU, {:+.1}% wall ({:.2} s / {:.2} s CPU)",
+                100.0 * (r0.time.cpu / f0.cpu - 1.0),
+                100.0 * (r0.time.wall / f0.wall - 1.0),
+                r0.time.cpu,
+                f0.cpu
             );
         }
+        let (rf, tf) = (ratio(cr as f64, fr as f64), ratio(ct.cpu, ft.cpu));
         let _ = writeln!(
             s,
-            "ray fraction {:.4}, time fraction {:.4} (time/ray {:.3})",
-            ratio(cr as f64, fr as f64),
-            ratio(cs, fs),
-            ratio(ratio(cs, fs), ratio(cr as f64, fr as f64))
+            "sequence: ray fraction {rf:.4}, CPU time fraction {tf:.4} ({:.2}x the ray fraction), \
+             wall time fraction {:.4}",
+            tf / rf,
+            ratio(ct.wall, ft.wall),
         );
     }
+    let _ = writeln!(
+        s,
+        "preparation (reading every frame to place the grid): {:.2} s",
+        report.prepare_seconds
+    );
     let verified: Option<Vec<bool>> = report.rows.iter().map(|r| r.identical).collect();
     if let Some(v) = verified.filter(|v| !v.is_empty()) {
         let _ = writeln!(
@@ -560,10 +622,19 @@ pub fn summary(report: &Report) -> String {
             }
         );
     }
+    let (lo, hi) = report.grid;
     let _ = writeln!(
         s,
-        "voxel tables: {} voxels x {}x{} blocks x 2 tables = {:.1} KiB",
+        "voxel tables: {} voxels ({} where changes happen) over [{:.2}, {:.2}, {:.2}]..[{:.2}, \
+         {:.2}, {:.2}] x {}x{} blocks x 2 tables = {:.1} KiB",
         report.voxels,
+        report.active_voxels,
+        lo.x,
+        lo.y,
+        lo.z,
+        hi.x,
+        hi.y,
+        hi.z,
         report.blocks.0,
         report.blocks.1,
         report.table_bytes as f64 / 1024.0

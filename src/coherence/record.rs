@@ -6,7 +6,7 @@
 //! cache, and the rays of one block cross mostly the same voxels), then set in the shared
 //! voxel tables once per voxel when the task ends.
 
-use super::grid::Grid;
+use super::grid::ActiveVoxels;
 use super::tables::{Table, VoxelTables};
 use crate::accel::{Accel, Hit};
 use crate::math::Ray;
@@ -14,7 +14,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 pub struct RecordingAccel<'a> {
     inner: &'a dyn Accel,
-    grid: &'a Grid,
+    voxels: &'a ActiveVoxels,
     /// Voxels crossed by rays looking for surfaces, and by shadow rays (one bit per voxel).
     surface: Vec<AtomicU64>,
     shadow: Vec<AtomicU64>,
@@ -30,12 +30,12 @@ fn mark(set: &[AtomicU64], v: usize) {
 }
 
 impl<'a> RecordingAccel<'a> {
-    pub fn new(inner: &'a dyn Accel, grid: &'a Grid) -> RecordingAccel<'a> {
-        let words = grid.len().div_ceil(64);
+    pub fn new(inner: &'a dyn Accel, voxels: &'a ActiveVoxels) -> RecordingAccel<'a> {
+        let words = voxels.fine.len().div_ceil(64);
         let zeros = || (0..words).map(|_| AtomicU64::new(0)).collect();
         RecordingAccel {
             inner,
-            grid,
+            voxels,
             surface: zeros(),
             shadow: zeros(),
             hit: AtomicBool::new(false),
@@ -69,7 +69,7 @@ impl Accel for RecordingAccel<'_> {
         if hit.is_some() {
             self.hit.store(true, Ordering::Relaxed);
         }
-        self.grid.walk(ray.origin, ray.dir, ray.tmin, end, |v| {
+        self.voxels.walk(ray.origin, ray.dir, ray.tmin, end, |v| {
             mark(&self.surface, v)
         });
         hit
@@ -79,7 +79,7 @@ impl Accel for RecordingAccel<'_> {
         // Whether or not something blocks it, the whole segment to the light is recorded:
         // the blocker may move away, and anything that moves into the segment must be seen.
         let blocked = self.inner.occluded(ray);
-        self.grid
+        self.voxels
             .walk(ray.origin, ray.dir, ray.tmin, ray.tmax, |v| {
                 mark(&self.shadow, v)
             });

@@ -6,7 +6,7 @@
 //! scene of its frame and its own random stream, so every frame equals a full render.
 
 use super::changes::{Changes, FrameSummary};
-use super::grid::Grid;
+use super::grid::{ActiveVoxels, Grid};
 use super::record::RecordingAccel;
 use super::tables::{BlockLayout, BlockSet, Table, VoxelTables};
 use crate::accel::Accel;
@@ -118,6 +118,7 @@ pub struct FrameStats {
 /// The incremental renderer's state between frames.
 pub struct CoherentRenderer {
     pub grid: Grid,
+    voxels: ActiveVoxels,
     pub layout: BlockLayout,
     tables: VoxelTables,
     previous: Option<(FrameSummary, Image)>,
@@ -131,6 +132,7 @@ impl CoherentRenderer {
     pub fn new(grid: Grid, layout: BlockLayout) -> CoherentRenderer {
         let tables = VoxelTables::new(grid.len(), &layout);
         CoherentRenderer {
+            voxels: ActiveVoxels::all(grid.clone()),
             grid,
             layout,
             tables,
@@ -138,7 +140,9 @@ impl CoherentRenderer {
         }
     }
 
-    /// A grid of about `voxels` voxels over every box in `bounds` (the extents of every frame).
+    /// A grid of about `voxels` voxels over every box in `bounds`. It must hold every box a
+    /// change will mark (a change outside it retraces the whole frame): the extents of every
+    /// frame do, and so do the boxes of the changes themselves (what `raylink animate` uses).
     pub fn grid_around(bounds: &[(Vec3, Vec3)], voxels: u32) -> Grid {
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for (a, b) in bounds {
@@ -153,6 +157,21 @@ impl CoherentRenderer {
         Grid::with_voxels(lo - pad, hi + pad, voxels)
     }
 
+    /// Records only the voxels overlapping `boxes`: every box a change of the sequence will
+    /// mark (a change elsewhere then retraces the whole frame). Rays cross the rest in
+    /// coarse steps.
+    pub fn restrict_to(&mut self, boxes: &[(Vec3, Vec3)]) {
+        let margin = MARGIN * (self.grid.hi - self.grid.lo).length();
+        self.voxels = ActiveVoxels::boxes(self.grid.clone(), boxes, 2.0 * margin);
+    }
+
+    /// Voxels that keep records.
+    pub fn active_voxels(&self) -> usize {
+        (0..self.grid.len())
+            .filter(|&v| self.voxels.is_active(v))
+            .count()
+    }
+
     /// Bytes of the voxel tables.
     pub fn table_bytes(&self) -> usize {
         self.tables.memory_bytes()
@@ -164,13 +183,22 @@ impl CoherentRenderer {
         self.tables = VoxelTables::new(self.grid.len(), &self.layout);
     }
 
-    /// The blocks to retrace for `changes`, and how many voxels were marked changed.
-    pub fn blocks_for(&self, changes: &Changes) -> (BlockSet, usize) {
+    /// The blocks to retrace for `changes`, how many voxels were marked changed, and why
+    /// every block is retraced, if so.
+    pub fn blocks_for(&self, changes: &Changes) -> (BlockSet, usize, Option<String>) {
         let mut blocks = BlockSet::new(&self.layout);
-        if changes.everything.is_some() {
-            return (BlockSet::all(&self.layout), 0);
+        if let Some(reason) = &changes.everything {
+            return (BlockSet::all(&self.layout), 0, Some(reason.clone()));
         }
         let margin = MARGIN * (self.grid.hi - self.grid.lo).length();
+        // Records exist only inside the grid: a change elsewhere cannot be traced back.
+        let inside = |(lo, hi): &(Vec3, Vec3)| {
+            lo.cmpge(self.grid.lo - margin).all() && hi.cmple(self.grid.hi + margin).all()
+        };
+        if !changes.objects.iter().chain(&changes.shadows).all(inside) {
+            let reason = "something changed outside the voxel grid".to_string();
+            return (BlockSet::all(&self.layout), 0, Some(reason));
+        }
         let mut changed = vec![false; self.grid.len()];
         for (lo, hi) in &changes.objects {
             self.grid
@@ -180,6 +208,11 @@ impl CoherentRenderer {
         for (lo, hi) in &changes.shadows {
             self.grid
                 .voxels_in_box(*lo - margin, *hi + margin, |v| shadow_only[v] = true);
+        }
+        if (0..self.grid.len()).any(|v| (changed[v] || shadow_only[v]) && !self.voxels.is_active(v))
+        {
+            let reason = "something changed where no records were kept".to_string();
+            return (BlockSet::all(&self.layout), 0, Some(reason));
         }
         let mut count = 0;
         for v in 0..self.grid.len() {
@@ -194,7 +227,7 @@ impl CoherentRenderer {
         if changes.light_moved {
             self.tables.collect_hits(&mut blocks);
         }
-        (blocks, count)
+        (blocks, count, None)
     }
 
     /// Renders the next frame of the sequence (the first call traces every pixel).
@@ -223,9 +256,9 @@ impl CoherentRenderer {
             }
             Some((previous, image)) => {
                 let changes = previous.diff(&summary);
-                let (blocks, voxels) = self.blocks_for(&changes);
+                let (blocks, voxels, reason) = self.blocks_for(&changes);
                 stats.changed_voxels = voxels;
-                stats.full_reason = changes.everything;
+                stats.full_reason = reason;
                 (blocks, image)
             }
         };
@@ -256,12 +289,12 @@ impl CoherentRenderer {
             })
             .collect();
         let pool = crate::render::thread_pool(engine.threads())?;
-        let (grid, tables) = (&self.grid, &self.tables);
+        let (voxels, tables) = (&self.voxels, &self.tables);
         let results: Vec<(Vec<Rgb>, RayStats)> = pool.install(|| {
             tasks
                 .par_iter()
                 .map(|(b, tile)| {
-                    let recorder = RecordingAccel::new(accel, grid);
+                    let recorder = RecordingAccel::new(accel, voxels);
                     let result = engine.region(&ctx.with_accel(&recorder), tile);
                     recorder.flush(tables, *b);
                     result

@@ -11,6 +11,18 @@ use crate::{Error, Result};
 use std::path::{Path, PathBuf};
 use toml::{Table, Value};
 
+/// Reads a native TOML scene; an animated one gives its first frame (so `raylink render`
+/// renders the first frame of an animation).
+pub fn read_first_frame(path: &Path) -> Result<Scene> {
+    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    // Static files go straight to the reader, so its messages keep their line numbers.
+    if !text.contains("animation") && !text.contains("keyframes") {
+        return super::toml::from_str(&text, path);
+    }
+    let anim = Animation::from_str(&text, path)?;
+    anim.scene_at(anim.start)
+}
+
 /// How a keyframe's values move on to the next keyframe's.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Interpolation {

@@ -76,7 +76,7 @@ impl Scene {
     /// Reads a scene file, choosing the reader by extension.
     pub fn load(path: &Path) -> crate::Result<Scene> {
         match path.extension().and_then(|e| e.to_str()) {
-            Some("toml") => toml::read(path),
+            Some("toml") => animation::read_first_frame(path),
             Some("pbrt") => pbrt::read(path),
             _ => Err(crate::Error::input(
                 path,
