@@ -10,11 +10,16 @@ use super::grid::ActiveVoxels;
 use super::tables::{Table, VoxelTables};
 use crate::accel::{Accel, Hit};
 use crate::math::Ray;
+use crate::scene::Scene;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::Mutex;
 
 pub struct RecordingAccel<'a> {
     inner: &'a dyn Accel,
+    scene: &'a Scene,
     voxels: &'a ActiveVoxels,
+    /// The last blocked shadow ray and its nearest hit.
+    last: Mutex<Option<(Ray, Option<Hit>)>>,
     /// Voxels crossed by rays looking for surfaces, and by shadow rays (one bit per voxel).
     surface: Vec<AtomicU64>,
     shadow: Vec<AtomicU64>,
@@ -30,12 +35,18 @@ fn mark(set: &[AtomicU64], v: usize) {
 }
 
 impl<'a> RecordingAccel<'a> {
-    pub fn new(inner: &'a dyn Accel, voxels: &'a ActiveVoxels) -> RecordingAccel<'a> {
+    pub fn new(
+        inner: &'a dyn Accel,
+        scene: &'a Scene,
+        voxels: &'a ActiveVoxels,
+    ) -> RecordingAccel<'a> {
         let words = voxels.fine.len().div_ceil(64);
         let zeros = || (0..words).map(|_| AtomicU64::new(0)).collect();
         RecordingAccel {
             inner,
+            scene,
             voxels,
+            last: Mutex::new(None),
             surface: zeros(),
             shadow: zeros(),
             hit: AtomicBool::new(false),
@@ -62,9 +73,26 @@ impl<'a> RecordingAccel<'a> {
     }
 }
 
+fn same_ray(a: &Ray, b: &Ray) -> bool {
+    let bits = |r: &Ray| {
+        (
+            r.origin.to_array().map(f32::to_bits),
+            r.dir.to_array().map(f32::to_bits),
+            r.tmin.to_bits(),
+            r.tmax.to_bits(),
+        )
+    };
+    bits(a) == bits(b)
+}
+
 impl Accel for RecordingAccel<'_> {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let hit = self.inner.intersect(ray);
+        let cached = self.last.lock().unwrap_or_else(|e| e.into_inner()).take();
+        // The same query gives the same answer: reuse the one `occluded` just made.
+        let hit = match cached {
+            Some((r, hit)) if same_ray(&r, ray) => hit,
+            _ => self.inner.intersect(ray),
+        };
         let end = hit.map_or(ray.tmax, |h| h.t);
         if hit.is_some() {
             self.hit.store(true, Ordering::Relaxed);
@@ -76,13 +104,27 @@ impl Accel for RecordingAccel<'_> {
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
-        // Whether or not something blocks it, the whole segment to the light is recorded:
-        // the blocker may move away, and anything that moves into the segment must be seen.
         let blocked = self.inner.occluded(ray);
-        self.voxels
-            .walk(ray.origin, ray.dir, ray.tmin, ray.tmax, |v| {
-                mark(&self.shadow, v)
-            });
+        // An unblocked segment is recorded to the light: anything that moves into it must
+        // be seen. A blocked one only up to the nearest blocker when that is opaque: while
+        // the blocker stays, nothing beyond it can change the answer (and if it moves, its
+        // voxels change). Behind a transmissive blocker the light still counts, so the
+        // whole segment is kept.
+        let mut end = ray.tmax;
+        if blocked {
+            let hit = self.inner.intersect(ray);
+            if let Some(h) = hit {
+                let shape = &self.scene.shapes[h.geom_id as usize];
+                if !self.scene.materials[shape.material].is_transmissive() {
+                    end = h.t;
+                }
+            }
+            // The Whitted integrator asks for this hit next: keep it.
+            *self.last.lock().unwrap_or_else(|e| e.into_inner()) = Some((*ray, hit));
+        }
+        self.voxels.walk(ray.origin, ray.dir, ray.tmin, end, |v| {
+            mark(&self.shadow, v)
+        });
         blocked
     }
 }

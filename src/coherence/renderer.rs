@@ -294,7 +294,7 @@ impl CoherentRenderer {
             tasks
                 .par_iter()
                 .map(|(b, tile)| {
-                    let recorder = RecordingAccel::new(accel, voxels);
+                    let recorder = RecordingAccel::new(accel, scene, voxels);
                     let result = engine.region(&ctx.with_accel(&recorder), tile);
                     recorder.flush(tables, *b);
                     result
