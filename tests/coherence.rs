@@ -546,6 +546,29 @@ fn cli_writes_frames_and_statistics() {
     assert!(rows[3].starts_with("3,0,"), "{text}");
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("every frame identical"), "{stdout}");
+
+    // The path tracer, through the command line.
+    let out = common::raylink(&[
+        "animate",
+        scene.to_str().unwrap(),
+        "-o",
+        dir.path().join("path_%d.exr").to_str().unwrap(),
+        "--integrator",
+        "path",
+        "--spp",
+        "2",
+        "--width",
+        "24",
+        "--height",
+        "18",
+        "--verify",
+        "--stats",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("every frame identical"), "{stdout}");
+    assert!(dir.path().join("path_3.exr").is_file());
 }
 
 #[test]

@@ -98,7 +98,7 @@ impl Animation {
             };
             for (k, v) in &a {
                 match (k.as_str(), v) {
-                    ("start", Value::Integer(s)) => anim.start = *s,
+                    ("start", Value::Integer(s)) if s.abs() <= 1_000_000_000 => anim.start = *s,
                     ("frames", Value::Integer(n)) if (1..=1_000_000).contains(n) => {
                         anim.frames = *n as u32
                     }
@@ -109,7 +109,7 @@ impl Animation {
                         return Err(fail(format!(
                             "animation.{k}: expected {}, got {v}",
                             match k.as_str() {
-                                "start" => "an integer frame number",
+                                "start" => "an integer frame number (at most 10^9 in size)",
                                 "frames" => "a frame count from 1 to 1000000",
                                 _ => "a positive number of frames per second",
                             }
