@@ -68,8 +68,9 @@ pub struct AnimateArgs {
     /// Pixel blocks of the voxel bit tables, COLSxROWS (at most one block per pixel).
     #[arg(long, default_value = "16x16", value_name = "COLSxROWS")]
     pub block_table: String,
-    /// Approximate number of voxels of the uniform grid over the animation's extent.
-    #[arg(long, default_value_t = 32768)]
+    /// Approximate number of voxels of the grid (over the region where the sequence changes).
+    /// More voxels retrace fewer pixels but cost more per recorded ray.
+    #[arg(long, default_value_t = 8192)]
     pub voxels: u32,
     /// Render every frame from scratch instead (the traditional frame-by-frame method).
     #[arg(long, conflicts_with = "verify")]
