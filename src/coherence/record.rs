@@ -20,6 +20,7 @@ pub struct RecordingAccel<'a> {
     voxels: &'a ActiveVoxels,
     /// The last blocked shadow ray and its nearest hit.
     last: Mutex<Option<(Ray, Option<Hit>)>>,
+    has_last: AtomicBool,
     /// Voxels crossed by rays looking for surfaces, and by shadow rays (one bit per voxel).
     surface: Vec<AtomicU64>,
     shadow: Vec<AtomicU64>,
@@ -47,6 +48,7 @@ impl<'a> RecordingAccel<'a> {
             scene,
             voxels,
             last: Mutex::new(None),
+            has_last: AtomicBool::new(false),
             surface: zeros(),
             shadow: zeros(),
             hit: AtomicBool::new(false),
@@ -87,7 +89,12 @@ fn same_ray(a: &Ray, b: &Ray) -> bool {
 
 impl Accel for RecordingAccel<'_> {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let cached = self.last.lock().unwrap_or_else(|e| e.into_inner()).take();
+        // Most queries follow no blocked shadow ray: skip the lock for them.
+        let cached = if self.has_last.swap(false, Ordering::Relaxed) {
+            self.last.lock().unwrap_or_else(|e| e.into_inner()).take()
+        } else {
+            None
+        };
         // The same query gives the same answer: reuse the one `occluded` just made.
         let hit = match cached {
             Some((r, hit)) if same_ray(&r, ray) => hit,
@@ -121,6 +128,7 @@ impl Accel for RecordingAccel<'_> {
             }
             // The Whitted integrator asks for this hit next: keep it.
             *self.last.lock().unwrap_or_else(|e| e.into_inner()) = Some((*ray, hit));
+            self.has_last.store(true, Ordering::Relaxed);
         }
         self.voxels.walk(ray.origin, ray.dir, ray.tmin, end, |v| {
             mark(&self.shadow, v)
