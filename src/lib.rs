@@ -8,11 +8,13 @@
 //! - [`bsdf`]: scattering at surfaces (evaluate, sample, density) for the Monte Carlo integrators.
 //! - [`integrators`]: one module per light-transport technique.
 //! - [`render`]: tiles, threads, pixel sampling, progress and statistics.
+//! - [`coherence`]: `raylink animate`, static-camera animation with object-space temporal coherence.
 //! - [`bench`]: `raylink bench`, Embree against the pure-Rust BVH.
 
 pub mod accel;
 pub mod bench;
 pub mod bsdf;
+pub mod coherence;
 pub mod error;
 pub mod image;
 pub mod integrators;

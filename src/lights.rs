@@ -146,6 +146,7 @@ pub struct EmissionSample {
     pub light: usize,
 }
 
+#[derive(Clone)]
 pub struct LightSet {
     pub emitters: Vec<Emitter>,
     /// Probability of choosing each emitter, and their cumulative sums.

@@ -42,6 +42,9 @@ enum Command {
     /// Convert a scene (.pbrt or .toml) to a native TOML scene; meshes are written as PLY
     /// files in a NAME.meshes folder beside it.
     Convert(ConvertArgs),
+    /// Render a keyframed animation (static camera), retracing in each frame only the pixels
+    /// whose rays crossed voxels where something changed; every frame equals a full render.
+    Animate(raylink::coherence::animate::AnimateArgs),
     /// Compare the intersection backends: build time, memory and Mrays/s on a ladder of scenes.
     Bench(raylink::bench::BenchArgs),
     /// Packaging: write the man page (raylink.1) and the bash, zsh and fish completions
@@ -283,6 +286,7 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => run_render(args),
         Command::Convert(args) => run_convert(args),
+        Command::Animate(args) => raylink::coherence::animate::run(&args),
         Command::Bench(args) => raylink::bench::run(&args),
         Command::GenerateAssets { dir } => generate_assets(&dir),
     };

@@ -31,6 +31,46 @@ pub trait Accel: Send + Sync {
     fn occluded(&self, ray: &Ray) -> bool;
 }
 
+/// How a [`DynamicAccel`] followed the scene to a new frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Update {
+    /// Nothing moved.
+    Unchanged,
+    /// The vertices of this many shapes were updated in place (Embree: BVHs refitted).
+    Refit(usize),
+    /// The structure was built again.
+    Rebuilt,
+}
+
+/// An intersection structure that follows a scene from one animation frame to the next.
+pub trait DynamicAccel: Accel {
+    /// Brings the structure to `scene`'s geometry (shape `i` is geometry `i`, as for [`build`]).
+    fn update(&mut self, scene: &Scene) -> crate::Result<Update>;
+}
+
+impl DynamicAccel for embree::EmbreeAccel {
+    fn update(&mut self, scene: &Scene) -> crate::Result<Update> {
+        embree::EmbreeAccel::update(self, scene)
+    }
+}
+
+impl DynamicAccel for bvh::BvhAccel {
+    fn update(&mut self, scene: &Scene) -> crate::Result<Update> {
+        // A fresh PLOC build is fast, and keeps the tree as good as a new one.
+        self.rebuild(scene)?;
+        Ok(Update::Rebuilt)
+    }
+}
+
+/// Builds an intersection structure for an animation: Embree as a dynamic scene whose moving
+/// geometries are refitted per frame, the BVH rebuilt per frame.
+pub fn build_dynamic(scene: &Scene, backend: Backend) -> crate::Result<Box<dyn DynamicAccel>> {
+    match backend {
+        Backend::Embree => Ok(Box::new(embree::EmbreeAccel::build_dynamic(scene)?)),
+        Backend::Bvh => Ok(Box::new(bvh::BvhAccel::build(scene)?)),
+    }
+}
+
 /// Which intersection backend to build (`--accel` on the command line).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum)]
 pub enum Backend {

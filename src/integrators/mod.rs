@@ -37,6 +37,17 @@ impl<'a> Context<'a> {
         }
     }
 
+    /// The same scene and lights, queried through another backend (for example one that
+    /// observes the queries, as the animation renderer's recorder does).
+    pub fn with_accel<'b>(&'b self, accel: &'b dyn Accel) -> Context<'b> {
+        Context {
+            scene: self.scene,
+            accel,
+            area_lights: self.area_lights.clone(),
+            lights: self.lights.clone(),
+        }
+    }
+
     /// The closest surface along the ray.
     pub fn intersect(&self, ray: &Ray, stats: &mut RayStats) -> Option<SurfacePoint> {
         stats.closest += 1;

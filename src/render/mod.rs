@@ -136,6 +136,28 @@ pub fn render(
     Ok((image, stats))
 }
 
+/// Renders the pixels of one rectangle (row-major) exactly as [`render`] renders them: a
+/// pixel's value does not depend on the tiling. Returns the pixels, rays traced and samples.
+pub fn render_region(
+    ctx: &Context,
+    integrator: &dyn Integrator,
+    options: &RenderOptions,
+    tile: &Tile,
+) -> (Vec<Rgb>, RayStats, u64) {
+    let mut camera = ctx.scene.camera.clone();
+    camera.width = options.width;
+    camera.height = options.height;
+    let basis = camera.basis();
+    sampling::render_tile(
+        ctx,
+        integrator,
+        &basis,
+        &options.sampling,
+        options.seed,
+        tile,
+    )
+}
+
 /// The render threads: `None` uses every core; each thread flushes denormals to zero.
 pub(crate) fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
     rayon::ThreadPoolBuilder::new()

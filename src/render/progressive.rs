@@ -108,12 +108,7 @@ impl Film {
         // Light paths: one per pixel sample over the whole image.
         let per_path = per_sample / (self.width as f64 * self.height as f64);
         for (i, px) in image.pixels.iter_mut().enumerate() {
-            let (s, l) = (self.sums[i], self.splats[i]);
-            *px = Rgb::new(
-                (s[0] * per_sample + l[0] * per_path) as f32,
-                (s[1] * per_sample + l[1] * per_path) as f32,
-                (s[2] * per_sample + l[2] * per_path) as f32,
-            );
+            *px = pixel_value(self.sums[i], self.splats[i], per_sample, per_path);
         }
         image
     }
@@ -125,6 +120,110 @@ struct TileResult {
     splats: Vec<Splat>,
     rays: RayStats,
     invalid: u64,
+}
+
+/// The sum of the estimates of samples `samples` of pixel `(x, y)`: what one pass adds to
+/// the pixel. Splats, rays and dropped samples go to `result`.
+#[allow(clippy::too_many_arguments)]
+fn pixel_pass(
+    ctx: &Context,
+    integrator: &dyn MonteCarlo,
+    camera: &CameraBasis,
+    seed: u64,
+    filter: &FilterSampler,
+    (x, y): (u32, u32),
+    samples: std::ops::Range<u32>,
+    result: &mut TileResult,
+) -> [f64; 3] {
+    let mut sum = [0.0f64; 3];
+    for i in samples {
+        let mut sampler = Sampler::new(seed, &[x as u64, y as u64], i);
+        let offset = filter.sample(sampler.next_2d());
+        let ray = camera.ray(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
+        let before = result.splats.len();
+        let l = integrator.sample(
+            ctx,
+            camera,
+            &ray,
+            &mut sampler,
+            &mut result.rays,
+            &mut result.splats,
+        );
+        let splats_ok = result.splats[before..]
+            .iter()
+            .all(|s| s.value.is_finite() && s.x.is_finite() && s.y.is_finite());
+        if !l.is_finite() || !splats_ok {
+            // A numerical failure on one sample must not poison the pixel.
+            result.splats.truncate(before);
+            result.invalid += 1;
+            continue;
+        }
+        sum[0] += l.x as f64;
+        sum[1] += l.y as f64;
+        sum[2] += l.z as f64;
+    }
+    sum
+}
+
+/// The value of a film pixel from its sample sum and splats (as [`Film::image`] computes it).
+fn pixel_value(sum: [f64; 3], splat: [f64; 3], per_sample: f64, per_path: f64) -> Rgb {
+    Rgb::new(
+        (sum[0] * per_sample + splat[0] * per_path) as f32,
+        (sum[1] * per_sample + splat[1] * per_path) as f32,
+        (sum[2] * per_sample + splat[2] * per_path) as f32,
+    )
+}
+
+/// Renders the pixels of one rectangle (row-major) with all `options.spp` samples, exactly
+/// as [`render_progressive`] (without a time limit) renders them, pass by pass, for an
+/// integrator that splats nothing (the path tracer). Returns the pixels, rays and the number
+/// of dropped samples.
+pub fn render_region(
+    ctx: &Context,
+    integrator: &dyn MonteCarlo,
+    options: &ProgressiveOptions,
+    tile: &Tile,
+) -> (Vec<Rgb>, RayStats, u64) {
+    let mut camera = ctx.scene.camera.clone();
+    camera.width = options.width;
+    camera.height = options.height;
+    let mut basis = camera.basis();
+    basis.margin = options.filter.radius();
+    let filter = FilterSampler::new(options.filter);
+    let mut result = TileResult {
+        sums: Vec::new(),
+        splats: Vec::new(),
+        rays: RayStats::default(),
+        invalid: 0,
+    };
+    let per_sample = 1.0 / options.spp as f64;
+    let per_path = per_sample / (options.width as f64 * options.height as f64);
+    let mut pixels = Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize);
+    for y in tile.y0..tile.y1 {
+        for x in tile.x0..tile.x1 {
+            let mut total = [0.0f64; 3];
+            let mut done = 0;
+            while done < options.spp {
+                let n = next_pass(done, options.spp);
+                let s = pixel_pass(
+                    ctx,
+                    integrator,
+                    &basis,
+                    options.seed,
+                    &filter,
+                    (x, y),
+                    done..done + n,
+                    &mut result,
+                );
+                for c in 0..3 {
+                    total[c] += s[c];
+                }
+                done += n;
+            }
+            pixels.push(pixel_value(total, [0.0; 3], per_sample, per_path));
+        }
+    }
+    (pixels, result.rays, result.invalid)
 }
 
 fn render_tile(
@@ -144,33 +243,16 @@ fn render_tile(
     };
     for y in tile.y0..tile.y1 {
         for x in tile.x0..tile.x1 {
-            let mut sum = [0.0f64; 3];
-            for i in samples.clone() {
-                let mut sampler = Sampler::new(options.seed, &[x as u64, y as u64], i);
-                let offset = filter.sample(sampler.next_2d());
-                let ray = camera.ray(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
-                let before = result.splats.len();
-                let l = integrator.sample(
-                    ctx,
-                    camera,
-                    &ray,
-                    &mut sampler,
-                    &mut result.rays,
-                    &mut result.splats,
-                );
-                let splats_ok = result.splats[before..]
-                    .iter()
-                    .all(|s| s.value.is_finite() && s.x.is_finite() && s.y.is_finite());
-                if !l.is_finite() || !splats_ok {
-                    // A numerical failure on one sample must not poison the pixel.
-                    result.splats.truncate(before);
-                    result.invalid += 1;
-                    continue;
-                }
-                sum[0] += l.x as f64;
-                sum[1] += l.y as f64;
-                sum[2] += l.z as f64;
-            }
+            let sum = pixel_pass(
+                ctx,
+                integrator,
+                camera,
+                options.seed,
+                filter,
+                (x, y),
+                samples.clone(),
+                &mut result,
+            );
             result.sums.push(sum);
         }
     }

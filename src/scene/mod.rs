@@ -2,6 +2,7 @@
 //! integrators never know which file it came from. Geometry is stored in world space:
 //! readers apply transforms when they load.
 
+pub mod animation;
 pub mod camera;
 pub mod convert;
 pub mod environment;
@@ -75,7 +76,7 @@ impl Scene {
     /// Reads a scene file, choosing the reader by extension.
     pub fn load(path: &Path) -> crate::Result<Scene> {
         match path.extension().and_then(|e| e.to_str()) {
-            Some("toml") => toml::read(path),
+            Some("toml") => animation::read_first_frame(path),
             Some("pbrt") => pbrt::read(path),
             _ => Err(crate::Error::input(
                 path,

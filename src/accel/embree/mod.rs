@@ -4,9 +4,9 @@
 
 mod sys;
 
-use super::{Accel, Hit};
+use super::{Accel, Hit, Update};
 use crate::math::{Ray, Vec3, Vec4};
-use crate::scene::{Geometry, Scene as SceneDesc};
+use crate::scene::{Geometry, QuadMesh, Scene as SceneDesc, TriangleMesh};
 use crate::{Error, Result};
 use std::ffi::{c_char, c_void, CStr, CString};
 use std::sync::atomic::{AtomicI64, Ordering};
@@ -161,6 +161,8 @@ pub struct Scene {
     device: Arc<DeviceInner>,
     committed: bool,
     next_id: GeometryId,
+    /// Geometries get refit quality (see [`Scene::new_dynamic`]).
+    dynamic: bool,
 }
 
 // SAFETY: Embree allows concurrent queries on a committed scene; every change goes through
@@ -177,6 +179,17 @@ impl Drop for Scene {
 
 impl Scene {
     pub fn new(device: &Device) -> Result<Scene> {
+        Scene::with_flags(device, false)
+    }
+
+    /// A scene meant to change between commits (animation): Embree keeps one BVH per
+    /// geometry under a top-level BVH, and geometries added with refit quality have their
+    /// BVH refitted, not rebuilt, when their vertices move.
+    pub fn new_dynamic(device: &Device) -> Result<Scene> {
+        Scene::with_flags(device, true)
+    }
+
+    fn with_flags(device: &Device, dynamic: bool) -> Result<Scene> {
         // SAFETY: the device is live.
         let raw = unsafe { sys::rtcNewScene(device.inner.raw) };
         device.inner.check("creating a scene")?;
@@ -185,14 +198,23 @@ impl Scene {
         }
         // SAFETY: `raw` is a live scene. Robust traversal avoids cracks between triangles.
         unsafe {
-            sys::rtcSetSceneFlags(raw, sys::RTC_SCENE_FLAG_ROBUST);
-            sys::rtcSetSceneBuildQuality(raw, sys::RTC_BUILD_QUALITY_HIGH);
+            if dynamic {
+                sys::rtcSetSceneFlags(
+                    raw,
+                    sys::RTC_SCENE_FLAG_ROBUST | sys::RTC_SCENE_FLAG_DYNAMIC,
+                );
+                sys::rtcSetSceneBuildQuality(raw, sys::RTC_BUILD_QUALITY_LOW);
+            } else {
+                sys::rtcSetSceneFlags(raw, sys::RTC_SCENE_FLAG_ROBUST);
+                sys::rtcSetSceneBuildQuality(raw, sys::RTC_BUILD_QUALITY_HIGH);
+            }
         }
         Ok(Scene {
             raw,
             device: device.inner.clone(),
             committed: false,
             next_id: 0,
+            dynamic,
         })
     }
 
@@ -306,6 +328,9 @@ impl Scene {
         let id = self.next_id;
         // SAFETY: `geometry` and the scene are live; the scene keeps its own reference.
         unsafe {
+            if self.dynamic {
+                sys::rtcSetGeometryBuildQuality(geometry, sys::RTC_BUILD_QUALITY_REFIT);
+            }
             sys::rtcCommitGeometry(geometry);
             sys::rtcAttachGeometryByID(self.raw, geometry, id);
             sys::rtcReleaseGeometry(geometry);
@@ -314,6 +339,40 @@ impl Scene {
         self.next_id += 1;
         self.committed = false;
         Ok(id)
+    }
+
+    /// Replaces the vertices of geometry `id` (a triangle or quad mesh with as many vertices,
+    /// or spheres given as (centre, radius) for a sphere geometry). Takes effect at the next
+    /// [`commit`](Self::commit).
+    pub fn update_vertices(&mut self, id: GeometryId, data: &[f32], stride: usize) -> Result<()> {
+        if id >= self.next_id {
+            return Err(Error::Embree(format!("no geometry {id} to update")));
+        }
+        if data.iter().any(|x| !x.is_finite()) {
+            return Err(Error::Embree(format!(
+                "geometry {id}: the new vertices are not finite"
+            )));
+        }
+        // SAFETY: the scene is live and `id` was attached to it. The vertex buffer was
+        // created by `rtcSetNewGeometryBuffer` with `stride`-float items; the caller passes
+        // as many items as it holds (checked against the buffer's size through the count the
+        // wrapper kept is not possible, so `EmbreeAccel::update` checks the vertex counts).
+        unsafe {
+            let geometry = sys::rtcGetGeometry(self.raw, id);
+            self.device.check("finding a geometry")?;
+            let buf =
+                sys::rtcGetGeometryBufferData(geometry, sys::RTC_BUFFER_TYPE_VERTEX, 0) as *mut f32;
+            if buf.is_null() {
+                return Err(Error::Embree(format!("geometry {id} has no vertex buffer")));
+            }
+            debug_assert_eq!(data.len() % stride, 0);
+            std::ptr::copy_nonoverlapping(data.as_ptr(), buf, data.len());
+            sys::rtcUpdateGeometryBuffer(geometry, sys::RTC_BUFFER_TYPE_VERTEX, 0);
+            sys::rtcCommitGeometry(geometry);
+        }
+        self.device.check("updating a geometry")?;
+        self.committed = false;
+        Ok(())
     }
 
     /// Builds the acceleration structure; queries are valid from then until the next change.
@@ -467,6 +526,46 @@ pub fn version() -> Result<String> {
 pub struct EmbreeAccel {
     scene: Scene,
     device: Device,
+    /// For a dynamic accel: what each geometry was built from, to tell a vertex update
+    /// (refit) from a change of topology (rebuild).
+    shapes: Option<Vec<ShapeKey>>,
+}
+
+/// The topology of a shape (kind, vertex count, hash of the indices) and a hash of its
+/// vertices.
+#[derive(Clone, Debug, PartialEq, Eq)]
+struct ShapeKey {
+    topology: (u8, usize, u64),
+    vertices: u64,
+}
+
+fn shape_key(geometry: &Geometry) -> ShapeKey {
+    use std::hash::{Hash, Hasher};
+    let hash = |f: &dyn Fn(&mut std::collections::hash_map::DefaultHasher)| {
+        let mut h = std::collections::hash_map::DefaultHasher::new();
+        f(&mut h);
+        h.finish()
+    };
+    let floats = |v: &[Vec3]| {
+        hash(&|h| {
+            v.iter()
+                .for_each(|p| p.to_array().map(f32::to_bits).hash(h))
+        })
+    };
+    match geometry {
+        Geometry::Sphere { center, radius } => ShapeKey {
+            topology: (0, 1, 0),
+            vertices: hash(&|h| center.extend(*radius).to_array().map(f32::to_bits).hash(h)),
+        },
+        Geometry::Triangles(m) => ShapeKey {
+            topology: (1, m.positions.len(), hash(&|h| m.indices.hash(h))),
+            vertices: floats(&m.positions),
+        },
+        Geometry::Quads(q) => ShapeKey {
+            topology: (2, q.positions.len(), hash(&|h| q.indices.hash(h))),
+            vertices: floats(&q.positions),
+        },
+    }
 }
 
 impl EmbreeAccel {
@@ -478,7 +577,77 @@ impl EmbreeAccel {
     /// The accel should own its device alone for [`memory_bytes`](Self::memory_bytes) to be
     /// its own.
     pub fn build_on(desc: &SceneDesc, device: Device) -> Result<EmbreeAccel> {
-        let mut scene = Scene::new(&device)?;
+        let scene = Scene::new(&device)?;
+        EmbreeAccel::fill(desc, device, scene, None)
+    }
+
+    /// Builds a dynamic scene (see [`Scene::new_dynamic`]) that [`update`](Self::update) can
+    /// move to another frame of an animation.
+    pub fn build_dynamic(desc: &SceneDesc) -> Result<EmbreeAccel> {
+        let device = Device::new()?;
+        let scene = Scene::new_dynamic(&device)?;
+        let keys = desc.shapes.iter().map(|s| shape_key(&s.geometry)).collect();
+        EmbreeAccel::fill(desc, device, scene, Some(keys))
+    }
+
+    /// Moves a dynamic accel to `desc`'s geometry: moved vertices are copied into the
+    /// geometries' buffers and their BVHs refitted; other changes rebuild the scene on the
+    /// same device. A static accel is rebuilt.
+    pub fn update(&mut self, desc: &SceneDesc) -> Result<Update> {
+        let keys: Vec<ShapeKey> = desc.shapes.iter().map(|s| shape_key(&s.geometry)).collect();
+        let same_topology = self.shapes.as_ref().is_some_and(|old| {
+            old.len() == keys.len() && old.iter().zip(&keys).all(|(a, b)| a.topology == b.topology)
+        });
+        if !same_topology {
+            let scene = if self.shapes.is_some() {
+                Scene::new_dynamic(&self.device)?
+            } else {
+                Scene::new(&self.device)?
+            };
+            let dynamic = self.shapes.is_some().then_some(keys);
+            let device = Device {
+                inner: self.device.inner.clone(),
+            };
+            *self = EmbreeAccel::fill(desc, device, scene, dynamic)?;
+            return Ok(Update::Rebuilt);
+        }
+        let old = self.shapes.take().unwrap_or_default();
+        let mut moved = 0;
+        for (i, ((a, b), shape)) in old.iter().zip(&keys).zip(&desc.shapes).enumerate() {
+            if a.vertices == b.vertices {
+                continue;
+            }
+            moved += 1;
+            match &shape.geometry {
+                Geometry::Sphere { center, radius } => {
+                    self.scene
+                        .update_vertices(i as u32, &center.extend(*radius).to_array(), 4)?
+                }
+                Geometry::Triangles(TriangleMesh { positions, .. })
+                | Geometry::Quads(QuadMesh { positions, .. }) => self.scene.update_vertices(
+                    i as u32,
+                    &positions
+                        .iter()
+                        .flat_map(|p| p.to_array())
+                        .collect::<Vec<_>>(),
+                    3,
+                )?,
+            }
+        }
+        self.shapes = Some(keys);
+        if moved == 0 {
+            return Ok(Update::Unchanged);
+        }
+        self.scene.commit()?;
+        Ok(Update::Refit(moved))
+    }
+
+    fn fill(
+        desc: &SceneDesc,
+        device: Device,
+        mut scene: Scene,
+        shapes: Option<Vec<ShapeKey>>,
+    ) -> Result<EmbreeAccel> {
         for shape in &desc.shapes {
             match &shape.geometry {
                 Geometry::Sphere { center, radius } => {
@@ -489,7 +658,11 @@ impl EmbreeAccel {
             };
         }
         scene.commit()?;
-        Ok(EmbreeAccel { scene, device })
+        Ok(EmbreeAccel {
+            scene,
+            device,
+            shapes,
+        })
     }
 
     /// Bytes allocated by Embree for this accel's device: its buffers, BVH and allocator blocks.

@@ -1,0 +1,295 @@
+//! The uniform voxel grid the coherence records live in, and the 3-D DDA (Amanatides & Woo
+//! 1987) that walks a ray segment through it. The grid is independent of the intersection
+//! backend: it only has to cover every place geometry or lights occupy during the sequence.
+
+use crate::math::Vec3;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Grid {
+    pub lo: Vec3,
+    pub hi: Vec3,
+    pub res: [u32; 3],
+    cell: Vec3,
+    inv_cell: Vec3,
+}
+
+impl Grid {
+    /// A grid over `[lo, hi]` with `res` voxels along each axis (each at least 1).
+    pub fn new(lo: Vec3, hi: Vec3, res: [u32; 3]) -> Grid {
+        let res = res.map(|r| r.max(1));
+        let size = (hi - lo).max(Vec3::splat(1e-6));
+        let hi = lo + size;
+        let cell = size / Vec3::new(res[0] as f32, res[1] as f32, res[2] as f32);
+        Grid {
+            lo,
+            hi,
+            res,
+            cell,
+            inv_cell: cell.recip(),
+        }
+    }
+
+    /// A grid over `[lo, hi]` with about `voxels` roughly cubic voxels.
+    pub fn with_voxels(lo: Vec3, hi: Vec3, voxels: u32) -> Grid {
+        let size = (hi - lo).max(Vec3::splat(1e-6));
+        let side = (size.x * size.y * size.z / voxels.max(1) as f32).cbrt();
+        let res = (size / side)
+            .ceil()
+            .to_array()
+            .map(|r| (r as u32).clamp(1, 1024));
+        Grid::new(lo, hi, res)
+    }
+
+    pub fn len(&self) -> usize {
+        self.res.iter().map(|&r| r as usize).product()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    pub fn index(&self, c: [u32; 3]) -> usize {
+        (c[2] as usize * self.res[1] as usize + c[1] as usize) * self.res[0] as usize
+            + c[0] as usize
+    }
+
+    pub fn coords(&self, index: usize) -> [u32; 3] {
+        let (rx, ry) = (self.res[0] as usize, self.res[1] as usize);
+        [
+            (index % rx) as u32,
+            (index / rx % ry) as u32,
+            (index / (rx * ry)) as u32,
+        ]
+    }
+
+    /// The box of voxel `index`.
+    pub fn voxel_box(&self, index: usize) -> (Vec3, Vec3) {
+        let c = self.coords(index);
+        let lo = self.lo + Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * self.cell;
+        (lo, lo + self.cell)
+    }
+
+    /// The voxel coordinates holding `p`, clamped into the grid.
+    fn cell_of(&self, p: Vec3) -> [u32; 3] {
+        // Truncation is the floor for the non-negative values kept (and the cast saturates).
+        let f = ((p - self.lo) * self.inv_cell).max(Vec3::ZERO);
+        [
+            (f.x as u32).min(self.res[0] - 1),
+            (f.y as u32).min(self.res[1] - 1),
+            (f.z as u32).min(self.res[2] - 1),
+        ]
+    }
+
+    /// Every voxel overlapping the box `[lo, hi]` (none if it misses the grid).
+    pub fn voxels_in_box(&self, lo: Vec3, hi: Vec3, mut f: impl FnMut(usize)) {
+        if lo.cmpgt(self.hi).any() || hi.cmplt(self.lo).any() {
+            return;
+        }
+        let (a, b) = (self.cell_of(lo), self.cell_of(hi));
+        for z in a[2]..=b[2] {
+            for y in a[1]..=b[1] {
+                for x in a[0]..=b[0] {
+                    f(self.index([x, y, z]));
+                }
+            }
+        }
+    }
+
+    /// Walks the segment `origin + t·dir`, `t ∈ [t0, t1]`, through the grid, calling `f` on
+    /// every voxel it crosses, in order. Parts outside the grid are skipped.
+    pub fn walk(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32, mut f: impl FnMut(usize)) {
+        self.walk_spans(origin, dir, t0, t1, |v, _, _| f(v));
+    }
+
+    /// [`walk`](Self::walk), also giving the parameter span `[ta, tb]` the segment spends
+    /// in each voxel.
+    pub fn walk_spans(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        t0: f32,
+        t1: f32,
+        mut f: impl FnMut(usize, f32, f32),
+    ) {
+        // Clip to the grid's box (slabs).
+        let inv = dir.recip();
+        let (mut tin, mut tout) = (t0.max(0.0), t1);
+        if dir.cmpne(Vec3::ZERO).all() {
+            let (a, b) = ((self.lo - origin) * inv, (self.hi - origin) * inv);
+            tin = tin.max(a.min(b).max_element());
+            tout = tout.min(a.max(b).min_element());
+        } else {
+            for k in 0..3 {
+                if dir[k] == 0.0 {
+                    if origin[k] < self.lo[k] || origin[k] > self.hi[k] {
+                        return;
+                    }
+                    continue;
+                }
+                let (a, b) = (
+                    (self.lo[k] - origin[k]) * inv[k],
+                    (self.hi[k] - origin[k]) * inv[k],
+                );
+                tin = tin.max(a.min(b));
+                tout = tout.min(a.max(b));
+            }
+        }
+        if tin.is_nan() || tout.is_nan() || tin > tout {
+            return;
+        }
+        // The cells at both ends fix how many boundaries the walk crosses on each axis; it
+        // then takes exactly those steps, in the order the ray meets the boundaries (no
+        // per-step range or distance checks, and rounding cannot push it off the grid).
+        let first = self.cell_of(origin + dir * tin);
+        let last = self.cell_of(origin + dir * tout);
+        let mut index = self.index(first) as isize;
+        let strides = [
+            1isize,
+            self.res[0] as isize,
+            self.res[0] as isize * self.res[1] as isize,
+        ];
+        let mut left = [0u32; 3];
+        let mut next = [f32::INFINITY; 3];
+        let mut delta = [0f32; 3];
+        let mut step = [0isize; 3];
+        for a in 0..3 {
+            let (c0, c1) = (first[a], last[a]);
+            if dir[a] > 0.0 && c1 > c0 {
+                left[a] = c1 - c0;
+                step[a] = strides[a];
+                let boundary = self.lo[a] + (c0 + 1) as f32 * self.cell[a];
+                next[a] = (boundary - origin[a]) * inv[a];
+                delta[a] = self.cell[a] * inv[a];
+            } else if dir[a] < 0.0 && c1 < c0 {
+                left[a] = c0 - c1;
+                step[a] = -strides[a];
+                let boundary = self.lo[a] + c0 as f32 * self.cell[a];
+                next[a] = (boundary - origin[a]) * inv[a];
+                delta[a] = -self.cell[a] * inv[a];
+            }
+        }
+        let mut t = tin;
+        for _ in 0..left[0] + left[1] + left[2] {
+            let a = if next[0] <= next[1] {
+                if next[0] <= next[2] {
+                    0
+                } else {
+                    2
+                }
+            } else if next[1] <= next[2] {
+                1
+            } else {
+                2
+            };
+            let boundary = next[a].min(tout);
+            f(index as usize, t, boundary);
+            t = boundary;
+            index += step[a];
+            left[a] -= 1;
+            next[a] = if left[a] == 0 {
+                f32::INFINITY
+            } else {
+                next[a] + delta[a]
+            };
+        }
+        f(index as usize, t, tout);
+    }
+}
+
+/// The voxels worth recording: those where a change can happen (the boxes the sequence's
+/// changes mark), and a coarse grid of blocks of voxels, so that a ray crosses the parts
+/// where nothing ever changes in a few coarse steps (Jevans's hierarchical grid, used here
+/// to skip what needs no records).
+#[derive(Clone, Debug)]
+pub struct ActiveVoxels {
+    pub fine: Grid,
+    coarse: Grid,
+    /// Per fine voxel.
+    active: Vec<bool>,
+    /// Per coarse cell: whether any of its fine voxels is active.
+    coarse_active: Vec<bool>,
+}
+
+/// Fine voxels per coarse cell along each axis.
+const COARSE: u32 = 4;
+
+impl ActiveVoxels {
+    /// Every voxel of `fine` is worth recording.
+    pub fn all(fine: Grid) -> ActiveVoxels {
+        let mut a = ActiveVoxels::none(fine);
+        a.active.fill(true);
+        a.coarse_active.fill(true);
+        a
+    }
+
+    /// Only the voxels overlapping one of `boxes` (grown by `margin`).
+    pub fn boxes(fine: Grid, boxes: &[(Vec3, Vec3)], margin: f32) -> ActiveVoxels {
+        let mut a = ActiveVoxels::none(fine);
+        for (lo, hi) in boxes {
+            let (fine, active) = (&a.fine, &mut a.active);
+            fine.voxels_in_box(*lo - margin, *hi + margin, |v| active[v] = true);
+        }
+        for v in 0..a.fine.len() {
+            if a.active[v] {
+                let c = a.fine.coords(v).map(|x| x / COARSE);
+                let i = a.coarse.index(c);
+                a.coarse_active[i] = true;
+            }
+        }
+        a
+    }
+
+    fn none(fine: Grid) -> ActiveVoxels {
+        let res = fine.res.map(|r| r.div_ceil(COARSE));
+        let scale = Vec3::new(
+            (res[0] * COARSE) as f32 / fine.res[0] as f32,
+            (res[1] * COARSE) as f32 / fine.res[1] as f32,
+            (res[2] * COARSE) as f32 / fine.res[2] as f32,
+        );
+        let coarse = Grid::new(fine.lo, fine.lo + (fine.hi - fine.lo) * scale, res);
+        ActiveVoxels {
+            active: vec![false; fine.len()],
+            coarse_active: vec![false; coarse.len()],
+            fine,
+            coarse,
+        }
+    }
+
+    pub fn is_active(&self, v: usize) -> bool {
+        self.active[v]
+    }
+
+    /// Calls `f` on every active voxel the segment crosses (and possibly on an active
+    /// neighbour of a coarse cell's boundary, where rounding puts the crossing).
+    pub fn walk(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32, mut f: impl FnMut(usize)) {
+        // The coarse walk finds the stretch of the segment over active coarse cells; one fine
+        // walk then covers that stretch.
+        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
+        self.coarse.walk_spans(origin, dir, t0, t1, |c, ta, tb| {
+            if self.coarse_active[c] {
+                lo = lo.min(ta);
+                hi = hi.max(tb);
+            }
+        });
+        if lo <= hi {
+            self.fine.walk(origin, dir, lo, hi, |v| {
+                if self.active[v] {
+                    f(v)
+                }
+            });
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn index_and_coords_round_trip() {
+        let g = Grid::new(Vec3::ZERO, Vec3::ONE, [3, 4, 5]);
+        for i in 0..g.len() {
+            assert_eq!(g.index(g.coords(i)), i);
+        }
+    }
+}

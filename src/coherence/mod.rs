@@ -1,0 +1,19 @@
+//! Object-space temporal coherence for static-camera animation (Jevans 1992, "Object Space
+//! Temporal Coherence for Ray Tracing"): voxels record which pixel blocks' rays crossed them,
+//! and a frame retraces only the blocks whose rays crossed voxels where something changed.
+//!
+//! - [`grid`]: the voxel grid and the 3-D DDA.
+//! - [`tables`]: pixel-block bit tables (surface and shadow) per voxel.
+//! - [`record`]: the intersection wrapper that records every query's segment.
+//! - [`changes`]: what changed between two frames.
+//! - [`renderer`]: the incremental frame renderer.
+//! - [`animate`]: `raylink animate`.
+
+pub mod animate;
+pub mod changes;
+pub mod grid;
+pub mod record;
+pub mod renderer;
+pub mod tables;
+
+pub use renderer::{CoherentRenderer, Engine, FrameStats};

@@ -1,0 +1,318 @@
+//! The incremental frame renderer (Jevans 1992, sections 3.2 and 3.3): frame 0 is traced in
+//! full while every block's ray segments are recorded in the voxel tables; each later frame
+//! marks the voxels of what changed, ORs their tables into the frame's block set, clears
+//! those blocks' records everywhere, retraces exactly those blocks (recording again) and
+//! copies every other pixel from the previous frame. A pixel's value depends only on the
+//! scene of its frame and its own random stream, so every frame equals a full render.
+
+use super::changes::{Changes, FrameSummary};
+use super::grid::{ActiveVoxels, Grid};
+use super::record::RecordingAccel;
+use super::tables::{BlockLayout, BlockSet, Table, VoxelTables};
+use crate::accel::Accel;
+use crate::image::Image;
+use crate::integrators::{Context, Integrator, MonteCarlo, RayStats};
+use crate::math::{Rgb, Vec3};
+use crate::render::progressive::ProgressiveOptions;
+use crate::render::{RenderOptions, Tile};
+use crate::scene::Scene;
+use crate::Result;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// How pixels are computed: one of the two engines, with its options.
+pub enum Engine<'a> {
+    /// The Whitted tile engine (adaptive or uniform supersampling).
+    Whitted {
+        integrator: &'a dyn Integrator,
+        options: RenderOptions,
+    },
+    /// The Monte Carlo engine, for integrators that splat nothing (the path tracer).
+    MonteCarlo {
+        integrator: &'a dyn MonteCarlo,
+        options: ProgressiveOptions,
+    },
+}
+
+impl Engine<'_> {
+    pub fn size(&self) -> (u32, u32) {
+        match self {
+            Engine::Whitted { options, .. } => (options.width, options.height),
+            Engine::MonteCarlo { options, .. } => (options.width, options.height),
+        }
+    }
+
+    fn threads(&self) -> Option<usize> {
+        match self {
+            Engine::Whitted { options, .. } => options.threads,
+            Engine::MonteCarlo { options, .. } => options.threads,
+        }
+    }
+
+    /// Renders one block; returns its pixels and the rays traced.
+    fn region(&self, ctx: &Context, tile: &Tile) -> (Vec<Rgb>, RayStats) {
+        match self {
+            Engine::Whitted {
+                integrator,
+                options,
+            } => {
+                let (p, r, _) = crate::render::render_region(ctx, *integrator, options, tile);
+                (p, r)
+            }
+            Engine::MonteCarlo {
+                integrator,
+                options,
+            } => {
+                let (p, r, _) =
+                    crate::render::progressive::render_region(ctx, *integrator, options, tile);
+                (p, r)
+            }
+        }
+    }
+
+    /// Renders the whole frame without coherence (the reference, and the "traditional"
+    /// column of the statistics).
+    pub fn render_full(&self, ctx: &Context) -> Result<(Image, RayStats)> {
+        match self {
+            Engine::Whitted {
+                integrator,
+                options,
+            } => {
+                let (image, stats) = crate::render::render(ctx, *integrator, options)?;
+                Ok((image, stats.rays))
+            }
+            Engine::MonteCarlo {
+                integrator,
+                options,
+            } => {
+                let (film, stats) = crate::render::progressive::render_progressive(
+                    ctx,
+                    *integrator,
+                    options,
+                    |_| Ok(()),
+                )?;
+                Ok((film.image(), stats.rays))
+            }
+        }
+    }
+}
+
+/// What one frame did.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct FrameStats {
+    pub rays: RayStats,
+    pub blocks_retraced: usize,
+    pub pixels_retraced: u64,
+    /// Voxels marked changed (0 on a full frame).
+    pub changed_voxels: usize,
+    /// Seconds spent finding and clearing the blocks to retrace (the coherence overhead that
+    /// is not ray tracing).
+    pub bookkeeping_seconds: f64,
+    pub seconds: f64,
+    /// Why the whole frame was retraced, if it was.
+    pub full_reason: Option<String>,
+    /// The blocks retraced.
+    pub blocks: Vec<usize>,
+}
+
+/// The incremental renderer's state between frames.
+pub struct CoherentRenderer {
+    pub grid: Grid,
+    voxels: ActiveVoxels,
+    pub layout: BlockLayout,
+    tables: VoxelTables,
+    previous: Option<(FrameSummary, Image)>,
+}
+
+/// Relative margin around changed boxes: covers rounding in the DDA and in hit distances, so
+/// a segment that meets a changed object always has a bit in a changed voxel.
+const MARGIN: f32 = 1e-4;
+
+impl CoherentRenderer {
+    pub fn new(grid: Grid, layout: BlockLayout) -> CoherentRenderer {
+        let tables = VoxelTables::new(grid.len(), &layout);
+        CoherentRenderer {
+            voxels: ActiveVoxels::all(grid.clone()),
+            grid,
+            layout,
+            tables,
+            previous: None,
+        }
+    }
+
+    /// A grid of about `voxels` voxels over every box in `bounds`. It must hold every box a
+    /// change will mark (a change outside it retraces the whole frame): the extents of every
+    /// frame do, and so do the boxes of the changes themselves (what `raylink animate` uses).
+    pub fn grid_around(bounds: &[(Vec3, Vec3)], voxels: u32) -> Grid {
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for (a, b) in bounds {
+            lo = lo.min(*a);
+            hi = hi.max(*b);
+        }
+        if lo.x > hi.x {
+            (lo, hi) = (Vec3::splat(-1.0), Vec3::ONE);
+        }
+        // A little padding so geometry on the boundary is inside.
+        let pad = (hi - lo).max_element().max(1e-3) * 1e-3;
+        Grid::with_voxels(lo - pad, hi + pad, voxels)
+    }
+
+    /// Records only the voxels overlapping `boxes`: every box a change of the sequence will
+    /// mark (a change elsewhere then retraces the whole frame). Rays cross the rest in
+    /// coarse steps.
+    pub fn restrict_to(&mut self, boxes: &[(Vec3, Vec3)]) {
+        let margin = MARGIN * (self.grid.hi - self.grid.lo).length();
+        self.voxels = ActiveVoxels::boxes(self.grid.clone(), boxes, 2.0 * margin);
+    }
+
+    /// Voxels that keep records.
+    pub fn active_voxels(&self) -> usize {
+        (0..self.grid.len())
+            .filter(|&v| self.voxels.is_active(v))
+            .count()
+    }
+
+    /// Bytes of the voxel tables.
+    pub fn table_bytes(&self) -> usize {
+        self.tables.memory_bytes()
+    }
+
+    /// Forgets the previous frame: the next frame is traced in full.
+    pub fn reset(&mut self) {
+        self.previous = None;
+        self.tables = VoxelTables::new(self.grid.len(), &self.layout);
+    }
+
+    /// The blocks to retrace for `changes`, how many voxels were marked changed, and why
+    /// every block is retraced, if so.
+    pub fn blocks_for(&self, changes: &Changes) -> (BlockSet, usize, Option<String>) {
+        let mut blocks = BlockSet::new(&self.layout);
+        if let Some(reason) = &changes.everything {
+            return (BlockSet::all(&self.layout), 0, Some(reason.clone()));
+        }
+        let margin = MARGIN * (self.grid.hi - self.grid.lo).length();
+        // Records exist only inside the grid: a change elsewhere cannot be traced back.
+        let inside = |(lo, hi): &(Vec3, Vec3)| {
+            lo.cmpge(self.grid.lo - margin).all() && hi.cmple(self.grid.hi + margin).all()
+        };
+        if !changes.objects.iter().chain(&changes.shadows).all(inside) {
+            let reason = "something changed outside the voxel grid".to_string();
+            return (BlockSet::all(&self.layout), 0, Some(reason));
+        }
+        let mut changed = vec![false; self.grid.len()];
+        for (lo, hi) in &changes.objects {
+            self.grid
+                .voxels_in_box(*lo - margin, *hi + margin, |v| changed[v] = true);
+        }
+        let mut shadow_only = vec![false; self.grid.len()];
+        for (lo, hi) in &changes.shadows {
+            self.grid
+                .voxels_in_box(*lo - margin, *hi + margin, |v| shadow_only[v] = true);
+        }
+        if (0..self.grid.len()).any(|v| (changed[v] || shadow_only[v]) && !self.voxels.is_active(v))
+        {
+            let reason = "something changed where no records were kept".to_string();
+            return (BlockSet::all(&self.layout), 0, Some(reason));
+        }
+        let mut count = 0;
+        for v in 0..self.grid.len() {
+            if changed[v] {
+                self.tables.collect(Table::Surface, v, &mut blocks);
+                self.tables.collect(Table::Shadow, v, &mut blocks);
+            } else if shadow_only[v] {
+                self.tables.collect(Table::Shadow, v, &mut blocks);
+            }
+            count += (changed[v] || shadow_only[v]) as usize;
+        }
+        if changes.light_moved {
+            self.tables.collect_hits(&mut blocks);
+        }
+        (blocks, count, None)
+    }
+
+    /// Renders the next frame of the sequence (the first call traces every pixel).
+    pub fn render_frame(
+        &mut self,
+        scene: &Scene,
+        accel: &dyn Accel,
+        engine: &Engine,
+    ) -> Result<(Image, FrameStats)> {
+        let start = Instant::now();
+        let (width, height) = engine.size();
+        if (width, height) != (self.layout.width, self.layout.height) {
+            return Err(crate::Error::Options(format!(
+                "the frame is {width}x{height} but the block tables were made for {}x{}",
+                self.layout.width, self.layout.height
+            )));
+        }
+        let ctx = Context::new(scene, accel);
+        let light_choice = matches!(engine, Engine::MonteCarlo { .. }).then_some(&ctx.lights);
+        let summary = FrameSummary::new(scene, light_choice);
+        let mut stats = FrameStats::default();
+        let (blocks, mut image) = match self.previous.take() {
+            None => {
+                stats.full_reason = Some("first frame".into());
+                (BlockSet::all(&self.layout), Image::new(width, height))
+            }
+            Some((previous, image)) => {
+                let changes = previous.diff(&summary);
+                let (blocks, voxels, reason) = self.blocks_for(&changes);
+                stats.changed_voxels = voxels;
+                stats.full_reason = reason;
+                (blocks, image)
+            }
+        };
+        self.tables.clear(&blocks);
+        stats.bookkeeping_seconds = start.elapsed().as_secs_f64();
+
+        let list: Vec<usize> = blocks.iter().collect();
+        // Blocks are cut into tiles no larger than the full renderer's, so that a frame
+        // that retraces a few blocks still keeps every thread busy (a pixel's value does
+        // not depend on the tiling).
+        let tasks: Vec<(usize, Tile)> = list
+            .iter()
+            .flat_map(|&b| {
+                let r = self.layout.rect(b);
+                crate::render::tiles(r.x1 - r.x0, r.y1 - r.y0)
+                    .into_iter()
+                    .map(move |t| {
+                        (
+                            b,
+                            Tile {
+                                x0: r.x0 + t.x0,
+                                x1: r.x0 + t.x1,
+                                y0: r.y0 + t.y0,
+                                y1: r.y0 + t.y1,
+                            },
+                        )
+                    })
+            })
+            .collect();
+        let pool = crate::render::thread_pool(engine.threads())?;
+        let (voxels, tables) = (&self.voxels, &self.tables);
+        let results: Vec<(Vec<Rgb>, RayStats)> = pool.install(|| {
+            tasks
+                .par_iter()
+                .map(|(b, tile)| {
+                    let recorder = RecordingAccel::new(accel, scene, voxels);
+                    let result = engine.region(&ctx.with_accel(&recorder), tile);
+                    recorder.flush(tables, *b);
+                    result
+                })
+                .collect()
+        });
+        for ((_, t), (pixels, rays)) in tasks.iter().zip(results) {
+            let w = t.x1 - t.x0;
+            for (i, c) in pixels.into_iter().enumerate() {
+                image.set(t.x0 + i as u32 % w, t.y0 + i as u32 / w, c);
+            }
+            stats.rays.add(&rays);
+            stats.pixels_retraced += ((t.x1 - t.x0) * (t.y1 - t.y0)) as u64;
+        }
+        stats.blocks_retraced = list.len();
+        stats.blocks = list;
+        stats.seconds = start.elapsed().as_secs_f64();
+        self.previous = Some((summary, image.clone()));
+        Ok((image, stats))
+    }
+}
