@@ -82,8 +82,14 @@ in_root bash -c 'source /usr/share/bash-completion/completions/raylink
   COMP_WORDS=(raylink re); COMP_CWORD=1; COMP_LINE="raylink re"; COMP_POINT=${#COMP_LINE}
   f=$(complete -p raylink | sed -E "s/.*-F ([^ ]+).*/\1/"); "$f" raylink re raylink
   printf "%s\n" "${COMPREPLY[@]}"' | grep -qx render
-test -s "$root/usr/share/zsh/vendor-completions/_raylink"
-test -s "$root/usr/share/fish/vendor_completions.d/raylink.fish"
+# zsh: compinit finds _raylink on the default fpath and binds it to raylink.
+in_root apt-get install -y -q --no-install-recommends zsh fish
+in_root zsh -fc 'autoload -Uz compinit && compinit -u && print -r -- "$_comps[raylink]"' | grep -qx _raylink
+# fish: completing `raylink re` from the vendor completions offers `render`.
+in_root fish -c 'complete --do-complete "raylink re"' | grep -q "^render"
+# The documents the man page names are installed.
+grep -q "/usr/share/doc/raylink" "$work/man.txt"
+test -s "$root/usr/share/doc/raylink/scene-format.md"
 
 step "dpkg -r raylink leaves nothing behind"
 in_root dpkg -L raylink > "$work/files.txt"

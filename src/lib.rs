@@ -13,6 +13,7 @@
 
 pub mod accel;
 pub mod bench;
+pub mod binary_file;
 pub mod bsdf;
 pub mod coherence;
 pub mod error;

@@ -26,8 +26,13 @@ use std::process::ExitCode;
 #[command(
     name = "raylink",
     about = "A global-illumination renderer over Embree",
-    long_about = "raylink renders scenes described in TOML files (see docs/scene-format.md) \
-                  or pbrt-v4 files (docs/pbrt.md) with Whitted ray tracing, writing EXR, HDR, TIFF, PNG or JPEG through OpenImageIO.\n\n\
+    long_about = "raylink renders scenes described in TOML files (scene-format.md) or pbrt-v4 \
+                  files (pbrt.md) with Whitted ray tracing, path tracing, light tracing, \
+                  bidirectional path tracing, irradiance caching or illumination networks, \
+                  and animations with object-space temporal coherence, writing EXR, HDR, \
+                  TIFF, PNG or JPEG through OpenImageIO. The documents named here are in \
+                  docs/ in the source tree and in /usr/share/doc/raylink/ when installed \
+                  from the Debian package.\n\n\
                   Example:\n  raylink render scenes/cornell-box.toml -o cornell.exr -o cornell.png"
 )]
 struct Cli {

@@ -23,36 +23,17 @@
 use super::patches::Patches;
 use super::ray_space::RaySpace;
 use super::{BuildStats, Network, NetworkParams, ESCAPE, NONE};
+use crate::binary_file::{fnv1a, Format, Reader};
 use crate::scene::Scene;
-use crate::{Error, Result};
+use crate::Result;
 use std::path::Path;
 
-const MAGIC: &[u8; 8] = b"RLNETWK\0";
 pub const VERSION: u32 = 1;
-
-/// The file checksum: FNV-1a over little-endian 64-bit words (the tail zero-padded), eight
-/// times fewer steps than over bytes for files of hundreds of megabytes.
-fn checksum(bytes: &[u8]) -> u64 {
-    let mut h = 0xcbf29ce484222325u64;
-    let mut words = bytes.chunks_exact(8);
-    for w in &mut words {
-        h ^= u64::from_le_bytes(w.try_into().unwrap());
-        h = h.wrapping_mul(0x100000001b3);
-    }
-    let mut tail = [0u8; 8];
-    tail[..words.remainder().len()].copy_from_slice(words.remainder());
-    h ^= u64::from_le_bytes(tail);
-    h.wrapping_mul(0x100000001b3) ^ bytes.len() as u64
-}
-
-fn fnv1a(bytes: &[u8]) -> u64 {
-    let mut h = 0xcbf29ce484222325u64;
-    for &b in bytes {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x100000001b3);
-    }
-    h
-}
+const FORMAT: Format = Format {
+    magic: b"RLNETWK\0",
+    version: VERSION,
+    what: "illumination network",
+};
 
 /// A hash of the scene's geometry (what the network depends on).
 pub fn geometry_hash(scene: &Scene) -> u64 {
@@ -72,9 +53,7 @@ fn params_bytes(p: &NetworkParams) -> Vec<u8> {
 
 /// Writes the network to `path` atomically.
 pub fn save(path: &Path, net: &Network, scene: &Scene) -> Result<()> {
-    let mut b = Vec::with_capacity(64 + 4 * (net.links.len() + net.nodes()));
-    b.extend_from_slice(MAGIC);
-    b.extend_from_slice(&VERSION.to_le_bytes());
+    let mut b = FORMAT.start(64 + 4 * (net.links.len() + net.nodes()));
     b.extend_from_slice(&geometry_hash(scene).to_le_bytes());
     b.extend_from_slice(&params_bytes(&net.params));
     b.extend_from_slice(&net.patches.cells.to_le_bytes());
@@ -101,66 +80,15 @@ pub fn save(path: &Path, net: &Network, scene: &Scene) -> Result<()> {
     {
         b.extend_from_slice(&v.to_le_bytes());
     }
-    let sum = checksum(&b);
-    b.extend_from_slice(&sum.to_le_bytes());
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "network".into());
-    let tmp = path.with_file_name(format!(".{name}.tmp{}", std::process::id()));
-    std::fs::write(&tmp, &b).map_err(|e| Error::io(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        Error::io(path, e)
-    })
-}
-
-struct Reader<'a> {
-    rest: &'a [u8],
-}
-
-impl Reader<'_> {
-    fn take<const N: usize>(&mut self) -> Option<[u8; N]> {
-        if self.rest.len() < N {
-            return None;
-        }
-        let (a, b) = self.rest.split_at(N);
-        self.rest = b;
-        a.try_into().ok()
-    }
-    fn u32(&mut self) -> Option<u32> {
-        self.take::<4>().map(u32::from_le_bytes)
-    }
-    fn u64(&mut self) -> Option<u64> {
-        self.take::<8>().map(u64::from_le_bytes)
-    }
-    fn f32(&mut self) -> Option<f32> {
-        self.take::<4>().map(f32::from_le_bytes)
-    }
+    FORMAT.save(path, b)
 }
 
 /// Reads a network written by [`save`] for the same scene geometry. `expected`, when given,
 /// must equal the stored parameters. Any other file is an [`Error::Input`] naming it.
 pub fn load(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> Result<Network> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let bad = |what: &str| Error::input(path, format!("not a usable illumination network: {what}"));
-    if bytes.len() < 12 || &bytes[..8] != MAGIC {
-        return Err(bad("no raylink network header"));
-    }
-    let version = u32::from_le_bytes(bytes[8..12].try_into().unwrap());
-    if version != VERSION {
-        return Err(bad(&format!(
-            "format version {version}, this raylink reads {VERSION}"
-        )));
-    }
-    if bytes.len() < 20 {
-        return Err(bad("truncated"));
-    }
-    let (body, tail) = bytes.split_at(bytes.len() - 8);
-    if checksum(body) != u64::from_le_bytes(tail.try_into().unwrap()) {
-        return Err(bad("checksum mismatch (truncated or corrupt)"));
-    }
-    let mut r = Reader { rest: &body[12..] };
+    let file = FORMAT.load(path)?;
+    let bad = |problem: &str| FORMAT.error(path, problem);
+    let mut r = Reader { rest: file.body() };
     let truncated = || bad("truncated");
     if r.u64().ok_or_else(truncated)? != geometry_hash(scene) {
         return Err(bad("written for another scene geometry"));

@@ -3,37 +3,33 @@
 //!
 //! ```text
 //! magic  "RLIRRAD\0"            8 bytes
-//! version u32 (= 1)
+//! version u32 (= 2)
 //! scene hash u64                FNV-1a of the scene's geometry, materials and lights
 //! bounces u32, accuracy f32, samples u32, ar f32, ambient 3×f32
 //! per level (bounces of them): count u64, then count records of 10 f32
 //!                               (position 3, normal 3, irradiance 3, R)
-//! checksum u64                  FNV-1a of every byte before it
+//! checksum u64                  of every byte before it (crate::binary_file)
 //! ```
 //!
 //! Records are stored per level in insertion order and re-inserted in that order, so a loaded
-//! cache is the same tree as the one saved. Files are written to a temporary name beside the
-//! target and renamed into place.
+//! cache is the same tree as the one saved. Files are written atomically
+//! (crate::binary_file). Version 1 differed only in its checksum.
 
 use super::octree::Octree;
 use super::record::Record;
 use super::{scene_cube, Cache, IcOptions};
+use crate::binary_file::{fnv1a, Format};
 use crate::math::Vec3;
 use crate::scene::Scene;
-use crate::{Error, Result};
+use crate::Result;
 use std::path::Path;
 
-const MAGIC: &[u8; 8] = b"RLIRRAD\0";
-pub const VERSION: u32 = 1;
-
-fn fnv1a(bytes: &[u8]) -> u64 {
-    let mut h = 0xcbf29ce484222325u64;
-    for &b in bytes {
-        h ^= b as u64;
-        h = h.wrapping_mul(0x100000001b3);
-    }
-    h
-}
+pub const VERSION: u32 = 2;
+const FORMAT: Format = Format {
+    magic: b"RLIRRAD\0",
+    version: VERSION,
+    what: "irradiance cache",
+};
 
 /// A hash of what the cached values depend on in the scene (not the camera).
 pub fn scene_hash(scene: &Scene) -> u64 {
@@ -48,10 +44,9 @@ pub fn scene_hash(scene: &Scene) -> u64 {
     fnv1a(text.as_bytes())
 }
 
+/// What follows the version: the scene hash and the options.
 fn header(scene: &Scene, options: &IcOptions) -> Vec<u8> {
     let mut b = Vec::new();
-    b.extend_from_slice(MAGIC);
-    b.extend_from_slice(&VERSION.to_le_bytes());
     b.extend_from_slice(&scene_hash(scene).to_le_bytes());
     b.extend_from_slice(&options.bounces.to_le_bytes());
     b.extend_from_slice(&options.accuracy.to_le_bytes());
@@ -65,7 +60,8 @@ fn header(scene: &Scene, options: &IcOptions) -> Vec<u8> {
 
 /// Writes the cache to `path` atomically.
 pub fn save(path: &Path, cache: &Cache, scene: &Scene, options: &IcOptions) -> Result<()> {
-    let mut b = header(scene, options);
+    let mut b = FORMAT.start(40 * cache.len());
+    b.extend_from_slice(&header(scene, options));
     for level in &cache.levels {
         b.extend_from_slice(&(level.len() as u64).to_le_bytes());
         for r in level.records() {
@@ -80,46 +76,20 @@ pub fn save(path: &Path, cache: &Cache, scene: &Scene, options: &IcOptions) -> R
             }
         }
     }
-    let sum = fnv1a(&b);
-    b.extend_from_slice(&sum.to_le_bytes());
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "cache".into());
-    let tmp = path.with_file_name(format!(".{name}.tmp{}", std::process::id()));
-    std::fs::write(&tmp, &b).map_err(|e| Error::io(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        Error::io(path, e)
-    })
+    FORMAT.save(path, b)
 }
 
 /// Reads a cache written by [`save`] for the same scene and options. Any other file is an
 /// [`Error::Input`] naming it.
 pub fn load(path: &Path, scene: &Scene, options: &IcOptions) -> Result<Cache> {
-    let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
-    let bad = |what: &str| Error::input(path, format!("not a usable irradiance cache: {what}"));
-    if bytes.len() < MAGIC.len() + 4 || &bytes[..8] != MAGIC {
-        return Err(bad("no raylink irradiance-cache header"));
-    }
-    let version = u32::from_le_bytes(bytes[8..12].try_into().unwrap());
-    if version != VERSION {
-        return Err(bad(&format!(
-            "format version {version}, this raylink reads {VERSION}"
-        )));
-    }
-    if bytes.len() < 8 {
-        return Err(bad("truncated"));
-    }
-    let (body, tail) = bytes.split_at(bytes.len() - 8);
-    if fnv1a(body) != u64::from_le_bytes(tail.try_into().unwrap()) {
-        return Err(bad("checksum mismatch (truncated or corrupt)"));
-    }
+    let file = FORMAT.load(path)?;
+    let body = file.body();
+    let bad = |problem: &str| FORMAT.error(path, problem);
     let expected = header(scene, options);
     if body.len() < expected.len() {
         return Err(bad("truncated header"));
     }
-    if body[12..20] != expected[12..20] {
+    if body[..8] != expected[..8] {
         return Err(bad("written for another scene"));
     }
     if body[..expected.len()] != expected[..] {
