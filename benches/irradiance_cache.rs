@@ -98,10 +98,6 @@ fn race(
 ) {
     let accel = accel::build(scene, Backend::Embree).unwrap();
     let ctx = Context::new(scene, accel.as_ref());
-    let mut camera = scene.camera.clone();
-    camera.width = size.0;
-    camera.height = size.1;
-    let basis = camera.basis();
     println!("\n### {title}\n");
     println!("| render | values (per level) | overture rays / value | time (s) | RMSE |");
     println!("|---|---|---|---|---|");
@@ -109,7 +105,7 @@ fn race(
     for &(spp, ic) in configs {
         let start = Instant::now();
         let o = options(size, spp, 1);
-        let integrator = IrradianceCache::build(&ctx, &basis, &o, ic, None).unwrap();
+        let integrator = IrradianceCache::build(&ctx, &o, ic, None).unwrap();
         let overture = start.elapsed().as_secs_f64();
         let (film, _) = render_progressive(&ctx, &integrator, &o, |_| Ok(())).unwrap();
         let seconds = start.elapsed().as_secs_f64();

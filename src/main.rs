@@ -725,13 +725,8 @@ fn irradiance_cache(
         Some(f) if f.exists() => Some(ic::file::load(f, scene, &options)?),
         _ => None,
     };
-    let mut camera = scene.camera.clone();
-    camera.width = render.width;
-    camera.height = render.height;
-    let mut basis = camera.basis();
-    basis.margin = render.filter.radius();
     let start = std::time::Instant::now();
-    let integrator = IrradianceCache::build(ctx, &basis, render, options, loaded)?;
+    let integrator = IrradianceCache::build(ctx, render, options, loaded)?;
     if !args.quiet {
         let stats = &integrator.stats;
         eprintln!(

@@ -54,12 +54,7 @@ fn render_ic(
     let start = Instant::now();
     let accel = accel::build(scene, Backend::Embree).unwrap();
     let ctx = Context::new(scene, accel.as_ref());
-    let mut camera = scene.camera.clone();
-    camera.width = o.width;
-    camera.height = o.height;
-    let mut basis = camera.basis();
-    basis.margin = o.filter.radius();
-    let integrator = IrradianceCache::build(&ctx, &basis, o, ic, cache).unwrap();
+    let integrator = IrradianceCache::build(&ctx, o, ic, cache).unwrap();
     let (film, _) = render_progressive(&ctx, &integrator, o, |_| Ok(())).unwrap();
     assert_eq!(film.invalid, 0);
     check(&ctx, &integrator);

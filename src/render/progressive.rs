@@ -9,8 +9,9 @@ use crate::image::filter::{Filter, FilterSampler};
 use crate::image::Image;
 use crate::integrators::{Context, MonteCarlo, RayStats, Splat};
 use crate::math::sobol::Sampler;
-use crate::math::{Rgb, Vec2};
+use crate::math::{Ray, Rgb, Vec2};
 use crate::scene::camera::CameraBasis;
+use crate::scene::Scene;
 use crate::{Error, Result};
 use rayon::prelude::*;
 use std::time::Instant;
@@ -137,9 +138,7 @@ fn pixel_pass(
 ) -> [f64; 3] {
     let mut sum = [0.0f64; 3];
     for i in samples {
-        let mut sampler = Sampler::new(seed, &[x as u64, y as u64], i);
-        let offset = filter.sample(sampler.next_2d());
-        let ray = camera.ray(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
+        let (mut sampler, ray) = camera_sample(camera, seed, filter, (x, y), i);
         let before = result.splats.len();
         let l = integrator.sample(
             ctx,
@@ -165,6 +164,33 @@ fn pixel_pass(
     sum
 }
 
+/// Camera sample `i` of pixel (x, y): its ray, through the pixel centre moved by an offset
+/// drawn from the filter, and its sampler with that offset's numbers drawn. Anything that
+/// must see exactly the render's camera rays (the irradiance cache's overture) calls this.
+pub(crate) fn camera_sample(
+    camera: &CameraBasis,
+    seed: u64,
+    filter: &FilterSampler,
+    (x, y): (u32, u32),
+    i: u32,
+) -> (Sampler, Ray) {
+    let mut sampler = Sampler::new(seed, &[x as u64, y as u64], i);
+    let offset = filter.sample(sampler.next_2d());
+    let ray = camera.ray(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
+    (sampler, ray)
+}
+
+/// The scene's camera at the render's size, with light-path splats accepted as far outside
+/// the film as the filter reaches.
+pub fn view_basis(scene: &Scene, options: &ProgressiveOptions) -> CameraBasis {
+    let mut camera = scene.camera.clone();
+    camera.width = options.width;
+    camera.height = options.height;
+    let mut basis = camera.basis();
+    basis.margin = options.filter.radius();
+    basis
+}
+
 /// The value of a film pixel from its sample sum and splats (as [`Film::image`] computes it).
 fn pixel_value(sum: [f64; 3], splat: [f64; 3], per_sample: f64, per_path: f64) -> Rgb {
     Rgb::new(
@@ -184,11 +210,7 @@ pub fn render_region(
     options: &ProgressiveOptions,
     tile: &Tile,
 ) -> (Vec<Rgb>, RayStats, u64) {
-    let mut camera = ctx.scene.camera.clone();
-    camera.width = options.width;
-    camera.height = options.height;
-    let mut basis = camera.basis();
-    basis.margin = options.filter.radius();
+    let basis = view_basis(ctx.scene, options);
     let filter = FilterSampler::new(options.filter);
     let mut result = TileResult {
         sums: Vec::new(),
@@ -293,11 +315,7 @@ pub fn render_progressive(
     }
     options.filter.validate().map_err(Error::Options)?;
     let pool = super::thread_pool(options.threads)?;
-    let mut camera = ctx.scene.camera.clone();
-    camera.width = options.width;
-    camera.height = options.height;
-    let mut basis = camera.basis();
-    basis.margin = options.filter.radius();
+    let basis = view_basis(ctx.scene, options);
     let filter_sampler = FilterSampler::new(options.filter);
     let tiles = tiles(options.width, options.height);
     let mut film = Film::new(options.width, options.height, options.filter);

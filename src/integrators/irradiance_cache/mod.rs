@@ -47,7 +47,7 @@ use crate::image::Image;
 use crate::math::sobol::Sampler;
 use crate::math::warp::power_heuristic;
 use crate::math::{offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
-use crate::render::progressive::ProgressiveOptions;
+use crate::render::progressive::{camera_sample, view_basis, ProgressiveOptions};
 use crate::scene::camera::CameraBasis;
 use crate::scene::{Scene, SurfacePoint};
 use crate::Result;
@@ -149,6 +149,20 @@ impl Cache {
 
     pub fn is_empty(&self) -> bool {
         self.len() == 0
+    }
+
+    /// An empty cache over the same cube with the same accuracies.
+    fn empty_like(&self) -> Cache {
+        Cache {
+            levels: self
+                .levels
+                .iter()
+                .map(|l| {
+                    let (center, side) = l.root();
+                    Octree::new(center, side, l.accuracy())
+                })
+                .collect(),
+        }
     }
 
     /// Adds another cache's values (over the same cube), level by level, in their order.
@@ -313,16 +327,16 @@ pub struct IrradianceCache {
 }
 
 impl IrradianceCache {
-    /// Runs the overture for the render `render` (size, samples, filter, seed) through
-    /// `camera`, starting from `cache` (loaded from a file) or an empty cache.
+    /// Runs the overture for the render `render` (size, samples, filter, seed) of the
+    /// scene's camera, starting from `cache` (loaded from a file) or an empty cache.
     pub fn build(
         ctx: &Context,
-        camera: &CameraBasis,
         render: &ProgressiveOptions,
         options: IcOptions,
         cache: Option<Cache>,
     ) -> Result<IrradianceCache> {
         let seed = render.seed;
+        let camera = view_basis(ctx.scene, render);
         let (_, side) = scene_cube(ctx.scene);
         let params = Params {
             options,
@@ -336,14 +350,14 @@ impl IrradianceCache {
         let (mut primaries, mut rays) = (0, 0);
         let pool = crate::render::thread_pool(render.threads)?;
         for phase in overture_schedule(render.width, render.height, render.spp) {
-            // Each chunk sees the cache as it stood before the wave plus its own values;
+            // Each chunk sees the cache as it stood before the phase plus its own values;
             // the chunks' values are then added in chunk order. Nothing depends on which
             // thread ran what.
             let chunks: Vec<(Cache, u64, RayStats)> = pool.install(|| {
                 phase
                     .into_par_iter()
                     .map(|chunk| {
-                        let mut local = Cache::new(ctx.scene, &options);
+                        let mut local = cache.empty_like();
                         let mut stats = RayStats::default();
                         let mut walk = Walk {
                             store: Store::Overlay {
@@ -355,11 +369,8 @@ impl IrradianceCache {
                             overture: true,
                         };
                         for (x, y, i) in chunk.samples() {
-                            // As render::progressive and `sample` below draw them.
-                            let mut sampler = Sampler::new(seed, &[x as u64, y as u64], i);
-                            let offset = filter.sample(sampler.next_2d());
-                            let ray =
-                                camera.ray(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
+                            let (mut sampler, ray) =
+                                camera_sample(&camera, seed, &filter, (x, y), i);
                             let mut rng = sample_rng(seed, &mut sampler);
                             trace(ctx, &params, &mut walk, &ray, 0, true, 0, &mut rng);
                         }
@@ -377,7 +388,7 @@ impl IrradianceCache {
         let overture_primaries = primaries;
         Ok(IrradianceCache {
             params,
-            camera: *camera,
+            camera,
             cache,
             stats: IcStats {
                 loaded,
