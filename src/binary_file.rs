@@ -1,7 +1,6 @@
 //! raylink's own binary files (irradiance caches, illumination networks): an 8-byte magic, a
 //! u32 format version, the body, and a u64 checksum of everything before it, all
-//! little-endian. Files are written to a temporary name beside the target and renamed into
-//! place, so a failed run never leaves a half-written file or damages the one it replaces.
+//! little-endian. Files are written atomically ([`crate::atomic_file`]).
 
 use crate::{Error, Result};
 use std::path::Path;
@@ -39,23 +38,6 @@ pub fn checksum(bytes: &[u8]) -> u64 {
     h.wrapping_mul(0x100000001b3) ^ bytes.len() as u64
 }
 
-/// Writes `bytes` to `path` through a temporary file beside it and a rename.
-pub fn write_atomically(path: &Path, bytes: &[u8]) -> Result<()> {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_else(|| "raylink".into());
-    let tmp = path.with_file_name(format!(".{name}.tmp{}", std::process::id()));
-    std::fs::write(&tmp, bytes).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        Error::io(&tmp, e)
-    })?;
-    std::fs::rename(&tmp, path).map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        Error::io(path, e)
-    })
-}
-
 /// A file read by [`Format::load`]: its magic, version and checksum were right.
 pub struct Loaded {
     bytes: Vec<u8>,
@@ -81,7 +63,7 @@ impl Format {
     pub fn save(&self, path: &Path, mut bytes: Vec<u8>) -> Result<()> {
         let sum = checksum(&bytes);
         bytes.extend_from_slice(&sum.to_le_bytes());
-        write_atomically(path, &bytes)
+        crate::atomic_file::write(path, &bytes)
     }
 
     /// The one-line error for a file of this kind that cannot be used.

@@ -12,6 +12,7 @@
 //! - [`bench`]: `raylink bench`, Embree against the pure-Rust BVH.
 
 pub mod accel;
+pub mod atomic_file;
 pub mod bench;
 pub mod binary_file;
 pub mod bsdf;

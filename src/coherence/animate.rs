@@ -16,7 +16,7 @@ use crate::scene::animation::Animation;
 use crate::scene::MAX_RESOLUTION;
 use crate::{Error, Result};
 use std::fmt::Write as _;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// The integrators `animate` can render with.
@@ -229,7 +229,7 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         print!("{}", summary(&report));
     }
     if let Some(csv) = &args.csv {
-        write_atomic(csv, &csv_text(&report))?;
+        crate::atomic_file::write(csv, csv_text(&report).as_bytes())?;
     }
     if let Some(r) = report.rows.iter().find(|r| r.identical == Some(false)) {
         return Err(Error::image(
@@ -238,12 +238,6 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
         ));
     }
     Ok(())
-}
-
-fn write_atomic(path: &Path, text: &str) -> Result<()> {
-    let tmp = path.with_extension("csv.tmp");
-    std::fs::write(&tmp, text).map_err(|e| Error::io(&tmp, e))?;
-    std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
 }
 
 /// Renders the animation and writes the frames; returns the statistics.

@@ -339,5 +339,5 @@ pub fn write(
             bytes.extend((k as i32).to_le_bytes());
         }
     }
-    super::convert::write_atomic(path, &bytes)
+    crate::atomic_file::write(path, &bytes)
 }
