@@ -94,11 +94,6 @@ pub fn render(
         ));
     }
     let pool = thread_pool(options.threads)?;
-
-    let mut camera = ctx.scene.camera.clone();
-    camera.width = options.width;
-    camera.height = options.height;
-    let basis = camera.basis();
     let tiles = tiles(options.width, options.height);
     let progress = progress_bar(options.progress, tiles.len() as u64, "tiles");
 
@@ -107,14 +102,7 @@ pub fn render(
         tiles
             .par_iter()
             .map(|tile| {
-                let result = sampling::render_tile(
-                    ctx,
-                    integrator,
-                    &basis,
-                    &options.sampling,
-                    options.seed,
-                    tile,
-                );
+                let result = render_region(ctx, integrator, options, tile);
                 progress.inc(1);
                 result
             })
@@ -136,8 +124,8 @@ pub fn render(
     Ok((image, stats))
 }
 
-/// Renders the pixels of one rectangle (row-major) exactly as [`render`] renders them: a
-/// pixel's value does not depend on the tiling. Returns the pixels, rays traced and samples.
+/// Renders the pixels of one rectangle (row-major); [`render`] renders each of its tiles
+/// with this, and a pixel's value does not depend on the tiling. Returns the pixels, rays traced and samples.
 pub fn render_region(
     ctx: &Context,
     integrator: &dyn Integrator,
