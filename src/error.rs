@@ -17,6 +17,12 @@ pub enum Error {
     /// Embree reported an error.
     #[error("embree: {0}")]
     Embree(String),
+    /// The render was stopped by a signal; `detail` says what was kept.
+    #[error("{detail}")]
+    Interrupted { signal: i32, detail: String },
+    /// The work would need more memory than --max-memory allows.
+    #[error("{0}")]
+    Memory(String),
     #[error("{}: {source}", path.display())]
     Io {
         path: PathBuf,

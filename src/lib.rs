@@ -18,10 +18,14 @@ pub mod binary_file;
 pub mod bsdf;
 pub mod coherence;
 pub mod error;
+#[doc(hidden)]
+pub mod fuzzing;
 pub mod image;
 pub mod integrators;
+pub mod interrupt;
 pub mod lights;
 pub mod math;
+pub mod memory;
 pub mod render;
 pub mod scene;
 

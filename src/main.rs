@@ -13,7 +13,8 @@ use raylink::integrators::path::{PathOptions, PathTracer, DEFAULT_MAX_DEPTH, MAX
 use raylink::integrators::whitted::{Whitted, WhittedOptions};
 use raylink::integrators::{Context, Integrator, MonteCarlo};
 use raylink::render::aov::{render_aovs, Aov};
-use raylink::render::progressive::{render_progressive, ProgressiveOptions, MAX_SPP};
+use raylink::render::checkpoint;
+use raylink::render::progressive::{render_progressive_from, Film, ProgressiveOptions, MAX_SPP};
 use raylink::render::{
     render, PixelSampling, RenderOptions, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD,
 };
@@ -153,6 +154,19 @@ struct RenderArgs {
     /// passed since the last write, so a long render can be watched.
     #[arg(long, value_name = "SECONDS")]
     write_interval: Option<f64>,
+    /// Monte Carlo integrators: save the film every this many seconds (after a pass) to
+    /// OUTPUT.checkpoint beside the first output, for --resume. An interrupted render
+    /// (SIGINT, SIGTERM) always saves one. The checkpoint is removed when the render ends.
+    #[arg(long, value_name = "SECONDS")]
+    checkpoint_interval: Option<f64>,
+    /// Monte Carlo integrators: continue an interrupted render from OUTPUT.checkpoint (same
+    /// scene and options); the image equals that of an uninterrupted render.
+    #[arg(long)]
+    resume: bool,
+    /// Refuse, before allocating, work that needs more memory than this (bytes, or with a
+    /// K, M, G or T suffix). Default: 3/4 of the physical memory.
+    #[arg(long, value_name = "SIZE")]
+    max_memory: Option<String>,
     /// Monte Carlo integrators: pixel reconstruction filter (default: the scene's, else a
     /// Gaussian of radius 1.5 and sigma 0.5, as in pbrt).
     #[arg(long, value_enum)]
@@ -267,7 +281,9 @@ struct NetworkArgs {
 /// The exit code of a failed run: 2 for bad input or options, 1 for the rest.
 fn exit_code(error: &Error) -> u8 {
     match error {
-        Error::Input { .. } | Error::Options(_) | Error::Io { .. } => 2,
+        Error::Input { .. } | Error::Options(_) | Error::Io { .. } | Error::Memory(_) => 2,
+        // As a shell reports a process killed by the signal.
+        Error::Interrupted { signal, .. } => (128 + signal).clamp(1, 255) as u8,
         _ => 1,
     }
 }
@@ -283,10 +299,23 @@ fn main() -> ExitCode {
     } else {
         raylink::VERSION.to_string()
     };
-    let matches = Cli::command().version(version).get_matches();
-    let cli = match Cli::from_arg_matches(&matches) {
+    let parsed = Cli::command()
+        .version(version)
+        .try_get_matches()
+        .and_then(|m| Cli::from_arg_matches(&m));
+    let cli = match parsed {
         Ok(cli) => cli,
-        Err(e) => e.exit(),
+        // --help and --version print as clap does.
+        Err(e)
+            if !e.use_stderr()
+                || e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand =>
+        {
+            e.exit()
+        }
+        Err(e) => {
+            eprintln!("raylink: {}", one_line_usage_error(&e));
+            return ExitCode::from(2);
+        }
     };
     let result = match cli.command {
         Command::Render(args) => run_render(args),
@@ -302,6 +331,20 @@ fn main() -> ExitCode {
             ExitCode::from(exit_code(&error))
         }
     }
+}
+
+/// A command-line error as one line: clap's message and its hint (possible values, a
+/// suggestion), without the usage lines.
+fn one_line_usage_error(e: &clap::Error) -> String {
+    let text = e.render().to_string();
+    let parts: Vec<&str> = text
+        .lines()
+        .map(str::trim)
+        .filter(|l| {
+            !l.is_empty() && !l.starts_with("Usage:") && !l.starts_with("For more information")
+        })
+        .collect();
+    parts.join(" ")
 }
 
 /// The reader's warnings (what it replaced by a substitute), one line each.
@@ -440,6 +483,19 @@ fn choose_filter(args: &RenderArgs, scene: &Scene) -> Result<Filter, Error> {
 
 fn run_render(args: RenderArgs) -> raylink::Result<()> {
     // Everything that can be checked is checked before the (possibly long) render.
+    if let Some(size) = &args.max_memory {
+        let bytes = raylink::memory::parse_size(size)
+            .map_err(|e| Error::Options(format!("--max-memory: {e}")))?;
+        raylink::memory::set_limit(bytes);
+    }
+    if let Some(t) = args.checkpoint_interval {
+        if !(t.is_finite() && t >= 0.0) {
+            return Err(Error::Options(format!(
+                "--checkpoint-interval must be a non-negative number of seconds, got {t}"
+            )));
+        }
+    }
+    raylink::interrupt::install()?;
     if args.threads == Some(0) {
         return Err(Error::Options("--threads must be at least 1".into()));
     }
@@ -480,6 +536,14 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
             Some(Box::new(PathTracer::new(PathOptions { max_depth })))
         }
     };
+    // The film (sums and splats for Monte Carlo), the tiles' results, the image, and the
+    // output's conversion buffer; AOVs add three images.
+    let per_pixel: u64 =
+        if monte_carlo.is_some() { 48 + 24 } else { 24 } + 12 + 16 + if args.aov { 36 } else { 0 };
+    raylink::memory::check(
+        &format!("a {width}x{height} image"),
+        width as u64 * height as u64 * per_pixel,
+    )?;
     let whitted_only = [
         ("--aa", args.aa.is_some()),
         ("--area-samples", args.area_samples.is_some()),
@@ -488,6 +552,8 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
     let monte_carlo_only = [
         ("--time-limit", args.time_limit.is_some()),
         ("--write-interval", args.write_interval.is_some()),
+        ("--checkpoint-interval", args.checkpoint_interval.is_some()),
+        ("--resume", args.resume),
         ("--filter", args.filter.is_some()),
         ("--filter-radius", args.filter_radius.is_some()),
     ];
@@ -558,6 +624,8 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
         ("raylink:max_depth".into(), MetaValue::Int(max_depth as i32)),
     ];
 
+    // What an interrupted render kept, for the closing message.
+    let mut partial_note = String::new();
     let (image, stats) = match &monte_carlo {
         None => {
             let sampling = pixel_sampling(&args, spp)?;
@@ -638,30 +706,68 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
             } else {
                 estimator.as_ref()
             };
-            let mut last_write = std::time::Instant::now();
-            let (film, stats) = render_progressive(&ctx, estimator, &options, |film| {
-                let due = args
-                    .write_interval
-                    .is_some_and(|t| last_write.elapsed().as_secs_f64() >= t);
-                if due && film.spp < options.spp {
-                    let mut meta = metadata.clone();
-                    meta.push((
-                        "raylink:samples_per_pixel".into(),
-                        MetaValue::Float(film.spp as f32),
-                    ));
-                    meta.push(("raylink:partial".into(), MetaValue::Int(1)));
-                    for out in &args.outputs {
-                        write_image(out, &film.image(), &meta, &out_options)?;
-                    }
-                    last_write = std::time::Instant::now();
+            let checkpoint = checkpoint::path_for(&args.outputs[0]);
+            let settings = checkpoint_settings(&args, &scene, integrator, &options, max_depth);
+            let mut resumed_samples = 0;
+            let resume = if args.resume {
+                if !checkpoint.exists() {
+                    return Err(Error::Options(format!(
+                        "--resume: there is no checkpoint {} (an interrupted render or \
+                         --checkpoint-interval writes one)",
+                        checkpoint.display()
+                    )));
                 }
-                Ok(())
-            })?;
-            if film.invalid > 0 && !args.quiet {
-                eprintln!(
-                    "raylink: warning: {} samples were not finite and were dropped",
-                    film.invalid
+                let blank = Film::new(width, height, filter);
+                let resumed = checkpoint::load(&checkpoint, &settings, blank)?;
+                resumed_samples = resumed.samples;
+                Some(resumed.film)
+            } else {
+                None
+            };
+            let mut last_write = std::time::Instant::now();
+            let mut last_checkpoint = std::time::Instant::now();
+            let (film, mut stats) =
+                render_progressive_from(&ctx, estimator, &options, resume, |film| {
+                    if args
+                        .checkpoint_interval
+                        .is_some_and(|t| last_checkpoint.elapsed().as_secs_f64() >= t)
+                        && film.spp < options.spp
+                    {
+                        // Samples so far are only an estimate here; the image does not use them.
+                        let samples = (film.mean_spp() * width as f64 * height as f64) as u64;
+                        checkpoint::save(&checkpoint, film, &settings, samples)?;
+                        last_checkpoint = std::time::Instant::now();
+                    }
+                    let due = args
+                        .write_interval
+                        .is_some_and(|t| last_write.elapsed().as_secs_f64() >= t);
+                    if due && film.spp < options.spp {
+                        let mut meta = metadata.clone();
+                        meta.push((
+                            "raylink:samples_per_pixel".into(),
+                            MetaValue::Float(film.spp as f32),
+                        ));
+                        meta.push(("raylink:partial".into(), MetaValue::Int(1)));
+                        for out in &args.outputs {
+                            write_image(out, &film.image(), &meta, &out_options)?;
+                        }
+                        last_write = std::time::Instant::now();
+                    }
+                    Ok(())
+                })?;
+            stats.samples += resumed_samples;
+            stats.invalid = film.invalid;
+            if stats.interrupted {
+                checkpoint::save(&checkpoint, &film, &settings, stats.samples)?;
+                partial_note = format!(
+                    "{:.2} of {} samples per pixel; the film is in {} for --resume",
+                    film.mean_spp(),
+                    options.spp,
+                    checkpoint.display()
                 );
+            } else if checkpoint.exists() {
+                // The render is complete: its checkpoint is stale.
+                let _ = std::fs::remove_file(&checkpoint);
             }
             let mut image = film.image();
             if let Some(ic) = cache_view.filter(|_| args.show_cache_points) {
@@ -674,6 +780,15 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
             (image, stats)
         }
     };
+    if stats.invalid > 0 && !args.quiet {
+        eprintln!(
+            "raylink: warning: {} samples were not finite and were dropped",
+            stats.invalid
+        );
+    }
+    if stats.interrupted {
+        metadata.push(("raylink:partial".into(), MetaValue::Int(1)));
+    }
     metadata.extend([
         (
             "raylink:samples_per_pixel".into(),
@@ -690,6 +805,27 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
     ]);
     for out in &args.outputs {
         write_image(out, &image, &metadata, &out_options)?;
+    }
+    if stats.interrupted {
+        let signal = raylink::interrupt::signal().unwrap_or(2);
+        let outputs: Vec<String> = args
+            .outputs
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect();
+        return Err(Error::Interrupted {
+            signal,
+            detail: format!(
+                "interrupted by {}: wrote the partial image {} ({})",
+                raylink::interrupt::name(signal),
+                outputs.join(", "),
+                if partial_note.is_empty() {
+                    "the tiles finished; the rest is black".to_string()
+                } else {
+                    partial_note
+                }
+            ),
+        });
     }
     if args.aov {
         let aovs = render_aovs(&ctx, width, height, filter, args.seed, args.threads)?;
@@ -869,4 +1005,33 @@ fn network(
         );
     }
     Ok((network, solution))
+}
+
+/// Everything the pixels of a Monte Carlo render depend on, for checking a --resume.
+fn checkpoint_settings(
+    args: &RenderArgs,
+    scene: &Scene,
+    integrator: IntegratorName,
+    options: &ProgressiveOptions,
+    max_depth: u32,
+) -> String {
+    checkpoint::settings(&[
+        ("version", raylink::VERSION.to_string()),
+        ("scene", format!("{:016x}", ic::file::scene_hash(scene))),
+        ("camera", format!("{:?}", scene.camera)),
+        ("integrator", integrator_name(integrator)),
+        ("accel", args.accel.name().to_string()),
+        ("size", format!("{}x{}", options.width, options.height)),
+        ("spp", options.spp.to_string()),
+        ("seed", options.seed.to_string()),
+        ("filter", format!("{:?}", options.filter)),
+        ("max_depth", max_depth.to_string()),
+        (
+            "irradiance_cache",
+            format!(
+                "{} {} {} {}",
+                args.ab, args.ic_accuracy, args.ic_samples, args.ar
+            ),
+        ),
+    ])
 }

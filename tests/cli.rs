@@ -93,12 +93,12 @@ fn renders_both_example_scenes_to_exr_and_png_with_metadata() {
     }
 }
 
-/// Every case in tests/bad_scenes: exit code 2, one line naming the file and the problem
+/// Every case in tests/bad_inputs/scenes: exit code 2, one line naming the file and the problem
 /// (the `# expect:` substring on the case's first line), no output file.
 #[test]
 fn bad_scenes_fail_cleanly_through_the_cli() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let mut cases: Vec<_> = files_in(&root.join("tests/bad_scenes"))
+    let mut cases: Vec<_> = files_in(&root.join("tests/bad_inputs/scenes"))
         .into_iter()
         .filter(|p| p.extension().is_some_and(|e| e == "toml"))
         .collect();
@@ -190,7 +190,7 @@ fn a_failed_run_leaves_an_existing_output_untouched() {
     let dir = tempfile::tempdir().unwrap();
     let precious = dir.path().join("precious.exr");
     std::fs::write(&precious, b"the user's earlier render").unwrap();
-    let bad = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad_scenes");
+    let bad = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad_inputs/scenes");
     let case = files_in(&bad)
         .into_iter()
         .find(|p| p.extension().is_some_and(|e| e == "toml"))
@@ -209,12 +209,12 @@ fn a_failed_run_leaves_an_existing_output_untouched() {
     assert_eq!(files_in(dir.path()), vec![precious]);
 }
 
-/// Every case in tests/bad_pbrt through the CLI: exit code 2, one line naming the file, line
+/// Every case in tests/bad_inputs/pbrt through the CLI: exit code 2, one line naming the file, line
 /// and problem, no output file, no panic.
 #[test]
 fn bad_pbrt_files_fail_cleanly_through_the_cli() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let cases: Vec<_> = files_in(&root.join("tests/bad_pbrt"))
+    let cases: Vec<_> = files_in(&root.join("tests/bad_inputs/pbrt"))
         .into_iter()
         .filter(|p| p.extension().is_some_and(|e| e == "pbrt"))
         .collect();
@@ -283,7 +283,8 @@ fn pbrt_scenes_render_with_warnings_and_convert_to_toml() {
     let (b, _) = read_image(&exr2).unwrap();
     assert_eq!(a.pixels, b.pixels);
     // A failed conversion writes nothing.
-    let bad = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad_pbrt/unknown-statement.pbrt");
+    let bad =
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad_inputs/pbrt/unknown-statement.pbrt");
     let never = dir.path().join("never.toml");
     let out = raylink(&[
         "convert",

@@ -1,6 +1,6 @@
 //! The pbrt-v4 reader end to end: Bitterli's Cornell box against the same scene written in
 //! TOML, statements and transforms on small scenes, PLY in every encoding, and the bad-input
-//! corpus in tests/bad_pbrt.
+//! corpus in tests/bad_inputs/pbrt.
 
 use raylink::accel::{self, Backend};
 use raylink::image::Image;
@@ -131,7 +131,7 @@ fn expectation(path: &Path) -> String {
 }
 
 fn bad_cases() -> Vec<PathBuf> {
-    let dir = root().join("tests/bad_pbrt");
+    let dir = root().join("tests/bad_inputs/pbrt");
     let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().path())

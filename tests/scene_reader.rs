@@ -1,4 +1,4 @@
-//! The scene readers: the bad-input corpus in tests/bad_scenes and the scenes in scenes/.
+//! The scene readers: the bad-input corpus in tests/bad_inputs/scenes and the scenes in scenes/.
 
 use raylink::math::{Vec2, Vec3};
 use raylink::scene::{Geometry, Light, Scene, Texture};
@@ -31,7 +31,7 @@ fn expectation(path: &Path) -> String {
 
 #[test]
 fn bad_scenes_fail_with_one_line_messages_naming_the_file_and_the_problem() {
-    let files = toml_files(&root().join("tests/bad_scenes"));
+    let files = toml_files(&root().join("tests/bad_inputs/scenes"));
     assert!(files.len() >= 15, "only {} bad scenes", files.len());
     let mut failures = Vec::new();
     for path in &files {
@@ -74,9 +74,9 @@ fn load(name: &str) -> Scene {
     Scene::load(&root().join("scenes").join(name)).unwrap_or_else(|e| panic!("{e}"))
 }
 
-/// A TOML scene given as text, read as if it were a file in tests/bad_scenes (for meshes).
+/// A TOML scene given as text, read as if it were a file in tests/bad_inputs/scenes (for meshes).
 fn parse(text: &str) -> raylink::Result<Scene> {
-    let path = root().join("tests/bad_scenes/inline.toml");
+    let path = root().join("tests/bad_inputs/scenes/inline.toml");
     raylink::scene::toml::from_str(text, &path)
 }
 
@@ -322,7 +322,7 @@ fn an_obj_with_a_missing_mtl_loads_when_the_scene_gives_a_material() {
 
 #[test]
 fn a_missing_scene_file_is_a_one_line_error() {
-    let path = root().join("tests/bad_scenes/no-such-scene.toml");
+    let path = root().join("tests/bad_inputs/scenes/no-such-scene.toml");
     let msg = Scene::load(&path).unwrap_err().to_string();
     assert!(
         msg.contains("no-such-scene.toml") && !msg.contains('\n'),

@@ -65,6 +65,7 @@ impl DynamicAccel for bvh::BvhAccel {
 /// Builds an intersection structure for an animation: Embree as a dynamic scene whose moving
 /// geometries are refitted per frame, the BVH rebuilt per frame.
 pub fn build_dynamic(scene: &Scene, backend: Backend) -> crate::Result<Box<dyn DynamicAccel>> {
+    check_memory(scene)?;
     match backend {
         Backend::Embree => Ok(Box::new(embree::EmbreeAccel::build_dynamic(scene)?)),
         Backend::Bvh => Ok(Box::new(bvh::BvhAccel::build(scene)?)),
@@ -101,8 +102,24 @@ impl std::fmt::Display for Backend {
 
 /// Builds the acceleration structure for a scene's shapes; shape `i` gets geometry id `i`.
 pub fn build(scene: &Scene, backend: Backend) -> crate::Result<Box<dyn Accel>> {
+    check_memory(scene)?;
     match backend {
         Backend::Embree => Ok(Box::new(embree::EmbreeAccel::build(scene)?)),
         Backend::Bvh => Ok(Box::new(bvh::BvhAccel::build(scene)?)),
     }
+}
+
+/// Bytes per primitive the intersection structures take at most (Embree's BVH with its
+/// build-time copies, or obvhs's CWBVH, plus the shading data kept beside them).
+const BYTES_PER_PRIMITIVE: u64 = 256;
+
+fn check_memory(scene: &Scene) -> crate::Result<()> {
+    crate::memory::check(
+        &format!(
+            "{}: the intersection structures for {} primitives",
+            scene.source.display(),
+            scene.primitive_count()
+        ),
+        scene.primitive_count() as u64 * BYTES_PER_PRIMITIVE,
+    )
 }

@@ -84,15 +84,7 @@ fn parse_count(s: &str) -> Option<usize> {
 
 /// Triangles (a quad counts as two) and spheres of a scene.
 pub fn primitive_count(scene: &Scene) -> usize {
-    scene
-        .shapes
-        .iter()
-        .map(|s| match &s.geometry {
-            Geometry::Sphere { .. } => 1,
-            Geometry::Triangles(m) => m.indices.len(),
-            Geometry::Quads(q) => 2 * q.indices.len(),
-        })
-        .sum()
+    scene.primitive_count()
 }
 
 fn base_scene(name: String, camera: Camera, light: Vec3) -> Scene {

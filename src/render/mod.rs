@@ -3,6 +3,7 @@
 //! or tile, so an image is the same bit for bit for any thread count and tile order.
 
 pub mod aov;
+pub mod checkpoint;
 pub mod progressive;
 mod sampling;
 
@@ -40,6 +41,11 @@ pub struct RenderStats {
     pub rays: RayStats,
     /// Image samples (camera rays) taken.
     pub samples: u64,
+    /// Samples whose value was NaN or infinite, dropped (counted as black).
+    pub invalid: u64,
+    /// The render stopped early on a signal ([`crate::interrupt`]); the image holds what
+    /// was finished.
+    pub interrupted: bool,
 }
 
 impl RenderStats {
@@ -98,13 +104,16 @@ pub fn render(
     let progress = progress_bar(options.progress, tiles.len() as u64, "tiles");
 
     let start = Instant::now();
-    let results: Vec<(Vec<Rgb>, RayStats, u64)> = pool.install(|| {
+    let results: Vec<Option<sampling::TileOutput>> = pool.install(|| {
         tiles
             .par_iter()
             .map(|tile| {
-                let result = render_region(ctx, integrator, options, tile);
-                progress.inc(1);
-                result
+                // On a signal the remaining tiles are skipped (left black).
+                (!crate::interrupt::requested()).then(|| {
+                    let result = region(ctx, integrator, options, tile);
+                    progress.inc(1);
+                    result
+                })
             })
             .collect()
     });
@@ -112,13 +121,18 @@ pub fn render(
 
     let mut image = Image::new(options.width, options.height);
     let mut stats = RenderStats::default();
-    for (tile, (pixels, rays, samples)) in tiles.iter().zip(results) {
+    for (tile, result) in tiles.iter().zip(results) {
+        let Some(out) = result else {
+            stats.interrupted = true;
+            continue;
+        };
         let w = tile.x1 - tile.x0;
-        for (i, c) in pixels.into_iter().enumerate() {
+        for (i, c) in out.pixels.into_iter().enumerate() {
             image.set(tile.x0 + i as u32 % w, tile.y0 + i as u32 / w, c);
         }
-        stats.rays.add(&rays);
-        stats.samples += samples;
+        stats.rays.add(&out.rays);
+        stats.samples += out.samples;
+        stats.invalid += out.invalid;
     }
     stats.seconds = start.elapsed().as_secs_f64();
     Ok((image, stats))
@@ -132,6 +146,16 @@ pub fn render_region(
     options: &RenderOptions,
     tile: &Tile,
 ) -> (Vec<Rgb>, RayStats, u64) {
+    let out = region(ctx, integrator, options, tile);
+    (out.pixels, out.rays, out.samples)
+}
+
+fn region(
+    ctx: &Context,
+    integrator: &dyn Integrator,
+    options: &RenderOptions,
+    tile: &Tile,
+) -> sampling::TileOutput {
     let mut camera = ctx.scene.camera.clone();
     camera.width = options.width;
     camera.height = options.height;

@@ -46,14 +46,20 @@ pub struct Film {
     sums: Vec<[f64; 3]>,
     /// Per pixel: splatted contributions, filter-weighted.
     splats: Vec<[f64; 3]>,
-    /// Samples per pixel taken so far.
+    /// Samples per pixel of every finished pass.
     pub spp: u32,
+    /// The pass in progress when a render was interrupted: its size (0: none) and how many
+    /// of the image's tiles, in order, already have its samples. A resumed render finishes
+    /// it tile by tile, adding exactly what the uninterrupted render would have added.
+    pass: u32,
+    tiles_done: u32,
     /// Samples that returned NaN or infinity and were dropped.
     pub invalid: u64,
 }
 
 impl Film {
-    fn new(width: u32, height: u32, filter: Filter) -> Film {
+    /// An empty film (no samples) of this size and filter.
+    pub fn new(width: u32, height: u32, filter: Filter) -> Film {
         // ∫ filter by the midpoint rule on a fine grid.
         let r = filter.radius();
         let n = 256;
@@ -75,8 +81,80 @@ impl Film {
             sums: vec![[0.0; 3]; pixels],
             splats: vec![[0.0; 3]; pixels],
             spp: 0,
+            pass: 0,
+            tiles_done: 0,
             invalid: 0,
         }
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// The per-pixel sums of sample estimates and of splats (for checkpoints).
+    pub(super) fn accumulators(&self) -> (&[[f64; 3]], &[[f64; 3]]) {
+        (&self.sums, &self.splats)
+    }
+
+    /// The pass in progress: its size and the tiles that have it (0, 0 between passes).
+    pub(super) fn pass_in_progress(&self) -> (u32, u32) {
+        (self.pass, self.tiles_done)
+    }
+
+    /// This (empty) film with saved accumulators and counts, checked for consistency.
+    pub(super) fn restored(
+        mut self,
+        sums: Vec<[f64; 3]>,
+        splats: Vec<[f64; 3]>,
+        spp: u32,
+        pass: u32,
+        tiles_done: u32,
+        invalid: u64,
+    ) -> std::result::Result<Film, String> {
+        let tile_count = tiles(self.width, self.height).len() as u32;
+        if spp > MAX_SPP
+            || pass > MAX_SPP
+            || tiles_done >= tile_count.max(1)
+            || (pass == 0) != (tiles_done == 0)
+        {
+            return Err("inconsistent sample counts".into());
+        }
+        if sums.len() != self.sums.len() || splats.len() != self.splats.len() {
+            return Err("wrong number of pixels".into());
+        }
+        self.sums = sums;
+        self.splats = splats;
+        self.spp = spp;
+        self.pass = pass;
+        self.tiles_done = tiles_done;
+        self.invalid = invalid;
+        Ok(self)
+    }
+
+    /// Whether a pass was cut short (the image then mixes pixels with `spp` and `spp + pass`
+    /// samples).
+    pub fn is_partial_pass(&self) -> bool {
+        self.tiles_done > 0
+    }
+
+    /// Samples taken in pixel (x, y).
+    fn samples_at(&self, x: u32, y: u32) -> u32 {
+        let tiles_x = self.width.div_ceil(super::TILE_SIZE);
+        let tile = (y / super::TILE_SIZE) * tiles_x + x / super::TILE_SIZE;
+        self.spp + if tile < self.tiles_done { self.pass } else { 0 }
+    }
+
+    /// Mean samples per pixel so far.
+    pub fn mean_spp(&self) -> f64 {
+        let pixels = self.width as f64 * self.height as f64;
+        self.spp as f64 + self.pass as f64 * self.tiles_done_pixels() as f64 / pixels
+    }
+
+    fn tiles_done_pixels(&self) -> u64 {
+        tiles(self.width, self.height)[..self.tiles_done as usize]
+            .iter()
+            .map(|t| (t.x1 - t.x0) as u64 * (t.y1 - t.y0) as u64)
+            .sum()
     }
 
     fn add_splat(&mut self, s: &Splat) {
@@ -102,6 +180,17 @@ impl Film {
     /// The image after the samples taken so far.
     pub fn image(&self) -> Image {
         let mut image = Image::new(self.width, self.height);
+        if self.is_partial_pass() {
+            // An interrupted pass: each pixel by its own count; one light path per sample.
+            let paths = self.mean_spp() * self.width as f64 * self.height as f64;
+            for (i, px) in image.pixels.iter_mut().enumerate() {
+                let (x, y) = (i as u32 % self.width, i as u32 / self.width);
+                let n = self.samples_at(x, y);
+                let per_sample = if n == 0 { 0.0 } else { 1.0 / n as f64 };
+                *px = pixel_value(self.sums[i], self.splats[i], per_sample, 1.0 / paths);
+            }
+            return image;
+        }
         if self.spp == 0 {
             return image;
         }
@@ -293,6 +382,21 @@ pub fn render_progressive(
     ctx: &Context,
     integrator: &dyn MonteCarlo,
     options: &ProgressiveOptions,
+    after_pass: impl FnMut(&Film) -> Result<()>,
+) -> Result<(Film, RenderStats)> {
+    render_progressive_from(ctx, integrator, options, None, after_pass)
+}
+
+/// [`render_progressive`], continuing from `resume` (a film saved by an earlier, interrupted
+/// run with the same scene and options: see [`super::checkpoint`]) if given. The result is
+/// the same bit for bit as a render that was never interrupted. When a stop is requested
+/// ([`crate::interrupt`]) the render returns after the tile in hand with
+/// [`RenderStats::interrupted`] set; the film then holds every tile finished so far.
+pub fn render_progressive_from(
+    ctx: &Context,
+    integrator: &dyn MonteCarlo,
+    options: &ProgressiveOptions,
+    resume: Option<Film>,
     mut after_pass: impl FnMut(&Film) -> Result<()>,
 ) -> Result<(Film, RenderStats)> {
     if options.width == 0 || options.height == 0 {
@@ -318,7 +422,19 @@ pub fn render_progressive(
     let basis = view_basis(ctx.scene, options);
     let filter_sampler = FilterSampler::new(options.filter);
     let tiles = tiles(options.width, options.height);
-    let mut film = Film::new(options.width, options.height, options.filter);
+    let mut film = match resume {
+        Some(film) => {
+            if (film.width, film.height, film.filter)
+                != (options.width, options.height, options.filter)
+            {
+                return Err(Error::Options(
+                    "the film to resume was rendered at another size or filter".into(),
+                ));
+            }
+            film
+        }
+        None => Film::new(options.width, options.height, options.filter),
+    };
     let mut stats = RenderStats::default();
     let progress = progress_bar(
         options.progress,
@@ -330,28 +446,44 @@ pub fn render_progressive(
         "samples",
     );
     let start = Instant::now();
+    progress.inc(film.spp as u64);
     while film.spp < options.spp {
-        let n = next_pass(film.spp, options.spp);
+        // A resumed film may be in the middle of a pass.
+        let n = if film.is_partial_pass() {
+            film.pass
+        } else {
+            next_pass(film.spp, options.spp)
+        };
+        film.pass = n;
         let pass_start = Instant::now();
         let samples = film.spp..film.spp + n;
-        for group in tiles.chunks(TILE_GROUP) {
-            let results: Vec<TileResult> = pool.install(|| {
+        // Tiles are merged in image order whatever the grouping, so a pass finished after a
+        // resume adds the same numbers in the same order as an uninterrupted one.
+        for group in tiles[film.tiles_done as usize..].chunks(TILE_GROUP) {
+            let results: Vec<Option<TileResult>> = pool.install(|| {
                 group
                     .par_iter()
                     .map(|tile| {
-                        render_tile(
-                            ctx,
-                            integrator,
-                            &basis,
-                            options,
-                            &filter_sampler,
-                            tile,
-                            samples.clone(),
-                        )
+                        (!crate::interrupt::requested()).then(|| {
+                            render_tile(
+                                ctx,
+                                integrator,
+                                &basis,
+                                options,
+                                &filter_sampler,
+                                tile,
+                                samples.clone(),
+                            )
+                        })
                     })
                     .collect()
             });
             for (tile, r) in group.iter().zip(results) {
+                // Keep the finished tiles up to the first one skipped.
+                let Some(r) = r else {
+                    stats.interrupted = true;
+                    break;
+                };
                 let w = tile.x1 - tile.x0;
                 for (i, s) in r.sums.iter().enumerate() {
                     let (x, y) = (tile.x0 + i as u32 % w, tile.y0 + i as u32 / w);
@@ -364,11 +496,23 @@ pub fn render_progressive(
                     film.add_splat(s);
                 }
                 stats.rays.add(&r.rays);
+                stats.samples += n as u64 * r.sums.len() as u64;
                 film.invalid += r.invalid;
+                film.tiles_done += 1;
+            }
+            if stats.interrupted {
+                break;
             }
         }
+        if stats.interrupted {
+            if film.tiles_done == 0 {
+                film.pass = 0;
+            }
+            break;
+        }
         film.spp += n;
-        stats.samples += n as u64 * options.width as u64 * options.height as u64;
+        film.pass = 0;
+        film.tiles_done = 0;
         progress.inc(n as u64);
         after_pass(&film)?;
         if let Some(limit) = options.time_limit {

@@ -72,6 +72,7 @@ struct TileRenderer<'a> {
     seed: u64,
     stats: RayStats,
     samples: u64,
+    invalid: u64,
 }
 
 impl TileRenderer<'_> {
@@ -80,9 +81,27 @@ impl TileRenderer<'_> {
         let mut rng = Rng::for_key(self.seed, key);
         self.samples += 1;
         let ray = self.camera.ray(x, y);
-        self.integrator
-            .radiance(self.ctx, &ray, &mut rng, &mut self.stats)
+        let mut sample = self
+            .integrator
+            .radiance(self.ctx, &ray, &mut rng, &mut self.stats);
+        if !sample.radiance.is_finite() {
+            // A numerical failure must not poison the pixel: dropped and counted.
+            sample.radiance = Rgb::ZERO;
+            self.invalid += 1;
+        }
+        sample
     }
+}
+
+/// What [`render_tile`] produced.
+pub(super) struct TileOutput {
+    /// The tile's pixels, row-major.
+    pub pixels: Vec<Rgb>,
+    pub rays: RayStats,
+    /// Image samples taken.
+    pub samples: u64,
+    /// Samples dropped for a NaN or infinite value.
+    pub invalid: u64,
 }
 
 /// Renders one tile; returns its pixels (row-major), rays traced and samples taken.
@@ -93,7 +112,7 @@ pub(super) fn render_tile(
     sampling: &PixelSampling,
     seed: u64,
     tile: &Tile,
-) -> (Vec<Rgb>, RayStats, u64) {
+) -> TileOutput {
     let mut r = TileRenderer {
         ctx,
         integrator,
@@ -101,6 +120,7 @@ pub(super) fn render_tile(
         seed,
         stats: RayStats::default(),
         samples: 0,
+        invalid: 0,
     };
     let mut pixels = Vec::with_capacity(((tile.x1 - tile.x0) * (tile.y1 - tile.y0)) as usize);
     match *sampling {
@@ -141,7 +161,12 @@ pub(super) fn render_tile(
             r = adaptive.renderer;
         }
     }
-    (pixels, r.stats, r.samples)
+    TileOutput {
+        pixels,
+        rays: r.stats,
+        samples: r.samples,
+        invalid: r.invalid,
+    }
 }
 
 /// Whitted's adaptive sampler. Sample points lie on a lattice `scale` = 2^max_depth times

@@ -73,6 +73,18 @@ impl Scene {
         (lo.x <= hi.x).then_some((lo, hi))
     }
 
+    /// Triangles (a quad counts as two) and spheres.
+    pub fn primitive_count(&self) -> usize {
+        self.shapes
+            .iter()
+            .map(|s| match &s.geometry {
+                Geometry::Sphere { .. } => 1,
+                Geometry::Triangles(m) => m.indices.len(),
+                Geometry::Quads(q) => 2 * q.indices.len(),
+            })
+            .sum()
+    }
+
     /// Reads a scene file, choosing the reader by extension.
     pub fn load(path: &Path) -> crate::Result<Scene> {
         match path.extension().and_then(|e| e.to_str()) {

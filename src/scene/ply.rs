@@ -126,7 +126,14 @@ pub fn read(path: &Path) -> crate::Result<PlyMesh> {
         .map_err(|e| Error::input(path, format!("cannot read the PLY file: {e}")))?;
     let mut reader = Reader::new(BufReader::new(file));
     let fail = |e: ply_rs_bw::parser::ParseError| {
+        // ply-rs appends tab-separated internals (the parser's expected-token sets): keep
+        // the message and the offending text.
         let msg = e.to_string().replace(['\n', '\r'], " ");
+        let mut parts = msg.split('\t').map(str::trim);
+        let mut msg = parts.next().unwrap_or_default().to_string();
+        if let Some(text) = parts.find(|p| p.starts_with("String:")) {
+            msg = format!("{msg} ({})", text.trim_end());
+        }
         let msg = match msg.strip_prefix("Line ") {
             Some(rest) => format!("line {rest}"),
             None => msg,

@@ -25,7 +25,7 @@ use crate::Result;
 use std::path::Path;
 
 pub const VERSION: u32 = 2;
-const FORMAT: Format = Format {
+pub(crate) const FORMAT: Format = Format {
     magic: b"RLIRRAD\0",
     version: VERSION,
     what: "irradiance cache",
@@ -45,7 +45,7 @@ pub fn scene_hash(scene: &Scene) -> u64 {
 }
 
 /// What follows the version: the scene hash and the options.
-fn header(scene: &Scene, options: &IcOptions) -> Vec<u8> {
+pub(crate) fn header(scene: &Scene, options: &IcOptions) -> Vec<u8> {
     let mut b = Vec::new();
     b.extend_from_slice(&scene_hash(scene).to_le_bytes());
     b.extend_from_slice(&options.bounces.to_le_bytes());

@@ -295,6 +295,9 @@ impl Walk<'_> {
     }
 }
 
+/// Memory a cached value takes with its share of the octree (estimated generously).
+const BYTES_PER_VALUE: u64 = 96;
+
 /// The options with the scene-derived constants.
 #[derive(Clone, Copy, Debug)]
 struct Params {
@@ -369,6 +372,9 @@ impl IrradianceCache {
                             overture: true,
                         };
                         for (x, y, i) in chunk.samples() {
+                            if crate::interrupt::requested() {
+                                break;
+                            }
                             let (mut sampler, ray) =
                                 camera_sample(&camera, seed, &filter, (x, y), i);
                             let mut rng = sample_rng(seed, &mut sampler);
@@ -379,11 +385,17 @@ impl IrradianceCache {
                     })
                     .collect()
             });
+            crate::interrupt::check("the irradiance-cache overture")?;
             for (local, n, stats) in chunks {
                 cache.absorb(local);
                 primaries += n;
                 rays += stats.total();
             }
+            // The cache grows phase by phase (each about twice the last at most).
+            crate::memory::check(
+                "the irradiance cache",
+                2 * cache.len() as u64 * BYTES_PER_VALUE,
+            )?;
         }
         let overture_primaries = primaries;
         Ok(IrradianceCache {

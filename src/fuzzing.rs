@@ -1,0 +1,91 @@
+//! Entry points for the fuzz targets in `fuzz/` (cargo fuzz): each hands arbitrary bytes to
+//! one reader the way a user's file reaches it, through a file in a per-process scratch
+//! folder. A reader may reject the bytes, but only with a one-line error: a panic, an abort
+//! or a multi-line message is a bug the fuzzer reports. Not an API.
+
+use crate::integrators::irradiance_cache::{file as ic_file, IcOptions};
+use crate::scene::{obj, ply, Scene};
+use std::path::{Path, PathBuf};
+use std::sync::OnceLock;
+
+/// This process's scratch folder (fuzzers run several processes side by side).
+fn scratch() -> &'static Path {
+    static DIR: OnceLock<PathBuf> = OnceLock::new();
+    DIR.get_or_init(|| {
+        let dir = std::env::temp_dir().join(format!("raylink-fuzz-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).expect("the scratch folder can be made");
+        dir
+    })
+}
+
+fn put(name: &str, bytes: &[u8]) -> PathBuf {
+    let path = scratch().join(name);
+    std::fs::write(&path, bytes).expect("the scratch file can be written");
+    path
+}
+
+/// A rejection must be one line (the CLI prints it as `raylink: error: ...`).
+fn one_line<T>(result: crate::Result<T>) -> Option<T> {
+    match result {
+        Ok(v) => Some(v),
+        Err(e) => {
+            let msg = e.to_string();
+            assert!(!msg.contains('\n'), "a multi-line error: {msg:?}");
+            None
+        }
+    }
+}
+
+/// A native TOML scene (with its animation keyframes), as `raylink render` reads it.
+pub fn scene_toml(data: &[u8]) {
+    one_line(Scene::load(&put("scene.toml", data)));
+}
+
+/// A pbrt-v4 scene.
+pub fn pbrt(data: &[u8]) {
+    one_line(Scene::load(&put("scene.pbrt", data)));
+}
+
+/// An OBJ file and the MTL file it may name (`mtllib m.mtl`): the bytes before the first NUL
+/// are the OBJ, the rest the MTL.
+pub fn obj(data: &[u8]) {
+    let split = data.iter().position(|&b| b == 0).unwrap_or(data.len());
+    put("m.mtl", data.get(split + 1..).unwrap_or_default());
+    one_line(obj::load(&put("m.obj", &data[..split]), true));
+}
+
+/// A PLY mesh (ASCII or binary).
+pub fn ply(data: &[u8]) {
+    one_line(ply::read(&put("m.ply", data)));
+}
+
+/// The scene the cache-file target loads caches for.
+fn cache_scene() -> &'static Scene {
+    static SCENE: OnceLock<Scene> = OnceLock::new();
+    SCENE.get_or_init(|| {
+        crate::scene::toml::from_str(
+            "[camera]\nposition = [0, 1, 3]\nlook_at = [0, 0, 0]\n\
+             [materials.white]\ndiffuse = [0.8, 0.8, 0.8]\n\
+             [[shapes]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"white\"\n\
+             [[lights]]\ntype = \"point\"\nposition = [0, 3, 0]\nintensity = [5, 5, 5]\n",
+            Path::new("fuzz.toml"),
+        )
+        .expect("the fuzz scene is valid")
+    })
+}
+
+/// An irradiance-cache file's records: the bytes follow a valid header for a fixed scene, and
+/// the file gets a valid checksum, so the fuzzer explores the record reader rather than the
+/// checksum.
+pub fn irradiance_cache(data: &[u8]) {
+    let scene = cache_scene();
+    let options = IcOptions::default();
+    let mut bytes = ic_file::FORMAT.start(data.len() + 64);
+    bytes.extend_from_slice(&ic_file::header(scene, &options));
+    bytes.extend_from_slice(data);
+    let path = scratch().join("cache.rlic");
+    ic_file::FORMAT
+        .save(&path, bytes)
+        .expect("the scratch file can be written");
+    one_line(ic_file::load(&path, scene, &options));
+}

@@ -1,0 +1,126 @@
+//! Render checkpoints: a Monte Carlo film saved between tiles, so that an interrupted render
+//! can be resumed (`raylink render --resume`) to exactly the image an uninterrupted render
+//! would have made. Little-endian binary in raylink's container ([`crate::binary_file`]):
+//!
+//! ```text
+//! magic "RLCHKPT\0", version u32 (= 1)
+//! settings  u64 length + UTF-8       everything the pixels depend on (scene hash, options)
+//! width u32, height u32
+//! spp u32, pass u32, tiles_done u32  finished passes; the pass in progress and its tiles done
+//! invalid u64, samples u64           dropped samples; camera samples taken
+//! sums   width·height × 3 f64        per pixel: sum of its sample estimates
+//! splats width·height × 3 f64        per pixel: filter-weighted light-path splats
+//! checksum u64
+//! ```
+//!
+//! The filter is part of the settings string; the film's float sums are stored exactly.
+
+use super::progressive::Film;
+use crate::binary_file::{Format, Reader};
+use crate::Result;
+use std::path::{Path, PathBuf};
+
+const FORMAT: Format = Format {
+    magic: b"RLCHKPT\0",
+    version: 1,
+    what: "render checkpoint",
+};
+
+/// Where the checkpoint of a render writing `output` goes: beside it, `OUTPUT.checkpoint`.
+pub fn path_for(output: &Path) -> PathBuf {
+    let mut name = output.file_name().unwrap_or_default().to_os_string();
+    name.push(".checkpoint");
+    output.with_file_name(name)
+}
+
+/// Writes `film` atomically, with `settings` (a description of everything the pixels depend
+/// on) to check a resume against.
+pub fn save(path: &Path, film: &Film, settings: &str, samples: u64) -> Result<()> {
+    let (sums, splats) = film.accumulators();
+    let mut b = FORMAT.start(settings.len() + 48 * sums.len() + 64);
+    b.extend_from_slice(&(settings.len() as u64).to_le_bytes());
+    b.extend_from_slice(settings.as_bytes());
+    let (width, height) = film.size();
+    let (pass, tiles_done) = film.pass_in_progress();
+    for v in [width, height, film.spp, pass, tiles_done] {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
+    b.extend_from_slice(&film.invalid.to_le_bytes());
+    b.extend_from_slice(&samples.to_le_bytes());
+    for px in sums.iter().chain(splats) {
+        for c in px {
+            b.extend_from_slice(&c.to_le_bytes());
+        }
+    }
+    FORMAT.save(path, b)
+}
+
+/// A film read back by [`load`], and the camera samples it had taken.
+pub struct Resumed {
+    pub film: Film,
+    pub samples: u64,
+}
+
+/// Reads a checkpoint written by [`save`] for the same `settings` and film size (`blank`, a
+/// new film of the render's size and filter, receives the values). Any other file is an
+/// [`Error::Input`] naming it.
+pub fn load(path: &Path, settings: &str, blank: Film) -> Result<Resumed> {
+    let file = FORMAT.load(path)?;
+    let bad = |problem: &str| FORMAT.error(path, problem);
+    let mut r = Reader { rest: file.body() };
+    let len = r.u64().ok_or_else(|| bad("truncated"))?;
+    if len > r.rest.len() as u64 {
+        return Err(bad("truncated"));
+    }
+    let (text, rest) = r.rest.split_at(len as usize);
+    r.rest = rest;
+    if text != settings.as_bytes() {
+        return Err(bad(
+            "written by a render with another scene or other options (resume with the \
+             options of the interrupted run)",
+        ));
+    }
+    let mut u = [0u32; 5];
+    for v in &mut u {
+        *v = r.u32().ok_or_else(|| bad("truncated"))?;
+    }
+    let [width, height, spp, pass, tiles_done] = u;
+    if (width, height) != blank.size() {
+        return Err(bad("written for another image size"));
+    }
+    let invalid = r.u64().ok_or_else(|| bad("truncated"))?;
+    let samples = r.u64().ok_or_else(|| bad("truncated"))?;
+    let pixels = width as usize * height as usize;
+    if r.rest.len() != 48 * pixels {
+        return Err(bad("truncated or trailing data"));
+    }
+    let mut values = r
+        .rest
+        .chunks_exact(8)
+        .map(|c| f64::from_le_bytes(c.try_into().unwrap()));
+    let mut read = |n: usize| -> Vec<[f64; 3]> {
+        (0..n)
+            .map(|_| {
+                let mut px = [0.0; 3];
+                for c in &mut px {
+                    *c = values.next().unwrap_or(f64::NAN);
+                }
+                px
+            })
+            .collect()
+    };
+    let sums = read(pixels);
+    let splats = read(pixels);
+    if sums.iter().chain(&splats).flatten().any(|v| !v.is_finite()) {
+        return Err(bad("a pixel value is not finite"));
+    }
+    let film = blank
+        .restored(sums, splats, spp, pass, tiles_done, invalid)
+        .map_err(|e| bad(&e))?;
+    Ok(Resumed { film, samples })
+}
+
+/// The settings string for `items` (name and value pairs), one per line.
+pub fn settings(items: &[(&str, String)]) -> String {
+    items.iter().map(|(k, v)| format!("{k}={v}\n")).collect()
+}

@@ -1,0 +1,349 @@
+//! Interruption, checkpoints and resume, memory limits and non-finite samples (issue 10):
+//! through the `raylink` binary where signals and exit codes are the point.
+
+use raylink::image::output::read_image;
+use raylink::image::{MetaValue, Metadata};
+use std::path::Path;
+use std::process::{Child, Command, Stdio};
+use std::time::{Duration, Instant};
+
+mod common;
+use common::{raylink, stderr};
+
+fn spawn(args: &[&str]) -> Child {
+    Command::new(env!("CARGO_BIN_EXE_raylink"))
+        .args(args)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("the raylink binary starts")
+}
+
+fn signal(child: &Child, name: &str) {
+    let status = Command::new("kill")
+        .args([&format!("-{name}"), &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(status.success());
+}
+
+/// Waits until `path` exists (the render is under way), failing if the child ends first.
+fn wait_for(child: &mut Child, path: &Path) {
+    let start = Instant::now();
+    while !path.exists() {
+        if let Some(status) = child.try_wait().unwrap() {
+            panic!(
+                "the render ended ({status}) before {} appeared",
+                path.display()
+            );
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(120),
+            "no {}",
+            path.display()
+        );
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// Waits until `ready(pid)`, failing if the child ends first.
+fn wait_until(child: &mut Child, ready: impl Fn(u32) -> bool) {
+    let start = Instant::now();
+    while !ready(child.id()) {
+        if let Some(status) = child.try_wait().unwrap() {
+            panic!("the render ended ({status}) too soon");
+        }
+        assert!(start.elapsed() < Duration::from_secs(120), "never ready");
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
+/// Whether the process has a handler for SIGTERM (bit 15 of SigCgt in /proc/PID/status).
+fn catches_sigterm(pid: u32) -> bool {
+    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap_or_default();
+    status
+        .lines()
+        .find_map(|l| l.strip_prefix("SigCgt:"))
+        .and_then(|mask| u64::from_str_radix(mask.trim(), 16).ok())
+        .is_some_and(|mask| mask & (1 << (15 - 1)) != 0)
+}
+
+/// User plus system CPU time of a process.
+fn cpu_seconds(pid: u32) -> f64 {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
+    // The fields after the command name (which is in parentheses).
+    let fields: Vec<&str> = stat
+        .rsplit_once(')')
+        .map(|(_, rest)| rest.split_whitespace().collect())
+        .unwrap_or_default();
+    let ticks = |i: usize| {
+        fields
+            .get(i)
+            .and_then(|v| v.parse::<f64>().ok())
+            .unwrap_or(0.0)
+    };
+    // utime and stime are fields 14 and 15 of the line, 11 and 12 after the name.
+    (ticks(11) + ticks(12)) / 100.0
+}
+
+/// Waits for the child after a signal; it must be gone within a generous bound (a hang, not
+/// a speed, is what this catches).
+fn finish(child: Child) -> std::process::Output {
+    let start = Instant::now();
+    let out = child.wait_with_output().unwrap();
+    assert!(start.elapsed() < Duration::from_secs(20), "slow to stop");
+    out
+}
+
+fn meta(m: &Metadata, key: &str) -> Option<MetaValue> {
+    m.iter().find(|(k, _)| k == key).map(|(_, v)| v.clone())
+}
+
+fn float(m: &Metadata, key: &str) -> f32 {
+    match meta(m, key) {
+        Some(MetaValue::Float(v)) => v,
+        other => panic!("{key}: {other:?}"),
+    }
+}
+
+const PATH_RENDER: [&str; 10] = [
+    "render",
+    "scenes/cornell-box.toml",
+    "--integrator",
+    "path",
+    "--width",
+    "32",
+    "--height",
+    "32",
+    "--spp",
+    "1024",
+];
+
+/// SIGINT in the middle of a path-traced render: exit 130, a partial EXR with its sample
+/// count, a checkpoint; `--resume` then finishes to exactly the uninterrupted image and
+/// removes the checkpoint.
+#[test]
+fn an_interrupted_render_keeps_its_work_and_resumes_to_the_same_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let full = dir.path().join("full.exr");
+    let part = dir.path().join("part.exr");
+    let checkpoint = dir.path().join("part.exr.checkpoint");
+    let mut args: Vec<&str> = PATH_RENDER.to_vec();
+    let (full_s, part_s) = (full.to_str().unwrap(), part.to_str().unwrap());
+    args.extend(["--quiet", "-o", full_s]);
+    let out = raylink(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+
+    let mut args: Vec<&str> = PATH_RENDER.to_vec();
+    args.extend(["--quiet", "-o", part_s]);
+    let mut interrupted = args.clone();
+    // A checkpoint after every pass shows when the render is under way.
+    interrupted.extend(["--checkpoint-interval", "0"]);
+    let mut child = spawn(&interrupted);
+    wait_for(&mut child, &checkpoint);
+    signal(&child, "INT");
+    let out = finish(child);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(130), "{err}");
+    assert!(err.contains("interrupted by SIGINT"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    let (image, m) = read_image(&part).unwrap();
+    assert_eq!(meta(&m, "raylink:partial"), Some(MetaValue::Int(1)));
+    let spp = float(&m, "raylink:samples_per_pixel");
+    assert!(spp > 0.0 && spp < 1024.0, "{spp}");
+    assert!(image.pixels.iter().all(|p| p.is_finite()));
+    assert!(checkpoint.exists());
+
+    args.push("--resume");
+    let out = raylink(&args);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (resumed, m) = read_image(&part).unwrap();
+    let (reference, _) = read_image(&full).unwrap();
+    assert_eq!(meta(&m, "raylink:partial"), None);
+    assert_eq!(float(&m, "raylink:samples_per_pixel"), 1024.0);
+    assert!(
+        resumed.pixels == reference.pixels,
+        "the resumed image differs from the uninterrupted one"
+    );
+    assert!(!checkpoint.exists(), "the checkpoint was left behind");
+}
+
+/// SIGTERM stops a Whitted render too: exit 143 and a partial image of the tiles finished.
+#[test]
+fn sigterm_stops_a_whitted_render_with_a_partial_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_path = dir.path().join("w.exr");
+    let progress = dir.path().join("w.png");
+    // Heavy enough to be running when the signal comes: uniform 8x8 supersampling.
+    let mut child = spawn(&[
+        "render",
+        "scenes/whitted.toml",
+        "--width",
+        "1600",
+        "--height",
+        "1200",
+        "--aa",
+        "uniform",
+        "--spp",
+        "64",
+        "--quiet",
+        "-o",
+        out_path.to_str().unwrap(),
+        "-o",
+        progress.to_str().unwrap(),
+    ]);
+    // Under way: the handler is installed and the process has rendered for a CPU second.
+    wait_until(&mut child, |pid| {
+        catches_sigterm(pid) && cpu_seconds(pid) > 1.0
+    });
+    signal(&child, "TERM");
+    let out = finish(child);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(143), "{err} {:?}", out.status);
+    assert!(err.contains("interrupted by SIGTERM"), "{err}");
+    let (image, m) = read_image(&out_path).unwrap();
+    assert_eq!(meta(&m, "raylink:partial"), Some(MetaValue::Int(1)));
+    let black = image
+        .pixels
+        .iter()
+        .filter(|p| p.max_element() == 0.0)
+        .count();
+    assert!(
+        black > 0 && black < image.pixels.len(),
+        "{black} black pixels"
+    );
+    assert!(progress.exists());
+    // Nothing but the two outputs (no temporary files).
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 2);
+}
+
+/// A resume needs its checkpoint, made with the same settings.
+#[test]
+fn resume_refuses_a_missing_or_foreign_checkpoint() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_path = dir.path().join("r.exr");
+    let o = out_path.to_str().unwrap();
+    let mut args: Vec<&str> = PATH_RENDER.to_vec();
+    args.extend(["--quiet", "-o", o, "--resume"]);
+    let out = raylink(&args);
+    assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("r.exr.checkpoint"),
+        "{}",
+        stderr(&out)
+    );
+
+    // A checkpoint from a run with another seed.
+    let mut child_args: Vec<&str> = PATH_RENDER.to_vec();
+    child_args.extend([
+        "--quiet",
+        "-o",
+        o,
+        "--checkpoint-interval",
+        "0",
+        "--seed",
+        "7",
+    ]);
+    let mut child = spawn(&child_args);
+    let checkpoint = dir.path().join("r.exr.checkpoint");
+    wait_for(&mut child, &checkpoint);
+    signal(&child, "INT");
+    assert_eq!(finish(child).status.code(), Some(130));
+    let out = raylink(&args);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("r.exr.checkpoint") && err.contains("other options"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+    // The refused resume left the checkpoint and the partial image alone.
+    assert!(checkpoint.exists() && out_path.exists());
+}
+
+/// Work beyond --max-memory is refused before it is allocated, with the amount needed.
+#[test]
+fn memory_limits_are_errors_that_say_how_much() {
+    let dir = tempfile::tempdir().unwrap();
+    let o = dir.path().join("m.exr");
+    let o = o.to_str().unwrap();
+    let cases: [(&[&str], &str); 3] = [
+        // A 60000² film under the default limit (3/4 of physical memory) on any test machine
+        // with less than 200 GiB.
+        (
+            &["--width", "60000", "--height", "60000"],
+            "60000x60000 image",
+        ),
+        (&["--max-memory", "64K"], "image would need"),
+        (&["--max-memory", "1x"], "--max-memory"),
+    ];
+    for (extra, needle) in cases {
+        let mut args = vec!["render", "scenes/whitted.toml", "--quiet", "-o", o];
+        args.extend(extra);
+        let out = raylink(&args);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{err}");
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(err.contains(needle), "{needle:?} not in {err}");
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}
+
+/// A test integrator: 1 everywhere, except NaN or infinity on a fixed share of samples.
+struct Faulty;
+
+impl raylink::integrators::MonteCarlo for Faulty {
+    fn sample(
+        &self,
+        _: &raylink::integrators::Context,
+        _: &raylink::scene::camera::CameraBasis,
+        _: &raylink::math::Ray,
+        sampler: &mut raylink::math::sobol::Sampler,
+        _: &mut raylink::integrators::RayStats,
+        _: &mut Vec<raylink::integrators::Splat>,
+    ) -> raylink::math::Rgb {
+        match sampler.next_1d() {
+            u if u < 0.1 => raylink::math::Rgb::splat(f32::NAN),
+            u if u < 0.2 => raylink::math::Rgb::new(f32::INFINITY, 0.0, 0.0),
+            _ => raylink::math::Rgb::ONE,
+        }
+    }
+}
+
+/// NaN and infinite samples are dropped and counted; no pixel is poisoned.
+#[test]
+fn non_finite_samples_are_dropped_and_counted() {
+    use raylink::render::progressive::{render_progressive, ProgressiveOptions};
+    let scene = raylink::scene::Scene::load(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml"),
+    )
+    .unwrap();
+    let accel = raylink::accel::build(&scene, raylink::accel::Backend::Embree).unwrap();
+    let ctx = raylink::integrators::Context::new(&scene, accel.as_ref());
+    let options = ProgressiveOptions {
+        width: 16,
+        height: 16,
+        spp: 64,
+        time_limit: None,
+        threads: Some(2),
+        seed: 3,
+        progress: false,
+        filter: Default::default(),
+    };
+    let (film, _) = render_progressive(&ctx, &Faulty, &options, |_| Ok(())).unwrap();
+    let image = film.image();
+    assert!(image.pixels.iter().all(|p| p.is_finite()));
+    // About a fifth of 16·16·64 samples fail; each pixel keeps its share of good ones.
+    let total = 16 * 16 * 64;
+    assert!(
+        (film.invalid as f64 / total as f64 - 0.2).abs() < 0.03,
+        "{} of {total} dropped",
+        film.invalid
+    );
+    let mean: f32 = image.pixels.iter().map(|p| p.y).sum::<f32>() / 256.0;
+    assert!(
+        (mean - (1.0 - film.invalid as f32 / total as f32)).abs() < 1e-4,
+        "{mean}"
+    );
+}
