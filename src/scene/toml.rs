@@ -550,6 +550,7 @@ impl Ctx<'_> {
     /// The line on which `key` is set inside the table at `span`; the table's first line
     /// when it cannot be found.
     fn key_line(&self, span: &Range<usize>, key: &str) -> usize {
+        let span = &self.table_extent(span);
         let body = self.text.get(span.clone()).unwrap_or("");
         if !key.is_empty() {
             let bytes = body.as_bytes();
@@ -566,6 +567,37 @@ impl Ctx<'_> {
             }
         }
         self.line_at(span.start)
+    }
+
+    /// A `[table]` or `[[table]]` header's span (what toml gives for a table opened by a
+    /// header) extended over the table's body, up to the next header line; any other span as
+    /// it is.
+    fn table_extent(&self, span: &Range<usize>) -> Range<usize> {
+        let Some(head) = self.text.get(span.clone()) else {
+            return span.clone();
+        };
+        if !head.trim_start().starts_with('[') || head.contains('=') {
+            return span.clone();
+        }
+        let is_header = |line: &str| {
+            let l = line.trim_start();
+            let name = l.trim_start_matches('[').trim_start();
+            l.starts_with('[')
+                && name
+                    .chars()
+                    .next()
+                    .is_some_and(|c| c.is_alphabetic() || c == '_' || c == '"' || c == '\'')
+        };
+        let mut end = self.text.len();
+        let mut offset = span.end;
+        for line in self.text[span.end..].split_inclusive('\n') {
+            if offset > span.end && is_header(line) {
+                end = offset;
+                break;
+            }
+            offset += line.len();
+        }
+        span.start..end
     }
 
     /// An error about `field` (a path inside the table, may be empty) of the table `site`.
