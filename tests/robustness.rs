@@ -347,3 +347,44 @@ fn non_finite_samples_are_dropped_and_counted() {
         "{mean}"
     );
 }
+
+/// Finite but huge coordinates (near f32::MAX) render with every integrator, to finite pixels.
+#[test]
+fn huge_coordinates_render_finite_images() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("huge.toml");
+    std::fs::write(
+        &scene,
+        "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
+         [materials.m]\ndiffuse = 0.5\n\
+         [materials.lamp]\nemission = [4, 4, 4]\n\
+         [[shapes]]\ntype = \"mesh\"\nmaterial = \"m\"\n\
+         positions = [[0, 0, 0], [3e38, 0, 0], [0, 3e38, 0]]\nindices = [[0, 1, 2]]\n\
+         [[shapes]]\ntype = \"quad\"\nmaterial = \"lamp\"\nvertices = [[-1, -1, 1], [-0.5, -1, 1], [-0.5, -0.5, 1], [-1, -0.5, 1]]\n\
+         [[lights]]\ntype = \"point\"\nposition = [0, 0, 4]\nintensity = [1, 1, 1]\n",
+    )
+    .unwrap();
+    for integrator in ["whitted", "path", "bdpt", "irradiance-cache", "network"] {
+        let out = dir.path().join(format!("{integrator}.exr"));
+        let run = raylink(&[
+            "render",
+            scene.to_str().unwrap(),
+            "--integrator",
+            integrator,
+            "--width",
+            "24",
+            "--height",
+            "16",
+            "--quiet",
+            "-o",
+            out.to_str().unwrap(),
+        ]);
+        assert!(run.status.success(), "{integrator}: {}", stderr(&run));
+        let (image, _) = read_image(&out).unwrap();
+        assert!(image.pixels.iter().all(|p| p.is_finite()), "{integrator}");
+        assert!(
+            image.pixels.iter().any(|p| p.max_element() > 0.0),
+            "{integrator}: black"
+        );
+    }
+}
