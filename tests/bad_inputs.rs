@@ -4,24 +4,12 @@
 //! cases, tests/bad_inputs/scenes and tests/bad_inputs/pbrt, run in tests/cli.rs.)
 
 use std::path::{Path, PathBuf};
-use std::process::Output;
 
 mod common;
-use common::{raylink, stderr};
+use common::{assert_clean_failure_of as assert_clean_failure, raylink};
 
 fn corpus() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/bad_inputs")
-}
-
-fn assert_clean_failure(case: &str, out: &Output, needles: &[&str]) {
-    let err = stderr(out);
-    assert_eq!(out.status.code(), Some(2), "{case}: {err}");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "{case}: expected one line, got: {err}");
-    assert!(lines[0].starts_with("raylink: error: "), "{case}: {err}");
-    for n in needles {
-        assert!(lines[0].contains(n), "{case}: {n:?} not in: {err}");
-    }
 }
 
 fn entries(dir: &Path) -> Vec<String> {
@@ -43,21 +31,29 @@ fn run_parallel<T: Sync>(cases: &[T], check: impl Fn(&T) + Sync) {
     });
 }
 
+/// The cases of a list file: one `CASE{separator}EXPECTED` per line, `#` lines are comments.
+fn read_cases(path: &Path, separator: &str) -> Vec<(String, String)> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
+        .map(|l| {
+            let (case, expect) = l.split_once(separator).expect("a case has its expectation");
+            (case.to_string(), expect.to_string())
+        })
+        .collect()
+}
+
 /// tests/bad_inputs/options.txt: bad command lines.
 #[test]
 fn bad_command_lines_fail_cleanly() {
-    let text = std::fs::read_to_string(corpus().join("options.txt")).unwrap();
-    let cases: Vec<(&str, &str)> = text
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
-        .map(|l| l.split_once(" # expect: ").expect("a case has # expect:"))
-        .collect();
+    let cases = read_cases(&corpus().join("options.txt"), " # expect: ");
     assert!(cases.len() >= 40, "only {} command-line cases", cases.len());
     run_parallel(&cases, |(args, expect)| {
         let dir = tempfile::tempdir().unwrap();
         let args = args.replace("{dir}", dir.path().to_str().unwrap());
         let argv: Vec<&str> = args.split_whitespace().collect();
-        assert_clean_failure(&args, &raylink(&argv), &[expect]);
+        assert_clean_failure(&args, &raylink(&argv), &[expect.as_str()]);
         assert!(entries(dir.path()).is_empty(), "{args} left files behind");
     });
 }
@@ -66,12 +62,7 @@ fn bad_command_lines_fail_cleanly() {
 #[test]
 fn bad_cache_network_and_checkpoint_files_fail_cleanly() {
     let files = corpus().join("files");
-    let text = std::fs::read_to_string(files.join("expect.txt")).unwrap();
-    let cases: Vec<(&str, &str)> = text
-        .lines()
-        .filter(|l| !l.starts_with('#') && !l.trim().is_empty())
-        .map(|l| l.split_once(": ").expect("FILE: TEXT"))
-        .collect();
+    let cases = read_cases(&files.join("expect.txt"), ": ");
     assert!(cases.len() >= 15, "only {} file cases", cases.len());
     run_parallel(&cases, |(name, expect)| {
         let dir = tempfile::tempdir().unwrap();
@@ -99,7 +90,7 @@ fn bad_cache_network_and_checkpoint_files_fail_cleanly() {
         let mut argv = vec!["render", "--quiet", "-o", out.to_str().unwrap()];
         argv.extend(args.iter().map(String::as_str));
         let placed_name = placed.file_name().unwrap().to_str().unwrap();
-        assert_clean_failure(name, &raylink(&argv), &[placed_name, expect]);
+        assert_clean_failure(name, &raylink(&argv), &[placed_name, expect.as_str()]);
         assert_eq!(
             std::fs::read(&placed).unwrap(),
             original,

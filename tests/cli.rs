@@ -17,18 +17,8 @@ fn files_in(dir: &Path) -> Vec<PathBuf> {
     v
 }
 
-/// Asserts a run failed with exit code 2 and a single `raylink: error:` line containing
-/// every one of `needles`.
 fn assert_clean_failure(out: &Output, needles: &[&str]) {
-    let err = stderr(out);
-    assert_eq!(out.status.code(), Some(2), "stderr: {err}");
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), 1, "expected one line, got: {err}");
-    assert!(lines[0].starts_with("raylink: error: "), "{err}");
-    for n in needles {
-        assert!(lines[0].contains(n), "{n:?} not in: {err}");
-    }
-    assert!(!err.contains("panicked"), "{err}");
+    common::assert_clean_failure_of("", out, needles)
 }
 
 #[test]
