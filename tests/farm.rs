@@ -34,7 +34,10 @@ fn refused(args: &[&str], names: &str) -> String {
 fn assert_bit_identical(a: &Image, b: &Image) {
     assert_eq!((a.width, a.height), (b.width, b.height));
     for (i, (p, q)) in a.pixels.iter().zip(&b.pixels).enumerate() {
-        let (p, q) = (p.to_array().map(f32::to_bits), q.to_array().map(f32::to_bits));
+        let (p, q) = (
+            p.to_array().map(f32::to_bits),
+            q.to_array().map(f32::to_bits),
+        );
         assert_eq!(
             p,
             q,
@@ -166,7 +169,13 @@ fn irradiance_cache_tiles_from_a_precomputed_cache_equal_the_whole_render() {
         "--ic-samples",
         "32",
     ];
-    let mut args = vec!["precompute", "scenes/cornell-box.toml", "-q", "--cache-file", &cache];
+    let mut args = vec![
+        "precompute",
+        "scenes/cornell-box.toml",
+        "-q",
+        "--cache-file",
+        &cache,
+    ];
     args.extend_from_slice(&view);
     ok(&args);
     let before = std::fs::read(&cache).unwrap();
@@ -227,7 +236,14 @@ fn irradiance_cache_tiles_from_a_precomputed_cache_equal_the_whole_render() {
     refused(&args, "view.ic");
     assert!(!Path::new(&out).exists());
     // Without a precomputed file, a tile job would have to run the whole overture.
-    let mut args = vec!["render", "scenes/cornell-box.toml", "--tile", "0/2", "-o", &out];
+    let mut args = vec![
+        "render",
+        "scenes/cornell-box.toml",
+        "--tile",
+        "0/2",
+        "-o",
+        &out,
+    ];
     args.extend_from_slice(&view);
     refused(&args, "raylink precompute");
     assert_eq!(std::fs::read(&cache).unwrap(), before);
@@ -359,4 +375,57 @@ fn merge_refuses_parts_that_do_not_fit() {
         .filter(|p| p.file_name().unwrap().to_string_lossy().starts_with('.'))
         .collect();
     assert!(leftovers.is_empty(), "{leftovers:?}");
+}
+
+/// The data window round trip through OpenImageIO: a region written at its place in a larger
+/// image reads back with that window and its pixels; a region that does not fit, or a part
+/// written as PNG (which has no data window), is an error and leaves no file.
+#[test]
+fn data_windows_round_trip_and_are_checked() {
+    use raylink::image::oiio::Window;
+    use raylink::image::output::{write_image_window, OutputOptions};
+    use raylink::math::Rgb;
+    let dir = tempfile::tempdir().unwrap();
+    let mut image = Image::new(3, 2);
+    for (i, p) in image.pixels.iter_mut().enumerate() {
+        *p = Rgb::new(i as f32, 0.5, -1.0 / (i as f32 + 1.0));
+    }
+    let window = Window {
+        x: 5,
+        y: 7,
+        full_x: 0,
+        full_y: 0,
+        full_width: 8,
+        full_height: 9,
+    };
+    let meta = vec![("raylink:test".to_string(), MetaValue::Int(4))];
+    let file = dir.path().join("part.exr");
+    write_image_window(&file, &image, window, &meta, &OutputOptions::default()).unwrap();
+    let raw = raylink::image::oiio::read(&file).unwrap();
+    assert_eq!(raw.window, window);
+    assert_eq!((raw.width, raw.height), (3, 2));
+    let (back, _) = read_image(&file).unwrap();
+    assert_bit_identical(&back, &image);
+    assert_eq!(raw.meta("raylink:test"), Some(&MetaValue::Int(4)));
+
+    let outside = Window { x: 6, ..window };
+    let bad = dir.path().join("outside.exr");
+    let e = write_image_window(&bad, &image, outside, &meta, &OutputOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("outside.exr") && e.contains("does not fit"),
+        "{e}"
+    );
+    let png = dir.path().join("part.png");
+    let e = write_image_window(&png, &image, window, &meta, &OutputOptions::default())
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("part.png"), "{e}");
+    let mut names: Vec<String> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["part.exr"]);
 }
