@@ -73,13 +73,13 @@ trap 'exit 130' INT TERM
 
 # munge: our own key and socket, so that a munged already running is left alone.
 mkdir -p "$work/munge"
-chmod 700 "$work/munge"
+chmod 711 "$work/munge"
 dd if=/dev/urandom of="$work/munge/munge.key" bs=1024 count=1 status=none
 chmod 400 "$work/munge/munge.key"
 socket=$work/munge/munge.socket
 munged --foreground --force --key-file="$work/munge/munge.key" --socket="$socket" \
     --pid-file="$work/munge/munged.pid" --log-file="$work/munge.log" \
-    --seed-file="$work/munge/munge.seed" &
+    --seed-file="$work/munge/munge.seed" 2>"$work/munged.out" &
 pids+=($!)
 
 host=$(hostname -s)

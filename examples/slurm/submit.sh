@@ -7,10 +7,11 @@
 # (cache, network or none; default: cache if the options select the irradiance-cache
 # integrator, network for the network integrator, else none), RAYLINK_IMAGE (default
 # image.exr), SBATCH_ARGS (extra sbatch arguments for every job, e.g. "--partition=render
-# --cpus-per-task=8"). OUT_DIR must be on a filesystem every node sees. Prints the job ids.
+# --cpus-per-task=8"). OUT_DIR must be on a filesystem every node sees; the precomputed
+# file is written there (do not pass --cache-file or --network-file). Prints the job ids.
 set -euo pipefail
 if [[ $# -lt 3 ]]; then
-    sed -n '2,12p' "$0" >&2
+    sed -n '2,11p' "$0" >&2
     exit 2
 fi
 here=$(cd "$(dirname "$0")" && pwd)
@@ -23,8 +24,9 @@ out=$(realpath "$out")
 opts="$*"
 if [[ -z "${RAYLINK_PRECOMPUTE:-}" ]]; then
     case " $opts " in
-    *" --integrator irradiance-cache "*) RAYLINK_PRECOMPUTE=cache ;;
-    *" --integrator network "*) RAYLINK_PRECOMPUTE=network ;;
+    *" --integrator irradiance-cache "* | *" --integrator=irradiance-cache "*)
+        RAYLINK_PRECOMPUTE=cache ;;
+    *" --integrator network "* | *" --integrator=network "*) RAYLINK_PRECOMPUTE=network ;;
     *) RAYLINK_PRECOMPUTE=none ;;
     esac
 fi
@@ -34,7 +36,12 @@ network) file=precomputed.net ;;
 none) file= ;;
 *) echo "submit.sh: RAYLINK_PRECOMPUTE must be cache, network or none" >&2; exit 2 ;;
 esac
-export RAYLINK=${RAYLINK:-$(command -v raylink)}
+# Absolute, since the jobs run in OUT_DIR (and on other nodes).
+RAYLINK=$(command -v "${RAYLINK:-raylink}") || {
+    echo "submit.sh: no raylink binary: install it or set RAYLINK" >&2
+    exit 2
+}
+export RAYLINK=$(realpath "$RAYLINK")
 export RAYLINK_SCENE=$scene RAYLINK_OUT=$out RAYLINK_TILES=$tiles RAYLINK_OPTS=$opts
 export RAYLINK_PRECOMPUTE RAYLINK_PRECOMPUTE_FILE=$file
 export RAYLINK_IMAGE=${RAYLINK_IMAGE:-image.exr}
