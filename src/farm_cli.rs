@@ -133,8 +133,7 @@ pub fn settings(
 ) -> raylink::Result<String> {
     let spp = args.spp.or(scene.settings.spp);
     let mut s = format!(
-        "integrator={} size={width}x{height} spp={spp:?} max_depth={max_depth} accel={:?} \
-         seed={} half={}",
+        "integrator={} size={width}x{height} max_depth={max_depth} accel={:?} seed={} half={}",
         integrator_name(integrator),
         args.accel,
         args.seed,
@@ -144,12 +143,20 @@ pub fn settings(
         IntegratorName::Whitted | IntegratorName::Network => {
             s += &format!(" sampling={:?}", pixel_sampling(args, spp)?);
         }
-        _ => s += &format!(" filter={:?}", choose_filter(args, scene)?),
+        // As `raylink render` defaults it (parts refuse --time-limit).
+        _ => {
+            s += &format!(
+                " spp={} filter={:?}",
+                spp.unwrap_or(16),
+                choose_filter(args, scene)?
+            )
+        }
     }
     if integrator == IntegratorName::Whitted {
         s += &format!(
-            " area_samples={:?} fresnel={}",
-            args.area_samples, args.fresnel
+            " area_samples={} fresnel={}",
+            args.area_samples.unwrap_or(16),
+            args.fresnel
         );
     }
     if integrator == IntegratorName::IrradianceCache {
