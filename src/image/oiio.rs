@@ -105,7 +105,7 @@ pub fn write(
     )
 }
 
-/// As [`write`], for a `width` x `height` region of a larger image: the region's top-left
+/// As [`write()`], for a `width` x `height` region of a larger image: the region's top-left
 /// pixel is (`window.x`, `window.y`) in a `window.full_width` x `window.full_height` image
 /// (`full_x` and `full_y` must be 0). OpenEXR keeps both windows; a region that does not fit
 /// in the full image is an error.
