@@ -247,6 +247,19 @@ fn irradiance_cache_tiles_from_a_precomputed_cache_equal_the_whole_render() {
     args.extend_from_slice(&view);
     refused(&args, "raylink precompute");
     assert_eq!(std::fs::read(&cache).unwrap(), before);
+    // precompute needs a file to write, and writes no image.
+    refused(&["precompute", "scenes/cornell-box.toml"], "--cache-file");
+    refused(
+        &[
+            "precompute",
+            "scenes/cornell-box.toml",
+            "--cache-file",
+            &cache,
+            "-o",
+            &out,
+        ],
+        "-o",
+    );
 }
 
 /// The illumination network: precomputed once, read by every tile job; the tiles equal a
