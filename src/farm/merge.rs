@@ -19,7 +19,8 @@ pub struct Merged {
 }
 
 /// Attributes every part must agree on, with how to name them in a message.
-const MUST_MATCH: [(&str, &str); 4] = [
+const MUST_MATCH: [(&str, &str); 5] = [
+    ("Software", "raylink version"),
     (META_SCENE_HASH, "scene"),
     ("raylink:integrator", "integrator"),
     ("raylink:seed", "seed"),
