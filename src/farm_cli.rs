@@ -225,8 +225,8 @@ pub fn view_key(args: &RenderArgs, scene: &Scene, render: &ProgressiveOptions) -
     raylink::binary_file::fnv1a(text.as_bytes()).max(1)
 }
 
-/// Writes a rendered part (and its AOVs, cropped from full AOV images) to the outputs, as EXR
-/// with the region as data window, then prints the summary.
+/// Writes a rendered part (and its AOVs) to the outputs, as EXR with the region as data
+/// window, then prints the summary.
 #[allow(clippy::too_many_arguments)]
 pub fn write_part(
     args: &RenderArgs,
@@ -259,14 +259,20 @@ pub fn write_part(
         write_image_window(out, &image, window, &metadata, out_options)?;
     }
     if args.aov {
-        let aovs =
-            raylink::render::aov::render_aovs(ctx, width, height, filter, args.seed, args.threads)?;
+        let aovs = raylink::render::aov::render_aovs_region(
+            ctx,
+            width,
+            height,
+            region,
+            filter,
+            args.seed,
+            args.threads,
+        )?;
         let first = &args.outputs[0];
         let stem = first.file_stem().unwrap_or_default().to_string_lossy();
         for (aov, img) in raylink::render::aov::Aov::ALL.iter().zip(&aovs) {
             let path = first.with_file_name(format!("{stem}.{}.exr", aov.name()));
-            let part = farm::crop(img, region);
-            write_image_window(&path, &part, window, &metadata, out_options)?;
+            write_image_window(&path, img, window, &metadata, out_options)?;
         }
     }
     if !args.quiet {

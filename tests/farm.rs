@@ -112,12 +112,13 @@ fn path_traced_tiles_with_a_wide_filter_equal_the_whole_render() {
     assert_eq!((tile.window.x, tile.window.y), (0, 6));
     assert_eq!((tile.window.full_width, tile.window.full_height), (40, 30));
     assert_eq!((tile.width, tile.height), (40, 6));
-    // A crop that starts inside a 16-pixel render tile.
+    // A crop that starts inside a 16-pixel render tile, with its auxiliary images.
     let crop = path(&dir, "crop.exr");
     let mut args = vec![
         "render",
         "scenes/cornell-box.toml",
         "-q",
+        "--aov",
         "--crop",
         "7,5,23,19",
         "-o",
@@ -126,7 +127,25 @@ fn path_traced_tiles_with_a_wide_filter_equal_the_whole_render() {
     args.extend_from_slice(&options);
     ok(&args);
     let (c, _) = read_image(Path::new(&crop)).unwrap();
-    assert_bit_identical(&c, &raylink::farm::crop(&whole, &tile_at(7, 5, 23, 19)));
+    let region = tile_at(7, 5, 23, 19);
+    assert_bit_identical(&c, &raylink::farm::crop(&whole, &region));
+    let whole_aov = path(&dir, "whole_aov.exr");
+    let mut args = vec![
+        "render",
+        "scenes/cornell-box.toml",
+        "-q",
+        "--aov",
+        "-o",
+        &whole_aov,
+    ];
+    args.extend_from_slice(&options);
+    ok(&args);
+    for aov in ["albedo", "normal", "depth"] {
+        let (part, _) = read_image(&dir.path().join(format!("crop.{aov}.exr"))).unwrap();
+        let (full, _) = read_image(&dir.path().join(format!("whole_aov.{aov}.exr"))).unwrap();
+        assert!(full.pixels.iter().any(|p| p.max_element() > 0.0), "{aov}");
+        assert_bit_identical(&part, &raylink::farm::crop(&full, &region));
+    }
 }
 
 fn tile_at(x0: u32, y0: u32, x1: u32, y1: u32) -> raylink::render::Tile {
