@@ -221,7 +221,8 @@ struct RenderArgs {
     /// Irradiance cache: a value's R is at least the scene's size / ar.
     #[arg(long, default_value_t = ic::DEFAULT_AR)]
     ar: f32,
-    /// Irradiance cache: load values from this file if it exists, and write the cache to it.
+    /// Irradiance cache: load values from this file if it exists, and write the cache to it;
+    /// a file holding this view's overture (raylink precompute) is only read.
     #[arg(long, value_name = "FILE")]
     cache_file: Option<PathBuf>,
     /// Irradiance cache: mark the pixels of the first-bounce values the camera sees (red),
@@ -788,7 +789,8 @@ fn irradiance_cache(
     if let (Some(f), false, Some(_)) = (&args.cache_file, frozen, args.part.part()) {
         return Err(Error::input(
             f,
-            "missing or not precomputed for this view (scene, size, samples, filter, seed):              run `raylink precompute --cache-file` with the render's options first",
+            "missing or not precomputed for this view (scene, size, samples, filter, seed): \
+             run `raylink precompute --cache-file` with the render's options first",
         ));
     }
     let start = std::time::Instant::now();
