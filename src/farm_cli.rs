@@ -184,19 +184,20 @@ pub fn settings(
     Ok(s)
 }
 
-/// The metadata every render gets for merging, plus the part's own.
+/// The settings every render records, and what a part needs for merging.
 pub fn part_metadata(
     metadata: &mut Metadata,
     settings: String,
     scene: &Scene,
     part: Option<(&Part, &Tile)>,
 ) {
-    metadata.push((
-        farm::META_SCENE_HASH.into(),
-        MetaValue::Str(format!("{:016x}", farm::scene_hash(scene))),
-    ));
     metadata.push((farm::META_SETTINGS.into(), MetaValue::Str(settings)));
     if let Some((part, region)) = part {
+        // Only parts: hashing a large scene's description takes time.
+        metadata.push((
+            farm::META_SCENE_HASH.into(),
+            MetaValue::Str(format!("{:016x}", farm::scene_hash(scene))),
+        ));
         if let Some(label) = part.tile_label() {
             metadata.push((farm::META_TILE.into(), MetaValue::Str(label)));
         }

@@ -778,7 +778,10 @@ fn irradiance_cache(
     // A file that holds this view's whole overture is used as it is and never written, so
     // that render jobs of parts of the view read the values the whole render would
     // (docs/farm.md).
-    let view = farm_cli::view_key(args, scene, render);
+    let view = match &args.cache_file {
+        Some(_) => farm_cli::view_key(args, scene, render),
+        None => 0,
+    };
     let (loaded, frozen) = match &args.cache_file {
         Some(f) if f.exists() => {
             let (cache, key) = ic::file::load_with_view(f, scene, &options)?;

@@ -370,6 +370,35 @@ fn merge_refuses_parts_that_do_not_fit() {
         &other,
     ]);
     refused(&["merge", &t0, &other, &t2, "-o", &out], "other.exr");
+    // A tile of an edited scene (the right wall's colour), everything else equal.
+    let edited = path(&dir, "edited.toml");
+    let text = std::fs::read_to_string("scenes/cornell-box.toml").unwrap();
+    let text = text.replace("[0.14, 0.45, 0.091]", "[0.14, 0.45, 0.092]");
+    std::fs::write(&edited, text).unwrap();
+    let from_edited = path(&dir, "from_edited.exr");
+    let mut args = vec!["render", edited.as_str()];
+    let render_args = [
+        "-q",
+        "--integrator",
+        "path",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--spp",
+        "1",
+        "--tile",
+        "1/3",
+        "-o",
+        &from_edited,
+    ];
+    args.extend_from_slice(&render_args);
+    ok(&args);
+    let err = refused(
+        &["merge", &t0, &from_edited, &t2, "-o", &out],
+        "from_edited.exr",
+    );
+    assert!(err.contains("scene"), "{err}");
     assert!(!Path::new(&out).exists());
     // The full set merges.
     ok(&["merge", &t2, &t0, &t1, "-o", &out]);
