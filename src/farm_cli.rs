@@ -103,7 +103,14 @@ pub fn region(
     if integrator == IntegratorName::Network {
         match &args.network.network_file {
             Some(f) if f.exists() => {}
-            _ => {
+            Some(f) => {
+                return Err(Error::input(
+                    f,
+                    "no such network: run `raylink precompute --network-file` with the \
+                     render's options first",
+                ))
+            }
+            None => {
                 return Err(Error::Options(
                     "--tile and --crop with the network integrator need an existing \
                      --network-file (run `raylink precompute --network-file F` first)"
