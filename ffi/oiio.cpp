@@ -155,17 +155,24 @@ struct RaylinkOiioImage {
     int height = 0;
     int nchannels = 0;
     int pixel_type = RAYLINK_OIIO_OTHER;
+    int x = 0, y = 0, full_x = 0, full_y = 0, full_width = 0, full_height = 0;
     std::string format;
     std::vector<std::string> channel_names;
     std::vector<float> pixels;
     std::vector<Attr> attrs;
 };
 
-extern "C" int raylink_oiio_write(const char *path, const char *format, int width, int height,
-                                  int nchannels, const float *data,
-                                  const char *const *channel_names,
-                                  const RaylinkOiioAttr *attrs, size_t nattrs, int pixel_type,
-                                  char *err, size_t err_len) {
+namespace {
+
+// Where the pixels lie in the full image (OpenEXR's data and display windows).
+struct Window {
+    int x, y, full_width, full_height;
+};
+
+// raylink_oiio_write and raylink_oiio_write_window; `window` is null for a whole image.
+int write_impl(const char *path, const char *format, int width, int height, int nchannels,
+               const float *data, const char *const *channel_names, const RaylinkOiioAttr *attrs,
+               size_t nattrs, int pixel_type, const Window *window, char *err, size_t err_len) {
     try {
         if (path == nullptr || format == nullptr || data == nullptr ||
             channel_names == nullptr || (attrs == nullptr && nattrs != 0)) {
@@ -207,6 +214,25 @@ extern "C" int raylink_oiio_write(const char *path, const char *format, int widt
         }
 
         OIIO::ImageSpec spec(width, height, nchannels, stored);
+        if (window != nullptr) {
+            if (window->x < 0 || window->y < 0 || window->full_width <= 0 ||
+                window->full_height <= 0 || window->x > window->full_width - width ||
+                window->y > window->full_height - height) {
+                set_error(err, err_len,
+                          "data window " + std::to_string(width) + "x" +
+                              std::to_string(height) + " at (" + std::to_string(window->x) +
+                              ", " + std::to_string(window->y) + ") does not fit in " +
+                              std::to_string(window->full_width) + "x" +
+                              std::to_string(window->full_height));
+                return 1;
+            }
+            spec.x = window->x;
+            spec.y = window->y;
+            spec.full_x = 0;
+            spec.full_y = 0;
+            spec.full_width = window->full_width;
+            spec.full_height = window->full_height;
+        }
         spec.channelnames.clear();
         spec.alpha_channel = -1;
         for (int c = 0; c < nchannels; ++c) {
@@ -271,6 +297,28 @@ extern "C" int raylink_oiio_write(const char *path, const char *format, int widt
     }
 }
 
+} // namespace
+
+extern "C" int raylink_oiio_write(const char *path, const char *format, int width, int height,
+                                  int nchannels, const float *data,
+                                  const char *const *channel_names,
+                                  const RaylinkOiioAttr *attrs, size_t nattrs, int pixel_type,
+                                  char *err, size_t err_len) {
+    return write_impl(path, format, width, height, nchannels, data, channel_names, attrs, nattrs,
+                      pixel_type, nullptr, err, err_len);
+}
+
+extern "C" int raylink_oiio_write_window(const char *path, const char *format, int x, int y,
+                                         int width, int height, int full_width, int full_height,
+                                         int nchannels, const float *data,
+                                         const char *const *channel_names,
+                                         const RaylinkOiioAttr *attrs, size_t nattrs,
+                                         int pixel_type, char *err, size_t err_len) {
+    const Window window{x, y, full_width, full_height};
+    return write_impl(path, format, width, height, nchannels, data, channel_names, attrs, nattrs,
+                      pixel_type, &window, err, err_len);
+}
+
 extern "C" RaylinkOiioImage *raylink_oiio_read(const char *path, char *err, size_t err_len) {
     try {
         if (path == nullptr) {
@@ -299,6 +347,12 @@ extern "C" RaylinkOiioImage *raylink_oiio_read(const char *path, char *err, size
         image->width = spec.width;
         image->height = spec.height;
         image->nchannels = spec.nchannels;
+        image->x = spec.x;
+        image->y = spec.y;
+        image->full_x = spec.full_x;
+        image->full_y = spec.full_y;
+        image->full_width = spec.full_width;
+        image->full_height = spec.full_height;
         image->pixel_type = pixel_type_code(spec.format);
         image->format = in->format_name();
         for (int c = 0; c < spec.nchannels; ++c) {
@@ -338,6 +392,17 @@ extern "C" int raylink_oiio_image_height(const RaylinkOiioImage *image) { return
 
 extern "C" int raylink_oiio_image_nchannels(const RaylinkOiioImage *image) {
     return image->nchannels;
+}
+
+extern "C" void raylink_oiio_image_window(const RaylinkOiioImage *image, int *x, int *y,
+                                         int *full_x, int *full_y, int *full_width,
+                                         int *full_height) {
+    *x = image->x;
+    *y = image->y;
+    *full_x = image->full_x;
+    *full_y = image->full_y;
+    *full_width = image->full_width;
+    *full_height = image->full_height;
 }
 
 extern "C" int raylink_oiio_image_pixel_type(const RaylinkOiioImage *image) {

@@ -55,6 +55,16 @@ int raylink_oiio_write(const char *path, const char *format, int width, int heig
                        const RaylinkOiioAttr *attrs, size_t nattrs, int pixel_type, char *err,
                        size_t err_len);
 
+/* As raylink_oiio_write, for a `width` x `height` region of a `full_width` x `full_height`
+ * image whose top-left pixel is (x, y): the file's data window is the region and its display
+ * window the full image (OpenEXR keeps both; formats without data windows may not). The
+ * region must lie inside the full image. */
+int raylink_oiio_write_window(const char *path, const char *format, int x, int y, int width,
+                              int height, int full_width, int full_height, int nchannels,
+                              const float *data, const char *const *channel_names,
+                              const RaylinkOiioAttr *attrs, size_t nattrs, int pixel_type,
+                              char *err, size_t err_len);
+
 /* An image read from a file; free it with raylink_oiio_image_free. */
 typedef struct RaylinkOiioImage RaylinkOiioImage;
 
@@ -67,6 +77,12 @@ void raylink_oiio_image_free(RaylinkOiioImage *image);
 int raylink_oiio_image_width(const RaylinkOiioImage *image);
 int raylink_oiio_image_height(const RaylinkOiioImage *image);
 int raylink_oiio_image_nchannels(const RaylinkOiioImage *image);
+
+/* Where the pixels read (width x height, the data window) lie: their top-left pixel is
+ * (*x, *y), and the display window is *full_width x *full_height from (*full_x, *full_y).
+ * For a file without windows: 0, 0, 0, 0, width, height. */
+void raylink_oiio_image_window(const RaylinkOiioImage *image, int *x, int *y, int *full_x,
+                               int *full_y, int *full_width, int *full_height);
 
 /* The stored pixel type (RAYLINK_OIIO_FLOAT etc., RAYLINK_OIIO_OTHER for anything else). */
 int raylink_oiio_image_pixel_type(const RaylinkOiioImage *image);

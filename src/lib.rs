@@ -10,6 +10,7 @@
 //! - [`render`]: tiles, threads, pixel sampling, progress and statistics.
 //! - [`coherence`]: `raylink animate`, static-camera animation with object-space temporal coherence.
 //! - [`bench`]: `raylink bench`, Embree against the pure-Rust BVH.
+//! - [`farm`]: rendering parts of an image (tiles, crops) on many machines, and merging them.
 
 pub mod accel;
 pub mod atomic_file;
@@ -18,6 +19,7 @@ pub mod binary_file;
 pub mod bsdf;
 pub mod coherence;
 pub mod error;
+pub mod farm;
 #[doc(hidden)]
 pub mod fuzzing;
 pub mod image;

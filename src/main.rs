@@ -23,6 +23,8 @@ use raylink::{accel, Error};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
+mod farm_cli;
+
 #[derive(Parser)]
 #[command(
     name = "raylink",
@@ -53,6 +55,14 @@ enum Command {
     Animate(raylink::coherence::animate::AnimateArgs),
     /// Compare the intersection backends: build time, memory and Mrays/s on a ladder of scenes.
     Bench(raylink::bench::BenchArgs),
+    /// Compute the irradiance cache of a view (--cache-file F) or the illumination network
+    /// (--network-file F) once, for render jobs (--tile, --crop) to read; takes the render
+    /// options (docs/farm.md).
+    #[command(mut_arg("outputs", |a| a.required(false).hide(true)))]
+    Precompute(RenderArgs),
+    /// Assemble the parts of a render (--tile or --crop EXR files) into the full image,
+    /// refusing parts that do not fit together (docs/farm.md).
+    Merge(farm_cli::MergeArgs),
     /// Packaging: write the man page (raylink.1) and the bash, zsh and fish completions
     /// generated from this command line into DIR.
     #[command(hide = true)]
@@ -225,7 +235,8 @@ struct RenderArgs {
     /// Irradiance cache: a value's R is at least the scene's size / ar.
     #[arg(long, default_value_t = ic::DEFAULT_AR)]
     ar: f32,
-    /// Irradiance cache: load values from this file if it exists, and write the cache to it.
+    /// Irradiance cache: load values from this file if it exists, and write the cache to it;
+    /// a file holding this view's overture (raylink precompute) is only read.
     #[arg(long, value_name = "FILE")]
     cache_file: Option<PathBuf>,
     /// Irradiance cache: mark the pixels of the first-bounce values the camera sees (red),
@@ -234,6 +245,8 @@ struct RenderArgs {
     show_cache_points: bool,
     #[command(flatten)]
     network: NetworkArgs,
+    #[command(flatten)]
+    part: farm_cli::PartArgs,
 }
 
 /// Options of the illumination-network integrator.
@@ -322,6 +335,8 @@ fn main() -> ExitCode {
         Command::Convert(args) => run_convert(args),
         Command::Animate(args) => raylink::coherence::animate::run(&args),
         Command::Bench(args) => raylink::bench::run(&args),
+        Command::Precompute(args) => farm_cli::run_precompute(args),
+        Command::Merge(args) => farm_cli::run_merge(args),
         Command::GenerateAssets { dir } => generate_assets(&dir),
     };
     match result {
@@ -481,7 +496,7 @@ fn choose_filter(args: &RenderArgs, scene: &Scene) -> Result<Filter, Error> {
     Ok(filter)
 }
 
-fn run_render(args: RenderArgs) -> raylink::Result<()> {
+fn run_render(mut args: RenderArgs) -> raylink::Result<()> {
     // Everything that can be checked is checked before the (possibly long) render.
     if let Some(size) = &args.max_memory {
         let bytes = raylink::memory::parse_size(size)
@@ -499,6 +514,7 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
     if args.threads == Some(0) {
         return Err(Error::Options("--threads must be at least 1".into()));
     }
+    farm_cli::resolve_outputs(&mut args)?;
     for out in &args.outputs {
         // A bad output path is a bad option: report it before any work is done.
         check_output_path(out).map_err(|e| Error::Options(e.to_string()))?;
@@ -600,6 +616,8 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
     if integrator == IntegratorName::Bdpt {
         Bdpt::check_scene(&scene).map_err(|e| Error::input(&args.scene, e))?;
     }
+    let region = farm_cli::region(&args, integrator, width, height)?;
+    let settings = farm_cli::settings(&args, &scene, integrator, width, height, max_depth)?;
     let filter = choose_filter(&args, &scene)?;
     let accel = accel::build(&scene, args.accel)?;
     let ctx = Context::new(&scene, accel.as_ref());
@@ -623,6 +641,8 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
         ("raylink:seed".into(), MetaValue::Str(args.seed.to_string())),
         ("raylink:max_depth".into(), MetaValue::Int(max_depth as i32)),
     ];
+    let part = args.part.part().zip(region.as_ref());
+    farm_cli::part_metadata(&mut metadata, settings, &scene, part);
 
     // What an interrupted render kept, for the closing message.
     let mut partial_note = String::new();
@@ -661,6 +681,20 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
             } else {
                 &whitted
             };
+            if let Some(r) = &region {
+                let (image, stats) = raylink::farm::render_region(&ctx, chosen, &options, r)?;
+                return farm_cli::write_part(
+                    &args,
+                    &ctx,
+                    r,
+                    (width, height),
+                    image,
+                    stats,
+                    metadata,
+                    &out_options,
+                    filter,
+                );
+            }
             render(&ctx, chosen, &options)?
         }
         Some(estimator) => {
@@ -706,6 +740,26 @@ fn run_render(args: RenderArgs) -> raylink::Result<()> {
             } else {
                 estimator.as_ref()
             };
+            if let Some(r) = &region {
+                let (image, stats, invalid) =
+                    raylink::farm::render_progressive_region(&ctx, estimator, &options, r)?;
+                if invalid > 0 && !args.quiet {
+                    eprintln!(
+                        "raylink: warning: {invalid} samples were not finite and were dropped"
+                    );
+                }
+                return farm_cli::write_part(
+                    &args,
+                    &ctx,
+                    r,
+                    (width, height),
+                    image,
+                    stats,
+                    metadata,
+                    &out_options,
+                    filter,
+                );
+            }
             let checkpoint = checkpoint::path_for(&args.outputs[0]);
             let settings = checkpoint_settings(&args, &scene, integrator, &options, max_depth);
             let mut resumed_samples = 0;
@@ -857,12 +911,32 @@ fn irradiance_cache(
         ..IcOptions::default()
     };
     options.validate().map_err(Error::Options)?;
-    let loaded = match &args.cache_file {
-        Some(f) if f.exists() => Some(ic::file::load(f, scene, &options)?),
-        _ => None,
+    // A file that holds this view's whole overture is used as it is and never written, so
+    // that render jobs of parts of the view read the values the whole render would
+    // (docs/farm.md).
+    let view = match &args.cache_file {
+        Some(_) => farm_cli::view_key(args, scene, render),
+        None => 0,
     };
+    let (loaded, frozen) = match &args.cache_file {
+        Some(f) if f.exists() => {
+            let (cache, key) = ic::file::load_with_view(f, scene, &options)?;
+            (Some(cache), key == Some(view))
+        }
+        _ => (None, false),
+    };
+    if let (Some(f), false, Some(_)) = (&args.cache_file, frozen, args.part.part()) {
+        return Err(Error::input(
+            f,
+            "missing or not precomputed for this view (scene, size, samples, filter, seed): \
+             run `raylink precompute --cache-file` with the render's options first",
+        ));
+    }
     let start = std::time::Instant::now();
-    let integrator = IrradianceCache::build(ctx, render, options, loaded)?;
+    let integrator = match loaded {
+        Some(cache) if frozen => IrradianceCache::frozen(ctx, render, options, cache)?,
+        loaded => IrradianceCache::build(ctx, render, options, loaded)?,
+    };
     if !args.quiet {
         let stats = &integrator.stats;
         eprintln!(
@@ -881,8 +955,16 @@ fn irradiance_cache(
                 .collect::<Vec<_>>()
         );
     }
-    if let Some(f) = &args.cache_file {
-        ic::file::save(f, integrator.cache(), scene, &options)?;
+    match &args.cache_file {
+        Some(f) if frozen && !args.quiet => {
+            eprintln!(
+                "irradiance cache: {} holds this view's overture; read only",
+                f.display()
+            );
+        }
+        Some(_) if frozen => {}
+        Some(f) => ic::file::save_for_view(f, integrator.cache(), scene, &options, view)?,
+        None => {}
     }
     Ok(integrator)
 }

@@ -57,6 +57,21 @@ pub struct RawImage {
     pub format: String,
     /// How the pixels are stored in the file, if it is one of the [`PixelType`]s.
     pub pixel_type: Option<PixelType>,
+    /// Where the pixels lie in the full image (OpenEXR's data and display windows).
+    pub window: Window,
+}
+
+/// Where the `width` x `height` pixels of a file lie in the full image: their top-left pixel
+/// is (`x`, `y`) and the full image (OpenEXR's display window) is `full_width` x
+/// `full_height` pixels from (`full_x`, `full_y`). A whole image is at (0, 0) in itself.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Window {
+    pub x: i32,
+    pub y: i32,
+    pub full_x: i32,
+    pub full_y: i32,
+    pub full_width: u32,
+    pub full_height: u32,
 }
 
 impl RawImage {
@@ -78,6 +93,52 @@ impl RawImage {
 pub fn write(
     path: &Path,
     format: &str,
+    width: u32,
+    height: u32,
+    channels: &[&str],
+    data: &[f32],
+    metadata: &Metadata,
+    pixel: PixelType,
+) -> Result<()> {
+    write_impl(
+        path, format, None, width, height, channels, data, metadata, pixel,
+    )
+}
+
+/// As [`write()`], for a `width` x `height` region of a larger image: the region's top-left
+/// pixel is (`window.x`, `window.y`) in a `window.full_width` x `window.full_height` image
+/// (`full_x` and `full_y` must be 0). OpenEXR keeps both windows; a region that does not fit
+/// in the full image is an error.
+#[allow(clippy::too_many_arguments)]
+pub fn write_window(
+    path: &Path,
+    format: &str,
+    window: Window,
+    width: u32,
+    height: u32,
+    channels: &[&str],
+    data: &[f32],
+    metadata: &Metadata,
+    pixel: PixelType,
+) -> Result<()> {
+    write_impl(
+        path,
+        format,
+        Some(window),
+        width,
+        height,
+        channels,
+        data,
+        metadata,
+        pixel,
+    )
+}
+
+#[allow(clippy::too_many_arguments)]
+fn write_impl(
+    path: &Path,
+    format: &str,
+    window: Option<Window>,
     width: u32,
     height: u32,
     channels: &[&str],
@@ -148,26 +209,65 @@ pub fn write(
         .collect();
 
     let mut err = ErrorBuffer::new();
-    // SAFETY: every pointer is valid for the duration of the call: `c_path`, `c_format` and the
-    // strings behind `channel_ptrs` and `attrs` are owned CStrings that outlive it;
-    // `channel_ptrs` holds exactly `nchannels` pointers, `attrs` `attrs.len()` structs, and
-    // `data` exactly `w * h * nchannels` floats (checked above). The C side only reads them,
-    // writes at most `err.len()` bytes into `err`, and catches every C++ exception.
-    let status = unsafe {
-        sys::raylink_oiio_write(
-            c_path.as_ptr(),
-            c_format.as_ptr(),
-            w,
-            h,
-            nchannels,
-            data.as_ptr(),
-            channel_ptrs.as_ptr(),
-            attrs.as_ptr(),
-            attrs.len(),
-            pixel.code(),
-            err.as_mut_ptr(),
-            err.len(),
-        )
+    let status = match window {
+        // SAFETY: every pointer is valid for the duration of the call: `c_path`, `c_format`
+        // and the strings behind `channel_ptrs` and `attrs` are owned CStrings that outlive
+        // it; `channel_ptrs` holds exactly `nchannels` pointers, `attrs` `attrs.len()`
+        // structs, and `data` exactly `w * h * nchannels` floats (checked above). The C side
+        // only reads them, writes at most `err.len()` bytes into `err`, and catches every
+        // C++ exception.
+        None => unsafe {
+            sys::raylink_oiio_write(
+                c_path.as_ptr(),
+                c_format.as_ptr(),
+                w,
+                h,
+                nchannels,
+                data.as_ptr(),
+                channel_ptrs.as_ptr(),
+                attrs.as_ptr(),
+                attrs.len(),
+                pixel.code(),
+                err.as_mut_ptr(),
+                err.len(),
+            )
+        },
+        Some(win) => {
+            let (Ok(fw), Ok(fh)) = (
+                c_int::try_from(win.full_width),
+                c_int::try_from(win.full_height),
+            ) else {
+                return Err(fail(format!(
+                    "cannot write a window of a {}x{} image",
+                    win.full_width, win.full_height
+                )));
+            };
+            if win.full_x != 0 || win.full_y != 0 {
+                return Err(fail("the full image must start at (0, 0)".into()));
+            }
+            // SAFETY: as for `raylink_oiio_write` above; the window is plain integers, which
+            // the C side checks against the image size.
+            unsafe {
+                sys::raylink_oiio_write_window(
+                    c_path.as_ptr(),
+                    c_format.as_ptr(),
+                    win.x,
+                    win.y,
+                    w,
+                    h,
+                    fw,
+                    fh,
+                    nchannels,
+                    data.as_ptr(),
+                    channel_ptrs.as_ptr(),
+                    attrs.as_ptr(),
+                    attrs.len(),
+                    pixel.code(),
+                    err.as_mut_ptr(),
+                    err.len(),
+                )
+            }
+        }
     };
     if status != 0 {
         return Err(fail(err.message()));
@@ -241,6 +341,28 @@ impl Handle {
             // long as `self`; we copy them out immediately.
             unsafe { std::slice::from_raw_parts(sys::raylink_oiio_image_pixels(h), len) }.to_vec()
         };
+        let (mut x, mut y, mut full_x, mut full_y, mut full_width, mut full_height) =
+            (0, 0, 0, 0, 0, 0);
+        // SAFETY: see above; the six pointers are to distinct live locals the call fills.
+        unsafe {
+            sys::raylink_oiio_image_window(
+                h,
+                &mut x,
+                &mut y,
+                &mut full_x,
+                &mut full_y,
+                &mut full_width,
+                &mut full_height,
+            )
+        };
+        let window = Window {
+            x,
+            y,
+            full_x,
+            full_y,
+            full_width: to_u32(full_width),
+            full_height: to_u32(full_height),
+        };
         // SAFETY: see above.
         let nattrs = unsafe { sys::raylink_oiio_image_nattrs(h) };
         let mut metadata = Metadata::with_capacity(nattrs);
@@ -278,6 +400,7 @@ impl Handle {
             metadata,
             format,
             pixel_type: PixelType::from_code(pixel_type),
+            window,
         }
     }
 }
@@ -396,6 +519,34 @@ mod sys {
             err: *mut c_char,
             err_len: usize,
         ) -> c_int;
+        #[allow(clippy::too_many_arguments)]
+        pub fn raylink_oiio_write_window(
+            path: *const c_char,
+            format: *const c_char,
+            x: c_int,
+            y: c_int,
+            width: c_int,
+            height: c_int,
+            full_width: c_int,
+            full_height: c_int,
+            nchannels: c_int,
+            data: *const c_float,
+            channel_names: *const *const c_char,
+            attrs: *const RaylinkOiioAttr,
+            nattrs: usize,
+            pixel_type: c_int,
+            err: *mut c_char,
+            err_len: usize,
+        ) -> c_int;
+        pub fn raylink_oiio_image_window(
+            image: *const RaylinkOiioImage,
+            x: *mut c_int,
+            y: *mut c_int,
+            full_x: *mut c_int,
+            full_y: *mut c_int,
+            full_width: *mut c_int,
+            full_height: *mut c_int,
+        );
         pub fn raylink_oiio_read(
             path: *const c_char,
             err: *mut c_char,

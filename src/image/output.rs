@@ -156,6 +156,35 @@ pub fn write_image(
     metadata: &Metadata,
     options: &OutputOptions,
 ) -> Result<()> {
+    write_image_impl(path, image, None, metadata, options)
+}
+
+/// As [`write_image`], for `image` as the region at (`window.x`, `window.y`) of a
+/// `window.full_width` x `window.full_height` image (a render tile): only OpenEXR, which keeps
+/// the region as its data window and the full image as its display window.
+pub fn write_image_window(
+    path: &Path,
+    image: &Image,
+    window: oiio::Window,
+    metadata: &Metadata,
+    options: &OutputOptions,
+) -> Result<()> {
+    if Format::from_path(path)? != Format::Exr {
+        return Err(Error::image(
+            path,
+            "a part of an image (tile or crop) is written only as .exr, which keeps where it lies",
+        ));
+    }
+    write_image_impl(path, image, Some(window), metadata, options)
+}
+
+fn write_image_impl(
+    path: &Path,
+    image: &Image,
+    window: Option<oiio::Window>,
+    metadata: &Metadata,
+    options: &OutputOptions,
+) -> Result<()> {
     check_output_path(path)?;
     let format = Format::from_path(path)?;
     let expected = image.width as usize * image.height as usize;
@@ -197,16 +226,29 @@ pub fn write_image(
     };
 
     let temp = TempFile::new(temp_path(path));
-    oiio::write(
-        &temp.path,
-        format.oiio_name(),
-        image.width,
-        image.height,
-        &["R", "G", "B"],
-        &data,
-        &attributes,
-        pixel,
-    )
+    match window {
+        None => oiio::write(
+            &temp.path,
+            format.oiio_name(),
+            image.width,
+            image.height,
+            &["R", "G", "B"],
+            &data,
+            &attributes,
+            pixel,
+        ),
+        Some(window) => oiio::write_window(
+            &temp.path,
+            format.oiio_name(),
+            window,
+            image.width,
+            image.height,
+            &["R", "G", "B"],
+            &data,
+            &attributes,
+            pixel,
+        ),
+    }
     .map_err(|e| retarget(e, &temp.path, path))?;
     fs::rename(&temp.path, path).map_err(|e| {
         Error::image(

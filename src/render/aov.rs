@@ -3,7 +3,7 @@
 //! its shading normal (facing the camera) and depth (distance along the ray). Pixels that see
 //! the background get zero.
 
-use super::{thread_pool, tiles};
+use super::{thread_pool, tiles, Tile};
 use crate::bsdf::Bsdf;
 use crate::image::filter::Filter;
 use crate::image::Image;
@@ -44,12 +44,40 @@ pub fn render_aovs(
     seed: u64,
     threads: Option<usize>,
 ) -> Result<[Image; 3]> {
+    let whole = Tile {
+        x0: 0,
+        y0: 0,
+        x1: width,
+        y1: height,
+    };
+    render_aovs_region(ctx, width, height, &whole, filter, seed, threads)
+}
+
+/// The pixels of `region` of the images [`render_aovs`] renders (a render job's part of the
+/// image, crate::farm): each pixel's samples depend only on the pixel.
+pub fn render_aovs_region(
+    ctx: &Context,
+    width: u32,
+    height: u32,
+    region: &Tile,
+    filter: Filter,
+    seed: u64,
+    threads: Option<usize>,
+) -> Result<[Image; 3]> {
     let mut camera = ctx.scene.camera.clone();
     camera.width = width;
     camera.height = height;
     let basis = camera.basis();
     let pool = thread_pool(threads)?;
-    let tiles = tiles(width, height);
+    let tiles: Vec<Tile> = tiles(region.x1 - region.x0, region.y1 - region.y0)
+        .into_iter()
+        .map(|t| Tile {
+            x0: region.x0 + t.x0,
+            y0: region.y0 + t.y0,
+            x1: region.x0 + t.x1,
+            y1: region.y0 + t.y1,
+        })
+        .collect();
     let results: Vec<Vec<[Rgb; 3]>> = pool.install(|| {
         tiles
             .par_iter()
@@ -83,12 +111,13 @@ pub fn render_aovs(
             })
             .collect()
     });
-    let mut images = [0; 3].map(|_| Image::new(width, height));
+    let mut images = [0; 3].map(|_| Image::new(region.x1 - region.x0, region.y1 - region.y0));
     for (t, px) in tiles.iter().zip(results) {
         let w = t.x1 - t.x0;
         for (i, v) in px.into_iter().enumerate() {
+            let (x, y) = (t.x0 + i as u32 % w, t.y0 + i as u32 / w);
             for (img, c) in images.iter_mut().zip(v) {
-                img.set(t.x0 + i as u32 % w, t.y0 + i as u32 / w, c);
+                img.set(x - region.x0, y - region.y0, c);
             }
         }
     }

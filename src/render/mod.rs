@@ -99,16 +99,34 @@ pub fn render(
             "the image needs a width and height of at least 1".into(),
         ));
     }
-    let pool = thread_pool(options.threads)?;
     let tiles = tiles(options.width, options.height);
-    let progress = progress_bar(options.progress, tiles.len() as u64, "tiles");
+    let (done, stats) = render_tiles(ctx, integrator, options, &tiles)?;
+    let mut image = Image::new(options.width, options.height);
+    for (tile, pixels) in tiles.iter().zip(done) {
+        let w = tile.x1 - tile.x0;
+        for (i, c) in pixels.into_iter().enumerate() {
+            image.set(tile.x0 + i as u32 % w, tile.y0 + i as u32 / w, c);
+        }
+    }
+    Ok((image, stats))
+}
 
+/// Renders `tiles` of the image in parallel: each tile's pixels (row-major), in order. On a
+/// signal ([`crate::interrupt`]) the tiles not yet started are skipped: they come back empty
+/// and [`RenderStats::interrupted`] is set.
+pub fn render_tiles(
+    ctx: &Context,
+    integrator: &dyn Integrator,
+    options: &RenderOptions,
+    tiles: &[Tile],
+) -> Result<(Vec<Vec<Rgb>>, RenderStats)> {
+    let pool = thread_pool(options.threads)?;
+    let progress = progress_bar(options.progress, tiles.len() as u64, "tiles");
     let start = Instant::now();
     let results: Vec<Option<sampling::TileOutput>> = pool.install(|| {
         tiles
             .par_iter()
             .map(|tile| {
-                // On a signal the remaining tiles are skipped (left black).
                 (!crate::interrupt::requested()).then(|| {
                     let result = region(ctx, integrator, options, tile);
                     progress.inc(1);
@@ -119,23 +137,21 @@ pub fn render(
     });
     progress.finish_and_clear();
 
-    let mut image = Image::new(options.width, options.height);
     let mut stats = RenderStats::default();
-    for (tile, result) in tiles.iter().zip(results) {
+    let mut done = Vec::with_capacity(tiles.len());
+    for result in results {
         let Some(out) = result else {
             stats.interrupted = true;
+            done.push(Vec::new());
             continue;
         };
-        let w = tile.x1 - tile.x0;
-        for (i, c) in out.pixels.into_iter().enumerate() {
-            image.set(tile.x0 + i as u32 % w, tile.y0 + i as u32 / w, c);
-        }
         stats.rays.add(&out.rays);
         stats.samples += out.samples;
         stats.invalid += out.invalid;
+        done.push(out.pixels);
     }
     stats.seconds = start.elapsed().as_secs_f64();
-    Ok((image, stats))
+    Ok((done, stats))
 }
 
 /// Renders the pixels of one rectangle (row-major); [`render`] renders each of its tiles

@@ -8,12 +8,14 @@
 //! bounces u32, accuracy f32, samples u32, ar f32, ambient 3×f32
 //! per level (bounces of them): count u64, then count records of 10 f32
 //!                               (position 3, normal 3, irradiance 3, R)
+//! view u64                      0, or the key of the render view whose overture the cache
+//!                               holds complete (`raylink precompute`; crate::farm)
 //! checksum u64                  of every byte before it (crate::binary_file)
 //! ```
 //!
 //! Records are stored per level in insertion order and re-inserted in that order, so a loaded
 //! cache is the same tree as the one saved. Files are written atomically
-//! (crate::binary_file). Version 1 differed only in its checksum.
+//! (crate::binary_file). Version 1 differed only in its checksum, version 2 had no view key.
 
 use super::octree::Octree;
 use super::record::Record;
@@ -24,7 +26,7 @@ use crate::scene::Scene;
 use crate::Result;
 use std::path::Path;
 
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 pub(crate) const FORMAT: Format = Format {
     magic: b"RLIRRAD\0",
     version: VERSION,
@@ -60,6 +62,18 @@ pub(crate) fn header(scene: &Scene, options: &IcOptions) -> Vec<u8> {
 
 /// Writes the cache to `path` atomically.
 pub fn save(path: &Path, cache: &Cache, scene: &Scene, options: &IcOptions) -> Result<()> {
+    save_for_view(path, cache, scene, options, 0)
+}
+
+/// Writes the cache to `path` atomically, marked as holding the whole overture of the render
+/// view `view` (a nonzero key; 0 marks none): a render of that view can use it as it is.
+pub fn save_for_view(
+    path: &Path,
+    cache: &Cache,
+    scene: &Scene,
+    options: &IcOptions,
+    view: u64,
+) -> Result<()> {
     let mut b = FORMAT.start(40 * cache.len());
     b.extend_from_slice(&header(scene, options));
     for level in &cache.levels {
@@ -76,12 +90,22 @@ pub fn save(path: &Path, cache: &Cache, scene: &Scene, options: &IcOptions) -> R
             }
         }
     }
+    b.extend_from_slice(&view.to_le_bytes());
     FORMAT.save(path, b)
 }
 
 /// Reads a cache written by [`save`] for the same scene and options. Any other file is an
 /// [`Error::Input`] naming it.
 pub fn load(path: &Path, scene: &Scene, options: &IcOptions) -> Result<Cache> {
+    load_with_view(path, scene, options).map(|(cache, _)| cache)
+}
+
+/// As [`load`], also returning the view key the file was saved with (`None` for 0).
+pub fn load_with_view(
+    path: &Path,
+    scene: &Scene,
+    options: &IcOptions,
+) -> Result<(Cache, Option<u64>)> {
     let file = FORMAT.load(path)?;
     let body = file.body();
     let bad = |problem: &str| FORMAT.error(path, problem);
@@ -129,8 +153,12 @@ pub fn load(path: &Path, scene: &Scene, options: &IcOptions) -> Result<Cache> {
         }
         *level = tree;
     }
-    if !rest.is_empty() {
+    if rest.len() < 8 {
+        return Err(bad("truncated"));
+    }
+    let view = u64::from_le_bytes(rest[..8].try_into().unwrap());
+    if rest.len() > 8 {
         return Err(bad("trailing data"));
     }
-    Ok(cache)
+    Ok((cache, (view != 0).then_some(view)))
 }

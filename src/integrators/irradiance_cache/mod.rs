@@ -349,6 +349,19 @@ impl IrradianceCache {
         };
         let mut cache = cache.unwrap_or_else(|| Cache::new(ctx.scene, &options));
         let loaded = cache.len() as u64;
+        if render.spp == 0 {
+            // Nothing to trace (see `frozen`).
+            return Ok(IrradianceCache {
+                params,
+                camera,
+                cache,
+                stats: IcStats {
+                    loaded,
+                    ..IcStats::default()
+                },
+                misses: AtomicU64::new(0),
+            });
+        }
         let filter = FilterSampler::new(render.filter);
         let (mut primaries, mut rays) = (0, 0);
         let pool = crate::render::thread_pool(render.threads)?;
@@ -409,6 +422,22 @@ impl IrradianceCache {
             },
             misses: AtomicU64::new(0),
         })
+    }
+
+    /// The integrator over `cache` as it is, without an overture: for a cache that already
+    /// holds the overture of this render's view (`raylink precompute`), so that a render of
+    /// any part of the image reads exactly the values the whole render would have.
+    pub fn frozen(
+        ctx: &Context,
+        render: &ProgressiveOptions,
+        options: IcOptions,
+        cache: Cache,
+    ) -> Result<IrradianceCache> {
+        let none = ProgressiveOptions {
+            spp: 0,
+            ..render.clone()
+        };
+        IrradianceCache::build(ctx, &none, options, Some(cache))
     }
 
     pub fn cache(&self) -> &Cache {

@@ -1,0 +1,48 @@
+//! The fuzzers' corpora (fuzz/corpus/TARGET/, kept minimised in the repository) replayed
+//! through the same entry points the fuzz targets call: every input must be read or rejected
+//! with a one-line error, never a panic. Crashes the fuzzers found are in these corpora, so
+//! this is their regression test, run without libFuzzer or the nightly toolchain.
+
+use std::path::Path;
+
+fn replay(target: &str, read: fn(&[u8])) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("fuzz/corpus")
+        .join(target);
+    let mut inputs: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.unwrap().path())
+        .collect();
+    inputs.sort();
+    assert!(inputs.len() >= 10, "{target}: only {} inputs", inputs.len());
+    for input in inputs {
+        let data = std::fs::read(&input).unwrap();
+        let result = std::panic::catch_unwind(|| read(&data));
+        assert!(result.is_ok(), "{} panicked", input.display());
+    }
+}
+
+#[test]
+fn scene_toml_corpus() {
+    replay("scene_toml", raylink::fuzzing::scene_toml);
+}
+
+#[test]
+fn pbrt_corpus() {
+    replay("pbrt", raylink::fuzzing::pbrt);
+}
+
+#[test]
+fn obj_corpus() {
+    replay("obj", raylink::fuzzing::obj);
+}
+
+#[test]
+fn ply_corpus() {
+    replay("ply", raylink::fuzzing::ply);
+}
+
+#[test]
+fn irradiance_cache_corpus() {
+    replay("irradiance_cache", raylink::fuzzing::irradiance_cache);
+}
