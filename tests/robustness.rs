@@ -20,12 +20,9 @@ fn spawn(args: &[&str]) -> Child {
         .expect("the raylink binary starts")
 }
 
-fn signal(child: &Child, name: &str) {
-    let status = Command::new("kill")
-        .args([&format!("-{name}"), &child.id().to_string()])
-        .status()
-        .unwrap();
-    assert!(status.success());
+fn signal(child: &Child, signal: nix::sys::signal::Signal) {
+    let pid = nix::unistd::Pid::from_raw(child.id() as i32);
+    nix::sys::signal::kill(pid, signal).expect("the signal is sent");
 }
 
 /// Waits until `path` exists (the render is under way), failing if the child ends first.
@@ -142,7 +139,7 @@ fn an_interrupted_render_keeps_its_work_and_resumes_to_the_same_image() {
     interrupted.extend(["--checkpoint-interval", "0"]);
     let mut child = spawn(&interrupted);
     wait_for(&mut child, &checkpoint);
-    signal(&child, "INT");
+    signal(&child, nix::sys::signal::Signal::SIGINT);
     let out = finish(child);
     let err = stderr(&out);
     assert_eq!(out.status.code(), Some(130), "{err}");
@@ -197,7 +194,7 @@ fn sigterm_stops_a_whitted_render_with_a_partial_image() {
     wait_until(&mut child, |pid| {
         catches_sigterm(pid) && cpu_seconds(pid) > 1.0
     });
-    signal(&child, "TERM");
+    signal(&child, nix::sys::signal::Signal::SIGTERM);
     let out = finish(child);
     let err = stderr(&out);
     assert_eq!(out.status.code(), Some(143), "{err} {:?}", out.status);
@@ -248,7 +245,7 @@ fn resume_refuses_a_missing_or_foreign_checkpoint() {
     let mut child = spawn(&child_args);
     let checkpoint = dir.path().join("r.exr.checkpoint");
     wait_for(&mut child, &checkpoint);
-    signal(&child, "INT");
+    signal(&child, nix::sys::signal::Signal::SIGINT);
     assert_eq!(finish(child).status.code(), Some(130));
     let out = raylink(&args);
     let err = stderr(&out);
