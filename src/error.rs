@@ -35,14 +35,14 @@ impl Error {
     pub fn input(path: impl Into<PathBuf>, detail: impl Into<String>) -> Self {
         Error::Input {
             path: path.into(),
-            detail: detail.into(),
+            detail: one_line(&detail.into()),
         }
     }
 
     pub fn image(path: impl Into<PathBuf>, detail: impl Into<String>) -> Self {
         Error::Image {
             path: path.into(),
-            detail: detail.into(),
+            detail: one_line(&detail.into()),
         }
     }
 
@@ -55,3 +55,32 @@ impl Error {
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// `text` on one line: control characters (a newline inside a quoted string of the input,
+/// say) are written as escapes, so that every message stays one line.
+pub fn one_line(text: &str) -> String {
+    if !text.chars().any(char::is_control) {
+        return text.to_string();
+    }
+    text.chars()
+        .map(|c| match c {
+            '\n' => "\\n".to_string(),
+            '\r' => "\\r".to_string(),
+            '\t' => " ".to_string(),
+            c if c.is_control() => c.escape_default().to_string(),
+            c => c.to_string(),
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    #[test]
+    fn messages_are_one_line() {
+        let e = super::Error::input("a.pbrt", "declaration \"rgb reflect\nce\" is bad\r\u{7}");
+        assert_eq!(
+            e.to_string(),
+            "a.pbrt: declaration \"rgb reflect\\nce\" is bad\\r\\u{7}"
+        );
+    }
+}

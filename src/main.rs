@@ -342,7 +342,11 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(error) => {
-            eprintln!("raylink: error: {error}");
+            // One line whatever the file names or input text hold.
+            eprintln!(
+                "raylink: error: {}",
+                raylink::error::one_line(&error.to_string())
+            );
             ExitCode::from(exit_code(&error))
         }
     }
