@@ -22,6 +22,7 @@ pub mod file;
 pub mod patches;
 pub mod preprocess;
 pub mod ray_space;
+pub mod relight;
 pub mod render;
 
 use crate::integrators::Context;
