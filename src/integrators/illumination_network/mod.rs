@@ -153,8 +153,9 @@ pub(crate) fn node_etendue(
     let w: Vec<f32> = (0..space.slots() as u32)
         .map(|s| space.etendue(s))
         .collect();
+    use rayon::prelude::*;
     links
-        .chunks(space.slots())
+        .par_chunks(space.slots())
         .enumerate()
         .map(|(n, row)| {
             let more: f32 = extra[extra_start[n] as usize..extra_start[n + 1] as usize]
@@ -213,10 +214,11 @@ impl Network {
     }
 
     /// Numbers the nodes (sides with at least one real link, in key order) and fills the
-    /// dense link table: in parallel over slots, each slot fills its own column (a cache-sized
-    /// array over the nodes), then the columns are transposed into per-node rows in blocks of
-    /// nodes. A second link of a slot at a node goes to the node's extra links. Nothing
-    /// depends on the schedule.
+    /// dense link table directly: the table is cut into one range of nodes per thread, and
+    /// each range's task walks every slot's links in slot order, keeping those that start at
+    /// its nodes (a node's first link of a slot goes into its row, further ones into its extra
+    /// links). Rows are written where they live, with no per-slot columns to transpose;
+    /// nothing depends on the schedule.
     pub fn assemble(
         params: NetworkParams,
         space: RaySpace,
@@ -241,77 +243,72 @@ impl Network {
         }
         let nodes = key_of_node.len();
         let n_slots = space.slots();
-        // Per slot: its column over the nodes, its extra (node, [slot, target]) links, and
-        // its escapes.
-        type Column = (Vec<u32>, Vec<(u32, [u32; 2])>, u64);
-        let per_slot: Vec<Column> = slots
-            .par_iter()
+        let tasks = rayon::current_num_threads().clamp(1, nodes.max(1));
+        let per = nodes.div_ceil(tasks).max(1);
+        // Zeroed pages come lazily from the system; each task fills its own with NONE.
+        let mut links = vec![0u32; nodes * n_slots];
+        type Part = (Vec<(u32, [u32; 2])>, u64);
+        let parts: Vec<Part> = links
+            .par_chunks_mut(per * n_slots)
             .enumerate()
-            .map(|(slot, s)| {
+            .map(|(t, rows)| {
+                rows.fill(NONE);
+                let lo = (t * per) as u32;
+                let count = (rows.len() / n_slots) as u32;
                 let mut extra = Vec::new();
-                let mut column = vec![NONE; nodes];
-                let mut put = |node: u32, target: u32| {
-                    let e = &mut column[node as usize];
-                    if *e == NONE {
-                        *e = target;
-                    } else {
-                        extra.push((node, [slot as u32, target]));
+                let mut escapes = 0u64;
+                for (slot, s) in slots.iter().enumerate() {
+                    let mut put = |node: u32, target: u32| {
+                        let local = node.wrapping_sub(lo);
+                        if local < count {
+                            let e = &mut rows[local as usize * n_slots + slot];
+                            if *e == NONE {
+                                *e = target;
+                            } else {
+                                extra.push((node, [slot as u32, target]));
+                            }
+                            true
+                        } else {
+                            false
+                        }
+                    };
+                    for &[a, b] in &s.pairs {
+                        let (na, nb) = (node_of_key[a as usize], node_of_key[b as usize]);
+                        put(na, nb);
+                        put(nb, na);
                     }
-                };
-                for &[a, b] in &s.pairs {
-                    let (na, nb) = (node_of_key[a as usize], node_of_key[b as usize]);
-                    put(na, nb);
-                    put(nb, na);
-                }
-                let mut escapes = 0;
-                for &k in &s.escapes {
-                    let n = node_of_key[k as usize];
-                    if n != NONE {
-                        put(n, ESCAPE);
-                        escapes += 1;
+                    for &k in &s.escapes {
+                        let n = node_of_key[k as usize];
+                        if n != NONE && put(n, ESCAPE) {
+                            escapes += 1;
+                        }
                     }
                 }
-                (column, extra, escapes)
+                // Grouped by node, in slot order within a node (a stable sort).
+                extra.sort_by_key(|e| e.0);
+                (extra, escapes)
             })
             .collect();
-        const BLOCK: usize = 64;
-        let mut links = vec![NONE; nodes * n_slots];
-        links
-            .par_chunks_mut(BLOCK * n_slots)
-            .enumerate()
-            .for_each(|(b, rows)| {
-                let first = b * BLOCK;
-                for (slot, (column, _, _)) in per_slot.iter().enumerate() {
-                    for (k, &t) in column[first..].iter().take(BLOCK).enumerate() {
-                        rows[k * n_slots + slot] = t;
-                    }
-                }
-            });
         let mut stats = BuildStats::default();
         for s in slots {
             stats.intersections += s.intersections;
             stats.degenerate += s.degenerate;
             stats.link_ends += 2 * s.pairs.len() as u64;
         }
-        // Extra links grouped by node (a counting sort), in slot order within a node.
         let mut extra_start = vec![0u32; nodes + 1];
-        for (_, extra, escapes) in &per_slot {
+        for (list, escapes) in &parts {
             stats.escapes += escapes;
-            for e in extra {
+            for e in list {
                 extra_start[e.0 as usize + 1] += 1;
             }
         }
         for i in 1..extra_start.len() {
             extra_start[i] += extra_start[i - 1];
         }
-        let mut fill = extra_start.clone();
-        let mut extra = vec![[0u32; 2]; extra_start[nodes] as usize];
-        for (_, list, _) in &per_slot {
-            for &(n, e) in list {
-                extra[fill[n as usize] as usize] = e;
-                fill[n as usize] += 1;
-            }
-        }
+        let extra: Vec<[u32; 2]> = parts
+            .into_iter()
+            .flat_map(|(list, _)| list.into_iter().map(|e| e.1))
+            .collect();
         stats.extra = extra.len() as u64;
         let etendue = node_etendue(&space, &links, &extra_start, &extra);
         Network {
