@@ -130,7 +130,7 @@ impl BenchConfig {
             Some("--scenes and --backends need at least one entry")
         } else if config.threads.is_empty() || config.threads.contains(&0) {
             Some("--threads needs thread counts of at least 1")
-        } else if config.reps == 0 || config.build_reps == 0 {
+        } else if config.reps == 0 || (config.build_reps == 0 && !args.network) {
             Some("--reps and --build-reps must be at least 1")
         } else if config.width == 0 || config.height == 0 {
             Some("--width and --height must be at least 1")

@@ -312,7 +312,10 @@ pub fn markdown(rows: &[NetworkRow], bench: &NetworkBench) -> String {
         format!("{:.3} / {:.3}", r.scan_lines.median, r.scan_assembly.median)
     });
     line("… M intersections/s (wall)", &|r| {
-        format!("{:.1}", r.intersections as f64 / r.scan.median.max(1e-9) / 1e6)
+        format!(
+            "{:.1}",
+            r.intersections as f64 / r.scan.median.max(1e-9) / 1e6
+        )
     });
     line("… M intersections/s per CPU-second × threads", &|r| {
         format!("{:.1}", r.scan_cpu_rate.median / 1e6)
@@ -332,9 +335,10 @@ pub fn markdown(rows: &[NetworkRow], bench: &NetworkBench) -> String {
         format!("{} ({} sweeps)", sec(r.distribution), r.sweeps)
     });
     line("render (s)", &|r| sec(r.render));
-    line("**full rebuild**: preprocess + distribution + render (s)", &|r| {
-        sec(r.rebuild)
-    });
+    line(
+        "**full rebuild**: preprocess + distribution + render (s)",
+        &|r| sec(r.rebuild),
+    );
     line("**relight, light strengths** (basis; s)", &|r| {
         sec(r.relight_strengths)
     });
@@ -345,9 +349,10 @@ pub fn markdown(rows: &[NetworkRow], bench: &NetworkBench) -> String {
             r.rebuild.median / r.relight_strengths.median.max(1e-9)
         )
     });
-    line("**relight, reflectances** (load + distribution + render; s)", &|r| {
-        sec(r.relight_reflectances)
-    });
+    line(
+        "**relight, reflectances** (load + distribution + render; s)",
+        &|r| sec(r.relight_reflectances),
+    );
     line("… of which: whole file load (s)", &|r| sec(r.load_all));
     line("… rebuild / relight", &|r| {
         format!(
