@@ -320,16 +320,32 @@ pub fn markdown(rows: &[NetworkRow], bench: &NetworkBench) -> String {
     line("… M intersections/s per CPU-second × threads", &|r| {
         format!("{:.1}", r.scan_cpu_rate.median / 1e6)
     });
-    line("preprocess, Embree casting (s)", &|r| sec(r.embree));
+    // Embree rows only where it ran (--build-reps 0 leaves it out).
+    let ran = |r: &NetworkRow| r.embree.median > 0.0;
+    line("preprocess, Embree casting (s)", &|r| {
+        if ran(r) {
+            sec(r.embree)
+        } else {
+            "–".into()
+        }
+    });
     line("… M intersections/s; closest-hit queries", &|r| {
-        format!(
-            "{:.1}; {:.1} M",
-            r.intersections as f64 / r.embree.median.max(1e-9) / 1e6,
-            r.rays as f64 / 1e6
-        )
+        if ran(r) {
+            format!(
+                "{:.1}; {:.1} M",
+                r.intersections as f64 / r.embree.median / 1e6,
+                r.rays as f64 / 1e6
+            )
+        } else {
+            "–".into()
+        }
     });
     line("… Embree / scan time", &|r| {
-        format!("{:.1}×", r.embree.median / r.scan.median.max(1e-9))
+        if ran(r) {
+            format!("{:.1}×", r.embree.median / r.scan.median.max(1e-9))
+        } else {
+            "–".into()
+        }
     });
     line("distribution (s)", &|r| {
         format!("{} ({} sweeps)", sec(r.distribution), r.sweeps)
