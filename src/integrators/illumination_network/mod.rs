@@ -316,8 +316,22 @@ impl Network {
                         }
                     }
                 }
-                // Grouped by node, in slot order within a node (a stable sort).
-                extra.sort_by_key(|e| e.0);
+                // Grouped by node, in slot order within a node (a stable counting sort).
+                let n = rows.len() / n_slots;
+                let mut start = vec![0u32; n + 1];
+                for e in &extra {
+                    start[(e.0 - first) as usize + 1] += 1;
+                }
+                for i in 1..start.len() {
+                    start[i] += start[i - 1];
+                }
+                let mut grouped = vec![(0u32, [0u32; 2]); extra.len()];
+                for e in &extra {
+                    let at = &mut start[(e.0 - first) as usize];
+                    grouped[*at as usize] = *e;
+                    *at += 1;
+                }
+                let extra = grouped;
                 let mut at = 0;
                 for (i, (row, wn)) in rows.chunks(n_slots).zip(wb.iter_mut()).enumerate() {
                     let node = first + i as u32;

@@ -221,9 +221,23 @@ pub fn scan_slot(
     seed: u64,
     jitter: f32,
 ) -> Vec<LineHit> {
+    let mut hits = Vec::new();
+    scan_slot_into(space, patches, slot, seed, jitter, &mut hits);
+    hits
+}
+
+/// [`scan_slot`] into a reused buffer (cleared first).
+pub fn scan_slot_into(
+    space: &RaySpace,
+    patches: &Patches,
+    slot: u32,
+    seed: u64,
+    jitter: f32,
+    hits: &mut Vec<LineHit>,
+) {
+    hits.clear();
     let (family, su, sv) = space.slot_slopes(slot);
     let d = space.direction(slot);
-    let mut hits = Vec::new();
     for pg in &patches.polygons {
         if pg.n == Vec3::ZERO {
             continue;
@@ -253,7 +267,6 @@ pub fn scan_slot(
             });
         });
     }
-    hits
 }
 
 /// The Embree-cast hits of one slot: every line of the slot that crosses the unit cube is
@@ -447,17 +460,20 @@ pub fn build_links(
 ) -> (Vec<SlotLinks>, RayStats) {
     let results: Vec<(SlotLinks, RayStats)> = (0..space.slots() as u32)
         .into_par_iter()
-        .map_init(LinkBuffers::default, |buf, slot| {
-            let mut stats = RayStats::default();
-            let hits = match (builder, ctx) {
-                (Builder::Embree, Some(ctx)) => {
-                    cast_slot(ctx, space, patches, slot, seed, jitter, &mut stats)
-                }
-                _ => scan_slot(space, patches, slot, seed, jitter),
-            };
-            let keys = 2 * patches.cells as usize;
-            (link_slot(&hits, space.lines_per_slot(), keys, buf), stats)
-        })
+        .map_init(
+            || (LinkBuffers::default(), Vec::new()),
+            |(buf, hits), slot| {
+                let mut stats = RayStats::default();
+                match (builder, ctx) {
+                    (Builder::Embree, Some(ctx)) => {
+                        *hits = cast_slot(ctx, space, patches, slot, seed, jitter, &mut stats)
+                    }
+                    _ => scan_slot_into(space, patches, slot, seed, jitter, hits),
+                };
+                let keys = 2 * patches.cells as usize;
+                (link_slot(hits, space.lines_per_slot(), keys, buf), stats)
+            },
+        )
         .collect();
     let mut stats = RayStats::default();
     let links = results
