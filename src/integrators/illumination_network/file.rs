@@ -210,14 +210,19 @@ fn basis_of(path: &Path, bytes: &[u8], nodes: usize, slots: usize) -> Result<Opt
         .ok_or_else(|| FORMAT.error(path, "invalid light basis"))
 }
 
-/// Reads only the prefix of a network file (header, node table, light basis), checked by its
-/// own checksum: a network without its link table (enough to render a solution from the
-/// basis, not to distribute), and the basis if one is stored.
-pub fn load_prefix(
-    path: &Path,
-    scene: &Scene,
-    expected: Option<&NetworkParams>,
-) -> Result<(Network, Option<LightBasis>)> {
+/// A network file opened up to the end of its prefix.
+struct Opened {
+    file: std::fs::File,
+    /// Everything up to and with the prefix checksum.
+    head: Vec<u8>,
+    header: Header,
+    space: RaySpace,
+    patches: Patches,
+}
+
+/// Opens a network file and reads its prefix (header, node table, light basis, prefix
+/// checksum), after checking its size against the header.
+fn open_prefix(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> Result<Opened> {
     let bad = |problem: &str| FORMAT.error(path, problem);
     let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
     let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
@@ -248,14 +253,39 @@ pub fn load_prefix(
     let mut rest = vec![0u8; prefix_len + 8 - head.len()];
     file.read_exact(&mut rest).map_err(|_| bad("truncated"))?;
     head.extend_from_slice(&rest);
-    let (data, sum) = head.split_at(prefix_len);
+    Ok(Opened {
+        file,
+        head,
+        header: h,
+        space,
+        patches,
+    })
+}
+
+/// Reads only the prefix of a network file (header, node table, light basis), checked by its
+/// own checksum: a network without its link table (enough to render a solution from the
+/// basis, not to distribute), and the basis if one is stored.
+pub fn load_prefix(
+    path: &Path,
+    scene: &Scene,
+    expected: Option<&NetworkParams>,
+) -> Result<(Network, Option<LightBasis>)> {
+    let bad = |problem: &str| FORMAT.error(path, problem);
+    let Opened {
+        head,
+        header: h,
+        space,
+        patches,
+        ..
+    } = open_prefix(path, scene, expected)?;
+    let (data, sum) = head.split_at(head.len() - 8);
     if checksum(data) != u64::from_le_bytes(sum.try_into().unwrap()) {
         return Err(bad("checksum mismatch (truncated or corrupt)"));
     }
     let body = &data[12 + HEADER..];
     let (keys, basis) = body.split_at(4 * h.nodes);
     let (key_of_node, node_of_key) = node_table(path, keys, h.cells)?;
-    let basis = basis_of(path, basis, h.nodes, slots)?;
+    let basis = basis_of(path, basis, h.nodes, space.slots())?;
     Ok((
         Network {
             params: h.params,
@@ -273,6 +303,61 @@ pub fn load_prefix(
     ))
 }
 
+/// [`crate::binary_file::checksum`] over data that arrives in pieces.
+struct StreamSum {
+    h: u64,
+    carry: [u8; 8],
+    carried: usize,
+    len: u64,
+}
+
+impl StreamSum {
+    const PRIME: u64 = 0x100000001b3;
+
+    fn new() -> Self {
+        StreamSum {
+            h: 0xcbf29ce484222325,
+            carry: [0; 8],
+            carried: 0,
+            len: 0,
+        }
+    }
+
+    fn word(&mut self, w: [u8; 8]) {
+        self.h ^= u64::from_le_bytes(w);
+        self.h = self.h.wrapping_mul(Self::PRIME);
+    }
+
+    fn update(&mut self, mut bytes: &[u8]) {
+        self.len += bytes.len() as u64;
+        if self.carried > 0 {
+            let n = (8 - self.carried).min(bytes.len());
+            self.carry[self.carried..self.carried + n].copy_from_slice(&bytes[..n]);
+            self.carried += n;
+            bytes = &bytes[n..];
+            if self.carried < 8 {
+                return;
+            }
+            self.word(self.carry);
+            self.carried = 0;
+        }
+        let mut words = bytes.chunks_exact(8);
+        for w in &mut words {
+            self.word(w.try_into().unwrap());
+        }
+        let tail = words.remainder();
+        self.carry[..tail.len()].copy_from_slice(tail);
+        self.carried = tail.len();
+    }
+
+    fn finish(mut self) -> u64 {
+        let mut tail = [0u8; 8];
+        tail[..self.carried].copy_from_slice(&self.carry[..self.carried]);
+        self.word(tail);
+        self.h ^ self.len
+    }
+}
+
 /// Reads a network written by [`save`] for the same scene geometry. `expected`, when given,
 /// must equal the stored parameters. Any other file is an [`Error::Input`] naming it.
 pub fn load(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> Result<Network> {
@@ -285,31 +370,53 @@ pub fn load_all(
     scene: &Scene,
     expected: Option<&NetworkParams>,
 ) -> Result<(Network, Option<LightBasis>)> {
-    let file = FORMAT.load(path)?;
     let bad = |problem: &str| FORMAT.error(path, problem);
-    let mut r = Reader { rest: file.body() };
-    let h = read_header(&mut r, path, scene, expected)?;
-    let (space, patches) = geometry(path, scene, &h)?;
+    let Opened {
+        mut file,
+        head,
+        header: h,
+        space,
+        patches,
+    } = open_prefix(path, scene, expected)?;
     let (nodes, n_extra) = (h.nodes, h.n_extra);
     let slots = space.slots();
-    let want = nodes
-        .checked_mul(slots + 2)
-        .and_then(|n| n.checked_add(1 + 2 * n_extra))
-        .and_then(|n| n.checked_mul(4))
-        .and_then(|n| n.checked_add(h.basis_len + 8))
-        .ok_or_else(|| bad("truncated"))?;
-    if r.rest.len() != want {
-        return Err(bad("size does not match the node count"));
+    // The tables are read in slices straight into their words, the checksum kept on the way:
+    // no copy of the whole file in memory.
+    let mut sum = StreamSum::new();
+    sum.update(&head);
+    let mut chunk = vec![0u8; 1 << 22];
+    let mut read_words = |count: usize, sum: &mut StreamSum| -> Result<Vec<u32>> {
+        let mut out = Vec::with_capacity(count);
+        let mut left = 4 * count;
+        while left > 0 {
+            let n = left.min(chunk.len());
+            file.read_exact(&mut chunk[..n])
+                .map_err(|_| bad("truncated"))?;
+            sum.update(&chunk[..n]);
+            out.extend(
+                chunk[..n]
+                    .chunks_exact(4)
+                    .map(|c| u32::from_le_bytes(c.try_into().unwrap())),
+            );
+            left -= n;
+        }
+        Ok(out)
+    };
+    let links = read_words(nodes * slots, &mut sum)?;
+    let extra_start = read_words(nodes + 1, &mut sum)?;
+    let extra: Vec<[u32; 2]> = read_words(2 * n_extra, &mut sum)?
+        .chunks_exact(2)
+        .map(|c| [c[0], c[1]])
+        .collect();
+    let mut stored = [0u8; 8];
+    file.read_exact(&mut stored).map_err(|_| bad("truncated"))?;
+    if sum.finish() != u64::from_le_bytes(stored) {
+        return Err(bad("checksum mismatch (truncated or corrupt)"));
     }
-    let (a, rest) = r.rest.split_at(4 * nodes);
-    let (basis, rest) = rest.split_at(h.basis_len);
-    let rest = &rest[8..];
-    let (b, rest) = rest.split_at(4 * nodes * slots);
-    let (c, rest) = rest.split_at(4 * (nodes + 1));
+    let body = &head[12 + HEADER..head.len() - 8];
+    let (a, basis) = body.split_at(4 * nodes);
     let (key_of_node, node_of_key) = node_table(path, a, h.cells)?;
     let basis = basis_of(path, basis, nodes, slots)?;
-    let (links, extra_start) = (words(b), words(c));
-    let extra: Vec<[u32; 2]> = words(rest).chunks_exact(2).map(|c| [c[0], c[1]]).collect();
     if extra_start[0] != 0
         || extra_start.windows(2).any(|w| w[0] > w[1])
         || extra_start[nodes] as usize != n_extra
@@ -340,4 +447,29 @@ pub fn load_all(
         },
         basis,
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The streamed checksum equals the file checksum however the data is cut.
+    #[test]
+    fn streamed_checksum_equals_the_whole_one() {
+        let data: Vec<u8> = (0..1000u32).map(|i| (i * 7919 % 251) as u8).collect();
+        for len in [0, 1, 7, 8, 9, 63, 1000] {
+            let bytes = &data[..len];
+            for cuts in [&[][..], &[1][..], &[3, 5][..], &[8, 9, 17][..]] {
+                let mut sum = StreamSum::new();
+                let mut at = 0;
+                for &c in cuts {
+                    let end = (at + c).min(len);
+                    sum.update(&bytes[at..end]);
+                    at = end;
+                }
+                sum.update(&bytes[at..]);
+                assert_eq!(sum.finish(), checksum(bytes), "len {len}, cuts {cuts:?}");
+            }
+        }
+    }
 }
