@@ -375,7 +375,8 @@ pub fn run_precompute(mut args: RenderArgs) -> raylink::Result<()> {
             super::irradiance_cache(&args, &scene, &ctx, &options)?;
         }
         _ => {
-            super::network(&args, &scene, &ctx)?;
+            let emission: Vec<_> = scene.materials.iter().map(|m| m.emission).collect();
+            super::network(&args, &scene, &ctx, &emission)?;
         }
     }
     if !args.quiet {

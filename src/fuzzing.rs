@@ -89,3 +89,31 @@ pub fn irradiance_cache(data: &[u8]) {
         .expect("the scratch file can be written");
     one_line(ic_file::load(&path, scene, &options));
 }
+
+/// The scene the network-file target loads networks for: a closed box with a lamp.
+fn network_scene() -> &'static Scene {
+    static SCENE: OnceLock<Scene> = OnceLock::new();
+    SCENE.get_or_init(|| {
+        crate::scene::toml::from_str(NETWORK_SCENE, Path::new("fuzz-network.toml"))
+            .expect("the fuzz scene is valid")
+    })
+}
+
+/// The network-file target's scene (also used to make its seed corpus).
+pub const NETWORK_SCENE: &str = "[camera]\nposition = [0.5, 0.5, 0.9]\nlook_at = [0.5, 0.5, 0]\n\
+     [materials.white]\ndiffuse = 0.7\n[materials.lamp]\nemission = [5, 5, 5]\n\
+     [[shapes]]\ntype = \"quad\"\nmaterial = \"white\"\n\
+     vertices = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]]\n\
+     [[shapes]]\ntype = \"quad\"\nmaterial = \"lamp\"\n\
+     vertices = [[0.25, 0.25, 1], [0.25, 0.75, 1], [0.75, 0.75, 1], [0.75, 0.25, 1]]\n";
+
+/// An illumination-network file for a fixed scene: the bytes follow the magic and version
+/// (the seed corpus holds real networks of [`NETWORK_SCENE`] without them). The reader checks
+/// the header (scene, parameters, sizes) before the checksums.
+pub fn network(data: &[u8]) {
+    use crate::integrators::illumination_network::file as net_file;
+    let mut bytes = net_file::FORMAT.start(data.len());
+    bytes.extend_from_slice(data);
+    let path = put("network.rlnet", &bytes);
+    one_line(net_file::load_all(&path, network_scene(), None));
+}

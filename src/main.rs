@@ -63,6 +63,12 @@ enum Command {
     /// Assemble the parts of a render (--tile or --crop EXR files) into the full image,
     /// refusing parts that do not fit together (docs/farm.md).
     Merge(farm_cli::MergeArgs),
+    /// Relight a saved illumination network (--network-file, required): new light strengths
+    /// (--light NAME=K, --light-scale, the scene file's emissions) and reflectances (the scene
+    /// file's materials), no preprocess, then render as `render` does. Light strengths alone
+    /// come from a stored light basis (one solution per emissive material) without a
+    /// distribution.
+    Relight(RelightArgs),
     /// Packaging: write the man page (raylink.1) and the bash, zsh and fish completions
     /// generated from this command line into DIR.
     #[command(hide = true)]
@@ -249,9 +255,34 @@ struct RenderArgs {
     part: farm_cli::PartArgs,
 }
 
+/// Options of `raylink relight`.
+#[derive(clap::Args)]
+struct RelightArgs {
+    #[command(flatten)]
+    render: RenderArgs,
+    /// Multiply the emission of the scene's material NAME by K (repeatable).
+    #[arg(long = "light", value_name = "NAME=K")]
+    lights: Vec<String>,
+    /// Recompute the light basis (one distribution per emissive material) for the scene's
+    /// reflectances and store it in the network file, replacing one made for other
+    /// reflectances (a file without a basis gets one on its first relight anyway).
+    #[arg(long)]
+    store_basis: bool,
+}
+
+/// What `raylink relight` adds to a network render.
+#[derive(Clone, Default)]
+struct RelightSpec {
+    lights: Vec<(String, f32)>,
+    store_basis: bool,
+}
+
 /// Options of the illumination-network integrator.
 #[derive(clap::Args)]
 struct NetworkArgs {
+    /// Set by `raylink relight`.
+    #[arg(skip)]
+    relight: Option<RelightSpec>,
     /// Network: slopes per axis S (3·S² links per patch).
     #[arg(long, default_value_t = net::DEFAULT_SLOPES)]
     slopes: u32,
@@ -337,6 +368,7 @@ fn main() -> ExitCode {
         Command::Bench(args) => raylink::bench::run(&args),
         Command::Precompute(args) => farm_cli::run_precompute(args),
         Command::Merge(args) => farm_cli::run_merge(args),
+        Command::Relight(args) => run_relight(args),
         Command::GenerateAssets { dir } => generate_assets(&dir),
     };
     match result {
@@ -523,8 +555,9 @@ fn run_render(mut args: RenderArgs) -> raylink::Result<()> {
         // A bad output path is a bad option: report it before any work is done.
         check_output_path(out).map_err(|e| Error::Options(e.to_string()))?;
     }
-    let scene = Scene::load(&args.scene)?;
+    let mut scene = Scene::load(&args.scene)?;
     print_warnings(&scene);
+    let file_emission = relight_lights(&mut scene, &args)?;
     let width = args.width.unwrap_or(scene.camera.width);
     let height = args.height.unwrap_or(scene.camera.height);
     for (name, v) in [("--width", width), ("--height", height)] {
@@ -675,7 +708,7 @@ fn run_render(mut args: RenderArgs) -> raylink::Result<()> {
             let built;
             let renderer;
             let chosen: &dyn Integrator = if integrator == IntegratorName::Network {
-                built = network(&args, &scene, &ctx)?;
+                built = network(&args, &scene, &ctx, &file_emission)?;
                 renderer = net::render::NetworkRenderer {
                     net: &built.0,
                     solution: &built.1,
@@ -973,11 +1006,83 @@ fn irradiance_cache(
     Ok(integrator)
 }
 
+/// `raylink relight`: a network render that must load its network and may change the lights.
+fn run_relight(args: RelightArgs) -> raylink::Result<()> {
+    let mut render = args.render;
+    if render
+        .integrator
+        .is_some_and(|i| i != IntegratorName::Network)
+    {
+        return Err(Error::Options(
+            "relight renders with the network integrator; leave out --integrator".into(),
+        ));
+    }
+    render.integrator = Some(IntegratorName::Network);
+    match &render.network.network_file {
+        None => {
+            return Err(Error::Options(
+                "relight needs --network-file FILE (a network saved by raylink render \
+                 --network-file)"
+                    .into(),
+            ))
+        }
+        Some(f) if !f.exists() => {
+            return Err(Error::Options(format!(
+                "{}: no such network file (save one with raylink render --network-file)",
+                f.display()
+            )))
+        }
+        Some(_) => {}
+    }
+    let mut lights = Vec::new();
+    for l in &args.lights {
+        let parsed = l
+            .split_once('=')
+            .and_then(|(name, k)| Some((name.to_string(), k.trim().parse::<f32>().ok()?)))
+            .filter(|(name, k)| !name.is_empty() && k.is_finite() && *k >= 0.0);
+        match parsed {
+            Some(p) => lights.push(p),
+            None => {
+                return Err(Error::Options(format!(
+                    "--light takes NAME=K with K a non-negative number, got \"{l}\""
+                )))
+            }
+        }
+    }
+    render.network.relight = Some(RelightSpec {
+        lights,
+        store_basis: args.store_basis,
+    });
+    run_render(render)
+}
+
+/// Applies `raylink relight`'s --light NAME=K to the scene's materials; returns the
+/// emissions as the scene file gives them (one per material).
+fn relight_lights(scene: &mut Scene, args: &RenderArgs) -> Result<Vec<raylink::math::Rgb>, Error> {
+    let original = scene.materials.iter().map(|m| m.emission).collect();
+    for (name, k) in args.network.relight.iter().flat_map(|r| &r.lights) {
+        let m = scene
+            .materials
+            .iter_mut()
+            .find(|m| &m.name == name && m.emission.max_element() > 0.0)
+            .ok_or_else(|| {
+                Error::input(
+                    &args.scene,
+                    format!("--light {name}: no emissive material named \"{name}\""),
+                )
+            })?;
+        m.emission *= *k;
+    }
+    Ok(original)
+}
+
 /// Loads (--network-file) or builds the illumination network, then distributes the light.
+/// `file_emission` is each material's emission before `raylink relight`'s --light.
 fn network(
     args: &RenderArgs,
     scene: &Scene,
     ctx: &Context,
+    file_emission: &[raylink::math::Rgb],
 ) -> Result<(net::Network, net::distribute::Solution), Error> {
     let a = &args.network;
     let params = net::NetworkParams {
@@ -1015,6 +1120,23 @@ fn network(
              directional lights light it only with --network-hybrid"
         );
     }
+    let options = net::distribute::DistributeOptions {
+        tolerance: a.tolerance,
+        light_scale: a.light_scale,
+        order: match a.network_order {
+            NetworkOrderName::Sweeps => net::distribute::Order::Sweeps,
+            NetworkOrderName::Shoot => net::distribute::Order::Shoot,
+        },
+        ..Default::default()
+    };
+    if let (Some(spec), Some(f)) = (&a.relight, &a.network_file) {
+        let (network, solution) =
+            relight_network(f, spec, scene, file_emission, &params, &options, &say)?;
+        if a.network_stats {
+            print_network_stats(&network, &solution);
+        }
+        return Ok((network, solution));
+    }
     let network = match &a.network_file {
         Some(f) if f.exists() => {
             let start = std::time::Instant::now();
@@ -1038,19 +1160,10 @@ fn network(
                 n.stats.intersections
             ));
             if let Some(f) = &a.network_file {
-                net::file::save(f, &n, scene)?;
+                net::file::save(f, &n, scene, None)?;
             }
             n
         }
-    };
-    let options = net::distribute::DistributeOptions {
-        tolerance: a.tolerance,
-        light_scale: a.light_scale,
-        order: match a.network_order {
-            NetworkOrderName::Sweeps => net::distribute::Order::Sweeps,
-            NetworkOrderName::Shoot => net::distribute::Order::Shoot,
-        },
-        ..Default::default()
     };
     let solution = net::distribute::distribute(&network, scene, &options);
     let st = &solution.stats;
@@ -1059,36 +1172,7 @@ fn network(
         st.seconds, st.sweeps
     ));
     if a.network_stats {
-        let bs = &network.stats;
-        let links = bs.link_ends / 2;
-        eprintln!(
-            "network stats: {} polygons, {} patches, {} nodes, {} slots per node\n\
-             network stats: {} links ({:.1} per node), {} escapes, {} extra, {} line-patch \
-             intersections ({:.1} M/s), {} closest-hit queries\n\
-             network stats: memory {:.1} MB network + {:.1} MB buffers, {} map entries\n\
-             network stats: preprocess {:.3} s (lines {:.3} s, assembly {:.3} s), distribution {:.3} s, \
-             {} sweeps, unshot {:.2e} of emitted",
-            network.patches.polygons.len(),
-            network.patches.cells,
-            network.nodes(),
-            network.slots(),
-            links,
-            bs.link_ends as f64 / network.nodes().max(1) as f64,
-            bs.escapes,
-            bs.extra,
-            bs.intersections,
-            bs.intersections as f64 / bs.seconds.max(1e-9) / 1e6,
-            bs.rays,
-            network.memory() as f64 / 1e6,
-            solution.memory() as f64 / 1e6,
-            st.map_entries,
-            bs.seconds,
-            bs.link_seconds,
-            bs.assemble_seconds,
-            st.seconds,
-            st.sweeps,
-            st.unshot.iter().sum::<f64>() / st.emitted.iter().sum::<f64>().max(1e-300),
-        );
+        print_network_stats(&network, &solution);
     }
     Ok((network, solution))
 }
@@ -1120,4 +1204,103 @@ fn checkpoint_settings(
             ),
         ),
     ])
+}
+
+/// `raylink relight`'s network and solution: from the file's light basis when it holds one
+/// for these reflectances (reading only the file's prefix: no link table, no distribution),
+/// else the whole network and a distribution (storing a basis when the file has none or
+/// `--store-basis` asks).
+fn relight_network(
+    file: &std::path::Path,
+    spec: &RelightSpec,
+    scene: &Scene,
+    file_emission: &[raylink::math::Rgb],
+    params: &net::NetworkParams,
+    options: &net::distribute::DistributeOptions,
+    say: &dyn Fn(String),
+) -> Result<(net::Network, net::distribute::Solution), Error> {
+    let emission: Vec<_> = scene.materials.iter().map(|m| m.emission).collect();
+    let start = std::time::Instant::now();
+    let (prefix, basis) = net::file::load_prefix(file, scene, Some(params))?;
+    if let Some(b) = basis.as_ref().filter(|_| !spec.store_basis) {
+        match b.superpose(&prefix, scene, &emission, options) {
+            Ok(solution) => {
+                say(format!(
+                    "network: relit from the light basis in {} ({} emissive materials) in \
+                     {:.3} s: no preprocess, no distribution (0 sweeps), link table not read",
+                    file.display(),
+                    b.lights.len(),
+                    start.elapsed().as_secs_f64()
+                ));
+                return Ok((prefix, solution));
+            }
+            Err(why) => say(format!("network: {why}; distributing again")),
+        }
+    }
+    drop(prefix);
+    let start = std::time::Instant::now();
+    let (network, _) = net::file::load_all(file, scene, Some(params))?;
+    say(format!(
+        "network: loaded {} in {:.2} s (no preprocess): {} nodes",
+        file.display(),
+        start.elapsed().as_secs_f64(),
+        network.nodes()
+    ));
+    let solution = if basis.is_none() || spec.store_basis {
+        let b = net::relight::LightBasis::compute(&network, scene, file_emission, options);
+        net::file::save(file, &network, scene, Some(&b))?;
+        say(format!(
+            "network: distribution of a light basis in {:.2} s ({} emissive materials, {} \
+             sweeps in all), stored in {}",
+            b.seconds,
+            b.lights.len(),
+            b.lights.iter().map(|l| l.sweeps).sum::<u32>(),
+            file.display()
+        ));
+        b.superpose(&network, scene, &emission, options)
+            .map_err(|e| Error::input(file, e))?
+    } else {
+        let solution = net::distribute::distribute(&network, scene, options);
+        say(format!(
+            "network: distribution in {:.2} s ({} sweeps or shots)",
+            solution.stats.seconds, solution.stats.sweeps
+        ));
+        solution
+    };
+    Ok((network, solution))
+}
+
+/// `--network-stats`: patches, links, intersections, memory, timings.
+fn print_network_stats(network: &net::Network, solution: &net::distribute::Solution) {
+    let st = &solution.stats;
+    let bs = &network.stats;
+    let links = bs.link_ends / 2;
+    eprintln!(
+        "network stats: {} polygons, {} patches, {} nodes, {} slots per node\n\
+         network stats: {} links ({:.1} per node), {} escapes, {} extra, {} line-patch \
+         intersections ({:.1} M/s), {} closest-hit queries\n\
+         network stats: memory {:.1} MB network + {:.1} MB buffers, {} map entries\n\
+         network stats: preprocess {:.3} s (lines {:.3} s, assembly {:.3} s), distribution {:.3} s, \
+         {} sweeps, unshot {:.2e} of emitted",
+        network.patches.polygons.len(),
+        network.patches.cells,
+        network.nodes(),
+        network.slots(),
+        links,
+        bs.link_ends as f64 / network.nodes().max(1) as f64,
+        bs.escapes,
+        bs.extra,
+        bs.intersections,
+        bs.intersections as f64 / bs.seconds.max(1e-9) / 1e6,
+        bs.rays,
+        network.memory() as f64 / 1e6,
+        solution.memory() as f64 / 1e6,
+        st.map_entries,
+        bs.seconds,
+        bs.link_seconds,
+        bs.assemble_seconds,
+        st.seconds,
+        st.sweeps,
+        st.unshot.iter().sum::<f64>() / st.emitted.iter().sum::<f64>().max(1e-300),
+    );
 }

@@ -46,3 +46,8 @@ fn ply_corpus() {
 fn irradiance_cache_corpus() {
     replay("irradiance_cache", raylink::fuzzing::irradiance_cache);
 }
+
+#[test]
+fn network_corpus() {
+    replay("network", raylink::fuzzing::network);
+}

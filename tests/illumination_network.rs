@@ -712,3 +712,242 @@ fn sweeps_and_shooting_agree() {
     assert!(total < 5.0 * tol as f64, "radiance differs by {total}");
     assert!(direct < 1e-5, "direct light differs by {direct}");
 }
+
+fn network_relight(scene: &str, out: &str, file: &str, extra: &[&str]) -> std::process::Output {
+    let mut args = vec![
+        "relight",
+        scene,
+        "--network-file",
+        file,
+        "--slopes",
+        "6",
+        "--intercept-step",
+        "0.0625",
+        "--width",
+        "24",
+        "--height",
+        "24",
+        "--spp",
+        "1",
+        "-o",
+        out,
+    ];
+    args.extend_from_slice(extra);
+    raylink(&args)
+}
+
+/// `raylink relight`: no preprocess (counters in its messages); the first relight stores a
+/// light basis, later ones superpose it (no distribution, no link table); doubling the
+/// lights doubles the image exactly, globally or per material; the superposed image agrees
+/// with a fresh distribution; changed reflectances distribute again and give exactly what
+/// `render` gives from the same file; bad options are errors with exit 2.
+#[test]
+fn relight_subcommand_reuses_the_network() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = tmp_path(&dir, "cornell.net");
+    let img = |name: &str| read_image(&dir.path().join(name)).unwrap().0;
+    let built = network_render(
+        "scenes/cornell-box.toml",
+        &tmp_path(&dir, "render.exr"),
+        &["--network-file", &file],
+    );
+    assert!(built.status.success(), "{}", stderr(&built));
+    let size = std::fs::metadata(&file).unwrap().len();
+
+    let first = network_relight(
+        "scenes/cornell-box.toml",
+        &tmp_path(&dir, "r1.exr"),
+        &file,
+        &[],
+    );
+    let e = stderr(&first);
+    assert!(first.status.success(), "{e}");
+    assert!(!e.contains("network: preprocess"), "{e}");
+    assert!(
+        e.contains("no preprocess") && e.contains("light basis"),
+        "{e}"
+    );
+    assert!(
+        std::fs::metadata(&file).unwrap().len() > size,
+        "basis not stored"
+    );
+
+    let second = network_relight(
+        "scenes/cornell-box.toml",
+        &tmp_path(&dir, "r2.exr"),
+        &file,
+        &["--light-scale", "2"],
+    );
+    let e = stderr(&second);
+    assert!(second.status.success(), "{e}");
+    assert!(!e.contains("network: preprocess"), "{e}");
+    assert!(
+        e.contains("no distribution (0 sweeps)") && e.contains("link table not read"),
+        "{e}"
+    );
+    let per_light = network_relight(
+        "scenes/cornell-box.toml",
+        &tmp_path(&dir, "r3.exr"),
+        &file,
+        &["--light", "light=2"],
+    );
+    assert!(per_light.status.success(), "{}", stderr(&per_light));
+    assert!(stderr(&per_light).contains("0 sweeps"));
+    let (r1, r2, r3) = (img("r1.exr"), img("r2.exr"), img("r3.exr"));
+    assert!(r1.pixels.iter().any(|p| p.x > 0.0));
+    for ((a, b), c) in r1.pixels.iter().zip(&r2.pixels).zip(&r3.pixels) {
+        assert_eq!(*a * 2.0, *b);
+        assert_eq!(*b, *c);
+    }
+    // The basis (one solution per emissive material, each to the tolerance) against the
+    // render's single distribution.
+    let fresh = img("render.exr");
+    let diff: f32 = fresh
+        .pixels
+        .iter()
+        .zip(&r1.pixels)
+        .map(|(a, b)| (*a - *b).abs().element_sum())
+        .sum();
+    let total: f32 = fresh.pixels.iter().map(|a| a.element_sum()).sum();
+    assert!(
+        diff / total < 2e-3,
+        "basis vs distribution {}",
+        diff / total
+    );
+
+    // Other reflectances: the basis does not apply, the distribution runs again and equals
+    // `render` from the same file.
+    let text = std::fs::read_to_string(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml"),
+    )
+    .unwrap()
+    .replace("diffuse = [0.63, 0.065, 0.05]", "diffuse = [0.2, 0.6, 0.6]");
+    let edited = tmp_path(&dir, "edited.toml");
+    std::fs::write(&edited, text).unwrap();
+    let relit = network_relight(&edited, &tmp_path(&dir, "r4.exr"), &file, &[]);
+    let e = stderr(&relit);
+    assert!(relit.status.success(), "{e}");
+    assert!(
+        e.contains("other reflectances") && e.contains("sweeps"),
+        "{e}"
+    );
+    assert!(
+        !e.contains("network: preprocess") && !e.contains("0 sweeps"),
+        "{e}"
+    );
+    let rendered = network_render(
+        &edited,
+        &tmp_path(&dir, "r5.exr"),
+        &["--network-file", &file],
+    );
+    assert!(rendered.status.success(), "{}", stderr(&rendered));
+    assert_eq!(img("r4.exr").pixels, img("r5.exr").pixels);
+    assert_ne!(img("r4.exr").pixels, r1.pixels);
+
+    // Bad input: exit 2, nothing written.
+    for (args, needle) in [
+        (vec!["--light", "nosuch=2"], "nosuch"),
+        (vec!["--light", "light"], "NAME=K"),
+        (vec!["--integrator", "path"], "network integrator"),
+    ] {
+        let out = network_relight(
+            "scenes/cornell-box.toml",
+            &tmp_path(&dir, "x.exr"),
+            &file,
+            &args,
+        );
+        assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+        assert!(stderr(&out).contains(needle), "{}", stderr(&out));
+    }
+    let missing = network_relight(
+        "scenes/cornell-box.toml",
+        &tmp_path(&dir, "x.exr"),
+        &tmp_path(&dir, "missing.net"),
+        &[],
+    );
+    assert_eq!(missing.status.code(), Some(2));
+    assert!(stderr(&missing).contains("missing.net"));
+    let none = raylink(&[
+        "relight",
+        "scenes/cornell-box.toml",
+        "-o",
+        &tmp_path(&dir, "x.exr"),
+    ]);
+    assert_eq!(none.status.code(), Some(2));
+    assert!(stderr(&none).contains("--network-file"));
+    assert!(!dir.path().join("x.exr").exists());
+}
+
+/// Superposition: in a closed box with two emissive materials, the basis solution for
+/// strengths (a, b) agrees with a distribution of the box lit at (a, b); each material's own
+/// solution is exactly the basis with the other switched off, and they add up exactly.
+#[test]
+fn light_basis_superposes_per_material() {
+    use raylink::integrators::illumination_network::relight::LightBasis;
+    use raylink::math::Rgb;
+    let materials = "[materials.m]\ndiffuse = [0.6, 0.5, 0.4]\n\
+                     [materials.warm]\ndiffuse = 0.3\nemission = [2, 1, 0.5]\n\
+                     [materials.cold]\ndiffuse = 0.5\nemission = [0.5, 1, 3]\n";
+    let mut text = format!("{CAMERA}\n{materials}\n");
+    for axis in 0..3 {
+        for side in [0.0, 1.0] {
+            let mat = match (axis, side == 0.0) {
+                (1, true) => "warm",
+                (0, false) => "cold",
+                _ => "m",
+            };
+            text += &wall(axis, side, mat);
+        }
+    }
+    let s = scene(&text);
+    let net = build(&s, params(5, 1.0 / 8.0), Builder::Scan);
+    let options = DistributeOptions {
+        tolerance: 1e-5,
+        ..Default::default()
+    };
+    let emission: Vec<Rgb> = s.materials.iter().map(|m| m.emission).collect();
+    let basis = LightBasis::compute(&net, &s, &emission, &options);
+    assert_eq!(basis.lights.len(), 2);
+    let index = |name: &str| s.materials.iter().position(|m| m.name == name).unwrap();
+    let (warm, cold) = (index("warm"), index("cold"));
+    let with = |a: f32, b: f32| {
+        let mut e = emission.clone();
+        e[warm] *= a;
+        e[cold] *= b;
+        e
+    };
+    let sup = |a: f32, b: f32| basis.superpose(&net, &s, &with(a, b), &options).unwrap();
+    let (only_warm, only_cold, both) = (sup(1.0, 0.0), sup(0.0, 1.0), sup(1.0, 1.0));
+    for ((x, y), z) in only_warm
+        .diffuse
+        .iter()
+        .zip(&only_cold.diffuse)
+        .zip(&both.diffuse)
+    {
+        assert_eq!(*x + *y, *z);
+    }
+    // Against a distribution of the scene lit at other strengths.
+    let (a, b) = (3.0, 0.25);
+    let mut lit = s.clone();
+    lit.materials[warm].emission *= a;
+    lit.materials[cold].emission *= b;
+    let reference = distribute(&net, &lit, &options);
+    let got = sup(a, b);
+    let (mut err, mut total) = (0.0f64, 0.0f64);
+    for (x, y) in got.diffuse.iter().zip(&reference.diffuse) {
+        err += (*x - *y).abs().element_sum() as f64;
+        total += y.element_sum() as f64;
+    }
+    assert!(
+        total > 0.0 && err / total < 1e-4,
+        "relative error {}",
+        err / total
+    );
+    // Other reflectances: the basis refuses.
+    let mut grey = s.clone();
+    grey.materials[index("m")].diffuse = raylink::scene::Texture::Constant(Rgb::splat(0.2));
+    assert!(basis
+        .superpose(&net, &grey, &emission, &options)
+        .unwrap_err()
+        .contains("reflectances"));
+}

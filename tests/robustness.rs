@@ -265,7 +265,7 @@ fn memory_limits_are_errors_that_say_how_much() {
     let dir = tempfile::tempdir().unwrap();
     let o = dir.path().join("m.exr");
     let o = o.to_str().unwrap();
-    let cases: [(&[&str], &str); 3] = [
+    let cases: [(&[&str], &str); 5] = [
         // A 60000² film under the default limit (3/4 of physical memory) on any test machine
         // with less than 200 GiB.
         (
@@ -274,9 +274,34 @@ fn memory_limits_are_errors_that_say_how_much() {
         ),
         (&["--max-memory", "64K"], "image would need"),
         (&["--max-memory", "1x"], "--max-memory"),
+        // An impossible illumination network (tens of TiB of links), refused before the
+        // preprocess.
+        (
+            &[
+                "--integrator",
+                "network",
+                "--slopes",
+                "128",
+                "--intercept-step",
+                "0.00025",
+            ],
+            "the illumination network would need",
+        ),
+        // The intersection structures of a scene of about 4,000 polygons.
+        (
+            &["--max-memory", "256K", "--width", "8", "--height", "8"],
+            "intersection structures",
+        ),
     ];
     for (extra, needle) in cases {
-        let mut args = vec!["render", "scenes/whitted.toml", "--quiet", "-o", o];
+        let scene = if extra.contains(&"network") {
+            "scenes/network-room.toml"
+        } else if extra.contains(&"256K") {
+            "scenes/anim-circus.toml"
+        } else {
+            "scenes/whitted.toml"
+        };
+        let mut args = vec!["render", scene, "--quiet", "-o", o];
         args.extend(extra);
         let out = raylink(&args);
         let err = stderr(&out);

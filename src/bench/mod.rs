@@ -5,6 +5,7 @@
 //! repetitions after warm-up runs, with the minimum and maximum as its spread. Results go to
 //! the terminal (a Markdown table), a CSV file and an SVG chart.
 
+pub mod network;
 pub mod path;
 pub mod rays;
 pub mod report;
@@ -67,6 +68,20 @@ pub struct BenchArgs {
     /// depth 8): paths/s and Mrays/s per backend and thread count; writes path.md.
     #[arg(long)]
     pub path_tracer: bool,
+    /// Measure illumination networks instead (the office scene, or the first of --scenes, at
+    /// --network-steps): preprocess with both builders, distribution, render, relighting
+    /// against a full rebuild; writes network.md. --reps defaults to 3 here, --build-reps
+    /// (Embree builds) to 1.
+    #[arg(long)]
+    pub network: bool,
+    /// Network bench: comma-separated intercept steps, one network each [default:
+    /// 0.03125,0.0078125 (16× the patches); 0.0625,0.03125 with --quick].
+    #[arg(long, value_delimiter = ',')]
+    pub network_steps: Option<Vec<f32>>,
+    /// Network bench: slopes per axis [default: 20, the paper's 1,200 links per patch; 8
+    /// with --quick].
+    #[arg(long)]
+    pub network_slopes: Option<u32>,
 }
 
 /// The resolved settings of a run.
@@ -115,7 +130,7 @@ impl BenchConfig {
             Some("--scenes and --backends need at least one entry")
         } else if config.threads.is_empty() || config.threads.contains(&0) {
             Some("--threads needs thread counts of at least 1")
-        } else if config.reps == 0 || config.build_reps == 0 {
+        } else if config.reps == 0 || (config.build_reps == 0 && !args.network) {
             Some("--reps and --build-reps must be at least 1")
         } else if config.width == 0 || config.height == 0 {
             Some("--width and --height must be at least 1")
@@ -333,6 +348,29 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     let mut config = BenchConfig::from_args(args)?;
     std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
     let quiet = args.quiet;
+    if args.network {
+        let q = args.quick;
+        let bench = network::NetworkBench {
+            scene: args
+                .scenes
+                .as_ref()
+                .and_then(|s| s.first())
+                .map_or_else(|| "scenes/network-office.toml".into(), PathBuf::from),
+            slopes: args.network_slopes.unwrap_or(if q { 8 } else { 20 }),
+            steps: args.network_steps.clone().unwrap_or(if q {
+                vec![0.0625, 0.03125]
+            } else {
+                vec![0.03125, 0.0078125]
+            }),
+            width: args.width.unwrap_or(if q { 64 } else { 480 }),
+            height: args.height.unwrap_or(if q { 48 } else { 360 }),
+            reps: args.reps.unwrap_or(if q { 1 } else { 3 }).max(1),
+            embree_reps: args.build_reps.unwrap_or(1),
+            seed: args.seed,
+            dir: args.out.clone(),
+        };
+        return network::run(&bench, &args.out, quiet);
+    }
     if args.path_tracer {
         config.width = args.width.unwrap_or(512);
         config.height = args.height.unwrap_or(512);

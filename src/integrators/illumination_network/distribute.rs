@@ -104,6 +104,10 @@ pub struct Solution {
     /// Radiance that arrived over each slot, one row per directional node (the in-buffers
     /// accumulated over the sweeps), for rendering.
     pub incoming: Vec<Rgb>,
+    /// The link rows of the directional nodes (in `dir_index` order): rendering gathers over
+    /// their linked slots without the network's link table (relighting from a stored basis
+    /// does not read it).
+    pub dir_rows: Vec<u32>,
     pub stats: DistributeStats,
     /// The emission multiplier the solution was computed with.
     pub light_scale: f32,
@@ -126,11 +130,23 @@ pub struct DistributeStats {
 /// The nodes' surfaces from the scene's materials (diffuse textures are evaluated at the
 /// patch centre).
 pub fn surfaces(net: &Network, scene: &Scene, light_scale: f32) -> Vec<Surface> {
+    let emission: Vec<Rgb> = scene
+        .materials
+        .iter()
+        .map(|m| m.emission * light_scale)
+        .collect();
+    surfaces_with(net, scene, &emission)
+}
+
+/// [`surfaces`] with the emission of each material given (indexed as `scene.materials`):
+/// relighting distributes one emissive material at a time.
+pub fn surfaces_with(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<Surface> {
     (0..net.nodes() as u32)
         .map(|node| {
             let (poly, cell, side) = net.node_place(node);
             let pg = &net.patches.polygons[poly as usize];
-            let m = &scene.materials[scene.shapes[pg.shape as usize].material];
+            let mi = scene.shapes[pg.shape as usize].material;
+            let m = &scene.materials[mi];
             let (s, t) = pg.cell_centre(cell);
             let p = net.space.to_world(pg.point(s, t));
             let kd = m.diffuse.eval(p, Vec2::new(s, t));
@@ -148,11 +164,7 @@ pub fn surfaces(net: &Network, scene: &Scene, light_scale: f32) -> Vec<Surface> 
                 ks,
                 kt,
                 alpha: m.roughness,
-                emission: if side == 0 {
-                    m.emission * light_scale
-                } else {
-                    Rgb::ZERO
-                },
+                emission: if side == 0 { emission[mi] } else { Rgb::ZERO },
             }
         })
         .collect()
@@ -379,7 +391,21 @@ fn sum3(v: &[Rgb], w: impl Fn(usize) -> f32) -> [f64; 3] {
 /// Carries light over the network until convergence.
 pub fn distribute(net: &Network, scene: &Scene, options: &DistributeOptions) -> Solution {
     let start = std::time::Instant::now();
-    let surfaces = surfaces(net, scene, options.light_scale);
+    distribute_surfaces(
+        net,
+        surfaces(net, scene, options.light_scale),
+        options,
+        start,
+    )
+}
+
+/// [`distribute`] for given node surfaces (their emission included).
+pub fn distribute_surfaces(
+    net: &Network,
+    surfaces: Vec<Surface>,
+    options: &DistributeOptions,
+    start: std::time::Instant,
+) -> Solution {
     let nodes = net.nodes();
     let slots = net.slots();
     let w: Vec<f32> = (0..slots as u32).map(|s| net.space.etendue(s)).collect();
@@ -611,6 +637,10 @@ pub fn distribute(net: &Network, scene: &Scene, options: &DistributeOptions) -> 
     }
     stats.unshot = unshot;
     stats.seconds = start.elapsed().as_secs_f64();
+    let dir_rows = dir_nodes
+        .iter()
+        .flat_map(|&n| net.row(n).iter().copied())
+        .collect();
     Solution {
         surfaces,
         diffuse,
@@ -618,6 +648,7 @@ pub fn distribute(net: &Network, scene: &Scene, options: &DistributeOptions) -> 
         dir_index,
         directional,
         incoming,
+        dir_rows,
         stats,
         light_scale: options.light_scale,
     }
@@ -644,7 +675,7 @@ impl Solution {
                 + self.direct.len()
                 + self.directional.len()
                 + self.incoming.len())
-            + 4 * self.dir_index.len()
+            + 4 * (self.dir_index.len() + self.dir_rows.len())
             + std::mem::size_of::<Surface>() * self.surfaces.len()
     }
 }
@@ -772,6 +803,7 @@ fn shoot(
         direct,
         directional: Vec::new(),
         incoming: Vec::new(),
+        dir_rows: Vec::new(),
         stats,
         light_scale: options.light_scale,
     }

@@ -3,33 +3,40 @@
 //!
 //! ```text
 //! magic "RLNETWK\0"          8 bytes
-//! version u32 (= 1)
+//! version u32 (= 2)
 //! geometry hash u64          FNV-1a of the scene's shapes (not materials or lights:
 //!                            relighting changes those and keeps the network)
 //! slopes u32, step f32, patch_size f32, jitter f32, seed u64
 //! cells u32, nodes u32, extra links u32
 //! build stats: intersections, link ends, escapes, extra, degenerate, rays (u64 each),
 //!              seconds f64
+//! light basis size u64       0 when no basis is stored
 //! key_of_node: nodes × u32
+//! light basis                (relight.rs: one converged solution per emissive material)
+//! prefix checksum u64        over everything before it
 //! links: nodes × 3·S² × u32
 //! extra_start: (nodes + 1) × u32, extra: extra links × 2 × u32
 //! checksum u64               FNV-1a over the 64-bit words of everything before it
 //! ```
 //!
-//! Patches (polygons and cells) are not stored: they are a function of the scene's geometry
-//! and the parameters, rebuilt on load and checked against the stored cell count. Files are
-//! written to a temporary name beside the target and renamed into place.
+//! The prefix (header, node table, light basis) has its own checksum so that relighting from
+//! the basis reads only the prefix and never the link table, the bulk of the file. Patches
+//! (polygons and cells) are not stored: they are a function of the scene's geometry and the
+//! parameters, rebuilt on load and checked against the stored cell count. Files are written
+//! to a temporary name beside the target and renamed into place.
 
 use super::patches::Patches;
 use super::ray_space::RaySpace;
+use super::relight::LightBasis;
 use super::{BuildStats, Network, NetworkParams, ESCAPE, NONE};
-use crate::binary_file::{fnv1a, Format, Reader};
+use crate::binary_file::{checksum, fnv1a, Format, Reader};
 use crate::scene::Scene;
-use crate::Result;
+use crate::{Error, Result};
+use std::io::Read;
 use std::path::Path;
 
-pub const VERSION: u32 = 1;
-const FORMAT: Format = Format {
+pub const VERSION: u32 = 2;
+pub(crate) const FORMAT: Format = Format {
     magic: b"RLNETWK\0",
     version: VERSION,
     what: "illumination network",
@@ -51,9 +58,10 @@ fn params_bytes(p: &NetworkParams) -> Vec<u8> {
     b
 }
 
-/// Writes the network to `path` atomically.
-pub fn save(path: &Path, net: &Network, scene: &Scene) -> Result<()> {
-    let mut b = FORMAT.start(64 + 4 * (net.links.len() + net.nodes()));
+/// Writes the network (and a light basis, if given) to `path` atomically.
+pub fn save(path: &Path, net: &Network, scene: &Scene, basis: Option<&LightBasis>) -> Result<()> {
+    let basis = basis.map(LightBasis::to_bytes).unwrap_or_default();
+    let mut b = FORMAT.start(64 + basis.len() + 4 * (net.links.len() + net.nodes()));
     b.extend_from_slice(&geometry_hash(scene).to_le_bytes());
     b.extend_from_slice(&params_bytes(&net.params));
     b.extend_from_slice(&net.patches.cells.to_le_bytes());
@@ -71,24 +79,45 @@ pub fn save(path: &Path, net: &Network, scene: &Scene) -> Result<()> {
         b.extend_from_slice(&v.to_le_bytes());
     }
     b.extend_from_slice(&s.seconds.to_le_bytes());
-    for v in net
-        .key_of_node
+    b.extend_from_slice(&(basis.len() as u64).to_le_bytes());
+    for v in &net.key_of_node {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
+    b.extend_from_slice(&basis);
+    let prefix = checksum(&b);
+    b.extend_from_slice(&prefix.to_le_bytes());
+    // One reservation, then the table as bytes in one go.
+    let table = net
+        .links
         .iter()
-        .chain(&net.links)
         .chain(&net.extra_start)
-        .chain(net.extra.iter().flatten())
-    {
+        .chain(net.extra.iter().flatten());
+    b.reserve(4 * (net.links.len() + net.extra_start.len() + 2 * net.extra.len()));
+    for v in table {
         b.extend_from_slice(&v.to_le_bytes());
     }
     FORMAT.save(path, b)
 }
 
-/// Reads a network written by [`save`] for the same scene geometry. `expected`, when given,
-/// must equal the stored parameters. Any other file is an [`Error::Input`] naming it.
-pub fn load(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> Result<Network> {
-    let file = FORMAT.load(path)?;
+/// Bytes of the header after the version.
+const HEADER: usize = 8 + 24 + 12 + 6 * 8 + 8 + 8;
+
+struct Header {
+    params: NetworkParams,
+    cells: u32,
+    nodes: usize,
+    n_extra: usize,
+    stats: BuildStats,
+    basis_len: usize,
+}
+
+fn read_header(
+    r: &mut Reader,
+    path: &Path,
+    scene: &Scene,
+    expected: Option<&NetworkParams>,
+) -> Result<Header> {
     let bad = |problem: &str| FORMAT.error(path, problem);
-    let mut r = Reader { rest: file.body() };
     let truncated = || bad("truncated");
     if r.u64().ok_or_else(truncated)? != geometry_hash(scene) {
         return Err(bad("written for another scene geometry"));
@@ -125,35 +154,276 @@ pub fn load(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> Res
         *v = r.u64().ok_or_else(truncated)?;
     }
     stats.seconds = f64::from_le_bytes(r.take::<8>().ok_or_else(truncated)?);
+    let basis_len = usize::try_from(r.u64().ok_or_else(truncated)?).map_err(|_| truncated())?;
+    Ok(Header {
+        params,
+        cells,
+        nodes,
+        n_extra,
+        stats,
+        basis_len,
+    })
+}
+
+/// The ray space and patches for a header, checked against the scene.
+fn geometry(path: &Path, scene: &Scene, h: &Header) -> Result<(RaySpace, Patches)> {
+    let bad = |problem: &str| FORMAT.error(path, problem);
     let bounds = scene
         .bounds()
         .ok_or_else(|| bad("the scene has no shapes"))?;
-    let space = RaySpace::new(params.slopes, params.step, bounds);
-    let patches = Patches::new(scene, &space, params.patch_size).map_err(|e| bad(&e))?;
-    if patches.cells != cells {
+    let space = RaySpace::new(h.params.slopes, h.params.step, bounds);
+    let patches = Patches::new(scene, &space, h.params.patch_size).map_err(|e| bad(&e))?;
+    if patches.cells != h.cells {
         return Err(bad("patch count differs from the scene's"));
     }
-    let slots = space.slots();
-    let want = nodes
-        .checked_mul(slots + 2)
-        .and_then(|n| n.checked_add(1 + 2 * n_extra))
-        .and_then(|n| n.checked_mul(4))
-        .ok_or_else(truncated)?;
-    if r.rest.len() != want {
-        return Err(bad("size does not match the node count"));
+    Ok((space, patches))
+}
+
+/// The node table: key_of_node and its inverse.
+fn node_table(path: &Path, bytes: &[u8], cells: u32) -> Result<(Vec<u32>, Vec<u32>)> {
+    let key_of_node = words(bytes);
+    let keys = 2 * cells as usize;
+    let mut node_of_key = vec![NONE; keys];
+    for (n, &k) in key_of_node.iter().enumerate() {
+        if k as usize >= keys || node_of_key[k as usize] != NONE {
+            return Err(FORMAT.error(path, "invalid node table"));
+        }
+        node_of_key[k as usize] = n as u32;
     }
-    let words = |bytes: &[u8]| -> Vec<u32> {
-        use rayon::prelude::*;
-        bytes
-            .par_chunks_exact(4)
-            .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
-            .collect()
+    Ok((key_of_node, node_of_key))
+}
+
+fn words(bytes: &[u8]) -> Vec<u32> {
+    use rayon::prelude::*;
+    bytes
+        .par_chunks_exact(4)
+        .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+        .collect()
+}
+
+fn basis_of(path: &Path, bytes: &[u8], nodes: usize, slots: usize) -> Result<Option<LightBasis>> {
+    if bytes.is_empty() {
+        return Ok(None);
+    }
+    LightBasis::from_bytes(bytes, nodes, slots)
+        .map(Some)
+        .ok_or_else(|| FORMAT.error(path, "invalid light basis"))
+}
+
+/// A network file opened up to the end of its prefix.
+struct Opened {
+    file: std::fs::File,
+    /// Everything up to and with the prefix checksum.
+    head: Vec<u8>,
+    header: Header,
+    space: RaySpace,
+    patches: Patches,
+}
+
+/// Opens a network file and reads its prefix (header, node table, light basis, prefix
+/// checksum), after checking its size against the header.
+fn open_prefix(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> Result<Opened> {
+    let bad = |problem: &str| FORMAT.error(path, problem);
+    let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
+    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
+    // As much of the header as there is: a short file still gets the right message (not a
+    // network, another version, or truncated).
+    let mut head = Vec::with_capacity(12 + HEADER);
+    (&mut file)
+        .take((12 + HEADER) as u64)
+        .read_to_end(&mut head)
+        .map_err(|e| Error::io(path, e))?;
+    if head.len() < 12 || &head[..8] != FORMAT.magic {
+        return Err(bad("no raylink illumination network header"));
+    }
+    let version = u32::from_le_bytes(head[8..12].try_into().unwrap());
+    if version != VERSION {
+        return Err(bad(&format!(
+            "format version {version}, this raylink reads {VERSION}"
+        )));
+    }
+    if head.len() < 12 + HEADER {
+        return Err(bad("truncated"));
+    }
+    let h = read_header(&mut Reader { rest: &head[12..] }, path, scene, expected)?;
+    let (space, patches) = geometry(path, scene, &h)?;
+    let slots = space.slots();
+    let prefix_len = 12 + HEADER + 4 * h.nodes + h.basis_len;
+    let total = (h.nodes as u64 * (slots as u64 + 1) + 1 + 2 * h.n_extra as u64) * 4
+        + prefix_len as u64
+        + 16;
+    if len != total {
+        return Err(bad(
+            "size does not match the node count (truncated or corrupt)",
+        ));
+    }
+    let mut rest = vec![0u8; prefix_len + 8 - head.len()];
+    file.read_exact(&mut rest).map_err(|_| bad("truncated"))?;
+    head.extend_from_slice(&rest);
+    Ok(Opened {
+        file,
+        head,
+        header: h,
+        space,
+        patches,
+    })
+}
+
+/// Reads only the prefix of a network file (header, node table, light basis), checked by its
+/// own checksum: a network without its link table (enough to render a solution from the
+/// basis, not to distribute), and the basis if one is stored.
+pub fn load_prefix(
+    path: &Path,
+    scene: &Scene,
+    expected: Option<&NetworkParams>,
+) -> Result<(Network, Option<LightBasis>)> {
+    let bad = |problem: &str| FORMAT.error(path, problem);
+    let Opened {
+        head,
+        header: h,
+        space,
+        patches,
+        ..
+    } = open_prefix(path, scene, expected)?;
+    let (data, sum) = head.split_at(head.len() - 8);
+    if checksum(data) != u64::from_le_bytes(sum.try_into().unwrap()) {
+        return Err(bad("checksum mismatch (truncated or corrupt)"));
+    }
+    let body = &data[12 + HEADER..];
+    let (keys, basis) = body.split_at(4 * h.nodes);
+    let (key_of_node, node_of_key) = node_table(path, keys, h.cells)?;
+    let basis = basis_of(path, basis, h.nodes, space.slots())?;
+    Ok((
+        Network {
+            params: h.params,
+            space,
+            patches,
+            node_of_key,
+            key_of_node,
+            links: Vec::new(),
+            extra_start: Vec::new(),
+            extra: Vec::new(),
+            etendue: Vec::new(),
+            stats: h.stats,
+        },
+        basis,
+    ))
+}
+
+/// [`crate::binary_file::checksum`] over data that arrives in pieces.
+struct StreamSum {
+    h: u64,
+    carry: [u8; 8],
+    carried: usize,
+    len: u64,
+}
+
+impl StreamSum {
+    const PRIME: u64 = 0x100000001b3;
+
+    fn new() -> Self {
+        StreamSum {
+            h: 0xcbf29ce484222325,
+            carry: [0; 8],
+            carried: 0,
+            len: 0,
+        }
+    }
+
+    fn word(&mut self, w: [u8; 8]) {
+        self.h ^= u64::from_le_bytes(w);
+        self.h = self.h.wrapping_mul(Self::PRIME);
+    }
+
+    fn update(&mut self, mut bytes: &[u8]) {
+        self.len += bytes.len() as u64;
+        if self.carried > 0 {
+            let n = (8 - self.carried).min(bytes.len());
+            self.carry[self.carried..self.carried + n].copy_from_slice(&bytes[..n]);
+            self.carried += n;
+            bytes = &bytes[n..];
+            if self.carried < 8 {
+                return;
+            }
+            self.word(self.carry);
+            self.carried = 0;
+        }
+        let mut words = bytes.chunks_exact(8);
+        for w in &mut words {
+            self.word(w.try_into().unwrap());
+        }
+        let tail = words.remainder();
+        self.carry[..tail.len()].copy_from_slice(tail);
+        self.carried = tail.len();
+    }
+
+    fn finish(mut self) -> u64 {
+        let mut tail = [0u8; 8];
+        tail[..self.carried].copy_from_slice(&self.carry[..self.carried]);
+        self.word(tail);
+        self.h ^ self.len
+    }
+}
+
+/// Reads a network written by [`save`] for the same scene geometry. `expected`, when given,
+/// must equal the stored parameters. Any other file is an [`Error::Input`] naming it.
+pub fn load(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> Result<Network> {
+    load_all(path, scene, expected).map(|(net, _)| net)
+}
+
+/// [`load`], with the light basis if one is stored.
+pub fn load_all(
+    path: &Path,
+    scene: &Scene,
+    expected: Option<&NetworkParams>,
+) -> Result<(Network, Option<LightBasis>)> {
+    let bad = |problem: &str| FORMAT.error(path, problem);
+    let Opened {
+        mut file,
+        head,
+        header: h,
+        space,
+        patches,
+    } = open_prefix(path, scene, expected)?;
+    let (nodes, n_extra) = (h.nodes, h.n_extra);
+    let slots = space.slots();
+    // The tables are read in slices straight into their words, the checksum kept on the way:
+    // no copy of the whole file in memory.
+    let mut sum = StreamSum::new();
+    sum.update(&head);
+    let mut chunk = vec![0u8; 1 << 22];
+    let mut read_words = |count: usize, sum: &mut StreamSum| -> Result<Vec<u32>> {
+        let mut out = Vec::with_capacity(count);
+        let mut left = 4 * count;
+        while left > 0 {
+            let n = left.min(chunk.len());
+            file.read_exact(&mut chunk[..n])
+                .map_err(|_| bad("truncated"))?;
+            sum.update(&chunk[..n]);
+            out.extend(
+                chunk[..n]
+                    .chunks_exact(4)
+                    .map(|c| u32::from_le_bytes(c.try_into().unwrap())),
+            );
+            left -= n;
+        }
+        Ok(out)
     };
-    let (a, rest) = r.rest.split_at(4 * nodes);
-    let (b, rest) = rest.split_at(4 * nodes * slots);
-    let (c, rest) = rest.split_at(4 * (nodes + 1));
-    let (key_of_node, links, extra_start) = (words(a), words(b), words(c));
-    let extra: Vec<[u32; 2]> = words(rest).chunks_exact(2).map(|c| [c[0], c[1]]).collect();
+    let links = read_words(nodes * slots, &mut sum)?;
+    let extra_start = read_words(nodes + 1, &mut sum)?;
+    let extra: Vec<[u32; 2]> = read_words(2 * n_extra, &mut sum)?
+        .chunks_exact(2)
+        .map(|c| [c[0], c[1]])
+        .collect();
+    let mut stored = [0u8; 8];
+    file.read_exact(&mut stored).map_err(|_| bad("truncated"))?;
+    if sum.finish() != u64::from_le_bytes(stored) {
+        return Err(bad("checksum mismatch (truncated or corrupt)"));
+    }
+    let body = &head[12 + HEADER..head.len() - 8];
+    let (a, basis) = body.split_at(4 * nodes);
+    let (key_of_node, node_of_key) = node_table(path, a, h.cells)?;
+    let basis = basis_of(path, basis, nodes, slots)?;
     if extra_start[0] != 0
         || extra_start.windows(2).any(|w| w[0] > w[1])
         || extra_start[nodes] as usize != n_extra
@@ -161,32 +431,52 @@ pub fn load(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> Res
     {
         return Err(bad("invalid extra-link table"));
     }
-    let keys = 2 * cells as usize;
-    let mut node_of_key = vec![NONE; keys];
-    for (n, &k) in key_of_node.iter().enumerate() {
-        if k as usize >= keys || node_of_key[k as usize] != NONE {
-            return Err(bad("invalid node table"));
-        }
-        node_of_key[k as usize] = n as u32;
-    }
-    if links
-        .iter()
-        .chain(extra.iter().map(|e| &e[1]))
-        .any(|&t| t < ESCAPE && t as usize >= nodes)
     {
-        return Err(bad("a link points past the last node"));
+        use rayon::prelude::*;
+        let out_of_range = |&t: &u32| t < ESCAPE && t as usize >= nodes;
+        if links.par_iter().any(out_of_range) || extra.iter().map(|e| &e[1]).any(out_of_range) {
+            return Err(bad("a link points past the last node"));
+        }
     }
     let etendue = super::node_etendue(&space, &links, &extra_start, &extra);
-    Ok(Network {
-        params,
-        space,
-        patches,
-        node_of_key,
-        key_of_node,
-        links,
-        extra_start,
-        extra,
-        etendue,
-        stats,
-    })
+    Ok((
+        Network {
+            params: h.params,
+            space,
+            patches,
+            node_of_key,
+            key_of_node,
+            links,
+            extra_start,
+            extra,
+            etendue,
+            stats: h.stats,
+        },
+        basis,
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The streamed checksum equals the file checksum however the data is cut.
+    #[test]
+    fn streamed_checksum_equals_the_whole_one() {
+        let data: Vec<u8> = (0..1000u32).map(|i| (i * 7919 % 251) as u8).collect();
+        for len in [0, 1, 7, 8, 9, 63, 1000] {
+            let bytes = &data[..len];
+            for cuts in [&[][..], &[1][..], &[3, 5][..], &[8, 9, 17][..]] {
+                let mut sum = StreamSum::new();
+                let mut at = 0;
+                for &c in cuts {
+                    let end = (at + c).min(len);
+                    sum.update(&bytes[at..end]);
+                    at = end;
+                }
+                sum.update(&bytes[at..]);
+                assert_eq!(sum.finish(), checksum(bytes), "len {len}, cuts {cuts:?}");
+            }
+        }
+    }
 }

@@ -22,6 +22,7 @@ pub mod file;
 pub mod patches;
 pub mod preprocess;
 pub mod ray_space;
+pub mod relight;
 pub mod render;
 
 use crate::integrators::Context;
@@ -36,6 +37,11 @@ use std::time::Instant;
 pub const NONE: u32 = u32::MAX;
 /// The slot's line leaves the scene.
 pub const ESCAPE: u32 = u32::MAX - 1;
+
+/// Side keys per block of the link table's assembly: a block's rows (at most 512 nodes,
+/// 2.4 MB at 1,200 slots) stay in the last-level cache while it is filled, and each slot's
+/// ends for a block are long enough to stream. A multiple of 64.
+pub const KEY_BLOCK: usize = 512;
 
 pub const DEFAULT_SLOPES: u32 = 12;
 pub const DEFAULT_STEP: f32 = 1.0 / 64.0;
@@ -142,30 +148,44 @@ pub struct Network {
     pub stats: BuildStats,
 }
 
-/// W of every node: Σ w over its slots that have a link or an escape.
+/// W of one node: Σ w over the slots of its row that have a link or an escape, then over
+/// its extra links (one order for the build and the file load, so both give the same bits).
+#[inline]
+pub(crate) fn row_etendue(row: &[u32], extra: impl Iterator<Item = u32>, w: &[f32]) -> f32 {
+    let more: f32 = extra.map(|l| w[l as usize]).sum();
+    row.iter()
+        .zip(w)
+        .map(|(&t, &w)| if t != NONE { w } else { 0.0 })
+        .sum::<f32>()
+        + more
+}
+
+/// The link ends of key block `b` of a slot.
+#[inline]
+fn ends(slot: &SlotLinks, b: usize) -> &[[u32; 2]] {
+    &slot.ends[slot.block_start[b] as usize..slot.block_start[b + 1] as usize]
+}
+
+/// W of every node.
 pub(crate) fn node_etendue(
     space: &RaySpace,
     links: &[u32],
     extra_start: &[u32],
     extra: &[[u32; 2]],
 ) -> Vec<f32> {
-    let w: Vec<f32> = (0..space.slots() as u32)
-        .map(|s| space.etendue(s))
-        .collect();
+    use rayon::prelude::*;
+    let w = space.etendues();
     links
-        .chunks(space.slots())
+        .par_chunks(space.slots())
         .enumerate()
         .map(|(n, row)| {
-            let more: f32 = extra[extra_start[n] as usize..extra_start[n + 1] as usize]
-                .iter()
-                .map(|e| w[e[0] as usize])
-                .sum();
-            row.iter()
-                .zip(&w)
-                .filter(|(&t, _)| t != NONE)
-                .map(|(_, &w)| w)
-                .sum::<f32>()
-                + more
+            row_etendue(
+                row,
+                extra[extra_start[n] as usize..extra_start[n + 1] as usize]
+                    .iter()
+                    .map(|e| e[0]),
+                &w,
+            )
         })
         .collect()
 }
@@ -183,6 +203,10 @@ impl Network {
         let bounds = scene.bounds().ok_or("the scene has no shapes")?;
         let space = RaySpace::new(params.slopes, params.step, bounds);
         let patches = Patches::new(scene, &space, params.patch_size)?;
+        // The dense link table (a u32 per slot for each side of each cell) dominates; the
+        // preprocess's sorted line hits take about as much again.
+        let table = patches.cells as u64 * 2 * space.slots() as u64 * 4;
+        crate::memory::check("the illumination network", 2 * table).map_err(|e| e.to_string())?;
         if builder == Builder::Scan {
             if let Some(p) = patches.polygons.iter().find(|p| p.sphere.is_some()) {
                 return Err(format!(
@@ -212,10 +236,11 @@ impl Network {
     }
 
     /// Numbers the nodes (sides with at least one real link, in key order) and fills the
-    /// dense link table: in parallel over slots, each slot fills its own column (a cache-sized
-    /// array over the nodes), then the columns are transposed into per-node rows in blocks of
-    /// nodes. A second link of a slot at a node goes to the node's extra links. Nothing
-    /// depends on the schedule.
+    /// dense link table. Each slot's link ends come grouped by blocks of [`KEY_BLOCK`] side
+    /// keys (preprocess::link_slot), so a block's rows (a few hundred kilobytes) are filled
+    /// in cache by one task walking every slot's ends for that block in slot order: the
+    /// first end of a slot at a node goes into its row, further ones into its extra links.
+    /// Blocks are independent (parallel), and nothing depends on the schedule.
     pub fn assemble(
         params: NetworkParams,
         space: RaySpace,
@@ -224,95 +249,126 @@ impl Network {
     ) -> Network {
         use rayon::prelude::*;
         let keys = 2 * patches.cells as usize;
-        let mut node_of_key = vec![NONE; keys];
+        let blocks = keys.div_ceil(KEY_BLOCK);
+        let n_slots = space.slots();
+        // Nodes: keys with a real link (not only escapes), marked by each slot.
+        let words = keys.div_ceil(64);
+        let mut marks = vec![0u64; words];
         for s in slots {
-            for &[a, b] in &s.pairs {
-                node_of_key[a as usize] = 0;
-                node_of_key[b as usize] = 0;
+            for (m, &sm) in marks.iter_mut().zip(&s.marks) {
+                *m |= sm;
             }
         }
+        let mut first_node = Vec::with_capacity(blocks + 1);
+        let mut node_of_key = vec![NONE; keys];
         let mut key_of_node = Vec::new();
-        for (k, n) in node_of_key.iter_mut().enumerate() {
-            if *n == 0 {
-                *n = key_of_node.len() as u32;
-                key_of_node.push(k as u32);
+        for (wi, &m) in marks.iter().enumerate() {
+            if wi % (KEY_BLOCK / 64) == 0 {
+                first_node.push(key_of_node.len());
+            }
+            for i in 0..64 {
+                if m >> i & 1 == 1 {
+                    let k = wi * 64 + i;
+                    node_of_key[k] = key_of_node.len() as u32;
+                    key_of_node.push(k as u32);
+                }
             }
         }
         let nodes = key_of_node.len();
-        let n_slots = space.slots();
-        // Per slot: its column over the nodes, its extra (node, [slot, target]) links, and
-        // its escapes.
-        type Column = (Vec<u32>, Vec<(u32, [u32; 2])>, u64);
-        let per_slot: Vec<Column> = slots
-            .par_iter()
-            .enumerate()
-            .map(|(slot, s)| {
+        first_node.push(nodes);
+        let w = space.etendues();
+        // Zeroed pages come lazily from the system; each block fills its own rows.
+        let mut links = vec![0u32; nodes * n_slots];
+        let mut etendue = vec![0f32; nodes];
+        let mut parts = Vec::with_capacity(blocks);
+        {
+            let (mut rest, mut wrest) = (&mut links[..], &mut etendue[..]);
+            for b in 0..blocks {
+                let n = first_node[b + 1] - first_node[b];
+                let (rows, r) = std::mem::take(&mut rest).split_at_mut(n * n_slots);
+                let (wb, wr) = std::mem::take(&mut wrest).split_at_mut(n);
+                rest = r;
+                wrest = wr;
+                parts.push((b, rows, wb));
+            }
+        }
+        type Part = (Vec<(u32, [u32; 2])>, u64);
+        let filled: Vec<Part> = parts
+            .into_par_iter()
+            .map(|(b, rows, wb)| {
+                rows.fill(NONE);
+                let first = first_node[b] as u32;
                 let mut extra = Vec::new();
-                let mut column = vec![NONE; nodes];
-                let mut put = |node: u32, target: u32| {
-                    let e = &mut column[node as usize];
-                    if *e == NONE {
-                        *e = target;
-                    } else {
-                        extra.push((node, [slot as u32, target]));
+                let mut escapes = 0u64;
+                for (slot, s) in slots.iter().enumerate() {
+                    for &[k, t] in ends(s, b) {
+                        let node = node_of_key[k as usize];
+                        if node == NONE {
+                            continue;
+                        }
+                        let target = if t == ESCAPE {
+                            escapes += 1;
+                            ESCAPE
+                        } else {
+                            node_of_key[t as usize]
+                        };
+                        let e = &mut rows[(node - first) as usize * n_slots + slot];
+                        if *e == NONE {
+                            *e = target;
+                        } else {
+                            extra.push((node, [slot as u32, target]));
+                        }
                     }
-                };
-                for &[a, b] in &s.pairs {
-                    let (na, nb) = (node_of_key[a as usize], node_of_key[b as usize]);
-                    put(na, nb);
-                    put(nb, na);
                 }
-                let mut escapes = 0;
-                for &k in &s.escapes {
-                    let n = node_of_key[k as usize];
-                    if n != NONE {
-                        put(n, ESCAPE);
-                        escapes += 1;
+                // Grouped by node, in slot order within a node (a stable counting sort).
+                let n = rows.len() / n_slots;
+                let mut start = vec![0u32; n + 1];
+                for e in &extra {
+                    start[(e.0 - first) as usize + 1] += 1;
+                }
+                for i in 1..start.len() {
+                    start[i] += start[i - 1];
+                }
+                let mut grouped = vec![(0u32, [0u32; 2]); extra.len()];
+                for e in &extra {
+                    let at = &mut start[(e.0 - first) as usize];
+                    grouped[*at as usize] = *e;
+                    *at += 1;
+                }
+                let extra = grouped;
+                let mut at = 0;
+                for (i, (row, wn)) in rows.chunks(n_slots).zip(wb.iter_mut()).enumerate() {
+                    let node = first + i as u32;
+                    let start = at;
+                    while at < extra.len() && extra[at].0 == node {
+                        at += 1;
                     }
+                    *wn = row_etendue(row, extra[start..at].iter().map(|e| e.1[0]), &w);
                 }
-                (column, extra, escapes)
+                (extra, escapes)
             })
             .collect();
-        const BLOCK: usize = 64;
-        let mut links = vec![NONE; nodes * n_slots];
-        links
-            .par_chunks_mut(BLOCK * n_slots)
-            .enumerate()
-            .for_each(|(b, rows)| {
-                let first = b * BLOCK;
-                for (slot, (column, _, _)) in per_slot.iter().enumerate() {
-                    for (k, &t) in column[first..].iter().take(BLOCK).enumerate() {
-                        rows[k * n_slots + slot] = t;
-                    }
-                }
-            });
         let mut stats = BuildStats::default();
         for s in slots {
             stats.intersections += s.intersections;
             stats.degenerate += s.degenerate;
-            stats.link_ends += 2 * s.pairs.len() as u64;
+            stats.link_ends += 2 * s.pairs;
         }
-        // Extra links grouped by node (a counting sort), in slot order within a node.
         let mut extra_start = vec![0u32; nodes + 1];
-        for (_, extra, escapes) in &per_slot {
+        for (list, escapes) in &filled {
             stats.escapes += escapes;
-            for e in extra {
+            for e in list {
                 extra_start[e.0 as usize + 1] += 1;
             }
         }
         for i in 1..extra_start.len() {
             extra_start[i] += extra_start[i - 1];
         }
-        let mut fill = extra_start.clone();
-        let mut extra = vec![[0u32; 2]; extra_start[nodes] as usize];
-        for (_, list, _) in &per_slot {
-            for &(n, e) in list {
-                extra[fill[n as usize] as usize] = e;
-                fill[n as usize] += 1;
-            }
-        }
+        let extra: Vec<[u32; 2]> = filled
+            .into_iter()
+            .flat_map(|(list, _)| list.into_iter().map(|e| e.1))
+            .collect();
         stats.extra = extra.len() as u64;
-        let etendue = node_etendue(&space, &links, &extra_start, &extra);
         Network {
             params,
             space,

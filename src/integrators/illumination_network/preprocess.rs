@@ -27,6 +27,7 @@
 
 use super::patches::{Patches, Polygon};
 use super::ray_space::{axes, RaySpace};
+use super::{ESCAPE, KEY_BLOCK};
 use crate::integrators::{Context, RayStats};
 use crate::math::{Ray, Vec3};
 use rayon::prelude::*;
@@ -40,11 +41,18 @@ pub struct LineHit {
     pub key: u32,
 }
 
-/// The links of one slot: pairs of side keys, and sides whose link leaves the scene.
+/// The links of one slot as link ends (side key, the side key at the other end or
+/// [`ESCAPE`]), grouped by blocks of [`KEY_BLOCK`] side keys: block b's ends are
+/// ends[block_start[b]..block_start[b + 1]], in the order the links were found along the
+/// sorted lines (each link's two ends, then the escapes).
 #[derive(Clone, Debug, Default)]
 pub struct SlotLinks {
-    pub pairs: Vec<[u32; 2]>,
-    pub escapes: Vec<u32>,
+    pub ends: Vec<[u32; 2]>,
+    pub block_start: Vec<u32>,
+    /// Links between two sides (each has two ends).
+    pub pairs: u64,
+    /// Bit set over side keys: the sides with a link (not only an escape) in this slot.
+    pub marks: Vec<u64>,
     pub intersections: u64,
     /// Consecutive hits on the same side (dropped).
     pub degenerate: u64,
@@ -213,9 +221,23 @@ pub fn scan_slot(
     seed: u64,
     jitter: f32,
 ) -> Vec<LineHit> {
+    let mut hits = Vec::new();
+    scan_slot_into(space, patches, slot, seed, jitter, &mut hits);
+    hits
+}
+
+/// [`scan_slot`] into a reused buffer (cleared first).
+pub fn scan_slot_into(
+    space: &RaySpace,
+    patches: &Patches,
+    slot: u32,
+    seed: u64,
+    jitter: f32,
+    hits: &mut Vec<LineHit>,
+) {
+    hits.clear();
     let (family, su, sv) = space.slot_slopes(slot);
     let d = space.direction(slot);
-    let mut hits = Vec::new();
     for pg in &patches.polygons {
         if pg.n == Vec3::ZERO {
             continue;
@@ -245,7 +267,6 @@ pub fn scan_slot(
             });
         });
     }
-    hits
 }
 
 /// The Embree-cast hits of one slot: every line of the slot that crosses the unit cube is
@@ -315,40 +336,61 @@ pub const COINCIDENT: f32 = 1e-5;
 #[derive(Default)]
 pub struct LinkBuffers {
     counts: Vec<u32>,
+    tmp: Vec<LineHit>,
     sorted: Vec<LineHit>,
+    ends: Vec<[u32; 2]>,
+    escapes: Vec<u32>,
 }
 
-/// Sorts one slot's hits along their lines (a counting sort by line, then by depth within
-/// each line's few hits) and links consecutive ones. `lines` is the number of lines per slot.
-pub fn link_slot(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) -> SlotLinks {
-    let counts = &mut buf.counts;
-    counts.clear();
-    counts.resize(lines + 1, 0);
-    for h in hits {
-        counts[h.line as usize + 1] += 1;
-    }
-    for i in 1..counts.len() {
-        counts[i] += counts[i - 1];
-    }
-    let sorted = &mut buf.sorted;
+/// Stable LSD radix sort of hits by line in two passes of about half the line bits each:
+/// the digit counters stay in the first-level cache, where one counter per line (hundreds of
+/// kilobytes at fine intercept steps) would not.
+fn radix_by_line(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) {
+    let bits = usize::BITS - lines.max(2).saturating_sub(1).leading_zeros();
+    let lo_bits = bits.div_ceil(2);
+    let blank = LineHit {
+        line: 0,
+        depth: 0.0,
+        key: 0,
+    };
+    let (counts, tmp, sorted) = (&mut buf.counts, &mut buf.tmp, &mut buf.sorted);
+    tmp.clear();
+    tmp.resize(hits.len(), blank);
     sorted.clear();
-    sorted.resize(
-        hits.len(),
-        LineHit {
-            line: 0,
-            depth: 0.0,
-            key: 0,
-        },
-    );
-    for h in hits {
-        let at = &mut counts[h.line as usize];
-        sorted[*at as usize] = *h;
-        *at += 1;
-    }
+    sorted.resize(hits.len(), blank);
+    let mut pass = |from: &[LineHit], to: &mut [LineHit], shift: u32, digits: usize| {
+        counts.clear();
+        counts.resize(digits + 1, 0);
+        let digit = |h: &LineHit| (h.line >> shift) as usize & (digits - 1);
+        for h in from {
+            counts[digit(h) + 1] += 1;
+        }
+        for i in 1..counts.len() {
+            counts[i] += counts[i - 1];
+        }
+        for h in from {
+            let at = &mut counts[digit(h)];
+            to[*at as usize] = *h;
+            *at += 1;
+        }
+    };
+    pass(hits, tmp, 0, 1 << lo_bits);
+    pass(tmp, sorted, lo_bits, 1 << (bits - lo_bits));
+}
+
+/// Sorts one slot's hits along their lines (a radix sort by line, then by depth within
+/// each line's few hits), links consecutive ones and groups the link ends by key block.
+/// `lines` is the number of lines per slot, `keys` the number of side keys.
+pub fn link_slot(hits: &[LineHit], lines: usize, keys: usize, buf: &mut LinkBuffers) -> SlotLinks {
+    radix_by_line(hits, lines, buf);
+    let sorted = &mut buf.sorted;
     let mut out = SlotLinks {
         intersections: hits.len() as u64,
         ..SlotLinks::default()
     };
+    let (ends, escapes) = (&mut buf.ends, &mut buf.escapes);
+    ends.clear();
+    escapes.clear();
     for group in sorted.chunk_by_mut(|x, y| x.line == y.line) {
         // Insertion sort: a line meets a handful of patches.
         for i in 1..group.len() {
@@ -359,20 +401,51 @@ pub fn link_slot(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) -> SlotL
             }
         }
         // Entering the scene: the first side facing −d looks out of it.
-        out.escapes.push(group[0].key ^ 1);
+        escapes.push(group[0].key ^ 1);
         for w in group.windows(2) {
             let (x, y) = (w[0].key, w[1].key ^ 1);
             // A line meeting the same side twice in a row (a hit on an edge counted by both
             // of its cells' polygon) carries nothing; coincident surfaces (a box standing on
             // the floor) touch, and no light passes between them.
             if x != y && w[1].depth - w[0].depth > COINCIDENT {
-                out.pairs.push([x, y]);
+                ends.push([x, y]);
+                ends.push([y, x]);
             } else {
                 out.degenerate += 1;
             }
         }
-        out.escapes.push(group[group.len() - 1].key);
+        escapes.push(group[group.len() - 1].key);
     }
+    out.pairs = ends.len() as u64 / 2;
+    out.marks = vec![0u64; keys.div_ceil(64)];
+    for &[k, _] in ends.iter() {
+        out.marks[k as usize / 64] |= 1 << (k % 64);
+    }
+    // A stable counting sort of the ends, then the escapes, by key block.
+    let blocks = keys.div_ceil(KEY_BLOCK);
+    let mut start = vec![0u32; blocks + 1];
+    for &[k, _] in ends.iter() {
+        start[k as usize / KEY_BLOCK + 1] += 1;
+    }
+    for &k in escapes.iter() {
+        start[k as usize / KEY_BLOCK + 1] += 1;
+    }
+    for i in 1..start.len() {
+        start[i] += start[i - 1];
+    }
+    let mut fill = start.clone();
+    let mut grouped = vec![[0u32; 2]; ends.len() + escapes.len()];
+    for e in ends
+        .iter()
+        .copied()
+        .chain(escapes.iter().map(|&k| [k, ESCAPE]))
+    {
+        let at = &mut fill[e[0] as usize / KEY_BLOCK];
+        grouped[*at as usize] = e;
+        *at += 1;
+    }
+    out.ends = grouped;
+    out.block_start = start;
     out
 }
 
@@ -387,16 +460,20 @@ pub fn build_links(
 ) -> (Vec<SlotLinks>, RayStats) {
     let results: Vec<(SlotLinks, RayStats)> = (0..space.slots() as u32)
         .into_par_iter()
-        .map_init(LinkBuffers::default, |buf, slot| {
-            let mut stats = RayStats::default();
-            let hits = match (builder, ctx) {
-                (Builder::Embree, Some(ctx)) => {
-                    cast_slot(ctx, space, patches, slot, seed, jitter, &mut stats)
-                }
-                _ => scan_slot(space, patches, slot, seed, jitter),
-            };
-            (link_slot(&hits, space.lines_per_slot(), buf), stats)
-        })
+        .map_init(
+            || (LinkBuffers::default(), Vec::new()),
+            |(buf, hits), slot| {
+                let mut stats = RayStats::default();
+                match (builder, ctx) {
+                    (Builder::Embree, Some(ctx)) => {
+                        *hits = cast_slot(ctx, space, patches, slot, seed, jitter, &mut stats)
+                    }
+                    _ => scan_slot_into(space, patches, slot, seed, jitter, hits),
+                };
+                let keys = 2 * patches.cells as usize;
+                (link_slot(hits, space.lines_per_slot(), keys, buf), stats)
+            },
+        )
         .collect();
     let mut stats = RayStats::default();
     let links = results

@@ -166,6 +166,11 @@ impl RaySpace {
         ds * ds * self.step * self.step / (r2 * r2)
     }
 
+    /// The étendue of every slot, in slot order.
+    pub fn etendues(&self) -> Vec<f32> {
+        (0..self.slots() as u32).map(|s| self.etendue(s)).collect()
+    }
+
     /// The (unnormalised, d_a = 1) direction of a slot's lines.
     pub fn direction(&self, slot: u32) -> Vec3 {
         let (f, su, sv) = self.slot_slopes(slot);

@@ -103,7 +103,7 @@ impl NetworkRenderer<'_> {
         let space = &net.space;
         let slots = net.slots();
         let row = &self.solution.incoming[k as usize * slots..(k as usize + 1) * slots];
-        let links = net.row(node);
+        let links = &self.solution.dir_rows[k as usize * slots..(k as usize + 1) * slots];
         let n = net.node_normal(node);
         let mut sum = Rgb::ZERO;
         let mut wsum = 0.0;

@@ -1,0 +1,399 @@
+//! Relighting by superposition. Light transport over a network is linear in the emission and
+//! the colour channels never mix (every reflectance map multiplies a channel by its own
+//! coefficient), so the solution for emissions E'_m of the emissive materials m is
+//!
+//! ```text
+//! solution(E') = Σ_m (E'_m / E_m) ⊙ solution_m,
+//! ```
+//!
+//! per channel, where solution_m is the converged network lit by material m alone at its
+//! emission E_m. A *light basis* stores one solution per emissive material (for the nodes'
+//! reflectances at the time it was computed, identified by a hash); relighting with other
+//! light strengths then runs no distribution at all and does not need the link table (the
+//! network file stores the basis before the links, so it is not even read). A change of
+//! reflectance invalidates the basis: the distribution runs again.
+//!
+//! Each basis solution converges to the tolerance relative to its own emitted flux, so the
+//! sum converges to the tolerance relative to the total. Scaling every light by a power of
+//! two scales the result exactly.
+
+use super::distribute::{self, DistributeOptions, DistributeStats, Solution, Surface};
+use super::Network;
+use crate::binary_file::{fnv1a, Reader};
+use crate::math::Rgb;
+use crate::scene::Scene;
+use rayon::prelude::*;
+use std::time::Instant;
+
+/// One emissive material's solution.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BasisLight {
+    /// Index into the scene's materials, and the material's name (checked on use).
+    pub material: u32,
+    pub name: String,
+    /// The emission the solution was computed with.
+    pub emission: Rgb,
+    pub sweeps: u32,
+    /// emitted, escaped, absorbed, unshot (flux, per channel).
+    pub balance: [[f64; 3]; 4],
+    pub diffuse: Vec<Rgb>,
+    pub direct: Vec<Rgb>,
+    pub directional: Vec<Rgb>,
+    pub incoming: Vec<Rgb>,
+}
+
+/// Per-material solutions for one set of reflectances.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct LightBasis {
+    /// [`reflectance_hash`] of the nodes' surfaces the basis was computed for.
+    pub reflectance: u64,
+    pub tolerance: f32,
+    pub max_sweeps: u32,
+    /// 0 sweeps, 1 shoot.
+    pub order: u32,
+    /// Directional node of each node or [`super::NONE`], and their link rows.
+    pub dir_index: Vec<u32>,
+    pub dir_rows: Vec<u32>,
+    pub lights: Vec<BasisLight>,
+    /// Seconds taken by the distributions that made the basis.
+    pub seconds: f64,
+}
+
+fn order_code(o: distribute::Order) -> u32 {
+    match o {
+        distribute::Order::Sweeps => 0,
+        distribute::Order::Shoot => 1,
+    }
+}
+
+/// A hash of everything a solution depends on besides the emission: each node's material
+/// and its (kd, ks, kt, α), and whether it is an emitter's front.
+pub fn reflectance_hash(net: &Network, scene: &Scene, surfaces: &[Surface]) -> u64 {
+    let mut bytes = Vec::with_capacity(surfaces.len() * 48);
+    for (node, s) in surfaces.iter().enumerate() {
+        let (poly, _, side) = net.node_place(node as u32);
+        let shape = net.patches.polygons[poly as usize].shape as usize;
+        bytes.extend_from_slice(&(scene.shapes[shape].material as u32).to_le_bytes());
+        bytes.extend_from_slice(&side.to_le_bytes());
+        for v in [s.kd, s.ks, s.kt] {
+            for c in 0..3 {
+                bytes.extend_from_slice(&v[c].to_bits().to_le_bytes());
+            }
+        }
+        bytes.extend_from_slice(&s.alpha.to_bits().to_le_bytes());
+    }
+    fnv1a(&bytes)
+}
+
+/// The emissive materials that emit from some node (front sides).
+fn emitting_materials(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<u32> {
+    let mut used = vec![false; scene.materials.len()];
+    for node in 0..net.nodes() as u32 {
+        let (poly, _, side) = net.node_place(node);
+        let m = scene.shapes[net.patches.polygons[poly as usize].shape as usize].material;
+        if side == 0 && emission[m].max_element() > 0.0 {
+            used[m] = true;
+        }
+    }
+    (0..used.len() as u32)
+        .filter(|&m| used[m as usize])
+        .collect()
+}
+
+impl LightBasis {
+    /// One distribution per emissive material, each lit by that material alone at
+    /// `emission` (indexed as the scene's materials).
+    pub fn compute(
+        net: &Network,
+        scene: &Scene,
+        emission: &[Rgb],
+        options: &DistributeOptions,
+    ) -> LightBasis {
+        let start = Instant::now();
+        let unlit: Vec<Rgb> = vec![Rgb::ZERO; emission.len()];
+        let dark = distribute::surfaces_with(net, scene, &unlit);
+        let mut basis = LightBasis {
+            reflectance: reflectance_hash(net, scene, &dark),
+            tolerance: options.tolerance,
+            max_sweeps: options.max_sweeps,
+            order: order_code(options.order),
+            ..LightBasis::default()
+        };
+        for m in emitting_materials(net, scene, emission) {
+            let mut only = unlit.clone();
+            only[m as usize] = emission[m as usize];
+            let surfaces = distribute::surfaces_with(net, scene, &only);
+            let sol = distribute::distribute_surfaces(net, surfaces, options, Instant::now());
+            let st = &sol.stats;
+            basis.dir_index = sol.dir_index;
+            basis.dir_rows = sol.dir_rows;
+            basis.lights.push(BasisLight {
+                material: m,
+                name: scene.materials[m as usize].name.clone(),
+                emission: emission[m as usize],
+                sweeps: st.sweeps,
+                balance: [st.emitted, st.escaped, st.absorbed, st.unshot],
+                diffuse: sol.diffuse,
+                direct: sol.direct,
+                directional: sol.directional,
+                incoming: sol.incoming,
+            });
+        }
+        if basis.lights.is_empty() {
+            // Nothing emits: the directional nodes as the distribution would number them.
+            let mut k = 0;
+            for (node, s) in dark.iter().enumerate() {
+                if s.directional() {
+                    basis.dir_index.push(k);
+                    basis.dir_rows.extend_from_slice(net.row(node as u32));
+                    k += 1;
+                } else {
+                    basis.dir_index.push(super::NONE);
+                }
+            }
+        }
+        basis.seconds = start.elapsed().as_secs_f64();
+        basis
+    }
+
+    /// The solution for the scene's materials with emission `emission` (indexed as the
+    /// scene's materials) times `light_scale`, or why the basis cannot give it.
+    pub fn superpose(
+        &self,
+        net: &Network,
+        scene: &Scene,
+        emission: &[Rgb],
+        options: &DistributeOptions,
+    ) -> Result<Solution, String> {
+        let start = Instant::now();
+        if self.tolerance != options.tolerance
+            || self.max_sweeps != options.max_sweeps
+            || self.order != order_code(options.order)
+        {
+            return Err(
+                "the stored light basis was computed with other distribution options".into(),
+            );
+        }
+        let unlit: Vec<Rgb> = vec![Rgb::ZERO; emission.len()];
+        let dark = distribute::surfaces_with(net, scene, &unlit);
+        if reflectance_hash(net, scene, &dark) != self.reflectance {
+            return Err("the stored light basis was computed for other reflectances".into());
+        }
+        // The weight of each basis light, per channel.
+        let mut weights = Vec::with_capacity(self.lights.len());
+        for light in &self.lights {
+            if scene
+                .materials
+                .get(light.material as usize)
+                .is_none_or(|m| m.name != light.name)
+            {
+                return Err("the stored light basis names other materials".into());
+            }
+            let new = emission[light.material as usize] * options.light_scale;
+            let mut w = Rgb::ZERO;
+            for c in 0..3 {
+                if light.emission[c] > 0.0 {
+                    w[c] = new[c] / light.emission[c];
+                } else if new[c] != 0.0 {
+                    return Err(format!(
+                        "material {} emits a colour the stored light basis lacks",
+                        light.name
+                    ));
+                }
+            }
+            weights.push(w);
+        }
+        // Every emitter must be in the basis.
+        for m in emitting_materials(net, scene, emission) {
+            if !self.lights.iter().any(|l| l.material == m) {
+                return Err(format!(
+                    "material {} emits but is not in the stored light basis",
+                    scene.materials[m as usize].name
+                ));
+            }
+        }
+        let sum = |part: fn(&BasisLight) -> &Vec<Rgb>, len: usize| -> Vec<Rgb> {
+            let mut out = vec![Rgb::ZERO; len];
+            for (light, w) in self.lights.iter().zip(&weights) {
+                out.par_iter_mut()
+                    .zip(part(light).par_iter())
+                    .for_each(|(o, v)| *o += *w * *v);
+            }
+            out
+        };
+        let nodes = net.nodes();
+        let dir_len = self.dir_rows.len();
+        let mut stats = DistributeStats::default();
+        for (light, w) in self.lights.iter().zip(&weights) {
+            stats.sweeps = stats.sweeps.max(light.sweeps);
+            for (total, part) in [
+                &mut stats.emitted,
+                &mut stats.escaped,
+                &mut stats.absorbed,
+                &mut stats.unshot,
+            ]
+            .into_iter()
+            .zip(&light.balance)
+            {
+                for c in 0..3 {
+                    total[c] += part[c] * w[c] as f64;
+                }
+            }
+        }
+        let diffuse = sum(|l| &l.diffuse, nodes);
+        let direct = sum(|l| &l.direct, nodes);
+        let directional = sum(|l| &l.directional, dir_len);
+        let incoming = sum(|l| &l.incoming, dir_len);
+        // The surfaces as the distribution would have them (rendering reads their ks, kt, α).
+        let lit: Vec<Rgb> = emission.iter().map(|e| *e * options.light_scale).collect();
+        let surfaces = distribute::surfaces_with(net, scene, &lit);
+        stats.seconds = start.elapsed().as_secs_f64();
+        Ok(Solution {
+            surfaces,
+            diffuse,
+            direct,
+            dir_index: self.dir_index.clone(),
+            directional,
+            incoming,
+            dir_rows: self.dir_rows.clone(),
+            stats,
+            // The emission the renderer shows directly is the scene's (already scaled per
+            // light by the caller) times this.
+            light_scale: options.light_scale,
+        })
+    }
+
+    /// Bytes of the serialised basis.
+    pub fn to_bytes(&self) -> Vec<u8> {
+        let mut b = Vec::new();
+        let u32s = |b: &mut Vec<u8>, v: &[u32]| {
+            for x in v {
+                b.extend_from_slice(&x.to_le_bytes());
+            }
+        };
+        let rgbs = |b: &mut Vec<u8>, v: &[Rgb]| {
+            for x in v {
+                for c in 0..3 {
+                    b.extend_from_slice(&x[c].to_le_bytes());
+                }
+            }
+        };
+        b.extend_from_slice(&self.reflectance.to_le_bytes());
+        b.extend_from_slice(&self.tolerance.to_le_bytes());
+        b.extend_from_slice(&self.max_sweeps.to_le_bytes());
+        b.extend_from_slice(&self.order.to_le_bytes());
+        b.extend_from_slice(&self.seconds.to_le_bytes());
+        u32s(
+            &mut b,
+            &[
+                self.lights.len() as u32,
+                self.dir_index.len() as u32,
+                self.dir_rows.len() as u32,
+            ],
+        );
+        u32s(&mut b, &self.dir_index);
+        u32s(&mut b, &self.dir_rows);
+        for l in &self.lights {
+            u32s(&mut b, &[l.material, l.name.len() as u32, l.sweeps]);
+            b.extend_from_slice(l.name.as_bytes());
+            rgbs(&mut b, &[l.emission]);
+            for v in l.balance.iter().flatten() {
+                b.extend_from_slice(&v.to_le_bytes());
+            }
+            for part in [&l.diffuse, &l.direct, &l.directional, &l.incoming] {
+                b.extend_from_slice(&(part.len() as u32).to_le_bytes());
+                rgbs(&mut b, part);
+            }
+        }
+        b
+    }
+
+    /// Parses [`LightBasis::to_bytes`] for a network of `nodes` nodes and `slots` slots.
+    pub fn from_bytes(bytes: &[u8], nodes: usize, slots: usize) -> Option<LightBasis> {
+        let mut r = Reader { rest: bytes };
+        let mut basis = LightBasis {
+            reflectance: r.u64()?,
+            tolerance: r.f32()?,
+            max_sweeps: r.u32()?,
+            order: r.u32()?,
+            seconds: f64::from_le_bytes(r.take::<8>()?),
+            ..LightBasis::default()
+        };
+        let (n_lights, n_index, n_rows) = (r.u32()?, r.u32()? as usize, r.u32()? as usize);
+        let u32s = |r: &mut Reader, n: usize| -> Option<Vec<u32>> {
+            if r.rest.len() < 4 * n {
+                return None;
+            }
+            let (a, rest) = r.rest.split_at(4 * n);
+            r.rest = rest;
+            Some(
+                a.chunks_exact(4)
+                    .map(|c| u32::from_le_bytes(c.try_into().unwrap()))
+                    .collect(),
+            )
+        };
+        let rgbs = |r: &mut Reader, n: usize| -> Option<Vec<Rgb>> {
+            if r.rest.len() < 12 * n {
+                return None;
+            }
+            let (a, rest) = r.rest.split_at(12 * n);
+            r.rest = rest;
+            Some(
+                a.par_chunks_exact(12)
+                    .map(|c| {
+                        let f = |i: usize| f32::from_le_bytes(c[i..i + 4].try_into().unwrap());
+                        Rgb::new(f(0), f(4), f(8))
+                    })
+                    .collect(),
+            )
+        };
+        basis.dir_index = u32s(&mut r, n_index)?;
+        basis.dir_rows = u32s(&mut r, n_rows)?;
+        let dir = basis
+            .dir_index
+            .iter()
+            .filter(|&&k| k != super::NONE)
+            .count();
+        if n_index != nodes || n_rows != dir * slots {
+            return None;
+        }
+        for _ in 0..n_lights {
+            let (material, name_len, sweeps) = (r.u32()?, r.u32()? as usize, r.u32()?);
+            if r.rest.len() < name_len {
+                return None;
+            }
+            let (name, rest) = r.rest.split_at(name_len);
+            r.rest = rest;
+            let name = String::from_utf8(name.to_vec()).ok()?;
+            let emission = rgbs(&mut r, 1)?[0];
+            let mut balance = [[0.0; 3]; 4];
+            for v in balance.iter_mut().flatten() {
+                *v = f64::from_le_bytes(r.take::<8>()?);
+            }
+            let mut parts = Vec::new();
+            for want in [nodes, nodes, n_rows, n_rows] {
+                let n = r.u32()? as usize;
+                if n != want {
+                    return None;
+                }
+                parts.push(rgbs(&mut r, n)?);
+            }
+            let incoming = parts.pop()?;
+            let directional = parts.pop()?;
+            let direct = parts.pop()?;
+            let diffuse = parts.pop()?;
+            basis.lights.push(BasisLight {
+                material,
+                name,
+                emission,
+                sweeps,
+                balance,
+                diffuse,
+                direct,
+                directional,
+                incoming,
+            });
+        }
+        r.rest.is_empty().then_some(basis)
+    }
+}
