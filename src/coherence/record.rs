@@ -89,15 +89,24 @@ fn same_ray(a: &Ray, b: &Ray) -> bool {
 
 impl Accel for RecordingAccel<'_> {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        // Most queries follow no blocked shadow ray: skip the lock for them.
-        let cached = if self.has_last.swap(false, Ordering::Relaxed) {
+        // Most queries follow no blocked shadow ray: skip the lock (and any read-modify-
+        // write) for them. Only this task uses the recorder.
+        let cached = if self.has_last.load(Ordering::Relaxed) {
+            self.has_last.store(false, Ordering::Relaxed);
             self.last.lock().unwrap_or_else(|e| e.into_inner()).take()
         } else {
             None
         };
-        // The same query gives the same answer: reuse the one `occluded` just made.
+        // The same query gives the same answer: reuse the one `occluded` just made. Its
+        // segment is then already in the shadow set, at least up to this hit; the shadow
+        // table is read whenever the surface table is, so it needs no second walk.
         let hit = match cached {
-            Some((r, hit)) if same_ray(&r, ray) => hit,
+            Some((r, hit)) if same_ray(&r, ray) => {
+                if hit.is_some() {
+                    self.hit.store(true, Ordering::Relaxed);
+                }
+                return hit;
+            }
             _ => self.inner.intersect(ray),
         };
         let end = hit.map_or(ray.tmax, |h| h.t);
