@@ -70,6 +70,7 @@ impl Grid {
     }
 
     /// The voxel coordinates holding `p`, clamped into the grid.
+    #[inline(always)]
     fn cell_of(&self, p: Vec3) -> [u32; 3] {
         // Truncation is the floor for the non-negative values kept (and the cast saturates).
         let f = ((p - self.lo) * self.inv_cell).max(Vec3::ZERO);
@@ -160,23 +161,49 @@ impl Grid {
                 delta[a] = -self.cell[a] * inv[a];
             }
         }
+        // The loop keeps its state in registers and picks the axis of each step with
+        // selects, not branches: the order of the crossings is unpredictable.
+        let [mut n0, mut n1, mut n2] = next;
+        let [mut l0, mut l1, mut l2] = left;
         let mut t = tin;
         for _ in 0..left[0] + left[1] + left[2] {
-            // The axis whose boundary comes first (lowest axis on ties), chosen without
-            // branches (Amanatides & Woo's comparison table): the order is unpredictable.
-            let k = ((next[0] <= next[1]) as usize) << 2
-                | ((next[0] <= next[2]) as usize) << 1
-                | (next[1] <= next[2]) as usize;
-            let a = [2, 1, 2, 1, 2, 2, 0, 0][k];
-            let boundary = next[a].min(tout);
+            // The axis whose boundary comes first (the lowest axis on ties).
+            let x = n0 <= n1 && n0 <= n2;
+            let y = !x && n1 <= n2;
+            let z = !x && !y;
+            let boundary = n0.min(n1).min(n2).min(tout);
             f(index as usize, t, boundary);
             t = boundary;
-            index += step[a];
-            left[a] -= 1;
-            next[a] = if left[a] == 0 {
-                f32::INFINITY
+            index += if x {
+                step[0]
+            } else if y {
+                step[1]
             } else {
-                next[a] + delta[a]
+                step[2]
+            };
+            l0 -= x as u32;
+            l1 -= y as u32;
+            l2 -= z as u32;
+            n0 = if l0 == 0 {
+                f32::INFINITY
+            } else if x {
+                n0 + delta[0]
+            } else {
+                n0
+            };
+            n1 = if l1 == 0 {
+                f32::INFINITY
+            } else if y {
+                n1 + delta[1]
+            } else {
+                n1
+            };
+            n2 = if l2 == 0 {
+                f32::INFINITY
+            } else if z {
+                n2 + delta[2]
+            } else {
+                n2
             };
         }
         f(index as usize, t, tout);
