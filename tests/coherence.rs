@@ -4,6 +4,7 @@
 mod common;
 
 use raylink::accel::{self, Backend, Update};
+use raylink::coherence::changes::FrameSummary;
 use raylink::coherence::grid::Grid;
 use raylink::coherence::renderer::{CoherentRenderer, Engine, FrameStats};
 use raylink::coherence::tables::BlockLayout;
@@ -236,7 +237,19 @@ fn run(text: &str, kind: Kind, blocks: (u32, u32)) -> Vec<(FrameStats, Image)> {
         }
     }
     let grid = CoherentRenderer::grid_around(&boxes, 4096);
-    let mut r = CoherentRenderer::new(grid, BlockLayout::new(w, h, blocks.0, blocks.1));
+    let layout = BlockLayout::new(w, h, blocks.0, blocks.1);
+    let mut r = CoherentRenderer::new(grid.clone(), layout);
+    // A second renderer records only where a later frame changes something (what
+    // `raylink animate` does): it must retrace exactly the same blocks.
+    let changes: Vec<Vec<_>> = scenes
+        .windows(2)
+        .map(|w| {
+            let c = FrameSummary::new(&w[0], None).diff(&FrameSummary::new(&w[1], None));
+            c.objects.iter().chain(&c.shadows).copied().collect()
+        })
+        .collect();
+    let mut sparse = CoherentRenderer::new(grid, layout);
+    sparse.restrict_to_sequence(&changes);
     let mut out = Vec::new();
     // The incremental renderer moves one dynamic structure (Embree refits what moved); each
     // full render builds its own static one.
@@ -244,6 +257,11 @@ fn run(text: &str, kind: Kind, blocks: (u32, u32)) -> Vec<(FrameStats, Image)> {
     for (f, scene) in frames.iter().zip(&scenes) {
         dynamic.update(scene).unwrap();
         let (image, stats) = r.render_frame(scene, dynamic.as_ref(), &engine).unwrap();
+        let (image2, stats2) = sparse
+            .render_frame(scene, dynamic.as_ref(), &engine)
+            .unwrap();
+        assert!(bits(&image) == bits(&image2), "frame {f}: sparse records");
+        assert_eq!(stats.blocks, stats2.blocks, "frame {f}: sparse records");
         let accel = accel::build(scene, Backend::Embree).unwrap();
         let (full, _) = engine
             .render_full(&Context::new(scene, accel.as_ref()))
@@ -648,4 +666,54 @@ fn embree_refits_moved_meshes_and_answers_like_a_fresh_build() {
         dynamic.update(&anim.scene_at(1).unwrap()).unwrap(),
         Update::Rebuilt
     );
+}
+
+#[test]
+fn cli_frame_range_matches_the_whole_sequence() {
+    // A sub-range starts with a full frame and continues coherently; its frames must equal
+    // those of the whole sequence, and keep their absolute numbers.
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("a.toml");
+    std::fs::write(
+        &scene,
+        animated("start = 10\n", MOVING)
+            .replace("frame = 0\n", "frame = 10\n")
+            .replace("frame = 2\n", "frame = 12\n"),
+    )
+    .unwrap();
+    let s = scene.to_str().unwrap();
+    let render = |name: &str, extra: &[&str]| {
+        let pattern = dir.path().join(format!("{name}/f_%d.exr"));
+        let mut args = vec!["animate", s, "-o", pattern.to_str().unwrap(), "--quiet"];
+        args.extend(["--aa-depth", "1", "--width", "40", "--height", "30"]);
+        args.extend(extra);
+        let out = common::raylink(&args);
+        assert!(out.status.success(), "{}", common::stderr(&out));
+    };
+    render("all", &[]);
+    render("part", &["--frames", "11..12"]);
+    render("tail", &["--frames", "12.."]);
+    let read = |name: &str, f: i64| {
+        let path = dir.path().join(format!("{name}/f_{f}.exr"));
+        bits(&raylink::image::output::read_image(&path).unwrap().0)
+    };
+    for f in 10..14 {
+        assert!(dir.path().join(format!("all/f_{f}.exr")).is_file());
+    }
+    for f in [11, 12] {
+        assert!(read("part", f) == read("all", f), "frame {f} differs");
+    }
+    // Frame 11 is in motion: the range's first frame differs from the sequence's first.
+    assert!(read("part", 11) != read("all", 10));
+    assert!(read("tail", 12) == read("all", 12) && read("tail", 13) == read("all", 13));
+    for (name, f) in [("part", 10), ("part", 13), ("tail", 11)] {
+        assert!(!dir.path().join(format!("{name}/f_{f}.exr")).exists());
+    }
+    // A range outside the sequence is an error naming it.
+    let bad = dir.path().join("bad/f_%d.exr");
+    for spec in ["8..11", "12..11", "x"] {
+        let out = common::raylink(&["animate", s, "-o", bad.to_str().unwrap(), "--frames", spec]);
+        assert_eq!(out.status.code(), Some(2), "{spec}");
+        assert!(common::stderr(&out).contains("--frames"), "{spec}");
+    }
 }

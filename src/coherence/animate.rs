@@ -72,6 +72,11 @@ pub struct AnimateArgs {
     /// More voxels retrace fewer pixels but cost more per recorded ray.
     #[arg(long, default_value_t = 8192)]
     pub voxels: u32,
+    /// Render only these frames of the sequence: A..B (both included), A.., ..B or A, in the
+    /// scene's frame numbers (e.g. one render-farm job's share). Frame A is traced in full,
+    /// the rest coherently; the frames equal those of the whole sequence bit for bit.
+    #[arg(long, value_name = "A..B")]
+    pub frames: Option<String>,
     /// Render every frame from scratch instead (the traditional frame-by-frame method).
     #[arg(long, conflicts_with = "verify")]
     pub no_coherence: bool,
@@ -128,6 +133,38 @@ pub fn frame_path(pattern: &str, frame: i64) -> Result<PathBuf> {
         "{}{frame:0width$}{tail}",
         &pattern[..start]
     )))
+}
+
+/// The frames of `all` (consecutive numbers) that `--frames spec` selects.
+pub fn select_frames(spec: &str, all: std::ops::Range<i64>) -> Result<Vec<i64>> {
+    let (first, last) = (all.start, all.end - 1);
+    let bad = |why: String| Error::Options(format!("--frames {spec}: {why}"));
+    let number = |s: &str, default: i64| -> Result<i64> {
+        let s = s.trim();
+        if s.is_empty() {
+            return Ok(default);
+        }
+        s.parse().map_err(|_| {
+            bad(format!(
+                "\"{s}\" is not a frame number (expected A..B, A.., ..B or A)"
+            ))
+        })
+    };
+    let (a, b) = match spec.split_once("..") {
+        Some((a, b)) => (number(a, first)?, number(b, last)?),
+        None if !spec.trim().is_empty() => {
+            let n = number(spec, first)?;
+            (n, n)
+        }
+        None => return Err(bad("expected A..B, A.., ..B or A".into())),
+    };
+    if a > b {
+        return Err(bad(format!("the range is empty ({a} > {b})")));
+    }
+    if a < first || b > last {
+        return Err(bad(format!("the sequence has frames {first} to {last}")));
+    }
+    Ok((a..=b).collect())
 }
 
 fn parse_blocks(s: &str) -> Result<(u32, u32)> {
@@ -260,7 +297,10 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
         ));
     }
     let anim = Animation::read(&args.scene)?;
-    let frames: Vec<i64> = anim.frame_numbers().collect();
+    let frames: Vec<i64> = match &args.frames {
+        Some(spec) => select_frames(spec, anim.frame_numbers())?,
+        None => anim.frame_numbers().collect(),
+    };
     let first_path = frame_path(&args.output, frames[0])?;
     if let Some(dir) = first_path.parent().filter(|d| !d.as_os_str().is_empty()) {
         std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
@@ -363,19 +403,26 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
     // the frame-to-frame changes mark (found by reading every frame once first), so its
     // resolution goes where it matters and rays crossing the still parts cost nothing.
     let prepare = Instant::now();
-    let mut boxes = Vec::new();
+    let mut changes = Vec::new();
     let mut previous = FrameSummary::new(&scene0, None);
     for &f in &frames[1..] {
         let next = FrameSummary::new(&anim.scene_at(f)?, None);
         let c = previous.diff(&next);
-        boxes.extend(c.objects.iter().chain(&c.shadows).copied());
+        changes.push(
+            c.objects
+                .iter()
+                .chain(&c.shadows)
+                .copied()
+                .collect::<Vec<_>>(),
+        );
         previous = next;
     }
+    let boxes: Vec<_> = changes.iter().flatten().copied().collect();
     let grid = CoherentRenderer::grid_around(&boxes, args.voxels);
     let prepare_seconds = prepare.elapsed().as_secs_f64();
     let layout = super::tables::BlockLayout::new(width, height, blocks.0, blocks.1);
     let mut coherent = CoherentRenderer::new(grid, layout);
-    coherent.restrict_to(&boxes);
+    coherent.restrict_to_sequence(&changes);
     let out_options = OutputOptions {
         exposure: args.exposure,
         half: args.half,

@@ -70,6 +70,7 @@ impl Grid {
     }
 
     /// The voxel coordinates holding `p`, clamped into the grid.
+    #[inline(always)]
     fn cell_of(&self, p: Vec3) -> [u32; 3] {
         // Truncation is the floor for the non-negative values kept (and the cast saturates).
         let f = ((p - self.lo) * self.inv_cell).max(Vec3::ZERO);
@@ -109,34 +110,26 @@ impl Grid {
         dir: Vec3,
         t0: f32,
         t1: f32,
+        f: impl FnMut(usize, f32, f32),
+    ) {
+        let inv = dir.recip();
+        if let Some((tin, tout)) = clip(self.lo, self.hi, origin, dir, inv, t0, t1) {
+            self.walk_clipped(origin, dir, inv, tin, tout, f);
+        }
+    }
+
+    /// The walk of a segment already clipped to `[tin, tout]` inside the grid's box
+    /// (`inv` = 1 / `dir`).
+    #[inline(always)]
+    fn walk_clipped(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        inv: Vec3,
+        tin: f32,
+        tout: f32,
         mut f: impl FnMut(usize, f32, f32),
     ) {
-        // Clip to the grid's box (slabs).
-        let inv = dir.recip();
-        let (mut tin, mut tout) = (t0.max(0.0), t1);
-        if dir.cmpne(Vec3::ZERO).all() {
-            let (a, b) = ((self.lo - origin) * inv, (self.hi - origin) * inv);
-            tin = tin.max(a.min(b).max_element());
-            tout = tout.min(a.max(b).min_element());
-        } else {
-            for k in 0..3 {
-                if dir[k] == 0.0 {
-                    if origin[k] < self.lo[k] || origin[k] > self.hi[k] {
-                        return;
-                    }
-                    continue;
-                }
-                let (a, b) = (
-                    (self.lo[k] - origin[k]) * inv[k],
-                    (self.hi[k] - origin[k]) * inv[k],
-                );
-                tin = tin.max(a.min(b));
-                tout = tout.min(a.max(b));
-            }
-        }
-        if tin.is_nan() || tout.is_nan() || tin > tout {
-            return;
-        }
         // The cells at both ends fix how many boundaries the walk crosses on each axis; it
         // then takes exactly those steps, in the order the ray meets the boundaries (no
         // per-step range or distance checks, and rounding cannot push it off the grid).
@@ -168,32 +161,87 @@ impl Grid {
                 delta[a] = -self.cell[a] * inv[a];
             }
         }
+        // The loop keeps its state in registers and picks the axis of each step with
+        // selects, not branches: the order of the crossings is unpredictable.
+        let [mut n0, mut n1, mut n2] = next;
+        let [mut l0, mut l1, mut l2] = left;
         let mut t = tin;
         for _ in 0..left[0] + left[1] + left[2] {
-            let a = if next[0] <= next[1] {
-                if next[0] <= next[2] {
-                    0
-                } else {
-                    2
-                }
-            } else if next[1] <= next[2] {
-                1
-            } else {
-                2
-            };
-            let boundary = next[a].min(tout);
+            // The axis whose boundary comes first (the lowest axis on ties).
+            let x = n0 <= n1 && n0 <= n2;
+            let y = !x && n1 <= n2;
+            let z = !x && !y;
+            let boundary = n0.min(n1).min(n2).min(tout);
             f(index as usize, t, boundary);
             t = boundary;
-            index += step[a];
-            left[a] -= 1;
-            next[a] = if left[a] == 0 {
-                f32::INFINITY
+            index += if x {
+                step[0]
+            } else if y {
+                step[1]
             } else {
-                next[a] + delta[a]
+                step[2]
+            };
+            l0 -= x as u32;
+            l1 -= y as u32;
+            l2 -= z as u32;
+            n0 = if l0 == 0 {
+                f32::INFINITY
+            } else if x {
+                n0 + delta[0]
+            } else {
+                n0
+            };
+            n1 = if l1 == 0 {
+                f32::INFINITY
+            } else if y {
+                n1 + delta[1]
+            } else {
+                n1
+            };
+            n2 = if l2 == 0 {
+                f32::INFINITY
+            } else if z {
+                n2 + delta[2]
+            } else {
+                n2
             };
         }
         f(index as usize, t, tout);
     }
+}
+
+/// The part `[tin, tout]` of `[max(t0, 0), t1]` where `origin + t·dir` is inside the box
+/// `[lo, hi]` (`inv` = 1 / `dir`); `None` if it misses.
+#[inline(always)]
+fn clip(
+    lo: Vec3,
+    hi: Vec3,
+    origin: Vec3,
+    dir: Vec3,
+    inv: Vec3,
+    t0: f32,
+    t1: f32,
+) -> Option<(f32, f32)> {
+    let (mut tin, mut tout) = (t0.max(0.0), t1);
+    if dir.cmpne(Vec3::ZERO).all() {
+        let (a, b) = ((lo - origin) * inv, (hi - origin) * inv);
+        tin = tin.max(a.min(b).max_element());
+        tout = tout.min(a.max(b).min_element());
+    } else {
+        for k in 0..3 {
+            if dir[k] == 0.0 {
+                if origin[k] < lo[k] || origin[k] > hi[k] {
+                    return None;
+                }
+                continue;
+            }
+            let (a, b) = ((lo[k] - origin[k]) * inv[k], (hi[k] - origin[k]) * inv[k]);
+            tin = tin.max(a.min(b));
+            tout = tout.min(a.max(b));
+        }
+    }
+    // False when either is NaN.
+    (tin <= tout).then_some((tin, tout))
 }
 
 /// The voxels worth recording: those where a change can happen (the boxes the sequence's
@@ -204,10 +252,13 @@ impl Grid {
 pub struct ActiveVoxels {
     pub fine: Grid,
     coarse: Grid,
-    /// Per fine voxel.
-    active: Vec<bool>,
+    /// One bit per fine voxel.
+    active: Vec<u64>,
     /// Per coarse cell: whether any of its fine voxels is active.
     coarse_active: Vec<bool>,
+    /// The box around the active voxels (a little grown), if any: a segment that misses it
+    /// is not walked at all.
+    bounds: Option<(Vec3, Vec3)>,
 }
 
 /// Fine voxels per coarse cell along each axis.
@@ -216,30 +267,21 @@ const COARSE: u32 = 4;
 impl ActiveVoxels {
     /// Every voxel of `fine` is worth recording.
     pub fn all(fine: Grid) -> ActiveVoxels {
-        let mut a = ActiveVoxels::none(fine);
-        a.active.fill(true);
-        a.coarse_active.fill(true);
-        a
+        let n = fine.len();
+        ActiveVoxels::from_mask(fine, &vec![true; n])
     }
 
     /// Only the voxels overlapping one of `boxes` (grown by `margin`).
     pub fn boxes(fine: Grid, boxes: &[(Vec3, Vec3)], margin: f32) -> ActiveVoxels {
-        let mut a = ActiveVoxels::none(fine);
+        let mut mask = vec![false; fine.len()];
         for (lo, hi) in boxes {
-            let (fine, active) = (&a.fine, &mut a.active);
-            fine.voxels_in_box(*lo - margin, *hi + margin, |v| active[v] = true);
+            fine.voxels_in_box(*lo - margin, *hi + margin, |v| mask[v] = true);
         }
-        for v in 0..a.fine.len() {
-            if a.active[v] {
-                let c = a.fine.coords(v).map(|x| x / COARSE);
-                let i = a.coarse.index(c);
-                a.coarse_active[i] = true;
-            }
-        }
-        a
+        ActiveVoxels::from_mask(fine, &mask)
     }
 
-    fn none(fine: Grid) -> ActiveVoxels {
+    /// The voxels `v` with `mask[v]`.
+    pub fn from_mask(fine: Grid, mask: &[bool]) -> ActiveVoxels {
         let res = fine.res.map(|r| r.div_ceil(COARSE));
         let scale = Vec3::new(
             (res[0] * COARSE) as f32 / fine.res[0] as f32,
@@ -247,33 +289,70 @@ impl ActiveVoxels {
             (res[2] * COARSE) as f32 / fine.res[2] as f32,
         );
         let coarse = Grid::new(fine.lo, fine.lo + (fine.hi - fine.lo) * scale, res);
+        let mut active = vec![0u64; fine.len().div_ceil(64)];
+        let mut coarse_active = vec![false; coarse.len()];
+        let (mut lo, mut hi) = ([u32::MAX; 3], [0u32; 3]);
+        for (v, _) in mask.iter().enumerate().filter(|(_, &m)| m) {
+            active[v / 64] |= 1 << (v % 64);
+            let c = fine.coords(v);
+            coarse_active[coarse.index(c.map(|x| x / COARSE))] = true;
+            for k in 0..3 {
+                lo[k] = lo[k].min(c[k]);
+                hi[k] = hi[k].max(c[k]);
+            }
+        }
+        let bounds = (lo[0] <= hi[0]).then(|| {
+            // Grown by a hair, so that rounding in the clip cannot cut off a crossing that
+            // the walk over the whole grid would have found.
+            let eps = (fine.hi - fine.lo).length() * 1e-5;
+            (
+                fine.voxel_box(fine.index(lo)).0 - eps,
+                fine.voxel_box(fine.index(hi)).1 + eps,
+            )
+        });
         ActiveVoxels {
-            active: vec![false; fine.len()],
-            coarse_active: vec![false; coarse.len()],
+            active,
+            coarse_active,
             fine,
             coarse,
+            bounds,
         }
     }
 
     pub fn is_active(&self, v: usize) -> bool {
-        self.active[v]
+        self.active[v / 64] >> (v % 64) & 1 != 0
+    }
+
+    /// How many voxels are active.
+    pub fn count(&self) -> usize {
+        self.active.iter().map(|w| w.count_ones() as usize).sum()
     }
 
     /// Calls `f` on every active voxel the segment crosses (and possibly on an active
     /// neighbour of a coarse cell's boundary, where rounding puts the crossing).
+    #[inline]
     pub fn walk(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32, mut f: impl FnMut(usize)) {
+        // Most segments miss the box around the active voxels: one slab test.
+        let Some((lo, hi)) = self.bounds else {
+            return;
+        };
+        let inv = dir.recip();
+        let Some((tin, tout)) = clip(lo, hi, origin, dir, inv, t0, t1) else {
+            return;
+        };
         // The coarse walk finds the stretch of the segment over active coarse cells; one fine
         // walk then covers that stretch.
-        let (mut lo, mut hi) = (f32::INFINITY, f32::NEG_INFINITY);
-        self.coarse.walk_spans(origin, dir, t0, t1, |c, ta, tb| {
-            if self.coarse_active[c] {
-                lo = lo.min(ta);
-                hi = hi.max(tb);
-            }
-        });
-        if lo <= hi {
-            self.fine.walk(origin, dir, lo, hi, |v| {
-                if self.active[v] {
+        let (mut a, mut b) = (f32::INFINITY, f32::NEG_INFINITY);
+        self.coarse
+            .walk_clipped(origin, dir, inv, tin, tout, |c, ta, tb| {
+                if self.coarse_active[c] {
+                    a = a.min(ta);
+                    b = b.max(tb);
+                }
+            });
+        if a <= b {
+            self.fine.walk_clipped(origin, dir, inv, a, b, |v, _, _| {
+                if self.is_active(v) {
                     f(v)
                 }
             });

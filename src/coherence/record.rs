@@ -11,16 +11,20 @@ use super::tables::{Table, VoxelTables};
 use crate::accel::{Accel, Hit};
 use crate::math::Ray;
 use crate::scene::Scene;
+use std::cell::Cell;
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::Mutex;
+
+thread_local! {
+    /// The last blocked shadow ray recorded on this thread, its nearest hit, and the
+    /// recorder that made it (by address). A task runs on one thread, its queries in order,
+    /// so no lock is needed.
+    static LAST: Cell<Option<(usize, Ray, Option<Hit>)>> = const { Cell::new(None) };
+}
 
 pub struct RecordingAccel<'a> {
     inner: &'a dyn Accel,
     scene: &'a Scene,
     voxels: &'a ActiveVoxels,
-    /// The last blocked shadow ray and its nearest hit.
-    last: Mutex<Option<(Ray, Option<Hit>)>>,
-    has_last: AtomicBool,
     /// Voxels crossed by rays looking for surfaces, and by shadow rays (one bit per voxel).
     surface: Vec<AtomicU64>,
     shadow: Vec<AtomicU64>,
@@ -41,18 +45,22 @@ impl<'a> RecordingAccel<'a> {
         scene: &'a Scene,
         voxels: &'a ActiveVoxels,
     ) -> RecordingAccel<'a> {
+        // Nothing cached by an earlier task (perhaps of another frame) may be reused.
+        LAST.set(None);
         let words = voxels.fine.len().div_ceil(64);
         let zeros = || (0..words).map(|_| AtomicU64::new(0)).collect();
         RecordingAccel {
             inner,
             scene,
             voxels,
-            last: Mutex::new(None),
-            has_last: AtomicBool::new(false),
             surface: zeros(),
             shadow: zeros(),
             hit: AtomicBool::new(false),
         }
+    }
+
+    fn id(&self) -> usize {
+        self as *const Self as usize
     }
 
     /// Sets `block`'s bit in the tables of every voxel recorded.
@@ -89,15 +97,17 @@ fn same_ray(a: &Ray, b: &Ray) -> bool {
 
 impl Accel for RecordingAccel<'_> {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        // Most queries follow no blocked shadow ray: skip the lock for them.
-        let cached = if self.has_last.swap(false, Ordering::Relaxed) {
-            self.last.lock().unwrap_or_else(|e| e.into_inner()).take()
-        } else {
-            None
-        };
-        // The same query gives the same answer: reuse the one `occluded` just made.
+        let cached = LAST.take();
+        // The same query gives the same answer: reuse the one `occluded` just made. Its
+        // segment is then already in the shadow set, at least up to this hit; the shadow
+        // table is read whenever the surface table is, so it needs no second walk.
         let hit = match cached {
-            Some((r, hit)) if same_ray(&r, ray) => hit,
+            Some((id, r, hit)) if id == self.id() && same_ray(&r, ray) => {
+                if hit.is_some() {
+                    self.hit.store(true, Ordering::Relaxed);
+                }
+                return hit;
+            }
             _ => self.inner.intersect(ray),
         };
         let end = hit.map_or(ray.tmax, |h| h.t);
@@ -127,8 +137,7 @@ impl Accel for RecordingAccel<'_> {
                 }
             }
             // The Whitted integrator asks for this hit next: keep it.
-            *self.last.lock().unwrap_or_else(|e| e.into_inner()) = Some((*ray, hit));
-            self.has_last.store(true, Ordering::Relaxed);
+            LAST.set(Some((self.id(), *ray, hit)));
         }
         self.voxels.walk(ray.origin, ray.dir, ray.tmin, end, |v| {
             mark(&self.shadow, v)

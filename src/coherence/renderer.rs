@@ -122,6 +122,11 @@ pub struct CoherentRenderer {
     pub layout: BlockLayout,
     tables: VoxelTables,
     previous: Option<(FrameSummary, Image)>,
+    /// With [`restrict_to_sequence`](Self::restrict_to_sequence): per voxel, the last
+    /// position in the sequence at which it changes (0: never).
+    last_change: Option<Vec<u32>>,
+    /// The position in the sequence of the next frame (0 after [`reset`](Self::reset)).
+    position: u32,
 }
 
 /// Relative margin around changed boxes: covers rounding in the DDA and in hit distances, so
@@ -137,6 +142,8 @@ impl CoherentRenderer {
             layout,
             tables,
             previous: None,
+            last_change: None,
+            position: 0,
         }
     }
 
@@ -163,13 +170,41 @@ impl CoherentRenderer {
     pub fn restrict_to(&mut self, boxes: &[(Vec3, Vec3)]) {
         let margin = MARGIN * (self.grid.hi - self.grid.lo).length();
         self.voxels = ActiveVoxels::boxes(self.grid.clone(), boxes, 2.0 * margin);
+        self.last_change = None;
     }
 
-    /// Voxels that keep records.
+    /// Records only where a *later* frame changes something: `changes[k]` holds the boxes
+    /// that the change from the sequence's frame `k` to frame `k + 1` marks. A record is
+    /// only ever read when its voxel changes, so a voxel keeps records until the last
+    /// frame that changes it and none after: a sequence whose motion ends costs nothing to
+    /// record from then on. A change the list did not foresee retraces the whole frame.
+    pub fn restrict_to_sequence(&mut self, changes: &[Vec<(Vec3, Vec3)>]) {
+        let margin = 2.0 * MARGIN * (self.grid.hi - self.grid.lo).length();
+        let mut last = vec![0u32; self.grid.len()];
+        for (k, boxes) in changes.iter().enumerate() {
+            for (lo, hi) in boxes {
+                self.grid
+                    .voxels_in_box(*lo - margin, *hi + margin, |v| last[v] = k as u32 + 1);
+            }
+        }
+        self.last_change = Some(last);
+        self.update_active();
+    }
+
+    /// The active voxels at the current position: those a later frame changes.
+    fn update_active(&mut self) {
+        if let Some(last) = &self.last_change {
+            let mask: Vec<bool> = last.iter().map(|&k| k > self.position).collect();
+            self.voxels = ActiveVoxels::from_mask(self.grid.clone(), &mask);
+        }
+    }
+
+    /// Voxels that keep records (at the start of the sequence).
     pub fn active_voxels(&self) -> usize {
-        (0..self.grid.len())
-            .filter(|&v| self.voxels.is_active(v))
-            .count()
+        match &self.last_change {
+            Some(last) => last.iter().filter(|&&k| k > 0).count(),
+            None => self.voxels.count(),
+        }
     }
 
     /// Bytes of the voxel tables.
@@ -181,6 +216,8 @@ impl CoherentRenderer {
     pub fn reset(&mut self) {
         self.previous = None;
         self.tables = VoxelTables::new(self.grid.len(), &self.layout);
+        self.position = 0;
+        self.update_active();
     }
 
     /// The blocks to retrace for `changes`, how many voxels were marked changed, and why
@@ -263,32 +300,48 @@ impl CoherentRenderer {
             }
         };
         self.tables.clear(&blocks);
+        // From here on, record only where a later frame changes something (the check
+        // above used the previous frame's set, under which its records were made).
+        if self.position > 0 && self.last_change.is_some() {
+            self.update_active();
+        }
         stats.bookkeeping_seconds = start.elapsed().as_secs_f64();
 
         let list: Vec<usize> = blocks.iter().collect();
-        // Blocks are cut into tiles no larger than the full renderer's, so that a frame
-        // that retraces a few blocks still keeps every thread busy (a pixel's value does
-        // not depend on the tiling).
+        let pool = crate::render::thread_pool(engine.threads())?;
+        // A frame that retraces a few blocks cuts them into tiles no larger than the full
+        // renderer's, to keep every thread busy; with many blocks, one task per block
+        // records each voxel once per block and traces fewer shared tile corners (a pixel's
+        // value does not depend on the tiling).
+        let split = list.len() < 8 * pool.current_num_threads();
         let tasks: Vec<(usize, Tile)> = list
             .iter()
             .flat_map(|&b| {
                 let r = self.layout.rect(b);
-                crate::render::tiles(r.x1 - r.x0, r.y1 - r.y0)
-                    .into_iter()
-                    .map(move |t| {
-                        (
-                            b,
-                            Tile {
-                                x0: r.x0 + t.x0,
-                                x1: r.x0 + t.x1,
-                                y0: r.y0 + t.y0,
-                                y1: r.y0 + t.y1,
-                            },
-                        )
-                    })
+                let whole = Tile {
+                    x0: 0,
+                    x1: r.x1 - r.x0,
+                    y0: 0,
+                    y1: r.y1 - r.y0,
+                };
+                let tiles = if split {
+                    crate::render::tiles(r.x1 - r.x0, r.y1 - r.y0)
+                } else {
+                    vec![whole]
+                };
+                tiles.into_iter().map(move |t| {
+                    (
+                        b,
+                        Tile {
+                            x0: r.x0 + t.x0,
+                            x1: r.x0 + t.x1,
+                            y0: r.y0 + t.y0,
+                            y1: r.y0 + t.y1,
+                        },
+                    )
+                })
             })
             .collect();
-        let pool = crate::render::thread_pool(engine.threads())?;
         let (voxels, tables) = (&self.voxels, &self.tables);
         let results: Vec<(Vec<Rgb>, RayStats)> = pool.install(|| {
             tasks
@@ -313,6 +366,7 @@ impl CoherentRenderer {
         stats.blocks = list;
         stats.seconds = start.elapsed().as_secs_f64();
         self.previous = Some((summary, image.clone()));
+        self.position += 1;
         Ok((image, stats))
     }
 }
