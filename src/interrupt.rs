@@ -30,7 +30,7 @@ pub fn install() -> Result<()> {
                     std::process::exit(128 + signal);
                 }
                 eprintln!(
-                    "\nraylink: {}: stopping after the tiles in hand (again to quit at once)",
+                    "\nraylink: {}: stopping after the work in hand (again to quit at once)",
                     name(signal)
                 );
             }

@@ -410,3 +410,41 @@ fn huge_coordinates_render_finite_images() {
         );
     }
 }
+
+/// SIGINT stops `raylink animate` after the frame in hand: the frames written are whole, the
+/// message says where to continue, exit 130.
+#[test]
+fn an_interrupted_animation_keeps_whole_frames() {
+    let dir = tempfile::tempdir().unwrap();
+    let pattern = dir.path().join("f_%04d.exr");
+    let mut child = spawn(&[
+        "animate",
+        "scenes/anim-circus.toml",
+        "--width",
+        "160",
+        "--height",
+        "120",
+        "--quiet",
+        "-o",
+        pattern.to_str().unwrap(),
+    ]);
+    wait_for(&mut child, &dir.path().join("f_0001.exr"));
+    signal(&child, nix::sys::signal::Signal::SIGINT);
+    let out = finish(child);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(130), "{err}");
+    assert!(err.contains("continue with --frames"), "{err}");
+    let written: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .collect();
+    assert!(
+        written.len() >= 2 && written.len() < 60,
+        "{} files",
+        written.len()
+    );
+    for path in written {
+        let (image, _) = read_image(&path).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!((image.width, image.height), (160, 120));
+    }
+}

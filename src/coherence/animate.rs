@@ -261,6 +261,8 @@ pub struct Report {
 }
 
 pub fn run(args: &AnimateArgs) -> Result<()> {
+    // SIGINT/SIGTERM stop the sequence after the frame in hand (frames are whole files).
+    crate::interrupt::install()?;
     let report = animate(args)?;
     if args.stats {
         print!("{}", summary(&report));
@@ -431,6 +433,17 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
     let mut full_notice = false;
     let mut dynamic: Option<Box<dyn DynamicAccel>> = None;
     for &f in &frames {
+        if let Some(signal) = crate::interrupt::signal() {
+            return Err(Error::Interrupted {
+                signal,
+                detail: format!(
+                    "interrupted by {}: frames {}..{} were written; continue with --frames {f}..",
+                    crate::interrupt::name(signal),
+                    frames[0],
+                    f - 1
+                ),
+            });
+        }
         let scene = if f == frames[0] {
             scene0.clone()
         } else {
