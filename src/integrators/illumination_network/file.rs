@@ -248,15 +248,21 @@ fn open_prefix(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> 
     let h = read_header(&mut Reader { rest: &head[12..] }, path, scene, expected)?;
     let (space, patches) = geometry(path, scene, &h)?;
     let slots = space.slots();
-    let prefix_len = 12 + HEADER + 4 * h.nodes + h.basis_len;
-    let total = (h.nodes as u64 * (slots as u64 + 1) + 1 + 2 * h.n_extra as u64) * 4
-        + prefix_len as u64
-        + 16;
-    if len != total {
+    // The header's sizes are the file's word until checked: a damaged basis length must not
+    // overflow (found by the network-file fuzzer).
+    let prefix_len = (12 + HEADER as u64 + 4 * h.nodes as u64).checked_add(h.basis_len as u64);
+    let total = prefix_len.and_then(|p| {
+        ((h.nodes as u64 * (slots as u64 + 1) + 1 + 2 * h.n_extra as u64) * 4)
+            .checked_add(p)?
+            .checked_add(16)
+    });
+    if total != Some(len) {
         return Err(bad(
             "size does not match the node count (truncated or corrupt)",
         ));
     }
+    // Within the file's length (checked above).
+    let prefix_len = prefix_len.unwrap_or_default() as usize;
     let mut rest = vec![0u8; prefix_len + 8 - head.len()];
     file.read_exact(&mut rest).map_err(|_| bad("truncated"))?;
     head.extend_from_slice(&rest);
