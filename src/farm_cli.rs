@@ -261,6 +261,12 @@ pub fn write_part(
             ),
         });
     }
+    if stats.invalid > 0 && !args.quiet {
+        eprintln!(
+            "raylink: warning: {} samples were not finite and were dropped",
+            stats.invalid
+        );
+    }
     let pixels = (region.x1 - region.x0) as f32 * (region.y1 - region.y0) as f32;
     metadata.extend([
         (

@@ -681,6 +681,20 @@ fn run_render(mut args: RenderArgs) -> raylink::Result<()> {
     let part = args.part.part().zip(region.as_ref());
     farm_cli::part_metadata(&mut metadata, settings, &scene, part);
 
+    // A part (--tile, --crop) is written as an EXR data window with what merge checks.
+    let write_part = |r: &raylink::render::Tile, image, stats, metadata| {
+        farm_cli::write_part(
+            &args,
+            &ctx,
+            r,
+            (width, height),
+            image,
+            stats,
+            metadata,
+            &out_options,
+            filter,
+        )
+    };
     // What an interrupted render kept, for the closing message.
     let mut partial_note = String::new();
     let (image, stats) = match &monte_carlo {
@@ -720,17 +734,7 @@ fn run_render(mut args: RenderArgs) -> raylink::Result<()> {
             };
             if let Some(r) = &region {
                 let (image, stats) = raylink::farm::render_region(&ctx, chosen, &options, r)?;
-                return farm_cli::write_part(
-                    &args,
-                    &ctx,
-                    r,
-                    (width, height),
-                    image,
-                    stats,
-                    metadata,
-                    &out_options,
-                    filter,
-                );
+                return write_part(r, image, stats, metadata);
             }
             render(&ctx, chosen, &options)?
         }
@@ -778,24 +782,9 @@ fn run_render(mut args: RenderArgs) -> raylink::Result<()> {
                 estimator.as_ref()
             };
             if let Some(r) = &region {
-                let (image, stats, invalid) =
+                let (image, stats) =
                     raylink::farm::render_progressive_region(&ctx, estimator, &options, r)?;
-                if invalid > 0 && !args.quiet {
-                    eprintln!(
-                        "raylink: warning: {invalid} samples were not finite and were dropped"
-                    );
-                }
-                return farm_cli::write_part(
-                    &args,
-                    &ctx,
-                    r,
-                    (width, height),
-                    image,
-                    stats,
-                    metadata,
-                    &out_options,
-                    filter,
-                );
+                return write_part(r, image, stats, metadata);
             }
             let checkpoint = checkpoint::path_for(&args.outputs[0]);
             let settings = checkpoint_settings(&args, &scene, integrator, &options, max_depth);

@@ -174,15 +174,7 @@ impl std::fmt::Write for Fnv1a {
 
 /// The sub-tiles of a region, rendered in parallel.
 fn sub_tiles(region: &Tile) -> Vec<Tile> {
-    crate::render::tiles(region.x1 - region.x0, region.y1 - region.y0)
-        .into_iter()
-        .map(|t| Tile {
-            x0: region.x0 + t.x0,
-            y0: region.y0 + t.y0,
-            x1: region.x0 + t.x1,
-            y1: region.y0 + t.y1,
-        })
-        .collect()
+    crate::render::tiles_in(region)
 }
 
 /// Assembles sub-tile pixels into the region's image.
@@ -229,14 +221,14 @@ pub fn render_region(
 /// Renders the pixels of `region` of the image
 /// [`crate::render::progressive::render_progressive`] would render with the same arguments
 /// (without a time limit), with the same values bit for bit. Only for integrators that do
-/// not splat (the caller refuses the light tracer and BDPT). Returns the image, the
-/// statistics and the number of dropped (non-finite) samples.
+/// not splat (the caller refuses the light tracer and BDPT). Returns the image and the
+/// statistics (with the number of dropped, non-finite samples).
 pub fn render_progressive_region(
     ctx: &Context,
     integrator: &dyn MonteCarlo,
     options: &ProgressiveOptions,
     region: &Tile,
-) -> Result<(Image, RenderStats, u64)> {
+) -> Result<(Image, RenderStats)> {
     check_region(region, options.width, options.height)?;
     if options.time_limit.is_some() {
         return Err(Error::Options(
@@ -267,7 +259,6 @@ pub fn render_progressive_region(
             .collect()
     });
     let mut stats = RenderStats::default();
-    let mut invalid = 0;
     let mut parts = Vec::with_capacity(tiles.len());
     for (t, result) in tiles.into_iter().zip(results) {
         let Some((pixels, rays, dropped)) = result else {
@@ -277,11 +268,11 @@ pub fn render_progressive_region(
         };
         stats.rays.add(&rays);
         stats.samples += options.spp as u64 * ((t.x1 - t.x0) * (t.y1 - t.y0)) as u64;
-        invalid += dropped;
+        stats.invalid += dropped;
         parts.push((t, pixels));
     }
     stats.seconds = start.elapsed().as_secs_f64();
-    Ok((assemble(region, parts), stats, invalid))
+    Ok((assemble(region, parts), stats))
 }
 
 /// The pixels of `region` of `image`.

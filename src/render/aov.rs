@@ -3,7 +3,7 @@
 //! its shading normal (facing the camera) and depth (distance along the ray). Pixels that see
 //! the background get zero.
 
-use super::{thread_pool, tiles, Tile};
+use super::{thread_pool, Tile};
 use crate::bsdf::Bsdf;
 use crate::image::filter::Filter;
 use crate::image::Image;
@@ -69,15 +69,7 @@ pub fn render_aovs_region(
     camera.height = height;
     let basis = camera.basis();
     let pool = thread_pool(threads)?;
-    let tiles: Vec<Tile> = tiles(region.x1 - region.x0, region.y1 - region.y0)
-        .into_iter()
-        .map(|t| Tile {
-            x0: region.x0 + t.x0,
-            y0: region.y0 + t.y0,
-            x1: region.x0 + t.x1,
-            y1: region.y0 + t.y1,
-        })
-        .collect();
+    let tiles = super::tiles_in(region);
     let results: Vec<Vec<[Rgb; 3]>> = pool.install(|| {
         tiles
             .par_iter()

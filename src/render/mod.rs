@@ -87,6 +87,19 @@ pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
         .collect()
 }
 
+/// The tiles of a region of the image (the image's own tiling, shifted to the region).
+pub fn tiles_in(region: &Tile) -> Vec<Tile> {
+    tiles(region.x1 - region.x0, region.y1 - region.y0)
+        .into_iter()
+        .map(|t| Tile {
+            x0: region.x0 + t.x0,
+            y0: region.y0 + t.y0,
+            x1: region.x0 + t.x1,
+            y1: region.y0 + t.y1,
+        })
+        .collect()
+}
+
 /// Renders the image seen by the scene's camera (at the options' resolution).
 pub fn render(
     ctx: &Context,
