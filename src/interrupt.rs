@@ -39,11 +39,6 @@ pub fn install() -> Result<()> {
     Ok(())
 }
 
-/// Asks the render to stop as if `signal` had arrived (also for tests).
-pub fn request(signal: i32) {
-    let _ = SIGNAL.compare_exchange(0, signal, Ordering::SeqCst, Ordering::SeqCst);
-}
-
 /// Whether a stop was asked for.
 pub fn requested() -> bool {
     SIGNAL.load(Ordering::Relaxed) != 0

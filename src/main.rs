@@ -679,7 +679,7 @@ fn run_render(mut args: RenderArgs) -> raylink::Result<()> {
         ("raylink:max_depth".into(), MetaValue::Int(max_depth as i32)),
     ];
     let part = args.part.part().zip(region.as_ref());
-    farm_cli::part_metadata(&mut metadata, settings, &scene, part);
+    farm_cli::part_metadata(&mut metadata, settings.clone(), &scene, part);
 
     // A part (--tile, --crop) is written as an EXR data window with what merge checks.
     let write_part = |r: &raylink::render::Tile, image, stats, metadata| {
@@ -787,7 +787,13 @@ fn run_render(mut args: RenderArgs) -> raylink::Result<()> {
                 return write_part(r, image, stats, metadata);
             }
             let checkpoint = checkpoint::path_for(&args.outputs[0]);
-            let settings = checkpoint_settings(&args, &scene, integrator, &options, max_depth);
+            // What a resume must match: the settings parts record for merging, with the
+            // version and the scene.
+            let settings = format!(
+                "raylink {} scene {:016x} {settings}",
+                raylink::VERSION,
+                raylink::farm::scene_hash(&scene)
+            );
             let mut resumed_samples = 0;
             let resume = if args.resume {
                 if !checkpoint.exists() {
@@ -1164,35 +1170,6 @@ fn network(
         print_network_stats(&network, &solution);
     }
     Ok((network, solution))
-}
-
-/// Everything the pixels of a Monte Carlo render depend on, for checking a --resume.
-fn checkpoint_settings(
-    args: &RenderArgs,
-    scene: &Scene,
-    integrator: IntegratorName,
-    options: &ProgressiveOptions,
-    max_depth: u32,
-) -> String {
-    checkpoint::settings(&[
-        ("version", raylink::VERSION.to_string()),
-        ("scene", format!("{:016x}", ic::file::scene_hash(scene))),
-        ("camera", format!("{:?}", scene.camera)),
-        ("integrator", integrator_name(integrator)),
-        ("accel", args.accel.name().to_string()),
-        ("size", format!("{}x{}", options.width, options.height)),
-        ("spp", options.spp.to_string()),
-        ("seed", options.seed.to_string()),
-        ("filter", format!("{:?}", options.filter)),
-        ("max_depth", max_depth.to_string()),
-        (
-            "irradiance_cache",
-            format!(
-                "{} {} {} {}",
-                args.ab, args.ic_accuracy, args.ic_samples, args.ar
-            ),
-        ),
-    ])
 }
 
 /// `raylink relight`'s network and solution: from the file's light basis when it holds one

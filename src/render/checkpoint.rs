@@ -119,8 +119,3 @@ pub fn load(path: &Path, settings: &str, blank: Film) -> Result<Resumed> {
         .map_err(|e| bad(&e))?;
     Ok(Resumed { film, samples })
 }
-
-/// The settings string for `items` (name and value pairs), one per line.
-pub fn settings(items: &[(&str, String)]) -> String {
-    items.iter().map(|(k, v)| format!("{k}={v}\n")).collect()
-}
