@@ -148,16 +148,23 @@ pub struct Network {
     pub stats: BuildStats,
 }
 
-/// W of one node: Σ w over the slots of its row that have a link or an escape, then over
-/// its extra links (one order for the build and the file load, so both give the same bits).
+/// W of one node: Σ w over its linked and escaping slots, in slot order, a slot's entry in
+/// the row before its extra links (`extra`: the node's extra (slot, target) pairs, in slot
+/// order). This is the order in which the build adds them up while it fills the table, so
+/// a loaded network has the same bits.
 #[inline]
-pub(crate) fn row_etendue(row: &[u32], extra: impl Iterator<Item = u32>, w: &[f32]) -> f32 {
-    let more: f32 = extra.map(|l| w[l as usize]).sum();
-    row.iter()
-        .zip(w)
-        .map(|(&t, &w)| if t != NONE { w } else { 0.0 })
-        .sum::<f32>()
-        + more
+pub(crate) fn row_etendue(row: &[u32], extra: &[[u32; 2]], w: &[f32]) -> f32 {
+    let mut sum = 0.0f32;
+    let mut more = extra.iter().peekable();
+    for (slot, (&t, &ws)) in row.iter().zip(w).enumerate() {
+        if t != NONE {
+            sum += ws;
+        }
+        while more.next_if(|e| e[0] as usize == slot).is_some() {
+            sum += ws;
+        }
+    }
+    sum
 }
 
 /// The link ends of key block `b` of a slot.
@@ -181,9 +188,7 @@ pub(crate) fn node_etendue(
         .map(|(n, row)| {
             row_etendue(
                 row,
-                extra[extra_start[n] as usize..extra_start[n + 1] as usize]
-                    .iter()
-                    .map(|e| e[0]),
+                &extra[extra_start[n] as usize..extra_start[n + 1] as usize],
                 &w,
             )
         })
@@ -295,12 +300,20 @@ impl Network {
         type Part = (Vec<(u32, [u32; 2])>, u64);
         let filled: Vec<Part> = parts
             .into_par_iter()
-            .map(|(b, rows, wb)| {
+            .map_init(Vec::new, |extra, (b, rows, wb)| {
                 rows.fill(NONE);
                 let first = first_node[b] as u32;
-                let mut extra = Vec::new();
+                // Room for every end of the block: an end that finds its slot taken is
+                // written there and kept by advancing `len`, without a branch (whether a
+                // slot is taken is close to a coin toss, which a branch would mispredict).
+                let room: usize = slots.iter().map(|s| ends(s, b).len()).sum();
+                // (A buffer per thread, reused: a block's room is a megabyte or so.)
+                extra.clear();
+                extra.resize(room, (0u32, [0u32; 2]));
+                let mut len = 0;
                 let mut escapes = 0u64;
                 for (slot, s) in slots.iter().enumerate() {
+                    let ws = w[slot];
                     for &[k, t] in ends(s, b) {
                         let node = node_of_key[k as usize];
                         if node == NONE {
@@ -312,40 +325,33 @@ impl Network {
                         } else {
                             node_of_key[t as usize]
                         };
-                        let e = &mut rows[(node - first) as usize * n_slots + slot];
-                        if *e == NONE {
-                            *e = target;
-                        } else {
-                            extra.push((node, [slot as u32, target]));
-                        }
+                        let local = (node - first) as usize;
+                        let e = &mut rows[local * n_slots + slot];
+                        let taken = *e != NONE;
+                        *e = if taken { *e } else { target };
+                        extra[len] = (node, [slot as u32, target]);
+                        len += usize::from(taken);
+                        // W in slot order, as `row_etendue` adds it up.
+                        wb[local] += ws;
                     }
                 }
+                let extra = &extra[..len];
                 // Grouped by node, in slot order within a node (a stable counting sort).
                 let n = rows.len() / n_slots;
                 let mut start = vec![0u32; n + 1];
-                for e in &extra {
+                for e in extra {
                     start[(e.0 - first) as usize + 1] += 1;
                 }
                 for i in 1..start.len() {
                     start[i] += start[i - 1];
                 }
                 let mut grouped = vec![(0u32, [0u32; 2]); extra.len()];
-                for e in &extra {
+                for e in extra {
                     let at = &mut start[(e.0 - first) as usize];
                     grouped[*at as usize] = *e;
                     *at += 1;
                 }
-                let extra = grouped;
-                let mut at = 0;
-                for (i, (row, wn)) in rows.chunks(n_slots).zip(wb.iter_mut()).enumerate() {
-                    let node = first + i as u32;
-                    let start = at;
-                    while at < extra.len() && extra[at].0 == node {
-                        at += 1;
-                    }
-                    *wn = row_etendue(row, extra[start..at].iter().map(|e| e.1[0]), &w);
-                }
-                (extra, escapes)
+                (grouped, escapes)
             })
             .collect();
         let mut stats = BuildStats::default();

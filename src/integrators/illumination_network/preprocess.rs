@@ -26,7 +26,7 @@
 //! the network does not depend on the thread count.
 
 use super::patches::{Patches, Polygon};
-use super::ray_space::{axes, RaySpace};
+use super::ray_space::{axes, jitter_seed, RaySpace};
 use super::{ESCAPE, KEY_BLOCK};
 use crate::integrators::{Context, RayStats};
 use crate::math::{Ray, Vec3};
@@ -124,29 +124,42 @@ pub fn scan_polygon(
         return;
     };
     let (a, u, v) = axes(family);
-    let q: Vec<(f32, f32)> = pg
-        .corners
-        .iter()
-        .map(|c| (c[u] - su * c[a], c[v] - sv * c[a]))
-        .collect();
-    let k = q.len();
+    // Projected corners and edge functions in fixed arrays (a polygon has 3 or 4 corners):
+    // this runs for every polygon and slot, and the inside test for every cell scanned.
+    let k = pg.corners.len().min(4);
+    let mut q = [(0.0f32, 0.0f32); 4];
+    for (qi, c) in q.iter_mut().zip(&pg.corners) {
+        *qi = (c[u] - su * c[a], c[v] - sv * c[a]);
+    }
+    let q = &q[..k];
     let mut area = 0.0;
     for i in 0..k {
         let (p0, p1) = (q[i], q[(i + 1) % k]);
         area += p0.0 * p1.1 - p1.0 * p0.1;
     }
     let sign = if area >= 0.0 { 1.0 } else { -1.0 };
-    // Edge functions e(x) = a·x_u + b·x_v + c, non-negative inside.
-    let edges: Vec<(f32, f32, f32)> = (0..k)
-        .map(|i| {
-            let (p0, p1) = (q[i], q[(i + 1) % k]);
-            let (a, b) = (-(p1.1 - p0.1) * sign, (p1.0 - p0.0) * sign);
-            (a, b, -(a * p0.0 + b * p0.1))
-        })
-        .collect();
+    // Edge functions e(x) = a·x_u + b·x_v + c, non-negative inside; a triangle's fourth is
+    // the constant 1.
+    let mut ea = [0.0f32; 4];
+    let mut eb = [0.0f32; 4];
+    let mut ec = [1.0f32; 4];
+    for i in 0..k {
+        let (p0, p1) = (q[i], q[(i + 1) % k]);
+        let (a, b) = (-(p1.1 - p0.1) * sign, (p1.0 - p0.0) * sign);
+        (ea[i], eb[i], ec[i]) = (a, b, -(a * p0.0 + b * p0.1));
+    }
+    // All four evaluated, no early exit: whether a cell near an edge is inside is close to
+    // a coin toss, which a branch per edge would mispredict.
+    let inside = |x: (f32, f32)| {
+        (0..4)
+            .map(|i| ea[i] * x.0 + eb[i] * x.1 + ec[i])
+            .fold(f32::INFINITY, f32::min)
+            >= 0.0
+    };
     let h = space.step;
     let n = space.intercepts as i64;
     let amp = 0.5 * jitter * h;
+    let mixed = jitter_seed(seed);
     let index_lo = |x: f32| (((x + 1.0) / h - 0.5).ceil() as i64).clamp(0, n);
     let index_hi = |x: f32| (((x + 1.0) / h - 0.5).floor() as i64).clamp(-1, n - 1);
     let (vmin, vmax) = q
@@ -154,33 +167,34 @@ pub fn scan_polygon(
         .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
             (lo.min(p.1), hi.max(p.1))
         });
+    // Per edge: its v-range and u as a function of v (once per polygon and slot, not per row).
+    let mut spans = [(0.0f32, 0.0f32, 0.0f32, 0.0f32, 0.0f32); 4];
+    for (i, span) in spans.iter_mut().enumerate().take(k) {
+        let (p0, p1) = (q[i], q[(i + 1) % k]);
+        let dv = p1.1 - p0.1;
+        let slope = if dv.abs() < 1e-12 {
+            0.0
+        } else {
+            (p1.0 - p0.0) / dv
+        };
+        *span = (p0.1.min(p1.1), p0.1.max(p1.1), p0.0, p0.1, slope);
+    }
+    let spans = &spans[..k];
+    let step = plane.b * h;
     for jv in index_lo(vmin - amp)..=index_hi(vmax + amp) {
         let cv = space.intercept(jv as u32);
         let (blo, bhi) = (cv - amp, cv + amp);
-        // The u-extent of the polygon within the row's band of possible jittered v.
+        // The u-extent of the polygon within the row's band of possible jittered v: each
+        // edge clipped to the band.
         let (mut umin, mut umax) = (f32::INFINITY, f32::NEG_INFINITY);
-        for i in 0..k {
-            let (p0, p1) = (q[i], q[(i + 1) % k]);
-            let dv = p1.1 - p0.1;
-            let (t0, t1) = if dv.abs() < 1e-12 {
-                if p0.1 >= blo && p0.1 <= bhi {
-                    (0.0, 1.0)
-                } else {
-                    continue;
-                }
-            } else {
-                let ta = (blo - p0.1) / dv;
-                let tb = (bhi - p0.1) / dv;
-                (ta.min(tb).max(0.0), ta.max(tb).min(1.0))
-            };
-            if t0 > t1 {
+        for &(lo, hi, u0, v0, slope) in spans {
+            let (a, b) = (lo.max(blo), hi.min(bhi));
+            if a > b {
                 continue;
             }
-            for t in [t0, t1] {
-                let x = p0.0 + t * (p1.0 - p0.0);
-                umin = umin.min(x);
-                umax = umax.max(x);
-            }
+            let (xa, xb) = (u0 + (a - v0) * slope, u0 + (b - v0) * slope);
+            umin = umin.min(xa.min(xb));
+            umax = umax.max(xa.max(xb));
         }
         if umin > umax {
             continue;
@@ -190,13 +204,11 @@ pub fn scan_polygon(
             continue;
         }
         // The paper's recurrence: one multiply-add at the row start, one add per cell.
-        let step = plane.b * h;
         let mut pa = plane.depth(space.intercept(ju0 as u32), cv);
         for ju in ju0..=ju1 {
-            let (du, dv) = space.jitter(seed, jitter, slot, ju as u32, jv as u32);
+            let (du, dv) = space.jitter_mixed(mixed, jitter, slot, ju as u32, jv as u32);
             let x = (space.intercept(ju as u32) + du, cv + dv);
-            let inside = edges.iter().all(|&(a, b, c)| a * x.0 + b * x.1 + c >= 0.0);
-            if inside {
+            if inside(x) {
                 let line = ju as u32 * space.intercepts + jv as u32;
                 hit(line, x.0, x.1, pa - plane.b * du - plane.c * dv);
             }

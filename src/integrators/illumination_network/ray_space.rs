@@ -250,15 +250,30 @@ impl RaySpace {
     /// the line, so both builders (and any thread) see the same lines.
     #[inline]
     pub fn jitter(&self, seed: u64, amount: f32, slot: u32, iu: u32, iv: u32) -> (f32, f32) {
+        self.jitter_mixed(jitter_seed(seed), amount, slot, iu, iv)
+    }
+
+    /// [`jitter`](Self::jitter) with the seed already mixed by [`jitter_seed`] (the scan
+    /// converter asks for millions of lines of one seed). One mixing round per line: the
+    /// key (slot, iu, iv) is a bijection of the line, and splitmix a bijection with full
+    /// avalanche, so lines get independent-looking jitters.
+    #[inline]
+    pub fn jitter_mixed(&self, mixed: u64, amount: f32, slot: u32, iu: u32, iv: u32) -> (f32, f32) {
         if amount == 0.0 {
             return (0.0, 0.0);
         }
         let key = ((slot as u64) << 40) ^ ((iu as u64) << 20) ^ iv as u64;
-        let h = splitmix(seed ^ splitmix(key));
+        let h = splitmix(mixed ^ key);
         let a = (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32) - 0.5;
         let b = ((h >> 8) & 0xff_ffff) as f32 * (1.0 / (1u64 << 24) as f32) - 0.5;
         (a * amount * self.step, b * amount * self.step)
     }
+}
+
+/// The seed as [`RaySpace::jitter_mixed`] takes it.
+#[inline]
+pub fn jitter_seed(seed: u64) -> u64 {
+    splitmix(seed ^ 0x6a09_e667_f3bc_c909)
 }
 
 #[inline]
