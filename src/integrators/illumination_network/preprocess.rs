@@ -151,17 +151,24 @@ pub fn scan_polygon(
     // All four evaluated, no early exit: whether a cell near an edge is inside is close to
     // a coin toss, which a branch per edge would mispredict.
     let inside = |x: (f32, f32)| {
-        (0..4)
-            .map(|i| ea[i] * x.0 + eb[i] * x.1 + ec[i])
-            .fold(f32::INFINITY, f32::min)
-            >= 0.0
+        let e = |i: usize| ea[i] * x.0 + eb[i] * x.1 + ec[i] >= 0.0;
+        e(0) & e(1) & e(2) & e(3)
     };
     let h = space.step;
     let n = space.intercepts as i64;
     let amp = 0.5 * jitter * h;
     let mixed = jitter_seed(seed);
-    let index_lo = |x: f32| (((x + 1.0) / h - 0.5).ceil() as i64).clamp(0, n);
-    let index_hi = |x: f32| (((x + 1.0) / h - 0.5).floor() as i64).clamp(-1, n - 1);
+    // ceil and floor by conversion (the baseline x86-64 target calls libm for f32::ceil).
+    let ceil = |x: f32| {
+        let t = x as i64;
+        t + i64::from((t as f32) < x)
+    };
+    let floor = |x: f32| {
+        let t = x as i64;
+        t - i64::from((t as f32) > x)
+    };
+    let index_lo = |x: f32| ceil((x + 1.0) / h - 0.5).clamp(0, n);
+    let index_hi = |x: f32| floor((x + 1.0) / h - 0.5).clamp(-1, n - 1);
     let (vmin, vmax) = q
         .iter()
         .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
@@ -366,10 +373,13 @@ fn radix_by_line(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) {
         key: 0,
     };
     let (counts, tmp, sorted) = (&mut buf.counts, &mut buf.tmp, &mut buf.sorted);
-    tmp.clear();
-    tmp.resize(hits.len(), blank);
-    sorted.clear();
-    sorted.resize(hits.len(), blank);
+    // Every element is overwritten by the passes: only grow, never clear.
+    for v in [&mut *tmp, &mut *sorted] {
+        if v.len() < hits.len() {
+            v.resize(hits.len(), blank);
+        }
+    }
+    let (tmp, sorted) = (&mut tmp[..hits.len()], &mut sorted[..hits.len()]);
     let mut pass = |from: &[LineHit], to: &mut [LineHit], shift: u32, digits: usize| {
         counts.clear();
         counts.resize(digits + 1, 0);
@@ -395,7 +405,7 @@ fn radix_by_line(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) {
 /// `lines` is the number of lines per slot, `keys` the number of side keys.
 pub fn link_slot(hits: &[LineHit], lines: usize, keys: usize, buf: &mut LinkBuffers) -> SlotLinks {
     radix_by_line(hits, lines, buf);
-    let sorted = &mut buf.sorted;
+    let sorted = &mut buf.sorted[..hits.len()];
     let mut out = SlotLinks {
         intersections: hits.len() as u64,
         ..SlotLinks::default()
