@@ -71,15 +71,31 @@ pub struct NetworkRow {
     pub render: Spread,
     pub rebuild: Spread,
     pub relight_strengths: Spread,
+    /// The network work alone, render excluded: preprocess + distribution, and prefix load +
+    /// superposition.
+    pub rebuild_network: Spread,
+    pub relight_network: Spread,
     pub relight_reflectances: Spread,
     pub load_prefix: Spread,
     pub load_all: Spread,
     pub basis_seconds: f64,
 }
 
-/// CPU seconds (user + system) of this process so far, from /proc (10 ms ticks); 0 where
-/// /proc is missing.
+/// CPU seconds of this process's live threads so far: the sum of their run times in
+/// /proc/self/task/*/schedstat (nanoseconds; the rayon workers live as long as the process).
+/// Falls back to /proc/self/stat (10 ms ticks), and to 0 where /proc is missing.
 fn cpu_seconds() -> f64 {
+    let from_tasks = || -> Option<f64> {
+        let mut ns = 0u64;
+        for task in std::fs::read_dir("/proc/self/task").ok()? {
+            let stat = std::fs::read_to_string(task.ok()?.path().join("schedstat")).ok()?;
+            ns += stat.split_whitespace().next()?.parse::<u64>().ok()?;
+        }
+        Some(ns as f64 * 1e-9)
+    };
+    if let Some(s) = from_tasks() {
+        return s;
+    }
     let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
         return 0.0;
     };
@@ -129,7 +145,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             step,
             ..NetworkRow::default()
         };
-        let mut t: [Vec<f64>; 14] = Default::default();
+        let mut t: [Vec<f64>; 16] = Default::default();
         for rep in 0..bench.reps {
             progress(&format!("step {step}, repetition {}: rebuild", rep + 1));
             // Full rebuild: scan preprocess + distribution + render.
@@ -138,6 +154,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             let net = Network::build(&scene, &ctx, params, Builder::Scan).map_err(bad)?;
             let cpu = cpu_seconds() - cpu;
             let sol = distribute(&net, &scene, &options);
+            t[12].push(start.elapsed().as_secs_f64());
             let renderer = NetworkRenderer {
                 net: &net,
                 solution: &sol,
@@ -190,6 +207,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             let sol = basis
                 .superpose(&prefix, &scene, &emission, &relit)
                 .map_err(bad)?;
+            t[13].push(start.elapsed().as_secs_f64());
             let renderer = NetworkRenderer {
                 net: &prefix,
                 solution: &sol,
@@ -236,6 +254,8 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
         row.distribution = s(&t[5]);
         row.render = s(&t[6]);
         row.relight_strengths = s(&t[7]);
+        row.rebuild_network = s(&t[12]);
+        row.relight_network = s(&t[13]);
         row.load_prefix = s(&t[8]);
         row.relight_reflectances = s(&t[9]);
         row.load_all = s(&t[10]);
@@ -365,6 +385,17 @@ pub fn markdown(rows: &[NetworkRow], bench: &NetworkBench) -> String {
             r.rebuild.median / r.relight_strengths.median.max(1e-9)
         )
     });
+    line(
+        "… network work alone, render excluded: rebuild / relight (s)",
+        &|r| {
+            format!(
+                "{:.3} / {:.4}: **{:.0}×**",
+                r.rebuild_network.median,
+                r.relight_network.median,
+                r.rebuild_network.median / r.relight_network.median.max(1e-9)
+            )
+        },
+    );
     line(
         "**relight, reflectances** (load + distribution + render; s)",
         &|r| sec(r.relight_reflectances),
