@@ -413,6 +413,10 @@ pub fn link_slot(hits: &[LineHit], lines: usize, keys: usize, buf: &mut LinkBuff
     let (ends, escapes) = (&mut buf.ends, &mut buf.escapes);
     ends.clear();
     escapes.clear();
+    // The nodes' marks and the ends per key block are counted as the links are found.
+    out.marks = vec![0u64; keys.div_ceil(64)];
+    let blocks = keys.div_ceil(KEY_BLOCK);
+    let mut start = vec![0u32; blocks + 1];
     for group in sorted.chunk_by_mut(|x, y| x.line == y.line) {
         // Insertion sort: a line meets a handful of patches.
         for i in 1..group.len() {
@@ -432,6 +436,10 @@ pub fn link_slot(hits: &[LineHit], lines: usize, keys: usize, buf: &mut LinkBuff
             if x != y && w[1].depth - w[0].depth > COINCIDENT {
                 ends.push([x, y]);
                 ends.push([y, x]);
+                for k in [x, y] {
+                    out.marks[k as usize / 64] |= 1 << (k % 64);
+                    start[k as usize / KEY_BLOCK + 1] += 1;
+                }
             } else {
                 out.degenerate += 1;
             }
@@ -439,16 +447,7 @@ pub fn link_slot(hits: &[LineHit], lines: usize, keys: usize, buf: &mut LinkBuff
         escapes.push(group[group.len() - 1].key);
     }
     out.pairs = ends.len() as u64 / 2;
-    out.marks = vec![0u64; keys.div_ceil(64)];
-    for &[k, _] in ends.iter() {
-        out.marks[k as usize / 64] |= 1 << (k % 64);
-    }
     // A stable counting sort of the ends, then the escapes, by key block.
-    let blocks = keys.div_ceil(KEY_BLOCK);
-    let mut start = vec![0u32; blocks + 1];
-    for &[k, _] in ends.iter() {
-        start[k as usize / KEY_BLOCK + 1] += 1;
-    }
     for &k in escapes.iter() {
         start[k as usize / KEY_BLOCK + 1] += 1;
     }
