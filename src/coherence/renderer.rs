@@ -353,11 +353,12 @@ impl CoherentRenderer {
             })
             .collect();
         let (voxels, tables) = (&self.voxels, &self.tables);
+        let nearest_blocker = matches!(engine, Engine::Whitted { .. });
         let results: Vec<(Vec<Rgb>, RayStats)> = pool.install(|| {
             tasks
                 .par_iter()
                 .map(|(b, tile)| {
-                    let recorder = RecordingAccel::new(accel, scene, voxels);
+                    let recorder = RecordingAccel::new(accel, scene, voxels, nearest_blocker);
                     let result = engine.region(&ctx.with_accel(&recorder), tile);
                     recorder.flush(tables, *b);
                     result
