@@ -166,8 +166,9 @@ impl Grid {
                 delta[a] = -self.cell[a] * inv[a];
             }
         }
-        // The loop keeps its state in registers and picks the axis of each step with
-        // selects, not branches: the order of the crossings is unpredictable.
+        // The loop keeps its state in registers. (The compiler makes branches of the choice
+        // of axis; forcing masks instead was slower, 43 against 33 ns a segment on frame 0 of
+        // the circus: the rays of a block are alike, so the branches are well predicted.)
         let [mut n0, mut n1, mut n2] = next;
         let [mut l0, mut l1, mut l2] = left;
         let mut t = tin;
