@@ -616,6 +616,8 @@ fn cli_writes_frames_and_statistics() {
         "1",
         "--csv",
         csv.to_str().unwrap(),
+        "--overhead-reps",
+        "3",
     ]);
     assert!(out.status.success(), "{}", common::stderr(&out));
     for f in 0..4 {
@@ -629,6 +631,19 @@ fn cli_writes_frames_and_statistics() {
     assert!(rows[3].starts_with("3,0,"), "{text}");
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("every frame identical"), "{stdout}");
+    // CPU time is measured finely enough for a frame of a few milliseconds (the retraced
+    // frames 1 and 2, coherent and full), and the repeated first frame is reported.
+    for r in &rows[1..3] {
+        let f: Vec<&str> = r.split(',').collect();
+        for i in [2, 10] {
+            let cpu: f64 = f[i].parse().unwrap();
+            assert!(cpu > 0.0, "column {i} of {r}");
+        }
+    }
+    assert!(
+        stdout.contains("first frame rendered 3 times both ways: median"),
+        "{stdout}"
+    );
 
     // The path tracer, through the command line.
     let out = common::raylink(&[

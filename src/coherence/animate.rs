@@ -578,7 +578,7 @@ pub fn csv_text(report: &Report) -> String {
         let (fr, fc, fw) = r.full.map_or(Default::default(), |(rays, t)| {
             (
                 rays.total().to_string(),
-                format!("{:.3}", t.cpu),
+                format!("{:.6}", t.cpu),
                 format!("{:.6}", t.wall),
             )
         });
@@ -592,7 +592,7 @@ pub fn csv_text(report: &Report) -> String {
         };
         let _ = writeln!(
             s,
-            "{},{},{:.3},{:.6},{},{},{},{:.6},{update},{fr},{fc},{fw},{}",
+            "{},{},{:.6},{:.6},{},{},{},{:.6},{update},{fr},{fc},{fw},{}",
             r.frame,
             c.rays.total(),
             r.time.cpu,
