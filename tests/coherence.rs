@@ -4,7 +4,7 @@
 mod common;
 
 use raylink::accel::{self, Backend, Update};
-use raylink::coherence::changes::FrameSummary;
+use raylink::coherence::changes::{surface_boxes, FrameSummary};
 use raylink::coherence::grid::Grid;
 use raylink::coherence::renderer::{CoherentRenderer, Engine, FrameStats};
 use raylink::coherence::tables::BlockLayout;
@@ -16,6 +16,7 @@ use raylink::math::Vec3;
 use raylink::render::progressive::ProgressiveOptions;
 use raylink::render::{PixelSampling, RenderOptions};
 use raylink::scene::animation::Animation;
+use raylink::scene::{Geometry, QuadMesh, TriangleMesh};
 use std::collections::BTreeSet;
 use std::path::Path;
 
@@ -119,6 +120,70 @@ fn dda_visits_exactly_the_voxels_a_segment_crosses() {
         checked > 5000,
         "the random segments cross voxels ({checked})"
     );
+}
+
+/// A change marks the voxels the changed objects' surfaces touch: the boxes must cover
+/// every point of the surface, be no larger than asked, and leave out what is far from it.
+#[test]
+fn surface_boxes_cover_the_surface_and_nothing_far_from_it() {
+    let mut rng = Lcg(11);
+    let inside = |boxes: &[(Vec3, Vec3)], p: Vec3| {
+        let e = 1e-5 * (1.0 + p.abs().max_element());
+        boxes
+            .iter()
+            .any(|(lo, hi)| p.cmpge(*lo - e).all() && p.cmple(*hi + e).all())
+    };
+    let size = 0.1;
+    // A sphere: points on it are covered, its centre is not.
+    let (center, radius) = (Vec3::new(0.3, -1.0, 2.0), 0.7);
+    let sphere = Geometry::Sphere { center, radius };
+    let mut boxes = Vec::new();
+    surface_boxes(&sphere, size, &mut boxes);
+    for _ in 0..2000 {
+        let d = Vec3::new(rng.next() - 0.5, rng.next() - 0.5, rng.next() - 0.5);
+        if d.length() > 1e-3 {
+            let p = center + d.normalize() * radius;
+            assert!(inside(&boxes, p), "sphere point {p} not covered");
+        }
+    }
+    assert!(!inside(&boxes, center), "the sphere's centre is marked");
+    // Triangles much larger than the boxes, and quads (not necessarily cut the same way by
+    // every backend): points on them are covered, a point off their plane is not.
+    let corners = [
+        Vec3::new(-2.0, 0.0, -2.0),
+        Vec3::new(2.0, 0.3, -2.0),
+        Vec3::new(2.0, 0.6, 2.0),
+        Vec3::new(-2.0, 0.3, 2.0),
+    ];
+    let tri = Geometry::Triangles(TriangleMesh {
+        positions: corners.to_vec(),
+        indices: vec![[0, 1, 2], [0, 2, 3]],
+        ..Default::default()
+    });
+    let quad = Geometry::Quads(QuadMesh {
+        positions: corners.to_vec(),
+        indices: vec![[0, 1, 2, 3]],
+    });
+    for g in [&tri, &quad] {
+        let mut boxes = Vec::new();
+        surface_boxes(g, size, &mut boxes);
+        for (lo, hi) in &boxes {
+            assert!(
+                (*hi - *lo).max_element() <= size * 1.0001,
+                "box larger than asked"
+            );
+        }
+        for i in 0..4000 {
+            let (mut u, mut v) = (rng.next(), rng.next());
+            if u + v > 1.0 {
+                (u, v) = (1.0 - u, 1.0 - v);
+            }
+            let t = [[0, 1, 2], [0, 2, 3]][i % 2].map(|k| corners[k]);
+            let p = t[0] + (t[1] - t[0]) * u + (t[2] - t[0]) * v;
+            assert!(inside(&boxes, p), "point {p} not covered");
+        }
+        assert!(!inside(&boxes, Vec3::new(0.0, 1.5, 0.0)));
+    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -241,14 +306,14 @@ fn run(text: &str, kind: Kind, blocks: (u32, u32)) -> Vec<(FrameStats, Image)> {
     let mut r = CoherentRenderer::new(grid.clone(), layout);
     // A second renderer records only where a later frame changes something (what
     // `raylink animate` does): it must retrace exactly the same blocks.
+    let mut sparse = CoherentRenderer::new(grid, layout);
     let changes: Vec<Vec<_>> = scenes
         .windows(2)
         .map(|w| {
             let c = FrameSummary::new(&w[0], None).diff(&FrameSummary::new(&w[1], None));
-            c.objects.iter().chain(&c.shadows).copied().collect()
+            sparse.surface_boxes(&c)
         })
         .collect();
-    let mut sparse = CoherentRenderer::new(grid, layout);
     sparse.restrict_to_sequence(&changes);
     let mut out = Vec::new();
     // The incremental renderer moves one dynamic structure (Embree refits what moved); each
@@ -551,6 +616,8 @@ fn cli_writes_frames_and_statistics() {
         "1",
         "--csv",
         csv.to_str().unwrap(),
+        "--overhead-reps",
+        "3",
     ]);
     assert!(out.status.success(), "{}", common::stderr(&out));
     for f in 0..4 {
@@ -564,6 +631,19 @@ fn cli_writes_frames_and_statistics() {
     assert!(rows[3].starts_with("3,0,"), "{text}");
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("every frame identical"), "{stdout}");
+    // CPU time is measured finely enough for a frame of a few milliseconds (the retraced
+    // frames 1 and 2, coherent and full), and the repeated first frame is reported.
+    for r in &rows[1..3] {
+        let f: Vec<&str> = r.split(',').collect();
+        for i in [2, 10] {
+            let cpu: f64 = f[i].parse().unwrap();
+            assert!(cpu > 0.0, "column {i} of {r}");
+        }
+    }
+    assert!(
+        stdout.contains("first frame rendered 3 times both ways: median"),
+        "{stdout}"
+    );
 
     // The path tracer, through the command line.
     let out = common::raylink(&[

@@ -87,6 +87,12 @@ pub struct AnimateArgs {
     /// Print per-frame statistics and a summary (rays, pixels retraced, time).
     #[arg(long)]
     pub stats: bool,
+    /// Before the sequence, render its first frame N times both ways (coherently, recording,
+    /// and from scratch, in alternating order) and report the median of the N ratios of
+    /// their CPU times as the frame-0 overhead (with --stats): one frame's time is too short
+    /// and too noisy to compare once.
+    #[arg(long, value_name = "N", default_value_t = 0)]
+    pub overhead_reps: u32,
     /// Write the per-frame statistics to this CSV file.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
@@ -224,25 +230,11 @@ impl Clock {
     }
 }
 
-/// CPU time of the process so far (user + system, every thread), from /proc/self/stat;
-/// 0 where that cannot be read. Linux counts it in ticks of 1/100 s.
+/// CPU time of the process so far (user + system, every thread, also threads that have
+/// ended), to the nanosecond (`clock_gettime(CLOCK_PROCESS_CPUTIME_ID)`); 0 where the
+/// clock cannot be read.
 fn cpu_seconds() -> f64 {
-    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
-        return 0.0;
-    };
-    // Fields after the command name (which is in parentheses and may hold spaces):
-    // state is field 3, utime 14, stime 15.
-    let Some(rest) = stat.rsplit_once(')').map(|(_, r)| r) else {
-        return 0.0;
-    };
-    let fields: Vec<&str> = rest.split_whitespace().collect();
-    let tick = |i: usize| {
-        fields
-            .get(i)
-            .and_then(|v| v.parse::<f64>().ok())
-            .unwrap_or(0.0)
-    };
-    (tick(11) + tick(12)) / 100.0
+    cpu_time::ProcessTime::try_now().map_or(0.0, |t| t.as_duration().as_secs_f64())
 }
 
 /// What a run did, for the summary.
@@ -258,6 +250,9 @@ pub struct Report {
     pub prepare_seconds: f64,
     /// The grid's box.
     pub grid: (crate::math::Vec3, crate::math::Vec3),
+    /// `--overhead-reps`: CPU seconds of the first frame rendered coherently and in full,
+    /// per repeat.
+    pub overhead: Vec<(f64, f64)>,
 }
 
 pub fn run(args: &AnimateArgs) -> Result<()> {
@@ -409,22 +404,48 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
     let mut previous = FrameSummary::new(&scene0, None);
     for &f in &frames[1..] {
         let next = FrameSummary::new(&anim.scene_at(f)?, None);
-        let c = previous.diff(&next);
-        changes.push(
-            c.objects
-                .iter()
-                .chain(&c.shadows)
-                .copied()
-                .collect::<Vec<_>>(),
-        );
+        changes.push(previous.diff(&next));
         previous = next;
     }
-    let boxes: Vec<_> = changes.iter().flatten().copied().collect();
+    let boxes: Vec<_> = changes
+        .iter()
+        .flat_map(|c| c.objects.iter().chain(&c.shadows))
+        .copied()
+        .collect();
     let grid = CoherentRenderer::grid_around(&boxes, args.voxels);
-    let prepare_seconds = prepare.elapsed().as_secs_f64();
     let layout = super::tables::BlockLayout::new(width, height, blocks.0, blocks.1);
     let mut coherent = CoherentRenderer::new(grid, layout);
-    coherent.restrict_to_sequence(&changes);
+    // Records are kept only where a later frame changes something: in the voxels that the
+    // changed objects' surfaces touch.
+    let marked: Vec<Vec<_>> = changes.iter().map(|c| coherent.surface_boxes(c)).collect();
+    coherent.restrict_to_sequence(&marked);
+    drop((changes, marked));
+    let prepare_seconds = prepare.elapsed().as_secs_f64();
+    let mut overhead = Vec::new();
+    for rep in 0..args.overhead_reps {
+        let full = || -> Result<f64> {
+            let clock = Clock::start();
+            let accel = accel::build(&scene0, args.accel)?;
+            engine.render_full(&Context::new(&scene0, accel.as_ref()))?;
+            Ok(clock.elapsed().cpu)
+        };
+        let mut recorded = || -> Result<f64> {
+            coherent.reset();
+            let clock = Clock::start();
+            let accel = accel::build_dynamic(&scene0, args.accel)?;
+            coherent.render_frame(&scene0, accel.as_ref(), &engine)?;
+            Ok(clock.elapsed().cpu)
+        };
+        // Alternating the order evens out whatever the first of a pair pays for.
+        overhead.push(if rep % 2 == 0 {
+            let f = full()?;
+            (recorded()?, f)
+        } else {
+            let c = recorded()?;
+            (c, full()?)
+        });
+    }
+    coherent.reset();
     let out_options = OutputOptions {
         exposure: args.exposure,
         half: args.half,
@@ -542,6 +563,7 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
         blocks: (layout.cols, layout.rows),
         prepare_seconds,
         grid: (coherent.grid.lo, coherent.grid.hi),
+        overhead,
     })
 }
 
@@ -556,7 +578,7 @@ pub fn csv_text(report: &Report) -> String {
         let (fr, fc, fw) = r.full.map_or(Default::default(), |(rays, t)| {
             (
                 rays.total().to_string(),
-                format!("{:.3}", t.cpu),
+                format!("{:.6}", t.cpu),
                 format!("{:.6}", t.wall),
             )
         });
@@ -570,7 +592,7 @@ pub fn csv_text(report: &Report) -> String {
         };
         let _ = writeln!(
             s,
-            "{},{},{:.3},{:.6},{},{},{},{:.6},{update},{fr},{fc},{fw},{}",
+            "{},{},{:.6},{:.6},{},{},{},{:.6},{update},{fr},{fc},{fw},{}",
             r.frame,
             c.rays.total(),
             r.time.cpu,
@@ -658,6 +680,30 @@ pub fn summary(report: &Report) -> String {
              wall time fraction {:.4}",
             tf / rf,
             ratio(ct.wall, ft.wall),
+        );
+    }
+    if !report.overhead.is_empty() {
+        let median = |mut v: Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            let n = v.len();
+            (v[(n - 1) / 2] + v[n / 2]) / 2.0
+        };
+        let ratios: Vec<f64> = report.overhead.iter().map(|&(c, f)| c / f).collect();
+        let (lo, hi) = ratios
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &r| {
+                (a.min(r), b.max(r))
+            });
+        let _ = writeln!(
+            s,
+            "frame-0 overhead, first frame rendered {} times both ways: median {:+.1}% CPU \
+             ({:+.1}% to {:+.1}%; median {:.3} s coherent / {:.3} s full)",
+            ratios.len(),
+            100.0 * (median(ratios.clone()) - 1.0),
+            100.0 * (lo - 1.0),
+            100.0 * (hi - 1.0),
+            median(report.overhead.iter().map(|o| o.0).collect()),
+            median(report.overhead.iter().map(|o| o.1).collect()),
         );
     }
     let _ = writeln!(

@@ -8,6 +8,7 @@ use crate::math::Vec3;
 use crate::scene::{Geometry, Light, QuadMesh, Scene, Shape, TriangleMesh};
 use rustc_hash::FxHashMap;
 use std::hash::{Hash, Hasher};
+use std::sync::Arc;
 
 /// An axis-aligned box.
 pub type Aabb = (Vec3, Vec3);
@@ -15,8 +16,9 @@ pub type Aabb = (Vec3, Vec3);
 /// What a frame's pixels can depend on, in a form two frames can be compared by.
 #[derive(Clone, Debug)]
 pub struct FrameSummary {
-    /// Shapes by fingerprint (geometry and material): their boxes and whether they emit.
-    shapes: FxHashMap<u64, Vec<(Aabb, bool)>>,
+    /// Shapes by fingerprint (geometry and material): their boxes, whether they emit, and
+    /// their geometry (whose surface a change marks).
+    shapes: FxHashMap<u64, Vec<(Aabb, bool, Arc<Geometry>)>>,
     lights: Vec<Light>,
     /// Everything that reaches every pixel (camera, world settings, the light choice of the
     /// Monte Carlo integrators), as text.
@@ -26,8 +28,11 @@ pub struct FrameSummary {
 /// The difference between two frames.
 #[derive(Clone, Debug, Default)]
 pub struct Changes {
-    /// Boxes around changed objects (old and new places): both tables of their voxels.
+    /// Boxes around changed objects (old and new places).
     pub objects: Vec<Aabb>,
+    /// The changed objects' geometry (old and new places), one per box of `objects`: the
+    /// voxels its surface touches are marked, both tables ([`surface_boxes`](Self::surface_boxes)).
+    pub geometry: Vec<Arc<Geometry>>,
     /// Boxes around lights whose intensity changed: shadow tables only.
     pub shadows: Vec<Aabb>,
     /// A light moved, appeared, vanished or turned: every block that found a surface may
@@ -38,6 +43,22 @@ pub struct Changes {
 }
 
 impl Changes {
+    /// Boxes no larger than `size` along any axis (but for rounding) that together cover
+    /// the surfaces of the changed objects (old and new places), and the shadow boxes of
+    /// changed lights: where a change can alter a ray's answer. A ray segment is only
+    /// affected by an object that moved (appeared, vanished, changed material) if it ends on
+    /// the object's old surface or crosses its new one (a segment starting on it starts on
+    /// its surface too), so the voxels its surface touches suffice; its box would also mark
+    /// the empty space inside and around it (a plank lying aslant, the hole of a torus).
+    pub fn surface_boxes(&self, size: f32) -> Vec<Aabb> {
+        let mut out = Vec::new();
+        for g in &self.geometry {
+            surface_boxes(g, size, &mut out);
+        }
+        out.extend_from_slice(&self.shadows);
+        out
+    }
+
     pub fn is_empty(&self) -> bool {
         self.objects.is_empty()
             && self.shadows.is_empty()
@@ -60,6 +81,71 @@ fn shape_bounds(shape: &Shape) -> Aabb {
             (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
             |(lo, hi), p| (lo.min(*p), hi.max(*p)),
         ),
+    }
+}
+
+/// Boxes no larger than `size` covering the surface of `g` (appended to `out`).
+pub fn surface_boxes(g: &Geometry, size: f32, out: &mut Vec<Aabb>) {
+    let size = size.max(1e-6);
+    match g {
+        Geometry::Sphere { center, radius } => {
+            // The cells of a lattice over its box that the sphere's surface passes through.
+            let n = ((2.0 * radius / size).ceil() as u32).clamp(1, 256);
+            let step = 2.0 * radius / n as f32;
+            let lo = *center - *radius;
+            for z in 0..n {
+                for y in 0..n {
+                    for x in 0..n {
+                        let a = lo + Vec3::new(x as f32, y as f32, z as f32) * step;
+                        let b = a + step;
+                        let nearest = center.clamp(a, b).distance(*center);
+                        let farthest = (*center - a).abs().max((*center - b).abs()).length();
+                        // A hair of slack for rounding (the boxes are grown again when used).
+                        if nearest <= radius * (1.0 + 1e-5) && farthest >= radius * (1.0 - 1e-5) {
+                            out.push((a, b));
+                        }
+                    }
+                }
+            }
+        }
+        Geometry::Triangles(m) => {
+            for t in &m.indices {
+                let p = t.map(|i| m.positions[i as usize]);
+                triangle_boxes(p, size, 0, out);
+            }
+        }
+        Geometry::Quads(m) => {
+            // Both ways of cutting each quad into triangles (the backends may differ).
+            for q in &m.indices {
+                let p = q.map(|i| m.positions[i as usize]);
+                for t in [[0, 1, 2], [0, 2, 3], [0, 1, 3], [1, 2, 3]] {
+                    triangle_boxes(t.map(|i| p[i]), size, 0, out);
+                }
+            }
+        }
+    }
+}
+
+/// Boxes no larger than `size` covering the triangle `p`: its box, or those of its four
+/// halves (midpoint subdivision), recursively.
+fn triangle_boxes(p: [Vec3; 3], size: f32, depth: u32, out: &mut Vec<Aabb>) {
+    let (lo, hi) = (p[0].min(p[1]).min(p[2]), p[0].max(p[1]).max(p[2]));
+    if (hi - lo).max_element() <= size || depth >= 12 {
+        out.push((lo, hi));
+        return;
+    }
+    let m = [
+        (p[0] + p[1]) * 0.5,
+        (p[1] + p[2]) * 0.5,
+        (p[2] + p[0]) * 0.5,
+    ];
+    for t in [
+        [p[0], m[0], m[2]],
+        [m[0], p[1], m[1]],
+        [m[2], m[1], p[2]],
+        [m[0], m[1], m[2]],
+    ] {
+        triangle_boxes(t, size, depth + 1, out);
     }
 }
 
@@ -96,14 +182,14 @@ impl FrameSummary {
     /// Carlo integrators), so every pixel depends on every light's power.
     pub fn new(scene: &Scene, light_choice: Option<&LightSet>) -> FrameSummary {
         let materials: Vec<String> = scene.materials.iter().map(|m| format!("{m:?}")).collect();
-        let mut shapes: FxHashMap<u64, Vec<(Aabb, bool)>> = FxHashMap::default();
+        let mut shapes: FxHashMap<u64, Vec<(Aabb, bool, Arc<Geometry>)>> = FxHashMap::default();
         for shape in &scene.shapes {
             let m = &scene.materials[shape.material];
             let emits = m.emission.max_element() > 0.0;
             shapes
                 .entry(shape_fingerprint(shape, &materials[shape.material]))
                 .or_default()
-                .push((shape_bounds(shape), emits));
+                .push((shape_bounds(shape), emits, Arc::new(shape.geometry.clone())));
         }
         let env = scene
             .environment
@@ -146,8 +232,11 @@ impl FrameSummary {
                     continue;
                 }
                 // Duplicates of one object: mark all copies (which ones moved is unknown).
-                for (bounds, emits) in list.iter().chain(b.shapes.get(key).into_iter().flatten()) {
+                for (bounds, emits, geometry) in
+                    list.iter().chain(b.shapes.get(key).into_iter().flatten())
+                {
                     c.objects.push(*bounds);
+                    c.geometry.push(geometry.clone());
                     emitter_changed |= *emits;
                 }
             }

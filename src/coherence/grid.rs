@@ -40,6 +40,11 @@ impl Grid {
         Grid::new(lo, hi, res)
     }
 
+    /// The size of a voxel.
+    pub fn cell_size(&self) -> Vec3 {
+        self.cell
+    }
+
     pub fn len(&self) -> usize {
         self.res.iter().map(|&r| r as usize).product()
     }
@@ -161,8 +166,9 @@ impl Grid {
                 delta[a] = -self.cell[a] * inv[a];
             }
         }
-        // The loop keeps its state in registers and picks the axis of each step with
-        // selects, not branches: the order of the crossings is unpredictable.
+        // The loop keeps its state in registers. (The compiler makes branches of the choice
+        // of axis; forcing masks instead was slower, 43 against 33 ns a segment on frame 0 of
+        // the circus: the rays of a block are alike, so the branches are well predicted.)
         let [mut n0, mut n1, mut n2] = next;
         let [mut l0, mut l1, mut l2] = left;
         let mut t = tin;
@@ -332,10 +338,18 @@ impl ActiveVoxels {
     /// neighbour of a coarse cell's boundary, where rounding puts the crossing).
     #[inline]
     pub fn walk(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32, mut f: impl FnMut(usize)) {
-        // Most segments miss the box around the active voxels: one slab test.
+        // Most segments miss the box around the active voxels. The box around the segment's
+        // ends rejects most of those without a division; one slab test the rest.
         let Some((lo, hi)) = self.bounds else {
             return;
         };
+        if t1 < f32::INFINITY {
+            let (a, b) = (origin + dir * t0.max(0.0), origin + dir * t1);
+            // (A NaN compares false: such a segment goes on to the slab test.)
+            if a.min(b).cmpgt(hi).any() || a.max(b).cmplt(lo).any() {
+                return;
+            }
+        }
         let inv = dir.recip();
         let Some((tin, tout)) = clip(lo, hi, origin, dir, inv, t0, t1) else {
             return;

@@ -29,6 +29,10 @@ pub struct RecordingAccel<'a> {
     surface: Vec<AtomicU64>,
     shadow: Vec<AtomicU64>,
     hit: AtomicBool,
+    /// Whether a blocked shadow ray is recorded only up to its nearest blocker, which takes
+    /// one more query (the Whitted integrator asks for that hit anyway) instead of up to
+    /// the light.
+    nearest_blocker: bool,
 }
 
 fn mark(set: &[AtomicU64], v: usize) {
@@ -40,10 +44,15 @@ fn mark(set: &[AtomicU64], v: usize) {
 }
 
 impl<'a> RecordingAccel<'a> {
+    /// `nearest_blocker`: record a blocked shadow ray only up to its nearest opaque blocker,
+    /// which takes one more query: worth it for the Whitted integrator, which asks for that
+    /// hit next anyway (and gets it from here); the path tracer does not, and a recorded
+    /// segment to the light costs it less than the query (measured: docs/animation.md).
     pub fn new(
         inner: &'a dyn Accel,
         scene: &'a Scene,
         voxels: &'a ActiveVoxels,
+        nearest_blocker: bool,
     ) -> RecordingAccel<'a> {
         // Nothing cached by an earlier task (perhaps of another frame) may be reused.
         LAST.set(None);
@@ -56,6 +65,7 @@ impl<'a> RecordingAccel<'a> {
             surface: zeros(),
             shadow: zeros(),
             hit: AtomicBool::new(false),
+            nearest_blocker,
         }
     }
 
@@ -126,9 +136,9 @@ impl Accel for RecordingAccel<'_> {
         // be seen. A blocked one only up to the nearest blocker when that is opaque: while
         // the blocker stays, nothing beyond it can change the answer (and if it moves, its
         // voxels change). Behind a transmissive blocker the light still counts, so the
-        // whole segment is kept.
+        // whole segment is kept; without `nearest_blocker`, it always is.
         let mut end = ray.tmax;
-        if blocked {
+        if blocked && self.nearest_blocker {
             let hit = self.inner.intersect(ray);
             if let Some(h) = hit {
                 let shape = &self.scene.shapes[h.geom_id as usize];

@@ -173,6 +173,13 @@ impl CoherentRenderer {
         self.last_change = None;
     }
 
+    /// The boxes whose voxels `changes` marks changed: the surfaces of the changed objects
+    /// (in pieces of at most half a voxel) and the shadow boxes of changed lights. What
+    /// [`restrict_to_sequence`](Self::restrict_to_sequence) wants for each frame.
+    pub fn surface_boxes(&self, changes: &Changes) -> Vec<(Vec3, Vec3)> {
+        changes.surface_boxes(0.5 * self.grid.cell_size().min_element())
+    }
+
     /// Records only where a *later* frame changes something: `changes[k]` holds the boxes
     /// that the change from the sequence's frame `k` to frame `k + 1` marks. A record is
     /// only ever read when its voxel changes, so a voxel keeps records until the last
@@ -237,9 +244,12 @@ impl CoherentRenderer {
             return (BlockSet::all(&self.layout), 0, Some(reason));
         }
         let mut changed = vec![false; self.grid.len()];
-        for (lo, hi) in &changes.objects {
+        for (lo, hi) in self.surface_boxes(&Changes {
+            shadows: Vec::new(),
+            ..changes.clone()
+        }) {
             self.grid
-                .voxels_in_box(*lo - margin, *hi + margin, |v| changed[v] = true);
+                .voxels_in_box(lo - margin, hi + margin, |v| changed[v] = true);
         }
         let mut shadow_only = vec![false; self.grid.len()];
         for (lo, hi) in &changes.shadows {
@@ -343,11 +353,12 @@ impl CoherentRenderer {
             })
             .collect();
         let (voxels, tables) = (&self.voxels, &self.tables);
+        let nearest_blocker = matches!(engine, Engine::Whitted { .. });
         let results: Vec<(Vec<Rgb>, RayStats)> = pool.install(|| {
             tasks
                 .par_iter()
                 .map(|(b, tile)| {
-                    let recorder = RecordingAccel::new(accel, scene, voxels);
+                    let recorder = RecordingAccel::new(accel, scene, voxels, nearest_blocker);
                     let result = engine.region(&ctx.with_accel(&recorder), tile);
                     recorder.flush(tables, *b);
                     result
