@@ -381,8 +381,14 @@ pub fn run_precompute(mut args: RenderArgs) -> raylink::Result<()> {
             super::irradiance_cache(&args, &scene, &ctx, &options)?;
         }
         _ => {
-            let emission: Vec<_> = scene.materials.iter().map(|m| m.emission).collect();
-            super::network(&args, &scene, &ctx, &emission)?;
+            // The network's structure only: a render distributes the light itself.
+            let params = super::network_params(&args)?;
+            let say = |line: String| {
+                if !args.quiet {
+                    eprintln!("{line}");
+                }
+            };
+            super::network_structure(&args, &scene, &ctx, &params, &say)?;
         }
     }
     if !args.quiet {

@@ -1080,14 +1080,7 @@ fn network(
     file_emission: &[raylink::math::Rgb],
 ) -> Result<(net::Network, net::distribute::Solution), Error> {
     let a = &args.network;
-    let params = net::NetworkParams {
-        slopes: a.slopes,
-        step: a.intercept_step,
-        patch_size: a.patch_size.unwrap_or(a.intercept_step),
-        jitter: a.network_jitter,
-        seed: args.seed,
-    };
-    params.validate().map_err(Error::Options)?;
+    let params = network_params(args)?;
     if !(a.tolerance > 0.0 && a.tolerance < 1.0) {
         return Err(Error::Options(format!(
             "--tolerance must be between 0 and 1 (exclusive), got {}",
@@ -1100,10 +1093,6 @@ fn network(
             a.light_scale
         )));
     }
-    let builder = match a.network_builder {
-        NetworkBuilderName::Scan => net::Builder::Scan,
-        NetworkBuilderName::Embree => net::Builder::Embree,
-    };
     let say = |line: String| {
         if !args.quiet {
             eprintln!("{line}");
@@ -1132,6 +1121,48 @@ fn network(
         }
         return Ok((network, solution));
     }
+    let network = network_structure(args, scene, ctx, &params, &say)?;
+    let solution = net::distribute::distribute(&network, scene, &options);
+    let st = &solution.stats;
+    say(format!(
+        "network: distribution in {:.2} s ({} sweeps or shots)",
+        st.seconds, st.sweeps
+    ));
+    if a.network_stats {
+        print_network_stats(&network, &solution);
+    }
+    Ok((network, solution))
+}
+
+/// The network's parameters from the options.
+fn network_params(args: &RenderArgs) -> Result<net::NetworkParams, Error> {
+    let a = &args.network;
+    let params = net::NetworkParams {
+        slopes: a.slopes,
+        step: a.intercept_step,
+        patch_size: a.patch_size.unwrap_or(a.intercept_step),
+        jitter: a.network_jitter,
+        seed: args.seed,
+    };
+    params.validate().map_err(Error::Options)?;
+    Ok(params)
+}
+
+/// The network itself, without light: loaded from `--network-file` if it exists, else
+/// preprocessed (and saved there). `raylink precompute --network-file` stops here.
+fn network_structure(
+    args: &RenderArgs,
+    scene: &Scene,
+    ctx: &Context,
+    params: &net::NetworkParams,
+    say: &dyn Fn(String),
+) -> Result<net::Network, Error> {
+    let a = &args.network;
+    let params = *params;
+    let builder = match a.network_builder {
+        NetworkBuilderName::Scan => net::Builder::Scan,
+        NetworkBuilderName::Embree => net::Builder::Embree,
+    };
     let network = match &a.network_file {
         Some(f) if f.exists() => {
             let start = std::time::Instant::now();
@@ -1160,16 +1191,7 @@ fn network(
             n
         }
     };
-    let solution = net::distribute::distribute(&network, scene, &options);
-    let st = &solution.stats;
-    say(format!(
-        "network: distribution in {:.2} s ({} sweeps or shots)",
-        st.seconds, st.sweeps
-    ));
-    if a.network_stats {
-        print_network_stats(&network, &solution);
-    }
-    Ok((network, solution))
+    Ok(network)
 }
 
 /// `raylink relight`'s network and solution: from the file's light basis when it holds one
