@@ -431,17 +431,20 @@ fn tmp_path(dir: &tempfile::TempDir, name: &str) -> String {
     dir.path().join(name).to_string_lossy().into_owned()
 }
 
-fn network_render(scene: &str, out: &str, extra: &[&str]) -> std::process::Output {
+/// `raylink COMMAND` (render, or relight, which always uses the network and refuses
+/// `--integrator`) with the network's small test settings; `--slopes 6` unless `extra`
+/// gives its own.
+fn network_command(command: &str, scene: &str, out: &str, extra: &[&str]) -> std::process::Output {
     let slopes = if extra.contains(&"--slopes") {
         &[][..]
     } else {
         &["--slopes", "6"][..]
     };
-    let mut args = vec![
-        "render",
-        scene,
-        "--integrator",
-        "network",
+    let mut args = vec![command, scene];
+    if command == "render" {
+        args.extend_from_slice(&["--integrator", "network"]);
+    }
+    args.extend_from_slice(&[
         "--intercept-step",
         "0.0625",
         "--width",
@@ -452,10 +455,14 @@ fn network_render(scene: &str, out: &str, extra: &[&str]) -> std::process::Outpu
         "1",
         "-o",
         out,
-    ];
+    ]);
     args.extend_from_slice(slopes);
     args.extend_from_slice(extra);
     raylink(&args)
+}
+
+fn network_render(scene: &str, out: &str, extra: &[&str]) -> std::process::Output {
+    network_command("render", scene, out, extra)
 }
 
 /// Network files: a second view from the saved network runs no preprocess and equals a fresh
@@ -714,26 +721,12 @@ fn sweeps_and_shooting_agree() {
 }
 
 fn network_relight(scene: &str, out: &str, file: &str, extra: &[&str]) -> std::process::Output {
-    let mut args = vec![
+    network_command(
         "relight",
         scene,
-        "--network-file",
-        file,
-        "--slopes",
-        "6",
-        "--intercept-step",
-        "0.0625",
-        "--width",
-        "24",
-        "--height",
-        "24",
-        "--spp",
-        "1",
-        "-o",
         out,
-    ];
-    args.extend_from_slice(extra);
-    raylink(&args)
+        &[&["--network-file", file], extra].concat(),
+    )
 }
 
 /// `raylink relight`: no preprocess (counters in its messages); the first relight stores a
