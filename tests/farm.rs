@@ -319,10 +319,10 @@ fn network_tiles_from_a_precomputed_network_equal_the_whole_render() {
 #[test]
 fn merge_refuses_parts_that_do_not_fit() {
     let dir = tempfile::tempdir().unwrap();
-    let render = |out: &str, extra: &[&str]| {
+    let render_scene = |scene: &str, out: &str, extra: &[&str]| {
         let mut args = vec![
             "render",
-            "scenes/cornell-box.toml",
+            scene,
             "-q",
             "--integrator",
             "path",
@@ -338,6 +338,7 @@ fn merge_refuses_parts_that_do_not_fit() {
         args.extend_from_slice(extra);
         ok(&args);
     };
+    let render = |out: &str, extra: &[&str]| render_scene("scenes/cornell-box.toml", out, extra);
     let pattern = path(&dir, "t{tile}.exr");
     for i in 0..3 {
         render(&pattern, &["--tile", &format!("{i}/3")]);
@@ -381,24 +382,7 @@ fn merge_refuses_parts_that_do_not_fit() {
     let text = text.replace("[0.14, 0.45, 0.091]", "[0.14, 0.45, 0.092]");
     std::fs::write(&edited, text).unwrap();
     let from_edited = path(&dir, "from_edited.exr");
-    let mut args = vec!["render", edited.as_str()];
-    let render_args = [
-        "-q",
-        "--integrator",
-        "path",
-        "--width",
-        "16",
-        "--height",
-        "12",
-        "--spp",
-        "1",
-        "--tile",
-        "1/3",
-        "-o",
-        &from_edited,
-    ];
-    args.extend_from_slice(&render_args);
-    ok(&args);
+    render_scene(&edited, &from_edited, &["--tile", "1/3"]);
     let err = refused(
         &["merge", &t0, &from_edited, &t2, "-o", &out],
         "from_edited.exr",
