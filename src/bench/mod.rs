@@ -23,6 +23,14 @@ use rayon::prelude::*;
 use std::path::PathBuf;
 use std::time::Instant;
 
+/// CPU time of the process so far (user + system, every thread, also threads that have
+/// ended), to the nanosecond (`clock_gettime(CLOCK_PROCESS_CPUTIME_ID)`); 0 where the clock
+/// cannot be read. For figures that must hold on a shared machine (per CPU-second rates,
+/// `raylink animate --stats`).
+pub fn cpu_seconds() -> f64 {
+    cpu_time::ProcessTime::try_now().map_or(0.0, |t| t.as_duration().as_secs_f64())
+}
+
 /// Options of `raylink bench`.
 #[derive(Clone, Debug, clap::Args)]
 pub struct BenchArgs {

@@ -81,32 +81,6 @@ pub struct NetworkRow {
     pub basis_seconds: f64,
 }
 
-/// CPU seconds of this process's live threads so far: the sum of their run times in
-/// /proc/self/task/*/schedstat (nanoseconds; the rayon workers live as long as the process).
-/// Falls back to /proc/self/stat (10 ms ticks), and to 0 where /proc is missing.
-fn cpu_seconds() -> f64 {
-    let from_tasks = || -> Option<f64> {
-        let mut ns = 0u64;
-        for task in std::fs::read_dir("/proc/self/task").ok()? {
-            let stat = std::fs::read_to_string(task.ok()?.path().join("schedstat")).ok()?;
-            ns += stat.split_whitespace().next()?.parse::<u64>().ok()?;
-        }
-        Some(ns as f64 * 1e-9)
-    };
-    if let Some(s) = from_tasks() {
-        return s;
-    }
-    let Ok(stat) = std::fs::read_to_string("/proc/self/stat") else {
-        return 0.0;
-    };
-    // Fields after the command name (which may hold spaces) in parentheses.
-    let rest = stat.rsplit_once(')').map_or("", |r| r.1);
-    let f: Vec<&str> = rest.split_whitespace().collect();
-    let ticks = |i: usize| f.get(i).and_then(|v| v.parse::<f64>().ok()).unwrap_or(0.0);
-    // utime and stime are fields 14 and 15 of the line, 12 and 13 after the name.
-    (ticks(11) + ticks(12)) / 100.0
-}
-
 fn timed<T>(f: impl FnOnce() -> Result<T>) -> Result<(T, f64)> {
     let start = Instant::now();
     let v = f()?;
@@ -150,9 +124,9 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             progress(&format!("step {step}, repetition {}: rebuild", rep + 1));
             // Full rebuild: scan preprocess + distribution + render.
             let start = Instant::now();
-            let cpu = cpu_seconds();
+            let cpu = super::cpu_seconds();
             let net = Network::build(&scene, &ctx, params, Builder::Scan).map_err(bad)?;
-            let cpu = cpu_seconds() - cpu;
+            let cpu = super::cpu_seconds() - cpu;
             let sol = distribute(&net, &scene, &options);
             t[12].push(start.elapsed().as_secs_f64());
             let renderer = NetworkRenderer {

@@ -218,23 +218,16 @@ impl Clock {
     fn start() -> Clock {
         Clock {
             wall: Instant::now(),
-            cpu: cpu_seconds(),
+            cpu: crate::bench::cpu_seconds(),
         }
     }
 
     fn elapsed(&self) -> Time {
         Time {
             wall: self.wall.elapsed().as_secs_f64(),
-            cpu: cpu_seconds() - self.cpu,
+            cpu: crate::bench::cpu_seconds() - self.cpu,
         }
     }
-}
-
-/// CPU time of the process so far (user + system, every thread, also threads that have
-/// ended), to the nanosecond (`clock_gettime(CLOCK_PROCESS_CPUTIME_ID)`); 0 where the
-/// clock cannot be read.
-fn cpu_seconds() -> f64 {
-    cpu_time::ProcessTime::try_now().map_or(0.0, |t| t.as_duration().as_secs_f64())
 }
 
 /// What a run did, for the summary.
