@@ -388,7 +388,7 @@ pub fn run_precompute(mut args: RenderArgs) -> raylink::Result<()> {
                     eprintln!("{line}");
                 }
             };
-            super::network_structure(&args, &scene, &ctx, &params, &say)?;
+            super::network_structure(&args, &scene, &ctx, params, &say)?;
         }
     }
     if !args.quiet {

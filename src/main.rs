@@ -1121,7 +1121,7 @@ fn network(
         }
         return Ok((network, solution));
     }
-    let network = network_structure(args, scene, ctx, &params, &say)?;
+    let network = network_structure(args, scene, ctx, params, &say)?;
     let solution = net::distribute::distribute(&network, scene, &options);
     let st = &solution.stats;
     say(format!(
@@ -1154,11 +1154,10 @@ fn network_structure(
     args: &RenderArgs,
     scene: &Scene,
     ctx: &Context,
-    params: &net::NetworkParams,
+    params: net::NetworkParams,
     say: &dyn Fn(String),
 ) -> Result<net::Network, Error> {
     let a = &args.network;
-    let params = *params;
     let builder = match a.network_builder {
         NetworkBuilderName::Scan => net::Builder::Scan,
         NetworkBuilderName::Embree => net::Builder::Embree,

@@ -119,7 +119,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             step,
             ..NetworkRow::default()
         };
-        let mut t: [Vec<f64>; 16] = Default::default();
+        let mut t: [Vec<f64>; 14] = Default::default();
         for rep in 0..bench.reps {
             progress(&format!("step {step}, repetition {}: rebuild", rep + 1));
             // Full rebuild: scan preprocess + distribution + render.
