@@ -1,8 +1,8 @@
 //! Criterion bench of the coherence recorder's segment walk (`ActiveVoxels::walk`), the cost
-//! that `raylink animate` adds to every ray: a grid shaped like the circus animation's
+//! that `raylink animate --records tables` adds to every ray: a grid shaped like the circus animation's
 //! (35×33×8 voxels, a quarter of them active, in two boxes), segments like its camera and
 //! shadow rays (long rays from outside, short ones ending inside, and shadow rays from inside
-//! to far lights). One thread.
+//! to far lights). One thread. Also the clip that segment records pay instead.
 //!
 //! `cargo bench --bench coherence`
 
@@ -59,6 +59,20 @@ fn walk(c: &mut Criterion) {
                 active.walk(o, d, t0, t1, |v| set[v / 64] |= 1 << (v % 64));
             }
             set.iter().map(|w| w.count_ones()).sum::<u32>()
+        })
+    });
+    // What segment records pay instead (`--records segments`): the clip to the box around
+    // the active voxels, and a copy of the end points of what is left.
+    let mut kept = Vec::with_capacity(segments.len());
+    group.bench_function("clip", |b| {
+        b.iter(|| {
+            kept.clear();
+            for &(o, d, t0, t1) in &segments {
+                if let Some(s) = active.clip_segment(o, d, t0, t1) {
+                    kept.push(s);
+                }
+            }
+            kept.len()
         })
     });
     group.finish();

@@ -6,6 +6,7 @@ mod common;
 use raylink::accel::{self, Backend, Update};
 use raylink::coherence::changes::{surface_boxes, FrameSummary};
 use raylink::coherence::grid::Grid;
+use raylink::coherence::record::Records;
 use raylink::coherence::renderer::{CoherentRenderer, Engine, FrameStats};
 use raylink::coherence::tables::BlockLayout;
 use raylink::image::Image;
@@ -303,9 +304,11 @@ fn run(text: &str, kind: Kind, blocks: (u32, u32)) -> Vec<(FrameStats, Image)> {
     }
     let grid = CoherentRenderer::grid_around(&boxes, 4096);
     let layout = BlockLayout::new(w, h, blocks.0, blocks.1);
-    let mut r = CoherentRenderer::new(grid.clone(), layout);
-    // A second renderer records only where a later frame changes something (what
-    // `raylink animate` does): it must retrace exactly the same blocks.
+    // The paper's voxel tables, recording everywhere.
+    let mut r = CoherentRenderer::with_records(grid.clone(), layout, Records::Tables);
+    // Segment records, everywhere, and (what `raylink animate` does) only where a later
+    // frame changes something: both must retrace exactly the same blocks.
+    let mut segments = CoherentRenderer::with_records(grid.clone(), layout, Records::Segments);
     let mut sparse = CoherentRenderer::new(grid, layout);
     let changes: Vec<Vec<_>> = scenes
         .windows(2)
@@ -322,11 +325,13 @@ fn run(text: &str, kind: Kind, blocks: (u32, u32)) -> Vec<(FrameStats, Image)> {
     for (f, scene) in frames.iter().zip(&scenes) {
         dynamic.update(scene).unwrap();
         let (image, stats) = r.render_frame(scene, dynamic.as_ref(), &engine).unwrap();
-        let (image2, stats2) = sparse
-            .render_frame(scene, dynamic.as_ref(), &engine)
-            .unwrap();
-        assert!(bits(&image) == bits(&image2), "frame {f}: sparse records");
-        assert_eq!(stats.blocks, stats2.blocks, "frame {f}: sparse records");
+        for (other, what) in [(&mut segments, "segment records"), (&mut sparse, "sparse")] {
+            let (image2, stats2) = other
+                .render_frame(scene, dynamic.as_ref(), &engine)
+                .unwrap();
+            assert!(bits(&image) == bits(&image2), "frame {f}: {what}");
+            assert_eq!(stats.blocks, stats2.blocks, "frame {f}: {what}");
+        }
         let accel = accel::build(scene, Backend::Embree).unwrap();
         let (full, _) = engine
             .render_full(&Context::new(scene, accel.as_ref()))
@@ -631,6 +636,7 @@ fn cli_writes_frames_and_statistics() {
     assert!(rows[3].starts_with("3,0,"), "{text}");
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("every frame identical"), "{stdout}");
+    assert!(stdout.contains("records: segments, at most"), "{stdout}");
     // CPU time is measured finely enough for a frame of a few milliseconds (the retraced
     // frames 1 and 2, coherent and full), and the repeated first frame is reported.
     for r in &rows[1..3] {
@@ -773,6 +779,8 @@ fn cli_frame_range_matches_the_whole_sequence() {
     render("all", &[]);
     render("part", &["--frames", "11..12"]);
     render("tail", &["--frames", "12.."]);
+    // The paper's voxel tables instead of segment records: the same frames.
+    render("tables", &["--records", "tables"]);
     let read = |name: &str, f: i64| {
         let path = dir.path().join(format!("{name}/f_{f}.exr"));
         bits(&raylink::image::output::read_image(&path).unwrap().0)
@@ -786,6 +794,12 @@ fn cli_frame_range_matches_the_whole_sequence() {
     // Frame 11 is in motion: the range's first frame differs from the sequence's first.
     assert!(read("part", 11) != read("all", 10));
     assert!(read("tail", 12) == read("all", 12) && read("tail", 13) == read("all", 13));
+    for f in 10..14 {
+        assert!(
+            read("tables", f) == read("all", f),
+            "frame {f}: voxel tables"
+        );
+    }
     for (name, f) in [("part", 10), ("part", 13), ("tail", 11)] {
         assert!(!dir.path().join(format!("{name}/f_{f}.exr")).exists());
     }

@@ -3,6 +3,7 @@
 //! saved per frame (`--stats`, `--csv`), like Table 2 of the paper.
 
 use super::changes::FrameSummary;
+use super::record::Records;
 use super::renderer::{CoherentRenderer, Engine, FrameStats};
 use crate::accel::{self, Backend, DynamicAccel, Update};
 use crate::image::output::{check_output_path, write_image, OutputOptions};
@@ -68,6 +69,11 @@ pub struct AnimateArgs {
     /// Pixel blocks of the voxel bit tables, COLSxROWS (at most one block per pixel).
     #[arg(long, default_value = "16x16", value_name = "COLSxROWS")]
     pub block_table: String,
+    /// How the records are kept: each block's ray segments, walked through the voxels that
+    /// changed when a frame needs them (faster), or the paper's per-voxel bit tables filled
+    /// by walking every segment as it is traced (less memory). Same frames, same blocks.
+    #[arg(long, value_enum, default_value = "segments")]
+    pub records: Records,
     /// Approximate number of voxels of the grid (over the region where the sequence changes).
     /// More voxels retrace fewer pixels but cost more per recorded ray.
     #[arg(long, default_value_t = 8192)]
@@ -234,7 +240,11 @@ impl Clock {
 pub struct Report {
     pub rows: Vec<FrameRow>,
     pub pixels_per_frame: u64,
-    pub table_bytes: usize,
+    pub records: Records,
+    /// The most memory the records took after a frame.
+    pub record_bytes: usize,
+    /// The most segments held after a frame (segment records).
+    pub segments: usize,
     pub voxels: usize,
     /// Voxels where a change can happen (the only ones recorded).
     pub active_voxels: usize,
@@ -407,7 +417,7 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
         .collect();
     let grid = CoherentRenderer::grid_around(&boxes, args.voxels);
     let layout = super::tables::BlockLayout::new(width, height, blocks.0, blocks.1);
-    let mut coherent = CoherentRenderer::new(grid, layout);
+    let mut coherent = CoherentRenderer::with_records(grid, layout, args.records);
     // Records are kept only where a later frame changes something: in the voxels that the
     // changed objects' surfaces touch.
     let marked: Vec<Vec<_>> = changes.iter().map(|c| coherent.surface_boxes(c)).collect();
@@ -445,6 +455,7 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
     };
     let mut rows = Vec::new();
     let mut full_notice = false;
+    let mut peak = (0, 0);
     let mut dynamic: Option<Box<dyn DynamicAccel>> = None;
     for &f in &frames {
         if let Some(signal) = crate::interrupt::signal() {
@@ -484,6 +495,8 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
             }
             let accel = dynamic.as_deref().expect("built above");
             let (img, stats) = coherent.render_frame(&scene, accel, &engine)?;
+            peak.0 = peak.0.max(coherent.record_bytes());
+            peak.1 = peak.1.max(coherent.segments());
             row.time = clock.elapsed();
             if f != frames[0] && stats.full_reason.is_some() && !full_notice && !args.quiet {
                 eprintln!(
@@ -550,7 +563,9 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
     Ok(Report {
         rows,
         pixels_per_frame: width as u64 * height as u64,
-        table_bytes: coherent.table_bytes(),
+        records: args.records,
+        record_bytes: peak.0,
+        segments: peak.1,
         voxels: coherent.grid.len(),
         active_voxels: coherent.active_voxels(),
         blocks: (layout.cols, layout.rows),
@@ -719,8 +734,8 @@ pub fn summary(report: &Report) -> String {
     let (lo, hi) = report.grid;
     let _ = writeln!(
         s,
-        "voxel tables: {} voxels ({} where changes happen) over [{:.2}, {:.2}, {:.2}]..[{:.2}, \
-         {:.2}, {:.2}] x {}x{} blocks x 2 tables = {:.1} KiB",
+        "voxel grid: {} voxels ({} where changes happen) over [{:.2}, {:.2}, {:.2}]..[{:.2}, \
+         {:.2}, {:.2}], {}x{} pixel blocks",
         report.voxels,
         report.active_voxels,
         lo.x,
@@ -731,7 +746,15 @@ pub fn summary(report: &Report) -> String {
         hi.z,
         report.blocks.0,
         report.blocks.1,
-        report.table_bytes as f64 / 1024.0
     );
+    let kib = report.record_bytes as f64 / 1024.0;
+    let _ = match report.records {
+        Records::Tables => writeln!(s, "records: voxel tables x 2 = {kib:.1} KiB"),
+        Records::Segments => writeln!(
+            s,
+            "records: segments, at most {} held after a frame = {kib:.1} KiB",
+            report.segments
+        ),
+    };
     s
 }

@@ -325,6 +325,11 @@ impl ActiveVoxels {
         }
     }
 
+    /// The box around the active voxels (a little grown), if any.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        self.bounds
+    }
+
     pub fn is_active(&self, v: usize) -> bool {
         self.active[v / 64] >> (v % 64) & 1 != 0
     }
@@ -334,24 +339,60 @@ impl ActiveVoxels {
         self.active.iter().map(|w| w.count_ones() as usize).sum()
     }
 
+    /// The part `[tin, tout]` of the segment inside the box around the active voxels, with
+    /// 1 / `dir`; `None` if it misses the box.
+    #[inline(always)]
+    fn clip_to_bounds(
+        &self,
+        origin: Vec3,
+        dir: Vec3,
+        t0: f32,
+        t1: f32,
+    ) -> Option<(Vec3, f32, f32)> {
+        // Most segments miss the box around the active voxels. The box around the segment's
+        // ends rejects most of those without a division; one slab test the rest.
+        let (lo, hi) = self.bounds?;
+        if t1 < f32::INFINITY {
+            let (a, b) = (origin + dir * t0.max(0.0), origin + dir * t1);
+            // Both ends beyond the same face. (Plain comparisons, no branch per axis: this
+            // runs for every ray recorded. A NaN compares false: such a segment goes on to
+            // the slab test.)
+            let mut out = false;
+            for k in 0..3 {
+                out |= (a[k] > hi[k]) & (b[k] > hi[k]);
+                out |= (a[k] < lo[k]) & (b[k] < lo[k]);
+            }
+            if out {
+                return None;
+            }
+        }
+        let inv = dir.recip();
+        let (tin, tout) = clip(lo, hi, origin, dir, inv, t0, t1)?;
+        Some((inv, tin, tout))
+    }
+
+    /// The end points of the part of the segment inside the box around the active voxels
+    /// (`None` if it misses): what a segment record keeps for a later
+    /// [`crosses`](Self::crosses).
+    #[inline]
+    pub fn clip_segment(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32) -> Option<[Vec3; 2]> {
+        let (_, tin, tout) = self.clip_to_bounds(origin, dir, t0, t1)?;
+        Some([origin + dir * tin, origin + dir * tout])
+    }
+
+    /// Whether the segment from `a` to `b` crosses an active voxel.
+    #[inline]
+    pub fn crosses(&self, [a, b]: [Vec3; 2]) -> bool {
+        let mut crossed = false;
+        self.walk(a, b - a, 0.0, 1.0, |_| crossed = true);
+        crossed
+    }
+
     /// Calls `f` on every active voxel the segment crosses (and possibly on an active
     /// neighbour of a coarse cell's boundary, where rounding puts the crossing).
     #[inline]
     pub fn walk(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32, mut f: impl FnMut(usize)) {
-        // Most segments miss the box around the active voxels. The box around the segment's
-        // ends rejects most of those without a division; one slab test the rest.
-        let Some((lo, hi)) = self.bounds else {
-            return;
-        };
-        if t1 < f32::INFINITY {
-            let (a, b) = (origin + dir * t0.max(0.0), origin + dir * t1);
-            // (A NaN compares false: such a segment goes on to the slab test.)
-            if a.min(b).cmpgt(hi).any() || a.max(b).cmplt(lo).any() {
-                return;
-            }
-        }
-        let inv = dir.recip();
-        let Some((tin, tout)) = clip(lo, hi, origin, dir, inv, t0, t1) else {
+        let Some((inv, tin, tout)) = self.clip_to_bounds(origin, dir, t0, t1) else {
             return;
         };
         // The coarse walk finds the stretch of the segment over active coarse cells; one fine

@@ -4,6 +4,8 @@
 //!
 //! - [`grid`]: the voxel grid and the 3-D DDA.
 //! - [`tables`]: pixel-block bit tables (surface and shadow) per voxel.
+//! - [`segments`]: the other form of the records: each block's segments, walked through
+//!   the voxels that changed when a frame asks.
 //! - [`record`]: the intersection wrapper that records every query's segment.
 //! - [`changes`]: what changed between two frames.
 //! - [`renderer`]: the incremental frame renderer.
@@ -14,6 +16,7 @@ pub mod changes;
 pub mod grid;
 pub mod record;
 pub mod renderer;
+pub mod segments;
 pub mod tables;
 
 pub use renderer::{CoherentRenderer, Engine, FrameStats};

@@ -7,27 +7,52 @@
 //! voxel tables once per voxel when the task ends.
 
 use super::grid::ActiveVoxels;
+use super::segments::BlockSegments;
 use super::tables::{Table, VoxelTables};
 use crate::accel::{Accel, Hit};
-use crate::math::Ray;
+use crate::math::{Ray, Vec3};
 use crate::scene::Scene;
-use std::cell::Cell;
+use std::cell::{Cell, RefCell};
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::Mutex;
 
 thread_local! {
     /// The last blocked shadow ray recorded on this thread, its nearest hit, and the
     /// recorder that made it (by address). A task runs on one thread, its queries in order,
     /// so no lock is needed.
     static LAST: Cell<Option<(usize, Ray, Option<Hit>)>> = const { Cell::new(None) };
+    /// The segments of the recorder that owns this thread's buffer (by serial number; 0:
+    /// none): a push without a lock. A recorder used on another thread, or while another
+    /// owns the buffer, falls back to its own locked list.
+    static LOCAL: RefCell<(u64, BlockSegments)> = const { RefCell::new((0, BlockSegments::new())) };
+}
+
+/// Serial numbers of recorders (0 is nobody).
+static SERIAL: AtomicU64 = AtomicU64::new(1);
+
+/// Where a recorder puts what it records.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Records {
+    /// Walk every segment through the grid as it is traced and set the block's bit in the
+    /// voxels' tables (the paper's form).
+    Tables,
+    /// Keep the block's segments; a frame walks them through the voxels that changed
+    /// (segments.rs).
+    Segments,
 }
 
 pub struct RecordingAccel<'a> {
     inner: &'a dyn Accel,
     scene: &'a Scene,
     voxels: &'a ActiveVoxels,
-    /// Voxels crossed by rays looking for surfaces, and by shadow rays (one bit per voxel).
+    records: Records,
+    /// Tables: voxels crossed by rays looking for surfaces, and by shadow rays (one bit per
+    /// voxel).
     surface: Vec<AtomicU64>,
     shadow: Vec<AtomicU64>,
+    /// Segments: this recorder's serial number, and its list when the thread's is taken.
+    serial: u64,
+    spill: Mutex<BlockSegments>,
     hit: AtomicBool,
     /// Whether a blocked shadow ray is recorded only up to its nearest blocker, which takes
     /// one more query (the Whitted integrator asks for that hit anyway) instead of up to
@@ -53,20 +78,90 @@ impl<'a> RecordingAccel<'a> {
         scene: &'a Scene,
         voxels: &'a ActiveVoxels,
         nearest_blocker: bool,
+        records: Records,
     ) -> RecordingAccel<'a> {
         // Nothing cached by an earlier task (perhaps of another frame) may be reused.
         LAST.set(None);
-        let words = voxels.fine.len().div_ceil(64);
+        let words = match records {
+            Records::Tables => voxels.fine.len().div_ceil(64),
+            Records::Segments => 0,
+        };
         let zeros = || (0..words).map(|_| AtomicU64::new(0)).collect();
+        let serial = SERIAL.fetch_add(1, Ordering::Relaxed);
+        if records == Records::Segments {
+            LOCAL.with_borrow_mut(|(owner, list)| {
+                if *owner == 0 {
+                    *owner = serial;
+                    list.clear();
+                }
+            });
+        }
         RecordingAccel {
             inner,
             scene,
             voxels,
+            records,
             surface: zeros(),
             shadow: zeros(),
+            serial,
+            spill: Mutex::new(BlockSegments::new()),
             hit: AtomicBool::new(false),
             nearest_blocker,
         }
+    }
+
+    /// Records the segment `origin + t·dir`, `t ∈ [t0, t1]`.
+    #[inline]
+    fn record(&self, table: Table, origin: Vec3, dir: Vec3, t0: f32, t1: f32) {
+        // Each form in a function of its own: the walk inlined here made the common path
+        // of the segments spill registers.
+        match self.records {
+            Records::Tables => self.walk(table, origin, dir, t0, t1),
+            Records::Segments => self.keep(table, origin, dir, t0, t1),
+        }
+    }
+
+    #[inline(never)]
+    fn walk(&self, table: Table, origin: Vec3, dir: Vec3, t0: f32, t1: f32) {
+        let set = match table {
+            Table::Surface => &self.surface,
+            Table::Shadow => &self.shadow,
+        };
+        self.voxels.walk(origin, dir, t0, t1, |v| mark(set, v));
+    }
+
+    #[inline(never)]
+    fn keep(&self, table: Table, origin: Vec3, dir: Vec3, t0: f32, t1: f32) {
+        let Some(s) = self.voxels.clip_segment(origin, dir, t0, t1) else {
+            return;
+        };
+        let local = LOCAL.with_borrow_mut(|(owner, list)| {
+            let mine = *owner == self.serial;
+            if mine {
+                list.push(table, s);
+            }
+            mine
+        });
+        if !local {
+            let mut spill = self.spill.lock().unwrap_or_else(|e| e.into_inner());
+            spill.push(table, s);
+        }
+    }
+
+    /// The segments recorded, and whether any ray found a surface (segment records).
+    pub fn finish(self) -> (BlockSegments, bool) {
+        // The thread's buffer keeps its (warm) memory for the next task; the block keeps an
+        // exact copy.
+        let mut list = LOCAL.with_borrow_mut(|(owner, list)| {
+            if *owner == self.serial {
+                *owner = 0;
+                list.clone()
+            } else {
+                BlockSegments::new()
+            }
+        });
+        list.append(self.spill.into_inner().unwrap_or_else(|e| e.into_inner()));
+        (list, self.hit.load(Ordering::Relaxed))
     }
 
     fn id(&self) -> usize {
@@ -124,9 +219,7 @@ impl Accel for RecordingAccel<'_> {
         if hit.is_some() {
             self.hit.store(true, Ordering::Relaxed);
         }
-        self.voxels.walk(ray.origin, ray.dir, ray.tmin, end, |v| {
-            mark(&self.surface, v)
-        });
+        self.record(Table::Surface, ray.origin, ray.dir, ray.tmin, end);
         hit
     }
 
@@ -149,9 +242,7 @@ impl Accel for RecordingAccel<'_> {
             // The Whitted integrator asks for this hit next: keep it.
             LAST.set(Some((self.id(), *ray, hit)));
         }
-        self.voxels.walk(ray.origin, ray.dir, ray.tmin, end, |v| {
-            mark(&self.shadow, v)
-        });
+        self.record(Table::Shadow, ray.origin, ray.dir, ray.tmin, end);
         blocked
     }
 }

@@ -7,7 +7,8 @@
 
 use super::changes::{Changes, FrameSummary};
 use super::grid::{ActiveVoxels, Grid};
-use super::record::RecordingAccel;
+use super::record::{RecordingAccel, Records};
+use super::segments::{BlockSegments, Changed, SegmentRecords};
 use super::tables::{BlockLayout, BlockSet, Table, VoxelTables};
 use crate::accel::Accel;
 use crate::image::Image;
@@ -120,7 +121,7 @@ pub struct CoherentRenderer {
     pub grid: Grid,
     voxels: ActiveVoxels,
     pub layout: BlockLayout,
-    tables: VoxelTables,
+    store: Store,
     previous: Option<(FrameSummary, Image)>,
     /// With [`restrict_to_sequence`](Self::restrict_to_sequence): per voxel, the last
     /// position in the sequence at which it changes (0: never).
@@ -129,18 +130,44 @@ pub struct CoherentRenderer {
     position: u32,
 }
 
+/// The records, in either form.
+enum Store {
+    Tables(VoxelTables),
+    Segments(SegmentRecords),
+}
+
+impl Store {
+    fn new(records: Records, voxels: usize, layout: &BlockLayout) -> Store {
+        match records {
+            Records::Tables => Store::Tables(VoxelTables::new(voxels, layout)),
+            Records::Segments => Store::Segments(SegmentRecords::new(layout)),
+        }
+    }
+
+    fn records(&self) -> Records {
+        match self {
+            Store::Tables(_) => Records::Tables,
+            Store::Segments(_) => Records::Segments,
+        }
+    }
+}
+
 /// Relative margin around changed boxes: covers rounding in the DDA and in hit distances, so
 /// a segment that meets a changed object always has a bit in a changed voxel.
 const MARGIN: f32 = 1e-4;
 
 impl CoherentRenderer {
+    /// A renderer keeping segment records (the faster form; `with_records` chooses).
     pub fn new(grid: Grid, layout: BlockLayout) -> CoherentRenderer {
-        let tables = VoxelTables::new(grid.len(), &layout);
+        CoherentRenderer::with_records(grid, layout, Records::Segments)
+    }
+
+    pub fn with_records(grid: Grid, layout: BlockLayout, records: Records) -> CoherentRenderer {
         CoherentRenderer {
+            store: Store::new(records, grid.len(), &layout),
             voxels: ActiveVoxels::all(grid.clone()),
             grid,
             layout,
-            tables,
             previous: None,
             last_change: None,
             position: 0,
@@ -214,15 +241,30 @@ impl CoherentRenderer {
         }
     }
 
-    /// Bytes of the voxel tables.
-    pub fn table_bytes(&self) -> usize {
-        self.tables.memory_bytes()
+    /// Bytes the records take: the voxel tables, or the segments held.
+    pub fn record_bytes(&self) -> usize {
+        match &self.store {
+            Store::Tables(t) => t.memory_bytes(),
+            Store::Segments(s) => s.memory_bytes(),
+        }
+    }
+
+    /// Segments held (segment records; 0 with tables).
+    pub fn segments(&self) -> usize {
+        match &self.store {
+            Store::Tables(_) => 0,
+            Store::Segments(s) => s.segments(),
+        }
+    }
+
+    pub fn records(&self) -> Records {
+        self.store.records()
     }
 
     /// Forgets the previous frame: the next frame is traced in full.
     pub fn reset(&mut self) {
         self.previous = None;
-        self.tables = VoxelTables::new(self.grid.len(), &self.layout);
+        self.store = Store::new(self.store.records(), self.grid.len(), &self.layout);
         self.position = 0;
         self.update_active();
     }
@@ -261,18 +303,38 @@ impl CoherentRenderer {
             let reason = "something changed where no records were kept".to_string();
             return (BlockSet::all(&self.layout), 0, Some(reason));
         }
-        let mut count = 0;
-        for v in 0..self.grid.len() {
-            if changed[v] {
-                self.tables.collect(Table::Surface, v, &mut blocks);
-                self.tables.collect(Table::Shadow, v, &mut blocks);
-            } else if shadow_only[v] {
-                self.tables.collect(Table::Shadow, v, &mut blocks);
+        let count = (0..self.grid.len())
+            .filter(|&v| changed[v] || shadow_only[v])
+            .count();
+        match &self.store {
+            Store::Tables(tables) => {
+                for v in 0..self.grid.len() {
+                    if changed[v] {
+                        tables.collect(Table::Surface, v, &mut blocks);
+                        tables.collect(Table::Shadow, v, &mut blocks);
+                    } else if shadow_only[v] {
+                        tables.collect(Table::Shadow, v, &mut blocks);
+                    }
+                }
+                if changes.light_moved {
+                    tables.collect_hits(&mut blocks);
+                }
             }
-            count += (changed[v] || shadow_only[v]) as usize;
-        }
-        if changes.light_moved {
-            self.tables.collect_hits(&mut blocks);
+            Store::Segments(segments) => {
+                if changes.light_moved {
+                    segments.collect_hits(&mut blocks);
+                }
+                // Shadow segments answer to every changed voxel, surface ones only to those
+                // where a surface changed (as the two tables are read above).
+                let any: Vec<bool> = changed
+                    .iter()
+                    .zip(&shadow_only)
+                    .map(|(a, b)| a | b)
+                    .collect();
+                let voxels =
+                    |mask: &[bool]| Changed::new(ActiveVoxels::from_mask(self.grid.clone(), mask));
+                segments.collect(&voxels(&changed), &voxels(&any), &mut blocks);
+            }
         }
         (blocks, count, None)
     }
@@ -296,6 +358,7 @@ impl CoherentRenderer {
         let light_choice = matches!(engine, Engine::MonteCarlo { .. }).then_some(&ctx.lights);
         let summary = FrameSummary::new(scene, light_choice);
         let mut stats = FrameStats::default();
+        let pool = crate::render::thread_pool(engine.threads())?;
         let (blocks, mut image) = match self.previous.take() {
             None => {
                 stats.full_reason = Some("first frame".into());
@@ -303,13 +366,16 @@ impl CoherentRenderer {
             }
             Some((previous, image)) => {
                 let changes = previous.diff(&summary);
-                let (blocks, voxels, reason) = self.blocks_for(&changes);
+                let (blocks, voxels, reason) = pool.install(|| self.blocks_for(&changes));
                 stats.changed_voxels = voxels;
                 stats.full_reason = reason;
                 (blocks, image)
             }
         };
-        self.tables.clear(&blocks);
+        match &mut self.store {
+            Store::Tables(tables) => tables.clear(&blocks),
+            Store::Segments(segments) => segments.clear(&blocks),
+        }
         // From here on, record only where a later frame changes something (the check
         // above used the previous frame's set, under which its records were made).
         if self.position > 0 && self.last_change.is_some() {
@@ -318,7 +384,6 @@ impl CoherentRenderer {
         stats.bookkeeping_seconds = start.elapsed().as_secs_f64();
 
         let list: Vec<usize> = blocks.iter().collect();
-        let pool = crate::render::thread_pool(engine.threads())?;
         // A frame that retraces a few blocks cuts them into tiles no larger than the full
         // renderer's, to keep every thread busy; with many blocks, one task per block
         // records each voxel once per block and traces fewer shared tile corners (a pixel's
@@ -352,20 +417,32 @@ impl CoherentRenderer {
                 })
             })
             .collect();
-        let (voxels, tables) = (&self.voxels, &self.tables);
+        let (voxels, store) = (&self.voxels, &self.store);
+        let records = store.records();
         let nearest_blocker = matches!(engine, Engine::Whitted { .. });
-        let results: Vec<(Vec<Rgb>, RayStats)> = pool.install(|| {
+        type Part = (Vec<Rgb>, RayStats, Option<(BlockSegments, bool)>);
+        let results: Vec<Part> = pool.install(|| {
             tasks
                 .par_iter()
                 .map(|(b, tile)| {
-                    let recorder = RecordingAccel::new(accel, scene, voxels, nearest_blocker);
-                    let result = engine.region(&ctx.with_accel(&recorder), tile);
-                    recorder.flush(tables, *b);
-                    result
+                    let recorder =
+                        RecordingAccel::new(accel, scene, voxels, nearest_blocker, records);
+                    let (pixels, rays) = engine.region(&ctx.with_accel(&recorder), tile);
+                    let segments = match store {
+                        Store::Tables(tables) => {
+                            recorder.flush(tables, *b);
+                            None
+                        }
+                        Store::Segments(_) => Some(recorder.finish()),
+                    };
+                    (pixels, rays, segments)
                 })
                 .collect()
         });
-        for ((_, t), (pixels, rays)) in tasks.iter().zip(results) {
+        for ((b, t), (pixels, rays, segments)) in tasks.iter().zip(results) {
+            if let (Store::Segments(store), Some((list, hit))) = (&mut self.store, segments) {
+                store.add(*b, list, hit);
+            }
             let w = t.x1 - t.x0;
             for (i, c) in pixels.into_iter().enumerate() {
                 image.set(t.x0 + i as u32 % w, t.y0 + i as u32 / w, c);
