@@ -160,7 +160,10 @@ impl<'a> RecordingAccel<'a> {
                 BlockSegments::new()
             }
         });
-        list.append(self.spill.into_inner().unwrap_or_else(|e| e.into_inner()));
+        let spill = self.spill.into_inner().unwrap_or_else(|e| e.into_inner());
+        if !spill.is_empty() {
+            list.append(spill);
+        }
         (list, self.hit.load(Ordering::Relaxed))
     }
 

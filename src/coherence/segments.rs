@@ -58,7 +58,7 @@ impl BlockSegments {
         }
     }
 
-    /// Adds another part's segments (a block traced in several tiles) and seals.
+    /// Adds another part's segments (a block traced in several tiles).
     pub fn append(&mut self, mut other: BlockSegments) {
         if self.is_empty() {
             // The usual case (a block traced in one task): no copy.
@@ -67,15 +67,19 @@ impl BlockSegments {
             self.surface.append(&mut other.surface);
             self.shadow.append(&mut other.shadow);
         }
-        self.seal();
     }
 
     /// Makes the box around the segments.
     pub fn seal(&mut self) {
-        (self.lo, self.hi) = self.surface.iter().chain(&self.shadow).fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), s| (lo.min(s[0]).min(s[1]), hi.max(s[0]).max(s[1])),
-        );
+        // Plain comparisons (the clipped ends are never NaN): one instruction each.
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        for p in self.surface.iter().chain(&self.shadow).flatten() {
+            for k in 0..3 {
+                lo[k] = if p[k] < lo[k] { p[k] } else { lo[k] };
+                hi[k] = if p[k] > hi[k] { p[k] } else { hi[k] };
+            }
+        }
+        (self.lo, self.hi) = (Vec3::from_array(lo), Vec3::from_array(hi));
     }
 
     /// Empties the lists, keeping their memory.
@@ -145,6 +149,7 @@ impl SegmentRecords {
     /// Adds what a part of block `b` recorded.
     pub fn add(&mut self, b: usize, segments: BlockSegments, hit: bool) {
         self.blocks[b].append(segments);
+        self.blocks[b].seal();
         if hit {
             self.hits.insert(b);
         }
