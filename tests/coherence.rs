@@ -309,6 +309,9 @@ fn run(text: &str, kind: Kind, blocks: (u32, u32)) -> Vec<(FrameStats, Image)> {
     // Segment records, everywhere, and (what `raylink animate` does) only where a later
     // frame changes something: both must retrace exactly the same blocks.
     let mut segments = CoherentRenderer::with_records(grid.clone(), layout, Records::Segments);
+    // Segment records over their memory budget after frame 0: turned into tables.
+    let mut switched = CoherentRenderer::with_records(grid.clone(), layout, Records::Segments);
+    switched.set_segment_budget(1);
     let mut sparse = CoherentRenderer::new(grid, layout);
     let changes: Vec<Vec<_>> = scenes
         .windows(2)
@@ -325,7 +328,12 @@ fn run(text: &str, kind: Kind, blocks: (u32, u32)) -> Vec<(FrameStats, Image)> {
     for (f, scene) in frames.iter().zip(&scenes) {
         dynamic.update(scene).unwrap();
         let (image, stats) = r.render_frame(scene, dynamic.as_ref(), &engine).unwrap();
-        for (other, what) in [(&mut segments, "segment records"), (&mut sparse, "sparse")] {
+        let others = [
+            (&mut segments, "segment records"),
+            (&mut switched, "segments turned into tables"),
+            (&mut sparse, "sparse"),
+        ];
+        for (other, what) in others {
             let (image2, stats2) = other
                 .render_frame(scene, dynamic.as_ref(), &engine)
                 .unwrap();
@@ -342,6 +350,8 @@ fn run(text: &str, kind: Kind, blocks: (u32, u32)) -> Vec<(FrameStats, Image)> {
         );
         out.push((stats, image));
     }
+    assert_eq!(switched.records(), Records::Tables);
+    assert_eq!(segments.records(), Records::Segments);
     out
 }
 

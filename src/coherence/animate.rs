@@ -494,7 +494,14 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
                 Some(d) => row.update = Some(d.update(&scene)?),
             }
             let accel = dynamic.as_deref().expect("built above");
+            let before = coherent.records();
             let (img, stats) = coherent.render_frame(&scene, accel, &engine)?;
+            if before != coherent.records() && !args.quiet {
+                eprintln!(
+                    "notice: frame {f}: the segment records grew past a quarter of the memory \
+                     limit; going on with voxel tables (same frames)"
+                );
+            }
             peak.0 = peak.0.max(coherent.record_bytes());
             peak.1 = peak.1.max(coherent.segments());
             row.time = clock.elapsed();
@@ -563,7 +570,7 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
     Ok(Report {
         rows,
         pixels_per_frame: width as u64 * height as u64,
-        records: args.records,
+        records: coherent.records(),
         record_bytes: peak.0,
         segments: peak.1,
         voxels: coherent.grid.len(),

@@ -128,6 +128,8 @@ pub struct CoherentRenderer {
     last_change: Option<Vec<u32>>,
     /// The position in the sequence of the next frame (0 after [`reset`](Self::reset)).
     position: u32,
+    /// Segment records that grow past this many bytes become voxel tables.
+    segment_budget: usize,
 }
 
 /// The records, in either form.
@@ -171,7 +173,15 @@ impl CoherentRenderer {
             previous: None,
             last_change: None,
             position: 0,
+            segment_budget: (crate::memory::limit().0 / 4).min(usize::MAX as u64) as usize,
         }
+    }
+
+    /// Segment records that grow past `bytes` are turned into voxel tables (which take
+    /// a fixed, small amount of memory) and the sequence goes on with tables. By default a
+    /// quarter of the memory limit (`--max-memory`).
+    pub fn set_segment_budget(&mut self, bytes: usize) {
+        self.segment_budget = bytes;
     }
 
     /// A grid of about `voxels` voxels over every box in `bounds`. It must hold every box a
@@ -452,6 +462,13 @@ impl CoherentRenderer {
         }
         stats.blocks_retraced = list.len();
         stats.blocks = list;
+        if matches!(&self.store, Store::Segments(s) if s.memory_bytes() > self.segment_budget) {
+            let empty = Store::Tables(VoxelTables::new(0, &self.layout));
+            if let Store::Segments(segments) = std::mem::replace(&mut self.store, empty) {
+                let tables = pool.install(|| segments.into_tables(&self.voxels, &self.layout));
+                self.store = Store::Tables(tables);
+            }
+        }
         stats.seconds = start.elapsed().as_secs_f64();
         self.previous = Some((summary, image.clone()));
         self.position += 1;

@@ -13,7 +13,7 @@
 //! measurements). The price is memory: 24 bytes a segment that reaches the box.
 
 use super::grid::ActiveVoxels;
-use super::tables::{BlockLayout, BlockSet, Table};
+use super::tables::{BlockLayout, BlockSet, Table, VoxelTables};
 use crate::math::Vec3;
 use rayon::prelude::*;
 
@@ -185,6 +185,24 @@ impl SegmentRecords {
         for (w, h) in into.words.iter_mut().zip(&self.hits.words) {
             *w |= h;
         }
+    }
+
+    /// The same records as voxel tables: every segment walked into the tables of the active
+    /// voxels it crosses (what the tables would hold had they been kept from the start,
+    /// for every voxel still active).
+    pub fn into_tables(self, voxels: &ActiveVoxels, layout: &BlockLayout) -> VoxelTables {
+        let tables = VoxelTables::new(voxels.fine.len(), layout);
+        self.blocks.par_iter().enumerate().for_each(|(b, s)| {
+            for (table, list) in [(Table::Surface, &s.surface), (Table::Shadow, &s.shadow)] {
+                for &[a, e] in list {
+                    voxels.walk(a, e - a, 0.0, 1.0, |v| tables.set(table, v, b));
+                }
+            }
+        });
+        for b in self.hits.iter() {
+            tables.set_hit(b);
+        }
+        tables
     }
 
     /// Segments held.
