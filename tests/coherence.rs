@@ -683,6 +683,28 @@ fn cli_writes_frames_and_statistics() {
     let stdout = String::from_utf8_lossy(&out.stdout);
     assert!(stdout.contains("every frame identical"), "{stdout}");
     assert!(dir.path().join("path_3.exr").is_file());
+
+    // Segment records over a quarter of --max-memory (about 200 KiB of them here) become
+    // voxel tables after frame 0, with a notice; every frame is still verified.
+    let out = common::raylink(&[
+        "animate",
+        scene.to_str().unwrap(),
+        "-o",
+        dir.path().join("small_%d.exr").to_str().unwrap(),
+        "--verify",
+        "--stats",
+        "--max-memory",
+        "512K",
+    ]);
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(stdout.contains("every frame identical"), "{stdout}");
+    assert!(stdout.contains("records: voxel tables"), "{stdout}");
+    assert!(
+        common::stderr(&out).contains("notice: frame 0: the segment records grew past"),
+        "{}",
+        common::stderr(&out)
+    );
 }
 
 #[test]
@@ -705,6 +727,13 @@ fn cli_rejects_bad_input() {
     let p = pattern.to_str().unwrap();
     let out = common::raylink(&["animate", s, "-o", p, "--block-table", "16"]);
     assert_eq!(out.status.code(), Some(2));
+    let out = common::raylink(&["animate", s, "-o", p, "--max-memory", "lots"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = common::stderr(&out);
+    assert!(
+        err.contains("--max-memory") && err.lines().count() == 1,
+        "{err}"
+    );
 
     let bad = dir.path().join("bad.toml");
     std::fs::write(

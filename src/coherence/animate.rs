@@ -102,6 +102,11 @@ pub struct AnimateArgs {
     /// Write the per-frame statistics to this CSV file.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
+    /// Refuse work that needs more memory than this (bytes, or with a K, M, G or T suffix);
+    /// segment records that grow past a quarter of it become voxel tables. Default: 3/4 of
+    /// the physical memory.
+    #[arg(long, value_name = "SIZE")]
+    pub max_memory: Option<String>,
     /// Worker threads (default: all cores). The images do not depend on it.
     #[arg(long)]
     pub threads: Option<usize>,
@@ -281,6 +286,11 @@ pub fn run(args: &AnimateArgs) -> Result<()> {
 pub fn animate(args: &AnimateArgs) -> Result<Report> {
     if args.threads == Some(0) {
         return Err(Error::Options("--threads must be at least 1".into()));
+    }
+    if let Some(size) = &args.max_memory {
+        let bytes = crate::memory::parse_size(size)
+            .map_err(|e| Error::Options(format!("--max-memory: {e}")))?;
+        crate::memory::set_limit(bytes);
     }
     let blocks = parse_blocks(&args.block_table)?;
     if args.voxels == 0 || args.voxels > 1 << 24 {
