@@ -376,8 +376,37 @@ impl ActiveVoxels {
     /// [`crosses`](Self::crosses).
     #[inline]
     pub fn clip_segment(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32) -> Option<[Vec3; 2]> {
-        let (_, tin, tout) = self.clip_to_bounds(origin, dir, t0, t1)?;
-        Some([origin + dir * tin, origin + dir * tout])
+        let (lo, hi) = self.bounds?;
+        // The same tests as `clip_to_bounds`, in plain comparisons: glam's NaN-tolerant
+        // min and max take several instructions each, and this runs for every ray recorded.
+        // A NaN may drop out of a comparison here, so non-finite ends are refused at the end.
+        if t1 < f32::INFINITY {
+            let (a, b) = (origin + dir * t0.max(0.0), origin + dir * t1);
+            let mut out = false;
+            for k in 0..3 {
+                out |= (a[k] > hi[k]) & (b[k] > hi[k]);
+                out |= (a[k] < lo[k]) & (b[k] < lo[k]);
+            }
+            if out {
+                return None;
+            }
+        }
+        let (mut tin, mut tout) = (if t0 > 0.0 { t0 } else { 0.0 }, t1);
+        for k in 0..3 {
+            // A zero direction gives ±∞ (outside the slab: the segment misses) or NaN (on
+            // its face, the box grown by a hair around the voxels: it misses them too).
+            let inv = 1.0 / dir[k];
+            let (a, b) = ((lo[k] - origin[k]) * inv, (hi[k] - origin[k]) * inv);
+            let (near, far) = if a < b { (a, b) } else { (b, a) };
+            tin = if near > tin { near } else { tin };
+            tout = if far < tout { far } else { tout };
+        }
+        // (A NaN t1 passes here and gives non-finite ends.)
+        if tin > tout {
+            return None;
+        }
+        let ends = [origin + dir * tin, origin + dir * tout];
+        (ends[0].is_finite() && ends[1].is_finite()).then_some(ends)
     }
 
     /// Whether the segment from `a` to `b` crosses an active voxel.
