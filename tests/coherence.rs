@@ -850,3 +850,51 @@ fn cli_frame_range_matches_the_whole_sequence() {
         assert!(common::stderr(&out).contains("--frames"), "{spec}");
     }
 }
+
+// ---------------------------------------------------------------------------------------
+// The recorder.
+
+/// Two recorders alive on one thread at once (not what the renderer does, but nothing
+/// forbids it): the second cannot use the thread's buffer and keeps its own; each gets
+/// exactly its own segments.
+#[test]
+fn recorders_sharing_a_thread_keep_their_own_segments() {
+    use raylink::accel::Accel;
+    use raylink::coherence::grid::ActiveVoxels;
+    use raylink::coherence::record::RecordingAccel;
+    use raylink::math::Ray;
+    let scene = Animation::from_str(&animated("", MOVING), Path::new("t.toml"))
+        .unwrap()
+        .scene_at(0)
+        .unwrap();
+    let accel = accel::build(&scene, Backend::Embree).unwrap();
+    let (lo, hi) = scene.bounds().unwrap();
+    let voxels = ActiveVoxels::all(Grid::new(lo, hi, [8, 8, 8]));
+    let down = |x: f32| Ray::new(Vec3::new(x, 5.0, 0.0), Vec3::new(0.0, -1.0, 0.0));
+    for swapped in [false, true] {
+        let first = RecordingAccel::new(accel.as_ref(), &scene, &voxels, true, Records::Segments);
+        let second = RecordingAccel::new(accel.as_ref(), &scene, &voxels, true, Records::Segments);
+        let (a, b) = if swapped {
+            (&second, &first)
+        } else {
+            (&first, &second)
+        };
+        // Interleaved: a records three rays, b two (one a shadow ray).
+        a.intersect(&down(-0.5));
+        b.intersect(&down(0.0));
+        a.intersect(&down(0.5));
+        b.occluded(&down(0.25));
+        a.intersect(&down(0.75));
+        let (sa, sb) = if swapped {
+            let sb = first.finish().0;
+            (second.finish().0, sb)
+        } else {
+            let sa = first.finish().0;
+            (sa, second.finish().0)
+        };
+        assert_eq!((sa.surface.len(), sa.shadow.len()), (3, 0));
+        assert_eq!((sb.surface.len(), sb.shadow.len()), (1, 1));
+        assert!(sa.surface.iter().all(|s| s[0].x != 0.0));
+        assert_eq!(sb.surface[0][0].x, 0.0);
+    }
+}
