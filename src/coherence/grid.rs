@@ -216,6 +216,24 @@ impl Grid {
     }
 }
 
+/// Whether both ends of the finite segment `origin + t·dir`, `t ∈ [max(t0, 0), t1]`, lie
+/// beyond the same face of the box `[lo, hi]`, so that it misses the box: a test without a
+/// division. (Plain comparisons, no branch per axis: this runs for every ray recorded. A NaN
+/// compares false, and an infinite `t1` is never rejected here: the slab test decides.)
+#[inline(always)]
+fn ends_beyond_one_face(lo: Vec3, hi: Vec3, origin: Vec3, dir: Vec3, t0: f32, t1: f32) -> bool {
+    if t1 >= f32::INFINITY || t1.is_nan() {
+        return false;
+    }
+    let (a, b) = (origin + dir * t0.max(0.0), origin + dir * t1);
+    let mut out = false;
+    for k in 0..3 {
+        out |= (a[k] > hi[k]) & (b[k] > hi[k]);
+        out |= (a[k] < lo[k]) & (b[k] < lo[k]);
+    }
+    out
+}
+
 /// The part `[tin, tout]` of `[max(t0, 0), t1]` where `origin + t·dir` is inside the box
 /// `[lo, hi]` (`inv` = 1 / `dir`); `None` if it misses.
 #[inline(always)]
@@ -352,19 +370,8 @@ impl ActiveVoxels {
         // Most segments miss the box around the active voxels. The box around the segment's
         // ends rejects most of those without a division; one slab test the rest.
         let (lo, hi) = self.bounds?;
-        if t1 < f32::INFINITY {
-            let (a, b) = (origin + dir * t0.max(0.0), origin + dir * t1);
-            // Both ends beyond the same face. (Plain comparisons, no branch per axis: this
-            // runs for every ray recorded. A NaN compares false: such a segment goes on to
-            // the slab test.)
-            let mut out = false;
-            for k in 0..3 {
-                out |= (a[k] > hi[k]) & (b[k] > hi[k]);
-                out |= (a[k] < lo[k]) & (b[k] < lo[k]);
-            }
-            if out {
-                return None;
-            }
+        if ends_beyond_one_face(lo, hi, origin, dir, t0, t1) {
+            return None;
         }
         let inv = dir.recip();
         let (tin, tout) = clip(lo, hi, origin, dir, inv, t0, t1)?;
@@ -380,16 +387,8 @@ impl ActiveVoxels {
         // The same tests as `clip_to_bounds`, in plain comparisons: glam's NaN-tolerant
         // min and max take several instructions each, and this runs for every ray recorded.
         // A NaN may drop out of a comparison here, so non-finite ends are refused at the end.
-        if t1 < f32::INFINITY {
-            let (a, b) = (origin + dir * t0.max(0.0), origin + dir * t1);
-            let mut out = false;
-            for k in 0..3 {
-                out |= (a[k] > hi[k]) & (b[k] > hi[k]);
-                out |= (a[k] < lo[k]) & (b[k] < lo[k]);
-            }
-            if out {
-                return None;
-            }
+        if ends_beyond_one_face(lo, hi, origin, dir, t0, t1) {
+            return None;
         }
         let (mut tin, mut tout) = (if t0 > 0.0 { t0 } else { 0.0 }, t1);
         for k in 0..3 {

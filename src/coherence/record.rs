@@ -1,10 +1,13 @@
-//! Recording the voxels a pixel block's rays cross without the integrators knowing: a wrapper
-//! around the intersection backend that answers every query through the real backend and
-//! walks the segment it covered (origin to hit, or to the end of the ray) through the grid.
+//! Recording a pixel block's ray segments without the integrators knowing: a wrapper around
+//! the intersection backend that answers every query through the real backend and records
+//! the segment it covered (origin to hit, or to the end of the ray), in either form.
 //!
-//! The voxels are first gathered in a small bit set private to the task (it stays in the
-//! cache, and the rays of one block cross mostly the same voxels), then set in the shared
-//! voxel tables once per voxel when the task ends.
+//! - Tables: the segment is walked through the grid; the voxels are first gathered in a
+//!   small bit set private to the task (it stays in the cache, and the rays of one block
+//!   cross mostly the same voxels), then set in the shared voxel tables once per voxel when
+//!   the task ends.
+//! - Segments: the segment, clipped to the box around the recording voxels, is copied into
+//!   the thread's buffer; the block keeps an exact-size copy when the task ends.
 
 use super::grid::ActiveVoxels;
 use super::segments::BlockSegments;
