@@ -534,11 +534,7 @@ fn choose_filter(args: &RenderArgs, scene: &Scene) -> Result<Filter, Error> {
 
 fn run_render(mut args: RenderArgs) -> raylink::Result<()> {
     // Everything that can be checked is checked before the (possibly long) render.
-    if let Some(size) = &args.max_memory {
-        let bytes = raylink::memory::parse_size(size)
-            .map_err(|e| Error::Options(format!("--max-memory: {e}")))?;
-        raylink::memory::set_limit(bytes);
-    }
+    raylink::memory::set_limit_option(args.max_memory.as_deref())?;
     if let Some(t) = args.checkpoint_interval {
         if !(t.is_finite() && t >= 0.0) {
             return Err(Error::Options(format!(

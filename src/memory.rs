@@ -40,6 +40,16 @@ fn default_limit() -> u64 {
     physical.min(cgroup) / 4 * 3
 }
 
+/// Sets the limit from a `--max-memory` value, if one was given (an options error naming
+/// the option if it does not parse).
+pub fn set_limit_option(size: Option<&str>) -> Result<()> {
+    if let Some(size) = size {
+        let bytes = parse_size(size).map_err(|e| Error::Options(format!("--max-memory: {e}")))?;
+        set_limit(bytes);
+    }
+    Ok(())
+}
+
 /// An error if `what` would need more than the limit.
 pub fn check(what: &str, bytes: u64) -> Result<()> {
     let (limit, default) = limit();

@@ -287,11 +287,7 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
     if args.threads == Some(0) {
         return Err(Error::Options("--threads must be at least 1".into()));
     }
-    if let Some(size) = &args.max_memory {
-        let bytes = crate::memory::parse_size(size)
-            .map_err(|e| Error::Options(format!("--max-memory: {e}")))?;
-        crate::memory::set_limit(bytes);
-    }
+    crate::memory::set_limit_option(args.max_memory.as_deref())?;
     let blocks = parse_blocks(&args.block_table)?;
     if args.voxels == 0 || args.voxels > 1 << 24 {
         return Err(Error::Options(format!(
