@@ -3,6 +3,7 @@
 //! backend: it only has to cover every place geometry or lights occupy during the sequence.
 
 use crate::math::Vec3;
+use glam::Vec3A;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Grid {
@@ -384,28 +385,44 @@ impl ActiveVoxels {
     #[inline]
     pub fn clip_segment(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32) -> Option<[Vec3; 2]> {
         let (lo, hi) = self.bounds?;
-        // The same tests as `clip_to_bounds`, in plain comparisons: glam's NaN-tolerant
-        // min and max take several instructions each, and this runs for every ray recorded.
-        // A NaN may drop out of a comparison here, so non-finite ends are refused at the end.
-        if ends_beyond_one_face(lo, hi, origin, dir, t0, t1) {
-            return None;
+        // The same tests as `clip_to_bounds`, on the three axes at once (SSE lanes) and in
+        // plain comparisons: this runs for every ray recorded. A NaN may drop out of a
+        // comparison here, so non-finite ends are refused at the end.
+        let (lo, hi, o, d) = (
+            Vec3A::from(lo),
+            Vec3A::from(hi),
+            Vec3A::from(origin),
+            Vec3A::from(dir),
+        );
+        let t0 = if t0 > 0.0 { t0 } else { 0.0 };
+        // Both ends beyond one face (`ends_beyond_one_face`; a NaN or infinite t1 skips it).
+        if t1 < f32::INFINITY {
+            let (a, b) = (o + d * t0, o + d * t1);
+            if ((a.cmpgt(hi) & b.cmpgt(hi)) | (a.cmplt(lo) & b.cmplt(lo))).any() {
+                return None;
+            }
         }
-        let (mut tin, mut tout) = (if t0 > 0.0 { t0 } else { 0.0 }, t1);
+        // A zero direction gives ±∞ (outside the slab: the segment misses) or NaN (on its
+        // face, the box grown by a hair around the voxels: it misses them too).
+        let inv = Vec3A::ONE / d;
+        let (a, b) = ((lo - o) * inv, (hi - o) * inv);
+        let ordered = a.cmplt(b);
+        let (near, far) = (Vec3A::select(ordered, a, b), Vec3A::select(ordered, b, a));
+        let (near, far) = (near.to_array(), far.to_array());
+        let (mut tin, mut tout) = (t0, t1);
         for k in 0..3 {
-            // A zero direction gives ±∞ (outside the slab: the segment misses) or NaN (on
-            // its face, the box grown by a hair around the voxels: it misses them too).
-            let inv = 1.0 / dir[k];
-            let (a, b) = ((lo[k] - origin[k]) * inv, (hi[k] - origin[k]) * inv);
-            let (near, far) = if a < b { (a, b) } else { (b, a) };
-            tin = if near > tin { near } else { tin };
-            tout = if far < tout { far } else { tout };
+            tin = if near[k] > tin { near[k] } else { tin };
+            tout = if far[k] < tout { far[k] } else { tout };
         }
         // (A NaN t1 passes here and gives non-finite ends.)
         if tin > tout {
             return None;
         }
-        let ends = [origin + dir * tin, origin + dir * tout];
-        (ends[0].is_finite() && ends[1].is_finite()).then_some(ends)
+        let ends = [o + d * tin, o + d * tout];
+        // Finite: strictly between ±∞ (NaN fails both). glam's `is_finite` is a call here.
+        let finite = |e: Vec3A| e.cmplt(Vec3A::INFINITY) & e.cmpgt(Vec3A::NEG_INFINITY);
+        let finite = finite(ends[0]) & finite(ends[1]);
+        finite.all().then(|| ends.map(Vec3::from))
     }
 
     /// Whether the segment from `a` to `b` crosses an active voxel.
@@ -453,5 +470,56 @@ mod tests {
         for i in 0..g.len() {
             assert_eq!(g.index(g.coords(i)), i);
         }
+    }
+
+    /// The record-time clip (SSE lanes, plain comparisons) keeps what the walk's clip keeps,
+    /// with the same ends, also for axis-parallel rays, rays to infinity and rays starting
+    /// inside the box; it refuses non-finite ends.
+    #[test]
+    fn record_clip_matches_walk_clip() {
+        let grid = Grid::new(Vec3::ZERO, Vec3::ONE, [8, 8, 8]);
+        let mask: Vec<bool> = (0..grid.len()).map(|v| grid.coords(v)[1] < 3).collect();
+        let voxels = ActiveVoxels::from_mask(grid, &mask);
+        let mut state = 7u64;
+        let mut next = move || {
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let (mut kept, mut dropped) = (0, 0);
+        for i in 0..20_000 {
+            let origin = Vec3::new(next(), next(), next()) * 2.0 - 0.5;
+            let mut dir = Vec3::new(next(), next(), next()) * 2.0 - 1.0;
+            if i % 3 == 0 {
+                dir[i / 3 % 3] = 0.0;
+            }
+            let (t0, t1) = match i % 4 {
+                0 => (0.0, f32::INFINITY),
+                1 => (-0.5, 0.7),
+                _ => (1e-4, next() * 2.0),
+            };
+            let walk = voxels
+                .clip_to_bounds(origin, dir, t0, t1)
+                .map(|(_, tin, tout)| [origin + dir * tin, origin + dir * tout])
+                .filter(|e| e[0].is_finite() && e[1].is_finite());
+            let record = voxels.clip_segment(origin, dir, t0, t1);
+            assert_eq!(record, walk, "{origin} + t {dir}, t in [{t0}, {t1}]");
+            if record.is_some() {
+                kept += 1;
+            } else {
+                dropped += 1;
+            }
+        }
+        assert!(
+            kept > 2_000 && dropped > 2_000,
+            "{kept} kept, {dropped} dropped"
+        );
+        let nan = Vec3::new(f32::NAN, 0.1, 0.1);
+        assert_eq!(voxels.clip_segment(nan, Vec3::X, 0.0, 1.0), None);
+        assert_eq!(
+            voxels.clip_segment(Vec3::splat(0.1), Vec3::X, 0.0, f32::NAN),
+            None
+        );
     }
 }
