@@ -20,10 +20,12 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::Mutex;
 
 thread_local! {
-    /// The last blocked shadow ray recorded on this thread, its nearest hit, and the
-    /// recorder that made it (by address). A task runs on one thread, its queries in order,
-    /// so no lock is needed.
-    static LAST: Cell<Option<(usize, Ray, Option<Hit>)>> = const { Cell::new(None) };
+    /// The last blocked shadow ray recorded on this thread and its nearest hit, and the
+    /// recorder that made it (by serial number; 0: none). A task runs on one thread, its
+    /// queries in order, so no lock is needed. The owner is kept apart so that a closest-hit
+    /// query checks one word, not the whole entry.
+    static LAST: Cell<Option<(Ray, Option<Hit>)>> = const { Cell::new(None) };
+    static LAST_OWNER: Cell<u64> = const { Cell::new(0) };
     /// The segments of the recorder that owns this thread's buffer (by serial number; 0:
     /// none): a push without a lock. A recorder used on another thread, or while another
     /// owns the buffer, falls back to its own locked list.
@@ -83,8 +85,6 @@ impl<'a> RecordingAccel<'a> {
         nearest_blocker: bool,
         records: Records,
     ) -> RecordingAccel<'a> {
-        // Nothing cached by an earlier task (perhaps of another frame) may be reused.
-        LAST.set(None);
         let words = match records {
             Records::Tables => voxels.fine.len().div_ceil(64),
             Records::Segments => 0,
@@ -151,7 +151,7 @@ impl<'a> RecordingAccel<'a> {
         }
     }
 
-    /// The segments recorded, and whether any ray found a surface (segment records).
+    /// The segments recorded (sealed), and whether any ray found a surface (segment records).
     pub fn finish(self) -> (BlockSegments, bool) {
         // The thread's buffer keeps its (warm) memory for the next task; the block keeps an
         // exact copy.
@@ -167,11 +167,9 @@ impl<'a> RecordingAccel<'a> {
         if !spill.is_empty() {
             list.append(spill);
         }
+        // Here, while the segments are in this thread's cache, not when the block is stored.
+        list.seal();
         (list, self.hit.load(Ordering::Relaxed))
-    }
-
-    fn id(&self) -> usize {
-        self as *const Self as usize
     }
 
     /// Sets `block`'s bit in the tables of every voxel recorded.
@@ -208,19 +206,21 @@ fn same_ray(a: &Ray, b: &Ray) -> bool {
 
 impl Accel for RecordingAccel<'_> {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let cached = LAST.take();
         // The same query gives the same answer: reuse the one `occluded` just made. Its
         // segment is then already in the shadow set, at least up to this hit; the shadow
         // table is read whenever the surface table is, so it needs no second walk.
-        let hit = match cached {
-            Some((id, r, hit)) if id == self.id() && same_ray(&r, ray) => {
-                if hit.is_some() {
-                    self.hit.store(true, Ordering::Relaxed);
+        if LAST_OWNER.get() == self.serial {
+            LAST_OWNER.set(0);
+            if let Some((r, hit)) = LAST.take() {
+                if same_ray(&r, ray) {
+                    if hit.is_some() {
+                        self.hit.store(true, Ordering::Relaxed);
+                    }
+                    return hit;
                 }
-                return hit;
             }
-            _ => self.inner.intersect(ray),
-        };
+        }
+        let hit = self.inner.intersect(ray);
         let end = hit.map_or(ray.tmax, |h| h.t);
         if hit.is_some() {
             self.hit.store(true, Ordering::Relaxed);
@@ -246,7 +246,8 @@ impl Accel for RecordingAccel<'_> {
                 }
             }
             // The Whitted integrator asks for this hit next: keep it.
-            LAST.set(Some((self.id(), *ray, hit)));
+            LAST.set(Some((*ray, hit)));
+            LAST_OWNER.set(self.serial);
         }
         self.record(Table::Shadow, ray.origin, ray.dir, ray.tmin, end);
         blocked

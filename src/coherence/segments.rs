@@ -58,7 +58,8 @@ impl BlockSegments {
         }
     }
 
-    /// Adds another part's segments (a block traced in several tiles).
+    /// Adds another part's segments (a block traced in several tiles); the box is the union
+    /// of both boxes (exact if both lists were sealed).
     pub fn append(&mut self, mut other: BlockSegments) {
         if self.is_empty() {
             // The usual case (a block traced in one task): no copy.
@@ -66,7 +67,13 @@ impl BlockSegments {
         } else {
             self.surface.append(&mut other.surface);
             self.shadow.append(&mut other.shadow);
+            (self.lo, self.hi) = (self.lo.min(other.lo), self.hi.max(other.hi));
         }
+    }
+
+    /// Whether the box is missing although there are segments (not sealed yet).
+    fn unsealed(&self) -> bool {
+        !self.is_empty() && !self.lo.cmple(self.hi).all()
     }
 
     /// Makes the box around the segments.
@@ -146,10 +153,13 @@ impl SegmentRecords {
         }
     }
 
-    /// Adds what a part of block `b` recorded.
-    pub fn add(&mut self, b: usize, segments: BlockSegments, hit: bool) {
+    /// Adds what a part of block `b` recorded (sealed here if it is not).
+    pub fn add(&mut self, b: usize, mut segments: BlockSegments, hit: bool) {
+        // The recorder seals its lists in the task, while they are in its cache.
+        if segments.unsealed() {
+            segments.seal();
+        }
         self.blocks[b].append(segments);
-        self.blocks[b].seal();
         if hit {
             self.hits.insert(b);
         }
