@@ -29,6 +29,12 @@ pub trait Accel: Send + Sync {
     fn intersect(&self, ray: &Ray) -> Option<Hit>;
     /// Whether anything lies along the ray within `[tmin, tmax]`.
     fn occluded(&self, ray: &Ray) -> bool;
+    /// The closest hit of a camera ray: the same answer as [`intersect`](Self::intersect).
+    /// The animation renderer's recorder may give it from the ray's hit in an earlier frame
+    /// when nothing changed along it (Jevans's section 3.3.3).
+    fn intersect_camera(&self, ray: &Ray) -> Option<Hit> {
+        self.intersect(ray)
+    }
 }
 
 /// How a [`DynamicAccel`] followed the scene to a new frame.

@@ -55,6 +55,14 @@ impl<'a> Context<'a> {
         Some(SurfacePoint::from_hit(&self.scene.shapes, ray, &hit))
     }
 
+    /// The closest surface along a camera ray (the backend may know it from an earlier
+    /// frame: [`Accel::intersect_camera`]).
+    pub fn intersect_camera(&self, ray: &Ray, stats: &mut RayStats) -> Option<SurfacePoint> {
+        stats.closest += 1;
+        let hit = self.accel.intersect_camera(ray)?;
+        Some(SurfacePoint::from_hit(&self.scene.shapes, ray, &hit))
+    }
+
     /// The closest hit along the ray as the backend reports it (shape and primitive), for
     /// techniques that keep their own tables per primitive.
     pub fn intersect_hit(&self, ray: &Ray, stats: &mut RayStats) -> Option<crate::accel::Hit> {

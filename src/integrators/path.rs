@@ -110,7 +110,12 @@ impl MonteCarlo for PathTracer {
         let mut prev_p = ray.origin;
         let mut depth = 0;
         loop {
-            let Some(sp) = ctx.intersect(&ray, stats) else {
+            let sp = if depth == 0 {
+                ctx.intersect_camera(&ray, stats)
+            } else {
+                ctx.intersect(&ray, stats)
+            };
+            let Some(sp) = sp else {
                 if let Some(bg) = lights.background_light() {
                     let le = lights.background_radiance(ray.dir);
                     let w = if specular {

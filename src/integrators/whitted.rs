@@ -68,7 +68,12 @@ impl Whitted {
         rng: &mut Rng,
         stats: &mut RayStats,
     ) -> (Rgb, u32) {
-        let Some(sp) = ctx.intersect(ray, stats) else {
+        let sp = if depth == 0 {
+            ctx.intersect_camera(ray, stats)
+        } else {
+            ctx.intersect(ray, stats)
+        };
+        let Some(sp) = sp else {
             return (ctx.scene.background, u32::MAX);
         };
         (
