@@ -250,6 +250,8 @@ pub struct Report {
     pub record_bytes: usize,
     /// The most segments held after a frame (segment records).
     pub segments: usize,
+    /// The most memory the kept camera hits took after a frame.
+    pub camera_bytes: usize,
     pub voxels: usize,
     /// Voxels where a change can happen (the only ones recorded).
     pub active_voxels: usize,
@@ -461,7 +463,7 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
     };
     let mut rows = Vec::new();
     let mut full_notice = false;
-    let mut peak = (0, 0);
+    let mut peak = (0, 0, 0);
     let mut dynamic: Option<Box<dyn DynamicAccel>> = None;
     for &f in &frames {
         if let Some(signal) = crate::interrupt::signal() {
@@ -500,15 +502,16 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
                 Some(d) => row.update = Some(d.update(&scene)?),
             }
             let accel = dynamic.as_deref().expect("built above");
-            let before = coherent.records();
+            let before = (coherent.records(), coherent.keeps_camera_hits());
             let (img, stats) = coherent.render_frame(&scene, accel, &engine)?;
-            if before != coherent.records() && !args.quiet {
+            if before != (coherent.records(), coherent.keeps_camera_hits()) && !args.quiet {
                 eprintln!(
-                    "notice: frame {f}: the segment records grew past a quarter of the memory \
-                     limit; going on with voxel tables (same frames)"
+                    "notice: frame {f}: the records grew past a quarter of the memory limit; \
+                     going on with voxel tables and without keeping camera hits (same frames)"
                 );
             }
             peak.0 = peak.0.max(coherent.record_bytes());
+            peak.2 = peak.2.max(coherent.camera_bytes());
             peak.1 = peak.1.max(coherent.segments());
             row.time = clock.elapsed();
             if f != frames[0] && stats.full_reason.is_some() && !full_notice && !args.quiet {
@@ -578,6 +581,7 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
         pixels_per_frame: width as u64 * height as u64,
         records: coherent.records(),
         record_bytes: peak.0,
+        camera_bytes: peak.2,
         segments: peak.1,
         voxels: coherent.grid.len(),
         active_voxels: coherent.active_voxels(),
@@ -592,7 +596,8 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
 pub fn csv_text(report: &Report) -> String {
     let mut s = String::from(
         "frame,rays,cpu_seconds,wall_seconds,pixels_retraced,blocks_retraced,changed_voxels,\
-         bookkeeping_seconds,accel_update,full_rays,full_cpu_seconds,full_wall_seconds,identical\n",
+         bookkeeping_seconds,accel_update,camera_rays_kept,camera_rays_reused,full_rays,\
+         full_cpu_seconds,full_wall_seconds,identical\n",
     );
     for r in &report.rows {
         let c = &r.coherent;
@@ -613,7 +618,7 @@ pub fn csv_text(report: &Report) -> String {
         };
         let _ = writeln!(
             s,
-            "{},{},{:.6},{:.6},{},{},{},{:.6},{update},{fr},{fc},{fw},{}",
+            "{},{},{:.6},{:.6},{},{},{},{:.6},{update},{},{},{fr},{fc},{fw},{}",
             r.frame,
             c.rays.total(),
             r.time.cpu,
@@ -622,6 +627,8 @@ pub fn csv_text(report: &Report) -> String {
             c.blocks_retraced,
             c.changed_voxels,
             c.bookkeeping_seconds,
+            c.camera_rays,
+            c.camera_reused,
             r.identical.map_or(String::new(), |b| b.to_string()),
         );
     }
@@ -769,5 +776,17 @@ pub fn summary(report: &Report) -> String {
             report.segments
         ),
     };
+    let (kept, reused) = report.rows.iter().fold((0, 0), |(k, r), row| {
+        (k + row.coherent.camera_rays, r + row.coherent.camera_reused)
+    });
+    if kept > 0 {
+        let _ = writeln!(
+            s,
+            "camera hits (section 3.3.3): {reused} of {kept} camera rays in retraced blocks \
+             ({:.1}%) answered from the block's last trace; at most {:.1} KiB kept",
+            100.0 * reused as f64 / kept as f64,
+            report.camera_bytes as f64 / 1024.0
+        );
+    }
     s
 }

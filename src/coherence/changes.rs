@@ -19,6 +19,9 @@ pub struct FrameSummary {
     /// Shapes by fingerprint (geometry and material): their boxes, whether they emit, and
     /// their geometry (whose surface a change marks).
     shapes: FxHashMap<u64, Vec<(Aabb, bool, Arc<Geometry>)>>,
+    /// Shape `i`'s fingerprint: a hit on shape `i` recorded in an earlier frame names the
+    /// same object now only if its fingerprint is the same (shapes come and go).
+    pub keys: Vec<u64>,
     lights: Vec<Light>,
     /// Everything that reaches every pixel (camera, world settings, the light choice of the
     /// Monte Carlo integrators), as text.
@@ -183,13 +186,17 @@ impl FrameSummary {
     pub fn new(scene: &Scene, light_choice: Option<&LightSet>) -> FrameSummary {
         let materials: Vec<String> = scene.materials.iter().map(|m| format!("{m:?}")).collect();
         let mut shapes: FxHashMap<u64, Vec<(Aabb, bool, Arc<Geometry>)>> = FxHashMap::default();
+        let mut keys = Vec::with_capacity(scene.shapes.len());
         for shape in &scene.shapes {
             let m = &scene.materials[shape.material];
             let emits = m.emission.max_element() > 0.0;
-            shapes
-                .entry(shape_fingerprint(shape, &materials[shape.material]))
-                .or_default()
-                .push((shape_bounds(shape), emits, Arc::new(shape.geometry.clone())));
+            let key = shape_fingerprint(shape, &materials[shape.material]);
+            keys.push(key);
+            shapes.entry(key).or_default().push((
+                shape_bounds(shape),
+                emits,
+                Arc::new(shape.geometry.clone()),
+            ));
         }
         let env = scene
             .environment
@@ -211,6 +218,7 @@ impl FrameSummary {
         }
         FrameSummary {
             shapes,
+            keys,
             lights: scene.lights.clone(),
             global,
         }

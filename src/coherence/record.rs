@@ -8,6 +8,11 @@
 //!   the task ends.
 //! - Segments: the segment, clipped to the box around the recording voxels, is copied into
 //!   the thread's buffer; the block keeps an exact-size copy when the task ends.
+//!
+//! Camera rays are also kept with their hits ([`CameraHit`]): when the block is retraced, a
+//! camera ray that crosses no changed voxel up to its hit gets that hit again without a
+//! query (section 3.3.3 of the paper: no intersection work in unchanged voxels before the
+//! stored hit; with Embree, which cannot start a traversal part-way, the whole query goes).
 
 use super::grid::ActiveVoxels;
 use super::segments::BlockSegments;
@@ -16,7 +21,7 @@ use crate::accel::{Accel, Hit};
 use crate::math::{Ray, Vec3};
 use crate::scene::Scene;
 use std::cell::{Cell, RefCell};
-use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::Mutex;
 
 thread_local! {
@@ -26,11 +31,84 @@ thread_local! {
     /// query checks one word, not the whole entry.
     static LAST: Cell<Option<(Ray, Option<Hit>)>> = const { Cell::new(None) };
     static LAST_OWNER: Cell<u64> = const { Cell::new(0) };
-    /// The segments of the recorder that owns this thread's buffer (by serial number; 0:
+    /// What the recorder that owns this thread's buffer recorded (by serial number; 0:
     /// none): a push without a lock. A recorder used on another thread, or while another
     /// owns the buffer, falls back to its own locked list.
-    static LOCAL: RefCell<(u64, BlockSegments)> = const { RefCell::new((0, BlockSegments::new())) };
+    static LOCAL: RefCell<(u64, Recorded)> = const { RefCell::new((0, Recorded::new())) };
 }
+
+/// A camera ray and its answer, as recorded: `shape` is the fingerprint of the shape hit
+/// (`FrameSummary::keys`), which must still be at that index for the hit to be reused.
+#[derive(Clone, Copy, Debug)]
+pub struct CameraHit {
+    ray: Ray,
+    hit: Option<Hit>,
+    shape: u64,
+}
+
+/// What a recorder's task recorded.
+#[derive(Clone, Debug, Default)]
+pub struct Recorded {
+    /// Segment records (empty with tables).
+    pub segments: BlockSegments,
+    /// Camera rays and their hits, in the order traced.
+    pub camera: Vec<CameraHit>,
+    /// Whether any ray found a surface.
+    pub hit: bool,
+    /// Camera rays answered from an earlier hit, and camera rays.
+    pub camera_reused: u64,
+    pub camera_rays: u64,
+}
+
+impl Recorded {
+    const fn new() -> Recorded {
+        Recorded {
+            segments: BlockSegments::new(),
+            camera: Vec::new(),
+            hit: false,
+            camera_reused: 0,
+            camera_rays: 0,
+        }
+    }
+
+    fn clear(&mut self) {
+        self.segments.clear();
+        self.camera.clear();
+    }
+
+    /// An exact-size copy of the lists (segments sealed).
+    fn copy(&self) -> Recorded {
+        let mut segments = self.segments.clone();
+        segments.seal();
+        Recorded {
+            segments,
+            camera: self.camera.clone(),
+            ..Recorded::new()
+        }
+    }
+
+    fn append(&mut self, other: Recorded) {
+        self.segments.append(other.segments);
+        self.camera.extend_from_slice(&other.camera);
+    }
+
+    /// Bytes of a block's camera hits.
+    pub fn camera_bytes(camera: &[CameraHit]) -> usize {
+        std::mem::size_of_val(camera)
+    }
+}
+
+/// How a retraced block's camera rays may reuse the hits of its last trace.
+pub struct CameraReuse<'a> {
+    /// The block's camera rays of its last trace, in the order traced.
+    pub previous: &'a [CameraHit],
+    /// The voxels where a surface changed in this frame.
+    pub changed: &'a ActiveVoxels,
+}
+
+/// How many stored camera rays a query looks ahead of the last one matched (the rays of a
+/// retraced block come in the same order, but for pixels whose sampling changed).
+const LOOKAHEAD: usize = 16;
 
 /// Serial numbers of recorders (0 is nobody).
 static SERIAL: AtomicU64 = AtomicU64::new(1);
@@ -55,9 +133,17 @@ pub struct RecordingAccel<'a> {
     /// voxel).
     surface: Vec<AtomicU64>,
     shadow: Vec<AtomicU64>,
-    /// Segments: this recorder's serial number, and its list when the thread's is taken.
+    /// This recorder's serial number, and its lists when the thread's are taken.
     serial: u64,
-    spill: Mutex<BlockSegments>,
+    spill: Mutex<Recorded>,
+    /// The shapes' fingerprints in this frame, if camera hits are recorded (each records
+    /// the one hit).
+    shape_keys: Option<&'a [u64]>,
+    /// Stored camera hits to reuse, with the next one expected.
+    reuse: Option<CameraReuse<'a>>,
+    cursor: AtomicUsize,
+    camera_reused: AtomicU64,
+    camera_rays: AtomicU64,
     hit: AtomicBool,
     /// Whether a blocked shadow ray is recorded only up to its nearest blocker, which takes
     /// one more query (the Whitted integrator asks for that hit anyway) instead of up to
@@ -71,6 +157,11 @@ fn mark(set: &[AtomicU64], v: usize) {
     if word.load(Ordering::Relaxed) & bit == 0 {
         word.store(word.load(Ordering::Relaxed) | bit, Ordering::Relaxed);
     }
+}
+
+/// Counts one (only the task's thread writes the counter: no atomic add needed).
+fn bump(counter: &AtomicU64) {
+    counter.store(counter.load(Ordering::Relaxed) + 1, Ordering::Relaxed);
 }
 
 impl<'a> RecordingAccel<'a> {
@@ -91,14 +182,12 @@ impl<'a> RecordingAccel<'a> {
         };
         let zeros = || (0..words).map(|_| AtomicU64::new(0)).collect();
         let serial = SERIAL.fetch_add(1, Ordering::Relaxed);
-        if records == Records::Segments {
-            LOCAL.with_borrow_mut(|(owner, list)| {
-                if *owner == 0 {
-                    *owner = serial;
-                    list.clear();
-                }
-            });
-        }
+        LOCAL.with_borrow_mut(|(owner, list)| {
+            if *owner == 0 {
+                *owner = serial;
+                list.clear();
+            }
+        });
         RecordingAccel {
             inner,
             scene,
@@ -107,10 +196,60 @@ impl<'a> RecordingAccel<'a> {
             surface: zeros(),
             shadow: zeros(),
             serial,
-            spill: Mutex::new(BlockSegments::new()),
+            spill: Mutex::new(Recorded::new()),
+            shape_keys: None,
+            reuse: None,
+            cursor: AtomicUsize::new(0),
+            camera_reused: AtomicU64::new(0),
+            camera_rays: AtomicU64::new(0),
             hit: AtomicBool::new(false),
             nearest_blocker,
         }
+    }
+
+    /// Also records camera rays with their hits (`shape_keys`: the shapes' fingerprints in
+    /// this frame), and answers them from `reuse` where nothing changed along them.
+    pub fn with_camera(mut self, shape_keys: &'a [u64], reuse: Option<CameraReuse<'a>>) -> Self {
+        self.shape_keys = Some(shape_keys);
+        self.reuse = reuse;
+        self
+    }
+
+    /// Runs `f` on this recorder's lists: the thread's buffer if it owns it, else its own.
+    #[inline]
+    fn with_lists(&self, f: impl FnOnce(&mut Recorded)) {
+        let mut f = Some(f);
+        LOCAL.with_borrow_mut(|(owner, list)| {
+            if *owner == self.serial {
+                (f.take().expect("called once"))(list);
+            }
+        });
+        if let Some(f) = f {
+            f(&mut self.spill.lock().unwrap_or_else(|e| e.into_inner()));
+        }
+    }
+
+    /// The stored hit of camera ray `ray`, if it can be reused: the same ray was traced in
+    /// the block's last trace, its hit is on the same shape (by fingerprint) and it crosses
+    /// no voxel where a surface changed up to that hit (or to its end, if it hit nothing).
+    fn stored_hit(&self, ray: &Ray) -> Option<Option<Hit>> {
+        let reuse = self.reuse.as_ref()?;
+        let start = self.cursor.load(Ordering::Relaxed);
+        let end = (start + LOOKAHEAD).min(reuse.previous.len());
+        let i = (start..end).find(|&i| same_ray(&reuse.previous[i].ray, ray))?;
+        self.cursor.store(i + 1, Ordering::Relaxed);
+        let stored = &reuse.previous[i];
+        let keys = self.shape_keys?;
+        let t1 = match stored.hit {
+            Some(h) if keys.get(h.geom_id as usize) != Some(&stored.shape) => return None,
+            Some(h) => h.t,
+            None => ray.tmax,
+        };
+        let mut crossed = false;
+        reuse
+            .changed
+            .walk(ray.origin, ray.dir, ray.tmin, t1, |_| crossed = true);
+        (!crossed).then_some(stored.hit)
     }
 
     /// Records the segment `origin + t·dir`, `t ∈ [t0, t1]`.
@@ -138,42 +277,36 @@ impl<'a> RecordingAccel<'a> {
         let Some(s) = self.voxels.clip_segment(origin, dir, t0, t1) else {
             return;
         };
-        let local = LOCAL.with_borrow_mut(|(owner, list)| {
-            let mine = *owner == self.serial;
-            if mine {
-                list.push(table, s);
-            }
-            mine
-        });
-        if !local {
-            let mut spill = self.spill.lock().unwrap_or_else(|e| e.into_inner());
-            spill.push(table, s);
-        }
+        self.with_lists(|list| list.segments.push(table, s));
     }
 
-    /// The segments recorded (sealed), and whether any ray found a surface (segment records).
-    pub fn finish(self) -> (BlockSegments, bool) {
+    /// What was recorded: the segments (sealed), the camera hits, whether any ray found a
+    /// surface, and the camera rays answered from stored hits.
+    pub fn finish(self) -> Recorded {
         // The thread's buffer keeps its (warm) memory for the next task; the block keeps an
-        // exact copy.
-        let mut list = LOCAL.with_borrow_mut(|(owner, list)| {
+        // exact copy, made (and its segments' box) while the lists are in this thread's
+        // cache, not when the block is stored.
+        let mut recorded = LOCAL.with_borrow_mut(|(owner, list)| {
             if *owner == self.serial {
                 *owner = 0;
-                list.clone()
+                list.copy()
             } else {
-                BlockSegments::new()
+                Recorded::new()
             }
         });
         let spill = self.spill.into_inner().unwrap_or_else(|e| e.into_inner());
-        if !spill.is_empty() {
-            list.append(spill);
+        if !spill.segments.is_empty() || !spill.camera.is_empty() {
+            recorded.append(spill);
+            recorded.segments.seal();
         }
-        // Here, while the segments are in this thread's cache, not when the block is stored.
-        list.seal();
-        (list, self.hit.load(Ordering::Relaxed))
+        recorded.hit = self.hit.load(Ordering::Relaxed);
+        recorded.camera_reused = self.camera_reused.load(Ordering::Relaxed);
+        recorded.camera_rays = self.camera_rays.load(Ordering::Relaxed);
+        recorded
     }
 
     /// Sets `block`'s bit in the tables of every voxel recorded.
-    pub fn flush(self, tables: &VoxelTables, block: usize) {
+    pub fn flush(&self, tables: &VoxelTables, block: usize) {
         for (table, set) in [
             (Table::Surface, &self.surface),
             (Table::Shadow, &self.shadow),
@@ -226,6 +359,40 @@ impl Accel for RecordingAccel<'_> {
             self.hit.store(true, Ordering::Relaxed);
         }
         self.record(Table::Surface, ray.origin, ray.dir, ray.tmin, end);
+        hit
+    }
+
+    fn intersect_camera(&self, ray: &Ray) -> Option<Hit> {
+        let Some(keys) = self.shape_keys else {
+            return self.intersect(ray);
+        };
+        bump(&self.camera_rays);
+        let hit = match self.stored_hit(ray) {
+            Some(hit) => {
+                bump(&self.camera_reused);
+                hit
+            }
+            None => self.inner.intersect(ray),
+        };
+        if hit.is_some() {
+            self.hit.store(true, Ordering::Relaxed);
+        }
+        // Recorded as any ray looking for a surface, and kept with its hit for next time.
+        self.record(
+            Table::Surface,
+            ray.origin,
+            ray.dir,
+            ray.tmin,
+            hit.map_or(ray.tmax, |h| h.t),
+        );
+        let shape = hit.map_or(0, |h| keys[h.geom_id as usize]);
+        self.with_lists(|list| {
+            list.camera.push(CameraHit {
+                ray: *ray,
+                hit,
+                shape,
+            })
+        });
         hit
     }
 

@@ -7,8 +7,8 @@
 
 use super::changes::{Changes, FrameSummary};
 use super::grid::{ActiveVoxels, Grid};
-use super::record::{RecordingAccel, Records};
-use super::segments::{BlockSegments, Changed, SegmentRecords};
+use super::record::{CameraHit, CameraReuse, Recorded, RecordingAccel, Records};
+use super::segments::{Changed, SegmentRecords};
 use super::tables::{BlockLayout, BlockSet, Table, VoxelTables};
 use crate::accel::Accel;
 use crate::image::Image;
@@ -114,6 +114,10 @@ pub struct FrameStats {
     pub full_reason: Option<String>,
     /// The blocks retraced.
     pub blocks: Vec<usize>,
+    /// Camera rays traced, and those answered from their hit in the block's last trace
+    /// (section 3.3.3).
+    pub camera_rays: u64,
+    pub camera_reused: u64,
 }
 
 /// The incremental renderer's state between frames.
@@ -128,8 +132,13 @@ pub struct CoherentRenderer {
     last_change: Option<Vec<u32>>,
     /// The position in the sequence of the next frame (0 after [`reset`](Self::reset)).
     position: u32,
-    /// Segment records that grow past this many bytes become voxel tables.
+    /// Records that grow past this many bytes are cut down: segment records become voxel
+    /// tables, and camera hits are no longer kept.
     segment_budget: usize,
+    /// Per block, its camera rays and their hits in its last trace (section 3.3.3), while
+    /// `camera_on`.
+    camera: Vec<Vec<CameraHit>>,
+    camera_on: bool,
 }
 
 /// The records, in either form.
@@ -174,12 +183,15 @@ impl CoherentRenderer {
             last_change: None,
             position: 0,
             segment_budget: (crate::memory::limit().0 / 4).min(usize::MAX as u64) as usize,
+            camera: vec![Vec::new(); layout.len()],
+            camera_on: true,
         }
     }
 
-    /// Segment records that grow past `bytes` are turned into voxel tables (which take
-    /// a fixed, small amount of memory) and the sequence goes on with tables. By default a
-    /// quarter of the memory limit (`--max-memory`).
+    /// Records that grow past `bytes` are cut down: segment records are turned into voxel
+    /// tables (which take a fixed, small amount of memory), camera hits are dropped, and the
+    /// sequence goes on without them. By default a quarter of the memory limit
+    /// (`--max-memory`).
     pub fn set_segment_budget(&mut self, bytes: usize) {
         self.segment_budget = bytes;
     }
@@ -251,11 +263,31 @@ impl CoherentRenderer {
         }
     }
 
-    /// Bytes the records take: the voxel tables, or the segments held.
+    /// Bytes the records take: the voxel tables or the segments held (the camera hits
+    /// apart: [`camera_bytes`](Self::camera_bytes)).
     pub fn record_bytes(&self) -> usize {
         match &self.store {
             Store::Tables(t) => t.memory_bytes(),
             Store::Segments(s) => s.memory_bytes(),
+        }
+    }
+
+    /// Bytes the stored camera hits take.
+    pub fn camera_bytes(&self) -> usize {
+        self.camera.iter().map(|c| Recorded::camera_bytes(c)).sum()
+    }
+
+    /// Whether camera hits are kept for reuse (until the records pass their budget).
+    pub fn keeps_camera_hits(&self) -> bool {
+        self.camera_on
+    }
+
+    /// Keeps camera hits for reuse (the default) or not (every retraced camera ray is
+    /// queried again; the frames are the same).
+    pub fn set_camera_hits(&mut self, on: bool) {
+        self.camera_on = on;
+        if !on {
+            self.camera = vec![Vec::new(); self.layout.len()];
         }
     }
 
@@ -274,17 +306,19 @@ impl CoherentRenderer {
     /// Forgets the previous frame: the next frame is traced in full.
     pub fn reset(&mut self) {
         self.previous = None;
+        self.camera = vec![Vec::new(); self.layout.len()];
         self.store = Store::new(self.store.records(), self.grid.len(), &self.layout);
         self.position = 0;
         self.update_active();
     }
 
     /// The blocks to retrace for `changes`, how many voxels were marked changed, and why
-    /// every block is retraced, if so.
-    pub fn blocks_for(&self, changes: &Changes) -> (BlockSet, usize, Option<String>) {
+    /// every block is retraced, if so; else the voxels where a surface changed (what a
+    /// stored camera hit must not be behind).
+    pub fn blocks_for(&self, changes: &Changes) -> (BlockSet, usize, Result<Vec<bool>, String>) {
         let mut blocks = BlockSet::new(&self.layout);
         if let Some(reason) = &changes.everything {
-            return (BlockSet::all(&self.layout), 0, Some(reason.clone()));
+            return (BlockSet::all(&self.layout), 0, Err(reason.clone()));
         }
         let margin = MARGIN * (self.grid.hi - self.grid.lo).length();
         // Records exist only inside the grid: a change elsewhere cannot be traced back.
@@ -293,7 +327,7 @@ impl CoherentRenderer {
         };
         if !changes.objects.iter().chain(&changes.shadows).all(inside) {
             let reason = "something changed outside the voxel grid".to_string();
-            return (BlockSet::all(&self.layout), 0, Some(reason));
+            return (BlockSet::all(&self.layout), 0, Err(reason));
         }
         let mut changed = vec![false; self.grid.len()];
         for (lo, hi) in self.surface_boxes(&Changes {
@@ -311,7 +345,7 @@ impl CoherentRenderer {
         if (0..self.grid.len()).any(|v| (changed[v] || shadow_only[v]) && !self.voxels.is_active(v))
         {
             let reason = "something changed where no records were kept".to_string();
-            return (BlockSet::all(&self.layout), 0, Some(reason));
+            return (BlockSet::all(&self.layout), 0, Err(reason));
         }
         let count = (0..self.grid.len())
             .filter(|&v| changed[v] || shadow_only[v])
@@ -346,7 +380,7 @@ impl CoherentRenderer {
                 segments.collect(&voxels(&changed), &voxels(&any), &mut blocks);
             }
         }
-        (blocks, count, None)
+        (blocks, count, Ok(changed))
     }
 
     /// Renders the next frame of the sequence (the first call traces every pixel).
@@ -369,23 +403,33 @@ impl CoherentRenderer {
         let summary = FrameSummary::new(scene, light_choice);
         let mut stats = FrameStats::default();
         let pool = crate::render::thread_pool(engine.threads())?;
-        let (blocks, mut image) = match self.previous.take() {
+        let (blocks, mut image, changed) = match self.previous.take() {
             None => {
                 stats.full_reason = Some("first frame".into());
-                (BlockSet::all(&self.layout), Image::new(width, height))
+                (BlockSet::all(&self.layout), Image::new(width, height), None)
             }
             Some((previous, image)) => {
                 let changes = previous.diff(&summary);
-                let (blocks, voxels, reason) = pool.install(|| self.blocks_for(&changes));
+                let (blocks, voxels, changed) = pool.install(|| self.blocks_for(&changes));
                 stats.changed_voxels = voxels;
-                stats.full_reason = reason;
-                (blocks, image)
+                stats.full_reason = changed.as_ref().err().cloned();
+                (blocks, image, changed.ok())
             }
         };
         match &mut self.store {
             Store::Tables(tables) => tables.clear(&blocks),
             Store::Segments(segments) => segments.clear(&blocks),
         }
+        // The retraced blocks' camera hits, to reuse where nothing changed along them (only
+        // when the frame's changed voxels are known: not after a change that reaches every
+        // pixel, whose geometry changes are not worked out).
+        let previous_camera: Vec<Vec<CameraHit>> = blocks
+            .iter()
+            .map(|b| std::mem::take(&mut self.camera[b]))
+            .collect();
+        let changed = changed
+            .filter(|_| self.camera_on)
+            .map(|mask| ActiveVoxels::from_mask(self.grid.clone(), &mask));
         // From here on, record only where a later frame changes something (the check
         // above used the previous frame's set, under which its records were made).
         if self.position > 0 && self.last_change.is_some() {
@@ -430,29 +474,48 @@ impl CoherentRenderer {
         let (voxels, store) = (&self.voxels, &self.store);
         let records = store.records();
         let nearest_blocker = matches!(engine, Engine::Whitted { .. });
-        type Part = (Vec<Rgb>, RayStats, Option<(BlockSegments, bool)>);
-        let results: Vec<Part> = pool.install(|| {
+        // Each task's block's index in `list` (its previous camera hits).
+        let position: Vec<usize> = {
+            let mut p = vec![0; self.layout.len()];
+            for (i, &b) in list.iter().enumerate() {
+                p[b] = i;
+            }
+            p
+        };
+        // Camera hits are kept from a block's first retrace on, not by a frame traced in
+        // full: most blocks of such a frame are never retraced, and keeping theirs cost frame
+        // 0 more time (the memory's first touch) than reusing them saved later.
+        let camera_on = self.camera_on && stats.full_reason.is_none();
+        let results: Vec<(Vec<Rgb>, RayStats, Recorded)> = pool.install(|| {
             tasks
                 .par_iter()
                 .map(|(b, tile)| {
-                    let recorder =
+                    let mut recorder =
                         RecordingAccel::new(accel, scene, voxels, nearest_blocker, records);
+                    if camera_on {
+                        let reuse = changed.as_ref().map(|changed| CameraReuse {
+                            previous: &previous_camera[position[*b]],
+                            changed,
+                        });
+                        recorder = recorder.with_camera(&summary.keys, reuse);
+                    }
                     let (pixels, rays) = engine.region(&ctx.with_accel(&recorder), tile);
-                    let segments = match store {
-                        Store::Tables(tables) => {
-                            recorder.flush(tables, *b);
-                            None
-                        }
-                        Store::Segments(_) => Some(recorder.finish()),
-                    };
-                    (pixels, rays, segments)
+                    if let Store::Tables(tables) = store {
+                        recorder.flush(tables, *b);
+                    }
+                    (pixels, rays, recorder.finish())
                 })
                 .collect()
         });
-        for ((b, t), (pixels, rays, segments)) in tasks.iter().zip(results) {
-            if let (Store::Segments(store), Some((list, hit))) = (&mut self.store, segments) {
-                store.add(*b, list, hit);
+        drop(previous_camera);
+        for ((b, t), (pixels, rays, recorded)) in tasks.iter().zip(results) {
+            if let Store::Segments(store) = &mut self.store {
+                store.add(*b, recorded.segments, recorded.hit);
             }
+            // (A block traced in several tiles: the parts in order.)
+            self.camera[*b].extend_from_slice(&recorded.camera);
+            stats.camera_rays += recorded.camera_rays;
+            stats.camera_reused += recorded.camera_reused;
             let w = t.x1 - t.x0;
             for (i, c) in pixels.into_iter().enumerate() {
                 image.set(t.x0 + i as u32 % w, t.y0 + i as u32 / w, c);
@@ -462,11 +525,17 @@ impl CoherentRenderer {
         }
         stats.blocks_retraced = list.len();
         stats.blocks = list;
-        if matches!(&self.store, Store::Segments(s) if s.memory_bytes() > self.segment_budget) {
-            let empty = Store::Tables(VoxelTables::new(0, &self.layout));
-            if let Store::Segments(segments) = std::mem::replace(&mut self.store, empty) {
-                let tables = pool.install(|| segments.into_tables(&self.voxels, &self.layout));
-                self.store = Store::Tables(tables);
+        if self.record_bytes() + self.camera_bytes() > self.segment_budget {
+            // Over the budget: segment records become tables, and camera hits are no longer
+            // kept (the frames stay the same; retraced camera rays are queried again).
+            self.camera_on = false;
+            self.camera = vec![Vec::new(); self.layout.len()];
+            if let Store::Segments(_) = self.store {
+                let empty = Store::Tables(VoxelTables::new(0, &self.layout));
+                if let Store::Segments(segments) = std::mem::replace(&mut self.store, empty) {
+                    let tables = pool.install(|| segments.into_tables(&self.voxels, &self.layout));
+                    self.store = Store::Tables(tables);
+                }
             }
         }
         stats.seconds = start.elapsed().as_secs_f64();
