@@ -110,6 +110,9 @@ pub struct CameraReuse<'a> {
 /// retraced block come in the same order, but for pixels whose sampling changed).
 const LOOKAHEAD: usize = 16;
 
+/// The cursor before a task's first camera ray.
+const UNSYNCED: usize = usize::MAX;
+
 /// Serial numbers of recorders (0 is nobody).
 static SERIAL: AtomicU64 = AtomicU64::new(1);
 
@@ -199,7 +202,7 @@ impl<'a> RecordingAccel<'a> {
             spill: Mutex::new(Recorded::new()),
             shape_keys: None,
             reuse: None,
-            cursor: AtomicUsize::new(0),
+            cursor: AtomicUsize::new(UNSYNCED),
             camera_reused: AtomicU64::new(0),
             camera_rays: AtomicU64::new(0),
             hit: AtomicBool::new(false),
@@ -235,8 +238,21 @@ impl<'a> RecordingAccel<'a> {
     fn stored_hit(&self, ray: &Ray) -> Option<Option<Hit>> {
         let reuse = self.reuse.as_ref()?;
         let start = self.cursor.load(Ordering::Relaxed);
-        let end = (start + LOOKAHEAD).min(reuse.previous.len());
-        let i = (start..end).find(|&i| same_ray(&reuse.previous[i].ray, ray))?;
+        // The task's first camera ray is looked for in the whole list: a block traced in
+        // several tiles (one task each) has them one after the other in it.
+        let range = match start {
+            UNSYNCED => 0..reuse.previous.len(),
+            _ => start..(start + LOOKAHEAD).min(reuse.previous.len()),
+        };
+        let found = range
+            .into_iter()
+            .find(|&i| same_ray(&reuse.previous[i].ray, ray));
+        let Some(i) = found else {
+            if start == UNSYNCED {
+                self.cursor.store(0, Ordering::Relaxed);
+            }
+            return None;
+        };
         self.cursor.store(i + 1, Ordering::Relaxed);
         let stored = &reuse.previous[i];
         let keys = self.shape_keys?;
