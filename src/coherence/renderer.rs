@@ -513,7 +513,11 @@ impl CoherentRenderer {
                 store.add(*b, recorded.segments, recorded.hit);
             }
             // (A block traced in several tiles: the parts in order.)
-            self.camera[*b].extend_from_slice(&recorded.camera);
+            if self.camera[*b].is_empty() {
+                self.camera[*b] = recorded.camera;
+            } else {
+                self.camera[*b].extend_from_slice(&recorded.camera);
+            }
             stats.camera_rays += recorded.camera_rays;
             stats.camera_reused += recorded.camera_reused;
             let w = t.x1 - t.x0;
