@@ -55,9 +55,18 @@ impl<'a> Context<'a> {
         Some(SurfacePoint::from_hit(&self.scene.shapes, ray, &hit))
     }
 
-    /// The closest surface along a camera ray (the backend may know it from an earlier
-    /// frame: [`Accel::intersect_camera`]).
-    pub fn intersect_camera(&self, ray: &Ray, stats: &mut RayStats) -> Option<SurfacePoint> {
+    /// The closest surface along ray `depth` of a path: [`intersect`](Self::intersect),
+    /// but the camera ray (depth 0) goes through [`Accel::intersect_camera`] (the backend
+    /// may know its hit from an earlier frame).
+    pub fn intersect_at_depth(
+        &self,
+        ray: &Ray,
+        depth: u32,
+        stats: &mut RayStats,
+    ) -> Option<SurfacePoint> {
+        if depth > 0 {
+            return self.intersect(ray, stats);
+        }
         stats.closest += 1;
         let hit = self.accel.intersect_camera(ray)?;
         Some(SurfacePoint::from_hit(&self.scene.shapes, ray, &hit))

@@ -110,12 +110,7 @@ impl MonteCarlo for PathTracer {
         let mut prev_p = ray.origin;
         let mut depth = 0;
         loop {
-            let sp = if depth == 0 {
-                ctx.intersect_camera(&ray, stats)
-            } else {
-                ctx.intersect(&ray, stats)
-            };
-            let Some(sp) = sp else {
+            let Some(sp) = ctx.intersect_at_depth(&ray, depth, stats) else {
                 if let Some(bg) = lights.background_light() {
                     let le = lights.background_radiance(ray.dir);
                     let w = if specular {

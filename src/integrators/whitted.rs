@@ -68,12 +68,7 @@ impl Whitted {
         rng: &mut Rng,
         stats: &mut RayStats,
     ) -> (Rgb, u32) {
-        let sp = if depth == 0 {
-            ctx.intersect_camera(ray, stats)
-        } else {
-            ctx.intersect(ray, stats)
-        };
-        let Some(sp) = sp else {
+        let Some(sp) = ctx.intersect_at_depth(ray, depth, stats) else {
             return (ctx.scene.background, u32::MAX);
         };
         (
