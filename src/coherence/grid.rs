@@ -428,8 +428,14 @@ impl ActiveVoxels {
     /// Whether the segment from `a` to `b` crosses an active voxel.
     #[inline]
     pub fn crosses(&self, [a, b]: [Vec3; 2]) -> bool {
+        self.crossed_by(a, b - a, 0.0, 1.0)
+    }
+
+    /// Whether the segment `origin + t·dir`, `t ∈ [t0, t1]`, crosses an active voxel.
+    #[inline]
+    pub fn crossed_by(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32) -> bool {
         let mut crossed = false;
-        self.walk(a, b - a, 0.0, 1.0, |_| crossed = true);
+        self.walk(origin, dir, t0, t1, |_| crossed = true);
         crossed
     }
 

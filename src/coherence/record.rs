@@ -91,11 +91,6 @@ impl Recorded {
         self.segments.append(other.segments);
         self.camera.extend_from_slice(&other.camera);
     }
-
-    /// Bytes of a block's camera hits.
-    pub fn camera_bytes(camera: &[CameraHit]) -> usize {
-        std::mem::size_of_val(camera)
-    }
 }
 
 /// How a retraced block's camera rays may reuse the hits of its last trace.
@@ -261,11 +256,18 @@ impl<'a> RecordingAccel<'a> {
             Some(h) => h.t,
             None => ray.tmax,
         };
-        let mut crossed = false;
-        reuse
-            .changed
-            .walk(ray.origin, ray.dir, ray.tmin, t1, |_| crossed = true);
+        let crossed = reuse.changed.crossed_by(ray.origin, ray.dir, ray.tmin, t1);
         (!crossed).then_some(stored.hit)
+    }
+
+    /// Notes a ray looking for a surface that got `hit`, and records its segment (to the hit,
+    /// or to the end of the ray).
+    fn record_surface(&self, ray: &Ray, hit: Option<Hit>) {
+        if hit.is_some() {
+            self.hit.store(true, Ordering::Relaxed);
+        }
+        let end = hit.map_or(ray.tmax, |h| h.t);
+        self.record(Table::Surface, ray.origin, ray.dir, ray.tmin, end);
     }
 
     /// Records the segment `origin + t·dir`, `t ∈ [t0, t1]`.
@@ -370,11 +372,7 @@ impl Accel for RecordingAccel<'_> {
             }
         }
         let hit = self.inner.intersect(ray);
-        let end = hit.map_or(ray.tmax, |h| h.t);
-        if hit.is_some() {
-            self.hit.store(true, Ordering::Relaxed);
-        }
-        self.record(Table::Surface, ray.origin, ray.dir, ray.tmin, end);
+        self.record_surface(ray, hit);
         hit
     }
 
@@ -390,17 +388,8 @@ impl Accel for RecordingAccel<'_> {
             }
             None => self.inner.intersect(ray),
         };
-        if hit.is_some() {
-            self.hit.store(true, Ordering::Relaxed);
-        }
         // Recorded as any ray looking for a surface, and kept with its hit for next time.
-        self.record(
-            Table::Surface,
-            ray.origin,
-            ray.dir,
-            ray.tmin,
-            hit.map_or(ray.tmax, |h| h.t),
-        );
+        self.record_surface(ray, hit);
         let shape = hit.map_or(0, |h| keys[h.geom_id as usize]);
         self.with_lists(|list| {
             list.camera.push(CameraHit {

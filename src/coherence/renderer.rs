@@ -274,7 +274,10 @@ impl CoherentRenderer {
 
     /// Bytes the stored camera hits take.
     pub fn camera_bytes(&self) -> usize {
-        self.camera.iter().map(|c| Recorded::camera_bytes(c)).sum()
+        self.camera
+            .iter()
+            .map(|c| std::mem::size_of_val(c.as_slice()))
+            .sum()
     }
 
     /// Whether camera hits are kept for reuse (until the records pass their budget).
