@@ -426,10 +426,10 @@ impl CoherentRenderer {
         // The retraced blocks' camera hits, to reuse where nothing changed along them (only
         // when the frame's changed voxels are known: not after a change that reaches every
         // pixel, whose geometry changes are not worked out).
-        let previous_camera: Vec<Vec<CameraHit>> = blocks
-            .iter()
-            .map(|b| std::mem::take(&mut self.camera[b]))
-            .collect();
+        let mut previous_camera: Vec<Vec<CameraHit>> = vec![Vec::new(); self.layout.len()];
+        for b in blocks.iter() {
+            previous_camera[b] = std::mem::take(&mut self.camera[b]);
+        }
         let changed = changed
             .filter(|_| self.camera_on)
             .map(|mask| ActiveVoxels::from_mask(self.grid.clone(), &mask));
@@ -477,14 +477,6 @@ impl CoherentRenderer {
         let (voxels, store) = (&self.voxels, &self.store);
         let records = store.records();
         let nearest_blocker = matches!(engine, Engine::Whitted { .. });
-        // Each task's block's index in `list` (its previous camera hits).
-        let position: Vec<usize> = {
-            let mut p = vec![0; self.layout.len()];
-            for (i, &b) in list.iter().enumerate() {
-                p[b] = i;
-            }
-            p
-        };
         // Camera hits are kept from a block's first retrace on, not by a frame traced in
         // full: most blocks of such a frame are never retraced, and keeping theirs cost frame
         // 0 more time (the memory's first touch) than reusing them saved later.
@@ -497,7 +489,7 @@ impl CoherentRenderer {
                         RecordingAccel::new(accel, scene, voxels, nearest_blocker, records);
                     if camera_on {
                         let reuse = changed.as_ref().map(|changed| CameraReuse {
-                            previous: &previous_camera[position[*b]],
+                            previous: &previous_camera[*b],
                             changed,
                         });
                         recorder = recorder.with_camera(&summary.keys, reuse);
@@ -537,12 +529,9 @@ impl CoherentRenderer {
             // kept (the frames stay the same; retraced camera rays are queried again).
             self.camera_on = false;
             self.camera = vec![Vec::new(); self.layout.len()];
-            if let Store::Segments(_) = self.store {
-                let empty = Store::Tables(VoxelTables::new(0, &self.layout));
-                if let Store::Segments(segments) = std::mem::replace(&mut self.store, empty) {
-                    let tables = pool.install(|| segments.into_tables(&self.voxels, &self.layout));
-                    self.store = Store::Tables(tables);
-                }
+            if let Store::Segments(segments) = &self.store {
+                let tables = pool.install(|| segments.to_tables(&self.voxels, &self.layout));
+                self.store = Store::Tables(tables);
             }
         }
         stats.seconds = start.elapsed().as_secs_f64();

@@ -200,7 +200,7 @@ impl SegmentRecords {
     /// The same records as voxel tables: every segment walked into the tables of the active
     /// voxels it crosses (what the tables would hold had they been kept from the start,
     /// for every voxel still active).
-    pub fn into_tables(self, voxels: &ActiveVoxels, layout: &BlockLayout) -> VoxelTables {
+    pub fn to_tables(&self, voxels: &ActiveVoxels, layout: &BlockLayout) -> VoxelTables {
         let tables = VoxelTables::new(voxels.fine.len(), layout);
         self.blocks.par_iter().enumerate().for_each(|(b, s)| {
             for (table, list) in [(Table::Surface, &s.surface), (Table::Shadow, &s.shadow)] {
