@@ -463,7 +463,8 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
     };
     let mut rows = Vec::new();
     let mut full_notice = false;
-    let mut peak = (0, 0, 0);
+    // The most the records held after a frame: bytes, segments, bytes of camera hits.
+    let (mut peak_bytes, mut peak_segments, mut peak_camera) = (0, 0, 0);
     let mut dynamic: Option<Box<dyn DynamicAccel>> = None;
     for &f in &frames {
         if let Some(signal) = crate::interrupt::signal() {
@@ -510,9 +511,9 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
                      going on with voxel tables and without keeping camera hits (same frames)"
                 );
             }
-            peak.0 = peak.0.max(coherent.record_bytes());
-            peak.2 = peak.2.max(coherent.camera_bytes());
-            peak.1 = peak.1.max(coherent.segments());
+            peak_bytes = peak_bytes.max(coherent.record_bytes());
+            peak_segments = peak_segments.max(coherent.segments());
+            peak_camera = peak_camera.max(coherent.camera_bytes());
             row.time = clock.elapsed();
             if f != frames[0] && stats.full_reason.is_some() && !full_notice && !args.quiet {
                 eprintln!(
@@ -580,9 +581,9 @@ pub fn animate(args: &AnimateArgs) -> Result<Report> {
         rows,
         pixels_per_frame: width as u64 * height as u64,
         records: coherent.records(),
-        record_bytes: peak.0,
-        camera_bytes: peak.2,
-        segments: peak.1,
+        record_bytes: peak_bytes,
+        camera_bytes: peak_camera,
+        segments: peak_segments,
         voxels: coherent.grid.len(),
         active_voxels: coherent.active_voxels(),
         blocks: (layout.cols, layout.rows),
