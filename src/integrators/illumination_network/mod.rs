@@ -29,7 +29,7 @@ use crate::integrators::Context;
 use crate::scene::Scene;
 use patches::Patches;
 pub use preprocess::Builder;
-use preprocess::SlotLinks;
+use preprocess::{EndPacking, SlotLinks};
 use ray_space::RaySpace;
 use std::time::Instant;
 
@@ -38,10 +38,11 @@ pub const NONE: u32 = u32::MAX;
 /// The slot's line leaves the scene.
 pub const ESCAPE: u32 = u32::MAX - 1;
 
-/// Side keys per block of the link table's assembly: a block's rows (at most 512 nodes,
-/// 2.4 MB at 1,200 slots) stay in the last-level cache while it is filled, and each slot's
-/// ends for a block are long enough to stream. A multiple of 64.
-pub const KEY_BLOCK: usize = 512;
+/// Side keys per block of the link table's assembly, at most 2^9: a block's rows (at most 512
+/// nodes, 2.4 MB at 1,200 slots) stay in the last-level cache while it is filled, and each
+/// slot's ends for a block are long enough to stream. Networks of more than 2^23 side keys
+/// take smaller blocks (the packed link ends, [`preprocess::EndPacking`], need the bits).
+pub const MAX_KEY_BLOCK_BITS: u32 = 9;
 
 pub const DEFAULT_SLOPES: u32 = 12;
 pub const DEFAULT_STEP: f32 = 1.0 / 64.0;
@@ -167,9 +168,9 @@ pub(crate) fn row_etendue(row: &[u32], extra: &[[u32; 2]], w: &[f32]) -> f32 {
     sum
 }
 
-/// The link ends of key block `b` of a slot.
+/// The packed link ends of key block `b` of a slot.
 #[inline]
-fn ends(slot: &SlotLinks, b: usize) -> &[[u32; 2]] {
+fn ends(slot: &SlotLinks, b: usize) -> &[u32] {
     &slot.ends[slot.block_start[b] as usize..slot.block_start[b + 1] as usize]
 }
 
@@ -221,6 +222,7 @@ impl Network {
                 ));
             }
         }
+        let packing = EndPacking::for_keys(2 * patches.cells as usize)?;
         let t = Instant::now();
         let (slots, rays) = preprocess::build_links(
             (builder == Builder::Embree).then_some(ctx),
@@ -229,10 +231,11 @@ impl Network {
             params.seed,
             params.jitter,
             builder,
+            packing,
         );
         let link_seconds = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let mut net = Network::assemble(params, space, patches, &slots);
+        let mut net = Network::assemble(params, space, patches, &slots, packing);
         net.stats.assemble_seconds = t.elapsed().as_secs_f64();
         net.stats.link_seconds = link_seconds;
         net.stats.rays = rays.total();
@@ -241,8 +244,8 @@ impl Network {
     }
 
     /// Numbers the nodes (sides with at least one real link, in key order) and fills the
-    /// dense link table. Each slot's link ends come grouped by blocks of [`KEY_BLOCK`] side
-    /// keys (preprocess::link_slot), so a block's rows (a few hundred kilobytes) are filled
+    /// dense link table. Each slot's link ends come grouped by blocks of side keys
+    /// (preprocess::link_slot, `packing`), so a block's rows (a few hundred kilobytes) are filled
     /// in cache by one task walking every slot's ends for that block in slot order: the
     /// first end of a slot at a node goes into its row, further ones into its extra links.
     /// Blocks are independent (parallel), and nothing depends on the schedule.
@@ -251,10 +254,12 @@ impl Network {
         space: RaySpace,
         patches: Patches,
         slots: &[SlotLinks],
+        packing: EndPacking,
     ) -> Network {
         use rayon::prelude::*;
         let keys = 2 * patches.cells as usize;
-        let blocks = keys.div_ceil(KEY_BLOCK);
+        let block = packing.block();
+        let blocks = keys.div_ceil(block);
         let n_slots = space.slots();
         // Nodes: keys with a real link (not only escapes), marked by each slot.
         let words = keys.div_ceil(64);
@@ -268,7 +273,7 @@ impl Network {
         let mut node_of_key = vec![NONE; keys];
         let mut key_of_node = Vec::new();
         for (wi, &m) in marks.iter().enumerate() {
-            if wi % (KEY_BLOCK / 64) == 0 {
+            if wi % (block / 64) == 0 {
                 first_node.push(key_of_node.len());
             }
             for i in 0..64 {
@@ -297,7 +302,9 @@ impl Network {
                 parts.push((b, rows, wb));
             }
         }
-        type Part = (Vec<(u32, [u32; 2])>, u64);
+        // Per block: its nodes' extra-link counts, their (slot, target) pairs grouped by node,
+        // and the escapes seen.
+        type Part = (Vec<u32>, Vec<[u32; 2]>, u64);
         let filled: Vec<Part> = parts
             .into_par_iter()
             .map_init(Vec::new, |extra, (b, rows, wb)| {
@@ -314,7 +321,8 @@ impl Network {
                 let mut escapes = 0u64;
                 for (slot, s) in slots.iter().enumerate() {
                     let ws = w[slot];
-                    for &[k, t] in ends(s, b) {
+                    for &e in ends(s, b) {
+                        let (k, t) = packing.unpack(b, e);
                         let node = node_of_key[k as usize];
                         if node == NONE {
                             continue;
@@ -329,7 +337,7 @@ impl Network {
                         let e = &mut rows[local * n_slots + slot];
                         let taken = *e != NONE;
                         *e = if taken { *e } else { target };
-                        extra[len] = (node, [slot as u32, target]);
+                        extra[len] = (node - first, [slot as u32, target]);
                         len += usize::from(taken);
                         // W in slot order, as `row_etendue` adds it up.
                         wb[local] += ws;
@@ -338,20 +346,25 @@ impl Network {
                 let extra = &extra[..len];
                 // Grouped by node, in slot order within a node (a stable counting sort).
                 let n = rows.len() / n_slots;
-                let mut start = vec![0u32; n + 1];
+                let mut count = vec![0u32; n];
                 for e in extra {
-                    start[(e.0 - first) as usize + 1] += 1;
+                    count[e.0 as usize] += 1;
                 }
-                for i in 1..start.len() {
-                    start[i] += start[i - 1];
-                }
-                let mut grouped = vec![(0u32, [0u32; 2]); extra.len()];
+                let mut at = 0;
+                let mut next: Vec<u32> = count
+                    .iter()
+                    .map(|&c| {
+                        at += c;
+                        at - c
+                    })
+                    .collect();
+                let mut grouped = vec![[0u32; 2]; extra.len()];
                 for e in extra {
-                    let at = &mut start[(e.0 - first) as usize];
-                    grouped[*at as usize] = *e;
+                    let at = &mut next[e.0 as usize];
+                    grouped[*at as usize] = e.1;
                     *at += 1;
                 }
-                (grouped, escapes)
+                (count, grouped, escapes)
             })
             .collect();
         let mut stats = BuildStats::default();
@@ -360,20 +373,28 @@ impl Network {
             stats.degenerate += s.degenerate;
             stats.link_ends += 2 * s.pairs;
         }
-        let mut extra_start = vec![0u32; nodes + 1];
-        for (list, escapes) in &filled {
+        let mut extra_start = Vec::with_capacity(nodes + 1);
+        extra_start.push(0u32);
+        for (count, _, escapes) in &filled {
             stats.escapes += escapes;
-            for e in list {
-                extra_start[e.0 as usize + 1] += 1;
+            for &c in count {
+                extra_start.push(extra_start[extra_start.len() - 1] + c);
             }
         }
-        for i in 1..extra_start.len() {
-            extra_start[i] += extra_start[i - 1];
+        // The blocks' lists copied into place in parallel (the copy first touches the memory).
+        let mut extra = vec![[0u32; 2]; extra_start[nodes] as usize];
+        {
+            let mut rest = &mut extra[..];
+            let mut pieces = Vec::with_capacity(filled.len());
+            for (_, list, _) in &filled {
+                let (to, r) = std::mem::take(&mut rest).split_at_mut(list.len());
+                rest = r;
+                pieces.push((to, list));
+            }
+            pieces
+                .into_par_iter()
+                .for_each(|(to, list)| to.copy_from_slice(list));
         }
-        let extra: Vec<[u32; 2]> = filled
-            .into_iter()
-            .flat_map(|(list, _)| list.into_iter().map(|e| e.1))
-            .collect();
         stats.extra = extra.len() as u64;
         Network {
             params,

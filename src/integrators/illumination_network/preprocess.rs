@@ -27,7 +27,7 @@
 
 use super::patches::{Patches, Polygon};
 use super::ray_space::{axes, jitter_seed, RaySpace};
-use super::{ESCAPE, KEY_BLOCK};
+use super::{ESCAPE, MAX_KEY_BLOCK_BITS};
 use crate::integrators::{Context, RayStats};
 use crate::math::{Ray, Vec3};
 use rayon::prelude::*;
@@ -41,13 +41,77 @@ pub struct LineHit {
     pub key: u32,
 }
 
-/// The links of one slot as link ends (side key, the side key at the other end or
-/// [`ESCAPE`]), grouped by blocks of [`KEY_BLOCK`] side keys: block b's ends are
+/// How a link end is packed into 32 bits: the side key's offset within its key block in the
+/// high `block_bits`, the side key at the other end in the low `target_bits` (all ones for an
+/// escape). Half the bytes of a (key, target) pair: the ends of every slot are held until the
+/// assembly (hundreds of megabytes on large networks, all of it memory the system must first
+/// clear), and the assembly streams them.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct EndPacking {
+    pub block_bits: u32,
+    pub target_bits: u32,
+}
+
+impl EndPacking {
+    /// The packing for `keys` side keys: target bits for every key plus the escape code, and
+    /// blocks of up to 2^[`MAX_KEY_BLOCK_BITS`] keys in the rest (at least 64 keys, a word of
+    /// node marks).
+    pub fn for_keys(keys: usize) -> Result<EndPacking, String> {
+        let target_bits = usize::BITS - keys.leading_zeros();
+        let block_bits = MAX_KEY_BLOCK_BITS.min(32u32.saturating_sub(target_bits));
+        if block_bits < 6 {
+            return Err(format!(
+                "the network would have {} patches, more than its 32-bit link ends can \
+                 address ({}); use a larger --patch-size",
+                keys / 2,
+                1u64 << 25
+            ));
+        }
+        Ok(EndPacking {
+            block_bits,
+            target_bits,
+        })
+    }
+
+    /// Side keys per block.
+    #[inline]
+    pub fn block(&self) -> usize {
+        1 << self.block_bits
+    }
+
+    #[inline]
+    fn escape(&self) -> u32 {
+        (1 << self.target_bits) - 1
+    }
+
+    #[inline]
+    fn pack(&self, key: u32, target: u32) -> u32 {
+        (key & (self.block() as u32 - 1)) << self.target_bits | target
+    }
+
+    /// The side key and the target (a side key or [`ESCAPE`]) of an end of block `block`.
+    #[inline]
+    pub fn unpack(&self, block: usize, end: u32) -> (u32, u32) {
+        let key = (block << self.block_bits) as u32 | end >> self.target_bits;
+        let target = end & self.escape();
+        (
+            key,
+            if target == self.escape() {
+                ESCAPE
+            } else {
+                target
+            },
+        )
+    }
+}
+
+/// The links of one slot as packed link ends ([`EndPacking`]: a side key and the side key at
+/// the other end or [`ESCAPE`]), grouped by key blocks: block b's ends are
 /// ends[block_start[b]..block_start[b + 1]], in the order the links were found along the
 /// sorted lines (each link's two ends, then the escapes).
 #[derive(Clone, Debug, Default)]
 pub struct SlotLinks {
-    pub ends: Vec<[u32; 2]>,
+    pub ends: Vec<u32>,
     pub block_start: Vec<u32>,
     /// Links between two sides (each has two ends).
     pub pairs: u64,
@@ -403,7 +467,13 @@ fn radix_by_line(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) {
 /// Sorts one slot's hits along their lines (a radix sort by line, then by depth within
 /// each line's few hits), links consecutive ones and groups the link ends by key block.
 /// `lines` is the number of lines per slot, `keys` the number of side keys.
-pub fn link_slot(hits: &[LineHit], lines: usize, keys: usize, buf: &mut LinkBuffers) -> SlotLinks {
+pub fn link_slot(
+    hits: &[LineHit],
+    lines: usize,
+    keys: usize,
+    packing: EndPacking,
+    buf: &mut LinkBuffers,
+) -> SlotLinks {
     radix_by_line(hits, lines, buf);
     let sorted = &mut buf.sorted[..hits.len()];
     let mut out = SlotLinks {
@@ -415,7 +485,8 @@ pub fn link_slot(hits: &[LineHit], lines: usize, keys: usize, buf: &mut LinkBuff
     escapes.clear();
     // The nodes' marks and the ends per key block are counted as the links are found.
     out.marks = vec![0u64; keys.div_ceil(64)];
-    let blocks = keys.div_ceil(KEY_BLOCK);
+    let block = packing.block();
+    let blocks = keys.div_ceil(block);
     let mut start = vec![0u32; blocks + 1];
     for group in sorted.chunk_by_mut(|x, y| x.line == y.line) {
         // Insertion sort: a line meets a handful of patches.
@@ -438,7 +509,7 @@ pub fn link_slot(hits: &[LineHit], lines: usize, keys: usize, buf: &mut LinkBuff
                 ends.push([y, x]);
                 for k in [x, y] {
                     out.marks[k as usize / 64] |= 1 << (k % 64);
-                    start[k as usize / KEY_BLOCK + 1] += 1;
+                    start[k as usize / block + 1] += 1;
                 }
             } else {
                 out.degenerate += 1;
@@ -449,20 +520,21 @@ pub fn link_slot(hits: &[LineHit], lines: usize, keys: usize, buf: &mut LinkBuff
     out.pairs = ends.len() as u64 / 2;
     // A stable counting sort of the ends, then the escapes, by key block.
     for &k in escapes.iter() {
-        start[k as usize / KEY_BLOCK + 1] += 1;
+        start[k as usize / block + 1] += 1;
     }
     for i in 1..start.len() {
         start[i] += start[i - 1];
     }
     let mut fill = start.clone();
-    let mut grouped = vec![[0u32; 2]; ends.len() + escapes.len()];
-    for e in ends
+    let mut grouped = vec![0u32; ends.len() + escapes.len()];
+    let escape = packing.escape();
+    for [k, t] in ends
         .iter()
         .copied()
-        .chain(escapes.iter().map(|&k| [k, ESCAPE]))
+        .chain(escapes.iter().map(|&k| [k, escape]))
     {
-        let at = &mut fill[e[0] as usize / KEY_BLOCK];
-        grouped[*at as usize] = e;
+        let at = &mut fill[k as usize / block];
+        grouped[*at as usize] = packing.pack(k, t);
         *at += 1;
     }
     out.ends = grouped;
@@ -478,6 +550,7 @@ pub fn build_links(
     seed: u64,
     jitter: f32,
     builder: Builder,
+    packing: EndPacking,
 ) -> (Vec<SlotLinks>, RayStats) {
     let results: Vec<(SlotLinks, RayStats)> = (0..space.slots() as u32)
         .into_par_iter()
@@ -492,7 +565,10 @@ pub fn build_links(
                     _ => scan_slot_into(space, patches, slot, seed, jitter, hits),
                 };
                 let keys = 2 * patches.cells as usize;
-                (link_slot(hits, space.lines_per_slot(), keys, buf), stats)
+                (
+                    link_slot(hits, space.lines_per_slot(), keys, packing, buf),
+                    stats,
+                )
             },
         )
         .collect();
@@ -505,4 +581,36 @@ pub fn build_links(
         })
         .collect();
     (links, stats)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn packed_ends_round_trip() {
+        // Small networks keep blocks of 512 keys; larger ones give block bits to the targets.
+        for (keys, block_bits) in [
+            (3usize, 9u32),
+            (151_722, 9),
+            (1 << 23, 8),
+            ((1 << 26) - 1, 6),
+        ] {
+            let p = EndPacking::for_keys(keys).unwrap();
+            assert_eq!(p.block_bits, block_bits, "{keys} keys");
+            assert!(p.block_bits + p.target_bits <= 32);
+            let last = keys as u32 - 1;
+            for key in [0, 1, last / 2, last] {
+                let block = key as usize / p.block();
+                for target in [0, 1, last / 3, last] {
+                    let end = p.pack(key, target);
+                    assert_eq!(p.unpack(block, end), (key, target), "{keys} keys");
+                }
+                let end = p.pack(key, p.escape());
+                assert_eq!(p.unpack(block, end), (key, ESCAPE));
+            }
+        }
+        let e = EndPacking::for_keys(1 << 26).unwrap_err();
+        assert!(e.contains("--patch-size"), "{e}");
+    }
 }
