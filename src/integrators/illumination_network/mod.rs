@@ -319,28 +319,49 @@ impl Network {
                 extra.resize(room, (0u32, [0u32; 2]));
                 let mut len = 0;
                 let mut escapes = 0u64;
+                let (w0, w1) = (b * block / 64, ((b + 1) * block / 64).min(words));
                 for (slot, s) in slots.iter().enumerate() {
                     let ws = w[slot];
+                    // One end (node, target): the first of its slot at the node fills the
+                    // row, later ones go to the extra links.
+                    // (A macro: as a closure, its captured counter left the registers.)
+                    macro_rules! put {
+                        ($node:expr, $target:expr) => {{
+                            let (node, target): (u32, u32) = ($node, $target);
+                            let local = (node - first) as usize;
+                            let e = &mut rows[local * n_slots + slot];
+                            let taken = *e != NONE;
+                            *e = if taken { *e } else { target };
+                            extra[len] = (node - first, [slot as u32, target]);
+                            len += usize::from(taken);
+                            // W in slot order, as `row_etendue` adds it up.
+                            wb[local] += ws;
+                        }};
+                    }
                     for &e in ends(s, b) {
                         let (k, t) = packing.unpack(b, e);
                         let node = node_of_key[k as usize];
-                        if node == NONE {
-                            continue;
+                        if node != NONE {
+                            put!(node, node_of_key[t as usize]);
                         }
-                        let target = if t == ESCAPE {
+                    }
+                    // Then the slot's escapes at nodes (a side's escapes are all alike, so
+                    // their order among themselves does not matter).
+                    for wi in w0..w1 {
+                        let mut m = s.escapes[wi] & marks[wi];
+                        while m != 0 {
+                            put!(node_of_key[wi * 64 + m.trailing_zeros() as usize], ESCAPE);
                             escapes += 1;
-                            ESCAPE
-                        } else {
-                            node_of_key[t as usize]
-                        };
-                        let local = (node - first) as usize;
-                        let e = &mut rows[local * n_slots + slot];
-                        let taken = *e != NONE;
-                        *e = if taken { *e } else { target };
-                        extra[len] = (node - first, [slot as u32, target]);
-                        len += usize::from(taken);
-                        // W in slot order, as `row_etendue` adds it up.
-                        wb[local] += ws;
+                            m &= m - 1;
+                        }
+                    }
+                    let more = s.more_start[b] as usize..s.more_start[b + 1] as usize;
+                    for &k in &s.more_escapes[more] {
+                        let node = node_of_key[k as usize];
+                        if node != NONE {
+                            put!(node, ESCAPE);
+                            escapes += 1;
+                        }
                     }
                 }
                 let extra = &extra[..len];

@@ -106,13 +106,22 @@ impl EndPacking {
 }
 
 /// The links of one slot as packed link ends ([`EndPacking`]: a side key and the side key at
-/// the other end or [`ESCAPE`]), grouped by key blocks: block b's ends are
+/// the other end), grouped by key blocks: block b's ends are
 /// ends[block_start[b]..block_start[b + 1]], in the order the links were found along the
-/// sorted lines (each link's two ends, then the escapes).
+/// sorted lines (each link's two ends); and its escapes, kept apart.
 #[derive(Clone, Debug, Default)]
 pub struct SlotLinks {
     pub ends: Vec<u32>,
     pub block_start: Vec<u32>,
+    /// Bit set over side keys: the sides whose line leaves the scene in this slot. Escapes are
+    /// as many as link ends, and most are on sides that never become nodes (a room's outer
+    /// faces): as bits they take a thirty-second of the memory, and the assembly skips the
+    /// sides that are not nodes a word at a time.
+    pub escapes: Vec<u64>,
+    /// A side's second and later escapes in this slot (a patch meeting two lines that both
+    /// leave), grouped by key block: block b's are more_escapes[more_start[b]..more_start[b + 1]].
+    pub more_escapes: Vec<u32>,
+    pub more_start: Vec<u32>,
     /// Links between two sides (each has two ends).
     pub pairs: u64,
     /// Bit set over side keys: the sides with a link (not only an escape) in this slot.
@@ -422,7 +431,6 @@ pub struct LinkBuffers {
     tmp: Vec<LineHit>,
     sorted: Vec<LineHit>,
     ends: Vec<[u32; 2]>,
-    escapes: Vec<u32>,
 }
 
 /// Stable LSD radix sort of hits by line in two passes of about half the line bits each:
@@ -480,11 +488,18 @@ pub fn link_slot(
         intersections: hits.len() as u64,
         ..SlotLinks::default()
     };
-    let (ends, escapes) = (&mut buf.ends, &mut buf.escapes);
+    let ends = &mut buf.ends;
     ends.clear();
-    escapes.clear();
     // The nodes' marks and the ends per key block are counted as the links are found.
     out.marks = vec![0u64; keys.div_ceil(64)];
+    out.escapes = vec![0u64; keys.div_ceil(64)];
+    let escape = |k: u32, bits: &mut [u64], more: &mut Vec<u32>| {
+        let (w, bit) = (k as usize / 64, 1u64 << (k % 64));
+        if bits[w] & bit != 0 {
+            more.push(k);
+        }
+        bits[w] |= bit;
+    };
     let block = packing.block();
     let blocks = keys.div_ceil(block);
     let mut start = vec![0u32; blocks + 1];
@@ -498,7 +513,7 @@ pub fn link_slot(
             }
         }
         // Entering the scene: the first side facing −d looks out of it.
-        escapes.push(group[0].key ^ 1);
+        escape(group[0].key ^ 1, &mut out.escapes, &mut out.more_escapes);
         for w in group.windows(2) {
             let (x, y) = (w[0].key, w[1].key ^ 1);
             // A line meeting the same side twice in a row (a hit on an edge counted by both
@@ -515,24 +530,36 @@ pub fn link_slot(
                 out.degenerate += 1;
             }
         }
-        escapes.push(group[group.len() - 1].key);
+        escape(
+            group[group.len() - 1].key,
+            &mut out.escapes,
+            &mut out.more_escapes,
+        );
     }
     out.pairs = ends.len() as u64 / 2;
-    // A stable counting sort of the ends, then the escapes, by key block.
-    for &k in escapes.iter() {
-        start[k as usize / block + 1] += 1;
+    // The later escapes grouped by key block (a counting sort).
+    let mut more_start = vec![0u32; blocks + 1];
+    for &k in &out.more_escapes {
+        more_start[k as usize / block + 1] += 1;
     }
+    for i in 1..more_start.len() {
+        more_start[i] += more_start[i - 1];
+    }
+    let mut fill = more_start.clone();
+    let mut more = vec![0u32; out.more_escapes.len()];
+    for &k in &out.more_escapes {
+        let at = &mut fill[k as usize / block];
+        more[*at as usize] = k;
+        *at += 1;
+    }
+    (out.more_escapes, out.more_start) = (more, more_start);
+    // A stable counting sort of the ends by key block.
     for i in 1..start.len() {
         start[i] += start[i - 1];
     }
     let mut fill = start.clone();
-    let mut grouped = vec![0u32; ends.len() + escapes.len()];
-    let escape = packing.escape();
-    for [k, t] in ends
-        .iter()
-        .copied()
-        .chain(escapes.iter().map(|&k| [k, escape]))
-    {
+    let mut grouped = vec![0u32; ends.len()];
+    for &[k, t] in ends.iter() {
         let at = &mut fill[k as usize / block];
         grouped[*at as usize] = packing.pack(k, t);
         *at += 1;
