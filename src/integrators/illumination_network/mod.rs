@@ -324,7 +324,7 @@ impl Network {
                     let ws = w[slot];
                     // One end (node, target): the first of its slot at the node fills the
                     // row, later ones go to the extra links.
-                    // (A macro: as a closure, its captured counter left the registers.)
+                    // (A macro, shared by the three loops below.)
                     macro_rules! put {
                         ($node:expr, $target:expr) => {{
                             let (node, target): (u32, u32) = ($node, $target);

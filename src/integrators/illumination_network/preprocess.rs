@@ -27,7 +27,7 @@
 
 use super::patches::{Patches, Polygon};
 use super::ray_space::{axes, jitter_seed, RaySpace};
-use super::{ESCAPE, MAX_KEY_BLOCK_BITS};
+use super::MAX_KEY_BLOCK_BITS;
 use crate::integrators::{Context, RayStats};
 use crate::math::{Ray, Vec3};
 use rayon::prelude::*;
@@ -42,8 +42,7 @@ pub struct LineHit {
 }
 
 /// How a link end is packed into 32 bits: the side key's offset within its key block in the
-/// high `block_bits`, the side key at the other end in the low `target_bits` (all ones for an
-/// escape). Half the bytes of a (key, target) pair: the ends of every slot are held until the
+/// high `block_bits`, the side key at the other end in the low `target_bits`. Half the bytes of a (key, target) pair: the ends of every slot are held until the
 /// assembly (hundreds of megabytes on large networks, all of it memory the system must first
 /// clear), and the assembly streams them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,11 +52,10 @@ pub struct EndPacking {
 }
 
 impl EndPacking {
-    /// The packing for `keys` side keys: target bits for every key plus the escape code, and
-    /// blocks of up to 2^[`MAX_KEY_BLOCK_BITS`] keys in the rest (at least 64 keys, a word of
-    /// node marks).
+    /// The packing for `keys` side keys: target bits for every key, and blocks of up to
+    /// 2^[`MAX_KEY_BLOCK_BITS`] keys in the rest (at least 64 keys, a word of node marks).
     pub fn for_keys(keys: usize) -> Result<EndPacking, String> {
-        let target_bits = usize::BITS - keys.leading_zeros();
+        let target_bits = usize::BITS - keys.saturating_sub(1).leading_zeros();
         let block_bits = MAX_KEY_BLOCK_BITS.min(32u32.saturating_sub(target_bits));
         if block_bits < 6 {
             return Err(format!(
@@ -80,28 +78,15 @@ impl EndPacking {
     }
 
     #[inline]
-    fn escape(&self) -> u32 {
-        (1 << self.target_bits) - 1
-    }
-
-    #[inline]
     fn pack(&self, key: u32, target: u32) -> u32 {
         (key & (self.block() as u32 - 1)) << self.target_bits | target
     }
 
-    /// The side key and the target (a side key or [`ESCAPE`]) of an end of block `block`.
+    /// The side key and the key at the other end of an end of block `block`.
     #[inline]
     pub fn unpack(&self, block: usize, end: u32) -> (u32, u32) {
         let key = (block << self.block_bits) as u32 | end >> self.target_bits;
-        let target = end & self.escape();
-        (
-            key,
-            if target == self.escape() {
-                ESCAPE
-            } else {
-                target
-            },
-        )
+        (key, end & ((1 << self.target_bits) - 1))
     }
 }
 
@@ -620,8 +605,9 @@ mod tests {
         for (keys, block_bits) in [
             (3usize, 9u32),
             (151_722, 9),
-            (1 << 23, 8),
-            ((1 << 26) - 1, 6),
+            (1 << 23, 9),
+            ((1 << 23) + 1, 8),
+            (1 << 26, 6),
         ] {
             let p = EndPacking::for_keys(keys).unwrap();
             assert_eq!(p.block_bits, block_bits, "{keys} keys");
@@ -633,11 +619,9 @@ mod tests {
                     let end = p.pack(key, target);
                     assert_eq!(p.unpack(block, end), (key, target), "{keys} keys");
                 }
-                let end = p.pack(key, p.escape());
-                assert_eq!(p.unpack(block, end), (key, ESCAPE));
             }
         }
-        let e = EndPacking::for_keys(1 << 26).unwrap_err();
+        let e = EndPacking::for_keys((1 << 26) + 1).unwrap_err();
         assert!(e.contains("--patch-size"), "{e}");
     }
 }
