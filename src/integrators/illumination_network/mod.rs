@@ -302,8 +302,8 @@ impl Network {
                 parts.push((b, rows, wb));
             }
         }
-        // Per block: its nodes' extra-link counts, their (slot, target) pairs grouped by node,
-        // and the escapes seen.
+        // Per block: where each of its nodes' extra links start, their (slot, target) pairs
+        // grouped by node, and the escapes seen.
         type Part = (Vec<u32>, Vec<[u32; 2]>, u64);
         let filled: Vec<Part> = parts
             .into_par_iter()
@@ -365,27 +365,14 @@ impl Network {
                     }
                 }
                 let extra = &extra[..len];
-                // Grouped by node, in slot order within a node (a stable counting sort).
-                let n = rows.len() / n_slots;
-                let mut count = vec![0u32; n];
+                // Grouped by node, in slot order within a node.
+                let mut start = vec![0u32; rows.len() / n_slots + 1];
                 for e in extra {
-                    count[e.0 as usize] += 1;
+                    start[e.0 as usize + 1] += 1;
                 }
-                let mut at = 0;
-                let mut next: Vec<u32> = count
-                    .iter()
-                    .map(|&c| {
-                        at += c;
-                        at - c
-                    })
-                    .collect();
-                let mut grouped = vec![[0u32; 2]; extra.len()];
-                for e in extra {
-                    let at = &mut next[e.0 as usize];
-                    grouped[*at as usize] = e.1;
-                    *at += 1;
-                }
-                (count, grouped, escapes)
+                let grouped =
+                    preprocess::group_stably(&mut start, extra, |e| e.0 as usize, |e| e.1);
+                (start, grouped, escapes)
             })
             .collect();
         let mut stats = BuildStats::default();
@@ -396,11 +383,10 @@ impl Network {
         }
         let mut extra_start = Vec::with_capacity(nodes + 1);
         extra_start.push(0u32);
-        for (count, _, escapes) in &filled {
+        for (start, _, escapes) in &filled {
             stats.escapes += escapes;
-            for &c in count {
-                extra_start.push(extra_start[extra_start.len() - 1] + c);
-            }
+            let base = extra_start[extra_start.len() - 1];
+            extra_start.extend(start[1..].iter().map(|&i| base + i));
         }
         // The blocks' lists copied into place in parallel (the copy first touches the memory).
         let mut extra = vec![[0u32; 2]; extra_start[nodes] as usize];

@@ -42,9 +42,10 @@ pub struct LineHit {
 }
 
 /// How a link end is packed into 32 bits: the side key's offset within its key block in the
-/// high `block_bits`, the side key at the other end in the low `target_bits`. Half the bytes of a (key, target) pair: the ends of every slot are held until the
-/// assembly (hundreds of megabytes on large networks, all of it memory the system must first
-/// clear), and the assembly streams them.
+/// high `block_bits`, the side key at the other end in the low `target_bits`. Half the bytes
+/// of a (key, target) pair: the ends of every slot are held until the assembly (hundreds of
+/// megabytes on large networks, all of it memory the system must first clear), and the
+/// assembly streams them.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct EndPacking {
     pub block_bits: u32,
@@ -104,7 +105,8 @@ pub struct SlotLinks {
     /// sides that are not nodes a word at a time.
     pub escapes: Vec<u64>,
     /// A side's second and later escapes in this slot (a patch meeting two lines that both
-    /// leave), grouped by key block: block b's are more_escapes[more_start[b]..more_start[b + 1]].
+    /// leave), grouped by key block: block b's are
+    /// more_escapes[more_start[b]..more_start[b + 1]].
     pub more_escapes: Vec<u32>,
     pub more_start: Vec<u32>,
     /// Links between two sides (each has two ends).
@@ -522,36 +524,48 @@ pub fn link_slot(
         );
     }
     out.pairs = ends.len() as u64 / 2;
-    // The later escapes grouped by key block (a counting sort).
+    // The later escapes and the ends grouped by key block.
     let mut more_start = vec![0u32; blocks + 1];
     for &k in &out.more_escapes {
         more_start[k as usize / block + 1] += 1;
     }
-    for i in 1..more_start.len() {
-        more_start[i] += more_start[i - 1];
-    }
-    let mut fill = more_start.clone();
-    let mut more = vec![0u32; out.more_escapes.len()];
-    for &k in &out.more_escapes {
-        let at = &mut fill[k as usize / block];
-        more[*at as usize] = k;
-        *at += 1;
-    }
-    (out.more_escapes, out.more_start) = (more, more_start);
-    // A stable counting sort of the ends by key block.
+    out.more_escapes = group_stably(
+        &mut more_start,
+        &out.more_escapes,
+        |k| k as usize / block,
+        |k| k,
+    );
+    out.more_start = more_start;
+    out.ends = group_stably(
+        &mut start,
+        ends,
+        |[k, _]| k as usize / block,
+        |[k, t]| packing.pack(k, t),
+    );
+    out.block_start = start;
+    out
+}
+
+/// A stable counting sort into groups (key blocks, nodes): on entry `start[g + 1]` holds group
+/// g's item count (`start[0]` is 0), on return `start[g]` its first index. Returns `value` of
+/// every item, grouped, in their order within a group.
+pub(super) fn group_stably<T: Copy, V: Copy + Default>(
+    start: &mut [u32],
+    items: &[T],
+    group_of: impl Fn(T) -> usize,
+    value: impl Fn(T) -> V,
+) -> Vec<V> {
     for i in 1..start.len() {
         start[i] += start[i - 1];
     }
-    let mut fill = start.clone();
-    let mut grouped = vec![0u32; ends.len()];
-    for &[k, t] in ends.iter() {
-        let at = &mut fill[k as usize / block];
-        grouped[*at as usize] = packing.pack(k, t);
+    let mut fill = start.to_vec();
+    let mut grouped = vec![V::default(); items.len()];
+    for &x in items {
+        let at = &mut fill[group_of(x)];
+        grouped[*at as usize] = value(x);
         *at += 1;
     }
-    out.ends = grouped;
-    out.block_start = start;
-    out
+    grouped
 }
 
 /// Runs a builder over every slot, in parallel, returning the links in slot order.
