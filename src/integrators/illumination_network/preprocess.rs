@@ -179,6 +179,47 @@ pub fn scan_polygon(
     jitter: f32,
     mut hit: impl FnMut(u32, f32, f32, f32),
 ) {
+    scan_cells(
+        space,
+        slot,
+        pg,
+        seed,
+        jitter,
+        &mut hit,
+        |_, _| (),
+        cell_if_inside,
+    )
+}
+
+fn cell_if_inside<F: FnMut(u32, f32, f32, f32)>(
+    hit: &mut F,
+    line: u32,
+    iu: f32,
+    iv: f32,
+    pa: f32,
+    inside: bool,
+) {
+    if inside {
+        hit(line, iu, iv, pa)
+    }
+}
+
+/// [`scan_polygon`] without its branch: `row(state, cells)` announces a row's candidate
+/// cells, then `cell(state, line, iu, iv, p_a, inside)` sees each of them. Whether a cell near
+/// an edge is inside is close to a coin toss: a caller that writes every cell and keeps it
+/// by `inside` mispredicts nothing.
+#[allow(clippy::too_many_arguments)]
+#[inline]
+fn scan_cells<S>(
+    space: &RaySpace,
+    slot: u32,
+    pg: &Polygon,
+    seed: u64,
+    jitter: f32,
+    state: &mut S,
+    row: impl Fn(&mut S, usize),
+    cell: impl Fn(&mut S, u32, f32, f32, f32, bool),
+) {
     let (family, su, sv) = space.slot_slopes(slot);
     let Some(plane) = SlotPlane::new(pg, family, su, sv) else {
         return;
@@ -272,13 +313,19 @@ pub fn scan_polygon(
         }
         // The paper's recurrence: one multiply-add at the row start, one add per cell.
         let mut pa = plane.depth(space.intercept(ju0 as u32), cv);
+        row(state, (ju1 - ju0 + 1) as usize);
         for ju in ju0..=ju1 {
             let (du, dv) = space.jitter_mixed(mixed, jitter, slot, ju as u32, jv as u32);
             let x = (space.intercept(ju as u32) + du, cv + dv);
-            if inside(x) {
-                let line = ju as u32 * space.intercepts + jv as u32;
-                hit(line, x.0, x.1, pa - plane.b * du - plane.c * dv);
-            }
+            let line = ju as u32 * space.intercepts + jv as u32;
+            cell(
+                state,
+                line,
+                x.0,
+                x.1,
+                pa - plane.b * du - plane.c * dv,
+                inside(x),
+            );
             pa -= step;
         }
     }
@@ -317,6 +364,12 @@ pub fn scan_slot_into(
     hits.clear();
     let (family, su, sv) = space.slot_slopes(slot);
     let d = space.direction(slot);
+    let blank = LineHit {
+        line: 0,
+        depth: 0.0,
+        key: 0,
+    };
+    let mut state = (hits, 0usize);
     for pg in &patches.polygons {
         if pg.n == Vec3::ZERO {
             continue;
@@ -336,16 +389,28 @@ pub fn scan_slot_into(
         let (su_, sv_) = (pu.0 - p0.0, pv.0 - p0.0);
         let (tu, tv) = (pu.1 - p0.1, pv.1 - p0.1);
         let (ns, nt) = (pg.ns as i32 - 1, pg.nt as i32 - 1);
-        scan_polygon(space, slot, pg, seed, jitter, |line, iu, iv, pa| {
-            let i = ((p0.0 + su_ * iu + sv_ * iv) as i32).clamp(0, ns) as u32;
-            let j = ((p0.1 + tu * iu + tv * iv) as i32).clamp(0, nt) as u32;
-            hits.push(LineHit {
-                line,
-                depth: pa,
-                key: (pg.first_cell + i * pg.nt + j) * 2 + back,
-            });
-        });
+        // Every candidate cell is written at `len`, which advances past those inside only
+        // (no branch; rows announce their cells so that the buffer has room).
+        let row = |(hits, len): &mut (&mut Vec<LineHit>, usize), cells: usize| {
+            if hits.len() < *len + cells {
+                hits.resize(2 * (*len + cells), blank);
+            }
+        };
+        let cell =
+            |(hits, len): &mut (&mut Vec<LineHit>, usize), line, iu: f32, iv: f32, pa, inside| {
+                let i = ((p0.0 + su_ * iu + sv_ * iv) as i32).clamp(0, ns) as u32;
+                let j = ((p0.1 + tu * iu + tv * iv) as i32).clamp(0, nt) as u32;
+                hits[*len] = LineHit {
+                    line,
+                    depth: pa,
+                    key: (pg.first_cell + i * pg.nt + j) * 2 + back,
+                };
+                *len += usize::from(inside);
+            };
+        scan_cells(space, slot, pg, seed, jitter, &mut state, row, cell);
     }
+    let (hits, len) = state;
+    hits.truncate(len);
 }
 
 /// The Embree-cast hits of one slot: every line of the slot that crosses the unit cube is
