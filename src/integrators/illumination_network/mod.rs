@@ -196,6 +196,9 @@ pub(crate) fn node_etendue(
         .collect()
 }
 
+/// Slots per cache line of a link row (cleared together by the assembly).
+const FILL_SLOTS: usize = 16;
+
 impl Network {
     /// Preprocess: patches and links for a scene. The Embree builder casts through `ctx`.
     pub fn build(
@@ -308,8 +311,8 @@ impl Network {
         let filled: Vec<Part> = parts
             .into_par_iter()
             .map_init(Vec::new, |extra, (b, rows, wb)| {
-                rows.fill(NONE);
                 let first = first_node[b] as u32;
+                let nodes_in_block = rows.len() / n_slots;
                 // Room for every end of the block: an end that finds its slot taken is
                 // written there and kept by advancing `len`, without a branch (whether a
                 // slot is taken is close to a coin toss, which a branch would mispredict).
@@ -321,6 +324,21 @@ impl Network {
                 let mut escapes = 0u64;
                 let (w0, w1) = (b * block / 64, ((b + 1) * block / 64).min(words));
                 for (slot, s) in slots.iter().enumerate() {
+                    // Each row's next cache line of slots is cleared just before the slots
+                    // are filled, while the block's lines are in cache (clearing the whole
+                    // block first would send them back to memory before they are filled).
+                    if slot % FILL_SLOTS == 0 {
+                        let to = (slot + FILL_SLOTS).min(n_slots);
+                        for r in 0..nodes_in_block {
+                            let line = &mut rows[r * n_slots + slot..r * n_slots + to];
+                            // (As an array: a call to memset per 64 bytes costs more.)
+                            if let Ok(line) = <&mut [u32; FILL_SLOTS]>::try_from(&mut *line) {
+                                *line = [NONE; FILL_SLOTS];
+                            } else {
+                                line.fill(NONE);
+                            }
+                        }
+                    }
                     let ws = w[slot];
                     // One end (node, target): the first of its slot at the node fills the
                     // row, later ones go to the extra links.
