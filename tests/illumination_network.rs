@@ -15,7 +15,9 @@ use raylink::integrators::illumination_network::distribute::{
     distribute, DistributeOptions, Solution,
 };
 use raylink::integrators::illumination_network::patches::Patches;
-use raylink::integrators::illumination_network::preprocess::{line_point, scan_polygon, Builder};
+use raylink::integrators::illumination_network::preprocess::{
+    line_point, scan_polygon, scan_slot, Builder,
+};
 use raylink::integrators::illumination_network::ray_space::{axes, RaySpace};
 use raylink::integrators::illumination_network::render::NetworkRenderer;
 use raylink::integrators::illumination_network::{Network, NetworkParams, ESCAPE, NONE};
@@ -121,6 +123,38 @@ fn etendue_of_lines_through_a_patch_is_pi_area() {
         let err = (sum - exact).abs() / exact;
         assert!(err < 0.015, "patch {i}: Σw = {sum}, π·A = {exact} ({err})");
     }
+}
+
+/// A slot's scan (hits bucketed by intercept row as they are found, then counted out by
+/// column) gives exactly the hits of its polygons' scans, sorted by line and, on a line, in
+/// the order of the polygons (the order the radix sort of the Embree builder keeps).
+#[test]
+fn slot_scan_sorts_the_polygons_hits_by_line() {
+    let s = scene(&format!(
+        "{CAMERA}\n[materials.m]\ndiffuse = 0.5\n\
+         [[shapes]]\ntype = \"quad\"\nmaterial = \"m\"\nvertices = [[0.1, 0.2, 0.3], [0.9, 0.3, 0.5], [0.8, 0.8, 0.9], [0.0, 0.7, 0.7]]\n\
+         [[shapes]]\ntype = \"quad\"\nmaterial = \"m\"\nvertices = [[0, 0, 0.2], [1, 0, 0.2], [1, 1, 0.2], [0, 1, 0.2]]\n\
+         [[shapes]]\ntype = \"quad\"\nmaterial = \"m\"\nvertices = [[0.3, 0, 0], [0.3, 1, 0], [0.3, 1, 1], [0.3, 0, 1]]\n"
+    ));
+    let space = RaySpace::new(4, 1.0 / 32.0, (Vec3::ZERO, Vec3::ONE));
+    let patches = Patches::new(&s, &space, 1.0 / 8.0).unwrap();
+    let mut total = 0;
+    for slot in 0..space.slots() as u32 {
+        let mut want = Vec::new();
+        for pg in &patches.polygons {
+            scan_polygon(&space, slot, pg, 5, 1.0, |line, _, _, pa| {
+                want.push((line, pa))
+            });
+        }
+        want.sort_by_key(|&(line, _)| line);
+        let got: Vec<(u32, f32)> = scan_slot(&space, &patches, slot, 5, 1.0)
+            .iter()
+            .map(|h| (h.line, h.depth))
+            .collect();
+        assert_eq!(got, want, "slot {slot}");
+        total += got.len();
+    }
+    assert!(total > 10_000, "{total} hits");
 }
 
 /// The scan converter's incremental p_a equals the directly computed ray-plane intersection,

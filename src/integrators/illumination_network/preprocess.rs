@@ -186,13 +186,15 @@ pub fn scan_polygon(
         seed,
         jitter,
         &mut hit,
-        |_, _| (),
+        |_, _, _| (),
         cell_if_inside,
     )
 }
 
+#[allow(clippy::too_many_arguments)]
 fn cell_if_inside<F: FnMut(u32, f32, f32, f32)>(
     hit: &mut F,
+    _column: u32,
     line: u32,
     iu: f32,
     iv: f32,
@@ -204,8 +206,8 @@ fn cell_if_inside<F: FnMut(u32, f32, f32, f32)>(
     }
 }
 
-/// [`scan_polygon`] without its branch: `row(state, cells)` announces a row's candidate
-/// cells, then `cell(state, line, iu, iv, p_a, inside)` sees each of them. Whether a cell near
+/// [`scan_polygon`] without its branch: `row(state, jv, cells)` announces a row's candidate
+/// cells, then `cell(state, ju, line, iu, iv, p_a, inside)` sees each of them. Whether a cell near
 /// an edge is inside is close to a coin toss: a caller that writes every cell and keeps it
 /// by `inside` mispredicts nothing.
 #[allow(clippy::too_many_arguments)]
@@ -217,8 +219,8 @@ fn scan_cells<S>(
     seed: u64,
     jitter: f32,
     state: &mut S,
-    row: impl Fn(&mut S, usize),
-    cell: impl Fn(&mut S, u32, f32, f32, f32, bool),
+    row: impl Fn(&mut S, u32, usize),
+    cell: impl Fn(&mut S, u32, u32, f32, f32, f32, bool),
 ) {
     let (family, su, sv) = space.slot_slopes(slot);
     let Some(plane) = SlotPlane::new(pg, family, su, sv) else {
@@ -313,13 +315,14 @@ fn scan_cells<S>(
         }
         // The paper's recurrence: one multiply-add at the row start, one add per cell.
         let mut pa = plane.depth(space.intercept(ju0 as u32), cv);
-        row(state, (ju1 - ju0 + 1) as usize);
+        row(state, jv as u32, (ju1 - ju0 + 1) as usize);
         for ju in ju0..=ju1 {
             let (du, dv) = space.jitter_mixed(mixed, jitter, slot, ju as u32, jv as u32);
             let x = (space.intercept(ju as u32) + du, cv + dv);
             let line = ju as u32 * space.intercepts + jv as u32;
             cell(
                 state,
+                ju as u32,
                 line,
                 x.0,
                 x.1,
@@ -339,7 +342,8 @@ fn side_key(pg: &Polygon, p: Vec3, d: Vec3) -> u32 {
     cell * 2 + u32::from(pg.normal_at(p).dot(d) <= 0.0)
 }
 
-/// The scan-conversion hits of one slot.
+/// The scan-conversion hits of one slot, sorted by line (in the order of the polygons on a
+/// line).
 pub fn scan_slot(
     space: &RaySpace,
     patches: &Patches,
@@ -347,29 +351,78 @@ pub fn scan_slot(
     seed: u64,
     jitter: f32,
 ) -> Vec<LineHit> {
+    let mut rows = RowBuckets::default();
+    scan_slot_into(space, patches, slot, seed, jitter, &mut rows);
     let mut hits = Vec::new();
-    scan_slot_into(space, patches, slot, seed, jitter, &mut hits);
+    rows.sorted_into(&mut hits);
     hits
 }
 
-/// [`scan_slot`] into a reused buffer (cleared first).
+/// One slot's scan hits, bucketed by intercept row (jv) as the scan finds them, and counted
+/// per column (ju): the first pass of the sort by line, done by the scan itself (a row of a
+/// polygon goes to one bucket). While bucketed, a hit's `line` holds its column.
+#[derive(Default)]
+pub struct RowBuckets {
+    rows: Vec<Vec<LineHit>>,
+    filled: Vec<u32>,
+    columns: Vec<u32>,
+    row: usize,
+}
+
+impl RowBuckets {
+    fn clear(&mut self, intercepts: usize) {
+        self.rows.resize_with(intercepts, Vec::new);
+        self.filled.clear();
+        self.filled.resize(intercepts, 0);
+        self.columns.clear();
+        self.columns.resize(intercepts + 1, 0);
+    }
+
+    /// The hits sorted by line (line = ju · intercepts + jv), stably: a stable counting sort
+    /// by column of the rows taken in order.
+    pub fn sorted_into(&mut self, out: &mut Vec<LineHit>) {
+        let n = self.rows.len() as u32;
+        let total = self.columns.iter().sum::<u32>() as usize;
+        if out.len() < total {
+            out.resize(total, BLANK_HIT);
+        }
+        out.truncate(total);
+        let at = &mut self.columns;
+        for i in 1..at.len() {
+            at[i] += at[i - 1];
+        }
+        for (jv, (row, &filled)) in self.rows.iter().zip(&self.filled).enumerate() {
+            for h in &row[..filled as usize] {
+                let to = &mut at[h.line as usize];
+                out[*to as usize] = LineHit {
+                    line: h.line * n + jv as u32,
+                    ..*h
+                };
+                *to += 1;
+            }
+        }
+    }
+}
+
+const BLANK_HIT: LineHit = LineHit {
+    line: 0,
+    depth: 0.0,
+    key: 0,
+};
+
+/// [`scan_slot`] into reused buckets (cleared first); [`RowBuckets::sorted_into`] then sorts
+/// them by line.
 pub fn scan_slot_into(
     space: &RaySpace,
     patches: &Patches,
     slot: u32,
     seed: u64,
     jitter: f32,
-    hits: &mut Vec<LineHit>,
+    rows: &mut RowBuckets,
 ) {
-    hits.clear();
+    rows.clear(space.intercepts as usize);
     let (family, su, sv) = space.slot_slopes(slot);
     let d = space.direction(slot);
-    let blank = LineHit {
-        line: 0,
-        depth: 0.0,
-        key: 0,
-    };
-    let mut state = (hits, 0usize);
     for pg in &patches.polygons {
         if pg.n == Vec3::ZERO {
             continue;
@@ -389,28 +442,30 @@ pub fn scan_slot_into(
         let (su_, sv_) = (pu.0 - p0.0, pv.0 - p0.0);
         let (tu, tv) = (pu.1 - p0.1, pv.1 - p0.1);
         let (ns, nt) = (pg.ns as i32 - 1, pg.nt as i32 - 1);
-        // Every candidate cell is written at `len`, which advances past those inside only
-        // (no branch; rows announce their cells so that the buffer has room).
-        let row = |(hits, len): &mut (&mut Vec<LineHit>, usize), cells: usize| {
-            if hits.len() < *len + cells {
-                hits.resize(2 * (*len + cells), blank);
+        // Every candidate cell is written at the end of its row's bucket, which grows past
+        // those inside only (no branch; a row announces its cells so that the bucket has room).
+        let row = |b: &mut RowBuckets, jv: u32, cells: usize| {
+            b.row = jv as usize;
+            let need = b.filled[b.row] as usize + cells;
+            let bucket = &mut b.rows[b.row];
+            if bucket.len() < need {
+                bucket.resize(2 * need, BLANK_HIT);
             }
         };
-        let cell =
-            |(hits, len): &mut (&mut Vec<LineHit>, usize), line, iu: f32, iv: f32, pa, inside| {
-                let i = ((p0.0 + su_ * iu + sv_ * iv) as i32).clamp(0, ns) as u32;
-                let j = ((p0.1 + tu * iu + tv * iv) as i32).clamp(0, nt) as u32;
-                hits[*len] = LineHit {
-                    line,
-                    depth: pa,
-                    key: (pg.first_cell + i * pg.nt + j) * 2 + back,
-                };
-                *len += usize::from(inside);
+        let cell = |b: &mut RowBuckets, ju: u32, _line, iu: f32, iv: f32, pa, inside| {
+            let i = ((p0.0 + su_ * iu + sv_ * iv) as i32).clamp(0, ns) as u32;
+            let j = ((p0.1 + tu * iu + tv * iv) as i32).clamp(0, nt) as u32;
+            let filled = &mut b.filled[b.row];
+            b.rows[b.row][*filled as usize] = LineHit {
+                line: ju,
+                depth: pa,
+                key: (pg.first_cell + i * pg.nt + j) * 2 + back,
             };
-        scan_cells(space, slot, pg, seed, jitter, &mut state, row, cell);
+            *filled += u32::from(inside);
+            b.columns[ju as usize + 1] += u32::from(inside);
+        };
+        scan_cells(space, slot, pg, seed, jitter, rows, row, cell);
     }
-    let (hits, len) = state;
-    hits.truncate(len);
 }
 
 /// The Embree-cast hits of one slot: every line of the slot that crosses the unit cube is
@@ -476,18 +531,19 @@ pub fn cast_slot(
 /// Hits closer than this along a line (unit-cube units of p_a) are on touching surfaces.
 pub const COINCIDENT: f32 = 1e-5;
 
-/// Reusable buffers of [`link_slot`].
+/// Reusable buffers of [`link_slot`] and the sorts before it.
 #[derive(Default)]
 pub struct LinkBuffers {
     counts: Vec<u32>,
     tmp: Vec<LineHit>,
     sorted: Vec<LineHit>,
     ends: Vec<[u32; 2]>,
+    rows: RowBuckets,
 }
 
-/// Stable LSD radix sort of hits by line in two passes of about half the line bits each:
-/// the digit counters stay in the first-level cache, where one counter per line (hundreds of
-/// kilobytes at fine intercept steps) would not.
+/// Stable LSD radix sort of hits by line (into `buf.sorted`) in two passes of about half the
+/// line bits each: the digit counters stay in the first-level cache, where one counter per
+/// line (hundreds of kilobytes at fine intercept steps) would not.
 fn radix_by_line(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) {
     let bits = usize::BITS - lines.max(2).saturating_sub(1).leading_zeros();
     let lo_bits = bits.div_ceil(2);
@@ -524,23 +580,18 @@ fn radix_by_line(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) {
     pass(tmp, sorted, lo_bits, 1 << (bits - lo_bits));
 }
 
-/// Sorts one slot's hits along their lines (a radix sort by line, then by depth within
-/// each line's few hits), links consecutive ones and groups the link ends by key block.
-/// `lines` is the number of lines per slot, `keys` the number of side keys.
+/// Sorts one slot's hits (sorted by line) by depth within each line's few hits, links
+/// consecutive ones and groups the link ends by key block. `keys` is the number of side keys.
 pub fn link_slot(
-    hits: &[LineHit],
-    lines: usize,
+    sorted: &mut [LineHit],
     keys: usize,
     packing: EndPacking,
-    buf: &mut LinkBuffers,
+    ends: &mut Vec<[u32; 2]>,
 ) -> SlotLinks {
-    radix_by_line(hits, lines, buf);
-    let sorted = &mut buf.sorted[..hits.len()];
     let mut out = SlotLinks {
-        intersections: hits.len() as u64,
+        intersections: sorted.len() as u64,
         ..SlotLinks::default()
     };
-    let ends = &mut buf.ends;
     ends.clear();
     // The nodes' marks and the ends per key block are counted as the links are found.
     out.marks = vec![0u64; keys.div_ceil(64)];
@@ -645,23 +696,24 @@ pub fn build_links(
 ) -> (Vec<SlotLinks>, RayStats) {
     let results: Vec<(SlotLinks, RayStats)> = (0..space.slots() as u32)
         .into_par_iter()
-        .map_init(
-            || (LinkBuffers::default(), Vec::new()),
-            |(buf, hits), slot| {
-                let mut stats = RayStats::default();
-                match (builder, ctx) {
-                    (Builder::Embree, Some(ctx)) => {
-                        *hits = cast_slot(ctx, space, patches, slot, seed, jitter, &mut stats)
-                    }
-                    _ => scan_slot_into(space, patches, slot, seed, jitter, hits),
-                };
-                let keys = 2 * patches.cells as usize;
-                (
-                    link_slot(hits, space.lines_per_slot(), keys, packing, buf),
-                    stats,
-                )
-            },
-        )
+        .map_init(LinkBuffers::default, |buf, slot| {
+            let mut stats = RayStats::default();
+            let hits = match (builder, ctx) {
+                (Builder::Embree, Some(ctx)) => {
+                    let hits = cast_slot(ctx, space, patches, slot, seed, jitter, &mut stats);
+                    radix_by_line(&hits, space.lines_per_slot(), buf);
+                    hits.len()
+                }
+                _ => {
+                    scan_slot_into(space, patches, slot, seed, jitter, &mut buf.rows);
+                    buf.rows.sorted_into(&mut buf.sorted);
+                    buf.sorted.len()
+                }
+            };
+            let keys = 2 * patches.cells as usize;
+            let sorted = &mut buf.sorted[..hits];
+            (link_slot(sorted, keys, packing, &mut buf.ends), stats)
+        })
         .collect();
     let mut stats = RayStats::default();
     let links = results
