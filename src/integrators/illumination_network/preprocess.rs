@@ -177,50 +177,57 @@ pub fn scan_polygon(
     pg: &Polygon,
     seed: u64,
     jitter: f32,
-    mut hit: impl FnMut(u32, f32, f32, f32),
+    hit: impl FnMut(u32, f32, f32, f32),
 ) {
-    scan_cells(
-        space,
-        slot,
-        pg,
-        seed,
-        jitter,
-        &mut hit,
-        |_, _, _| (),
-        cell_if_inside,
-    )
+    scan_cells(space, slot, pg, seed, jitter, &mut EachHit(hit))
 }
 
-#[allow(clippy::too_many_arguments)]
-fn cell_if_inside<F: FnMut(u32, f32, f32, f32)>(
-    hit: &mut F,
-    _column: u32,
-    line: u32,
-    iu: f32,
-    iv: f32,
-    pa: f32,
-    inside: bool,
-) {
-    if inside {
-        hit(line, iu, iv, pa)
+/// Where [`scan_cells`] puts a polygon's candidate cells: `row(jv, cells)` announces a row of
+/// them and returns what takes them.
+trait Rows {
+    type Row<'r>: RowCells
+    where
+        Self: 'r;
+    fn row(&mut self, jv: u32, cells: usize) -> Self::Row<'_>;
+}
+
+/// The cells of one row: `cell(ju, line, iu, iv, p_a, inside)` for each candidate.
+trait RowCells {
+    fn cell(&mut self, ju: u32, line: u32, iu: f32, iv: f32, pa: f32, inside: bool);
+}
+
+/// [`scan_polygon`]'s callback, for the cells inside.
+struct EachHit<F>(F);
+
+impl<F: FnMut(u32, f32, f32, f32)> Rows for EachHit<F> {
+    type Row<'r>
+        = &'r mut EachHit<F>
+    where
+        F: 'r;
+    fn row(&mut self, _: u32, _: usize) -> &mut EachHit<F> {
+        self
     }
 }
 
-/// [`scan_polygon`] without its branch: `row(state, jv, cells)` announces a row's candidate
-/// cells, then `cell(state, ju, line, iu, iv, p_a, inside)` sees each of them. Whether a cell near
-/// an edge is inside is close to a coin toss: a caller that writes every cell and keeps it
-/// by `inside` mispredicts nothing.
-#[allow(clippy::too_many_arguments)]
+impl<F: FnMut(u32, f32, f32, f32)> RowCells for &mut EachHit<F> {
+    fn cell(&mut self, _: u32, line: u32, iu: f32, iv: f32, pa: f32, inside: bool) {
+        if inside {
+            (self.0)(line, iu, iv, pa)
+        }
+    }
+}
+
+/// [`scan_polygon`] without its branch: every candidate cell of a row goes to `rows` with
+/// whether it is inside. Whether a cell near an edge is inside is close to a coin toss: a
+/// caller that writes every cell and keeps it by `inside` mispredicts nothing.
 #[inline]
-fn scan_cells<S>(
+fn scan_cells<R: Rows>(
     space: &RaySpace,
     slot: u32,
     pg: &Polygon,
     seed: u64,
     jitter: f32,
-    state: &mut S,
-    row: impl Fn(&mut S, u32, usize),
-    cell: impl Fn(&mut S, u32, u32, f32, f32, f32, bool),
+    rows: &mut R,
 ) {
     let (family, su, sv) = space.slot_slopes(slot);
     let Some(plane) = SlotPlane::new(pg, family, su, sv) else {
@@ -315,13 +322,12 @@ fn scan_cells<S>(
         }
         // The paper's recurrence: one multiply-add at the row start, one add per cell.
         let mut pa = plane.depth(space.intercept(ju0 as u32), cv);
-        row(state, jv as u32, (ju1 - ju0 + 1) as usize);
+        let mut row = rows.row(jv as u32, (ju1 - ju0 + 1) as usize);
         for ju in ju0..=ju1 {
             let (du, dv) = space.jitter_mixed(mixed, jitter, slot, ju as u32, jv as u32);
             let x = (space.intercept(ju as u32) + du, cv + dv);
             let line = ju as u32 * space.intercepts + jv as u32;
-            cell(
-                state,
+            row.cell(
                 ju as u32,
                 line,
                 x.0,
@@ -366,7 +372,6 @@ pub struct RowBuckets {
     rows: Vec<Vec<LineHit>>,
     filled: Vec<u32>,
     columns: Vec<u32>,
-    row: usize,
 }
 
 impl RowBuckets {
@@ -431,7 +436,6 @@ pub fn scan_slot_into(
             continue;
         };
         let back = u32::from(pg.n.dot(d) <= 0.0);
-        // The hit point is affine in the intercept: so are (s, t), scaled to cell units.
         let at = |iu: f32, iv: f32| {
             let p = line_point(family, su, sv, iu, iv, plane.depth(iu, iv));
             let (s, t) = pg.st(p);
@@ -439,32 +443,111 @@ pub fn scan_slot_into(
         };
         let p0 = at(0.0, 0.0);
         let (pu, pv) = (at(1.0, 0.0), at(0.0, 1.0));
-        let (su_, sv_) = (pu.0 - p0.0, pv.0 - p0.0);
-        let (tu, tv) = (pu.1 - p0.1, pv.1 - p0.1);
-        let (ns, nt) = (pg.ns as i32 - 1, pg.nt as i32 - 1);
-        // Every candidate cell is written at the end of its row's bucket, which grows past
-        // those inside only (no branch; a row announces its cells so that the bucket has room).
-        let row = |b: &mut RowBuckets, jv: u32, cells: usize| {
-            b.row = jv as usize;
-            let need = b.filled[b.row] as usize + cells;
-            let bucket = &mut b.rows[b.row];
-            if bucket.len() < need {
-                bucket.resize(2 * need, BLANK_HIT);
-            }
+        let map = CellMap {
+            p0,
+            su: pu.0 - p0.0,
+            sv: pv.0 - p0.0,
+            tu: pu.1 - p0.1,
+            tv: pv.1 - p0.1,
+            ns: pg.ns as i32 - 1,
+            nt: pg.nt as i32 - 1,
+            first_cell: pg.first_cell,
+            back,
         };
-        let cell = |b: &mut RowBuckets, ju: u32, _line, iu: f32, iv: f32, pa, inside| {
-            let i = ((p0.0 + su_ * iu + sv_ * iv) as i32).clamp(0, ns) as u32;
-            let j = ((p0.1 + tu * iu + tv * iv) as i32).clamp(0, nt) as u32;
-            let filled = &mut b.filled[b.row];
-            b.rows[b.row][*filled as usize] = LineHit {
-                line: ju,
-                depth: pa,
-                key: (pg.first_cell + i * pg.nt + j) * 2 + back,
-            };
-            *filled += u32::from(inside);
-            b.columns[ju as usize + 1] += u32::from(inside);
+        scan_cells(
+            space,
+            slot,
+            pg,
+            seed,
+            jitter,
+            &mut PolygonRows { b: rows, map },
+        );
+    }
+}
+
+/// A polygon's cell (and side key) from a hit's intercept: the hit point is affine in the
+/// intercept, and so are (s, t), scaled to cell units.
+#[derive(Clone, Copy)]
+struct CellMap {
+    p0: (f32, f32),
+    su: f32,
+    sv: f32,
+    tu: f32,
+    tv: f32,
+    ns: i32,
+    nt: i32,
+    first_cell: u32,
+    back: u32,
+}
+
+impl CellMap {
+    #[inline]
+    fn key(&self, iu: f32, iv: f32) -> u32 {
+        let i = ((self.p0.0 + self.su * iu + self.sv * iv) as i32).clamp(0, self.ns) as u32;
+        let j = ((self.p0.1 + self.tu * iu + self.tv * iv) as i32).clamp(0, self.nt) as u32;
+        (self.first_cell + i * (self.nt as u32 + 1) + j) * 2 + self.back
+    }
+}
+
+/// One polygon's rows into the slot's buckets.
+struct PolygonRows<'a> {
+    b: &'a mut RowBuckets,
+    map: CellMap,
+}
+
+impl Rows for PolygonRows<'_> {
+    type Row<'r>
+        = BucketRow<'r>
+    where
+        Self: 'r;
+    fn row(&mut self, jv: u32, cells: usize) -> BucketRow<'_> {
+        let RowBuckets {
+            rows,
+            filled,
+            columns,
+        } = &mut *self.b;
+        let (bucket, filled) = (&mut rows[jv as usize], &mut filled[jv as usize]);
+        let need = *filled as usize + cells;
+        if bucket.len() < need {
+            bucket.resize(2 * need, BLANK_HIT);
+        }
+        BucketRow {
+            n: *filled,
+            out: bucket,
+            filled,
+            columns,
+            map: self.map,
+        }
+    }
+}
+
+/// A row's cells written at the end of its bucket, which grows past those inside only (no
+/// branch; the row announced its cells, so the bucket has room). The count is kept here
+/// (in a register) and stored when the row ends.
+struct BucketRow<'r> {
+    out: &'r mut [LineHit],
+    n: u32,
+    filled: &'r mut u32,
+    columns: &'r mut [u32],
+    map: CellMap,
+}
+
+impl RowCells for BucketRow<'_> {
+    #[inline]
+    fn cell(&mut self, ju: u32, _: u32, iu: f32, iv: f32, pa: f32, inside: bool) {
+        self.out[self.n as usize] = LineHit {
+            line: ju,
+            depth: pa,
+            key: self.map.key(iu, iv),
         };
-        scan_cells(space, slot, pg, seed, jitter, rows, row, cell);
+        self.n += u32::from(inside);
+        self.columns[ju as usize + 1] += u32::from(inside);
+    }
+}
+
+impl Drop for BucketRow<'_> {
+    fn drop(&mut self) {
+        *self.filled = self.n;
     }
 }
 
