@@ -20,10 +20,13 @@
 //! repeated closest-hit queries (for geometry the scan converter cannot project, and as a
 //! cross-check).
 //!
-//! **Links.** The hits of one slot are sorted by (line, p_a); consecutive hits k, k+1 on a line
+//! **Links.** The hits of one slot are sorted by (line, p_a): the scan converter buckets them
+//! by intercept row as it finds them and one counting pass by column finishes the sort by
+//! line ([`RowBuckets`]); Embree's hits take a radix sort. Consecutive hits k, k+1 on a line
 //! link the side of k facing +d with the side of k+1 facing −d; the first and last hits have
-//! an *escape* slot (light leaving that way leaves the scene). Work is parallel over slots (the paper's slope queue) and merged in slot order:
-//! the network does not depend on the thread count.
+//! an *escape* slot (light leaving that way leaves the scene). Work is parallel over slots
+//! (the paper's slope queue) and merged in slot order: the network does not depend on the
+//! thread count.
 
 use super::patches::{Patches, Polygon};
 use super::ray_space::{axes, jitter_seed, RaySpace};
