@@ -395,20 +395,21 @@ impl RowBuckets {
             out.resize(total, BLANK_HIT);
         }
         out.truncate(total);
-        let at = &mut self.columns;
-        for i in 1..at.len() {
-            at[i] += at[i - 1];
-        }
-        for (jv, (row, &filled)) in self.rows.iter().zip(&self.filled).enumerate() {
-            for h in &row[..filled as usize] {
-                let to = &mut at[h.line as usize];
-                out[*to as usize] = LineHit {
-                    line: h.line * n + jv as u32,
-                    ..*h
-                };
-                *to += 1;
-            }
-        }
+        starts_from_counts(&mut self.columns);
+        let rows = self.rows.iter().zip(&self.filled).enumerate();
+        let hits = rows.flat_map(|(jv, (row, &filled))| {
+            row[..filled as usize].iter().map(move |h| (jv as u32, *h))
+        });
+        scatter_stably(
+            &mut self.columns,
+            hits,
+            |(_, h)| h.line as usize,
+            |(jv, h)| LineHit {
+                line: h.line * n + jv,
+                ..h
+            },
+            out,
+        );
     }
 }
 
@@ -649,18 +650,12 @@ fn radix_by_line(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) {
     let mut pass = |from: &[LineHit], to: &mut [LineHit], shift: u32, digits: usize| {
         counts.clear();
         counts.resize(digits + 1, 0);
-        let digit = |h: &LineHit| (h.line >> shift) as usize & (digits - 1);
-        for h in from {
+        let digit = |h: LineHit| (h.line >> shift) as usize & (digits - 1);
+        for &h in from {
             counts[digit(h) + 1] += 1;
         }
-        for i in 1..counts.len() {
-            counts[i] += counts[i - 1];
-        }
-        for h in from {
-            let at = &mut counts[digit(h)];
-            to[*at as usize] = *h;
-            *at += 1;
-        }
+        starts_from_counts(counts);
+        scatter_stably(counts, from.iter().copied(), digit, |h| h, to);
     };
     pass(hits, tmp, 0, 1 << lo_bits);
     pass(tmp, sorted, lo_bits, 1 << (bits - lo_bits));
@@ -757,17 +752,42 @@ pub(super) fn group_stably<T: Copy, V: Copy + Default>(
     group_of: impl Fn(T) -> usize,
     value: impl Fn(T) -> V,
 ) -> Vec<V> {
-    for i in 1..start.len() {
-        start[i] += start[i - 1];
-    }
-    let mut fill = start.to_vec();
+    starts_from_counts(start);
     let mut grouped = vec![V::default(); items.len()];
-    for &x in items {
-        let at = &mut fill[group_of(x)];
-        grouped[*at as usize] = value(x);
-        *at += 1;
-    }
+    let mut next = start.to_vec();
+    scatter_stably(
+        &mut next,
+        items.iter().copied(),
+        group_of,
+        value,
+        &mut grouped,
+    );
     grouped
+}
+
+/// Counts to starts, in place: `at[g + 1]` holds group g's item count (`at[0]` is 0), and
+/// becomes the end of group g (so `at[g]` its start).
+fn starts_from_counts(at: &mut [u32]) {
+    for i in 1..at.len() {
+        at[i] += at[i - 1];
+    }
+}
+
+/// The scatter of a stable counting sort, shared by the sorts of the preprocess: `at[g]` is
+/// the next place of group g in `out` ([`starts_from_counts`]); `value` of every item goes
+/// there, in the items' order.
+fn scatter_stably<T: Copy, V>(
+    at: &mut [u32],
+    items: impl IntoIterator<Item = T>,
+    group_of: impl Fn(T) -> usize,
+    value: impl Fn(T) -> V,
+    out: &mut [V],
+) {
+    items.into_iter().for_each(|x| {
+        let to = &mut at[group_of(x)];
+        out[*to as usize] = value(x);
+        *to += 1;
+    });
 }
 
 /// Runs a builder over every slot, in parallel, returning the links in slot order.
