@@ -29,7 +29,7 @@ use crate::integrators::Context;
 use crate::scene::Scene;
 use patches::Patches;
 pub use preprocess::Builder;
-use preprocess::{EndPacking, SlotLinks};
+use preprocess::{EndPacking, LinkBatch};
 use ray_space::RaySpace;
 use std::time::Instant;
 
@@ -168,12 +168,6 @@ pub(crate) fn row_etendue(row: &[u32], extra: &[[u32; 2]], w: &[f32]) -> f32 {
     sum
 }
 
-/// The packed link ends of key block `b` of a slot.
-#[inline]
-fn ends(slot: &SlotLinks, b: usize) -> &[u32] {
-    &slot.ends[slot.block_start[b] as usize..slot.block_start[b + 1] as usize]
-}
-
 /// W of every node.
 pub(crate) fn node_etendue(
     space: &RaySpace,
@@ -227,7 +221,7 @@ impl Network {
         }
         let packing = EndPacking::for_keys(2 * patches.cells as usize)?;
         let t = Instant::now();
-        let (slots, rays) = preprocess::build_links(
+        let (batches, rays) = preprocess::build_links(
             (builder == Builder::Embree).then_some(ctx),
             &space,
             &patches,
@@ -238,7 +232,7 @@ impl Network {
         );
         let link_seconds = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let mut net = Network::assemble(params, space, patches, &slots, packing);
+        let mut net = Network::assemble(params, space, patches, &batches, packing);
         net.stats.assemble_seconds = t.elapsed().as_secs_f64();
         net.stats.link_seconds = link_seconds;
         net.stats.rays = rays.total();
@@ -247,8 +241,8 @@ impl Network {
     }
 
     /// Numbers the nodes (sides with at least one real link, in key order) and fills the
-    /// dense link table. Each slot's link ends come grouped by blocks of side keys
-    /// (preprocess::link_slot, `packing`), so a block's rows (a few hundred kilobytes) are filled
+    /// dense link table. Each batch of slots has its link ends grouped by blocks of side keys
+    /// ([`LinkBatch`], `packing`), so a block's rows (a few hundred kilobytes) are filled
     /// in cache by one task walking every slot's ends for that block in slot order: the
     /// first end of a slot at a node goes into its row, further ones into its extra links.
     /// Blocks are independent (parallel), and nothing depends on the schedule.
@@ -256,7 +250,7 @@ impl Network {
         params: NetworkParams,
         space: RaySpace,
         patches: Patches,
-        slots: &[SlotLinks],
+        batches: &[LinkBatch],
         packing: EndPacking,
     ) -> Network {
         use rayon::prelude::*;
@@ -264,10 +258,10 @@ impl Network {
         let block = packing.block();
         let blocks = keys.div_ceil(block);
         let n_slots = space.slots();
-        // Nodes: keys with a real link (not only escapes), marked by each slot.
+        // Nodes: keys with a real link (not only escapes), marked by each batch of slots.
         let words = keys.div_ceil(64);
         let mut marks = vec![0u64; words];
-        for s in slots {
+        for s in batches {
             for (m, &sm) in marks.iter_mut().zip(&s.marks) {
                 *m |= sm;
             }
@@ -316,14 +310,19 @@ impl Network {
                 // Room for every end of the block: an end that finds its slot taken is
                 // written there and kept by advancing `len`, without a branch (whether a
                 // slot is taken is close to a coin toss, which a branch would mispredict).
-                let room: usize = slots.iter().map(|s| ends(s, b).len()).sum();
-                // (A buffer per thread, reused: a block's room is a megabyte or so.)
-                extra.clear();
-                extra.resize(room, (0u32, [0u32; 2]));
+                let room: usize = batches.iter().map(|s| s.block_ends(b)).sum();
+                // (A buffer per thread, reused: a block's room is a megabyte or so. Only
+                // grown, never cleared: every entry kept is written first.)
+                if extra.len() < room {
+                    extra.resize(room, (0u32, [0u32; 2]));
+                }
                 let mut len = 0;
                 let mut escapes = 0u64;
                 let (w0, w1) = (b * block / 64, ((b + 1) * block / 64).min(words));
-                for (slot, s) in slots.iter().enumerate() {
+                let slots = batches
+                    .iter()
+                    .flat_map(|s| (0..s.slots as usize).map(move |j| (s, j)));
+                for (slot, (s, j)) in slots.enumerate() {
                     // Each row's next cache line of slots is cleared just before the slots
                     // are filled, while the block's lines are in cache (clearing the whole
                     // block first would send them back to memory before they are filled).
@@ -356,7 +355,7 @@ impl Network {
                             wb[local] += ws;
                         }};
                     }
-                    for &e in ends(s, b) {
+                    for &e in s.ends(b, j) {
                         let (k, t) = packing.unpack(b, e);
                         let node = node_of_key[k as usize];
                         if node != NONE {
@@ -365,16 +364,15 @@ impl Network {
                     }
                     // Then the slot's escapes at nodes (a side's escapes are all alike, so
                     // their order among themselves does not matter).
-                    for wi in w0..w1 {
-                        let mut m = s.escapes[wi] & marks[wi];
+                    for (wi, &e) in (w0..w1).zip(s.escapes(b, j, block / 64)) {
+                        let mut m = e & marks[wi];
                         while m != 0 {
                             put!(node_of_key[wi * 64 + m.trailing_zeros() as usize], ESCAPE);
                             escapes += 1;
                             m &= m - 1;
                         }
                     }
-                    let more = s.more_start[b] as usize..s.more_start[b + 1] as usize;
-                    for &k in &s.more_escapes[more] {
+                    for &k in s.more_escapes(b, j) {
                         let node = node_of_key[k as usize];
                         if node != NONE {
                             put!(node, ESCAPE);
@@ -394,7 +392,7 @@ impl Network {
             })
             .collect();
         let mut stats = BuildStats::default();
-        for s in slots {
+        for s in batches {
             stats.intersections += s.intersections;
             stats.degenerate += s.degenerate;
             stats.link_ends += 2 * s.pairs;

@@ -81,6 +81,13 @@ impl EndPacking {
         1 << self.block_bits
     }
 
+    /// The block of a side key (a shift: a division by the block's size, unknown to the
+    /// compiler, would cost tens of cycles per link end).
+    #[inline]
+    pub fn block_of(&self, key: u32) -> usize {
+        (key >> self.block_bits) as usize
+    }
+
     #[inline]
     fn pack(&self, key: u32, target: u32) -> u32 {
         (key & (self.block() as u32 - 1)) << self.target_bits | target
@@ -94,31 +101,75 @@ impl EndPacking {
     }
 }
 
-/// The links of one slot as packed link ends ([`EndPacking`]: a side key and the side key at
-/// the other end), grouped by key blocks: block b's ends are
-/// ends[block_start[b]..block_start[b + 1]], in the order the links were found along the
-/// sorted lines (each link's two ends); and its escapes, kept apart.
+/// Slots linked by one task, one after the other: a few, so that the assembly reads each key
+/// block's ends and escapes in runs of several slots rather than a short piece per slot.
+pub const SLOT_BATCH: usize = 8;
+
+/// The links of a batch of consecutive slots as packed link ends ([`EndPacking`]: a side key
+/// and the side key at the other end), grouped by key block and, within a block, by slot:
+/// group g = b·slots + j (block b, the batch's j-th slot) is ends[start[g]..start[g + 1]], in
+/// the order the links were found along the sorted lines (each link's two ends); and the
+/// escapes, kept apart, grouped alike. The assembly reads block b of every batch in turn, so
+/// a block's share of a batch lies in one piece.
 #[derive(Clone, Debug, Default)]
-pub struct SlotLinks {
+pub struct LinkBatch {
+    pub first_slot: u32,
+    pub slots: u32,
     pub ends: Vec<u32>,
-    pub block_start: Vec<u32>,
-    /// Bit set over side keys: the sides whose line leaves the scene in this slot. Escapes are
-    /// as many as link ends, and most are on sides that never become nodes (a room's outer
-    /// faces): as bits they take a thirty-second of the memory, and the assembly skips the
-    /// sides that are not nodes a word at a time.
+    pub start: Vec<u32>,
+    /// Bit sets over side keys: the sides whose line leaves the scene, per group: group g's
+    /// bits are escapes[g·w..(g + 1)·w] for w = block / 64 words, bit i of word k the block's
+    /// key 64·k + i. Escapes are as many as link ends, and most are on sides that never become
+    /// nodes (a room's outer faces): as bits they take a thirty-second of the memory, and the
+    /// assembly skips the sides that are not nodes a word at a time.
     pub escapes: Vec<u64>,
-    /// A side's second and later escapes in this slot (a patch meeting two lines that both
-    /// leave), grouped by key block: block b's are
-    /// more_escapes[more_start[b]..more_start[b + 1]].
+    /// A side's second and later escapes in a slot (a patch meeting two lines that both
+    /// leave), per group: more_escapes[more_start[g]..more_start[g + 1]].
     pub more_escapes: Vec<u32>,
     pub more_start: Vec<u32>,
     /// Links between two sides (each has two ends).
     pub pairs: u64,
-    /// Bit set over side keys: the sides with a link (not only an escape) in this slot.
+    /// Bit set over side keys: the sides with a link (not only an escape) in the batch.
     pub marks: Vec<u64>,
     pub intersections: u64,
     /// Consecutive hits on the same side (dropped).
     pub degenerate: u64,
+}
+
+impl LinkBatch {
+    /// Group of key block `b` and the batch's `j`-th slot.
+    #[inline]
+    fn group(&self, b: usize, j: usize) -> usize {
+        b * self.slots as usize + j
+    }
+
+    /// The packed link ends of key block `b` in the batch's `j`-th slot.
+    #[inline]
+    pub fn ends(&self, b: usize, j: usize) -> &[u32] {
+        let g = self.group(b, j);
+        &self.ends[self.start[g] as usize..self.start[g + 1] as usize]
+    }
+
+    /// The ends of key block `b` in every slot of the batch.
+    #[inline]
+    pub fn block_ends(&self, b: usize) -> usize {
+        let (g0, g1) = (self.group(b, 0), self.group(b + 1, 0));
+        (self.start[g1] - self.start[g0]) as usize
+    }
+
+    /// The escape bits of key block `b` in the batch's `j`-th slot (`words` words a block).
+    #[inline]
+    pub fn escapes(&self, b: usize, j: usize, words: usize) -> &[u64] {
+        let g = self.group(b, j);
+        &self.escapes[g * words..(g + 1) * words]
+    }
+
+    /// The second and later escapes of key block `b` in the batch's `j`-th slot.
+    #[inline]
+    pub fn more_escapes(&self, b: usize, j: usize) -> &[u32] {
+        let g = self.group(b, j);
+        &self.more_escapes[self.more_start[g] as usize..self.more_start[g + 1] as usize]
+    }
 }
 
 /// Which builder finds the line-patch intersections.
@@ -618,14 +669,19 @@ pub fn cast_slot(
 /// Hits closer than this along a line (unit-cube units of p_a) are on touching surfaces.
 pub const COINCIDENT: f32 = 1e-5;
 
-/// Reusable buffers of [`link_slot`] and the sorts before it.
+/// Reusable buffers of a batch's linking and the sorts before it.
 #[derive(Default)]
 pub struct LinkBuffers {
     counts: Vec<u32>,
     tmp: Vec<LineHit>,
     sorted: Vec<LineHit>,
-    ends: Vec<[u32; 2]>,
     rows: RowBuckets,
+    /// The batch's link ends (side key, key at the other end) and later escapes, slot after
+    /// slot; slot j's are ends[ends_at[j]..ends_at[j + 1]] and likewise for `more`.
+    ends: Vec<[u32; 2]>,
+    ends_at: Vec<usize>,
+    more: Vec<u32>,
+    more_at: Vec<usize>,
 }
 
 /// Stable LSD radix sort of hits by line (into `buf.sorted`) in two passes of about half the
@@ -661,44 +717,43 @@ fn radix_by_line(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) {
     pass(tmp, sorted, lo_bits, 1 << (bits - lo_bits));
 }
 
-/// Sorts one slot's hits (sorted by line) by depth within each line's few hits, links
-/// consecutive ones and groups the link ends by key block. `keys` is the number of side keys.
-pub fn link_slot(
+/// Sorts one slot's hits (sorted by line) by depth within each line's few hits and links
+/// consecutive ones, as the `j`-th slot of `out`: the link ends go to `ends` and a side's
+/// second and later escapes to `more` (both grouped later, [`LinkBatch::group_ends`]), the
+/// escapes, the node marks and the groups' counts straight into `out`.
+fn link_slot(
     sorted: &mut [LineHit],
-    keys: usize,
+    j: usize,
     packing: EndPacking,
     ends: &mut Vec<[u32; 2]>,
-) -> SlotLinks {
-    let mut out = SlotLinks {
-        intersections: sorted.len() as u64,
-        ..SlotLinks::default()
-    };
-    ends.clear();
-    // The nodes' marks and the ends per key block are counted as the links are found.
-    out.marks = vec![0u64; keys.div_ceil(64)];
-    out.escapes = vec![0u64; keys.div_ceil(64)];
-    let escape = |k: u32, bits: &mut [u64], more: &mut Vec<u32>| {
-        let (w, bit) = (k as usize / 64, 1u64 << (k % 64));
-        if bits[w] & bit != 0 {
+    more: &mut Vec<u32>,
+    out: &mut LinkBatch,
+) {
+    out.intersections += sorted.len() as u64;
+    let words = packing.block() / 64;
+    let slots = out.slots as usize;
+    let group = |k: u32| packing.block_of(k) * slots + j;
+    let mut escape = |k: u32, out: &mut LinkBatch| {
+        let w = group(k) * words + (k as usize & (packing.block() - 1)) / 64;
+        let bit = 1u64 << (k % 64);
+        if out.escapes[w] & bit != 0 {
             more.push(k);
+            out.more_start[group(k) + 1] += 1;
         }
-        bits[w] |= bit;
+        out.escapes[w] |= bit;
     };
-    let block = packing.block();
-    let blocks = keys.div_ceil(block);
-    let mut start = vec![0u32; blocks + 1];
-    for group in sorted.chunk_by_mut(|x, y| x.line == y.line) {
+    for hits in sorted.chunk_by_mut(|x, y| x.line == y.line) {
         // Insertion sort: a line meets a handful of patches.
-        for i in 1..group.len() {
-            let mut j = i;
-            while j > 0 && (group[j].depth, group[j].key) < (group[j - 1].depth, group[j - 1].key) {
-                group.swap(j, j - 1);
-                j -= 1;
+        for i in 1..hits.len() {
+            let mut h = i;
+            while h > 0 && (hits[h].depth, hits[h].key) < (hits[h - 1].depth, hits[h - 1].key) {
+                hits.swap(h, h - 1);
+                h -= 1;
             }
         }
         // Entering the scene: the first side facing −d looks out of it.
-        escape(group[0].key ^ 1, &mut out.escapes, &mut out.more_escapes);
-        for w in group.windows(2) {
+        escape(hits[0].key ^ 1, out);
+        for w in hits.windows(2) {
             let (x, y) = (w[0].key, w[1].key ^ 1);
             // A line meeting the same side twice in a row (a hit on an edge counted by both
             // of its cells' polygon) carries nothing; coincident surfaces (a box standing on
@@ -708,39 +763,68 @@ pub fn link_slot(
                 ends.push([y, x]);
                 for k in [x, y] {
                     out.marks[k as usize / 64] |= 1 << (k % 64);
-                    start[k as usize / block + 1] += 1;
+                    out.start[group(k) + 1] += 1;
                 }
             } else {
                 out.degenerate += 1;
             }
         }
-        escape(
-            group[group.len() - 1].key,
-            &mut out.escapes,
-            &mut out.more_escapes,
+        escape(hits[hits.len() - 1].key, out);
+    }
+}
+
+impl LinkBatch {
+    /// An empty batch of `slots` slots from `first_slot`, for `keys` side keys.
+    fn new(first_slot: usize, slots: usize, keys: usize, packing: EndPacking) -> LinkBatch {
+        let groups = keys.div_ceil(packing.block()) * slots;
+        LinkBatch {
+            first_slot: first_slot as u32,
+            slots: slots as u32,
+            start: vec![0; groups + 1],
+            escapes: vec![0; groups * packing.block() / 64],
+            more_start: vec![0; groups + 1],
+            marks: vec![0; keys.div_ceil(64)],
+            ..LinkBatch::default()
+        }
+    }
+
+    /// Groups the batch's link ends and later escapes (`buf`, slot after slot) by key block
+    /// and slot, keeping their order within a group; packs the ends.
+    fn group_ends(&mut self, buf: &LinkBuffers, packing: EndPacking) {
+        let slots = self.slots as usize;
+        self.pairs = buf.ends.len() as u64 / 2;
+        self.ends = group_slots(&mut self.start, &buf.ends, &buf.ends_at, |[k, t]| {
+            (packing.block_of(k) * slots, packing.pack(k, t))
+        });
+        self.more_escapes = group_slots(&mut self.more_start, &buf.more, &buf.more_at, |k| {
+            (packing.block_of(k) * slots, k)
+        });
+    }
+}
+
+/// A stable counting sort of a batch's items (slot j's are items[at[j]..at[j + 1]]) into
+/// groups: `place(item)` gives its group for the batch's first slot (slot j's group is j
+/// further on) and its value. `start` as in [`group_stably`].
+fn group_slots<T: Copy, V: Copy + Default>(
+    start: &mut [u32],
+    items: &[T],
+    at: &[usize],
+    place: impl Fn(T) -> (usize, V),
+) -> Vec<V> {
+    starts_from_counts(start);
+    let mut grouped = vec![V::default(); items.len()];
+    let mut next = start.to_vec();
+    // A loop per slot (the slot a constant in it).
+    for (j, r) in at.windows(2).enumerate() {
+        scatter_stably(
+            &mut next,
+            items[r[0]..r[1]].iter().copied(),
+            |x| place(x).0 + j,
+            |x| place(x).1,
+            &mut grouped,
         );
     }
-    out.pairs = ends.len() as u64 / 2;
-    // The later escapes and the ends grouped by key block.
-    let mut more_start = vec![0u32; blocks + 1];
-    for &k in &out.more_escapes {
-        more_start[k as usize / block + 1] += 1;
-    }
-    out.more_escapes = group_stably(
-        &mut more_start,
-        &out.more_escapes,
-        |k| k as usize / block,
-        |k| k,
-    );
-    out.more_start = more_start;
-    out.ends = group_stably(
-        &mut start,
-        ends,
-        |[k, _]| k as usize / block,
-        |[k, t]| packing.pack(k, t),
-    );
-    out.block_start = start;
-    out
+    grouped
 }
 
 /// A stable counting sort into groups (key blocks, nodes): on entry `start[g + 1]` holds group
@@ -790,7 +874,8 @@ fn scatter_stably<T: Copy, V>(
     });
 }
 
-/// Runs a builder over every slot, in parallel, returning the links in slot order.
+/// Runs a builder over every slot, in parallel over batches of [`SLOT_BATCH`] slots,
+/// returning the batches in slot order.
 pub fn build_links(
     ctx: Option<&Context>,
     space: &RaySpace,
@@ -799,26 +884,42 @@ pub fn build_links(
     jitter: f32,
     builder: Builder,
     packing: EndPacking,
-) -> (Vec<SlotLinks>, RayStats) {
-    let results: Vec<(SlotLinks, RayStats)> = (0..space.slots() as u32)
+) -> (Vec<LinkBatch>, RayStats) {
+    let slots = space.slots();
+    let keys = 2 * patches.cells as usize;
+    let results: Vec<(LinkBatch, RayStats)> = (0..slots.div_ceil(SLOT_BATCH))
         .into_par_iter()
-        .map_init(LinkBuffers::default, |buf, slot| {
+        .map_init(LinkBuffers::default, |buf, batch| {
+            let first = batch * SLOT_BATCH;
+            let mut out = LinkBatch::new(first, SLOT_BATCH.min(slots - first), keys, packing);
             let mut stats = RayStats::default();
-            let hits = match (builder, ctx) {
-                (Builder::Embree, Some(ctx)) => {
-                    let hits = cast_slot(ctx, space, patches, slot, seed, jitter, &mut stats);
-                    radix_by_line(&hits, space.lines_per_slot(), buf);
-                    hits.len()
-                }
-                _ => {
-                    scan_slot_into(space, patches, slot, seed, jitter, &mut buf.rows);
-                    buf.rows.sorted_into(&mut buf.sorted);
-                    buf.sorted.len()
-                }
-            };
-            let keys = 2 * patches.cells as usize;
-            let sorted = &mut buf.sorted[..hits];
-            (link_slot(sorted, keys, packing, &mut buf.ends), stats)
+            for v in [&mut buf.ends_at, &mut buf.more_at] {
+                v.clear();
+                v.push(0);
+            }
+            buf.ends.clear();
+            buf.more.clear();
+            for j in 0..out.slots as usize {
+                let slot = (first + j) as u32;
+                let hits = match (builder, ctx) {
+                    (Builder::Embree, Some(ctx)) => {
+                        let hits = cast_slot(ctx, space, patches, slot, seed, jitter, &mut stats);
+                        radix_by_line(&hits, space.lines_per_slot(), buf);
+                        hits.len()
+                    }
+                    _ => {
+                        scan_slot_into(space, patches, slot, seed, jitter, &mut buf.rows);
+                        buf.rows.sorted_into(&mut buf.sorted);
+                        buf.sorted.len()
+                    }
+                };
+                let sorted = &mut buf.sorted[..hits];
+                link_slot(sorted, j, packing, &mut buf.ends, &mut buf.more, &mut out);
+                buf.ends_at.push(buf.ends.len());
+                buf.more_at.push(buf.more.len());
+            }
+            out.group_ends(buf, packing);
+            (out, stats)
         })
         .collect();
     let mut stats = RayStats::default();
