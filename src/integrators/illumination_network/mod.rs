@@ -322,19 +322,23 @@ impl Network {
                 let slots = batches
                     .iter()
                     .flat_map(|s| (0..s.slots as usize).map(move |j| (s, j)));
+                // Rows end in a partial line when the slots are not a multiple of
+                // FILL_SLOTS: that part is cleared first, so that the loop clears whole lines.
+                let whole = n_slots - n_slots % FILL_SLOTS;
+                for row in rows.chunks_exact_mut(n_slots) {
+                    row[whole..].fill(NONE);
+                }
                 for (slot, (s, j)) in slots.enumerate() {
                     // Each row's next cache line of slots is cleared just before the slots
                     // are filled, while the block's lines are in cache (clearing the whole
                     // block first would send them back to memory before they are filled).
-                    if slot % FILL_SLOTS == 0 {
-                        let to = (slot + FILL_SLOTS).min(n_slots);
+                    if slot % FILL_SLOTS == 0 && slot < whole {
                         for r in 0..nodes_in_block {
-                            let line = &mut rows[r * n_slots + slot..r * n_slots + to];
-                            // (As an array: a call to memset per 64 bytes costs more.)
-                            if let Ok(line) = <&mut [u32; FILL_SLOTS]>::try_from(&mut *line) {
+                            // (A fixed-size array: a call to memset per 64 bytes costs more.)
+                            if let Some(line) =
+                                rows[r * n_slots + slot..].first_chunk_mut::<FILL_SLOTS>()
+                            {
                                 *line = [NONE; FILL_SLOTS];
-                            } else {
-                                line.fill(NONE);
                             }
                         }
                     }
