@@ -14,7 +14,9 @@
 //!
 //! and the line's jitter (a fraction of h on each intercept, hashed from the seed and the
 //! line) adds −B'·δ_u − C'·δ_v. The inside test uses the jittered intercept itself, so both
-//! builders meet exactly the same lines.
+//! builders meet exactly the same lines. A row's cells go four at a time through SIMD lanes
+//! (the jitter hash, the intercepts, the inside test, the patch keys); the depths still
+//! follow the recurrence cell after cell.
 //!
 //! **Embree casting**. The same jittered lines are cast through the intersection backend with
 //! repeated closest-hit queries (for geometry the scan converter cannot project, and as a
@@ -29,11 +31,12 @@
 //! thread count.
 
 use super::patches::{Patches, Polygon};
-use super::ray_space::{axes, jitter_seed, RaySpace};
+use super::ray_space::{axes, jitter_seed, slot_jitter_seeds, RaySpace};
 use super::MAX_KEY_BLOCK_BITS;
 use crate::integrators::{Context, RayStats};
 use crate::math::{Ray, Vec3};
 use rayon::prelude::*;
+use wide::{f32x4, i32x4, u32x4};
 
 /// A line meeting a patch: the line within its slot, p_a along it, and the key of the side
 /// facing +d (cell·2 + 0 for the front, + 1 for the back).
@@ -233,7 +236,15 @@ pub fn scan_polygon(
     jitter: f32,
     hit: impl FnMut(u32, f32, f32, f32),
 ) {
-    scan_cells(space, slot, pg, seed, jitter, &mut EachHit(hit))
+    let intercepts = space.intercepts;
+    scan_cells(
+        space,
+        slot,
+        pg,
+        seed,
+        jitter,
+        &mut EachHit { hit, intercepts },
+    )
 }
 
 /// Where [`scan_cells`] puts a polygon's candidate cells: `row(jv, cells)` announces a row of
@@ -245,28 +256,43 @@ trait Rows {
     fn row(&mut self, jv: u32, cells: usize) -> Self::Row<'_>;
 }
 
-/// The cells of one row: `cell(ju, line, iu, iv, p_a, inside)` for each candidate.
+/// The cells of one row, [`LANES`] at a time: `cells(ju, lanes, iu, iv, p_a, inside)` for the
+/// `lanes` candidates from column `ju` on (all but a row's last group are full), with their
+/// jittered intercepts, depths, and whether each is inside (bit l for lane l).
 trait RowCells {
-    fn cell(&mut self, ju: u32, line: u32, iu: f32, iv: f32, pa: f32, inside: bool);
+    fn cells(&mut self, ju: u32, lanes: usize, iu: f32x4, iv: f32x4, pa: f32x4, inside: u32);
 }
 
-/// [`scan_polygon`]'s callback, for the cells inside.
-struct EachHit<F>(F);
+/// Candidate cells scanned together, one per SIMD lane.
+const LANES: usize = 4;
+
+/// [`scan_polygon`]'s callback, for the cells inside, and a row of it.
+struct EachHit<F> {
+    hit: F,
+    intercepts: u32,
+}
+
+struct EachHitRow<'a, F> {
+    each: &'a mut EachHit<F>,
+    jv: u32,
+}
 
 impl<F: FnMut(u32, f32, f32, f32)> Rows for EachHit<F> {
     type Row<'r>
-        = &'r mut EachHit<F>
+        = EachHitRow<'r, F>
     where
         F: 'r;
-    fn row(&mut self, _: u32, _: usize) -> &mut EachHit<F> {
-        self
+    fn row(&mut self, jv: u32, _: usize) -> EachHitRow<'_, F> {
+        EachHitRow { each: self, jv }
     }
 }
 
-impl<F: FnMut(u32, f32, f32, f32)> RowCells for &mut EachHit<F> {
-    fn cell(&mut self, _: u32, line: u32, iu: f32, iv: f32, pa: f32, inside: bool) {
-        if inside {
-            (self.0)(line, iu, iv, pa)
+impl<F: FnMut(u32, f32, f32, f32)> RowCells for EachHitRow<'_, F> {
+    fn cells(&mut self, ju: u32, lanes: usize, iu: f32x4, iv: f32x4, pa: f32x4, inside: u32) {
+        let (iu, iv, pa) = (iu.to_array(), iv.to_array(), pa.to_array());
+        for l in (0..lanes).filter(|l| inside >> l & 1 == 1) {
+            let line = (ju + l as u32) * self.each.intercepts + self.jv;
+            (self.each.hit)(line, iu[l], iv[l], pa[l])
         }
     }
 }
@@ -312,16 +338,20 @@ fn scan_cells<R: Rows>(
         let (a, b) = (-(p1.1 - p0.1) * sign, (p1.0 - p0.0) * sign);
         (ea[i], eb[i], ec[i]) = (a, b, -(a * p0.0 + b * p0.1));
     }
-    // All four evaluated, no early exit: whether a cell near an edge is inside is close to
-    // a coin toss, which a branch per edge would mispredict.
-    let inside = |x: (f32, f32)| {
-        let e = |i: usize| ea[i] * x.0 + eb[i] * x.1 + ec[i] >= 0.0;
-        e(0) & e(1) & e(2) & e(3)
+    // All four evaluated, no early exit, for the four lanes at once: whether a cell near an
+    // edge is inside is close to a coin toss, which a branch per edge would mispredict.
+    let inside = |u: f32x4, v: f32x4| {
+        let e = |i: usize| {
+            (f32x4::splat(ea[i]) * u + f32x4::splat(eb[i]) * v + f32x4::splat(ec[i]))
+                .simd_ge(f32x4::ZERO)
+        };
+        (e(0) & e(1) & e(2) & e(3)).to_bitmask()
     };
     let h = space.step;
     let n = space.intercepts as i64;
     let amp = 0.5 * jitter * h;
-    let mixed = jitter_seed(seed);
+    let seeds = slot_jitter_seeds(jitter_seed(seed), slot);
+    let splat_h = f32x4::splat(h);
     // ceil and floor by conversion (the baseline x86-64 target calls libm for f32::ceil).
     let ceil = |x: f32| {
         let t = x as i64;
@@ -377,19 +407,28 @@ fn scan_cells<R: Rows>(
         // The paper's recurrence: one multiply-add at the row start, one add per cell.
         let mut pa = plane.depth(space.intercept(ju0 as u32), cv);
         let mut row = rows.row(jv as u32, (ju1 - ju0 + 1) as usize);
-        for ju in ju0..=ju1 {
-            let (du, dv) = space.jitter_mixed(mixed, jitter, slot, ju as u32, jv as u32);
-            let x = (space.intercept(ju as u32) + du, cv + dv);
-            let line = ju as u32 * space.intercepts + jv as u32;
-            row.cell(
-                ju as u32,
-                line,
-                x.0,
-                x.1,
-                pa - plane.b * du - plane.c * dv,
-                inside(x),
-            );
-            pa -= step;
+        let mut ju = ju0 as u32;
+        while ju <= ju1 as u32 {
+            let lanes = (ju1 as u32 - ju + 1).min(LANES as u32) as usize;
+            // The depths by the recurrence, cell after cell (a lane past the row's end takes
+            // one too, unused).
+            let depths = std::array::from_fn(|_| {
+                let d = pa;
+                pa -= step;
+                d
+            });
+            let columns = u32x4::splat(ju) + u32x4::from([0, 1, 2, 3]);
+            let lines = columns * u32x4::splat(space.intercepts) + u32x4::splat(jv as u32);
+            let (du, dv) = space.jitter_lanes(seeds, jitter, lines);
+            let centres: i32x4 = wide::bytemuck::cast(columns);
+            // space.intercept(ju), lane by lane.
+            let iu =
+                f32x4::splat(-1.0) + (centres.round_float() + f32x4::splat(0.5)) * splat_h + du;
+            let iv = f32x4::splat(cv) + dv;
+            let pas = f32x4::from(depths) - f32x4::splat(plane.b) * du - f32x4::splat(plane.c) * dv;
+            let inside = inside(iu, iv) & ((1 << lanes) - 1);
+            row.cells(ju, lanes, iu, iv, pas, inside);
+            ju += LANES as u32;
         }
     }
 }
@@ -536,11 +575,21 @@ struct CellMap {
 }
 
 impl CellMap {
+    /// The side keys of four hits. (Clamped before the conversion, which gives the same
+    /// cell as clamping the converted index.)
     #[inline]
-    fn key(&self, iu: f32, iv: f32) -> u32 {
-        let i = ((self.p0.0 + self.su * iu + self.sv * iv) as i32).clamp(0, self.ns) as u32;
-        let j = ((self.p0.1 + self.tu * iu + self.tv * iv) as i32).clamp(0, self.nt) as u32;
-        (self.first_cell + i * (self.nt as u32 + 1) + j) * 2 + self.back
+    fn keys(&self, iu: f32x4, iv: f32x4) -> i32x4 {
+        let cell = |p: f32, du: f32, dv: f32, last: i32| {
+            let x = f32x4::splat(p) + f32x4::splat(du) * iu + f32x4::splat(dv) * iv;
+            x.max(f32x4::ZERO)
+                .min(f32x4::splat(last as f32))
+                .trunc_int()
+        };
+        let i = cell(self.p0.0, self.su, self.sv, self.ns);
+        let j = cell(self.p0.1, self.tu, self.tv, self.nt);
+        let first = i32x4::splat(self.first_cell as i32);
+        (first + i * i32x4::splat(self.nt + 1) + j) * i32x4::splat(2)
+            + i32x4::splat(self.back as i32)
     }
 }
 
@@ -589,14 +638,18 @@ struct BucketRow<'r> {
 
 impl RowCells for BucketRow<'_> {
     #[inline]
-    fn cell(&mut self, ju: u32, _: u32, iu: f32, iv: f32, pa: f32, inside: bool) {
-        self.out[self.n as usize] = LineHit {
-            line: ju,
-            depth: pa,
-            key: self.map.key(iu, iv),
-        };
-        self.n += u32::from(inside);
-        self.columns[ju as usize + 1] += u32::from(inside);
+    fn cells(&mut self, ju: u32, lanes: usize, iu: f32x4, iv: f32x4, pa: f32x4, inside: u32) {
+        let (keys, pa) = (self.map.keys(iu, iv).to_array(), pa.to_array());
+        for l in 0..lanes {
+            let inside = inside >> l & 1;
+            self.out[self.n as usize] = LineHit {
+                line: ju + l as u32,
+                depth: pa[l],
+                key: keys[l] as u32,
+            };
+            self.n += inside;
+            self.columns[(ju as usize + l) + 1] += inside;
+        }
     }
 }
 

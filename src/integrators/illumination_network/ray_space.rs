@@ -29,6 +29,7 @@
 //! ∫ A|cosθ| dω over a hemisphere's worth of lines: πA (tested).
 
 use crate::math::Vec3;
+use wide::{f32x4, i32x4, u32x4};
 
 /// The grid over lines, and the map from world space into the unit cube.
 #[derive(Clone, Debug, PartialEq)]
@@ -253,21 +254,51 @@ impl RaySpace {
         self.jitter_mixed(jitter_seed(seed), amount, slot, iu, iv)
     }
 
-    /// [`jitter`](Self::jitter) with the seed already mixed by [`jitter_seed`] (the scan
-    /// converter asks for millions of lines of one seed). One mixing round per line: the
-    /// key (slot, iu, iv) is a bijection of the line, and splitmix a bijection with full
-    /// avalanche, so lines get independent-looking jitters.
+    /// [`jitter`](Self::jitter) with the seed already mixed by [`jitter_seed`].
     #[inline]
     pub fn jitter_mixed(&self, mixed: u64, amount: f32, slot: u32, iu: u32, iv: u32) -> (f32, f32) {
-        if amount == 0.0 {
-            return (0.0, 0.0);
-        }
-        let key = ((slot as u64) << 40) ^ ((iu as u64) << 20) ^ iv as u64;
-        let h = splitmix(mixed ^ key);
-        let a = (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32) - 0.5;
-        let b = ((h >> 8) & 0xff_ffff) as f32 * (1.0 / (1u64 << 24) as f32) - 0.5;
-        (a * amount * self.step, b * amount * self.step)
+        let (du, dv) = self.jitter_lanes(
+            slot_jitter_seeds(mixed, slot),
+            amount,
+            u32x4::splat(iu * self.intercepts + iv),
+        );
+        (du.to_array()[0], dv.to_array()[0])
     }
+
+    /// The jitters of four lines of one slot (`lines`: iu·intercepts + iv), the slot's seeds
+    /// from [`slot_jitter_seeds`]. One 32-bit hash per intercept (a bijection with full
+    /// avalanche of the line and the slot's seed), in SIMD lanes: the scan converter asks for
+    /// millions of lines.
+    #[inline]
+    pub fn jitter_lanes(&self, seeds: [u32; 2], amount: f32, lines: u32x4) -> (f32x4, f32x4) {
+        if amount == 0.0 {
+            return (f32x4::ZERO, f32x4::ZERO);
+        }
+        let scale = f32x4::splat(amount * self.step);
+        let fraction = |seed: u32| {
+            let bits: i32x4 = wide::bytemuck::cast(hash32(lines ^ u32x4::splat(seed)) >> 8u32);
+            (bits.round_float() * f32x4::splat(1.0 / (1u32 << 24) as f32) - f32x4::splat(0.5))
+                * scale
+        };
+        (fraction(seeds[0]), fraction(seeds[1]))
+    }
+}
+
+/// A slot's two jitter seeds (one per intercept axis), from the mixed seed.
+#[inline]
+pub fn slot_jitter_seeds(mixed: u64, slot: u32) -> [u32; 2] {
+    let h = splitmix(mixed ^ slot as u64);
+    [h as u32, (h >> 32) as u32]
+}
+
+/// Chris Wellons's "lowbias32" integer hash, lane by lane.
+#[inline]
+fn hash32(mut x: u32x4) -> u32x4 {
+    x ^= x >> 16u32;
+    x *= u32x4::splat(0x7feb_352d);
+    x ^= x >> 15u32;
+    x *= u32x4::splat(0x846c_a68b);
+    x ^ (x >> 16u32)
 }
 
 /// The seed as [`RaySpace::jitter_mixed`] takes it.
@@ -290,6 +321,64 @@ mod tests {
 
     fn space() -> RaySpace {
         RaySpace::new(5, 0.25, (Vec3::ZERO, Vec3::ONE))
+    }
+
+    /// The jitters are uniform over [−½, ½)·amount·h on each axis, the two axes and
+    /// neighbouring lines uncorrelated, and the SIMD lanes give each line the jitter the
+    /// one-line form gives it.
+    #[test]
+    fn line_jitters_are_uniform_and_lane_independent() {
+        let space = RaySpace::new(6, 1.0 / 64.0, (Vec3::ZERO, Vec3::ONE));
+        let (amount, half) = (0.75f32, 0.5 * 0.75 / 64.0);
+        let mixed = jitter_seed(3);
+        let n = space.intercepts;
+        let (mut m, mut uu, mut vv, mut uv, mut next) = ([0.0f64; 2], 0.0, 0.0, 0.0, 0.0);
+        let mut count = 0.0;
+        for slot in [0, 7, space.slots() as u32 - 1] {
+            let seeds = slot_jitter_seeds(mixed, slot);
+            for iu in 0..n {
+                for iv in (0..n).step_by(4) {
+                    let lines = u32x4::from(std::array::from_fn(|l| iu * n + iv + l as u32));
+                    let (du, dv) = space.jitter_lanes(seeds, amount, lines);
+                    let (du, dv) = (du.to_array(), dv.to_array());
+                    for l in 0..4 {
+                        let one = space.jitter_mixed(mixed, amount, slot, iu, iv + l as u32);
+                        assert_eq!(
+                            one,
+                            (du[l], dv[l]),
+                            "slot {slot} line ({iu}, {})",
+                            iv + l as u32
+                        );
+                        assert!((-half..half).contains(&du[l]) && (-half..half).contains(&dv[l]));
+                    }
+                    let half = half as f64;
+                    let (x, y) = (du[0] as f64 / half, dv[0] as f64 / half);
+                    m[0] += x;
+                    m[1] += y;
+                    uu += x * x;
+                    vv += y * y;
+                    uv += x * y;
+                    next += x * du[1] as f64 / half;
+                    count += 1.0;
+                }
+            }
+        }
+        // Uniform on [−1, 1): mean 0, second moment 1/3. Over 27,648 lines the standard
+        // deviation of each estimate is at most 0.0035: 0.02 is about six of them.
+        for (what, value, expected) in [
+            ("mean u", m[0] / count, 0.0),
+            ("mean v", m[1] / count, 0.0),
+            ("E[u²]", uu / count, 1.0 / 3.0),
+            ("E[v²]", vv / count, 1.0 / 3.0),
+            ("E[uv]", uv / count, 0.0),
+            ("E[u u_next]", next / count, 0.0),
+        ] {
+            assert!(
+                (value - expected).abs() < 0.02,
+                "{what} = {value}, expected {expected}"
+            );
+        }
+        assert_eq!(space.jitter_mixed(mixed, 0.0, 1, 2, 3), (0.0, 0.0));
     }
 
     #[test]
