@@ -735,6 +735,8 @@ pub struct LinkBuffers {
     ends_at: Vec<usize>,
     more: Vec<u32>,
     more_at: Vec<usize>,
+    /// A slot's escapes, over all side keys (cleared after each slot).
+    escapes: Vec<u64>,
 }
 
 /// Stable LSD radix sort of hits by line (into `buf.sorted`) in two passes of about half the
@@ -774,26 +776,28 @@ fn radix_by_line(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) {
 /// consecutive ones, as the `j`-th slot of `out`: the link ends go to `ends` and a side's
 /// second and later escapes to `more` (both grouped later, [`LinkBatch::group_ends`]), the
 /// escapes, the node marks and the groups' counts straight into `out`.
+#[allow(clippy::too_many_arguments)]
 fn link_slot(
     sorted: &mut [LineHit],
     j: usize,
     packing: EndPacking,
     ends: &mut Vec<[u32; 2]>,
     more: &mut Vec<u32>,
+    escapes: &mut [u64],
     out: &mut LinkBatch,
 ) {
     out.intersections += sorted.len() as u64;
-    let words = packing.block() / 64;
     let slots = out.slots as usize;
     let group = |k: u32| packing.block_of(k) * slots + j;
+    // The slot's escapes gather in `escapes` (a bit set over all side keys: dense, so it
+    // stays in cache, where the batch's block-major copy would not) and go to `out` after.
     let mut escape = |k: u32, out: &mut LinkBatch| {
-        let w = group(k) * words + (k as usize & (packing.block() - 1)) / 64;
-        let bit = 1u64 << (k % 64);
-        if out.escapes[w] & bit != 0 {
+        let (w, bit) = (k as usize / 64, 1u64 << (k % 64));
+        if escapes[w] & bit != 0 {
             more.push(k);
             out.more_start[group(k) + 1] += 1;
         }
-        out.escapes[w] |= bit;
+        escapes[w] |= bit;
     };
     for hits in sorted.chunk_by_mut(|x, y| x.line == y.line) {
         // Insertion sort: a line meets a handful of patches.
@@ -823,6 +827,12 @@ fn link_slot(
             }
         }
         escape(hits[hits.len() - 1].key, out);
+    }
+    let words = packing.block() / 64;
+    for (b, bits) in escapes.chunks_mut(words).enumerate() {
+        let g = b * slots + j;
+        out.escapes[g * words..g * words + bits.len()].copy_from_slice(bits);
+        bits.fill(0);
     }
 }
 
@@ -967,7 +977,9 @@ pub fn build_links(
                     }
                 };
                 let sorted = &mut buf.sorted[..hits];
-                link_slot(sorted, j, packing, &mut buf.ends, &mut buf.more, &mut out);
+                buf.escapes.resize(keys.div_ceil(64), 0);
+                let (ends, more, escapes) = (&mut buf.ends, &mut buf.more, &mut buf.escapes);
+                link_slot(sorted, j, packing, ends, more, escapes, &mut out);
                 buf.ends_at.push(buf.ends.len());
                 buf.more_at.push(buf.more.len());
             }
