@@ -26,9 +26,9 @@
 //! by intercept row as it finds them and one counting pass by column finishes the sort by
 //! line ([`RowBuckets`]); Embree's hits take a radix sort. Consecutive hits k, k+1 on a line
 //! link the side of k facing +d with the side of k+1 facing −d; the first and last hits have
-//! an *escape* slot (light leaving that way leaves the scene). Work is parallel over slots
-//! (the paper's slope queue) and merged in slot order: the network does not depend on the
-//! thread count.
+//! an *escape* slot (light leaving that way leaves the scene). Work is parallel over batches
+//! of slots (the paper's slope queue; [`LinkBatch`]) and merged in slot order: the network
+//! does not depend on the thread count.
 
 use super::patches::{Patches, Polygon};
 use super::ray_space::{axes, jitter_seed, slot_jitter_seeds, RaySpace};
@@ -110,7 +110,7 @@ pub const SLOT_BATCH: usize = 8;
 
 /// The links of a batch of consecutive slots as packed link ends ([`EndPacking`]: a side key
 /// and the side key at the other end), grouped by key block and, within a block, by slot:
-/// group g = b·slots + j (block b, the batch's j-th slot) is ends[start[g]..start[g + 1]], in
+/// group g = b·slots + j (block b, the batch's j-th slot) is `ends[start[g]..start[g + 1]]`, in
 /// the order the links were found along the sorted lines (each link's two ends); and the
 /// escapes, kept apart, grouped alike. The assembly reads block b of every batch in turn, so
 /// a block's share of a batch lies in one piece.
@@ -121,13 +121,13 @@ pub struct LinkBatch {
     pub ends: Vec<u32>,
     pub start: Vec<u32>,
     /// Bit sets over side keys: the sides whose line leaves the scene, per group: group g's
-    /// bits are escapes[g·w..(g + 1)·w] for w = block / 64 words, bit i of word k the block's
+    /// bits are `escapes[g·w..(g + 1)·w]` for w = block / 64 words, bit i of word k the block's
     /// key 64·k + i. Escapes are as many as link ends, and most are on sides that never become
     /// nodes (a room's outer faces): as bits they take a thirty-second of the memory, and the
     /// assembly skips the sides that are not nodes a word at a time.
     pub escapes: Vec<u64>,
     /// A side's second and later escapes in a slot (a patch meeting two lines that both
-    /// leave), per group: more_escapes[more_start[g]..more_start[g + 1]].
+    /// leave), per group: `more_escapes[more_start[g]..more_start[g + 1]]`.
     pub more_escapes: Vec<u32>,
     pub more_start: Vec<u32>,
     /// Links between two sides (each has two ends).
@@ -237,14 +237,8 @@ pub fn scan_polygon(
     hit: impl FnMut(u32, f32, f32, f32),
 ) {
     let intercepts = space.intercepts;
-    scan_cells(
-        space,
-        slot,
-        pg,
-        seed,
-        jitter,
-        &mut EachHit { hit, intercepts },
-    )
+    let each = &mut EachHit { hit, intercepts };
+    scan_cells(space, slot, pg, seed, jitter, each)
 }
 
 /// Where [`scan_cells`] puts a polygon's candidate cells: `row(jv, cells)` announces a row of
@@ -730,7 +724,7 @@ pub struct LinkBuffers {
     sorted: Vec<LineHit>,
     rows: RowBuckets,
     /// The batch's link ends (side key, key at the other end) and later escapes, slot after
-    /// slot; slot j's are ends[ends_at[j]..ends_at[j + 1]] and likewise for `more`.
+    /// slot; slot j's are `ends[ends_at[j]..ends_at[j + 1]]` and likewise for `more`.
     ends: Vec<[u32; 2]>,
     ends_at: Vec<usize>,
     more: Vec<u32>,
@@ -865,7 +859,7 @@ impl LinkBatch {
     }
 }
 
-/// A stable counting sort of a batch's items (slot j's are items[at[j]..at[j + 1]]) into
+/// A stable counting sort of a batch's items (slot j's are `items[at[j]..at[j + 1]]`) into
 /// groups: `place(item)` gives its group for the batch's first slot (slot j's group is j
 /// further on) and its value. `start` as in [`group_stably`].
 fn group_slots<T: Copy, V: Copy + Default>(
