@@ -368,7 +368,7 @@ impl Network {
                     }
                     // Then the slot's escapes at nodes (a side's escapes are all alike, so
                     // their order among themselves does not matter).
-                    for (wi, &e) in (w0..w1).zip(s.escapes(b, j, block / 64)) {
+                    for (wi, &e) in (w0..w1).zip(s.escapes(b, j)) {
                         let mut m = e & marks[wi];
                         while m != 0 {
                             put!(node_of_key[wi * 64 + m.trailing_zeros() as usize], ESCAPE);

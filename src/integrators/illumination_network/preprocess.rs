@@ -116,16 +116,17 @@ pub const SLOT_BATCH: usize = 8;
 /// a block's share of a batch lies in one piece.
 #[derive(Clone, Debug, Default)]
 pub struct LinkBatch {
-    pub first_slot: u32,
     pub slots: u32,
     pub ends: Vec<u32>,
     pub start: Vec<u32>,
     /// Bit sets over side keys: the sides whose line leaves the scene, per group: group g's
-    /// bits are `escapes[g·w..(g + 1)·w]` for w = block / 64 words, bit i of word k the block's
-    /// key 64·k + i. Escapes are as many as link ends, and most are on sides that never become
+    /// bits are `escapes[g·w..(g + 1)·w]` for w = `words` (block / 64), bit i of word k the
+    /// block's key 64·k + i. Escapes are as many as link ends, and most are on sides that never become
     /// nodes (a room's outer faces): as bits they take a thirty-second of the memory, and the
     /// assembly skips the sides that are not nodes a word at a time.
     pub escapes: Vec<u64>,
+    /// Escape words per group: a block's keys / 64.
+    pub words: usize,
     /// A side's second and later escapes in a slot (a patch meeting two lines that both
     /// leave), per group: `more_escapes[more_start[g]..more_start[g + 1]]`.
     pub more_escapes: Vec<u32>,
@@ -160,11 +161,11 @@ impl LinkBatch {
         (self.start[g1] - self.start[g0]) as usize
     }
 
-    /// The escape bits of key block `b` in the batch's `j`-th slot (`words` words a block).
+    /// The escape bits of key block `b` in the batch's `j`-th slot.
     #[inline]
-    pub fn escapes(&self, b: usize, j: usize, words: usize) -> &[u64] {
+    pub fn escapes(&self, b: usize, j: usize) -> &[u64] {
         let g = self.group(b, j);
-        &self.escapes[g * words..(g + 1) * words]
+        &self.escapes[g * self.words..(g + 1) * self.words]
     }
 
     /// The second and later escapes of key block `b` in the batch's `j`-th slot.
@@ -822,7 +823,7 @@ fn link_slot(
         }
         escape(hits[hits.len() - 1].key, out);
     }
-    let words = packing.block() / 64;
+    let words = out.words;
     for (b, bits) in escapes.chunks_mut(words).enumerate() {
         let g = b * slots + j;
         out.escapes[g * words..g * words + bits.len()].copy_from_slice(bits);
@@ -831,14 +832,15 @@ fn link_slot(
 }
 
 impl LinkBatch {
-    /// An empty batch of `slots` slots from `first_slot`, for `keys` side keys.
-    fn new(first_slot: usize, slots: usize, keys: usize, packing: EndPacking) -> LinkBatch {
+    /// An empty batch of `slots` slots, for `keys` side keys.
+    fn new(slots: usize, keys: usize, packing: EndPacking) -> LinkBatch {
         let groups = keys.div_ceil(packing.block()) * slots;
+        let words = packing.block() / 64;
         LinkBatch {
-            first_slot: first_slot as u32,
             slots: slots as u32,
             start: vec![0; groups + 1],
-            escapes: vec![0; groups * packing.block() / 64],
+            escapes: vec![0; groups * words],
+            words,
             more_start: vec![0; groups + 1],
             marks: vec![0; keys.div_ceil(64)],
             ..LinkBatch::default()
@@ -886,24 +888,14 @@ fn group_slots<T: Copy, V: Copy + Default>(
 
 /// A stable counting sort into groups (key blocks, nodes): on entry `start[g + 1]` holds group
 /// g's item count (`start[0]` is 0), on return `start[g]` its first index. Returns `value` of
-/// every item, grouped, in their order within a group.
+/// every item, grouped, in their order within a group ([`group_slots`] with one slot).
 pub(super) fn group_stably<T: Copy, V: Copy + Default>(
     start: &mut [u32],
     items: &[T],
     group_of: impl Fn(T) -> usize,
     value: impl Fn(T) -> V,
 ) -> Vec<V> {
-    starts_from_counts(start);
-    let mut grouped = vec![V::default(); items.len()];
-    let mut next = start.to_vec();
-    scatter_stably(
-        &mut next,
-        items.iter().copied(),
-        group_of,
-        value,
-        &mut grouped,
-    );
-    grouped
+    group_slots(start, items, &[0, items.len()], |x| (group_of(x), value(x)))
 }
 
 /// Counts to starts, in place: `at[g + 1]` holds group g's item count (`at[0]` is 0), and
@@ -948,7 +940,7 @@ pub fn build_links(
         .into_par_iter()
         .map_init(LinkBuffers::default, |buf, batch| {
             let first = batch * SLOT_BATCH;
-            let mut out = LinkBatch::new(first, SLOT_BATCH.min(slots - first), keys, packing);
+            let mut out = LinkBatch::new(SLOT_BATCH.min(slots - first), keys, packing);
             let mut stats = RayStats::default();
             for v in [&mut buf.ends_at, &mut buf.more_at] {
                 v.clear();
@@ -956,6 +948,7 @@ pub fn build_links(
             }
             buf.ends.clear();
             buf.more.clear();
+            buf.escapes.resize(keys.div_ceil(64), 0);
             for j in 0..out.slots as usize {
                 let slot = (first + j) as u32;
                 let hits = match (builder, ctx) {
@@ -971,7 +964,6 @@ pub fn build_links(
                     }
                 };
                 let sorted = &mut buf.sorted[..hits];
-                buf.escapes.resize(keys.div_ceil(64), 0);
                 let (ends, more, escapes) = (&mut buf.ends, &mut buf.more, &mut buf.escapes);
                 link_slot(sorted, j, packing, ends, more, escapes, &mut out);
                 buf.ends_at.push(buf.ends.len());
