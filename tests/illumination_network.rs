@@ -125,6 +125,44 @@ fn etendue_of_lines_through_a_patch_is_pi_area() {
     }
 }
 
+/// Patches much larger than the intercept step in an open scene: a patch meets many lines of
+/// each slot, most of them leaving the scene. Every one is kept (the first in the node's row,
+/// the others among its extra links), so each node's étendue W is still π·area, as for the
+/// lines through one patch above.
+#[test]
+fn large_patches_in_an_open_scene_keep_every_escape() {
+    let s = scene(&format!(
+        "{CAMERA}\n[materials.m]\ndiffuse = 0.5\n[materials.lamp]\ndiffuse = 0\nemission = 1\n\
+         [[shapes]]\ntype = \"quad\"\nmaterial = \"m\"\nvertices = [[0, 0, 0], [0, 0, 1], [1, 0, 1], [1, 0, 0]]\n\
+         [[shapes]]\ntype = \"quad\"\nmaterial = \"lamp\"\nvertices = [[0.4, 0.3, 0.4], [0.6, 0.3, 0.4], [0.6, 0.3, 0.6], [0.4, 0.3, 0.6]]\n"
+    ));
+    let p = NetworkParams {
+        patch_size: 0.25,
+        ..params(6, 1.0 / 128.0)
+    };
+    let net = build(&s, p, Builder::Scan);
+    let mut checked = 0;
+    for node in 0..net.nodes() as u32 {
+        let (poly, _, side) = net.node_place(node);
+        // The floor's upper sides (the lamp's lower sides link to the floor only).
+        if poly != 0 || side != 0 {
+            continue;
+        }
+        let pg = &net.patches.polygons[0];
+        let exact = std::f64::consts::PI * pg.area() as f64 / (pg.ns * pg.nt) as f64;
+        let w = net.etendue[node as usize] as f64;
+        let err = (w - exact).abs() / exact;
+        assert!(err < 0.03, "node {node}: W = {w}, π·A = {exact} ({err})");
+        checked += 1;
+    }
+    assert!(checked >= 4, "{checked} floor nodes");
+    assert!(
+        net.stats.extra > 100 * net.nodes() as u64,
+        "{:?}",
+        net.stats
+    );
+}
+
 /// A slot's scan (hits bucketed by intercept row as they are found, then counted out by
 /// column) gives exactly the hits of its polygons' scans, sorted by line and, on a line, in
 /// the order of the polygons (the order the radix sort of the Embree builder keeps).

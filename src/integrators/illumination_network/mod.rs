@@ -307,10 +307,15 @@ impl Network {
             .map_init(Vec::new, |extra, (b, rows, wb)| {
                 let first = first_node[b] as u32;
                 let nodes_in_block = rows.len() / n_slots;
-                // Room for every end of the block: an end that finds its slot taken is
-                // written there and kept by advancing `len`, without a branch (whether a
+                // Room for every end and escape of the block: one that finds its slot taken
+                // is written there and kept by advancing `len`, without a branch (whether a
                 // slot is taken is close to a coin toss, which a branch would mispredict).
-                let room: usize = batches.iter().map(|s| s.block_ends(b)).sum();
+                // (Escapes count too: a large patch in an open scene meets many escaping
+                // lines of a slot.)
+                let room: usize = batches
+                    .iter()
+                    .map(|s| s.block_ends(b) + s.block_escapes(b))
+                    .sum();
                 // (A buffer per thread, reused: a block's room is a megabyte or so. Only
                 // grown, never cleared: every entry kept is written first.)
                 if extra.len() < room {
