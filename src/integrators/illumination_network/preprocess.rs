@@ -411,6 +411,12 @@ fn scan_cells<R: Rows>(
         let mut pa = plane.depth(space.intercept(ju0 as u32), cv);
         let mut row = rows.row(jv as u32, (ju1 - ju0 + 1) as usize);
         let mut ju = ju0 as u32;
+        // The lines (ju·intercepts + jv) of the group's four cells, advanced by an add (a
+        // multiply of 32-bit lanes is several instructions in SSE2).
+        let per_column = space.intercepts;
+        let mut lines = (u32x4::splat(ju) + u32x4::from([0, 1, 2, 3])) * u32x4::splat(per_column)
+            + u32x4::splat(jv as u32);
+        let next_group = u32x4::splat(LANES as u32 * per_column);
         while ju <= ju1 as u32 {
             let lanes = (ju1 as u32 - ju + 1).min(LANES as u32) as usize;
             // The depths by the recurrence, cell after cell (a lane past the row's end takes
@@ -421,8 +427,8 @@ fn scan_cells<R: Rows>(
                 d
             });
             let columns = u32x4::splat(ju) + u32x4::from([0, 1, 2, 3]);
-            let lines = columns * u32x4::splat(space.intercepts) + u32x4::splat(jv as u32);
             let (du, dv) = space.jitter_lanes(seeds, jitter, lines);
+            lines += next_group;
             let centres: i32x4 = wide::bytemuck::cast(columns);
             // space.intercept(ju), lane by lane.
             let iu =
@@ -444,8 +450,8 @@ fn side_key(pg: &Polygon, p: Vec3, d: Vec3) -> u32 {
     cell * 2 + u32::from(pg.normal_at(p).dot(d) <= 0.0)
 }
 
-/// The scan-conversion hits of one slot, sorted by line (in the order of the polygons on a
-/// line).
+/// The scan-conversion hits of one slot, sorted by line (on a line, in the [`scan_order`] of
+/// the polygons).
 pub fn scan_slot(
     space: &RaySpace,
     patches: &Patches,
@@ -465,6 +471,8 @@ pub fn scan_slot(
 /// polygon goes to one bucket). While bucketed, a hit's `line` holds its column.
 #[derive(Default)]
 pub struct RowBuckets {
+    /// The polygons' scan order (see [`scan_slot_into`]).
+    order: Vec<(f32, u32)>,
     rows: Vec<Vec<LineHit>>,
     filled: Vec<u32>,
     columns: Vec<u32>,
@@ -489,20 +497,19 @@ impl RowBuckets {
         }
         out.truncate(total);
         starts_from_counts(&mut self.columns);
-        let rows = self.rows.iter().zip(&self.filled).enumerate();
-        let hits = rows.flat_map(|(jv, (row, &filled))| {
-            row[..filled as usize].iter().map(move |h| (jv as u32, *h))
-        });
-        scatter_stably(
-            &mut self.columns,
-            hits,
-            |(_, h)| h.line as usize,
-            |(jv, h)| LineHit {
-                line: h.line * n + jv,
-                ..h
-            },
-            out,
-        );
+        // A loop per row (a flattening iterator over the rows costs a few times as much).
+        for (jv, (row, &filled)) in self.rows.iter().zip(&self.filled).enumerate() {
+            scatter_stably(
+                &mut self.columns,
+                row[..filled as usize].iter().copied(),
+                |h| h.line as usize,
+                |h| LineHit {
+                    line: h.line * n + jv as u32,
+                    ..h
+                },
+                out,
+            );
+        }
     }
 }
 
@@ -525,7 +532,9 @@ pub fn scan_slot_into(
     rows.clear(space.intercepts as usize);
     let (family, su, sv) = space.slot_slopes(slot);
     let d = space.direction(slot);
-    for pg in &patches.polygons {
+    scan_order(patches, d, &mut rows.order);
+    for i in 0..rows.order.len() {
+        let pg = &patches.polygons[rows.order[i].1 as usize];
         if pg.n == Vec3::ZERO {
             continue;
         }
@@ -560,6 +569,21 @@ pub fn scan_slot_into(
             &mut PolygonRows { b: rows, map },
         );
     }
+}
+
+/// The order in which a slot's polygons are scanned (into `order`: (key, polygon)): by their
+/// centres along the slot's direction `d`. A line's hits then mostly come in depth order
+/// already, and the linking's sort by depth mostly finds them sorted, its branches
+/// predicted: of the office scene's 21 million two-hit lines, 8.9 million came out of depth
+/// order in the polygons' own order, and 9 lines in this one. The links do not depend on
+/// this order.
+pub fn scan_order(patches: &Patches, d: Vec3, order: &mut Vec<(f32, u32)>) {
+    order.clear();
+    order.extend(patches.polygons.iter().enumerate().map(|(i, pg)| {
+        let centre = pg.corners.iter().copied().sum::<Vec3>() / pg.corners.len() as f32;
+        (centre.dot(d), i as u32)
+    }));
+    order.sort_unstable_by(|x, y| x.0.total_cmp(&y.0).then(x.1.cmp(&y.1)));
 }
 
 /// A polygon's cell (and side key) from a hit's intercept: the hit point is affine in the
@@ -612,6 +636,7 @@ impl Rows for PolygonRows<'_> {
             rows,
             filled,
             columns,
+            ..
         } = &mut *self.b;
         let (bucket, filled) = (&mut rows[jv as usize], &mut filled[jv as usize]);
         let need = *filled as usize + cells;
