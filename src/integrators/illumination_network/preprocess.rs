@@ -31,7 +31,7 @@
 //! does not depend on the thread count.
 
 use super::patches::{Patches, Polygon};
-use super::ray_space::{axes, jitter_seed, slot_jitter_seeds, RaySpace};
+use super::ray_space::{axes, jitter_seed, slot_jitter_seed, RaySpace};
 use super::MAX_KEY_BLOCK_BITS;
 use crate::integrators::{Context, RayStats};
 use crate::math::{Ray, Vec3};
@@ -353,7 +353,7 @@ fn scan_cells<R: Rows>(
     let h = space.step;
     let n = space.intercepts as i64;
     let amp = 0.5 * jitter * h;
-    let seeds = slot_jitter_seeds(jitter_seed(seed), slot);
+    let slot_seed = slot_jitter_seed(jitter_seed(seed), slot);
     let splat_h = f32x4::splat(h);
     // ceil and floor by conversion (the baseline x86-64 target calls libm for f32::ceil).
     let ceil = |x: f32| {
@@ -427,7 +427,7 @@ fn scan_cells<R: Rows>(
                 d
             });
             let columns = u32x4::splat(ju) + u32x4::from([0, 1, 2, 3]);
-            let (du, dv) = space.jitter_lanes(seeds, jitter, lines);
+            let (du, dv) = space.jitter_lanes(slot_seed, jitter, lines);
             lines += next_group;
             let centres: i32x4 = wide::bytemuck::cast(columns);
             // space.intercept(ju), lane by lane.

@@ -258,37 +258,40 @@ impl RaySpace {
     #[inline]
     pub fn jitter_mixed(&self, mixed: u64, amount: f32, slot: u32, iu: u32, iv: u32) -> (f32, f32) {
         let (du, dv) = self.jitter_lanes(
-            slot_jitter_seeds(mixed, slot),
+            slot_jitter_seed(mixed, slot),
             amount,
             u32x4::splat(iu * self.intercepts + iv),
         );
         (du.to_array()[0], dv.to_array()[0])
     }
 
-    /// The jitters of four lines of one slot (`lines`: iu·intercepts + iv), the slot's seeds
-    /// from [`slot_jitter_seeds`]. One 32-bit hash per intercept (a bijection with full
-    /// avalanche of the line and the slot's seed), in SIMD lanes: the scan converter asks for
-    /// millions of lines.
+    /// The jitters of four lines of one slot (`lines`: iu·intercepts + iv), the slot's seed
+    /// from [`slot_jitter_seed`]. One 32-bit hash per line (a bijection with full avalanche
+    /// of the line and the slot's seed), in SIMD lanes: the scan converter asks for millions
+    /// of lines. Its high 16 bits give the u jitter and its low 16 bits the v jitter: steps
+    /// of h/65536, finer than any use of the lines can tell.
     #[inline]
-    pub fn jitter_lanes(&self, seeds: [u32; 2], amount: f32, lines: u32x4) -> (f32x4, f32x4) {
+    pub fn jitter_lanes(&self, seed: u32, amount: f32, lines: u32x4) -> (f32x4, f32x4) {
         if amount == 0.0 {
             return (f32x4::ZERO, f32x4::ZERO);
         }
         let scale = f32x4::splat(amount * self.step);
-        let fraction = |seed: u32| {
-            let bits: i32x4 = wide::bytemuck::cast(hash32(lines ^ u32x4::splat(seed)) >> 8u32);
-            (bits.round_float() * f32x4::splat(1.0 / (1u32 << 24) as f32) - f32x4::splat(0.5))
-                * scale
+        let hash = hash32(lines ^ u32x4::splat(seed));
+        let fraction = |bits: u32x4| {
+            let bits: i32x4 = wide::bytemuck::cast(bits);
+            (bits.round_float() * f32x4::splat(1.0 / 65536.0) - f32x4::splat(0.5)) * scale
         };
-        (fraction(seeds[0]), fraction(seeds[1]))
+        (
+            fraction(hash >> 16u32),
+            fraction(hash & u32x4::splat(0xffff)),
+        )
     }
 }
 
-/// A slot's two jitter seeds (one per intercept axis), from the mixed seed.
+/// A slot's jitter seed, from the mixed seed.
 #[inline]
-pub fn slot_jitter_seeds(mixed: u64, slot: u32) -> [u32; 2] {
-    let h = splitmix(mixed ^ slot as u64);
-    [h as u32, (h >> 32) as u32]
+pub fn slot_jitter_seed(mixed: u64, slot: u32) -> u32 {
+    splitmix(mixed ^ slot as u64) as u32
 }
 
 /// Chris Wellons's "lowbias32" integer hash, lane by lane.
@@ -335,11 +338,11 @@ mod tests {
         let (mut m, mut uu, mut vv, mut uv, mut next) = ([0.0f64; 2], 0.0, 0.0, 0.0, 0.0);
         let mut count = 0.0;
         for slot in [0, 7, space.slots() as u32 - 1] {
-            let seeds = slot_jitter_seeds(mixed, slot);
+            let seed = slot_jitter_seed(mixed, slot);
             for iu in 0..n {
                 for iv in (0..n).step_by(4) {
                     let lines = u32x4::from(std::array::from_fn(|l| iu * n + iv + l as u32));
-                    let (du, dv) = space.jitter_lanes(seeds, amount, lines);
+                    let (du, dv) = space.jitter_lanes(seed, amount, lines);
                     let (du, dv) = (du.to_array(), dv.to_array());
                     for l in 0..4 {
                         let one = space.jitter_mixed(mixed, amount, slot, iu, iv + l as u32);
