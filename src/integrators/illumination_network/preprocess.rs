@@ -355,6 +355,8 @@ fn scan_cells<R: Rows>(
     let amp = 0.5 * jitter * h;
     let slot_seed = slot_jitter_seed(jitter_seed(seed), slot);
     let splat_h = f32x4::splat(h);
+    // Lane l of a group holds column ju + l.
+    let lane = u32x4::from([0, 1, 2, 3]);
     // ceil and floor by conversion (the baseline x86-64 target calls libm for f32::ceil).
     let ceil = |x: f32| {
         let t = x as i64;
@@ -414,8 +416,8 @@ fn scan_cells<R: Rows>(
         // The lines (ju·intercepts + jv) of the group's four cells, advanced by an add (a
         // multiply of 32-bit lanes is several instructions in SSE2).
         let per_column = space.intercepts;
-        let mut lines = (u32x4::splat(ju) + u32x4::from([0, 1, 2, 3])) * u32x4::splat(per_column)
-            + u32x4::splat(jv as u32);
+        let mut lines =
+            (u32x4::splat(ju) + lane) * u32x4::splat(per_column) + u32x4::splat(jv as u32);
         let next_group = u32x4::splat(LANES as u32 * per_column);
         while ju <= ju1 as u32 {
             let lanes = (ju1 as u32 - ju + 1).min(LANES as u32) as usize;
@@ -426,7 +428,7 @@ fn scan_cells<R: Rows>(
                 pa -= step;
                 d
             });
-            let columns = u32x4::splat(ju) + u32x4::from([0, 1, 2, 3]);
+            let columns = u32x4::splat(ju) + lane;
             let (du, dv) = space.jitter_lanes(slot_seed, jitter, lines);
             lines += next_group;
             let centres: i32x4 = wide::bytemuck::cast(columns);
@@ -471,7 +473,7 @@ pub fn scan_slot(
 /// polygon goes to one bucket). While bucketed, a hit's `line` holds its column.
 #[derive(Default)]
 pub struct RowBuckets {
-    /// The polygons' scan order (see [`scan_slot_into`]).
+    /// The polygons' scan order ([`scan_order`]).
     order: Vec<(f32, u32)>,
     rows: Vec<Vec<LineHit>>,
     filled: Vec<u32>,
