@@ -1260,7 +1260,7 @@ fn print_network_stats(network: &net::Network, solution: &net::distribute::Solut
     let links = bs.link_ends / 2;
     eprintln!(
         "network stats: {} polygons, {} patches, {} nodes, {} slots per node\n\
-         network stats: {} links ({:.1} per node), {} escapes, {} extra, {} line-patch \
+         network stats: {} links ({:.1} per node), {} escapes, {} beyond a slot's first, {} line-patch \
          intersections ({:.1} M/s), {} closest-hit queries\n\
          network stats: memory {:.1} MB network + {:.1} MB buffers, {} map entries\n\
          network stats: preprocess {:.3} s (lines {:.3} s, assembly {:.3} s), distribution {:.3} s, \

@@ -126,8 +126,8 @@ fn etendue_of_lines_through_a_patch_is_pi_area() {
 }
 
 /// Patches much larger than the intercept step in an open scene: a patch meets many lines of
-/// each slot, most of them leaving the scene. Every one is kept (the first in the node's row,
-/// the others among its extra links), so each node's étendue W is still π·area, as for the
+/// each slot, most of them leaving the scene. Every one is kept (a slot can have several
+/// links), so each node's étendue W is still π·area, as for the
 /// lines through one patch above.
 #[test]
 fn large_patches_in_an_open_scene_keep_every_escape() {
@@ -283,13 +283,8 @@ fn scan_and_embree_builders_agree() {
                     t
                 }
             };
-            for (slot, &t) in net.row(node).iter().enumerate() {
-                if t != NONE {
-                    v.push((key, slot as u32, target(t)));
-                }
-            }
-            for &[slot, t] in net.extra_links(node) {
-                v.push((key, slot, target(t)));
+            for (slot, t) in net.slot_links(node) {
+                v.push((key, slot as u32, target(t)));
             }
         }
         v.sort_unstable();
@@ -332,13 +327,8 @@ fn closed_box_radiance(net: &Network, sol: &Solution) -> (f64, f64, f64) {
         let k = sol.dir_index[node];
         if k != NONE {
             let row = &sol.directional[k as usize * net.slots()..][..net.slots()];
-            for (l, &t) in net.row(node as u32).iter().enumerate() {
-                if t != NONE {
-                    f += (row[l].x * w[l]) as f64;
-                }
-            }
-            for &[l, _] in net.extra_links(node as u32) {
-                f += (row[l as usize].x * w[l as usize]) as f64;
+            for (l, _) in net.slot_links(node as u32) {
+                f += (row[l].x * w[l]) as f64;
             }
         }
         flux += f;
@@ -621,6 +611,49 @@ fn network_files_are_reused_for_views_and_lighting() {
     assert!(!dir.path().join("g.exr").exists());
 }
 
+/// A link table damaged under a valid checksum (a link to a node past the last, a node's links
+/// out of slot order) is refused with a one-line error naming the file.
+#[test]
+fn damaged_link_tables_are_refused_even_with_a_valid_checksum() {
+    use raylink::integrators::illumination_network::file;
+    let scene = cornell();
+    let net = build(&scene, params(5, 1.0 / 16.0), Builder::Scan);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("cornell.net");
+    file::save(&path, &net, &scene, None).unwrap();
+    assert!(file::load(&path, &scene, None).is_ok());
+    let bytes = std::fs::read(&path).unwrap();
+    // The links are the last words before the checksum.
+    let links_at = bytes.len() - 8 - 4 * net.links.len();
+    let damaged = |i: usize, link: u32| {
+        let mut b = bytes.clone();
+        b[links_at + 4 * i..links_at + 4 * i + 4].copy_from_slice(&link.to_le_bytes());
+        let n = b.len() - 8;
+        let sum = raylink::binary_file::checksum(&b[..n]);
+        b[n..].copy_from_slice(&sum.to_le_bytes());
+        std::fs::write(&path, b).unwrap();
+        file::load(&path, &scene, None).unwrap_err().to_string()
+    };
+    let code = net.code;
+    let first = net.links[0];
+    let past = damaged(0, code.pack(code.slot(first) as u32, net.nodes() as u32));
+    // A node whose first link takes the last slot, before its other links.
+    let node = (0..net.nodes() as u32)
+        .find(|&n| net.links_of(n).len() >= 2)
+        .unwrap();
+    let i = net.link_start[node as usize] as usize;
+    let last_slot = net.slots() as u32 - 1;
+    assert!(code.slot(net.links[i + 1]) < last_slot as usize);
+    let unordered = damaged(i, code.pack(last_slot, code.target(net.links[i])));
+    for (e, what) in [
+        (past, "past the last slot or node"),
+        (unordered, "not in slot order"),
+    ] {
+        assert!(e.contains("cornell.net") && e.contains(what), "{e}");
+        assert!(!e.contains('\n'), "{e}");
+    }
+}
+
 /// The network and its image do not depend on the number of threads.
 #[test]
 fn network_is_independent_of_thread_count() {
@@ -636,8 +669,8 @@ fn network_is_independent_of_thread_count() {
         .build()
         .unwrap()
         .install(|| build(&scene, p, Builder::Scan));
+    assert_eq!(one.link_start, two.link_start);
     assert_eq!(one.links, two.links);
-    assert_eq!(one.extra, two.extra);
     let sol1 = distribute(&one, &scene, &DistributeOptions::default());
     let sol2 = distribute(&two, &scene, &DistributeOptions::default());
     assert_eq!(sol1.diffuse, sol2.diffuse);

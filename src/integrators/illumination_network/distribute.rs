@@ -271,7 +271,11 @@ pub(crate) fn local(c: f32) -> Vec3 {
 /// Reflection (on the node's own slots) and transmission (onto its twin's slots) maps.
 fn maps(net: &Network, node: u32, surface: &Surface, twin: u32) -> (SparseMap, SparseMap) {
     let space = &net.space;
-    let row = net.row(node);
+    let (mut row, mut trow) = (Vec::new(), Vec::new());
+    net.row_into(node, &mut row);
+    if twin != NONE {
+        net.row_into(twin, &mut trow);
+    }
     let n = net.node_normal(node);
     let mut buf = Vec::new();
     let mut reflect = SparseMap {
@@ -307,7 +311,7 @@ fn maps(net: &Network, node: u32, surface: &Surface, twin: u32) -> (SparseMap, S
                         for e in &mut reflect.entries[start..] {
                             e.1 /= sum;
                         }
-                    } else if let Some(o) = nearest_linked(space, row, r, &mut buf) {
+                    } else if let Some(o) = nearest_linked(space, &row, r, &mut buf) {
                         reflect.entries.push((o, 1.0));
                     }
                 } else {
@@ -325,7 +329,7 @@ fn maps(net: &Network, node: u32, surface: &Surface, twin: u32) -> (SparseMap, S
                     };
                     lobe_row(
                         space,
-                        row,
+                        &row,
                         n,
                         r,
                         surface.alpha,
@@ -336,13 +340,12 @@ fn maps(net: &Network, node: u32, surface: &Surface, twin: u32) -> (SparseMap, S
                 }
             }
             if surface.kt.max_element() > 0.0 && twin != NONE {
-                let trow = net.row(twin);
                 let through = -wi;
                 if surface.alpha <= sharp {
                     let o = if trow[l as usize] != NONE {
                         Some(l)
                     } else {
-                        nearest_linked(space, trow, through, &mut buf)
+                        nearest_linked(space, &trow, through, &mut buf)
                     };
                     if let Some(o) = o {
                         transmit.entries.push((o, 1.0));
@@ -360,7 +363,7 @@ fn maps(net: &Network, node: u32, surface: &Surface, twin: u32) -> (SparseMap, S
                     };
                     lobe_row(
                         space,
-                        trow,
+                        &trow,
                         -n,
                         through,
                         surface.alpha,
@@ -447,21 +450,15 @@ pub fn distribute_surfaces(
     };
     let flux_of = |shot_d: &[Rgb], shot_dir: &[Rgb]| {
         let mut f = sum3(shot_d, |i| net.etendue[i]);
-        let g = sum3(shot_dir, |i| w[i % slots]);
-        // Extra links of a slot carry the slot's radiance too.
-        let extra: Vec<Rgb> = dir_nodes
-            .iter()
-            .enumerate()
-            .flat_map(|(k, &n)| {
-                net.extra_links(n)
-                    .iter()
-                    .map(move |&[l, _]| (k * slots + l as usize, l))
-            })
-            .map(|(i, l)| shot_dir[i] * w[l as usize])
-            .collect();
-        let h = sum3(&extra, |_| 1.0);
-        for c in 0..3 {
-            f[c] += g[c] + h[c];
+        // Directional radiance leaves over every link of its slot (a slot with two links
+        // carries it twice).
+        for (k, &n) in dir_nodes.iter().enumerate() {
+            for (l, _) in net.slot_links(n) {
+                let r = shot_dir[k * slots + l] * w[l];
+                for c in 0..3 {
+                    f[c] += r[c] as f64;
+                }
+            }
         }
         f
     };
@@ -474,20 +471,10 @@ pub fn distribute_surfaces(
     let escape_etendue: Vec<f32> = (0..nodes as u32)
         .into_par_iter()
         .map(|i| {
-            let row: f32 = net
-                .row(i)
-                .iter()
-                .zip(&w)
-                .filter(|(&t, _)| t == ESCAPE)
-                .map(|(_, &wl)| wl)
-                .sum();
-            let extra: f32 = net
-                .extra_links(i)
-                .iter()
-                .filter(|e| e[1] == ESCAPE)
-                .map(|e| w[e[0] as usize])
-                .sum();
-            row + extra
+            net.slot_links(i)
+                .filter(|&(_, t)| t == ESCAPE)
+                .map(|(l, _)| w[l])
+                .sum()
         })
         .collect();
     let mut escaped = vec![Rgb::ZERO; nodes];
@@ -504,19 +491,17 @@ pub fn distribute_surfaces(
             r
         };
         if dir_nodes.is_empty() {
-            // All diffuse: a branchless gather, NONE and ESCAPE reading a zero past the end.
+            // All diffuse: a branchless gather, an escape reading a zero past the end.
             padded[..nodes].copy_from_slice(&shot_d);
+            let code = net.code;
             in_total
                 .par_iter_mut()
                 .zip(escaped.par_iter_mut())
                 .enumerate()
                 .for_each(|(i, (tot, esc))| {
                     let mut sum = Rgb::ZERO;
-                    for (&t, &wl) in net.row(i as u32).iter().zip(&w) {
-                        sum += padded[(t as usize).min(nodes)] * wl;
-                    }
-                    for &[l, t] in net.extra_links(i as u32) {
-                        sum += padded[(t as usize).min(nodes)] * w[l as usize];
+                    for &l in net.links_of(i as u32) {
+                        sum += padded[code.raw_target(l).min(nodes)] * w[code.slot(l)];
                     }
                     *tot = sum;
                     *esc = shot_d[i] * escape_etendue[i];
@@ -529,14 +514,10 @@ pub fn distribute_surfaces(
                 .for_each(|(i, (tot, esc))| {
                     let mut sum = Rgb::ZERO;
                     let mut out = Rgb::ZERO;
-                    let extra = net
-                        .extra_links(i as u32)
-                        .iter()
-                        .map(|e| (e[0] as usize, e[1]));
-                    for (l, j) in net.row(i as u32).iter().copied().enumerate().chain(extra) {
+                    for (l, j) in net.slot_links(i as u32) {
                         if j < ESCAPE {
                             sum += radiance(j, l) * w[l];
-                        } else if j == ESCAPE {
+                        } else {
                             out += radiance(i as u32, l) * w[l];
                         }
                     }
@@ -548,16 +529,10 @@ pub fn distribute_surfaces(
             .par_chunks_mut(slots)
             .zip(&dir_nodes)
             .for_each(|(buf, &i)| {
-                for (l, (b, &j)) in buf.iter_mut().zip(net.row(i)).enumerate() {
-                    *b = if j < ESCAPE {
-                        radiance(j, l) * w[l]
-                    } else {
-                        Rgb::ZERO
-                    };
-                }
-                for &[l, j] in net.extra_links(i) {
+                buf.fill(Rgb::ZERO);
+                for (l, j) in net.slot_links(i) {
                     if j < ESCAPE {
-                        buf[l as usize] += radiance(j, l as usize) * w[l as usize];
+                        buf[l] += radiance(j, l) * w[l];
                     }
                 }
             });
@@ -566,12 +541,8 @@ pub fn distribute_surfaces(
             .zip(in_buf.par_chunks(slots))
             .zip(&dir_nodes)
             .for_each(|((acc, flux), &i)| {
-                // Extra links are in slot order: a slot with m links had m times the étendue.
-                let mut runs = net
-                    .extra_links(i)
-                    .chunk_by(|a, b| a[0] == b[0])
-                    .map(|r| (r[0][0] as usize, r.len() + 1))
-                    .peekable();
+                // Links are in slot order: a slot with m links had m times the étendue.
+                let mut runs = slot_runs(net, i).peekable();
                 for (l, (a, f)) in acc.iter_mut().zip(flux).enumerate() {
                     let mut m = 1.0;
                     if let Some(&(rl, c)) = runs.peek() {
@@ -611,9 +582,9 @@ pub fn distribute_surfaces(
                 for (o, &wl) in out.iter_mut().zip(&w) {
                     *o /= wl;
                 }
-                // A slot with extra links spreads its flux over all of them.
-                for run in net.extra_links(node as u32).chunk_by(|a, b| a[0] == b[0]) {
-                    out[run[0][0] as usize] /= (1 + run.len()) as f32;
+                // A slot with several links spreads its flux over all of them.
+                for (l, m) in slot_runs(net, node as u32).filter(|&(_, m)| m > 1) {
+                    out[l] /= m as f32;
                 }
             });
         diffuse
@@ -637,10 +608,12 @@ pub fn distribute_surfaces(
     }
     stats.unshot = unshot;
     stats.seconds = start.elapsed().as_secs_f64();
-    let dir_rows = dir_nodes
-        .iter()
-        .flat_map(|&n| net.row(n).iter().copied())
-        .collect();
+    let mut dir_rows = Vec::with_capacity(dir_nodes.len() * slots);
+    let mut row = Vec::new();
+    for &n in &dir_nodes {
+        net.row_into(n, &mut row);
+        dir_rows.extend_from_slice(&row);
+    }
     Solution {
         surfaces,
         diffuse,
@@ -652,6 +625,14 @@ pub fn distribute_surfaces(
         stats,
         light_scale: options.light_scale,
     }
+}
+
+/// The slots of a node's links with their number of links, in slot order.
+fn slot_runs(net: &Network, node: u32) -> impl Iterator<Item = (usize, usize)> + '_ {
+    let code = net.code;
+    net.links_of(node)
+        .chunk_by(move |a, b| code.slot(*a) == code.slot(*b))
+        .map(move |r| (code.slot(r[0]), r.len()))
 }
 
 /// out[l'] += k·c·in[l] over a map's entries.
@@ -712,14 +693,7 @@ fn shoot(
                      stats: &mut DistributeStats,
                      touched: &mut Vec<u32>| {
         let u = std::mem::replace(&mut unshot[i], Rgb::ZERO);
-        let extra = net
-            .extra_links(i as u32)
-            .iter()
-            .map(|e| (e[0] as usize, e[1]));
-        for (l, j) in net.row(i as u32).iter().copied().enumerate().chain(extra) {
-            if j == NONE {
-                continue;
-            }
+        for (l, j) in net.slot_links(i as u32) {
             let f = u * w[l];
             if j == ESCAPE {
                 for c in 0..3 {

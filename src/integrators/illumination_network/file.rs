@@ -3,19 +3,19 @@
 //!
 //! ```text
 //! magic "RLNETWK\0"          8 bytes
-//! version u32 (= 2)
+//! version u32 (= 3)
 //! geometry hash u64          FNV-1a of the scene's shapes (not materials or lights:
 //!                            relighting changes those and keeps the network)
 //! slopes u32, step f32, patch_size f32, jitter f32, seed u64
-//! cells u32, nodes u32, extra links u32
+//! cells u32, nodes u32, links u32
 //! build stats: intersections, link ends, escapes, extra, degenerate, rays (u64 each),
 //!              seconds f64
 //! light basis size u64       0 when no basis is stored
 //! key_of_node: nodes × u32
 //! light basis                (relight.rs: one converged solution per emissive material)
 //! prefix checksum u64        over everything before it
-//! links: nodes × 3·S² × u32
-//! extra_start: (nodes + 1) × u32, extra: extra links × 2 × u32
+//! link_start: (nodes + 1) × u32
+//! links: links × u32          each node's links in slot order, packed (slot, other end)
 //! checksum u64               FNV-1a over the 64-bit words of everything before it
 //! ```
 //!
@@ -28,14 +28,14 @@
 use super::patches::Patches;
 use super::ray_space::RaySpace;
 use super::relight::LightBasis;
-use super::{BuildStats, Network, NetworkParams, ESCAPE, NONE};
+use super::{BuildStats, LinkCode, Network, NetworkParams, NONE};
 use crate::binary_file::{checksum, fnv1a, Format, Reader};
 use crate::scene::Scene;
 use crate::{Error, Result};
 use std::io::Read;
 use std::path::Path;
 
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 pub(crate) const FORMAT: Format = Format {
     magic: b"RLNETWK\0",
     version: VERSION,
@@ -66,7 +66,7 @@ pub fn save(path: &Path, net: &Network, scene: &Scene, basis: Option<&LightBasis
     b.extend_from_slice(&params_bytes(&net.params));
     b.extend_from_slice(&net.patches.cells.to_le_bytes());
     b.extend_from_slice(&(net.nodes() as u32).to_le_bytes());
-    b.extend_from_slice(&(net.extra.len() as u32).to_le_bytes());
+    b.extend_from_slice(&(net.links.len() as u32).to_le_bytes());
     let s = &net.stats;
     for v in [
         s.intersections,
@@ -87,12 +87,8 @@ pub fn save(path: &Path, net: &Network, scene: &Scene, basis: Option<&LightBasis
     let prefix = checksum(&b);
     b.extend_from_slice(&prefix.to_le_bytes());
     // One reservation, then the table as bytes in one go.
-    let table = net
-        .links
-        .iter()
-        .chain(&net.extra_start)
-        .chain(net.extra.iter().flatten());
-    b.reserve(4 * (net.links.len() + net.extra_start.len() + 2 * net.extra.len()));
+    let table = net.link_start.iter().chain(&net.links);
+    b.reserve(4 * (net.link_start.len() + net.links.len()));
     for v in table {
         b.extend_from_slice(&v.to_le_bytes());
     }
@@ -106,7 +102,7 @@ struct Header {
     params: NetworkParams,
     cells: u32,
     nodes: usize,
-    n_extra: usize,
+    n_links: usize,
     stats: BuildStats,
     basis_len: usize,
 }
@@ -141,7 +137,7 @@ fn read_header(
     }
     let cells = r.u32().ok_or_else(truncated)?;
     let nodes = r.u32().ok_or_else(truncated)? as usize;
-    let n_extra = r.u32().ok_or_else(truncated)? as usize;
+    let n_links = r.u32().ok_or_else(truncated)? as usize;
     let mut stats = BuildStats::default();
     for v in [
         &mut stats.intersections,
@@ -159,7 +155,7 @@ fn read_header(
         params,
         cells,
         nodes,
-        n_extra,
+        n_links,
         stats,
         basis_len,
     })
@@ -247,12 +243,11 @@ fn open_prefix(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> 
     }
     let h = read_header(&mut Reader { rest: &head[12..] }, path, scene, expected)?;
     let (space, patches) = geometry(path, scene, &h)?;
-    let slots = space.slots();
     // The header's sizes are the file's word until checked: a damaged basis length must not
     // overflow (found by the network-file fuzzer).
     let prefix_len = (12 + HEADER as u64 + 4 * h.nodes as u64).checked_add(h.basis_len as u64);
     let total = prefix_len.and_then(|p| {
-        ((h.nodes as u64 * (slots as u64 + 1) + 1 + 2 * h.n_extra as u64) * 4)
+        ((h.nodes as u64 + 1 + h.n_links as u64) * 4)
             .checked_add(p)?
             .checked_add(16)
     });
@@ -299,6 +294,7 @@ pub fn load_prefix(
     let (keys, basis) = body.split_at(4 * h.nodes);
     let (key_of_node, node_of_key) = node_table(path, keys, h.cells)?;
     let basis = basis_of(path, basis, h.nodes, space.slots())?;
+    let code = LinkCode::new(space.slots(), 2 * h.cells as usize).map_err(|e| bad(&e))?;
     Ok((
         Network {
             params: h.params,
@@ -306,9 +302,9 @@ pub fn load_prefix(
             patches,
             node_of_key,
             key_of_node,
+            link_start: Vec::new(),
             links: Vec::new(),
-            extra_start: Vec::new(),
-            extra: Vec::new(),
+            code,
             etendue: Vec::new(),
             stats: h.stats,
         },
@@ -391,7 +387,7 @@ pub fn load_all(
         space,
         patches,
     } = open_prefix(path, scene, expected)?;
-    let (nodes, n_extra) = (h.nodes, h.n_extra);
+    let (nodes, n_links) = (h.nodes, h.n_links);
     let slots = space.slots();
     // The tables are read in slices straight into their words, the checksum kept on the way:
     // no copy of the whole file in memory.
@@ -415,12 +411,8 @@ pub fn load_all(
         }
         Ok(out)
     };
-    let links = read_words(nodes * slots, &mut sum)?;
-    let extra_start = read_words(nodes + 1, &mut sum)?;
-    let extra: Vec<[u32; 2]> = read_words(2 * n_extra, &mut sum)?
-        .chunks_exact(2)
-        .map(|c| [c[0], c[1]])
-        .collect();
+    let link_start = read_words(nodes + 1, &mut sum)?;
+    let links = read_words(n_links, &mut sum)?;
     let mut stored = [0u8; 8];
     file.read_exact(&mut stored).map_err(|_| bad("truncated"))?;
     if sum.finish() != u64::from_le_bytes(stored) {
@@ -430,21 +422,33 @@ pub fn load_all(
     let (a, basis) = body.split_at(4 * nodes);
     let (key_of_node, node_of_key) = node_table(path, a, h.cells)?;
     let basis = basis_of(path, basis, nodes, slots)?;
-    if extra_start[0] != 0
-        || extra_start.windows(2).any(|w| w[0] > w[1])
-        || extra_start[nodes] as usize != n_extra
-        || extra.iter().any(|e| e[0] as usize >= slots)
+    if link_start[0] != 0
+        || link_start.windows(2).any(|w| w[0] > w[1])
+        || link_start[nodes] as usize != n_links
     {
-        return Err(bad("invalid extra-link table"));
+        return Err(bad("invalid link table"));
     }
+    let code = LinkCode::new(slots, 2 * h.cells as usize).map_err(|e| bad(&e))?;
     {
         use rayon::prelude::*;
-        let out_of_range = |&t: &u32| t < ESCAPE && t as usize >= nodes;
-        if links.par_iter().any(out_of_range) || extra.iter().map(|e| &e[1]).any(out_of_range) {
-            return Err(bad("a link points past the last node"));
+        // Each node's links in slot order, to existing slots and nodes.
+        let escape = code.raw_target(code.pack(0, super::ESCAPE));
+        let past = links.par_iter().any(|&l| {
+            let t = code.raw_target(l);
+            code.slot(l) >= slots || (t >= nodes && t != escape)
+        });
+        if past {
+            return Err(bad("a link points past the last slot or node"));
+        }
+        let unordered = link_start.par_windows(2).any(|r| {
+            let list = &links[r[0] as usize..r[1] as usize];
+            list.windows(2).any(|p| code.slot(p[0]) > code.slot(p[1]))
+        });
+        if unordered {
+            return Err(bad("a node's links are not in slot order"));
         }
     }
-    let etendue = super::node_etendue(&space, &links, &extra_start, &extra);
+    let etendue = super::node_etendue(&space, code, &link_start, &links);
     Ok((
         Network {
             params: h.params,
@@ -452,9 +456,9 @@ pub fn load_all(
             patches,
             node_of_key,
             key_of_node,
+            link_start,
             links,
-            extra_start,
-            extra,
+            code,
             etendue,
             stats: h.stats,
         },

@@ -5,8 +5,8 @@
 //! - [`patches`]: polygons (and spheres) cut into patches; each patch side is a potential
 //!   network node.
 //! - [`preprocess`]: lines → links, by incremental scan conversion or by Embree casting.
-//! - [`Network`] (here): the compact network: per node one 32-bit link per slot, plus extra
-//!   links for slots that meet the patch more than once.
+//! - [`Network`] (here): the compact network: per node its links in slot order, 32 bits each
+//!   (the slot and the node at the other end).
 //! - [`distribute`]: light carried over the links until convergence, with reflectance maps
 //!   for diffuse (the paper's bypass), mirror, glossy, transmission and frosted surfaces.
 //! - [`render`]: eye rays find the patch; interpolation over patches and slopes (figure 6).
@@ -33,13 +33,14 @@ use preprocess::{EndPacking, LinkBatch};
 use ray_space::RaySpace;
 use std::time::Instant;
 
-/// No link in this slot (no line of this slope meets the side).
+/// No link in this slot (no line of this slope meets the side), in a row of
+/// [`Network::row_into`].
 pub const NONE: u32 = u32::MAX;
 /// The slot's line leaves the scene.
 pub const ESCAPE: u32 = u32::MAX - 1;
 
-/// Side keys per block of the link table's assembly, at most 2^9: a block's rows (at most 512
-/// nodes, 2.4 MB at 1,200 slots) stay in the last-level cache while it is filled, and each
+/// Side keys per block of the link table's assembly, at most 2^9: a block's links (at most
+/// 512 nodes, about a megabyte at 1,200 slots) stay in cache while they are grouped, and each
 /// slot's ends for a block are long enough to stream. Networks of more than 2^23 side keys
 /// take smaller blocks (the packed link ends, [`preprocess::EndPacking`], need the bits).
 pub const MAX_KEY_BLOCK_BITS: u32 = 9;
@@ -113,7 +114,7 @@ pub struct BuildStats {
     pub link_ends: u64,
     /// Slots whose line leaves the scene.
     pub escapes: u64,
-    /// Link ends beyond the first of their slot at a node (in `extra`).
+    /// Links beyond the first of their slot at a node (a patch meeting two lines of a slot).
     pub extra: u64,
     /// Consecutive hits of a line on the same side or on touching surfaces (no link).
     pub degenerate: u64,
@@ -124,6 +125,78 @@ pub struct BuildStats {
     pub seconds: f64,
     pub link_seconds: f64,
     pub assemble_seconds: f64,
+}
+
+/// How a node's link is stored in 32 bits: its slot in the high bits, the node at the other
+/// end in the low ones (all ones: the line leaves the scene). Half of a node's slots have no
+/// link on average, so a list of its links takes about half the memory of the paper's row of
+/// one entry per slot, and the slot bits cost nothing a row index did not.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct LinkCode {
+    target_bits: u32,
+}
+
+impl LinkCode {
+    /// The code for `slots` slots and `keys` side keys (nodes are at most as many).
+    pub fn new(slots: usize, keys: usize) -> Result<LinkCode, String> {
+        let slot_bits = (usize::BITS - slots.saturating_sub(1).leading_zeros()).max(1);
+        let target_bits = 32u32.saturating_sub(slot_bits);
+        if keys as u64 >= 1u64 << target_bits {
+            return Err(format!(
+                "the network would have {} patch sides, more than its 32-bit links can address \
+                 at {slots} slots per patch ({}); use a larger --patch-size or fewer --slopes",
+                keys,
+                (1u64 << target_bits) - 1
+            ));
+        }
+        Ok(LinkCode { target_bits })
+    }
+
+    /// The target bits of an escape (and a mask of the target bits).
+    #[inline]
+    fn escape(self) -> u32 {
+        (1 << self.target_bits) - 1
+    }
+
+    /// A link of `slot` to node `target` (or [`ESCAPE`]).
+    #[inline]
+    pub fn pack(self, slot: u32, target: u32) -> u32 {
+        let t = if target == ESCAPE {
+            self.escape()
+        } else {
+            target
+        };
+        slot << self.target_bits | t
+    }
+
+    /// A link of `slot` to a node (not an escape).
+    #[inline]
+    fn pack_node(self, slot: u32, node: u32) -> u32 {
+        slot << self.target_bits | node
+    }
+
+    #[inline]
+    pub fn slot(self, link: u32) -> usize {
+        (link >> self.target_bits) as usize
+    }
+
+    /// The node at the other end, or [`ESCAPE`].
+    #[inline]
+    pub fn target(self, link: u32) -> u32 {
+        let t = link & self.escape();
+        if t == self.escape() {
+            ESCAPE
+        } else {
+            t
+        }
+    }
+
+    /// The other end's bits as they are: an escape is larger than any node (a branchless
+    /// gather clamps it onto a zero past the last node).
+    #[inline]
+    pub fn raw_target(self, link: u32) -> usize {
+        (link & self.escape()) as usize
+    }
 }
 
 /// The illumination network: geometry only (no materials, no light), so it is reused for
@@ -137,61 +210,49 @@ pub struct Network {
     pub node_of_key: Vec<u32>,
     /// For each node, its side key.
     pub key_of_node: Vec<u32>,
-    /// nodes × slots: the node at the other end of each slot's link, [`ESCAPE`] or [`NONE`].
+    /// Each node's links in slot order, packed by `code`: node n's are
+    /// `links[link_start[n]..link_start[n + 1]]`. A patch bigger than an intercept cell in
+    /// projection can meet two lines of one slot: such a slot has two (or more) links.
+    pub link_start: Vec<u32>,
     pub links: Vec<u32>,
-    /// Further links of a slot whose entry in `links` is taken (a patch that meets more than
-    /// one line of a slope): the (slot, target) pairs of node n are
-    /// extra[extra_start[n]..extra_start[n + 1]].
-    pub extra_start: Vec<u32>,
-    pub extra: Vec<[u32; 2]>,
-    /// For each node, W = Σ w over its linked and escaping slots.
+    pub code: LinkCode,
+    /// For each node, W = Σ w over its links (escapes included).
     pub etendue: Vec<f32>,
     pub stats: BuildStats,
 }
 
-/// W of one node: Σ w over its linked and escaping slots, in slot order, a slot's entry in
-/// the row before its extra links (`extra`: the node's extra (slot, target) pairs, in slot
-/// order). This is the order in which the build adds them up while it fills the table, so
-/// a loaded network has the same bits.
+/// W of one node: Σ w over its links (`list`, in slot order), in four interleaved partial
+/// sums (one running sum over ~800 links would be a chain of dependent additions). The build
+/// and the loader both add up W here, so a loaded network has the same bits.
 #[inline]
-pub(crate) fn row_etendue(row: &[u32], extra: &[[u32; 2]], w: &[f32]) -> f32 {
-    let mut sum = 0.0f32;
-    let mut more = extra.iter().peekable();
-    for (slot, (&t, &ws)) in row.iter().zip(w).enumerate() {
-        if t != NONE {
-            sum += ws;
-        }
-        while more.next_if(|e| e[0] as usize == slot).is_some() {
-            sum += ws;
+fn list_etendue(code: LinkCode, w: &[f32], list: &[u32]) -> f32 {
+    let mut sum = [0.0f32; 4];
+    let mut quads = list.chunks_exact(4);
+    for q in &mut quads {
+        for (s, &l) in sum.iter_mut().zip(q) {
+            *s += w[code.slot(l)];
         }
     }
-    sum
+    for (s, &l) in sum.iter_mut().zip(quads.remainder()) {
+        *s += w[code.slot(l)];
+    }
+    (sum[0] + sum[1]) + (sum[2] + sum[3])
 }
 
-/// W of every node.
+/// W of every node ([`list_etendue`]).
 pub(crate) fn node_etendue(
     space: &RaySpace,
+    code: LinkCode,
+    link_start: &[u32],
     links: &[u32],
-    extra_start: &[u32],
-    extra: &[[u32; 2]],
 ) -> Vec<f32> {
     use rayon::prelude::*;
     let w = space.etendues();
-    links
-        .par_chunks(space.slots())
-        .enumerate()
-        .map(|(n, row)| {
-            row_etendue(
-                row,
-                &extra[extra_start[n] as usize..extra_start[n + 1] as usize],
-                &w,
-            )
-        })
+    link_start
+        .par_windows(2)
+        .map(|r| list_etendue(code, &w, &links[r[0] as usize..r[1] as usize]))
         .collect()
 }
-
-/// Slots per cache line of a link row (cleared together by the assembly).
-const FILL_SLOTS: usize = 16;
 
 impl Network {
     /// Preprocess: patches and links for a scene. The Embree builder casts through `ctx`.
@@ -206,8 +267,8 @@ impl Network {
         let bounds = scene.bounds().ok_or("the scene has no shapes")?;
         let space = RaySpace::new(params.slopes, params.step, bounds);
         let patches = Patches::new(scene, &space, params.patch_size)?;
-        // The dense link table (a u32 per slot for each side of each cell) dominates; the
-        // preprocess's sorted line hits take about as much again.
+        // A bound: a link per slot for each side of each cell (half of them are linked in a
+        // closed room); the preprocess's link ends take about as much again.
         let table = patches.cells as u64 * 2 * space.slots() as u64 * 4;
         crate::memory::check("the illumination network", 2 * table).map_err(|e| e.to_string())?;
         if builder == Builder::Scan {
@@ -219,7 +280,9 @@ impl Network {
                 ));
             }
         }
-        let packing = EndPacking::for_keys(2 * patches.cells as usize)?;
+        let keys = 2 * patches.cells as usize;
+        let packing = EndPacking::for_keys(keys)?;
+        let code = LinkCode::new(space.slots(), keys)?;
         let t = Instant::now();
         let (batches, rays) = preprocess::build_links(
             (builder == Builder::Embree).then_some(ctx),
@@ -232,7 +295,7 @@ impl Network {
         );
         let link_seconds = t.elapsed().as_secs_f64();
         let t = Instant::now();
-        let mut net = Network::assemble(params, space, patches, &batches, packing);
+        let mut net = Network::assemble(params, space, patches, &batches, packing, code)?;
         net.stats.assemble_seconds = t.elapsed().as_secs_f64();
         net.stats.link_seconds = link_seconds;
         net.stats.rays = rays.total();
@@ -241,23 +304,24 @@ impl Network {
     }
 
     /// Numbers the nodes (sides with at least one real link, in key order) and fills the
-    /// dense link table. Each batch of slots has its link ends grouped by blocks of side keys
-    /// ([`LinkBatch`], `packing`), so a block's rows (a few hundred kilobytes) are filled
-    /// in cache by one task walking every slot's ends for that block in slot order: the
-    /// first end of a slot at a node goes into its row, further ones into its extra links.
-    /// Blocks are independent (parallel), and nothing depends on the schedule.
+    /// link lists. Each batch of slots has its link ends grouped by blocks of side keys
+    /// ([`LinkBatch`], `packing`), so a block's links (a megabyte or so) are gathered in
+    /// cache by one task walking every slot's ends for that block in slot order, then
+    /// grouped by node (a stable counting sort: each node's links stay in slot order) into
+    /// the block's place in the table. Blocks are independent (parallel), and nothing depends
+    /// on the schedule.
     pub fn assemble(
         params: NetworkParams,
         space: RaySpace,
         patches: Patches,
         batches: &[LinkBatch],
         packing: EndPacking,
-    ) -> Network {
+        code: LinkCode,
+    ) -> Result<Network, String> {
         use rayon::prelude::*;
         let keys = 2 * patches.cells as usize;
         let block = packing.block();
         let blocks = keys.div_ceil(block);
-        let n_slots = space.slots();
         // Nodes: keys with a real link (not only escapes), marked by each batch of slots.
         let words = keys.div_ceil(64);
         let mut marks = vec![0u64; words];
@@ -283,122 +347,135 @@ impl Network {
         }
         let nodes = key_of_node.len();
         first_node.push(nodes);
+        let block_words = |b: usize| (b * block / 64, ((b + 1) * block / 64).min(words));
+        // Each block's links, exactly: its link ends (every one at a node, which it marked)
+        // and its escapes at nodes (a word of node marks at a time).
+        let counts: Vec<usize> = (0..blocks)
+            .into_par_iter()
+            .map(|b| {
+                let (w0, w1) = block_words(b);
+                let mut n = 0;
+                for s in batches {
+                    n += s.block_ends(b);
+                    for j in 0..s.slots as usize {
+                        for (e, m) in s.escapes(b, j).iter().zip(&marks[w0..w1]) {
+                            n += (e & m).count_ones() as usize;
+                        }
+                        let more = s.more_escapes(b, j).iter();
+                        n += more.filter(|&&k| node_of_key[k as usize] != NONE).count();
+                    }
+                }
+                n
+            })
+            .collect();
+        let total: usize = counts.iter().sum();
+        if total > u32::MAX as usize {
+            return Err(format!(
+                "the network would have {total} links, more than 32-bit offsets address; use \
+                 a larger --intercept-step or fewer --slopes"
+            ));
+        }
         let w = space.etendues();
-        // Zeroed pages come lazily from the system; each block fills its own rows.
-        let mut links = vec![0u32; nodes * n_slots];
+        // Zeroed pages come lazily from the system; each block fills its own part.
+        let mut links = vec![0u32; total];
+        let mut link_start = vec![0u32; nodes + 1];
         let mut etendue = vec![0f32; nodes];
         let mut parts = Vec::with_capacity(blocks);
         {
-            let (mut rest, mut wrest) = (&mut links[..], &mut etendue[..]);
-            for b in 0..blocks {
+            let mut rest = (&mut links[..], &mut link_start[1..], &mut etendue[..]);
+            let mut base = 0;
+            for (b, &count) in counts.iter().enumerate() {
                 let n = first_node[b + 1] - first_node[b];
-                let (rows, r) = std::mem::take(&mut rest).split_at_mut(n * n_slots);
-                let (wb, wr) = std::mem::take(&mut wrest).split_at_mut(n);
-                rest = r;
-                wrest = wr;
-                parts.push((b, rows, wb));
+                let (l, lr) = std::mem::take(&mut rest.0).split_at_mut(count);
+                let (s, sr) = std::mem::take(&mut rest.1).split_at_mut(n);
+                let (e, er) = std::mem::take(&mut rest.2).split_at_mut(n);
+                rest = (lr, sr, er);
+                parts.push((b, base as u32, l, s, e));
+                base += count;
             }
         }
-        // Per block: where each of its nodes' extra links start, their (slot, target) pairs
-        // grouped by node, and the escapes seen.
-        type Part = (Vec<u32>, Vec<[u32; 2]>, u64);
-        let filled: Vec<Part> = parts
+        // Per block: the escapes seen, and the links beyond the first of their slot.
+        let filled: Vec<(u64, u64)> = parts
             .into_par_iter()
-            .map_init(Vec::new, |extra, (b, rows, wb)| {
-                let first = first_node[b] as u32;
-                let nodes_in_block = rows.len() / n_slots;
-                // Room for every end and escape of the block: one that finds its slot taken
-                // is written there and kept by advancing `len`, without a branch (whether a
-                // slot is taken is close to a coin toss, which a branch would mispredict).
-                // (Escapes count too: a large patch in an open scene meets many escaping
-                // lines of a slot.)
-                let room: usize = batches
-                    .iter()
-                    .map(|s| s.block_ends(b) + s.block_escapes(b))
-                    .sum();
-                // (A buffer per thread, reused: a block's room is a megabyte or so. Only
-                // grown, never cleared: every entry kept is written first.)
-                if extra.len() < room {
-                    extra.resize(room, (0u32, [0u32; 2]));
-                }
-                let mut len = 0;
-                let mut escapes = 0u64;
-                let (w0, w1) = (b * block / 64, ((b + 1) * block / 64).min(words));
-                let slots = batches
-                    .iter()
-                    .flat_map(|s| (0..s.slots as usize).map(move |j| (s, j)));
-                // Rows end in a partial line when the slots are not a multiple of
-                // FILL_SLOTS: that part is cleared first, so that the loop clears whole lines.
-                let whole = n_slots - n_slots % FILL_SLOTS;
-                for row in rows.chunks_exact_mut(n_slots) {
-                    row[whole..].fill(NONE);
-                }
-                for (slot, (s, j)) in slots.enumerate() {
-                    // Each row's next cache line of slots is cleared just before the slots
-                    // are filled, while the block's lines are in cache (clearing the whole
-                    // block first would send them back to memory before they are filled).
-                    if slot % FILL_SLOTS == 0 && slot < whole {
-                        for r in 0..nodes_in_block {
-                            // (A fixed-size array: a call to memset per 64 bytes costs more.)
-                            if let Some(line) =
-                                rows[r * n_slots + slot..].first_chunk_mut::<FILL_SLOTS>()
-                            {
-                                *line = [NONE; FILL_SLOTS];
+            .map_init(
+                || (Vec::new(), Vec::new()),
+                |(gathered, at), (b, base, out, ends_at, wb)| {
+                    let first = first_node[b] as u32;
+                    // (A buffer per thread, reused, and only grown: every entry kept is
+                    // written first.)
+                    if gathered.len() < out.len() {
+                        gathered.resize(out.len(), (0u32, 0u32));
+                    }
+                    at.clear();
+                    at.resize(wb.len() + 1, 0u32);
+                    let mut len = 0;
+                    let mut keep = |node: u32, link: u32, at: &mut Vec<u32>| {
+                        let local = node - first;
+                        gathered[len] = (local, link);
+                        len += 1;
+                        at[local as usize + 1] += 1;
+                    };
+                    let (w0, w1) = block_words(b);
+                    let slots = batches
+                        .iter()
+                        .flat_map(|s| (0..s.slots as usize).map(move |j| (s, j)));
+                    for (slot, (s, j)) in slots.enumerate() {
+                        let slot = slot as u32;
+                        for &e in s.ends(b, j) {
+                            let (k, t) = packing.unpack(b, e);
+                            let link = code.pack_node(slot, node_of_key[t as usize]);
+                            keep(node_of_key[k as usize], link, at);
+                        }
+                        // Then the slot's escapes at nodes (a side's escapes are all alike, so
+                        // their order among themselves does not matter).
+                        let escape = code.pack(slot, ESCAPE);
+                        for (wi, &e) in (w0..w1).zip(s.escapes(b, j)) {
+                            let mut m = e & marks[wi];
+                            while m != 0 {
+                                keep(
+                                    node_of_key[wi * 64 + m.trailing_zeros() as usize],
+                                    escape,
+                                    at,
+                                );
+                                m &= m - 1;
+                            }
+                        }
+                        for &k in s.more_escapes(b, j) {
+                            let node = node_of_key[k as usize];
+                            if node != NONE {
+                                keep(node, escape, at);
                             }
                         }
                     }
-                    let ws = w[slot];
-                    // One end (node, target): the first of its slot at the node fills the
-                    // row, later ones go to the extra links.
-                    // (A macro, shared by the three loops below.)
-                    macro_rules! put {
-                        ($node:expr, $target:expr) => {{
-                            let (node, target): (u32, u32) = ($node, $target);
-                            let local = (node - first) as usize;
-                            let e = &mut rows[local * n_slots + slot];
-                            let taken = *e != NONE;
-                            *e = if taken { *e } else { target };
-                            extra[len] = (node - first, [slot as u32, target]);
-                            len += usize::from(taken);
-                            // W in slot order, as `row_etendue` adds it up.
-                            wb[local] += ws;
-                        }};
+                    let ends: usize = batches.iter().map(|s| s.block_ends(b)).sum();
+                    let escapes = (len - ends) as u64;
+                    // Grouped by node, each node's links in slot order.
+                    preprocess::starts_from_counts(at);
+                    for (to, &end) in ends_at.iter_mut().zip(&at[1..]) {
+                        *to = base + end;
                     }
-                    for &e in s.ends(b, j) {
-                        let (k, t) = packing.unpack(b, e);
-                        let node = node_of_key[k as usize];
-                        if node != NONE {
-                            put!(node, node_of_key[t as usize]);
+                    preprocess::scatter_stably(
+                        at,
+                        &gathered[..len],
+                        |g| g.0 as usize,
+                        |g| g.1,
+                        out,
+                    );
+                    // W, and the links beyond the first of their slot.
+                    let mut extra = 0u64;
+                    let mut from = 0;
+                    for (i, wn) in wb.iter_mut().enumerate() {
+                        let to = (ends_at[i] - base) as usize;
+                        let list = &out[from..to];
+                        *wn = list_etendue(code, &w, list);
+                        for p in list.windows(2) {
+                            extra += u64::from(code.slot(p[0]) == code.slot(p[1]));
                         }
+                        from = to;
                     }
-                    // Then the slot's escapes at nodes (a side's escapes are all alike, so
-                    // their order among themselves does not matter).
-                    for (wi, &e) in (w0..w1).zip(s.escapes(b, j)) {
-                        let mut m = e & marks[wi];
-                        while m != 0 {
-                            put!(node_of_key[wi * 64 + m.trailing_zeros() as usize], ESCAPE);
-                            escapes += 1;
-                            m &= m - 1;
-                        }
-                    }
-                    for &k in s.more_escapes(b, j) {
-                        let node = node_of_key[k as usize];
-                        if node != NONE {
-                            put!(node, ESCAPE);
-                            escapes += 1;
-                        }
-                    }
-                }
-                let extra = &extra[..len];
-                // Grouped by node, in slot order within a node.
-                let mut start = vec![0u32; rows.len() / n_slots + 1];
-                for e in extra {
-                    start[e.0 as usize + 1] += 1;
-                }
-                let grouped =
-                    preprocess::group_stably(&mut start, extra, |e| e.0 as usize, |e| e.1);
-                (start, grouped, escapes)
-            })
+                    (escapes, extra)
+                },
+            )
             .collect();
         let mut stats = BuildStats::default();
         for s in batches {
@@ -406,40 +483,22 @@ impl Network {
             stats.degenerate += s.degenerate;
             stats.link_ends += 2 * s.pairs;
         }
-        let mut extra_start = Vec::with_capacity(nodes + 1);
-        extra_start.push(0u32);
-        for (start, _, escapes) in &filled {
+        for (escapes, extra) in filled {
             stats.escapes += escapes;
-            let base = extra_start[extra_start.len() - 1];
-            extra_start.extend(start[1..].iter().map(|&i| base + i));
+            stats.extra += extra;
         }
-        // The blocks' lists copied into place in parallel (the copy first touches the memory).
-        let mut extra = vec![[0u32; 2]; extra_start[nodes] as usize];
-        {
-            let mut rest = &mut extra[..];
-            let mut pieces = Vec::with_capacity(filled.len());
-            for (_, list, _) in &filled {
-                let (to, r) = std::mem::take(&mut rest).split_at_mut(list.len());
-                rest = r;
-                pieces.push((to, list));
-            }
-            pieces
-                .into_par_iter()
-                .for_each(|(to, list)| to.copy_from_slice(list));
-        }
-        stats.extra = extra.len() as u64;
-        Network {
+        Ok(Network {
             params,
             space,
             patches,
             node_of_key,
             key_of_node,
+            link_start,
             links,
-            extra_start,
-            extra,
+            code,
             etendue,
             stats,
-        }
+        })
     }
 
     pub fn nodes(&self) -> usize {
@@ -450,21 +509,31 @@ impl Network {
         self.space.slots()
     }
 
-    /// The link row of a node.
+    /// A node's links, in slot order (packed by [`Network::code`]).
     #[inline]
-    pub fn row(&self, node: u32) -> &[u32] {
-        let s = self.slots();
-        &self.links[node as usize * s..(node as usize + 1) * s]
+    pub fn links_of(&self, node: u32) -> &[u32] {
+        let n = node as usize;
+        &self.links[self.link_start[n] as usize..self.link_start[n + 1] as usize]
     }
 
-    /// The extra (slot, target) links of a node.
+    /// A node's links as (slot, node at the other end or [`ESCAPE`]), in slot order.
     #[inline]
-    pub fn extra_links(&self, node: u32) -> &[[u32; 2]] {
-        let (a, b) = (
-            self.extra_start[node as usize] as usize,
-            self.extra_start[node as usize + 1] as usize,
-        );
-        &self.extra[a..b]
+    pub fn slot_links(&self, node: u32) -> impl DoubleEndedIterator<Item = (usize, u32)> + '_ {
+        let code = self.code;
+        self.links_of(node)
+            .iter()
+            .map(move |&l| (code.slot(l), code.target(l)))
+    }
+
+    /// A node's links as a row of one entry per slot (the paper's layout): the other end of
+    /// the slot's first link, [`ESCAPE`], or [`NONE`]. For the directional nodes' maps and
+    /// rendering, which look slots up by direction.
+    pub fn row_into(&self, node: u32, row: &mut Vec<u32>) {
+        row.clear();
+        row.resize(self.slots(), NONE);
+        for (slot, t) in self.slot_links(node).rev() {
+            row[slot] = t;
+        }
     }
 
     /// The polygon, cell and side (0 front, 1 back) of a node.
@@ -495,11 +564,10 @@ impl Network {
     /// Bytes held by the network's tables.
     pub fn memory(&self) -> usize {
         4 * (self.links.len()
+            + self.link_start.len()
             + self.node_of_key.len()
             + self.key_of_node.len()
-            + self.etendue.len()
-            + self.extra_start.len()
-            + 2 * self.extra.len())
+            + self.etendue.len())
             + self.patches.polygons.len() * std::mem::size_of::<patches::Polygon>()
     }
 }

@@ -898,7 +898,8 @@ impl LinkBatch {
 
 /// A stable counting sort of a batch's items (slot j's are `items[at[j]..at[j + 1]]`) into
 /// groups: `place(item)` gives its group for the batch's first slot (slot j's group is j
-/// further on) and its value. `start` as in [`group_stably`].
+/// further on) and its value. On entry `start[g + 1]` holds group g's item count (`start[0]`
+/// is 0), on return `start[g]` its first index.
 fn group_slots<T: Copy, V: Copy + Default>(
     start: &mut [u32],
     items: &[T],
@@ -921,21 +922,9 @@ fn group_slots<T: Copy, V: Copy + Default>(
     grouped
 }
 
-/// A stable counting sort into groups (key blocks, nodes): on entry `start[g + 1]` holds group
-/// g's item count (`start[0]` is 0), on return `start[g]` its first index. Returns `value` of
-/// every item, grouped, in their order within a group ([`group_slots`] with one slot).
-pub(super) fn group_stably<T: Copy, V: Copy + Default>(
-    start: &mut [u32],
-    items: &[T],
-    group_of: impl Fn(T) -> usize,
-    value: impl Fn(T) -> V,
-) -> Vec<V> {
-    group_slots(start, items, &[0, items.len()], |x| (group_of(x), value(x)))
-}
-
 /// Counts to starts, in place: `at[g + 1]` holds group g's item count (`at[0]` is 0), and
 /// becomes the end of group g (so `at[g]` its start).
-fn starts_from_counts(at: &mut [u32]) {
+pub(super) fn starts_from_counts(at: &mut [u32]) {
     for i in 1..at.len() {
         at[i] += at[i - 1];
     }
@@ -944,7 +933,7 @@ fn starts_from_counts(at: &mut [u32]) {
 /// The scatter of a stable counting sort, shared by the sorts of the preprocess: `at[g]` is
 /// the next place of group g in `out` ([`starts_from_counts`]); `value` of every item goes
 /// there, in the items' order.
-fn scatter_stably<T: Copy, V>(
+pub(super) fn scatter_stably<T: Copy, V>(
     at: &mut [u32],
     items: impl IntoIterator<Item = T>,
     group_of: impl Fn(T) -> usize,

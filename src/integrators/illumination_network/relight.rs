@@ -141,11 +141,12 @@ impl LightBasis {
         }
         if basis.lights.is_empty() {
             // Nothing emits: the directional nodes as the distribution would number them.
-            let mut k = 0;
+            let (mut k, mut row) = (0, Vec::new());
             for (node, s) in dark.iter().enumerate() {
                 if s.directional() {
                     basis.dir_index.push(k);
-                    basis.dir_rows.extend_from_slice(net.row(node as u32));
+                    net.row_into(node as u32, &mut row);
+                    basis.dir_rows.extend_from_slice(&row);
                     k += 1;
                 } else {
                     basis.dir_index.push(super::NONE);
