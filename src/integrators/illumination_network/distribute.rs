@@ -18,7 +18,7 @@
 //! preprocess: they depend on materials, which relighting may change.
 //!
 //! **Order.** Jacobi sweeps: in each sweep every node gathers what its neighbours shot in the
-//! previous sweep over its links (links are symmetric, so gathering over a node's own row is
+//! previous sweep over its links (links are symmetric, so gathering over a node's own links is
 //! the scatter of its neighbours), then passes it through its reflectance. Each sweep is
 //! parallel over nodes and independent of the thread count. Sweep k carries exactly the
 //! light of k bounces, so the first sweep's output is direct illumination (kept for the

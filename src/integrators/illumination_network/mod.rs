@@ -254,6 +254,52 @@ pub(crate) fn node_etendue(
         .collect()
 }
 
+/// Calls `keep(local node, link)` for every link of key block `b` (its nodes numbered from
+/// `first`), in slot order: a slot's link ends, then its escapes at nodes.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn walk_block(
+    batches: &[LinkBatch],
+    b: usize,
+    packing: EndPacking,
+    code: LinkCode,
+    node_of_key: &[u32],
+    marks: &[u64],
+    first: u32,
+    mut keep: impl FnMut(u32, u32),
+) {
+    let words = packing.block() / 64;
+    let w0 = b * words;
+    let slots = batches
+        .iter()
+        .flat_map(|s| (0..s.slots as usize).map(move |j| (s, j)));
+    for (slot, (s, j)) in slots.enumerate() {
+        let slot = slot as u32;
+        for &e in s.ends(b, j) {
+            let (k, t) = packing.unpack(b, e);
+            let link = code.pack_node(slot, node_of_key[t as usize]);
+            keep(node_of_key[k as usize] - first, link);
+        }
+        // Then the slot's escapes at nodes (a side's escapes are all alike, so their order
+        // among themselves does not matter).
+        let escape = code.pack(slot, ESCAPE);
+        for (wi, &e) in (w0..marks.len()).zip(s.escapes(b, j)) {
+            let mut m = e & marks[wi];
+            while m != 0 {
+                let k = wi * 64 + m.trailing_zeros() as usize;
+                keep(node_of_key[k] - first, escape);
+                m &= m - 1;
+            }
+        }
+        for &k in s.more_escapes(b, j) {
+            let node = node_of_key[k as usize];
+            if node != NONE {
+                keep(node - first, escape);
+            }
+        }
+    }
+}
+
 impl Network {
     /// Preprocess: patches and links for a scene. The Embree builder casts through `ctx`.
     pub fn build(
@@ -305,11 +351,11 @@ impl Network {
 
     /// Numbers the nodes (sides with at least one real link, in key order) and fills the
     /// link lists. Each batch of slots has its link ends grouped by blocks of side keys
-    /// ([`LinkBatch`], `packing`), so a block's links (a megabyte or so) are gathered in
-    /// cache by one task walking every slot's ends for that block in slot order, then
-    /// grouped by node (a stable counting sort: each node's links stay in slot order) into
-    /// the block's place in the table. Blocks are independent (parallel), and nothing depends
-    /// on the schedule.
+    /// ([`LinkBatch`], `packing`), so one task fills a block's place in the table (a
+    /// megabyte or so) by walking every slot's ends for that block in slot order twice: to
+    /// count each node's links, then to put them in place (a stable counting sort: each
+    /// node's links stay in slot order). Blocks are independent (parallel), and nothing
+    /// depends on the schedule.
     pub fn assemble(
         params: NetworkParams,
         space: RaySpace,
@@ -397,85 +443,56 @@ impl Network {
         // Per block: the escapes seen, and the links beyond the first of their slot.
         let filled: Vec<(u64, u64)> = parts
             .into_par_iter()
-            .map_init(
-                || (Vec::new(), Vec::new()),
-                |(gathered, at), (b, base, out, ends_at, wb)| {
-                    let first = first_node[b] as u32;
-                    // (A buffer per thread, reused, and only grown: every entry kept is
-                    // written first.)
-                    if gathered.len() < out.len() {
-                        gathered.resize(out.len(), (0u32, 0u32));
+            .map_init(Vec::new, |at, (b, base, out, ends_at, wb)| {
+                let first = first_node[b] as u32;
+                // Every link of the block in slot order, walked twice: to count each
+                // node's links, then to put them in place.
+                at.clear();
+                at.resize(wb.len() + 1, 0u32);
+                walk_block(
+                    batches,
+                    b,
+                    packing,
+                    code,
+                    &node_of_key,
+                    &marks,
+                    first,
+                    |l, _| at[l as usize + 1] += 1,
+                );
+                let ends: usize = batches.iter().map(|s| s.block_ends(b)).sum();
+                let escapes = (out.len() - ends) as u64;
+                preprocess::starts_from_counts(at);
+                for (to, &end) in ends_at.iter_mut().zip(&at[1..]) {
+                    *to = base + end;
+                }
+                walk_block(
+                    batches,
+                    b,
+                    packing,
+                    code,
+                    &node_of_key,
+                    &marks,
+                    first,
+                    |l, link| {
+                        let to = &mut at[l as usize];
+                        out[*to as usize] = link;
+                        *to += 1;
+                    },
+                );
+                // W, and the links beyond the first of their slot.
+                let mut extra = 0u64;
+                let mut from = 0;
+                for (i, wn) in wb.iter_mut().enumerate() {
+                    let to = (ends_at[i] - base) as usize;
+                    let list = &out[from..to];
+                    *wn = list_etendue(code, &w, list);
+                    for p in list.windows(2) {
+                        extra += u64::from(code.slot(p[0]) == code.slot(p[1]));
                     }
-                    at.clear();
-                    at.resize(wb.len() + 1, 0u32);
-                    let mut len = 0;
-                    let mut keep = |node: u32, link: u32, at: &mut Vec<u32>| {
-                        let local = node - first;
-                        gathered[len] = (local, link);
-                        len += 1;
-                        at[local as usize + 1] += 1;
-                    };
-                    let (w0, w1) = block_words(b);
-                    let slots = batches
-                        .iter()
-                        .flat_map(|s| (0..s.slots as usize).map(move |j| (s, j)));
-                    for (slot, (s, j)) in slots.enumerate() {
-                        let slot = slot as u32;
-                        for &e in s.ends(b, j) {
-                            let (k, t) = packing.unpack(b, e);
-                            let link = code.pack_node(slot, node_of_key[t as usize]);
-                            keep(node_of_key[k as usize], link, at);
-                        }
-                        // Then the slot's escapes at nodes (a side's escapes are all alike, so
-                        // their order among themselves does not matter).
-                        let escape = code.pack(slot, ESCAPE);
-                        for (wi, &e) in (w0..w1).zip(s.escapes(b, j)) {
-                            let mut m = e & marks[wi];
-                            while m != 0 {
-                                keep(
-                                    node_of_key[wi * 64 + m.trailing_zeros() as usize],
-                                    escape,
-                                    at,
-                                );
-                                m &= m - 1;
-                            }
-                        }
-                        for &k in s.more_escapes(b, j) {
-                            let node = node_of_key[k as usize];
-                            if node != NONE {
-                                keep(node, escape, at);
-                            }
-                        }
-                    }
-                    let ends: usize = batches.iter().map(|s| s.block_ends(b)).sum();
-                    let escapes = (len - ends) as u64;
-                    // Grouped by node, each node's links in slot order.
-                    preprocess::starts_from_counts(at);
-                    for (to, &end) in ends_at.iter_mut().zip(&at[1..]) {
-                        *to = base + end;
-                    }
-                    preprocess::scatter_stably(
-                        at,
-                        &gathered[..len],
-                        |g| g.0 as usize,
-                        |g| g.1,
-                        out,
-                    );
-                    // W, and the links beyond the first of their slot.
-                    let mut extra = 0u64;
-                    let mut from = 0;
-                    for (i, wn) in wb.iter_mut().enumerate() {
-                        let to = (ends_at[i] - base) as usize;
-                        let list = &out[from..to];
-                        *wn = list_etendue(code, &w, list);
-                        for p in list.windows(2) {
-                            extra += u64::from(code.slot(p[0]) == code.slot(p[1]));
-                        }
-                        from = to;
-                    }
-                    (escapes, extra)
-                },
-            )
+                    from = to;
+                }
+                (escapes, extra)
+            })
             .collect();
         let mut stats = BuildStats::default();
         for s in batches {
