@@ -254,47 +254,51 @@ pub(crate) fn node_etendue(
         .collect()
 }
 
-/// Calls `keep(local node, link)` for every link of key block `b` (its nodes numbered from
-/// `first`), in slot order: a slot's link ends, then its escapes at nodes.
-#[allow(clippy::too_many_arguments)]
-#[inline(always)]
-fn walk_block(
-    batches: &[LinkBatch],
-    b: usize,
+/// What the assembly reads the links of a key block from: the batches' link ends and escapes,
+/// and the node numbering.
+struct BlockLinks<'a> {
+    batches: &'a [LinkBatch],
     packing: EndPacking,
     code: LinkCode,
-    node_of_key: &[u32],
-    marks: &[u64],
-    first: u32,
-    mut keep: impl FnMut(u32, u32),
-) {
-    let words = packing.block() / 64;
-    let w0 = b * words;
-    let slots = batches
-        .iter()
-        .flat_map(|s| (0..s.slots as usize).map(move |j| (s, j)));
-    for (slot, (s, j)) in slots.enumerate() {
-        let slot = slot as u32;
-        for &e in s.ends(b, j) {
-            let (k, t) = packing.unpack(b, e);
-            let link = code.pack_node(slot, node_of_key[t as usize]);
-            keep(node_of_key[k as usize] - first, link);
-        }
-        // Then the slot's escapes at nodes (a side's escapes are all alike, so their order
-        // among themselves does not matter).
-        let escape = code.pack(slot, ESCAPE);
-        for (wi, &e) in (w0..marks.len()).zip(s.escapes(b, j)) {
-            let mut m = e & marks[wi];
-            while m != 0 {
-                let k = wi * 64 + m.trailing_zeros() as usize;
-                keep(node_of_key[k] - first, escape);
-                m &= m - 1;
+    node_of_key: &'a [u32],
+    marks: &'a [u64],
+}
+
+impl BlockLinks<'_> {
+    /// Calls `keep(local node, link)` for every link of key block `b` (its nodes numbered
+    /// from `first`), in slot order: a slot's link ends, then its escapes at nodes.
+    #[inline(always)]
+    fn walk(&self, b: usize, first: u32, mut keep: impl FnMut(u32, u32)) {
+        let (packing, code, node_of_key, marks) =
+            (self.packing, self.code, self.node_of_key, self.marks);
+        let w0 = b * packing.block() / 64;
+        let slots = self
+            .batches
+            .iter()
+            .flat_map(|s| (0..s.slots as usize).map(move |j| (s, j)));
+        for (slot, (s, j)) in slots.enumerate() {
+            let slot = slot as u32;
+            for &e in s.ends(b, j) {
+                let (k, t) = packing.unpack(b, e);
+                let link = code.pack_node(slot, node_of_key[t as usize]);
+                keep(node_of_key[k as usize] - first, link);
             }
-        }
-        for &k in s.more_escapes(b, j) {
-            let node = node_of_key[k as usize];
-            if node != NONE {
-                keep(node - first, escape);
+            // Then the slot's escapes at nodes (a side's escapes are all alike, so their order
+            // among themselves does not matter).
+            let escape = code.pack(slot, ESCAPE);
+            for (wi, &e) in (w0..marks.len()).zip(s.escapes(b, j)) {
+                let mut m = e & marks[wi];
+                while m != 0 {
+                    let k = wi * 64 + m.trailing_zeros() as usize;
+                    keep(node_of_key[k] - first, escape);
+                    m &= m - 1;
+                }
+            }
+            for &k in s.more_escapes(b, j) {
+                let node = node_of_key[k as usize];
+                if node != NONE {
+                    keep(node - first, escape);
+                }
             }
         }
     }
@@ -440,6 +444,13 @@ impl Network {
                 base += count;
             }
         }
+        let block_links = BlockLinks {
+            batches,
+            packing,
+            code,
+            node_of_key: &node_of_key,
+            marks: &marks,
+        };
         // Per block: the escapes seen, and the links beyond the first of their slot.
         let filled: Vec<(u64, u64)> = parts
             .into_par_iter()
@@ -449,36 +460,18 @@ impl Network {
                 // node's links, then to put them in place.
                 at.clear();
                 at.resize(wb.len() + 1, 0u32);
-                walk_block(
-                    batches,
-                    b,
-                    packing,
-                    code,
-                    &node_of_key,
-                    &marks,
-                    first,
-                    |l, _| at[l as usize + 1] += 1,
-                );
+                block_links.walk(b, first, |l, _| at[l as usize + 1] += 1);
                 let ends: usize = batches.iter().map(|s| s.block_ends(b)).sum();
                 let escapes = (out.len() - ends) as u64;
                 preprocess::starts_from_counts(at);
                 for (to, &end) in ends_at.iter_mut().zip(&at[1..]) {
                     *to = base + end;
                 }
-                walk_block(
-                    batches,
-                    b,
-                    packing,
-                    code,
-                    &node_of_key,
-                    &marks,
-                    first,
-                    |l, link| {
-                        let to = &mut at[l as usize];
-                        out[*to as usize] = link;
-                        *to += 1;
-                    },
-                );
+                block_links.walk(b, first, |l, link| {
+                    let to = &mut at[l as usize];
+                    out[*to as usize] = link;
+                    *to += 1;
+                });
                 // W, and the links beyond the first of their slot.
                 let mut extra = 0u64;
                 let mut from = 0;
