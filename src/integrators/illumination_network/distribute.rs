@@ -273,7 +273,8 @@ fn maps(net: &Network, node: u32, surface: &Surface, twin: u32) -> (SparseMap, S
     let space = &net.space;
     let (mut row, mut trow) = (Vec::new(), Vec::new());
     net.row_into(node, &mut row);
-    if twin != NONE {
+    // The twin's row, for transmission only.
+    if surface.kt.max_element() > 0.0 && twin != NONE {
         net.row_into(twin, &mut trow);
     }
     let n = net.node_normal(node);
@@ -608,12 +609,7 @@ pub fn distribute_surfaces(
     }
     stats.unshot = unshot;
     stats.seconds = start.elapsed().as_secs_f64();
-    let mut dir_rows = Vec::with_capacity(dir_nodes.len() * slots);
-    let mut row = Vec::new();
-    for &n in &dir_nodes {
-        net.row_into(n, &mut row);
-        dir_rows.extend_from_slice(&row);
-    }
+    let dir_rows = net.rows_of(dir_nodes.iter().copied());
     Solution {
         surfaces,
         diffuse,

@@ -28,7 +28,7 @@
 use super::patches::Patches;
 use super::ray_space::RaySpace;
 use super::relight::LightBasis;
-use super::{BuildStats, LinkCode, Network, NetworkParams, NONE};
+use super::{BuildStats, LinkCode, Network, NetworkParams, ESCAPE, NONE};
 use crate::binary_file::{checksum, fnv1a, Format, Reader};
 use crate::scene::Scene;
 use crate::{Error, Result};
@@ -432,10 +432,9 @@ pub fn load_all(
     {
         use rayon::prelude::*;
         // Each node's links in slot order, to existing slots and nodes.
-        let escape = code.raw_target(code.pack(0, super::ESCAPE));
         let past = links.par_iter().any(|&l| {
-            let t = code.raw_target(l);
-            code.slot(l) >= slots || (t >= nodes && t != escape)
+            let t = code.target(l);
+            code.slot(l) >= slots || (t != ESCAPE && t as usize >= nodes)
         });
         if past {
             return Err(bad("a link points past the last slot or node"));

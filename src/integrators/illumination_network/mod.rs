@@ -265,6 +265,28 @@ struct BlockLinks<'a> {
 }
 
 impl BlockLinks<'_> {
+    /// The number of links of key block `b` ([`BlockLinks::walk`] gives them): its link ends
+    /// (every one at a node, which it marked) and its escapes at nodes, counted a word of
+    /// node marks at a time.
+    fn count(&self, b: usize) -> usize {
+        let w0 = b * self.packing.block() / 64;
+        let marks = &self.marks[w0..];
+        let mut n = 0;
+        for s in self.batches {
+            n += s.block_ends(b);
+            for j in 0..s.slots as usize {
+                for (e, m) in s.escapes(b, j).iter().zip(marks) {
+                    n += (e & m).count_ones() as usize;
+                }
+                let more = s.more_escapes(b, j).iter();
+                n += more
+                    .filter(|&&k| self.node_of_key[k as usize] != NONE)
+                    .count();
+            }
+        }
+        n
+    }
+
     /// Calls `keep(local node, link)` for every link of key block `b` (its nodes numbered
     /// from `first`), in slot order: a slot's link ends, then its escapes at nodes.
     #[inline(always)]
@@ -397,26 +419,17 @@ impl Network {
         }
         let nodes = key_of_node.len();
         first_node.push(nodes);
-        let block_words = |b: usize| (b * block / 64, ((b + 1) * block / 64).min(words));
-        // Each block's links, exactly: its link ends (every one at a node, which it marked)
-        // and its escapes at nodes (a word of node marks at a time).
+        let block_links = BlockLinks {
+            batches,
+            packing,
+            code,
+            node_of_key: &node_of_key,
+            marks: &marks,
+        };
+        // Each block's links, exactly, so that each block fills its own place.
         let counts: Vec<usize> = (0..blocks)
             .into_par_iter()
-            .map(|b| {
-                let (w0, w1) = block_words(b);
-                let mut n = 0;
-                for s in batches {
-                    n += s.block_ends(b);
-                    for j in 0..s.slots as usize {
-                        for (e, m) in s.escapes(b, j).iter().zip(&marks[w0..w1]) {
-                            n += (e & m).count_ones() as usize;
-                        }
-                        let more = s.more_escapes(b, j).iter();
-                        n += more.filter(|&&k| node_of_key[k as usize] != NONE).count();
-                    }
-                }
-                n
-            })
+            .map(|b| block_links.count(b))
             .collect();
         let total: usize = counts.iter().sum();
         if total > u32::MAX as usize {
@@ -444,13 +457,6 @@ impl Network {
                 base += count;
             }
         }
-        let block_links = BlockLinks {
-            batches,
-            packing,
-            code,
-            node_of_key: &node_of_key,
-            marks: &marks,
-        };
         // Per block: the escapes seen, and the links beyond the first of their slot.
         let filled: Vec<(u64, u64)> = parts
             .into_par_iter()
@@ -544,6 +550,16 @@ impl Network {
         for (slot, t) in self.slot_links(node).rev() {
             row[slot] = t;
         }
+    }
+
+    /// The rows ([`Network::row_into`]) of `nodes`, one after another.
+    pub fn rows_of(&self, nodes: impl IntoIterator<Item = u32>) -> Vec<u32> {
+        let (mut rows, mut row) = (Vec::new(), Vec::new());
+        for node in nodes {
+            self.row_into(node, &mut row);
+            rows.extend_from_slice(&row);
+        }
+        rows
     }
 
     /// The polygon, cell and side (0 front, 1 back) of a node.

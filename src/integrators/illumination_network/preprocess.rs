@@ -161,14 +161,6 @@ impl LinkBatch {
         (self.start[g1] - self.start[g0]) as usize
     }
 
-    /// The escapes of key block `b` in every slot of the batch (at nodes or not).
-    pub fn block_escapes(&self, b: usize) -> usize {
-        let (g0, g1) = (self.group(b, 0), self.group(b + 1, 0));
-        let bits = &self.escapes[g0 * self.words..g1 * self.words];
-        let more = self.more_start[g1] - self.more_start[g0];
-        bits.iter().map(|w| w.count_ones() as usize).sum::<usize>() + more as usize
-    }
-
     /// The escape bits of key block `b` in the batch's `j`-th slot.
     #[inline]
     pub fn escapes(&self, b: usize, j: usize) -> &[u64] {

@@ -141,17 +141,17 @@ impl LightBasis {
         }
         if basis.lights.is_empty() {
             // Nothing emits: the directional nodes as the distribution would number them.
-            let (mut k, mut row) = (0, Vec::new());
-            for (node, s) in dark.iter().enumerate() {
+            let mut k = 0;
+            for s in &dark {
                 if s.directional() {
                     basis.dir_index.push(k);
-                    net.row_into(node as u32, &mut row);
-                    basis.dir_rows.extend_from_slice(&row);
                     k += 1;
                 } else {
                     basis.dir_index.push(super::NONE);
                 }
             }
+            let directional = dark.iter().enumerate().filter(|(_, s)| s.directional());
+            basis.dir_rows = net.rows_of(directional.map(|(node, _)| node as u32));
         }
         basis.seconds = start.elapsed().as_secs_f64();
         basis
