@@ -1243,10 +1243,23 @@ fn relight_network(
         b.superpose(&network, scene, &emission, options)
             .map_err(|e| Error::input(file, e))?
     } else {
-        let solution = net::distribute::distribute(&network, scene, options);
+        // The stored basis, for the old reflectances, is where the distribution starts.
+        let start = std::time::Instant::now();
+        let guess = basis
+            .as_ref()
+            .and_then(|b| b.guess(&network, scene, &emission, options));
+        let surfaces = net::distribute::surfaces(&network, scene, options.light_scale);
+        let solution =
+            net::distribute::distribute_from(&network, surfaces, options, start, guess.as_ref());
         say(format!(
-            "network: distribution in {:.2} s ({} sweeps or shots)",
-            solution.stats.seconds, solution.stats.sweeps
+            "network: distribution in {:.2} s ({} sweeps or shots{})",
+            solution.stats.seconds,
+            solution.stats.sweeps,
+            if solution.stats.warm_start {
+                ", starting from the stored light basis"
+            } else {
+                ""
+            }
         ));
         solution
     };

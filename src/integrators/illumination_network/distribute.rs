@@ -124,6 +124,8 @@ pub struct DistributeStats {
     pub unshot: [f64; 3],
     /// Entries of the directional maps.
     pub map_entries: u64,
+    /// Started from a guess ([`distribute_from`]).
+    pub warm_start: bool,
     pub seconds: f64,
 }
 
@@ -410,6 +412,23 @@ pub fn distribute_surfaces(
     options: &DistributeOptions,
     start: std::time::Instant,
 ) -> Solution {
+    distribute_from(net, surfaces, options, start, None)
+}
+
+/// [`distribute_surfaces`] starting from `guess`, a solution of the same network for other
+/// surfaces (incremental radiosity, after Chen 1990): the first sweep gathers the whole guess
+/// X₀ (emission included) and passes it through the new reflectances T; what that changes,
+/// r = E + T·X₀ − X₀ (negative where a reflectance went down), is then shot like emission
+/// until it falls below the tolerance. The result is X₀ + Σ Tᵏ·r, the new solution whatever
+/// the guess; the closer the guess, the fewer sweeps. When one material changes, r is
+/// mostly that material's light. Sweeps only (the shooting order starts cold).
+pub fn distribute_from(
+    net: &Network,
+    surfaces: Vec<Surface>,
+    options: &DistributeOptions,
+    start: std::time::Instant,
+    guess: Option<&Solution>,
+) -> Solution {
     let nodes = net.nodes();
     let slots = net.slots();
     let w: Vec<f32> = (0..slots as u32).map(|s| net.space.etendue(s)).collect();
@@ -438,6 +457,7 @@ pub fn distribute_surfaces(
     if options.order == Order::Shoot && dir_nodes.is_empty() {
         return shoot(net, surfaces, options, start);
     }
+    let guess = guess.filter(|g| g.diffuse.len() == nodes && g.dir_index.len() == nodes);
     let mut shot_d: Vec<Rgb> = surfaces.iter().map(|s| s.emission).collect();
     let mut shot_dir = vec![Rgb::ZERO; dir_nodes.len() * slots];
     let mut in_buf = vec![Rgb::ZERO; dir_nodes.len() * slots];
@@ -466,6 +486,33 @@ pub fn distribute_surfaces(
     stats.emitted = flux_of(&shot_d, &shot_dir);
     let emitted_total: f64 = stats.emitted.iter().sum();
     let mut unshot = stats.emitted;
+    // What is still to be shot, in absolute value (a warm start shoots negative light too).
+    let unshot_size = |shot_d: &[Rgb], shot_dir: &[Rgb]| {
+        let abs = |v: &[Rgb]| v.iter().map(|c| c.abs()).collect::<Vec<Rgb>>();
+        flux_of(&abs(shot_d), &abs(shot_dir)).iter().sum::<f64>()
+    };
+    let mut to_shoot = emitted_total;
+    let mut guess_flux = [0.0; 3];
+    if let Some(g) = guess {
+        stats.warm_start = true;
+        // X₀: the guess's reflected light on top of the emission, the directional rows of
+        // the nodes that were directional then and are now.
+        diffuse.copy_from_slice(&g.diffuse);
+        for (s, d) in shot_d.iter_mut().zip(&g.diffuse) {
+            *s += *d;
+        }
+        for (k, &n) in dir_nodes.iter().enumerate() {
+            let old = g.dir_index[n as usize];
+            if old != NONE {
+                let from = &g.directional[old as usize * slots..(old as usize + 1) * slots];
+                directional[k * slots..(k + 1) * slots].copy_from_slice(from);
+            }
+        }
+        shot_dir.copy_from_slice(&directional);
+        direct = direct_light(net, &surfaces, &w);
+        // The first sweep passes on X₀'s reflected light too: not absorbed.
+        guess_flux = flux_of(&diffuse, &directional);
+    }
     let mut in_total = vec![Rgb::ZERO; nodes];
     let mut padded = vec![Rgb::ZERO; nodes + 1];
     // Σ w over each node's escaping links.
@@ -479,9 +526,7 @@ pub fn distribute_surfaces(
         })
         .collect();
     let mut escaped = vec![Rgb::ZERO; nodes];
-    while unshot.iter().sum::<f64>() > options.tolerance as f64 * emitted_total
-        && stats.sweeps < options.max_sweeps
-    {
+    while to_shoot > options.tolerance as f64 * emitted_total && stats.sweeps < options.max_sweeps {
         // Gather: flux arriving over each node's links from what the other ends shot.
         let radiance = |j: u32, l: usize| {
             let mut r = shot_d[j as usize];
@@ -588,6 +633,17 @@ pub fn distribute_surfaces(
                     out[l] /= m as f32;
                 }
             });
+        if guess.is_some() && stats.sweeps == 0 {
+            // T·X₀ less X₀'s reflected light: the change r, shot from now on.
+            shot_d
+                .par_iter_mut()
+                .zip(&diffuse)
+                .for_each(|(s, d)| *s -= *d);
+            shot_dir
+                .par_iter_mut()
+                .zip(&directional)
+                .for_each(|(s, d)| *s -= *d);
+        }
         diffuse
             .par_iter_mut()
             .zip(&shot_d)
@@ -599,10 +655,11 @@ pub fn distribute_surfaces(
         let next = flux_of(&shot_d, &shot_dir);
         for c in 0..3 {
             stats.escaped[c] += esc[c];
-            stats.absorbed[c] += arrived[c] - next[c];
+            stats.absorbed[c] += arrived[c] - next[c] - std::mem::take(&mut guess_flux[c]);
         }
         unshot = next;
-        if stats.sweeps == 0 {
+        to_shoot = unshot_size(&shot_d, &shot_dir);
+        if stats.sweeps == 0 && guess.is_none() {
             direct.copy_from_slice(&shot_d);
         }
         stats.sweeps += 1;
@@ -621,6 +678,28 @@ pub fn distribute_surfaces(
         stats,
         light_scale: options.light_scale,
     }
+}
+
+/// The diffuse light reflected from what comes straight from the emitters (what the first
+/// sweep from the emission finds), shot from the emitters alone: a warm start's first sweep
+/// gathers more than emission.
+fn direct_light(net: &Network, surfaces: &[Surface], w: &[f32]) -> Vec<Rgb> {
+    let mut arrived = vec![Rgb::ZERO; net.nodes()];
+    for (i, s) in surfaces.iter().enumerate() {
+        if s.emission != Rgb::ZERO {
+            for (l, j) in net.slot_links(i as u32) {
+                if j < ESCAPE {
+                    arrived[j as usize] += s.emission * w[l];
+                }
+            }
+        }
+    }
+    arrived
+        .iter()
+        .zip(surfaces)
+        .zip(&net.etendue)
+        .map(|((a, s), &e)| s.kd * *a / e)
+        .collect()
 }
 
 /// The slots of a node's links with their number of links, in slot order.

@@ -213,9 +213,62 @@ impl LightBasis {
                 ));
             }
         }
+        Ok(self.combine(net, scene, emission, options, &weights, start))
+    }
+
+    /// A starting point for a distribution with other reflectances
+    /// ([`distribute::distribute_from`]): the basis superposed for `emission` (indexed as the
+    /// scene's materials) times `options.light_scale`, whatever the reflectances, with the
+    /// lights matched by material index and name (a light the basis lacks is left out; any
+    /// guess gives the right solution, a close one in fewer sweeps). `None` if the basis is
+    /// for a network of another size.
+    pub fn guess(
+        &self,
+        net: &Network,
+        scene: &Scene,
+        emission: &[Rgb],
+        options: &DistributeOptions,
+    ) -> Option<Solution> {
+        let nodes = net.nodes();
+        if self.dir_index.len() != nodes || self.lights.iter().any(|l| l.diffuse.len() != nodes) {
+            return None;
+        }
+        let weights = self
+            .lights
+            .iter()
+            .map(|light| {
+                let m = light.material as usize;
+                match scene.materials.get(m) {
+                    Some(mat) if mat.name == light.name => {
+                        let new = emission[m] * options.light_scale;
+                        Rgb::from_array(std::array::from_fn(|c| {
+                            if light.emission[c] > 0.0 {
+                                new[c] / light.emission[c]
+                            } else {
+                                0.0
+                            }
+                        }))
+                    }
+                    _ => Rgb::ZERO,
+                }
+            })
+            .collect::<Vec<_>>();
+        Some(self.combine(net, scene, emission, options, &weights, Instant::now()))
+    }
+
+    /// Σ weight ⊙ solution over the basis lights.
+    fn combine(
+        &self,
+        net: &Network,
+        scene: &Scene,
+        emission: &[Rgb],
+        options: &DistributeOptions,
+        weights: &[Rgb],
+        start: Instant,
+    ) -> Solution {
         let sum = |part: fn(&BasisLight) -> &Vec<Rgb>, len: usize| -> Vec<Rgb> {
             let mut out = vec![Rgb::ZERO; len];
-            for (light, w) in self.lights.iter().zip(&weights) {
+            for (light, w) in self.lights.iter().zip(weights) {
                 out.par_iter_mut()
                     .zip(part(light).par_iter())
                     .for_each(|(o, v)| *o += *w * *v);
@@ -225,7 +278,7 @@ impl LightBasis {
         let nodes = net.nodes();
         let dir_len = self.dir_rows.len();
         let mut stats = DistributeStats::default();
-        for (light, w) in self.lights.iter().zip(&weights) {
+        for (light, w) in self.lights.iter().zip(weights) {
             stats.sweeps = stats.sweeps.max(light.sweeps);
             for (total, part) in [
                 &mut stats.emitted,
@@ -249,7 +302,7 @@ impl LightBasis {
         let lit: Vec<Rgb> = emission.iter().map(|e| *e * options.light_scale).collect();
         let surfaces = distribute::surfaces_with(net, scene, &lit);
         stats.seconds = start.elapsed().as_secs_f64();
-        Ok(Solution {
+        Solution {
             surfaces,
             diffuse,
             direct,
@@ -261,7 +314,7 @@ impl LightBasis {
             // The emission the renderer shows directly is the scene's (already scaled per
             // light by the caller) times this.
             light_scale: options.light_scale,
-        })
+        }
     }
 
     /// Bytes of the serialised basis.
