@@ -5,7 +5,9 @@
 //!
 //! Each repetition runs, back to back: a full rebuild (scan preprocess + distribution +
 //! render), a relight of light strengths (network file prefix + light basis superposition +
-//! render), a relight of reflectances (whole network file + distribution + render) and, for
+//! render), a relight of reflectances (the carpet recoloured: whole network file +
+//! distribution started from the stored light basis + render; and, for comparison, the same
+//! distribution started cold) and, for
 //! the first `build_reps` repetitions, the Embree preprocess. Interleaving them makes a change
 //! of the machine's load hit them alike, so ratios within a run stay fair. Numbers are
 //! medians with [min–max] over the repetitions.
@@ -16,7 +18,9 @@
 
 use super::Spread;
 use crate::accel::{self, Backend};
-use crate::integrators::illumination_network::distribute::{distribute, DistributeOptions};
+use crate::integrators::illumination_network::distribute::{
+    distribute, distribute_from, surfaces, DistributeOptions,
+};
 use crate::integrators::illumination_network::relight::LightBasis;
 use crate::integrators::illumination_network::render::NetworkRenderer;
 use crate::integrators::illumination_network::{file, Builder, Network, NetworkParams};
@@ -76,6 +80,11 @@ pub struct NetworkRow {
     pub rebuild_network: Spread,
     pub relight_network: Spread,
     pub relight_reflectances: Spread,
+    /// The relight's distribution, from the basis, and a cold one of the same scene.
+    pub warm_distribution: Spread,
+    pub cold_distribution: Spread,
+    pub warm_sweeps: u32,
+    pub cold_sweeps: u32,
     pub load_prefix: Spread,
     pub load_all: Spread,
     pub basis_seconds: f64,
@@ -103,6 +112,15 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
     };
     let options = DistributeOptions::default();
     let emission: Vec<Rgb> = scene.materials.iter().map(|m| m.emission).collect();
+    // The reflectance relight's edit: another carpet.
+    let mut recoloured = scene.clone();
+    let carpet = recoloured
+        .materials
+        .iter_mut()
+        .find(|m| m.name == "carpet")
+        .ok_or_else(|| Error::input(&bench.scene, "the bench scene has no material \"carpet\""))?;
+    carpet.diffuse = crate::scene::Texture::Constant(Rgb::new(0.35, 0.3, 0.45));
+    let recoloured_ctx = Context::new(&recoloured, accel.as_ref());
     std::fs::create_dir_all(&bench.dir).map_err(|e| Error::io(&bench.dir, e))?;
     let mut rows = Vec::new();
     for &step in &bench.steps {
@@ -119,7 +137,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             step,
             ..NetworkRow::default()
         };
-        let mut t: [Vec<f64>; 14] = Default::default();
+        let mut t: [Vec<f64>; 16] = Default::default();
         for rep in 0..bench.reps {
             progress(&format!("step {step}, repetition {}: rebuild", rep + 1));
             // Full rebuild: scan preprocess + distribution + render.
@@ -192,18 +210,33 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             t[8].push(load);
             drop((prefix, sol));
 
-            // Reflectances: the whole file and a distribution.
+            // Reflectances (the carpet recoloured): the whole file and a distribution that
+            // starts from the basis stored for the old carpet (`raylink relight`'s way).
             let start = Instant::now();
-            let ((net, _), load) = timed(|| file::load_all(&path, &scene, Some(&params)))?;
-            let sol = distribute(&net, &scene, &relit);
+            let ((net, basis), load) = timed(|| file::load_all(&path, &recoloured, Some(&params)))?;
+            let guess = basis.and_then(|b| b.guess(&net, &recoloured, &emission, &relit));
+            let sol = distribute_from(
+                &net,
+                surfaces(&net, &recoloured, relit.light_scale),
+                &relit,
+                Instant::now(),
+                guess.as_ref(),
+            );
             let renderer = NetworkRenderer {
                 net: &net,
                 solution: &sol,
                 hybrid: false,
             };
-            render(&ctx, &renderer, &render_options)?;
+            render(&recoloured_ctx, &renderer, &render_options)?;
             t[9].push(start.elapsed().as_secs_f64());
             t[10].push(load);
+            t[14].push(sol.stats.seconds);
+            row.warm_sweeps = sol.stats.sweeps;
+            drop(sol);
+            // The same distribution started cold, for comparison.
+            let sol = distribute(&net, &recoloured, &relit);
+            t[15].push(sol.stats.seconds);
+            row.cold_sweeps = sol.stats.sweeps;
             drop((net, sol));
 
             if rep < bench.embree_reps {
@@ -233,6 +266,8 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
         row.load_prefix = s(&t[8]);
         row.relight_reflectances = s(&t[9]);
         row.load_all = s(&t[10]);
+        row.warm_distribution = s(&t[14]);
+        row.cold_distribution = s(&t[15]);
         row.embree = s(&t[11]);
         std::fs::remove_file(&path).map_err(|e| Error::io(&path, e))?;
         progress(&format!(
@@ -371,10 +406,16 @@ pub fn markdown(rows: &[NetworkRow], bench: &NetworkBench) -> String {
         },
     );
     line(
-        "**relight, reflectances** (load + distribution + render; s)",
+        "**relight, reflectances**: carpet recoloured (load + distribution from the basis + render; s)",
         &|r| sec(r.relight_reflectances),
     );
     line("… of which: whole file load (s)", &|r| sec(r.load_all));
+    line("… of which: distribution from the basis (s)", &|r| {
+        format!("{} ({} sweeps)", sec(r.warm_distribution), r.warm_sweeps)
+    });
+    line("… the same distribution started cold (s)", &|r| {
+        format!("{} ({} sweeps)", sec(r.cold_distribution), r.cold_sweeps)
+    });
     line("… rebuild / relight", &|r| {
         format!(
             "{:.1}×",
