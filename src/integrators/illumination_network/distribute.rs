@@ -457,7 +457,10 @@ pub fn distribute_from(
     if options.order == Order::Shoot && dir_nodes.is_empty() {
         return shoot(net, surfaces, options, start);
     }
-    let guess = guess.filter(|g| g.diffuse.len() == nodes && g.dir_index.len() == nodes);
+    let guess = guess.filter(|g| {
+        let dir = g.dir_index.iter().filter(|&&k| k != NONE).count();
+        g.diffuse.len() == nodes && g.dir_index.len() == nodes && g.directional.len() == dir * slots
+    });
     let mut shot_d: Vec<Rgb> = surfaces.iter().map(|s| s.emission).collect();
     let mut shot_dir = vec![Rgb::ZERO; dir_nodes.len() * slots];
     let mut in_buf = vec![Rgb::ZERO; dir_nodes.len() * slots];
@@ -486,8 +489,12 @@ pub fn distribute_from(
     stats.emitted = flux_of(&shot_d, &shot_dir);
     let emitted_total: f64 = stats.emitted.iter().sum();
     let mut unshot = stats.emitted;
-    // What is still to be shot, in absolute value (a warm start shoots negative light too).
-    let unshot_size = |shot_d: &[Rgb], shot_dir: &[Rgb]| {
+    // What is still to be shot, in absolute value: a warm start shoots negative light too
+    // (a cold one never does, and sums the signed flux it has).
+    let unshot_size = |shot_d: &[Rgb], shot_dir: &[Rgb], signed: [f64; 3]| {
+        if guess.is_none() {
+            return signed.iter().sum::<f64>();
+        }
         let abs = |v: &[Rgb]| v.iter().map(|c| c.abs()).collect::<Vec<Rgb>>();
         flux_of(&abs(shot_d), &abs(shot_dir)).iter().sum::<f64>()
     };
@@ -658,7 +665,7 @@ pub fn distribute_from(
             stats.absorbed[c] += arrived[c] - next[c] - std::mem::take(&mut guess_flux[c]);
         }
         unshot = next;
-        to_shoot = unshot_size(&shot_d, &shot_dir);
+        to_shoot = unshot_size(&shot_d, &shot_dir, next);
         if stats.sweeps == 0 && guess.is_none() {
             direct.copy_from_slice(&shot_d);
         }
