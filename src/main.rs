@@ -1229,39 +1229,36 @@ fn relight_network(
         start.elapsed().as_secs_f64(),
         network.nodes()
     ));
-    let solution = if basis.is_none() || spec.store_basis {
-        let b = net::relight::LightBasis::compute(&network, scene, file_emission, options);
-        net::file::save(file, &network, scene, Some(&b))?;
-        say(format!(
-            "network: distribution of a light basis in {:.2} s ({} emissive materials, {} \
-             sweeps in all), stored in {}",
-            b.seconds,
-            b.lights.len(),
-            b.lights.iter().map(|l| l.sweeps).sum::<u32>(),
-            file.display()
-        ));
-        b.superpose(&network, scene, &emission, options)
-            .map_err(|e| Error::input(file, e))?
-    } else {
+    let solution = match basis.as_ref().filter(|_| !spec.store_basis) {
+        None => {
+            let b = net::relight::LightBasis::compute(&network, scene, file_emission, options);
+            net::file::save(file, &network, scene, Some(&b))?;
+            say(format!(
+                "network: distribution of a light basis in {:.2} s ({} emissive materials, {} \
+                 sweeps in all), stored in {}",
+                b.seconds,
+                b.lights.len(),
+                b.lights.iter().map(|l| l.sweeps).sum::<u32>(),
+                file.display()
+            ));
+            b.superpose(&network, scene, &emission, options)
+                .map_err(|e| Error::input(file, e))?
+        }
         // The stored basis, for the old reflectances, is where the distribution starts.
-        let start = std::time::Instant::now();
-        let guess = basis
-            .as_ref()
-            .and_then(|b| b.guess(&network, scene, &emission, options));
-        let surfaces = net::distribute::surfaces(&network, scene, options.light_scale);
-        let solution =
-            net::distribute::distribute_from(&network, surfaces, options, start, guess.as_ref());
-        say(format!(
-            "network: distribution in {:.2} s ({} sweeps or shots{})",
-            solution.stats.seconds,
-            solution.stats.sweeps,
-            if solution.stats.warm_start {
-                ", starting from the stored light basis"
-            } else {
-                ""
-            }
-        ));
-        solution
+        Some(b) => {
+            let solution = b.redistribute(&network, scene, &emission, options);
+            say(format!(
+                "network: distribution in {:.2} s ({} sweeps or shots{})",
+                solution.stats.seconds,
+                solution.stats.sweeps,
+                if solution.stats.warm_start {
+                    ", starting from the stored light basis"
+                } else {
+                    ""
+                }
+            ));
+            solution
+        }
     };
     Ok((network, solution))
 }

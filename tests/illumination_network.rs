@@ -1088,7 +1088,6 @@ fn light_basis_superposes_per_material() {
 /// and whose mirror wall gets rougher.
 #[test]
 fn warm_start_from_a_basis_for_other_reflectances_matches_a_cold_distribution() {
-    use raylink::integrators::illumination_network::distribute::{distribute_from, surfaces};
     use raylink::integrators::illumination_network::relight::LightBasis;
     use raylink::math::Rgb;
     use raylink::scene::Texture;
@@ -1118,15 +1117,7 @@ fn warm_start_from_a_basis_for_other_reflectances_matches_a_cold_distribution() 
         let net = build(old, params(5, step), Builder::Scan);
         let emission: Vec<Rgb> = old.materials.iter().map(|m| m.emission).collect();
         let basis = LightBasis::compute(&net, old, &emission, &options);
-        let guess = basis.guess(&net, new, &emission, &options).unwrap();
-        let start = std::time::Instant::now();
-        let warm = distribute_from(
-            &net,
-            surfaces(&net, new, 1.0),
-            &options,
-            start,
-            Some(&guess),
-        );
+        let warm = basis.redistribute(&net, new, &emission, &options);
         let cold = distribute(&net, new, &options);
         assert!(warm.stats.warm_start && !cold.stats.warm_start);
         let close = |what: &str, got: &[Rgb], want: &[Rgb], bound: f64| {

@@ -18,9 +18,7 @@
 
 use super::Spread;
 use crate::accel::{self, Backend};
-use crate::integrators::illumination_network::distribute::{
-    distribute, distribute_from, surfaces, DistributeOptions,
-};
+use crate::integrators::illumination_network::distribute::{distribute, DistributeOptions};
 use crate::integrators::illumination_network::relight::LightBasis;
 use crate::integrators::illumination_network::render::NetworkRenderer;
 use crate::integrators::illumination_network::{file, Builder, Network, NetworkParams};
@@ -214,14 +212,8 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             // starts from the basis stored for the old carpet (`raylink relight`'s way).
             let start = Instant::now();
             let ((net, basis), load) = timed(|| file::load_all(&path, &recoloured, Some(&params)))?;
-            let guess = basis.and_then(|b| b.guess(&net, &recoloured, &emission, &relit));
-            let sol = distribute_from(
-                &net,
-                surfaces(&net, &recoloured, relit.light_scale),
-                &relit,
-                Instant::now(),
-                guess.as_ref(),
-            );
+            let basis = basis.ok_or_else(|| bad("the light basis was not stored".into()))?;
+            let sol = basis.redistribute(&net, &recoloured, &emission, &relit);
             let renderer = NetworkRenderer {
                 net: &net,
                 solution: &sol,

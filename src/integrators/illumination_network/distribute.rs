@@ -383,9 +383,15 @@ fn maps(net: &Network, node: u32, surface: &Surface, twin: u32) -> (SparseMap, S
     (reflect, transmit)
 }
 
-fn sum3(v: &[Rgb], w: impl Fn(usize) -> f32) -> [f64; 3] {
+/// A value as it is (the `size` of [`sum3`] for signed sums).
+fn same(c: Rgb) -> Rgb {
+    c
+}
+
+/// Σ size(v_i)·w(i) per channel, in f64.
+fn sum3(v: &[Rgb], size: impl Fn(Rgb) -> Rgb, w: impl Fn(usize) -> f32) -> [f64; 3] {
     let mut s = [0.0f64; 3];
-    for (i, c) in v.iter().enumerate() {
+    for (i, c) in v.iter().map(|&c| size(c)).enumerate() {
         let k = w(i) as f64;
         for ch in 0..3 {
             s[ch] += c[ch] as f64 * k;
@@ -472,13 +478,14 @@ pub fn distribute_from(
         map_entries,
         ..DistributeStats::default()
     };
-    let flux_of = |shot_d: &[Rgb], shot_dir: &[Rgb]| {
-        let mut f = sum3(shot_d, |i| net.etendue[i]);
+    // The flux of what the nodes shoot, or with `size` = `Rgb::abs` its absolute value.
+    let flux_by = |shot_d: &[Rgb], shot_dir: &[Rgb], size: fn(Rgb) -> Rgb| {
+        let mut f = sum3(shot_d, size, |i| net.etendue[i]);
         // Directional radiance leaves over every link of its slot (a slot with two links
         // carries it twice).
         for (k, &n) in dir_nodes.iter().enumerate() {
             for (l, _) in net.slot_links(n) {
-                let r = shot_dir[k * slots + l] * w[l];
+                let r = size(shot_dir[k * slots + l]) * w[l];
                 for c in 0..3 {
                     f[c] += r[c] as f64;
                 }
@@ -486,17 +493,19 @@ pub fn distribute_from(
         }
         f
     };
+    let flux_of = |shot_d: &[Rgb], shot_dir: &[Rgb]| flux_by(shot_d, shot_dir, same);
     stats.emitted = flux_of(&shot_d, &shot_dir);
     let emitted_total: f64 = stats.emitted.iter().sum();
     let mut unshot = stats.emitted;
     // What is still to be shot, in absolute value: a warm start shoots negative light too
     // (a cold one never does, and sums the signed flux it has).
     let unshot_size = |shot_d: &[Rgb], shot_dir: &[Rgb], signed: [f64; 3]| {
-        if guess.is_none() {
-            return signed.iter().sum::<f64>();
-        }
-        let abs = |v: &[Rgb]| v.iter().map(|c| c.abs()).collect::<Vec<Rgb>>();
-        flux_of(&abs(shot_d), &abs(shot_dir)).iter().sum::<f64>()
+        let flux = if guess.is_none() {
+            signed
+        } else {
+            flux_by(shot_d, shot_dir, Rgb::abs)
+        };
+        flux.iter().sum::<f64>()
     };
     let mut to_shoot = emitted_total;
     let mut guess_flux = [0.0; 3];
@@ -607,8 +616,8 @@ pub fn distribute_from(
                     *a += *f / (w[l] * m);
                 }
             });
-        let arrived = sum3(&in_total, |_| 1.0);
-        let esc = sum3(&escaped, |_| 1.0);
+        let arrived = sum3(&in_total, same, |_| 1.0);
+        let esc = sum3(&escaped, same, |_| 1.0);
         // Reflect: the diffuse bypass, then the directional maps.
         shot_d
             .par_iter_mut()

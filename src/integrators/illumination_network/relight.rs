@@ -216,13 +216,38 @@ impl LightBasis {
         Ok(self.combine(net, scene, emission, options, &weights, start))
     }
 
+    /// A distribution for the scene's reflectances, whatever those of the basis, started
+    /// from the basis ([`LightBasis::guess`], [`distribute::distribute_from`]); cold if the
+    /// basis is for a network of another size. `emission` as in [`LightBasis::superpose`].
+    pub fn redistribute(
+        &self,
+        net: &Network,
+        scene: &Scene,
+        emission: &[Rgb],
+        options: &DistributeOptions,
+    ) -> Solution {
+        let start = Instant::now();
+        match self.guess(net, scene, emission, options) {
+            // The guess's surfaces are the scene's, lit by `emission`.
+            Some(mut guess) => {
+                let surfaces = std::mem::take(&mut guess.surfaces);
+                distribute::distribute_from(net, surfaces, options, start, Some(&guess))
+            }
+            None => {
+                let lit: Vec<Rgb> = emission.iter().map(|e| *e * options.light_scale).collect();
+                let surfaces = distribute::surfaces_with(net, scene, &lit);
+                distribute::distribute_from(net, surfaces, options, start, None)
+            }
+        }
+    }
+
     /// A starting point for a distribution with other reflectances
     /// ([`distribute::distribute_from`]): the basis superposed for `emission` (indexed as the
     /// scene's materials) times `options.light_scale`, whatever the reflectances, with the
     /// lights matched by material index and name (a light the basis lacks is left out; any
     /// guess gives the right solution, a close one in fewer sweeps). `None` if the basis is
     /// for a network of another size.
-    pub fn guess(
+    fn guess(
         &self,
         net: &Network,
         scene: &Scene,
