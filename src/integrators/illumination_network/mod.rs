@@ -221,37 +221,49 @@ pub struct Network {
     pub stats: BuildStats,
 }
 
+/// The slots' étendues w, padded with zeros to a power of two: a slot index masked into the
+/// table needs no bounds check in the loops over links (every link's slot is below the
+/// number of slots, so the mask changes nothing).
+pub(crate) struct SlotWeights {
+    w: Vec<f32>,
+    mask: usize,
+}
+
+impl SlotWeights {
+    pub(crate) fn new(space: &RaySpace) -> SlotWeights {
+        let mut w = space.etendues();
+        let mask = w.len().next_power_of_two() - 1;
+        w.resize(mask + 1, 0.0);
+        SlotWeights { w, mask }
+    }
+
+    /// The table (its length `mask() + 1`) and the mask.
+    #[inline]
+    pub(crate) fn table(&self) -> (&[f32], usize) {
+        (&self.w[..=self.mask], self.mask)
+    }
+}
+
 /// W of one node: Σ w over its links (`list`, in slot order), in four interleaved partial
-/// sums (one running sum over ~800 links would be a chain of dependent additions). The build
-/// and the loader both add up W here, so a loaded network has the same bits.
-#[inline]
-fn list_etendue(code: LinkCode, w: &[f32], list: &[u32]) -> f32 {
+/// sums (one running sum over ~800 links would be a chain of dependent additions), calling
+/// `each` with every link on the way (the loader's checks, in the same pass). The build and
+/// the loader both add up W here, so a loaded network has the same bits.
+#[inline(always)]
+fn list_etendue(code: LinkCode, w: &SlotWeights, list: &[u32], mut each: impl FnMut(u32)) -> f32 {
+    let (w, mask) = w.table();
     let mut sum = [0.0f32; 4];
     let mut quads = list.chunks_exact(4);
     for q in &mut quads {
         for (s, &l) in sum.iter_mut().zip(q) {
-            *s += w[code.slot(l)];
+            each(l);
+            *s += w[code.slot(l) & mask];
         }
     }
     for (s, &l) in sum.iter_mut().zip(quads.remainder()) {
-        *s += w[code.slot(l)];
+        each(l);
+        *s += w[code.slot(l) & mask];
     }
     (sum[0] + sum[1]) + (sum[2] + sum[3])
-}
-
-/// W of every node ([`list_etendue`]).
-pub(crate) fn node_etendue(
-    space: &RaySpace,
-    code: LinkCode,
-    link_start: &[u32],
-    links: &[u32],
-) -> Vec<f32> {
-    use rayon::prelude::*;
-    let w = space.etendues();
-    link_start
-        .par_windows(2)
-        .map(|r| list_etendue(code, &w, &links[r[0] as usize..r[1] as usize]))
-        .collect()
 }
 
 /// What the assembly reads the links of a key block from: the batches' link ends and escapes,
@@ -438,7 +450,7 @@ impl Network {
                  a larger --intercept-step or fewer --slopes"
             ));
         }
-        let w = space.etendues();
+        let w = SlotWeights::new(&space);
         // Zeroed pages come lazily from the system; each block fills its own part.
         let mut links = vec![0u32; total];
         let mut link_start = vec![0u32; nodes + 1];
@@ -484,7 +496,7 @@ impl Network {
                 for (i, wn) in wb.iter_mut().enumerate() {
                     let to = (ends_at[i] - base) as usize;
                     let list = &out[from..to];
-                    *wn = list_etendue(code, &w, list);
+                    *wn = list_etendue(code, &w, list, |_| ());
                     for p in list.windows(2) {
                         extra += u64::from(code.slot(p[0]) == code.slot(p[1]));
                     }
