@@ -25,10 +25,11 @@
 //! hybrid rendering). Networks without directional nodes take a branchless gather.
 
 use super::ray_space::RaySpace;
-use super::{Network, ESCAPE, NONE};
+use super::{Network, SlotWeights, ESCAPE, NONE};
 use crate::bsdf::Ggx;
 use crate::math::{Rgb, Vec2, Vec3};
 use crate::scene::Scene;
+use glam::Vec3A;
 use rayon::prelude::*;
 
 /// The surface of one node.
@@ -530,7 +531,10 @@ pub fn distribute_from(
         guess_flux = flux_of(&diffuse, &directional);
     }
     let mut in_total = vec![Rgb::ZERO; nodes];
-    let mut padded = vec![Rgb::ZERO; nodes + 1];
+    // What the diffuse nodes shot, as four-lane vectors for the gather (one load and one
+    // multiply-add of a register per link; the lanes' arithmetic is Rgb's, so the same bits).
+    let mut padded = vec![Vec3A::ZERO; nodes + 1];
+    let w_pow2 = SlotWeights::new(&net.space);
     // Σ w over each node's escaping links.
     let escape_etendue: Vec<f32> = (0..nodes as u32)
         .into_par_iter()
@@ -554,18 +558,35 @@ pub fn distribute_from(
         };
         if dir_nodes.is_empty() {
             // All diffuse: a branchless gather, an escape reading a zero past the end.
-            padded[..nodes].copy_from_slice(&shot_d);
+            for (p, s) in padded.iter_mut().zip(&shot_d) {
+                *p = Vec3A::from(*s);
+            }
             let code = net.code;
+            let padded = &padded;
             in_total
                 .par_iter_mut()
                 .zip(escaped.par_iter_mut())
                 .enumerate()
                 .for_each(|(i, (tot, esc))| {
-                    let mut sum = Rgb::ZERO;
-                    for &l in net.links_of(i as u32) {
-                        sum += padded[code.raw_target(l).min(nodes)] * w[code.slot(l)];
+                    // Slices whose lengths bound the indices (the zero past the last node, a
+                    // power of two of slots): no bounds check per link.
+                    let (padded, (w, mask)) = (&padded[..=nodes], w_pow2.table());
+                    let gather =
+                        |l: u32| padded[code.raw_target(l).min(nodes)] * w[code.slot(l) & mask];
+                    // Four interleaved sums: one running sum would wait on the previous
+                    // addition at every link.
+                    let mut acc = [Vec3A::ZERO; 4];
+                    let mut quads = net.links_of(i as u32).chunks_exact(4);
+                    for q in &mut quads {
+                        for (a, &l) in acc.iter_mut().zip(q) {
+                            *a += gather(l);
+                        }
                     }
-                    *tot = sum;
+                    for (a, &l) in acc.iter_mut().zip(quads.remainder()) {
+                        *a += gather(l);
+                    }
+                    let sum = (acc[0] + acc[1]) + (acc[2] + acc[3]);
+                    *tot = sum.into();
                     *esc = shot_d[i] * escape_etendue[i];
                 });
         } else {
