@@ -25,7 +25,7 @@
 //! hybrid rendering). Networks without directional nodes take a branchless gather.
 
 use super::ray_space::RaySpace;
-use super::{Network, SlotWeights, ESCAPE, NONE};
+use super::{LinkCode, Network, SlotWeights, ESCAPE, NONE};
 use crate::bsdf::Ggx;
 use crate::math::{Rgb, Vec2, Vec3};
 use crate::scene::Scene;
@@ -535,6 +535,9 @@ pub fn distribute_from(
     // multiply-add of a register per link; the lanes' arithmetic is Rgb's, so the same bits).
     let mut padded = vec![Vec3A::ZERO; nodes + 1];
     let w_pow2 = SlotWeights::new(&net.space);
+    // Each node's directional row, NONE for diffuse nodes and the escapes' zero past the end.
+    let mut row_of = dir_index.clone();
+    row_of.push(NONE);
     // Σ w over each node's escaping links.
     let escape_etendue: Vec<f32> = (0..nodes as u32)
         .into_par_iter()
@@ -556,58 +559,45 @@ pub fn distribute_from(
             }
             r
         };
-        if dir_nodes.is_empty() {
-            // All diffuse: a branchless gather, an escape reading a zero past the end.
-            for (p, s) in padded.iter_mut().zip(&shot_d) {
-                *p = Vec3A::from(*s);
-            }
-            let code = net.code;
-            let padded = &padded;
-            in_total
-                .par_iter_mut()
-                .zip(escaped.par_iter_mut())
-                .enumerate()
-                .for_each(|(i, (tot, esc))| {
-                    // Slices whose lengths bound the indices (the zero past the last node, a
-                    // power of two of slots): no bounds check per link.
-                    let (padded, (w, mask)) = (&padded[..=nodes], w_pow2.table());
-                    let gather =
-                        |l: u32| padded[code.raw_target(l).min(nodes)] * w[code.slot(l) & mask];
-                    // Four interleaved sums: one running sum would wait on the previous
-                    // addition at every link.
-                    let mut acc = [Vec3A::ZERO; 4];
-                    let mut quads = net.links_of(i as u32).chunks_exact(4);
-                    for q in &mut quads {
-                        for (a, &l) in acc.iter_mut().zip(q) {
-                            *a += gather(l);
-                        }
-                    }
-                    for (a, &l) in acc.iter_mut().zip(quads.remainder()) {
-                        *a += gather(l);
-                    }
-                    let sum = (acc[0] + acc[1]) + (acc[2] + acc[3]);
-                    *tot = sum.into();
-                    *esc = shot_d[i] * escape_etendue[i];
-                });
-        } else {
-            in_total
-                .par_iter_mut()
-                .zip(escaped.par_iter_mut())
-                .enumerate()
-                .for_each(|(i, (tot, esc))| {
-                    let mut sum = Rgb::ZERO;
-                    let mut out = Rgb::ZERO;
-                    for (l, j) in net.slot_links(i as u32) {
-                        if j < ESCAPE {
-                            sum += radiance(j, l) * w[l];
-                        } else {
-                            out += radiance(i as u32, l) * w[l];
-                        }
-                    }
-                    *tot = sum;
-                    *esc = out;
-                });
+        // Each node gathers: the diffuse part branchless (an escape reads a zero past the last
+        // node), the directional part of directional ends on top (none in an all-diffuse
+        // network, whose loop has no test for it).
+        for (p, s) in padded.iter_mut().zip(&shot_d) {
+            *p = Vec3A::from(*s);
         }
+        let all_diffuse = dir_nodes.is_empty();
+        let (padded_now, shot_dir_now) = (&padded, &shot_dir);
+        in_total
+            .par_iter_mut()
+            .zip(escaped.par_iter_mut())
+            .enumerate()
+            .for_each(|(i, (tot, esc))| {
+                let links = net.links_of(i as u32);
+                let ends = Ends {
+                    code: net.code,
+                    padded: padded_now,
+                    w: &w_pow2,
+                    row_of: &row_of,
+                    shot_dir: shot_dir_now,
+                    slots,
+                };
+                *tot = if all_diffuse {
+                    ends.gather::<false>(links)
+                } else {
+                    ends.gather::<true>(links)
+                };
+                // Light leaving over escapes: the diffuse part over their étendue, and a
+                // directional node's own directional radiance on each.
+                let mut out = shot_d[i] * escape_etendue[i];
+                let k = dir_index[i];
+                if k != NONE {
+                    let row = &shot_dir_now[k as usize * slots..(k as usize + 1) * slots];
+                    for (l, _) in net.slot_links(i as u32).filter(|&(_, j)| j == ESCAPE) {
+                        out += row[l] * w[l];
+                    }
+                }
+                *esc = out;
+            });
         in_buf
             .par_chunks_mut(slots)
             .zip(&dir_nodes)
@@ -745,6 +735,54 @@ fn slot_runs(net: &Network, node: u32) -> impl Iterator<Item = (usize, usize)> +
     net.links_of(node)
         .chunk_by(move |a, b| code.slot(*a) == code.slot(*b))
         .map(move |r| (code.slot(r[0]), r.len()))
+}
+
+/// What a node gathers over its links from what the other ends shot.
+struct Ends<'a> {
+    code: LinkCode,
+    /// The diffuse radiance shot, a zero past the last node (where escapes read).
+    padded: &'a [Vec3A],
+    w: &'a SlotWeights,
+    /// Each end's directional row, or NONE ([`NONE`] past the last node).
+    row_of: &'a [u32],
+    shot_dir: &'a [Rgb],
+    slots: usize,
+}
+
+impl Ends<'_> {
+    /// Σ over `links` of the radiance shot toward the node × w: the diffuse part and, with
+    /// `DIRECTIONAL`, the directional part of directional ends. Four interleaved four-lane
+    /// sums: one running sum would wait on the previous addition at every link. The slices
+    /// are cut to lengths that bound their indices (the pad past the last node, a power of
+    /// two of slots), so the diffuse part has no bounds check per link.
+    #[inline(always)]
+    fn gather<const DIRECTIONAL: bool>(&self, links: &[u32]) -> Rgb {
+        let nodes = self.padded.len() - 1;
+        let (padded, row_of) = (&self.padded[..=nodes], &self.row_of[..=nodes]);
+        let ((w, mask), code) = (self.w.table(), self.code);
+        let end = |l: u32| {
+            let (t, slot) = (code.raw_target(l).min(nodes), code.slot(l) & mask);
+            let mut r = padded[t];
+            if DIRECTIONAL {
+                let k = row_of[t];
+                if k != NONE {
+                    r += Vec3A::from(self.shot_dir[k as usize * self.slots + slot]);
+                }
+            }
+            r * w[slot]
+        };
+        let mut acc = [Vec3A::ZERO; 4];
+        let mut quads = links.chunks_exact(4);
+        for q in &mut quads {
+            for (a, &l) in acc.iter_mut().zip(q) {
+                *a += end(l);
+            }
+        }
+        for (a, &l) in acc.iter_mut().zip(quads.remainder()) {
+            *a += end(l);
+        }
+        ((acc[0] + acc[1]) + (acc[2] + acc[3])).into()
+    }
 }
 
 /// out[l'] += k·c·in[l] over a map's entries.
