@@ -483,13 +483,24 @@ pub fn distribute_from(
     let flux_by = |shot_d: &[Rgb], shot_dir: &[Rgb], size: fn(Rgb) -> Rgb| {
         let mut f = sum3(shot_d, size, |i| net.etendue[i]);
         // Directional radiance leaves over every link of its slot (a slot with two links
-        // carries it twice).
-        for (k, &n) in dir_nodes.iter().enumerate() {
-            for (l, _) in net.slot_links(n) {
-                let r = size(shot_dir[k * slots + l]) * w[l];
-                for c in 0..3 {
-                    f[c] += r[c] as f64;
+        // carries it twice). Per node in parallel, added up in node order.
+        let per_node: Vec<[f64; 3]> = dir_nodes
+            .par_iter()
+            .enumerate()
+            .map(|(k, &n)| {
+                let mut f = [0.0; 3];
+                for (l, _) in net.slot_links(n) {
+                    let r = size(shot_dir[k * slots + l]) * w[l];
+                    for c in 0..3 {
+                        f[c] += r[c] as f64;
+                    }
                 }
+                f
+            })
+            .collect();
+        for node in per_node {
+            for c in 0..3 {
+                f[c] += node[c];
             }
         }
         f
@@ -614,17 +625,10 @@ pub fn distribute_from(
             .zip(in_buf.par_chunks(slots))
             .zip(&dir_nodes)
             .for_each(|((acc, flux), &i)| {
-                // Links are in slot order: a slot with m links had m times the étendue.
-                let mut runs = slot_runs(net, i).peekable();
-                for (l, (a, f)) in acc.iter_mut().zip(flux).enumerate() {
-                    let mut m = 1.0;
-                    if let Some(&(rl, c)) = runs.peek() {
-                        if rl == l {
-                            m = c as f32;
-                            runs.next();
-                        }
-                    }
-                    *a += *f / (w[l] * m);
+                // Links are in slot order: a slot with m links had m times the étendue. Only
+                // linked slots receive anything (the others' flux is zero).
+                for (l, m) in slot_runs(net, i) {
+                    acc[l] += flux[l] / (w[l] * m as f32);
                 }
             });
         let arrived = sum3(&in_total, same, |_| 1.0);
@@ -652,12 +656,13 @@ pub fn distribute_from(
                         apply(transmit, theirs, surfaces[twin as usize].kt, out);
                     }
                 }
-                for (o, &wl) in out.iter_mut().zip(&w) {
-                    *o /= wl;
-                }
-                // A slot with several links spreads its flux over all of them.
-                for (l, m) in slot_runs(net, node as u32).filter(|&(_, m)| m > 1) {
-                    out[l] /= m as f32;
+                // Flux to radiance on the slots the maps reach (linked or escaping ones, the
+                // others stay zero); a slot with several links spreads its flux over all of them.
+                for (l, m) in slot_runs(net, node as u32) {
+                    out[l] /= w[l];
+                    if m > 1 {
+                        out[l] /= m as f32;
+                    }
                 }
             });
         if guess.is_some() && stats.sweeps == 0 {
