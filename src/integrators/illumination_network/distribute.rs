@@ -22,7 +22,8 @@
 //! the scatter of its neighbours), then passes it through its reflectance. Each sweep is
 //! parallel over nodes and independent of the thread count. Sweep k carries exactly the
 //! light of k bounces, so the first sweep's output is direct illumination (kept for the
-//! hybrid rendering). Networks without directional nodes take a branchless gather.
+//! hybrid rendering). The gather is branchless for the diffuse light (`Ends::gather`);
+//! directional ends add their rows on top.
 
 use super::ray_space::RaySpace;
 use super::{LinkCode, Network, SlotWeights, ESCAPE, NONE};
