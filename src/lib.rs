@@ -9,7 +9,7 @@
 //! - [`integrators`]: one module per light-transport technique.
 //! - [`render`]: tiles, threads, pixel sampling, progress and statistics.
 //! - [`coherence`]: `raylink animate`, static-camera animation with object-space temporal coherence.
-//! - [`bench`]: `raylink bench`, Embree against the pure-Rust BVH.
+//! - [`bench`](mod@bench): `raylink bench`, Embree against the pure-Rust BVH.
 //! - [`farm`]: rendering parts of an image (tiles, crops) on many machines, and merging them.
 
 pub mod accel;

@@ -32,7 +32,7 @@ pub enum AnimIntegrator {
 /// Options of `raylink animate`.
 #[derive(Clone, Debug, clap::Args)]
 pub struct AnimateArgs {
-    /// The animated scene (.toml with an [animation] table and keyframes; docs/animation.md).
+    /// The animated scene (.toml with an `[animation]` table and keyframes; docs/animation.md).
     pub scene: PathBuf,
     /// Output file pattern: `%d` or `%0Nd` is replaced by the frame number
     /// (e.g. frames/frame_%04d.exr); the extension picks the format.

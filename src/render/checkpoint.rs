@@ -63,7 +63,7 @@ pub struct Resumed {
 
 /// Reads a checkpoint written by [`save`] for the same `settings` and film size (`blank`, a
 /// new film of the render's size and filter, receives the values). Any other file is an
-/// [`Error::Input`] naming it.
+/// [`Error::Input`](crate::Error::Input) naming it.
 pub fn load(path: &Path, settings: &str, blank: Film) -> Result<Resumed> {
     let file = FORMAT.load(path)?;
     let bad = |problem: &str| FORMAT.error(path, problem);

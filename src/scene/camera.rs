@@ -16,7 +16,7 @@ pub struct Camera {
 
 impl Camera {
     /// The ray through the continuous raster position (x right, y down, pixel (0,0) spans
-    /// [0,1]x[0,1]).
+    /// \[0,1\]x\[0,1\]).
     pub fn ray(&self, x: f32, y: f32) -> Ray {
         let basis = self.basis();
         basis.ray(x, y)

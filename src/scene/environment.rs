@@ -87,7 +87,7 @@ impl Environment {
     }
 }
 
-/// The unit direction `d` as a point of [0,1]² in the equal-area octahedral mapping.
+/// The unit direction `d` as a point of \[0,1\]² in the equal-area octahedral mapping.
 pub fn equal_area_sphere_to_square(d: Vec3) -> Vec2 {
     let (x, y, z) = (d.x.abs(), d.y.abs(), d.z.abs());
     let r = (1.0 - z).max(0.0).sqrt();

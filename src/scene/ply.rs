@@ -1,6 +1,6 @@
 //! PLY meshes (ASCII, binary little and big endian) through `ply-rs-bw`: positions, normals
 //! (`nx ny nz`), uvs (`u v`, `s t`, `texture_u texture_v` or `texture_s texture_t`) and faces
-//! (`vertex_indices` or `vertex_index`) of three or four vertices. [`write`] writes binary
+//! (`vertex_indices` or `vertex_index`) of three or four vertices. [`write()`] writes binary
 //! little-endian files for `raylink convert`.
 
 use super::{Geometry, QuadMesh, TriangleMesh};

@@ -1,5 +1,5 @@
 //! The Embree backend: a safe wrapper over the system Embree (3 or 4, chosen by build.rs) and
-//! the [`Accel`](super::Accel) implementation on top of it. This module and `sys` hold the only
+//! the [`Accel`] implementation on top of it. This module and `sys` hold the only
 //! unsafe Embree code; the differences between Embree 3 and 4 stay inside `query`.
 
 mod sys;

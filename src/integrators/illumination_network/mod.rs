@@ -10,7 +10,7 @@
 //! - [`distribute`]: light carried over the links until convergence, with reflectance maps
 //!   for diffuse (the paper's bypass), mirror, glossy, transmission and frosted surfaces.
 //! - [`render`]: eye rays find the patch; interpolation over patches and slopes (figure 6).
-//! - [`file`]: saving and loading networks, so views and lighting change without a preprocess.
+//! - [`file`](mod@file): saving and loading networks, so views and lighting change without a preprocess.
 //!
 //! Units: a link carries *flux*; a slot's étendue w converts between radiance and flux. A
 //! node's étendue W is the sum of w over its slots (linked or escaping), about π·area: a

@@ -217,7 +217,7 @@ impl LightBasis {
     }
 
     /// A distribution for the scene's reflectances, whatever those of the basis, started
-    /// from the basis ([`LightBasis::guess`], [`distribute::distribute_from`]); cold if the
+    /// from the basis (`LightBasis::guess`, [`distribute::distribute_from`]); cold if the
     /// basis is for a network of another size. `emission` as in [`LightBasis::superpose`].
     pub fn redistribute(
         &self,

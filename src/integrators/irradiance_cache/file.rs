@@ -95,7 +95,7 @@ pub fn save_for_view(
 }
 
 /// Reads a cache written by [`save`] for the same scene and options. Any other file is an
-/// [`Error::Input`] naming it.
+/// [`Error::Input`](crate::Error::Input) naming it.
 pub fn load(path: &Path, scene: &Scene, options: &IcOptions) -> Result<Cache> {
     load_with_view(path, scene, options).map(|(cache, _)| cache)
 }

@@ -7,7 +7,7 @@
 //! (mirrors, glass) are followed by sampling the BSDF's delta lobes, and E, the *indirect*
 //! irradiance, comes from the cache:
 //!
-//! - **Primary method** ([`primary`]): n strata in sin²θ by 2n strata in φ, one jittered ray
+//! - **Primary method** (`primary`): n strata in sin²θ by 2n strata in φ, one jittered ray
 //!   each: θ_j = asin(√((j + X)/n)), φ_k = π(k + Y)/n for j < n, k < 2n (eq. 2 with
 //!   0-based indices). Uniform sin²θ is the cosine-weighted density cosθ/π, so the estimator
 //!   of ∫ L cosθ dω is (π / 2n²) Σ L — exactly eq. 2. L is the radiance leaving the surface
@@ -22,7 +22,7 @@
 //! **Determinism.** The cache is filled by an *overture* that traces exactly the camera rays
 //! of the final render (same sampler keys and filter offsets), with their specular
 //! continuations but without the direct lighting of the first surfaces, and stores every
-//! primary value it computes (at all levels). It runs in phases (see [`overture_schedule`]):
+//! primary value it computes (at all levels). It runs in phases (see `overture_schedule`):
 //! coarse to fine over the image, each phase a set of image tiles that run in parallel, each
 //! tile looking values up in the cache as it stood before the phase plus the tile's own new
 //! values; after the phase the tiles' values are added in tile order. The schedule depends

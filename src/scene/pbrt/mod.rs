@@ -1,7 +1,7 @@
 //! The pbrt-v4 scene format (<https://pbrt.org/fileformat-v4>), read into a [`Scene`].
 //!
-//! [`lexer`] splits a file into tokens with positions, [`params`] checks parameter lists,
-//! and [`Loader`] runs the statements against pbrt's graphics state (CTM, material, area
+//! `lexer` splits a file into tokens with positions, `params` checks parameter lists,
+//! and `Loader` runs the statements against pbrt's graphics state (CTM, material, area
 //! light, orientation, the attribute stack), baking every shape into world space. Object
 //! instances are flattened into world-space copies.
 //!
