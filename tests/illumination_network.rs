@@ -611,16 +611,44 @@ fn network_files_are_reused_for_views_and_lighting() {
     assert!(!dir.path().join("g.exr").exists());
 }
 
-/// A link table damaged under a valid checksum (a link to a node past the last, a node's links
-/// out of slot order) is refused with a one-line error naming the file.
-#[test]
-fn damaged_link_tables_are_refused_even_with_a_valid_checksum() {
+/// The Cornell box's network (S = 5, h = 1/16), saved to a file in a temporary directory.
+fn saved_cornell_network() -> (
+    raylink::scene::Scene,
+    Network,
+    tempfile::TempDir,
+    std::path::PathBuf,
+) {
     use raylink::integrators::illumination_network::file;
     let scene = cornell();
     let net = build(&scene, params(5, 1.0 / 16.0), Builder::Scan);
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("cornell.net");
     file::save(&path, &net, &scene, None).unwrap();
+    (scene, net, dir, path)
+}
+
+/// A network read back from its file is the one that was built: the same link lists, and
+/// the same W bit for bit (the loader adds it up as the build does, in the same pass as its
+/// checks, the link table read in two halves at once).
+#[test]
+fn a_loaded_network_is_the_built_one() {
+    use raylink::integrators::illumination_network::file;
+    let (scene, net, _dir, path) = saved_cornell_network();
+    let loaded = file::load(&path, &scene, None).unwrap();
+    assert!(net.links.len() > 50_000, "{} links", net.links.len());
+    assert_eq!(loaded.link_start, net.link_start);
+    assert_eq!(loaded.links, net.links);
+    assert_eq!(loaded.key_of_node, net.key_of_node);
+    let bits = |n: &Network| n.etendue.iter().map(|w| w.to_bits()).collect::<Vec<_>>();
+    assert_eq!(bits(&loaded), bits(&net));
+}
+
+/// A link table damaged under a valid checksum (a link to a node past the last, a node's links
+/// out of slot order) is refused with a one-line error naming the file.
+#[test]
+fn damaged_link_tables_are_refused_even_with_a_valid_checksum() {
+    use raylink::integrators::illumination_network::file;
+    let (scene, net, _dir, path) = saved_cornell_network();
     assert!(file::load(&path, &scene, None).is_ok());
     let bytes = std::fs::read(&path).unwrap();
     // The links are the last words before the checksum.
