@@ -26,7 +26,7 @@
 //! directional ends add their rows on top.
 
 use super::ray_space::RaySpace;
-use super::{LinkCode, Network, SlotWeights, ESCAPE, NONE};
+use super::{interleaved_sum, LinkCode, Network, SlotWeights, ESCAPE, NONE};
 use crate::bsdf::Ggx;
 use crate::math::{Rgb, Vec2, Vec3};
 use crate::scene::Scene;
@@ -578,21 +578,20 @@ pub fn distribute_from(
             *p = Vec3A::from(*s);
         }
         let all_diffuse = dir_nodes.is_empty();
-        let (padded_now, shot_dir_now) = (&padded, &shot_dir);
+        let ends = Ends {
+            code: net.code,
+            padded: &padded,
+            w: &w_pow2,
+            row_of: &row_of,
+            shot_dir: &shot_dir,
+            slots,
+        };
         in_total
             .par_iter_mut()
             .zip(escaped.par_iter_mut())
             .enumerate()
             .for_each(|(i, (tot, esc))| {
                 let links = net.links_of(i as u32);
-                let ends = Ends {
-                    code: net.code,
-                    padded: padded_now,
-                    w: &w_pow2,
-                    row_of: &row_of,
-                    shot_dir: shot_dir_now,
-                    slots,
-                };
                 *tot = if all_diffuse {
                     ends.gather::<false>(links)
                 } else {
@@ -603,7 +602,7 @@ pub fn distribute_from(
                 let mut out = shot_d[i] * escape_etendue[i];
                 let k = dir_index[i];
                 if k != NONE {
-                    let row = &shot_dir_now[k as usize * slots..(k as usize + 1) * slots];
+                    let row = &ends.shot_dir[k as usize * slots..(k as usize + 1) * slots];
                     for (l, _) in net.slot_links(i as u32).filter(|&(_, j)| j == ESCAPE) {
                         out += row[l] * w[l];
                     }
@@ -757,8 +756,8 @@ struct Ends<'a> {
 
 impl Ends<'_> {
     /// Σ over `links` of the radiance shot toward the node × w: the diffuse part and, with
-    /// `DIRECTIONAL`, the directional part of directional ends. Four interleaved four-lane
-    /// sums: one running sum would wait on the previous addition at every link. The slices
+    /// `DIRECTIONAL`, the directional part of directional ends, in four-lane vectors
+    /// ([`interleaved_sum`]). The slices
     /// are cut to lengths that bound their indices (the pad past the last node, a power of
     /// two of slots), so the diffuse part has no bounds check per link.
     #[inline(always)]
@@ -777,17 +776,7 @@ impl Ends<'_> {
             }
             r * w[slot]
         };
-        let mut acc = [Vec3A::ZERO; 4];
-        let mut quads = links.chunks_exact(4);
-        for q in &mut quads {
-            for (a, &l) in acc.iter_mut().zip(q) {
-                *a += end(l);
-            }
-        }
-        for (a, &l) in acc.iter_mut().zip(quads.remainder()) {
-            *a += end(l);
-        }
-        ((acc[0] + acc[1]) + (acc[2] + acc[3])).into()
+        interleaved_sum(links, end).into()
     }
 }
 

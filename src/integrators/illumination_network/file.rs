@@ -33,6 +33,7 @@ use crate::binary_file::{checksum, fnv1a, Format, Reader};
 use crate::scene::Scene;
 use crate::{Error, Result};
 use std::io::Read;
+use std::os::unix::fs::FileExt;
 use std::path::Path;
 
 pub const VERSION: u32 = 3;
@@ -380,7 +381,6 @@ pub fn load_all(
     expected: Option<&NetworkParams>,
 ) -> Result<(Network, Option<LightBasis>)> {
     let bad = |problem: &str| FORMAT.error(path, problem);
-    use std::os::unix::fs::FileExt;
     let Opened {
         file,
         head,

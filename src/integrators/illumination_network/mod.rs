@@ -244,26 +244,37 @@ impl SlotWeights {
     }
 }
 
-/// W of one node: Σ w over its links (`list`, in slot order), in four interleaved partial
-/// sums (one running sum over ~800 links would be a chain of dependent additions), calling
+/// Σ term(l) over `list`, in four interleaved partial sums added as (s₀ + s₁) + (s₂ + s₃): one
+/// running sum over ~800 links would be a chain of dependent additions. The order is fixed,
+/// so the bits depend on the list alone.
+#[inline(always)]
+pub(crate) fn interleaved_sum<T>(list: &[u32], mut term: impl FnMut(u32) -> T) -> T
+where
+    T: Copy + Default + std::ops::Add<Output = T> + std::ops::AddAssign,
+{
+    let mut sum = [T::default(); 4];
+    let mut quads = list.chunks_exact(4);
+    for q in &mut quads {
+        for (s, &l) in sum.iter_mut().zip(q) {
+            *s += term(l);
+        }
+    }
+    for (s, &l) in sum.iter_mut().zip(quads.remainder()) {
+        *s += term(l);
+    }
+    (sum[0] + sum[1]) + (sum[2] + sum[3])
+}
+
+/// W of one node: Σ w over its links (`list`, in slot order) ([`interleaved_sum`]), calling
 /// `each` with every link on the way (the loader's checks, in the same pass). The build and
 /// the loader both add up W here, so a loaded network has the same bits.
 #[inline(always)]
 fn list_etendue(code: LinkCode, w: &SlotWeights, list: &[u32], mut each: impl FnMut(u32)) -> f32 {
     let (w, mask) = w.table();
-    let mut sum = [0.0f32; 4];
-    let mut quads = list.chunks_exact(4);
-    for q in &mut quads {
-        for (s, &l) in sum.iter_mut().zip(q) {
-            each(l);
-            *s += w[code.slot(l) & mask];
-        }
-    }
-    for (s, &l) in sum.iter_mut().zip(quads.remainder()) {
+    interleaved_sum(list, |l| {
         each(l);
-        *s += w[code.slot(l) & mask];
-    }
-    (sum[0] + sum[1]) + (sum[2] + sum[3])
+        w[code.slot(l) & mask]
+    })
 }
 
 /// What the assembly reads the links of a key block from: the batches' link ends and escapes,
