@@ -42,6 +42,44 @@ pub struct BasisLight {
     pub incoming: Vec<Rgb>,
 }
 
+impl BasisLight {
+    /// Whether the scene's material at the light's index still has its name.
+    fn names_its_material(&self, scene: &Scene) -> bool {
+        scene
+            .materials
+            .get(self.material as usize)
+            .is_some_and(|m| m.name == self.name)
+    }
+
+    /// The light's weight per channel for its material's `emission` (indexed as the scene's
+    /// materials) times `light_scale`, and whether that emits a channel the light lacks (its
+    /// weight there is 0).
+    fn weight(&self, emission: &[Rgb], light_scale: f32) -> (Rgb, bool) {
+        let new = emission[self.material as usize] * light_scale;
+        let (mut w, mut lacks) = (Rgb::ZERO, false);
+        for c in 0..3 {
+            if self.emission[c] > 0.0 {
+                w[c] = new[c] / self.emission[c];
+            } else {
+                lacks |= new[c] != 0.0;
+            }
+        }
+        (w, lacks)
+    }
+}
+
+/// The nodes' surfaces lit by `emission` (indexed as the scene's materials) times the
+/// options' light scale.
+fn lit_surfaces(
+    net: &Network,
+    scene: &Scene,
+    emission: &[Rgb],
+    options: &DistributeOptions,
+) -> Vec<Surface> {
+    let lit: Vec<Rgb> = emission.iter().map(|e| *e * options.light_scale).collect();
+    distribute::surfaces_with(net, scene, &lit)
+}
+
 /// Per-material solutions for one set of reflectances.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct LightBasis {
@@ -183,24 +221,15 @@ impl LightBasis {
         // The weight of each basis light, per channel.
         let mut weights = Vec::with_capacity(self.lights.len());
         for light in &self.lights {
-            if scene
-                .materials
-                .get(light.material as usize)
-                .is_none_or(|m| m.name != light.name)
-            {
+            if !light.names_its_material(scene) {
                 return Err("the stored light basis names other materials".into());
             }
-            let new = emission[light.material as usize] * options.light_scale;
-            let mut w = Rgb::ZERO;
-            for c in 0..3 {
-                if light.emission[c] > 0.0 {
-                    w[c] = new[c] / light.emission[c];
-                } else if new[c] != 0.0 {
-                    return Err(format!(
-                        "material {} emits a colour the stored light basis lacks",
-                        light.name
-                    ));
-                }
+            let (w, lacks) = light.weight(emission, options.light_scale);
+            if lacks {
+                return Err(format!(
+                    "material {} emits a colour the stored light basis lacks",
+                    light.name
+                ));
             }
             weights.push(w);
         }
@@ -234,8 +263,7 @@ impl LightBasis {
                 distribute::distribute_from(net, surfaces, options, start, Some(&guess))
             }
             None => {
-                let lit: Vec<Rgb> = emission.iter().map(|e| *e * options.light_scale).collect();
-                let surfaces = distribute::surfaces_with(net, scene, &lit);
+                let surfaces = lit_surfaces(net, scene, emission, options);
                 distribute::distribute_from(net, surfaces, options, start, None)
             }
         }
@@ -262,19 +290,10 @@ impl LightBasis {
             .lights
             .iter()
             .map(|light| {
-                let m = light.material as usize;
-                match scene.materials.get(m) {
-                    Some(mat) if mat.name == light.name => {
-                        let new = emission[m] * options.light_scale;
-                        Rgb::from_array(std::array::from_fn(|c| {
-                            if light.emission[c] > 0.0 {
-                                new[c] / light.emission[c]
-                            } else {
-                                0.0
-                            }
-                        }))
-                    }
-                    _ => Rgb::ZERO,
+                if light.names_its_material(scene) {
+                    light.weight(emission, options.light_scale).0
+                } else {
+                    Rgb::ZERO
                 }
             })
             .collect::<Vec<_>>();
@@ -324,8 +343,7 @@ impl LightBasis {
         let directional = sum(|l| &l.directional, dir_len);
         let incoming = sum(|l| &l.incoming, dir_len);
         // The surfaces as the distribution would have them (rendering reads their ks, kt, α).
-        let lit: Vec<Rgb> = emission.iter().map(|e| *e * options.light_scale).collect();
-        let surfaces = distribute::surfaces_with(net, scene, &lit);
+        let surfaces = lit_surfaces(net, scene, emission, options);
         stats.seconds = start.elapsed().as_secs_f64();
         Solution {
             surfaces,
