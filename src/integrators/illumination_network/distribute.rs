@@ -545,11 +545,11 @@ pub fn distribute_from(
     let mut in_total = vec![Rgb::ZERO; nodes];
     // What the diffuse nodes shot, as four-lane vectors for the gather (one load and one
     // multiply-add of a register per link; the lanes' arithmetic is Rgb's, so the same bits).
-    let mut padded = vec![Vec3A::ZERO; nodes + 1];
+    let mut padded = vec![Vec3A::ZERO; Ends::padded_len(nodes)];
     let w_pow2 = SlotWeights::new(&net.space);
     // Each node's directional row, NONE for diffuse nodes and the escapes' zero past the end.
     let mut row_of = dir_index.clone();
-    row_of.push(NONE);
+    row_of.resize(padded.len(), NONE);
     // Σ w over each node's escaping links.
     let escape_etendue: Vec<f32> = (0..nodes as u32)
         .into_par_iter()
@@ -745,28 +745,38 @@ fn slot_runs(net: &Network, node: u32) -> impl Iterator<Item = (usize, usize)> +
 /// What a node gathers over its links from what the other ends shot.
 struct Ends<'a> {
     code: LinkCode,
-    /// The diffuse radiance shot, a zero past the last node (where escapes read).
+    /// The diffuse radiance shot, and zeros past the last node up to a power of two
+    /// ([`Ends::padded_len`]), where escapes read.
     padded: &'a [Vec3A],
     w: &'a SlotWeights,
-    /// Each end's directional row, or NONE ([`NONE`] past the last node).
+    /// Each end's directional row, or NONE ([`NONE`] past the last node), as long as `padded`.
     row_of: &'a [u32],
     shot_dir: &'a [Rgb],
     slots: usize,
 }
 
 impl Ends<'_> {
+    /// The length of `padded` for `nodes` nodes: a power of two past the last node. A link
+    /// masked to it gives its node (below the mask, which is below the target bits) or, for
+    /// an escape (all target bits set), the last entry, a zero: one `and` per link, no
+    /// bounds check and no branch.
+    fn padded_len(nodes: usize) -> usize {
+        (nodes + 1).next_power_of_two()
+    }
+
     /// Σ over `links` of the radiance shot toward the node × w: the diffuse part and, with
     /// `DIRECTIONAL`, the directional part of directional ends, in four-lane vectors
-    /// ([`interleaved_sum`]). The slices
-    /// are cut to lengths that bound their indices (the pad past the last node, a power of
-    /// two of slots), so the diffuse part has no bounds check per link.
+    /// ([`interleaved_sum`]). Indices are masked into slices of power-of-two lengths (nodes,
+    /// [`Ends::padded_len`]; slots, [`SlotWeights`]), so the diffuse part has no bounds check
+    /// per link.
     #[inline(always)]
     fn gather<const DIRECTIONAL: bool>(&self, links: &[u32]) -> Rgb {
-        let nodes = self.padded.len() - 1;
-        let (padded, row_of) = (&self.padded[..=nodes], &self.row_of[..=nodes]);
+        let last = self.padded.len() - 1;
+        debug_assert!(self.padded.len().is_power_of_two());
+        let (padded, row_of) = (&self.padded[..=last], &self.row_of[..=last]);
         let ((w, mask), code) = (self.w.table(), self.code);
         let end = |l: u32| {
-            let (t, slot) = (code.raw_target(l).min(nodes), code.slot(l) & mask);
+            let (t, slot) = (l as usize & last, code.slot(l) & mask);
             let mut r = padded[t];
             if DIRECTIONAL {
                 let k = row_of[t];

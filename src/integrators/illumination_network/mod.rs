@@ -191,8 +191,8 @@ impl LinkCode {
         }
     }
 
-    /// The other end's bits as they are: an escape is larger than any node (a branchless
-    /// gather clamps it onto a zero past the last node).
+    /// The other end's bits as they are: an escape is larger than any node (the loader's
+    /// checks compare them without a branch).
     #[inline]
     pub fn raw_target(self, link: u32) -> usize {
         (link & self.escape()) as usize
