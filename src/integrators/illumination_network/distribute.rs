@@ -24,6 +24,14 @@
 //! light of k bounces, so the first sweep's output is direct illumination (kept for the
 //! hybrid rendering). The gather is branchless for the diffuse light (`Ends::gather`);
 //! directional ends add their rows on top.
+//!
+//! All-diffuse networks are solved by default with conjugate gradients on the symmetrised
+//! system ([`conjugate_gradients`]): the same gather, about 8 of them where the sweeps take
+//! 13, and a smaller error. Networks with directional nodes (their maps are not symmetric)
+//! use the sweeps whatever the order asked; `Order::Shoot` is the paper-era alternative,
+//! sequential.
+
+mod conjugate_gradients;
 
 use super::ray_space::RaySpace;
 use super::{interleaved_sum, LinkCode, Network, SlotWeights, ESCAPE, NONE};
@@ -64,11 +72,15 @@ pub struct DistributeOptions {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum Order {
     /// Jacobi sweeps over all nodes, in parallel.
-    #[default]
     Sweeps,
     /// Largest unshot flux first (Southwell iteration, as progressive radiosity), one node at
     /// a time. Networks with directional nodes use sweeps.
     Shoot,
+    /// Conjugate gradients on the symmetrised system ([`conjugate_gradients`]): about half
+    /// the gathers of the sweeps for the same tolerance. Networks with directional nodes use
+    /// sweeps.
+    #[default]
+    ConjugateGradients,
 }
 
 impl Default for DistributeOptions {
@@ -77,7 +89,7 @@ impl Default for DistributeOptions {
             tolerance: super::DEFAULT_TOLERANCE,
             max_sweeps: 100_000,
             light_scale: 1.0,
-            order: Order::Sweeps,
+            order: Order::ConjugateGradients,
         }
     }
 }
@@ -117,6 +129,8 @@ pub struct Solution {
 
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct DistributeStats {
+    /// Passes over the links: sweeps, or the gathers of conjugate gradients (one each), or
+    /// for [`Order::Shoot`] the shots.
     pub sweeps: u32,
     /// Flux (RGB) emitted, escaped over links that leave the scene, absorbed, and still
     /// unshot at the end: emitted = escaped + absorbed + unshot.
@@ -469,6 +483,9 @@ pub fn distribute_from(
         let dir = g.dir_index.iter().filter(|&&k| k != NONE).count();
         g.diffuse.len() == nodes && g.dir_index.len() == nodes && g.directional.len() == dir * slots
     });
+    if options.order == Order::ConjugateGradients && dir_nodes.is_empty() {
+        return conjugate_gradients::solve(net, surfaces, options, start, guess);
+    }
     let mut shot_d: Vec<Rgb> = surfaces.iter().map(|s| s.emission).collect();
     let mut shot_dir = vec![Rgb::ZERO; dir_nodes.len() * slots];
     let mut in_buf = vec![Rgb::ZERO; dir_nodes.len() * slots];
@@ -550,16 +567,7 @@ pub fn distribute_from(
     // Each node's directional row, NONE for diffuse nodes and the escapes' zero past the end.
     let mut row_of = dir_index.clone();
     row_of.resize(padded.len(), NONE);
-    // Σ w over each node's escaping links.
-    let escape_etendue: Vec<f32> = (0..nodes as u32)
-        .into_par_iter()
-        .map(|i| {
-            net.slot_links(i)
-                .filter(|&(_, t)| t == ESCAPE)
-                .map(|(l, _)| w[l])
-                .sum()
-        })
-        .collect();
+    let escape_etendue = escape_etendues(net);
     let mut escaped = vec![Rgb::ZERO; nodes];
     while to_shoot > options.tolerance as f64 * emitted_total && stats.sweeps < options.max_sweeps {
         // Gather: flux arriving over each node's links from what the other ends shot.
@@ -734,6 +742,19 @@ fn direct_light(net: &Network, surfaces: &[Surface], w: &[f32]) -> Vec<Rgb> {
         .collect()
 }
 
+/// Σ w over each node's escaping links.
+fn escape_etendues(net: &Network) -> Vec<f32> {
+    (0..net.nodes() as u32)
+        .into_par_iter()
+        .map(|i| {
+            net.slot_links(i)
+                .filter(|&(_, t)| t == ESCAPE)
+                .map(|(l, _)| net.space.etendue(l as u32))
+                .sum()
+        })
+        .collect()
+}
+
 /// The slots of a node's links with their number of links, in slot order.
 fn slot_runs(net: &Network, node: u32) -> impl Iterator<Item = (usize, usize)> + '_ {
     let code = net.code;
@@ -755,13 +776,25 @@ struct Ends<'a> {
     slots: usize,
 }
 
-impl Ends<'_> {
+impl<'a> Ends<'a> {
     /// The length of `padded` for `nodes` nodes: a power of two past the last node. A link
     /// masked to it gives its node (below the mask, which is below the target bits) or, for
     /// an escape (all target bits set), the last entry, a zero: one `and` per link, no
     /// bounds check and no branch.
     fn padded_len(nodes: usize) -> usize {
         (nodes + 1).next_power_of_two()
+    }
+
+    /// The ends of an all-diffuse network (only [`Ends::gather`]`::<false>`), reading `padded`.
+    fn diffuse(code: LinkCode, padded: &'a [Vec3A], w: &'a SlotWeights) -> Ends<'a> {
+        Ends {
+            code,
+            padded,
+            w,
+            row_of: &[],
+            shot_dir: &[],
+            slots: 0,
+        }
     }
 
     /// Σ over `links` of the radiance shot toward the node × w: the diffuse part and, with
@@ -773,7 +806,12 @@ impl Ends<'_> {
     fn gather<const DIRECTIONAL: bool>(&self, links: &[u32]) -> Rgb {
         let last = self.padded.len() - 1;
         debug_assert!(self.padded.len().is_power_of_two());
-        let (padded, row_of) = (&self.padded[..=last], &self.row_of[..=last]);
+        let padded = &self.padded[..=last];
+        let row_of = if DIRECTIONAL {
+            &self.row_of[..=last]
+        } else {
+            &[]
+        };
         let ((w, mask), code) = (self.w.table(), self.code);
         let end = |l: u32| {
             let (t, slot) = (l as usize & last, code.slot(l) & mask);

@@ -101,6 +101,7 @@ fn order_code(o: distribute::Order) -> u32 {
     match o {
         distribute::Order::Sweeps => 0,
         distribute::Order::Shoot => 1,
+        distribute::Order::ConjugateGradients => 2,
     }
 }
 
