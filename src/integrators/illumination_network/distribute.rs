@@ -31,7 +31,7 @@
 //! use the sweeps whatever the order asked; `Order::Shoot` is the paper-era alternative,
 //! sequential.
 
-mod conjugate_gradients;
+pub mod conjugate_gradients;
 
 use super::ray_space::RaySpace;
 use super::{interleaved_sum, LinkCode, Network, SlotWeights, ESCAPE, NONE};

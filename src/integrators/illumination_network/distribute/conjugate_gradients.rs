@@ -16,7 +16,8 @@
 //! [−1, 1]. Conjugate gradients on it (one per colour channel, in the lanes of a `Vec3A`) need
 //! one gather K·y per iteration, like a sweep, and cut the residual by about 4 per iteration
 //! on the office scene where a sweep cuts it by the mean albedo (about 1.6): 6 gathers
-//! against 13 sweeps at the same tolerance.
+//! against 13 sweeps at the same tolerance, 8 at the tenth of it they are held to
+//! (`TIGHTER`).
 //!
 //! The residual r of the system is what one more sweep would change: x_r's change is S·r, so
 //! its flux is Σ √(kd·W)·|r|, compared with the tolerance as the sweeps compare the flux they
