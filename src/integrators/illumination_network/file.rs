@@ -368,6 +368,54 @@ impl StreamSum {
     }
 }
 
+/// A node's links checked: flag 1 if one goes past the last slot or node (an escape aside),
+/// flag 2 if they are not in slot order. Four links at a time on the packed words: the slot
+/// is their high bits, so a slot past the last is a word at or above `slots` shifted up,
+/// and slot order is the order of the words with the target bits masked off.
+fn link_flags(code: LinkCode, list: &[u32], slots: usize, nodes: usize) -> u8 {
+    use wide::u32x4;
+    let escape = code.escape();
+    // Every word is below 2^32: with a power of two of slots no slot can be past the last.
+    let first_past = u32::try_from((slots as u64) << code.target_bits).unwrap_or(u32::MAX);
+    let slot_past = |l: u32x4| {
+        if first_past == u32::MAX {
+            u32x4::ZERO
+        } else {
+            l.simd_ge(u32x4::splat(first_past))
+        }
+    };
+    let (esc, nodes4) = (u32x4::splat(escape), u32x4::splat(nodes as u32));
+    let node_past = |l: u32x4| {
+        let t = l & esc;
+        t.simd_ge(nodes4) & !t.simd_eq(esc)
+    };
+    let slot_bits = |l: u32x4| l & !esc;
+    let (mut past, mut unordered) = (u32x4::ZERO, u32x4::ZERO);
+    let quads = list.chunks_exact(4);
+    let tail = quads.remainder();
+    for q in quads {
+        let l = u32x4::new([q[0], q[1], q[2], q[3]]);
+        past |= slot_past(l) | node_past(l);
+    }
+    // Each word against the next one, four pairs at a time.
+    let pairs = list.len().saturating_sub(1);
+    for i in (0..pairs / 4).map(|k| 4 * k) {
+        let (a, b) = (&list[i..i + 4], &list[i + 1..i + 5]);
+        let a = slot_bits(u32x4::new([a[0], a[1], a[2], a[3]]));
+        let b = slot_bits(u32x4::new([b[0], b[1], b[2], b[3]]));
+        unordered |= b.simd_lt(a);
+    }
+    let mut flags = u8::from(past.any()) | u8::from(unordered.any()) << 1;
+    for &l in tail {
+        let (slot, t) = (code.slot(l), code.raw_target(l));
+        flags |= u8::from(slot >= slots || (t >= nodes && t != escape as usize));
+    }
+    for p in list[pairs / 4 * 4..].windows(2) {
+        flags |= u8::from(code.slot(p[1]) < code.slot(p[0])) << 1;
+    }
+    flags
+}
+
 /// Reads a network written by [`save`] for the same scene geometry. `expected`, when given,
 /// must equal the stored parameters. Any other file is an [`Error::Input`] naming it.
 pub fn load(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> Result<Network> {
@@ -420,59 +468,71 @@ pub fn load_all(
     );
     a?;
     b?;
-    sum.update(wide::bytemuck::cast_slice(second));
     let mut stored = [0u8; 8];
     file.read_exact_at(&mut stored, at + 4 * n_links as u64)
         .map_err(|_| bad("truncated"))?;
-    if sum.finish() != u64::from_le_bytes(stored) {
-        return Err(bad("checksum mismatch (truncated or corrupt)"));
-    }
-    // The file is little-endian.
-    #[cfg(target_endian = "big")]
-    for w in link_start.iter_mut().chain(&mut links) {
-        *w = u32::from_le(*w);
-    }
     let body = &head[12 + HEADER..head.len() - 8];
     let (a, basis) = body.split_at(4 * nodes);
-    let (key_of_node, node_of_key) = node_table(path, a, h.cells)?;
-    let basis = basis_of(path, basis, nodes, slots)?;
-    if link_start[0] != 0
-        || link_start.windows(2).any(|w| w[0] > w[1])
-        || link_start[nodes] as usize != n_links
-    {
-        return Err(bad("invalid link table"));
+    // The file is little-endian (the link table's words are converted after its checksum).
+    #[cfg(target_endian = "big")]
+    for w in link_start.iter_mut() {
+        *w = u32::from_le(*w);
     }
+    let starts_ok = link_start[0] == 0
+        && link_start.windows(2).all(|w| w[0] <= w[1])
+        && link_start[nodes] as usize == n_links;
     let code = LinkCode::new(slots, 2 * h.cells as usize).map_err(|e| bad(&e))?;
-    // One pass over each node's links, in parallel: their W, and on the way whether they go to
-    // existing slots and nodes (flag 1) in slot order (flag 2), checked without a branch per
-    // link. (A bad slot reads a W masked into the table; the result is not used.)
-    let etendue = {
+    // One pass over each node's links, in parallel: their W, and whether they go to existing
+    // slots and nodes (flag 1) in slot order (flag 2), checked without a branch per link. (A
+    // bad slot reads a W masked into the table; the result is not used.)
+    let w = super::SlotWeights::new(&space);
+    let check = |links: &[u32]| {
         use rayon::prelude::*;
-        let w = super::SlotWeights::new(&space);
-        let escape = code.escape() as usize;
         let (etendue, flags): (Vec<f32>, Vec<u8>) = link_start
             .par_windows(2)
             .map(|r| {
                 let list = &links[r[0] as usize..r[1] as usize];
-                let (mut past, mut unordered, mut last) = (false, false, 0);
-                let e = super::list_etendue(code, &w, list, |l| {
-                    let (slot, t) = (code.slot(l), code.raw_target(l));
-                    past |= (slot >= slots) | ((t >= nodes) & (t != escape));
-                    unordered |= slot < last;
-                    last = slot;
-                });
-                (e, u8::from(past) | u8::from(unordered) << 1)
+                let e = super::list_etendue(code, &w, list, |_| ());
+                (e, link_flags(code, list, slots, nodes))
             })
             .unzip();
-        let flags = flags.iter().fold(0, |all, f| all | f);
-        if flags & 1 != 0 {
-            return Err(bad("a link points past the last slot or node"));
-        }
-        if flags & 2 != 0 {
-            return Err(bad("a node's links are not in slot order"));
-        }
-        etendue
+        (etendue, flags.iter().fold(0, |all, f| all | f))
     };
+    let second = &links[n_links / 2..];
+    let whole = |sum: StreamSum| sum.finish() == u64::from_le_bytes(stored);
+    // The checksum of the second half goes on one thread while the pass starts on the other
+    // (its result is used only once the checksum holds).
+    #[cfg(target_endian = "little")]
+    let (sum_ok, checked) = rayon::join(
+        || {
+            sum.update(wide::bytemuck::cast_slice(second));
+            whole(sum)
+        },
+        || starts_ok.then(|| check(&links)),
+    );
+    #[cfg(target_endian = "big")]
+    let (sum_ok, checked) = {
+        sum.update(wide::bytemuck::cast_slice(second));
+        let ok = whole(sum);
+        for w in links.iter_mut() {
+            *w = u32::from_le(*w);
+        }
+        (ok, (ok && starts_ok).then(|| check(&links)))
+    };
+    if !sum_ok {
+        return Err(bad("checksum mismatch (truncated or corrupt)"));
+    }
+    let (key_of_node, node_of_key) = node_table(path, a, h.cells)?;
+    let basis = basis_of(path, basis, nodes, slots)?;
+    let Some((etendue, flags)) = checked else {
+        return Err(bad("invalid link table"));
+    };
+    if flags & 1 != 0 {
+        return Err(bad("a link points past the last slot or node"));
+    }
+    if flags & 2 != 0 {
+        return Err(bad("a node's links are not in slot order"));
+    }
     Ok((
         Network {
             params: h.params,
@@ -493,6 +553,60 @@ pub fn load_all(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The four-at-a-time link checks find a bad slot, a bad node or a slot out of order
+    /// wherever it is (in a quad, in the tail, across a quad's edge), let escapes and the last
+    /// slot and node pass, and agree with checking one link at a time.
+    #[test]
+    fn link_checks_find_every_damage() {
+        let one_at_a_time = |code: LinkCode, list: &[u32], slots: usize, nodes: usize| {
+            let mut flags = 0;
+            for (i, &l) in list.iter().enumerate() {
+                let (slot, t) = (code.slot(l), code.target(l));
+                flags |=
+                    u8::from(slot >= slots || (t != super::super::ESCAPE && t as usize >= nodes));
+                if i > 0 && slot < code.slot(list[i - 1]) {
+                    flags |= 2;
+                }
+            }
+            flags
+        };
+        // 1,200 slots (not a power of two: a slot can be past the last) and 1,024.
+        for slots in [1200usize, 1024] {
+            let (nodes, keys) = (1000usize, 4000usize);
+            let code = LinkCode::new(slots, keys).unwrap();
+            for len in [1usize, 3, 4, 5, 8, 9, 13] {
+                let good: Vec<u32> = (0..len as u32)
+                    .map(|i| {
+                        let slot = i * (slots as u32 - 1) / len as u32;
+                        match i % 3 {
+                            0 => code.pack(slot, super::super::ESCAPE),
+                            1 => code.pack(slot, nodes as u32 - 1),
+                            _ => code.pack(slot, i),
+                        }
+                    })
+                    .collect();
+                assert_eq!(link_flags(code, &good, slots, nodes), 0, "{slots} {len}");
+                for at in 0..len {
+                    let mut bad = good.clone();
+                    bad[at] = code.pack(code.slot(good[at]) as u32, nodes as u32);
+                    let mut unordered = good.clone();
+                    unordered[at] = code.pack(slots as u32 - 1, 0);
+                    let mut cases = vec![(bad, 1), (unordered, if at + 1 < len { 2 } else { 0 })];
+                    if slots < 1 << (32 - code.target_bits) {
+                        let mut past_slot = good.clone();
+                        past_slot[at] = code.pack(slots as u32, 0);
+                        cases.push((past_slot, if at + 1 < len { 3 } else { 1 }));
+                    }
+                    for (list, want) in cases {
+                        let got = link_flags(code, &list, slots, nodes);
+                        assert_eq!(got, one_at_a_time(code, &list, slots, nodes));
+                        assert_eq!(got, want, "{slots} slots, {len} links, at {at}");
+                    }
+                }
+            }
+        }
+    }
 
     /// The streamed checksum equals the file checksum however the data is cut.
     #[test]
