@@ -1114,15 +1114,26 @@ fn network(
         ..Default::default()
     };
     if let (Some(spec), Some(f)) = (&a.relight, &a.network_file) {
-        let (network, solution) =
-            relight_network(f, spec, scene, file_emission, &params, &options, &say)?;
+        let (network, solution) = relight_network(
+            f,
+            spec,
+            scene,
+            file_emission,
+            &params,
+            &options,
+            &say,
+            &args.scene,
+        )?;
         if a.network_stats {
             print_network_stats(&network, &solution);
         }
         return Ok((network, solution));
     }
     let network = network_structure(args, scene, ctx, params, &say)?;
-    let solution = net::distribute::distribute(&network, scene, &options);
+    let surfaces = net::distribute::surfaces(&network, scene, options.light_scale);
+    check_bounded(&network, &surfaces, &args.scene)?;
+    let start = std::time::Instant::now();
+    let solution = net::distribute::distribute_surfaces(&network, surfaces, &options, start);
     let st = &solution.stats;
     say(format!(
         "network: distribution in {:.2} s ({} sweeps or shots)",
@@ -1193,10 +1204,32 @@ fn network_structure(
     Ok(network)
 }
 
+/// An error naming the scene when light in some channel can never leave the network
+/// ([`net::distribute::lossless_channel`]): its radiance has no finite value.
+fn check_bounded(
+    network: &net::Network,
+    surfaces: &[net::distribute::Surface],
+    scene_path: &std::path::Path,
+) -> Result<(), Error> {
+    match net::distribute::lossless_channel(network, surfaces) {
+        None => Ok(()),
+        Some(c) => Err(Error::input(
+            scene_path,
+            format!(
+                "no {} light can leave the scene: every surface reflects or transmits all of it \
+                 and no line escapes, so its radiance grows without bound; lower a diffuse, \
+                 specular or transmission value below 1",
+                ["red", "green", "blue"][c]
+            ),
+        )),
+    }
+}
+
 /// `raylink relight`'s network and solution: from the file's light basis when it holds one
 /// for these reflectances (reading only the file's prefix: no link table, no distribution),
 /// else the whole network and a distribution (storing a basis when the file has none or
 /// `--store-basis` asks).
+#[allow(clippy::too_many_arguments)]
 fn relight_network(
     file: &std::path::Path,
     spec: &RelightSpec,
@@ -1205,10 +1238,17 @@ fn relight_network(
     params: &net::NetworkParams,
     options: &net::distribute::DistributeOptions,
     say: &dyn Fn(String),
+    scene_path: &std::path::Path,
 ) -> Result<(net::Network, net::distribute::Solution), Error> {
     let emission: Vec<_> = scene.materials.iter().map(|m| m.emission).collect();
     let start = std::time::Instant::now();
     let (prefix, basis) = net::file::load_prefix(file, scene, Some(params))?;
+    let lit: Vec<_> = emission.iter().map(|&e| e * options.light_scale).collect();
+    check_bounded(
+        &prefix,
+        &net::distribute::surfaces_with(&prefix, scene, &lit),
+        scene_path,
+    )?;
     if let Some(b) = basis.as_ref().filter(|_| !spec.store_basis) {
         match b.superpose(&prefix, scene, &emission, options) {
             Ok(solution) => {

@@ -68,6 +68,11 @@ fn wall(axis: usize, side: f32, material: &str) -> String {
 
 /// The unit cube, closed, every wall of material `m` except the floor (y = 0) of `floor`.
 fn closed_box(materials: &str, m: &str, floor: &str) -> Scene {
+    scene(&closed_box_text(materials, m, floor))
+}
+
+/// [`closed_box`]'s scene file.
+fn closed_box_text(materials: &str, m: &str, floor: &str) -> String {
     let mut text = format!("{CAMERA}\n{materials}\n");
     for axis in 0..3 {
         for side in [0.0, 1.0] {
@@ -75,7 +80,7 @@ fn closed_box(materials: &str, m: &str, floor: &str) -> Scene {
             text += &wall(axis, side, mat);
         }
     }
-    scene(&text)
+    text
 }
 
 fn params(slopes: u32, step: f32) -> NetworkParams {
@@ -898,6 +903,45 @@ fn the_distribution_orders_agree() {
             "channel {ch}: escapes differ by {escaped}"
         );
     }
+}
+
+/// A closed box whose every wall reflects all of the red light (green and blue are partly
+/// absorbed) has no finite red radiance: rendering and relighting refuse it with a one-line
+/// error naming the scene and the channel, exit 2, and write no image; with one wall
+/// absorbing a little red it renders.
+#[test]
+fn a_closed_scene_that_absorbs_no_light_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let write = |name: &str, floor: &str| {
+        let materials = format!(
+            "[materials.m]\ndiffuse = [1, 0.5, 0.5]\nemission = 1\n[materials.floor]\n\
+             diffuse = {floor}\n"
+        );
+        let path = tmp_path(&dir, name);
+        std::fs::write(&path, closed_box_text(&materials, "m", "floor")).unwrap();
+        path
+    };
+    let white = write("white.toml", "[1, 0.2, 0.2]");
+    let out = tmp_path(&dir, "white.png");
+    let net = tmp_path(&dir, "white.net");
+    let render = network_render(&white, &out, &["--network-file", &net]);
+    let relight = network_relight(&white, &out, &net, &["--light", "m=2"]);
+    for (what, run) in [("render", &render), ("relight", &relight)] {
+        let e = stderr(run);
+        assert_eq!(run.status.code(), Some(2), "{what}: {e}");
+        let errors: Vec<&str> = e.lines().filter(|l| l.contains("error")).collect();
+        assert!(
+            errors.len() == 1
+                && errors[0].contains("white.toml")
+                && errors[0].contains("no red light can leave"),
+            "{what}: {e}"
+        );
+        assert!(!std::path::Path::new(&out).exists(), "{what}");
+    }
+    let grey = write("grey.toml", "[0.9, 0.2, 0.2]");
+    let ok = network_render(&grey, &out, &[]);
+    assert!(ok.status.success(), "{}", stderr(&ok));
+    assert!(std::path::Path::new(&out).exists());
 }
 
 fn network_relight(scene: &str, out: &str, file: &str, extra: &[&str]) -> std::process::Output {

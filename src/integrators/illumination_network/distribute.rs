@@ -188,6 +188,23 @@ pub fn surfaces_with(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<Surf
         .collect()
 }
 
+/// The colour channel (0 red, 1 green, 2 blue) in which light is emitted and can never
+/// leave: no link escapes and every node reflects or transmits all of it (kd + ks + kt = 1).
+/// Its radiance has no finite value (each bounce carries all of it on), so no distribution
+/// converges: the sweeps would run to `max_sweeps`, conjugate gradients stop at a value set
+/// by rounding. `None` when every channel is bounded.
+pub fn lossless_channel(net: &Network, surfaces: &[Surface]) -> Option<usize> {
+    if net.stats.escapes > 0 {
+        return None;
+    }
+    (0..3).find(|&c| {
+        surfaces.iter().any(|s| s.emission[c] > 0.0)
+            && surfaces
+                .iter()
+                .all(|s| s.kd[c] + s.ks[c] + s.kt[c] >= 1.0 - 1e-6)
+    })
+}
+
 /// Candidate slots around direction `dir` (unit): every slot within `radius` grid steps of
 /// `dir`'s slope coordinates in each family whose slope range it is near.
 pub(crate) fn candidates(space: &RaySpace, dir: Vec3, radius: i64, out: &mut Vec<u32>) {
