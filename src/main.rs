@@ -1243,12 +1243,6 @@ fn relight_network(
     let emission: Vec<_> = scene.materials.iter().map(|m| m.emission).collect();
     let start = std::time::Instant::now();
     let (prefix, basis) = net::file::load_prefix(file, scene, Some(params))?;
-    let lit: Vec<_> = emission.iter().map(|&e| e * options.light_scale).collect();
-    check_bounded(
-        &prefix,
-        &net::distribute::surfaces_with(&prefix, scene, &lit),
-        scene_path,
-    )?;
     if let Some(b) = basis.as_ref().filter(|_| !spec.store_basis) {
         match b.superpose(&prefix, scene, &emission, options) {
             Ok(solution) => {
@@ -1264,6 +1258,15 @@ fn relight_network(
             Err(why) => say(format!("network: {why}; distributing again")),
         }
     }
+    // A distribution follows: of the lights as they are now, or (a new basis) of the file's.
+    let lit: Vec<_> = (emission.iter().zip(file_emission))
+        .map(|(&e, &f)| (e * options.light_scale).max(f))
+        .collect();
+    check_bounded(
+        &prefix,
+        &net::distribute::surfaces_with(&prefix, scene, &lit),
+        scene_path,
+    )?;
     drop(prefix);
     let start = std::time::Instant::now();
     let (network, _) = net::file::load_all(file, scene, Some(params))?;
