@@ -482,9 +482,9 @@ pub fn load_all(
         && link_start.windows(2).all(|w| w[0] <= w[1])
         && link_start[nodes] as usize == n_links;
     let code = LinkCode::new(slots, 2 * h.cells as usize).map_err(|e| bad(&e))?;
-    // One pass over each node's links, in parallel: their W, and whether they go to existing
-    // slots and nodes (flag 1) in slot order (flag 2), checked without a branch per link. (A
-    // bad slot reads a W masked into the table; the result is not used.)
+    // Per node, in parallel: W, and whether its links go to existing slots and nodes (flag 1)
+    // in slot order (flag 2), checked four at a time (`link_flags`). (A bad slot reads a W
+    // masked into the table; the result is not used.)
     let w = super::SlotWeights::new(&space);
     let check = |links: &[u32]| {
         use rayon::prelude::*;
@@ -492,7 +492,7 @@ pub fn load_all(
             .par_windows(2)
             .map(|r| {
                 let list = &links[r[0] as usize..r[1] as usize];
-                let e = super::list_etendue(code, &w, list, |_| ());
+                let e = super::list_etendue(code, &w, list);
                 (e, link_flags(code, list, slots, nodes))
             })
             .unzip();

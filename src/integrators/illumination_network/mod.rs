@@ -265,16 +265,12 @@ where
     (sum[0] + sum[1]) + (sum[2] + sum[3])
 }
 
-/// W of one node: Σ w over its links (`list`, in slot order) ([`interleaved_sum`]), calling
-/// `each` with every link on the way (the loader's checks, in the same pass). The build and
-/// the loader both add up W here, so a loaded network has the same bits.
+/// W of one node: Σ w over its links (`list`, in slot order) ([`interleaved_sum`]). The
+/// build and the loader both add up W here, so a loaded network has the same bits.
 #[inline(always)]
-fn list_etendue(code: LinkCode, w: &SlotWeights, list: &[u32], mut each: impl FnMut(u32)) -> f32 {
+fn list_etendue(code: LinkCode, w: &SlotWeights, list: &[u32]) -> f32 {
     let (w, mask) = w.table();
-    interleaved_sum(list, |l| {
-        each(l);
-        w[code.slot(l) & mask]
-    })
+    interleaved_sum(list, |l| w[code.slot(l) & mask])
 }
 
 /// What the assembly reads the links of a key block from: the batches' link ends and escapes,
@@ -507,7 +503,7 @@ impl Network {
                 for (i, wn) in wb.iter_mut().enumerate() {
                     let to = (ends_at[i] - base) as usize;
                     let list = &out[from..to];
-                    *wn = list_etendue(code, &w, list, |_| ());
+                    *wn = list_etendue(code, &w, list);
                     for p in list.windows(2) {
                         extra += u64::from(code.slot(p[0]) == code.slot(p[1]));
                     }

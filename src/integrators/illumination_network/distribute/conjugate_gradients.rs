@@ -116,10 +116,7 @@ pub(super) fn solve(
             .map(|i| (kd(i) * kx[i] / etendue(i)).into())
             .collect()
     } else {
-        let w: Vec<f32> = (0..net.slots() as u32)
-            .map(|l| net.space.etendue(l))
-            .collect();
-        direct_light(net, &surfaces, &w)
+        direct_light(net, &surfaces, &net.space.etendues())
     };
     // r₀ = S K E − (I − S K S) v₀ = S K x₀ − v₀.
     let mut r: Vec<Vec3A> = (0..nodes).map(|i| s[i] * kx[i] - v[i]).collect();
