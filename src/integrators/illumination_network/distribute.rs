@@ -584,7 +584,7 @@ pub fn distribute_from(
     // Each node's directional row, NONE for diffuse nodes and the escapes' zero past the end.
     let mut row_of = dir_index.clone();
     row_of.resize(padded.len(), NONE);
-    let escape_etendue = escape_etendues(net);
+    let escape_etendue = &net.escape_etendue;
     let mut escaped = vec![Rgb::ZERO; nodes];
     while to_shoot > options.tolerance as f64 * emitted_total && stats.sweeps < options.max_sweeps {
         // Gather: flux arriving over each node's links from what the other ends shot.
@@ -756,19 +756,6 @@ fn direct_light(net: &Network, surfaces: &[Surface], w: &[f32]) -> Vec<Rgb> {
         .zip(surfaces)
         .zip(&net.etendue)
         .map(|((a, s), &e)| s.kd * *a / e)
-        .collect()
-}
-
-/// Σ w over each node's escaping links.
-fn escape_etendues(net: &Network) -> Vec<f32> {
-    (0..net.nodes() as u32)
-        .into_par_iter()
-        .map(|i| {
-            net.slot_links(i)
-                .filter(|&(_, t)| t == ESCAPE)
-                .map(|(l, _)| net.space.etendue(l as u32))
-                .sum()
-        })
         .collect()
 }
 

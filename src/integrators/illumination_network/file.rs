@@ -307,6 +307,7 @@ pub fn load_prefix(
             links: Vec::new(),
             code,
             etendue: Vec::new(),
+            escape_etendue: Vec::new(),
             stats: h.stats,
         },
         basis,
@@ -369,7 +370,7 @@ impl StreamSum {
 }
 
 /// A node's links checked: flag 1 if one goes past the last slot or node (an escape aside),
-/// flag 2 if they are not in slot order. Four links at a time on the packed words: the slot
+/// flag 2 if they are not in slot order; flag 4 if one escapes. Four links at a time on the packed words: the slot
 /// is their high bits, so a slot past the last is a word at or above `slots` shifted up,
 /// and slot order is the order of the words with the target bits masked off.
 fn link_flags(code: LinkCode, list: &[u32], slots: usize, nodes: usize) -> u8 {
@@ -390,12 +391,13 @@ fn link_flags(code: LinkCode, list: &[u32], slots: usize, nodes: usize) -> u8 {
         t.simd_ge(nodes4) & !t.simd_eq(esc)
     };
     let slot_bits = |l: u32x4| l & !esc;
-    let (mut past, mut unordered) = (u32x4::ZERO, u32x4::ZERO);
+    let (mut past, mut unordered, mut escapes) = (u32x4::ZERO, u32x4::ZERO, u32x4::ZERO);
     let quads = list.chunks_exact(4);
     let tail = quads.remainder();
     for q in quads {
         let l = u32x4::new([q[0], q[1], q[2], q[3]]);
         past |= slot_past(l) | node_past(l);
+        escapes |= (l & esc).simd_eq(esc);
     }
     // Each word against the next one, four pairs at a time.
     let pairs = list.len().saturating_sub(1);
@@ -405,10 +407,12 @@ fn link_flags(code: LinkCode, list: &[u32], slots: usize, nodes: usize) -> u8 {
         let b = slot_bits(u32x4::new([b[0], b[1], b[2], b[3]]));
         unordered |= b.simd_lt(a);
     }
-    let mut flags = u8::from(past.any()) | u8::from(unordered.any()) << 1;
+    let mut flags =
+        u8::from(past.any()) | u8::from(unordered.any()) << 1 | u8::from(escapes.any()) << 2;
     for &l in tail {
         let (slot, t) = (code.slot(l), code.raw_target(l));
         flags |= u8::from(slot >= slots || (t >= nodes && t != escape as usize));
+        flags |= u8::from(t == escape as usize) << 2;
     }
     for p in list[pairs / 4 * 4..].windows(2) {
         flags |= u8::from(code.slot(p[1]) < code.slot(p[0])) << 1;
@@ -496,7 +500,24 @@ pub fn load_all(
                 (e, link_flags(code, list, slots, nodes))
             })
             .unzip();
-        (etendue, flags.iter().fold(0, |all, f| all | f))
+        // The escapes' part of W, for the nodes with an escape (flag 4).
+        let escape_etendue = link_start
+            .par_windows(2)
+            .zip(&flags)
+            .map(|(r, &f)| {
+                let list = &links[r[0] as usize..r[1] as usize];
+                if f & 4 != 0 {
+                    super::list_escape_etendue(code, &w, list)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        (
+            etendue,
+            escape_etendue,
+            flags.iter().fold(0, |all, f| all | f),
+        )
     };
     let second = &links[n_links / 2..];
     let whole = |sum: StreamSum| sum.finish() == u64::from_le_bytes(stored);
@@ -524,7 +545,7 @@ pub fn load_all(
     }
     let (key_of_node, node_of_key) = node_table(path, a, h.cells)?;
     let basis = basis_of(path, basis, nodes, slots)?;
-    let Some((etendue, flags)) = checked else {
+    let Some((etendue, escape_etendue, flags)) = checked else {
         return Err(bad("invalid link table"));
     };
     if flags & 1 != 0 {
@@ -544,6 +565,7 @@ pub fn load_all(
             links,
             code,
             etendue,
+            escape_etendue,
             stats: h.stats,
         },
         basis,
@@ -556,15 +578,19 @@ mod tests {
 
     /// The four-at-a-time link checks find a bad slot, a bad node or a slot out of order
     /// wherever it is (in a quad, in the tail, across a quad's edge), let escapes and the last
-    /// slot and node pass, and agree with checking one link at a time.
+    /// slot and node pass, flag lists with an escape, and agree with checking one link at a
+    /// time.
     #[test]
     fn link_checks_find_every_damage() {
+        use super::super::ESCAPE;
+        let escapes = |code: LinkCode, list: &[u32]| {
+            4 * u8::from(list.iter().any(|&l| code.target(l) == ESCAPE))
+        };
         let one_at_a_time = |code: LinkCode, list: &[u32], slots: usize, nodes: usize| {
-            let mut flags = 0;
+            let mut flags = escapes(code, list);
             for (i, &l) in list.iter().enumerate() {
                 let (slot, t) = (code.slot(l), code.target(l));
-                flags |=
-                    u8::from(slot >= slots || (t != super::super::ESCAPE && t as usize >= nodes));
+                flags |= u8::from(slot >= slots || (t != ESCAPE && t as usize >= nodes));
                 if i > 0 && slot < code.slot(list[i - 1]) {
                     flags |= 2;
                 }
@@ -580,13 +606,22 @@ mod tests {
                     .map(|i| {
                         let slot = i * (slots as u32 - 1) / len as u32;
                         match i % 3 {
-                            0 => code.pack(slot, super::super::ESCAPE),
+                            0 => code.pack(slot, ESCAPE),
                             1 => code.pack(slot, nodes as u32 - 1),
                             _ => code.pack(slot, i),
                         }
                     })
                     .collect();
-                assert_eq!(link_flags(code, &good, slots, nodes), 0, "{slots} {len}");
+                assert_eq!(link_flags(code, &good, slots, nodes), 4, "{slots} {len}");
+                // Without its escapes the list is flagged for nothing.
+                let closed: Vec<u32> = good
+                    .iter()
+                    .map(|&l| match code.target(l) {
+                        ESCAPE => code.pack(code.slot(l) as u32, 0),
+                        _ => l,
+                    })
+                    .collect();
+                assert_eq!(link_flags(code, &closed, slots, nodes), 0, "{slots} {len}");
                 for at in 0..len {
                     let mut bad = good.clone();
                     bad[at] = code.pack(code.slot(good[at]) as u32, nodes as u32);
@@ -601,6 +636,7 @@ mod tests {
                     for (list, want) in cases {
                         let got = link_flags(code, &list, slots, nodes);
                         assert_eq!(got, one_at_a_time(code, &list, slots, nodes));
+                        let want = want | escapes(code, &list);
                         assert_eq!(got, want, "{slots} slots, {len} links, at {at}");
                     }
                 }

@@ -218,6 +218,9 @@ pub struct Network {
     pub code: LinkCode,
     /// For each node, W = Σ w over its links (escapes included).
     pub etendue: Vec<f32>,
+    /// For each node, the part of W over its escaping links (the energy balance's escapes),
+    /// added up in the same pass as W.
+    pub escape_etendue: Vec<f32>,
     pub stats: BuildStats,
 }
 
@@ -271,6 +274,29 @@ where
 fn list_etendue(code: LinkCode, w: &SlotWeights, list: &[u32]) -> f32 {
     let (w, mask) = w.table();
     interleaved_sum(list, |l| w[code.slot(l) & mask])
+}
+
+/// Whether a node's links include an escape.
+#[inline]
+fn has_escape(code: LinkCode, list: &[u32]) -> bool {
+    let escape = code.escape();
+    list.iter()
+        .fold(false, |any, &l| any | (l & escape == escape))
+}
+
+/// The part of a node's W over its escaping links (the energy balance's escapes), in the
+/// order of [`list_etendue`]. The build and the loader add it up once, for the nodes with
+/// an escape (few in a closed scene), so a distribution does not walk every link for it.
+fn list_escape_etendue(code: LinkCode, w: &SlotWeights, list: &[u32]) -> f32 {
+    let (w, mask) = w.table();
+    let escape = code.escape();
+    interleaved_sum(list, |l| {
+        if l & escape == escape {
+            w[code.slot(l) & mask]
+        } else {
+            0.0
+        }
+    })
 }
 
 /// What the assembly reads the links of a key block from: the batches' link ends and escapes,
@@ -462,24 +488,31 @@ impl Network {
         let mut links = vec![0u32; total];
         let mut link_start = vec![0u32; nodes + 1];
         let mut etendue = vec![0f32; nodes];
+        let mut escape_etendue = vec![0f32; nodes];
         let mut parts = Vec::with_capacity(blocks);
         {
-            let mut rest = (&mut links[..], &mut link_start[1..], &mut etendue[..]);
+            let mut rest = (
+                &mut links[..],
+                &mut link_start[1..],
+                &mut etendue[..],
+                &mut escape_etendue[..],
+            );
             let mut base = 0;
             for (b, &count) in counts.iter().enumerate() {
                 let n = first_node[b + 1] - first_node[b];
                 let (l, lr) = std::mem::take(&mut rest.0).split_at_mut(count);
                 let (s, sr) = std::mem::take(&mut rest.1).split_at_mut(n);
                 let (e, er) = std::mem::take(&mut rest.2).split_at_mut(n);
-                rest = (lr, sr, er);
-                parts.push((b, base as u32, l, s, e));
+                let (x, xr) = std::mem::take(&mut rest.3).split_at_mut(n);
+                rest = (lr, sr, er, xr);
+                parts.push((b, base as u32, l, s, (e, x)));
                 base += count;
             }
         }
         // Per block: the escapes seen, and the links beyond the first of their slot.
         let filled: Vec<(u64, u64)> = parts
             .into_par_iter()
-            .map_init(Vec::new, |at, (b, base, out, ends_at, wb)| {
+            .map_init(Vec::new, |at, (b, base, out, ends_at, (wb, xb))| {
                 let first = first_node[b] as u32;
                 // Every link of the block in slot order, walked twice: to count each
                 // node's links, then to put them in place.
@@ -497,13 +530,17 @@ impl Network {
                     out[*to as usize] = link;
                     *to += 1;
                 });
-                // W, and the links beyond the first of their slot.
+                // W (and its escapes' part, in blocks with escapes), and the links beyond the
+                // first of their slot.
                 let mut extra = 0u64;
                 let mut from = 0;
-                for (i, wn) in wb.iter_mut().enumerate() {
+                for (i, (wn, xn)) in wb.iter_mut().zip(xb.iter_mut()).enumerate() {
                     let to = (ends_at[i] - base) as usize;
                     let list = &out[from..to];
                     *wn = list_etendue(code, &w, list);
+                    if escapes > 0 && has_escape(code, list) {
+                        *xn = list_escape_etendue(code, &w, list);
+                    }
                     for p in list.windows(2) {
                         extra += u64::from(code.slot(p[0]) == code.slot(p[1]));
                     }
@@ -532,6 +569,7 @@ impl Network {
             links,
             code,
             etendue,
+            escape_etendue,
             stats,
         })
     }

@@ -25,9 +25,7 @@
 //! result is independent of the thread count, and doubling the emission doubles every vector
 //! exactly (the same iterations, scaled by a power of two).
 
-use super::{
-    direct_light, escape_etendues, DistributeOptions, DistributeStats, Ends, Solution, Surface,
-};
+use super::{direct_light, DistributeOptions, DistributeStats, Ends, Solution, Surface};
 use crate::integrators::illumination_network::{Network, SlotWeights, NONE};
 use crate::math::Rgb;
 use glam::{DVec3, Vec3A};
@@ -152,7 +150,7 @@ pub(super) fn solve(
     }
     // The balance: what leaves over escapes, what the nodes absorb, and what one more sweep
     // would add (signed): emitted = escaped + absorbed + unshot.
-    let escape = escape_etendues(net);
+    let escape = &net.escape_etendue;
     let x = |i: usize| emission(i) + s[i] * v[i];
     let escaped = chunked_sum(nodes, |i| x(i) * escape[i]);
     let absorbed = chunked_sum(nodes, |i| (Vec3A::ONE - kd(i)) * kx[i]);
