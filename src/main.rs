@@ -1131,7 +1131,7 @@ fn network(
     }
     let network = network_structure(args, scene, ctx, params, &say)?;
     let surfaces = net::distribute::surfaces(&network, scene, options.light_scale);
-    check_bounded(&network, &surfaces, &args.scene)?;
+    check_bounded(&network, scene, &surfaces, &args.scene)?;
     let start = std::time::Instant::now();
     let solution = net::distribute::distribute_surfaces(&network, surfaces, &options, start);
     let st = &solution.stats;
@@ -1204,24 +1204,32 @@ fn network_structure(
     Ok(network)
 }
 
-/// An error naming the scene when light in some channel can never leave the network
-/// ([`net::distribute::lossless_channel`]): its radiance has no finite value.
+/// An error naming the scene and the material when light in some channel can never be
+/// absorbed or leave the scene ([`net::distribute::lossless_channel`]): its radiance has no
+/// finite value.
 fn check_bounded(
     network: &net::Network,
+    scene: &Scene,
     surfaces: &[net::distribute::Surface],
     scene_path: &std::path::Path,
 ) -> Result<(), Error> {
     match net::distribute::lossless_channel(network, surfaces) {
         None => Ok(()),
-        Some(c) => Err(Error::input(
-            scene_path,
-            format!(
-                "no {} light can leave the scene: every surface reflects or transmits all of it \
-                 and no line escapes, so its radiance grows without bound; lower a diffuse, \
-                 specular or transmission value below 1",
-                ["red", "green", "blue"][c]
-            ),
-        )),
+        Some((c, node)) => {
+            let (poly, _, _) = network.node_place(node);
+            let shape = network.patches.polygons[poly as usize].shape as usize;
+            let material = &scene.materials[scene.shapes[shape].material].name;
+            Err(Error::input(
+                scene_path,
+                format!(
+                    "no {} light emitted by material '{material}' can leave: every surface it \
+                     reaches reflects or transmits all of it (diffuse + specular + \
+                     transmission = 1) and no line leads out of the scene, so its radiance \
+                     grows without bound; lower one of them below 1",
+                    ["red", "green", "blue"][c]
+                ),
+            ))
+        }
     }
 }
 
@@ -1258,15 +1266,6 @@ fn relight_network(
             Err(why) => say(format!("network: {why}; distributing again")),
         }
     }
-    // A distribution follows: of the lights as they are now, or (a new basis) of the file's.
-    let lit: Vec<_> = (emission.iter().zip(file_emission))
-        .map(|(&e, &f)| (e * options.light_scale).max(f))
-        .collect();
-    check_bounded(
-        &prefix,
-        &net::distribute::surfaces_with(&prefix, scene, &lit),
-        scene_path,
-    )?;
     drop(prefix);
     let start = std::time::Instant::now();
     let (network, _) = net::file::load_all(file, scene, Some(params))?;
@@ -1276,6 +1275,16 @@ fn relight_network(
         start.elapsed().as_secs_f64(),
         network.nodes()
     ));
+    // A distribution follows: of the lights as they are now, or (a new basis) of the file's.
+    let lit: Vec<_> = (emission.iter().zip(file_emission))
+        .map(|(&e, &f)| (e * options.light_scale).max(f))
+        .collect();
+    check_bounded(
+        &network,
+        scene,
+        &net::distribute::surfaces_with(&network, scene, &lit),
+        scene_path,
+    )?;
     let solution = match basis.as_ref().filter(|_| !spec.store_basis) {
         None => {
             let b = net::relight::LightBasis::compute(&network, scene, file_emission, options);

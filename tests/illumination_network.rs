@@ -954,7 +954,7 @@ fn a_closed_scene_that_absorbs_no_light_is_refused() {
         assert!(
             errors.len() == 1
                 && errors[0].contains("white.toml")
-                && errors[0].contains("no red light can leave"),
+                && errors[0].contains("no red light emitted by material 'm' can leave"),
             "{what}: {e}"
         );
         assert!(!std::path::Path::new(&out).exists(), "{what}");
@@ -963,6 +963,59 @@ fn a_closed_scene_that_absorbs_no_light_is_refused() {
     let ok = network_render(&grey, &out, &[]);
     assert!(ok.status.success(), "{}", stderr(&ok));
     assert!(std::path::Path::new(&out).exists());
+}
+
+/// The same inside an open scene: the box, sealed, stands above a ground that absorbs half
+/// the light and whose lines escape. The box's inner sides still keep all the red light
+/// they emit (its outer sides lead out), so `render` refuses it; with the box's floor
+/// absorbing a tenth of the red it renders. The library's check names the channel and an
+/// emitter inside the box.
+#[test]
+fn a_sealed_box_that_absorbs_no_light_is_refused_in_an_open_scene() {
+    use raylink::integrators::illumination_network::distribute::{lossless_channel, surfaces};
+    let dir = tempfile::tempdir().unwrap();
+    let ground = "[[shapes]]\ntype = \"quad\"\nmaterial = \"ground\"\n\
+                  vertices = [[-1, -0.5, -1], [-1, -0.5, 2], [2, -0.5, 2], [2, -0.5, -1]]\n";
+    let text = |floor: &str| {
+        let materials = format!(
+            "[materials.m]\ndiffuse = [1, 0.5, 0.5]\nemission = 1\n[materials.floor]\n\
+             diffuse = {floor}\n[materials.ground]\ndiffuse = 0.5\n"
+        );
+        closed_box_text(&materials, "m", "floor") + ground
+    };
+    let (sealed, grey) = (text("[1, 0.2, 0.2]"), text("[0.9, 0.2, 0.2]"));
+    let s = scene(&sealed);
+    let net = build(&s, params(6, 1.0 / 32.0), Builder::Scan);
+    assert!(net.stats.escapes > 0, "the scene is open");
+    let (c, node) = lossless_channel(&net, &surfaces(&net, &s, 1.0)).expect("refused");
+    let (poly, _, side) = net.node_place(node);
+    let material = s.shapes[net.patches.polygons[poly as usize].shape as usize].material;
+    assert_eq!((c, side, s.materials[material].name.as_str()), (0, 0, "m"));
+    let g = scene(&grey);
+    let net = build(&g, params(6, 1.0 / 32.0), Builder::Scan);
+    assert_eq!(lossless_channel(&net, &surfaces(&net, &g, 1.0)), None);
+    // Through the CLI.
+    let out = tmp_path(&dir, "sealed.png");
+    for (name, text, refused) in [("sealed.toml", &sealed, true), ("grey.toml", &grey, false)] {
+        let path = tmp_path(&dir, name);
+        std::fs::write(&path, text).unwrap();
+        let run = network_render(&path, &out, &[]);
+        let e = stderr(&run);
+        if refused {
+            assert_eq!(run.status.code(), Some(2), "{e}");
+            let errors: Vec<&str> = e.lines().filter(|l| l.contains("error")).collect();
+            assert!(
+                errors.len() == 1
+                    && errors[0].contains(name)
+                    && errors[0].contains("no red light emitted by material 'm' can leave"),
+                "{e}"
+            );
+            assert!(!std::path::Path::new(&out).exists());
+        } else {
+            assert!(run.status.success(), "{e}");
+            assert!(std::path::Path::new(&out).exists());
+        }
+    }
 }
 
 fn network_relight(scene: &str, out: &str, file: &str, extra: &[&str]) -> std::process::Output {

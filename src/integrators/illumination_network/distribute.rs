@@ -188,20 +188,54 @@ pub fn surfaces_with(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<Surf
         .collect()
 }
 
-/// The colour channel (0 red, 1 green, 2 blue) in which light is emitted and can never
-/// leave: no link escapes and every node reflects or transmits all of it (kd + ks + kt = 1).
-/// Its radiance has no finite value (each bounce carries all of it on), so no distribution
-/// converges: the sweeps would run to `max_sweeps`, conjugate gradients stop at a value set
-/// by rounding. `None` when every channel is bounded.
-pub fn lossless_channel(net: &Network, surfaces: &[Surface]) -> Option<usize> {
-    if net.stats.escapes > 0 {
-        return None;
-    }
-    (0..3).find(|&c| {
-        surfaces.iter().any(|s| s.emission[c] > 0.0)
-            && surfaces
-                .iter()
-                .all(|s| s.kd[c] + s.ks[c] + s.kt[c] >= 1.0 - 1e-6)
+/// The colour channel (0 red, 1 green, 2 blue) in which emitted light can never leave some
+/// part of the scene: a group of nodes that reflect or transmit all of it (kd + ks + kt = 1),
+/// holding an emitter, with no link from it to an absorbing node or out of the scene (the
+/// whole scene when it is closed, or a sealed box inside an open one). Its radiance has no
+/// finite value (each bounce carries all of it on), so no distribution converges: the sweeps
+/// would run to `max_sweeps`, conjugate gradients stop at a value set by rounding. Gives the
+/// channel and an emitting node of such a group, `None` when every channel is bounded.
+/// Needs the link table; walks the links of the lossless nodes joined to a lossless
+/// emitter, none when no emitter is lossless (the usual case).
+pub fn lossless_channel(net: &Network, surfaces: &[Surface]) -> Option<(usize, u32)> {
+    let nodes = net.nodes();
+    (0..3).find_map(|c| {
+        let lossless = |i: usize| {
+            let s = &surfaces[i];
+            s.kd[c] + s.ks[c] + s.kt[c] >= 1.0 - 1e-6
+        };
+        let mut seen = vec![false; nodes];
+        let mut stack = Vec::new();
+        (0..nodes)
+            .filter(|&i| surfaces[i].emission[c] > 0.0 && lossless(i))
+            .find(|&emitter| {
+                if seen[emitter] {
+                    // Its group was walked whole from an earlier emitter, and can leave.
+                    return false;
+                }
+                // The whole group of lossless nodes the emitter's light can reach: over links,
+                // and through transmitting patches to their other side.
+                let mut leaves = false;
+                seen[emitter] = true;
+                stack.push(emitter as u32);
+                while let Some(i) = stack.pop() {
+                    let through = (surfaces[i as usize].kt[c] > 0.0).then(|| {
+                        let key = net.key_of_node[i as usize];
+                        net.node_of_key[(key ^ 1) as usize]
+                    });
+                    let links = net.links_of(i).iter().map(|&l| net.code.target(l));
+                    for t in links.chain(through) {
+                        if t == ESCAPE || t == NONE || !lossless(t as usize) {
+                            leaves = true;
+                        } else if !seen[t as usize] {
+                            seen[t as usize] = true;
+                            stack.push(t);
+                        }
+                    }
+                }
+                !leaves
+            })
+            .map(|emitter| (c, emitter as u32))
     })
 }
 
