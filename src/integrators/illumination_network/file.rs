@@ -370,9 +370,10 @@ impl StreamSum {
 }
 
 /// A node's links checked: flag 1 if one goes past the last slot or node (an escape aside),
-/// flag 2 if they are not in slot order; flag 4 if one escapes. Four links at a time on the packed words: the slot
-/// is their high bits, so a slot past the last is a word at or above `slots` shifted up,
-/// and slot order is the order of the words with the target bits masked off.
+/// flag 2 if they are not in slot order, flag 4 if one escapes. Four links at a time on the
+/// packed words: the slot is their high bits, so a slot past the last is a word at or above
+/// `slots` shifted up, and slot order is the order of the words with the target bits masked
+/// off.
 fn link_flags(code: LinkCode, list: &[u32], slots: usize, nodes: usize) -> u8 {
     use wide::u32x4;
     let escape = code.escape();

@@ -219,7 +219,7 @@ pub struct Network {
     /// For each node, W = Σ w over its links (escapes included).
     pub etendue: Vec<f32>,
     /// For each node, the part of W over its escaping links (the energy balance's escapes),
-    /// added up in the same pass as W.
+    /// added up beside W by the build and the loader.
     pub escape_etendue: Vec<f32>,
     pub stats: BuildStats,
 }
