@@ -1114,16 +1114,8 @@ fn network(
         ..Default::default()
     };
     if let (Some(spec), Some(f)) = (&a.relight, &a.network_file) {
-        let (network, solution) = relight_network(
-            f,
-            spec,
-            scene,
-            file_emission,
-            &params,
-            &options,
-            &say,
-            &args.scene,
-        )?;
+        let (network, solution) =
+            relight_network(f, spec, scene, file_emission, &params, &options, &say)?;
         if a.network_stats {
             print_network_stats(&network, &solution);
         }
@@ -1131,7 +1123,7 @@ fn network(
     }
     let network = network_structure(args, scene, ctx, params, &say)?;
     let surfaces = net::distribute::surfaces(&network, scene, options.light_scale);
-    check_bounded(&network, scene, &surfaces, &args.scene)?;
+    check_bounded(&network, scene, &surfaces)?;
     let start = std::time::Instant::now();
     let solution = net::distribute::distribute_surfaces(&network, surfaces, &options, start);
     let st = &solution.stats;
@@ -1204,14 +1196,13 @@ fn network_structure(
     Ok(network)
 }
 
-/// An error naming the scene and the material when light in some channel can never be
+/// An error naming the scene file and the material when light in some channel can never be
 /// absorbed or leave the scene ([`net::distribute::lossless_channel`]): its radiance has no
 /// finite value.
 fn check_bounded(
     network: &net::Network,
     scene: &Scene,
     surfaces: &[net::distribute::Surface],
-    scene_path: &std::path::Path,
 ) -> Result<(), Error> {
     match net::distribute::lossless_channel(network, surfaces) {
         None => Ok(()),
@@ -1220,7 +1211,7 @@ fn check_bounded(
             let shape = network.patches.polygons[poly as usize].shape as usize;
             let material = &scene.materials[scene.shapes[shape].material].name;
             Err(Error::input(
-                scene_path,
+                &scene.source,
                 format!(
                     "no {} light emitted by material '{material}' can leave: every surface it \
                      reaches reflects or transmits all of it (diffuse + specular + \
@@ -1237,7 +1228,6 @@ fn check_bounded(
 /// for these reflectances (reading only the file's prefix: no link table, no distribution),
 /// else the whole network and a distribution (storing a basis when the file has none or
 /// `--store-basis` asks).
-#[allow(clippy::too_many_arguments)]
 fn relight_network(
     file: &std::path::Path,
     spec: &RelightSpec,
@@ -1246,7 +1236,6 @@ fn relight_network(
     params: &net::NetworkParams,
     options: &net::distribute::DistributeOptions,
     say: &dyn Fn(String),
-    scene_path: &std::path::Path,
 ) -> Result<(net::Network, net::distribute::Solution), Error> {
     let emission: Vec<_> = scene.materials.iter().map(|m| m.emission).collect();
     let start = std::time::Instant::now();
@@ -1283,7 +1272,6 @@ fn relight_network(
         &network,
         scene,
         &net::distribute::surfaces_with(&network, scene, &lit),
-        scene_path,
     )?;
     let solution = match basis.as_ref().filter(|_| !spec.store_basis) {
         None => {

@@ -219,10 +219,7 @@ pub fn lossless_channel(net: &Network, surfaces: &[Surface]) -> Option<(usize, u
                 seen[emitter] = true;
                 stack.push(emitter as u32);
                 while let Some(i) = stack.pop() {
-                    let through = (surfaces[i as usize].kt[c] > 0.0).then(|| {
-                        let key = net.key_of_node[i as usize];
-                        net.node_of_key[(key ^ 1) as usize]
-                    });
+                    let through = (surfaces[i as usize].kt[c] > 0.0).then(|| net.twin(i));
                     let links = net.links_of(i).iter().map(|&l| net.code.target(l));
                     for t in links.chain(through) {
                         if t == ESCAPE || t == NONE || !lossless(t as usize) {
@@ -494,7 +491,8 @@ pub fn distribute_surfaces(
 /// r = E + T·X₀ − X₀ (negative where a reflectance went down), is then shot like emission
 /// until it falls below the tolerance. The result is X₀ + Σ Tᵏ·r, the new solution whatever
 /// the guess; the closer the guess, the fewer sweeps. When one material changes, r is
-/// mostly that material's light. Sweeps only (the shooting order starts cold).
+/// mostly that material's light. The sweeps and conjugate gradients start from the guess
+/// (CG from its reflected light); the shooting order starts cold.
 pub fn distribute_from(
     net: &Network,
     surfaces: Vec<Surface>,
@@ -514,13 +512,9 @@ pub fn distribute_from(
             dir_nodes.push(i as u32);
         }
     }
-    let twin_of = |node: u32| {
-        let key = net.key_of_node[node as usize];
-        net.node_of_key[(key ^ 1) as usize]
-    };
     let maps: Vec<(SparseMap, SparseMap)> = dir_nodes
         .par_iter()
-        .map(|&n| maps(net, n, &surfaces[n as usize], twin_of(n)))
+        .map(|&n| maps(net, n, &surfaces[n as usize], net.twin(n)))
         .collect();
     let map_entries = maps
         .iter()
@@ -706,7 +700,7 @@ pub fn distribute_from(
                 let (reflect, _) = &maps[k];
                 let own = &in_buf[k * slots..(k + 1) * slots];
                 apply(reflect, own, surfaces[node].ks, out);
-                let twin = twin_of(node as u32);
+                let twin = net.twin(node as u32);
                 if twin != NONE {
                     let t = dir_index[twin as usize];
                     if t != NONE {

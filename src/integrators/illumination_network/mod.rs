@@ -631,6 +631,13 @@ impl Network {
         (poly as u32, cell, key & 1)
     }
 
+    /// The node on the other side of a node's patch (where transmitted light goes on), or
+    /// [`NONE`] when no link reaches that side.
+    #[inline]
+    pub fn twin(&self, node: u32) -> u32 {
+        self.node_of_key[(self.key_of_node[node as usize] ^ 1) as usize]
+    }
+
     /// The outward unit normal of a node's side.
     pub fn node_normal(&self, node: u32) -> crate::math::Vec3 {
         let (poly, cell, side) = self.node_place(node);

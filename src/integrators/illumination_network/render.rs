@@ -67,8 +67,7 @@ impl NetworkRenderer<'_> {
                 });
         }
         if sfc.kt.max_element() > 0.0 {
-            let key = net.key_of_node[node as usize];
-            let twin = net.node_of_key[(key ^ 1) as usize];
+            let twin = net.twin(node);
             if twin != NONE && sol.dir_index[twin as usize] != NONE {
                 let sigma2 = (sfc.alpha * sfc.alpha).max(1e-12);
                 let through = -wo;
