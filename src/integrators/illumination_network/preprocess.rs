@@ -751,10 +751,13 @@ pub struct LinkBuffers {
     tmp: Vec<LineHit>,
     sorted: Vec<LineHit>,
     rows: RowBuckets,
-    /// The batch's link ends (side key, key at the other end) and later escapes, slot after
-    /// slot; slot j's are `ends[ends_at[j]..ends_at[j + 1]]` and likewise for `more`.
-    ends: Vec<[u32; 2]>,
-    ends_at: Vec<usize>,
+    /// The batch's packed link ends, one bucket per key block, each in the order the links
+    /// were found, slot after slot (so grouped by slot already); `bucket_at[b·slots + j]` is
+    /// block b's length before the batch's j-th slot.
+    buckets: Vec<Vec<u32>>,
+    bucket_at: Vec<u32>,
+    /// The batch's later escapes, slot after slot: slot j's are
+    /// `more[more_at[j]..more_at[j + 1]]`.
     more: Vec<u32>,
     more_at: Vec<usize>,
     /// A slot's escapes, over all side keys (cleared after each slot).
@@ -795,15 +798,16 @@ fn radix_by_line(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) {
 }
 
 /// Sorts one slot's hits (sorted by line) by depth within each line's few hits and links
-/// consecutive ones, as the `j`-th slot of `out`: the link ends go to `ends` and a side's
-/// second and later escapes to `more` (both grouped later, [`LinkBatch::group_ends`]), the
-/// escapes, the node marks and the groups' counts straight into `out`.
+/// consecutive ones, as the `j`-th slot of `out`: the packed link ends go to their key
+/// block's bucket and a side's second and later escapes to `more` (both joined later,
+/// [`LinkBatch::group_ends`]), the escapes, the node marks and the later escapes' counts
+/// straight into `out`.
 #[allow(clippy::too_many_arguments)]
 fn link_slot(
     sorted: &mut [LineHit],
     j: usize,
     packing: EndPacking,
-    ends: &mut Vec<[u32; 2]>,
+    buckets: &mut [Vec<u32>],
     more: &mut Vec<u32>,
     escapes: &mut [u64],
     out: &mut LinkBatch,
@@ -838,11 +842,9 @@ fn link_slot(
             // of its cells' polygon) carries nothing; coincident surfaces (a box standing on
             // the floor) touch, and no light passes between them.
             if x != y && w[1].depth - w[0].depth > COINCIDENT {
-                ends.push([x, y]);
-                ends.push([y, x]);
-                for k in [x, y] {
+                for (k, t) in [(x, y), (y, x)] {
+                    buckets[packing.block_of(k)].push(packing.pack(k, t));
                     out.marks[k as usize / 64] |= 1 << (k % 64);
-                    out.start[group(k) + 1] += 1;
                 }
             } else {
                 out.degenerate += 1;
@@ -874,14 +876,24 @@ impl LinkBatch {
         }
     }
 
-    /// Groups the batch's link ends and later escapes (`buf`, slot after slot) by key block
-    /// and slot, keeping their order within a group; packs the ends.
+    /// Joins the batch's buckets of link ends block after block (each is grouped by slot
+    /// already) and groups its later escapes (`buf`, slot after slot) by key block and slot,
+    /// keeping their order within a group.
     fn group_ends(&mut self, buf: &LinkBuffers, packing: EndPacking) {
         let slots = self.slots as usize;
-        self.pairs = buf.ends.len() as u64 / 2;
-        self.ends = group_slots(&mut self.start, &buf.ends, &buf.ends_at, |[k, t]| {
-            (packing.block_of(k) * slots, packing.pack(k, t))
-        });
+        let total: usize = buf.buckets.iter().map(Vec::len).sum();
+        self.pairs = total as u64 / 2;
+        let mut ends = Vec::with_capacity(total);
+        for (b, bucket) in buf.buckets.iter().enumerate() {
+            let base = ends.len() as u32;
+            let at = &buf.bucket_at[b * slots..(b + 1) * slots];
+            for (to, &at) in self.start[b * slots..(b + 1) * slots].iter_mut().zip(at) {
+                *to = base + at;
+            }
+            ends.extend_from_slice(bucket);
+        }
+        *self.start.last_mut().expect("a batch has a group") = total as u32;
+        self.ends = ends;
         self.more_escapes = group_slots(&mut self.more_start, &buf.more, &buf.more_at, |k| {
             (packing.block_of(k) * slots, k)
         });
@@ -958,14 +970,16 @@ pub fn build_links(
             let first = batch * SLOT_BATCH;
             let mut out = LinkBatch::new(SLOT_BATCH.min(slots - first), keys, packing);
             let mut stats = RayStats::default();
-            for v in [&mut buf.ends_at, &mut buf.more_at] {
-                v.clear();
-                v.push(0);
-            }
-            buf.ends.clear();
+            let (slots, blocks) = (out.slots as usize, keys.div_ceil(packing.block()));
+            buf.more_at.clear();
+            buf.more_at.push(0);
             buf.more.clear();
+            buf.buckets.resize_with(blocks, Vec::new);
+            buf.buckets.iter_mut().for_each(Vec::clear);
+            buf.bucket_at.clear();
+            buf.bucket_at.resize(blocks * slots, 0);
             buf.escapes.resize(keys.div_ceil(64), 0);
-            for j in 0..out.slots as usize {
+            for j in 0..slots {
                 let slot = (first + j) as u32;
                 let hits = match (builder, ctx) {
                     (Builder::Embree, Some(ctx)) => {
@@ -979,10 +993,12 @@ pub fn build_links(
                         buf.sorted.len()
                     }
                 };
+                for (b, bucket) in buf.buckets.iter().enumerate() {
+                    buf.bucket_at[b * slots + j] = bucket.len() as u32;
+                }
                 let sorted = &mut buf.sorted[..hits];
-                let (ends, more, escapes) = (&mut buf.ends, &mut buf.more, &mut buf.escapes);
-                link_slot(sorted, j, packing, ends, more, escapes, &mut out);
-                buf.ends_at.push(buf.ends.len());
+                let (buckets, more, escapes) = (&mut buf.buckets, &mut buf.more, &mut buf.escapes);
+                link_slot(sorted, j, packing, buckets, more, escapes, &mut out);
                 buf.more_at.push(buf.more.len());
             }
             out.group_ends(buf, packing);
