@@ -67,7 +67,8 @@ enum Command {
     /// (--light NAME=K, --light-scale, the scene file's emissions) and reflectances (the scene
     /// file's materials), no preprocess, then render as `render` does. Light strengths alone
     /// come from a stored light basis (one solution per emissive material) without a
-    /// distribution.
+    /// distribution, and so does a new colour for a material with a stored reflectance
+    /// series (--reflectance-series).
     Relight(RelightArgs),
     /// Packaging: write the man page (raylink.1) and the bash, zsh and fish completions
     /// generated from this command line into DIR.
@@ -271,6 +272,13 @@ struct RelightArgs {
     /// reflectances (a file without a basis gets one on its first relight anyway).
     #[arg(long)]
     store_basis: bool,
+    /// With the light basis, store a reflectance series for the diffuse material NAME
+    /// (repeatable): a later relight that gives that material another single colour, the
+    /// rest of the scene unchanged, is then a weighted sum of the series' terms, with no
+    /// distribution and without reading the link table. Implies --store-basis; costs about
+    /// a dozen distributions per material; needs a network of diffuse surfaces.
+    #[arg(long = "reflectance-series", value_name = "NAME")]
+    reflectance_series: Vec<String>,
 }
 
 /// What `raylink relight` adds to a network render.
@@ -278,6 +286,7 @@ struct RelightArgs {
 struct RelightSpec {
     lights: Vec<(String, f32)>,
     store_basis: bool,
+    reflectance_series: Vec<String>,
 }
 
 /// Options of the illumination-network integrator.
@@ -1043,9 +1052,11 @@ fn run_relight(args: RelightArgs) -> raylink::Result<()> {
             }
         }
     }
+    // A series is stored with a light basis, computed afresh.
     render.network.relight = Some(RelightSpec {
         lights,
-        store_basis: args.store_basis,
+        store_basis: args.store_basis || !args.reflectance_series.is_empty(),
+        reflectance_series: args.reflectance_series,
     });
     run_render(render)
 }
@@ -1066,6 +1077,19 @@ fn relight_lights(scene: &mut Scene, args: &RenderArgs) -> Result<Vec<raylink::m
                 )
             })?;
         m.emission *= *k;
+    }
+    for name in args
+        .network
+        .relight
+        .iter()
+        .flat_map(|r| &r.reflectance_series)
+    {
+        if !scene.materials.iter().any(|m| &m.name == name) {
+            return Err(Error::input(
+                &args.scene,
+                format!("--reflectance-series {name}: no material named \"{name}\""),
+            ));
+        }
     }
     Ok(original)
 }
@@ -1252,7 +1276,24 @@ fn relight_network(
                 ));
                 return Ok((prefix, solution));
             }
-            Err(why) => say(format!("network: {why}; distributing again")),
+            Err(why) => match b.from_series(&prefix, scene, &emission, options) {
+                Ok(solution) => {
+                    say(format!(
+                        "network: relit from the reflectance series in {} ({}) in {:.3} s: \
+                         no preprocess, no distribution (0 sweeps), link table not read",
+                        file.display(),
+                        b.series
+                            .iter()
+                            .map(|s| format!("'{}', {} terms", s.name, s.terms.len()))
+                            .collect::<Vec<_>>()
+                            .join("; "),
+                        start.elapsed().as_secs_f64()
+                    ));
+                    return Ok((prefix, solution));
+                }
+                Err(_) if b.series.is_empty() => say(format!("network: {why}; distributing again")),
+                Err(series) => say(format!("network: {why}, and {series}; distributing again")),
+            },
         }
     }
     drop(prefix);
@@ -1275,7 +1316,18 @@ fn relight_network(
     )?;
     let solution = match basis.as_ref().filter(|_| !spec.store_basis) {
         None => {
-            let b = net::relight::LightBasis::compute(&network, scene, file_emission, options);
+            let mut b = net::relight::LightBasis::compute(&network, scene, file_emission, options);
+            for name in &spec.reflectance_series {
+                b.add_series(&network, scene, options, name).map_err(|e| {
+                    Error::input(&scene.source, format!("--reflectance-series: {e}"))
+                })?;
+                let s = b.series.last().expect("a series was added");
+                say(format!(
+                    "network: reflectance series of '{name}': {} terms ({} sweeps)",
+                    s.terms.len(),
+                    s.sweeps
+                ));
+            }
             net::file::save(file, &network, scene, Some(&b))?;
             say(format!(
                 "network: distribution of a light basis in {:.2} s ({} emissive materials, {} \

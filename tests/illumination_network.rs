@@ -1027,6 +1027,18 @@ fn network_relight(scene: &str, out: &str, file: &str, extra: &[&str]) -> std::p
     )
 }
 
+/// The Cornell box's network saved by `render --network-file` in `dir`: the file's path.
+fn cornell_network_file(dir: &tempfile::TempDir) -> String {
+    let file = tmp_path(dir, "cornell.net");
+    let built = network_render(
+        "scenes/cornell-box.toml",
+        &tmp_path(dir, "render.exr"),
+        &["--network-file", &file],
+    );
+    assert!(built.status.success(), "{}", stderr(&built));
+    file
+}
+
 /// `raylink relight`: no preprocess (counters in its messages); the first relight stores a
 /// light basis, later ones superpose it (no distribution, no link table); doubling the
 /// lights doubles the image exactly, globally or per material; the superposed image agrees
@@ -1035,14 +1047,8 @@ fn network_relight(scene: &str, out: &str, file: &str, extra: &[&str]) -> std::p
 #[test]
 fn relight_subcommand_reuses_the_network() {
     let dir = tempfile::tempdir().unwrap();
-    let file = tmp_path(&dir, "cornell.net");
+    let file = cornell_network_file(&dir);
     let img = |name: &str| read_image(&dir.path().join(name)).unwrap().0;
-    let built = network_render(
-        "scenes/cornell-box.toml",
-        &tmp_path(&dir, "render.exr"),
-        &["--network-file", &file],
-    );
-    assert!(built.status.success(), "{}", stderr(&built));
     let size = std::fs::metadata(&file).unwrap().len();
 
     let first = network_relight(
@@ -1207,6 +1213,21 @@ fn two_light_box(floor: Option<&str>, mirror: Option<&str>) -> Scene {
     scene(&text)
 }
 
+/// Asserts that `got` is within `bound` of `want`, relative: Σ|got − want| / Σ|want|.
+fn assert_close(what: &str, got: &[raylink::math::Rgb], want: &[raylink::math::Rgb], bound: f64) {
+    assert_eq!(got.len(), want.len(), "{what}");
+    let (mut err, mut total) = (0.0f64, 0.0f64);
+    for (x, y) in got.iter().zip(want) {
+        err += (*x - *y).abs().element_sum() as f64;
+        total += y.abs().element_sum() as f64;
+    }
+    assert!(
+        total > 0.0 && err / total < bound,
+        "{what}: relative error {}",
+        err / total
+    );
+}
+
 /// Superposition: in a closed box with two emissive materials, the basis solution for
 /// strengths (a, b) agrees with a distribution of the box lit at (a, b); each material's own
 /// solution is exactly the basis with the other switched off, and they add up exactly.
@@ -1312,17 +1333,7 @@ fn warm_start_from_a_basis_for_other_reflectances_matches_a_cold_distribution() 
             let cold = distribute(&net, new, &options);
             assert!(warm.stats.warm_start && !cold.stats.warm_start);
             let close = |what: &str, got: &[Rgb], want: &[Rgb], bound: f64| {
-                assert_eq!(got.len(), want.len(), "{name}: {what}");
-                let (mut err, mut total) = (0.0f64, 0.0f64);
-                for (x, y) in got.iter().zip(want) {
-                    err += (*x - *y).abs().element_sum() as f64;
-                    total += y.abs().element_sum() as f64;
-                }
-                assert!(
-                    total > 0.0 && err / total < bound,
-                    "{name}: {what}: relative error {}",
-                    err / total
-                );
+                assert_close(&format!("{name}: {what}"), got, want, bound)
             };
             close("diffuse", &warm.diffuse, &cold.diffuse, 1e-4);
             close("direct", &warm.direct, &cold.direct, 1e-5);
@@ -1363,4 +1374,160 @@ fn warm_start_from_a_basis_for_other_reflectances_matches_a_cold_distribution() 
             );
         }
     }
+}
+
+/// Reflectance series: the floor of a closed box recoloured is a weighted sum of the
+/// series' terms, with no distribution, agreeing with a distribution of the recoloured box
+/// (the reflected light and its direct part), and exactly doubled with the lights doubled;
+/// changes the series does not cover are refused with the reason (another material changed,
+/// the material made glossy, one light alone changed); a network with directional surfaces
+/// gets no series; the series survive the basis's bytes, and damage to them is refused.
+#[test]
+fn a_reflectance_series_relights_one_material_without_a_distribution() {
+    use raylink::integrators::illumination_network::relight::{LightBasis, MAX_SERIES_TERMS};
+    use raylink::math::Rgb;
+    use raylink::scene::Texture;
+    let s = two_light_box(Some("diffuse = 0.4"), None);
+    let net = build(&s, params(5, 1.0 / 8.0), Builder::Scan);
+    let options = DistributeOptions {
+        tolerance: 1e-5,
+        ..Default::default()
+    };
+    let emission: Vec<Rgb> = s.materials.iter().map(|m| m.emission).collect();
+    let mut basis = LightBasis::compute(&net, &s, &emission, &options);
+    basis.add_series(&net, &s, &options, "floor").unwrap();
+    let terms = basis.series[0].terms.len();
+    assert!((3..MAX_SERIES_TERMS).contains(&terms), "{terms} terms");
+    let index = |name: &str| s.materials.iter().position(|m| m.name == name).unwrap();
+    let with_floor = |kd: Rgb| {
+        let mut t = s.clone();
+        t.materials[index("floor")].diffuse = Texture::Constant(kd);
+        t
+    };
+    let recoloured = with_floor(Rgb::new(0.9, 0.1, 0.6));
+    let got = basis
+        .from_series(&net, &recoloured, &emission, &options)
+        .unwrap();
+    assert_eq!(got.stats.sweeps, 0);
+    let reference = distribute(&net, &recoloured, &options);
+    let close = assert_close;
+    close("diffuse", &got.diffuse, &reference.diffuse, 1e-4);
+    close("direct", &got.direct, &reference.direct, 1e-5);
+    // The old colour gives the basis's own solution back; the lights doubled, double.
+    let unchanged = basis.from_series(&net, &s, &emission, &options).unwrap();
+    let superposed = basis.superpose(&net, &s, &emission, &options).unwrap();
+    close("unchanged", &unchanged.diffuse, &superposed.diffuse, 1e-4);
+    let doubled = DistributeOptions {
+        light_scale: 2.0,
+        ..options
+    };
+    let twice = basis
+        .from_series(&net, &recoloured, &emission, &doubled)
+        .unwrap();
+    for (x, y) in twice.diffuse.iter().zip(&got.diffuse) {
+        assert_eq!(*x, *y * 2.0);
+    }
+    // Changes the series does not cover.
+    let mut two_changed = recoloured.clone();
+    two_changed.materials[index("m")].diffuse = Texture::Constant(Rgb::splat(0.2));
+    let e = basis
+        .from_series(&net, &two_changed, &emission, &options)
+        .unwrap_err();
+    assert!(e.contains("no stored reflectance series"), "{e}");
+    let mut glossy = recoloured.clone();
+    glossy.materials[index("floor")].specular = Rgb::splat(0.3);
+    let e = basis
+        .from_series(&net, &glossy, &emission, &options)
+        .unwrap_err();
+    assert!(e.contains("one diffuse colour"), "{e}");
+    let mut one_light = emission.clone();
+    one_light[index("warm")] *= 2.0;
+    let e = basis
+        .from_series(&net, &recoloured, &one_light, &options)
+        .unwrap_err();
+    assert!(e.contains("unevenly"), "{e}");
+    // A network with a mirror gets no series.
+    let mirrored = two_light_box(Some("diffuse = 0.4"), Some("diffuse = 0\nspecular = 0.7"));
+    let mnet = build(&mirrored, params(5, 1.0 / 6.0), Builder::Scan);
+    let memission: Vec<Rgb> = mirrored.materials.iter().map(|m| m.emission).collect();
+    let mut mbasis = LightBasis::compute(&mnet, &mirrored, &memission, &options);
+    let e = mbasis
+        .add_series(&mnet, &mirrored, &options, "floor")
+        .unwrap_err();
+    assert!(
+        e.contains("diffuse surfaces") && e.contains("mirror"),
+        "{e}"
+    );
+    // The bytes: the series come back; cut or lengthened, the basis is refused.
+    let bytes = basis.to_bytes();
+    let back = LightBasis::from_bytes(&bytes, net.nodes(), net.slots()).unwrap();
+    assert_eq!(back, basis);
+    for cut in [1, 12, 200] {
+        assert!(
+            LightBasis::from_bytes(&bytes[..bytes.len() - cut], net.nodes(), net.slots()).is_none()
+        );
+    }
+    let mut longer = bytes.clone();
+    longer.push(0);
+    assert!(LightBasis::from_bytes(&longer, net.nodes(), net.slots()).is_none());
+}
+
+/// `raylink relight --reflectance-series`: an unknown material is an error naming the scene
+/// file (exit 2, no image); a series stored for the Cornell box's left wall relights the
+/// wall recoloured with no distribution and without reading the link table, close to a
+/// render that distributes from the same file.
+#[test]
+fn relight_with_a_reflectance_series_reads_no_link_table() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = cornell_network_file(&dir);
+    let img = |name: &str| read_image(&dir.path().join(name)).unwrap().0;
+    let bad = network_relight(
+        "scenes/cornell-box.toml",
+        &tmp_path(&dir, "bad.exr"),
+        &file,
+        &["--reflectance-series", "nosuch"],
+    );
+    let e = stderr(&bad);
+    assert_eq!(bad.status.code(), Some(2), "{e}");
+    assert!(
+        e.contains("cornell-box.toml") && e.contains("no material named \"nosuch\""),
+        "{e}"
+    );
+    assert!(!dir.path().join("bad.exr").exists());
+    let stored = network_relight(
+        "scenes/cornell-box.toml",
+        &tmp_path(&dir, "stored.exr"),
+        &file,
+        &["--reflectance-series", "left_wall"],
+    );
+    let e = stderr(&stored);
+    assert!(stored.status.success(), "{e}");
+    assert!(e.contains("reflectance series of 'left_wall'"), "{e}");
+    // The left wall blue (the scene's meshes are inline: the copy reads nothing beside it).
+    let text = std::fs::read_to_string("scenes/cornell-box.toml").unwrap();
+    let recoloured = text.replace("diffuse = [0.63, 0.065, 0.05]", "diffuse = [0.1, 0.2, 0.7]");
+    assert_ne!(text, recoloured);
+    let scene = tmp_path(&dir, "recoloured.toml");
+    std::fs::write(&scene, recoloured).unwrap();
+    let relit = network_relight(&scene, &tmp_path(&dir, "relit.exr"), &file, &[]);
+    let full = network_render(
+        &scene,
+        &tmp_path(&dir, "full.exr"),
+        &["--network-file", &file],
+    );
+    let e = stderr(&relit);
+    assert!(relit.status.success(), "{e}");
+    assert!(
+        e.contains("relit from the reflectance series") && e.contains("link table not read"),
+        "{e}"
+    );
+    assert!(full.status.success(), "{}", stderr(&full));
+    let (got, want) = (img("relit.exr"), img("full.exr"));
+    let before = img("stored.exr");
+    let (err, change) = (rmse(&got, &want, None), rmse(&before, &want, None));
+    let level = mean(&want, None).element_sum() as f64 / 3.0;
+    assert!(
+        err < 1e-3 * level && change > 100.0 * err,
+        "rmse {err}, change {change}, mean {level}"
+    );
 }

@@ -7,8 +7,9 @@
 //! render), a relight of light strengths (network file prefix + light basis superposition +
 //! render), a relight of reflectances (the carpet recoloured: whole network file +
 //! distribution started from the stored light basis + render; and, for comparison, the same
-//! distribution started cold) and, for
-//! the first `build_reps` repetitions, the Embree preprocess. Interleaving them makes a change
+//! distribution started cold), the same recolouring from the carpet's reflectance series
+//! (network file prefix + the series' weighted sum + render) and, for the first `build_reps`
+//! repetitions, the Embree preprocess. Interleaving them makes a change
 //! of the machine's load hit them alike, so ratios within a run stay fair. Numbers are
 //! medians with [min–max] over the repetitions.
 //!
@@ -86,6 +87,13 @@ pub struct NetworkRow {
     pub load_prefix: Spread,
     pub load_all: Spread,
     pub basis_seconds: f64,
+    /// The carpet's reflectance series: a relight from it (prefix + sum + render) and its
+    /// prefix load; computing it once, its terms, and what it adds to the file.
+    pub relight_series: Spread,
+    pub load_series_prefix: Spread,
+    pub series_seconds: f64,
+    pub series_terms: usize,
+    pub series_bytes: u64,
 }
 
 fn timed<T>(f: impl FnOnce() -> Result<T>) -> Result<(T, f64)> {
@@ -130,12 +138,14 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             seed: bench.seed,
         };
         let path = bench.dir.join(format!("network-{step}.net"));
+        // The same network with the carpet's reflectance series beside the light basis.
+        let series_path = bench.dir.join(format!("network-{step}-series.net"));
         let bad = |e: String| Error::input(&bench.scene, e);
         let mut row = NetworkRow {
             step,
             ..NetworkRow::default()
         };
-        let mut t: [Vec<f64>; 16] = Default::default();
+        let mut t: [Vec<f64>; 18] = Default::default();
         for rep in 0..bench.reps {
             progress(&format!("step {step}, repetition {}: rebuild", rep + 1));
             // Full rebuild: scan preprocess + distribution + render.
@@ -180,6 +190,19 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
                 row.basis_seconds = s;
                 row.basis_lights = basis.lights.len();
                 row.basis_bytes = std::fs::metadata(&path).map_or(0, |m| m.len()) - row.file_bytes;
+                progress(&format!("step {step}: reflectance series of the carpet"));
+                let (basis, s) = timed(|| {
+                    let mut b = basis;
+                    b.add_series(&net, &scene, &options, "carpet")
+                        .map_err(bad)?;
+                    file::save(&series_path, &net, &scene, Some(&b))?;
+                    Ok(b)
+                })?;
+                row.series_seconds = s;
+                row.series_terms = basis.series[0].terms.len();
+                row.series_bytes = std::fs::metadata(&series_path).map_or(0, |m| m.len())
+                    - row.file_bytes
+                    - row.basis_bytes;
             }
             drop(sol);
             drop(net);
@@ -231,6 +254,24 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             row.cold_sweeps = sol.stats.sweeps;
             drop((net, sol));
 
+            // Reflectances from the carpet's series: the file's prefix and a weighted sum.
+            let start = Instant::now();
+            let ((prefix, basis), load) =
+                timed(|| file::load_prefix(&series_path, &recoloured, Some(&params)))?;
+            let basis = basis.ok_or_else(|| bad("the light basis was not stored".into()))?;
+            let sol = basis
+                .from_series(&prefix, &recoloured, &emission, &relit)
+                .map_err(bad)?;
+            let renderer = NetworkRenderer {
+                net: &prefix,
+                solution: &sol,
+                hybrid: false,
+            };
+            render(&recoloured_ctx, &renderer, &render_options)?;
+            t[16].push(start.elapsed().as_secs_f64());
+            t[17].push(load);
+            drop((prefix, sol));
+
             if rep < bench.embree_reps {
                 progress(&format!("step {step}, repetition {}: Embree", rep + 1));
                 let net = Network::build(&scene, &ctx, params, Builder::Embree).map_err(bad)?;
@@ -261,7 +302,11 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
         row.warm_distribution = s(&t[14]);
         row.cold_distribution = s(&t[15]);
         row.embree = s(&t[11]);
-        std::fs::remove_file(&path).map_err(|e| Error::io(&path, e))?;
+        row.relight_series = s(&t[16]);
+        row.load_series_prefix = s(&t[17]);
+        for p in [&path, &series_path] {
+            std::fs::remove_file(p).map_err(|e| Error::io(p, e))?;
+        }
         progress(&format!(
             "step {step}: rebuild {:.3} s, relight {:.3} s ({:.1}×)",
             row.rebuild.median,
@@ -414,6 +459,19 @@ pub fn markdown(rows: &[NetworkRow], bench: &NetworkBench) -> String {
             r.rebuild.median / r.relight_reflectances.median.max(1e-9)
         )
     });
+    line(
+        "**relight, reflectances from a series**: the same carpet (file prefix + the carpet's series summed + render; s)",
+        &|r| sec(r.relight_series),
+    );
+    line("… of which: file prefix load (s)", &|r| {
+        sec(r.load_series_prefix)
+    });
+    line("… rebuild / relight", &|r| {
+        format!(
+            "**{:.1}×**",
+            r.rebuild.median / r.relight_series.median.max(1e-9)
+        )
+    });
     line("light basis, once (distributions + save; s)", &|r| {
         format!(
             "{:.3} ({} emissive materials, {:.1} MB)",
@@ -422,6 +480,17 @@ pub fn markdown(rows: &[NetworkRow], bench: &NetworkBench) -> String {
             r.basis_bytes as f64 / 1e6
         )
     });
+    line(
+        "the carpet's reflectance series, once (distributions + save; s)",
+        &|r| {
+            format!(
+                "{:.3} ({} terms, {:.1} MB)",
+                r.series_seconds,
+                r.series_terms,
+                r.series_bytes as f64 / 1e6
+            )
+        },
+    );
     out
 }
 

@@ -16,6 +16,24 @@
 //! Each basis solution converges to the tolerance relative to its own emitted flux, so the
 //! sum converges to the tolerance relative to the total. Scaling every light by a power of
 //! two scales the result exactly.
+//!
+//! **Reflectance series.** A new colour for one diffuse material m is not linear, but it is
+//! a power series (after Ben-Artzi et al. 2008, who expand an image in the coefficients of
+//! edited BRDFs). Per channel, with m's nodes at a constant kd = ρ, R' the other nodes'
+//! reflectances, P the projector on m's nodes and A = W⁻¹K the links' transport, the total
+//! radiance y = E + (R' + ρP) A y is
+//!
+//! ```text
+//! y(ρ) = Σ_n ρⁿ Tₙ,   T₀ = M E,   Tₙ₊₁ = M P A Tₙ,   M = (I − R'A)⁻¹:
+//! ```
+//!
+//! T₀ is the network lit with m black; Tₙ₊₁ is what m's nodes send on after one more
+//! reflection at unit albedo (P A Tₙ, the radiance arriving at them) and everything that
+//! light does before it comes back to m. Each term is one distribution with m black. The
+//! terms fall by the fraction of m's light that returns to m (0.36–0.38 for the office's
+//! carpet), so a dozen reach the tolerance even at ρ = 1, and any ρ ≤ 1 is then a weighted
+//! sum: no distribution, and (stored with the light basis, before the links) no link table.
+//! The direct light (for the hybrid rendering) is affine in ρ: T₀'s plus ρ·P A E.
 
 use super::distribute::{self, DistributeOptions, DistributeStats, Solution, Surface};
 use super::Network;
@@ -95,6 +113,39 @@ pub struct LightBasis {
     pub lights: Vec<BasisLight>,
     /// Seconds taken by the distributions that made the basis.
     pub seconds: f64,
+    /// Reflectance series of materials whose colour may change ([`ReflectanceSeries`]).
+    pub series: Vec<ReflectanceSeries>,
+}
+
+/// Terms a reflectance series stops at if they have not fallen below the tolerance.
+pub const MAX_SERIES_TERMS: usize = 40;
+
+/// One diffuse material's reflectance series (module docs): the terms Tₙ of the nodes'
+/// radiance in powers of its kd, for the lights of the basis at their stored emission.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct ReflectanceSeries {
+    /// Index into the scene's materials, and its name (checked on use).
+    pub material: u32,
+    pub name: String,
+    /// [`reflectance_hash`] of the surfaces with this material's nodes blanked: the rest of
+    /// the scene the series holds for.
+    pub others: u64,
+    /// Gathers over the links that computing the series took.
+    pub sweeps: u32,
+    pub terms: Vec<SeriesTerm>,
+}
+
+/// One term of a [`ReflectanceSeries`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct SeriesTerm {
+    /// Each node's reflected radiance (on the material's nodes: what they send on, at unit
+    /// albedo, of the previous term), and the direct part (terms 0 and 1 only, else empty).
+    pub diffuse: Vec<Rgb>,
+    pub direct: Vec<Rgb>,
+    /// Flux per channel: the term's total radiance times W over the nodes; escaped and
+    /// absorbed by its distribution.
+    pub flux: [f64; 3],
+    pub escaped: [f64; 3],
 }
 
 fn order_code(o: distribute::Order) -> u32 {
@@ -137,6 +188,174 @@ fn emitting_materials(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<u32
     (0..used.len() as u32)
         .filter(|&m| used[m as usize])
         .collect()
+}
+
+/// The scene material of each node.
+fn node_materials(net: &Network, scene: &Scene) -> Vec<usize> {
+    (0..net.nodes() as u32)
+        .map(|node| {
+            let (poly, _, _) = net.node_place(node);
+            scene.shapes[net.patches.polygons[poly as usize].shape as usize].material
+        })
+        .collect()
+}
+
+/// `surfaces` with material `m`'s nodes black (kd, ks, kt, α zero; emission kept).
+fn blanked(surfaces: &[Surface], materials: &[usize], m: usize) -> Vec<Surface> {
+    surfaces
+        .iter()
+        .zip(materials)
+        .map(|(s, &mi)| {
+            if mi == m {
+                Surface {
+                    emission: s.emission,
+                    ..Surface::default()
+                }
+            } else {
+                *s
+            }
+        })
+        .collect()
+}
+
+/// P A y: on material `m`'s nodes the radiance arriving over their links (Σ w·y at the other
+/// end, over W), elsewhere zero.
+fn arriving(net: &Network, materials: &[usize], m: usize, y: &[Rgb]) -> Vec<Rgb> {
+    (0..net.nodes())
+        .into_par_iter()
+        .map(|i| {
+            if materials[i] != m {
+                return Rgb::ZERO;
+            }
+            let mut sum = Rgb::ZERO;
+            for (slot, t) in net.slot_links(i as u32) {
+                if t != super::ESCAPE {
+                    sum += y[t as usize] * net.space.etendue(slot as u32);
+                }
+            }
+            sum / net.etendue[i]
+        })
+        .collect()
+}
+
+/// Flux per channel: Σ radiance × W over the nodes.
+fn flux(net: &Network, y: &[Rgb]) -> [f64; 3] {
+    let mut f = [0.0; 3];
+    for (v, w) in y.iter().zip(&net.etendue) {
+        for (c, fc) in f.iter_mut().enumerate() {
+            *fc += v[c] as f64 * *w as f64;
+        }
+    }
+    f
+}
+
+/// The series' rest is held to this fraction of the tolerance (of the emitted flux).
+pub const SERIES_REST: f64 = 0.1;
+
+impl ReflectanceSeries {
+    /// The series of material `m` for the nodes' other reflectances and `emission` (indexed
+    /// as the scene's materials): terms until the rest of the series at kd = 1 is below
+    /// [`SERIES_REST`] of the tolerance (or [`MAX_SERIES_TERMS`]). Networks with directional
+    /// nodes are refused (the light arriving at m is then not the nodes' radiance).
+    pub fn compute(
+        net: &Network,
+        scene: &Scene,
+        emission: &[Rgb],
+        options: &DistributeOptions,
+        m: usize,
+    ) -> Result<ReflectanceSeries, String> {
+        let name = &scene.materials[m].name;
+        let materials = node_materials(net, scene);
+        if !materials.contains(&m) {
+            return Err(format!("material '{name}' is on no node of the network"));
+        }
+        let lit = distribute::surfaces_with(net, scene, emission);
+        let blank = blanked(&lit, &materials, m);
+        if let Some(i) = blank.iter().position(Surface::directional) {
+            return Err(format!(
+                "a reflectance series needs a network of diffuse surfaces, and material '{}' \
+                 reflects or transmits specularly",
+                scene.materials[materials[i]].name
+            ));
+        }
+        let emitted_light: Vec<Rgb> = lit.iter().map(|s| s.emission).collect();
+        let emitted = flux(net, &emitted_light);
+        let mut series = ReflectanceSeries {
+            material: m as u32,
+            name: name.clone(),
+            others: reflectance_hash(net, scene, &blank),
+            ..ReflectanceSeries::default()
+        };
+        // T₀: the network with m black; y is each term's total radiance.
+        let sol = distribute::distribute_surfaces(net, blank.clone(), options, Instant::now());
+        let mut y: Vec<Rgb> = (emitted_light.iter().zip(&sol.diffuse))
+            .map(|(e, d)| *e + *d)
+            .collect();
+        series.sweeps += sol.stats.sweeps;
+        series.terms.push(SeriesTerm {
+            flux: flux(net, &y),
+            escaped: sol.stats.escaped,
+            diffuse: sol.diffuse,
+            direct: sol.direct,
+        });
+        let limit = SERIES_REST * options.tolerance as f64;
+        while series.terms.len() < MAX_SERIES_TERMS
+            && !series
+                .rest(Rgb::ONE)
+                .is_some_and(|rest| (0..3).all(|c| rest[c] <= limit * emitted[c]))
+        {
+            let sent = arriving(net, &materials, m, &y);
+            series.sweeps += 1;
+            let surfaces = (blank.iter().zip(&sent))
+                .map(|(s, e)| Surface { emission: *e, ..*s })
+                .collect();
+            let sol = distribute::distribute_surfaces(net, surfaces, options, Instant::now());
+            series.sweeps += sol.stats.sweeps;
+            y = sent
+                .iter()
+                .zip(&sol.diffuse)
+                .map(|(e, d)| *e + *d)
+                .collect();
+            // The direct light is affine in kd: T₁'s is P A E.
+            let direct = if series.terms.len() == 1 {
+                arriving(net, &materials, m, &emitted_light)
+            } else {
+                Vec::new()
+            };
+            series.terms.push(SeriesTerm {
+                flux: flux(net, &y),
+                escaped: sol.stats.escaped,
+                diffuse: y.clone(),
+                direct,
+            });
+        }
+        Ok(series)
+    }
+
+    /// The rest of the series after its last term for kd = `rho`, per channel (flux): the
+    /// terms taken to fall on geometrically at 1.25 times the ratio of the last two (the
+    /// ratio still grows slowly toward its limit); `None` where that times ρ reaches 1.
+    fn rest(&self, rho: Rgb) -> Option<[f64; 3]> {
+        let n = self.terms.len();
+        let last = &self.terms[n - 1].flux;
+        let mut rest = [0.0; 3];
+        for c in 0..3 {
+            if last[c] <= 0.0 {
+                continue;
+            }
+            let q = if n >= 2 && self.terms[n - 2].flux[c] > 0.0 {
+                1.25 * last[c] / self.terms[n - 2].flux[c]
+            } else {
+                1.0
+            };
+            let r = rho[c] as f64 * q;
+            if r >= 1.0 {
+                return None;
+            }
+            rest[c] = last[c] * (rho[c] as f64).powi(n as i32) * q / (1.0 - r);
+        }
+        Some(rest)
+    }
 }
 
 impl LightBasis {
@@ -196,6 +415,178 @@ impl LightBasis {
         basis
     }
 
+    /// Adds the reflectance series of the material named `name` ([`ReflectanceSeries`]), for
+    /// the nodes' reflectances now and the basis's lights at their stored emission (which
+    /// must be the scene's reflectances the basis was computed for).
+    pub fn add_series(
+        &mut self,
+        net: &Network,
+        scene: &Scene,
+        options: &DistributeOptions,
+        name: &str,
+    ) -> Result<(), String> {
+        let m = scene
+            .materials
+            .iter()
+            .position(|m| m.name == name)
+            .ok_or_else(|| format!("the scene has no material '{name}'"))?;
+        let mut emission = vec![Rgb::ZERO; scene.materials.len()];
+        for light in &self.lights {
+            emission[light.material as usize] = light.emission;
+        }
+        let start = Instant::now();
+        let series = ReflectanceSeries::compute(net, scene, &emission, options, m)?;
+        self.seconds += start.elapsed().as_secs_f64();
+        self.series.retain(|s| s.material != m as u32);
+        self.series.push(series);
+        Ok(())
+    }
+
+    /// The solution for the scene as it is now from a stored reflectance series: when the
+    /// only change of reflectance since the basis is one series' material, now of constant,
+    /// purely diffuse colour, and every light is at its stored emission times one common
+    /// factor. No distribution and no link table; an error says why the series do not apply.
+    pub fn from_series(
+        &self,
+        net: &Network,
+        scene: &Scene,
+        emission: &[Rgb],
+        options: &DistributeOptions,
+    ) -> Result<Solution, String> {
+        let start = Instant::now();
+        self.check_options(options)?;
+        let surfaces = lit_surfaces(net, scene, emission, options);
+        let materials = node_materials(net, scene);
+        let series = self
+            .series
+            .iter()
+            .filter(|s| {
+                scene
+                    .materials
+                    .get(s.material as usize)
+                    .is_some_and(|m| m.name == s.name)
+            })
+            .find(|s| {
+                let blank = blanked(&surfaces, &materials, s.material as usize);
+                reflectance_hash(net, scene, &blank) == s.others
+            })
+            .ok_or("no stored reflectance series covers this change of reflectances")?;
+        let m = series.material as usize;
+        let at_m: Vec<&Surface> = (surfaces.iter().zip(&materials))
+            .filter(|(_, &mi)| mi == m)
+            .map(|(s, _)| s)
+            .collect();
+        let Some(first) = at_m.first() else {
+            return Err(format!(
+                "material '{}' is on no node of the network",
+                series.name
+            ));
+        };
+        let rho = first.kd;
+        if at_m.iter().any(|s| s.kd != rho || s.directional()) {
+            return Err(format!(
+                "material '{}' is no longer of one diffuse colour, which its reflectance \
+                 series needs",
+                series.name
+            ));
+        }
+        // One factor for every light (the series holds the basis's lights together).
+        let mut scale = None;
+        for light in &self.lights {
+            let (w, lacks) = light.weight(emission, options.light_scale);
+            for c in (0..3).filter(|&c| light.emission[c] > 0.0) {
+                if lacks || scale.is_some_and(|k| k != w[c]) {
+                    return Err(
+                        "light strengths changed unevenly, which a reflectance series \
+                                does not cover"
+                            .into(),
+                    );
+                }
+                scale = Some(w[c]);
+            }
+        }
+        let scale = scale.unwrap_or(0.0);
+        self.check_emitters(net, scene, emission)?;
+        let emitted: Vec<[f64; 3]> = self.lights.iter().map(|l| l.balance[0]).collect();
+        let emitted = [0, 1, 2].map(|c| emitted.iter().map(|e| e[c]).sum::<f64>());
+        let limit = SERIES_REST * options.tolerance as f64;
+        let rest = series
+            .rest(rho)
+            .filter(|rest| (0..3).all(|c| rest[c] <= limit * emitted[c]))
+            .ok_or_else(|| {
+                format!(
+                    "the reflectance series of '{}' does not converge to the tolerance at its \
+                     new colour",
+                    series.name
+                )
+            })?;
+        let nodes = net.nodes();
+        let power = |n: usize| {
+            let p = |c: usize| rho[c].powi(n as i32) * scale;
+            Rgb::new(p(0), p(1), p(2))
+        };
+        let mut diffuse = vec![Rgb::ZERO; nodes];
+        let mut direct = vec![Rgb::ZERO; nodes];
+        let mut stats = DistributeStats::default();
+        for (n, term) in series.terms.iter().enumerate() {
+            let k = power(n);
+            diffuse
+                .par_iter_mut()
+                .zip(term.diffuse.par_iter())
+                .for_each(|(o, v)| *o += k * *v);
+            direct
+                .par_iter_mut()
+                .zip(term.direct.par_iter())
+                .for_each(|(o, v)| *o += k * *v);
+            for c in 0..3 {
+                stats.escaped[c] += term.escaped[c] * k[c] as f64;
+            }
+        }
+        // The balance: emitted = escaped + absorbed + what the series leaves out.
+        for c in 0..3 {
+            stats.emitted[c] = emitted[c] * scale as f64;
+            stats.unshot[c] = rest[c] * scale as f64;
+            stats.absorbed[c] = stats.emitted[c] - stats.escaped[c] - stats.unshot[c];
+        }
+        stats.seconds = start.elapsed().as_secs_f64();
+        Ok(Solution {
+            surfaces,
+            diffuse,
+            direct,
+            dir_index: self.dir_index.clone(),
+            directional: Vec::new(),
+            incoming: Vec::new(),
+            dir_rows: self.dir_rows.clone(),
+            stats,
+            light_scale: options.light_scale,
+        })
+    }
+
+    /// Every material that emits now has a solution in the basis.
+    fn check_emitters(&self, net: &Network, scene: &Scene, emission: &[Rgb]) -> Result<(), String> {
+        for m in emitting_materials(net, scene, emission) {
+            if !self.lights.iter().any(|l| l.material == m) {
+                return Err(format!(
+                    "material {} emits but is not in the stored light basis",
+                    scene.materials[m as usize].name
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    fn check_options(&self, options: &DistributeOptions) -> Result<(), String> {
+        if self.tolerance != options.tolerance
+            || self.max_sweeps != options.max_sweeps
+            || self.order != order_code(options.order)
+        {
+            return Err(
+                "the stored light basis was computed with other distribution options".into(),
+            );
+        }
+        Ok(())
+    }
+
     /// The solution for the scene's materials with emission `emission` (indexed as the
     /// scene's materials) times `light_scale`, or why the basis cannot give it.
     pub fn superpose(
@@ -206,14 +597,7 @@ impl LightBasis {
         options: &DistributeOptions,
     ) -> Result<Solution, String> {
         let start = Instant::now();
-        if self.tolerance != options.tolerance
-            || self.max_sweeps != options.max_sweeps
-            || self.order != order_code(options.order)
-        {
-            return Err(
-                "the stored light basis was computed with other distribution options".into(),
-            );
-        }
+        self.check_options(options)?;
         let unlit: Vec<Rgb> = vec![Rgb::ZERO; emission.len()];
         let dark = distribute::surfaces_with(net, scene, &unlit);
         if reflectance_hash(net, scene, &dark) != self.reflectance {
@@ -235,14 +619,7 @@ impl LightBasis {
             weights.push(w);
         }
         // Every emitter must be in the basis.
-        for m in emitting_materials(net, scene, emission) {
-            if !self.lights.iter().any(|l| l.material == m) {
-                return Err(format!(
-                    "material {} emits but is not in the stored light basis",
-                    scene.materials[m as usize].name
-                ));
-            }
-        }
+        self.check_emitters(net, scene, emission)?;
         Ok(self.combine(net, scene, emission, options, &weights, start))
     }
 
@@ -403,6 +780,26 @@ impl LightBasis {
                 rgbs(&mut b, part);
             }
         }
+        // The reflectance series follow the lights (a basis without them ends here, as
+        // files written before them do).
+        if !self.series.is_empty() {
+            u32s(&mut b, &[self.series.len() as u32]);
+        }
+        for s in &self.series {
+            u32s(&mut b, &[s.material, s.name.len() as u32, s.sweeps]);
+            b.extend_from_slice(s.name.as_bytes());
+            b.extend_from_slice(&s.others.to_le_bytes());
+            u32s(&mut b, &[s.terms.len() as u32]);
+            for t in &s.terms {
+                for v in t.flux.iter().chain(&t.escaped) {
+                    b.extend_from_slice(&v.to_le_bytes());
+                }
+                for part in [&t.diffuse, &t.direct] {
+                    b.extend_from_slice(&(part.len() as u32).to_le_bytes());
+                    rgbs(&mut b, part);
+                }
+            }
+        }
         b
     }
 
@@ -490,6 +887,44 @@ impl LightBasis {
                 direct,
                 directional,
                 incoming,
+            });
+        }
+        let n_series = if r.rest.is_empty() { 0 } else { r.u32()? };
+        for _ in 0..n_series {
+            let (material, name_len, sweeps) = (r.u32()?, r.u32()? as usize, r.u32()?);
+            if r.rest.len() < name_len {
+                return None;
+            }
+            let (name, rest) = r.rest.split_at(name_len);
+            r.rest = rest;
+            let name = String::from_utf8(name.to_vec()).ok()?;
+            let others = r.u64()?;
+            let n_terms = r.u32()? as usize;
+            if n_terms == 0 || n_terms > MAX_SERIES_TERMS {
+                return None;
+            }
+            let mut terms = Vec::with_capacity(n_terms);
+            for n in 0..n_terms {
+                let mut term = SeriesTerm::default();
+                for v in term.flux.iter_mut().chain(&mut term.escaped) {
+                    *v = f64::from_le_bytes(r.take::<8>()?);
+                }
+                // Every term has each node's radiance; terms 0 and 1 the direct light too.
+                let direct_len = if n <= 1 { nodes } else { 0 };
+                for (part, want) in [(&mut term.diffuse, nodes), (&mut term.direct, direct_len)] {
+                    if r.u32()? as usize != want {
+                        return None;
+                    }
+                    *part = rgbs(&mut r, want)?;
+                }
+                terms.push(term);
+            }
+            basis.series.push(ReflectanceSeries {
+                material,
+                name,
+                others,
+                sweeps,
+                terms,
             });
         }
         r.rest.is_empty().then_some(basis)
