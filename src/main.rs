@@ -269,7 +269,8 @@ struct RelightArgs {
     lights: Vec<String>,
     /// Recompute the light basis (one distribution per emissive material) for the scene's
     /// reflectances and store it in the network file, replacing one made for other
-    /// reflectances (a file without a basis gets one on its first relight anyway).
+    /// reflectances and its reflectance series (a file without a basis gets one on its first
+    /// relight anyway).
     #[arg(long)]
     store_basis: bool,
     /// With the light basis, store a reflectance series for the diffuse material NAME
