@@ -1232,9 +1232,7 @@ fn check_bounded(
     match net::distribute::lossless_channel(network, surfaces) {
         None => Ok(()),
         Some((c, node)) => {
-            let (poly, _, _) = network.node_place(node);
-            let shape = network.patches.polygons[poly as usize].shape as usize;
-            let material = &scene.materials[scene.shapes[shape].material].name;
+            let material = &scene.materials[network.node_material(node, scene).0].name;
             Err(Error::input(
                 &scene.source,
                 format!(
@@ -1277,6 +1275,8 @@ fn relight_network(
                 ));
                 return Ok((prefix, solution));
             }
+            // No series stored: nothing more to try before distributing.
+            Err(why) if b.series.is_empty() => say(format!("network: {why}; distributing again")),
             Err(why) => match b.from_series(&prefix, scene, &emission, options) {
                 Ok(solution) => {
                     say(format!(
@@ -1292,7 +1292,6 @@ fn relight_network(
                     ));
                     return Ok((prefix, solution));
                 }
-                Err(_) if b.series.is_empty() => say(format!("network: {why}; distributing again")),
                 Err(series) => say(format!("network: {why}, and {series}; distributing again")),
             },
         }

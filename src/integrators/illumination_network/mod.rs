@@ -631,6 +631,13 @@ impl Network {
         (poly as u32, cell, key & 1)
     }
 
+    /// The scene material of a node (its polygon's shape's), and its side (0 front, 1 back).
+    pub fn node_material(&self, node: u32, scene: &Scene) -> (usize, u32) {
+        let (poly, _, side) = self.node_place(node);
+        let shape = self.patches.polygons[poly as usize].shape as usize;
+        (scene.shapes[shape].material, side)
+    }
+
     /// The node on the other side of a node's patch (where transmitted light goes on), or
     /// [`NONE`] when no link reaches that side.
     #[inline]

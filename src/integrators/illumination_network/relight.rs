@@ -142,8 +142,8 @@ pub struct SeriesTerm {
     /// albedo, of the previous term), and the direct part (terms 0 and 1 only, else empty).
     pub diffuse: Vec<Rgb>,
     pub direct: Vec<Rgb>,
-    /// Flux per channel: the term's total radiance times W over the nodes; escaped and
-    /// absorbed by its distribution.
+    /// Flux per channel: the term's total radiance times W over the nodes, and what its
+    /// distribution let escape.
     pub flux: [f64; 3],
     pub escaped: [f64; 3],
 }
@@ -161,9 +161,8 @@ fn order_code(o: distribute::Order) -> u32 {
 pub fn reflectance_hash(net: &Network, scene: &Scene, surfaces: &[Surface]) -> u64 {
     let mut bytes = Vec::with_capacity(surfaces.len() * 48);
     for (node, s) in surfaces.iter().enumerate() {
-        let (poly, _, side) = net.node_place(node as u32);
-        let shape = net.patches.polygons[poly as usize].shape as usize;
-        bytes.extend_from_slice(&(scene.shapes[shape].material as u32).to_le_bytes());
+        let (material, side) = net.node_material(node as u32, scene);
+        bytes.extend_from_slice(&(material as u32).to_le_bytes());
         bytes.extend_from_slice(&side.to_le_bytes());
         for v in [s.kd, s.ks, s.kt] {
             for c in 0..3 {
@@ -179,8 +178,7 @@ pub fn reflectance_hash(net: &Network, scene: &Scene, surfaces: &[Surface]) -> u
 fn emitting_materials(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<u32> {
     let mut used = vec![false; scene.materials.len()];
     for node in 0..net.nodes() as u32 {
-        let (poly, _, side) = net.node_place(node);
-        let m = scene.shapes[net.patches.polygons[poly as usize].shape as usize].material;
+        let (m, side) = net.node_material(node, scene);
         if side == 0 && emission[m].max_element() > 0.0 {
             used[m] = true;
         }
@@ -193,10 +191,7 @@ fn emitting_materials(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<u32
 /// The scene material of each node.
 fn node_materials(net: &Network, scene: &Scene) -> Vec<usize> {
     (0..net.nodes() as u32)
-        .map(|node| {
-            let (poly, _, _) = net.node_place(node);
-            scene.shapes[net.patches.polygons[poly as usize].shape as usize].material
-        })
+        .map(|node| net.node_material(node, scene).0)
         .collect()
 }
 
