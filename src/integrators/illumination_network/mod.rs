@@ -332,39 +332,64 @@ impl BlockLinks<'_> {
         n
     }
 
-    /// Calls `keep(local node, link)` for every link of key block `b` (its nodes numbered
-    /// from `first`), in slot order: a slot's link ends, then its escapes at nodes.
+    /// Adds to `at[j + 1]` the number of links of the block's j-th key (its link ends and its
+    /// escapes, at nodes only), reading only the ends' key bits: every key with a link end
+    /// is a node, so no lookup of the node numbering.
+    fn count_keys(&self, b: usize, at: &mut [u32]) {
+        let (packing, node_of_key, marks) = (self.packing, self.node_of_key, self.marks);
+        let (w0, k0) = (b * packing.block() / 64, b * packing.block());
+        for s in self.batches {
+            for j in 0..s.slots as usize {
+                for &e in s.ends(b, j) {
+                    at[(e >> packing.target_bits) as usize + 1] += 1;
+                }
+                for (wi, (&e, &mk)) in s.escapes(b, j).iter().zip(&marks[w0..]).enumerate() {
+                    let mut m = e & mk;
+                    while m != 0 {
+                        at[wi * 64 + m.trailing_zeros() as usize + 1] += 1;
+                        m &= m - 1;
+                    }
+                }
+                for &k in s.more_escapes(b, j) {
+                    if node_of_key[k as usize] != NONE {
+                        at[k as usize - k0 + 1] += 1;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Calls `keep(j, link)` for every link of key block `b` (j its key's place in the block),
+    /// in slot order: a slot's link ends, then its escapes at nodes.
     #[inline(always)]
-    fn walk(&self, b: usize, first: u32, mut keep: impl FnMut(u32, u32)) {
+    fn walk(&self, b: usize, mut keep: impl FnMut(u32, u32)) {
         let (packing, code, node_of_key, marks) =
             (self.packing, self.code, self.node_of_key, self.marks);
-        let w0 = b * packing.block() / 64;
+        let (w0, k0) = (b * packing.block() / 64, b * packing.block());
         let slots = self
             .batches
             .iter()
             .flat_map(|s| (0..s.slots as usize).map(move |j| (s, j)));
+        let target_mask = (1 << packing.target_bits) - 1;
         for (slot, (s, j)) in slots.enumerate() {
             let slot = slot as u32;
             for &e in s.ends(b, j) {
-                let (k, t) = packing.unpack(b, e);
-                let link = code.pack_node(slot, node_of_key[t as usize]);
-                keep(node_of_key[k as usize] - first, link);
+                let link = code.pack_node(slot, node_of_key[(e & target_mask) as usize]);
+                keep(e >> packing.target_bits, link);
             }
             // Then the slot's escapes at nodes (a side's escapes are all alike, so their order
             // among themselves does not matter).
             let escape = code.pack(slot, ESCAPE);
-            for (wi, &e) in (w0..marks.len()).zip(s.escapes(b, j)) {
-                let mut m = e & marks[wi];
+            for (wi, (&e, &mk)) in (0u32..).zip(s.escapes(b, j).iter().zip(&marks[w0..])) {
+                let mut m = e & mk;
                 while m != 0 {
-                    let k = wi * 64 + m.trailing_zeros() as usize;
-                    keep(node_of_key[k] - first, escape);
+                    keep(wi * 64 + m.trailing_zeros(), escape);
                     m &= m - 1;
                 }
             }
             for &k in s.more_escapes(b, j) {
-                let node = node_of_key[k as usize];
-                if node != NONE {
-                    keep(node - first, escape);
+                if node_of_key[k as usize] != NONE {
+                    keep(k - k0 as u32, escape);
                 }
             }
         }
@@ -513,20 +538,23 @@ impl Network {
         let filled: Vec<(u64, u64)> = parts
             .into_par_iter()
             .map_init(Vec::new, |at, (b, base, out, ends_at, (wb, xb))| {
-                let first = first_node[b] as u32;
-                // Every link of the block in slot order, walked twice: to count each
-                // node's links, then to put them in place.
+                // Every link of the block in slot order, counted per key, then walked to put
+                // them in place. Nodes are numbered in key order and keys that are not nodes
+                // have no links, so the keys' places are the nodes'.
                 at.clear();
-                at.resize(wb.len() + 1, 0u32);
-                block_links.walk(b, first, |l, _| at[l as usize + 1] += 1);
+                at.resize(block + 1, 0u32);
+                block_links.count_keys(b, at);
                 let ends: usize = batches.iter().map(|s| s.block_ends(b)).sum();
                 let escapes = (out.len() - ends) as u64;
                 preprocess::starts_from_counts(at);
-                for (to, &end) in ends_at.iter_mut().zip(&at[1..]) {
+                let k0 = b * block;
+                let block_keys = &node_of_key[k0..(k0 + block).min(keys)];
+                let nodes_at = block_keys.iter().zip(&at[1..]).filter(|(&n, _)| n != NONE);
+                for (to, (_, &end)) in ends_at.iter_mut().zip(nodes_at) {
                     *to = base + end;
                 }
-                block_links.walk(b, first, |l, link| {
-                    let to = &mut at[l as usize];
+                block_links.walk(b, |j, link| {
+                    let to = &mut at[j as usize];
                     out[*to as usize] = link;
                     *to += 1;
                 });

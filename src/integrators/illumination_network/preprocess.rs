@@ -477,8 +477,9 @@ impl RowBuckets {
         self.rows.resize_with(intercepts, Vec::new);
         self.filled.clear();
         self.filled.resize(intercepts, 0);
+        // Padded so a row's last group of lanes counts into whole lanes.
         self.columns.clear();
-        self.columns.resize(intercepts + 1, 0);
+        self.columns.resize(intercepts + 1 + LANES, 0);
     }
 
     /// The hits sorted by line (line = ju · intercepts + jv), stably: a stable counting sort
@@ -597,14 +598,15 @@ struct CellMap {
 
 impl CellMap {
     /// The side keys of four hits. (Clamped before the conversion, which gives the same
-    /// cell as clamping the converted index.)
+    /// cell as clamping the converted index; the plain SSE forms, since a NaN becomes 0 in
+    /// `maxps` with 0 as its second operand, and a clamped value converts exactly.)
     #[inline]
     fn keys(&self, iu: f32x4, iv: f32x4) -> i32x4 {
         let cell = |p: f32, du: f32, dv: f32, last: i32| {
             let x = f32x4::splat(p) + f32x4::splat(du) * iu + f32x4::splat(dv) * iv;
-            x.max(f32x4::ZERO)
-                .min(f32x4::splat(last as f32))
-                .trunc_int()
+            x.fast_max(f32x4::ZERO)
+                .fast_min(f32x4::splat(last as f32))
+                .fast_trunc_int()
         };
         let i = cell(self.p0.0, self.su, self.sv, self.ns);
         let j = cell(self.p0.1, self.tu, self.tv, self.nt);
@@ -633,7 +635,8 @@ impl Rows for PolygonRows<'_> {
             ..
         } = &mut *self.b;
         let (bucket, filled) = (&mut rows[jv as usize], &mut filled[jv as usize]);
-        let need = *filled as usize + cells;
+        // Room for the row's last group of lanes written whole.
+        let need = *filled as usize + cells + LANES;
         if bucket.len() < need {
             bucket.resize(2 * need, BLANK_HIT);
         }
@@ -662,15 +665,23 @@ impl RowCells for BucketRow<'_> {
     #[inline]
     fn cells(&mut self, ju: u32, lanes: usize, iu: f32x4, iv: f32x4, pa: f32x4, inside: u32) {
         let (keys, pa) = (self.map.keys(iu, iv).to_array(), pa.to_array());
-        for l in 0..lanes {
-            let inside = inside >> l & 1;
-            self.out[self.n as usize] = LineHit {
+        // Every lane written (those past the row's end have no inside bit), each at the
+        // next free place: one bounds check for the group, not one per lane.
+        let out = &mut self.out[self.n as usize..][..LANES];
+        let mut k = 0;
+        for l in 0..LANES {
+            out[k & (LANES - 1)] = LineHit {
                 line: ju + l as u32,
                 depth: pa[l],
                 key: keys[l] as u32,
             };
-            self.n += inside;
-            self.columns[(ju as usize + l) + 1] += inside;
+            k += (inside >> l & 1) as usize;
+        }
+        self.n += k as u32;
+        debug_assert!(inside >> lanes == 0);
+        let columns = &mut self.columns[ju as usize + 1..][..LANES];
+        for (l, c) in columns.iter_mut().enumerate() {
+            *c += inside >> l & 1;
         }
     }
 }
