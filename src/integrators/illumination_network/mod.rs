@@ -449,9 +449,10 @@ impl Network {
     /// link lists. Each batch of slots has its link ends grouped by blocks of side keys
     /// ([`LinkBatch`], `packing`), so one task fills a block's place in the table (a
     /// megabyte or so) by walking every slot's ends for that block in slot order twice: to
-    /// count each node's links, then to put them in place (a stable counting sort: each
-    /// node's links stay in slot order). Blocks are independent (parallel), and nothing
-    /// depends on the schedule.
+    /// count each key's links, then to put them in place (a stable counting sort: each
+    /// node's links stay in slot order; keys are counted, not nodes, since the nodes are
+    /// numbered in key order and other keys have no links). Blocks are independent
+    /// (parallel), and nothing depends on the schedule.
     pub fn assemble(
         params: NetworkParams,
         space: RaySpace,
