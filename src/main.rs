@@ -1278,16 +1278,14 @@ fn relight_network(
             // No series stored: nothing more to try before distributing.
             Err(why) if b.series.is_empty() => say(format!("network: {why}; distributing again")),
             Err(why) => match b.from_series(&prefix, scene, &emission, options) {
-                Ok(solution) => {
+                Ok((solution, series)) => {
                     say(format!(
-                        "network: relit from the reflectance series in {} ({}) in {:.3} s: \
-                         no preprocess, no distribution (0 sweeps), link table not read",
+                        "network: relit from the reflectance series of '{}' in {} ({} terms) \
+                         in {:.3} s: no preprocess, no distribution (0 sweeps), link table not \
+                         read",
+                        series.name,
                         file.display(),
-                        b.series
-                            .iter()
-                            .map(|s| format!("'{}', {} terms", s.name, s.terms.len()))
-                            .collect::<Vec<_>>()
-                            .join("; "),
+                        series.terms.len(),
                         start.elapsed().as_secs_f64()
                     ));
                     return Ok((prefix, solution));

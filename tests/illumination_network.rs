@@ -1405,23 +1405,24 @@ fn a_reflectance_series_relights_one_material_without_a_distribution() {
         t
     };
     let recoloured = with_floor(Rgb::new(0.9, 0.1, 0.6));
-    let got = basis
+    let (got, used) = basis
         .from_series(&net, &recoloured, &emission, &options)
         .unwrap();
+    assert_eq!(used.name, "floor");
     assert_eq!(got.stats.sweeps, 0);
     let reference = distribute(&net, &recoloured, &options);
     let close = assert_close;
     close("diffuse", &got.diffuse, &reference.diffuse, 1e-4);
     close("direct", &got.direct, &reference.direct, 1e-5);
     // The old colour gives the basis's own solution back; the lights doubled, double.
-    let unchanged = basis.from_series(&net, &s, &emission, &options).unwrap();
+    let (unchanged, _) = basis.from_series(&net, &s, &emission, &options).unwrap();
     let superposed = basis.superpose(&net, &s, &emission, &options).unwrap();
     close("unchanged", &unchanged.diffuse, &superposed.diffuse, 1e-4);
     let doubled = DistributeOptions {
         light_scale: 2.0,
         ..options
     };
-    let twice = basis
+    let (twice, _) = basis
         .from_series(&net, &recoloured, &emission, &doubled)
         .unwrap();
     for (x, y) in twice.diffuse.iter().zip(&got.diffuse) {
@@ -1498,7 +1499,12 @@ fn relight_with_a_reflectance_series_reads_no_link_table() {
         "scenes/cornell-box.toml",
         &tmp_path(&dir, "stored.exr"),
         &file,
-        &["--reflectance-series", "left_wall"],
+        &[
+            "--reflectance-series",
+            "left_wall",
+            "--reflectance-series",
+            "right_wall",
+        ],
     );
     let e = stderr(&stored);
     assert!(stored.status.success(), "{e}");
@@ -1518,7 +1524,9 @@ fn relight_with_a_reflectance_series_reads_no_link_table() {
     let e = stderr(&relit);
     assert!(relit.status.success(), "{e}");
     assert!(
-        e.contains("relit from the reflectance series") && e.contains("link table not read"),
+        e.contains("relit from the reflectance series of 'left_wall'")
+            && !e.contains("right_wall")
+            && e.contains("link table not read"),
         "{e}"
     );
     assert!(full.status.success(), "{}", stderr(&full));

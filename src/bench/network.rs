@@ -259,7 +259,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             let ((prefix, basis), load) =
                 timed(|| file::load_prefix(&series_path, &recoloured, Some(&params)))?;
             let basis = basis.ok_or_else(|| bad("the light basis was not stored".into()))?;
-            let sol = basis
+            let (sol, _) = basis
                 .from_series(&prefix, &recoloured, &emission, &relit)
                 .map_err(bad)?;
             let renderer = NetworkRenderer {

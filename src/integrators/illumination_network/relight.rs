@@ -441,13 +441,14 @@ impl LightBasis {
     /// only change of reflectance since the basis is one series' material, now of constant,
     /// purely diffuse colour, and every light is at its stored emission times one common
     /// factor. No distribution and no link table; an error says why the series do not apply.
+    /// Also gives the series used.
     pub fn from_series(
         &self,
         net: &Network,
         scene: &Scene,
         emission: &[Rgb],
         options: &DistributeOptions,
-    ) -> Result<Solution, String> {
+    ) -> Result<(Solution, &ReflectanceSeries), String> {
         let start = Instant::now();
         self.check_options(options)?;
         let surfaces = lit_surfaces(net, scene, emission, options);
@@ -544,7 +545,7 @@ impl LightBasis {
             stats.absorbed[c] = stats.emitted[c] - stats.escaped[c] - stats.unshot[c];
         }
         stats.seconds = start.elapsed().as_secs_f64();
-        Ok(Solution {
+        let solution = Solution {
             surfaces,
             diffuse,
             direct,
@@ -554,7 +555,8 @@ impl LightBasis {
             dir_rows: self.dir_rows.clone(),
             stats,
             light_scale: options.light_scale,
-        })
+        };
+        Ok((solution, series))
     }
 
     /// Every material that emits now has a solution in the basis.
