@@ -750,6 +750,11 @@ impl LightBasis {
                 }
             }
         };
+        // A light's or a series' head ([`LightBasis::from_bytes`] reads it back).
+        let named = |b: &mut Vec<u8>, material: u32, name: &str, sweeps: u32| {
+            u32s(b, &[material, name.len() as u32, sweeps]);
+            b.extend_from_slice(name.as_bytes());
+        };
         b.extend_from_slice(&self.reflectance.to_le_bytes());
         b.extend_from_slice(&self.tolerance.to_le_bytes());
         b.extend_from_slice(&self.max_sweeps.to_le_bytes());
@@ -766,8 +771,7 @@ impl LightBasis {
         u32s(&mut b, &self.dir_index);
         u32s(&mut b, &self.dir_rows);
         for l in &self.lights {
-            u32s(&mut b, &[l.material, l.name.len() as u32, l.sweeps]);
-            b.extend_from_slice(l.name.as_bytes());
+            named(&mut b, l.material, &l.name, l.sweeps);
             rgbs(&mut b, &[l.emission]);
             for v in l.balance.iter().flatten() {
                 b.extend_from_slice(&v.to_le_bytes());
@@ -783,8 +787,7 @@ impl LightBasis {
             u32s(&mut b, &[self.series.len() as u32]);
         }
         for s in &self.series {
-            u32s(&mut b, &[s.material, s.name.len() as u32, s.sweeps]);
-            b.extend_from_slice(s.name.as_bytes());
+            named(&mut b, s.material, &s.name, s.sweeps);
             b.extend_from_slice(&s.others.to_le_bytes());
             u32s(&mut b, &[s.terms.len() as u32]);
             for t in &s.terms {
@@ -839,6 +842,16 @@ impl LightBasis {
                     .collect(),
             )
         };
+        // A light's or a series' head: its material, name and sweeps.
+        let named = |r: &mut Reader| -> Option<(u32, String, u32)> {
+            let (material, name_len, sweeps) = (r.u32()?, r.u32()? as usize, r.u32()?);
+            if r.rest.len() < name_len {
+                return None;
+            }
+            let (name, rest) = r.rest.split_at(name_len);
+            r.rest = rest;
+            Some((material, String::from_utf8(name.to_vec()).ok()?, sweeps))
+        };
         basis.dir_index = u32s(&mut r, n_index)?;
         basis.dir_rows = u32s(&mut r, n_rows)?;
         let dir = basis
@@ -850,13 +863,7 @@ impl LightBasis {
             return None;
         }
         for _ in 0..n_lights {
-            let (material, name_len, sweeps) = (r.u32()?, r.u32()? as usize, r.u32()?);
-            if r.rest.len() < name_len {
-                return None;
-            }
-            let (name, rest) = r.rest.split_at(name_len);
-            r.rest = rest;
-            let name = String::from_utf8(name.to_vec()).ok()?;
+            let (material, name, sweeps) = named(&mut r)?;
             let emission = rgbs(&mut r, 1)?[0];
             let mut balance = [[0.0; 3]; 4];
             for v in balance.iter_mut().flatten() {
@@ -888,13 +895,7 @@ impl LightBasis {
         }
         let n_series = if r.rest.is_empty() { 0 } else { r.u32()? };
         for _ in 0..n_series {
-            let (material, name_len, sweeps) = (r.u32()?, r.u32()? as usize, r.u32()?);
-            if r.rest.len() < name_len {
-                return None;
-            }
-            let (name, rest) = r.rest.split_at(name_len);
-            r.rest = rest;
-            let name = String::from_utf8(name.to_vec()).ok()?;
+            let (material, name, sweeps) = named(&mut r)?;
             let others = r.u64()?;
             let n_terms = r.u32()? as usize;
             if n_terms == 0 || n_terms > MAX_SERIES_TERMS {
