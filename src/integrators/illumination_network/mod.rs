@@ -310,51 +310,41 @@ struct BlockLinks<'a> {
 }
 
 impl BlockLinks<'_> {
-    /// The number of links of key block `b` ([`BlockLinks::walk`] gives them): its link ends
-    /// (every one at a node, which it marked) and its escapes at nodes, counted a word of
-    /// node marks at a time.
-    fn count(&self, b: usize) -> usize {
-        let w0 = b * self.packing.block() / 64;
-        let marks = &self.marks[w0..];
-        let mut n = 0;
-        for s in self.batches {
-            n += s.block_ends(b);
-            for j in 0..s.slots as usize {
-                for (e, m) in s.escapes(b, j).iter().zip(marks) {
-                    n += (e & m).count_ones() as usize;
-                }
-                let more = s.more_escapes(b, j).iter();
-                n += more
-                    .filter(|&&k| self.node_of_key[k as usize] != NONE)
-                    .count();
-            }
-        }
-        n
-    }
-
-    /// Adds to `at[j + 1]` the number of links of the block's j-th key (its link ends and its
-    /// escapes, at nodes only), reading only the ends' key bits: every key with a link end
-    /// is a node, so no lookup of the node numbering.
-    fn count_keys(&self, b: usize, at: &mut [u32]) {
-        let (packing, node_of_key, marks) = (self.packing, self.node_of_key, self.marks);
-        let (w0, k0) = (b * packing.block() / 64, b * packing.block());
+    /// The places of key block `b`'s links by key: `at[j]` the first place of its j-th key's
+    /// links and `at[block]` their number (its link ends and its escapes at nodes), counted
+    /// from the ends' key bits alone: every key with a link end is a node, so no lookup of
+    /// the node numbering.
+    fn places(&self, b: usize) -> Vec<u32> {
+        let mut at = vec![0u32; self.packing.block() + 1];
         for s in self.batches {
             for j in 0..s.slots as usize {
                 for &e in s.ends(b, j) {
-                    at[(e >> packing.target_bits) as usize + 1] += 1;
+                    at[(e >> self.packing.target_bits) as usize + 1] += 1;
                 }
-                for (wi, (&e, &mk)) in s.escapes(b, j).iter().zip(&marks[w0..]).enumerate() {
-                    let mut m = e & mk;
-                    while m != 0 {
-                        at[wi * 64 + m.trailing_zeros() as usize + 1] += 1;
-                        m &= m - 1;
-                    }
-                }
-                for &k in s.more_escapes(b, j) {
-                    if node_of_key[k as usize] != NONE {
-                        at[k as usize - k0 + 1] += 1;
-                    }
-                }
+                self.escapes_at_nodes(s, b, j, |k| at[k as usize + 1] += 1);
+            }
+        }
+        preprocess::starts_from_counts(&mut at);
+        at
+    }
+
+    /// Calls `keep(j)` for each escape at a node of key block `b` in slot `j` of batch `s`
+    /// (the node's key the j-th of the block): a word of node marks at a time, then the
+    /// side's later escapes.
+    #[inline(always)]
+    fn escapes_at_nodes(&self, s: &LinkBatch, b: usize, j: usize, mut keep: impl FnMut(u32)) {
+        let k0 = b * self.packing.block();
+        let marks = &self.marks[k0 / 64..];
+        for (wi, (&e, &mk)) in (0u32..).zip(s.escapes(b, j).iter().zip(marks)) {
+            let mut m = e & mk;
+            while m != 0 {
+                keep(wi * 64 + m.trailing_zeros());
+                m &= m - 1;
+            }
+        }
+        for &k in s.more_escapes(b, j) {
+            if self.node_of_key[k as usize] != NONE {
+                keep(k - k0 as u32);
             }
         }
     }
@@ -363,9 +353,7 @@ impl BlockLinks<'_> {
     /// in slot order: a slot's link ends, then its escapes at nodes.
     #[inline(always)]
     fn walk(&self, b: usize, mut keep: impl FnMut(u32, u32)) {
-        let (packing, code, node_of_key, marks) =
-            (self.packing, self.code, self.node_of_key, self.marks);
-        let (w0, k0) = (b * packing.block() / 64, b * packing.block());
+        let (packing, code, node_of_key) = (self.packing, self.code, self.node_of_key);
         let slots = self
             .batches
             .iter()
@@ -380,18 +368,7 @@ impl BlockLinks<'_> {
             // Then the slot's escapes at nodes (a side's escapes are all alike, so their order
             // among themselves does not matter).
             let escape = code.pack(slot, ESCAPE);
-            for (wi, (&e, &mk)) in (0u32..).zip(s.escapes(b, j).iter().zip(&marks[w0..])) {
-                let mut m = e & mk;
-                while m != 0 {
-                    keep(wi * 64 + m.trailing_zeros(), escape);
-                    m &= m - 1;
-                }
-            }
-            for &k in s.more_escapes(b, j) {
-                if node_of_key[k as usize] != NONE {
-                    keep(k - k0 as u32, escape);
-                }
-            }
+            self.escapes_at_nodes(s, b, j, |k| keep(k, escape));
         }
     }
 }
@@ -497,12 +474,12 @@ impl Network {
             node_of_key: &node_of_key,
             marks: &marks,
         };
-        // Each block's links, exactly, so that each block fills its own place.
-        let counts: Vec<usize> = (0..blocks)
+        // Each block's links by key, exactly, so that each block fills its own place.
+        let places: Vec<Vec<u32>> = (0..blocks)
             .into_par_iter()
-            .map(|b| block_links.count(b))
+            .map(|b| block_links.places(b))
             .collect();
-        let total: usize = counts.iter().sum();
+        let total: usize = places.iter().map(|at| at[block] as usize).sum();
         if total > u32::MAX as usize {
             return Err(format!(
                 "the network would have {total} links, more than 32-bit offsets address; use \
@@ -524,30 +501,26 @@ impl Network {
                 &mut escape_etendue[..],
             );
             let mut base = 0;
-            for (b, &count) in counts.iter().enumerate() {
-                let n = first_node[b + 1] - first_node[b];
+            for (b, at) in places.into_iter().enumerate() {
+                let (count, n) = (at[block] as usize, first_node[b + 1] - first_node[b]);
                 let (l, lr) = std::mem::take(&mut rest.0).split_at_mut(count);
                 let (s, sr) = std::mem::take(&mut rest.1).split_at_mut(n);
                 let (e, er) = std::mem::take(&mut rest.2).split_at_mut(n);
                 let (x, xr) = std::mem::take(&mut rest.3).split_at_mut(n);
                 rest = (lr, sr, er, xr);
-                parts.push((b, base as u32, l, s, (e, x)));
+                parts.push((b, at, base as u32, l, s, (e, x)));
                 base += count;
             }
         }
         // Per block: the escapes seen, and the links beyond the first of their slot.
         let filled: Vec<(u64, u64)> = parts
             .into_par_iter()
-            .map_init(Vec::new, |at, (b, base, out, ends_at, (wb, xb))| {
-                // Every link of the block in slot order, counted per key, then walked to put
-                // them in place. Nodes are numbered in key order and keys that are not nodes
-                // have no links, so the keys' places are the nodes'.
-                at.clear();
-                at.resize(block + 1, 0u32);
-                block_links.count_keys(b, at);
+            .map(|(b, mut at, base, out, ends_at, (wb, xb))| {
+                // The block's links walked in slot order and put in place by key. Nodes are
+                // numbered in key order and keys that are not nodes have no links, so the
+                // keys' places are the nodes'.
                 let ends: usize = batches.iter().map(|s| s.block_ends(b)).sum();
                 let escapes = (out.len() - ends) as u64;
-                preprocess::starts_from_counts(at);
                 let k0 = b * block;
                 let block_keys = &node_of_key[k0..(k0 + block).min(keys)];
                 let nodes_at = block_keys.iter().zip(&at[1..]).filter(|(&n, _)| n != NONE);
