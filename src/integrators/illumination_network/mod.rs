@@ -311,30 +311,43 @@ struct BlockLinks<'a> {
 
 impl BlockLinks<'_> {
     /// The places of key block `b`'s links by key: `at[j]` the first place of its j-th key's
-    /// links and `at[block]` their number (its link ends and its escapes at nodes), counted
-    /// from the ends' key bits alone: every key with a link end is a node, so no lookup of
-    /// the node numbering.
-    fn places(&self, b: usize) -> Vec<u32> {
-        let mut at = vec![0u32; self.packing.block() + 1];
-        for s in self.batches {
+    /// links and `at[block]` their number (its link ends and its escapes at nodes), and the
+    /// block's node marks (bit j of word j / 64: the j-th key is a node). The ends are
+    /// counted from their key bits alone, and a key is a node when it has an end: the
+    /// linking marks no nodes, and the count needs no node numbering.
+    fn places(batches: &[LinkBatch], packing: EndPacking, b: usize) -> (Vec<u32>, Vec<u64>) {
+        let mut at = vec![0u32; packing.block() + 1];
+        for s in batches {
             for j in 0..s.slots as usize {
                 for &e in s.ends(b, j) {
-                    at[(e >> self.packing.target_bits) as usize + 1] += 1;
+                    at[(e >> packing.target_bits) as usize + 1] += 1;
                 }
-                self.escapes_at_nodes(s, b, j, |k| at[k as usize + 1] += 1);
+            }
+        }
+        let marks: Vec<u64> = at[1..]
+            .chunks_exact(64)
+            .map(|c| (0..64).fold(0, |m, i| m | u64::from(c[i] > 0) << i))
+            .collect();
+        for s in batches {
+            for j in 0..s.slots as usize {
+                Self::escapes_at_nodes(s, b, j, &marks, |k| at[k as usize + 1] += 1);
             }
         }
         preprocess::starts_from_counts(&mut at);
-        at
+        (at, marks)
     }
 
     /// Calls `keep(j)` for each escape at a node of key block `b` in slot `j` of batch `s`
-    /// (the node's key the j-th of the block): a word of node marks at a time, then the
-    /// side's later escapes.
+    /// (the node's key the j-th of the block; `marks` the block's node marks): a word of
+    /// node marks at a time, then the side's later escapes.
     #[inline(always)]
-    fn escapes_at_nodes(&self, s: &LinkBatch, b: usize, j: usize, mut keep: impl FnMut(u32)) {
-        let k0 = b * self.packing.block();
-        let marks = &self.marks[k0 / 64..];
+    fn escapes_at_nodes(
+        s: &LinkBatch,
+        b: usize,
+        j: usize,
+        marks: &[u64],
+        mut keep: impl FnMut(u32),
+    ) {
         for (wi, (&e, &mk)) in (0u32..).zip(s.escapes(b, j).iter().zip(marks)) {
             let mut m = e & mk;
             while m != 0 {
@@ -342,9 +355,11 @@ impl BlockLinks<'_> {
                 m &= m - 1;
             }
         }
+        let k0 = (b * s.words * 64) as u32;
         for &k in s.more_escapes(b, j) {
-            if self.node_of_key[k as usize] != NONE {
-                keep(k - k0 as u32);
+            let k = k - k0;
+            if marks[k as usize / 64] >> (k % 64) & 1 == 1 {
+                keep(k);
             }
         }
     }
@@ -359,6 +374,8 @@ impl BlockLinks<'_> {
             .iter()
             .flat_map(|s| (0..s.slots as usize).map(move |j| (s, j)));
         let target_mask = (1 << packing.target_bits) - 1;
+        let words = packing.block() / 64;
+        let block_marks = &self.marks[b * words..((b + 1) * words).min(self.marks.len())];
         for (slot, (s, j)) in slots.enumerate() {
             let slot = slot as u32;
             for &e in s.ends(b, j) {
@@ -368,7 +385,7 @@ impl BlockLinks<'_> {
             // Then the slot's escapes at nodes (a side's escapes are all alike, so their order
             // among themselves does not matter).
             let escape = code.pack(slot, ESCAPE);
-            self.escapes_at_nodes(s, b, j, |k| keep(k, escape));
+            Self::escapes_at_nodes(s, b, j, block_marks, |k| keep(k, escape));
         }
     }
 }
@@ -442,14 +459,14 @@ impl Network {
         let keys = 2 * patches.cells as usize;
         let block = packing.block();
         let blocks = keys.div_ceil(block);
-        // Nodes: keys with a real link (not only escapes), marked by each batch of slots.
-        let words = keys.div_ceil(64);
-        let mut marks = vec![0u64; words];
-        for s in batches {
-            for (m, &sm) in marks.iter_mut().zip(&s.marks) {
-                *m |= sm;
-            }
-        }
+        // Each block's links by key, exactly, so that each block fills its own place; and
+        // its nodes: keys with a real link (not only escapes).
+        let (places, marks): (Vec<Vec<u32>>, Vec<Vec<u64>>) = (0..blocks)
+            .into_par_iter()
+            .map(|b| BlockLinks::places(batches, packing, b))
+            .unzip();
+        let mut marks = marks.concat();
+        marks.truncate(keys.div_ceil(64));
         let mut first_node = Vec::with_capacity(blocks + 1);
         let mut node_of_key = vec![NONE; keys];
         let mut key_of_node = Vec::new();
@@ -474,11 +491,6 @@ impl Network {
             node_of_key: &node_of_key,
             marks: &marks,
         };
-        // Each block's links by key, exactly, so that each block fills its own place.
-        let places: Vec<Vec<u32>> = (0..blocks)
-            .into_par_iter()
-            .map(|b| block_links.places(b))
-            .collect();
         let total: usize = places.iter().map(|at| at[block] as usize).sum();
         if total > u32::MAX as usize {
             return Err(format!(

@@ -133,8 +133,6 @@ pub struct LinkBatch {
     pub more_start: Vec<u32>,
     /// Links between two sides (each has two ends).
     pub pairs: u64,
-    /// Bit set over side keys: the sides with a link (not only an escape) in the batch.
-    pub marks: Vec<u64>,
     pub intersections: u64,
     /// Consecutive hits on the same side (dropped).
     pub degenerate: u64,
@@ -768,7 +766,7 @@ pub struct LinkBuffers {
     buckets: Vec<Vec<u32>>,
     bucket_at: Vec<u32>,
     /// The batch's later escapes, slot after slot: slot j's are
-    /// `more[more_at[j]..more_at[j + 1]]`.
+    /// `more[more_at[j]..more_at[j + 1]]` (past the last, room for the next slot's).
     more: Vec<u32>,
     more_at: Vec<usize>,
     /// A slot's escapes, over all side keys (cleared after each slot).
@@ -811,8 +809,8 @@ fn radix_by_line(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) {
 /// Sorts one slot's hits (sorted by line) by depth within each line's few hits and links
 /// consecutive ones, as the `j`-th slot of `out`: the packed link ends go to their key
 /// block's bucket and a side's second and later escapes to `more` (both joined later,
-/// [`LinkBatch::group_ends`]), the escapes, the node marks and the later escapes' counts
-/// straight into `out`.
+/// [`LinkBatch::group_ends`]), the escapes straight into `out`. (Which sides are nodes, the
+/// assembly reads off the link ends.)
 #[allow(clippy::too_many_arguments)]
 fn link_slot(
     sorted: &mut [LineHit],
@@ -820,50 +818,80 @@ fn link_slot(
     packing: EndPacking,
     buckets: &mut [Vec<u32>],
     more: &mut Vec<u32>,
+    more_at: &mut Vec<usize>,
     escapes: &mut [u64],
     out: &mut LinkBatch,
 ) {
     out.intersections += sorted.len() as u64;
-    let slots = out.slots as usize;
-    let group = |k: u32| packing.block_of(k) * slots + j;
     // The slot's escapes gather in `escapes` (a bit set over all side keys: dense, so it
     // stays in cache, where the batch's block-major copy would not) and go to `out` after.
-    let mut escape = |k: u32, out: &mut LinkBatch| {
-        let (w, bit) = (k as usize / 64, 1u64 << (k % 64));
-        if escapes[w] & bit != 0 {
-            more.push(k);
-            out.more_start[group(k) + 1] += 1;
-        }
-        escapes[w] |= bit;
-    };
-    for hits in sorted.chunk_by_mut(|x, y| x.line == y.line) {
-        // Insertion sort: a line meets a handful of patches.
-        for i in 1..hits.len() {
-            let mut h = i;
-            while h > 0 && (hits[h].depth, hits[h].key) < (hits[h - 1].depth, hits[h - 1].key) {
-                hits.swap(h, h - 1);
-                h -= 1;
-            }
-        }
-        // Entering the scene: the first side facing −d looks out of it.
-        escape(hits[0].key ^ 1, out);
-        for w in hits.windows(2) {
-            let (x, y) = (w[0].key, w[1].key ^ 1);
-            // A line meeting the same side twice in a row (a hit on an edge counted by both
-            // of its cells' polygon) carries nothing; coincident surfaces (a box standing on
-            // the floor) touch, and no light passes between them.
-            if x != y && w[1].depth - w[0].depth > COINCIDENT {
-                for (k, t) in [(x, y), (y, x)] {
-                    buckets[packing.block_of(k)].push(packing.pack(k, t));
-                    out.marks[k as usize / 64] |= 1 << (k % 64);
-                }
-            } else {
-                out.degenerate += 1;
-            }
-        }
-        escape(hits[hits.len() - 1].key, out);
+    // A side's later escapes go to `more` without a branch (whether a side has escaped
+    // already is data, not a pattern): each escape is written at the next place, which
+    // advances only for a later one. A line has at most two.
+    let mut n = *more_at.last().expect("a batch's escapes start at 0");
+    if more.len() < n + 2 * sorted.len() {
+        more.resize(n + 2 * sorted.len(), 0);
     }
-    let words = out.words;
+    let mut escape = |k: u32| {
+        let (w, bit) = (k as usize / 64, k % 64);
+        let seen = escapes[w] >> bit & 1;
+        more[n] = k;
+        n += seen as usize;
+        escapes[w] |= 1 << bit;
+    };
+    // Each line's few hits in depth order: an insertion sort over the slot that never moves
+    // a hit past its line's first. The scan order mostly gives the order already, so the one
+    // branch per hit (its line and depth tested together) is rarely taken.
+    for i in 1..sorted.len() {
+        let mut h = i;
+        while h > 0 && {
+            let (x, y) = (&sorted[h - 1], &sorted[h]);
+            (x.line == y.line) & ((y.depth, y.key) < (x.depth, x.key))
+        } {
+            sorted.swap(h, h - 1);
+            h -= 1;
+        }
+    }
+    let (Some(first), Some(last)) = (sorted.first(), sorted.last()) else {
+        return finish_slot(j, n, more_at, escapes, out);
+    };
+    // Entering the scene: the first side facing −d looks out of it; leaving it, the last
+    // side facing +d. Consecutive hits on a line link; between lines, one leaves and the
+    // next enters (the same order as line by line).
+    escape(first.key ^ 1);
+    for w in sorted.windows(2) {
+        if w[0].line != w[1].line {
+            escape(w[0].key);
+            escape(w[1].key ^ 1);
+            continue;
+        }
+        let (x, y) = (w[0].key, w[1].key ^ 1);
+        // A line meeting the same side twice in a row (a hit on an edge counted by both of
+        // its cells' polygon) carries nothing; coincident surfaces (a box standing on the
+        // floor) touch, and no light passes between them.
+        if x != y && w[1].depth - w[0].depth > COINCIDENT {
+            for (k, t) in [(x, y), (y, x)] {
+                buckets[packing.block_of(k)].push(packing.pack(k, t));
+            }
+        } else {
+            out.degenerate += 1;
+        }
+    }
+    escape(last.key);
+    finish_slot(j, n, more_at, escapes, out)
+}
+
+/// The end of a slot's linking: its later escapes end at `n` in the batch's `more`, and its
+/// escape bits go to the `j`-th slot of `out` (and are cleared).
+fn finish_slot(
+    j: usize,
+    n: usize,
+    more_at: &mut Vec<usize>,
+    escapes: &mut [u64],
+    out: &mut LinkBatch,
+) {
+    more_at.push(n);
+    let (words, slots) = (out.words, out.slots as usize);
     for (b, bits) in escapes.chunks_mut(words).enumerate() {
         let g = b * slots + j;
         out.escapes[g * words..g * words + bits.len()].copy_from_slice(bits);
@@ -882,7 +910,6 @@ impl LinkBatch {
             escapes: vec![0; groups * words],
             words,
             more_start: vec![0; groups + 1],
-            marks: vec![0; keys.div_ceil(64)],
             ..LinkBatch::default()
         }
     }
@@ -905,6 +932,11 @@ impl LinkBatch {
         }
         *self.start.last_mut().expect("a batch has a group") = total as u32;
         self.ends = ends;
+        for (j, r) in buf.more_at.windows(2).enumerate() {
+            for &k in &buf.more[r[0]..r[1]] {
+                self.more_start[packing.block_of(k) * slots + j + 1] += 1;
+            }
+        }
         self.more_escapes = group_slots(&mut self.more_start, &buf.more, &buf.more_at, |k| {
             (packing.block_of(k) * slots, k)
         });
@@ -984,7 +1016,6 @@ pub fn build_links(
             let (slots, blocks) = (out.slots as usize, keys.div_ceil(packing.block()));
             buf.more_at.clear();
             buf.more_at.push(0);
-            buf.more.clear();
             buf.buckets.resize_with(blocks, Vec::new);
             buf.buckets.iter_mut().for_each(Vec::clear);
             buf.bucket_at.clear();
@@ -1008,9 +1039,11 @@ pub fn build_links(
                     buf.bucket_at[b * slots + j] = bucket.len() as u32;
                 }
                 let sorted = &mut buf.sorted[..hits];
-                let (buckets, more, escapes) = (&mut buf.buckets, &mut buf.more, &mut buf.escapes);
-                link_slot(sorted, j, packing, buckets, more, escapes, &mut out);
-                buf.more_at.push(buf.more.len());
+                let (buckets, escapes) = (&mut buf.buckets, &mut buf.escapes);
+                let (more, more_at) = (&mut buf.more, &mut buf.more_at);
+                link_slot(
+                    sorted, j, packing, buckets, more, more_at, escapes, &mut out,
+                );
             }
             out.group_ends(buf, packing);
             (out, stats)
