@@ -682,12 +682,29 @@ impl RowCells for BucketRow<'_> {
         }
         self.n += k as u32;
         debug_assert!(inside >> lanes == 0);
-        let columns = &mut self.columns[ju as usize + 1..][..LANES];
-        for (l, c) in columns.iter_mut().enumerate() {
-            *c += inside >> l & 1;
-        }
+        // The four columns counted at once: a table gives the lanes' inside bits as a vector.
+        let columns: &mut [u32; LANES] = (&mut self.columns[ju as usize + 1..][..LANES])
+            .try_into()
+            .expect("a group of lanes");
+        *columns =
+            (u32x4::from(*columns) + u32x4::from(INSIDE_LANES[inside as usize & 15])).to_array();
     }
 }
+
+/// The lanes of a group's inside bits, one 0 or 1 per lane, for each of the 16 bit patterns.
+const INSIDE_LANES: [[u32; LANES]; 16] = {
+    let mut t = [[0; LANES]; 16];
+    let mut m = 0;
+    while m < 16 {
+        let mut l = 0;
+        while l < LANES {
+            t[m][l] = (m >> l & 1) as u32;
+            l += 1;
+        }
+        m += 1;
+    }
+    t
+};
 
 impl Drop for BucketRow<'_> {
     fn drop(&mut self) {
