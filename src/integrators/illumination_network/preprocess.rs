@@ -954,29 +954,29 @@ impl LinkBatch {
         }
         *self.start.last_mut().expect("a batch has a group") = total as u32;
         self.ends = ends;
-        for (j, r) in buf.more_at.windows(2).enumerate() {
-            for &k in &buf.more[r[0]..r[1]] {
-                self.more_start[packing.block_of(k) * slots + j + 1] += 1;
-            }
-        }
         self.more_escapes = group_slots(&mut self.more_start, &buf.more, &buf.more_at, |k| {
             (packing.block_of(k) * slots, k)
         });
     }
 }
 
-/// A stable counting sort of a batch's items (slot j's are `items[at[j]..at[j + 1]]`) into
-/// groups: `place(item)` gives its group for the batch's first slot (slot j's group is j
-/// further on) and its value. On entry `start[g + 1]` holds group g's item count (`start[0]`
-/// is 0), on return `start[g]` its first index.
+/// A stable counting sort of a batch's items (slot j's are `items[at[j]..at[j + 1]]`; `items`
+/// may hold more after the last slot's) into groups: `place(item)` gives its group for the
+/// batch's first slot (slot j's group is j further on) and its value. `start` (zeros on
+/// entry, one more than the groups) gives on return group g's first index in `start[g]`.
 fn group_slots<T: Copy, V: Copy + Default>(
     start: &mut [u32],
     items: &[T],
     at: &[usize],
     place: impl Fn(T) -> (usize, V),
 ) -> Vec<V> {
+    for (j, r) in at.windows(2).enumerate() {
+        for &x in &items[r[0]..r[1]] {
+            start[place(x).0 + j + 1] += 1;
+        }
+    }
     starts_from_counts(start);
-    let mut grouped = vec![V::default(); items.len()];
+    let mut grouped = vec![V::default(); at.last().map_or(0, |&n| n)];
     let mut next = start.to_vec();
     // A loop per slot (the slot a constant in it).
     for (j, r) in at.windows(2).enumerate() {
