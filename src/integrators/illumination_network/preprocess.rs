@@ -874,44 +874,31 @@ fn link_slot(
             h -= 1;
         }
     }
-    let (Some(first), Some(last)) = (sorted.first(), sorted.last()) else {
-        return finish_slot(j, n, more_at, escapes, out);
-    };
     // Entering the scene: the first side facing −d looks out of it; leaving it, the last
     // side facing +d. Consecutive hits on a line link; between lines, one leaves and the
     // next enters (the same order as line by line).
-    escape(first.key ^ 1);
-    for w in sorted.windows(2) {
-        if w[0].line != w[1].line {
-            escape(w[0].key);
-            escape(w[1].key ^ 1);
-            continue;
-        }
-        let (x, y) = (w[0].key, w[1].key ^ 1);
-        // A line meeting the same side twice in a row (a hit on an edge counted by both of
-        // its cells' polygon) carries nothing; coincident surfaces (a box standing on the
-        // floor) touch, and no light passes between them.
-        if x != y && w[1].depth - w[0].depth > COINCIDENT {
-            for (k, t) in [(x, y), (y, x)] {
-                buckets[packing.block_of(k)].push(packing.pack(k, t));
+    if let (Some(first), Some(last)) = (sorted.first(), sorted.last()) {
+        escape(first.key ^ 1);
+        for w in sorted.windows(2) {
+            if w[0].line != w[1].line {
+                escape(w[0].key);
+                escape(w[1].key ^ 1);
+                continue;
             }
-        } else {
-            out.degenerate += 1;
+            let (x, y) = (w[0].key, w[1].key ^ 1);
+            // A line meeting the same side twice in a row (a hit on an edge counted by both
+            // of its cells' polygon) carries nothing; coincident surfaces (a box standing on
+            // the floor) touch, and no light passes between them.
+            if x != y && w[1].depth - w[0].depth > COINCIDENT {
+                for (k, t) in [(x, y), (y, x)] {
+                    buckets[packing.block_of(k)].push(packing.pack(k, t));
+                }
+            } else {
+                out.degenerate += 1;
+            }
         }
+        escape(last.key);
     }
-    escape(last.key);
-    finish_slot(j, n, more_at, escapes, out)
-}
-
-/// The end of a slot's linking: its later escapes end at `n` in the batch's `more`, and its
-/// escape bits go to the `j`-th slot of `out` (and are cleared).
-fn finish_slot(
-    j: usize,
-    n: usize,
-    more_at: &mut Vec<usize>,
-    escapes: &mut [u64],
-    out: &mut LinkBatch,
-) {
     more_at.push(n);
     let (words, slots) = (out.words, out.slots as usize);
     for (b, bits) in escapes.chunks_mut(words).enumerate() {
