@@ -45,6 +45,10 @@ pub const ESCAPE: u32 = u32::MAX - 1;
 /// take smaller blocks (the packed link ends, [`preprocess::EndPacking`], need the bits).
 pub const MAX_KEY_BLOCK_BITS: u32 = 9;
 
+/// The places of a key block's links by key ([`BlockLinks::places`]): one more than the
+/// largest block's keys.
+const KEY_BLOCK_PLACES: usize = (1 << MAX_KEY_BLOCK_BITS) + 1;
+
 pub const DEFAULT_SLOPES: u32 = 12;
 pub const DEFAULT_STEP: f32 = 1.0 / 64.0;
 pub const DEFAULT_TOLERANCE: f32 = 1e-3;
@@ -315,8 +319,16 @@ impl BlockLinks<'_> {
     /// block's node marks (bit j of word j / 64: the j-th key is a node). The ends are
     /// counted from their key bits alone, and a key is a node when it has an end: the
     /// linking marks no nodes, and the count needs no node numbering.
-    fn places(batches: &[LinkBatch], packing: EndPacking, b: usize) -> (Vec<u32>, Vec<u64>) {
-        let mut at = vec![0u32; packing.block() + 1];
+    fn places<const USUAL: bool>(
+        batches: &[LinkBatch],
+        packing: EndPacking,
+        b: usize,
+    ) -> (Vec<u32>, Vec<u64>) {
+        let packing = packing.known::<USUAL>();
+        // The largest block's size whatever the block (those past it count nothing), so
+        // that the fill's places are a fixed-size array: its index, a key's offset in the
+        // block, then needs no bounds check with the usual packing.
+        let mut at = vec![0u32; KEY_BLOCK_PLACES];
         for s in batches {
             for j in 0..s.slots as usize {
                 for &e in s.ends(b, j) {
@@ -324,7 +336,7 @@ impl BlockLinks<'_> {
                 }
             }
         }
-        let marks: Vec<u64> = at[1..]
+        let marks: Vec<u64> = at[1..=packing.block()]
             .chunks_exact(64)
             .map(|c| (0..64).fold(0, |m, i| m | u64::from(c[i] > 0) << i))
             .collect();
@@ -367,8 +379,9 @@ impl BlockLinks<'_> {
     /// Calls `keep(j, link)` for every link of key block `b` (j its key's place in the block),
     /// in slot order: a slot's link ends, then its escapes at nodes.
     #[inline(always)]
-    fn walk(&self, b: usize, mut keep: impl FnMut(u32, u32)) {
-        let (packing, code, node_of_key) = (self.packing, self.code, self.node_of_key);
+    fn walk<const USUAL: bool>(&self, b: usize, mut keep: impl FnMut(u32, u32)) {
+        let packing = self.packing.known::<USUAL>();
+        let (code, node_of_key) = (self.code, self.node_of_key);
         let slots = self
             .batches
             .iter()
@@ -398,6 +411,17 @@ impl Network {
         params: NetworkParams,
         builder: Builder,
     ) -> Result<Network, String> {
+        Self::build_packed(scene, ctx, params, builder, EndPacking::for_keys)
+    }
+
+    /// [`Network::build`] with the preprocess's link ends packed as `packing(side keys)` says.
+    fn build_packed(
+        scene: &Scene,
+        ctx: &Context,
+        params: NetworkParams,
+        builder: Builder,
+        packing: impl FnOnce(usize) -> Result<EndPacking, String>,
+    ) -> Result<Network, String> {
         params.validate()?;
         let start = Instant::now();
         let bounds = scene.bounds().ok_or("the scene has no shapes")?;
@@ -417,7 +441,7 @@ impl Network {
             }
         }
         let keys = 2 * patches.cells as usize;
-        let packing = EndPacking::for_keys(keys)?;
+        let packing = packing(keys)?;
         let code = LinkCode::new(space.slots(), keys)?;
         let t = Instant::now();
         let (batches, rays) = preprocess::build_links(
@@ -463,7 +487,10 @@ impl Network {
         // its nodes: keys with a real link (not only escapes).
         let (places, marks): (Vec<Vec<u32>>, Vec<Vec<u64>>) = (0..blocks)
             .into_par_iter()
-            .map(|b| BlockLinks::places(batches, packing, b))
+            .map(|b| match packing == EndPacking::USUAL {
+                true => BlockLinks::places::<true>(batches, packing, b),
+                false => BlockLinks::places::<false>(batches, packing, b),
+            })
             .unzip();
         let mut marks = marks.concat();
         marks.truncate(keys.div_ceil(64));
@@ -539,11 +566,17 @@ impl Network {
                 for (to, (_, &end)) in ends_at.iter_mut().zip(nodes_at) {
                     *to = base + end;
                 }
-                block_links.walk(b, |j, link| {
+                let at: &mut [u32; KEY_BLOCK_PLACES] =
+                    (&mut at[..]).try_into().expect("a block's places");
+                let place = |j: u32, link: u32| {
                     let to = &mut at[j as usize];
                     out[*to as usize] = link;
                     *to += 1;
-                });
+                };
+                match packing == EndPacking::USUAL {
+                    true => block_links.walk::<true>(b, place),
+                    false => block_links.walk::<false>(b, place),
+                }
                 // W (and its escapes' part, in blocks with escapes), and the links beyond the
                 // first of their slot.
                 let mut extra = 0u64;
@@ -680,5 +713,52 @@ impl Network {
             + self.key_of_node.len()
             + self.etendue.len())
             + self.patches.polygons.len() * std::mem::size_of::<patches::Polygon>()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::{self, Backend};
+
+    /// The loops over link ends are compiled apart for the usual packing
+    /// ([`EndPacking::known`]): the other copies, those of networks of more than 2^23 side
+    /// keys, must build the same network.
+    #[test]
+    fn every_packing_of_link_ends_builds_the_same_network() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml");
+        let scene = Scene::load(&path).unwrap();
+        let acc = accel::build(&scene, Backend::Embree).unwrap();
+        let ctx = Context::new(&scene, acc.as_ref());
+        let params = NetworkParams {
+            slopes: 4,
+            step: 1.0 / 32.0,
+            patch_size: 1.0 / 16.0,
+            jitter: 1.0,
+            seed: 3,
+        };
+        let usual = Network::build(&scene, &ctx, params, Builder::Scan).unwrap();
+        // Blocks of 64 keys: the smallest the packing allows.
+        let small = |_| {
+            Ok(EndPacking {
+                block_bits: 6,
+                target_bits: 26,
+            })
+        };
+        let other = Network::build_packed(&scene, &ctx, params, Builder::Scan, small).unwrap();
+        assert_eq!(
+            EndPacking::for_keys(2 * usual.patches.cells as usize),
+            Ok(EndPacking::USUAL)
+        );
+        assert!(usual.links.len() > 10_000 && usual.stats.escapes > 0 && usual.stats.extra > 0);
+        assert_eq!(usual.key_of_node, other.key_of_node);
+        assert_eq!(usual.node_of_key, other.node_of_key);
+        assert_eq!(usual.link_start, other.link_start);
+        assert_eq!(usual.links, other.links);
+        let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&usual.etendue), bits(&other.etendue));
+        assert_eq!(bits(&usual.escape_etendue), bits(&other.escape_etendue));
+        assert_eq!(usual.stats.extra, other.stats.extra);
+        assert_eq!(usual.stats.escapes, other.stats.escapes);
     }
 }

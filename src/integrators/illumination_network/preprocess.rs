@@ -61,9 +61,11 @@ pub struct EndPacking {
 impl EndPacking {
     /// The packing for `keys` side keys: target bits for every key, and blocks of up to
     /// 2^[`MAX_KEY_BLOCK_BITS`] keys in the rest (at least 64 keys, a word of node marks).
+    /// Networks of up to 2^23 side keys (millions of patches) all take the usual packing.
     pub fn for_keys(keys: usize) -> Result<EndPacking, String> {
-        let target_bits = usize::BITS - keys.saturating_sub(1).leading_zeros();
-        let block_bits = MAX_KEY_BLOCK_BITS.min(32u32.saturating_sub(target_bits));
+        let needed = usize::BITS - keys.saturating_sub(1).leading_zeros();
+        let target_bits = needed.max(Self::USUAL.target_bits);
+        let block_bits = 32u32.saturating_sub(target_bits);
         if block_bits < 6 {
             return Err(format!(
                 "the network would have {} patches, more than its 32-bit link ends can \
@@ -76,6 +78,28 @@ impl EndPacking {
             block_bits,
             target_bits,
         })
+    }
+
+    /// The packing of every network of up to 2^23 side keys: blocks of
+    /// 2^[`MAX_KEY_BLOCK_BITS`] keys, the targets in the other bits. The loops over link ends
+    /// are compiled for it apart ([`EndPacking::known`]), its shifts and masks constants.
+    pub const USUAL: EndPacking = EndPacking {
+        block_bits: MAX_KEY_BLOCK_BITS,
+        target_bits: 32 - MAX_KEY_BLOCK_BITS,
+    };
+
+    /// The packing as a loop over link ends sees it: the usual one as a constant when `USUAL`
+    /// (a loop is compiled twice, `f::<true>` run for the usual packing and `f::<false>` for
+    /// others), else as read at run time. A shift by a count from
+    /// memory takes a load and the count register; by a constant, neither.
+    #[inline(always)]
+    pub fn known<const USUAL: bool>(self) -> EndPacking {
+        if USUAL {
+            debug_assert_eq!(self, Self::USUAL);
+            Self::USUAL
+        } else {
+            self
+        }
     }
 
     /// Side keys per block.
@@ -834,7 +858,7 @@ fn radix_by_line(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) {
 /// [`LinkBatch::group_ends`]), the escapes straight into `out`. (Which sides are nodes, the
 /// assembly reads off the link ends.)
 #[allow(clippy::too_many_arguments)]
-fn link_slot(
+fn link_slot<const USUAL: bool>(
     sorted: &mut [LineHit],
     j: usize,
     packing: EndPacking,
@@ -844,6 +868,7 @@ fn link_slot(
     escapes: &mut [u64],
     out: &mut LinkBatch,
 ) {
+    let packing = packing.known::<USUAL>();
     out.intersections += sorted.len() as u64;
     // The slot's escapes gather in `escapes` (a bit set over all side keys: dense, so it
     // stays in cache, where the batch's block-major copy would not) and go to `out` after.
@@ -854,6 +879,9 @@ fn link_slot(
     if more.len() < n + 2 * sorted.len() {
         more.resize(n + 2 * sorted.len(), 0);
     }
+    // A slice: the compiler keeps its address and length in registers, where it reloaded
+    // the Vec's from memory for every escape.
+    let more = &mut more[..];
     let mut escape = |k: u32| {
         let (w, bit) = (k as usize / 64, k % 64);
         let seen = escapes[w] >> bit & 1;
@@ -1050,9 +1078,12 @@ pub fn build_links(
                 let sorted = &mut buf.sorted[..hits];
                 let (buckets, escapes) = (&mut buf.buckets, &mut buf.escapes);
                 let (more, more_at) = (&mut buf.more, &mut buf.more_at);
-                link_slot(
-                    sorted, j, packing, buckets, more, more_at, escapes, &mut out,
-                );
+                let (p, out) = (packing, &mut out);
+                if p == EndPacking::USUAL {
+                    link_slot::<true>(sorted, j, p, buckets, more, more_at, escapes, out);
+                } else {
+                    link_slot::<false>(sorted, j, p, buckets, more, more_at, escapes, out);
+                }
             }
             out.group_ends(buf, packing);
             (out, stats)
@@ -1075,7 +1106,7 @@ mod tests {
 
     #[test]
     fn packed_ends_round_trip() {
-        // Small networks keep blocks of 512 keys; larger ones give block bits to the targets.
+        // Small networks take the usual packing; larger ones give block bits to the targets.
         for (keys, block_bits) in [
             (3usize, 9u32),
             (151_722, 9),
@@ -1085,6 +1116,7 @@ mod tests {
         ] {
             let p = EndPacking::for_keys(keys).unwrap();
             assert_eq!(p.block_bits, block_bits, "{keys} keys");
+            assert_eq!(p == EndPacking::USUAL, block_bits == 9, "{keys} keys");
             assert!(p.block_bits + p.target_bits <= 32);
             let last = keys as u32 - 1;
             for key in [0, 1, last / 2, last] {
