@@ -400,7 +400,16 @@ fn scan_cells<R: Rows>(
         *span = (p0.1.min(p1.1), p0.1.max(p1.1), p0.0, p0.1, slope);
     }
     let spans = &spans[..k];
+    // Plain minimum and maximum (`maxss`): `f32::max` keeps a NaN out in several more
+    // instructions, and these coordinates are finite.
+    let (min, max) = (
+        |a: f32, b: f32| if a < b { a } else { b },
+        |a: f32, b: f32| if a > b { a } else { b },
+    );
     let step = plane.b * h;
+    // Lane l's line is l·intercepts past the group's first.
+    let per_column = space.intercepts;
+    let lane_lines = lane * u32x4::splat(per_column);
     for jv in index_lo(vmin - amp)..=index_hi(vmax + amp) {
         let cv = space.intercept(jv as u32);
         let (blo, bhi) = (cv - amp, cv + amp);
@@ -408,13 +417,13 @@ fn scan_cells<R: Rows>(
         // edge clipped to the band.
         let (mut umin, mut umax) = (f32::INFINITY, f32::NEG_INFINITY);
         for &(lo, hi, u0, v0, slope) in spans {
-            let (a, b) = (lo.max(blo), hi.min(bhi));
+            let (a, b) = (max(lo, blo), min(hi, bhi));
             if a > b {
                 continue;
             }
             let (xa, xb) = (u0 + (a - v0) * slope, u0 + (b - v0) * slope);
-            umin = umin.min(xa.min(xb));
-            umax = umax.max(xa.max(xb));
+            umin = min(umin, min(xa, xb));
+            umax = max(umax, max(xa, xb));
         }
         if umin > umax {
             continue;
@@ -429,9 +438,7 @@ fn scan_cells<R: Rows>(
         let mut ju = ju0 as u32;
         // The lines (ju·intercepts + jv) of the group's four cells, advanced by an add (a
         // multiply of 32-bit lanes is several instructions in SSE2).
-        let per_column = space.intercepts;
-        let mut lines =
-            (u32x4::splat(ju) + lane) * u32x4::splat(per_column) + u32x4::splat(jv as u32);
+        let mut lines = u32x4::splat(ju * per_column + jv as u32) + lane_lines;
         let next_group = u32x4::splat(LANES as u32 * per_column);
         while ju <= ju1 as u32 {
             let lanes = (ju1 as u32 - ju + 1).min(LANES as u32) as usize;
@@ -484,14 +491,26 @@ pub fn scan_slot(
 
 /// One slot's scan hits, bucketed by intercept row (jv) as the scan finds them, and counted
 /// per column (ju): the first pass of the sort by line, done by the scan itself (a row of a
-/// polygon goes to one bucket). While bucketed, a hit's `line` holds its column.
+/// polygon goes to one bucket). A bucket holds whole groups of lanes, those outside too
+/// ([`HitGroup`]): the scan stores a group in a few vector stores, where packing its cells
+/// inside took a store and some arithmetic per lane.
 #[derive(Default)]
 pub struct RowBuckets {
     /// The polygons' scan order ([`scan_order`]).
     order: Vec<(f32, u32)>,
-    rows: Vec<Vec<LineHit>>,
+    rows: Vec<Vec<HitGroup>>,
     filled: Vec<u32>,
     columns: Vec<u32>,
+}
+
+/// A group of [`LANES`] candidate cells of a row: columns `column..column + LANES`, their
+/// depths and side keys, and which are inside (bit l for lane l).
+#[derive(Clone, Copy, Default)]
+struct HitGroup {
+    column: u32,
+    inside: u32,
+    depths: [f32; LANES],
+    keys: [u32; LANES],
 }
 
 impl RowBuckets {
@@ -499,34 +518,48 @@ impl RowBuckets {
         self.rows.resize_with(intercepts, Vec::new);
         self.filled.clear();
         self.filled.resize(intercepts, 0);
-        // Padded so a row's last group of lanes counts into whole lanes.
+        // Padded so a row's last group of lanes counts into whole lanes. Past the last
+        // column, nothing is counted: the sort sends the cells outside there.
         self.columns.clear();
         self.columns.resize(intercepts + 1 + LANES, 0);
     }
 
     /// The hits sorted by line (line = ju · intercepts + jv), stably: a stable counting sort
-    /// by column of the rows taken in order.
+    /// by column of the rows taken in order. A cell outside goes to one place past the
+    /// hits (its column's place does not advance), so no lane takes a branch.
     pub fn sorted_into(&mut self, out: &mut Vec<LineHit>) {
         let n = self.rows.len() as u32;
         let total = self.columns.iter().sum::<u32>() as usize;
-        if out.len() < total {
-            out.resize(total, BLANK_HIT);
+        if out.len() < total + 1 {
+            out.resize(total + 1, BLANK_HIT);
         }
-        out.truncate(total);
+        out.truncate(total + 1);
         starts_from_counts(&mut self.columns);
+        let (at, outside) = (&mut self.columns[..], n as usize + 1);
+        debug_assert_eq!(at[outside] as usize, total);
         // A loop per row (a flattening iterator over the rows costs a few times as much).
         for (jv, (row, &filled)) in self.rows.iter().zip(&self.filled).enumerate() {
-            scatter_stably(
-                &mut self.columns,
-                row[..filled as usize].iter().copied(),
-                |h| h.line as usize,
-                |h| LineHit {
-                    line: h.line * n + jv as u32,
-                    ..h
-                },
-                out,
-            );
+            for g in &row[..filled as usize] {
+                let mut line = g.column * n + jv as u32;
+                for l in 0..LANES {
+                    let inside = g.inside >> l & 1;
+                    let column = if inside == 1 {
+                        g.column as usize + l
+                    } else {
+                        outside
+                    };
+                    let to = &mut at[column];
+                    out[*to as usize] = LineHit {
+                        line,
+                        depth: g.depths[l],
+                        key: g.keys[l],
+                    };
+                    *to += inside;
+                    line += n;
+                }
+            }
         }
+        out.truncate(total);
     }
 }
 
@@ -566,17 +599,13 @@ pub fn scan_slot_into(
         };
         let p0 = at(0.0, 0.0);
         let (pu, pv) = (at(1.0, 0.0), at(0.0, 1.0));
-        let map = CellMap {
+        let map = CellMap::new(
             p0,
-            su: pu.0 - p0.0,
-            sv: pv.0 - p0.0,
-            tu: pu.1 - p0.1,
-            tv: pv.1 - p0.1,
-            ns: pg.ns as i32 - 1,
-            nt: pg.nt as i32 - 1,
-            first_cell: pg.first_cell,
+            (pu.0 - p0.0, pv.0 - p0.0),
+            (pu.1 - p0.1, pv.1 - p0.1),
+            pg,
             back,
-        };
+        );
         scan_cells(
             space,
             slot,
@@ -604,42 +633,53 @@ pub fn scan_order(patches: &Patches, d: Vec3, order: &mut Vec<(f32, u32)>) {
 }
 
 /// A polygon's cell (and side key) from a hit's intercept: the hit point is affine in the
-/// intercept, and so are (s, t), scaled to cell units.
+/// intercept, and so are (s, t), scaled to cell units. Its constants are held in lanes
+/// already: a polygon's rows take them from here, with no splat per row.
 #[derive(Clone, Copy)]
 struct CellMap {
-    p0: (f32, f32),
-    su: f32,
-    sv: f32,
-    tu: f32,
-    tv: f32,
-    ns: i32,
-    nt: i32,
-    first_cell: u32,
-    back: u32,
+    /// s at intercept (0, 0), and its changes per unit of i_u and of i_v; t alike.
+    s: [f32x4; 3],
+    t: [f32x4; 3],
+    /// The last cell index in s and in t.
+    last: [f32x4; 2],
+    /// Cells per row (nt), as 16-bit halves for the dot product.
+    row: i16x8,
+    first_cell: i32x4,
+    back: i32x4,
 }
 
 impl CellMap {
+    /// The map of polygon `pg`'s side facing +d (`back` 1 when that is its back), from (s, t)
+    /// at intercept (0, 0) and their changes per unit of i_u and of i_v.
+    fn new(p0: (f32, f32), ds: (f32, f32), dt: (f32, f32), pg: &Polygon, back: u32) -> CellMap {
+        let splat = f32x4::splat;
+        CellMap {
+            s: [splat(p0.0), splat(ds.0), splat(ds.1)],
+            t: [splat(p0.1), splat(dt.0), splat(dt.1)],
+            last: [splat((pg.ns - 1) as f32), splat((pg.nt - 1) as f32)],
+            row: wide::bytemuck::cast(i32x4::splat(pg.nt as i32)),
+            first_cell: i32x4::splat(pg.first_cell as i32),
+            back: i32x4::splat(back as i32),
+        }
+    }
+
     /// The side keys of four hits. (Clamped before the conversion, which gives the same
     /// cell as clamping the converted index; the plain SSE forms, since a NaN becomes 0 in
     /// `maxps` with 0 as its second operand, and a clamped value converts exactly.)
     #[inline]
     fn keys(&self, iu: f32x4, iv: f32x4) -> i32x4 {
-        let cell = |p: f32, du: f32, dv: f32, last: i32| {
-            let x = f32x4::splat(p) + f32x4::splat(du) * iu + f32x4::splat(dv) * iv;
-            x.fast_max(f32x4::ZERO)
-                .fast_min(f32x4::splat(last as f32))
-                .fast_trunc_int()
+        let cell = |[p, du, dv]: [f32x4; 3], last: f32x4| {
+            let x = p + du * iu + dv * iv;
+            x.fast_max(f32x4::ZERO).fast_min(last).fast_trunc_int()
         };
-        let i = cell(self.p0.0, self.su, self.sv, self.ns);
-        let j = cell(self.p0.1, self.tu, self.tv, self.nt);
+        let i = cell(self.s, self.last[0]);
+        let j = cell(self.t, self.last[1]);
         // The cell's row times the row length as a dot product of 16-bit halves (one
         // instruction; a multiply of 32-bit lanes is several in SSE2). Exact: both are at most
         // 4096 (the patches' cells per side), so their high halves are zero.
-        let row = wide::bytemuck::cast::<_, i16x8>(i)
-            .dot(wide::bytemuck::cast(i32x4::splat(self.nt + 1)));
-        let first = i32x4::splat(self.first_cell as i32);
-        let cell = first + row + j;
-        cell + cell + i32x4::splat(self.back as i32)
+        let row = wide::bytemuck::cast::<_, i16x8>(i).dot(self.row);
+        let cell = self.first_cell + row + j;
+        cell + cell + self.back
     }
 }
 
@@ -654,6 +694,7 @@ impl Rows for PolygonRows<'_> {
         = BucketRow<'r>
     where
         Self: 'r;
+    #[inline]
     fn row(&mut self, jv: u32, cells: usize) -> BucketRow<'_> {
         let RowBuckets {
             rows,
@@ -662,50 +703,42 @@ impl Rows for PolygonRows<'_> {
             ..
         } = &mut *self.b;
         let (bucket, filled) = (&mut rows[jv as usize], &mut filled[jv as usize]);
-        // Room for the row's last group of lanes written whole.
-        let need = *filled as usize + cells + LANES;
+        let need = *filled as usize + cells.div_ceil(LANES);
         if bucket.len() < need {
-            bucket.resize(2 * need, BLANK_HIT);
+            bucket.resize(2 * need, HitGroup::default());
         }
         BucketRow {
             n: *filled,
             out: bucket,
             filled,
             columns,
-            map: self.map,
+            map: &self.map,
         }
     }
 }
 
-/// A row's cells written at the end of its bucket, which grows past those inside only (no
-/// branch; the row announced its cells, so the bucket has room). The count is kept here
-/// (in a register) and stored when the row ends.
+/// A row's groups of cells written at the end of its bucket (the row announced its cells,
+/// so the bucket has room). The count is kept here (in a register) and stored when the row
+/// ends.
 struct BucketRow<'r> {
-    out: &'r mut [LineHit],
+    out: &'r mut [HitGroup],
     n: u32,
     filled: &'r mut u32,
     columns: &'r mut [u32],
-    map: CellMap,
+    map: &'r CellMap,
 }
 
 impl RowCells for BucketRow<'_> {
     #[inline]
     fn cells(&mut self, ju: u32, lanes: usize, iu: f32x4, iv: f32x4, pa: f32x4, inside: u32) {
-        let (keys, pa) = (self.map.keys(iu, iv).to_array(), pa.to_array());
-        // Every lane written (those past the row's end have no inside bit), each at the
-        // next free place: one bounds check for the group, not one per lane.
-        let out = &mut self.out[self.n as usize..][..LANES];
-        let mut k = 0;
-        for l in 0..LANES {
-            out[k & (LANES - 1)] = LineHit {
-                line: ju + l as u32,
-                depth: pa[l],
-                key: keys[l] as u32,
-            };
-            k += (inside >> l & 1) as usize;
-        }
-        self.n += k as u32;
-        debug_assert!(inside >> lanes == 0);
+        debug_assert!(lanes <= LANES && inside >> lanes == 0);
+        self.out[self.n as usize] = HitGroup {
+            column: ju,
+            inside,
+            depths: pa.to_array(),
+            keys: wide::bytemuck::cast(self.map.keys(iu, iv)),
+        };
+        self.n += 1;
         // The four columns counted at once: a table gives the lanes' inside bits as a vector.
         let columns: &mut [u32; LANES] = (&mut self.columns[ju as usize + 1..][..LANES])
             .try_into()

@@ -272,9 +272,8 @@ impl RaySpace {
     /// of h/65536, finer than any use of the lines can tell.
     #[inline]
     pub fn jitter_lanes(&self, seed: u32, amount: f32, lines: u32x4) -> (f32x4, f32x4) {
-        if amount == 0.0 {
-            return (f32x4::ZERO, f32x4::ZERO);
-        }
+        // No early return for no jitter: a zero scale gives zeros, and the scan converter
+        // would test `amount` for every group of lanes.
         let scale = f32x4::splat(amount * self.step);
         let hash = hash32(lines ^ u32x4::splat(seed));
         let fraction = |bits: u32x4| {
