@@ -525,8 +525,9 @@ impl RowBuckets {
     }
 
     /// The hits sorted by line (line = ju · intercepts + jv), stably: a stable counting sort
-    /// by column of the rows taken in order. A cell outside goes to one place past the
-    /// hits (its column's place does not advance), so no lane takes a branch.
+    /// by column of the rows taken in order. A group's four columns are consecutive, so
+    /// their places are read and advanced as one vector (by the lanes inside, as the scan
+    /// counted them); a cell outside goes to one place past the hits, without a branch.
     pub fn sorted_into(&mut self, out: &mut Vec<LineHit>) {
         let n = self.rows.len() as u32;
         let total = self.columns.iter().sum::<u32>() as usize;
@@ -535,26 +536,25 @@ impl RowBuckets {
         }
         out.truncate(total + 1);
         starts_from_counts(&mut self.columns);
-        let (at, outside) = (&mut self.columns[..], n as usize + 1);
-        debug_assert_eq!(at[outside] as usize, total);
+        let past = u32x4::splat(total as u32);
         // A loop per row (a flattening iterator over the rows costs a few times as much).
         for (jv, (row, &filled)) in self.rows.iter().zip(&self.filled).enumerate() {
             for g in &row[..filled as usize] {
+                let at: &mut [u32; LANES] = (&mut self.columns[g.column as usize..][..LANES])
+                    .try_into()
+                    .expect("a group of lanes");
+                let (places, inside) = (u32x4::from(*at), INSIDE_LANES[g.inside as usize & 15]);
+                let inside = u32x4::from(inside);
+                *at = (places + inside).to_array();
+                // Lanes inside take their column's place, lanes outside the one past the hits.
+                let to = (u32x4::ZERO - inside).bitselect(places, past).to_array();
                 let mut line = g.column * n + jv as u32;
                 for l in 0..LANES {
-                    let inside = g.inside >> l & 1;
-                    let column = if inside == 1 {
-                        g.column as usize + l
-                    } else {
-                        outside
-                    };
-                    let to = &mut at[column];
-                    out[*to as usize] = LineHit {
+                    out[to[l] as usize] = LineHit {
                         line,
                         depth: g.depths[l],
                         key: g.keys[l],
                     };
-                    *to += inside;
                     line += n;
                 }
             }
