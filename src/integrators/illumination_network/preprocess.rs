@@ -484,9 +484,100 @@ pub fn scan_slot(
 ) -> Vec<LineHit> {
     let mut rows = RowBuckets::default();
     scan_slot_into(space, patches, slot, seed, jitter, &mut rows);
-    let mut hits = Vec::new();
+    let mut hits = SortedHits::default();
     rows.sorted_into(&mut hits);
-    hits
+    (0..hits.len()).map(|i| hits.get(i)).collect()
+}
+
+/// A slot's hits sorted by line, as three arrays (hit i is `line[i]`, `depth[i]`, `key[i]`):
+/// the linking compares a hit with the one before it four hits at a time.
+#[derive(Default)]
+pub struct SortedHits {
+    line: Vec<u32>,
+    depth: Vec<f32>,
+    key: Vec<u32>,
+}
+
+impl SortedHits {
+    pub fn len(&self) -> usize {
+        self.line.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.line.is_empty()
+    }
+
+    pub fn get(&self, i: usize) -> LineHit {
+        LineHit {
+            line: self.line[i],
+            depth: self.depth[i],
+            key: self.key[i],
+        }
+    }
+
+    /// `n` hits, their values left to be overwritten (the arrays only grow).
+    fn set_len(&mut self, n: usize) {
+        if self.line.len() < n {
+            self.line.resize(n, 0);
+            self.depth.resize(n, 0.0);
+            self.key.resize(n, 0);
+        }
+        self.line.truncate(n);
+        self.depth.truncate(n);
+        self.key.truncate(n);
+    }
+
+    /// Each line's few hits in order of (depth, key): an insertion sort that never moves a hit
+    /// past its line's first. The scan order mostly gives the order already, so each hit is
+    /// compared with the one before it four at a time, and the sort's step runs only for a
+    /// group with a pair out of order (for each of its hits in turn: a step changes what
+    /// the next compares).
+    fn sort_lines(&mut self) {
+        let n = self.len();
+        let mut i = 1;
+        while i + LANES <= n {
+            // The hits before [i, i + 4) and those hits (slices of one length: no bounds
+            // checks in the loop).
+            let (line, depth, key) = (&self.line[..n], &self.depth[..n], &self.key[..n]);
+            let u32s = |v: &[u32], at: usize| {
+                let v: [u32; LANES] = v[at..at + LANES].try_into().expect("four hits");
+                v
+            };
+            let f32s = |at: usize| {
+                let v: [f32; LANES] = depth[at..at + LANES].try_into().expect("four hits");
+                f32x4::from(v)
+            };
+            let bits = |m: i32x4| wide::bytemuck::cast::<_, f32x4>(m).to_bitmask();
+            let same = u32x4::from(u32s(line, i - 1)).simd_eq(u32x4::from(u32s(line, i)));
+            // Keys are below 2^31: a signed comparison orders them.
+            let (k0, k1): (i32x4, i32x4) = (
+                wide::bytemuck::cast(u32s(key, i - 1)),
+                wide::bytemuck::cast(u32s(key, i)),
+            );
+            let (d0, d1) = (f32s(i - 1), f32s(i));
+            let before =
+                d1.simd_lt(d0).to_bitmask() | (d1.simd_eq(d0).to_bitmask() & bits(k1.simd_lt(k0)));
+            if bits(wide::bytemuck::cast(same)) & before != 0 {
+                (i..i + LANES).for_each(|h| self.insert(h));
+            }
+            i += LANES;
+        }
+        (i..n).for_each(|h| self.insert(h));
+    }
+
+    /// The insertion sort's step for hit `h`.
+    fn insert(&mut self, mut h: usize) {
+        while h > 0 && self.line[h - 1] == self.line[h] && {
+            let (x, y) = (self.get(h - 1), self.get(h));
+            (y.depth, y.key) < (x.depth, x.key)
+        } {
+            for v in [&mut self.line, &mut self.key] {
+                v.swap(h, h - 1);
+            }
+            self.depth.swap(h, h - 1);
+            h -= 1;
+        }
+    }
 }
 
 /// One slot's scan hits, bucketed by intercept row (jv) as the scan finds them, and counted
@@ -528,13 +619,15 @@ impl RowBuckets {
     /// by column of the rows taken in order. A group's four columns are consecutive, so
     /// their places are read and advanced as one vector (by the lanes inside, as the scan
     /// counted them); a cell outside goes to one place past the hits, without a branch.
-    pub fn sorted_into(&mut self, out: &mut Vec<LineHit>) {
+    pub fn sorted_into(&mut self, out: &mut SortedHits) {
         let n = self.rows.len() as u32;
         let total = self.columns.iter().sum::<u32>() as usize;
-        if out.len() < total + 1 {
-            out.resize(total + 1, BLANK_HIT);
-        }
-        out.truncate(total + 1);
+        out.set_len(total + 1);
+        let (lines, depths, keys) = (
+            &mut out.line[..total + 1],
+            &mut out.depth[..total + 1],
+            &mut out.key[..total + 1],
+        );
         starts_from_counts(&mut self.columns);
         let past = u32x4::splat(total as u32);
         // A loop per row (a flattening iterator over the rows costs a few times as much).
@@ -550,24 +643,15 @@ impl RowBuckets {
                 let to = (u32x4::ZERO - inside).bitselect(places, past).to_array();
                 let mut line = g.column * n + jv as u32;
                 for l in 0..LANES {
-                    out[to[l] as usize] = LineHit {
-                        line,
-                        depth: g.depths[l],
-                        key: g.keys[l],
-                    };
+                    let to = to[l] as usize;
+                    (lines[to], depths[to], keys[to]) = (line, g.depths[l], g.keys[l]);
                     line += n;
                 }
             }
         }
-        out.truncate(total);
+        out.set_len(total);
     }
 }
-
-const BLANK_HIT: LineHit = LineHit {
-    line: 0,
-    depth: 0.0,
-    key: 0,
-};
 
 /// [`scan_slot`] into reused buckets (cleared first); [`RowBuckets::sorted_into`] then sorts
 /// them by line.
@@ -837,7 +921,8 @@ pub const COINCIDENT: f32 = 1e-5;
 pub struct LinkBuffers {
     counts: Vec<u32>,
     tmp: Vec<LineHit>,
-    sorted: Vec<LineHit>,
+    radix: Vec<LineHit>,
+    sorted: SortedHits,
     rows: RowBuckets,
     /// The batch's packed link ends, one bucket per key block, each in the order the links
     /// were found, slot after slot (so grouped by slot already); `bucket_at[b·slots + j]` is
@@ -863,7 +948,7 @@ fn radix_by_line(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) {
         depth: 0.0,
         key: 0,
     };
-    let (counts, tmp, sorted) = (&mut buf.counts, &mut buf.tmp, &mut buf.sorted);
+    let (counts, tmp, sorted) = (&mut buf.counts, &mut buf.tmp, &mut buf.radix);
     // Every element is overwritten by the passes: only grow, never clear.
     for v in [&mut *tmp, &mut *sorted] {
         if v.len() < hits.len() {
@@ -883,6 +968,13 @@ fn radix_by_line(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) {
     };
     pass(hits, tmp, 0, 1 << lo_bits);
     pass(tmp, sorted, lo_bits, 1 << (bits - lo_bits));
+    let out = &mut buf.sorted;
+    out.set_len(0);
+    for h in sorted.iter() {
+        out.line.push(h.line);
+        out.depth.push(h.depth);
+        out.key.push(h.key);
+    }
 }
 
 /// Sorts one slot's hits (sorted by line) by depth within each line's few hits and links
@@ -892,7 +984,7 @@ fn radix_by_line(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) {
 /// assembly reads off the link ends.)
 #[allow(clippy::too_many_arguments)]
 fn link_slot<const USUAL: bool>(
-    sorted: &mut [LineHit],
+    hits: &mut SortedHits,
     j: usize,
     packing: EndPacking,
     buckets: &mut [Vec<u32>],
@@ -902,15 +994,16 @@ fn link_slot<const USUAL: bool>(
     out: &mut LinkBatch,
 ) {
     let packing = packing.known::<USUAL>();
-    out.intersections += sorted.len() as u64;
+    let len = hits.len();
+    out.intersections += len as u64;
     // The slot's escapes gather in `escapes` (a bit set over all side keys: dense, so it
     // stays in cache, where the batch's block-major copy would not) and go to `out` after.
     // A side's later escapes go to `more` without a branch (whether a side has escaped
     // already is data, not a pattern): each escape is written at the next place, which
     // advances only for a later one. A line has at most two.
     let mut n = *more_at.last().expect("a batch's escapes start at 0");
-    if more.len() < n + 2 * sorted.len() {
-        more.resize(n + 2 * sorted.len(), 0);
+    if more.len() < n + 2 * len {
+        more.resize(n + 2 * len, 0);
     }
     // A slice: the compiler keeps its address and length in registers, where it reloaded
     // the Vec's from memory for every escape.
@@ -922,35 +1015,24 @@ fn link_slot<const USUAL: bool>(
         n += seen as usize;
         escapes[w] |= 1 << bit;
     };
-    // Each line's few hits in depth order: an insertion sort over the slot that never moves
-    // a hit past its line's first. The scan order mostly gives the order already, so the one
-    // branch per hit (its line and depth tested together) is rarely taken.
-    for i in 1..sorted.len() {
-        let mut h = i;
-        while h > 0 && {
-            let (x, y) = (&sorted[h - 1], &sorted[h]);
-            (x.line == y.line) & ((y.depth, y.key) < (x.depth, x.key))
-        } {
-            sorted.swap(h, h - 1);
-            h -= 1;
-        }
-    }
+    hits.sort_lines();
     // Entering the scene: the first side facing −d looks out of it; leaving it, the last
     // side facing +d. Consecutive hits on a line link; between lines, one leaves and the
     // next enters (the same order as line by line).
-    if let (Some(first), Some(last)) = (sorted.first(), sorted.last()) {
-        escape(first.key ^ 1);
-        for w in sorted.windows(2) {
-            if w[0].line != w[1].line {
-                escape(w[0].key);
-                escape(w[1].key ^ 1);
+    let (line, depth, key) = (&hits.line[..len], &hits.depth[..len], &hits.key[..len]);
+    if let (Some(&first), Some(&last)) = (key.first(), key.last()) {
+        escape(first ^ 1);
+        for i in 1..len {
+            if line[i - 1] != line[i] {
+                escape(key[i - 1]);
+                escape(key[i] ^ 1);
                 continue;
             }
-            let (x, y) = (w[0].key, w[1].key ^ 1);
+            let (x, y) = (key[i - 1], key[i] ^ 1);
             // A line meeting the same side twice in a row (a hit on an edge counted by both
             // of its cells' polygon) carries nothing; coincident surfaces (a box standing on
             // the floor) touch, and no light passes between them.
-            if x != y && w[1].depth - w[0].depth > COINCIDENT {
+            if x != y && depth[i] - depth[i - 1] > COINCIDENT {
                 for (k, t) in [(x, y), (y, x)] {
                     buckets[packing.block_of(k)].push(packing.pack(k, t));
                 }
@@ -958,7 +1040,7 @@ fn link_slot<const USUAL: bool>(
                 out.degenerate += 1;
             }
         }
-        escape(last.key);
+        escape(last);
     }
     more_at.push(n);
     let (words, slots) = (out.words, out.slots as usize);
@@ -1093,22 +1175,20 @@ pub fn build_links(
             buf.escapes.resize(keys.div_ceil(64), 0);
             for j in 0..slots {
                 let slot = (first + j) as u32;
-                let hits = match (builder, ctx) {
+                match (builder, ctx) {
                     (Builder::Embree, Some(ctx)) => {
                         let hits = cast_slot(ctx, space, patches, slot, seed, jitter, &mut stats);
                         radix_by_line(&hits, space.lines_per_slot(), buf);
-                        hits.len()
                     }
                     _ => {
                         scan_slot_into(space, patches, slot, seed, jitter, &mut buf.rows);
                         buf.rows.sorted_into(&mut buf.sorted);
-                        buf.sorted.len()
                     }
-                };
+                }
                 for (b, bucket) in buf.buckets.iter().enumerate() {
                     buf.bucket_at[b * slots + j] = bucket.len() as u32;
                 }
-                let sorted = &mut buf.sorted[..hits];
+                let sorted = &mut buf.sorted;
                 let (buckets, escapes) = (&mut buf.buckets, &mut buf.escapes);
                 let (more, more_at) = (&mut buf.more, &mut buf.more_at);
                 let (p, out) = (packing, &mut out);
