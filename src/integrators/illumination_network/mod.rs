@@ -376,30 +376,61 @@ impl BlockLinks<'_> {
         }
     }
 
-    /// Calls `keep(j, link)` for every link of key block `b` (j its key's place in the block),
-    /// in slot order: a slot's link ends, then its escapes at nodes.
+    /// Puts every link of key block `b` in place, in slot order (a slot's link ends, then
+    /// its escapes at nodes): a link goes to its key's next place (`at`, by the key's offset
+    /// in the block) in `out`, the block's part of the table.
     #[inline(always)]
-    fn walk<const USUAL: bool>(&self, b: usize, mut keep: impl FnMut(u32, u32)) {
+    fn fill<const USUAL: bool>(&self, b: usize, at: &mut [u32; KEY_BLOCK_PLACES], out: &mut [u32]) {
         let packing = self.packing.known::<USUAL>();
-        let (code, node_of_key) = (self.code, self.node_of_key);
+        let code = self.code;
         let slots = self
             .batches
             .iter()
             .flat_map(|s| (0..s.slots as usize).map(move |j| (s, j)));
-        let target_mask = (1 << packing.target_bits) - 1;
         let words = packing.block() / 64;
         let block_marks = &self.marks[b * words..((b + 1) * words).min(self.marks.len())];
         for (slot, (s, j)) in slots.enumerate() {
             let slot = slot as u32;
-            for &e in s.ends(b, j) {
-                let link = code.pack_node(slot, node_of_key[(e & target_mask) as usize]);
-                keep(e >> packing.target_bits, link);
-            }
+            let ends = s.ends(b, j);
+            place_ends::<USUAL>(
+                ends,
+                packing,
+                code.pack_node(slot, 0),
+                self.node_of_key,
+                at,
+                out,
+            );
             // Then the slot's escapes at nodes (a side's escapes are all alike, so their order
             // among themselves does not matter).
             let escape = code.pack(slot, ESCAPE);
-            Self::escapes_at_nodes(s, b, j, block_marks, |k| keep(k, escape));
+            Self::escapes_at_nodes(s, b, j, block_marks, |k| {
+                let to = &mut at[k as usize];
+                out[*to as usize] = escape;
+                *to += 1;
+            });
         }
+    }
+}
+
+/// Puts one slot's link ends of a key block in place ([`BlockLinks::fill`]); `slot` is the
+/// slot packed as a link ([`LinkCode`]), to which the node at the other end is added. Not
+/// inlined: the loop then has the registers to itself (inlined in the block's fill, it
+/// reloaded three addresses from the stack for every end).
+#[inline(never)]
+fn place_ends<const USUAL: bool>(
+    ends: &[u32],
+    packing: EndPacking,
+    slot: u32,
+    node_of_key: &[u32],
+    at: &mut [u32; KEY_BLOCK_PLACES],
+    out: &mut [u32],
+) {
+    let packing = packing.known::<USUAL>();
+    let target_mask = (1 << packing.target_bits) - 1;
+    for &e in ends {
+        let to = &mut at[(e >> packing.target_bits) as usize];
+        out[*to as usize] = slot | node_of_key[(e & target_mask) as usize];
+        *to += 1;
     }
 }
 
@@ -568,14 +599,9 @@ impl Network {
                 }
                 let at: &mut [u32; KEY_BLOCK_PLACES] =
                     (&mut at[..]).try_into().expect("a block's places");
-                let place = |j: u32, link: u32| {
-                    let to = &mut at[j as usize];
-                    out[*to as usize] = link;
-                    *to += 1;
-                };
                 match packing == EndPacking::USUAL {
-                    true => block_links.walk::<true>(b, place),
-                    false => block_links.walk::<false>(b, place),
+                    true => block_links.fill::<true>(b, at, out),
+                    false => block_links.fill::<false>(b, at, out),
                 }
                 // W (and its escapes' part, in blocks with escapes), and the links beyond the
                 // first of their slot.
