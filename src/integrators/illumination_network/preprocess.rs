@@ -583,7 +583,7 @@ impl SortedHits {
 /// One slot's scan hits, bucketed by intercept row (jv) as the scan finds them, and counted
 /// per column (ju): the first pass of the sort by line, done by the scan itself (a row of a
 /// polygon goes to one bucket). A bucket holds whole groups of lanes, those outside too
-/// ([`HitGroup`]): the scan stores a group in a few vector stores, where packing its cells
+/// (`HitGroup`): the scan stores a group in a few vector stores, where packing its cells
 /// inside took a store and some arithmetic per lane.
 #[derive(Default)]
 pub struct RowBuckets {
