@@ -90,8 +90,8 @@ impl EndPacking {
 
     /// The packing as a loop over link ends sees it: the usual one as a constant when `USUAL`
     /// (a loop is compiled twice, `f::<true>` run for the usual packing and `f::<false>` for
-    /// others), else as read at run time. A shift by a count from
-    /// memory takes a load and the count register; by a constant, neither.
+    /// others), else as read at run time. A shift by a count from memory takes a load and the
+    /// count register; by a constant, neither.
     #[inline(always)]
     pub fn known<const USUAL: bool>(self) -> EndPacking {
         if USUAL {
