@@ -499,15 +499,11 @@ pub struct SortedHits {
 }
 
 impl SortedHits {
-    pub fn len(&self) -> usize {
+    fn len(&self) -> usize {
         self.line.len()
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.line.is_empty()
-    }
-
-    pub fn get(&self, i: usize) -> LineHit {
+    fn get(&self, i: usize) -> LineHit {
         LineHit {
             line: self.line[i],
             depth: self.depth[i],
