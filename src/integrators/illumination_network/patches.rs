@@ -272,11 +272,107 @@ impl Patches {
         })
     }
 
+    /// The sides that face out of the scene, as a bit set over side keys (bit k % 64 of word
+    /// k / 64): those of a polygon lying in a face of the scene's bounding box, facing out
+    /// of the box. Every line leaving such a side goes where nothing is, so the side never
+    /// links and is never a node (a room's walls seen from outside). The test is exact: the
+    /// polygon's corners equal the box's bound, as computed from the same corners.
+    pub fn outer_sides(&self) -> Vec<u64> {
+        let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
+        for p in &self.polygons {
+            match p.sphere {
+                Some((c, r)) => (lo, hi) = (lo.min(c - Vec3::splat(r)), hi.max(c + Vec3::splat(r))),
+                None => {
+                    for &c in &p.corners {
+                        (lo, hi) = (lo.min(c), hi.max(c));
+                    }
+                }
+            }
+        }
+        let keys = 2 * self.cells as usize;
+        let mut outer = vec![0u64; keys.div_ceil(64)];
+        for p in self.polygons.iter().filter(|p| p.n != Vec3::ZERO) {
+            for axis in 0..3 {
+                // The box's face at its low (high) bound faces −axis (+axis); side 0 faces
+                // along the winding normal, side 1 against it.
+                for (bound, out) in [(lo[axis], -1.0), (hi[axis], 1.0)] {
+                    if p.n[axis] == 0.0 || p.corners.iter().any(|c| c[axis] != bound) {
+                        continue;
+                    }
+                    let side = u32::from(p.n[axis] * out < 0.0);
+                    for cell in p.first_cell..p.first_cell + p.cells() {
+                        let k = (cell * 2 + side) as usize;
+                        outer[k / 64] |= 1 << (k % 64);
+                    }
+                }
+            }
+        }
+        outer
+    }
+
     /// The polygon and cell of an intersection point (unit-cube space).
     pub fn locate(&self, shape: u32, prim: u32, p: Vec3) -> Option<(u32, u32)> {
         let poly = *self.prim_polygon.get(shape as usize)?.get(prim as usize)?;
         let pg = &self.polygons[poly as usize];
         let (s, t) = pg.st(p);
         Some((poly, pg.cell_at(s, t)))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    /// An open room (no front wall) with a block on its floor and a poster flat on its left
+    /// wall: the outer sides are exactly those of polygons in a face of the bounding box
+    /// that face away from the room.
+    #[test]
+    fn outer_sides_are_the_bounding_box_faces_seen_from_outside() {
+        let quad = |v: &str| {
+            format!("[[shapes]]\ntype = \"quad\"\nmaterial = \"white\"\nvertices = {v}\n")
+        };
+        let mut text = String::from(
+            "[camera]\nposition = [1, 1, 5]\nlook_at = [1, 1, 0]\n\
+             [materials.white]\ndiffuse = 0.5\n",
+        );
+        for v in [
+            "[[0, 0, 0], [0, 0, 2], [2, 0, 2], [2, 0, 0]]",
+            "[[0, 2, 0], [2, 2, 0], [2, 2, 2], [0, 2, 2]]",
+            "[[0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0]]",
+            "[[0, 0, 0], [0, 2, 0], [0, 2, 2], [0, 0, 2]]",
+            "[[2, 0, 2], [2, 2, 2], [2, 2, 0], [2, 0, 0]]",
+            // The poster, and the block's top and one of its sides.
+            "[[0, 0.5, 0.5], [0, 1, 0.5], [0, 1, 1], [0, 0.5, 1]]",
+            "[[0.5, 0.5, 0.5], [0.5, 0.5, 1], [1, 0.5, 1], [1, 0.5, 0.5]]",
+            "[[0.5, 0, 0.5], [0.5, 0.5, 0.5], [0.5, 0.5, 1], [0.5, 0, 1]]",
+        ] {
+            text += &quad(v);
+        }
+        let scene = crate::scene::toml::from_str(&text, Path::new("room.toml")).unwrap();
+        let space = RaySpace::new(4, 1.0 / 16.0, scene.bounds().unwrap());
+        let patches = Patches::new(&scene, &space, 1.0 / 8.0).unwrap();
+        let outer = patches.outer_sides();
+        let room_centre = space.to_unit(Vec3::splat(1.0));
+        let mut marked = 0;
+        for (i, p) in patches.polygons.iter().enumerate() {
+            let centre = p.corners.iter().copied().sum::<Vec3>() / p.corners.len() as f32;
+            for side in 0..2 {
+                let facing = if side == 0 { p.n } else { -p.n };
+                // The walls, floor, ceiling and poster lie in the box's faces; the block
+                // (polygons 6 and 7) does not.
+                let expected = i < 6 && facing.dot(centre - room_centre) > 0.0;
+                for cell in p.first_cell..p.first_cell + p.cells() {
+                    let k = (cell * 2 + side) as usize;
+                    assert_eq!(
+                        outer[k / 64] >> (k % 64) & 1 == 1,
+                        expected,
+                        "polygon {i} side {side}"
+                    );
+                    marked += usize::from(expected);
+                }
+            }
+        }
+        assert!(marked > 100, "{marked} outer sides");
     }
 }

@@ -983,6 +983,7 @@ fn link_slot<const USUAL: bool>(
     hits: &mut SortedHits,
     j: usize,
     packing: EndPacking,
+    outer: &[u64],
     buckets: &mut [Vec<u32>],
     more: &mut Vec<u32>,
     more_at: &mut Vec<usize>,
@@ -1006,6 +1007,11 @@ fn link_slot<const USUAL: bool>(
     let more = &mut more[..];
     let mut escape = |k: u32| {
         let (w, bit) = (k as usize / 64, k % 64);
+        // A side facing out of the scene is never a node: its escape is dropped here, not
+        // carried to the assembly (in a room, nearly every escape is a wall's outer side).
+        if outer[w] >> bit & 1 == 1 {
+            return;
+        }
         let seen = escapes[w] >> bit & 1;
         more[n] = k;
         n += seen as usize;
@@ -1143,7 +1149,9 @@ pub(super) fn scatter_stably<T: Copy, V>(
 }
 
 /// Runs a builder over every slot, in parallel over batches of [`SLOT_BATCH`] slots,
-/// returning the batches in slot order.
+/// returning the batches in slot order. Escapes at the side keys of `outer` (a bit set:
+/// sides that can never be nodes, [`Patches::outer_sides`]) are dropped.
+#[allow(clippy::too_many_arguments)]
 pub fn build_links(
     ctx: Option<&Context>,
     space: &RaySpace,
@@ -1152,6 +1160,7 @@ pub fn build_links(
     jitter: f32,
     builder: Builder,
     packing: EndPacking,
+    outer: &[u64],
 ) -> (Vec<LinkBatch>, RayStats) {
     let slots = space.slots();
     let keys = 2 * patches.cells as usize;
@@ -1189,9 +1198,9 @@ pub fn build_links(
                 let (more, more_at) = (&mut buf.more, &mut buf.more_at);
                 let (p, out) = (packing, &mut out);
                 if p == EndPacking::USUAL {
-                    link_slot::<true>(sorted, j, p, buckets, more, more_at, escapes, out);
+                    link_slot::<true>(sorted, j, p, outer, buckets, more, more_at, escapes, out);
                 } else {
-                    link_slot::<false>(sorted, j, p, buckets, more, more_at, escapes, out);
+                    link_slot::<false>(sorted, j, p, outer, buckets, more, more_at, escapes, out);
                 }
             }
             out.group_ends(buf, packing);
