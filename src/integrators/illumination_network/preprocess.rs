@@ -977,7 +977,9 @@ fn radix_by_line(hits: &[LineHit], lines: usize, buf: &mut LinkBuffers) {
 /// consecutive ones, as the `j`-th slot of `out`: the packed link ends go to their key
 /// block's bucket and a side's second and later escapes to `more` (both joined later,
 /// [`LinkBatch::group_ends`]), the escapes straight into `out`. (Which sides are nodes, the
-/// assembly reads off the link ends.)
+/// assembly reads off the link ends.) Not inlined: in the batch's loop, its loop reloaded
+/// the buckets' and the hits' addresses from the stack for every pair.
+#[inline(never)]
 #[allow(clippy::too_many_arguments)]
 fn link_slot<const USUAL: bool>(
     hits: &mut SortedHits,
