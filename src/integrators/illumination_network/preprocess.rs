@@ -145,9 +145,10 @@ pub struct LinkBatch {
     pub start: Vec<u32>,
     /// Bit sets over side keys: the sides whose line leaves the scene, per group: group g's
     /// bits are `escapes[g·w..(g + 1)·w]` for w = `words` (block / 64), bit i of word k the
-    /// block's key 64·k + i. Escapes are as many as link ends, and most are on sides that never become
-    /// nodes (a room's outer faces): as bits they take a thirty-second of the memory, and the
-    /// assembly skips the sides that are not nodes a word at a time.
+    /// block's key 64·k + i. Escapes can be as many as link ends, and most are on sides that
+    /// never become nodes: as bits they take a thirty-second of the memory, and the assembly
+    /// skips the sides that are not nodes a word at a time. (Those of sides facing out of
+    /// the scene, a room's walls seen from outside, are not recorded at all.)
     pub escapes: Vec<u64>,
     /// Escape words per group: a block's keys / 64.
     pub words: usize,
