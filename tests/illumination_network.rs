@@ -456,8 +456,10 @@ fn network_image(scene: &Scene, p: NetworkParams, size: u32, hybrid: bool) -> Im
 }
 
 /// The Cornell box against the path tracer: the relative RMSE of 4×4-pixel block means
-/// (the light excluded) is below 25% at a coarse network, shrinks at a finer one, and shrinks
-/// more with the hybrid mode (direct light per pixel) on the coarse network.
+/// (the light excluded), averaged over four jitter seeds, is below 30% at a coarse network,
+/// shrinks to under half at a finer one, and shrinks with the hybrid mode (direct light per
+/// pixel) on the coarse network. One seed's error is itself random: at the coarse network
+/// it spans 17–29% over eight seeds, so a single seed would test the jitter's luck.
 #[test]
 fn cornell_box_approaches_the_path_tracer() {
     let scene = cornell();
@@ -495,18 +497,30 @@ fn cornell_box_approaches_the_path_tracer() {
     };
     let reference = masked(&full);
     let scale = mean(&reference, None).element_sum() as f64 / 3.0;
-    let error = |p: NetworkParams, hybrid: bool| {
-        let img = masked(&network_image(&scene, p, size, hybrid));
-        rmse(&img, &reference, None) / scale
+    let seeds = 1..=4u64;
+    let error = |slopes: u32, step: f32, hybrid: bool| {
+        let errors: Vec<f64> = seeds
+            .clone()
+            .map(|seed| {
+                let p = NetworkParams {
+                    seed,
+                    ..params(slopes, step)
+                };
+                let img = masked(&network_image(&scene, p, size, hybrid));
+                rmse(&img, &reference, None) / scale
+            })
+            .collect();
+        eprintln!("slopes {slopes}, h {step}, hybrid {hybrid}: relative RMSE by seed {errors:.4?}");
+        errors.iter().sum::<f64>() / errors.len() as f64
     };
-    let coarse = error(params(6, 1.0 / 16.0), false);
-    let fine = error(params(12, 1.0 / 32.0), false);
-    let hybrid = error(params(6, 1.0 / 16.0), true);
-    eprintln!("relative RMSE: coarse {coarse:.4}, fine {fine:.4}, coarse hybrid {hybrid:.4}");
-    assert!(coarse < 0.25, "coarse network: {coarse}");
-    assert!(fine < 0.8 * coarse, "fine {fine} vs coarse {coarse}");
+    let coarse = error(6, 1.0 / 16.0, false);
+    let fine = error(12, 1.0 / 32.0, false);
+    let hybrid = error(6, 1.0 / 16.0, true);
+    eprintln!("mean relative RMSE: coarse {coarse:.4}, fine {fine:.4}, coarse hybrid {hybrid:.4}");
+    assert!(coarse < 0.3, "coarse network: {coarse}");
+    assert!(fine < 0.5 * coarse, "fine {fine} vs coarse {coarse}");
     // Direct light per pixel removes the coarse network's blurred shadows.
-    assert!(hybrid < 0.6 * coarse, "hybrid {hybrid} vs coarse {coarse}");
+    assert!(hybrid < 0.4 * coarse, "hybrid {hybrid} vs coarse {coarse}");
 }
 
 fn tmp_path(dir: &tempfile::TempDir, name: &str) -> String {
