@@ -1,5 +1,6 @@
 //! Locates the system Embree (4, else 3) and OpenImageIO, generates Embree bindings with
-//! bindgen and compiles the small C API over OpenImageIO in `ffi/oiio.cpp`.
+//! bindgen and compiles the small C API over OpenImageIO in `ffi/oiio.cpp` and the processor
+//! and clock functions in `ffi/platform.c`.
 
 use std::env;
 use std::path::{Path, PathBuf};
@@ -17,6 +18,8 @@ fn main() {
     println!("cargo:rerun-if-changed=ffi/embree.h");
     println!("cargo:rerun-if-changed=ffi/oiio.h");
     println!("cargo:rerun-if-changed=ffi/oiio.cpp");
+    println!("cargo:rerun-if-changed=ffi/platform.h");
+    println!("cargo:rerun-if-changed=ffi/platform.c");
     println!("cargo:rerun-if-env-changed=EMBREE_DIR");
     println!("cargo::rustc-check-cfg=cfg(embree4)");
     println!("cargo::rustc-check-cfg=cfg(embree3)");
@@ -30,6 +33,15 @@ fn main() {
     });
     bind_embree(&embree);
     build_oiio();
+    build_platform();
+}
+
+/// The processor and clock functions of `ffi/platform.c`.
+fn build_platform() {
+    cc::Build::new()
+        .file("ffi/platform.c")
+        .warnings(true)
+        .compile("raylink_platform");
 }
 
 fn fail(message: &str) -> ! {

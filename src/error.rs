@@ -1,9 +1,12 @@
-//! The one error type of the library. Every message is a single line that names the file
-//! (or option) and the problem, ready to print after `raylink: error: `.
+//! The one error type of the library. Every message is a single line that names the file or
+//! the setting and the problem. Settings are named as the library names them (`max_depth`,
+//! `ic_accuracy`); a front end that calls them something else (a command-line flag) maps
+//! [`Error::Setting`] to its own names.
 
 use std::path::PathBuf;
 
 #[derive(Debug, thiserror::Error)]
+#[non_exhaustive]
 pub enum Error {
     /// A scene, mesh or other input file is malformed; `detail` names the line or field.
     #[error("{}: {detail}", path.display())]
@@ -11,18 +14,31 @@ pub enum Error {
     /// An image could not be written or read.
     #[error("{}: {detail}", path.display())]
     Image { path: PathBuf, detail: String },
-    /// A command-line option or render setting is invalid.
+    /// One setting of a job is invalid or does not apply: `name` is the setting's name
+    /// (see [`crate::Settings`]), `detail` the rest of the sentence.
+    #[error("{name} {detail}")]
+    Setting { name: String, detail: String },
+    /// A request that is invalid as a whole (not one setting's fault).
     #[error("{0}")]
-    Options(String),
+    Invalid(String),
     /// Embree reported an error.
     #[error("embree: {0}")]
     Embree(String),
-    /// The render was stopped by a signal; `detail` says what was kept.
-    #[error("{detail}")]
-    Interrupted { signal: i32, detail: String },
-    /// The work would need more memory than --max-memory allows.
-    #[error("{0}")]
-    Memory(String),
+    /// The caller cancelled work that had nothing to keep.
+    #[error("cancelled during {stage}; nothing was kept")]
+    Cancelled { stage: String },
+    /// The work would need more memory than the job's budget allows.
+    #[error("{what} would need {} of memory, more than the budget of {}{}",
+        crate::job::human_size(*needed), crate::job::human_size(*limit),
+        if *default_limit { " (3/4 of the physical memory)" } else { "" })]
+    Memory {
+        what: String,
+        needed: u64,
+        limit: u64,
+        /// The budget was the machine's default, not one the caller chose.
+        default_limit: bool,
+    },
+    /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
     Io {
         path: PathBuf,
@@ -50,6 +66,15 @@ impl Error {
         Error::Io {
             path: path.into(),
             source,
+        }
+    }
+
+    /// A problem with the setting `name`: `detail` completes the sentence ("must be at
+    /// most 1024, got 2000").
+    pub fn setting(name: &str, detail: impl Into<String>) -> Self {
+        Error::Setting {
+            name: name.to_string(),
+            detail: one_line(&detail.into()),
         }
     }
 }
@@ -82,5 +107,7 @@ mod tests {
             e.to_string(),
             "a.pbrt: declaration \"rgb reflect\\nce\" is bad\\r\\u{7}"
         );
+        let s = super::Error::setting("max_depth", "must be at most 1024, got 2000");
+        assert_eq!(s.to_string(), "max_depth must be at most 1024, got 2000");
     }
 }

@@ -1,37 +1,68 @@
-//! raylink: a global-illumination renderer.
+//! raylink: a global-illumination renderer over Embree. It implements Whitted ray tracing,
+//! path, light and bidirectional path tracing, irradiance caching, illumination networks
+//! and object-space temporal coherence for animations, and writes images through
+//! OpenImageIO.
 //!
-//! The layers, bottom up:
-//! - [`accel`]: one intersection interface; the Embree backend is the only place that talks to Embree, and
-//!   `accel::bvh` is the pure-Rust backend (obvhs).
-//! - [`scene`]: the scene description every reader produces (camera, materials, shapes, lights).
-//! - [`image`]: images and their files, written and read through OpenImageIO.
-//! - [`bsdf`]: scattering at surfaces (evaluate, sample, density) for the Monte Carlo integrators.
-//! - [`integrators`]: one module per light-transport technique.
-//! - [`render`]: tiles, threads, pixel sampling, progress and statistics.
-//! - [`coherence`]: `raylink animate`, static-camera animation with object-space temporal coherence.
-//! - [`bench`](mod@bench): `raylink bench`, Embree against the pure-Rust BVH.
-//! - [`farm`]: rendering parts of an image (tiles, crops) on many machines, and merging them.
+//! A render is a [`Job`]: a [`Technique`] with its settings (made from [`Settings`] by
+//! [`Technique::create`], which checks them), a view, a seed, the threads and the
+//! intersection [`Backend`]. A [`Renderer`] runs it; the caller keeps the [`Control`]: a
+//! [`CancelToken`] it can cancel from any thread, a [`MemoryBudget`] and a [`Progress`] sink.
+//! The library holds no process-wide state and prints nothing. The image is a function of
+//! (scene, settings, seed): the same bit for bit for any thread count.
+//!
+//! ```no_run
+//! use raylink::{Control, Job, Renderer, Scene, Settings, Technique, TechniqueKind};
+//!
+//! let scene = Scene::load("scenes/cornell-box.toml".as_ref())?;
+//! let technique = Technique::create(&Settings {
+//!     integrator: Some(TechniqueKind::Path),
+//!     spp: Some(64),
+//!     ..Settings::default()
+//! })?;
+//! let job = Job { seed: 7, ..Job::new(&scene, technique) };
+//! let control = Control::default();
+//! let mut renderer = Renderer::new(scene, job, &control)?;
+//! let rendered = renderer.render(&control)?;
+//! raylink::write_image("cornell.exr".as_ref(), &rendered.image, &[], &Default::default())?;
+//! println!("{}", rendered.stats.summary());
+//! # Ok::<(), raylink::Error>(())
+//! ```
+//!
+//! The layers, bottom up: [`accel`] (one intersection interface, Embree or a pure-Rust BVH),
+//! [`scene`] (what every reader produces), [`image`] (images and their files), the
+//! techniques and the tile driver (internal), [`job`] (the engine), and beside it
+//! [`coherence`] (animations), [`farm`] (parts of an image, merged) and [`bench`]
+//! (measurements).
 
 pub mod accel;
 pub mod atomic_file;
 pub mod bench;
-pub mod binary_file;
-pub mod bsdf;
+pub(crate) mod binary_file;
+pub(crate) mod bsdf;
 pub mod coherence;
 pub mod error;
 pub mod farm;
 #[doc(hidden)]
 pub mod fuzzing;
 pub mod image;
-pub mod integrators;
-pub mod interrupt;
-pub mod lights;
+pub(crate) mod integrators;
+pub mod job;
+pub(crate) mod lights;
 pub mod math;
-pub mod memory;
-pub mod render;
+pub mod platform;
+pub(crate) mod render;
 pub mod scene;
 
+pub use accel::Backend;
 pub use error::{Error, Result};
+pub use image::output::{read_image, write_image, OutputOptions};
+pub use image::{Image, MetaValue, Metadata};
+pub use job::{
+    Aov, CancelToken, Control, Job, MemoryBudget, Progress, Relight, Rendered, Renderer, Settings,
+    Technique, TechniqueKind,
+};
+pub use render::{checkpoint, Film, RenderStats, Tile};
+pub use scene::Scene;
 
 /// Version of this crate, as printed by `raylink --version`.
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");

@@ -4,6 +4,7 @@
 pub mod bvh;
 pub mod embree;
 
+use crate::job::Control;
 use crate::math::{Ray, Vec3};
 use crate::scene::Scene;
 
@@ -70,8 +71,12 @@ impl DynamicAccel for bvh::BvhAccel {
 
 /// Builds an intersection structure for an animation: Embree as a dynamic scene whose moving
 /// geometries are refitted per frame, the BVH rebuilt per frame.
-pub fn build_dynamic(scene: &Scene, backend: Backend) -> crate::Result<Box<dyn DynamicAccel>> {
-    check_memory(scene)?;
+pub fn build_dynamic(
+    scene: &Scene,
+    backend: Backend,
+    control: &Control,
+) -> crate::Result<Box<dyn DynamicAccel>> {
+    check_memory(scene, control)?;
     match backend {
         Backend::Embree => Ok(Box::new(embree::EmbreeAccel::build_dynamic(scene)?)),
         Backend::Bvh => Ok(Box::new(bvh::BvhAccel::build(scene)?)),
@@ -79,7 +84,7 @@ pub fn build_dynamic(scene: &Scene, backend: Backend) -> crate::Result<Box<dyn D
 }
 
 /// Which intersection backend to build (`--accel` on the command line).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Backend {
     /// The system Embree.
     #[default]
@@ -98,6 +103,10 @@ impl Backend {
             Backend::Bvh => "bvh",
         }
     }
+
+    pub fn from_name(name: &str) -> Option<Backend> {
+        Backend::ALL.into_iter().find(|b| b.name() == name)
+    }
 }
 
 impl std::fmt::Display for Backend {
@@ -107,8 +116,9 @@ impl std::fmt::Display for Backend {
 }
 
 /// Builds the acceleration structure for a scene's shapes; shape `i` gets geometry id `i`.
-pub fn build(scene: &Scene, backend: Backend) -> crate::Result<Box<dyn Accel>> {
-    check_memory(scene)?;
+/// The job's memory budget bounds it, and a cancel before the build stops it.
+pub fn build(scene: &Scene, backend: Backend, control: &Control) -> crate::Result<Box<dyn Accel>> {
+    check_memory(scene, control)?;
     match backend {
         Backend::Embree => Ok(Box::new(embree::EmbreeAccel::build(scene)?)),
         Backend::Bvh => Ok(Box::new(bvh::BvhAccel::build(scene)?)),
@@ -119,8 +129,9 @@ pub fn build(scene: &Scene, backend: Backend) -> crate::Result<Box<dyn Accel>> {
 /// build-time copies, or obvhs's CWBVH, plus the shading data kept beside them).
 const BYTES_PER_PRIMITIVE: u64 = 256;
 
-fn check_memory(scene: &Scene) -> crate::Result<()> {
-    crate::memory::check(
+fn check_memory(scene: &Scene, control: &Control) -> crate::Result<()> {
+    control.cancel.check("the intersection structure's build")?;
+    control.budget.check(
         &format!(
             "{}: the intersection structures for {} primitives",
             scene.source.display(),

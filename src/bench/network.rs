@@ -19,17 +19,21 @@
 
 use super::Spread;
 use crate::accel::{self, Backend};
-use crate::integrators::illumination_network::distribute::{distribute, DistributeOptions};
+use crate::integrators::illumination_network::distribute::{
+    distribute, DistributeOptions, Solution,
+};
 use crate::integrators::illumination_network::relight::LightBasis;
 use crate::integrators::illumination_network::render::NetworkRenderer;
 use crate::integrators::illumination_network::{file, Builder, Network, NetworkParams};
 use crate::integrators::Context;
+use crate::job::Control;
 use crate::math::Rgb;
-use crate::render::{render, PixelSampling, RenderOptions};
+use crate::render::pixels::{render_pixels, PixelView};
+use crate::render::{PixelSampling, RenderStats, Tile};
 use crate::scene::Scene;
 use crate::{Error, Result};
 use std::fmt::Write;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant;
 
 /// What to measure.
@@ -102,19 +106,29 @@ fn timed<T>(f: impl FnOnce() -> Result<T>) -> Result<(T, f64)> {
     Ok((v, start.elapsed().as_secs_f64()))
 }
 
+/// Renders a view of a distributed network.
+fn render_view(ctx: &Context, net: &Network, sol: &Solution, view: &PixelView) -> RenderStats {
+    let renderer = NetworkRenderer {
+        net,
+        solution: sol,
+        hybrid: false,
+    };
+    let whole = Tile::whole(view.width, view.height);
+    render_pixels(ctx, &renderer, view, &whole, &Control::default()).1
+}
+
 /// Measures every network of the bench.
 pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<Vec<NetworkRow>> {
     let scene = Scene::load(&bench.scene)?;
-    let accel = accel::build(&scene, Backend::Embree)?;
+    let accel = accel::build(&scene, Backend::Embree, &Default::default())?;
     let ctx = Context::new(&scene, accel.as_ref());
     let threads = rayon::current_num_threads();
-    let render_options = RenderOptions {
+    let view = PixelView {
         width: bench.width,
         height: bench.height,
         sampling: PixelSampling::Uniform { n: 1 },
         threads: None,
         seed: bench.seed,
-        progress: false,
     };
     let options = DistributeOptions::default();
     let emission: Vec<Rgb> = scene.materials.iter().map(|m| m.emission).collect();
@@ -155,12 +169,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             let cpu = super::cpu_seconds() - cpu;
             let sol = distribute(&net, &scene, &options);
             t[12].push(start.elapsed().as_secs_f64());
-            let renderer = NetworkRenderer {
-                net: &net,
-                solution: &sol,
-                hybrid: false,
-            };
-            let (_, rs) = render(&ctx, &renderer, &render_options)?;
+            let rs = render_view(&ctx, &net, &sol, &view);
             t[0].push(start.elapsed().as_secs_f64());
             t[1].push(net.stats.seconds);
             t[2].push(net.stats.link_seconds);
@@ -221,12 +230,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
                 .superpose(&prefix, &scene, &emission, &relit)
                 .map_err(bad)?;
             t[13].push(start.elapsed().as_secs_f64());
-            let renderer = NetworkRenderer {
-                net: &prefix,
-                solution: &sol,
-                hybrid: false,
-            };
-            render(&ctx, &renderer, &render_options)?;
+            render_view(&ctx, &prefix, &sol, &view);
             t[7].push(start.elapsed().as_secs_f64());
             t[8].push(load);
             drop((prefix, sol));
@@ -237,12 +241,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             let ((net, basis), load) = timed(|| file::load_all(&path, &recoloured, Some(&params)))?;
             let basis = basis.ok_or_else(|| bad("the light basis was not stored".into()))?;
             let sol = basis.redistribute(&net, &recoloured, &emission, &relit);
-            let renderer = NetworkRenderer {
-                net: &net,
-                solution: &sol,
-                hybrid: false,
-            };
-            render(&recoloured_ctx, &renderer, &render_options)?;
+            render_view(&recoloured_ctx, &net, &sol, &view);
             t[9].push(start.elapsed().as_secs_f64());
             t[10].push(load);
             t[14].push(sol.stats.seconds);
@@ -262,12 +261,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             let (sol, _) = basis
                 .from_series(&prefix, &recoloured, &emission, &relit)
                 .map_err(bad)?;
-            let renderer = NetworkRenderer {
-                net: &prefix,
-                solution: &sol,
-                hybrid: false,
-            };
-            render(&recoloured_ctx, &renderer, &render_options)?;
+            render_view(&recoloured_ctx, &prefix, &sol, &view);
             t[16].push(start.elapsed().as_secs_f64());
             t[17].push(load);
             drop((prefix, sol));
@@ -492,18 +486,4 @@ pub fn markdown(rows: &[NetworkRow], bench: &NetworkBench) -> String {
         },
     );
     out
-}
-
-/// `raylink bench --network`.
-pub fn run(bench: &NetworkBench, out: &Path, quiet: bool) -> Result<()> {
-    let rows = measure(bench, &mut |line| {
-        if !quiet {
-            eprintln!("bench: {line}");
-        }
-    })?;
-    let md = markdown(&rows, bench);
-    let file = out.join("network.md");
-    std::fs::write(&file, &md).map_err(|e| Error::io(&file, e))?;
-    println!("{md}");
-    Ok(())
 }

@@ -4,11 +4,9 @@
 
 use super::scenes::resolve;
 use super::{BenchConfig, Spread};
-use crate::accel::{self, Backend};
+use crate::accel::Backend;
 use crate::image::filter::Filter;
-use crate::integrators::path::{PathOptions, PathTracer};
-use crate::integrators::Context;
-use crate::render::progressive::{render_progressive, ProgressiveOptions};
+use crate::job::{Control, Job, MonteCarloSettings, Renderer, Technique};
 use crate::Result;
 
 /// Samples per pixel of each timed render.
@@ -21,27 +19,31 @@ pub struct PathRow {
     pub mrays_per_s: Spread,
 }
 
+/// Renders the Cornell box through the job API per backend and thread count.
 pub fn measure(config: &BenchConfig, progress: &mut dyn FnMut(&str)) -> Result<Vec<PathRow>> {
-    let scene = resolve("cornell")?;
-    let tracer = PathTracer::new(PathOptions { max_depth: 8 });
+    let scene = std::sync::Arc::new(resolve("cornell")?);
+    let technique = Technique::Path(MonteCarloSettings {
+        max_depth: 8,
+        spp: SPP,
+        time_limit: None,
+        filter: Filter::default(),
+    });
+    let control = Control::default();
     let mut rows = Vec::new();
     for &backend in &config.backends {
-        let accel = accel::build(&scene, backend)?;
-        let ctx = Context::new(&scene, accel.as_ref());
         for &threads in &config.threads {
-            let options = ProgressiveOptions {
+            let job = Job {
                 width: config.width,
                 height: config.height,
-                spp: SPP,
-                time_limit: None,
-                threads: Some(threads),
                 seed: config.seed,
-                progress: false,
-                filter: Filter::default(),
+                threads: Some(threads),
+                accel: backend,
+                ..Job::new(&scene, technique.clone())
             };
+            let mut renderer = Renderer::new(scene.clone(), job, &control)?;
             let (mut paths, mut mrays) = (Vec::new(), Vec::new());
             for rep in 0..config.warmup + config.reps {
-                let (_, stats) = render_progressive(&ctx, &tracer, &options, |_| Ok(()))?;
+                let stats = renderer.render(&control)?.stats;
                 if rep >= config.warmup {
                     paths.push(stats.samples as f64 / stats.seconds);
                     mrays.push(stats.mrays_per_second());

@@ -31,7 +31,7 @@ impl SceneSpec {
             return Ok(SceneSpec::File(cornell_path()));
         }
         let bad = || {
-            Error::Options(format!(
+            Error::Invalid(format!(
                 "unknown bench scene {name:?}: expected cornell, spheres-N, terrain-N (N like \
                  10k or 1m) or a .toml scene file"
             ))
@@ -308,7 +308,7 @@ mod tests {
     #[test]
     fn unknown_names_are_option_errors() {
         for name in ["nope", "spheres-", "cubes-10k", "terrain-x"] {
-            assert!(matches!(resolve(name), Err(Error::Options(_))), "{name}");
+            assert!(matches!(resolve(name), Err(Error::Invalid(_))), "{name}");
         }
     }
 }

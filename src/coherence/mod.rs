@@ -9,14 +9,20 @@
 //! - [`record`]: the intersection wrapper that records every query's segment.
 //! - [`changes`]: what changed between two frames.
 //! - [`renderer`]: the incremental frame renderer.
-//! - [`animate`]: `raylink animate`.
+//! - [`sequence`]: a sequence's frames rendered coherently (or verified), with statistics;
+//!   [`report`] writes them for people.
 
-pub mod animate;
-pub mod changes;
-pub mod grid;
-pub mod record;
-pub mod renderer;
-pub mod segments;
-pub mod tables;
+pub(crate) mod changes;
+pub(crate) mod grid;
+pub(crate) mod record;
+pub(crate) mod renderer;
+pub mod report;
+pub(crate) mod segments;
+pub mod sequence;
+pub(crate) mod tables;
 
-pub use renderer::{CoherentRenderer, Engine, FrameStats};
+pub use record::Records;
+pub use renderer::FrameStats;
+pub use sequence::{
+    render_sequence, FrameRow, Report, SequenceJob, SequenceMode, SequenceTechnique, Time,
+};

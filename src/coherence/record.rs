@@ -112,7 +112,7 @@ const UNSYNCED: usize = usize::MAX;
 static SERIAL: AtomicU64 = AtomicU64::new(1);
 
 /// Where a recorder puts what it records.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Records {
     /// Walk every segment through the grid as it is traced and set the block's bit in the
     /// voxels' tables (the paper's form).

@@ -13,22 +13,24 @@ use super::tables::{BlockLayout, BlockSet, Table, VoxelTables};
 use crate::accel::Accel;
 use crate::image::Image;
 use crate::integrators::{Context, Integrator, MonteCarlo, RayStats};
+use crate::job::{Control, MemoryBudget};
 use crate::math::{Rgb, Vec3};
+use crate::render::driver::drive;
+use crate::render::pixels::PixelView;
 use crate::render::progressive::ProgressiveOptions;
-use crate::render::{RenderOptions, Tile};
+use crate::render::{Tile, MERGE_WINDOW};
 use crate::scene::Scene;
 use crate::Result;
-use rayon::prelude::*;
 use std::time::Instant;
 
-/// How pixels are computed: one of the two engines, with its options.
-pub enum Engine<'a> {
-    /// The Whitted tile engine (adaptive or uniform supersampling).
+/// How pixels are computed: one of the two tile kernels, with its view.
+pub(crate) enum Engine<'a> {
+    /// The one-pass kernel (Whitted's adaptive or uniform supersampling).
     Whitted {
         integrator: &'a dyn Integrator,
-        options: RenderOptions,
+        view: PixelView,
     },
-    /// The Monte Carlo engine, for integrators that splat nothing (the path tracer).
+    /// The Monte Carlo kernel, for integrators that splat nothing (the path tracer).
     MonteCarlo {
         integrator: &'a dyn MonteCarlo,
         options: ProgressiveOptions,
@@ -38,14 +40,14 @@ pub enum Engine<'a> {
 impl Engine<'_> {
     pub fn size(&self) -> (u32, u32) {
         match self {
-            Engine::Whitted { options, .. } => (options.width, options.height),
+            Engine::Whitted { view, .. } => (view.width, view.height),
             Engine::MonteCarlo { options, .. } => (options.width, options.height),
         }
     }
 
     fn threads(&self) -> Option<usize> {
         match self {
-            Engine::Whitted { options, .. } => options.threads,
+            Engine::Whitted { view, .. } => view.threads,
             Engine::MonteCarlo { options, .. } => options.threads,
         }
     }
@@ -53,48 +55,48 @@ impl Engine<'_> {
     /// Renders one block; returns its pixels and the rays traced.
     fn region(&self, ctx: &Context, tile: &Tile) -> (Vec<Rgb>, RayStats) {
         match self {
-            Engine::Whitted {
-                integrator,
-                options,
-            } => {
-                let (p, r, _) = crate::render::render_region(ctx, *integrator, options, tile);
-                (p, r)
+            Engine::Whitted { integrator, view } => {
+                let out = crate::render::pixels::render_tile(ctx, *integrator, view, tile);
+                (out.pixels, out.rays)
             }
             Engine::MonteCarlo {
                 integrator,
                 options,
             } => {
                 let (p, r, _) =
-                    crate::render::progressive::render_region(ctx, *integrator, options, tile);
+                    crate::render::progressive::render_tile(ctx, *integrator, options, tile);
                 (p, r)
             }
         }
     }
 
     /// Renders the whole frame without coherence (the reference, and the "traditional"
-    /// column of the statistics).
-    pub fn render_full(&self, ctx: &Context) -> Result<(Image, RayStats)> {
-        match self {
-            Engine::Whitted {
-                integrator,
-                options,
-            } => {
-                let (image, stats) = crate::render::render(ctx, *integrator, options)?;
-                Ok((image, stats.rays))
+    /// column of the statistics). `None` if cancelled.
+    pub fn render_full(&self, ctx: &Context, control: &Control) -> Result<(Image, RayStats)> {
+        let (image, stats) = match self {
+            Engine::Whitted { integrator, view } => {
+                let whole = Tile::whole(view.width, view.height);
+                crate::render::pixels::render_pixels(ctx, *integrator, view, &whole, control)
             }
             Engine::MonteCarlo {
                 integrator,
                 options,
             } => {
-                let (film, stats) = crate::render::progressive::render_progressive(
+                let (film, stats) = crate::render::progressive::render_passes(
                     ctx,
                     *integrator,
                     options,
-                    |_| Ok(()),
+                    None,
+                    &mut |_| Ok(()),
+                    control,
                 )?;
-                Ok((film.image(), stats.rays))
+                (film.image(), stats)
             }
+        };
+        if stats.cancelled {
+            control.cancel.check("a frame")?;
         }
+        Ok((image, stats.rays))
     }
 }
 
@@ -103,6 +105,8 @@ impl Engine<'_> {
 pub struct FrameStats {
     pub rays: RayStats,
     pub blocks_retraced: usize,
+    /// Blocks of the frame's tables.
+    pub blocks_total: usize,
     pub pixels_retraced: u64,
     /// Voxels marked changed (0 on a full frame).
     pub changed_voxels: usize,
@@ -182,7 +186,7 @@ impl CoherentRenderer {
             previous: None,
             last_change: None,
             position: 0,
-            segment_budget: (crate::memory::limit().0 / 4).min(usize::MAX as u64) as usize,
+            segment_budget: (MemoryBudget::default().limit() / 4).min(usize::MAX as u64) as usize,
             camera: vec![Vec::new(); layout.len()],
             camera_on: true,
         }
@@ -392,11 +396,12 @@ impl CoherentRenderer {
         scene: &Scene,
         accel: &dyn Accel,
         engine: &Engine,
+        control: &Control,
     ) -> Result<(Image, FrameStats)> {
         let start = Instant::now();
         let (width, height) = engine.size();
         if (width, height) != (self.layout.width, self.layout.height) {
-            return Err(crate::Error::Options(format!(
+            return Err(crate::Error::Invalid(format!(
                 "the frame is {width}x{height} but the block tables were made for {}x{}",
                 self.layout.width, self.layout.height
             )));
@@ -405,7 +410,10 @@ impl CoherentRenderer {
         let light_choice = matches!(engine, Engine::MonteCarlo { .. }).then_some(&ctx.lights);
         let summary = FrameSummary::new(scene, light_choice);
         let mut stats = FrameStats::default();
-        let pool = crate::render::thread_pool(engine.threads())?;
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(engine.threads().unwrap_or(0))
+            .build()
+            .map_err(|e| crate::Error::Invalid(format!("cannot start threads: {e}")))?;
         let (blocks, mut image, changed) = match self.previous.take() {
             None => {
                 stats.full_reason = Some("first frame".into());
@@ -445,7 +453,8 @@ impl CoherentRenderer {
         // renderer's, to keep every thread busy; with many blocks, one task per block
         // records each voxel once per block and traces fewer shared tile corners (a pixel's
         // value does not depend on the tiling).
-        let split = list.len() < 8 * pool.current_num_threads();
+        let split =
+            list.len() < 8 * crate::render::driver::worker_count(engine.threads(), usize::MAX);
         let tasks: Vec<(usize, Tile)> = list
             .iter()
             .flat_map(|&b| {
@@ -481,28 +490,37 @@ impl CoherentRenderer {
         // full: most blocks of such a frame are never retraced, and keeping theirs cost frame
         // 0 more time (the memory's first touch) than reusing them saved later.
         let camera_on = self.camera_on && stats.full_reason.is_none();
-        let results: Vec<(Vec<Rgb>, RayStats, Recorded)> = pool.install(|| {
-            tasks
-                .par_iter()
-                .map(|(b, tile)| {
-                    let mut recorder =
-                        RecordingAccel::new(accel, scene, voxels, nearest_blocker, records);
-                    if camera_on {
-                        let reuse = changed.as_ref().map(|changed| CameraReuse {
-                            previous: &previous_camera[*b],
-                            changed,
-                        });
-                        recorder = recorder.with_camera(&summary.keys, reuse);
-                    }
-                    let (pixels, rays) = engine.region(&ctx.with_accel(&recorder), tile);
-                    if let Store::Tables(tables) = store {
-                        recorder.flush(tables, *b);
-                    }
-                    (pixels, rays, recorder.finish())
-                })
-                .collect()
-        });
+        let mut results: Vec<(Vec<Rgb>, RayStats, Recorded)> = Vec::with_capacity(tasks.len());
+        let driven = drive(
+            &tasks,
+            engine.threads(),
+            MERGE_WINDOW,
+            &control.cancel,
+            |(b, tile)| {
+                let mut recorder =
+                    RecordingAccel::new(accel, scene, voxels, nearest_blocker, records);
+                if camera_on {
+                    let reuse = changed.as_ref().map(|changed| CameraReuse {
+                        previous: &previous_camera[*b],
+                        changed,
+                    });
+                    recorder = recorder.with_camera(&summary.keys, reuse);
+                }
+                let (pixels, rays) = engine.region(&ctx.with_accel(&recorder), tile);
+                if let Store::Tables(tables) = store {
+                    recorder.flush(tables, *b);
+                }
+                (pixels, rays, recorder.finish())
+            },
+            |_, r| results.push(r),
+        );
         drop(previous_camera);
+        if driven.cancelled {
+            // A frame is written whole or not at all; the records are no longer whole
+            // either, so the next frame starts afresh.
+            self.reset();
+            control.cancel.check("a frame")?;
+        }
         for ((b, t), (pixels, rays, recorded)) in tasks.iter().zip(results) {
             if let Store::Segments(store) = &mut self.store {
                 store.add(*b, recorded.segments, recorded.hit);
@@ -515,14 +533,12 @@ impl CoherentRenderer {
             }
             stats.camera_rays += recorded.camera_rays;
             stats.camera_reused += recorded.camera_reused;
-            let w = t.x1 - t.x0;
-            for (i, c) in pixels.into_iter().enumerate() {
-                image.set(t.x0 + i as u32 % w, t.y0 + i as u32 / w, c);
-            }
+            crate::render::place(&mut image, (0, 0), t, pixels);
             stats.rays.add(&rays);
-            stats.pixels_retraced += ((t.x1 - t.x0) * (t.y1 - t.y0)) as u64;
+            stats.pixels_retraced += t.pixels();
         }
         stats.blocks_retraced = list.len();
+        stats.blocks_total = self.layout.len();
         stats.blocks = list;
         if self.record_bytes() + self.camera_bytes() > self.segment_budget {
             // Over the budget: segment records become tables, and camera hits are no longer

@@ -89,7 +89,7 @@ fn read_part(path: &Path) -> Result<Part> {
 /// Reads and assembles the parts; see the module documentation for what is refused.
 pub fn merge(paths: &[PathBuf]) -> Result<Merged> {
     let Some(first_path) = paths.first() else {
-        return Err(Error::Options("merge needs at least one part".into()));
+        return Err(Error::Invalid("merge needs at least one part".into()));
     };
     let mut first_part = Some(read_part(first_path)?);
     // The first part's metadata, which every other part is compared with.

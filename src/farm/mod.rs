@@ -8,15 +8,10 @@
 pub mod merge;
 
 use crate::image::Image;
-use crate::integrators::{Context, Integrator, MonteCarlo, RayStats};
-use crate::math::Rgb;
-use crate::render::progressive::ProgressiveOptions;
-use crate::render::{RenderOptions, RenderStats, Tile};
+use crate::render::Tile;
 use crate::scene::Scene;
 use crate::{Error, Result};
-use rayon::prelude::*;
 use std::path::{Path, PathBuf};
-use std::time::Instant;
 
 /// Metadata attribute: the [`scene_hash`] of the scene rendered, as 16 hex digits.
 pub const META_SCENE_HASH: &str = "raylink:scene_hash";
@@ -39,7 +34,7 @@ pub enum Part {
 
 /// Parses `I/N` (0 ≤ I < N).
 pub fn parse_tile(text: &str) -> std::result::Result<Part, String> {
-    let bad = || format!("--tile takes I/N with 0 <= I < N (e.g. 0/4), got \"{text}\"");
+    let bad = || format!("takes I/N with 0 <= I < N (e.g. 0/4), got \"{text}\"");
     let (i, n) = text.split_once('/').ok_or_else(bad)?;
     let index: u32 = i.trim().parse().map_err(|_| bad())?;
     let count: u32 = n.trim().parse().map_err(|_| bad())?;
@@ -53,7 +48,7 @@ pub fn parse_tile(text: &str) -> std::result::Result<Part, String> {
 pub fn parse_crop(text: &str) -> std::result::Result<Part, String> {
     let bad = || {
         format!(
-            "--crop takes pixel bounds x0,y0,x1,y1 with x0 < x1 and y0 < y1 (x1 and y1 \
+            "takes pixel bounds x0,y0,x1,y1 with x0 < x1 and y0 < y1 (x1 and y1 \
              excluded), got \"{text}\""
         )
     };
@@ -74,19 +69,25 @@ impl Part {
         match *self {
             Part::Tile { index, count } => {
                 if count > height {
-                    return Err(Error::Options(format!(
-                        "--tile {index}/{count}: the image has only {height} rows, so at most \
-                         {height} tiles"
-                    )));
+                    return Err(Error::setting(
+                        "tile",
+                        format!(
+                            "{index}/{count}: the image has only {height} rows, so at most \
+                             {height} tiles"
+                        ),
+                    ));
                 }
                 Ok(band(index, count, width, height))
             }
             Part::Crop(t) => {
                 if t.x1 > width || t.y1 > height {
-                    return Err(Error::Options(format!(
-                        "--crop {},{},{},{} reaches outside the {width}x{height} image",
-                        t.x0, t.y0, t.x1, t.y1
-                    )));
+                    return Err(Error::setting(
+                        "crop",
+                        format!(
+                            "{},{},{},{} reaches outside the {width}x{height} image",
+                            t.x0, t.y0, t.x1, t.y1
+                        ),
+                    ));
                 }
                 Ok(t)
             }
@@ -130,10 +131,13 @@ pub fn output_path(pattern: &Path, part: Option<&Part>) -> Result<PathBuf> {
             text.replace("{tiles}", &count.to_string())
                 .replace("{tile}", &index.to_string()),
         )),
-        _ => Err(Error::Options(format!(
-            "{}: {{tile}} and {{tiles}} in an output name need --tile I/N",
-            pattern.display()
-        ))),
+        _ => Err(Error::setting(
+            "tile",
+            format!(
+                "is needed for {{tile}} and {{tiles}} in an output name ({})",
+                pattern.display()
+            ),
+        )),
     }
 }
 
@@ -170,109 +174,6 @@ impl std::fmt::Write for Fnv1a {
         }
         Ok(())
     }
-}
-
-/// The sub-tiles of a region, rendered in parallel.
-fn sub_tiles(region: &Tile) -> Vec<Tile> {
-    crate::render::tiles_in(region)
-}
-
-/// Assembles sub-tile pixels into the region's image.
-fn assemble(region: &Tile, parts: Vec<(Tile, Vec<Rgb>)>) -> Image {
-    let mut image = Image::new(region.x1 - region.x0, region.y1 - region.y0);
-    for (t, pixels) in parts {
-        let w = t.x1 - t.x0;
-        for (i, c) in pixels.into_iter().enumerate() {
-            let (x, y) = (t.x0 + i as u32 % w, t.y0 + i as u32 / w);
-            image.set(x - region.x0, y - region.y0, c);
-        }
-    }
-    image
-}
-
-fn check_region(region: &Tile, width: u32, height: u32) -> Result<()> {
-    if region.x0 >= region.x1 || region.y0 >= region.y1 || region.x1 > width || region.y1 > height {
-        return Err(Error::Options(format!(
-            "the region {} is empty or outside the {width}x{height} image",
-            region_label(region)
-        )));
-    }
-    Ok(())
-}
-
-/// Renders the pixels of `region` of the image [`crate::render::render`] would render with
-/// the same arguments, with the same values bit for bit.
-pub fn render_region(
-    ctx: &Context,
-    integrator: &dyn Integrator,
-    options: &RenderOptions,
-    region: &Tile,
-) -> Result<(Image, RenderStats)> {
-    options.sampling.validate()?;
-    check_region(region, options.width, options.height)?;
-    let tiles = sub_tiles(region);
-    let (pixels, stats) = crate::render::render_tiles(ctx, integrator, options, &tiles)?;
-    Ok((
-        assemble(region, tiles.into_iter().zip(pixels).collect()),
-        stats,
-    ))
-}
-
-/// Renders the pixels of `region` of the image
-/// [`crate::render::progressive::render_progressive`] would render with the same arguments
-/// (without a time limit), with the same values bit for bit. Only for integrators that do
-/// not splat (the caller refuses the light tracer and BDPT). Returns the image and the
-/// statistics (with the number of dropped, non-finite samples).
-pub fn render_progressive_region(
-    ctx: &Context,
-    integrator: &dyn MonteCarlo,
-    options: &ProgressiveOptions,
-    region: &Tile,
-) -> Result<(Image, RenderStats)> {
-    check_region(region, options.width, options.height)?;
-    if options.time_limit.is_some() {
-        return Err(Error::Options(
-            "--time-limit cannot be used for a part of an image: every part must take the \
-             same samples"
-                .into(),
-        ));
-    }
-    if options.spp == 0 || options.spp > crate::render::progressive::MAX_SPP {
-        return Err(Error::Options(format!(
-            "--spp must be between 1 and {}, got {}",
-            crate::render::progressive::MAX_SPP,
-            options.spp
-        )));
-    }
-    options.filter.validate().map_err(Error::Options)?;
-    let pool = crate::render::thread_pool(options.threads)?;
-    let start = Instant::now();
-    let tiles = sub_tiles(region);
-    let results: Vec<Option<(Vec<Rgb>, RayStats, u64)>> = pool.install(|| {
-        tiles
-            .par_iter()
-            .map(|t| {
-                // On a signal the tiles not yet started are skipped (the part is not written).
-                (!crate::interrupt::requested())
-                    .then(|| crate::render::progressive::render_region(ctx, integrator, options, t))
-            })
-            .collect()
-    });
-    let mut stats = RenderStats::default();
-    let mut parts = Vec::with_capacity(tiles.len());
-    for (t, result) in tiles.into_iter().zip(results) {
-        let Some((pixels, rays, dropped)) = result else {
-            stats.interrupted = true;
-            parts.push((t, Vec::new()));
-            continue;
-        };
-        stats.rays.add(&rays);
-        stats.samples += options.spp as u64 * ((t.x1 - t.x0) * (t.y1 - t.y0)) as u64;
-        stats.invalid += dropped;
-        parts.push((t, pixels));
-    }
-    stats.seconds = start.elapsed().as_secs_f64();
-    Ok((assemble(region, parts), stats))
 }
 
 /// The pixels of `region` of `image`.

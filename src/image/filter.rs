@@ -25,6 +25,19 @@ impl Default for Filter {
     }
 }
 
+/// As scene files name it: `gaussian radius=1.5 sigma=0.5`.
+impl std::fmt::Display for Filter {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            Filter::Box { radius } => write!(f, "box radius={radius}"),
+            Filter::Triangle { radius } => write!(f, "triangle radius={radius}"),
+            Filter::Gaussian { radius, sigma } => {
+                write!(f, "gaussian radius={radius} sigma={sigma}")
+            }
+        }
+    }
+}
+
 impl Filter {
     pub fn radius(&self) -> f32 {
         match *self {

@@ -15,7 +15,7 @@
 //!
 //! The filter is part of the settings string; the film's float sums are stored exactly.
 
-use super::progressive::Film;
+use super::Film;
 use crate::binary_file::{Format, Reader};
 use crate::Result;
 use std::path::{Path, PathBuf};

@@ -1,38 +1,23 @@
-//! The rendering engine: the image is cut into tiles rendered in parallel by rayon. Every
-//! image sample draws from a random stream keyed by (seed, sample position), never by thread
-//! or tile, so an image is the same bit for bit for any thread count and tile order.
+//! The rendering engine: the image is cut into tiles that the one tile driver
+//! ([`driver`]) renders in parallel. Every image sample draws from a random stream keyed by
+//! (seed, sample position), never by thread or tile, and results are merged in tile order, so
+//! an image is the same bit for bit for any thread count and schedule.
 
-pub mod aov;
+pub(crate) mod aov;
 pub mod checkpoint;
-pub mod progressive;
+pub(crate) mod driver;
+mod film;
+pub(crate) mod pixels;
+pub(crate) mod progressive;
 mod sampling;
 
-pub use sampling::{PixelSampling, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD, MAX_ADAPTIVE_DEPTH};
+pub use film::Film;
+pub use sampling::{PixelSampling, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD};
 
-use crate::accel::embree::set_flush_denormals;
-use crate::image::Image;
-use crate::integrators::{Context, Integrator, RayStats};
-use crate::math::Rgb;
-use crate::{Error, Result};
-use indicatif::{ProgressBar, ProgressStyle};
-use rayon::prelude::*;
-use std::io::IsTerminal;
-use std::time::Instant;
+use crate::integrators::RayStats;
 
 /// Side of the square tiles the image is cut into.
 pub const TILE_SIZE: u32 = 16;
-
-#[derive(Clone, Debug, PartialEq)]
-pub struct RenderOptions {
-    pub width: u32,
-    pub height: u32,
-    pub sampling: PixelSampling,
-    /// Worker threads; `None` uses every core.
-    pub threads: Option<usize>,
-    pub seed: u64,
-    /// Show a progress bar (only ever drawn on a terminal).
-    pub progress: bool,
-}
 
 /// What a render did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -43,9 +28,8 @@ pub struct RenderStats {
     pub samples: u64,
     /// Samples whose value was NaN or infinite, dropped (counted as black).
     pub invalid: u64,
-    /// The render stopped early on a signal ([`crate::interrupt`]); the image holds what
-    /// was finished.
-    pub interrupted: bool,
+    /// The render was cancelled before it finished; the image holds what was finished.
+    pub cancelled: bool,
 }
 
 impl RenderStats {
@@ -53,7 +37,7 @@ impl RenderStats {
         self.rays.total() as f64 / self.seconds.max(1e-9) / 1e6
     }
 
-    /// The closing summary line.
+    /// A one-line summary.
     pub fn summary(&self) -> String {
         format!(
             "rendered in {:.2} s: {} rays ({} camera samples), {:.2} Mrays/s",
@@ -66,7 +50,7 @@ impl RenderStats {
 }
 
 /// A rectangle of pixels, `[x0, x1) × [y0, y1)`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Tile {
     pub x0: u32,
     pub y0: u32,
@@ -74,6 +58,31 @@ pub struct Tile {
     pub y1: u32,
 }
 
+impl Tile {
+    /// The whole `width` × `height` image.
+    pub fn whole(width: u32, height: u32) -> Tile {
+        Tile {
+            x0: 0,
+            y0: 0,
+            x1: width,
+            y1: height,
+        }
+    }
+
+    pub fn width(&self) -> u32 {
+        self.x1 - self.x0
+    }
+
+    pub fn height(&self) -> u32 {
+        self.y1 - self.y0
+    }
+
+    pub fn pixels(&self) -> u64 {
+        self.width() as u64 * self.height() as u64
+    }
+}
+
+/// The image's tiles, row by row.
 pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
     (0..height.div_ceil(TILE_SIZE))
         .flat_map(|ty| {
@@ -89,7 +98,7 @@ pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
 
 /// The tiles of a region of the image (the image's own tiling, shifted to the region).
 pub fn tiles_in(region: &Tile) -> Vec<Tile> {
-    tiles(region.x1 - region.x0, region.y1 - region.y0)
+    tiles(region.width(), region.height())
         .into_iter()
         .map(|t| Tile {
             x0: region.x0 + t.x0,
@@ -100,128 +109,20 @@ pub fn tiles_in(region: &Tile) -> Vec<Tile> {
         .collect()
 }
 
-/// Renders the image seen by the scene's camera (at the options' resolution).
-pub fn render(
-    ctx: &Context,
-    integrator: &dyn Integrator,
-    options: &RenderOptions,
-) -> Result<(Image, RenderStats)> {
-    options.sampling.validate()?;
-    if options.width == 0 || options.height == 0 {
-        return Err(Error::Options(
-            "the image needs a width and height of at least 1".into(),
-        ));
-    }
-    let tiles = tiles(options.width, options.height);
-    let (done, stats) = render_tiles(ctx, integrator, options, &tiles)?;
-    let mut image = Image::new(options.width, options.height);
-    for (tile, pixels) in tiles.iter().zip(done) {
-        let w = tile.x1 - tile.x0;
-        for (i, c) in pixels.into_iter().enumerate() {
-            image.set(tile.x0 + i as u32 % w, tile.y0 + i as u32 / w, c);
-        }
-    }
-    Ok((image, stats))
-}
+/// Results merged per tile, at most this many tiles ahead of the slowest (bounds the memory
+/// finished tiles hold while they wait to be merged in order).
+pub(crate) const MERGE_WINDOW: usize = 64;
 
-/// Renders `tiles` of the image in parallel: each tile's pixels (row-major), in order. On a
-/// signal ([`crate::interrupt`]) the tiles not yet started are skipped: they come back empty
-/// and [`RenderStats::interrupted`] is set.
-pub fn render_tiles(
-    ctx: &Context,
-    integrator: &dyn Integrator,
-    options: &RenderOptions,
-    tiles: &[Tile],
-) -> Result<(Vec<Vec<Rgb>>, RenderStats)> {
-    let pool = thread_pool(options.threads)?;
-    let progress = progress_bar(options.progress, tiles.len() as u64, "tiles");
-    let start = Instant::now();
-    let results: Vec<Option<sampling::TileOutput>> = pool.install(|| {
-        tiles
-            .par_iter()
-            .map(|tile| {
-                (!crate::interrupt::requested()).then(|| {
-                    let result = region(ctx, integrator, options, tile);
-                    progress.inc(1);
-                    result
-                })
-            })
-            .collect()
-    });
-    progress.finish_and_clear();
-
-    let mut stats = RenderStats::default();
-    let mut done = Vec::with_capacity(tiles.len());
-    for result in results {
-        let Some(out) = result else {
-            stats.interrupted = true;
-            done.push(Vec::new());
-            continue;
-        };
-        stats.rays.add(&out.rays);
-        stats.samples += out.samples;
-        stats.invalid += out.invalid;
-        done.push(out.pixels);
-    }
-    stats.seconds = start.elapsed().as_secs_f64();
-    Ok((done, stats))
-}
-
-/// Renders the pixels of one rectangle (row-major); [`render`] renders each of its tiles
-/// with this, and a pixel's value does not depend on the tiling. Returns the pixels, rays traced and samples.
-pub fn render_region(
-    ctx: &Context,
-    integrator: &dyn Integrator,
-    options: &RenderOptions,
+/// Copies a tile's pixels (row-major) into `image`, whose top-left pixel is `origin`.
+pub(crate) fn place(
+    image: &mut crate::image::Image,
+    origin: (u32, u32),
     tile: &Tile,
-) -> (Vec<Rgb>, RayStats, u64) {
-    let out = region(ctx, integrator, options, tile);
-    (out.pixels, out.rays, out.samples)
-}
-
-fn region(
-    ctx: &Context,
-    integrator: &dyn Integrator,
-    options: &RenderOptions,
-    tile: &Tile,
-) -> sampling::TileOutput {
-    let mut camera = ctx.scene.camera.clone();
-    camera.width = options.width;
-    camera.height = options.height;
-    let basis = camera.basis();
-    sampling::render_tile(
-        ctx,
-        integrator,
-        &basis,
-        &options.sampling,
-        options.seed,
-        tile,
-    )
-}
-
-/// The render threads: `None` uses every core; each thread flushes denormals to zero.
-pub(crate) fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool> {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads.unwrap_or(0))
-        .start_handler(|_| set_flush_denormals())
-        .build()
-        .map_err(|e| Error::Options(format!("cannot start render threads: {e}")))
-}
-
-/// A progress bar over `total` units (a spinner when the total is unknown, i.e. 0).
-fn progress_bar(wanted: bool, total: u64, unit: &str) -> ProgressBar {
-    if !wanted || !std::io::stderr().is_terminal() {
-        return ProgressBar::hidden();
+    pixels: impl IntoIterator<Item = crate::math::Rgb>,
+) {
+    let w = tile.width();
+    for (i, c) in pixels.into_iter().enumerate() {
+        let (x, y) = (tile.x0 + i as u32 % w, tile.y0 + i as u32 / w);
+        image.set(x - origin.0, y - origin.1, c);
     }
-    if total == 0 {
-        return ProgressBar::new_spinner();
-    }
-    let bar = ProgressBar::new(total);
-    bar.set_style(
-        ProgressStyle::with_template(&format!(
-            "{{spinner}} [{{elapsed_precise}}] {{wide_bar}} {{pos}}/{{len}} {unit}, ETA {{eta}}"
-        ))
-        .expect("the progress template is valid"),
-    );
-    bar
 }

@@ -35,6 +35,20 @@ impl Default for PixelSampling {
     }
 }
 
+/// As the metadata and the settings name it: `adaptive threshold=0.1 depth=3`, `uniform
+/// spp=16`.
+impl std::fmt::Display for PixelSampling {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match *self {
+            PixelSampling::Adaptive {
+                threshold,
+                max_depth,
+            } => write!(f, "adaptive threshold={threshold} depth={max_depth}"),
+            PixelSampling::Uniform { n } => write!(f, "uniform spp={}", n * n),
+        }
+    }
+}
+
 impl PixelSampling {
     pub fn validate(&self) -> Result<()> {
         match *self {
@@ -43,21 +57,28 @@ impl PixelSampling {
                 max_depth,
             } => {
                 if !(threshold >= 0.0 && threshold.is_finite()) {
-                    return Err(Error::Options(format!(
-                        "--aa-threshold must be a non-negative number, got {threshold}"
-                    )));
+                    return Err(Error::setting(
+                        "aa_threshold",
+                        format!("must be a non-negative number, got {threshold}"),
+                    ));
                 }
                 if max_depth > MAX_ADAPTIVE_DEPTH {
-                    return Err(Error::Options(format!(
-                        "--aa-depth must be at most {MAX_ADAPTIVE_DEPTH}, got {max_depth}"
-                    )));
+                    return Err(Error::setting(
+                        "aa_depth",
+                        format!("must be at most {MAX_ADAPTIVE_DEPTH}, got {max_depth}"),
+                    ));
                 }
             }
             PixelSampling::Uniform { n } => {
                 if n == 0 || n > 64 {
-                    return Err(Error::Options(format!(
-                        "uniform supersampling takes 1 to 64 samples per pixel side, got {n}"
-                    )));
+                    return Err(Error::setting(
+                        "spp",
+                        format!(
+                            "must be 1 to 4096 for uniform supersampling (at most 64 per pixel \
+                             side), got {}",
+                            n * n
+                        ),
+                    ));
                 }
             }
         }

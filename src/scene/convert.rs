@@ -94,7 +94,7 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::Result<()> {
         .unwrap_or(Path::new("."))
         .to_path_buf();
     if !out_dir.is_dir() {
-        return Err(Error::Options(format!(
+        return Err(Error::Invalid(format!(
             "{}: the output's directory does not exist",
             output.display()
         )));

@@ -493,30 +493,6 @@ mod query {
     }
 }
 
-/// Sets flush-to-zero and denormals-are-zero on the calling thread, as Embree recommends for
-/// every thread that traces rays (denormals slow traversal down by orders of magnitude).
-pub fn set_flush_denormals() {
-    #[cfg(target_arch = "x86_64")]
-    #[allow(deprecated)]
-    // SAFETY: reading and writing MXCSR only changes this thread's float rounding flags.
-    unsafe {
-        use std::arch::x86_64::{_mm_getcsr, _mm_setcsr};
-        _mm_setcsr(_mm_getcsr() | 0x8040);
-    }
-}
-
-/// Whether flush-to-zero and denormals-are-zero are on for the calling thread.
-pub fn flush_denormals_enabled() -> bool {
-    #[cfg(target_arch = "x86_64")]
-    #[allow(deprecated)]
-    // SAFETY: reading MXCSR has no side effects.
-    unsafe {
-        std::arch::x86_64::_mm_getcsr() & 0x8040 == 0x8040
-    }
-    #[cfg(not(target_arch = "x86_64"))]
-    true
-}
-
 /// The version string of the Embree library raylink runs on.
 pub fn version() -> Result<String> {
     Ok(Device::new()?.version())

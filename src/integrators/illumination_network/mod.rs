@@ -24,8 +24,10 @@ pub mod preprocess;
 pub mod ray_space;
 pub mod relight;
 pub mod render;
+pub(crate) mod technique;
 
 use crate::integrators::Context;
+use crate::job::Control;
 use crate::scene::Scene;
 use patches::Patches;
 pub use preprocess::Builder;
@@ -442,7 +444,38 @@ impl Network {
         params: NetworkParams,
         builder: Builder,
     ) -> Result<Network, String> {
-        Self::build_packed(scene, ctx, params, builder, EndPacking::for_keys, true)
+        Self::build_packed(
+            scene,
+            ctx,
+            params,
+            builder,
+            EndPacking::for_keys,
+            true,
+            &Control::default(),
+        )
+    }
+
+    /// [`Network::build`] under a job's controls: its memory budget bounds the network, and
+    /// a cancel stops the preprocess. A problem of the scene's is an error naming its file.
+    pub(crate) fn build_with(
+        scene: &Scene,
+        ctx: &Context,
+        params: NetworkParams,
+        builder: Builder,
+        control: &Control,
+    ) -> crate::Result<Network> {
+        let n = Self::build_packed(
+            scene,
+            ctx,
+            params,
+            builder,
+            EndPacking::for_keys,
+            true,
+            control,
+        )
+        .map_err(|e| crate::Error::input(&scene.source, e))?;
+        control.cancel.check("the network preprocess")?;
+        Ok(n)
     }
 
     /// [`Network::build`] with the preprocess's link ends packed as `packing(side keys)` says,
@@ -455,6 +488,7 @@ impl Network {
         builder: Builder,
         packing: impl FnOnce(usize) -> Result<EndPacking, String>,
         drop_outer: bool,
+        control: &Control,
     ) -> Result<Network, String> {
         params.validate()?;
         let start = Instant::now();
@@ -464,7 +498,10 @@ impl Network {
         // A bound: a link per slot for each side of each cell (half of them are linked in a
         // closed room); the preprocess's link ends take about as much again.
         let table = patches.cells as u64 * 2 * space.slots() as u64 * 4;
-        crate::memory::check("the illumination network", 2 * table).map_err(|e| e.to_string())?;
+        control
+            .budget
+            .check("the illumination network", 2 * table)
+            .map_err(|e| e.to_string())?;
         if builder == Builder::Scan {
             if let Some(p) = patches.polygons.iter().find(|p| p.sphere.is_some()) {
                 return Err(format!(
@@ -761,7 +798,7 @@ mod tests {
     #[test]
     fn every_packing_of_link_ends_builds_the_same_network() {
         let (scene, params) = cornell_network();
-        let acc = accel::build(&scene, Backend::Embree).unwrap();
+        let acc = accel::build(&scene, Backend::Embree, &Control::default()).unwrap();
         let ctx = Context::new(&scene, acc.as_ref());
         let usual = Network::build(&scene, &ctx, params, Builder::Scan).unwrap();
         // Blocks of 64 keys: the smallest the packing allows.
@@ -771,8 +808,16 @@ mod tests {
                 target_bits: 26,
             })
         };
-        let other =
-            Network::build_packed(&scene, &ctx, params, Builder::Scan, small, true).unwrap();
+        let other = Network::build_packed(
+            &scene,
+            &ctx,
+            params,
+            Builder::Scan,
+            small,
+            true,
+            &Control::default(),
+        )
+        .unwrap();
         assert_eq!(
             EndPacking::for_keys(2 * usual.patches.cells as usize),
             Ok(EndPacking::USUAL)
@@ -787,12 +832,20 @@ mod tests {
     #[test]
     fn dropping_the_outer_sides_escapes_builds_the_same_network() {
         let (scene, params) = cornell_network();
-        let acc = accel::build(&scene, Backend::Embree).unwrap();
+        let acc = accel::build(&scene, Backend::Embree, &Control::default()).unwrap();
         let ctx = Context::new(&scene, acc.as_ref());
         for builder in [Builder::Scan, Builder::Embree] {
             let build = |drop| {
-                Network::build_packed(&scene, &ctx, params, builder, EndPacking::for_keys, drop)
-                    .unwrap()
+                Network::build_packed(
+                    &scene,
+                    &ctx,
+                    params,
+                    builder,
+                    EndPacking::for_keys,
+                    drop,
+                    &Control::default(),
+                )
+                .unwrap()
             };
             let (dropped, kept) = (build(true), build(false));
             let outer = dropped.patches.outer_sides();

@@ -38,21 +38,23 @@
 pub mod file;
 pub mod octree;
 pub mod record;
+pub(crate) mod technique;
 
 use super::path::sample_direct;
 use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
 use crate::image::filter::FilterSampler;
 use crate::image::Image;
+use crate::job::Control;
 use crate::math::sobol::Sampler;
 use crate::math::warp::power_heuristic;
 use crate::math::{offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
+use crate::render::driver::drive;
 use crate::render::progressive::{camera_sample, view_basis, ProgressiveOptions};
 use crate::scene::camera::CameraBasis;
 use crate::scene::{Scene, SurfacePoint};
-use crate::Result;
+use crate::{Error, Result};
 use octree::Octree;
-use rayon::prelude::*;
 use record::{Record, WeightedSum};
 use std::f32::consts::{FRAC_1_PI, PI};
 use std::sync::atomic::{AtomicU64, Ordering};
@@ -92,24 +94,30 @@ impl Default for IcOptions {
 }
 
 impl IcOptions {
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<()> {
         if !(self.accuracy > 0.0 && self.accuracy.is_finite()) {
-            return Err(format!(
-                "--ic-accuracy must be positive, got {}",
-                self.accuracy
+            return Err(Error::setting(
+                "ic_accuracy",
+                format!("must be positive, got {}", self.accuracy),
             ));
         }
         if self.samples < 2 {
-            return Err(format!(
-                "--ic-samples must be at least 2, got {}",
-                self.samples
+            return Err(Error::setting(
+                "ic_samples",
+                format!("must be at least 2, got {}", self.samples),
             ));
         }
         if self.bounces > 32 {
-            return Err(format!("--ab must be at most 32, got {}", self.bounces));
+            return Err(Error::setting(
+                "ab",
+                format!("must be at most 32, got {}", self.bounces),
+            ));
         }
         if !(self.ar > 0.0 && self.ar.is_finite()) {
-            return Err(format!("--ar must be positive, got {}", self.ar));
+            return Err(Error::setting(
+                "ar",
+                format!("must be positive, got {}", self.ar),
+            ));
         }
         Ok(())
     }
@@ -332,11 +340,12 @@ pub struct IrradianceCache {
 impl IrradianceCache {
     /// Runs the overture for the render `render` (size, samples, filter, seed) of the
     /// scene's camera, starting from `cache` (loaded from a file) or an empty cache.
-    pub fn build(
+    pub(crate) fn build(
         ctx: &Context,
         render: &ProgressiveOptions,
         options: IcOptions,
         cache: Option<Cache>,
+        control: &Control,
     ) -> Result<IrradianceCache> {
         let seed = render.seed;
         let camera = view_basis(ctx.scene, render);
@@ -364,52 +373,64 @@ impl IrradianceCache {
         }
         let filter = FilterSampler::new(render.filter);
         let (mut primaries, mut rays) = (0, 0);
-        let pool = crate::render::thread_pool(render.threads)?;
-        for phase in overture_schedule(render.width, render.height, render.spp) {
+        let schedule = overture_schedule(render.width, render.height, render.spp);
+        let parts = schedule.iter().map(|p| p.len() as u64).sum();
+        let progress = control.phase("overture", Some(parts), "parts");
+        for phase in schedule {
             // Each chunk sees the cache as it stood before the phase plus its own values;
             // the chunks' values are then added in chunk order. Nothing depends on which
             // thread ran what.
-            let chunks: Vec<(Cache, u64, RayStats)> = pool.install(|| {
-                phase
-                    .into_par_iter()
-                    .map(|chunk| {
-                        let mut local = cache.empty_like();
-                        let mut stats = RayStats::default();
-                        let mut walk = Walk {
-                            store: Store::Overlay {
-                                base: &cache,
-                                local: &mut local,
-                            },
-                            primaries: 0,
-                            stats: &mut stats,
-                            overture: true,
-                        };
-                        for (x, y, i) in chunk.samples() {
-                            if crate::interrupt::requested() {
-                                break;
-                            }
-                            let (mut sampler, ray) =
-                                camera_sample(&camera, seed, &filter, (x, y), i);
-                            let mut rng = sample_rng(seed, &mut sampler);
-                            trace(ctx, &params, &mut walk, &ray, 0, true, 0, &mut rng);
+            let mut chunks: Vec<(Cache, u64, RayStats)> = Vec::with_capacity(phase.len());
+            drive(
+                &phase,
+                render.threads,
+                phase.len(),
+                &control.cancel,
+                |chunk| {
+                    let mut local = cache.empty_like();
+                    let mut stats = RayStats::default();
+                    let mut walk = Walk {
+                        store: Store::Overlay {
+                            base: &cache,
+                            local: &mut local,
+                        },
+                        primaries: 0,
+                        stats: &mut stats,
+                        overture: true,
+                    };
+                    for (x, y, i) in chunk.samples() {
+                        if control.cancel.is_cancelled() {
+                            break;
                         }
-                        let n = walk.primaries;
-                        (local, n, stats)
-                    })
-                    .collect()
-            });
-            crate::interrupt::check("the irradiance-cache overture")?;
+                        let (mut sampler, ray) = camera_sample(&camera, seed, &filter, (x, y), i);
+                        let mut rng = sample_rng(seed, &mut sampler);
+                        trace(ctx, &params, &mut walk, &ray, 0, true, 0, &mut rng);
+                    }
+                    let n = walk.primaries;
+                    (local, n, stats)
+                },
+                |_, chunk| {
+                    chunks.push(chunk);
+                    progress.advance(1);
+                },
+            );
+            control.cancel.check("the irradiance-cache overture")?;
             for (local, n, stats) in chunks {
                 cache.absorb(local);
                 primaries += n;
                 rays += stats.total();
             }
             // The cache grows phase by phase (each about twice the last at most).
-            crate::memory::check(
+            control.budget.check(
                 "the irradiance cache",
                 2 * cache.len() as u64 * BYTES_PER_VALUE,
             )?;
         }
+        progress.end(&format!(
+            "{} values computed ({:.0} rays each)",
+            primaries,
+            rays as f64 / primaries.max(1) as f64
+        ));
         let overture_primaries = primaries;
         Ok(IrradianceCache {
             params,
@@ -427,7 +448,7 @@ impl IrradianceCache {
     /// The integrator over `cache` as it is, without an overture: for a cache that already
     /// holds the overture of this render's view (`raylink precompute`), so that a render of
     /// any part of the image reads exactly the values the whole render would have.
-    pub fn frozen(
+    pub(crate) fn frozen(
         ctx: &Context,
         render: &ProgressiveOptions,
         options: IcOptions,
@@ -437,7 +458,7 @@ impl IrradianceCache {
             spp: 0,
             ..render.clone()
         };
-        IrradianceCache::build(ctx, &none, options, Some(cache))
+        IrradianceCache::build(ctx, &none, options, Some(cache), &Control::default())
     }
 
     pub fn cache(&self) -> &Cache {

@@ -1,0 +1,312 @@
+//! The `raylink` command line: parses arguments, describes a job, calls the library, and
+//! owns what a front end owns: signals, progress bars, printing and exit codes (0 success,
+//! 1 a failure while working, 2 bad input or options, 128 + N stopped by signal N).
+
+mod animate;
+mod bench;
+mod bench_chart;
+mod farm;
+mod options;
+mod progress;
+mod render;
+mod signals;
+
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
+use options::flag;
+use raylink::job::{human_size, parse_size};
+use raylink::{CancelToken, Control, Error, MemoryBudget, Scene};
+use signals::Signals;
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::sync::Arc;
+
+#[derive(Parser)]
+#[command(
+    name = "raylink",
+    about = "A global-illumination renderer over Embree",
+    long_about = "raylink renders scenes described in TOML files (scene-format.md) or pbrt-v4 \
+                  files (pbrt.md) with Whitted ray tracing, path tracing, light tracing, \
+                  bidirectional path tracing, irradiance caching or illumination networks, \
+                  and animations with object-space temporal coherence, writing EXR, HDR, \
+                  TIFF, PNG or JPEG through OpenImageIO. The documents named here are in \
+                  docs/ in the source tree and in /usr/share/doc/raylink/ when installed \
+                  from the Debian package.\n\n\
+                  Example:\n  raylink render scenes/cornell-box.toml -o cornell.exr -o cornell.png"
+)]
+struct Args {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to one or more image files.
+    Render(options::RenderArgs),
+    /// Convert a scene (.pbrt or .toml) to a native TOML scene; meshes are written as PLY
+    /// files in a NAME.meshes folder beside it.
+    Convert(ConvertArgs),
+    /// Render a keyframed animation (static camera), retracing in each frame only the pixels
+    /// whose rays crossed voxels where something changed; every frame equals a full render.
+    Animate(animate::AnimateArgs),
+    /// Compare the intersection backends: build time, memory and Mrays/s on a ladder of scenes.
+    Bench(bench::BenchArgs),
+    /// Compute the irradiance cache of a view (--cache-file F) or the illumination network
+    /// (--network-file F) once, for render jobs (--tile, --crop) to read; takes the render
+    /// options (docs/farm.md).
+    #[command(mut_arg("outputs", |a| a.required(false).hide(true)))]
+    Precompute(options::RenderArgs),
+    /// Assemble the parts of a render (--tile or --crop EXR files) into the full image,
+    /// refusing parts that do not fit together (docs/farm.md).
+    Merge(farm::MergeArgs),
+    /// Relight a saved illumination network (--network-file, required): new light strengths
+    /// (--light NAME=K, --light-scale, the scene file's emissions) and reflectances (the scene
+    /// file's materials), no preprocess, then render as `render` does. Light strengths alone
+    /// come from a stored light basis (one solution per emissive material) without a
+    /// distribution, and so does a new colour for a material with a stored reflectance
+    /// series (--reflectance-series).
+    Relight(render::RelightArgs),
+    /// Packaging: write the man page (raylink.1) and the bash, zsh and fish completions
+    /// generated from this command line into DIR.
+    #[command(hide = true)]
+    GenerateAssets {
+        /// The directory to write into (created if missing).
+        dir: PathBuf,
+    },
+}
+
+#[derive(clap::Args)]
+struct ConvertArgs {
+    /// The scene file (.pbrt or .toml).
+    scene: PathBuf,
+    /// The TOML scene to write.
+    #[arg(short, long = "output", value_name = "FILE")]
+    output: PathBuf,
+    /// Print nothing but errors and warnings.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+/// Why a command failed: a library error, or a signal that stopped the work.
+pub enum Failure {
+    Error(Error),
+    Interrupted { signal: i32, detail: String },
+}
+
+impl From<Error> for Failure {
+    fn from(e: Error) -> Failure {
+        Failure::Error(e)
+    }
+}
+
+/// What every command shares: the signal handlers, installed before any work.
+pub struct Cli {
+    signals: Signals,
+}
+
+impl Cli {
+    /// The controls of a job: the signals' cancel token, the budget of `--max-memory` and
+    /// the terminal's progress.
+    pub fn control(&self, quiet: bool, max_memory: Option<&str>) -> Result<Control, Failure> {
+        let budget = match max_memory {
+            None => MemoryBudget::default(),
+            Some(size) => MemoryBudget::bytes(
+                parse_size(size).map_err(|e| Error::Invalid(format!("--max-memory: {e}")))?,
+            ),
+        };
+        Ok(Control {
+            cancel: self.signals.cancel().clone(),
+            budget,
+            progress: Arc::new(progress::Terminal::new(quiet)),
+        })
+    }
+
+    /// The failure of work stopped by a signal during `stage`, saying what was kept.
+    pub fn interrupted(&self, stage: &str, kept: &str) -> Failure {
+        let signal = self.signals.received().unwrap_or(2);
+        Failure::Interrupted {
+            signal,
+            detail: format!(
+                "interrupted by {} during {stage}: {kept}",
+                signals::name(signal)
+            ),
+        }
+    }
+
+    /// `--network-stats` and the like: the technique's statistics.
+    pub fn print_report(&self, args: &options::RenderArgs, renderer: &raylink::Renderer) {
+        if args.network.network_stats {
+            for line in renderer.report() {
+                eprintln!("{line}");
+            }
+        }
+    }
+}
+
+/// The exit code of a failed run: 2 for bad input or options, 1 for the rest.
+fn exit_code(failure: &Failure) -> u8 {
+    match failure {
+        Failure::Error(
+            Error::Input { .. }
+            | Error::Setting { .. }
+            | Error::Invalid(_)
+            | Error::Io { .. }
+            | Error::Memory { .. },
+        ) => 2,
+        // As a shell reports a process killed by the signal.
+        Failure::Interrupted { signal, .. } => (128 + signal).clamp(1, 255) as u8,
+        Failure::Error(_) => 1,
+    }
+}
+
+/// The one line a failure prints, in the command line's words: settings by their flags.
+fn message(cli: &Cli, failure: &Failure) -> String {
+    let text = match failure {
+        Failure::Interrupted { detail, .. } => detail.clone(),
+        Failure::Error(Error::Setting { name, detail }) => format!("{} {detail}", flag(name)),
+        Failure::Error(Error::Memory {
+            what,
+            needed,
+            limit,
+            default_limit,
+        }) => format!(
+            "{what} would need {} of memory, more than the limit of {}{}",
+            human_size(*needed),
+            human_size(*limit),
+            if *default_limit {
+                " (3/4 of the physical memory; raise it with --max-memory)"
+            } else {
+                " set by --max-memory"
+            }
+        ),
+        Failure::Error(Error::Cancelled { stage }) => {
+            let signal = cli.signals.received().unwrap_or(2);
+            format!(
+                "interrupted by {} during {stage}; nothing was written",
+                signals::name(signal)
+            )
+        }
+        Failure::Error(e) => e.to_string(),
+    };
+    raylink::error::one_line(&text)
+}
+
+fn main() -> ExitCode {
+    // Only --version needs Embree's version; don't start a device (and its thread pool) for
+    // every other command.
+    let asks_version = std::env::args_os()
+        .skip(1)
+        .any(|a| a == "--version" || a == "-V");
+    let version = if asks_version {
+        version_string()
+    } else {
+        raylink::VERSION.to_string()
+    };
+    let parsed = Args::command()
+        .version(version)
+        .try_get_matches()
+        .and_then(|m| Args::from_arg_matches(&m));
+    let args = match parsed {
+        Ok(args) => args,
+        // --help and --version print as clap does.
+        Err(e)
+            if !e.use_stderr()
+                || e.kind() == clap::error::ErrorKind::DisplayHelpOnMissingArgumentOrSubcommand =>
+        {
+            e.exit()
+        }
+        Err(e) => {
+            eprintln!("raylink: {}", one_line_usage_error(&e));
+            return ExitCode::from(2);
+        }
+    };
+    // The handlers before any work. The commands that keep what they finished cancel their
+    // job on a first signal; the others stop at once.
+    let graceful = matches!(
+        args.command,
+        Command::Render(_)
+            | Command::Relight(_)
+            | Command::Precompute(_)
+            | Command::Animate(_)
+            | Command::Convert(_)
+    );
+    let signals = match Signals::install(CancelToken::new(), graceful) {
+        Ok(s) => s,
+        Err(e) => {
+            eprintln!("raylink: error: {e}");
+            return ExitCode::from(1);
+        }
+    };
+    let cli = Cli { signals };
+    let result = match args.command {
+        Command::Render(a) => render::run_render(&cli, a, raylink::Settings::default()),
+        Command::Convert(a) => run_convert(&cli, a),
+        Command::Animate(a) => animate::run(&cli, &a),
+        Command::Bench(a) => bench::run(&a).map_err(Failure::from),
+        Command::Precompute(a) => render::run_precompute(&cli, a),
+        Command::Merge(a) => farm::run_merge(a),
+        Command::Relight(a) => render::run_relight(&cli, a),
+        Command::GenerateAssets { dir } => generate_assets(&dir).map_err(Failure::from),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(failure) => {
+            eprintln!("raylink: error: {}", message(&cli, &failure));
+            ExitCode::from(exit_code(&failure))
+        }
+    }
+}
+
+/// A command-line error as one line: clap's message and its hint (possible values, a
+/// suggestion), without the usage lines.
+fn one_line_usage_error(e: &clap::Error) -> String {
+    let text = e.render().to_string();
+    let parts: Vec<&str> = text
+        .lines()
+        .map(str::trim)
+        .filter(|l| {
+            !l.is_empty() && !l.starts_with("Usage:") && !l.starts_with("For more information")
+        })
+        .collect();
+    parts.join(" ")
+}
+
+fn run_convert(cli: &Cli, args: ConvertArgs) -> Result<(), Failure> {
+    if args.output.extension().and_then(|e| e.to_str()) != Some("toml") {
+        return Err(Error::Invalid(format!(
+            "{}: the output of convert must be a .toml file",
+            args.output.display()
+        ))
+        .into());
+    }
+    let control = cli.control(args.quiet, None)?;
+    let scene: Scene = render::load_scene(&args.scene, &control)?;
+    raylink::scene::convert::write_toml(&scene, &args.output)?;
+    Ok(())
+}
+
+/// Writes the man pages DIR/man/raylink.1 and raylink-SUBCOMMAND.1 (clap_mangen) and the
+/// completions DIR/completions/{raylink.bash,_raylink,raylink.fish} (clap_complete), all from
+/// the same definition the program parses.
+fn generate_assets(dir: &std::path::Path) -> raylink::Result<()> {
+    use clap_complete::{generate_to, Shell};
+    let mut cmd = Args::command().version(raylink::VERSION);
+    let man = dir.join("man");
+    std::fs::create_dir_all(&man).map_err(|e| Error::io(&man, e))?;
+    clap_mangen::generate_to(cmd.clone(), &man).map_err(|e| Error::io(&man, e))?;
+    let completions = dir.join("completions");
+    std::fs::create_dir_all(&completions).map_err(|e| Error::io(&completions, e))?;
+    for shell in [Shell::Bash, Shell::Zsh, Shell::Fish] {
+        generate_to(shell, &mut cmd, "raylink", &completions)
+            .map_err(|e| Error::io(&completions, e))?;
+    }
+    Ok(())
+}
+
+fn version_string() -> String {
+    let embree = raylink::accel::embree::version().unwrap_or_else(|e| format!("unavailable: {e}"));
+    format!(
+        "{} (Embree {embree}, OpenImageIO {})",
+        raylink::VERSION,
+        raylink::image::oiio::version()
+    )
+}

@@ -1,0 +1,442 @@
+//! The options of `raylink render`, `precompute` and `relight`, grouped as `--help` shows
+//! them, and how they become the library's [`Settings`] and [`Job`]. Settings a scene file
+//! gives are the defaults; options override them. An option that does not apply to the
+//! chosen integrator is an error naming it.
+
+use crate::farm::PartArgs;
+use clap::ValueEnum;
+use raylink::image::filter::Filter;
+use raylink::job::{AntiAliasing, NetworkBuilder, NetworkOrder};
+use raylink::{Backend, Error, Job, Scene, Settings, Technique, TechniqueKind};
+use std::path::PathBuf;
+
+const COMMON: &str = "Common options";
+const MONTE_CARLO: &str = "Monte Carlo (path, light, bdpt, irradiance-cache)";
+const WHITTED: &str = "Whitted and network pixel sampling";
+const CACHE: &str = "Irradiance cache";
+const NETWORK: &str = "Illumination network";
+const OUTPUT: &str = "Output";
+
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+pub enum IntegratorName {
+    /// Whitted 1980: recursive reflection, refraction and shadows.
+    Whitted,
+    /// Path tracing with next-event estimation and multiple importance sampling.
+    Path,
+    /// Light (particle) tracing: paths from the lights, connected to the camera.
+    Light,
+    /// Bidirectional path tracing, all strategies combined by multiple importance sampling.
+    Bdpt,
+    /// Ward's irradiance caching: direct and specular as in the path tracer, indirect
+    /// diffuse light from cached irradiance values.
+    IrradianceCache,
+    /// Buckalew & Fussell's illumination networks: a view-independent network of patches and
+    /// links, built once (--network-file), lit by a distribution process.
+    Network,
+}
+
+impl IntegratorName {
+    pub fn kind(self) -> TechniqueKind {
+        match self {
+            IntegratorName::Whitted => TechniqueKind::Whitted,
+            IntegratorName::Path => TechniqueKind::Path,
+            IntegratorName::Light => TechniqueKind::Light,
+            IntegratorName::Bdpt => TechniqueKind::Bdpt,
+            IntegratorName::IrradianceCache => TechniqueKind::IrradianceCache,
+            IntegratorName::Network => TechniqueKind::Network,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq, ValueEnum)]
+pub enum AccelName {
+    /// The system Embree.
+    Embree,
+    /// obvhs's compressed wide BVH, pure Rust.
+    Bvh,
+}
+
+impl AccelName {
+    pub fn backend(self) -> Backend {
+        match self {
+            AccelName::Embree => Backend::Embree,
+            AccelName::Bvh => Backend::Bvh,
+        }
+    }
+}
+
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum NetworkOrderName {
+    /// Jacobi sweeps over every node, in parallel.
+    Sweeps,
+    /// Largest unshot flux first, one node at a time (all-diffuse networks).
+    Shoot,
+    /// Conjugate gradients (all-diffuse networks; others use sweeps).
+    #[value(name = "cg")]
+    ConjugateGradients,
+}
+
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum NetworkBuilderName {
+    /// Incremental scan conversion of the polygons (the paper's preprocess).
+    Scan,
+    /// Repeated closest-hit queries along every line through the intersection backend.
+    Embree,
+}
+
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum FilterName {
+    Box,
+    Triangle,
+    Gaussian,
+}
+
+#[derive(Clone, Copy, PartialEq, ValueEnum)]
+enum AntiAliasingName {
+    /// Whitted's adaptive corner subdivision.
+    Adaptive,
+    /// A regular grid of --spp samples in every pixel.
+    Uniform,
+}
+
+#[derive(clap::Args)]
+pub struct RenderArgs {
+    /// The scene file (.toml or .pbrt).
+    pub scene: PathBuf,
+    /// Output image; the extension picks the format (.exr .hdr .tif .png .jpg). Repeat for
+    /// several formats of the same render.
+    #[arg(short, long = "output", required = true, value_name = "FILE", help_heading = OUTPUT)]
+    pub outputs: Vec<PathBuf>,
+    /// Light-transport technique (default: the scene's, else whitted).
+    #[arg(long, value_enum, help_heading = COMMON)]
+    pub integrator: Option<IntegratorName>,
+    /// Intersection backend: Embree, or the pure-Rust BVH (obvhs). Images match up to
+    /// floating-point ties.
+    #[arg(long, value_enum, default_value = "embree", help_heading = COMMON)]
+    pub accel: AccelName,
+    /// Image width in pixels (default: the scene's).
+    #[arg(long, help_heading = COMMON)]
+    pub width: Option<u32>,
+    /// Image height in pixels (default: the scene's).
+    #[arg(long, help_heading = COMMON)]
+    pub height: Option<u32>,
+    /// Samples per pixel (default: the scene's, else 16). For Whitted and the network it
+    /// selects uniform supersampling and must be a square (1, 4, 9, 16, ...).
+    #[arg(long, help_heading = COMMON)]
+    pub spp: Option<u32>,
+    /// Maximum depth of the ray tree (Whitted) or number of bounces (Monte Carlo; 1 is
+    /// direct lighting only). Default: the scene's, else 8.
+    #[arg(long, help_heading = COMMON)]
+    pub max_depth: Option<u32>,
+    /// Worker threads (default: all cores). The image does not depend on it.
+    #[arg(long, help_heading = COMMON)]
+    pub threads: Option<usize>,
+    /// Seed of the random streams.
+    #[arg(long, default_value_t = 0, help_heading = COMMON)]
+    pub seed: u64,
+    /// Refuse, before allocating, work that needs more memory than this (bytes, or with a
+    /// K, M, G or T suffix). Default: 3/4 of the physical memory.
+    #[arg(long, value_name = "SIZE", help_heading = COMMON)]
+    pub max_memory: Option<String>,
+    /// No progress bars, notes or summary lines (warnings and errors are still printed).
+    #[arg(short, long, help_heading = COMMON)]
+    pub quiet: bool,
+    /// Render whole sample passes until this many seconds have passed (--spp, if given,
+    /// still caps the samples).
+    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, help_heading = MONTE_CARLO)]
+    pub time_limit: Option<f64>,
+    /// Write the outputs after a pass when this many seconds have passed since the last
+    /// write, so a long render can be watched.
+    #[arg(long, value_name = "SECONDS", help_heading = MONTE_CARLO)]
+    pub write_interval: Option<f64>,
+    /// Save the film every this many seconds (after a pass) to OUTPUT.checkpoint beside the
+    /// first output, for --resume. An interrupted render (SIGINT, SIGTERM) always saves one.
+    /// The checkpoint is removed when the render ends.
+    #[arg(long, value_name = "SECONDS", help_heading = MONTE_CARLO)]
+    pub checkpoint_interval: Option<f64>,
+    /// Continue an interrupted render from OUTPUT.checkpoint (same scene and options); the
+    /// image equals that of an uninterrupted render.
+    #[arg(long, help_heading = MONTE_CARLO)]
+    pub resume: bool,
+    /// Pixel reconstruction filter (default: the scene's, else a Gaussian of radius 1.5 and
+    /// sigma 0.5, as in pbrt).
+    #[arg(long, value_enum, help_heading = MONTE_CARLO)]
+    filter: Option<FilterName>,
+    /// Radius of the pixel filter in pixels (default 0.5 for box, 2 for triangle, 1.5 for
+    /// Gaussian).
+    #[arg(long, help_heading = MONTE_CARLO)]
+    filter_radius: Option<f32>,
+    /// Anti-aliasing: adaptive (default) or uniform supersampling.
+    #[arg(long, value_enum, help_heading = WHITTED)]
+    aa: Option<AntiAliasingName>,
+    /// Adaptive anti-aliasing: largest corner difference accepted without subdividing
+    /// (default 0.1).
+    #[arg(long, help_heading = WHITTED)]
+    aa_threshold: Option<f32>,
+    /// Adaptive anti-aliasing: deepest subdivision level, each level halving the square
+    /// (default 3).
+    #[arg(long, help_heading = WHITTED)]
+    aa_depth: Option<u32>,
+    /// Whitted: shadow rays per area light at each shading point (default 16).
+    #[arg(long, help_heading = WHITTED)]
+    area_samples: Option<u32>,
+    /// Whitted: weight reflection and transmission by Fresnel's law on every material.
+    #[arg(long, help_heading = WHITTED)]
+    fresnel: bool,
+    /// Diffuse bounces, each with its own value set (default 4).
+    #[arg(long, help_heading = CACHE)]
+    ab: Option<u32>,
+    /// Accuracy a: values are used where the estimated error is below a (default 0.15).
+    #[arg(long, help_heading = CACHE)]
+    ic_accuracy: Option<f32>,
+    /// Rays per primary value at the first bounce, halved per bounce (default 512).
+    #[arg(long, help_heading = CACHE)]
+    ic_samples: Option<u32>,
+    /// A value's R is at least the scene's size / ar (default 64).
+    #[arg(long, help_heading = CACHE)]
+    ar: Option<f32>,
+    /// Load values from this file if it exists, and write the cache to it; a file holding
+    /// this view's overture (raylink precompute) is only read.
+    #[arg(long, value_name = "FILE", help_heading = CACHE)]
+    pub cache_file: Option<PathBuf>,
+    /// Mark the pixels of the first-bounce values the camera sees (red), as in figure 5b of
+    /// Ward et al. 1988.
+    #[arg(long, help_heading = CACHE)]
+    show_cache_points: bool,
+    #[command(flatten)]
+    pub network: NetworkArgs,
+    #[command(flatten)]
+    pub part: PartArgs,
+    /// Also write auxiliary images of the first surface seen (albedo, normal, depth) as
+    /// STEM.albedo.exr, STEM.normal.exr and STEM.depth.exr beside the first output.
+    #[arg(long, help_heading = OUTPUT)]
+    pub aov: bool,
+    /// Exposure in stops applied to 8-bit outputs (PNG, JPEG).
+    #[arg(long, allow_negative_numbers = true, help_heading = OUTPUT)]
+    pub exposure: Option<f32>,
+    /// Store EXR pixels as half floats instead of 32-bit floats.
+    #[arg(long, help_heading = OUTPUT)]
+    pub half: bool,
+}
+
+/// Options of the illumination-network integrator.
+#[derive(clap::Args)]
+pub struct NetworkArgs {
+    /// Slopes per axis S (3·S² links per patch; default 12).
+    #[arg(long, help_heading = NETWORK)]
+    slopes: Option<u32>,
+    /// Intercept step h, as a fraction of the scene's largest extent (default 1/64).
+    #[arg(long, help_heading = NETWORK)]
+    intercept_step: Option<f32>,
+    /// Patch edge, as a fraction of the scene's largest extent (default: the intercept
+    /// step).
+    #[arg(long, help_heading = NETWORK)]
+    patch_size: Option<f32>,
+    /// Intercept jitter, a fraction of the intercept step (0 to 1; default 1).
+    #[arg(long, help_heading = NETWORK)]
+    network_jitter: Option<f32>,
+    /// How links are found (default scan).
+    #[arg(long, value_enum, help_heading = NETWORK)]
+    network_builder: Option<NetworkBuilderName>,
+    /// Stop distributing when the unshot flux is below this fraction of the emitted flux
+    /// (default 0.001; conjugate gradients hold it to a tenth of that: their error is less
+    /// even).
+    #[arg(long, help_heading = NETWORK)]
+    tolerance: Option<f32>,
+    /// Load the network from this file if it exists (no preprocess), else build it and
+    /// write it there.
+    #[arg(long, value_name = "FILE", help_heading = NETWORK)]
+    pub network_file: Option<PathBuf>,
+    /// Multiply every emission by this factor (relighting a saved network; default 1).
+    #[arg(long, help_heading = NETWORK)]
+    light_scale: Option<f32>,
+    /// Print patches, links, intersections, memory and timings.
+    #[arg(long, help_heading = NETWORK)]
+    pub network_stats: bool,
+    /// Order of the distribution (default cg).
+    #[arg(long, value_enum, help_heading = NETWORK)]
+    network_order: Option<NetworkOrderName>,
+    /// Compute direct light per pixel (a light sample and a shadow ray) and take only the
+    /// indirect light from the network.
+    #[arg(long, help_heading = NETWORK)]
+    network_hybrid: bool,
+}
+
+/// The command-line name of a setting, for messages.
+pub fn flag(setting: &str) -> String {
+    match setting {
+        "region" => "--tile/--crop".into(),
+        "relight" => "--light".into(),
+        s => format!("--{}", s.replace('_', "-")),
+    }
+}
+
+/// The settings the options give (only those given).
+pub fn given_settings(args: &RenderArgs, scene: &Scene) -> Settings {
+    let n = &args.network;
+    let filter = match (args.filter, args.filter_radius) {
+        (None, None) => None,
+        (None, Some(radius)) => Some(match scene.settings.filter.unwrap_or_default() {
+            Filter::Box { .. } => Filter::Box { radius },
+            Filter::Triangle { .. } => Filter::Triangle { radius },
+            Filter::Gaussian { sigma, .. } => Filter::Gaussian { radius, sigma },
+        }),
+        (Some(FilterName::Box), r) => Some(Filter::Box {
+            radius: r.unwrap_or(0.5),
+        }),
+        (Some(FilterName::Triangle), r) => Some(Filter::Triangle {
+            radius: r.unwrap_or(2.0),
+        }),
+        (Some(FilterName::Gaussian), r) => Some(Filter::Gaussian {
+            radius: r.unwrap_or(1.5),
+            sigma: 0.5,
+        }),
+    };
+    Settings {
+        integrator: args.integrator.map(IntegratorName::kind),
+        spp: args.spp,
+        max_depth: args.max_depth,
+        time_limit: args.time_limit,
+        filter,
+        aa: args.aa.map(|a| match a {
+            AntiAliasingName::Adaptive => AntiAliasing::Adaptive,
+            AntiAliasingName::Uniform => AntiAliasing::Uniform,
+        }),
+        aa_threshold: args.aa_threshold,
+        aa_depth: args.aa_depth,
+        area_samples: args.area_samples,
+        fresnel: args.fresnel.then_some(true),
+        ab: args.ab,
+        ic_accuracy: args.ic_accuracy,
+        ic_samples: args.ic_samples,
+        ar: args.ar,
+        cache_file: args.cache_file.clone(),
+        show_cache_points: args.show_cache_points.then_some(true),
+        slopes: n.slopes,
+        intercept_step: n.intercept_step,
+        patch_size: n.patch_size,
+        network_jitter: n.network_jitter,
+        network_builder: n.network_builder.map(|b| match b {
+            NetworkBuilderName::Scan => NetworkBuilder::Scan,
+            NetworkBuilderName::Embree => NetworkBuilder::Embree,
+        }),
+        tolerance: n.tolerance,
+        network_file: n.network_file.clone(),
+        light_scale: n.light_scale,
+        network_order: n.network_order.map(|o| match o {
+            NetworkOrderName::Sweeps => NetworkOrder::Sweeps,
+            NetworkOrderName::Shoot => NetworkOrder::Shoot,
+            NetworkOrderName::ConjugateGradients => NetworkOrder::ConjugateGradients,
+        }),
+        network_hybrid: n.network_hybrid.then_some(true),
+        relight: None,
+    }
+}
+
+/// The settings a scene file gives.
+pub fn scene_settings(scene: &Scene) -> Result<Settings, Error> {
+    let s = &scene.settings;
+    let integrator = match s.integrator.as_deref() {
+        None => None,
+        Some(name) => Some(TechniqueKind::from_name(name).ok_or_else(|| {
+            Error::input(
+                &scene.source,
+                format!("unknown integrator \"{name}\" in the scene's render settings"),
+            )
+        })?),
+    };
+    Ok(Settings {
+        integrator,
+        spp: s.spp,
+        max_depth: s.max_depth,
+        filter: s.filter,
+        ..Settings::default()
+    })
+}
+
+/// The options other than settings that apply only to some integrators.
+fn other_options(args: &RenderArgs) -> [(&'static str, bool, fn(TechniqueKind) -> bool); 5] {
+    let progressive = |k: TechniqueKind| k.is_monte_carlo();
+    [
+        (
+            "--write-interval",
+            args.write_interval.is_some(),
+            progressive,
+        ),
+        (
+            "--checkpoint-interval",
+            args.checkpoint_interval.is_some(),
+            progressive,
+        ),
+        ("--resume", args.resume, progressive),
+        ("--network-stats", args.network.network_stats, |k| {
+            k == TechniqueKind::Network
+        }),
+        ("--aov", false, |_| true),
+    ]
+}
+
+/// The job the options and the scene describe: the scene's settings overridden by the
+/// options, each option checked to apply to the integrator chosen.
+pub fn job(args: &RenderArgs, scene: &Scene, extra: Settings) -> Result<Job, Error> {
+    let flags = given_settings(args, scene).overlaid(&extra);
+    let mut from_scene = scene_settings(scene)?;
+    // With a time limit only an explicit --spp caps the samples; adaptive anti-aliasing
+    // asked for on the command line ignores the scene's sample count.
+    if flags.time_limit.is_some() || flags.aa == Some(AntiAliasing::Adaptive) {
+        from_scene.spp = None;
+    }
+    let settings = from_scene.overlaid(&flags);
+    let kind = settings.integrator.unwrap_or(TechniqueKind::Whitted);
+    for setting in flags.given() {
+        if !kind.reads(setting) {
+            return Err(Error::Invalid(format!(
+                "{} does not apply to the {kind} integrator",
+                flag(setting)
+            )));
+        }
+    }
+    for (option, given, applies) in other_options(args) {
+        if given && !applies(kind) {
+            return Err(Error::Invalid(format!(
+                "{option} does not apply to the {kind} integrator"
+            )));
+        }
+    }
+    let technique = Technique::create(&settings)?;
+    Ok(Job {
+        width: args.width.unwrap_or(scene.camera.width),
+        height: args.height.unwrap_or(scene.camera.height),
+        seed: args.seed,
+        threads: args.threads,
+        accel: args.accel.backend(),
+        ..Job::new(scene, technique)
+    })
+}
+
+/// Checks of the options alone, before the scene is read.
+pub fn check(args: &RenderArgs) -> Result<(), Error> {
+    for (name, v) in [
+        ("--checkpoint-interval", args.checkpoint_interval),
+        ("--write-interval", args.write_interval),
+    ] {
+        if let Some(t) = v {
+            if !(t.is_finite() && t >= 0.0) {
+                return Err(Error::Invalid(format!(
+                    "{name} must be a non-negative number of seconds, got {t}"
+                )));
+            }
+        }
+    }
+    if let Some(e) = args.exposure {
+        if !e.is_finite() {
+            return Err(Error::Invalid(format!(
+                "--exposure must be a finite number of stops, got {e}"
+            )));
+        }
+    }
+    if args.threads == Some(0) {
+        return Err(Error::setting("threads", "must be at least 1"));
+    }
+    Ok(())
+}

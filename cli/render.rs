@@ -1,0 +1,435 @@
+//! `raylink render`, `relight` and `precompute`: a job from the options and the scene,
+//! rendered by the library, written to the outputs; checkpoints, intermediate writes and the
+//! partial image of an interrupted render.
+
+use crate::farm;
+use crate::options::{self, IntegratorName, RenderArgs};
+use crate::{Cli, Failure};
+use raylink::checkpoint;
+use raylink::image::output::check_output_path;
+use raylink::{
+    write_image, Aov, Control, Error, Job, MetaValue, Metadata, OutputOptions, Relight, Rendered,
+    Renderer, Scene, Settings, Technique, TechniqueKind,
+};
+use std::path::PathBuf;
+use std::sync::Arc;
+
+/// Options of `raylink relight`.
+#[derive(clap::Args)]
+pub struct RelightArgs {
+    #[command(flatten)]
+    pub render: RenderArgs,
+    /// Multiply the emission of the scene's material NAME by K (repeatable).
+    #[arg(long = "light", value_name = "NAME=K")]
+    lights: Vec<String>,
+    /// Recompute the light basis (one distribution per emissive material) for the scene's
+    /// reflectances and store it in the network file, replacing one made for other
+    /// reflectances and its reflectance series (a file without a basis gets one on its first
+    /// relight anyway).
+    #[arg(long)]
+    store_basis: bool,
+    /// With the light basis, store a reflectance series for the diffuse material NAME
+    /// (repeatable): a later relight that gives that material another single colour, the
+    /// rest of the scene unchanged, is then a weighted sum of the series' terms, with no
+    /// distribution and without reading the link table. Implies --store-basis; costs about
+    /// a dozen distributions per material; needs a network of diffuse surfaces.
+    #[arg(long = "reflectance-series", value_name = "NAME")]
+    reflectance_series: Vec<String>,
+}
+
+/// The output options, checked against the outputs they would change.
+fn output_options(args: &RenderArgs) -> Result<OutputOptions, Error> {
+    let ext = |p: &PathBuf| {
+        p.extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase)
+            .unwrap_or_default()
+    };
+    let mut seen = std::collections::HashSet::new();
+    for out in &args.outputs {
+        if !seen.insert(out) {
+            return Err(Error::Invalid(format!(
+                "{}: the same output is given twice",
+                out.display()
+            )));
+        }
+    }
+    if args.half && !args.outputs.iter().any(|o| ext(o) == "exr") {
+        return Err(Error::Invalid(
+            "--half applies to EXR outputs, and none is given".into(),
+        ));
+    }
+    if args.exposure.is_some()
+        && !args
+            .outputs
+            .iter()
+            .any(|o| matches!(ext(o).as_str(), "png" | "jpg" | "jpeg"))
+    {
+        return Err(Error::Invalid(
+            "--exposure applies to 8-bit outputs (PNG, JPEG), and none is given".into(),
+        ));
+    }
+    Ok(OutputOptions {
+        exposure: args.exposure.unwrap_or(0.0),
+        half: args.half,
+    })
+}
+
+/// Loads the scene and prints what its reader replaced.
+pub fn load_scene(path: &std::path::Path, control: &Control) -> Result<Scene, Error> {
+    let scene = Scene::load(path)?;
+    control.cancel.check("loading the scene")?;
+    for w in &scene.warnings {
+        eprintln!("warning: {w}");
+    }
+    Ok(scene)
+}
+
+/// What every render records in its images.
+fn metadata(args: &RenderArgs, job: &Job) -> Metadata {
+    let t = &job.technique;
+    let mut m: Metadata = vec![
+        (
+            "Software".into(),
+            MetaValue::Str(format!("raylink {}", raylink::VERSION)),
+        ),
+        (
+            "raylink:scene".into(),
+            MetaValue::Str(args.scene.display().to_string()),
+        ),
+        (
+            "raylink:integrator".into(),
+            MetaValue::Str(t.kind().to_string()),
+        ),
+        ("raylink:seed".into(), MetaValue::Str(job.seed.to_string())),
+        (
+            "raylink:max_depth".into(),
+            MetaValue::Int(t.max_depth() as i32),
+        ),
+    ];
+    match t {
+        Technique::Whitted(w) => m.push((
+            "raylink:sampling".into(),
+            MetaValue::Str(w.sampling.to_string()),
+        )),
+        Technique::Network(n) => m.push((
+            "raylink:sampling".into(),
+            MetaValue::Str(n.sampling.to_string()),
+        )),
+        _ => {}
+    }
+    if let Some(mc) = t.monte_carlo() {
+        m.push((
+            "raylink:filter".into(),
+            MetaValue::Str(mc.filter.to_string()),
+        ));
+    }
+    m
+}
+
+/// `raylink render`, and `relight` with its settings in `extra`.
+pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<(), Failure> {
+    let control = cli.control(args.quiet, args.max_memory.as_deref())?;
+    options::check(&args)?;
+    farm::resolve_outputs(&mut args)?;
+    for out in &args.outputs {
+        // A bad output path is a bad option: report it before any work is done.
+        check_output_path(out).map_err(|e| Error::Invalid(e.to_string()))?;
+    }
+    let out_options = output_options(&args)?;
+    let scene = load_scene(&args.scene, &control)?;
+    let mut job = options::job(&args, &scene, extra)?;
+    job.region = farm::region(&args, &job)?;
+    let settings = job.settings_key() + &format!(" half={}", args.half);
+    let mut metadata = metadata(&args, &job);
+    farm::part_metadata(&mut metadata, settings.clone(), &scene, &args, &job);
+    let scene = Arc::new(scene);
+    let mut renderer = Renderer::new(scene.clone(), job, &control)?;
+    let job = renderer.job().clone();
+    if job.region.is_some() {
+        renderer.prepare(&control)?;
+        let rendered = renderer.render(&control)?;
+        cli.print_report(&args, &renderer);
+        return farm::write_part(
+            cli,
+            &args,
+            &renderer,
+            rendered,
+            metadata,
+            &out_options,
+            &control,
+        );
+    }
+    let mut partial_note = String::new();
+    let rendered = if job.technique.monte_carlo().is_some() {
+        let (rendered, note) = render_with_checkpoints(
+            &args,
+            &mut renderer,
+            &settings,
+            &metadata,
+            &out_options,
+            &control,
+        )?;
+        partial_note = note;
+        rendered
+    } else {
+        renderer.render(&control)?
+    };
+    cli.print_report(&args, &renderer);
+    let Rendered { image, stats, .. } = rendered;
+    if stats.invalid > 0 {
+        eprintln!(
+            "raylink: warning: {} samples were not finite and were dropped",
+            stats.invalid
+        );
+    }
+    if stats.cancelled && stats.samples == 0 {
+        // Nothing rendered overwrites nothing.
+        return Err(cli.interrupted("the render", "nothing was rendered, so nothing was written"));
+    }
+    if stats.cancelled {
+        metadata.push(("raylink:partial".into(), MetaValue::Int(1)));
+    }
+    let pixels = job.width as f32 * job.height as f32;
+    metadata.extend(farm::stats_metadata(&stats, pixels));
+    for out in &args.outputs {
+        write_image(out, &image, &metadata, &out_options)?;
+    }
+    if stats.cancelled {
+        let outputs: Vec<String> = args
+            .outputs
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect();
+        return Err(cli.interrupted(
+            "the render",
+            &format!(
+                "wrote the partial image {} ({})",
+                outputs.join(", "),
+                if partial_note.is_empty() {
+                    "the tiles finished; the rest is black".to_string()
+                } else {
+                    partial_note
+                }
+            ),
+        ));
+    }
+    if args.aov {
+        let aovs = renderer
+            .render_aovs(&control)
+            .ok_or_else(|| cli.interrupted("the auxiliary images", "the image was written"))?;
+        let first = &args.outputs[0];
+        let stem = first.file_stem().unwrap_or_default().to_string_lossy();
+        for (aov, img) in Aov::ALL.iter().zip(&aovs) {
+            let path = first.with_file_name(format!("{stem}.{}.exr", aov.name()));
+            write_image(&path, img, &metadata, &out_options)?;
+        }
+    }
+    if !args.quiet {
+        eprintln!("{}", stats.summary());
+    }
+    Ok(())
+}
+
+/// A progressive render with --resume, --checkpoint-interval and --write-interval; the
+/// checkpoint of an interrupted render is saved. Returns the render and, if interrupted,
+/// what the checkpoint keeps.
+fn render_with_checkpoints(
+    args: &RenderArgs,
+    renderer: &mut Renderer,
+    settings: &str,
+    metadata: &Metadata,
+    out_options: &OutputOptions,
+    control: &Control,
+) -> Result<(Rendered, String), Failure> {
+    let job = renderer.job().clone();
+    let (width, height) = (job.width, job.height);
+    let mc = *job
+        .technique
+        .monte_carlo()
+        .expect("a progressive technique");
+    let checkpoint = checkpoint::path_for(&args.outputs[0]);
+    // What a resume must match: the settings parts record for merging, with the version and
+    // the scene.
+    let settings = format!(
+        "raylink {} scene {:016x} {settings}",
+        raylink::VERSION,
+        raylink::farm::scene_hash(renderer.scene())
+    );
+    let mut resumed_samples = 0;
+    let resume = if args.resume {
+        if !checkpoint.exists() {
+            return Err(Error::Invalid(format!(
+                "--resume: there is no checkpoint {} (an interrupted render or \
+                 --checkpoint-interval writes one)",
+                checkpoint.display()
+            ))
+            .into());
+        }
+        let blank = raylink::Film::new(width, height, mc.filter);
+        let resumed = checkpoint::load(&checkpoint, &settings, blank)?;
+        resumed_samples = resumed.samples;
+        Some(resumed.film)
+    } else {
+        None
+    };
+    let mut last_write = std::time::Instant::now();
+    let mut last_checkpoint = std::time::Instant::now();
+    let mut rendered = renderer.render_progressive(control, resume, &mut |film| {
+        if args
+            .checkpoint_interval
+            .is_some_and(|t| last_checkpoint.elapsed().as_secs_f64() >= t)
+            && film.spp < mc.spp
+        {
+            // Samples so far are only an estimate here; the image does not use them.
+            let samples = (film.mean_spp() * width as f64 * height as f64) as u64;
+            checkpoint::save(&checkpoint, film, &settings, samples)?;
+            last_checkpoint = std::time::Instant::now();
+        }
+        let due = args
+            .write_interval
+            .is_some_and(|t| last_write.elapsed().as_secs_f64() >= t);
+        if due && film.spp < mc.spp {
+            let mut meta = metadata.clone();
+            meta.push((
+                "raylink:samples_per_pixel".into(),
+                MetaValue::Float(film.spp as f32),
+            ));
+            meta.push(("raylink:partial".into(), MetaValue::Int(1)));
+            for out in &args.outputs {
+                write_image(out, &film.image(), &meta, out_options)?;
+            }
+            last_write = std::time::Instant::now();
+        }
+        Ok(())
+    })?;
+    rendered.stats.samples += resumed_samples;
+    let film = rendered
+        .film
+        .as_ref()
+        .expect("a whole progressive render has a film");
+    let mut note = String::new();
+    if rendered.stats.cancelled && rendered.stats.samples > 0 {
+        checkpoint::save(&checkpoint, film, &settings, rendered.stats.samples)?;
+        note = format!(
+            "{:.2} of {} samples per pixel; the film is in {} for --resume",
+            film.mean_spp(),
+            mc.spp,
+            checkpoint.display()
+        );
+    } else if !rendered.stats.cancelled && checkpoint.exists() {
+        // The render is complete: its checkpoint is stale.
+        let _ = std::fs::remove_file(&checkpoint);
+    }
+    Ok((rendered, note))
+}
+
+/// `raylink relight`: a network render that must load its network and may change the lights.
+pub fn run_relight(cli: &Cli, args: RelightArgs) -> Result<(), Failure> {
+    let mut render = args.render;
+    if render
+        .integrator
+        .is_some_and(|i| i != IntegratorName::Network)
+    {
+        return Err(Error::Invalid(
+            "relight renders with the network integrator; leave out --integrator".into(),
+        )
+        .into());
+    }
+    render.integrator = Some(IntegratorName::Network);
+    match &render.network.network_file {
+        None => {
+            return Err(Error::Invalid(
+                "relight needs --network-file FILE (a network saved by raylink render \
+                 --network-file)"
+                    .into(),
+            )
+            .into())
+        }
+        Some(f) if !f.exists() => {
+            return Err(Error::Invalid(format!(
+                "{}: no such network file (save one with raylink render --network-file)",
+                f.display()
+            ))
+            .into())
+        }
+        Some(_) => {}
+    }
+    let mut lights = Vec::new();
+    for l in &args.lights {
+        let parsed = l
+            .split_once('=')
+            .and_then(|(name, k)| Some((name.to_string(), k.trim().parse::<f32>().ok()?)))
+            .filter(|(name, k)| !name.is_empty() && k.is_finite() && *k >= 0.0);
+        match parsed {
+            Some(p) => lights.push(p),
+            None => {
+                return Err(Error::Invalid(format!(
+                    "--light takes NAME=K with K a non-negative number, got \"{l}\""
+                ))
+                .into())
+            }
+        }
+    }
+    let relight = Relight {
+        lights,
+        store_basis: args.store_basis,
+        reflectance_series: args.reflectance_series,
+    };
+    let extra = Settings {
+        relight: Some(relight),
+        ..Settings::default()
+    };
+    run_render(cli, render, extra)
+}
+
+/// `raylink precompute`: the irradiance cache (`--cache-file`) of one view, or the
+/// illumination network (`--network-file`), computed once and written atomically for render
+/// jobs to read.
+pub fn run_precompute(cli: &Cli, mut args: RenderArgs) -> Result<(), Failure> {
+    let control = cli.control(args.quiet, args.max_memory.as_deref())?;
+    if !args.outputs.is_empty() {
+        return Err(Error::Invalid("precompute writes no image: -o does not apply".into()).into());
+    }
+    if args.part.part().is_some() {
+        return Err(Error::Invalid(
+            "precompute covers the whole view: --tile and --crop do not apply".into(),
+        )
+        .into());
+    }
+    let wanted = match (&args.cache_file, &args.network.network_file) {
+        (Some(_), None) => IntegratorName::IrradianceCache,
+        (None, Some(_)) => IntegratorName::Network,
+        _ => {
+            return Err(Error::Invalid(
+                "precompute needs one of --cache-file F (irradiance cache) and \
+                 --network-file F (illumination network)"
+                    .into(),
+            )
+            .into())
+        }
+    };
+    if let Some(i) = args.integrator.filter(|&i| i != wanted) {
+        return Err(Error::Invalid(format!(
+            "--integrator {} does not precompute anything; --cache-file is for \
+             irradiance-cache, --network-file for network",
+            i.kind()
+        ))
+        .into());
+    }
+    args.integrator = Some(wanted);
+    options::check(&args)?;
+    let scene = load_scene(&args.scene, &control)?;
+    let job = options::job(&args, &scene, Settings::default())?;
+    debug_assert!(matches!(
+        job.technique.kind(),
+        TechniqueKind::IrradianceCache | TechniqueKind::Network
+    ));
+    let start = std::time::Instant::now();
+    let mut renderer = Renderer::new(scene, job, &control)?;
+    renderer.precompute(&control)?;
+    if !args.quiet {
+        eprintln!("precomputed in {:.2} s", start.elapsed().as_secs_f64());
+    }
+    Ok(())
+}

@@ -1,0 +1,70 @@
+//! SIGINT and SIGTERM. The first one cancels the running job through its cancel token: a
+//! render keeps what it finished (written marked partial) and the process exits with
+//! 128 + the signal's number. A second signal ends the process at once, with the signal's
+//! default action.
+
+use raylink::CancelToken;
+use signal_hook::consts::{SIGINT, SIGTERM};
+use std::sync::atomic::{AtomicI32, Ordering};
+use std::sync::Arc;
+
+/// The signals the process listens for, and the first one received.
+#[derive(Clone)]
+pub struct Signals {
+    first: Arc<AtomicI32>,
+    cancel: CancelToken,
+}
+
+impl Signals {
+    /// Starts listening (on a thread of its own, so that the handler itself only records
+    /// the signal). A first signal cancels `cancel` if `graceful`, else ends the process as
+    /// the signal's default action would.
+    pub fn install(cancel: CancelToken, graceful: bool) -> Result<Signals, String> {
+        let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM])
+            .map_err(|e| format!("cannot install the signal handlers: {e}"))?;
+        let first = Arc::new(AtomicI32::new(0));
+        let (seen, token) = (first.clone(), cancel.clone());
+        std::thread::Builder::new()
+            .name("raylink-signals".into())
+            .spawn(move || {
+                for signal in signals.forever() {
+                    let first = seen
+                        .compare_exchange(0, signal, Ordering::SeqCst, Ordering::SeqCst)
+                        .is_ok();
+                    if !first || !graceful {
+                        // The second one: the user does not want to wait.
+                        let _ = signal_hook::low_level::emulate_default_handler(signal);
+                        std::process::exit(128 + signal);
+                    }
+                    token.cancel();
+                    eprintln!(
+                        "\nraylink: {}: stopping after the work in hand (again to quit at once)",
+                        name(signal)
+                    );
+                }
+            })
+            .map_err(|e| format!("cannot start the signal thread: {e}"))?;
+        Ok(Signals { first, cancel })
+    }
+
+    /// The signal that asked for the stop, if any.
+    pub fn received(&self) -> Option<i32> {
+        match self.first.load(Ordering::SeqCst) {
+            0 => None,
+            s => Some(s),
+        }
+    }
+
+    pub fn cancel(&self) -> &CancelToken {
+        &self.cancel
+    }
+}
+
+/// The signal's usual name.
+pub fn name(signal: i32) -> &'static str {
+    match signal {
+        SIGINT => "SIGINT",
+        SIGTERM => "SIGTERM",
+        _ => "signal",
+    }
+}

@@ -1,0 +1,206 @@
+//! The statistics of a sequence for people: a summary in the manner of Table 2 of Jevans's
+//! paper, and a per-frame CSV.
+
+use super::record::Records;
+use super::sequence::{Report, Time};
+use crate::accel::Update;
+use std::fmt::Write as _;
+
+/// The per-frame CSV.
+pub fn csv_text(report: &Report) -> String {
+    let mut s = String::from(
+        "frame,rays,cpu_seconds,wall_seconds,pixels_retraced,blocks_retraced,changed_voxels,\
+         bookkeeping_seconds,accel_update,camera_rays_kept,camera_rays_reused,full_rays,\
+         full_cpu_seconds,full_wall_seconds,identical\n",
+    );
+    for r in &report.rows {
+        let c = &r.coherent;
+        let (fr, fc, fw) = r.full.map_or(Default::default(), |(rays, t)| {
+            (
+                rays.total().to_string(),
+                format!("{:.6}", t.cpu),
+                format!("{:.6}", t.wall),
+            )
+        });
+        let update = match r.update {
+            // --no-coherence: no structure is kept.
+            None if r.time.wall == 0.0 => "",
+            None => "built",
+            Some(Update::Unchanged) => "unchanged",
+            Some(Update::Refit(_)) => "refit",
+            Some(Update::Rebuilt) => "rebuilt",
+        };
+        let _ = writeln!(
+            s,
+            "{},{},{:.6},{:.6},{},{},{},{:.6},{update},{},{},{fr},{fc},{fw},{}",
+            r.frame,
+            c.rays.total(),
+            r.time.cpu,
+            r.time.wall,
+            c.pixels_retraced,
+            c.blocks_retraced,
+            c.changed_voxels,
+            c.bookkeeping_seconds,
+            c.camera_rays,
+            c.camera_reused,
+            r.identical.map_or(String::new(), |b| b.to_string()),
+        );
+    }
+    s
+}
+
+/// A summary like Table 2 of the paper: rays and CPU time of the full ("traditional") and the
+/// coherent renders, per frame and for the whole sequence.
+pub fn summary(report: &Report) -> String {
+    let mut s = String::new();
+    let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::NAN };
+    let _ = writeln!(
+        s,
+        "{:>6} {:>12} {:>9} | {:>12} {:>7} {:>9} {:>7} {:>9} {:>9}",
+        "frame", "full rays", "full cpu", "rays", "ratio", "cpu s", "ratio", "retraced", "wall s"
+    );
+    let (mut cr, mut fr, mut px) = (0u64, 0u64, 0u64);
+    let (mut ct, mut ft) = (Time::default(), Time::default());
+    let mut all_full = !report.rows.is_empty();
+    for r in &report.rows {
+        let c = &r.coherent;
+        cr += c.rays.total();
+        ct.cpu += r.time.cpu;
+        ct.wall += r.time.wall;
+        px += c.pixels_retraced;
+        let (frays, ftime) = r
+            .full
+            .map_or((0, Time::default()), |(rays, t)| (rays.total(), t));
+        all_full &= r.full.is_some();
+        fr += frays;
+        ft.cpu += ftime.cpu;
+        ft.wall += ftime.wall;
+        let _ = writeln!(
+            s,
+            "{:>6} {:>12} {:>9.2} | {:>12} {:>7.4} {:>9.2} {:>7.4} {:>8.2}% {:>9.3}",
+            r.frame,
+            frays,
+            ftime.cpu,
+            c.rays.total(),
+            ratio(c.rays.total() as f64, frays as f64),
+            r.time.cpu,
+            ratio(r.time.cpu, ftime.cpu),
+            100.0 * c.pixels_retraced as f64 / report.pixels_per_frame as f64,
+            r.time.wall,
+        );
+    }
+    let frames = report.rows.len() as u64;
+    let _ = writeln!(
+        s,
+        "{:>6} {:>12} {:>9.2} | {:>12} {:>7.4} {:>9.2} {:>7.4} {:>8.2}% {:>9.3}",
+        "all",
+        fr,
+        ft.cpu,
+        cr,
+        ratio(cr as f64, fr as f64),
+        ct.cpu,
+        ratio(ct.cpu, ft.cpu),
+        100.0 * px as f64 / (report.pixels_per_frame * frames.max(1)) as f64,
+        ct.wall,
+    );
+    if all_full {
+        let r0 = &report.rows[0];
+        if let Some((_, f0)) = r0.full {
+            let _ = writeln!(
+                s,
+                "frame-0 overhead: {:+.1}% CPU, {:+.1}% wall ({:.2} s / {:.2} s CPU)",
+                100.0 * (r0.time.cpu / f0.cpu - 1.0),
+                100.0 * (r0.time.wall / f0.wall - 1.0),
+                r0.time.cpu,
+                f0.cpu
+            );
+        }
+        let (rf, tf) = (ratio(cr as f64, fr as f64), ratio(ct.cpu, ft.cpu));
+        let _ = writeln!(
+            s,
+            "sequence: ray fraction {rf:.4}, CPU time fraction {tf:.4} ({:.2}x the ray fraction), \
+             wall time fraction {:.4}",
+            tf / rf,
+            ratio(ct.wall, ft.wall),
+        );
+    }
+    if !report.overhead.is_empty() {
+        let median = |mut v: Vec<f64>| {
+            v.sort_by(f64::total_cmp);
+            let n = v.len();
+            (v[(n - 1) / 2] + v[n / 2]) / 2.0
+        };
+        let ratios: Vec<f64> = report.overhead.iter().map(|&(c, f)| c / f).collect();
+        let (lo, hi) = ratios
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &r| {
+                (a.min(r), b.max(r))
+            });
+        let _ = writeln!(
+            s,
+            "frame-0 overhead, first frame rendered {} times both ways: median {:+.1}% CPU \
+             ({:+.1}% to {:+.1}%; median {:.3} s coherent / {:.3} s full)",
+            ratios.len(),
+            100.0 * (median(ratios.clone()) - 1.0),
+            100.0 * (lo - 1.0),
+            100.0 * (hi - 1.0),
+            median(report.overhead.iter().map(|o| o.0).collect()),
+            median(report.overhead.iter().map(|o| o.1).collect()),
+        );
+    }
+    let _ = writeln!(
+        s,
+        "preparation (reading every frame to place the grid): {:.2} s",
+        report.prepare_seconds
+    );
+    let verified: Option<Vec<bool>> = report.rows.iter().map(|r| r.identical).collect();
+    if let Some(v) = verified.filter(|v| !v.is_empty()) {
+        let _ = writeln!(
+            s,
+            "verify: {}",
+            if v.iter().all(|&b| b) {
+                "every frame identical to its full render"
+            } else {
+                "DIFFERENCES (see above)"
+            }
+        );
+    }
+    let (lo, hi) = report.grid;
+    let _ = writeln!(
+        s,
+        "voxel grid: {} voxels ({} where changes happen) over [{:.2}, {:.2}, {:.2}]..[{:.2}, \
+         {:.2}, {:.2}], {}x{} pixel blocks",
+        report.voxels,
+        report.active_voxels,
+        lo.x,
+        lo.y,
+        lo.z,
+        hi.x,
+        hi.y,
+        hi.z,
+        report.blocks.0,
+        report.blocks.1,
+    );
+    let kib = report.record_bytes as f64 / 1024.0;
+    let _ = match report.records {
+        Records::Tables => writeln!(s, "records: voxel tables x 2 = {kib:.1} KiB"),
+        Records::Segments => writeln!(
+            s,
+            "records: segments, at most {} held after a frame = {kib:.1} KiB",
+            report.segments
+        ),
+    };
+    let (kept, reused) = report.rows.iter().fold((0, 0), |(k, r), row| {
+        (k + row.coherent.camera_rays, r + row.coherent.camera_reused)
+    });
+    if kept > 0 {
+        let _ = writeln!(
+            s,
+            "camera hits (section 3.3.3): {reused} of {kept} camera rays in retraced blocks \
+             ({:.1}%) answered from the block's last trace; at most {:.1} KiB kept",
+            100.0 * reused as f64 / kept as f64,
+            report.camera_bytes as f64 / 1024.0
+        );
+    }
+    s
+}

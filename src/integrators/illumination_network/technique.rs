@@ -1,0 +1,364 @@
+//! The illumination network in the technique lifecycle. Its preparation is view-independent:
+//! the network is loaded from its file (no preprocess) or built and saved there, then the
+//! light is distributed over it; a relight starts from the file's light basis or reflectance
+//! series where it can (no distribution at all). Renders of any view then read it.
+
+use super::distribute::{self, DistributeOptions, Solution};
+use super::render::NetworkRenderer;
+use super::{file, relight, Network, NetworkParams};
+use crate::integrators::{Context, Integrator, RayStats, Sample};
+use crate::job::technique::{Lifecycle, Tiles};
+use crate::job::{Control, Job, NetworkSettings, Relight};
+use crate::math::{Ray, Rgb, Rng};
+use crate::scene::Scene;
+use crate::{Error, Result};
+use std::path::Path;
+
+pub(crate) struct NetworkTechnique {
+    settings: NetworkSettings,
+    /// Each material's emission as the scene file gives it, before a relight's changes.
+    file_emission: Vec<Rgb>,
+    prepared: Option<Prepared>,
+}
+
+/// A distributed network, as a technique that gives radiance along camera rays.
+struct Prepared {
+    net: Network,
+    solution: Solution,
+    hybrid: bool,
+}
+
+impl Integrator for Prepared {
+    fn radiance(&self, ctx: &Context, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Sample {
+        NetworkRenderer {
+            net: &self.net,
+            solution: &self.solution,
+            hybrid: self.hybrid,
+        }
+        .radiance(ctx, ray, rng, stats)
+    }
+}
+
+/// The scene with a relight's light strengths applied (`None`: no relight of lights), and
+/// what it checks of the relight's names.
+pub(crate) fn relit_scene(scene: &Scene, settings: &NetworkSettings) -> Result<Option<Scene>> {
+    let Some(relight) = &settings.relight else {
+        return Ok(None);
+    };
+    for name in &relight.reflectance_series {
+        if !scene.materials.iter().any(|m| &m.name == name) {
+            return Err(Error::input(
+                &scene.source,
+                format!("reflectance series of {name}: no material named \"{name}\""),
+            ));
+        }
+    }
+    if relight.lights.is_empty() {
+        return Ok(None);
+    }
+    let mut relit = scene.clone();
+    for (name, k) in &relight.lights {
+        let m = relit
+            .materials
+            .iter_mut()
+            .find(|m| &m.name == name && m.emission.max_element() > 0.0)
+            .ok_or_else(|| {
+                Error::input(
+                    &scene.source,
+                    format!("light {name}: no emissive material named \"{name}\""),
+                )
+            })?;
+        m.emission *= *k;
+    }
+    Ok(Some(relit))
+}
+
+impl NetworkTechnique {
+    /// The technique for `scene` as its file gives it (before a relight's changes).
+    pub(crate) fn new(settings: NetworkSettings, scene: &Scene) -> NetworkTechnique {
+        NetworkTechnique {
+            settings,
+            file_emission: scene.materials.iter().map(|m| m.emission).collect(),
+            prepared: None,
+        }
+    }
+
+    fn params(&self, job: &Job) -> NetworkParams {
+        NetworkParams {
+            seed: job.seed,
+            ..self.settings.params
+        }
+    }
+
+    /// The network itself, without light: loaded from the file if it exists, else built
+    /// (and saved there).
+    fn structure(&self, ctx: &Context, job: &Job, control: &Control) -> Result<Network> {
+        let params = self.params(job);
+        let scene = ctx.scene;
+        match &self.settings.file {
+            Some(f) if f.exists() => {
+                let start = std::time::Instant::now();
+                let n = file::load(f, scene, Some(&params))?;
+                control.note(&format!(
+                    "network: loaded {} in {:.2} s (no preprocess): {} nodes",
+                    f.display(),
+                    start.elapsed().as_secs_f64(),
+                    n.nodes()
+                ));
+                Ok(n)
+            }
+            _ => {
+                let builder = self.settings.builder;
+                let n = Network::build_with(scene, ctx, params, builder, control)?;
+                control.note(&format!(
+                    "network: preprocess ({:?}) in {:.2} s: {} nodes, {} intersections",
+                    builder,
+                    n.stats.seconds,
+                    n.nodes(),
+                    n.stats.intersections
+                ));
+                if let Some(f) = &self.settings.file {
+                    file::save(f, &n, scene, None)?;
+                }
+                Ok(n)
+            }
+        }
+    }
+}
+
+impl Lifecycle for NetworkTechnique {
+    fn prepare(&mut self, ctx: &Context, job: &Job, control: &Control) -> Result<()> {
+        let scene = ctx.scene;
+        let options = &self.settings.distribute;
+        if !scene.lights.is_empty() && !self.settings.hybrid {
+            control.warn(
+                "the network carries only emissive surfaces; the scene's point and directional \
+                 lights light it only in hybrid mode",
+            );
+        }
+        let (net, solution) = match (&self.settings.relight, &self.settings.file) {
+            (Some(relight), Some(f)) => {
+                let params = self.params(job);
+                let from = (f.as_path(), &params, options);
+                relight_network(from, relight, scene, &self.file_emission, control)?
+            }
+            _ => {
+                let net = self.structure(ctx, job, control)?;
+                let surfaces = distribute::surfaces(&net, scene, options.light_scale);
+                check_bounded(&net, scene, &surfaces)?;
+                let start = std::time::Instant::now();
+                let solution = distribute::distribute_surfaces(&net, surfaces, options, start);
+                let st = &solution.stats;
+                control.note(&format!(
+                    "network: distribution in {:.2} s ({} sweeps or shots)",
+                    st.seconds, st.sweeps
+                ));
+                (net, solution)
+            }
+        };
+        self.prepared = Some(Prepared {
+            net,
+            solution,
+            hybrid: self.settings.hybrid,
+        });
+        Ok(())
+    }
+
+    fn tiles(&self) -> Tiles<'_> {
+        Tiles::Pixels(
+            self.prepared.as_ref().expect("the renderer prepares first"),
+            self.settings.sampling,
+        )
+    }
+
+    fn precompute(&mut self, ctx: &Context, job: &Job, control: &Control) -> Result<()> {
+        if self.settings.file.is_none() {
+            return Err(Error::setting(
+                "network_file",
+                "is where a precomputed network goes: give one",
+            ));
+        }
+        // The structure only: each render distributes the light itself.
+        self.structure(ctx, job, control).map(drop)
+    }
+
+    fn report(&self) -> Vec<String> {
+        let Some(p) = &self.prepared else {
+            return Vec::new();
+        };
+        let (network, solution) = (&p.net, &p.solution);
+        let st = &solution.stats;
+        let bs = &network.stats;
+        let links = bs.link_ends / 2;
+        vec![
+            format!(
+                "network stats: {} polygons, {} patches, {} nodes, {} slots per node",
+                network.patches.polygons.len(),
+                network.patches.cells,
+                network.nodes(),
+                network.slots(),
+            ),
+            format!(
+                "network stats: {} links ({:.1} per node), {} escapes, {} beyond a slot's \
+                 first, {} line-patch intersections ({:.1} M/s), {} closest-hit queries",
+                links,
+                bs.link_ends as f64 / network.nodes().max(1) as f64,
+                bs.escapes,
+                bs.extra,
+                bs.intersections,
+                bs.intersections as f64 / bs.seconds.max(1e-9) / 1e6,
+                bs.rays,
+            ),
+            format!(
+                "network stats: memory {:.1} MB network + {:.1} MB buffers, {} map entries",
+                network.memory() as f64 / 1e6,
+                solution.memory() as f64 / 1e6,
+                st.map_entries,
+            ),
+            format!(
+                "network stats: preprocess {:.3} s (lines {:.3} s, assembly {:.3} s), \
+                 distribution {:.3} s, {} sweeps, unshot {:.2e} of emitted",
+                bs.seconds,
+                bs.link_seconds,
+                bs.assemble_seconds,
+                st.seconds,
+                st.sweeps,
+                st.unshot.iter().sum::<f64>() / st.emitted.iter().sum::<f64>().max(1e-300),
+            ),
+        ]
+    }
+}
+
+/// An error naming the scene file and the material when light in some channel can never be
+/// absorbed or leave the scene ([`distribute::lossless_channel`]): its radiance has no
+/// finite value.
+fn check_bounded(network: &Network, scene: &Scene, surfaces: &[distribute::Surface]) -> Result<()> {
+    match distribute::lossless_channel(network, surfaces) {
+        None => Ok(()),
+        Some((c, node)) => {
+            let material = &scene.materials[network.node_material(node, scene).0].name;
+            Err(Error::input(
+                &scene.source,
+                format!(
+                    "no {} light emitted by material '{material}' can leave: every surface it \
+                     reaches reflects or transmits all of it (diffuse + specular + \
+                     transmission = 1) and no line leads out of the scene, so its radiance \
+                     grows without bound; lower one of them below 1",
+                    ["red", "green", "blue"][c]
+                ),
+            ))
+        }
+    }
+}
+
+/// A relight's network and solution: from the file's light basis when it holds one for
+/// these reflectances (reading only the file's prefix: no link table, no distribution), else
+/// the whole network and a distribution (storing a basis when the file has none or
+/// `store_basis` asks).
+fn relight_network(
+    (file, params, options): (&Path, &NetworkParams, &DistributeOptions),
+    spec: &Relight,
+    scene: &Scene,
+    file_emission: &[Rgb],
+    control: &Control,
+) -> Result<(Network, Solution)> {
+    let store_basis = spec.store_basis || !spec.reflectance_series.is_empty();
+    let emission: Vec<_> = scene.materials.iter().map(|m| m.emission).collect();
+    let start = std::time::Instant::now();
+    let (prefix, basis) = file::load_prefix(file, scene, Some(params))?;
+    if let Some(b) = basis.as_ref().filter(|_| !store_basis) {
+        match b.superpose(&prefix, scene, &emission, options) {
+            Ok(solution) => {
+                control.note(&format!(
+                    "network: relit from the light basis in {} ({} emissive materials) in \
+                     {:.3} s: no preprocess, no distribution (0 sweeps), link table not read",
+                    file.display(),
+                    b.lights.len(),
+                    start.elapsed().as_secs_f64()
+                ));
+                return Ok((prefix, solution));
+            }
+            // No series stored: nothing more to try before distributing.
+            Err(why) if b.series.is_empty() => {
+                control.note(&format!("network: {why}; distributing again"))
+            }
+            Err(why) => match b.from_series(&prefix, scene, &emission, options) {
+                Ok((solution, series)) => {
+                    control.note(&format!(
+                        "network: relit from the reflectance series of '{}' in {} ({} terms) \
+                         in {:.3} s: no preprocess, no distribution (0 sweeps), link table not \
+                         read",
+                        series.name,
+                        file.display(),
+                        series.terms.len(),
+                        start.elapsed().as_secs_f64()
+                    ));
+                    return Ok((prefix, solution));
+                }
+                Err(series) => {
+                    control.note(&format!("network: {why}, and {series}; distributing again"))
+                }
+            },
+        }
+    }
+    drop(prefix);
+    let start = std::time::Instant::now();
+    let (network, _) = file::load_all(file, scene, Some(params))?;
+    control.note(&format!(
+        "network: loaded {} in {:.2} s (no preprocess): {} nodes",
+        file.display(),
+        start.elapsed().as_secs_f64(),
+        network.nodes()
+    ));
+    // A distribution follows: of the lights as they are now, or (a new basis) of the file's.
+    let lit: Vec<_> = (emission.iter().zip(file_emission))
+        .map(|(&e, &f)| (e * options.light_scale).max(f))
+        .collect();
+    check_bounded(
+        &network,
+        scene,
+        &distribute::surfaces_with(&network, scene, &lit),
+    )?;
+    let solution = match basis.as_ref().filter(|_| !store_basis) {
+        None => {
+            let mut b = relight::LightBasis::compute(&network, scene, file_emission, options);
+            for name in &spec.reflectance_series {
+                b.add_series(&network, scene, options, name)
+                    .map_err(|e| Error::input(&scene.source, format!("reflectance series: {e}")))?;
+                let s = b.series.last().expect("a series was added");
+                control.note(&format!(
+                    "network: reflectance series of '{name}': {} terms ({} sweeps)",
+                    s.terms.len(),
+                    s.sweeps
+                ));
+            }
+            file::save(file, &network, scene, Some(&b))?;
+            control.note(&format!(
+                "network: distribution of a light basis in {:.2} s ({} emissive materials, {} \
+                 sweeps in all), stored in {}",
+                b.seconds,
+                b.lights.len(),
+                b.lights.iter().map(|l| l.sweeps).sum::<u32>(),
+                file.display()
+            ));
+            b.superpose(&network, scene, &emission, options)
+                .map_err(|e| Error::input(file, e))?
+        }
+        // The stored basis, for the old reflectances, is where the distribution starts.
+        Some(b) => {
+            let solution = b.redistribute(&network, scene, &emission, options);
+            control.note(&format!(
+                "network: distribution in {:.2} s ({} sweeps or shots{})",
+                solution.stats.seconds,
+                solution.stats.sweeps,
+                if solution.stats.warm_start {
+                    ", starting from the stored light basis"
+                } else {
+                    ""
+                }
+            ));
+            solution
+        }
+    };
+    Ok((network, solution))
+}

@@ -1,0 +1,149 @@
+//! The irradiance cache in the technique lifecycle: its preparation loads the cache file (if
+//! any), runs the overture for the job's view and saves the cache; a file that already holds
+//! this view's whole overture (precomputed for render jobs) is only read, so that every part
+//! of the image reads the values the whole render would.
+
+use super::{file, IrradianceCache};
+use crate::image::Image;
+use crate::integrators::Context;
+use crate::job::technique::{Lifecycle, Tiles};
+use crate::job::{CacheSettings, Control, Job, MonteCarloSettings};
+use crate::math::Rgb;
+use crate::render::progressive::ProgressiveOptions;
+use crate::scene::Scene;
+use crate::{Error, Result};
+
+pub(crate) struct CacheTechnique {
+    render: MonteCarloSettings,
+    settings: CacheSettings,
+    built: Option<IrradianceCache>,
+    report: Vec<String>,
+}
+
+impl CacheTechnique {
+    pub(crate) fn new(render: MonteCarloSettings, settings: CacheSettings) -> CacheTechnique {
+        CacheTechnique {
+            render,
+            settings,
+            built: None,
+            report: Vec::new(),
+        }
+    }
+
+    /// The cache for the job's view: loaded, completed by the overture, saved.
+    fn build(&mut self, ctx: &Context, job: &Job, control: &Control) -> Result<IrradianceCache> {
+        let options = self.settings.options;
+        let render = job.progressive(&self.render);
+        let file = self.settings.file.as_deref();
+        let view = match file {
+            Some(_) => view_key(ctx.scene, &render, job.accel),
+            None => 0,
+        };
+        let (loaded, frozen) = match file {
+            Some(f) if f.exists() => {
+                let (cache, key) = file::load_with_view(f, ctx.scene, &options)?;
+                (Some(cache), key == Some(view))
+            }
+            _ => (None, false),
+        };
+        if let (Some(f), false, Some(_)) = (file, frozen, job.region) {
+            return Err(Error::input(
+                f,
+                "missing or not precomputed for this view (scene, size, samples, filter, \
+                 seed): precompute the cache with the render's settings first",
+            ));
+        }
+        let start = std::time::Instant::now();
+        let integrator = match loaded {
+            Some(cache) if frozen => IrradianceCache::frozen(ctx, &render, options, cache)?,
+            loaded => IrradianceCache::build(ctx, &render, options, loaded, control)?,
+        };
+        let stats = &integrator.stats;
+        let line = format!(
+            "irradiance cache: {} values ({} loaded, {} computed by the overture in {:.2} s, \
+             {:.0} rays each); per bounce level: {:?}",
+            integrator.cache().len(),
+            stats.loaded,
+            stats.overture_primaries,
+            start.elapsed().as_secs_f64(),
+            stats.overture_rays as f64 / stats.overture_primaries.max(1) as f64,
+            integrator
+                .cache()
+                .levels
+                .iter()
+                .map(|l| l.len())
+                .collect::<Vec<_>>()
+        );
+        control.note(&line);
+        self.report = vec![line];
+        match file {
+            Some(f) if frozen => control.note(&format!(
+                "irradiance cache: {} holds this view's overture; read only",
+                f.display()
+            )),
+            Some(f) => file::save_for_view(f, integrator.cache(), ctx.scene, &options, view)?,
+            None => {}
+        }
+        Ok(integrator)
+    }
+}
+
+impl Lifecycle for CacheTechnique {
+    fn prepare(&mut self, ctx: &Context, job: &Job, control: &Control) -> Result<()> {
+        self.built = Some(self.build(ctx, job, control)?);
+        Ok(())
+    }
+
+    fn tiles(&self) -> Tiles<'_> {
+        Tiles::Samples(
+            self.built.as_ref().expect("the renderer prepares first"),
+            self.render,
+        )
+    }
+
+    fn precompute(&mut self, ctx: &Context, job: &Job, control: &Control) -> Result<()> {
+        if self.settings.file.is_none() {
+            return Err(Error::setting(
+                "cache_file",
+                "is where a precomputed irradiance cache goes: give one",
+            ));
+        }
+        self.build(ctx, job, control).map(drop)
+    }
+
+    fn annotate(&self, ctx: &Context, image: &mut Image, control: &Control) {
+        if let (true, Some(ic)) = (self.settings.show_points, &self.built) {
+            let shown = ic.show_points(ctx, image, Rgb::new(1.0, 0.0, 0.0));
+            control.note(&format!("marked {shown} irradiance cache values"));
+        }
+    }
+
+    fn report(&self) -> Vec<String> {
+        self.report.clone()
+    }
+}
+
+/// The key of the render view an overture traces: everything its camera rays and cached
+/// values depend on besides the cache options (which the file's header holds): scene with
+/// camera, size, samples, filter, seed and intersection backend.
+pub(crate) fn view_key(
+    scene: &Scene,
+    render: &ProgressiveOptions,
+    accel: crate::accel::Backend,
+) -> u64 {
+    let backend = match accel {
+        crate::accel::Backend::Embree => "Embree",
+        crate::accel::Backend::Bvh => "Bvh",
+    };
+    let text = format!(
+        "{:016x}|{}x{}|{}|{:?}|{}|{backend}",
+        crate::farm::scene_hash(scene),
+        render.width,
+        render.height,
+        render.spp,
+        render.filter,
+        render.seed,
+    );
+    // Never 0, which marks a cache without a view.
+    crate::binary_file::fnv1a(text.as_bytes()).max(1)
+}

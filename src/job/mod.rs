@@ -1,0 +1,409 @@
+//! A render described as a value, and the engine that runs it. A [`Job`] names the
+//! technique with its settings ([`Technique`], made from [`Settings`] by
+//! [`Technique::create`]), the view (size, and optionally a part of the image), the seed, the
+//! threads and the intersection backend. A [`Renderer`] builds what the job renders from
+//! (the intersection structure; the technique's preparation) and renders it; the caller
+//! passes a [`Control`] with its own cancel token, memory budget and progress sink, and gets
+//! the image and its statistics back. Every front end (the command line, a farm job, an
+//! animation, a benchmark, an embedding program) renders through it.
+
+mod control;
+mod settings;
+pub(crate) mod technique;
+
+pub use control::{
+    human_size, parse_size, CancelToken, Control, MemoryBudget, Phase, Progress, Silent,
+};
+pub use settings::{
+    AntiAliasing, CacheSettings, MonteCarloSettings, NetworkBuilder, NetworkOrder, NetworkSettings,
+    Relight, Settings, Technique, TechniqueKind, WhittedSettings,
+};
+
+use crate::accel::{self, Accel, Backend};
+use crate::image::Image;
+use crate::integrators::Context;
+use crate::render::aov::render_aovs;
+use crate::render::pixels::{render_pixels, PixelView};
+use crate::render::progressive::{render_passes, render_region, ProgressiveOptions};
+use crate::render::{Film, RenderStats, Tile};
+use crate::scene::{Scene, MAX_RESOLUTION};
+use crate::{Error, Result};
+use std::sync::Arc;
+use technique::{Lifecycle, Tiles};
+
+/// A render: what to render with, at what size, which pixels, with which random streams.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Job {
+    pub technique: Technique,
+    pub width: u32,
+    pub height: u32,
+    /// Only these pixels of the image (a render job's part of it); `None`: all of them.
+    /// Every pixel has the value the whole render gives it.
+    pub region: Option<Tile>,
+    /// Seed of the random streams: the image is a function of (scene, settings, seed).
+    pub seed: u64,
+    /// Worker threads; `None` uses every core. The image does not depend on it.
+    pub threads: Option<usize>,
+    pub accel: Backend,
+}
+
+impl Job {
+    /// A job rendering `scene`'s camera view at its own size with `technique`, seed 0, on
+    /// every core, with Embree.
+    pub fn new(scene: &Scene, technique: Technique) -> Job {
+        Job {
+            technique,
+            width: scene.camera.width,
+            height: scene.camera.height,
+            region: None,
+            seed: 0,
+            threads: None,
+            accel: Backend::default(),
+        }
+    }
+
+    /// Checks what can be checked before any work.
+    pub fn validate(&self) -> Result<()> {
+        for (name, v) in [("width", self.width), ("height", self.height)] {
+            if !(1..=MAX_RESOLUTION).contains(&v) {
+                return Err(Error::setting(
+                    name,
+                    format!("must be between 1 and {MAX_RESOLUTION}, got {v}"),
+                ));
+            }
+        }
+        if self.threads == Some(0) {
+            return Err(Error::setting("threads", "must be at least 1"));
+        }
+        let Some(r) = self.region else {
+            return Ok(());
+        };
+        if r.x0 >= r.x1 || r.y0 >= r.y1 || r.x1 > self.width || r.y1 > self.height {
+            return Err(Error::setting(
+                "region",
+                format!(
+                    "{},{},{},{} is empty or outside the {}x{} image",
+                    r.x0, r.y0, r.x1, r.y1, self.width, self.height
+                ),
+            ));
+        }
+        let kind = self.technique.kind();
+        if !self.technique.renders_parts() {
+            return Err(Error::setting(
+                "region",
+                format!(
+                    "does not apply to the {kind} integrator: its light paths splat onto every \
+                     pixel of the image, so a part cannot be rendered alone"
+                ),
+            ));
+        }
+        match &self.technique {
+            Technique::Network(n) => match &n.file {
+                Some(f) if f.exists() => {}
+                Some(f) => {
+                    return Err(Error::input(
+                        f,
+                        "no such network: precompute it with the render's settings first",
+                    ))
+                }
+                None => {
+                    return Err(Error::setting(
+                        "network_file",
+                        "is needed to render a part of the image with the network integrator \
+                         (an existing network, precomputed first)",
+                    ))
+                }
+            },
+            Technique::IrradianceCache(_, c) if c.file.is_none() => {
+                return Err(Error::setting(
+                    "cache_file",
+                    "is needed to render a part of the image with the irradiance cache (a \
+                     cache precomputed for this view first)",
+                ))
+            }
+            _ => {}
+        }
+        if self
+            .technique
+            .monte_carlo()
+            .is_some_and(|m| m.time_limit.is_some())
+        {
+            return Err(Error::setting(
+                "time_limit",
+                "cannot be used for a part of an image: every part must take the same samples",
+            ));
+        }
+        Ok(())
+    }
+
+    /// The pixels the job renders.
+    pub fn pixels(&self) -> Tile {
+        self.region.unwrap_or(Tile::whole(self.width, self.height))
+    }
+
+    /// Every setting that changes pixels, as one line: parts of an image merge, and a
+    /// checkpoint resumes, only where theirs are equal.
+    pub fn settings_key(&self) -> String {
+        let t = &self.technique;
+        let mut s = format!(
+            "integrator={} size={}x{} max_depth={} accel={} seed={}",
+            t.kind(),
+            self.width,
+            self.height,
+            t.max_depth(),
+            self.accel,
+            self.seed
+        );
+        match t {
+            Technique::Whitted(w) => {
+                s += &format!(
+                    " sampling={:?} area_samples={} fresnel={}",
+                    w.sampling, w.area_samples, w.fresnel
+                )
+            }
+            Technique::Network(n) => {
+                let p = &n.params;
+                s += &format!(
+                    " sampling={:?} slopes={} intercept_step={} patch_size={} jitter={} \
+                     builder={:?} tolerance={} light_scale={} order={:?} hybrid={}",
+                    n.sampling,
+                    p.slopes,
+                    p.step,
+                    p.patch_size,
+                    p.jitter,
+                    n.builder,
+                    n.distribute.tolerance,
+                    n.distribute.light_scale,
+                    n.distribute.order,
+                    n.hybrid
+                )
+            }
+            _ => {}
+        }
+        if let Some(mc) = t.monte_carlo() {
+            s += &format!(" spp={} filter={:?}", mc.spp, mc.filter);
+        }
+        if let Technique::IrradianceCache(_, c) = t {
+            let o = &c.options;
+            s += &format!(
+                " ab={} ic_accuracy={} ic_samples={} ar={}",
+                o.bounces, o.accuracy, o.samples, o.ar
+            );
+        }
+        s
+    }
+
+    /// The Monte Carlo view of the job, for the progressive techniques.
+    pub(crate) fn progressive(&self, mc: &MonteCarloSettings) -> ProgressiveOptions {
+        ProgressiveOptions {
+            width: self.width,
+            height: self.height,
+            spp: mc.spp,
+            time_limit: mc.time_limit,
+            threads: self.threads,
+            seed: self.seed,
+            filter: mc.filter,
+        }
+    }
+
+    /// Bytes per pixel of the film, the finished tiles, the image and an output's conversion
+    /// buffer.
+    fn bytes_per_pixel(&self) -> u64 {
+        let film = if self.technique.monte_carlo().is_some() {
+            48 + 24
+        } else {
+            24
+        };
+        film + 12 + 16
+    }
+}
+
+/// What a render gives back.
+#[derive(Debug)]
+pub struct Rendered {
+    /// The image of the job's pixels (its region's size for a part).
+    pub image: Image,
+    pub stats: RenderStats,
+    /// A progressive render's film (what a checkpoint saves), for the whole image.
+    pub film: Option<Film>,
+}
+
+impl Rendered {
+    /// Whether the render stopped before every sample was taken (cancelled).
+    pub fn is_partial(&self) -> bool {
+        self.stats.cancelled
+    }
+}
+
+/// Renders a [`Job`]: holds the scene, its intersection structure and the prepared
+/// technique, so that a network or cache prepared once serves every render after it.
+pub struct Renderer {
+    scene: Arc<Scene>,
+    job: Job,
+    accel: Box<dyn Accel>,
+    technique: Box<dyn Lifecycle>,
+    prepared: bool,
+}
+
+impl std::fmt::Debug for Renderer {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Renderer")
+            .field("job", &self.job)
+            .field("prepared", &self.prepared)
+            .finish_non_exhaustive()
+    }
+}
+
+impl Renderer {
+    /// Checks the job and builds the scene's intersection structure; the technique's own
+    /// preparation runs on the first render (or [`prepare`](Self::prepare)).
+    pub fn new(scene: impl Into<Arc<Scene>>, job: Job, control: &Control) -> Result<Renderer> {
+        let mut scene = scene.into();
+        job.validate()?;
+        control.budget.check(
+            &format!("a {}x{} image", job.width, job.height),
+            job.width as u64 * job.height as u64 * job.bytes_per_pixel(),
+        )?;
+        // Created for the scene as given: a relight keeps its emissions as the file's.
+        let technique = technique::create(&job.technique, &scene)?;
+        if let Technique::Network(n) = &job.technique {
+            if let Some(relit) =
+                crate::integrators::illumination_network::technique::relit_scene(&scene, n)?
+            {
+                scene = Arc::new(relit);
+            }
+        }
+        control.cancel.check("loading")?;
+        let accel = accel::build(&scene, job.accel, control)?;
+        Ok(Renderer {
+            scene,
+            job,
+            accel,
+            technique,
+            prepared: false,
+        })
+    }
+
+    pub fn job(&self) -> &Job {
+        &self.job
+    }
+
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The technique's preparation (the irradiance cache's overture, the network's
+    /// preprocess and distribution); done once.
+    pub fn prepare(&mut self, control: &Control) -> Result<()> {
+        if !self.prepared {
+            let ctx = Context::new(&self.scene, self.accel.as_ref());
+            self.technique.prepare(&ctx, &self.job, control)?;
+            self.prepared = true;
+        }
+        Ok(())
+    }
+
+    /// The preparation alone, saved to the technique's file for render jobs to read: an
+    /// irradiance cache's overture for this view, or a network's structure.
+    pub fn precompute(&mut self, control: &Control) -> Result<()> {
+        let ctx = Context::new(&self.scene, self.accel.as_ref());
+        self.technique.precompute(&ctx, &self.job, control)
+    }
+
+    /// Statistics of the technique's preparation, one line each.
+    pub fn report(&self) -> Vec<String> {
+        self.technique.report()
+    }
+
+    /// Renders the job. A cancel returns what was finished, marked partial.
+    pub fn render(&mut self, control: &Control) -> Result<Rendered> {
+        self.render_progressive(control, None, &mut |_| Ok(()))
+    }
+
+    /// Renders the job, continuing a progressive render from `resume` (a film saved by an
+    /// earlier, cancelled render of the same job), with `after_pass` seeing the film after
+    /// every whole pass of samples (to write it, or a checkpoint).
+    pub fn render_progressive(
+        &mut self,
+        control: &Control,
+        resume: Option<Film>,
+        after_pass: &mut dyn FnMut(&Film) -> Result<()>,
+    ) -> Result<Rendered> {
+        self.prepare(control)?;
+        let ctx = Context::new(&self.scene, self.accel.as_ref());
+        let job = &self.job;
+        let region = job.pixels();
+        let mut rendered = match self.technique.tiles() {
+            Tiles::Pixels(integrator, sampling) => {
+                if resume.is_some() {
+                    return Err(Error::setting(
+                        "resume",
+                        format!(
+                            "applies to progressive renders, not the {} integrator",
+                            job.technique.kind()
+                        ),
+                    ));
+                }
+                let view = PixelView {
+                    width: job.width,
+                    height: job.height,
+                    sampling,
+                    threads: job.threads,
+                    seed: job.seed,
+                };
+                let (image, stats) = render_pixels(&ctx, integrator, &view, &region, control);
+                Rendered {
+                    image,
+                    stats,
+                    film: None,
+                }
+            }
+            Tiles::Samples(integrator, mc) => {
+                let options = job.progressive(&mc);
+                if job.region.is_some() {
+                    let (image, stats) =
+                        render_region(&ctx, integrator, &options, &region, control)?;
+                    Rendered {
+                        image,
+                        stats,
+                        film: None,
+                    }
+                } else {
+                    let (film, mut stats) =
+                        render_passes(&ctx, integrator, &options, resume, after_pass, control)?;
+                    stats.invalid = film.invalid;
+                    Rendered {
+                        image: film.image(),
+                        stats,
+                        film: Some(film),
+                    }
+                }
+            }
+        };
+        if !rendered.stats.cancelled {
+            self.technique.annotate(&ctx, &mut rendered.image, control);
+        }
+        Ok(rendered)
+    }
+
+    /// The auxiliary images of the job's pixels (albedo, normal, depth: what the camera
+    /// sees first, filtered as the image is), or `None` if cancelled.
+    pub fn render_aovs(&self, control: &Control) -> Option<[Image; 3]> {
+        let ctx = Context::new(&self.scene, self.accel.as_ref());
+        // The image's filter; the scene's for the techniques that have none.
+        let filter = match self.job.technique.monte_carlo() {
+            Some(m) => m.filter,
+            None => self.scene.settings.filter.unwrap_or_default(),
+        };
+        render_aovs(
+            &ctx,
+            (self.job.width, self.job.height),
+            &self.job.pixels(),
+            (filter, self.job.seed, self.job.threads),
+            control,
+        )
+    }
+}
+
+/// The auxiliary images: what each of [`Renderer::render_aovs`]' images holds.
+pub use crate::render::aov::Aov;

@@ -1,0 +1,214 @@
+//! The one tile driver. Every technique's per-tile work (image tiles, sample passes, the
+//! irradiance cache's overture chunks, the animation renderer's blocks) runs through
+//! [`drive`]: workers take the next item as soon as they finish one (no barrier between
+//! groups), and the caller's thread merges the results strictly in item order while the
+//! workers go on. Merging in a fixed order is what keeps an image the same bit for bit for
+//! any thread count or schedule.
+
+use crate::job::CancelToken;
+use crate::platform::set_flush_denormals;
+use std::collections::VecDeque;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::{mpsc, Condvar, Mutex};
+
+/// How a drive ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) struct Driven {
+    /// Items merged: always a prefix of the items, in order.
+    pub merged: usize,
+    /// A stop was asked for before every item was merged.
+    pub cancelled: bool,
+}
+
+/// Worker threads for `threads` (`None`: every core), never more than there are items.
+pub(crate) fn worker_count(threads: Option<usize>, items: usize) -> usize {
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    threads.unwrap_or(cores).clamp(1, items.max(1))
+}
+
+/// Runs `work` on each of `items` on `threads` workers and hands every result to `merge`
+/// with its index, in index order, on the calling thread. At most `window` items are
+/// started ahead of the last one merged, which bounds the results waiting for a slow item.
+/// Once `cancel` is set no new item starts; the results merged so far are a prefix of the
+/// items, and the ones finished after a gap are dropped.
+pub(crate) fn drive<T, R>(
+    items: &[T],
+    threads: Option<usize>,
+    window: usize,
+    cancel: &CancelToken,
+    work: impl Fn(&T) -> R + Sync,
+    mut merge: impl FnMut(usize, R),
+) -> Driven
+where
+    T: Sync,
+    R: Send,
+{
+    let n = items.len();
+    let window = window.max(1);
+    let next = AtomicUsize::new(0);
+    // The count merged so far, which workers wait on when too far ahead; and whether a
+    // worker died (so that the others stop waiting for its item).
+    let merged_count = Mutex::new(0usize);
+    let advanced = Condvar::new();
+    let failed = AtomicBool::new(false);
+    let (send, receive) = mpsc::channel::<(usize, R)>();
+    let mut merged = 0;
+    std::thread::scope(|scope| {
+        for _ in 0..worker_count(threads, n) {
+            let send = send.clone();
+            let (next, merged_count, advanced, failed, work) =
+                (&next, &merged_count, &advanced, &failed, &work);
+            scope.spawn(move || {
+                set_flush_denormals();
+                let _alarm = Alarm { failed, advanced };
+                loop {
+                    if cancel.is_cancelled() || failed.load(Ordering::Relaxed) {
+                        break;
+                    }
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    if i >= n {
+                        break;
+                    }
+                    let mut m = merged_count.lock().unwrap_or_else(|e| e.into_inner());
+                    // A cancel sends no wake-up: look at it now and then while waiting.
+                    while i >= *m + window
+                        && !failed.load(Ordering::Relaxed)
+                        && !cancel.is_cancelled()
+                    {
+                        m = advanced
+                            .wait_timeout(m, std::time::Duration::from_millis(20))
+                            .unwrap_or_else(|e| e.into_inner())
+                            .0;
+                    }
+                    drop(m);
+                    if cancel.is_cancelled() || failed.load(Ordering::Relaxed) {
+                        break;
+                    }
+                    if send.send((i, work(&items[i]))).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(send);
+        // Results that arrived before their predecessors, by index - merged.
+        let mut waiting: VecDeque<Option<R>> = VecDeque::new();
+        for (i, r) in receive.iter() {
+            let slot = i - merged;
+            if waiting.len() <= slot {
+                waiting.resize_with(slot + 1, || None);
+            }
+            waiting[slot] = Some(r);
+            let before = merged;
+            while let Some(Some(_)) = waiting.front() {
+                let r = waiting.pop_front().flatten().expect("checked above");
+                merge(merged, r);
+                merged += 1;
+            }
+            if merged != before {
+                *merged_count.lock().unwrap_or_else(|e| e.into_inner()) = merged;
+                advanced.notify_all();
+            }
+        }
+    });
+    Driven {
+        merged,
+        cancelled: merged < n,
+    }
+}
+
+/// Wakes the other workers if this one unwinds, so that none waits for its item forever.
+struct Alarm<'a> {
+    failed: &'a AtomicBool,
+    advanced: &'a Condvar,
+}
+
+impl Drop for Alarm<'_> {
+    fn drop(&mut self) {
+        if std::thread::panicking() {
+            self.failed.store(true, Ordering::Relaxed);
+            self.advanced.notify_all();
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn merges_every_item_in_order_for_any_thread_count() {
+        let items: Vec<u64> = (0..500).collect();
+        for threads in [1, 2, 3, 8] {
+            for window in [1, 4, 64] {
+                let mut seen = Vec::new();
+                let d = drive(
+                    &items,
+                    Some(threads),
+                    window,
+                    &CancelToken::new(),
+                    |&x| {
+                        // Uneven work, so that items finish out of order.
+                        std::thread::sleep(std::time::Duration::from_micros(x % 7 * 20));
+                        x * x
+                    },
+                    |i, r| seen.push((i, r)),
+                );
+                assert_eq!(
+                    d,
+                    Driven {
+                        merged: 500,
+                        cancelled: false
+                    }
+                );
+                let expected: Vec<_> = (0..500).map(|i| (i as usize, i * i)).collect();
+                assert_eq!(seen, expected, "{threads} threads, window {window}");
+            }
+        }
+    }
+
+    #[test]
+    fn a_cancel_stops_starting_items_and_keeps_a_prefix() {
+        let items: Vec<u32> = (0..10_000).collect();
+        let cancel = CancelToken::new();
+        let mut merged = Vec::new();
+        let d = drive(
+            &items,
+            Some(2),
+            16,
+            &cancel,
+            |&x| {
+                if x == 100 {
+                    cancel.cancel();
+                }
+                x
+            },
+            |i, r| merged.push((i, r)),
+        );
+        assert!(d.cancelled && d.merged < 200, "{d:?}");
+        assert_eq!(merged.len(), d.merged);
+        assert!(merged
+            .iter()
+            .enumerate()
+            .all(|(k, &(i, r))| k == i && r as usize == i));
+    }
+
+    #[test]
+    fn a_panicking_item_does_not_hang_the_others() {
+        let items: Vec<u32> = (0..100).collect();
+        let result = std::panic::catch_unwind(|| {
+            drive(
+                &items,
+                Some(2),
+                2,
+                &CancelToken::new(),
+                |&x| {
+                    assert!(x != 3, "item 3 fails");
+                    x
+                },
+                |_, _| {},
+            )
+        });
+        assert!(result.is_err());
+    }
+}

@@ -1,0 +1,202 @@
+//! The film of a Monte Carlo render: per pixel, the sum of its sample estimates and the
+//! filter-weighted splats of light paths, with the count of passes taken. The image is their
+//! mean; a checkpoint stores them exactly.
+
+use super::{tiles, TILE_SIZE};
+use crate::image::filter::Filter;
+use crate::image::Image;
+use crate::integrators::Splat;
+use crate::math::{Rgb, Vec2};
+use crate::render::progressive::MAX_SPP;
+
+/// The accumulated film.
+pub struct Film {
+    pub(crate) width: u32,
+    pub(crate) height: u32,
+    pub(crate) filter: Filter,
+    /// 1 / ∫ filter over the plane, in pixel units.
+    filter_norm: f64,
+    /// Per pixel: the sum of its camera-sample estimates.
+    pub(crate) sums: Vec<[f64; 3]>,
+    /// Per pixel: splatted contributions, filter-weighted.
+    splats: Vec<[f64; 3]>,
+    /// Samples per pixel of every finished pass.
+    pub spp: u32,
+    /// The pass in progress when a render was interrupted: its size (0: none) and how many
+    /// of the image's tiles, in order, already have its samples. A resumed render finishes
+    /// it tile by tile, adding exactly what the uninterrupted render would have added.
+    pub(crate) pass: u32,
+    pub(crate) tiles_done: u32,
+    /// Samples that returned NaN or infinity and were dropped.
+    pub invalid: u64,
+}
+
+impl Film {
+    /// An empty film (no samples) of this size and filter.
+    pub fn new(width: u32, height: u32, filter: Filter) -> Film {
+        // ∫ filter by the midpoint rule on a fine grid.
+        let r = filter.radius();
+        let n = 256;
+        let h = 2.0 * r / n as f32;
+        let mut integral = 0.0f64;
+        for i in 0..n {
+            for j in 0..n {
+                let d = Vec2::new(-r + (i as f32 + 0.5) * h, -r + (j as f32 + 0.5) * h);
+                integral += filter.eval(d) as f64;
+            }
+        }
+        integral *= (h * h) as f64;
+        let pixels = width as usize * height as usize;
+        Film {
+            width,
+            height,
+            filter,
+            filter_norm: 1.0 / integral,
+            sums: vec![[0.0; 3]; pixels],
+            splats: vec![[0.0; 3]; pixels],
+            spp: 0,
+            pass: 0,
+            tiles_done: 0,
+            invalid: 0,
+        }
+    }
+
+    pub fn size(&self) -> (u32, u32) {
+        (self.width, self.height)
+    }
+
+    /// The per-pixel sums of sample estimates and of splats (for checkpoints).
+    pub(crate) fn accumulators(&self) -> (&[[f64; 3]], &[[f64; 3]]) {
+        (&self.sums, &self.splats)
+    }
+
+    /// The pass in progress: its size and the tiles that have it (0, 0 between passes).
+    pub(crate) fn pass_in_progress(&self) -> (u32, u32) {
+        (self.pass, self.tiles_done)
+    }
+
+    /// This (empty) film with saved accumulators and counts, checked for consistency.
+    pub(crate) fn restored(
+        mut self,
+        sums: Vec<[f64; 3]>,
+        splats: Vec<[f64; 3]>,
+        spp: u32,
+        pass: u32,
+        tiles_done: u32,
+        invalid: u64,
+    ) -> std::result::Result<Film, String> {
+        let tile_count = tiles(self.width, self.height).len() as u32;
+        if spp > MAX_SPP
+            || pass > MAX_SPP
+            || tiles_done >= tile_count.max(1)
+            || (pass == 0) != (tiles_done == 0)
+        {
+            return Err("inconsistent sample counts".into());
+        }
+        if sums.len() != self.sums.len() || splats.len() != self.splats.len() {
+            return Err("wrong number of pixels".into());
+        }
+        self.sums = sums;
+        self.splats = splats;
+        self.spp = spp;
+        self.pass = pass;
+        self.tiles_done = tiles_done;
+        self.invalid = invalid;
+        Ok(self)
+    }
+
+    /// Whether a pass was cut short (the image then mixes pixels with `spp` and `spp + pass`
+    /// samples).
+    pub fn is_partial_pass(&self) -> bool {
+        self.tiles_done > 0
+    }
+
+    /// Samples taken in pixel (x, y).
+    fn samples_at(&self, x: u32, y: u32) -> u32 {
+        let tiles_x = self.width.div_ceil(TILE_SIZE);
+        let tile = (y / TILE_SIZE) * tiles_x + x / TILE_SIZE;
+        self.spp + if tile < self.tiles_done { self.pass } else { 0 }
+    }
+
+    /// Mean samples per pixel so far.
+    pub fn mean_spp(&self) -> f64 {
+        let pixels = self.width as f64 * self.height as f64;
+        self.spp as f64 + self.pass as f64 * self.tiles_done_pixels() as f64 / pixels
+    }
+
+    fn tiles_done_pixels(&self) -> u64 {
+        tiles(self.width, self.height)[..self.tiles_done as usize]
+            .iter()
+            .map(|t| (t.x1 - t.x0) as u64 * (t.y1 - t.y0) as u64)
+            .sum()
+    }
+
+    pub(crate) fn add_splat(&mut self, s: &Splat) {
+        let r = self.filter.radius();
+        let x0 = ((s.x - r - 0.5).ceil().max(0.0)) as i64;
+        let x1 = ((s.x + r - 0.5).floor()).min(self.width as f32 - 1.0) as i64;
+        let y0 = ((s.y - r - 0.5).ceil().max(0.0)) as i64;
+        let y1 = ((s.y + r - 0.5).floor()).min(self.height as f32 - 1.0) as i64;
+        for y in y0..=y1 {
+            for x in x0..=x1 {
+                let d = Vec2::new(x as f32 + 0.5 - s.x, y as f32 + 0.5 - s.y);
+                let w = self.filter.eval(d) as f64 * self.filter_norm;
+                if w > 0.0 {
+                    let p = &mut self.splats[y as usize * self.width as usize + x as usize];
+                    p[0] += w * s.value.x as f64;
+                    p[1] += w * s.value.y as f64;
+                    p[2] += w * s.value.z as f64;
+                }
+            }
+        }
+    }
+
+    /// The image after the samples taken so far.
+    pub fn image(&self) -> Image {
+        let mut image = Image::new(self.width, self.height);
+        if self.is_partial_pass() {
+            // An interrupted pass: each pixel by its own count; one light path per sample.
+            let paths = self.mean_spp() * self.width as f64 * self.height as f64;
+            for (i, px) in image.pixels.iter_mut().enumerate() {
+                let (x, y) = (i as u32 % self.width, i as u32 / self.width);
+                let n = self.samples_at(x, y);
+                let per_sample = if n == 0 { 0.0 } else { 1.0 / n as f64 };
+                *px = pixel_value(self.sums[i], self.splats[i], per_sample, 1.0 / paths);
+            }
+            return image;
+        }
+        if self.spp == 0 {
+            return image;
+        }
+        let per_sample = 1.0 / self.spp as f64;
+        // Light paths: one per pixel sample over the whole image.
+        let per_path = per_sample / (self.width as f64 * self.height as f64);
+        for (i, px) in image.pixels.iter_mut().enumerate() {
+            *px = pixel_value(self.sums[i], self.splats[i], per_sample, per_path);
+        }
+        image
+    }
+}
+
+/// The value of a film pixel from its sample sum and splats (as [`Film::image`] computes it).
+pub(crate) fn pixel_value(sum: [f64; 3], splat: [f64; 3], per_sample: f64, per_path: f64) -> Rgb {
+    Rgb::new(
+        (sum[0] * per_sample + splat[0] * per_path) as f32,
+        (sum[1] * per_sample + splat[1] * per_path) as f32,
+        (sum[2] * per_sample + splat[2] * per_path) as f32,
+    )
+}
+
+impl std::fmt::Debug for Film {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Film")
+            .field("width", &self.width)
+            .field("height", &self.height)
+            .field("filter", &self.filter)
+            .field("spp", &self.spp)
+            .field("pass", &self.pass)
+            .field("tiles_done", &self.tiles_done)
+            .field("invalid", &self.invalid)
+            .finish_non_exhaustive()
+    }
+}

@@ -1,0 +1,90 @@
+//! One-pass rendering: each pixel's value from its own samples (Whitted's adaptive corner
+//! subdivision or uniform supersampling), for the techniques that give radiance along a
+//! camera ray (Whitted, the illumination network).
+
+use super::driver::drive;
+use super::{place, sampling, tiles_in, PixelSampling, RenderStats, Tile, MERGE_WINDOW};
+use crate::image::Image;
+use crate::integrators::{Context, Integrator, RayStats};
+use crate::job::Control;
+use crate::math::Rgb;
+use std::time::Instant;
+
+/// The view a one-pass render samples.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct PixelView {
+    pub width: u32,
+    pub height: u32,
+    pub sampling: PixelSampling,
+    pub threads: Option<usize>,
+    pub seed: u64,
+}
+
+/// Renders the pixels of `region` of the image (the whole image or a part of it: a pixel's
+/// value does not depend on which others are rendered with it). Returns the region's image.
+/// A cancel leaves the tiles not merged black, and marks the statistics.
+pub(crate) fn render_pixels(
+    ctx: &Context,
+    integrator: &dyn Integrator,
+    view: &PixelView,
+    region: &Tile,
+    control: &Control,
+) -> (Image, RenderStats) {
+    let tiles = tiles_in(region);
+    let phase = control.phase("render", Some(region.pixels()), "pixels");
+    let start = Instant::now();
+    let mut image = Image::new(region.width(), region.height());
+    let mut stats = RenderStats::default();
+    let driven = drive(
+        &tiles,
+        view.threads,
+        MERGE_WINDOW,
+        &control.cancel,
+        |tile| render_tile(ctx, integrator, view, tile),
+        |i, out| {
+            place(&mut image, (region.x0, region.y0), &tiles[i], out.pixels);
+            stats.rays.add(&out.rays);
+            stats.samples += out.samples;
+            stats.invalid += out.invalid;
+            phase.advance(tiles[i].pixels());
+        },
+    );
+    stats.cancelled = driven.cancelled;
+    stats.seconds = start.elapsed().as_secs_f64();
+    phase.end(&stats.summary());
+    (image, stats)
+}
+
+/// The pixels of one tile (row-major), the rays traced and the samples taken.
+pub(crate) fn render_tile(
+    ctx: &Context,
+    integrator: &dyn Integrator,
+    view: &PixelView,
+    tile: &Tile,
+) -> TilePixels {
+    let mut camera = ctx.scene.camera.clone();
+    camera.width = view.width;
+    camera.height = view.height;
+    let out = sampling::render_tile(
+        ctx,
+        integrator,
+        &camera.basis(),
+        &view.sampling,
+        view.seed,
+        tile,
+    );
+    TilePixels {
+        pixels: out.pixels,
+        rays: out.rays,
+        samples: out.samples,
+        invalid: out.invalid,
+    }
+}
+
+/// What one tile produced.
+pub(crate) struct TilePixels {
+    pub pixels: Vec<Rgb>,
+    pub rays: RayStats,
+    pub samples: u64,
+    pub invalid: u64,
+}
