@@ -78,7 +78,10 @@ pub fn build_dynamic(
 ) -> crate::Result<Box<dyn DynamicAccel>> {
     check_memory(scene, control)?;
     match backend {
-        Backend::Embree => Ok(Box::new(embree::EmbreeAccel::build_dynamic(scene)?)),
+        Backend::Embree => Ok(Box::new(embree::EmbreeAccel::build_dynamic(
+            scene,
+            &control.cancel,
+        )?)),
         Backend::Bvh => Ok(Box::new(bvh::BvhAccel::build(scene)?)),
     }
 }
@@ -120,7 +123,10 @@ impl std::fmt::Display for Backend {
 pub fn build(scene: &Scene, backend: Backend, control: &Control) -> crate::Result<Box<dyn Accel>> {
     check_memory(scene, control)?;
     match backend {
-        Backend::Embree => Ok(Box::new(embree::EmbreeAccel::build(scene)?)),
+        Backend::Embree => Ok(Box::new(embree::EmbreeAccel::build_cancellable(
+            scene,
+            &control.cancel,
+        )?)),
         Backend::Bvh => Ok(Box::new(bvh::BvhAccel::build(scene)?)),
     }
 }

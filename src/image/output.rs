@@ -153,7 +153,7 @@ pub fn check_output_path(path: &Path) -> Result<()> {
 pub fn write_image(
     path: &Path,
     image: &Image,
-    metadata: &Metadata,
+    metadata: &[(String, MetaValue)],
     options: &OutputOptions,
 ) -> Result<()> {
     write_image_impl(path, image, None, metadata, options)
@@ -166,7 +166,7 @@ pub fn write_image_window(
     path: &Path,
     image: &Image,
     window: oiio::Window,
-    metadata: &Metadata,
+    metadata: &[(String, MetaValue)],
     options: &OutputOptions,
 ) -> Result<()> {
     if Format::from_path(path)? != Format::Exr {
@@ -182,7 +182,7 @@ fn write_image_impl(
     path: &Path,
     image: &Image,
     window: Option<oiio::Window>,
-    metadata: &Metadata,
+    metadata: &[(String, MetaValue)],
     options: &OutputOptions,
 ) -> Result<()> {
     check_output_path(path)?;
@@ -200,7 +200,7 @@ fn write_image_impl(
         ));
     }
 
-    let mut attributes = metadata.clone();
+    let mut attributes = metadata.to_vec();
     let (data, pixel) = if format.is_display() {
         attributes.push(("oiio:ColorSpace".into(), MetaValue::Str("sRGB".into())));
         if format == Format::Jpeg {

@@ -292,6 +292,17 @@ impl Renderer {
         &self.scene
     }
 
+    /// Looks through another camera (its size is the job's). A view-independent technique
+    /// (the network, and those with nothing to prepare) renders the new view from what it
+    /// prepared; the irradiance cache runs its overture for the new view on the next render,
+    /// starting from the values it has.
+    pub fn set_camera(&mut self, camera: crate::scene::Camera) {
+        Arc::make_mut(&mut self.scene).camera = camera;
+        if self.technique.view_dependent() {
+            self.prepared = false;
+        }
+    }
+
     /// The technique's preparation (the irradiance cache's overture, the network's
     /// preprocess and distribution); done once.
     pub fn prepare(&mut self, control: &Control) -> Result<()> {

@@ -34,6 +34,11 @@ pub(crate) trait Lifecycle: Send + Sync {
         Ok(())
     }
 
+    /// Whether the preparation depends on the view (a new camera prepares again).
+    fn view_dependent(&self) -> bool {
+        false
+    }
+
     /// What renders the tiles, once prepared.
     fn tiles(&self) -> Tiles<'_>;
 

@@ -5,6 +5,7 @@
 mod sys;
 
 use super::{Accel, Hit, Update};
+use crate::job::CancelToken;
 use crate::math::{Ray, Vec3, Vec4};
 use crate::scene::{Geometry, QuadMesh, Scene as SceneDesc, TriangleMesh};
 use crate::{Error, Result};
@@ -45,6 +46,14 @@ impl DeviceInner {
             Err(Error::Embree(message))
         }
     }
+}
+
+/// Embree's progress monitor during a commit: whether to go on (the token is not cancelled).
+/// It must not unwind into C: it only reads an atomic flag.
+unsafe extern "C" fn keep_building(token: *mut c_void, _done: f64) -> bool {
+    // SAFETY: `commit_cancellable` passes a token that outlives the commit.
+    let token = unsafe { &*(token as *const CancelToken) };
+    !token.is_cancelled()
 }
 
 /// Called by Embree on every error. It must not unwind into C: it only records the message.
@@ -377,9 +386,31 @@ impl Scene {
 
     /// Builds the acceleration structure; queries are valid from then until the next change.
     pub fn commit(&mut self) -> Result<()> {
-        // SAFETY: the scene is live and no query can run during `&mut self`.
-        unsafe { sys::rtcCommitScene(self.raw) };
-        self.device.check("committing the scene")?;
+        self.commit_cancellable(&CancelToken::new())
+    }
+
+    /// [`commit`](Self::commit), stopped early (with [`Error::Cancelled`]) once `cancel` is
+    /// set: Embree asks a progress monitor whether to go on as it builds.
+    pub fn commit_cancellable(&mut self, cancel: &CancelToken) -> Result<()> {
+        let token: *const CancelToken = cancel;
+        // SAFETY: the scene is live and no query can run during `&mut self`. The monitor
+        // only reads the token, which outlives the call: it is removed before returning.
+        unsafe {
+            sys::rtcSetSceneProgressMonitorFunction(
+                self.raw,
+                Some(keep_building),
+                token as *mut c_void,
+            );
+            sys::rtcCommitScene(self.raw);
+            sys::rtcSetSceneProgressMonitorFunction(self.raw, None, std::ptr::null_mut());
+        }
+        let built = self.device.check("committing the scene");
+        if cancel.is_cancelled() {
+            return Err(Error::Cancelled {
+                stage: "the intersection structure's build".into(),
+            });
+        }
+        built?;
         self.committed = true;
         Ok(())
     }
@@ -549,21 +580,28 @@ impl EmbreeAccel {
         EmbreeAccel::build_on(desc, Device::new()?)
     }
 
+    /// [`build`](Self::build), stopped early once `cancel` is set.
+    pub fn build_cancellable(desc: &SceneDesc, cancel: &CancelToken) -> Result<EmbreeAccel> {
+        let device = Device::new()?;
+        let scene = Scene::new(&device)?;
+        EmbreeAccel::fill(desc, device, scene, None, cancel)
+    }
+
     /// Builds on a given device (for example one made with `threads=1` to build on one thread).
     /// The accel should own its device alone for [`memory_bytes`](Self::memory_bytes) to be
     /// its own.
     pub fn build_on(desc: &SceneDesc, device: Device) -> Result<EmbreeAccel> {
         let scene = Scene::new(&device)?;
-        EmbreeAccel::fill(desc, device, scene, None)
+        EmbreeAccel::fill(desc, device, scene, None, &CancelToken::new())
     }
 
     /// Builds a dynamic scene (see [`Scene::new_dynamic`]) that [`update`](Self::update) can
     /// move to another frame of an animation.
-    pub fn build_dynamic(desc: &SceneDesc) -> Result<EmbreeAccel> {
+    pub fn build_dynamic(desc: &SceneDesc, cancel: &CancelToken) -> Result<EmbreeAccel> {
         let device = Device::new()?;
         let scene = Scene::new_dynamic(&device)?;
         let keys = desc.shapes.iter().map(|s| shape_key(&s.geometry)).collect();
-        EmbreeAccel::fill(desc, device, scene, Some(keys))
+        EmbreeAccel::fill(desc, device, scene, Some(keys), cancel)
     }
 
     /// Moves a dynamic accel to `desc`'s geometry: moved vertices are copied into the
@@ -584,7 +622,7 @@ impl EmbreeAccel {
             let device = Device {
                 inner: self.device.inner.clone(),
             };
-            *self = EmbreeAccel::fill(desc, device, scene, dynamic)?;
+            *self = EmbreeAccel::fill(desc, device, scene, dynamic, &CancelToken::new())?;
             return Ok(Update::Rebuilt);
         }
         let old = self.shapes.take().unwrap_or_default();
@@ -623,6 +661,7 @@ impl EmbreeAccel {
         device: Device,
         mut scene: Scene,
         shapes: Option<Vec<ShapeKey>>,
+        cancel: &CancelToken,
     ) -> Result<EmbreeAccel> {
         for shape in &desc.shapes {
             match &shape.geometry {
@@ -632,8 +671,9 @@ impl EmbreeAccel {
                 Geometry::Triangles(m) => scene.attach_triangles(&m.positions, &m.indices)?,
                 Geometry::Quads(q) => scene.attach_quads(&q.positions, &q.indices)?,
             };
+            cancel.check("the intersection structure's build")?;
         }
-        scene.commit()?;
+        scene.commit_cancellable(cancel)?;
         Ok(EmbreeAccel {
             scene,
             device,

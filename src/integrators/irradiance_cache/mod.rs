@@ -45,7 +45,7 @@ use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
 use crate::image::filter::FilterSampler;
 use crate::image::Image;
-use crate::job::Control;
+use crate::job::{CancelToken, Control};
 use crate::math::sobol::Sampler;
 use crate::math::warp::power_heuristic;
 use crate::math::{offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
@@ -286,6 +286,9 @@ struct Walk<'a> {
     stats: &'a mut RayStats,
     /// The overture: no direct lighting on camera-level surfaces (only the cache matters).
     overture: bool,
+    /// The overture's cancel token: once set, values stop being computed (the overture
+    /// then returns nothing, so what a cut-short value holds is never used).
+    cancel: Option<&'a CancelToken>,
 }
 
 impl Walk<'_> {
@@ -397,6 +400,7 @@ impl IrradianceCache {
                         primaries: 0,
                         stats: &mut stats,
                         overture: true,
+                        cancel: Some(&control.cancel),
                     };
                     for (x, y, i) in chunk.samples() {
                         if control.cancel.is_cancelled() {
@@ -506,6 +510,7 @@ impl IrradianceCache {
             primaries: 0,
             stats: &mut stats,
             overture: false,
+            cancel: None,
         };
         indirect(ctx, &self.params, &mut walk, p, n, n, 0)
     }
@@ -527,6 +532,7 @@ impl MonteCarlo for IrradianceCache {
             primaries: 0,
             stats,
             overture: false,
+            cancel: None,
         };
         let l = trace(ctx, &self.params, &mut walk, ray, 0, true, 0, &mut rng);
         if walk.primaries > 0 {
@@ -713,6 +719,9 @@ fn primary(
     let mut sum = Rgb::ZERO;
     let mut inv_d = 0.0f64;
     for j in 0..strata {
+        if walk.cancel.is_some_and(CancelToken::is_cancelled) {
+            break;
+        }
         for k in 0..2 * strata {
             let sin2 = (j as f32 + rng.uniform()) / strata as f32;
             let (sin_t, cos_t) = (sin2.sqrt(), (1.0 - sin2).max(0.0).sqrt());

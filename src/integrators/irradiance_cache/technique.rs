@@ -40,6 +40,8 @@ impl CacheTechnique {
             None => 0,
         };
         let (loaded, frozen) = match file {
+            // A new view starts from the values the last one computed.
+            _ if self.built.is_some() => (self.built.take().map(|b| b.cache().clone()), false),
             Some(f) if f.exists() => {
                 let (cache, key) = file::load_with_view(f, ctx.scene, &options)?;
                 (Some(cache), key == Some(view))
@@ -92,6 +94,10 @@ impl Lifecycle for CacheTechnique {
     fn prepare(&mut self, ctx: &Context, job: &Job, control: &Control) -> Result<()> {
         self.built = Some(self.build(ctx, job, control)?);
         Ok(())
+    }
+
+    fn view_dependent(&self) -> bool {
+        true
     }
 
     fn tiles(&self) -> Tiles<'_> {

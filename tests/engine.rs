@@ -1,0 +1,224 @@
+//! The engine as a library user drives it: jobs cancelled by their caller stop within a
+//! second in every long phase and say what they kept; jobs in one process keep their own
+//! controls; the image does not depend on the thread count.
+
+use raylink::{
+    CancelToken, Control, Error, Job, MemoryBudget, Rendered, Renderer, Scene, Settings, Technique,
+    TechniqueKind,
+};
+use std::path::Path;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+fn scene(name: &str) -> Arc<Scene> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenes")
+        .join(name);
+    Arc::new(Scene::load(&path).unwrap())
+}
+
+fn job(scene: &Scene, settings: Settings, size: (u32, u32)) -> Job {
+    Job {
+        width: size.0,
+        height: size.1,
+        seed: 3,
+        threads: Some(2),
+        ..Job::new(scene, Technique::create(&settings).unwrap())
+    }
+}
+
+/// Runs `work` on a thread, cancels its token after `after`, and returns what it gave and
+/// how long it took to stop after the cancel.
+fn cancel_after<T: Send + 'static>(
+    after: Duration,
+    work: impl FnOnce(Control) -> T + Send + 'static,
+) -> (T, Duration) {
+    let control = Control::with_cancel(CancelToken::new());
+    let token = control.cancel.clone();
+    let worker = std::thread::spawn(move || work(control));
+    std::thread::sleep(after);
+    let asked = Instant::now();
+    token.cancel();
+    let result = worker.join().expect("the job does not panic");
+    (result, asked.elapsed())
+}
+
+fn checksum(rendered: &Rendered) -> Vec<[u32; 3]> {
+    rendered
+        .image
+        .pixels
+        .iter()
+        .map(|p| p.to_array().map(f32::to_bits))
+        .collect()
+}
+
+#[test]
+fn a_cancelled_path_render_stops_within_a_second_and_is_partial() {
+    let box_scene = scene("cornell-box.toml");
+    let settings = Settings {
+        integrator: Some(TechniqueKind::Path),
+        spp: Some(1 << 16),
+        ..Settings::default()
+    };
+    let job = job(&box_scene, settings, (128, 128));
+    let (rendered, stop) = cancel_after(Duration::from_millis(400), move |control| {
+        Renderer::new(box_scene, job, &control)?.render(&control)
+    });
+    let rendered = rendered.unwrap();
+    assert!(stop < Duration::from_secs(1), "took {stop:?} to stop");
+    assert!(rendered.is_partial());
+    let film = rendered.film.as_ref().unwrap();
+    assert!(film.mean_spp() > 0.0 && film.mean_spp() < (1 << 16) as f64);
+    assert!(rendered.stats.samples > 0);
+}
+
+#[test]
+fn a_cancelled_irradiance_cache_overture_stops_within_a_second() {
+    let room = scene("indirect-room.toml");
+    let settings = Settings {
+        integrator: Some(TechniqueKind::IrradianceCache),
+        spp: Some(4),
+        ic_samples: Some(4096),
+        ..Settings::default()
+    };
+    let job = job(&room, settings, (320, 240));
+    let (result, stop) = cancel_after(Duration::from_millis(400), move |control| {
+        Renderer::new(room, job, &control)?.render(&control)
+    });
+    assert!(stop < Duration::from_secs(1), "took {stop:?} to stop");
+    match result {
+        Err(Error::Cancelled { stage }) => assert!(stage.contains("overture"), "{stage}"),
+        other => panic!("expected a cancel during the overture, got {other:?}"),
+    }
+}
+
+#[test]
+fn concurrent_jobs_keep_their_own_controls() {
+    let box_scene = scene("cornell-box.toml");
+    let settings = Settings {
+        integrator: Some(TechniqueKind::Path),
+        spp: Some(8),
+        ..Settings::default()
+    };
+    let small = job(&box_scene, settings.clone(), (48, 48));
+    let solo = {
+        let control = Control::default();
+        let mut r = Renderer::new(box_scene.clone(), small.clone(), &control).unwrap();
+        checksum(&r.render(&control).unwrap())
+    };
+    // Job A: long, cancelled, with a large budget. Job B: small budget, never cancelled.
+    let long = job(
+        &box_scene,
+        Settings {
+            spp: Some(1 << 16),
+            ..settings
+        },
+        (96, 96),
+    );
+    let a_control = Control {
+        budget: MemoryBudget::bytes(1 << 32),
+        ..Control::with_cancel(CancelToken::new())
+    };
+    let b_control = Control {
+        budget: MemoryBudget::bytes(64 << 20),
+        ..Control::with_cancel(CancelToken::new())
+    };
+    let a_token = a_control.cancel.clone();
+    let (scene_a, scene_b) = (box_scene.clone(), box_scene.clone());
+    let a = std::thread::spawn(move || {
+        Renderer::new(scene_a, long, &a_control)
+            .unwrap()
+            .render(&a_control)
+            .unwrap()
+    });
+    let b = std::thread::spawn(move || {
+        let mut r = Renderer::new(scene_b, small, &b_control).unwrap();
+        // B runs while A is under way, and A is cancelled while B renders.
+        std::thread::sleep(Duration::from_millis(200));
+        a_token.cancel();
+        r.render(&b_control).unwrap()
+    });
+    let (a, b) = (a.join().unwrap(), b.join().unwrap());
+    assert!(a.is_partial());
+    assert!(!b.is_partial());
+    assert_eq!(checksum(&b), solo, "job B differs from its solo run");
+    // B's budget is its own: a film B's size fits, one A's size past 64 MiB does not.
+    let huge = job(&box_scene, Settings::default(), (8192, 8192));
+    let refused = Renderer::new(
+        box_scene,
+        huge,
+        &Control {
+            budget: MemoryBudget::bytes(64 << 20),
+            ..Control::default()
+        },
+    );
+    assert!(matches!(refused, Err(Error::Memory { .. })), "{refused:?}");
+}
+
+#[test]
+fn images_do_not_depend_on_the_thread_count() {
+    let spheres = scene("cornell-spheres.toml");
+    for kind in [
+        TechniqueKind::Path,
+        TechniqueKind::Bdpt,
+        TechniqueKind::Whitted,
+    ] {
+        let settings = Settings {
+            integrator: Some(kind),
+            spp: Some(4),
+            ..Settings::default()
+        };
+        let images: Vec<_> = [1, 2, 5]
+            .into_iter()
+            .map(|threads| {
+                let job = Job {
+                    threads: Some(threads),
+                    ..job(&spheres, settings.clone(), (40, 40))
+                };
+                let control = Control::default();
+                checksum(
+                    &Renderer::new(spheres.clone(), job, &control)
+                        .unwrap()
+                        .render(&control)
+                        .unwrap(),
+                )
+            })
+            .collect();
+        assert!(images.windows(2).all(|w| w[0] == w[1]), "{kind}");
+    }
+}
+
+#[test]
+fn bad_settings_name_the_setting() {
+    let box_scene = scene("cornell-box.toml");
+    for (settings, name) in [
+        (
+            Settings {
+                max_depth: Some(9999),
+                ..Settings::default()
+            },
+            "max_depth",
+        ),
+        (
+            Settings {
+                integrator: Some(TechniqueKind::Path),
+                spp: Some(0),
+                ..Settings::default()
+            },
+            "spp",
+        ),
+    ] {
+        match Technique::create(&settings) {
+            Err(Error::Setting { name: n, .. }) => assert_eq!(n, name),
+            other => panic!("{other:?}"),
+        }
+    }
+    let job = Job {
+        width: 0,
+        ..job(&box_scene, Settings::default(), (8, 8))
+    };
+    match Renderer::new(box_scene, job, &Control::default()) {
+        Err(Error::Setting { name, .. }) => assert_eq!(name, "width"),
+        other => panic!("{other:?}"),
+    }
+}
