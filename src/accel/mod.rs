@@ -5,8 +5,8 @@ pub mod bvh;
 pub mod embree;
 
 use crate::job::Control;
-use crate::math::{Ray, Vec3};
-use crate::scene::Scene;
+use crate::math::{Ray, Vec2, Vec3};
+use crate::scene::{Geometry, Scene, Shape, SurfacePoint};
 
 /// The closest hit along a ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -22,6 +22,60 @@ pub struct Hit {
     pub geom_id: u32,
     /// Index of the primitive within the shape.
     pub prim_id: u32,
+}
+
+impl Hit {
+    /// Completes the intersection: position, normals and uv of the hit primitive of
+    /// `shapes` (the scene's, which the structure was built from).
+    pub fn surface_point(&self, shapes: &[Shape], ray: &Ray) -> SurfacePoint {
+        let hit = self;
+        let shape = &shapes[hit.geom_id as usize];
+        let p = ray.at(hit.t);
+        let ng = hit.ng.normalize();
+        let (ns, uv) = match &shape.geometry {
+            Geometry::Sphere { center, .. } => {
+                let n = (p - *center).normalize();
+                let uv = Vec2::new(
+                    0.5 + n.z.atan2(n.x) / std::f32::consts::TAU,
+                    n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
+                );
+                (n, uv)
+            }
+            Geometry::Triangles(mesh) => {
+                let [a, b, c] = mesh.indices[hit.prim_id as usize].map(|i| i as usize);
+                let w = Vec3::new(1.0 - hit.u - hit.v, hit.u, hit.v);
+                let ns = match &mesh.normals {
+                    Some(n) => {
+                        let n = (n[a] * w.x + n[b] * w.y + n[c] * w.z).normalize_or_zero();
+                        if n == Vec3::ZERO {
+                            ng
+                        } else if n.dot(ng) < 0.0 {
+                            // Keep the shading normal on the geometric side.
+                            -n
+                        } else {
+                            n
+                        }
+                    }
+                    None => ng,
+                };
+                let uv = match &mesh.uvs {
+                    Some(t) => t[a] * w.x + t[b] * w.y + t[c] * w.z,
+                    None => Vec2::new(hit.u, hit.v),
+                };
+                (ns, uv)
+            }
+            Geometry::Quads(_) => (ng, Vec2::new(hit.u, hit.v)),
+        };
+        SurfacePoint {
+            p,
+            ng,
+            ns,
+            uv,
+            t: hit.t,
+            shape: hit.geom_id as usize,
+            material: shape.material,
+        }
+    }
 }
 
 /// Closest-hit and occlusion queries over a fixed scene. Implementations are thread-safe.

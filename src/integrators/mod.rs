@@ -52,7 +52,7 @@ impl<'a> Context<'a> {
     pub fn intersect(&self, ray: &Ray, stats: &mut RayStats) -> Option<SurfacePoint> {
         stats.closest += 1;
         let hit = self.accel.intersect(ray)?;
-        Some(SurfacePoint::from_hit(&self.scene.shapes, ray, &hit))
+        Some(hit.surface_point(&self.scene.shapes, ray))
     }
 
     /// The closest surface along ray `depth` of a path: [`intersect`](Self::intersect),
@@ -69,7 +69,7 @@ impl<'a> Context<'a> {
         }
         stats.closest += 1;
         let hit = self.accel.intersect_camera(ray)?;
-        Some(SurfacePoint::from_hit(&self.scene.shapes, ray, &hit))
+        Some(hit.surface_point(&self.scene.shapes, ray))
     }
 
     /// The closest hit along the ray as the backend reports it (shape and primitive), for

@@ -1,4 +1,3 @@
-use crate::accel::Hit;
 use crate::math::{Ray, Vec2, Vec3};
 
 /// A piece of geometry and the material it is made of.
@@ -92,54 +91,3 @@ pub struct SurfacePoint {
     pub material: usize,
 }
 
-impl SurfacePoint {
-    /// Completes an intersection: position, normals and uv for the hit primitive.
-    pub fn from_hit(shapes: &[Shape], ray: &Ray, hit: &Hit) -> SurfacePoint {
-        let shape = &shapes[hit.geom_id as usize];
-        let p = ray.at(hit.t);
-        let ng = hit.ng.normalize();
-        let (ns, uv) = match &shape.geometry {
-            Geometry::Sphere { center, .. } => {
-                let n = (p - *center).normalize();
-                let uv = Vec2::new(
-                    0.5 + n.z.atan2(n.x) / std::f32::consts::TAU,
-                    n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
-                );
-                (n, uv)
-            }
-            Geometry::Triangles(mesh) => {
-                let [a, b, c] = mesh.indices[hit.prim_id as usize].map(|i| i as usize);
-                let w = Vec3::new(1.0 - hit.u - hit.v, hit.u, hit.v);
-                let ns = match &mesh.normals {
-                    Some(n) => {
-                        let n = (n[a] * w.x + n[b] * w.y + n[c] * w.z).normalize_or_zero();
-                        if n == Vec3::ZERO {
-                            ng
-                        } else if n.dot(ng) < 0.0 {
-                            // Keep the shading normal on the geometric side.
-                            -n
-                        } else {
-                            n
-                        }
-                    }
-                    None => ng,
-                };
-                let uv = match &mesh.uvs {
-                    Some(t) => t[a] * w.x + t[b] * w.y + t[c] * w.z,
-                    None => Vec2::new(hit.u, hit.v),
-                };
-                (ns, uv)
-            }
-            Geometry::Quads(_) => (ng, Vec2::new(hit.u, hit.v)),
-        };
-        SurfacePoint {
-            p,
-            ng,
-            ns,
-            uv,
-            t: hit.t,
-            shape: hit.geom_id as usize,
-            material: shape.material,
-        }
-    }
-}

@@ -242,7 +242,7 @@ fn direct_diffuse(
     rng: &mut Rng,
     stats: &mut RayStats,
 ) -> Rgb {
-    let sp = SurfacePoint::from_hit(&ctx.scene.shapes, ray, hit);
+    let sp = hit.surface_point(&ctx.scene.shapes, ray);
     let m = &ctx.scene.materials[sp.material];
     let mut kd = m.diffuse.eval(sp.p, sp.uv);
     let total = kd + m.specular + m.transmission;
