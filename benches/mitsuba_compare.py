@@ -1,16 +1,18 @@
 #!/usr/bin/env python3
 """Path-tracing throughput and error of raylink against Mitsuba 3 on the Bitterli Cornell box.
 
-Both render the scene of ../shared/scenes/cornell-box-bitterli at the same resolution and
-sample count with their path integrators and the same path length (Mitsuba's max_depth 8
-counts the camera segment: it is 7 bounces, raylink's --max-depth 7). Throughput is camera
-paths per second of render time (scene loading excluded for both). Errors are RMSEs against
-Tungsten's converged render, box-downsampled, with the light's pixels excluded (as in
-tests/monte_carlo.rs). Both use a box pixel filter: Mitsuba splats each sample into every
-pixel its filter covers (a tent shares samples between neighbours and lowers per-pixel noise
-while correlating pixels), raylink samples its filter by importance (each pixel keeps its
-own samples), so only the box filter compares the estimators themselves. Each renderer runs
---reps times; medians are reported.
+Both render the scene of scenes/cornell-box-bitterli at the same resolution and sample count
+with their path integrators and the same path length (Mitsuba's max_depth 8 counts the
+camera segment: it is 7 bounces, raylink's --max-depth 7). Throughput is camera paths per
+second of render time (scene loading excluded for both). Errors are RMSEs against Tungsten's
+converged render, box-downsampled, with the light's pixels excluded (as in
+tests/monte_carlo.rs): by default the 256x256 copy in scenes/cornell-box-bitterli, which
+serves --size 256 and its divisors; --reference takes another (e.g. the full 1024x1024
+TungstenRender.exr from Bitterli's site) for larger sizes. Both use a box pixel filter:
+Mitsuba splats each sample into every pixel its filter covers (a tent shares samples between
+neighbours and lowers per-pixel noise while correlating pixels), raylink samples its filter
+by importance (each pixel keeps its own samples), so only the box filter compares the
+estimators themselves. Each renderer runs --reps times; medians are reported.
 
 Setup: python3 -m venv /tmp/mi && /tmp/mi/bin/pip install mitsuba
 Run:   cargo build --release --example compare && /tmp/mi/bin/python benches/mitsuba_compare.py
@@ -26,7 +28,7 @@ import tempfile
 import time
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-SHARED = os.path.join(ROOT, "..", "shared", "scenes", "cornell-box-bitterli")
+SCENE = os.path.join(ROOT, "scenes", "cornell-box-bitterli")
 
 
 def rmse(image, reference, size):
@@ -42,16 +44,18 @@ def main():
     ap.add_argument("--spp", type=int, default=64)
     ap.add_argument("--max-depth", type=int, default=8, help="Mitsuba's max_depth")
     ap.add_argument("--reps", type=int, default=3)
+    ap.add_argument("--reference", default=os.path.join(SCENE, "TungstenRender-256.exr"),
+                    help="Tungsten's render; its size must be a multiple of --size")
     args = ap.parse_args()
     import mitsuba as mi
     mi.set_variant("scalar_rgb")
-    reference = os.path.join(SHARED, "TungstenRender.exr")
+    reference = args.reference
     tmp = tempfile.mkdtemp()
     pixels = args.size * args.size
 
     mi_times, mi_errors = [], []
     for rep in range(args.reps):
-        with open(os.path.join(SHARED, "mitsuba-scene_v3.xml")) as f:
+        with open(os.path.join(SCENE, "mitsuba-scene_v3.xml")) as f:
             xml = f.read().replace('<rfilter type="tent" />', '<rfilter type="box" />')
         scene = mi.load_string(xml, spp=args.spp, resx=args.size, resy=args.size,
                                max_depth=args.max_depth)

@@ -4,8 +4,8 @@
 #  1. unpacks a minbase trixie root (debootstrap, cached by packaging/debootstrap-cache.sh)
 #     and installs the build dependencies there with apt (that root is cached too, as
 #     trixie-build.tar beside the minbase one);
-#  2. bind-mounts this source tree at /src (and ../shared at /shared), and the host's Rust
-#     toolchain (~/.cargo, ~/.rustup) into it;
+#  2. bind-mounts this source tree at /src, and the host's Rust toolchain (~/.cargo,
+#     ~/.rustup) into it;
 #  3. runs `cargo test` there and checks that the binary reports Embree 4.
 # The build directory is RAYLINK_DEB13_TARGET (default /var/cache/raylink-debootstrap/
 # target-trixie) so reruns are incremental. Exits non-zero if any step or test fails.
@@ -56,9 +56,6 @@ mount -t proc proc "$root/proc"; mounts+=("$root/proc")
 bind /dev /dev
 mkdir -p "$target"
 bind "$src" /src
-# Some tests read reference data from ../shared beside the source tree (the Tungsten render
-# of Bitterli's Cornell box); mount it at the same place relative to /src.
-if [ -d "$src/../shared" ]; then bind "$(realpath "$src/../shared")" /shared; fi
 bind "$cargo_home" /opt/cargo
 bind "$rustup_home" /opt/rustup
 bind "$target" /target

@@ -107,10 +107,12 @@ fn furnace_irradiance_is_analytic() {
     }
 }
 
+/// Tungsten's render, box-downsampled from 1024x1024 to 256x256 (scenes/cornell-box-bitterli).
 fn tungsten_256() -> Image {
-    let reference = manifest("../shared/scenes/cornell-box-bitterli/TungstenRender.exr");
-    let (reference, _) = read_image(&reference).expect("../shared holds the Tungsten render");
-    box_downsample(&reference, 256, 256).unwrap()
+    let reference = manifest("scenes/cornell-box-bitterli/TungstenRender-256.exr");
+    let (reference, _) = read_image(&reference).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((reference.width, reference.height), (256, 256));
+    reference
 }
 
 /// The Cornell box at 128x128 (compared with Tungsten's render box-downsampled to 128x128,

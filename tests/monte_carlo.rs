@@ -2,7 +2,7 @@
 //! render, and themselves (determinism).
 
 use raylink::accel::{self, Backend};
-use raylink::image::compare::{box_downsample, bright_mask, mean, rmse};
+use raylink::image::compare::{bright_mask, mean, rmse};
 use raylink::image::filter::Filter;
 use raylink::image::output::read_image;
 use raylink::image::Image;
@@ -188,13 +188,13 @@ fn gathering_shooting_and_bidirectional_agree() {
 }
 
 /// Renders `scene` with the path tracer at 256x256 (64 bounces, box filter) and returns the
-/// RMSE against Tungsten's converged render (box-downsampled to 256x256, the light's pixels,
-/// i.e. reference brighter than 1 and their neighbours, excluded), after checking the mean
-/// colour is within 1%.
+/// RMSE against Tungsten's converged render (box-downsampled from 1024x1024 to 256x256, as
+/// stored in scenes/cornell-box-bitterli; the light's pixels, i.e. reference brighter than 1
+/// and their neighbours, excluded), after checking the mean colour is within 1%.
 fn error_against_tungsten(scene: &Scene, spp: u32) -> f64 {
-    let reference = manifest("../shared/scenes/cornell-box-bitterli/TungstenRender.exr");
-    let (reference, _) = read_image(&reference).expect("../shared holds the Tungsten render");
-    let reference = box_downsample(&reference, 256, 256).unwrap();
+    let reference = manifest("scenes/cornell-box-bitterli/TungstenRender-256.exr");
+    let (reference, _) = read_image(&reference).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!((reference.width, reference.height), (256, 256));
     let image = render(
         scene,
         Kind::Path,
@@ -231,7 +231,7 @@ fn cornell_box_matches_tungsten() {
 /// The same scene read from Bitterli's own pbrt-v4 file: 32 spp reach about 0.0085.
 #[test]
 fn cornell_box_from_pbrt_matches_tungsten() {
-    let path = manifest("../shared/scenes/cornell-box-bitterli/scene-v4.pbrt");
+    let path = manifest("scenes/cornell-box-bitterli/scene-v4.pbrt");
     let scene = Scene::load(&path).unwrap();
     let e = error_against_tungsten(&scene, 32);
     assert!(e < 0.0105, "RMSE {e}");
