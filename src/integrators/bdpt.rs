@@ -45,7 +45,7 @@ impl Bdpt {
         {
             return Err(
                 "the bdpt integrator supports area and point lights only; this scene has a \
-                 directional light or a background: use --integrator path"
+                 directional light or a background: render it with the path integrator"
                     .into(),
             );
         }

@@ -118,7 +118,7 @@ pub fn load_with_view(
     }
     if body[..expected.len()] != expected[..] {
         return Err(bad(
-            "written with other --ab, --ic-accuracy, --ic-samples or --ar",
+            "written with other cache settings (ab, ic_accuracy, ic_samples or ar)",
         ));
     }
     let mut rest = &body[expected.len()..];
