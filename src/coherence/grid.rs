@@ -104,12 +104,14 @@ impl Grid {
 
     /// Walks the segment `origin + t·dir`, `t ∈ [t0, t1]`, through the grid, calling `f` on
     /// every voxel it crosses, in order. Parts outside the grid are skipped.
+    #[cfg(test)]
     pub fn walk(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32, mut f: impl FnMut(usize)) {
         self.walk_spans(origin, dir, t0, t1, |v, _, _| f(v));
     }
 
     /// [`walk`](Self::walk), also giving the parameter span `[ta, tb]` the segment spends
     /// in each voxel.
+    #[cfg(test)]
     pub fn walk_spans(
         &self,
         origin: Vec3,

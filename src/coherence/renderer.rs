@@ -173,6 +173,7 @@ const MARGIN: f32 = 1e-4;
 
 impl CoherentRenderer {
     /// A renderer keeping segment records (the faster form; `with_records` chooses).
+    #[cfg(test)]
     pub fn new(grid: Grid, layout: BlockLayout) -> CoherentRenderer {
         CoherentRenderer::with_records(grid, layout, Records::Segments)
     }

@@ -145,6 +145,7 @@ impl Polygon {
     }
 
     /// Area of the polygon (unit-cube units).
+    #[cfg(test)]
     pub fn area(&self) -> f32 {
         if let Some((_, r)) = self.sphere {
             return 4.0 * std::f32::consts::PI * r * r;

@@ -121,6 +121,7 @@ impl EndPacking {
     }
 
     /// The side key and the key at the other end of an end of block `block`.
+    #[cfg(test)]
     #[inline]
     pub fn unpack(&self, block: usize, end: u32) -> (u32, u32) {
         let key = (block << self.block_bits) as u32 | end >> self.target_bits;
@@ -251,6 +252,7 @@ pub fn line_point(family: u32, su: f32, sv: f32, iu: f32, iv: f32, pa: f32) -> V
 /// Scan-converts one polygon for one slot: calls `hit(line, iu, iv, p_a)` for every line of
 /// the slot (with jittered intercepts (iu, iv)) that meets the polygon, p_a computed by the
 /// incremental recurrence.
+#[cfg(test)]
 #[allow(clippy::too_many_arguments)]
 pub fn scan_polygon(
     space: &RaySpace,
@@ -285,16 +287,19 @@ trait RowCells {
 const LANES: usize = 4;
 
 /// [`scan_polygon`]'s callback, for the cells inside, and a row of it.
+#[cfg(test)]
 struct EachHit<F> {
     hit: F,
     intercepts: u32,
 }
 
+#[cfg(test)]
 struct EachHitRow<'a, F> {
     each: &'a mut EachHit<F>,
     jv: u32,
 }
 
+#[cfg(test)]
 impl<F: FnMut(u32, f32, f32, f32)> Rows for EachHit<F> {
     type Row<'r>
         = EachHitRow<'r, F>
@@ -305,6 +310,7 @@ impl<F: FnMut(u32, f32, f32, f32)> Rows for EachHit<F> {
     }
 }
 
+#[cfg(test)]
 impl<F: FnMut(u32, f32, f32, f32)> RowCells for EachHitRow<'_, F> {
     fn cells(&mut self, ju: u32, lanes: usize, iu: f32x4, iv: f32x4, pa: f32x4, inside: u32) {
         let (iu, iv, pa) = (iu.to_array(), iv.to_array(), pa.to_array());
@@ -476,6 +482,7 @@ fn side_key(pg: &Polygon, p: Vec3, d: Vec3) -> u32 {
 
 /// The scan-conversion hits of one slot, sorted by line (on a line, in the [`scan_order`] of
 /// the polygons).
+#[cfg(test)]
 pub fn scan_slot(
     space: &RaySpace,
     patches: &Patches,

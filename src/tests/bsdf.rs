@@ -2,9 +2,9 @@
 //! density the BSDF reports, the density integrating to the fraction of non-delta samples,
 //! and sample weights equal to eval/pdf.
 
-use raylink::bsdf::{Bsdf, Transport};
-use raylink::math::{Rgb, Rng, Vec2, Vec3};
-use raylink::scene::{Material, SurfacePoint, Texture};
+use crate::bsdf::{Bsdf, Transport};
+use crate::math::{Rgb, Rng, Vec2, Vec3};
+use crate::scene::{Material, SurfacePoint, Texture};
 
 const THETA_BINS: usize = 20;
 const PHI_BINS: usize = 40;
@@ -55,7 +55,7 @@ fn integrate_pdf(bsdf: &Bsdf, wo: Vec3) -> Vec<f64> {
 fn chi2_tail(x: f64, dof: f64) -> f64 {
     let k = 2.0 / (9.0 * dof);
     let z = ((x / dof).powf(1.0 / 3.0) - (1.0 - k)) / k.sqrt();
-    0.5 * raylink::math::erfc(z / std::f64::consts::SQRT_2)
+    0.5 * crate::math::erfc(z / std::f64::consts::SQRT_2)
 }
 
 /// Runs the three checks for one material and outgoing direction.
@@ -202,7 +202,7 @@ fn glass_weights() {
         let wo = wo.normalize();
         let bsdf = Bsdf::new(&glass, &point(), wo);
         let eta = if wo.z > 0.0 { 1.0 / 1.5 } else { 1.5 };
-        let f = raylink::math::optics::fresnel_dielectric(wo.z.abs(), eta);
+        let f = crate::math::optics::fresnel_dielectric(wo.z.abs(), eta);
         let mut rng = Rng::for_key(3, &[]);
         let n = 100_000;
         let (mut rad, mut imp, mut refl) = (0.0f64, 0.0f64, 0usize);
@@ -249,8 +249,8 @@ fn brdfs_are_reciprocal() {
     });
     let mut rng = Rng::for_key(8, &[]);
     for _ in 0..1000 {
-        let a = raylink::math::warp::cosine_hemisphere(Vec2::new(rng.uniform(), rng.uniform()));
-        let b = raylink::math::warp::cosine_hemisphere(Vec2::new(rng.uniform(), rng.uniform()));
+        let a = crate::math::warp::cosine_hemisphere(Vec2::new(rng.uniform(), rng.uniform()));
+        let b = crate::math::warp::cosine_hemisphere(Vec2::new(rng.uniform(), rng.uniform()));
         let bsdf = Bsdf::new(&coated, &point(), a);
         let fab = bsdf.eval(a, b, Transport::Radiance) / b.z;
         let fba = bsdf.eval(b, a, Transport::Radiance) / a.z;

@@ -1,0 +1,40 @@
+//! What the network tests share: scenes parsed from text, the test networks' parameters,
+//! a network built with Embree's help, the Cornell box.
+
+use super::network_scenes::closed_box_text;
+use crate::accel::{self, Backend};
+use crate::integrators::illumination_network::preprocess::Builder;
+use crate::integrators::illumination_network::{Network, NetworkParams};
+use crate::integrators::Context;
+use crate::job::Control;
+use crate::scene::Scene;
+use std::path::Path;
+
+pub(crate) fn scene(text: &str) -> Scene {
+    crate::scene::toml::from_str(text, Path::new("test.toml")).expect("test scene parses")
+}
+
+/// The unit cube, closed, every wall of material `m` except the floor (y = 0) of `floor`.
+pub(crate) fn closed_box(materials: &str, m: &str, floor: &str) -> Scene {
+    scene(&closed_box_text(materials, m, floor))
+}
+
+pub(crate) fn params(slopes: u32, step: f32) -> NetworkParams {
+    NetworkParams {
+        slopes,
+        step,
+        patch_size: step,
+        jitter: 1.0,
+        seed: 7,
+    }
+}
+
+pub(crate) fn build(scene: &Scene, p: NetworkParams, builder: Builder) -> Network {
+    let accel = accel::build(scene, Backend::Embree, &Control::default()).unwrap();
+    let ctx = Context::new(scene, accel.as_ref());
+    Network::build(scene, &ctx, p, builder).unwrap()
+}
+
+pub(crate) fn cornell() -> Scene {
+    Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/cornell-box.toml")).unwrap()
+}
