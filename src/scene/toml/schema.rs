@@ -1,83 +1,112 @@
 //! The file as serde sees it: structures that mirror the scene file table for table. The
 //! reader deserialises them (syntax, unknown keys and wrong types are caught here, with
-//! toml's line and column); the builder checks the values.
+//! toml's line and column) and `raylink convert` serialises them, so the two share one
+//! description of the format. Values are checked later, by the builder.
 
 use crate::math::{Vec2, Vec3};
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
-use serde::Deserialize;
+use serde::ser::{SerializeMap, SerializeSeq, Serializer};
+use serde::{Deserialize, Serialize};
 use std::fmt;
 use toml::Spanned;
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct FileDesc {
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) camera: Option<Spanned<CameraDesc>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) world: Option<Spanned<WorldDesc>>,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Ordered::is_empty")]
     pub(crate) materials: Ordered<Spanned<MaterialDesc>>,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub(crate) shapes: Vec<Spanned<ShapeDesc>>,
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub(crate) lights: Vec<Spanned<LightDesc>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) render: Option<Spanned<RenderDesc>>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RenderDesc {
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) integrator: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) spp: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) max_depth: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) filter: Option<FilterDesc>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct FilterDesc {
     #[serde(rename = "type")]
     pub(crate) kind: String,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) radius: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) sigma: Option<f32>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct EnvironmentDesc {
     pub(crate) file: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) scale: Option<Splat3>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) transform: Option<OneOrMany<TransformOp>>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct CameraDesc {
     pub(crate) position: V3,
     pub(crate) look_at: V3,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) up: Option<V3>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) fov: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) width: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) height: Option<u32>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct WorldDesc {
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) ambient: Option<Splat3>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) background: Option<Splat3>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) environment: Option<EnvironmentDesc>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct MaterialDesc {
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) diffuse: Option<DiffuseDesc>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) ambient: Option<Splat3>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) specular: Option<Splat3>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) transmission: Option<Splat3>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) ior: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) phong_exponent: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) roughness: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) fresnel: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) emission: Option<Splat3>,
 }
 
@@ -87,47 +116,62 @@ pub(crate) enum DiffuseDesc {
 }
 
 /// `{ checker = {..} }`, `{ uv_checker = {..} }` or `{ image = {..} }`.
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct TextureTable {
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) checker: Option<CheckerDesc>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) uv_checker: Option<UvCheckerDesc>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) image: Option<ImageDesc>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct UvCheckerDesc {
     pub(crate) even: Splat3,
     pub(crate) odd: Splat3,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) uscale: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) vscale: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) udelta: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) vdelta: Option<f32>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct ImageDesc {
     pub(crate) file: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) encoding: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) scale: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) invert: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) uscale: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) vscale: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) udelta: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) vdelta: Option<f32>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct CheckerDesc {
     pub(crate) even: Splat3,
     pub(crate) odd: Splat3,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) size: Option<f32>,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub(crate) enum ShapeKind {
     Sphere,
@@ -161,24 +205,51 @@ impl ShapeKind {
     }
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct ShapeDesc {
     #[serde(rename = "type")]
     pub(crate) kind: ShapeKind,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) material: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) transform: Option<OneOrMany<TransformOp>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) center: Option<V3>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) radius: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) vertices: Option<Vec<V3>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) positions: Option<Vec<V3>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) indices: Option<Vec<Idx3>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) normals: Option<Vec<V3>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) uvs: Option<Vec<V2>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) file: Option<String>,
 }
 
 impl ShapeDesc {
+    /// A shape of `kind` without a material or parameters (for writing).
+    pub(crate) fn new(kind: ShapeKind) -> ShapeDesc {
+        ShapeDesc {
+            kind,
+            material: None,
+            transform: None,
+            center: None,
+            radius: None,
+            vertices: None,
+            positions: None,
+            indices: None,
+            normals: None,
+            uvs: None,
+            file: None,
+        }
+    }
+
     /// The kind-specific parameters that are present.
     pub(crate) fn present(&self) -> Vec<&'static str> {
         [
@@ -197,42 +268,51 @@ impl ShapeDesc {
     }
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct TransformOp {
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) translate: Option<V3>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) rotate: Option<RotateDesc>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) scale: Option<Splat3>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_rows")]
     pub(crate) matrix: Option<Vec<Vec<f32>>>,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RotateDesc {
     pub(crate) axis: V3,
+    #[serde(serialize_with = "exact_f32")]
     pub(crate) degrees: f32,
 }
 
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
 #[serde(rename_all = "lowercase")]
 pub(crate) enum LightKind {
     Point,
     Directional,
 }
 
-#[derive(Deserialize)]
+#[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct LightDesc {
     #[serde(rename = "type")]
     pub(crate) kind: LightKind,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) position: Option<V3>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) intensity: Option<Splat3>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) direction: Option<V3>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) irradiance: Option<Splat3>,
 }
 
 // ------------------------------------------------------------------------------------------
-// Value types with their own deserializers (for clear messages).
+// Value types with their own deserializers (for clear messages) and serializers.
 
 /// Exactly three numbers `[x, y, z]`.
 #[derive(Clone, Copy, Debug)]
@@ -412,6 +492,12 @@ impl<'de, T: Deserialize<'de>> Deserialize<'de> for OneOrMany<T> {
 /// A table whose entries keep the order of the file.
 pub(crate) struct Ordered<T>(pub(crate) Vec<(String, T)>);
 
+impl<T> Ordered<T> {
+    pub(crate) fn is_empty(&self) -> bool {
+        self.0.is_empty()
+    }
+}
+
 impl<T> Default for Ordered<T> {
     fn default() -> Self {
         Ordered(Vec::new())
@@ -435,5 +521,165 @@ impl<'de, T: Deserialize<'de>> Deserialize<'de> for Ordered<T> {
             }
         }
         d.deserialize_map(Vis(std::marker::PhantomData))
+    }
+}
+
+// ------------------------------------------------------------------------------------------
+// Writing: each value type as the reader takes it (vectors and colours as arrays, so every
+// component is written as the scene holds it), and every float so that it reads back to the
+// same bits.
+
+/// An `f32` written so that the reader gets the same bits back. The reader parses a TOML
+/// float as an `f64` and narrows it to `f32`; the `f32`'s shortest decimal survives that for
+/// every `f32` but one pair (checked over all of them): `±7.038531e-26` lies so close to the
+/// midpoint between two `f32`s that its `f64` rounds across it. Such a value is written as
+/// its `f64`'s decimal instead (up to 17 digits), which reads back exactly.
+struct Exact(f32);
+
+impl Serialize for Exact {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let x = self.0;
+        let shortest_survives = x
+            .to_string()
+            .parse::<f64>()
+            .is_ok_and(|y| (y as f32).to_bits() == x.to_bits());
+        if shortest_survives {
+            s.serialize_f32(x)
+        } else {
+            s.serialize_f64(f64::from(x))
+        }
+    }
+}
+
+fn exact_f32<S: Serializer>(x: &f32, s: S) -> Result<S::Ok, S::Error> {
+    Exact(*x).serialize(s)
+}
+
+fn opt_f32<S: Serializer>(x: &Option<f32>, s: S) -> Result<S::Ok, S::Error> {
+    x.map(Exact).serialize(s)
+}
+
+fn opt_rows<S: Serializer>(rows: &Option<Vec<Vec<f32>>>, s: S) -> Result<S::Ok, S::Error> {
+    let rows: Option<Vec<Vec<Exact>>> = rows.as_ref().map(|rows| {
+        rows.iter()
+            .map(|r| r.iter().copied().map(Exact).collect())
+            .collect()
+    });
+    rows.serialize(s)
+}
+
+fn numbers<S: Serializer>(s: S, values: &[f32]) -> Result<S::Ok, S::Error> {
+    let mut seq = s.serialize_seq(Some(values.len()))?;
+    for &x in values {
+        seq.serialize_element(&Exact(x))?;
+    }
+    seq.end()
+}
+
+impl Serialize for V3 {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        numbers(s, &self.0.to_array())
+    }
+}
+
+impl Serialize for V2 {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        numbers(s, &self.0.to_array())
+    }
+}
+
+impl Serialize for Idx3 {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        self.0.serialize(s)
+    }
+}
+
+impl Serialize for Splat3 {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        numbers(s, &self.0.to_array())
+    }
+}
+
+impl Serialize for DiffuseDesc {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            DiffuseDesc::Colour(c) => numbers(s, &c.to_array()),
+            DiffuseDesc::Texture(t) => t.serialize(s),
+        }
+    }
+}
+
+impl<T: Serialize> Serialize for OneOrMany<T> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            OneOrMany::One(x) => x.serialize(s),
+            OneOrMany::Many(xs) => xs.serialize(s),
+        }
+    }
+}
+
+impl<T: Serialize> Serialize for Ordered<T> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut map = s.serialize_map(Some(self.0.len()))?;
+        for (k, v) in &self.0 {
+            map.serialize_entry(k, v)?;
+        }
+        map.end()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[derive(Deserialize, Serialize)]
+    struct Doc {
+        v: V3,
+        #[serde(serialize_with = "exact_f32")]
+        degrees: f32,
+        #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+        size: Option<f32>,
+    }
+
+    /// Floats are written as the shortest decimals that read back to the same bits, or, for
+    /// the rare values whose shortest decimal does not survive the reader's f64, as the f64's.
+    #[test]
+    fn floats_round_trip_exactly() {
+        let strided = (0..0x7f80_0000u32).step_by(7919).map(f32::from_bits);
+        let special = [
+            f32::MIN_POSITIVE,
+            f32::MAX,
+            f32::EPSILON,
+            0.1,
+            0.65,
+            1e-38,
+            3e38,
+            // Its shortest decimal, 7.038531e-26, reads back through an f64 as the next f32.
+            f32::from_bits(0x15ae_43fd),
+        ];
+        for x in strided.chain(special) {
+            let v = Vec3::new(x, -x, 1.0 / x.max(1e-30));
+            let doc = Doc {
+                v: V3(v),
+                degrees: x,
+                size: Some(-x),
+            };
+            let text = toml::to_string(&doc).unwrap();
+            let back: Doc = toml::from_str(&text).unwrap();
+            let bits = |v: Vec3| v.to_array().map(f32::to_bits);
+            assert_eq!(bits(back.v.0), bits(v), "{text}");
+            assert_eq!(back.degrees.to_bits(), x.to_bits(), "{text}");
+            assert_eq!(back.size.map(f32::to_bits), Some((-x).to_bits()), "{text}");
+        }
+        // Tidy where it can be: the shortest decimal.
+        let doc = Doc {
+            v: V3(Vec3::new(0.65, 1.0, 19.5)),
+            degrees: 0.1,
+            size: None,
+        };
+        assert_eq!(
+            toml::to_string(&doc).unwrap(),
+            "v = [0.65, 1.0, 19.5]\ndegrees = 0.1\n"
+        );
     }
 }
