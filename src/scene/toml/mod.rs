@@ -22,7 +22,10 @@ use super::Scene;
 use builder::Builder;
 use diagnostics::Ctx;
 use schema::FileDesc;
+use serde::Deserialize;
 use std::path::Path;
+use toml::de::DeTable;
+use toml::Spanned;
 
 /// Reads a native TOML scene.
 pub fn read(path: &Path) -> crate::Result<Scene> {
@@ -32,9 +35,48 @@ pub fn read(path: &Path) -> crate::Result<Scene> {
 
 /// Parses a native TOML scene; `path` names the file in messages and resolves relative paths.
 pub fn from_str(text: &str, path: &Path) -> crate::Result<Scene> {
-    let ctx = Ctx { path, text };
-    let file: FileDesc = toml::from_str(text).map_err(|e| ctx.toml_error(&e))?;
-    Builder::new(ctx).build(file)
+    Document::parse(text, path)?.build()
+}
+
+/// A scene file parsed as TOML (syntax checked, nothing else): what decides whether the file
+/// is a static scene or an animation, then reads as either without parsing the text again.
+pub(crate) struct Document<'a> {
+    ctx: Ctx<'a>,
+    root: Spanned<DeTable<'a>>,
+}
+
+impl<'a> Document<'a> {
+    /// Parses `text`; `path` names the file in messages.
+    pub(crate) fn parse(text: &'a str, path: &'a Path) -> crate::Result<Document<'a>> {
+        let ctx = Ctx { path, text };
+        let root = DeTable::parse(text).map_err(|e| ctx.toml_error(&e))?;
+        Ok(Document { ctx, root })
+    }
+
+    /// The top-level table.
+    pub(crate) fn root(&self) -> &DeTable<'a> {
+        self.root.get_ref()
+    }
+
+    /// The file, as messages name it.
+    pub(crate) fn path(&self) -> &'a Path {
+        self.ctx.path
+    }
+
+    /// Reads the document as a static scene.
+    pub(crate) fn build(self) -> crate::Result<Scene> {
+        let ctx = self.ctx;
+        let file = FileDesc::deserialize(toml::de::Deserializer::from(self.root))
+            .map_err(|e| ctx.toml_error(&e))?;
+        Builder::new(ctx).build(file)
+    }
+
+    /// The document as a plain TOML table (values without their positions).
+    pub(crate) fn into_table(self) -> crate::Result<toml::Table> {
+        let ctx = self.ctx;
+        toml::Table::deserialize(toml::de::Deserializer::from(self.root))
+            .map_err(|e| ctx.toml_error(&e))
+    }
 }
 
 #[cfg(test)]
