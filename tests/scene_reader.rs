@@ -423,3 +423,50 @@ fn nested_tables_read_the_same_as_headers_or_inline() {
         "{err}"
     );
 }
+
+/// Whether a TOML file is an animation is decided on the parsed document (a top-level
+/// `[animation]` table, or keyframes), not on its text: a static scene that merely mentions
+/// the word (a comment, a material named `animation`) is read by the static reader, whose
+/// messages give the lines of the file itself.
+#[test]
+fn a_static_scene_that_mentions_animation_is_read_as_static() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("still.toml");
+    let text = "# No animation here, and no keyframes either.\n\
+                [camera]\nposition = [0, 1, 5]\nlook_at = [0, 1, 0]\n\
+                [materials.animation]\ndiffuse = 0.8\n\
+                [[shapes]]\ntype = \"sphere\"\nmaterial = \"animation\"\nradius = 1\n";
+    std::fs::write(&path, text).unwrap();
+    let s = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(s.materials[0].name, "animation");
+    assert_eq!(s.shapes.len(), 1);
+    // Line 10 of the file (read as an animation, the file would be rewritten before reading,
+    // and the message would give the line of the rewritten text).
+    std::fs::write(&path, text.replace("radius = 1", "radius = -1")).unwrap();
+    let e = Scene::load(&path).unwrap_err().to_string();
+    assert!(
+        e.ends_with("still.toml: line 10: shapes[0].radius: must be positive, got -1"),
+        "{e}"
+    );
+}
+
+/// Keyframes make a file an animation even without an `[animation]` table (one frame, as
+/// `raylink animate` reads it): `Scene::load` gives that frame.
+#[test]
+fn keyframes_without_an_animation_table_give_their_first_frame() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("keyed.toml");
+    let text = format!(
+        "{CAMERA}[[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\n\
+         [[shapes.keyframes]]\nframe = 0\ntranslate = [2, 0, 0]\n"
+    );
+    std::fs::write(&path, text).unwrap();
+    let s = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(
+        s.shapes[0].geometry,
+        Geometry::Sphere {
+            center: Vec3::new(2.0, 0.0, 0.0),
+            radius: 1.0
+        }
+    );
+}

@@ -6,21 +6,44 @@
 //! and transform baking as a static scene, and "render frame N from scratch" and "update to
 //! frame N" see the same `Scene`.
 
+use super::toml::Document;
 use super::Scene;
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};
+use toml::de::{DeTable, DeValue};
 use toml::{Table, Value};
 
 /// Reads a native TOML scene; an animated one gives its first frame (so `raylink render`
 /// renders the first frame of an animation).
 pub fn read_first_frame(path: &Path) -> Result<Scene> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let doc = Document::parse(&text, path)?;
     // Static files go straight to the reader, so its messages keep their line numbers.
-    if !text.contains("animation") && !text.contains("keyframes") {
-        return super::toml::from_str(&text, path);
+    if !is_animation(doc.root()) {
+        return doc.build();
     }
-    let anim = Animation::from_str(&text, path)?;
+    let anim = Animation::from_document(doc)?;
     anim.scene_at(anim.start)
+}
+
+/// Whether a parsed scene file is an animation: it has a top-level `animation` key (the
+/// `[animation]` table), or `keyframes` on a shape, light, material or the camera (where
+/// [`Animation`] takes them from; a missing `[animation]` table means one frame).
+fn is_animation(root: &DeTable) -> bool {
+    let keyed = |v: &DeValue| v.as_table().is_some_and(|t| t.contains_key("keyframes"));
+    root.iter().any(
+        |(key, value)| match (key.get_ref().as_ref(), value.get_ref()) {
+            ("animation", _) => true,
+            ("shapes" | "lights", DeValue::Array(items)) => {
+                items.iter().any(|item| keyed(item.get_ref()))
+            }
+            ("materials", DeValue::Table(materials)) => {
+                materials.values().any(|m| keyed(m.get_ref()))
+            }
+            ("camera", camera) => keyed(camera),
+            _ => false,
+        },
+    )
 }
 
 /// How a keyframe's values move on to the next keyframe's.
@@ -80,10 +103,14 @@ impl Animation {
     }
 
     pub fn from_str(text: &str, path: &Path) -> Result<Animation> {
+        Animation::from_document(Document::parse(text, path)?)
+    }
+
+    /// The animation of a parsed scene file (a static one has a single frame).
+    fn from_document(doc: Document) -> Result<Animation> {
+        let path = doc.path();
         let fail = |msg: String| Error::input(path, msg);
-        let mut base: Table = text
-            .parse()
-            .map_err(|e: toml::de::Error| fail(one_line(&e)))?;
+        let mut base = doc.into_table()?;
         let mut anim = Animation {
             path: path.to_path_buf(),
             base: Table::new(),
@@ -475,15 +502,6 @@ fn to_text(table: &Table) -> String {
         }
     }
     out + &sections
-}
-
-fn one_line(e: &dyn std::fmt::Display) -> String {
-    e.to_string()
-        .lines()
-        .map(str::trim)
-        .filter(|l| !l.is_empty())
-        .collect::<Vec<_>>()
-        .join(" ")
 }
 
 #[cfg(test)]

@@ -3,15 +3,24 @@
 //! binary PLY file in a `NAME.meshes/` folder beside the output. Image textures and
 //! environment maps are referenced by path (relative to the output when possible).
 //!
+//! The scene is turned into the reader's own schema ([`super::toml::schema`]) and written by
+//! the `toml` crate, so what is written is what the reader reads: floats are written as the
+//! shortest decimals that read back to the same `f32`, strings and keys are quoted where
+//! TOML needs it.
+//!
 //! Everything is written through temporary files renamed into place, the TOML last, so a
 //! failed conversion never leaves a half-written scene behind.
 
-use super::{Geometry, Scene, Texture};
+use super::toml::schema::{
+    CameraDesc, CheckerDesc, DiffuseDesc, EnvironmentDesc, FileDesc, FilterDesc, ImageDesc,
+    LightDesc, LightKind, MaterialDesc, OneOrMany, Ordered, RenderDesc, ShapeDesc, ShapeKind,
+    Splat3, TextureTable, TransformOp, UvCheckerDesc, WorldDesc, V3,
+};
+use super::{Camera, Geometry, Light, Material, RenderSettings, Scene, Texture};
 use crate::image::filter::Filter;
-use crate::math::Vec3;
 use crate::Error;
-use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use toml::Spanned;
 
 /// Reads `input` (.pbrt or .toml) and writes it to `output` as a native TOML scene.
 /// Returns the scene read (with its warnings).
@@ -19,37 +28,6 @@ pub fn convert(input: &Path, output: &Path) -> crate::Result<Scene> {
     let scene = Scene::load(input)?;
     write_toml(&scene, output)?;
     Ok(scene)
-}
-
-/// A float as TOML: shortest representation that reads back exactly.
-fn num(x: f32) -> String {
-    let s = format!("{x:?}");
-    if s.contains(['.', 'e', 'E']) || s.contains("inf") || s.contains("NaN") {
-        s
-    } else {
-        format!("{s}.0")
-    }
-}
-
-fn v3(v: Vec3) -> String {
-    format!("[{}, {}, {}]", num(v.x), num(v.y), num(v.z))
-}
-
-fn quote(s: &str) -> String {
-    let mut out = String::from("\"");
-    for c in s.chars() {
-        match c {
-            '"' => out.push_str("\\\""),
-            '\\' => out.push_str("\\\\"),
-            '\n' => out.push_str("\\n"),
-            c if c.is_control() => {
-                let _ = write!(out, "\\u{:04X}", c as u32);
-            }
-            c => out.push(c),
-        }
-    }
-    out.push('"');
-    out
 }
 
 /// A path written into the TOML: the referenced file as seen from `out_dir`.
@@ -103,76 +81,10 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::Result<()> {
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "scene".into());
-    let mesh_dir_name = format!("{stem}.meshes");
-    let mut t = String::new();
-    let _ = writeln!(
-        t,
-        "# Written by raylink {} from {}.\n",
-        crate::VERSION,
-        scene.source.display()
-    );
-    let c = &scene.camera;
-    let _ = writeln!(
-        t,
-        "[camera]\nposition = {}\nlook_at = {}\nup = {}\nfov = {}\nwidth = {}\nheight = {}\n",
-        v3(c.position),
-        v3(c.look_at),
-        v3(c.up),
-        num(c.fov_deg),
-        c.width,
-        c.height
-    );
-    let _ = writeln!(
-        t,
-        "[world]\nambient = {}\nbackground = {}",
-        v3(scene.ambient),
-        v3(scene.background)
-    );
-    if let Some(env) = &scene.environment {
-        let m = env.transform;
-        let rows = (0..3)
-            .map(|r| {
-                let row = m.row(r);
-                format!("[{}, {}, {}, 0.0]", num(row.x), num(row.y), num(row.z))
-            })
-            .collect::<Vec<_>>()
-            .join(", ");
-        let _ = writeln!(
-            t,
-            "environment = {{ file = {}, scale = {}, transform = {{ matrix = [{rows}, [0.0, 0.0, 0.0, 1.0]] }} }}",
-            quote(&reference(scene, &env.file, &out_dir)),
-            v3(env.scale)
-        );
-    }
-    t.push('\n');
-    let s = &scene.settings;
-    if s != &Default::default() {
-        t.push_str("[render]\n");
-        if let Some(i) = &s.integrator {
-            let _ = writeln!(t, "integrator = {}", quote(i));
-        }
-        if let Some(n) = s.spp {
-            let _ = writeln!(t, "spp = {n}");
-        }
-        if let Some(n) = s.max_depth {
-            let _ = writeln!(t, "max_depth = {n}");
-        }
-        if let Some(f) = s.filter {
-            let f = match f {
-                Filter::Box { radius } => format!("{{ type = \"box\", radius = {} }}", num(radius)),
-                Filter::Triangle { radius } => {
-                    format!("{{ type = \"triangle\", radius = {} }}", num(radius))
-                }
-                Filter::Gaussian { radius, sigma } => format!(
-                    "{{ type = \"gaussian\", radius = {}, sigma = {} }}",
-                    num(radius),
-                    num(sigma)
-                ),
-            };
-            let _ = writeln!(t, "filter = {f}");
-        }
-        t.push('\n');
-    }
+    let refs = Refs {
+        scene,
+        out_dir: &out_dir,
+    };
     // Material names as TOML keys: the scene's own where unique, else m<index>.
     let mut keys: Vec<String> = Vec::new();
     for (i, m) in scene.materials.iter().enumerate() {
@@ -183,153 +95,295 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::Result<()> {
         };
         keys.push(key);
     }
-    for (m, key) in scene.materials.iter().zip(&keys) {
-        let _ = writeln!(t, "[materials.{}]", quote(key));
-        let diffuse = match &m.diffuse {
-            Texture::Constant(c) => v3(*c),
-            Texture::Checker { even, odd, size } => format!(
-                "{{ checker = {{ even = {}, odd = {}, size = {} }} }}",
-                v3(*even),
-                v3(*odd),
-                num(*size)
-            ),
-            Texture::UvChecker { even, odd, mapping } => format!(
-                "{{ uv_checker = {{ even = {}, odd = {}, uscale = {}, vscale = {}, udelta = {}, vdelta = {} }} }}",
-                v3(*even),
-                v3(*odd),
-                num(mapping.scale.x),
-                num(mapping.scale.y),
-                num(mapping.offset.x),
-                num(mapping.offset.y)
-            ),
-            Texture::Image(img) => format!(
-                "{{ image = {{ file = {}, encoding = {}, scale = {}, invert = {}, uscale = {}, vscale = {}, udelta = {}, vdelta = {} }} }}",
-                quote(&reference(scene, &img.file, &out_dir)),
-                quote(&img.encoding.name()),
-                num(img.scale),
-                img.invert,
-                num(img.mapping.scale.x),
-                num(img.mapping.scale.y),
-                num(img.mapping.offset.x),
-                num(img.mapping.offset.y)
-            ),
-        };
-        let _ = writeln!(t, "diffuse = {diffuse}");
-        if let Some(a) = m.ambient {
-            let _ = writeln!(t, "ambient = {}", v3(a));
-        }
-        let _ = writeln!(
-            t,
-            "specular = {}\ntransmission = {}\nior = {}\nphong_exponent = {}\nroughness = {}\n\
-             fresnel = {}\nemission = {}\n",
-            v3(m.specular),
-            v3(m.transmission),
-            num(m.ior),
-            num(m.phong_exponent),
-            num(m.roughness),
-            m.fresnel,
-            v3(m.emission)
-        );
-    }
-    // Meshes go to a temporary folder that replaces NAME.meshes only once all is written.
-    let final_mesh_dir = out_dir.join(&mesh_dir_name);
-    let mesh_dir = out_dir.join(format!(".{mesh_dir_name}.tmp-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&mesh_dir);
-    let cleanup = TempDir(mesh_dir.clone());
-    let mut wrote_meshes = false;
+    let mut file = FileDesc {
+        camera: Some(spanned(camera(&scene.camera))),
+        world: Some(spanned(world(scene, refs))),
+        materials: Ordered(
+            scene
+                .materials
+                .iter()
+                .zip(&keys)
+                .map(|(m, key)| (key.clone(), spanned(material(m, refs))))
+                .collect(),
+        ),
+        shapes: Vec::new(),
+        lights: scene.lights.iter().map(|l| spanned(light(l))).collect(),
+        render: render(&scene.settings).map(spanned),
+    };
+    let mut meshes = MeshDir::new(&out_dir, format!("{stem}.meshes"));
     for (i, shape) in scene.shapes.iter().enumerate() {
-        let _ = writeln!(t, "[[shapes]]");
-        match &shape.geometry {
+        let mut desc = match &shape.geometry {
             Geometry::Sphere { center, radius } => {
-                let _ = writeln!(
-                    t,
-                    "type = \"sphere\"\ncenter = {}\nradius = {}",
-                    v3(*center),
-                    num(*radius)
-                );
+                let mut d = ShapeDesc::new(ShapeKind::Sphere);
+                d.center = Some(V3(*center));
+                d.radius = Some(*radius);
+                d
             }
             g => {
-                if !wrote_meshes {
-                    std::fs::create_dir_all(&mesh_dir).map_err(|e| Error::io(&mesh_dir, e))?;
-                    wrote_meshes = true;
-                }
-                let name = format!("mesh_{i:04}.ply");
-                let path = mesh_dir.join(&name);
-                match g {
-                    Geometry::Triangles(m) => super::ply::write(
-                        &path,
-                        &m.positions,
-                        m.normals.as_deref(),
-                        m.uvs.as_deref(),
-                        &m.indices,
-                        &[],
-                    )?,
-                    Geometry::Quads(q) => {
-                        super::ply::write(&path, &q.positions, None, None, &[], &q.indices)?
-                    }
-                    Geometry::Sphere { .. } => unreachable!("handled above"),
-                }
-                let _ = writeln!(
-                    t,
-                    "type = \"ply\"\nfile = {}",
-                    quote(&format!("{mesh_dir_name}/{name}"))
-                );
+                let mut d = ShapeDesc::new(ShapeKind::Ply);
+                d.file = Some(meshes.write(i, g)?);
+                d
             }
-        }
-        let _ = writeln!(t, "material = {}\n", quote(&keys[shape.material]));
+        };
+        desc.material = Some(keys[shape.material].clone());
+        file.shapes.push(spanned(desc));
     }
-    for light in &scene.lights {
-        match light {
-            super::Light::Point {
-                position,
-                intensity,
-            } => {
-                let _ = writeln!(
-                    t,
-                    "[[lights]]\ntype = \"point\"\nposition = {}\nintensity = {}\n",
-                    v3(*position),
-                    v3(*intensity)
-                );
-            }
-            super::Light::Directional {
-                direction,
-                irradiance,
-            } => {
-                let _ = writeln!(
-                    t,
-                    "[[lights]]\ntype = \"directional\"\ndirection = {}\nirradiance = {}\n",
-                    v3(*direction),
-                    v3(*irradiance)
-                );
-            }
+    let body = toml::to_string(&file).map_err(|e| {
+        Error::Options(format!(
+            "{}: the scene cannot be written as TOML: {e}",
+            output.display()
+        ))
+    })?;
+    let text = format!(
+        "# Written by raylink {} from {}.\n\n{body}",
+        crate::VERSION,
+        scene.source.display()
+    );
+    meshes.install()?;
+    crate::atomic_file::write(output, text.as_bytes())
+}
+
+/// What resolves the paths of referenced files (textures, environment maps).
+#[derive(Clone, Copy)]
+struct Refs<'a> {
+    scene: &'a Scene,
+    out_dir: &'a Path,
+}
+
+impl Refs<'_> {
+    fn to(&self, file: &Path) -> String {
+        reference(self.scene, file, self.out_dir)
+    }
+}
+
+/// The schema's tables carry their place in a file; a written one has none.
+fn spanned<T>(value: T) -> Spanned<T> {
+    Spanned::new(0..0, value)
+}
+
+fn camera(c: &Camera) -> CameraDesc {
+    CameraDesc {
+        position: V3(c.position),
+        look_at: V3(c.look_at),
+        up: Some(V3(c.up)),
+        fov: Some(c.fov_deg),
+        width: Some(c.width),
+        height: Some(c.height),
+    }
+}
+
+fn world(scene: &Scene, refs: Refs) -> WorldDesc {
+    let environment = scene.environment.as_ref().map(|env| {
+        let m = env.transform;
+        let mut rows: Vec<Vec<f32>> = (0..3)
+            .map(|r| {
+                let row = m.row(r);
+                vec![row.x, row.y, row.z, 0.0]
+            })
+            .collect();
+        rows.push(vec![0.0, 0.0, 0.0, 1.0]);
+        EnvironmentDesc {
+            file: refs.to(&env.file),
+            scale: Some(Splat3(env.scale)),
+            transform: Some(OneOrMany::One(TransformOp {
+                translate: None,
+                rotate: None,
+                scale: None,
+                matrix: Some(rows),
+            })),
+        }
+    });
+    WorldDesc {
+        ambient: Some(Splat3(scene.ambient)),
+        background: Some(Splat3(scene.background)),
+        environment,
+    }
+}
+
+/// The `[render]` table; none for the default settings.
+fn render(s: &RenderSettings) -> Option<RenderDesc> {
+    if s == &RenderSettings::default() {
+        return None;
+    }
+    let filter = s.filter.map(|f| {
+        let (kind, radius, sigma) = match f {
+            Filter::Box { radius } => ("box", radius, None),
+            Filter::Triangle { radius } => ("triangle", radius, None),
+            Filter::Gaussian { radius, sigma } => ("gaussian", radius, Some(sigma)),
+        };
+        FilterDesc {
+            kind: kind.into(),
+            radius: Some(radius),
+            sigma,
+        }
+    });
+    Some(RenderDesc {
+        integrator: s.integrator.clone(),
+        spp: s.spp,
+        max_depth: s.max_depth,
+        filter,
+    })
+}
+
+fn material(m: &Material, refs: Refs) -> MaterialDesc {
+    MaterialDesc {
+        diffuse: Some(diffuse(&m.diffuse, refs)),
+        ambient: m.ambient.map(Splat3),
+        specular: Some(Splat3(m.specular)),
+        transmission: Some(Splat3(m.transmission)),
+        ior: Some(m.ior),
+        phong_exponent: Some(m.phong_exponent),
+        roughness: Some(m.roughness),
+        fresnel: Some(m.fresnel),
+        emission: Some(Splat3(m.emission)),
+    }
+}
+
+fn diffuse(t: &Texture, refs: Refs) -> DiffuseDesc {
+    let table = match t {
+        Texture::Constant(c) => return DiffuseDesc::Colour(*c),
+        Texture::Checker { even, odd, size } => TextureTable {
+            checker: Some(CheckerDesc {
+                even: Splat3(*even),
+                odd: Splat3(*odd),
+                size: Some(*size),
+            }),
+            uv_checker: None,
+            image: None,
+        },
+        Texture::UvChecker { even, odd, mapping } => TextureTable {
+            checker: None,
+            uv_checker: Some(UvCheckerDesc {
+                even: Splat3(*even),
+                odd: Splat3(*odd),
+                uscale: Some(mapping.scale.x),
+                vscale: Some(mapping.scale.y),
+                udelta: Some(mapping.offset.x),
+                vdelta: Some(mapping.offset.y),
+            }),
+            image: None,
+        },
+        Texture::Image(img) => TextureTable {
+            checker: None,
+            uv_checker: None,
+            image: Some(ImageDesc {
+                file: refs.to(&img.file),
+                encoding: Some(img.encoding.name()),
+                scale: Some(img.scale),
+                invert: Some(img.invert),
+                uscale: Some(img.mapping.scale.x),
+                vscale: Some(img.mapping.scale.y),
+                udelta: Some(img.mapping.offset.x),
+                vdelta: Some(img.mapping.offset.y),
+            }),
+        },
+    };
+    DiffuseDesc::Texture(table)
+}
+
+fn light(l: &Light) -> LightDesc {
+    let mut d = LightDesc {
+        kind: LightKind::Point,
+        position: None,
+        intensity: None,
+        direction: None,
+        irradiance: None,
+    };
+    match *l {
+        Light::Point {
+            position,
+            intensity,
+        } => {
+            d.position = Some(V3(position));
+            d.intensity = Some(Splat3(intensity));
+        }
+        Light::Directional {
+            direction,
+            irradiance,
+        } => {
+            d.kind = LightKind::Directional;
+            d.direction = Some(V3(direction));
+            d.irradiance = Some(Splat3(irradiance));
         }
     }
-    if wrote_meshes {
-        // Swap the new meshes in: old folder aside, new one in place, old one removed.
-        let old = out_dir.join(format!(".{mesh_dir_name}.old-{}", std::process::id()));
-        let had_old = final_mesh_dir.exists();
+    d
+}
+
+/// The `NAME.meshes` folder: meshes go to a temporary folder that replaces it only once all
+/// is written (and is removed on drop, after a failure or once renamed away).
+struct MeshDir {
+    out_dir: PathBuf,
+    /// `NAME.meshes`, as the TOML refers to it.
+    name: String,
+    tmp: PathBuf,
+    created: bool,
+}
+
+impl MeshDir {
+    fn new(out_dir: &Path, name: String) -> MeshDir {
+        let tmp = out_dir.join(format!(".{name}.tmp-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&tmp);
+        MeshDir {
+            out_dir: out_dir.to_path_buf(),
+            name,
+            tmp,
+            created: false,
+        }
+    }
+
+    /// Writes shape `i`'s mesh as PLY; returns the path the TOML gives it.
+    fn write(&mut self, i: usize, g: &Geometry) -> crate::Result<String> {
+        if !self.created {
+            std::fs::create_dir_all(&self.tmp).map_err(|e| Error::io(&self.tmp, e))?;
+            self.created = true;
+        }
+        let file = format!("mesh_{i:04}.ply");
+        let path = self.tmp.join(&file);
+        match g {
+            Geometry::Triangles(m) => super::ply::write(
+                &path,
+                &m.positions,
+                m.normals.as_deref(),
+                m.uvs.as_deref(),
+                &m.indices,
+                &[],
+            )?,
+            Geometry::Quads(q) => {
+                super::ply::write(&path, &q.positions, None, None, &[], &q.indices)?
+            }
+            Geometry::Sphere { .. } => unreachable!("spheres are written inline"),
+        }
+        Ok(format!("{}/{file}", self.name))
+    }
+
+    /// Swaps the new meshes in: old folder aside, new one in place, old one removed.
+    fn install(self) -> crate::Result<()> {
+        if !self.created {
+            return Ok(());
+        }
+        let final_dir = self.out_dir.join(&self.name);
+        let old = self
+            .out_dir
+            .join(format!(".{}.old-{}", self.name, std::process::id()));
+        let had_old = final_dir.exists();
         if had_old {
-            std::fs::rename(&final_mesh_dir, &old).map_err(|e| Error::io(&final_mesh_dir, e))?;
+            std::fs::rename(&final_dir, &old).map_err(|e| Error::io(&final_dir, e))?;
         }
-        if let Err(e) = std::fs::rename(&mesh_dir, &final_mesh_dir) {
+        if let Err(e) = std::fs::rename(&self.tmp, &final_dir) {
             if had_old {
-                let _ = std::fs::rename(&old, &final_mesh_dir);
+                let _ = std::fs::rename(&old, &final_dir);
             }
-            return Err(Error::io(&final_mesh_dir, e));
+            return Err(Error::io(&final_dir, e));
         }
         if had_old {
             let _ = std::fs::remove_dir_all(&old);
         }
+        Ok(())
     }
-    drop(cleanup);
-    crate::atomic_file::write(output, t.as_bytes())
 }
 
-/// A temporary folder removed on drop (after a failure, or when it was renamed away).
-struct TempDir(PathBuf);
-
-impl Drop for TempDir {
+impl Drop for MeshDir {
     fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
+        let _ = std::fs::remove_dir_all(&self.tmp);
     }
 }

@@ -1,0 +1,438 @@
+//! Building the scene: the builder checks the values of the deserialised file (see
+//! [`schema`](super::schema)), bakes transforms into world-space geometry, and resolves
+//! material names, meshes, textures and environment maps relative to the file.
+
+mod shapes;
+
+use super::checks::{
+    colour, direction, finite, finite3, matrix, non_negative, positive, resolution, Xform,
+};
+use super::diagnostics::{Ctx, Site};
+use super::schema::{
+    CameraDesc, DiffuseDesc, EnvironmentDesc, FileDesc, LightDesc, LightKind, MaterialDesc,
+    OneOrMany, RenderDesc, Splat3, TextureTable, TransformOp,
+};
+use crate::image::filter::Filter;
+use crate::math::{Mat3, Mat4, Rgb, Vec2, Vec3};
+use crate::scene::environment::Environment;
+use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
+use crate::scene::{Camera, Light, Material, RenderSettings, Scene, Texture};
+use crate::Error;
+use std::collections::HashMap;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use toml::Spanned;
+
+pub(super) struct Builder<'a> {
+    ctx: Ctx<'a>,
+    /// Directory that relative mesh paths start from.
+    dir: PathBuf,
+    materials: Vec<Material>,
+    names: HashMap<String, usize>,
+    /// Scene material index of each MTL material already loaded, by OBJ file.
+    obj_materials: HashMap<PathBuf, Vec<usize>>,
+}
+
+impl<'a> Builder<'a> {
+    pub(super) fn new(ctx: Ctx<'a>) -> Self {
+        let dir = ctx.path.parent().map(Path::to_path_buf).unwrap_or_default();
+        Builder {
+            ctx,
+            dir,
+            materials: Vec::new(),
+            names: HashMap::new(),
+            obj_materials: HashMap::new(),
+        }
+    }
+
+    fn site(&self, name: String, span: Range<usize>) -> Site {
+        Site { name, span }
+    }
+
+    pub(super) fn build(mut self, file: FileDesc) -> crate::Result<Scene> {
+        let ctx = self.ctx;
+        let Some(camera) = file.camera else {
+            return Err(Error::input(
+                ctx.path,
+                "missing [camera] table: the scene needs a camera (position, look_at, fov)",
+            ));
+        };
+        let camera = self.camera(camera)?;
+
+        let settings = match file.render {
+            Some(r) => self.render(r)?,
+            None => RenderSettings::default(),
+        };
+        let mut environment = None;
+        let (ambient, background) = match file.world {
+            Some(world) => {
+                let site = self.site("world".into(), world.span());
+                let mut world = world.into_inner();
+                if let Some(env) = world.environment.take() {
+                    environment = Some(std::sync::Arc::new(self.environment(&site, env)?));
+                }
+                let get = |v: Option<Splat3>, key: &str| -> crate::Result<Rgb> {
+                    v.map_or(Ok(Rgb::ZERO), |c| {
+                        colour(c.0).map_err(|m| ctx.fail(&site, key, m))
+                    })
+                };
+                (
+                    get(world.ambient, "ambient")?,
+                    get(world.background, "background")?,
+                )
+            }
+            None => (Rgb::ZERO, Rgb::ZERO),
+        };
+
+        for (name, desc) in file.materials.0 {
+            let site = self.site(format!("materials.{name}"), desc.span());
+            let material = self.material(&site, name.clone(), desc.into_inner())?;
+            self.names.insert(name, self.materials.len());
+            self.materials.push(material);
+        }
+
+        if file.shapes.is_empty() {
+            return Err(Error::input(
+                ctx.path,
+                "the scene has no shapes: add at least one [[shapes]] table",
+            ));
+        }
+        let mut shapes = Vec::new();
+        for (i, desc) in file.shapes.into_iter().enumerate() {
+            let site = self.site(format!("shapes[{i}]"), desc.span());
+            shapes.extend(self.shape(&site, desc.into_inner())?);
+        }
+
+        let mut lights = Vec::new();
+        for (i, desc) in file.lights.into_iter().enumerate() {
+            let site = self.site(format!("lights[{i}]"), desc.span());
+            lights.push(self.light(&site, desc.into_inner())?);
+        }
+
+        Ok(Scene {
+            source: ctx.path.to_path_buf(),
+            camera,
+            materials: self.materials,
+            shapes,
+            lights,
+            ambient,
+            background,
+            environment,
+            settings,
+            warnings: Vec::new(),
+        })
+    }
+
+    fn camera(&self, desc: Spanned<CameraDesc>) -> crate::Result<Camera> {
+        let ctx = self.ctx;
+        let site = self.site("camera".into(), desc.span());
+        let desc = desc.into_inner();
+        let at = |key: &str, r: Result<Vec3, String>| r.map_err(|m| ctx.fail(&site, key, m));
+        let position = at("position", finite3(desc.position.0))?;
+        let look_at = at("look_at", finite3(desc.look_at.0))?;
+        let up = at("up", direction(desc.up.map_or(Vec3::Y, |v| v.0)))?;
+        let forward = look_at - position;
+        if forward.length() <= 1e-6 * (1.0 + position.abs().max_element()) {
+            return Err(ctx.fail(
+                &site,
+                "look_at",
+                format!("must differ from the camera position {position}"),
+            ));
+        }
+        if forward.normalize().cross(up).length() < 1e-4 {
+            return Err(ctx.fail(
+                &site,
+                "up",
+                format!("must not be parallel to the viewing direction, got {up}"),
+            ));
+        }
+        let fov = desc.fov.unwrap_or(45.0);
+        if !(fov > 0.0 && fov < 180.0) {
+            return Err(ctx.fail(
+                &site,
+                "fov",
+                format!("must be in (0, 180) degrees, got {fov}"),
+            ));
+        }
+        let width =
+            resolution(desc.width.unwrap_or(640)).map_err(|m| ctx.fail(&site, "width", m))?;
+        let height =
+            resolution(desc.height.unwrap_or(480)).map_err(|m| ctx.fail(&site, "height", m))?;
+        Ok(Camera {
+            position,
+            look_at,
+            up,
+            fov_deg: fov,
+            width,
+            height,
+        })
+    }
+
+    fn material(&self, site: &Site, name: String, desc: MaterialDesc) -> crate::Result<Material> {
+        let ctx = self.ctx;
+        let fail = |key: &'static str| move |m: String| ctx.fail(site, key, m);
+        let d = Material::default();
+        let col = |v: Option<Splat3>, key: &'static str, default: Rgb| -> crate::Result<Rgb> {
+            v.map_or(Ok(default), |c| colour(c.0).map_err(fail(key)))
+        };
+        let diffuse = match desc.diffuse {
+            None => d.diffuse,
+            Some(DiffuseDesc::Colour(c)) => Texture::Constant(colour(c).map_err(fail("diffuse"))?),
+            Some(DiffuseDesc::Texture(t)) => self.texture(site, t)?,
+        };
+        let ambient = match desc.ambient {
+            None => None,
+            Some(c) => Some(colour(c.0).map_err(fail("ambient"))?),
+        };
+        Ok(Material {
+            name,
+            diffuse,
+            ambient,
+            specular: col(desc.specular, "specular", d.specular)?,
+            transmission: col(desc.transmission, "transmission", d.transmission)?,
+            ior: positive(desc.ior.unwrap_or(d.ior)).map_err(fail("ior"))?,
+            phong_exponent: non_negative(desc.phong_exponent.unwrap_or(d.phong_exponent))
+                .map_err(fail("phong_exponent"))?,
+            roughness: non_negative(desc.roughness.unwrap_or(d.roughness))
+                .map_err(fail("roughness"))?,
+            fresnel: desc.fresnel.unwrap_or(d.fresnel),
+            emission: col(desc.emission, "emission", d.emission)?,
+        })
+    }
+
+    fn texture(&self, site: &Site, t: TextureTable) -> crate::Result<Texture> {
+        let ctx = self.ctx;
+        let fail = |key: &'static str| move |m: String| ctx.fail(site, key, m);
+        let count = [
+            t.checker.is_some(),
+            t.uv_checker.is_some(),
+            t.image.is_some(),
+        ]
+        .iter()
+        .filter(|&&b| b)
+        .count();
+        if count != 1 {
+            return Err(ctx.fail(
+                site,
+                "diffuse",
+                "a texture table takes exactly one of checker, uv_checker or image",
+            ));
+        }
+        let mapping = |us: Option<f32>, vs: Option<f32>, ud: Option<f32>, vd: Option<f32>| {
+            let f = |v: Option<f32>, d: f32| finite(v.unwrap_or(d));
+            Ok::<_, String>(UvMapping {
+                scale: Vec2::new(f(us, 1.0)?, f(vs, 1.0)?),
+                offset: Vec2::new(f(ud, 0.0)?, f(vd, 0.0)?),
+            })
+        };
+        if let Some(c) = t.checker {
+            return Ok(Texture::Checker {
+                even: colour(c.even.0).map_err(fail("diffuse.checker.even"))?,
+                odd: colour(c.odd.0).map_err(fail("diffuse.checker.odd"))?,
+                size: positive(c.size.unwrap_or(1.0)).map_err(fail("diffuse.checker.size"))?,
+            });
+        }
+        if let Some(c) = t.uv_checker {
+            return Ok(Texture::UvChecker {
+                even: colour(c.even.0).map_err(fail("diffuse.uv_checker.even"))?,
+                odd: colour(c.odd.0).map_err(fail("diffuse.uv_checker.odd"))?,
+                mapping: mapping(c.uscale, c.vscale, c.udelta, c.vdelta)
+                    .map_err(fail("diffuse.uv_checker"))?,
+            });
+        }
+        let i = t.image.expect("counted above");
+        let path = self.dir.join(&i.file);
+        let encoding = match i.encoding {
+            None => Encoding::default_for(&path),
+            Some(e) => Encoding::parse(&e).ok_or_else(|| {
+                ctx.fail(
+                    site,
+                    "diffuse.image.encoding",
+                    format!("must be \"linear\", \"sRGB\" or \"gamma G\", got \"{e}\""),
+                )
+            })?,
+        };
+        let scale = non_negative(i.scale.unwrap_or(1.0)).map_err(fail("diffuse.image.scale"))?;
+        let mapping =
+            mapping(i.uscale, i.vscale, i.udelta, i.vdelta).map_err(fail("diffuse.image"))?;
+        let image = ImageTexture::load(
+            &path,
+            i.file.into(),
+            encoding,
+            scale,
+            i.invert.unwrap_or(false),
+            mapping,
+        )
+        .map_err(|e| ctx.fail(site, "diffuse.image.file", e))?;
+        Ok(Texture::Image(std::sync::Arc::new(image)))
+    }
+
+    fn environment(&self, site: &Site, desc: EnvironmentDesc) -> crate::Result<Environment> {
+        let ctx = self.ctx;
+        let xf = self.transform(site, desc.transform)?;
+        let scale = colour(desc.scale.map_or(Vec3::ONE, |s| s.0))
+            .map_err(|m| ctx.fail(site, "environment.scale", m))?;
+        let path = self.dir.join(&desc.file);
+        Environment::load(&path, desc.file.into(), Mat3::from_mat4(xf.m), scale)
+            .map_err(|e| ctx.fail(site, "environment.file", e))
+    }
+
+    fn render(&self, desc: Spanned<RenderDesc>) -> crate::Result<RenderSettings> {
+        let ctx = self.ctx;
+        let site = self.site("render".into(), desc.span());
+        let desc = desc.into_inner();
+        if desc.spp == Some(0) {
+            return Err(ctx.fail(&site, "spp", "must be at least 1"));
+        }
+        let filter = match desc.filter {
+            None => None,
+            Some(f) => {
+                let radius = f.radius;
+                let filter = match f.kind.as_str() {
+                    "box" => Filter::Box {
+                        radius: radius.unwrap_or(0.5),
+                    },
+                    "triangle" => Filter::Triangle {
+                        radius: radius.unwrap_or(2.0),
+                    },
+                    "gaussian" => Filter::Gaussian {
+                        radius: radius.unwrap_or(1.5),
+                        sigma: f.sigma.unwrap_or(0.5),
+                    },
+                    other => {
+                        return Err(ctx.fail(
+                            &site,
+                            "filter.type",
+                            format!(
+                                "must be \"box\", \"triangle\" or \"gaussian\", got \"{other}\""
+                            ),
+                        ))
+                    }
+                };
+                if f.sigma.is_some() && !matches!(filter, Filter::Gaussian { .. }) {
+                    return Err(ctx.fail(
+                        &site,
+                        "filter.sigma",
+                        "only a gaussian filter takes sigma",
+                    ));
+                }
+                filter
+                    .validate()
+                    .map_err(|m| ctx.fail(&site, "filter", m))?;
+                Some(filter)
+            }
+        };
+        Ok(RenderSettings {
+            integrator: desc.integrator,
+            spp: desc.spp,
+            max_depth: desc.max_depth,
+            filter,
+        })
+    }
+
+    fn transform(&self, site: &Site, desc: Option<OneOrMany<TransformOp>>) -> crate::Result<Xform> {
+        let ctx = self.ctx;
+        let (ops, single) = match desc {
+            None => (Vec::new(), true),
+            Some(OneOrMany::One(op)) => (vec![op], true),
+            Some(OneOrMany::Many(ops)) => (ops, false),
+        };
+        let mut m = Mat4::IDENTITY;
+        for (i, op) in ops.into_iter().enumerate() {
+            let field = if single {
+                "transform".to_string()
+            } else {
+                format!("transform[{i}]")
+            };
+            let fail = |key: &str, msg: String| {
+                let f = if key.is_empty() {
+                    field.clone()
+                } else {
+                    format!("{field}.{key}")
+                };
+                ctx.fail(site, &f, msg)
+            };
+            let count = [
+                op.translate.is_some(),
+                op.rotate.is_some(),
+                op.scale.is_some(),
+                op.matrix.is_some(),
+            ]
+            .iter()
+            .filter(|&&b| b)
+            .count();
+            if count != 1 {
+                return Err(fail(
+                    "",
+                    format!(
+                        "each step takes exactly one of translate, rotate, scale or matrix \
+                         (found {count}); use an array of steps to combine them"
+                    ),
+                ));
+            }
+            let step = if let Some(t) = op.translate {
+                Mat4::from_translation(finite3(t.0).map_err(|e| fail("translate", e))?)
+            } else if let Some(r) = op.rotate {
+                let axis = direction(r.axis.0).map_err(|e| fail("rotate.axis", e))?;
+                let deg = finite(r.degrees).map_err(|e| fail("rotate.degrees", e))?;
+                Mat4::from_axis_angle(axis, deg.to_radians())
+            } else if let Some(s) = op.scale {
+                let s = finite3(s.0).map_err(|e| fail("scale", e))?;
+                if s.abs().min_element() == 0.0 {
+                    return Err(fail("scale", format!("must not be zero, got {s}")));
+                }
+                Mat4::from_scale(s)
+            } else if let Some(rows) = op.matrix {
+                matrix(&rows).map_err(|e| fail("matrix", e))?
+            } else {
+                Mat4::IDENTITY
+            };
+            // Steps apply in order: the later one acts on the result of the earlier.
+            m = step * m;
+        }
+        Xform::new(m).map_err(|e| ctx.fail(site, "transform", e))
+    }
+
+    fn light(&self, site: &Site, desc: LightDesc) -> crate::Result<Light> {
+        let ctx = self.ctx;
+        let (name, takes, allowed): (&str, &str, [&str; 2]) = match desc.kind {
+            LightKind::Point => ("point", "position, intensity", ["position", "intensity"]),
+            LightKind::Directional => (
+                "directional",
+                "direction, irradiance",
+                ["direction", "irradiance"],
+            ),
+        };
+        let present = [
+            ("position", desc.position.is_some()),
+            ("intensity", desc.intensity.is_some()),
+            ("direction", desc.direction.is_some()),
+            ("irradiance", desc.irradiance.is_some()),
+        ];
+        for (key, is) in present {
+            if is && !allowed.contains(&key) {
+                return Err(ctx.fail(
+                    site,
+                    key,
+                    format!("a {name} light does not take `{key}` (it takes {takes})"),
+                ));
+            }
+        }
+        let need = |key: &str| ctx.fail(site, "", format!("a {name} light needs `{key}`"));
+        let fail = |key: &'static str| move |m: String| ctx.fail(site, key, m);
+        Ok(match desc.kind {
+            LightKind::Point => Light::Point {
+                position: finite3(desc.position.ok_or_else(|| need("position"))?.0)
+                    .map_err(fail("position"))?,
+                intensity: colour(desc.intensity.ok_or_else(|| need("intensity"))?.0)
+                    .map_err(fail("intensity"))?,
+            },
+            LightKind::Directional => Light::Directional {
+                direction: direction(desc.direction.ok_or_else(|| need("direction"))?.0)
+                    .map_err(fail("direction"))?,
+                irradiance: colour(desc.irradiance.ok_or_else(|| need("irradiance"))?.0)
+                    .map_err(fail("irradiance"))?,
+            },
+        })
+    }
+}
