@@ -12,17 +12,17 @@ use std::time::Duration;
 const SCENES: [&str; 2] = ["cornell", "spheres-100k"];
 
 fn kernels(c: &mut Criterion) {
-    raylink::accel::embree::set_flush_denormals();
+    raylink::platform::set_flush_denormals();
     for name in SCENES {
         let scene = scenes::resolve(name).expect("bench scene");
-        let reference = accel::build(&scene, Backend::Embree).expect("Embree builds");
+        let reference = accel::build(&scene, Backend::Embree, &Default::default()).expect("Embree builds");
         let sets = rays::generate(&scene, reference.as_ref(), 160, 120, 1);
         let mut group = c.benchmark_group(format!("trace/{name}"));
         group
             .sample_size(20)
             .measurement_time(Duration::from_secs(3));
         for backend in Backend::ALL {
-            let accel = accel::build(&scene, backend).expect("backend builds");
+            let accel = accel::build(&scene, backend, &Default::default()).expect("backend builds");
             for kind in RayKind::ALL {
                 let rays = sets.get(kind);
                 group.throughput(Throughput::Elements(rays.len() as u64));
@@ -45,7 +45,7 @@ fn builds(c: &mut Criterion) {
             .throughput(Throughput::Elements(scenes::primitive_count(&scene) as u64));
         for backend in Backend::ALL {
             group.bench_function(BenchmarkId::from_parameter(backend), |b| {
-                b.iter(|| accel::build(&scene, backend).expect("backend builds"))
+                b.iter(|| accel::build(&scene, backend, &Default::default()).expect("backend builds"))
             });
         }
         group.finish();

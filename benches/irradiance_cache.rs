@@ -16,33 +16,59 @@
 //! (`scenes/cornell-box-bitterli/TungstenRender-256.exr`, box-downsampled from 1024x1024, the
 //! light's pixels excluded), where issue 5 quotes Radiance 5.4 at RMSE 0.0056 in 247 s.
 
-use raylink::accel::{self, Backend};
 use raylink::image::compare::{box_downsample, bright_mask, rmse};
 use raylink::image::filter::Filter;
-use raylink::image::output::{read_image, write_image, OutputOptions};
-use raylink::image::Image;
-use raylink::integrators::irradiance_cache::{IcOptions, IrradianceCache};
-use raylink::integrators::path::{PathOptions, PathTracer};
-use raylink::integrators::Context;
-use raylink::render::progressive::{render_progressive, ProgressiveOptions};
-use raylink::scene::Scene;
+use raylink::{read_image, write_image, Control, Image, Job, OutputOptions, Renderer};
+use raylink::{Scene, Settings, Technique, TechniqueKind};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::Instant;
 
 const WIDTH: u32 = 256;
 const HEIGHT: u32 = 192;
 const REFERENCE_SPP: u32 = 4096;
 
-fn options(size: (u32, u32), spp: u32, seed: u64) -> ProgressiveOptions {
-    ProgressiveOptions {
+/// A render of `scene` at `size` with `settings` (a box filter, every core): its image and
+/// seconds, and the technique's report.
+fn render(scene: &Arc<Scene>, size: (u32, u32), settings: Settings, seed: u64) -> (Image, f64, Vec<String>) {
+    let settings = Settings {
+        filter: Some(Filter::Box { radius: 0.5 }),
+        ..settings
+    };
+    let job = Job {
         width: size.0,
         height: size.1,
-        spp,
-        time_limit: None,
-        threads: None,
         seed,
-        progress: false,
-        filter: Filter::Box { radius: 0.5 },
+        ..Job::new(scene, Technique::create(&settings).unwrap())
+    };
+    let control = Control::default();
+    let start = Instant::now();
+    let mut renderer = Renderer::new(scene.clone(), job, &control).unwrap();
+    let image = renderer.render(&control).unwrap().image;
+    (image, start.elapsed().as_secs_f64(), renderer.report())
+}
+
+/// The settings of a cache render.
+#[derive(Clone, Copy)]
+struct Cache {
+    spp: u32,
+    bounces: u32,
+    samples: u32,
+    accuracy: f32,
+    ar: f32,
+}
+
+impl Cache {
+    fn settings(&self) -> Settings {
+        Settings {
+            integrator: Some(TechniqueKind::IrradianceCache),
+            spp: Some(self.spp),
+            ab: Some(self.bounces),
+            ic_samples: Some(self.samples),
+            ic_accuracy: Some(self.accuracy),
+            ar: Some(self.ar),
+            ..Settings::default()
+        }
     }
 }
 
@@ -50,15 +76,18 @@ fn half(image: &Image) -> Image {
     box_downsample(image, image.width / 2, image.height / 2).expect("even size")
 }
 
-fn path_trace(ctx: &Context, size: (u32, u32), spp: u32, seed: u64) -> (Image, f64) {
-    let tracer = PathTracer::new(PathOptions { max_depth: 8 });
-    let start = Instant::now();
-    let o = options(size, spp, seed);
-    let (film, _) = render_progressive(ctx, &tracer, &o, |_| Ok(())).unwrap();
-    (film.image(), start.elapsed().as_secs_f64())
+fn path_trace(scene: &Arc<Scene>, size: (u32, u32), spp: u32, seed: u64) -> (Image, f64) {
+    let settings = Settings {
+        integrator: Some(TechniqueKind::Path),
+        spp: Some(spp),
+        max_depth: Some(8),
+        ..Settings::default()
+    };
+    let (image, seconds, _) = render(scene, size, settings, seed);
+    (image, seconds)
 }
 
-fn room_reference(ctx: &Context) -> Image {
+fn room_reference(scene: &Arc<Scene>) -> Image {
     let path = std::env::var_os("RAYLINK_IC_REFERENCE")
         .map(PathBuf::from)
         .unwrap_or_else(|| {
@@ -72,55 +101,41 @@ fn room_reference(ctx: &Context) -> Image {
         "rendering the reference ({REFERENCE_SPP} spp) to {}",
         path.display()
     );
-    let (image, seconds) = path_trace(ctx, (WIDTH, HEIGHT), REFERENCE_SPP, 99);
+    let (image, seconds) = path_trace(scene, (WIDTH, HEIGHT), REFERENCE_SPP, 99);
     eprintln!("reference rendered in {seconds:.0} s");
     let options = OutputOptions {
         exposure: 0.0,
         half: false,
     };
-    write_image(&path, &image, &Vec::new(), &options).unwrap();
+    write_image(&path, &image, &[], &options).unwrap();
     image
 }
 
 /// One scene's race: the cache at each setting, then the path tracer at doubling sample
 /// counts until it reaches the best cache's error. `compare` maps a render to the
 /// reference's resolution; `mask` excludes reference pixels.
-#[allow(clippy::too_many_arguments)]
 fn race(
     title: &str,
-    scene: &Scene,
-    size: (u32, u32),
-    reference: &Image,
-    compare: &dyn Fn(&Image) -> Image,
-    mask: Option<&[bool]>,
-    configs: &[(u32, IcOptions)],
+    (scene, size): (&Arc<Scene>, (u32, u32)),
+    (reference, compare, mask): (&Image, &dyn Fn(&Image) -> Image, Option<&[bool]>),
+    configs: &[Cache],
     max_spp: u32,
 ) {
-    let accel = accel::build(scene, Backend::Embree).unwrap();
-    let ctx = Context::new(scene, accel.as_ref());
     println!("\n### {title}\n");
-    println!("| render | values (per level) | overture rays / value | time (s) | RMSE |");
-    println!("|---|---|---|---|---|");
+    println!("| render | time (s) | RMSE | cache |");
+    println!("|---|---|---|---|");
     let mut best: Option<(f64, f64)> = None;
-    for &(spp, ic) in configs {
-        let start = Instant::now();
-        let o = options(size, spp, 1);
-        let integrator = IrradianceCache::build(&ctx, &o, ic, None).unwrap();
-        let overture = start.elapsed().as_secs_f64();
-        let (film, _) = render_progressive(&ctx, &integrator, &o, |_| Ok(())).unwrap();
-        let seconds = start.elapsed().as_secs_f64();
-        let error = rmse(&compare(&film.image()), reference, mask);
-        let stats = integrator.stats;
-        let levels: Vec<usize> = integrator.cache().levels.iter().map(|l| l.len()).collect();
+    for c in configs {
+        let (image, seconds, report) = render(scene, size, c.settings(), 1);
+        let error = rmse(&compare(&image), reference, mask);
         println!(
-            "| irradiance cache, a {}, {} rays, ab {}, ar {}, {spp} spp | {} {levels:?} | \
-             {:.0} | {seconds:.2} (overture {overture:.2}) | {error:.5} |",
-            ic.accuracy,
-            ic.samples,
-            ic.bounces,
-            ic.ar,
-            integrator.cache().len(),
-            stats.overture_rays as f64 / stats.overture_primaries.max(1) as f64,
+            "| irradiance cache, a {}, {} rays, ab {}, ar {}, {} spp | {seconds:.2} | {error:.5} | {} |",
+            c.accuracy,
+            c.samples,
+            c.bounces,
+            c.ar,
+            c.spp,
+            report.join("; ")
         );
         if best.is_none_or(|(t, e)| seconds * error * error < t * e * e) {
             best = Some((seconds, error));
@@ -132,9 +147,9 @@ fn race(
     let mut spp = 16;
     let mut reached = None;
     while spp <= max_spp {
-        let (image, seconds) = path_trace(&ctx, size, spp, 1);
+        let (image, seconds) = path_trace(scene, size, spp, 1);
         let error = rmse(&compare(&image), reference, mask);
-        println!("| path tracer, {spp} spp | | | {seconds:.2} | {error:.5} |");
+        println!("| path tracer, {spp} spp | {seconds:.2} | {error:.5} | |");
         if error <= target {
             // Between the two bracketing runs, error² · time is about constant.
             reached = Some(match previous {
@@ -164,64 +179,49 @@ fn race(
 
 fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let scene = Scene::load(&root.join("scenes/indirect-room.toml")).unwrap();
-    let reference = {
-        let accel = accel::build(&scene, Backend::Embree).unwrap();
-        half(&room_reference(&Context::new(&scene, accel.as_ref())))
-    };
+    let scene = Arc::new(Scene::load(&root.join("scenes/indirect-room.toml")).unwrap());
+    let reference = half(&room_reference(&scene));
     // Radiance-style settings for an indirectly lit room: many bounces, many rays per
     // value, and a coarser minimum spacing (ar) than the defaults; the final pass needs few
     // samples since nothing in view is lit directly.
-    let room = IcOptions {
+    let room = Cache {
+        spp: 4,
         bounces: 7,
         samples: 2048,
         accuracy: 0.25,
-        ..IcOptions::default()
+        ar: 16.0,
     };
     race(
         "Indirectly lit room, 256x192 (RMSE at 128x96)",
-        &scene,
-        (WIDTH, HEIGHT),
-        &reference,
-        &half,
-        None,
-        &[
-            (4, IcOptions { ar: 16.0, ..room }),
-            (4, IcOptions { ar: 8.0, ..room }),
-            (4, IcOptions { ar: 4.0, ..room }),
-        ],
+        (&scene, (WIDTH, HEIGHT)),
+        (&reference, &half, None),
+        &[room, Cache { ar: 8.0, ..room }, Cache { ar: 4.0, ..room }],
         REFERENCE_SPP / 4,
     );
 
-    let cornell = Scene::load(&root.join("scenes/cornell-box.toml")).unwrap();
+    let cornell = Arc::new(Scene::load(&root.join("scenes/cornell-box.toml")).unwrap());
     let tungsten = root.join("scenes/cornell-box-bitterli/TungstenRender-256.exr");
     let (reference, _) = read_image(&tungsten).unwrap_or_else(|e| panic!("{e}"));
     let mask = bright_mask(&reference, 1.0);
+    let box_cache = Cache {
+        spp: 16,
+        bounces: 5,
+        samples: 512,
+        accuracy: 0.15,
+        ar: 16.0,
+    };
     race(
         "Cornell box, 256x256, against Tungsten (light pixels excluded)",
-        &cornell,
-        (256, 256),
-        &reference,
-        &|image: &Image| image.clone(),
-        Some(&mask),
+        (&cornell, (256, 256)),
+        (&reference, &|image: &Image| image.clone(), Some(&mask)),
         &[
-            (
-                16,
-                IcOptions {
-                    bounces: 5,
-                    ar: 16.0,
-                    ..IcOptions::default()
-                },
-            ),
-            (
-                16,
-                IcOptions {
-                    bounces: 8,
-                    ar: 32.0,
-                    samples: 1024,
-                    ..IcOptions::default()
-                },
-            ),
+            box_cache,
+            Cache {
+                bounces: 8,
+                ar: 32.0,
+                samples: 1024,
+                ..box_cache
+            },
         ],
         256,
     );

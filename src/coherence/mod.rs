@@ -13,7 +13,9 @@
 //!   [`report`] writes them for people.
 
 pub(crate) mod changes;
-pub(crate) mod grid;
+/// The voxel grid and its walk, public only for `benches/coherence.rs`: not an API.
+#[doc(hidden)]
+pub mod grid;
 pub(crate) mod record;
 pub(crate) mod renderer;
 pub mod report;

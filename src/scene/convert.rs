@@ -129,7 +129,7 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::Result<()> {
         file.shapes.push(spanned(desc));
     }
     let body = toml::to_string(&file).map_err(|e| {
-        Error::Options(format!(
+        Error::Invalid(format!(
             "{}: the scene cannot be written as TOML: {e}",
             output.display()
         ))
