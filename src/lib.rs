@@ -52,6 +52,8 @@ pub mod math;
 pub mod platform;
 pub(crate) mod render;
 pub mod scene;
+#[cfg(test)]
+mod tests;
 
 pub use accel::Backend;
 pub use error::{Error, Result};
