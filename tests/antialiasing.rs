@@ -1,12 +1,11 @@
 //! Whitted's adaptive anti-aliasing against regular supersampling on scenes/whitted.toml.
 
-use raylink::accel::{self, Backend};
-use raylink::image::Image;
-use raylink::integrators::whitted::{Whitted, WhittedOptions};
-use raylink::integrators::Context;
-use raylink::render::{render, PixelSampling, RenderOptions, RenderStats};
-use raylink::scene::Scene;
+use raylink::job::AntiAliasing;
+use raylink::{
+    Backend, Control, Image, Job, RenderStats, Renderer, Scene, Settings, Technique, TechniqueKind,
+};
 use std::path::Path;
+use std::sync::Arc;
 
 /// Largest RMSE (display values, clamped to [0, 1]) accepted between the adaptive image and
 /// the 16x16-supersampled reference at 160x120. At this size most of the checkerboard is
@@ -24,31 +23,56 @@ fn clamped(image: &Image) -> Image {
     }
 }
 
+/// Whitted with its default options and the pixel sampling `sampling` gives (the settings
+/// of anti-aliasing only).
+fn whitted(sampling: Settings) -> Technique {
+    Technique::create(&Settings {
+        integrator: Some(TechniqueKind::Whitted),
+        ..sampling
+    })
+    .unwrap()
+}
+
+/// Uniform `n`×`n` supersampling.
+fn uniform(n: u32) -> Settings {
+    Settings {
+        aa: Some(AntiAliasing::Uniform),
+        spp: Some(n * n),
+        ..Settings::default()
+    }
+}
+
 #[test]
 fn adaptive_traces_fewer_rays_than_4x4_and_stays_close_to_16x16() {
-    let scene =
-        Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/whitted.toml")).unwrap();
-    let accel = accel::build(&scene, Backend::Embree).unwrap();
-    let ctx = Context::new(&scene, accel.as_ref());
-    let whitted = Whitted::new(WhittedOptions::default());
-    let run = |sampling| -> (Image, RenderStats) {
-        let options = RenderOptions {
+    let scene = Arc::new(
+        Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/whitted.toml")).unwrap(),
+    );
+    let run = |sampling: Settings| -> (Image, RenderStats) {
+        let job = Job {
             width: 160,
             height: 120,
-            sampling,
-            threads: None,
+            region: None,
             seed: 3,
-            progress: false,
+            threads: None,
+            accel: Backend::Embree,
+            ..Job::new(&scene, whitted(sampling))
         };
-        let (image, stats) = render(&ctx, &whitted, &options).unwrap();
-        (clamped(&image), stats)
+        let control = Control::default();
+        let rendered = Renderer::new(scene.clone(), job, &control)
+            .unwrap()
+            .render(&control)
+            .unwrap();
+        (clamped(&rendered.image), rendered.stats)
     };
-    let (reference, _) = run(PixelSampling::Uniform { n: 16 });
-    let (uniform, uniform_stats) = run(PixelSampling::Uniform { n: 4 });
-    let (adaptive, adaptive_stats) = run(PixelSampling::default());
-    let (corners, _) = run(PixelSampling::Adaptive {
-        threshold: 0.0,
-        max_depth: 0,
+    let (reference, _) = run(uniform(16));
+    let (uniform, uniform_stats) = run(uniform(4));
+    // The default: adaptive, threshold 0.1, depth 3.
+    let (adaptive, adaptive_stats) = run(Settings::default());
+    let (corners, _) = run(Settings {
+        aa: Some(AntiAliasing::Adaptive),
+        aa_threshold: Some(0.0),
+        aa_depth: Some(0),
+        ..Settings::default()
     });
     let (e_uniform, e_adaptive, e_corners) = (
         uniform.rmse(&reference),

@@ -4,14 +4,12 @@
 
 use raylink::accel::bvh::BvhAccel;
 use raylink::accel::embree::EmbreeAccel;
-use raylink::accel::{self, Accel, Backend, Hit};
+use raylink::accel::{Accel, Backend, Hit};
 use raylink::bench::{rays, scenes};
 use raylink::image::Image;
-use raylink::integrators::whitted::{Whitted, WhittedOptions};
-use raylink::integrators::Context;
 use raylink::math::{Ray, Rgb, Rng, Vec3};
-use raylink::render::{render, PixelSampling, RenderOptions};
 use raylink::scene::{Camera, Geometry, Material, QuadMesh, Scene, Shape};
+use raylink::{Control, Job, Renderer, Settings, Technique, TechniqueKind};
 use std::path::Path;
 
 fn load(name: &str) -> Scene {
@@ -415,18 +413,28 @@ const W: u32 = 128;
 const H: u32 = 96;
 
 fn render_with(scene: &Scene, backend: Backend) -> Image {
-    let accel = accel::build(scene, backend).unwrap();
-    let ctx = Context::new(scene, accel.as_ref());
-    let options = RenderOptions {
+    // Whitted with its defaults, one sample per pixel (uniform 1x1).
+    let technique = Technique::create(&Settings {
+        integrator: Some(TechniqueKind::Whitted),
+        spp: Some(1),
+        ..Settings::default()
+    })
+    .unwrap();
+    let job = Job {
         width: W,
         height: H,
-        sampling: PixelSampling::Uniform { n: 1 },
-        threads: None,
+        region: None,
         seed: 3,
-        progress: false,
+        threads: None,
+        accel: backend,
+        ..Job::new(scene, technique)
     };
-    let whitted = Whitted::new(WhittedOptions::default());
-    render(&ctx, &whitted, &options).unwrap().0
+    let control = Control::default();
+    Renderer::new(scene.clone(), job, &control)
+        .unwrap()
+        .render(&control)
+        .unwrap()
+        .image
 }
 
 /// Whitted renders through both backends (128×96, one sample per pixel, area lights sampled):

@@ -1,7 +1,8 @@
 //! The Embree wrapper on geometry whose answers are known in closed form.
 
-use raylink::accel::embree::{flush_denormals_enabled, set_flush_denormals, Device, Scene};
+use raylink::accel::embree::{Device, Scene};
 use raylink::math::{Ray, Vec3, Vec4};
+use raylink::platform::{flush_denormals_enabled, set_flush_denormals};
 
 fn ray(o: [f32; 3], d: [f32; 3]) -> Ray {
     Ray::new(Vec3::from(o), Vec3::from(d))

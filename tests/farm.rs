@@ -148,8 +148,8 @@ fn path_traced_tiles_with_a_wide_filter_equal_the_whole_render() {
     }
 }
 
-fn tile_at(x0: u32, y0: u32, x1: u32, y1: u32) -> raylink::render::Tile {
-    raylink::render::Tile { x0, y0, x1, y1 }
+fn tile_at(x0: u32, y0: u32, x1: u32, y1: u32) -> raylink::Tile {
+    raylink::Tile { x0, y0, x1, y1 }
 }
 
 /// Whitted's adaptive anti-aliasing: squares are subdivided by comparing corner samples, and

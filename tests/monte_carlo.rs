@@ -1,17 +1,13 @@
 //! The Monte Carlo integrators against analytic answers, each other, an external reference
 //! render, and themselves (determinism).
 
-use raylink::accel::{self, Backend};
 use raylink::image::compare::{bright_mask, mean, rmse};
 use raylink::image::filter::Filter;
 use raylink::image::output::read_image;
 use raylink::image::Image;
-use raylink::integrators::bdpt::{Bdpt, BdptOptions};
-use raylink::integrators::light::{LightOptions, LightTracer};
-use raylink::integrators::path::{PathOptions, PathTracer};
-use raylink::integrators::{Context, MonteCarlo};
-use raylink::render::progressive::{render_progressive, ProgressiveOptions};
+use raylink::job::MonteCarloSettings;
 use raylink::scene::Scene;
+use raylink::{Backend, Control, Job, Renderer, Technique};
 use std::path::Path;
 
 fn manifest(p: &str) -> std::path::PathBuf {
@@ -25,11 +21,11 @@ enum Kind {
     Bdpt,
 }
 
-fn integrator(kind: Kind, max_depth: u32) -> Box<dyn MonteCarlo> {
+fn technique(kind: Kind, mc: MonteCarloSettings) -> Technique {
     match kind {
-        Kind::Path => Box::new(PathTracer::new(PathOptions { max_depth })),
-        Kind::Light => Box::new(LightTracer::new(LightOptions { max_depth })),
-        Kind::Bdpt => Box::new(Bdpt::new(BdptOptions { max_depth })),
+        Kind::Path => Technique::Path(mc),
+        Kind::Light => Technique::Light(mc),
+        Kind::Bdpt => Technique::Bdpt(mc),
     }
 }
 
@@ -44,25 +40,29 @@ struct Setup {
 }
 
 fn render(scene: &Scene, kind: Kind, s: &Setup) -> Image {
-    let accel = accel::build(scene, Backend::Embree).unwrap();
-    let ctx = Context::new(scene, accel.as_ref());
-    let options = ProgressiveOptions {
-        width: s.width,
-        height: s.height,
+    let mc = MonteCarloSettings {
+        max_depth: s.max_depth,
         spp: s.spp,
         time_limit: None,
-        threads: s.threads,
-        seed: s.seed,
-        progress: false,
         filter: s.filter,
     };
-    let (film, _) = render_progressive(
-        &ctx,
-        integrator(kind, s.max_depth).as_ref(),
-        &options,
-        |_| Ok(()),
-    )
-    .unwrap();
+    let job = Job {
+        width: s.width,
+        height: s.height,
+        region: None,
+        seed: s.seed,
+        threads: s.threads,
+        accel: Backend::Embree,
+        ..Job::new(scene, technique(kind, mc))
+    };
+    let control = Control::default();
+    let rendered = Renderer::new(scene.clone(), job, &control)
+        .unwrap()
+        .render(&control)
+        .unwrap();
+    let film = rendered
+        .film
+        .expect("a whole progressive render keeps its film");
     assert_eq!(film.invalid, 0, "{kind:?}: non-finite samples");
     film.image()
 }

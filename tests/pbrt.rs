@@ -2,13 +2,10 @@
 //! TOML, statements and transforms on small scenes, PLY in every encoding, and the bad-input
 //! corpus in tests/bad_inputs/pbrt.
 
-use raylink::accel::{self, Backend};
 use raylink::image::Image;
-use raylink::integrators::whitted::{Whitted, WhittedOptions};
-use raylink::integrators::Context;
 use raylink::math::{Rgb, Vec3};
-use raylink::render::{render, PixelSampling, RenderOptions};
 use raylink::scene::{Geometry, Scene};
+use raylink::{Backend, Control, Job, Renderer, Settings, Technique, TechniqueKind};
 use std::path::{Path, PathBuf};
 
 #[allow(dead_code)]
@@ -22,20 +19,29 @@ fn bitterli() -> PathBuf {
     root().join("scenes/cornell-box-bitterli/scene-v4.pbrt")
 }
 
+/// Whitted with its defaults and uniform 2x2 supersampling, at `size`x`size`.
 fn whitted_render(scene: &Scene, size: u32) -> Image {
-    let accel = accel::build(scene, Backend::Embree).unwrap();
-    let ctx = Context::new(scene, accel.as_ref());
-    let options = RenderOptions {
+    let technique = Technique::create(&Settings {
+        integrator: Some(TechniqueKind::Whitted),
+        spp: Some(4),
+        ..Settings::default()
+    })
+    .unwrap();
+    let job = Job {
         width: size,
         height: size,
-        sampling: PixelSampling::Uniform { n: 2 },
-        threads: Some(2),
+        region: None,
         seed: 7,
-        progress: false,
+        threads: Some(2),
+        accel: Backend::Embree,
+        ..Job::new(scene, technique)
     };
-    render(&ctx, &Whitted::new(WhittedOptions::default()), &options)
+    let control = Control::default();
+    Renderer::new(scene.clone(), job, &control)
         .unwrap()
-        .0
+        .render(&control)
+        .unwrap()
+        .image
 }
 
 #[test]

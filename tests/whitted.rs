@@ -1,11 +1,12 @@
-//! The Whitted integrator against closed-form answers, on scenes built in code.
+//! The Whitted integrator against closed-form answers, on scenes built in code, rendered
+//! through the job API. (The answers along single rays, which call the integrator itself,
+//! are unit tests in src/tests/whitted.rs.)
 
-use raylink::accel::{self, Backend};
-use raylink::integrators::whitted::{Whitted, WhittedOptions};
-use raylink::integrators::{Context, Integrator, RayStats};
-use raylink::math::{Ray, Rgb, Rng, Vec3};
-use raylink::render::{render, PixelSampling, RenderOptions};
+use raylink::math::{Rgb, Vec3};
 use raylink::scene::{Camera, Geometry, Light, Material, QuadMesh, Scene, Shape, Texture};
+use raylink::{
+    Backend, Control, Image, Job, RenderStats, Renderer, Settings, Technique, TechniqueKind,
+};
 use std::f32::consts::PI;
 
 fn camera() -> Camera {
@@ -72,13 +73,47 @@ fn diffuse(kd: Rgb) -> Material {
     }
 }
 
-fn radiance(scene: &Scene, ray: Ray, options: WhittedOptions) -> Rgb {
-    let accel = accel::build(scene, Backend::Embree).unwrap();
-    let ctx = Context::new(scene, accel.as_ref());
-    let mut rng = Rng::for_key(0, &[]);
-    Whitted::new(options)
-        .radiance(&ctx, &ray, &mut rng, &mut RayStats::default())
-        .radiance
+/// Whitted's integrator with its defaults and `settings` (sampling, area samples).
+fn whitted_settings(settings: Settings) -> Technique {
+    Technique::create(&Settings {
+        integrator: Some(TechniqueKind::Whitted),
+        ..settings
+    })
+    .unwrap()
+}
+
+/// Whitted with uniform `n`×`n` supersampling and `area_samples` shadow rays per area light.
+fn whitted(n: u32, area_samples: u32) -> Technique {
+    whitted_settings(Settings {
+        spp: Some(n * n),
+        area_samples: Some(area_samples),
+        ..Settings::default()
+    })
+}
+
+/// Renders the camera's view at `size` with `technique` through the job API.
+fn render(
+    scene: &Scene,
+    technique: Technique,
+    (width, height): (u32, u32),
+    seed: u64,
+    threads: Option<usize>,
+) -> (Image, RenderStats) {
+    let job = Job {
+        width,
+        height,
+        seed,
+        threads,
+        region: None,
+        accel: Backend::Embree,
+        ..Job::new(scene, technique)
+    };
+    let control = Control::default();
+    let rendered = Renderer::new(scene.clone(), job, &control)
+        .unwrap()
+        .render(&control)
+        .unwrap();
+    (rendered.image, rendered.stats)
 }
 
 fn close(a: Rgb, b: Rgb, rel: f32) -> bool {
@@ -100,17 +135,7 @@ fn diffuse_plane_under_point_light_matches_lambert() {
         intensity,
     });
     scene.ambient = Rgb::splat(0.1);
-    let options = RenderOptions {
-        width: 64,
-        height: 48,
-        sampling: PixelSampling::Uniform { n: 1 },
-        threads: Some(2),
-        seed: 1,
-        progress: false,
-    };
-    let accel = accel::build(&scene, Backend::Embree).unwrap();
-    let ctx = Context::new(&scene, accel.as_ref());
-    let (image, _) = render(&ctx, &Whitted::new(WhittedOptions::default()), &options).unwrap();
+    let (image, _) = render(&scene, whitted(1, 16), (64, 48), 1, Some(2));
     let basis = scene.camera.basis();
     let mut checked = 0;
     for (x, y) in [(32, 24), (5, 40), (60, 30), (20, 10), (50, 45)] {
@@ -129,192 +154,6 @@ fn diffuse_plane_under_point_light_matches_lambert() {
         checked += 1;
     }
     assert_eq!(checked, 5);
-}
-
-/// A mirror at 45° shows the (emissive) wall it faces, scaled by ks.
-#[test]
-fn mirror_shows_the_colour_it_faces() {
-    let mut scene = empty_scene();
-    let mirror = add_material(
-        &mut scene,
-        Material {
-            diffuse: Texture::Constant(Rgb::ZERO),
-            specular: Rgb::splat(0.8),
-            phong_exponent: 0.0,
-            ..Material::default()
-        },
-    );
-    let wall_emission = Rgb::new(0.2, 0.5, 0.9);
-    let wall = add_material(
-        &mut scene,
-        Material {
-            diffuse: Texture::Constant(Rgb::ZERO),
-            emission: wall_emission,
-            ..Material::default()
-        },
-    );
-    // Mirror through the origin, normal (0, 1, 1)/√2: a ray along -z reflects to +y.
-    quad(
-        &mut scene,
-        [
-            Vec3::new(-1.0, -1.0, 1.0),
-            Vec3::new(1.0, -1.0, 1.0),
-            Vec3::new(1.0, 1.0, -1.0),
-            Vec3::new(-1.0, 1.0, -1.0),
-        ],
-        mirror,
-    );
-    // Emissive wall at y = 5 facing down.
-    quad(
-        &mut scene,
-        [
-            Vec3::new(-5.0, 5.0, -5.0),
-            Vec3::new(5.0, 5.0, -5.0),
-            Vec3::new(5.0, 5.0, 5.0),
-            Vec3::new(-5.0, 5.0, 5.0),
-        ],
-        wall,
-    );
-    let ray = Ray::new(Vec3::new(0.1, 0.0, 3.0), Vec3::NEG_Z);
-    let got = radiance(&scene, ray, WhittedOptions::default());
-    assert!(close(got, 0.8 * wall_emission, 1e-5), "{got}");
-    // With the tree cut at the camera ray, the reflection is not traced.
-    let shallow = WhittedOptions {
-        max_depth: 1,
-        ..WhittedOptions::default()
-    };
-    assert_eq!(radiance(&scene, ray, shallow), Rgb::ZERO);
-}
-
-fn shadow_scene(blocker: Material) -> (Scene, Vec3) {
-    let mut scene = empty_scene();
-    let kd = Rgb::splat(0.6);
-    let m = add_material(
-        &mut scene,
-        Material {
-            ambient: Some(Rgb::new(0.3, 0.2, 0.1)),
-            ..diffuse(kd)
-        },
-    );
-    floor(&mut scene, 0.0, 20.0, m);
-    let b = add_material(&mut scene, blocker);
-    // A thin horizontal slab (two quads, both facing outward) between light and floor.
-    let top = [
-        Vec3::new(-1.0, 1.5, -1.0),
-        Vec3::new(-1.0, 1.5, 1.0),
-        Vec3::new(1.0, 1.5, 1.0),
-        Vec3::new(1.0, 1.5, -1.0),
-    ];
-    quad(&mut scene, top, b);
-    let bottom = top.map(|v| Vec3::new(v.x, 1.4, v.z));
-    quad(&mut scene, [bottom[3], bottom[2], bottom[1], bottom[0]], b);
-    let light = Vec3::new(0.0, 4.0, 0.0);
-    scene.lights.push(Light::Point {
-        position: light,
-        intensity: Rgb::splat(30.0),
-    });
-    scene.ambient = Rgb::splat(0.5);
-    (scene, light)
-}
-
-/// A point in shadow gets only the ambient term ka·Ia; a transmissive occluder attenuates the
-/// light by kt at each surface the shadow ray crosses.
-#[test]
-fn shadowed_points_get_ambient_only_and_glass_attenuates() {
-    let view = Ray::new(Vec3::new(0.3, 1.0, 0.2), Vec3::NEG_Y);
-    let opaque = diffuse(Rgb::splat(0.5));
-    let (scene, _) = shadow_scene(opaque);
-    let got = radiance(&scene, view, WhittedOptions::default());
-    let ambient = Rgb::new(0.3, 0.2, 0.1) * 0.5;
-    assert!(close(got, ambient, 1e-6), "{got} vs {ambient}");
-
-    let kt = Rgb::new(0.5, 0.8, 1.0);
-    let glass = Material {
-        diffuse: Texture::Constant(Rgb::ZERO),
-        transmission: kt,
-        ior: 1.0,
-        ..Material::default()
-    };
-    let (scene, light) = shadow_scene(glass);
-    let got = radiance(&scene, view, WhittedOptions::default());
-    let p = Vec3::new(0.3, 0.0, 0.2);
-    let to = light - p;
-    let unshadowed = 0.6 / PI * 30.0 * to.normalize().y / to.length_squared();
-    let expected = ambient + Rgb::splat(unshadowed) * kt * kt;
-    assert!(close(got, expected, 1e-4), "{got} vs {expected}");
-}
-
-/// Inside glass (the ray meets the surface from behind its normal), a ray steeper than the
-/// critical angle leaves and sees the sky; a grazing one is totally internally reflected,
-/// so T = 0 and only ks·S remains.
-#[test]
-fn total_internal_reflection_inside_glass() {
-    let mut scene = empty_scene();
-    let glass = add_material(
-        &mut scene,
-        Material {
-            diffuse: Texture::Constant(Rgb::ZERO),
-            specular: Rgb::splat(0.25),
-            transmission: Rgb::splat(1.0),
-            ior: 1.5,
-            phong_exponent: 0.0,
-            ..Material::default()
-        },
-    );
-    let sky = Rgb::new(1.0, 2.0, 3.0);
-    let sky_m = add_material(
-        &mut scene,
-        Material {
-            diffuse: Texture::Constant(Rgb::ZERO),
-            emission: sky,
-            ..Material::default()
-        },
-    );
-    // Glass surface y = 1 facing up (the camera is inside, below it); the sky at y = 3
-    // facing down; a dim floor far below sees the reflected rays.
-    floor(&mut scene, 1.0, 50.0, glass);
-    let s = 50.0;
-    quad(
-        &mut scene,
-        [
-            Vec3::new(-s, 3.0, -s),
-            Vec3::new(s, 3.0, -s),
-            Vec3::new(s, 3.0, s),
-            Vec3::new(-s, 3.0, s),
-        ],
-        sky_m,
-    );
-    let floor_glow = Rgb::new(0.5, 0.0, 0.0);
-    let floor_m = add_material(
-        &mut scene,
-        Material {
-            diffuse: Texture::Constant(Rgb::ZERO),
-            emission: floor_glow,
-            ..Material::default()
-        },
-    );
-    floor(&mut scene, -1.0, 50.0, floor_m);
-    let options = WhittedOptions {
-        max_depth: 3,
-        ..WhittedOptions::default()
-    };
-    let at = |deg: f32| {
-        let a = deg.to_radians();
-        Ray::new(Vec3::ZERO, Vec3::new(a.sin(), a.cos(), 0.0))
-    };
-    // 30° < 41.8°: refracts out to the sky (kt), reflects down to the floor (ks).
-    let steep = radiance(&scene, at(30.0), options.clone());
-    assert!(close(steep, sky + 0.25 * floor_glow, 1e-5), "{steep}");
-    // 60° > 41.8°: no transmission at all.
-    let grazing = radiance(&scene, at(60.0), options.clone());
-    assert!(close(grazing, 0.25 * floor_glow, 1e-5), "{grazing}");
-    // With Fresnel weighting, total internal reflection sends everything into ks·S.
-    let fresnel = WhittedOptions {
-        fresnel: true,
-        ..options
-    };
-    let grazing = radiance(&scene, at(60.0), fresnel);
-    assert!(close(grazing, 0.25 * floor_glow, 1e-5), "{grazing}");
 }
 
 /// A scene with every random element (glossy, frosted, area light) rendered adaptively.
@@ -393,42 +232,26 @@ fn busy_scene() -> Scene {
 #[test]
 fn image_is_bit_identical_for_any_thread_count() {
     let scene = busy_scene();
-    let accel = accel::build(&scene, Backend::Embree).unwrap();
-    let ctx = Context::new(&scene, accel.as_ref());
-    let whitted = Whitted::new(WhittedOptions {
-        area_samples: 4,
-        ..WhittedOptions::default()
-    });
-    for sampling in [PixelSampling::default(), PixelSampling::Uniform { n: 2 }] {
+    // Area samples 4; the default adaptive sampling, then uniform 2x2.
+    for spp in [None, Some(4)] {
+        let technique = whitted_settings(Settings {
+            spp,
+            area_samples: Some(4),
+            ..Settings::default()
+        });
         let images: Vec<_> = [1, 2, 3]
             .into_iter()
-            .map(|threads| {
-                let options = RenderOptions {
-                    width: 120,
-                    height: 90,
-                    sampling,
-                    threads: Some(threads),
-                    seed: 42,
-                    progress: false,
-                };
-                render(&ctx, &whitted, &options).unwrap()
-            })
+            .map(|threads| render(&scene, technique.clone(), (120, 90), 42, Some(threads)))
             .collect();
         for (image, stats) in &images[1..] {
-            assert_eq!(image.pixels, images[0].0.pixels, "{sampling:?}");
+            assert_eq!(image.pixels, images[0].0.pixels, "{technique:?}");
             assert_eq!(stats.rays, images[0].1.rays);
         }
         // And a different seed does change the noisy parts.
-        let other = RenderOptions {
-            width: 120,
-            height: 90,
-            sampling,
-            threads: Some(2),
-            seed: 43,
-            progress: false,
-        };
         assert_ne!(
-            render(&ctx, &whitted, &other).unwrap().0.pixels,
+            render(&scene, technique.clone(), (120, 90), 43, Some(2))
+                .0
+                .pixels,
             images[0].0.pixels
         );
     }

@@ -1,8 +1,14 @@
+//! Tests that need the crate's internals (integrators called directly, caches, networks and
+//! coherence records looked into, test integrators), one file per theme.
+
 mod bsdf;
 mod coherence;
 mod coherence_scenes;
+mod irradiance_cache;
 mod network_build;
 mod network_common;
 mod network_relight;
 mod network_scenes;
 mod network_transport;
+mod robustness;
+mod whitted;

@@ -60,7 +60,9 @@ pub(crate) fn header(scene: &Scene, options: &IcOptions) -> Vec<u8> {
     b
 }
 
-/// Writes the cache to `path` atomically.
+/// Writes the cache to `path` atomically, marked with no view (for tests: the irradiance
+/// cache technique saves with [`save_for_view`]).
+#[cfg(test)]
 pub fn save(path: &Path, cache: &Cache, scene: &Scene, options: &IcOptions) -> Result<()> {
     save_for_view(path, cache, scene, options, 0)
 }
@@ -94,8 +96,8 @@ pub fn save_for_view(
     FORMAT.save(path, b)
 }
 
-/// Reads a cache written by [`save`] for the same scene and options. Any other file is an
-/// [`Error::Input`](crate::Error::Input) naming it.
+/// Reads a cache written by [`save_for_view`] for the same scene and options. Any other file
+/// is an [`Error::Input`](crate::Error::Input) naming it.
 pub fn load(path: &Path, scene: &Scene, options: &IcOptions) -> Result<Cache> {
     load_with_view(path, scene, options).map(|(cache, _)| cache)
 }

@@ -496,13 +496,15 @@ impl IrradianceCache {
         shown
     }
 
-    /// Primary values the final render computed without storing them.
+    /// Primary values the final render computed without storing them (for tests).
+    #[cfg(test)]
     pub fn misses(&self) -> u64 {
         self.misses.load(Ordering::Relaxed)
     }
 
     /// The indirect irradiance the cache gives at a surface point with normal `n` (level 0),
     /// computing a primary value if S is empty; for tests.
+    #[cfg(test)]
     pub fn irradiance(&self, ctx: &Context, p: Vec3, n: Vec3) -> Rgb {
         let mut stats = RayStats::default();
         let mut walk = Walk {
