@@ -25,7 +25,9 @@
 //! result is independent of the thread count, and doubling the emission doubles every vector
 //! exactly (the same iterations, scaled by a power of two).
 
-use super::{direct_light, DistributeOptions, DistributeStats, Ends, Solution, Surface};
+use super::gather::Ends;
+use super::sweeps::direct_light;
+use super::{DistributeOptions, DistributeStats, Solution, Surface};
 use crate::integrators::illumination_network::{Network, SlotWeights, NONE};
 use crate::math::Rgb;
 use glam::{DVec3, Vec3A};
