@@ -12,8 +12,8 @@
 //!              seconds f64
 //! light basis size u64       0 when no basis is stored
 //! key_of_node: nodes × u32
-//! light basis                (relight.rs: one converged solution per emissive material,
-//!                            then any reflectance series)
+//! light basis                (relight/file_bytes.rs: one converged solution per emissive
+//!                            material, then any reflectance series)
 //! prefix checksum u64        over everything before it
 //! link_start: (nodes + 1) × u32
 //! links: links × u32          each node's links in slot order, packed (slot, other end)
