@@ -498,7 +498,7 @@ pub fn load_all(
             .par_windows(2)
             .map(|r| {
                 let list = &links[r[0] as usize..r[1] as usize];
-                let e = super::list_etendue(code, &w, list);
+                let e = super::etendue::list_etendue(code, &w, list);
                 (e, link_flags(code, list, slots, nodes))
             })
             .unzip();
@@ -509,7 +509,7 @@ pub fn load_all(
             .map(|(r, &f)| {
                 let list = &links[r[0] as usize..r[1] as usize];
                 if f & 4 != 0 {
-                    super::list_escape_etendue(code, &w, list)
+                    super::etendue::list_escape_etendue(code, &w, list)
                 } else {
                     0.0
                 }
