@@ -3,7 +3,8 @@
 use super::params::Params;
 use super::shapes;
 use super::spectrum::{self, Kind};
-use super::{AreaEmission, FloatTexture, Loader, Loc};
+use super::state::AreaEmission;
+use super::{FloatTexture, Loader, Loc};
 use crate::math::Vec2;
 use crate::math::{Mat3, Rgb, Vec3};
 use crate::scene::environment::Environment;
