@@ -12,18 +12,23 @@
 //!
 //! Files: `statements.rs` runs each statement (and reads included files in place),
 //! `cursor.rs` reads a statement's arguments and parameter lists, `state.rs` holds the
-//! graphics state and its stack, `options.rs` the rendering options and the camera, and
-//! `world.rs` the world block's materials, textures, shapes and lights.
+//! graphics state and its stack, `options.rs` the rendering options and the camera. The world
+//! block: `materials.rs`, `textures.rs`, `lights.rs` and `shape_statement.rs` (the geometry
+//! itself from `shapes.rs`), their spectrum and texture parameters from `param_values.rs`.
 
 mod cursor;
 mod lexer;
+mod lights;
+mod materials;
 mod options;
+mod param_values;
 mod params;
+mod shape_statement;
 mod shapes;
 mod spectrum;
 mod state;
 mod statements;
-mod world;
+mod textures;
 
 use super::environment::Environment;
 use super::{Camera, Light, Material, Scene, Shape, Texture};
@@ -165,5 +170,40 @@ impl Loader {
             self.warnings
                 .push(format!("{}:{}: {msg}", loc.file.display(), loc.line));
         }
+    }
+
+    /// The scene read: the camera made at WorldBegin, the shapes and the materials they use.
+    fn finish(mut self) -> crate::Result<Scene> {
+        let Some(camera) = self.camera_value.take() else {
+            return Err(crate::Error::input(
+                &self.source,
+                "the file has no WorldBegin (truncated file?)",
+            ));
+        };
+        if self.shapes.is_empty() {
+            return Err(crate::Error::input(&self.source, "the scene has no shapes"));
+        }
+        // Keep only the materials shapes use, in their order.
+        let mut map = vec![usize::MAX; self.materials.len()];
+        let mut materials = Vec::new();
+        for s in &mut self.shapes {
+            if map[s.material] == usize::MAX {
+                map[s.material] = materials.len();
+                materials.push(self.materials[s.material].clone());
+            }
+            s.material = map[s.material];
+        }
+        Ok(Scene {
+            source: self.source,
+            camera,
+            materials,
+            shapes: self.shapes,
+            lights: self.lights,
+            ambient: Rgb::ZERO,
+            background: self.background,
+            environment: self.environment,
+            settings: self.settings,
+            warnings: self.warnings,
+        })
     }
 }
