@@ -2,7 +2,7 @@
 //! it did.
 
 use super::patches::Patches;
-use super::preprocess::{self, Builder, EndPacking};
+use super::preprocess::{self, Builder, EndPacking, LinkInputs};
 use super::ray_space::RaySpace;
 use super::{LinkCode, Network, NetworkParams};
 use crate::integrators::Context;
@@ -79,16 +79,16 @@ impl Network {
             false => vec![0; keys.div_ceil(64)],
         };
         let t = Instant::now();
-        let (batches, rays) = preprocess::build_links(
-            (builder == Builder::Embree).then_some(ctx),
-            &space,
-            &patches,
-            params.seed,
-            params.jitter,
+        let (batches, rays) = preprocess::build_links(&LinkInputs {
+            ctx: (builder == Builder::Embree).then_some(ctx),
+            space: &space,
+            patches: &patches,
+            seed: params.seed,
+            jitter: params.jitter,
             builder,
             packing,
-            &outer,
-        );
+            outer: &outer,
+        });
         let link_seconds = t.elapsed().as_secs_f64();
         let t = Instant::now();
         let mut net = Network::assemble(params, space, patches, &batches, packing, code)?;

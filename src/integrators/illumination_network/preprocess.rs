@@ -48,7 +48,7 @@ mod sorted_hits;
 
 pub use cast::cast_slot;
 pub(super) use counting_sort::starts_from_counts;
-pub use link::{build_links, LinkBuffers, COINCIDENT, SLOT_BATCH};
+pub use link::{build_links, LinkBuffers, LinkInputs, COINCIDENT, SLOT_BATCH};
 pub use link_batch::LinkBatch;
 pub use packing::EndPacking;
 pub use row_buckets::{scan_order, scan_slot, scan_slot_into, RowBuckets};

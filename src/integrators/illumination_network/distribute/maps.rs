@@ -63,19 +63,32 @@ fn nearest_linked(space: &RaySpace, row: &[u32], target: Vec3, buf: &mut Vec<u32
     }
 }
 
-#[allow(clippy::too_many_arguments)]
-/// A normalised lobe over the linked slots of `row` around `centre`: weight(l) =
-/// lobe(direction of l)·w_l; falls back to the nearest slot when the lobe misses every slot.
-fn lobe_row(
-    space: &RaySpace,
-    row: &[u32],
+/// A lobe of directions around `centre` (unit), on the side of `normal`: `weight(d)` for a
+/// unit direction d. Its roughness or angular width `alpha` sets how far from the centre
+/// the slots are searched (about 3α radians).
+struct Lobe<F> {
     normal: Vec3,
     centre: Vec3,
     alpha: f32,
-    lobe: impl Fn(Vec3) -> f32,
+    weight: F,
+}
+
+/// A normalised lobe over the linked slots of `row` around the lobe's centre: weight(l) =
+/// lobe.weight(direction of l)·w_l; falls back to the nearest slot when the lobe misses every
+/// slot.
+fn lobe_row(
+    space: &RaySpace,
+    row: &[u32],
+    lobe: Lobe<impl Fn(Vec3) -> f32>,
     buf: &mut Vec<u32>,
     out: &mut Vec<(u32, f32)>,
 ) {
+    let Lobe {
+        normal,
+        centre,
+        alpha,
+        weight: lobe,
+    } = lobe;
     // Lobe reach ≈ 3α radians; one slope step is about 2/S radians near a family centre.
     let radius =
         ((3.0 * alpha * space.slopes as f32 / 2.0).ceil() as i64 + 1).min(space.slopes as i64);
@@ -178,16 +191,13 @@ pub(super) fn maps(
                         let h = (wi + wo).normalize();
                         ggx.d(local(n.dot(h))) * ggx.g(local(co), local(ci)) / (4.0 * ci * co)
                     };
-                    lobe_row(
-                        space,
-                        &row,
-                        n,
-                        r,
-                        surface.alpha,
-                        lobe,
-                        &mut buf,
-                        &mut reflect.entries,
-                    );
+                    let lobe = Lobe {
+                        normal: n,
+                        centre: r,
+                        alpha: surface.alpha,
+                        weight: lobe,
+                    };
+                    lobe_row(space, &row, lobe, &mut buf, &mut reflect.entries);
                 }
             }
             if surface.kt.max_element() > 0.0 && twin != NONE {
@@ -212,16 +222,13 @@ pub(super) fn maps(
                         let th = c.acos();
                         (-0.5 * th * th / sigma2).exp()
                     };
-                    lobe_row(
-                        space,
-                        &trow,
-                        -n,
-                        through,
-                        surface.alpha,
-                        lobe,
-                        &mut buf,
-                        &mut transmit.entries,
-                    );
+                    let lobe = Lobe {
+                        normal: -n,
+                        centre: through,
+                        alpha: surface.alpha,
+                        weight: lobe,
+                    };
+                    lobe_row(space, &trow, lobe, &mut buf, &mut transmit.entries);
                 }
             }
         }

@@ -54,7 +54,6 @@ pub fn line_point(family: u32, su: f32, sv: f32, iu: f32, iv: f32, pa: f32) -> V
 /// Scan-converts one polygon for one slot: calls `hit(line, iu, iv, p_a)` for every line of
 /// the slot (with jittered intercepts (iu, iv)) that meets the polygon, p_a computed by the
 /// incremental recurrence.
-#[allow(clippy::too_many_arguments)]
 pub fn scan_polygon(
     space: &RaySpace,
     slot: u32,
