@@ -12,8 +12,8 @@
 //!              seconds f64
 //! light basis size u64       0 when no basis is stored
 //! key_of_node: nodes × u32
-//! light basis                (relight.rs: one converged solution per emissive material,
-//!                            then any reflectance series)
+//! light basis                (relight/file_bytes.rs: one converged solution per emissive
+//!                            material, then any reflectance series)
 //! prefix checksum u64        over everything before it
 //! link_start: (nodes + 1) × u32
 //! links: links × u32          each node's links in slot order, packed (slot, other end)
@@ -498,7 +498,7 @@ pub fn load_all(
             .par_windows(2)
             .map(|r| {
                 let list = &links[r[0] as usize..r[1] as usize];
-                let e = super::list_etendue(code, &w, list);
+                let e = super::etendue::list_etendue(code, &w, list);
                 (e, link_flags(code, list, slots, nodes))
             })
             .unzip();
@@ -509,7 +509,7 @@ pub fn load_all(
             .map(|(r, &f)| {
                 let list = &links[r[0] as usize..r[1] as usize];
                 if f & 4 != 0 {
-                    super::list_escape_etendue(code, &w, list)
+                    super::etendue::list_escape_etendue(code, &w, list)
                 } else {
                     0.0
                 }

@@ -146,8 +146,12 @@ impl Lifecycle for NetworkTechnique {
                 let net = self.structure(ctx, job, control)?;
                 let surfaces = distribute::surfaces(&net, scene, options.light_scale);
                 check_bounded(&net, scene, &surfaces)?;
-                let start = std::time::Instant::now();
-                let solution = distribute::distribute_surfaces(&net, surfaces, options, start);
+                let run = distribute::Run {
+                    start: std::time::Instant::now(),
+                    cancel: Some(&control.cancel),
+                };
+                let solution = distribute::distribute_surfaces(&net, surfaces, options, run);
+                control.cancel.check("the network's light distribution")?;
                 let st = &solution.stats;
                 control.note(&format!(
                     "network: distribution in {:.2} s ({} sweeps or shots)",

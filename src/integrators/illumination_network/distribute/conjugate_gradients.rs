@@ -25,7 +25,9 @@
 //! result is independent of the thread count, and doubling the emission doubles every vector
 //! exactly (the same iterations, scaled by a power of two).
 
-use super::{direct_light, DistributeOptions, DistributeStats, Ends, Solution, Surface};
+use super::gather::Ends;
+use super::sweeps::direct_light;
+use super::{DistributeOptions, DistributeStats, Solution, Surface};
 use crate::integrators::illumination_network::{Network, SlotWeights, NONE};
 use crate::math::Rgb;
 use glam::{DVec3, Vec3A};
@@ -76,7 +78,7 @@ pub(super) fn solve(
     net: &Network,
     surfaces: Vec<Surface>,
     options: &DistributeOptions,
-    start: std::time::Instant,
+    run: super::Run,
     guess: Option<&Solution>,
 ) -> Solution {
     let nodes = net.nodes();
@@ -122,7 +124,7 @@ pub(super) fn solve(
     let mut rr = chunked_sum(nodes, |i| r[i] * r[i]);
     let mut to_shoot = flux_of_residual(&r);
     let mut kp = vec![Vec3A::ZERO; nodes];
-    while to_shoot > limit && sweeps < options.max_sweeps {
+    while to_shoot > limit && sweeps < options.max_sweeps && !run.stopped() {
         // q = (I − S K S) p.
         for (yi, (pi, si)) in y.iter_mut().zip(p.iter().zip(&s)) {
             *yi = *pi * *si;
@@ -172,7 +174,7 @@ pub(super) fn solve(
             unshot: unshot.to_array(),
             map_entries: 0,
             warm_start: guess.is_some(),
-            seconds: start.elapsed().as_secs_f64(),
+            seconds: run.start.elapsed().as_secs_f64(),
         },
         light_scale: options.light_scale,
     }

@@ -1,0 +1,284 @@
+//! Materials: pbrt's material types as raylink's diffuse, specular and transmission
+//! coefficients (the closest substitute where raylink has no match).
+
+use super::params::Params;
+use super::spectrum::{self, Kind};
+use super::{Loader, Loc};
+use crate::math::Rgb;
+use crate::scene::{Material, Texture};
+
+/// pbrt-v4's roughness remapping for the Trowbridge–Reitz distribution: alpha = √roughness.
+fn roughness_to_alpha(r: f64) -> f64 {
+    r.max(0.0).sqrt()
+}
+
+/// Normal-incidence reflectance of a conductor, per channel.
+fn conductor_f0(eta: Rgb, k: Rgb) -> Rgb {
+    let f = |n: f32, k: f32| ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k);
+    Rgb::new(f(eta.x, k.x), f(eta.y, k.y), f(eta.z, k.z))
+}
+
+impl Loader {
+    /// Isotropic roughness of a material as raylink's alpha.
+    fn roughness(&mut self, p: &Params, prefix: &str, st: &str, loc: &Loc) -> crate::Result<f32> {
+        let r = self.float_param(p, &format!("{prefix}roughness"), 0.0, st, loc)?;
+        let u = self.float_param(p, &format!("{prefix}uroughness"), r, st, loc)?;
+        let v = self.float_param(p, &format!("{prefix}vroughness"), r, st, loc)?;
+        if u != v {
+            self.warn(loc, format!("{st}: anisotropic roughness is averaged"));
+        }
+        let remap = p
+            .bool("remaproughness")
+            .map_err(Self::pe(loc))?
+            .unwrap_or(true);
+        let alpha = |x: f64| {
+            if remap {
+                roughness_to_alpha(x)
+            } else {
+                x.max(0.0)
+            }
+        };
+        Ok((0.5 * (alpha(u) + alpha(v))) as f32)
+    }
+
+    /// An index of refraction ("float eta" or a spectrum).
+    fn eta(
+        &mut self,
+        p: &Params,
+        name: &str,
+        default: f32,
+        st: &str,
+        loc: &Loc,
+    ) -> crate::Result<f32> {
+        if let Some(q) = p.find(name, &["float"]).ok().flatten() {
+            return Ok(q.nums()[0] as f32);
+        }
+        let Some(rgb) = self.spectrum(p, name, Kind::Unbounded, st, loc)? else {
+            return Ok(default);
+        };
+        if rgb.max_element() - rgb.min_element() > 1e-3 {
+            self.warn(
+                loc,
+                format!("{st}: dispersion is not supported; using the mean index"),
+            );
+        }
+        Ok(rgb.element_sum() / 3.0)
+    }
+
+    /// Conductor reflectance at normal incidence from `eta`/`k` or `reflectance`.
+    fn conductor(
+        &mut self,
+        p: &Params,
+        prefix: &str,
+        st: &str,
+        loc: &Loc,
+    ) -> crate::Result<Texture> {
+        let refl = format!("{prefix}reflectance");
+        if p.find(&refl, &["rgb", "spectrum", "blackbody", "texture"])
+            .ok()
+            .flatten()
+            .is_some()
+        {
+            p.ignore(&format!("{prefix}eta"));
+            p.ignore(&format!("{prefix}k"));
+            return self.texture_param(p, &refl, Rgb::ONE, st, loc);
+        }
+        let (cu_eta, cu_k) = spectrum::copper();
+        let eta = match p.find(&format!("{prefix}eta"), &["float"]).ok().flatten() {
+            Some(q) => Rgb::splat(q.nums()[0] as f32),
+            None => self
+                .spectrum(p, &format!("{prefix}eta"), Kind::Unbounded, st, loc)?
+                .unwrap_or(cu_eta),
+        };
+        let k = self
+            .spectrum(p, &format!("{prefix}k"), Kind::Unbounded, st, loc)?
+            .unwrap_or(cu_k);
+        Ok(Texture::Constant(conductor_f0(eta, k)))
+    }
+
+    pub(super) fn material(
+        &mut self,
+        ty: &str,
+        name: &str,
+        p: &Params,
+        loc: &Loc,
+    ) -> crate::Result<Material> {
+        let st = if name.is_empty() {
+            format!("Material \"{ty}\"")
+        } else {
+            format!("MakeNamedMaterial \"{name}\"")
+        };
+        let st = st.as_str();
+        // Anonymous materials are named after their statement, for messages and TOML keys.
+        let name = if name.is_empty() {
+            format!("{ty}-line{}", loc.line)
+        } else {
+            name.to_string()
+        };
+        let base = Material {
+            name: name.clone(),
+            diffuse: Texture::Constant(Rgb::ZERO),
+            ambient: None,
+            specular: Rgb::ZERO,
+            transmission: Rgb::ZERO,
+            ior: 1.5,
+            roughness: 0.0,
+            fresnel: false,
+            ..Material::default()
+        };
+        let diffuse_default = Rgb::splat(0.5);
+        let substitute = |this: &mut Loader, what: &str| {
+            this.warn(loc, format!("material \"{ty}\" is not supported; {what}"));
+        };
+        let m = match ty {
+            "diffuse" => Material {
+                diffuse: self.texture_param(p, "reflectance", diffuse_default, st, loc)?,
+                ..base
+            },
+            "coateddiffuse" => {
+                for q in ["thickness", "albedo", "g", "maxdepth", "nsamples"] {
+                    p.ignore(q);
+                }
+                self.coated_diffuse(base, p, 1.5, st, loc)?
+            }
+            "conductor" => {
+                let f0 = self.conductor(p, "", st, loc)?;
+                Material {
+                    specular: self.texture_to_constant(f0, st, loc),
+                    roughness: self.roughness(p, "", st, loc)?,
+                    ..base
+                }
+            }
+            "dielectric" | "thindielectric" => {
+                if ty == "thindielectric" {
+                    substitute(self, "using a smooth dielectric (refracting) surface");
+                }
+                let roughness = self.roughness(p, "", st, loc)?;
+                if roughness > 0.0 {
+                    self.warn(
+                        loc,
+                        format!("{st}: rough dielectric: the reflection is rough, the transmission stays smooth"),
+                    );
+                }
+                Material {
+                    specular: Rgb::ONE,
+                    transmission: Rgb::ONE,
+                    fresnel: true,
+                    ior: self.eta(p, "eta", 1.5, st, loc)?,
+                    roughness,
+                    ..base
+                }
+            }
+            "diffusetransmission" => {
+                substitute(
+                    self,
+                    "using its diffuse reflection (transmission is dropped)",
+                );
+                p.ignore("transmittance");
+                p.ignore("scale");
+                Material {
+                    diffuse: self.texture_param(p, "reflectance", Rgb::splat(0.25), st, loc)?,
+                    ..base
+                }
+            }
+            "coatedconductor" => {
+                substitute(self, "using the conductor without its coating");
+                for q in [
+                    "thickness",
+                    "albedo",
+                    "g",
+                    "maxdepth",
+                    "nsamples",
+                    "interface.eta",
+                ] {
+                    p.ignore(q);
+                }
+                let f0 = self.conductor(p, "conductor.", st, loc)?;
+                let _ = self.roughness(p, "interface.", st, loc)?;
+                Material {
+                    specular: self.texture_to_constant(f0, st, loc),
+                    roughness: self.roughness(p, "conductor.", st, loc)?,
+                    ..base
+                }
+            }
+            "subsurface" => {
+                substitute(self, "using a coated diffuse surface");
+                for q in ["mfp", "sigma_a", "sigma_s", "scale", "g", "name"] {
+                    p.ignore(q);
+                }
+                self.coated_diffuse(base, p, 1.33, st, loc)?
+            }
+            "interface" => {
+                substitute(self, "using an invisible (index-matched) surface");
+                Material {
+                    transmission: Rgb::ONE,
+                    ior: 1.0,
+                    ..base
+                }
+            }
+            "mix" => {
+                let names = p.strings("materials").map_err(Self::pe(loc))?;
+                let amount = self.float_param(p, "amount", 0.5, st, loc)?;
+                let pick = names
+                    .as_ref()
+                    .and_then(|n| n.get(if amount < 0.5 { 0 } else { 1 }))
+                    .cloned();
+                substitute(
+                    self,
+                    "using the one of its two materials with the larger weight",
+                );
+                match pick.and_then(|n| self.named_materials.get(&n).copied()) {
+                    Some(i) => Material {
+                        name,
+                        ..self.materials[i].clone()
+                    },
+                    None => {
+                        return Err(loc.error(format!(
+                            "{st}: \"materials\" must name two materials defined before"
+                        )))
+                    }
+                }
+            }
+            _ => {
+                // measured, hair and anything else.
+                for q in p.list.iter() {
+                    p.ignore(&q.name);
+                }
+                substitute(self, "using a grey diffuse surface");
+                Material {
+                    diffuse: Texture::Constant(diffuse_default),
+                    ..base
+                }
+            }
+        };
+        for q in ["displacement", "normalmap"] {
+            if p.find(q, &["texture", "string", "float"])
+                .ok()
+                .flatten()
+                .is_some()
+            {
+                self.warn(loc, format!("{st}: \"{q}\" is not supported; ignored"));
+            }
+        }
+        Ok(m)
+    }
+
+    /// A diffuse base under a dielectric coat: Fresnel-weighted specular over diffuse.
+    fn coated_diffuse(
+        &mut self,
+        base: Material,
+        p: &Params,
+        eta: f32,
+        st: &str,
+        loc: &Loc,
+    ) -> crate::Result<Material> {
+        Ok(Material {
+            diffuse: self.texture_param(p, "reflectance", Rgb::splat(0.5), st, loc)?,
+            specular: Rgb::ONE,
+            fresnel: true,
+            ior: self.eta(p, "eta", eta, st, loc)?,
+            roughness: self.roughness(p, "", st, loc)?,
+            ..base
+        })
+    }
+}

@@ -1,0 +1,208 @@
+//! The rendering options before WorldBegin (camera, film, sampler, filter, integrator), and
+//! raylink's camera made from pbrt's at WorldBegin.
+
+use super::params::Params;
+use super::{Loader, Loc};
+use crate::image::filter::Filter;
+use crate::scene::{Camera, MAX_RESOLUTION};
+use glam::{DMat3, DMat4, DVec3};
+
+pub(super) struct CameraDef {
+    camera_to_world: DMat4,
+    fov: f64,
+    loc: Loc,
+}
+
+impl Loader {
+    pub(super) fn option(
+        &mut self,
+        kw: &str,
+        ty: &str,
+        _value: Option<String>,
+        p: &Params,
+        loc: &Loc,
+    ) -> crate::Result<()> {
+        let pe = |e| loc.param_error(e);
+        match kw {
+            "Camera" => {
+                if ty != "perspective" {
+                    self.warn(
+                        loc,
+                        format!("Camera \"{ty}\" is not supported; using a perspective camera"),
+                    );
+                }
+                let fov = p.float_or("fov", 90.0).map_err(pe)?;
+                if !(fov > 0.0 && fov < 180.0) {
+                    return Err(loc.error(format!(
+                        "Camera: fov must be in (0, 180) degrees, got {fov}"
+                    )));
+                }
+                if p.float_or("lensradius", 0.0).map_err(pe)? > 0.0 {
+                    self.warn(
+                        loc,
+                        "Camera: depth of field (lensradius) is not supported; using a pinhole",
+                    );
+                }
+                p.ignore("focaldistance");
+                let ctm = self.state.ctm;
+                if ctm.determinant().abs() < 1e-12 || !ctm.is_finite() {
+                    return Err(loc.error("Camera: the camera transform is singular"));
+                }
+                let camera_to_world = ctm.inverse();
+                self.coordinate_systems
+                    .insert("camera".into(), camera_to_world);
+                self.camera = Some(CameraDef {
+                    camera_to_world,
+                    fov,
+                    loc: loc.clone(),
+                });
+            }
+            "Film" => {
+                if !matches!(ty, "rgb" | "gbuffer" | "spectral") {
+                    self.warn(
+                        loc,
+                        format!("Film \"{ty}\" is not supported; using an RGB film"),
+                    );
+                }
+                let res = |name: &str, default: u32| -> crate::Result<u32> {
+                    let v = p.int(name).map_err(|e| loc.param_error(e))?;
+                    match v {
+                        None => Ok(default),
+                        Some(v) if (1..=MAX_RESOLUTION as i64).contains(&v) => Ok(v as u32),
+                        Some(v) => Err(loc.error(format!(
+                            "Film: {name} must be between 1 and {MAX_RESOLUTION}, got {v}"
+                        ))),
+                    }
+                };
+                self.resolution = (res("xresolution", 1280)?, res("yresolution", 720)?);
+                // The output file is named on the command line.
+                p.ignore("filename");
+            }
+            "Sampler" => {
+                // raylink has its own sample patterns; the sample count carries over.
+                if let Some(n) = p.int("pixelsamples").map_err(pe)? {
+                    if !(1..=1 << 24).contains(&n) {
+                        return Err(loc.error(format!(
+                            "Sampler: pixelsamples must be between 1 and 16777216, got {n}"
+                        )));
+                    }
+                    self.settings.spp = Some(n as u32);
+                }
+            }
+            "PixelFilter" => {
+                let x = p.float("xradius").map_err(pe)?;
+                let y = p.float("yradius").map_err(pe)?;
+                let r = |default: f64| x.unwrap_or(default).max(y.unwrap_or(default)) as f32;
+                let filter = match ty {
+                    "box" => Filter::Box { radius: r(0.5) },
+                    "triangle" => Filter::Triangle { radius: r(2.0) },
+                    "gaussian" => Filter::Gaussian {
+                        radius: r(1.5),
+                        sigma: p.float_or("sigma", 0.5).map_err(pe)? as f32,
+                    },
+                    _ => {
+                        for name in ["B", "C", "tau"] {
+                            p.ignore(name);
+                        }
+                        self.warn(
+                            loc,
+                            format!(
+                                "PixelFilter \"{ty}\" is not supported; using the default \
+                                 Gaussian (radius 1.5, sigma 0.5)"
+                            ),
+                        );
+                        Filter::default()
+                    }
+                };
+                filter
+                    .validate()
+                    .map_err(|m| loc.error(format!("PixelFilter: {m}")))?;
+                self.settings.filter = Some(filter);
+            }
+            "Integrator" => {
+                let name = match ty {
+                    "volpath" | "path" | "simplepath" => "path",
+                    "bdpt" => "bdpt",
+                    "lighttracer" => "light",
+                    _ => {
+                        self.warn(
+                            loc,
+                            format!("Integrator \"{ty}\" is not supported; using the path tracer"),
+                        );
+                        "path"
+                    }
+                };
+                self.settings.integrator = Some(name.into());
+                if let Some(d) = p.int("maxdepth").map_err(pe)? {
+                    if d < 0 {
+                        return Err(loc.error(format!(
+                            "Integrator: maxdepth must not be negative, got {d}"
+                        )));
+                    }
+                    self.settings.max_depth = Some(d.min(u32::MAX as i64) as u32);
+                } else {
+                    self.settings.max_depth = Some(5);
+                }
+            }
+            "Accelerator" => {
+                for q in &p.list {
+                    p.ignore(&q.name);
+                }
+            }
+            "ColorSpace" if !ty.eq_ignore_ascii_case("srgb") => {
+                self.warn(
+                    loc,
+                    format!("ColorSpace \"{ty}\" is not supported; colours are read as sRGB"),
+                );
+            }
+            "Option" => {
+                self.warn(loc, format!("Option \"{ty}\" is not supported; ignored"));
+            }
+            _ => {}
+        }
+        Ok(())
+    }
+
+    /// raylink's camera from pbrt's camera transform. pbrt's camera space is left-handed
+    /// (x right, y up, z forward); raylink's image right is forward × up. When pbrt's right
+    /// is the opposite (a camera-to-world without a reflection, as a plain `LookAt` gives),
+    /// no rotation of raylink's camera shows the same image, so the whole world is mirrored
+    /// across the plane through the eye spanned by forward and up instead: the camera then
+    /// sees exactly pbrt's image.
+    pub(super) fn begin_world(&mut self, loc: &Loc) -> crate::Result<()> {
+        self.state.ctm = DMat4::IDENTITY;
+        self.coordinate_systems
+            .insert("world".into(), DMat4::IDENTITY);
+        let (c2w, fov, cam_loc) = match &self.camera {
+            Some(c) => (c.camera_to_world, c.fov, c.loc.clone()),
+            None => (DMat4::IDENTITY, 90.0, loc.clone()),
+        };
+        let pos = c2w.transform_point3(DVec3::ZERO);
+        let forward = c2w.transform_vector3(DVec3::Z).normalize_or_zero();
+        let up = c2w.transform_vector3(DVec3::Y);
+        let up = (up - forward * up.dot(forward)).normalize_or_zero();
+        let right = c2w.transform_vector3(DVec3::X);
+        if forward == DVec3::ZERO || up == DVec3::ZERO || !pos.is_finite() {
+            return Err(cam_loc.error("Camera: the camera transform is degenerate"));
+        }
+        let raylink_right = forward.cross(up);
+        if right.dot(raylink_right) < 0.0 {
+            let n = raylink_right.normalize();
+            let reflect = DMat4::from_mat3(DMat3::IDENTITY - 2.0 * outer(n, n));
+            self.mirror = DMat4::from_translation(pos) * reflect * DMat4::from_translation(-pos);
+        }
+        self.camera_value = Some(Camera {
+            position: pos.as_vec3(),
+            look_at: (pos + forward).as_vec3(),
+            up: up.as_vec3(),
+            fov_deg: fov as f32,
+            width: self.resolution.0,
+            height: self.resolution.1,
+        });
+        Ok(())
+    }
+}
+
+fn outer(a: DVec3, b: DVec3) -> DMat3 {
+    DMat3::from_cols(a * b.x, a * b.y, a * b.z)
+}

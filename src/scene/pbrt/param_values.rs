@@ -1,0 +1,144 @@
+//! Parameters whose values the loader resolves: spectra (rgb, named, sampled, blackbody) as
+//! RGB, and the names of spectrum and float textures.
+
+use super::params::{ParamError, Params};
+use super::spectrum::{self, Kind};
+use super::{FloatTexture, Loader, Loc};
+use crate::math::Rgb;
+use crate::scene::Texture;
+
+impl Loader {
+    pub(super) fn pe(loc: &Loc) -> impl Fn(ParamError) -> crate::Error + '_ {
+        move |e| loc.param_error(e)
+    }
+
+    /// A spectrum-valued parameter (rgb, spectrum, blackbody) as RGB.
+    pub(super) fn spectrum(
+        &mut self,
+        p: &Params,
+        name: &str,
+        kind: Kind,
+        statement: &str,
+        loc: &Loc,
+    ) -> crate::Result<Option<Rgb>> {
+        let Some(q) = p
+            .find(name, &["rgb", "spectrum", "blackbody"])
+            .map_err(Self::pe(loc))?
+        else {
+            return Ok(None);
+        };
+        let qloc = loc.at(q.line, q.col);
+        let rgb = match q.ty.as_str() {
+            "rgb" => {
+                let v = q.nums();
+                if v.len() != 3 {
+                    return Err(qloc.error(format!("parameter \"{name}\" takes one rgb value")));
+                }
+                Rgb::new(v[0] as f32, v[1] as f32, v[2] as f32)
+            }
+            "blackbody" => spectrum::blackbody(q.nums()[0]),
+            _ => {
+                match q.strs().first() {
+                    Some(named) => match spectrum::named(named) {
+                        Some((rgb, approx)) => {
+                            if approx {
+                                self.warn(
+                                &qloc,
+                                format!("{statement}: spectrum \"{named}\" is approximated by white"),
+                            );
+                            }
+                            rgb
+                        }
+                        None => {
+                            self.warn(
+                                &qloc,
+                                format!(
+                                    "{statement}: spectrum \"{named}\" is not known; using 1 \
+                                 (spectrum files are not read)"
+                                ),
+                            );
+                            Rgb::ONE
+                        }
+                    },
+                    None => spectrum::sampled(q.nums(), kind),
+                }
+            }
+        };
+        if kind != Kind::Unbounded && rgb.min_element() < 0.0 {
+            return Err(qloc.error(format!(
+                "parameter \"{name}\" must not be negative, got {rgb}"
+            )));
+        }
+        Ok(Some(rgb))
+    }
+
+    /// A spectrum parameter that may also name a texture.
+    pub(super) fn texture_param(
+        &mut self,
+        p: &Params,
+        name: &str,
+        default: Rgb,
+        statement: &str,
+        loc: &Loc,
+    ) -> crate::Result<Texture> {
+        if let Some(q) = p.find(name, &["texture"]).ok().flatten() {
+            let tex = q.strs()[0].clone();
+            return match self.textures.get(&tex) {
+                Some(t) => Ok(t.clone()),
+                None => Err(loc
+                    .at(q.line, q.col)
+                    .error(format!("{statement}: no spectrum texture named \"{tex}\""))),
+            };
+        }
+        let c = self.spectrum(p, name, Kind::Reflectance, statement, loc)?;
+        Ok(Texture::Constant(c.unwrap_or(default)))
+    }
+
+    /// A float parameter that may also name a (constant) float texture.
+    pub(super) fn float_param(
+        &mut self,
+        p: &Params,
+        name: &str,
+        default: f64,
+        statement: &str,
+        loc: &Loc,
+    ) -> crate::Result<f64> {
+        let Some(q) = p.find(name, &["float", "texture"]).map_err(Self::pe(loc))? else {
+            return Ok(default);
+        };
+        if q.ty == "float" {
+            return Ok(q.nums()[0]);
+        }
+        let tex = q.strs()[0].clone();
+        let qloc = loc.at(q.line, q.col);
+        match self.float_textures.get(&tex) {
+            Some(FloatTexture::Constant(v)) => Ok(*v),
+            Some(FloatTexture::Unsupported) => {
+                self.warn(
+                    &qloc,
+                    format!(
+                        "{statement}: \"{name}\" varies by texture \"{tex}\", which raylink \
+                         cannot evaluate; using {default}"
+                    ),
+                );
+                Ok(default)
+            }
+            None => Err(qloc.error(format!("{statement}: no float texture named \"{tex}\""))),
+        }
+    }
+
+    /// raylink's specular coefficient is a colour, not a texture: a textured one uses its
+    /// largest value.
+    pub(super) fn texture_to_constant(&mut self, t: Texture, st: &str, loc: &Loc) -> Rgb {
+        match t {
+            Texture::Constant(c) => c,
+            other => {
+                self.warn(
+                    loc,
+                    format!("{st}: a textured specular colour is replaced by its maximum"),
+                );
+                other.max_value()
+            }
+        }
+    }
+}

@@ -1,0 +1,112 @@
+//! pbrt's graphics state (CTM, material, area light, orientation) and the attribute stack that
+//! saves and restores it.
+
+use super::{Loader, Loc};
+use crate::math::Rgb;
+use glam::{DMat4, DVec3};
+
+/// An area light attached to the shapes that follow (`AreaLightSource`).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct AreaEmission {
+    pub(super) radiance: Rgb,
+}
+
+#[derive(Clone, Debug)]
+pub(super) struct GraphicsState {
+    pub(super) ctm: DMat4,
+    pub(super) reverse_orientation: bool,
+    /// Index into `Loader::materials`; `None` is pbrt's default (diffuse, reflectance 0.5).
+    pub(super) material: Option<usize>,
+    pub(super) area: Option<AreaEmission>,
+    /// `ActiveTransform EndTime`: transform statements only change the end transform,
+    /// which raylink (no motion blur) ignores.
+    pub(super) end_time_only: bool,
+}
+
+impl Default for GraphicsState {
+    fn default() -> Self {
+        GraphicsState {
+            ctm: DMat4::IDENTITY,
+            reverse_orientation: false,
+            material: None,
+            area: None,
+            end_time_only: false,
+        }
+    }
+}
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Block {
+    Attribute,
+    Transform,
+    Object,
+}
+
+impl Block {
+    pub(super) fn begin(self) -> &'static str {
+        match self {
+            Block::Attribute => "AttributeBegin",
+            Block::Transform => "TransformBegin",
+            Block::Object => "ObjectBegin",
+        }
+    }
+}
+
+impl Loader {
+    pub(super) fn set_ctm(&mut self, loc: &Loc, f: impl FnOnce(DMat4) -> DMat4) {
+        if self.state.end_time_only {
+            let _ = loc;
+            return;
+        }
+        self.state.ctm = f(self.state.ctm);
+    }
+
+    pub(super) fn push(&mut self, block: Block, loc: &Loc) {
+        self.stack.push((block, self.state.clone(), loc.clone()));
+    }
+
+    pub(super) fn pop(&mut self, block: Block, loc: &Loc) -> crate::Result<()> {
+        let end = match block {
+            Block::Attribute => "AttributeEnd",
+            Block::Transform => "TransformEnd",
+            Block::Object => "ObjectEnd",
+        };
+        match self.stack.pop() {
+            None => Err(loc.error(format!("{end} without a matching {}", block.begin()))),
+            Some((open, _, open_loc)) if open != block => Err(loc.error(format!(
+                "{end} does not match the {} at line {}",
+                open.begin(),
+                open_loc.line
+            ))),
+            Some((_, saved_state, _)) => {
+                if block == Block::Transform {
+                    self.state.ctm = saved_state.ctm;
+                } else {
+                    self.state = saved_state;
+                }
+                Ok(())
+            }
+        }
+    }
+}
+
+/// pbrt's `LookAt`: the world-to-camera transform of an eye at `eye` looking at `target`.
+pub(crate) fn look_at(eye: DVec3, target: DVec3, up: DVec3) -> Result<DMat4, String> {
+    let dir = (target - eye).normalize_or_zero();
+    if dir == DVec3::ZERO {
+        return Err("the eye and the target are the same point".into());
+    }
+    let right = up.normalize_or_zero().cross(dir);
+    if right.length() < 1e-9 {
+        return Err("the up vector is parallel to the viewing direction".into());
+    }
+    let right = right.normalize();
+    let new_up = dir.cross(right);
+    let camera_to_world = DMat4::from_cols(
+        right.extend(0.0),
+        new_up.extend(0.0),
+        dir.extend(0.0),
+        eye.extend(1.0),
+    );
+    Ok(camera_to_world.inverse())
+}
