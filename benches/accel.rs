@@ -15,7 +15,8 @@ fn kernels(c: &mut Criterion) {
     raylink::platform::set_flush_denormals();
     for name in SCENES {
         let scene = scenes::resolve(name).expect("bench scene");
-        let reference = accel::build(&scene, Backend::Embree, &Default::default()).expect("Embree builds");
+        let reference =
+            accel::build(&scene, Backend::Embree, &Default::default()).expect("Embree builds");
         let sets = rays::generate(&scene, reference.as_ref(), 160, 120, 1);
         let mut group = c.benchmark_group(format!("trace/{name}"));
         group
@@ -45,7 +46,9 @@ fn builds(c: &mut Criterion) {
             .throughput(Throughput::Elements(scenes::primitive_count(&scene) as u64));
         for backend in Backend::ALL {
             group.bench_function(BenchmarkId::from_parameter(backend), |b| {
-                b.iter(|| accel::build(&scene, backend, &Default::default()).expect("backend builds"))
+                b.iter(|| {
+                    accel::build(&scene, backend, &Default::default()).expect("backend builds")
+                })
             });
         }
         group.finish();

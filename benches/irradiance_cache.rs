@@ -30,7 +30,12 @@ const REFERENCE_SPP: u32 = 4096;
 
 /// A render of `scene` at `size` with `settings` (a box filter, every core): its image and
 /// seconds, and the technique's report.
-fn render(scene: &Arc<Scene>, size: (u32, u32), settings: Settings, seed: u64) -> (Image, f64, Vec<String>) {
+fn render(
+    scene: &Arc<Scene>,
+    size: (u32, u32),
+    settings: Settings,
+    seed: u64,
+) -> (Image, f64, Vec<String>) {
     let settings = Settings {
         filter: Some(Filter::Box { radius: 0.5 }),
         ..settings
@@ -111,16 +116,29 @@ fn room_reference(scene: &Arc<Scene>) -> Image {
     image
 }
 
+/// What a render is measured against: the reference, how a render is brought to its
+/// resolution, and the reference pixels left out.
+struct Target<'a> {
+    reference: &'a Image,
+    compare: &'a dyn Fn(&Image) -> Image,
+    mask: Option<&'a [bool]>,
+}
+
 /// One scene's race: the cache at each setting, then the path tracer at doubling sample
 /// counts until it reaches the best cache's error. `compare` maps a render to the
 /// reference's resolution; `mask` excludes reference pixels.
 fn race(
     title: &str,
     (scene, size): (&Arc<Scene>, (u32, u32)),
-    (reference, compare, mask): (&Image, &dyn Fn(&Image) -> Image, Option<&[bool]>),
+    target: Target,
     configs: &[Cache],
     max_spp: u32,
 ) {
+    let Target {
+        reference,
+        compare,
+        mask,
+    } = target;
     println!("\n### {title}\n");
     println!("| render | time (s) | RMSE | cache |");
     println!("|---|---|---|---|");
@@ -194,7 +212,11 @@ fn main() {
     race(
         "Indirectly lit room, 256x192 (RMSE at 128x96)",
         (&scene, (WIDTH, HEIGHT)),
-        (&reference, &half, None),
+        Target {
+            reference: &reference,
+            compare: &half,
+            mask: None,
+        },
         &[room, Cache { ar: 8.0, ..room }, Cache { ar: 4.0, ..room }],
         REFERENCE_SPP / 4,
     );
@@ -213,7 +235,11 @@ fn main() {
     race(
         "Cornell box, 256x256, against Tungsten (light pixels excluded)",
         (&cornell, (256, 256)),
-        (&reference, &|image: &Image| image.clone(), Some(&mask)),
+        Target {
+            reference: &reference,
+            compare: &|image: &Image| image.clone(),
+            mask: Some(&mask),
+        },
         &[
             box_cache,
             Cache {

@@ -7,10 +7,6 @@ use raylink::bench::{BenchConfig, RayKind, Row, Spread};
 use raylink::Backend;
 use std::path::Path;
 
-fn mib(bytes: usize) -> f64 {
-    bytes as f64 / (1024.0 * 1024.0)
-}
-
 /// Colour of a (backend, thread count) series: blues for Embree, reds for the BVH; darker for
 /// more threads.
 fn colour(backend: Backend, thread_index: usize) -> RGBColor {

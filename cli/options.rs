@@ -354,8 +354,12 @@ pub fn scene_settings(scene: &Scene) -> Result<Settings, Error> {
     })
 }
 
+/// An option that is not a setting: its name, whether it was given, and the integrators it
+/// applies to.
+type OtherOption = (&'static str, bool, fn(TechniqueKind) -> bool);
+
 /// The options other than settings that apply only to some integrators.
-fn other_options(args: &RenderArgs) -> [(&'static str, bool, fn(TechniqueKind) -> bool); 5] {
+fn other_options(args: &RenderArgs) -> [OtherOption; 4] {
     let progressive = |k: TechniqueKind| k.is_monte_carlo();
     [
         (
@@ -372,7 +376,6 @@ fn other_options(args: &RenderArgs) -> [(&'static str, bool, fn(TechniqueKind) -
         ("--network-stats", args.network.network_stats, |k| {
             k == TechniqueKind::Network
         }),
-        ("--aov", false, |_| true),
     ]
 }
 

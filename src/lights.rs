@@ -103,12 +103,7 @@ impl EnvironmentSampler {
     }
 }
 
-impl Emitter {
-    /// Whether the emitter is a point or a direction (cannot be hit by a ray).
-    pub fn is_delta(&self) -> bool {
-        matches!(self, Emitter::Point { .. } | Emitter::Directional { .. })
-    }
-}
+impl Emitter {}
 
 /// A sample of incident light at a shaded point.
 #[derive(Clone, Copy, Debug)]
@@ -497,19 +492,6 @@ impl LightSet {
             }
         };
         (s.pdf_dir > 0.0).then_some(s)
-    }
-
-    /// Densities with which `sample_le` starts a path at `p` (normal `n`) on area light `i`
-    /// going along `dir`: (area density with the choice, solid-angle density).
-    pub fn pdf_le_area(&self, i: usize, n: Vec3, dir: Vec3) -> (f32, f32) {
-        match &self.emitters[i] {
-            Emitter::Area(a) => (self.pmf[i] / a.area, dir.dot(n).max(0.0) / PI),
-            Emitter::Background { .. } => (
-                self.pmf[i] / (PI * self.radius * self.radius),
-                UNIFORM_SPHERE_PDF,
-            ),
-            _ => (0.0, 0.0),
-        }
     }
 }
 

@@ -468,7 +468,7 @@ fn lights_and_environment() {
     raylink::image::output::write_image(
         &dir.path().join("sky.exr"),
         &image,
-        &vec![],
+        &[],
         &Default::default(),
     )
     .unwrap();
@@ -497,7 +497,7 @@ fn textures_checkerboard_and_imagemap() {
     raylink::image::output::write_image(
         &dir.path().join("t.png"),
         &image,
-        &vec![],
+        &[],
         &Default::default(),
     )
     .unwrap();
@@ -784,7 +784,7 @@ fn converted_textures_environment_and_settings_round_trip() {
     raylink::image::output::write_image(
         &dir.path().join("sky.exr"),
         &sky,
-        &vec![],
+        &[],
         &Default::default(),
     )
     .unwrap();
@@ -793,7 +793,7 @@ fn converted_textures_environment_and_settings_round_trip() {
     raylink::image::output::write_image(
         &dir.path().join("t.png"),
         &tex,
-        &vec![],
+        &[],
         &Default::default(),
     )
     .unwrap();

@@ -259,7 +259,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
                 timed(|| file::load_prefix(&series_path, &recoloured, Some(&params)))?;
             let basis = basis.ok_or_else(|| bad("the light basis was not stored".into()))?;
             let (sol, _) = basis
-                .from_series(&prefix, &recoloured, &emission, &relit)
+                .relit_from_series(&prefix, &recoloured, &emission, &relit)
                 .map_err(bad)?;
             render_view(&recoloured_ctx, &prefix, &sol, &view);
             t[16].push(start.elapsed().as_secs_f64());

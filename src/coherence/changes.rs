@@ -61,13 +61,6 @@ impl Changes {
         out.extend_from_slice(&self.shadows);
         out
     }
-
-    pub fn is_empty(&self) -> bool {
-        self.objects.is_empty()
-            && self.shadows.is_empty()
-            && !self.light_moved
-            && self.everything.is_none()
-    }
 }
 
 fn hash_f32s(h: &mut impl Hasher, v: impl IntoIterator<Item = f32>) {

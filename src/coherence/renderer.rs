@@ -218,15 +218,6 @@ impl CoherentRenderer {
         Grid::with_voxels(lo - pad, hi + pad, voxels)
     }
 
-    /// Records only the voxels overlapping `boxes`: every box a change of the sequence will
-    /// mark (a change elsewhere then retraces the whole frame). Rays cross the rest in
-    /// coarse steps.
-    pub fn restrict_to(&mut self, boxes: &[(Vec3, Vec3)]) {
-        let margin = MARGIN * (self.grid.hi - self.grid.lo).length();
-        self.voxels = ActiveVoxels::boxes(self.grid.clone(), boxes, 2.0 * margin);
-        self.last_change = None;
-    }
-
     /// The boxes whose voxels `changes` marks changed: the surfaces of the changed objects
     /// (in pieces of at most half a voxel) and the shadow boxes of changed lights. What
     /// [`restrict_to_sequence`](Self::restrict_to_sequence) wants for each frame.
@@ -288,15 +279,6 @@ impl CoherentRenderer {
     /// Whether camera hits are kept for reuse (until the records pass their budget).
     pub fn keeps_camera_hits(&self) -> bool {
         self.camera_on
-    }
-
-    /// Keeps camera hits for reuse (the default) or not (every retraced camera ray is
-    /// queried again; the frames are the same).
-    pub fn set_camera_hits(&mut self, on: bool) {
-        self.camera_on = on;
-        if !on {
-            self.camera = vec![Vec::new(); self.layout.len()];
-        }
     }
 
     /// Segments held (segment records; 0 with tables).

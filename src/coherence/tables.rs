@@ -33,10 +33,7 @@ impl BlockLayout {
         self.cols as usize * self.rows as usize
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
+    #[cfg(test)]
     /// The block holding pixel (x, y).
     pub fn block_of(&self, x: u32, y: u32) -> usize {
         let c = (x as u64 * self.cols as u64 / self.width as u64) as usize;
@@ -94,6 +91,7 @@ impl BlockSet {
         self.words[b / 64] >> (b % 64) & 1 != 0
     }
 
+    #[cfg(test)]
     pub fn count(&self) -> usize {
         self.words.iter().map(|w| w.count_ones() as usize).sum()
     }

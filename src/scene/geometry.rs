@@ -1,4 +1,4 @@
-use crate::math::{Ray, Vec2, Vec3};
+use crate::math::{Vec2, Vec3};
 
 /// A piece of geometry and the material it is made of.
 #[derive(Clone, Debug, PartialEq)]
@@ -90,4 +90,3 @@ pub struct SurfacePoint {
     pub shape: usize,
     pub material: usize,
 }
-

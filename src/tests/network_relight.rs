@@ -229,7 +229,7 @@ fn a_reflectance_series_relights_one_material_without_a_distribution() {
     };
     let recoloured = with_floor(Rgb::new(0.9, 0.1, 0.6));
     let (got, used) = basis
-        .from_series(&net, &recoloured, &emission, &options)
+        .relit_from_series(&net, &recoloured, &emission, &options)
         .unwrap();
     assert_eq!(used.name, "floor");
     assert_eq!(got.stats.sweeps, 0);
@@ -238,7 +238,9 @@ fn a_reflectance_series_relights_one_material_without_a_distribution() {
     close("diffuse", &got.diffuse, &reference.diffuse, 1e-4);
     close("direct", &got.direct, &reference.direct, 1e-5);
     // The old colour gives the basis's own solution back; the lights doubled, double.
-    let (unchanged, _) = basis.from_series(&net, &s, &emission, &options).unwrap();
+    let (unchanged, _) = basis
+        .relit_from_series(&net, &s, &emission, &options)
+        .unwrap();
     let superposed = basis.superpose(&net, &s, &emission, &options).unwrap();
     close("unchanged", &unchanged.diffuse, &superposed.diffuse, 1e-4);
     let doubled = DistributeOptions {
@@ -246,7 +248,7 @@ fn a_reflectance_series_relights_one_material_without_a_distribution() {
         ..options
     };
     let (twice, _) = basis
-        .from_series(&net, &recoloured, &emission, &doubled)
+        .relit_from_series(&net, &recoloured, &emission, &doubled)
         .unwrap();
     for (x, y) in twice.diffuse.iter().zip(&got.diffuse) {
         assert_eq!(*x, *y * 2.0);
@@ -255,19 +257,19 @@ fn a_reflectance_series_relights_one_material_without_a_distribution() {
     let mut two_changed = recoloured.clone();
     two_changed.materials[index("m")].diffuse = Texture::Constant(Rgb::splat(0.2));
     let e = basis
-        .from_series(&net, &two_changed, &emission, &options)
+        .relit_from_series(&net, &two_changed, &emission, &options)
         .unwrap_err();
     assert!(e.contains("no stored reflectance series"), "{e}");
     let mut glossy = recoloured.clone();
     glossy.materials[index("floor")].specular = Rgb::splat(0.3);
     let e = basis
-        .from_series(&net, &glossy, &emission, &options)
+        .relit_from_series(&net, &glossy, &emission, &options)
         .unwrap_err();
     assert!(e.contains("one diffuse colour"), "{e}");
     let mut one_light = emission.clone();
     one_light[index("warm")] *= 2.0;
     let e = basis
-        .from_series(&net, &recoloured, &one_light, &options)
+        .relit_from_series(&net, &recoloured, &one_light, &options)
         .unwrap_err();
     assert!(e.contains("unevenly"), "{e}");
     // A network with a mirror gets no series.

@@ -41,7 +41,15 @@ impl Network {
         builder: Builder,
     ) -> Result<Network, String> {
         let control = Control::default();
-        Self::build_packed(scene, ctx, params, builder, EndPacking::for_keys, true, &control)
+        Self::build_packed(
+            scene,
+            ctx,
+            params,
+            builder,
+            EndPacking::for_keys,
+            true,
+            &control,
+        )
     }
 
     /// [`Network::build`] under a job's controls: its memory budget bounds the network, and
@@ -53,8 +61,15 @@ impl Network {
         builder: Builder,
         control: &Control,
     ) -> crate::Result<Network> {
-        let built =
-            Self::build_packed(scene, ctx, params, builder, EndPacking::for_keys, true, control);
+        let built = Self::build_packed(
+            scene,
+            ctx,
+            params,
+            builder,
+            EndPacking::for_keys,
+            true,
+            control,
+        );
         control.cancel.check("the network preprocess")?;
         built.map_err(|e| crate::Error::input(&scene.source, e))
     }
@@ -146,9 +161,16 @@ mod tests {
                 target_bits: 26,
             })
         };
-        let other =
-            Network::build_packed(&scene, &ctx, params, Builder::Scan, small, true, &Control::default())
-                .unwrap();
+        let other = Network::build_packed(
+            &scene,
+            &ctx,
+            params,
+            Builder::Scan,
+            small,
+            true,
+            &Control::default(),
+        )
+        .unwrap();
         assert_eq!(
             EndPacking::for_keys(2 * usual.patches.cells as usize),
             Ok(EndPacking::USUAL)
@@ -176,7 +198,7 @@ mod tests {
                     drop,
                     &Control::default(),
                 )
-                    .unwrap()
+                .unwrap()
             };
             let (dropped, kept) = (build(true), build(false));
             let outer = dropped.patches.outer_sides();

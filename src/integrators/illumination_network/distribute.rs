@@ -44,7 +44,6 @@ mod solution;
 mod surfaces;
 mod sweeps;
 
-pub use maps::SparseMap;
 pub(crate) use maps::{candidates, local};
 pub use solution::{DistributeStats, Solution};
 pub use surfaces::{lossless_channel, surfaces, surfaces_with, Surface};

@@ -46,14 +46,14 @@ mod row_buckets;
 mod scan;
 mod sorted_hits;
 
-pub use cast::cast_slot;
 pub(super) use counting_sort::starts_from_counts;
-pub use link::{build_links, LinkBuffers, LinkInputs, COINCIDENT, SLOT_BATCH};
+pub use link::{build_links, LinkInputs};
 pub use link_batch::LinkBatch;
 pub use packing::EndPacking;
-pub use row_buckets::{scan_order, scan_slot, scan_slot_into, RowBuckets};
-pub use scan::{line_point, scan_polygon, SlotPlane};
-pub use sorted_hits::SortedHits;
+#[cfg(test)]
+pub use row_buckets::{scan_order, scan_slot};
+#[cfg(test)]
+pub use scan::{line_point, scan_polygon};
 
 /// A line meeting a patch: the line within its slot, p_a along it, and the key of the side
 /// facing +d (cell·2 + 0 for the front, + 1 for the back).

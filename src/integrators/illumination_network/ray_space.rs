@@ -46,6 +46,7 @@ pub struct RaySpace {
     pub scale: f32,
 }
 
+#[cfg(test)]
 /// One line of the grid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct Line {
@@ -134,12 +135,14 @@ impl RaySpace {
     }
 
     /// The line index: a bijection between lines and 0..3·S²·N².
+    #[cfg(test)]
     pub fn line_index(&self, l: Line) -> u64 {
         let n = self.intercepts as u64;
         let slot = self.slot(l.family, l.su, l.sv) as u64;
         (slot * n + l.iu as u64) * n + l.iv as u64
     }
 
+    #[cfg(test)]
     pub fn line(&self, index: u64) -> Line {
         let n = self.intercepts as u64;
         let iv = (index % n) as u32;
@@ -154,6 +157,7 @@ impl RaySpace {
         }
     }
 
+    #[cfg(test)]
     pub fn line_count(&self) -> u64 {
         self.slots() as u64 * self.lines_per_slot() as u64
     }
@@ -215,6 +219,7 @@ impl RaySpace {
     }
 
     /// The slot whose direction is nearest (in slope space) to `d` (either orientation).
+    #[cfg(test)]
     pub fn nearest_slot(&self, d: Vec3) -> u32 {
         let (f, su, sv) = self.slopes_of(d);
         let k = |s: f32| (self.slope_coord(s).round().max(0.0) as u32).min(self.slopes - 1);

@@ -25,5 +25,5 @@ mod basis;
 mod file_bytes;
 mod series;
 
-pub use basis::{reflectance_hash, BasisLight, LightBasis};
-pub use series::{ReflectanceSeries, SeriesTerm, MAX_SERIES_TERMS, SERIES_REST};
+pub use basis::{BasisLight, LightBasis};
+pub use series::{ReflectanceSeries, SeriesTerm, MAX_SERIES_TERMS};

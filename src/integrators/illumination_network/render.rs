@@ -17,7 +17,6 @@ use super::{Network, ESCAPE, NONE};
 use crate::bsdf::Ggx;
 use crate::integrators::{Context, Integrator, RayStats, Sample};
 use crate::math::{offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
-use crate::scene::SurfacePoint;
 use std::f32::consts::FRAC_1_PI;
 
 pub struct NetworkRenderer<'a> {

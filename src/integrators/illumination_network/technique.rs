@@ -286,7 +286,7 @@ fn relight_network(
             Err(why) if b.series.is_empty() => {
                 control.note(&format!("network: {why}; distributing again"))
             }
-            Err(why) => match b.from_series(&prefix, scene, &emission, options) {
+            Err(why) => match b.relit_from_series(&prefix, scene, &emission, options) {
                 Ok((solution, series)) => {
                     control.note(&format!(
                         "network: relit from the reflectance series of '{}' in {} ({} terms) \

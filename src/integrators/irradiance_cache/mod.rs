@@ -155,10 +155,6 @@ impl Cache {
         self.levels.iter().map(|l| l.len()).sum()
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
     /// An empty cache over the same cube with the same accuracies.
     fn empty_like(&self) -> Cache {
         Cache {

@@ -92,10 +92,6 @@ impl Octree {
         self.records.len()
     }
 
-    pub fn is_empty(&self) -> bool {
-        self.records.is_empty()
-    }
-
     /// The values in insertion order.
     pub fn records(&self) -> &[Record] {
         &self.records
@@ -151,6 +147,7 @@ impl Octree {
         depth
     }
 
+    #[cfg(test)]
     /// Indices of the values in S at P (w_i > 1/a and d_i ≥ 0), with their weights, by the
     /// recursive search of section 3.3.
     pub fn search(&self, p: Vec3, n: Vec3, out: &mut Vec<(u32, f32)>) {

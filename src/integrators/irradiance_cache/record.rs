@@ -40,6 +40,7 @@ impl Record {
     }
 }
 
+#[cfg(test)]
 /// Eq. 5: Σ w_i E_i / Σ w_i over the accepted values, in the order given. A value at P itself
 /// (infinite weight) is returned as is. None when nothing was accepted (S is empty).
 pub fn weighted_average(accepted: &[(f32, Rgb)]) -> Option<Rgb> {

@@ -90,7 +90,8 @@ pub(super) fn shoot(
     let total = |unshot: &[Rgb]| (0..nodes).map(|i| flux(unshot[i], i)).sum::<f64>();
     let mut since_check = 0usize;
     remaining = remaining.min(total(&unshot));
-    while remaining > options.tolerance as f64 * emitted_total && tree[1].0 > 0.0 && !run.stopped() {
+    while remaining > options.tolerance as f64 * emitted_total && tree[1].0 > 0.0 && !run.stopped()
+    {
         let i = tree[1].1 as usize;
         touched.clear();
         shoot_one(i, &mut unshot, &mut diffuse, &mut stats, &mut touched);

@@ -76,6 +76,7 @@ impl EndPacking {
         (key & (self.block() as u32 - 1)) << self.target_bits | target
     }
 
+    #[cfg(test)]
     /// The side key and the key at the other end of an end of block `block`.
     #[inline]
     pub fn unpack(&self, block: usize, end: u32) -> (u32, u32) {

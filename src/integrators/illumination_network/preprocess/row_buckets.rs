@@ -5,12 +5,14 @@
 use super::counting_sort::starts_from_counts;
 use super::scan::{line_point, scan_cells, RowCells, Rows, SlotPlane, LANES};
 use super::sorted_hits::SortedHits;
+#[cfg(test)]
 use super::LineHit;
 use crate::integrators::illumination_network::patches::{Patches, Polygon};
 use crate::integrators::illumination_network::ray_space::RaySpace;
 use crate::math::Vec3;
 use wide::{f32x4, i16x8, i32x4, u32x4};
 
+#[cfg(test)]
 /// The scan-conversion hits of one slot, sorted by line (on a line, in the [`scan_order`] of
 /// the polygons).
 pub fn scan_slot(

@@ -51,6 +51,7 @@ pub fn line_point(family: u32, su: f32, sv: f32, iu: f32, iv: f32, pa: f32) -> V
     Vec3::from_array(p)
 }
 
+#[cfg(test)]
 /// Scan-converts one polygon for one slot: calls `hit(line, iu, iv, p_a)` for every line of
 /// the slot (with jittered intercepts (iu, iv)) that meets the polygon, p_a computed by the
 /// incremental recurrence.
@@ -86,17 +87,20 @@ pub(super) trait RowCells {
 /// Candidate cells scanned together, one per SIMD lane.
 pub(super) const LANES: usize = 4;
 
+#[cfg(test)]
 /// [`scan_polygon`]'s callback, for the cells inside, and a row of it.
 struct EachHit<F> {
     hit: F,
     intercepts: u32,
 }
 
+#[cfg(test)]
 struct EachHitRow<'a, F> {
     each: &'a mut EachHit<F>,
     jv: u32,
 }
 
+#[cfg(test)]
 impl<F: FnMut(u32, f32, f32, f32)> Rows for EachHit<F> {
     type Row<'r>
         = EachHitRow<'r, F>
@@ -107,6 +111,7 @@ impl<F: FnMut(u32, f32, f32, f32)> Rows for EachHit<F> {
     }
 }
 
+#[cfg(test)]
 impl<F: FnMut(u32, f32, f32, f32)> RowCells for EachHitRow<'_, F> {
     fn cells(&mut self, ju: u32, lanes: usize, iu: f32x4, iv: f32x4, pa: f32x4, inside: u32) {
         let (iu, iv, pa) = (iu.to_array(), iv.to_array(), pa.to_array());

@@ -149,7 +149,8 @@ impl LightBasis {
             let mut only = unlit.clone();
             only[m as usize] = emission[m as usize];
             let surfaces = distribute::surfaces_with(net, scene, &only);
-            let sol = distribute::distribute_surfaces(net, surfaces, options, distribute::Run::now());
+            let sol =
+                distribute::distribute_surfaces(net, surfaces, options, distribute::Run::now());
             let st = &sol.stats;
             basis.dir_index = sol.dir_index;
             basis.dir_rows = sol.dir_rows;

@@ -154,7 +154,8 @@ impl ReflectanceSeries {
             ..ReflectanceSeries::default()
         };
         // T₀: the network with m black; y is each term's total radiance.
-        let sol = distribute::distribute_surfaces(net, blank.clone(), options, distribute::Run::now());
+        let sol =
+            distribute::distribute_surfaces(net, blank.clone(), options, distribute::Run::now());
         let mut y: Vec<Rgb> = (emitted_light.iter().zip(&sol.diffuse))
             .map(|(e, d)| *e + *d)
             .collect();
@@ -176,7 +177,8 @@ impl ReflectanceSeries {
             let surfaces = (blank.iter().zip(&sent))
                 .map(|(s, e)| Surface { emission: *e, ..*s })
                 .collect();
-            let sol = distribute::distribute_surfaces(net, surfaces, options, distribute::Run::now());
+            let sol =
+                distribute::distribute_surfaces(net, surfaces, options, distribute::Run::now());
             series.sweeps += sol.stats.sweeps;
             y = sent
                 .iter()
@@ -231,7 +233,7 @@ impl LightBasis {
     /// purely diffuse colour, and every light is at its stored emission times one common
     /// factor. No distribution and no link table; an error says why the series do not apply.
     /// Also gives the series used.
-    pub fn from_series(
+    pub fn relit_from_series(
         &self,
         net: &Network,
         scene: &Scene,
