@@ -100,12 +100,28 @@ pub fn region(args: &RenderArgs, job: &Job) -> raylink::Result<Option<Tile>> {
             )));
         }
     }
-    if let raylink::Technique::IrradianceCache(_, c) = &job.technique {
-        if c.show_points {
+    match &job.technique {
+        raylink::Technique::IrradianceCache(_, c) if c.show_points => {
             return Err(Error::Invalid(
                 "--show-cache-points cannot be used with --tile or --crop".into(),
             ));
         }
+        raylink::Technique::IrradianceCache(_, c) if c.file.is_none() => {
+            return Err(Error::Invalid(
+                "--tile and --crop with the irradiance cache need --cache-file F precomputed \
+                 for this view (run `raylink precompute --cache-file F` with the same options \
+                 first)"
+                    .into(),
+            ));
+        }
+        raylink::Technique::Network(n) if !n.file.as_ref().is_some_and(|f| f.exists()) => {
+            return Err(Error::Invalid(
+                "--tile and --crop with the network integrator need an existing \
+                 --network-file (run `raylink precompute --network-file F` first)"
+                    .into(),
+            ));
+        }
+        _ => {}
     }
     part.region(job.width, job.height).map(Some)
 }

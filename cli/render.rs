@@ -77,8 +77,7 @@ fn output_options(args: &RenderArgs) -> Result<OutputOptions, Error> {
 
 /// Loads the scene and prints what its reader replaced.
 pub fn load_scene(path: &std::path::Path, control: &Control) -> Result<Scene, Error> {
-    let scene = Scene::load(path)?;
-    control.cancel.check("loading the scene")?;
+    let scene = Scene::load_with(path, control)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }

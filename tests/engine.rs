@@ -222,3 +222,54 @@ fn bad_settings_name_the_setting() {
         other => panic!("{other:?}"),
     }
 }
+
+#[test]
+fn a_cancelled_network_preprocess_stops_within_a_second() {
+    let office = scene("network-office.toml");
+    let settings = Settings {
+        integrator: Some(TechniqueKind::Network),
+        intercept_step: Some(1.0 / 128.0),
+        slopes: Some(20),
+        ..Settings::default()
+    };
+    let job = job(&office, settings, (32, 24));
+    let (result, stop) = cancel_after(Duration::from_millis(300), move |control| {
+        Renderer::new(office, job, &control)?.render(&control)
+    });
+    assert!(stop < Duration::from_secs(1), "took {stop:?} to stop");
+    match result {
+        Err(Error::Cancelled { stage }) => assert!(stage.contains("network"), "{stage}"),
+        other => panic!("expected a cancel during the network's preparation, got {other:?}"),
+    }
+}
+
+#[test]
+fn a_cancelled_parse_of_a_large_scene_stops_within_a_second() {
+    // A pbrt scene whose includes fan out: each level includes the next twice, 2^24 leaves,
+    // more than any machine reads in a second.
+    let dir = tempfile::tempdir().unwrap();
+    let levels = 24;
+    for k in 0..levels {
+        let next = format!("Include \"level{}.pbrt\"\n", k + 1);
+        std::fs::write(dir.path().join(format!("level{k}.pbrt")), next.repeat(2)).unwrap();
+    }
+    std::fs::write(
+        dir.path().join(format!("level{levels}.pbrt")),
+        "AttributeBegin\nAttributeEnd\n",
+    )
+    .unwrap();
+    let root = dir.path().join("scene.pbrt");
+    std::fs::write(
+        &root,
+        "LookAt 0 0 5 0 0 0 0 1 0\nCamera \"perspective\"\nWorldBegin\nInclude \"level0.pbrt\"\n",
+    )
+    .unwrap();
+    let (result, stop) = cancel_after(Duration::from_millis(300), move |control| {
+        Scene::load_with(&root, &control).map(drop)
+    });
+    assert!(stop < Duration::from_secs(1), "took {stop:?} to stop");
+    match result {
+        Err(Error::Cancelled { stage }) => assert!(stage.contains("scene"), "{stage}"),
+        other => panic!("expected a cancel while reading, got {other:?}"),
+    }
+}

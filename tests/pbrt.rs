@@ -790,13 +790,8 @@ fn converted_textures_environment_and_settings_round_trip() {
     .unwrap();
     let mut tex = Image::new(2, 2);
     tex.set(1, 1, Rgb::ONE);
-    raylink::image::output::write_image(
-        &dir.path().join("t.png"),
-        &tex,
-        &[],
-        &Default::default(),
-    )
-    .unwrap();
+    raylink::image::output::write_image(&dir.path().join("t.png"), &tex, &[], &Default::default())
+        .unwrap();
     let s = load_in(
         dir.path(),
         &format!(

@@ -8,6 +8,7 @@
 
 use super::toml::Document;
 use super::Scene;
+use crate::job::Control;
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};
 use toml::de::{DeTable, DeValue};
@@ -15,9 +16,10 @@ use toml::{Table, Value};
 
 /// Reads a native TOML scene; an animated one gives its first frame (so `raylink render`
 /// renders the first frame of an animation).
-pub fn read_first_frame(path: &Path) -> Result<Scene> {
+pub fn read_first_frame(path: &Path, control: &Control) -> Result<Scene> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    let doc = Document::parse(&text, path)?;
+    control.cancel.check("reading the scene")?;
+    let doc = Document::parse_with(&text, path, Some(&control.cancel))?;
     // Static files go straight to the reader, so its messages keep their line numbers.
     if !is_animation(doc.root()) {
         return doc.build();

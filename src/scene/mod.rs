@@ -87,9 +87,16 @@ impl Scene {
 
     /// Reads a scene file, choosing the reader by extension.
     pub fn load(path: &Path) -> crate::Result<Scene> {
+        Scene::load_with(path, &crate::job::Control::default())
+    }
+
+    /// [`load`](Self::load) under a job's controls: a cancel stops the reading (between
+    /// statements of a pbrt file, between shapes of a TOML one) with
+    /// [`Error::Cancelled`](crate::Error::Cancelled).
+    pub fn load_with(path: &Path, control: &crate::job::Control) -> crate::Result<Scene> {
         match path.extension().and_then(|e| e.to_str()) {
-            Some("toml") => animation::read_first_frame(path),
-            Some("pbrt") => pbrt::read(path),
+            Some("toml") => animation::read_first_frame(path, control),
+            Some("pbrt") => pbrt::read(path, control),
             _ => Err(crate::Error::input(
                 path,
                 "unknown scene format: expected a .toml or .pbrt scene file",

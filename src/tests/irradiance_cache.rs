@@ -155,10 +155,7 @@ fn cache_files_are_reused_and_checked() {
         ..ic
     };
     let e = file::load(&path, &scene, &other).unwrap_err().to_string();
-    assert!(
-        e.contains("cornell.ic") && e.contains("--ic-accuracy"),
-        "{e}"
-    );
+    assert!(e.contains("cornell.ic") && e.contains("ic_accuracy"), "{e}");
     let furnace = Scene::load(&manifest("tests/scenes/furnace.toml")).unwrap();
     let e = file::load(&path, &furnace, &ic).unwrap_err().to_string();
     assert!(e.contains("another scene"), "{e}");

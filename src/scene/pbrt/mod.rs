@@ -32,6 +32,7 @@ mod textures;
 
 use super::environment::Environment;
 use super::{Camera, Light, Material, Scene, Shape, Texture};
+use crate::job::{CancelToken, Control};
 use crate::math::Rgb;
 use crate::scene::RenderSettings;
 use crate::Error;
@@ -44,14 +45,19 @@ use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// Reads a pbrt-v4 scene file (and the files it includes).
-pub fn read(path: &Path) -> crate::Result<Scene> {
+pub fn read(path: &Path, control: &Control) -> crate::Result<Scene> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    from_str(&text, path)
+    from_str_with(&text, path, control)
 }
 
 /// Reads pbrt-v4 scene text; `path` names it in messages and anchors relative paths.
 pub fn from_str(text: &str, path: &Path) -> crate::Result<Scene> {
-    let mut loader = Loader::new(path);
+    from_str_with(text, path, &Control::default())
+}
+
+/// [`from_str`], stopped between statements once the control's token is cancelled.
+pub fn from_str_with(text: &str, path: &Path, control: &Control) -> crate::Result<Scene> {
+    let mut loader = Loader::new(path, control.cancel.clone());
     loader.run_file(path, text, None)?;
     loader.finish()
 }
@@ -130,10 +136,12 @@ struct Loader {
     warnings: Vec<String>,
     warned: HashSet<String>,
     source: PathBuf,
+    /// Stops the reading between statements.
+    cancel: CancelToken,
 }
 
 impl Loader {
-    fn new(path: &Path) -> Loader {
+    fn new(path: &Path, cancel: CancelToken) -> Loader {
         Loader {
             include_stack: Vec::new(),
             state: GraphicsState::default(),
@@ -160,6 +168,7 @@ impl Loader {
             warnings: Vec::new(),
             warned: HashSet::new(),
             source: path.to_path_buf(),
+            cancel,
         }
     }
 

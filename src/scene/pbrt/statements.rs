@@ -50,6 +50,7 @@ impl Loader {
             i: 0,
         };
         while cursor.i < tokens.len() {
+            self.cancel.check("reading the scene")?;
             self.statement(&mut cursor)?;
         }
         self.include_stack.pop();

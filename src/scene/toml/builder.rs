@@ -99,6 +99,9 @@ impl<'a> Builder<'a> {
         }
         let mut shapes = Vec::new();
         for (i, desc) in file.shapes.into_iter().enumerate() {
+            if let Some(cancel) = ctx.cancel {
+                cancel.check("reading the scene")?;
+            }
             let site = self.site(format!("shapes[{i}]"), desc.span());
             shapes.extend(self.shape(&site, desc.into_inner())?);
         }

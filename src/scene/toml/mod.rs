@@ -48,7 +48,16 @@ pub(crate) struct Document<'a> {
 impl<'a> Document<'a> {
     /// Parses `text`; `path` names the file in messages.
     pub(crate) fn parse(text: &'a str, path: &'a Path) -> crate::Result<Document<'a>> {
-        let ctx = Ctx { path, text };
+        Document::parse_with(text, path, None)
+    }
+
+    /// [`parse`](Self::parse), and a build that stops between shapes once `cancel` is set.
+    pub(crate) fn parse_with(
+        text: &'a str,
+        path: &'a Path,
+        cancel: Option<&'a crate::job::CancelToken>,
+    ) -> crate::Result<Document<'a>> {
+        let ctx = Ctx { path, text, cancel };
         let root = DeTable::parse(text).map_err(|e| ctx.toml_error(&e))?;
         Ok(Document { ctx, root })
     }
