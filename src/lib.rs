@@ -31,7 +31,7 @@
 //! The layers, bottom up: [`accel`] (one intersection interface, Embree or a pure-Rust BVH),
 //! [`scene`] (what every reader produces), [`image`] (images and their files), the
 //! techniques and the tile driver (internal), [`job`] (the engine), and beside it
-//! [`coherence`] (animations), [`farm`] (parts of an image, merged) and [`bench`]
+//! [`coherence`] (animations), [`farm`] (parts of an image, merged) and [`bench`](mod@bench)
 //! (measurements).
 
 pub mod accel;

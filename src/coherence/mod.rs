@@ -2,13 +2,13 @@
 //! Temporal Coherence for Ray Tracing"): voxels record which pixel blocks' rays crossed them,
 //! and a frame retraces only the blocks whose rays crossed voxels where something changed.
 //!
-//! - [`grid`]: the voxel grid and the 3-D DDA.
-//! - [`tables`]: pixel-block bit tables (surface and shadow) per voxel.
-//! - [`segments`]: the other form of the records: each block's segments, walked through
+//! - `grid`: the voxel grid and the 3-D DDA.
+//! - `tables`: pixel-block bit tables (surface and shadow) per voxel.
+//! - `segments`: the other form of the records: each block's segments, walked through
 //!   the voxels that changed when a frame asks.
-//! - [`record`]: the intersection wrapper that records every query's segment.
-//! - [`changes`]: what changed between two frames.
-//! - [`renderer`]: the incremental frame renderer.
+//! - `record`: the intersection wrapper that records every query's segment.
+//! - `changes`: what changed between two frames.
+//! - `renderer`: the incremental frame renderer.
 //! - [`sequence`]: a sequence's frames rendered coherently (or verified), with statistics;
 //!   [`report`] writes them for people.
 

@@ -2,7 +2,7 @@
 //! or `--crop x0,y0,x1,y1`) and writes it as an OpenEXR file whose data window is that part
 //! of the full image (its display window), with the metadata [`merge`] needs to check that
 //! parts fit together. A pixel's value depends only on (scene, options, seed, pixel), never
-//! on which other pixels are rendered with it (see [`crate::render`]), so merged parts equal
+//! on which other pixels are rendered with it (see the tile driver), so merged parts equal
 //! the whole render bit for bit. docs/farm.md describes the workflow and the Slurm example.
 
 pub mod merge;

@@ -1,6 +1,6 @@
 //! Render checkpoints: a Monte Carlo film saved between tiles, so that an interrupted render
 //! can be resumed (`raylink render --resume`) to exactly the image an uninterrupted render
-//! would have made. Little-endian binary in raylink's container ([`crate::binary_file`]):
+//! would have made. Little-endian binary in raylink's container (`binary_file.rs`):
 //!
 //! ```text
 //! magic "RLCHKPT\0", version u32 (= 1)

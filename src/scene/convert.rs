@@ -3,7 +3,7 @@
 //! binary PLY file in a `NAME.meshes/` folder beside the output. Image textures and
 //! environment maps are referenced by path (relative to the output when possible).
 //!
-//! The scene is turned into the reader's own schema ([`super::toml::schema`]) and written by
+//! The scene is turned into the reader's own schema (`toml/schema.rs`) and written by
 //! the `toml` crate, so what is written is what the reader reads: floats are written as the
 //! shortest decimals that read back to the same `f32`, strings and keys are quoted where
 //! TOML needs it.

@@ -26,7 +26,7 @@
 //! directional ends add their rows on top.
 //!
 //! All-diffuse networks are solved by default with conjugate gradients on the symmetrised
-//! system ([`conjugate_gradients`]): the same gather, about 8 of them where the sweeps take
+//! system (`conjugate_gradients.rs`): the same gather, about 8 of them where the sweeps take
 //! 13, and a smaller error. Networks with directional nodes (their maps are not symmetric)
 //! use the sweeps whatever the order asked; `Order::Shoot` is the paper-era alternative,
 //! sequential.
@@ -70,7 +70,7 @@ pub enum Order {
     /// Largest unshot flux first (Southwell iteration, as progressive radiosity), one node at
     /// a time. Networks with directional nodes use sweeps.
     Shoot,
-    /// Conjugate gradients on the symmetrised system ([`conjugate_gradients`]): about half
+    /// Conjugate gradients on the symmetrised system (`conjugate_gradients.rs`): about half
     /// the gathers of the sweeps for the same tolerance. Networks with directional nodes use
     /// sweeps.
     #[default]

@@ -1,8 +1,8 @@
 //! The native scene format (documented in docs/scene-format.md).
 //!
 //! Reading happens in two steps: serde + toml turn the text into the `*Desc` structures of
-//! [`schema`] (syntax, unknown keys and wrong types are caught there, with toml's line and
-//! column), then the [`builder`] checks the values and bakes transforms into world-space
+//! `schema` (syntax, unknown keys and wrong types are caught there, with toml's line and
+//! column), then the `builder` checks the values and bakes transforms into world-space
 //! geometry. Every problem becomes an [`Error::input`](crate::Error::input) whose detail is
 //! one line that starts with the line number and names the field, e.g.
 //! `line 12: shapes[2].radius: must be positive, got -1`.
