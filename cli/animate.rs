@@ -67,9 +67,10 @@ pub struct AnimateArgs {
     /// Maximum ray-tree depth (Whitted) or bounces (path). Default: the scene's, else 8.
     #[arg(long)]
     pub max_depth: Option<u32>,
-    /// Whitted: shadow rays per area light at each shading point.
-    #[arg(long, default_value_t = 16)]
-    pub area_samples: u32,
+    /// Whitted: shadow rays per area light at each shading point (default: the scene's, else
+    /// 16).
+    #[arg(long)]
+    pub area_samples: Option<u32>,
     /// Pixel blocks of the voxel bit tables, COLSxROWS (at most one block per pixel).
     #[arg(long, default_value = "16x16", value_name = "COLSxROWS")]
     pub block_table: String,
@@ -233,10 +234,10 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
     for w in &scene0.warnings {
         eprintln!("warning: {w}");
     }
-    let integrator = match (args.integrator, scene0.settings.integrator.as_deref()) {
+    let integrator = match (args.integrator, scene0.settings.integrator) {
         (Some(i), _) => i,
-        (None, None | Some("whitted")) => AnimIntegrator::Whitted,
-        (None, Some("path")) => AnimIntegrator::Path,
+        (None, None | Some(TechniqueKind::Whitted)) => AnimIntegrator::Whitted,
+        (None, Some(TechniqueKind::Path)) => AnimIntegrator::Path,
         (None, Some(other)) => {
             return Err(Error::input(
                 &args.scene,
@@ -245,25 +246,29 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
             .into())
         }
     };
+    // The scene's settings, the options over them; Whitted samples adaptively unless --spp
+    // asks for a grid (the scene's spp is the path tracer's).
+    let given = &scene0.settings;
     let settings = match integrator {
         AnimIntegrator::Whitted => Settings {
             integrator: Some(TechniqueKind::Whitted),
             spp: args.spp,
-            aa_threshold: args.aa_threshold,
-            aa_depth: args.aa_depth,
-            area_samples: Some(args.area_samples),
-            max_depth: args.max_depth.or(scene0.settings.max_depth),
+            aa_threshold: args.aa_threshold.or(given.aa_threshold),
+            aa_depth: args.aa_depth.or(given.aa_depth),
+            area_samples: Some(args.area_samples.or(given.area_samples).unwrap_or(16)),
+            fresnel: given.fresnel,
+            max_depth: args.max_depth.or(given.max_depth),
             ..Settings::default()
         },
         AnimIntegrator::Path => Settings {
             integrator: Some(TechniqueKind::Path),
-            spp: args.spp.or(scene0.settings.spp),
-            max_depth: args.max_depth.or(scene0.settings.max_depth),
-            filter: scene0.settings.filter,
+            spp: args.spp.or(given.spp),
+            max_depth: args.max_depth.or(given.max_depth),
+            filter: given.filter,
             ..Settings::default()
         },
     };
-    let technique = match Technique::create(&settings)? {
+    let technique = match Technique::create(&settings).map_err(|e| scene0.locate(e))? {
         Technique::Whitted(w) => SequenceTechnique::Whitted(w),
         Technique::Path(mc) => SequenceTechnique::Path(mc),
         _ => unreachable!("the settings name whitted or path"),

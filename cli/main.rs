@@ -201,7 +201,7 @@ fn main() -> ExitCode {
     } else {
         raylink::VERSION.to_string()
     };
-    let parsed = Args::command()
+    let parsed = command()
         .version(version)
         .try_get_matches()
         .and_then(|m| Args::from_arg_matches(&m));
@@ -256,6 +256,21 @@ fn main() -> ExitCode {
     }
 }
 
+/// The command line's definition. Every option that takes a value takes a negative number
+/// as its value (then refused with the option's own message if it must be positive), not as
+/// an unknown option.
+fn command() -> clap::Command {
+    Args::command().mut_subcommands(|sub| {
+        sub.mut_args(|a| {
+            if a.get_action().takes_values() && !a.is_positional() {
+                a.allow_negative_numbers(true)
+            } else {
+                a
+            }
+        })
+    })
+}
+
 /// A command-line error as one line: clap's message and its hint (possible values, a
 /// suggestion), without the usage lines.
 fn one_line_usage_error(e: &clap::Error) -> String {
@@ -289,7 +304,7 @@ fn run_convert(cli: &Cli, args: ConvertArgs) -> Result<(), Failure> {
 /// the same definition the program parses.
 fn generate_assets(dir: &std::path::Path) -> raylink::Result<()> {
     use clap_complete::{generate_to, Shell};
-    let mut cmd = Args::command().version(raylink::VERSION);
+    let mut cmd = command().version(raylink::VERSION);
     let man = dir.join("man");
     std::fs::create_dir_all(&man).map_err(|e| Error::io(&man, e))?;
     clap_mangen::generate_to(cmd.clone(), &man).map_err(|e| Error::io(&man, e))?;

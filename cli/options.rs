@@ -333,27 +333,6 @@ pub fn given_settings(args: &RenderArgs, scene: &Scene) -> Settings {
     }
 }
 
-/// The settings a scene file gives.
-pub fn scene_settings(scene: &Scene) -> Result<Settings, Error> {
-    let s = &scene.settings;
-    let integrator = match s.integrator.as_deref() {
-        None => None,
-        Some(name) => Some(TechniqueKind::from_name(name).ok_or_else(|| {
-            Error::input(
-                &scene.source,
-                format!("unknown integrator \"{name}\" in the scene's render settings"),
-            )
-        })?),
-    };
-    Ok(Settings {
-        integrator,
-        spp: s.spp,
-        max_depth: s.max_depth,
-        filter: s.filter,
-        ..Settings::default()
-    })
-}
-
 /// An option that is not a setting: its name, whether it was given, and the integrators it
 /// applies to.
 type OtherOption = (&'static str, bool, fn(TechniqueKind) -> bool);
@@ -383,7 +362,7 @@ fn other_options(args: &RenderArgs) -> [OtherOption; 4] {
 /// options, each option checked to apply to the integrator chosen.
 pub fn job(args: &RenderArgs, scene: &Scene, extra: Settings) -> Result<Job, Error> {
     let flags = given_settings(args, scene).overlaid(&extra);
-    let mut from_scene = scene_settings(scene)?;
+    let mut from_scene = scene.settings.clone();
     // With a time limit only an explicit --spp caps the samples; adaptive anti-aliasing
     // asked for on the command line ignores the scene's sample count.
     if flags.time_limit.is_some() || flags.aa == Some(AntiAliasing::Adaptive) {
@@ -393,9 +372,13 @@ pub fn job(args: &RenderArgs, scene: &Scene, extra: Settings) -> Result<Job, Err
     let kind = settings.integrator.unwrap_or(TechniqueKind::Whitted);
     for setting in flags.given() {
         if !kind.reads(setting) {
+            // The filter's radius alone is given as its own option.
+            let option = match setting {
+                "filter" if args.filter.is_none() => "--filter-radius".to_string(),
+                s => flag(s),
+            };
             return Err(Error::Invalid(format!(
-                "{} does not apply to the {kind} integrator",
-                flag(setting)
+                "{option} does not apply to the {kind} integrator"
             )));
         }
     }
@@ -406,7 +389,11 @@ pub fn job(args: &RenderArgs, scene: &Scene, extra: Settings) -> Result<Job, Err
             )));
         }
     }
-    let technique = Technique::create(&settings)?;
+    // A bad value the scene file gives is reported at its line there.
+    let technique = Technique::create(&settings).map_err(|e| match &e {
+        Error::Setting { name, .. } if !flags.given().contains(&name.as_str()) => scene.locate(e),
+        _ => e,
+    })?;
     Ok(Job {
         width: args.width.unwrap_or(scene.camera.width),
         height: args.height.unwrap_or(scene.camera.height),

@@ -42,7 +42,7 @@ impl Progress for Terminal {
                 bar.set_style(
                     ProgressStyle::with_template(&format!(
                         "{{spinner}} {phase} [{{elapsed_precise}}] {{wide_bar}} {{human_pos}}/{{human_len}} \
-                         {unit}, ETA {{eta}}"
+                         {unit}, ETA {{eta}} {{msg}}"
                     ))
                     .expect("the progress template is valid"),
                 );
@@ -52,7 +52,7 @@ impl Progress for Terminal {
                 let bar = ProgressBar::new_spinner();
                 bar.set_style(
                     ProgressStyle::with_template(&format!(
-                        "{{spinner}} {phase} [{{elapsed_precise}}] {{human_pos}} {unit}"
+                        "{{spinner}} {phase} [{{elapsed_precise}}] {{human_pos}} {unit} {{msg}}"
                     ))
                     .expect("the progress template is valid"),
                 );
@@ -73,6 +73,12 @@ impl Progress for Terminal {
     fn advance(&self, units: u64) {
         if let Some(bar) = &*self.bar.lock().unwrap_or_else(|e| e.into_inner()) {
             bar.inc(units);
+        }
+    }
+
+    fn status(&self, text: &str) {
+        if let Some(bar) = &*self.bar.lock().unwrap_or_else(|e| e.into_inner()) {
+            bar.set_message(text.to_string());
         }
     }
 

@@ -52,6 +52,7 @@ pub mod math;
 pub mod platform;
 pub(crate) mod render;
 pub mod scene;
+pub mod settings;
 #[cfg(test)]
 mod tests;
 

@@ -366,6 +366,11 @@ fn irradiance_cache_cases(run: &mut Run) {
         "2",
         "--ic-samples",
         "32",
+        // The cache's defaults, over the settings the scene file recommends.
+        "--ic-accuracy",
+        "0.15",
+        "--ar",
+        "64",
     ];
     run.render("irradiance-cache", room, &ic);
     // The first run writes the file (marked with this view), the second only reads it.
@@ -535,6 +540,10 @@ fn farm_cases(run: &mut Run) {
         "2",
         "--ic-samples",
         "32",
+        "--ic-accuracy",
+        "0.15",
+        "--ar",
+        "64",
         "--cache-file",
     ];
     let mut args = vec!["precompute", "scenes/indirect-room.toml"];

@@ -100,6 +100,7 @@ fn base_scene(name: String, camera: Camera, light: Vec3) -> Scene {
         ambient: Rgb::splat(0.05),
         background: Rgb::splat(0.2),
         settings: Default::default(),
+        setting_sources: Vec::new(),
         environment: None,
         warnings: Vec::new(),
     }

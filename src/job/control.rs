@@ -115,6 +115,8 @@ pub trait Progress: Send + Sync {
     fn begin(&self, _phase: &str, _total: Option<u64>, _unit: &str) {}
     /// `units` more of the phase in hand are done.
     fn advance(&self, _units: u64) {}
+    /// Where the phase in hand stands, in a few words ("unshot 3.1e-4 of emitted").
+    fn status(&self, _text: &str) {}
     /// The phase in hand ended after `seconds`; `summary` says what it did, one line.
     fn end(&self, _phase: &str, _seconds: f64, _summary: &str) {}
     /// Something worth telling a person, one line (what was loaded, what was skipped).
@@ -194,6 +196,10 @@ pub struct Phase<'a> {
 impl Phase<'_> {
     pub fn advance(&self, units: u64) {
         self.control.progress.advance(units);
+    }
+
+    pub fn status(&self, text: &str) {
+        self.control.progress.status(text);
     }
 
     pub fn seconds(&self) -> f64 {

@@ -12,12 +12,14 @@
 //! failed conversion never leaves a half-written scene behind.
 
 use super::toml::schema::{
-    CameraDesc, CheckerDesc, DiffuseDesc, EnvironmentDesc, FileDesc, FilterDesc, ImageDesc,
-    LightDesc, LightKind, MaterialDesc, OneOrMany, Ordered, RenderDesc, ShapeDesc, ShapeKind,
-    Splat3, TextureTable, TransformOp, UvCheckerDesc, WorldDesc, V3,
+    CacheDesc, CameraDesc, CheckerDesc, DiffuseDesc, EnvironmentDesc, FileDesc, FilterDesc,
+    ImageDesc, LightDesc, LightKind, MaterialDesc, NetworkDesc, OneOrMany, Ordered, RenderDesc,
+    ShapeDesc, ShapeKind, Splat3, TextureTable, TransformOp, UvCheckerDesc, WhittedDesc, WorldDesc,
+    V3,
 };
 use super::{Camera, Geometry, Light, Material, RenderSettings, Scene, Texture};
 use crate::image::filter::Filter;
+use crate::settings::{AntiAliasing, NetworkBuilder, NetworkOrder};
 use crate::Error;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
@@ -200,7 +202,7 @@ fn world(scene: &Scene, refs: Refs) -> WorldDesc {
     }
 }
 
-/// The `[render]` table; none for the default settings.
+/// The `[render]` table; none for the default settings. Files are written as given.
 fn render(s: &RenderSettings) -> Option<RenderDesc> {
     if s == &RenderSettings::default() {
         return None;
@@ -217,11 +219,60 @@ fn render(s: &RenderSettings) -> Option<RenderDesc> {
             sigma,
         }
     });
+    let path = |p: &Option<PathBuf>| p.as_ref().map(|p| p.display().to_string());
+    let whitted = WhittedDesc {
+        area_samples: s.area_samples,
+        fresnel: s.fresnel,
+    };
+    let cache = CacheDesc {
+        ab: s.ab,
+        accuracy: s.ic_accuracy,
+        samples: s.ic_samples,
+        ar: s.ar,
+        cache_file: path(&s.cache_file),
+    };
+    let network = NetworkDesc {
+        slopes: s.slopes,
+        intercept_step: s.intercept_step,
+        patch_size: s.patch_size,
+        jitter: s.network_jitter,
+        builder: s.network_builder.map(|b| {
+            match b {
+                NetworkBuilder::Scan => "scan",
+                NetworkBuilder::Embree => "embree",
+            }
+            .into()
+        }),
+        tolerance: s.tolerance,
+        order: s.network_order.map(|o| {
+            match o {
+                NetworkOrder::ConjugateGradients => "cg",
+                NetworkOrder::Sweeps => "sweeps",
+                NetworkOrder::Shoot => "shoot",
+            }
+            .into()
+        }),
+        hybrid: s.network_hybrid,
+        file: path(&s.network_file),
+    };
     Some(RenderDesc {
-        integrator: s.integrator.clone(),
+        integrator: s.integrator.map(|k| k.name().to_string()),
         spp: s.spp,
         max_depth: s.max_depth,
+        time_limit: s.time_limit,
         filter,
+        aa: s.aa.map(|a| {
+            match a {
+                AntiAliasing::Adaptive => "adaptive",
+                AntiAliasing::Uniform => "uniform",
+            }
+            .into()
+        }),
+        aa_threshold: s.aa_threshold,
+        aa_depth: s.aa_depth,
+        whitted: (whitted != WhittedDesc::default()).then(|| spanned(whitted)),
+        irradiance_cache: (cache != CacheDesc::default()).then(|| spanned(cache)),
+        network: (network != NetworkDesc::default()).then(|| spanned(network)),
     })
 }
 

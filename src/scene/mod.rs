@@ -21,7 +21,7 @@ pub use environment::Environment;
 pub use geometry::{Geometry, QuadMesh, Shape, SurfacePoint, TriangleMesh};
 pub use light::Light;
 pub use material::{Material, Texture};
-pub use settings::RenderSettings;
+pub use settings::{SettingSource, Settings as RenderSettings};
 
 use crate::math::{Rgb, Vec3};
 use std::path::{Path, PathBuf};
@@ -46,6 +46,8 @@ pub struct Scene {
     pub environment: Option<Arc<Environment>>,
     /// Render settings given in the file; command-line options override them.
     pub settings: RenderSettings,
+    /// Where the file gives each of its settings (for messages).
+    pub setting_sources: Vec<SettingSource>,
     /// What the reader could not represent exactly and replaced by the closest substitute,
     /// one line each, `FILE:LINE: message` (for `raylink render` to print).
     pub warnings: Vec<String>,
@@ -83,6 +85,23 @@ impl Scene {
                 Geometry::Quads(q) => 2 * q.indices.len(),
             })
             .sum()
+    }
+
+    /// An error about a setting this scene's file gives, as one naming the file, line and
+    /// key; any other error as it is.
+    pub fn locate(&self, error: crate::Error) -> crate::Error {
+        match error {
+            crate::Error::Setting { name, detail } => {
+                match self.setting_sources.iter().find(|s| s.setting == name) {
+                    Some(s) => crate::Error::input(
+                        &self.source,
+                        format!("line {}: {} {detail}", s.line, s.key),
+                    ),
+                    None => crate::Error::Setting { name, detail },
+                }
+            }
+            other => other,
+        }
     }
 
     /// Reads a scene file, choosing the reader by extension.

@@ -1,15 +1,16 @@
 //! Render settings a scene file may carry (pbrt's `Sampler`, `Integrator`, `PixelFilter`;
-//! a `[render]` table in TOML). Command-line options override them.
+//! a `[render]` table in TOML): the library's [`Settings`], with where the file gives each,
+//! so that a bad value is reported at its line. Command-line options override them.
 
-use crate::image::filter::Filter;
+pub use crate::settings::Settings;
 
-#[derive(Clone, Debug, Default, PartialEq)]
-pub struct RenderSettings {
-    /// raylink integrator name ("whitted", "path", "light", "bdpt", ...).
-    pub integrator: Option<String>,
-    /// Samples per pixel.
-    pub spp: Option<u32>,
-    /// Maximum path length (number of bounces).
-    pub max_depth: Option<u32>,
-    pub filter: Option<Filter>,
+/// Where a scene file gives a setting.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct SettingSource {
+    /// The setting's name ([`Settings`]' field).
+    pub setting: &'static str,
+    /// The key as the file writes it (`[render.irradiance-cache] accuracy`).
+    pub key: String,
+    /// Its line in the file.
+    pub line: usize,
 }

@@ -63,19 +63,7 @@ pub struct DistributeOptions {
 }
 
 /// The order in which nodes process their light.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Order {
-    /// Jacobi sweeps over all nodes, in parallel.
-    Sweeps,
-    /// Largest unshot flux first (Southwell iteration, as progressive radiosity), one node at
-    /// a time. Networks with directional nodes use sweeps.
-    Shoot,
-    /// Conjugate gradients on the symmetrised system (`conjugate_gradients.rs`): about half
-    /// the gathers of the sweeps for the same tolerance. Networks with directional nodes use
-    /// sweeps.
-    #[default]
-    ConjugateGradients,
-}
+pub use crate::settings::NetworkOrder as Order;
 
 impl Default for DistributeOptions {
     fn default() -> Self {
@@ -90,10 +78,12 @@ impl Default for DistributeOptions {
 
 /// When a distribution started (for its statistics), and what stops it early: a job's
 /// cancel token, looked at between sweeps.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy)]
 pub struct Run<'a> {
     pub start: std::time::Instant,
     pub cancel: Option<&'a crate::job::CancelToken>,
+    /// Told the unshot flux as a fraction of the emitted before each sweep (progress).
+    pub report: Option<&'a (dyn Fn(f64) + Sync)>,
 }
 
 impl Run<'_> {
@@ -102,11 +92,16 @@ impl Run<'_> {
         Run {
             start: std::time::Instant::now(),
             cancel: None,
+            report: None,
         }
     }
 
-    /// Whether it should stop before the next sweep.
-    pub(crate) fn stopped(&self) -> bool {
+    /// Reports how much is still unshot (`unshot` of `emitted`) and tells whether to stop
+    /// before the next sweep.
+    pub(crate) fn stopped(&self, unshot: f64, emitted: f64) -> bool {
+        if let Some(report) = self.report {
+            report(unshot / emitted.max(1e-300));
+        }
         self.cancel.is_some_and(|c| c.is_cancelled())
     }
 }

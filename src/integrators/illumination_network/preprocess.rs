@@ -65,8 +65,4 @@ pub struct LineHit {
 }
 
 /// Which builder finds the line-patch intersections.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Builder {
-    Scan,
-    Embree,
-}
+pub use crate::settings::NetworkBuilder as Builder;

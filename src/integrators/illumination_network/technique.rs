@@ -109,13 +109,14 @@ impl NetworkTechnique {
             }
             _ => {
                 let builder = self.settings.builder;
+                let phase = control.phase("preprocess", None, "");
                 let n = Network::build_with(scene, ctx, params, builder, control)?;
-                control.note(&format!(
-                    "network: preprocess ({:?}) in {:.2} s: {} nodes, {} intersections",
-                    builder,
-                    n.stats.seconds,
+                phase.end(&format!(
+                    "{} nodes, {} links, {} intersections ({:?} builder)",
                     n.nodes(),
-                    n.stats.intersections
+                    n.stats.link_ends / 2,
+                    n.stats.intersections,
+                    builder
                 ));
                 if let Some(f) = &self.settings.file {
                     file::save(f, &n, scene, None)?;
@@ -146,16 +147,28 @@ impl Lifecycle for NetworkTechnique {
                 let net = self.structure(ctx, job, control)?;
                 let surfaces = distribute::surfaces(&net, scene, options.light_scale);
                 check_bounded(&net, scene, &surfaces)?;
+                let phase = control.phase("distribution", None, "sweeps");
+                let shown = std::sync::Mutex::new(std::time::Instant::now());
+                let report = |unshot: f64| {
+                    // A few updates a second: the shooting order asks once per node.
+                    let mut last = shown.lock().unwrap_or_else(|e| e.into_inner());
+                    if last.elapsed().as_millis() >= 100 {
+                        *last = std::time::Instant::now();
+                        phase.status(&format!("unshot {unshot:.2e} of emitted"));
+                    }
+                };
                 let run = distribute::Run {
                     start: std::time::Instant::now(),
                     cancel: Some(&control.cancel),
+                    report: Some(&report),
                 };
                 let solution = distribute::distribute_surfaces(&net, surfaces, options, run);
                 control.cancel.check("the network's light distribution")?;
                 let st = &solution.stats;
-                control.note(&format!(
-                    "network: distribution in {:.2} s ({} sweeps or shots)",
-                    st.seconds, st.sweeps
+                phase.end(&format!(
+                    "{} sweeps or shots, unshot {:.2e} of emitted",
+                    st.sweeps,
+                    st.unshot.iter().sum::<f64>() / st.emitted.iter().sum::<f64>().max(1e-300)
                 ));
                 (net, solution)
             }

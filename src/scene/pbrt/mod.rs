@@ -212,6 +212,7 @@ impl Loader {
             background: self.background,
             environment: self.environment,
             settings: self.settings,
+            setting_sources: Vec::new(),
             warnings: self.warnings,
         })
     }

@@ -5,6 +5,7 @@ use super::params::Params;
 use super::{Loader, Loc};
 use crate::image::filter::Filter;
 use crate::scene::{Camera, MAX_RESOLUTION};
+use crate::settings::TechniqueKind;
 use glam::{DMat3, DMat4, DVec3};
 
 pub(super) struct CameraDef {
@@ -121,18 +122,18 @@ impl Loader {
             }
             "Integrator" => {
                 let name = match ty {
-                    "volpath" | "path" | "simplepath" => "path",
-                    "bdpt" => "bdpt",
-                    "lighttracer" => "light",
+                    "volpath" | "path" | "simplepath" => TechniqueKind::Path,
+                    "bdpt" => TechniqueKind::Bdpt,
+                    "lighttracer" => TechniqueKind::Light,
                     _ => {
                         self.warn(
                             loc,
                             format!("Integrator \"{ty}\" is not supported; using the path tracer"),
                         );
-                        "path"
+                        TechniqueKind::Path
                     }
                 };
-                self.settings.integrator = Some(name.into());
+                self.settings.integrator = Some(name);
                 if let Some(d) = p.int("maxdepth").map_err(pe)? {
                     if d < 0 {
                         return Err(loc.error(format!(

@@ -2,6 +2,7 @@
 //! [`schema`](super::schema)), bakes transforms into world-space geometry, and resolves
 //! material names, meshes, textures and environment maps relative to the file.
 
+mod render;
 mod shapes;
 
 use super::checks::{
@@ -10,9 +11,8 @@ use super::checks::{
 use super::diagnostics::{Ctx, Site};
 use super::schema::{
     CameraDesc, DiffuseDesc, EnvironmentDesc, FileDesc, LightDesc, LightKind, MaterialDesc,
-    OneOrMany, RenderDesc, Splat3, TextureTable, TransformOp,
+    OneOrMany, Splat3, TextureTable, TransformOp,
 };
-use crate::image::filter::Filter;
 use crate::math::{Mat3, Mat4, Rgb, Vec2, Vec3};
 use crate::scene::environment::Environment;
 use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
@@ -59,9 +59,9 @@ impl<'a> Builder<'a> {
         };
         let camera = self.camera(camera)?;
 
-        let settings = match file.render {
+        let (settings, setting_sources) = match file.render {
             Some(r) => self.render(r)?,
-            None => RenderSettings::default(),
+            None => (RenderSettings::default(), Vec::new()),
         };
         let mut environment = None;
         let (ambient, background) = match file.world {
@@ -122,6 +122,7 @@ impl<'a> Builder<'a> {
             background,
             environment,
             settings,
+            setting_sources,
             warnings: Vec::new(),
         })
     }
@@ -278,59 +279,6 @@ impl<'a> Builder<'a> {
         let path = self.dir.join(&desc.file);
         Environment::load(&path, desc.file.into(), Mat3::from_mat4(xf.m), scale)
             .map_err(|e| ctx.fail(site, "environment.file", e))
-    }
-
-    fn render(&self, desc: Spanned<RenderDesc>) -> crate::Result<RenderSettings> {
-        let ctx = self.ctx;
-        let site = self.site("render".into(), desc.span());
-        let desc = desc.into_inner();
-        if desc.spp == Some(0) {
-            return Err(ctx.fail(&site, "spp", "must be at least 1"));
-        }
-        let filter = match desc.filter {
-            None => None,
-            Some(f) => {
-                let radius = f.radius;
-                let filter = match f.kind.as_str() {
-                    "box" => Filter::Box {
-                        radius: radius.unwrap_or(0.5),
-                    },
-                    "triangle" => Filter::Triangle {
-                        radius: radius.unwrap_or(2.0),
-                    },
-                    "gaussian" => Filter::Gaussian {
-                        radius: radius.unwrap_or(1.5),
-                        sigma: f.sigma.unwrap_or(0.5),
-                    },
-                    other => {
-                        return Err(ctx.fail(
-                            &site,
-                            "filter.type",
-                            format!(
-                                "must be \"box\", \"triangle\" or \"gaussian\", got \"{other}\""
-                            ),
-                        ))
-                    }
-                };
-                if f.sigma.is_some() && !matches!(filter, Filter::Gaussian { .. }) {
-                    return Err(ctx.fail(
-                        &site,
-                        "filter.sigma",
-                        "only a gaussian filter takes sigma",
-                    ));
-                }
-                filter
-                    .validate()
-                    .map_err(|m| ctx.fail(&site, "filter", m))?;
-                Some(filter)
-            }
-        };
-        Ok(RenderSettings {
-            integrator: desc.integrator,
-            spp: desc.spp,
-            max_depth: desc.max_depth,
-            filter,
-        })
     }
 
     fn transform(&self, site: &Site, desc: Option<OneOrMany<TransformOp>>) -> crate::Result<Xform> {

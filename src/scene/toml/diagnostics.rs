@@ -83,7 +83,7 @@ impl Ctx<'_> {
 
     /// The line on which `key` is set inside the table at `span`; the table's first line
     /// when it cannot be found.
-    fn key_line(&self, span: &Range<usize>, key: &str) -> usize {
+    pub(super) fn key_line(&self, span: &Range<usize>, key: &str) -> usize {
         let span = &self.table_extent(span);
         let body = self.text.get(span.clone()).unwrap_or("");
         if !key.is_empty() {

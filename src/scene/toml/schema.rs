@@ -27,7 +27,9 @@ pub(crate) struct FileDesc {
     pub(crate) render: Option<Spanned<RenderDesc>>,
 }
 
-#[derive(Deserialize, Serialize)]
+/// `[render]`: the render settings the scene file carries (command-line options override
+/// them). The keys are the settings' names; each technique's own are in a table of its own.
+#[derive(Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct RenderDesc {
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -37,7 +39,77 @@ pub(crate) struct RenderDesc {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) max_depth: Option<u32>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) time_limit: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) filter: Option<FilterDesc>,
+    /// Whitted's and the network's anti-aliasing: "adaptive" or "uniform".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) aa: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) aa_threshold: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) aa_depth: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) whitted: Option<Spanned<WhittedDesc>>,
+    #[serde(rename = "irradiance-cache", skip_serializing_if = "Option::is_none")]
+    pub(crate) irradiance_cache: Option<Spanned<CacheDesc>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) network: Option<Spanned<NetworkDesc>>,
+}
+
+/// `[render.whitted]`.
+#[derive(Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct WhittedDesc {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) area_samples: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) fresnel: Option<bool>,
+}
+
+/// `[render.irradiance-cache]`.
+#[derive(Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct CacheDesc {
+    /// Diffuse bounces (Radiance's -ab).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) ab: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) accuracy: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) samples: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) ar: Option<f32>,
+    /// Relative to the scene file.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) cache_file: Option<String>,
+}
+
+/// `[render.network]`.
+#[derive(Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct NetworkDesc {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) slopes: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) intercept_step: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) patch_size: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) jitter: Option<f32>,
+    /// "scan" or "embree".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) builder: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) tolerance: Option<f32>,
+    /// "cg", "sweeps" or "shoot".
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) order: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) hybrid: Option<bool>,
+    /// Relative to the scene file.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) file: Option<String>,
 }
 
 #[derive(Deserialize, Serialize)]

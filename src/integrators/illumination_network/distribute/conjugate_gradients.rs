@@ -124,7 +124,7 @@ pub(super) fn solve(
     let mut rr = chunked_sum(nodes, |i| r[i] * r[i]);
     let mut to_shoot = flux_of_residual(&r);
     let mut kp = vec![Vec3A::ZERO; nodes];
-    while to_shoot > limit && sweeps < options.max_sweeps && !run.stopped() {
+    while to_shoot > limit && sweeps < options.max_sweeps && !run.stopped(to_shoot, emitted_total) {
         // q = (I − S K S) p.
         for (yi, (pi, si)) in y.iter_mut().zip(p.iter().zip(&s)) {
             *yi = *pi * *si;

@@ -90,7 +90,9 @@ pub(super) fn shoot(
     let total = |unshot: &[Rgb]| (0..nodes).map(|i| flux(unshot[i], i)).sum::<f64>();
     let mut since_check = 0usize;
     remaining = remaining.min(total(&unshot));
-    while remaining > options.tolerance as f64 * emitted_total && tree[1].0 > 0.0 && !run.stopped()
+    while remaining > options.tolerance as f64 * emitted_total
+        && tree[1].0 > 0.0
+        && !run.stopped(remaining, emitted_total)
     {
         let i = tree[1].1 as usize;
         touched.clear();

@@ -160,7 +160,7 @@ pub fn distribute_from(
     let mut escaped = vec![Rgb::ZERO; nodes];
     while to_shoot > options.tolerance as f64 * emitted_total
         && stats.sweeps < options.max_sweeps
-        && !run.stopped()
+        && !run.stopped(to_shoot, emitted_total)
     {
         // Gather: flux arriving over each node's links from what the other ends shot.
         let radiance = |j: u32, l: usize| {

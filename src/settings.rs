@@ -1,0 +1,266 @@
+//! The parameter set of a render: every setting a front end or a scene file can give, each
+//! optional, named as scene files and messages name it. [`crate::Technique::create`] turns it
+//! into a technique with its defaults and checks.
+
+use crate::image::filter::Filter;
+use std::path::PathBuf;
+
+/// The light-transport techniques, by name.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TechniqueKind {
+    /// Whitted 1980: recursive reflection, refraction and shadows.
+    Whitted,
+    /// Path tracing with next-event estimation and multiple importance sampling.
+    Path,
+    /// Light (particle) tracing: paths from the lights, connected to the camera.
+    Light,
+    /// Bidirectional path tracing, all strategies combined by multiple importance sampling.
+    Bdpt,
+    /// Ward's irradiance caching.
+    IrradianceCache,
+    /// Buckalew & Fussell's illumination networks.
+    Network,
+}
+
+impl TechniqueKind {
+    pub const ALL: [TechniqueKind; 6] = [
+        TechniqueKind::Whitted,
+        TechniqueKind::Path,
+        TechniqueKind::Light,
+        TechniqueKind::Bdpt,
+        TechniqueKind::IrradianceCache,
+        TechniqueKind::Network,
+    ];
+
+    /// The name in scene files and on the command line.
+    pub fn name(self) -> &'static str {
+        match self {
+            TechniqueKind::Whitted => "whitted",
+            TechniqueKind::Path => "path",
+            TechniqueKind::Light => "light",
+            TechniqueKind::Bdpt => "bdpt",
+            TechniqueKind::IrradianceCache => "irradiance-cache",
+            TechniqueKind::Network => "network",
+        }
+    }
+
+    pub fn from_name(name: &str) -> Option<TechniqueKind> {
+        TechniqueKind::ALL
+            .into_iter()
+            .find(|k| k.name().eq_ignore_ascii_case(name))
+    }
+
+    /// Whether it renders progressive Monte Carlo sample passes (and so takes a time limit,
+    /// a pixel filter and checkpoints).
+    pub fn is_monte_carlo(self) -> bool {
+        !matches!(self, TechniqueKind::Whitted | TechniqueKind::Network)
+    }
+
+    /// The settings of [`Settings`] this technique reads; a front end may refuse the others.
+    pub fn reads(self, setting: &str) -> bool {
+        const COMMON: &[&str] = &["integrator", "max_depth", "spp"];
+        const MONTE_CARLO: &[&str] = &["time_limit", "filter"];
+        const PIXELS: &[&str] = &["aa", "aa_threshold", "aa_depth"];
+        const WHITTED: &[&str] = &["area_samples", "fresnel"];
+        const CACHE: &[&str] = &[
+            "ab",
+            "ic_accuracy",
+            "ic_samples",
+            "ar",
+            "cache_file",
+            "show_cache_points",
+        ];
+        const NETWORK: &[&str] = &[
+            "slopes",
+            "intercept_step",
+            "patch_size",
+            "network_jitter",
+            "network_builder",
+            "tolerance",
+            "network_file",
+            "light_scale",
+            "network_order",
+            "network_hybrid",
+            "relight",
+        ];
+        let groups: &[&[&str]] = match self {
+            TechniqueKind::Whitted => &[COMMON, PIXELS, WHITTED],
+            TechniqueKind::Path | TechniqueKind::Light | TechniqueKind::Bdpt => {
+                &[COMMON, MONTE_CARLO]
+            }
+            // The cache's overture traces the final render's samples: no time limit.
+            TechniqueKind::IrradianceCache => &[COMMON, &["filter"], CACHE],
+            TechniqueKind::Network => &[COMMON, PIXELS, NETWORK],
+        };
+        groups.iter().any(|g| g.contains(&setting))
+    }
+}
+
+impl std::fmt::Display for TechniqueKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Whitted's anti-aliasing: adaptive corner subdivision or a regular grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AntiAliasing {
+    Adaptive,
+    Uniform,
+}
+
+/// How the illumination network finds its links.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum NetworkBuilder {
+    /// Incremental scan conversion of the polygons (the paper's preprocess).
+    #[default]
+    Scan,
+    /// Repeated closest-hit queries along every line through the intersection backend.
+    Embree,
+}
+
+/// The order in which the network's nodes process their light.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum NetworkOrder {
+    /// Jacobi sweeps over all nodes, in parallel.
+    Sweeps,
+    /// Largest unshot flux first (Southwell iteration, as progressive radiosity), one node at
+    /// a time. Networks with directional nodes use sweeps.
+    Shoot,
+    /// Conjugate gradients on the symmetrised system: about half the gathers of the sweeps
+    /// for the same tolerance. Networks with directional nodes use sweeps.
+    #[default]
+    ConjugateGradients,
+}
+
+/// What `relight` changes in a saved network (see [`crate::job::NetworkSettings::relight`]).
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Relight {
+    /// Multiply the emission of the scene's material NAME by K.
+    pub lights: Vec<(String, f32)>,
+    /// Compute and store the light basis afresh (replacing the file's).
+    pub store_basis: bool,
+    /// Store a reflectance series for each of these diffuse materials with the basis.
+    pub reflectance_series: Vec<String>,
+}
+
+/// Every setting a front end can give, each optional (unset: the technique's default). The
+/// field names are the settings' names in messages.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Settings {
+    /// The technique (default: Whitted).
+    pub integrator: Option<TechniqueKind>,
+    /// Samples per pixel (Monte Carlo, default 16); Whitted and network: a square number
+    /// selects uniform supersampling.
+    pub spp: Option<u32>,
+    /// Ray-tree depth (Whitted) or bounces (Monte Carlo). Default 8.
+    pub max_depth: Option<u32>,
+    /// Monte Carlo: render whole passes until this many seconds have passed.
+    pub time_limit: Option<f64>,
+    /// Monte Carlo: the pixel filter (default pbrt's Gaussian).
+    pub filter: Option<Filter>,
+    pub aa: Option<AntiAliasing>,
+    pub aa_threshold: Option<f32>,
+    pub aa_depth: Option<u32>,
+    /// Whitted: shadow rays per area light (default 16).
+    pub area_samples: Option<u32>,
+    /// Whitted: Fresnel-weighted reflection and transmission everywhere.
+    pub fresnel: Option<bool>,
+    /// Irradiance cache: bounces.
+    pub ab: Option<u32>,
+    pub ic_accuracy: Option<f32>,
+    pub ic_samples: Option<u32>,
+    pub ar: Option<f32>,
+    /// Irradiance cache: values are loaded from this file if it exists and saved to it.
+    pub cache_file: Option<PathBuf>,
+    /// Irradiance cache: mark the first-level values the camera sees.
+    pub show_cache_points: Option<bool>,
+    pub slopes: Option<u32>,
+    pub intercept_step: Option<f32>,
+    pub patch_size: Option<f32>,
+    pub network_jitter: Option<f32>,
+    pub network_builder: Option<NetworkBuilder>,
+    pub tolerance: Option<f32>,
+    /// Network: loaded from this file if it exists, else built and saved there.
+    pub network_file: Option<PathBuf>,
+    pub light_scale: Option<f32>,
+    pub network_order: Option<NetworkOrder>,
+    pub network_hybrid: Option<bool>,
+    pub relight: Option<Relight>,
+}
+
+impl Settings {
+    /// These settings with every setting `over` gives replacing its own.
+    pub fn overlaid(self, over: &Settings) -> Settings {
+        macro_rules! pick {
+            ($($f:ident),*) => { Settings { $($f: over.$f.clone().or(self.$f),)* } };
+        }
+        pick!(
+            integrator,
+            spp,
+            max_depth,
+            time_limit,
+            filter,
+            aa,
+            aa_threshold,
+            aa_depth,
+            area_samples,
+            fresnel,
+            ab,
+            ic_accuracy,
+            ic_samples,
+            ar,
+            cache_file,
+            show_cache_points,
+            slopes,
+            intercept_step,
+            patch_size,
+            network_jitter,
+            network_builder,
+            tolerance,
+            network_file,
+            light_scale,
+            network_order,
+            network_hybrid,
+            relight
+        )
+    }
+
+    /// The names of the settings that are set.
+    pub fn given(&self) -> Vec<&'static str> {
+        let mut v = Vec::new();
+        macro_rules! given {
+            ($($f:ident),*) => { $( if self.$f.is_some() { v.push(stringify!($f)); } )* };
+        }
+        given!(
+            integrator,
+            spp,
+            max_depth,
+            time_limit,
+            filter,
+            aa,
+            aa_threshold,
+            aa_depth,
+            area_samples,
+            fresnel,
+            ab,
+            ic_accuracy,
+            ic_samples,
+            ar,
+            cache_file,
+            show_cache_points,
+            slopes,
+            intercept_step,
+            patch_size,
+            network_jitter,
+            network_builder,
+            tolerance,
+            network_file,
+            light_scale,
+            network_order,
+            network_hybrid,
+            relight
+        );
+        v
+    }
+}
