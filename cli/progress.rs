@@ -51,9 +51,11 @@ impl Progress for Terminal {
             None => {
                 let bar = ProgressBar::new_spinner();
                 bar.set_style(
-                    ProgressStyle::with_template(&format!(
-                        "{{spinner}} {phase} [{{elapsed_precise}}] {{human_pos}} {unit} {{msg}}"
-                    ))
+                    ProgressStyle::with_template(&if unit.is_empty() {
+                        format!("{{spinner}} {phase} [{{elapsed_precise}}] {{msg}}")
+                    } else {
+                        format!("{{spinner}} {phase} [{{elapsed_precise}}] {{human_pos}} {unit} {{msg}}")
+                    })
                     .expect("the progress template is valid"),
                 );
                 bar
@@ -86,8 +88,14 @@ impl Progress for Terminal {
         if let Some(bar) = self.bar.lock().unwrap_or_else(|e| e.into_inner()).take() {
             bar.finish_and_clear();
         }
-        // The render's own summary is printed once the image is written.
-        if !self.quiet && phase != "render" && !summary.is_empty() {
+        // The render's own summary is printed once the image is written; short phases other
+        // than a technique's preparation pass without a line.
+        let preparation = matches!(phase, "overture" | "preprocess" | "distribution");
+        if !self.quiet
+            && phase != "render"
+            && !summary.is_empty()
+            && (preparation || seconds >= 1.0)
+        {
             self.line(&format!("{phase}: {summary} ({seconds:.2} s)"));
         }
     }

@@ -54,11 +54,51 @@ pub fn csv_text(report: &Report) -> String {
 pub fn summary(report: &Report) -> String {
     let mut s = String::new();
     let ratio = |a: f64, b: f64| if b > 0.0 { a / b } else { f64::NAN };
-    let _ = writeln!(
-        s,
-        "{:>6} {:>12} {:>9} | {:>12} {:>7} {:>9} {:>7} {:>9} {:>9}",
-        "frame", "full rays", "full cpu", "rays", "ratio", "cpu s", "ratio", "retraced", "wall s"
-    );
+    // Only the columns measured: the full renders with --verify or --no-coherence, the
+    // coherent ones unless --no-coherence.
+    let full_cols = report.rows.iter().any(|r| r.full.is_some());
+    let coherent_cols = report.rows.iter().any(|r| r.time.wall > 0.0);
+    let both = full_cols && coherent_cols;
+    let row = |label: &str, full: (u64, f64), rays: u64, time: Time, retraced: f64| {
+        let mut line = format!("{label:>6}");
+        if full_cols {
+            line += &format!(" {:>12} {:>9.2}", full.0, full.1);
+        }
+        if both {
+            line += " |";
+        }
+        if coherent_cols {
+            line += &format!(" {rays:>12}");
+            if both {
+                line += &format!(" {:>7.4}", ratio(rays as f64, full.0 as f64));
+            }
+            line += &format!(" {:>9.2}", time.cpu);
+            if both {
+                line += &format!(" {:>7.4}", ratio(time.cpu, full.1));
+            }
+            line += &format!(" {retraced:>8.2}% {:>9.3}", time.wall);
+        }
+        line
+    };
+    let mut header = format!("{:>6}", "frame");
+    if full_cols {
+        header += &format!(" {:>12} {:>9}", "full rays", "full cpu");
+    }
+    if both {
+        header += " |";
+    }
+    if coherent_cols {
+        header += &format!(" {:>12}", "rays");
+        if both {
+            header += &format!(" {:>7}", "ratio");
+        }
+        header += &format!(" {:>9}", "cpu s");
+        if both {
+            header += &format!(" {:>7}", "ratio");
+        }
+        header += &format!(" {:>9} {:>9}", "retraced", "wall s");
+    }
+    let _ = writeln!(s, "{header}");
     let (mut cr, mut fr, mut px) = (0u64, 0u64, 0u64);
     let (mut ct, mut ft) = (Time::default(), Time::default());
     let mut all_full = !report.rows.is_empty();
@@ -75,34 +115,20 @@ pub fn summary(report: &Report) -> String {
         fr += frays;
         ft.cpu += ftime.cpu;
         ft.wall += ftime.wall;
-        let _ = writeln!(
-            s,
-            "{:>6} {:>12} {:>9.2} | {:>12} {:>7.4} {:>9.2} {:>7.4} {:>8.2}% {:>9.3}",
-            r.frame,
-            frays,
-            ftime.cpu,
+        let retraced = 100.0 * c.pixels_retraced as f64 / report.pixels_per_frame as f64;
+        let line = row(
+            &r.frame.to_string(),
+            (frays, ftime.cpu),
             c.rays.total(),
-            ratio(c.rays.total() as f64, frays as f64),
-            r.time.cpu,
-            ratio(r.time.cpu, ftime.cpu),
-            100.0 * c.pixels_retraced as f64 / report.pixels_per_frame as f64,
-            r.time.wall,
+            r.time,
+            retraced,
         );
+        let _ = writeln!(s, "{line}");
     }
     let frames = report.rows.len() as u64;
-    let _ = writeln!(
-        s,
-        "{:>6} {:>12} {:>9.2} | {:>12} {:>7.4} {:>9.2} {:>7.4} {:>8.2}% {:>9.3}",
-        "all",
-        fr,
-        ft.cpu,
-        cr,
-        ratio(cr as f64, fr as f64),
-        ct.cpu,
-        ratio(ct.cpu, ft.cpu),
-        100.0 * px as f64 / (report.pixels_per_frame * frames.max(1)) as f64,
-        ct.wall,
-    );
+    let retraced = 100.0 * px as f64 / (report.pixels_per_frame * frames.max(1)) as f64;
+    let _ = writeln!(s, "{}", row("all", (fr, ft.cpu), cr, ct, retraced));
+    let all_full = all_full && coherent_cols;
     if all_full {
         let r0 = &report.rows[0];
         if let Some((_, f0)) = r0.full {

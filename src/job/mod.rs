@@ -274,7 +274,13 @@ impl Renderer {
             }
         }
         control.cancel.check("loading")?;
+        let phase = control.phase("building", None, "");
         let accel = accel::build(&scene, job.accel, control)?;
+        phase.end(&format!(
+            "{} intersection structure over {} primitives",
+            job.accel,
+            scene.primitive_count()
+        ));
         Ok(Renderer {
             scene,
             job,

@@ -113,13 +113,21 @@ impl Scene {
     /// statements of a pbrt file, between shapes of a TOML one) with
     /// [`Error::Cancelled`](crate::Error::Cancelled).
     pub fn load_with(path: &Path, control: &crate::job::Control) -> crate::Result<Scene> {
-        match path.extension().and_then(|e| e.to_str()) {
+        let phase = control.phase("reading", None, "");
+        let scene = match path.extension().and_then(|e| e.to_str()) {
             Some("toml") => animation::read_first_frame(path, control),
             Some("pbrt") => pbrt::read(path, control),
             _ => Err(crate::Error::input(
                 path,
                 "unknown scene format: expected a .toml or .pbrt scene file",
             )),
-        }
+        }?;
+        phase.end(&format!(
+            "{}: {} shapes, {} primitives",
+            path.display(),
+            scene.shapes.len(),
+            scene.primitive_count()
+        ));
+        Ok(scene)
     }
 }

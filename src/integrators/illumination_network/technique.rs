@@ -150,6 +150,7 @@ impl Lifecycle for NetworkTechnique {
                 let phase = control.phase("distribution", None, "sweeps");
                 let shown = std::sync::Mutex::new(std::time::Instant::now());
                 let report = |unshot: f64| {
+                    phase.advance(1);
                     // A few updates a second: the shooting order asks once per node.
                     let mut last = shown.lock().unwrap_or_else(|e| e.into_inner());
                     if last.elapsed().as_millis() >= 100 {

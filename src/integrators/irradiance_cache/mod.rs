@@ -427,9 +427,11 @@ impl IrradianceCache {
             )?;
         }
         progress.end(&format!(
-            "{} values computed ({:.0} rays each)",
-            primaries,
-            rays as f64 / primaries.max(1) as f64
+            "{} values ({loaded} loaded, {primaries} computed, {:.0} rays each); per bounce \
+             level: {:?}",
+            cache.len(),
+            rays as f64 / primaries.max(1) as f64,
+            cache.levels.iter().map(|l| l.len()).collect::<Vec<_>>()
         ));
         let overture_primaries = primaries;
         Ok(IrradianceCache {

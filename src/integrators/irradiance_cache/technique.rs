@@ -76,7 +76,6 @@ impl CacheTechnique {
                 .map(|l| l.len())
                 .collect::<Vec<_>>()
         );
-        control.note(&line);
         self.report = vec![line];
         match file {
             Some(f) if frozen => control.note(&format!(
