@@ -85,6 +85,7 @@ fn mixed_scene() -> Scene {
         ambient: Rgb::splat(0.1),
         background: Rgb::ZERO,
         settings: Default::default(),
+        setting_sources: Vec::new(),
         environment: None,
         warnings: Vec::new(),
     }

@@ -305,6 +305,7 @@ fn environment_map_lighting_matches_quadrature() {
         ambient: Rgb::ZERO,
         background: Rgb::ZERO,
         settings: Default::default(),
+        setting_sources: Vec::new(),
         environment: Some(std::sync::Arc::new(env.clone())),
         warnings: vec![],
     };

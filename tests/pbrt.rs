@@ -63,7 +63,10 @@ fn bitterli_cornell_box_loads_with_the_expected_contents() {
     assert_eq!((cam.width, cam.height, cam.fov_deg), (1024, 1024, 19.5));
     assert_eq!(scene.settings.spp, Some(64));
     assert_eq!(scene.settings.max_depth, Some(65));
-    assert_eq!(scene.settings.integrator.as_deref(), Some("path"));
+    assert_eq!(
+        scene.settings.integrator,
+        Some(raylink::TechniqueKind::Path)
+    );
     assert_eq!(
         scene.settings.filter,
         Some(raylink::image::filter::Filter::Triangle { radius: 1.0 })
@@ -808,7 +811,7 @@ fn converted_textures_environment_and_settings_round_trip() {
     )
     .unwrap();
     assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
-    assert_eq!(s.settings.integrator.as_deref(), Some("bdpt"));
+    assert_eq!(s.settings.integrator, Some(raylink::TechniqueKind::Bdpt));
     assert_eq!((s.settings.spp, s.settings.max_depth), (Some(16), Some(7)));
     let out = dir.path().join("out/scene.toml");
     std::fs::create_dir(dir.path().join("out")).unwrap();

@@ -30,6 +30,7 @@ fn empty_scene() -> Scene {
         ambient: Rgb::ZERO,
         background: Rgb::ZERO,
         settings: Default::default(),
+        setting_sources: Vec::new(),
         environment: None,
         warnings: Vec::new(),
     }

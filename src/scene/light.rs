@@ -189,6 +189,7 @@ mod tests {
             ambient: Rgb::ZERO,
             background: Rgb::ZERO,
             settings: Default::default(),
+            setting_sources: Vec::new(),
             environment: None,
             warnings: Vec::new(),
         };
