@@ -307,7 +307,7 @@ fn network_tiles_from_a_precomputed_network_equal_the_whole_render() {
     let err = stderr(&out);
     assert!(out.status.success(), "{err}");
     // The network's structure only: every render distributes the light itself.
-    assert!(err.contains("network: preprocess"), "{err}");
+    assert!(err.contains("preprocess: "), "{err}");
     assert!(!err.contains("distribution"), "{err}");
     let before = std::fs::read(&file).unwrap();
     tiles_equal_whole("scenes/cornell-box.toml", &options, 2, &dir);

@@ -79,7 +79,9 @@ impl CacheTechnique {
         self.report = vec![line];
         match file {
             Some(f) if frozen => control.note(&format!(
-                "irradiance cache: {} holds this view's overture; read only",
+                "irradiance cache: {} values from {}, which holds this view's overture (read \
+                 only; 0 computed)",
+                integrator.cache().len(),
                 f.display()
             )),
             Some(f) => file::save_for_view(f, integrator.cache(), ctx.scene, &options, view)?,
