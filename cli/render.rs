@@ -247,7 +247,6 @@ fn render_with_checkpoints(
         .technique
         .monte_carlo()
         .expect("a progressive technique");
-    let checkpoint = checkpoint::path_for(&args.outputs[0]);
     // What a resume must match: the settings parts record for merging, with the version and
     // the scene.
     let settings = format!(
@@ -255,18 +254,19 @@ fn render_with_checkpoints(
         raylink::VERSION,
         raylink::farm::scene_hash(renderer.scene())
     );
+    let checkpoint = checkpoint::path_for(&args.outputs[0], &settings);
     let mut resumed_samples = 0;
     let resume = if args.resume {
-        if !checkpoint.exists() {
+        let Some(found) = checkpoint::find(&args.outputs[0], &settings)? else {
             return Err(Error::Invalid(format!(
                 "--resume: there is no checkpoint {} (an interrupted render or \
                  --checkpoint-interval writes one)",
                 checkpoint.display()
             ))
             .into());
-        }
+        };
         let blank = raylink::Film::new(width, height, mc.filter);
-        let resumed = checkpoint::load(&checkpoint, &settings, blank)?;
+        let resumed = checkpoint::load(&found, &settings, blank, mc.spp)?;
         resumed_samples = resumed.samples;
         Some(resumed.film)
     } else {

@@ -72,8 +72,16 @@ impl Job {
                 ));
             }
         }
-        if self.threads == Some(0) {
-            return Err(Error::setting("threads", "must be at least 1"));
+        if let Some(threads) = self.threads {
+            // Threads past a few per core only cost memory and start-up.
+            let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+            let limit = (16 * cores).max(64);
+            if threads == 0 || threads > limit {
+                return Err(Error::setting(
+                    "threads",
+                    format!("must be between 1 and {limit} (16 per core), got {threads}"),
+                ));
+            }
         }
         let Some(r) = self.region else {
             return Ok(());

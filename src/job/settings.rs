@@ -91,7 +91,11 @@ impl Technique {
         Ok(match kind {
             TechniqueKind::Whitted => Technique::Whitted(WhittedSettings {
                 max_depth: max_depth.max(1),
-                area_samples: settings.area_samples.unwrap_or(16),
+                area_samples: at_most(
+                    "area_samples",
+                    settings.area_samples.unwrap_or(16),
+                    1 << 16,
+                )?,
                 fresnel: settings.fresnel.unwrap_or(false),
                 sampling: pixel_sampling(settings)?,
             }),
@@ -109,7 +113,11 @@ impl Technique {
                 let options = IcOptions {
                     bounces: settings.ab.unwrap_or(ic::DEFAULT_BOUNCES),
                     accuracy: settings.ic_accuracy.unwrap_or(ic::DEFAULT_ACCURACY),
-                    samples: settings.ic_samples.unwrap_or(ic::DEFAULT_SAMPLES),
+                    samples: at_most(
+                        "ic_samples",
+                        settings.ic_samples.unwrap_or(ic::DEFAULT_SAMPLES),
+                        1 << 20,
+                    )?,
                     ar: settings.ar.unwrap_or(ic::DEFAULT_AR),
                     ..IcOptions::default()
                 };
@@ -160,6 +168,17 @@ impl Technique {
     pub fn renders_parts(&self) -> bool {
         !matches!(self, Technique::Light(_) | Technique::Bdpt(_))
     }
+}
+
+/// `value` if it is at most `limit`: counts bound the work a job may ask for.
+fn at_most(name: &str, value: u32, limit: u32) -> Result<u32> {
+    if value > limit {
+        return Err(Error::setting(
+            name,
+            format!("must be at most {limit}, got {value}"),
+        ));
+    }
+    Ok(value)
 }
 
 /// The pixel sampling of Whitted and the network: uniform supersampling when `spp` is
@@ -240,7 +259,7 @@ fn network(s: &Settings, max_depth: u32) -> Result<NetworkSettings> {
         jitter: s.network_jitter.unwrap_or(1.0),
         seed: 0,
     };
-    params.validate().map_err(Error::Invalid)?;
+    params.validate()?;
     let tolerance = s.tolerance.unwrap_or(net::DEFAULT_TOLERANCE);
     if !(tolerance > 0.0 && tolerance < 1.0) {
         return Err(Error::setting(

@@ -26,11 +26,69 @@ const FORMAT: Format = Format {
     what: "render checkpoint",
 };
 
-/// Where the checkpoint of a render writing `output` goes: beside it, `OUTPUT.checkpoint`.
-pub fn path_for(output: &Path) -> PathBuf {
+/// `OUTPUT.checkpoint`, or with `key`, `OUTPUT.KEY.checkpoint`.
+fn named(output: &Path, key: Option<&str>) -> PathBuf {
     let mut name = output.file_name().unwrap_or_default().to_os_string();
+    if let Some(key) = key {
+        name.push(format!(".{key}"));
+    }
     name.push(".checkpoint");
     output.with_file_name(name)
+}
+
+/// A short key of a render's settings, for its checkpoint's name.
+fn key(settings: &str) -> String {
+    format!(
+        "{:08x}",
+        crate::binary_file::fnv1a(settings.as_bytes()) as u32
+    )
+}
+
+/// Where a render writing `output` with `settings` keeps its checkpoint: beside the output,
+/// `OUTPUT.checkpoint`, unless a checkpoint of another render (other settings or seed) is
+/// there: then `OUTPUT.KEY.checkpoint` with a key of the settings, so that no render
+/// overwrites another's.
+pub fn path_for(output: &Path, settings: &str) -> PathBuf {
+    let plain = named(output, None);
+    match settings_of(&plain) {
+        Ok(s) if s != settings => named(output, Some(&key(settings))),
+        _ => plain,
+    }
+}
+
+/// The checkpoint a resume of the render writing `output` with `settings` reads, if any:
+/// `OUTPUT.checkpoint` when that render wrote it, else its keyed one. A checkpoint of
+/// another render with no keyed one beside it is an error saying so; a damaged one, an
+/// error naming it.
+pub fn find(output: &Path, settings: &str) -> Result<Option<PathBuf>> {
+    let plain = named(output, None);
+    let keyed = named(output, Some(&key(settings)));
+    if !plain.exists() {
+        return Ok(keyed.exists().then_some(keyed));
+    }
+    if settings_of(&plain)? == settings {
+        return Ok(Some(plain));
+    }
+    if keyed.exists() {
+        return Ok(Some(keyed));
+    }
+    Err(FORMAT.error(
+        &plain,
+        "written by a render with another scene or other options (resume with the options \
+         of the interrupted run)",
+    ))
+}
+
+/// The settings a checkpoint was written with (its checksum checked first).
+fn settings_of(path: &Path) -> Result<String> {
+    let file = FORMAT.load(path)?;
+    let mut r = Reader { rest: file.body() };
+    let bad = |problem: &str| FORMAT.error(path, problem);
+    let len = r.u64().ok_or_else(|| bad("truncated"))?;
+    if len > r.rest.len() as u64 {
+        return Err(bad("truncated"));
+    }
+    String::from_utf8(r.rest[..len as usize].to_vec()).map_err(|_| bad("corrupt settings"))
 }
 
 /// Writes `film` atomically, with `settings` (a description of everything the pixels depend
@@ -62,9 +120,10 @@ pub struct Resumed {
 }
 
 /// Reads a checkpoint written by [`save`] for the same `settings` and film size (`blank`, a
-/// new film of the render's size and filter, receives the values). Any other file is an
-/// [`Error::Input`](crate::Error::Input) naming it.
-pub fn load(path: &Path, settings: &str, blank: Film) -> Result<Resumed> {
+/// new film of the render's size and filter, receives the values) of a render of `target`
+/// samples per pixel. Any other file, or one whose counts that render never passes through,
+/// is an [`Error::Input`](crate::Error::Input) naming it.
+pub fn load(path: &Path, settings: &str, blank: Film, target: u32) -> Result<Resumed> {
     let file = FORMAT.load(path)?;
     let bad = |problem: &str| FORMAT.error(path, problem);
     let mut r = Reader { rest: file.body() };
@@ -114,8 +173,11 @@ pub fn load(path: &Path, settings: &str, blank: Film) -> Result<Resumed> {
     if sums.iter().chain(&splats).flatten().any(|v| !v.is_finite()) {
         return Err(bad("a pixel value is not finite"));
     }
+    if samples > (spp as u64 + pass as u64) * pixels as u64 {
+        return Err(bad("counts more samples than its passes hold"));
+    }
     let film = blank
-        .restored(sums, splats, spp, pass, tiles_done, invalid)
+        .restored((sums, splats), (spp, pass, tiles_done, invalid), target)
         .map_err(|e| bad(&e))?;
     Ok(Resumed { film, samples })
 }

@@ -7,7 +7,7 @@ use crate::image::filter::Filter;
 use crate::image::Image;
 use crate::integrators::Splat;
 use crate::math::{Rgb, Vec2};
-use crate::render::progressive::MAX_SPP;
+use crate::render::progressive::{next_pass, reachable, MAX_SPP};
 
 /// The accumulated film.
 pub struct Film {
@@ -75,15 +75,14 @@ impl Film {
         (self.pass, self.tiles_done)
     }
 
-    /// This (empty) film with saved accumulators and counts, checked for consistency.
+    /// This (empty) film with saved accumulators and counts, checked against each other and
+    /// against a render of `target` samples per pixel: the counts must be ones that render
+    /// passes through, and the sums finite and not negative.
     pub(crate) fn restored(
         mut self,
-        sums: Vec<[f64; 3]>,
-        splats: Vec<[f64; 3]>,
-        spp: u32,
-        pass: u32,
-        tiles_done: u32,
-        invalid: u64,
+        (sums, splats): (Vec<[f64; 3]>, Vec<[f64; 3]>),
+        (spp, pass, tiles_done, invalid): (u32, u32, u32, u64),
+        target: u32,
     ) -> std::result::Result<Film, String> {
         let tile_count = tiles(self.width, self.height).len() as u32;
         if spp > MAX_SPP
@@ -92,6 +91,24 @@ impl Film {
             || (pass == 0) != (tiles_done == 0)
         {
             return Err("inconsistent sample counts".into());
+        }
+        if spp >= target {
+            return Err(format!(
+                "holds {spp} samples per pixel, and this render takes {target}: nothing to resume"
+            ));
+        }
+        if !reachable(spp, target) || (pass != 0 && pass != next_pass(spp, target)) {
+            return Err(format!(
+                "its sample counts ({spp} per pixel, a pass of {pass} under way) are not those \
+                 of a render of {target} samples per pixel"
+            ));
+        }
+        let pixels = self.width as u64 * self.height as u64;
+        if invalid > (spp as u64 + pass as u64) * pixels {
+            return Err("more dropped samples than samples".into());
+        }
+        if sums.iter().chain(&splats).flatten().any(|v| !(*v >= 0.0)) {
+            return Err("a pixel sum is negative or not a number".into());
         }
         if sums.len() != self.sums.len() || splats.len() != self.splats.len() {
             return Err("wrong number of pixels".into());

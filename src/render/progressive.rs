@@ -258,8 +258,18 @@ pub(crate) fn render_region(
 
 /// The sizes of successive passes: 1, 1, 2, 4, 8, 16, 16, ... (early images come quickly,
 /// later passes are long enough to keep every thread busy).
-fn next_pass(done: u32, target: u32) -> u32 {
+pub(crate) fn next_pass(done: u32, target: u32) -> u32 {
     done.clamp(1, 16).min(target - done)
+}
+
+/// Whether a render of `target` samples per pixel passes through `spp` whole samples (the
+/// passes' sizes are fixed, so a film between passes can only hold certain counts).
+pub(crate) fn reachable(spp: u32, target: u32) -> bool {
+    let mut done = 0;
+    while done < spp && done < target {
+        done += next_pass(done, target);
+    }
+    done == spp
 }
 
 /// Renders with a Monte Carlo integrator in passes, continuing from `resume` (a film saved by

@@ -208,7 +208,7 @@ impl Network {
         if total > u32::MAX as usize {
             return Err(format!(
                 "the network would have {total} links, more than 32-bit offsets address; use \
-                 a larger --intercept-step or fewer --slopes"
+                 a larger intercept_step or fewer slopes"
             ));
         }
         let w = SlotWeights::new(&space);

@@ -86,7 +86,7 @@ impl Network {
         drop_outer: bool,
         control: &Control,
     ) -> Result<Network, String> {
-        params.validate()?;
+        params.validate().map_err(|e| e.to_string())?;
         let start = Instant::now();
         let bounds = scene.bounds().ok_or("the scene has no shapes")?;
         let space = RaySpace::new(params.slopes, params.step, bounds);

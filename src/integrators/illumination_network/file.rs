@@ -127,12 +127,14 @@ fn read_header(
         jitter: r.f32().ok_or_else(truncated)?,
         seed: r.u64().ok_or_else(truncated)?,
     };
-    params.validate().map_err(|e| bad(&e))?;
+    params
+        .validate()
+        .map_err(|_| bad("corrupt: its network settings are out of range"))?;
     if let Some(e) = expected {
         if params_bytes(e) != params_bytes(&params) {
             return Err(bad(&format!(
-                "built with other parameters (--slopes {}, --intercept-step {}, --patch-size {}, \
-                 --network-jitter {}, --seed {})",
+                "built with other network settings (slopes {}, intercept_step {}, patch_size \
+                 {}, jitter {}, seed {})",
                 params.slopes, params.step, params.patch_size, params.jitter, params.seed
             )));
         }

@@ -19,7 +19,7 @@ impl LinkCode {
         if keys as u64 >= 1u64 << target_bits {
             return Err(format!(
                 "the network would have {} patch sides, more than its 32-bit links can address \
-                 at {slots} slots per patch ({}); use a larger --patch-size or fewer --slopes",
+                 at {slots} slots per patch ({}); use a larger patch_size or fewer slopes",
                 keys,
                 (1u64 << target_bits) - 1
             ));

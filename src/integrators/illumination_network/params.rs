@@ -31,30 +31,34 @@ impl Default for NetworkParams {
 }
 
 impl NetworkParams {
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> crate::Result<()> {
+        let bad = |name: &str, detail: String| Err(crate::Error::setting(name, detail));
         if !(1..=128).contains(&self.slopes) {
-            return Err(format!(
-                "--slopes must be between 1 and 128, got {}",
-                self.slopes
-            ));
+            return bad(
+                "slopes",
+                format!("must be between 1 and 128, got {}", self.slopes),
+            );
         }
         if !(self.step.is_finite() && self.step >= 1.0 / 4096.0 && self.step <= 1.0) {
-            return Err(format!(
-                "--intercept-step must be between 1/4096 and 1, got {}",
-                self.step
-            ));
+            return bad(
+                "intercept_step",
+                format!("must be between 1/4096 and 1, got {}", self.step),
+            );
         }
         if !(self.patch_size.is_finite()
             && self.patch_size >= 1.0 / 4096.0
             && self.patch_size <= 1.0)
         {
-            return Err(format!(
-                "--patch-size must be between 1/4096 and 1, got {}",
-                self.patch_size
-            ));
+            return bad(
+                "patch_size",
+                format!("must be between 1/4096 and 1, got {}", self.patch_size),
+            );
         }
         if !(0.0..=1.0).contains(&self.jitter) {
-            return Err(format!("--jitter must be in [0, 1], got {}", self.jitter));
+            return bad(
+                "network_jitter",
+                format!("must be in [0, 1], got {}", self.jitter),
+            );
         }
         Ok(())
     }

@@ -263,7 +263,7 @@ impl Patches {
             first = first
                 .checked_add(p.cells())
                 .filter(|&n| n < u32::MAX / 2 - 1)
-                .ok_or("too many patches for 32-bit indices: give a larger --patch-size")?;
+                .ok_or("too many patches for 32-bit indices: give a larger patch_size")?;
         }
         Ok(Patches {
             polygons,

@@ -148,8 +148,23 @@ pub fn load_with_view(
                 e: Vec3::new(f[6], f[7], f[8]),
                 r: f[9],
             };
-            if !(f.iter().all(|v| v.is_finite()) && rec.r > 0.0) {
-                return Err(bad("invalid record"));
+            // Finite values, a unit normal, irradiance that is not negative, a radius within
+            // the scene's cube, and a point inside it: anything else no render computes.
+            let inside = (rec.p - center).abs().max_element() <= side;
+            let unit = (rec.n.length() - 1.0).abs() < 1e-3;
+            if !(f.iter().all(|v| v.is_finite())
+                && rec.r > 0.0
+                && rec.r <= side
+                && rec.e.min_element() >= 0.0
+                && unit
+                && inside)
+            {
+                return Err(bad(&format!(
+                    "value {} of bounce level {l} is not one a render computes (a point \
+                     outside the scene, a normal not of unit length, negative irradiance or a \
+                     radius out of range)",
+                    tree.len()
+                )));
             }
             tree.insert(rec);
         }

@@ -25,7 +25,7 @@ impl EndPacking {
         if block_bits < 6 {
             return Err(format!(
                 "the network would have {} patches, more than its 32-bit link ends can \
-                 address ({}); use a larger --patch-size",
+                 address ({}); use a larger patch_size",
                 keys / 2,
                 1u64 << 25
             ));
@@ -113,6 +113,6 @@ mod tests {
             }
         }
         let e = EndPacking::for_keys((1 << 26) + 1).unwrap_err();
-        assert!(e.contains("--patch-size"), "{e}");
+        assert!(e.contains("patch_size"), "{e}");
     }
 }
