@@ -614,12 +614,15 @@ fn read_image_maps_channels_to_rgb() {
     oiio::write(
         &grey,
         "openexr",
-        2,
-        1,
-        &["Y"],
-        &[0.25, 4.0],
+        oiio::ImageToWrite {
+            width: 2,
+            height: 1,
+            channels: &["Y"],
+            data: &[0.25, 4.0],
+            pixel_type: PixelType::Float,
+            window: None,
+        },
         &none,
-        PixelType::Float,
     )
     .unwrap();
     let (image, _) = read_image(&grey).unwrap();
@@ -630,12 +633,15 @@ fn read_image_maps_channels_to_rgb() {
     oiio::write(
         &rgba,
         "exr",
-        2,
-        1,
-        &["R", "G", "B", "A"],
-        &data,
+        oiio::ImageToWrite {
+            width: 2,
+            height: 1,
+            channels: &["R", "G", "B", "A"],
+            data: &data,
+            pixel_type: PixelType::Float,
+            window: None,
+        },
         &none,
-        PixelType::Float,
     )
     .unwrap();
     let raw = oiio::read(&rgba).unwrap();
@@ -651,12 +657,15 @@ fn read_image_maps_channels_to_rgb() {
     oiio::write(
         &grey_alpha,
         "png",
-        1,
-        1,
-        &["Y", "A"],
-        &[0.6, 1.0],
+        oiio::ImageToWrite {
+            width: 1,
+            height: 1,
+            channels: &["Y", "A"],
+            data: &[0.6, 1.0],
+            pixel_type: PixelType::U8,
+            window: None,
+        },
         &none,
-        PixelType::U8,
     )
     .unwrap();
     let (image, _) = read_image(&grey_alpha).unwrap();
@@ -669,12 +678,15 @@ fn read_image_maps_channels_to_rgb() {
     oiio::write(
         &deep,
         "png",
-        1,
-        1,
-        &["R", "G", "B"],
-        &[0.0, 0.5, 1.0],
+        oiio::ImageToWrite {
+            width: 1,
+            height: 1,
+            channels: &["R", "G", "B"],
+            data: &[0.0, 0.5, 1.0],
+            pixel_type: PixelType::U16,
+            window: None,
+        },
         &none,
-        PixelType::U16,
     )
     .unwrap();
     let raw = oiio::read(&deep).unwrap();

@@ -84,68 +84,38 @@ impl RawImage {
     }
 }
 
-/// Writes an image of `channels.len()` interleaved float channels to `path`, encoded by the
-/// OpenImageIO writer for `format` (`"openexr"`, `"png"`, `"jpeg"`, `"tiff"`, `"hdr"`, or an
-/// extension such as `"exr"`) whatever the extension of `path`; `metadata` becomes file
-/// attributes where the format supports them. On failure a partly written file may be left
-/// at `path`: the caller removes it (see [`super::output::write_image`], which does).
-#[allow(clippy::too_many_arguments)]
-pub fn write(
-    path: &Path,
-    format: &str,
-    width: u32,
-    height: u32,
-    channels: &[&str],
-    data: &[f32],
-    metadata: &Metadata,
-    pixel: PixelType,
-) -> Result<()> {
-    write_impl(
-        path, format, None, width, height, channels, data, metadata, pixel,
-    )
+/// An image to write: `width` x `height` pixels of `channels.len()` interleaved float
+/// channels, stored in the file as `pixel_type`.
+#[derive(Clone, Copy, Debug)]
+pub struct ImageToWrite<'a> {
+    pub width: u32,
+    pub height: u32,
+    /// Channel names, e.g. `["R", "G", "B"]`.
+    pub channels: &'a [&'a str],
+    /// `width * height * channels.len()` values, interleaved, row-major, top row first.
+    pub data: &'a [f32],
+    pub pixel_type: PixelType,
+    /// `None` for a whole image. `Some` for a region of a larger image: the region's top-left
+    /// pixel is (`window.x`, `window.y`) in a `window.full_width` x `window.full_height` image
+    /// (`full_x` and `full_y` must be 0). OpenEXR keeps both windows; a region that does not
+    /// fit in the full image is an error.
+    pub window: Option<Window>,
 }
 
-/// As [`write()`], for a `width` x `height` region of a larger image: the region's top-left
-/// pixel is (`window.x`, `window.y`) in a `window.full_width` x `window.full_height` image
-/// (`full_x` and `full_y` must be 0). OpenEXR keeps both windows; a region that does not fit
-/// in the full image is an error.
-#[allow(clippy::too_many_arguments)]
-pub fn write_window(
-    path: &Path,
-    format: &str,
-    window: Window,
-    width: u32,
-    height: u32,
-    channels: &[&str],
-    data: &[f32],
-    metadata: &Metadata,
-    pixel: PixelType,
-) -> Result<()> {
-    write_impl(
-        path,
-        format,
-        Some(window),
+/// Writes `image` to `path`, encoded by the OpenImageIO writer for `format` (`"openexr"`,
+/// `"png"`, `"jpeg"`, `"tiff"`, `"hdr"`, or an extension such as `"exr"`) whatever the
+/// extension of `path`; `metadata` becomes file attributes where the format supports them. On
+/// failure a partly written file may be left at `path`: the caller removes it (see
+/// [`super::output::write_image`], which does).
+pub fn write(path: &Path, format: &str, image: ImageToWrite, metadata: &Metadata) -> Result<()> {
+    let ImageToWrite {
         width,
         height,
         channels,
         data,
-        metadata,
-        pixel,
-    )
-}
-
-#[allow(clippy::too_many_arguments)]
-fn write_impl(
-    path: &Path,
-    format: &str,
-    window: Option<Window>,
-    width: u32,
-    height: u32,
-    channels: &[&str],
-    data: &[f32],
-    metadata: &Metadata,
-    pixel: PixelType,
-) -> Result<()> {
+        pixel_type: pixel,
+        window,
+    } = image;
     let fail = |detail: String| Error::image(path, detail);
     let c_path = path_to_cstring(path)?;
     let c_format = cstring(path, "format name", format)?;
@@ -504,7 +474,6 @@ mod sys {
     }
 
     extern "C" {
-        #[allow(clippy::too_many_arguments)]
         pub fn raylink_oiio_write(
             path: *const c_char,
             format: *const c_char,
@@ -519,7 +488,6 @@ mod sys {
             err: *mut c_char,
             err_len: usize,
         ) -> c_int;
-        #[allow(clippy::too_many_arguments)]
         pub fn raylink_oiio_write_window(
             path: *const c_char,
             format: *const c_char,
@@ -596,12 +564,15 @@ mod tests {
             let e = write(
                 path,
                 format,
-                1,
-                1,
-                channels,
-                &[0.0; 3],
+                ImageToWrite {
+                    width: 1,
+                    height: 1,
+                    channels,
+                    data: &[0.0; 3],
+                    pixel_type: PixelType::Float,
+                    window: None,
+                },
                 meta,
-                PixelType::Float,
             );
             assert!(e.unwrap_err().to_string().contains("NUL"));
         };
@@ -634,28 +605,58 @@ mod tests {
         let e = write(
             &path,
             "exr",
-            2,
-            2,
-            &rgb,
-            &[0.0; 11],
+            ImageToWrite {
+                width: 2,
+                height: 2,
+                channels: &rgb,
+                data: &[0.0; 11],
+                pixel_type: PixelType::Float,
+                window: None,
+            },
             &meta,
-            PixelType::Float,
         );
         assert!(e.unwrap_err().to_string().contains("11 values"));
-        let e = write(&path, "exr", 0, 2, &rgb, &[], &meta, PixelType::Float);
+        let e = write(
+            &path,
+            "exr",
+            ImageToWrite {
+                width: 0,
+                height: 2,
+                channels: &rgb,
+                data: &[],
+                pixel_type: PixelType::Float,
+                window: None,
+            },
+            &meta,
+        );
         assert!(e.unwrap_err().to_string().contains("0x2"));
-        let e = write(&path, "exr", 1, 1, &[], &[], &meta, PixelType::Float);
+        let e = write(
+            &path,
+            "exr",
+            ImageToWrite {
+                width: 1,
+                height: 1,
+                channels: &[],
+                data: &[],
+                pixel_type: PixelType::Float,
+                window: None,
+            },
+            &meta,
+        );
         assert!(e.is_err());
         let huge = u32::MAX;
         let e = write(
             &path,
             "exr",
-            huge,
-            1,
-            &rgb,
-            &[0.0; 3],
+            ImageToWrite {
+                width: huge,
+                height: 1,
+                channels: &rgb,
+                data: &[0.0; 3],
+                pixel_type: PixelType::Float,
+                window: None,
+            },
             &meta,
-            PixelType::Float,
         );
         assert!(e.is_err());
         assert!(!path.exists());
@@ -668,12 +669,15 @@ mod tests {
         let e = write(
             &path,
             "nosuchformat",
-            1,
-            1,
-            &["Y"],
-            &[0.5],
+            ImageToWrite {
+                width: 1,
+                height: 1,
+                channels: &["Y"],
+                data: &[0.5],
+                pixel_type: PixelType::Float,
+                window: None,
+            },
             &Metadata::new(),
-            PixelType::Float,
         )
         .unwrap_err()
         .to_string();
@@ -702,7 +706,20 @@ mod tests {
         let path = dir.path().join(".x.png.tmp-1");
         let data = [0.0f32, 0.5, 1.0, 0.25];
         let meta = Metadata::new();
-        write(&path, "png", 2, 2, &["Y"], &data, &meta, PixelType::U8).unwrap();
+        write(
+            &path,
+            "png",
+            ImageToWrite {
+                width: 2,
+                height: 2,
+                channels: &["Y"],
+                data: &data,
+                pixel_type: PixelType::U8,
+                window: None,
+            },
+            &meta,
+        )
+        .unwrap();
         let raw = read(&path).unwrap();
         assert_eq!(raw.format, "png");
         assert_eq!(raw.pixel_type, Some(PixelType::U8));
@@ -719,10 +736,36 @@ mod tests {
         );
         // "exr" as an extension-like name, "tiff" as a format name.
         let exr = dir.path().join("noext");
-        write(&exr, "exr", 2, 2, &["Y"], &data, &meta, PixelType::Float).unwrap();
+        write(
+            &exr,
+            "exr",
+            ImageToWrite {
+                width: 2,
+                height: 2,
+                channels: &["Y"],
+                data: &data,
+                pixel_type: PixelType::Float,
+                window: None,
+            },
+            &meta,
+        )
+        .unwrap();
         assert_eq!(read(&exr).unwrap().format, "openexr");
         let tif = dir.path().join("tif.exr");
-        write(&tif, "tiff", 2, 2, &["Y"], &data, &meta, PixelType::U16).unwrap();
+        write(
+            &tif,
+            "tiff",
+            ImageToWrite {
+                width: 2,
+                height: 2,
+                channels: &["Y"],
+                data: &data,
+                pixel_type: PixelType::U16,
+                window: None,
+            },
+            &meta,
+        )
+        .unwrap();
         let raw = read(&tif).unwrap();
         assert_eq!(raw.format, "tiff");
         assert_eq!(raw.pixel_type, Some(PixelType::U16));

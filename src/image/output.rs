@@ -226,29 +226,19 @@ fn write_image_impl(
     };
 
     let temp = TempFile::new(temp_path(path));
-    match window {
-        None => oiio::write(
-            &temp.path,
-            format.oiio_name(),
-            image.width,
-            image.height,
-            &["R", "G", "B"],
-            &data,
-            &attributes,
-            pixel,
-        ),
-        Some(window) => oiio::write_window(
-            &temp.path,
-            format.oiio_name(),
+    oiio::write(
+        &temp.path,
+        format.oiio_name(),
+        oiio::ImageToWrite {
+            width: image.width,
+            height: image.height,
+            channels: &["R", "G", "B"],
+            data: &data,
+            pixel_type: pixel,
             window,
-            image.width,
-            image.height,
-            &["R", "G", "B"],
-            &data,
-            &attributes,
-            pixel,
-        ),
-    }
+        },
+        &attributes,
+    )
     .map_err(|e| retarget(e, &temp.path, path))?;
     fs::rename(&temp.path, path).map_err(|e| {
         Error::image(

@@ -196,20 +196,32 @@ fn camera_pdf_dir(camera: &CameraBasis, w: Vec3) -> f32 {
     }
 }
 
-/// Extends `path` by a random walk from `ray` with throughput `beta` and solid-angle density
-/// `pdf` for the ray's direction; at most `max` more vertices.
-#[allow(clippy::too_many_arguments)]
-fn random_walk(
-    ctx: &Context,
-    mut ray: Ray,
-    mut beta: Rgb,
-    mut pdf: f32,
+/// Where a random walk starts: the ray leaving a subpath's last vertex, with throughput
+/// `beta` and solid-angle density `pdf` for its direction; the walk adds at most `max` more
+/// vertices, carrying `mode`.
+struct WalkStart {
+    ray: Ray,
+    beta: Rgb,
+    pdf: f32,
     max: u32,
     mode: Transport,
+}
+
+/// Extends `path` by a random walk from `start`.
+fn random_walk(
+    ctx: &Context,
+    start: WalkStart,
     path: &mut Vec<Vertex>,
     sampler: &mut Sampler,
     stats: &mut RayStats,
 ) {
+    let WalkStart {
+        mut ray,
+        mut beta,
+        mut pdf,
+        max,
+        mode,
+    } = start;
     let mut bounces = 0;
     while bounces < max {
         let Some(sp) = ctx.intersect(&ray, stats) else {
@@ -263,20 +275,27 @@ fn remap0(x: f32) -> f32 {
     }
 }
 
-impl Bdpt {
-    /// The multiple importance sampling weight of the strategy (s, t) for the path made of
+/// The strategy (s, t): the path made of the light subpath's first `s` vertices connected to
+/// the camera subpath's first `t`.
+#[derive(Clone, Copy)]
+struct Connection<'p> {
+    light: &'p [Vertex],
+    camera: &'p [Vertex],
+    s: usize,
+    t: usize,
+}
+
+impl Connection<'_> {
+    /// The multiple importance sampling weight of the strategy for the path made of
     /// `light[..s]` and `camera[..t]`, with `sampled` replacing the connection vertex that
     /// strategy sampled anew (the camera for t = 1).
-    #[allow(clippy::too_many_arguments)]
-    fn mis_weight(
-        &self,
-        ctx: &Context,
-        camera_basis: &CameraBasis,
-        light: &[Vertex],
-        camera: &[Vertex],
-        s: usize,
-        t: usize,
-    ) -> f32 {
+    fn mis_weight(&self, ctx: &Context, camera_basis: &CameraBasis) -> f32 {
+        let Connection {
+            light,
+            camera,
+            s,
+            t,
+        } = *self;
         if s + t == 2 {
             return 1.0;
         }
@@ -363,11 +382,13 @@ impl MonteCarlo for Bdpt {
         let pdf_cam = camera_pdf_dir(camera, camera_ray.dir);
         random_walk(
             ctx,
-            *camera_ray,
-            Rgb::ONE,
-            pdf_cam,
-            max_depth + 1,
-            Transport::Radiance,
+            WalkStart {
+                ray: *camera_ray,
+                beta: Rgb::ONE,
+                pdf: pdf_cam,
+                max: max_depth + 1,
+                mode: Transport::Radiance,
+            },
             &mut cam_path,
             sampler,
             stats,
@@ -395,11 +416,13 @@ impl MonteCarlo for Bdpt {
                 let origin = if point { p } else { offset_origin(p, n, dir) };
                 random_walk(
                     ctx,
-                    Ray::new(origin, dir),
-                    le * (cos / (pdf_pos * pdf_dir)),
-                    pdf_dir,
-                    max_depth,
-                    Transport::Importance,
+                    WalkStart {
+                        ray: Ray::new(origin, dir),
+                        beta: le * (cos / (pdf_pos * pdf_dir)),
+                        pdf: pdf_dir,
+                        max: max_depth,
+                        mode: Transport::Importance,
+                    },
                     &mut light_path,
                     sampler,
                     stats,
@@ -432,7 +455,13 @@ impl MonteCarlo for Bdpt {
                         if l == Rgb::ZERO {
                             continue;
                         }
-                        let w = self.mis_weight(ctx, camera, &light_path, &cam_path, 0, t);
+                        let w = Connection {
+                            light: &light_path,
+                            camera: &cam_path,
+                            s: 0,
+                            t,
+                        }
+                        .mis_weight(ctx, camera);
                         radiance += l * w;
                     }
                     (_, 1) => {
@@ -465,7 +494,13 @@ impl MonteCarlo for Bdpt {
                         }
                         let mut cam_only = cam_path.clone();
                         cam_only.truncate(1);
-                        let w = self.mis_weight(ctx, camera, &light_path, &cam_only, s, 1);
+                        let w = Connection {
+                            light: &light_path,
+                            camera: &cam_only,
+                            s,
+                            t: 1,
+                        }
+                        .mis_weight(ctx, camera);
                         splats.push(Splat {
                             x: c.x,
                             y: c.y,
@@ -517,7 +552,13 @@ impl MonteCarlo for Bdpt {
                         if ctx.occluded(&Ray::segment(from, to), stats) {
                             continue;
                         }
-                        let w = self.mis_weight(ctx, camera, &light_path, &cam_path, s, t);
+                        let w = Connection {
+                            light: &light_path,
+                            camera: &cam_path,
+                            s,
+                            t,
+                        }
+                        .mis_weight(ctx, camera);
                         radiance += l * w;
                     }
                 }

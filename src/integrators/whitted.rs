@@ -57,37 +57,30 @@ impl Whitted {
     pub fn new(options: WhittedOptions) -> Self {
         Whitted { options }
     }
+}
 
+/// One camera sample's ray tree: what every node of it reads (the options, the scene) and
+/// updates (the sample's random stream and ray counts), passed down the recursion as one
+/// value.
+struct RayTree<'a> {
+    options: &'a WhittedOptions,
+    ctx: &'a Context<'a>,
+    rng: &'a mut Rng,
+    stats: &'a mut RayStats,
+}
+
+impl RayTree<'_> {
     /// Intensity arriving along `ray`, for a branch of the ray tree with accumulated `weight`.
-    fn trace(
-        &self,
-        ctx: &Context,
-        ray: &Ray,
-        depth: u32,
-        weight: f32,
-        rng: &mut Rng,
-        stats: &mut RayStats,
-    ) -> (Rgb, u32) {
-        let Some(sp) = ctx.intersect_at_depth(ray, depth, stats) else {
+    fn trace(&mut self, ray: &Ray, depth: u32, weight: f32) -> (Rgb, u32) {
+        let ctx = self.ctx;
+        let Some(sp) = ctx.intersect_at_depth(ray, depth, self.stats) else {
             return (ctx.scene.background, u32::MAX);
         };
-        (
-            self.shade(ctx, ray, &sp, depth, weight, rng, stats),
-            sp.shape as u32,
-        )
+        (self.shade(ray, &sp, depth, weight), sp.shape as u32)
     }
 
-    #[allow(clippy::too_many_arguments)]
-    fn shade(
-        &self,
-        ctx: &Context,
-        ray: &Ray,
-        sp: &SurfacePoint,
-        depth: u32,
-        weight: f32,
-        rng: &mut Rng,
-        stats: &mut RayStats,
-    ) -> Rgb {
+    fn shade(&mut self, ray: &Ray, sp: &SurfacePoint, depth: u32, weight: f32) -> Rgb {
+        let ctx = self.ctx;
         let m = &ctx.scene.materials[sp.material];
         let d = ray.dir.normalize();
         // The paper's convention: N points to the side the ray comes from, and the index of
@@ -107,7 +100,7 @@ impl Whitted {
         }
         let kd = m.diffuse.eval(sp.p, sp.uv);
         color += m.ambient.unwrap_or(kd) * ctx.scene.ambient;
-        color += self.direct(ctx, m, kd, sp.p, ng, n, view, rng, stats);
+        color += self.direct(m, kd, sp.p, ng, n, view);
 
         if depth + 1 >= self.options.max_depth {
             return color;
@@ -128,9 +121,9 @@ impl Whitted {
 
         let (ks_weight, kt_weight) = (weight * ks.max_element(), weight * kt.max_element());
         if ks_weight > self.options.cutoff {
-            let dir = self.perturbed(n, ng, m.roughness, rng, |n| reflect(d, n), 1.0);
+            let dir = self.perturbed(n, ng, m.roughness, |n| reflect(d, n), 1.0);
             let r = Ray::new(offset_origin(sp.p, ng, dir), dir);
-            color += ks * self.trace(ctx, &r, depth + 1, ks_weight, rng, stats).0;
+            color += ks * self.trace(&r, depth + 1, ks_weight).0;
         }
         // T is zero under total internal reflection (the paper's imaginary kf).
         if kt_weight > self.options.cutoff && refracted.is_some() {
@@ -138,30 +131,18 @@ impl Whitted {
                 n,
                 ng,
                 m.roughness,
-                rng,
                 |n| refract(d, n, eta).unwrap_or(d),
                 -1.0,
             );
             let r = Ray::new(offset_origin(sp.p, ng, dir), dir);
-            color += kt * self.trace(ctx, &r, depth + 1, kt_weight, rng, stats).0;
+            color += kt * self.trace(&r, depth + 1, kt_weight).0;
         }
         color
     }
 
     /// The diffuse term Σ kd/π·(N·L)·E and the Phong highlight, with shadow rays.
-    #[allow(clippy::too_many_arguments)]
-    fn direct(
-        &self,
-        ctx: &Context,
-        m: &Material,
-        kd: Rgb,
-        p: Vec3,
-        ng: Vec3,
-        n: Vec3,
-        view: Vec3,
-        rng: &mut Rng,
-        stats: &mut RayStats,
-    ) -> Rgb {
+    fn direct(&mut self, m: &Material, kd: Rgb, p: Vec3, ng: Vec3, n: Vec3, view: Vec3) -> Rgb {
+        let ctx = self.ctx;
         let diffuse_on = kd.max_element() > 0.0;
         let highlight_on = m.specular.max_element() > 0.0 && m.phong_exponent > 0.0;
         if !diffuse_on && !highlight_on {
@@ -187,7 +168,7 @@ impl Whitted {
             if cos <= 0.0 || ng.dot(wi) <= 0.0 {
                 continue;
             }
-            let transmittance = self.transmittance(ctx, p, ng, wi, target, stats);
+            let transmittance = self.transmittance(p, ng, wi, target);
             if transmittance == Rgb::ZERO {
                 continue;
             }
@@ -203,7 +184,7 @@ impl Whitted {
         }
         if diffuse_on {
             for light in &ctx.area_lights {
-                color += kd * FRAC_1_PI * self.area_irradiance(ctx, light, p, ng, n, rng, stats);
+                color += kd * FRAC_1_PI * self.area_irradiance(light, p, ng, n);
             }
         }
         color
@@ -211,24 +192,20 @@ impl Whitted {
 
     /// Irradiance at `p` from an area light, by stratified sampling of its area, each sample
     /// with its own shadow ray.
-    #[allow(clippy::too_many_arguments)]
     fn area_irradiance(
-        &self,
-        ctx: &Context,
+        &mut self,
         light: &crate::scene::light::AreaLight,
         p: Vec3,
         ng: Vec3,
         n: Vec3,
-        rng: &mut Rng,
-        stats: &mut RayStats,
     ) -> Rgb {
         let side = (self.options.area_samples.max(1) as f32).sqrt().ceil() as u32;
         let count = side * side;
         let mut sum = Rgb::ZERO;
         for i in 0..count {
             let u = Vec2::new(
-                ((i % side) as f32 + rng.uniform()) / side as f32,
-                ((i / side) as f32 + rng.uniform()) / side as f32,
+                ((i % side) as f32 + self.rng.uniform()) / side as f32,
+                ((i / side) as f32 + self.rng.uniform()) / side as f32,
             );
             let y = light.sample(u);
             let to = y.p - p;
@@ -242,7 +219,7 @@ impl Whitted {
             if cos_s <= 0.0 || cos_l <= 0.0 || ng.dot(wi) <= 0.0 {
                 continue;
             }
-            let t = self.transmittance(ctx, p, ng, wi, Some(y.p), stats);
+            let t = self.transmittance(p, ng, wi, Some(y.p));
             sum += light.radiance * t * (cos_s * cos_l / d2);
         }
         sum * (light.area / count as f32)
@@ -251,27 +228,20 @@ impl Whitted {
     /// How much light gets from `p` to the light: 1 if nothing is in the way, the product of
     /// the kt of transmissive occluders, 0 behind an opaque one. `target` None is a light at
     /// infinity.
-    fn transmittance(
-        &self,
-        ctx: &Context,
-        p: Vec3,
-        ng: Vec3,
-        wi: Vec3,
-        target: Option<Vec3>,
-        stats: &mut RayStats,
-    ) -> Rgb {
+    fn transmittance(&mut self, p: Vec3, ng: Vec3, wi: Vec3, target: Option<Vec3>) -> Rgb {
+        let ctx = self.ctx;
         let towards_light = |from: Vec3| match target {
             Some(end) => Ray::segment(from, end),
             None => Ray::new(from, wi),
         };
         let mut ray = towards_light(offset_origin(p, ng, wi));
-        if !ctx.occluded(&ray, stats) {
+        if !ctx.occluded(&ray, self.stats) {
             return Rgb::ONE;
         }
         // Something is in the way: walk through it, multiplying kt.
         let mut t = Rgb::ONE;
         for _ in 0..MAX_SHADOW_CROSSINGS {
-            let Some(hit) = ctx.intersect(&ray, stats) else {
+            let Some(hit) = ctx.intersect(&ray, self.stats) else {
                 return t;
             };
             let m = &ctx.scene.materials[hit.material];
@@ -291,11 +261,10 @@ impl Whitted {
     /// redrawn until it leaves on the intended side (`side` +1: reflection, −1: transmission)
     /// of the geometric surface; falls back to the unperturbed normal.
     fn perturbed(
-        &self,
+        &mut self,
         n: Vec3,
         ng: Vec3,
         roughness: f32,
-        rng: &mut Rng,
         direction: impl Fn(Vec3) -> Vec3,
         side: f32,
     ) -> Vec3 {
@@ -305,11 +274,11 @@ impl Whitted {
                 // A microfacet normal from the GGX distribution D(h) cos θh with α =
                 // roughness, the same meaning the Monte Carlo BSDFs give it:
                 // tan²θ = α² u / (1 − u).
-                let u = rng.uniform();
+                let u = self.rng.uniform();
                 let tan2 = roughness * roughness * u / (1.0 - u).max(1e-7);
                 let cos = 1.0 / (1.0 + tan2).sqrt();
                 let sin = (1.0 - cos * cos).max(0.0).sqrt();
-                let phi = std::f32::consts::TAU * rng.uniform();
+                let phi = std::f32::consts::TAU * self.rng.uniform();
                 let np = (n * cos + (t * phi.cos() + b * phi.sin()) * sin).normalize();
                 let dir = direction(np);
                 if dir.dot(ng) * side > 0.0 {
@@ -323,7 +292,13 @@ impl Whitted {
 
 impl Integrator for Whitted {
     fn radiance(&self, ctx: &Context, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Sample {
-        let (radiance, object) = self.trace(ctx, ray, 0, 1.0, rng, stats);
+        let mut tree = RayTree {
+            options: &self.options,
+            ctx,
+            rng,
+            stats,
+        };
+        let (radiance, object) = tree.trace(ray, 0, 1.0);
         Sample { radiance, object }
     }
 }

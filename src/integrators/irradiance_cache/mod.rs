@@ -275,7 +275,12 @@ enum Store<'a> {
     },
 }
 
+/// One camera sample's walk through the scene and the cache: what its every shading point
+/// reads (the scene, the parameters, the values) and updates (counts), passed down as one
+/// value.
 struct Walk<'a> {
+    ctx: &'a Context<'a>,
+    params: &'a Params,
     store: Store<'a>,
     /// Primary values computed.
     primaries: u64,
@@ -389,6 +394,8 @@ impl IrradianceCache {
                     let mut local = cache.empty_like();
                     let mut stats = RayStats::default();
                     let mut walk = Walk {
+                        ctx,
+                        params: &params,
                         store: Store::Overlay {
                             base: &cache,
                             local: &mut local,
@@ -404,7 +411,7 @@ impl IrradianceCache {
                         }
                         let (mut sampler, ray) = camera_sample(&camera, seed, &filter, (x, y), i);
                         let mut rng = sample_rng(seed, &mut sampler);
-                        trace(ctx, &params, &mut walk, &ray, 0, true, 0, &mut rng);
+                        walk.trace(&ray, 0, true, 0, &mut rng);
                     }
                     let n = walk.primaries;
                     (local, n, stats)
@@ -506,13 +513,15 @@ impl IrradianceCache {
     pub fn irradiance(&self, ctx: &Context, p: Vec3, n: Vec3) -> Rgb {
         let mut stats = RayStats::default();
         let mut walk = Walk {
+            ctx,
+            params: &self.params,
             store: Store::Frozen(&self.cache),
             primaries: 0,
             stats: &mut stats,
             overture: false,
             cancel: None,
         };
-        indirect(ctx, &self.params, &mut walk, p, n, n, 0)
+        walk.indirect(p, n, n, 0)
     }
 }
 
@@ -528,13 +537,15 @@ impl MonteCarlo for IrradianceCache {
     ) -> Rgb {
         let mut rng = sample_rng(self.params.seed, sampler);
         let mut walk = Walk {
+            ctx,
+            params: &self.params,
             store: Store::Frozen(&self.cache),
             primaries: 0,
             stats,
             overture: false,
             cancel: None,
         };
-        let l = trace(ctx, &self.params, &mut walk, ray, 0, true, 0, &mut rng);
+        let l = walk.trace(ray, 0, true, 0, &mut rng);
         if walk.primaries > 0 {
             self.misses.fetch_add(walk.primaries, Ordering::Relaxed);
         }
@@ -548,206 +559,176 @@ fn sample_rng(seed: u64, sampler: &mut Sampler) -> Rng {
     Rng::for_key(seed, &[u.x.to_bits() as u64, u.y.to_bits() as u64])
 }
 
-/// Radiance along `ray` at diffuse level `level`. `emission` says whether emitters seen
-/// count (camera rays and their specular continuations) or not (primary-method rays).
-#[allow(clippy::too_many_arguments)]
-fn trace(
-    ctx: &Context,
-    params: &Params,
-    walk: &mut Walk,
-    ray: &Ray,
-    level: u32,
-    emission: bool,
-    specular_depth: u32,
-    rng: &mut Rng,
-) -> Rgb {
-    match ctx.intersect(ray, walk.stats) {
-        Some(sp) => shade(
-            ctx,
-            params,
-            walk,
-            ray,
-            &sp,
-            level,
-            emission,
-            specular_depth,
-            rng,
-        ),
-        None if emission => ctx.lights.background_radiance(ray.dir),
-        None => Rgb::ZERO,
+impl Walk<'_> {
+    /// Radiance along `ray` at diffuse level `level`. `emission` says whether emitters seen
+    /// count (camera rays and their specular continuations) or not (primary-method rays).
+    fn trace(
+        &mut self,
+        ray: &Ray,
+        level: u32,
+        emission: bool,
+        specular_depth: u32,
+        rng: &mut Rng,
+    ) -> Rgb {
+        let ctx = self.ctx;
+        match ctx.intersect(ray, self.stats) {
+            Some(sp) => self.shade(ray, &sp, level, emission, specular_depth, rng),
+            None if emission => ctx.lights.background_radiance(ray.dir),
+            None => Rgb::ZERO,
+        }
     }
-}
 
-/// Radiance leaving `sp` back along `ray`.
-#[allow(clippy::too_many_arguments)]
-fn shade(
-    ctx: &Context,
-    params: &Params,
-    walk: &mut Walk,
-    ray: &Ray,
-    sp: &SurfacePoint,
-    level: u32,
-    emission: bool,
-    specular_depth: u32,
-    rng: &mut Rng,
-) -> Rgb {
-    let m = &ctx.scene.materials[sp.material];
-    let wo = -ray.dir.normalize();
-    let mut l = Rgb::ZERO;
-    if emission && m.is_emissive() && wo.dot(sp.ng) > 0.0 {
-        l += m.emission;
-    }
-    let bsdf = Bsdf::new(m, sp, wo);
-    let non_delta = bsdf.has_non_delta();
-    let lights = &ctx.lights;
-    // The overture skips direct light where it is not cached (but draws the same numbers).
-    let direct = !(walk.overture && level == 0);
-    if non_delta {
-        // Direct light, light-sampling half of the MIS pair (the BSDF half is below). (Light
-        // sampling alone, as Radiance does, saves a third of the rays of a primary value but
-        // is far noisier where emitters are large and near, e.g. the furnace test.)
-        let u_choice = rng.uniform();
-        let u_light = Vec2::new(rng.uniform(), rng.uniform());
-        if direct {
-            l += sample_direct(ctx, &bsdf, sp, wo, u_choice, u_light, walk.stats);
+    /// Radiance leaving `sp` back along `ray`.
+    fn shade(
+        &mut self,
+        ray: &Ray,
+        sp: &SurfacePoint,
+        level: u32,
+        emission: bool,
+        specular_depth: u32,
+        rng: &mut Rng,
+    ) -> Rgb {
+        let ctx = self.ctx;
+        let m = &ctx.scene.materials[sp.material];
+        let wo = -ray.dir.normalize();
+        let mut l = Rgb::ZERO;
+        if emission && m.is_emissive() && wo.dot(sp.ng) > 0.0 {
+            l += m.emission;
         }
-        // Indirect diffuse: ρ/π · E.
-        let kd = m.diffuse.eval(sp.p, sp.uv);
-        if kd.max_element() > 0.0 {
-            let n = bsdf.shading_normal();
-            let ng = if sp.ng.dot(n) >= 0.0 { sp.ng } else { -sp.ng };
-            let e = indirect(ctx, params, walk, sp.p, n, ng, level);
-            l += kd * FRAC_1_PI * e;
+        let bsdf = Bsdf::new(m, sp, wo);
+        let non_delta = bsdf.has_non_delta();
+        let lights = &ctx.lights;
+        // The overture skips direct light where it is not cached (but draws the same
+        // numbers).
+        let direct = !(self.overture && level == 0);
+        if non_delta {
+            // Direct light, light-sampling half of the MIS pair (the BSDF half is below).
+            // (Light sampling alone, as Radiance does, saves a third of the rays of a primary
+            // value but is far noisier where emitters are large and near, e.g. the furnace
+            // test.)
+            let u_choice = rng.uniform();
+            let u_light = Vec2::new(rng.uniform(), rng.uniform());
+            if direct {
+                l += sample_direct(ctx, &bsdf, sp, wo, u_choice, u_light, self.stats);
+            }
+            // Indirect diffuse: ρ/π · E.
+            let kd = m.diffuse.eval(sp.p, sp.uv);
+            if kd.max_element() > 0.0 {
+                let n = bsdf.shading_normal();
+                let ng = if sp.ng.dot(n) >= 0.0 { sp.ng } else { -sp.ng };
+                let e = self.indirect(sp.p, n, ng, level);
+                l += kd * FRAC_1_PI * e;
+            }
         }
-    }
-    // One BSDF sample: a non-delta direction completes the direct-light MIS pair (emitters
-    // only: the indirect part is the cache's); a delta direction is a specular path,
-    // followed.
-    let u_lobe = rng.uniform();
-    let u = Vec2::new(rng.uniform(), rng.uniform());
-    let Some(bs) = bsdf.sample(wo, u_lobe, u, Transport::Radiance) else {
-        return l;
-    };
-    if bs.weight.max_element() <= 0.0 {
-        return l;
-    }
-    let next = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi);
-    if bs.delta {
-        if specular_depth < MAX_SPECULAR_DEPTH {
-            l += bs.weight
-                * trace(
-                    ctx,
-                    params,
-                    walk,
-                    &next,
-                    level,
-                    emission,
-                    specular_depth + 1,
-                    rng,
-                );
+        // One BSDF sample: a non-delta direction completes the direct-light MIS pair
+        // (emitters only: the indirect part is the cache's); a delta direction is a specular
+        // path, followed.
+        let u_lobe = rng.uniform();
+        let u = Vec2::new(rng.uniform(), rng.uniform());
+        let Some(bs) = bsdf.sample(wo, u_lobe, u, Transport::Radiance) else {
+            return l;
+        };
+        if bs.weight.max_element() <= 0.0 {
+            return l;
         }
-    } else if direct && !lights.is_empty() {
-        match ctx.intersect(&next, walk.stats) {
-            Some(hit) => {
-                let hm = &ctx.scene.materials[hit.material];
-                if hm.is_emissive() && bs.wi.dot(hit.ng) < 0.0 {
-                    if let Some(li) = lights.light_of_shape(hit.shape) {
-                        let w = power_heuristic(bs.pdf, lights.pdf_li(li, sp.p, hit.p, hit.ng));
-                        l += bs.weight * hm.emission * w;
+        let next = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi);
+        if bs.delta {
+            if specular_depth < MAX_SPECULAR_DEPTH {
+                l += bs.weight * self.trace(&next, level, emission, specular_depth + 1, rng);
+            }
+        } else if direct && !lights.is_empty() {
+            match ctx.intersect(&next, self.stats) {
+                Some(hit) => {
+                    let hm = &ctx.scene.materials[hit.material];
+                    if hm.is_emissive() && bs.wi.dot(hit.ng) < 0.0 {
+                        if let Some(li) = lights.light_of_shape(hit.shape) {
+                            let w = power_heuristic(bs.pdf, lights.pdf_li(li, sp.p, hit.p, hit.ng));
+                            l += bs.weight * hm.emission * w;
+                        }
+                    }
+                }
+                None => {
+                    if let Some(bg) = lights.background_light() {
+                        let w = power_heuristic(
+                            bs.pdf,
+                            lights.pdf_li(bg, sp.p, sp.p + bs.wi, Vec3::ZERO),
+                        );
+                        l += bs.weight * lights.background_radiance(bs.wi) * w;
                     }
                 }
             }
-            None => {
-                if let Some(bg) = lights.background_light() {
-                    let w =
-                        power_heuristic(bs.pdf, lights.pdf_li(bg, sp.p, sp.p + bs.wi, Vec3::ZERO));
-                    l += bs.weight * lights.background_radiance(bs.wi) * w;
+        }
+        l
+    }
+
+    /// Indirect irradiance at level `level`: the cache (secondary method), else a new
+    /// primary value (stored when the cache grows); the constant ambient value beyond the
+    /// last level.
+    fn indirect(&mut self, p: Vec3, n: Vec3, ng: Vec3, level: u32) -> Rgb {
+        let params = self.params;
+        if level >= params.options.bounces {
+            return params.options.ambient;
+        }
+        if let Some(e) = self.interpolate(level as usize, p, n) {
+            return e;
+        }
+        let rec = self.primary(p, n, ng, level);
+        self.primaries += 1;
+        if let Store::Overlay { local, .. } = &mut self.store {
+            local.levels[level as usize].insert(rec);
+        }
+        rec.e
+    }
+
+    /// The primary method (eq. 2): see the module documentation.
+    fn primary(&mut self, p: Vec3, n: Vec3, ng: Vec3, level: u32) -> Record {
+        let (ctx, params) = (self.ctx, self.params);
+        let strata = params.options.strata_at(level);
+        let mut rng = Rng::for_key(
+            params.seed,
+            &[
+                0x1c,
+                p.x.to_bits() as u64,
+                p.y.to_bits() as u64,
+                p.z.to_bits() as u64,
+                level as u64,
+            ],
+        );
+        let (t, b) = crate::math::frame(n);
+        let mut sum = Rgb::ZERO;
+        let mut inv_d = 0.0f64;
+        for j in 0..strata {
+            if self.cancel.is_some_and(CancelToken::is_cancelled) {
+                break;
+            }
+            for k in 0..2 * strata {
+                let sin2 = (j as f32 + rng.uniform()) / strata as f32;
+                let (sin_t, cos_t) = (sin2.sqrt(), (1.0 - sin2).max(0.0).sqrt());
+                let phi = PI * (k as f32 + rng.uniform()) / strata as f32;
+                let dir =
+                    (t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + n * cos_t).normalize();
+                if dir.dot(ng) <= 0.0 {
+                    continue;
+                }
+                let ray = Ray::new(offset_origin(p, ng, dir), dir);
+                if let Some(sp) = ctx.intersect(&ray, self.stats) {
+                    inv_d += 1.0 / (sp.t.max(1e-6) as f64);
+                    sum += self.shade(&ray, &sp, level + 1, false, 0, &mut rng);
                 }
             }
         }
-    }
-    l
-}
-
-/// Indirect irradiance at level `level`: the cache (secondary method), else a new primary
-/// value (stored when the cache grows); the constant ambient value beyond the last level.
-fn indirect(
-    ctx: &Context,
-    params: &Params,
-    walk: &mut Walk,
-    p: Vec3,
-    n: Vec3,
-    ng: Vec3,
-    level: u32,
-) -> Rgb {
-    if level >= params.options.bounces {
-        return params.options.ambient;
-    }
-    if let Some(e) = walk.interpolate(level as usize, p, n) {
-        return e;
-    }
-    let rec = primary(ctx, params, walk, p, n, ng, level);
-    walk.primaries += 1;
-    if let Store::Overlay { local, .. } = &mut walk.store {
-        local.levels[level as usize].insert(rec);
-    }
-    rec.e
-}
-
-/// The primary method (eq. 2): see the module documentation.
-fn primary(
-    ctx: &Context,
-    params: &Params,
-    walk: &mut Walk,
-    p: Vec3,
-    n: Vec3,
-    ng: Vec3,
-    level: u32,
-) -> Record {
-    let strata = params.options.strata_at(level);
-    let mut rng = Rng::for_key(
-        params.seed,
-        &[
-            0x1c,
-            p.x.to_bits() as u64,
-            p.y.to_bits() as u64,
-            p.z.to_bits() as u64,
-            level as u64,
-        ],
-    );
-    let (t, b) = crate::math::frame(n);
-    let mut sum = Rgb::ZERO;
-    let mut inv_d = 0.0f64;
-    for j in 0..strata {
-        if walk.cancel.is_some_and(CancelToken::is_cancelled) {
-            break;
+        let count = 2 * strata * strata;
+        let e = sum * (PI / count as f32);
+        let r = if inv_d > 0.0 {
+            (count as f64 / inv_d) as f32
+        } else {
+            params.r_max
+        };
+        Record {
+            p,
+            n,
+            e,
+            r: r.clamp(params.r_min, params.r_max),
         }
-        for k in 0..2 * strata {
-            let sin2 = (j as f32 + rng.uniform()) / strata as f32;
-            let (sin_t, cos_t) = (sin2.sqrt(), (1.0 - sin2).max(0.0).sqrt());
-            let phi = PI * (k as f32 + rng.uniform()) / strata as f32;
-            let dir = (t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + n * cos_t).normalize();
-            if dir.dot(ng) <= 0.0 {
-                continue;
-            }
-            let ray = Ray::new(offset_origin(p, ng, dir), dir);
-            if let Some(sp) = ctx.intersect(&ray, walk.stats) {
-                inv_d += 1.0 / (sp.t.max(1e-6) as f64);
-                sum += shade(ctx, params, walk, &ray, &sp, level + 1, false, 0, &mut rng);
-            }
-        }
-    }
-    let count = 2 * strata * strata;
-    let e = sum * (PI / count as f32);
-    let r = if inv_d > 0.0 {
-        (count as f64 / inv_d) as f32
-    } else {
-        params.r_max
-    };
-    Record {
-        p,
-        n,
-        e,
-        r: r.clamp(params.r_min, params.r_max),
     }
 }
