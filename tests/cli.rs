@@ -286,6 +286,84 @@ fn pbrt_scenes_render_with_warnings_and_convert_to_toml() {
     assert!(!never.exists());
 }
 
+/// An environment map neither square (equal-area) nor 2:1 (lat-long) is refused with exit
+/// code 2 and one line naming the file and the accepted shapes, from a TOML scene and from
+/// pbrt's `infinite` light; a 2:1 map from pbrt renders, with a warning that pbrt-v4 itself
+/// needs it converted.
+#[test]
+fn environment_maps_of_other_shapes_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut image = raylink::Image::new(48, 16);
+    image.pixels.fill(raylink::math::Rgb::ONE);
+    raylink::write_image(
+        &dir.path().join("wide.exr"),
+        &image,
+        &[],
+        &Default::default(),
+    )
+    .unwrap();
+    let toml = dir.path().join("s.toml");
+    std::fs::write(
+        &toml,
+        "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\n\
+         [world]\nenvironment = { file = \"wide.exr\" }\n\n\
+         [materials.m]\n\n[[shapes]]\ntype = \"sphere\"\nmaterial = \"m\"\n",
+    )
+    .unwrap();
+    let pbrt = |file: &str| {
+        let path = dir.path().join(format!("{file}.pbrt"));
+        std::fs::write(
+            &path,
+            format!(
+                "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n\
+                 LightSource \"infinite\" \"string filename\" \"{file}\"\n\
+                 Shape \"sphere\" \"float radius\" 1\n"
+            ),
+        )
+        .unwrap();
+        path
+    };
+    let out_file = dir.path().join("never.exr");
+    let render = |scene: &Path, out: &Path| {
+        raylink(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "--quiet",
+        ])
+    };
+    for scene in [toml, pbrt("wide.exr")] {
+        let out = render(&scene, &out_file);
+        assert_clean_failure(&out, &["wide.exr", "48x16", "square", "2:1"]);
+        assert!(!out_file.exists());
+    }
+    let mut image = raylink::Image::new(32, 16);
+    image.pixels.fill(raylink::math::Rgb::ONE);
+    raylink::write_image(
+        &dir.path().join("sky.exr"),
+        &image,
+        &[],
+        &Default::default(),
+    )
+    .unwrap();
+    let scene = pbrt("sky.exr");
+    let out = render(&scene, &dir.path().join("sky-lit.exr"));
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(
+        stderr(&out).trim_end(),
+        format!(
+            "warning: {}:4: LightSource \"infinite\": \"sky.exr\" is a lat-long image, converted \
+             to the equal-area mapping (pbrt-v4 itself needs `imgtool makeequiarea`)",
+            scene.display()
+        )
+    );
+}
+
 fn meta_value(meta: &raylink::image::Metadata, key: &str) -> Option<MetaValue> {
     meta.iter().find(|(n, _)| n == key).map(|(_, v)| v.clone())
 }

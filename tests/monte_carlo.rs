@@ -341,3 +341,263 @@ fn environment_map_lighting_matches_quadrature() {
         assert!((m[c] / expected[c] - 1.0).abs() < 0.01, "{m} vs {expected}");
     }
 }
+
+/// A diffuse sphere (albedo 0.5, radius 1, at the origin) seen head-on from direction `n`
+/// through a 1° camera, lit by the environment map of `scene_dir/file` (a TOML scene
+/// written there): the path tracer's image mean.
+fn sphere_under_environment(
+    scene_dir: &Path,
+    file: &str,
+    n: raylink::math::Vec3,
+) -> (Scene, raylink::math::Rgb) {
+    let p = n.normalize() * 5.0;
+    let toml = format!(
+        "[camera]\nposition = [{}, {}, {}]\nlook_at = [0, 0, 0]\nup = [0, 0, 1]\nfov = 1\nwidth = 4\nheight = 4\n\n\
+         [world]\nenvironment = {{ file = \"{file}\" }}\n\n\
+         [materials.grey]\ndiffuse = 0.5\n\n\
+         [[shapes]]\ntype = \"sphere\"\nmaterial = \"grey\"\nradius = 1\n",
+        p.x, p.y, p.z
+    );
+    let path = scene_dir.join(format!("{file}.toml"));
+    std::fs::write(&path, toml).unwrap();
+    let scene = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
+    let image = render(
+        &scene,
+        Kind::Path,
+        &Setup {
+            width: 4,
+            height: 4,
+            spp: 4096,
+            max_depth: 1,
+            seed: 3,
+            threads: None,
+            filter: Filter::Box { radius: 0.5 },
+        },
+    );
+    (scene, mean(&image, None))
+}
+
+/// Lat-long texel (column, row) of a W×H map: its light-space direction at the centre
+/// (pbrt-v4's convention: θ from +z down the rows, φ from +x towards +y across).
+fn lat_long_dir(w: u32, h: u32, x: f64, y: f64) -> glam::DVec3 {
+    let (theta, phi) = (
+        std::f64::consts::PI * y / h as f64,
+        std::f64::consts::TAU * x / w as f64,
+    );
+    glam::DVec3::new(
+        theta.sin() * phi.cos(),
+        theta.sin() * phi.sin(),
+        theta.cos(),
+    )
+}
+
+/// ρ/π ∫ L(ω) max(0, n·ω) dω for a lat-long map read as constant over each texel, by
+/// 8×8 points per texel in (θ, φ) weighted by sin θ: independent of the conversion to the
+/// equal-area mapping and of the renderer.
+fn lat_long_quadrature(map: &Image, n: glam::DVec3, albedo: f64) -> [f64; 3] {
+    let (w, h) = (map.width, map.height);
+    let s = 8;
+    let mut sum = [0.0f64; 3];
+    let cell = (std::f64::consts::TAU / (w * s) as f64) * (std::f64::consts::PI / (h * s) as f64);
+    for y in 0..h * s {
+        for x in 0..w * s {
+            let d = lat_long_dir(
+                w,
+                h,
+                x as f64 / s as f64 + 0.5 / s as f64,
+                y as f64 / s as f64 + 0.5 / s as f64,
+            );
+            let cos = n.dot(d);
+            if cos <= 0.0 {
+                continue;
+            }
+            let sin_theta = (1.0 - d.z * d.z).max(0.0).sqrt();
+            let l = map.get(x / s, y / s);
+            for c in 0..3 {
+                sum[c] += l[c] as f64 * cos * sin_theta * cell;
+            }
+        }
+    }
+    sum.map(|v| v * albedo / std::f64::consts::PI)
+}
+
+/// A lat-long sky (W×H = 128×64): a smooth gradient in θ and φ plus a 3×3-texel sun.
+fn lat_long_sky(sun: (u32, u32), sun_radiance: f32) -> Image {
+    let (w, h) = (128u32, 64u32);
+    let mut map = Image::new(w, h);
+    for y in 0..h {
+        for x in 0..w {
+            let d = lat_long_dir(w, h, x as f64 + 0.5, y as f64 + 0.5);
+            let v = (0.3 + 1.2 * (0.5 + 0.5 * d.z) + 0.6 * (0.5 + 0.5 * (d.y - 0.5 * d.x))) as f32;
+            let near_sun = x.abs_diff(sun.0) <= 1 && y.abs_diff(sun.1) <= 1;
+            let s = if near_sun { sun_radiance } else { 0.0 };
+            map.set(
+                x,
+                y,
+                raylink::math::Rgb::new(0.5 * v + s, 0.8 * v + s, v + 0.8 * s),
+            );
+        }
+    }
+    map
+}
+
+/// A lat-long environment map and the equal-area map it converts to light a diffuse sphere
+/// alike, and as the lat-long image itself says: the path tracer's means under (a) the
+/// lat-long EXR and (b) its conversion written out and read back as an equal-area EXR agree
+/// within 1%, and both within 1% of the quadrature of the lat-long texels over the
+/// hemisphere the camera sees. The view and the sun are away from the poles and off the
+/// x–z plane, so a mirrored or turned convention moves the sun out of (or across) that
+/// hemisphere and fails.
+#[test]
+fn lat_long_environment_lights_like_its_conversion_and_its_quadrature() {
+    let dir = tempfile::tempdir().unwrap();
+    // The sun at texel (28, 18): φ ≈ 80°, θ ≈ 52°; the camera looks from φ = 40°, θ = 70°.
+    let sky = lat_long_sky((28, 18), 1000.0);
+    raylink::write_image(&dir.path().join("sky.exr"), &sky, &[], &Default::default()).unwrap();
+    let view = lat_long_dir(128, 64, 128.0 * 40.0 / 360.0, 64.0 * 70.0 / 180.0);
+    let (scene, a) = sphere_under_environment(dir.path(), "sky.exr", view.as_vec3());
+    let env = scene.environment.as_ref().unwrap();
+    assert_eq!((env.image.width, env.image.height), (128, 128));
+    raylink::write_image(
+        &dir.path().join("octa.exr"),
+        &env.image,
+        &[],
+        &Default::default(),
+    )
+    .unwrap();
+    let (scene_b, b) = sphere_under_environment(dir.path(), "octa.exr", view.as_vec3());
+    assert_eq!(scene_b.environment.as_ref().unwrap().image, env.image);
+    let expected = lat_long_quadrature(&sky, view, 0.5);
+    // The same with the map mirrored (φ → −φ): what a wrong convention would give.
+    let mirrored = lat_long_quadrature(&sky, glam::DVec3::new(view.x, -view.y, view.z), 0.5);
+    eprintln!("lat-long {a}, equal-area {b}, quadrature {expected:?} (mirrored {mirrored:?})");
+    for c in 0..3 {
+        assert!(
+            (a[c] / b[c] - 1.0).abs() < 0.01,
+            "lat-long {a} vs equal-area {b}"
+        );
+        let e = expected[c] as f32;
+        assert!(
+            (a[c] / e - 1.0).abs() < 0.01,
+            "lat-long {a} vs quadrature {expected:?}"
+        );
+        assert!(
+            (mirrored[c] as f32 / e - 1.0).abs() > 0.1,
+            "the test cannot tell a mirror"
+        );
+    }
+}
+
+/// A constant lat-long map is exactly the constant equal-area map of the same side (W×W),
+/// so the two render the same image bit for bit; and as a white furnace (radiance 1, a
+/// white sphere) the image stays white.
+#[test]
+fn constant_lat_long_map_equals_constant_equal_area_map_and_furnace_stays_white() {
+    use raylink::math::Rgb;
+    let dir = tempfile::tempdir().unwrap();
+    let mut latlong = Image::new(64, 32);
+    latlong.pixels.fill(Rgb::ONE);
+    let mut square = Image::new(64, 64);
+    square.pixels.fill(Rgb::ONE);
+    for (name, image) in [("latlong.exr", &latlong), ("square.exr", &square)] {
+        raylink::write_image(&dir.path().join(name), image, &[], &Default::default()).unwrap();
+    }
+    let scene = |file: &str| {
+        let toml = format!(
+            "[camera]\nposition = [0.3, -4, 1]\nlook_at = [0, 0, 0]\nup = [0, 0, 1]\nfov = 40\nwidth = 16\nheight = 12\n\n\
+             [world]\nenvironment = {{ file = \"{file}\" }}\n\n\
+             [materials.white]\ndiffuse = 1\n\n\
+             [[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\nradius = 1\n"
+        );
+        let path = dir.path().join(format!("{file}.toml"));
+        std::fs::write(&path, toml).unwrap();
+        Scene::load(&path).unwrap_or_else(|e| panic!("{e}"))
+    };
+    let (a, b) = (scene("latlong.exr"), scene("square.exr"));
+    assert_eq!(a.environment.as_ref().unwrap().image, square);
+    let setup = Setup {
+        width: 16,
+        height: 12,
+        spp: 256,
+        max_depth: 5,
+        seed: 5,
+        threads: None,
+        filter: Filter::Box { radius: 0.5 },
+    };
+    let (ia, ib) = (
+        render(&a, Kind::Path, &setup),
+        render(&b, Kind::Path, &setup),
+    );
+    assert!(
+        ia.pixels == ib.pixels,
+        "constant lat-long and equal-area maps render differently"
+    );
+    let m = mean(&ia, None);
+    let worst = ia
+        .pixels
+        .iter()
+        .map(|p| (p.x - 1.0).abs())
+        .fold(0.0f32, f32::max);
+    eprintln!("furnace under a lat-long map: mean {m}, worst pixel off by {worst}");
+    for c in 0..3 {
+        assert!((m[c] - 1.0).abs() < 0.005, "furnace mean {m}");
+    }
+    assert!(worst < 0.05, "a furnace pixel is off by {worst}");
+}
+
+/// Importance sampling of a converted lat-long map: a sky with a small, very bright sun
+/// (one texel of 128×64 at 20000, 95% of the light on the sphere), so that the sun is
+/// found only through the sampling distribution built from the converted image. As the
+/// equal-area test above (environment_map_lighting_matches_quadrature), the path tracer
+/// must agree within 1% with the quadrature of the converted map (Environment::eval),
+/// and that with the quadrature of the lat-long texels.
+#[test]
+fn lat_long_sun_is_importance_sampled_without_bias() {
+    use raylink::math::{Rgb, Vec3};
+    let dir = tempfile::tempdir().unwrap();
+    let mut sky = lat_long_sky((0, 0), 0.0);
+    sky.set(100, 20, Rgb::new(20000.0, 18000.0, 15000.0));
+    raylink::write_image(&dir.path().join("sun.exr"), &sky, &[], &Default::default()).unwrap();
+    let view = lat_long_dir(128, 64, 128.0 * 300.0 / 360.0, 64.0 * 80.0 / 180.0);
+    let (scene, m) = sphere_under_environment(dir.path(), "sun.exr", view.as_vec3());
+    let env = scene.environment.as_ref().unwrap();
+    // Quadrature of the converted map over the hemisphere about `view`.
+    let n = view.as_vec3().normalize();
+    let (t, b) = {
+        let a = if n.x.abs() > 0.9 { Vec3::Y } else { Vec3::X };
+        let t = n.cross(a).normalize();
+        (t, n.cross(t))
+    };
+    let (nt, np) = (800, 1600);
+    let mut converted = [0.0f64; 3];
+    for i in 0..nt {
+        let cos = (i as f32 + 0.5) / nt as f32;
+        let sin = (1.0 - cos * cos).sqrt();
+        for j in 0..np {
+            let phi = std::f32::consts::TAU * (j as f32 + 0.5) / np as f32;
+            let w = t * (sin * phi.cos()) + b * (sin * phi.sin()) + n * cos;
+            let l = env.eval(w);
+            for c in 0..3 {
+                converted[c] += (l[c] * cos) as f64 * (std::f64::consts::TAU / (nt * np) as f64);
+            }
+        }
+    }
+    let converted = converted.map(|v| v * 0.5 / std::f64::consts::PI);
+    let latlong = lat_long_quadrature(&sky, view, 0.5);
+    let sky_only = lat_long_quadrature(&lat_long_sky((0, 0), 0.0), view, 0.5);
+    eprintln!(
+        "lat-long sun: path {m}, quadrature of the conversion {converted:?}, of the lat-long \
+         texels {latlong:?} (sky alone {sky_only:?})"
+    );
+    for c in 0..3 {
+        assert!(
+            (m[c] / converted[c] as f32 - 1.0).abs() < 0.01,
+            "{m} vs {converted:?}"
+        );
+        assert!(
+            (converted[c] / latlong[c] - 1.0).abs() < 0.01,
+            "{converted:?} vs {latlong:?}"
+        );
+        assert!(sky_only[c] / latlong[c] < 0.2, "the sun must dominate");
+    }
+}

@@ -484,6 +484,56 @@ fn lights_and_environment() {
     let env = s.environment.as_ref().expect("environment map");
     assert_eq!(env.eval(Vec3::Z), Rgb::new(8.0, 10.0, 12.0));
     assert_eq!(env.eval(Vec3::X), Rgb::splat(0.5));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+
+    // A 2:1 lat-long map (an extension: pbrt-v4 needs `imgtool makeequiarea`) is converted,
+    // with a warning, in makeequiarea's orientation: texel (12, 3) of 32x16 is φ = 140.6°
+    // from +x towards +y, θ = 36.6° from +z.
+    let mut image = Image::new(32, 16);
+    image.pixels.fill(Rgb::splat(0.25));
+    image.set(12, 3, Rgb::splat(1000.0));
+    raylink::image::output::write_image(
+        &dir.path().join("latlong.exr"),
+        &image,
+        &[],
+        &Default::default(),
+    )
+    .unwrap();
+    let s = load_in(
+        dir.path(),
+        &format!("{HEADER}LightSource \"infinite\" \"string filename\" \"latlong.exr\"\n{TRI}"),
+        &[],
+    )
+    .unwrap();
+    assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
+    assert!(
+        s.warnings[0].contains("\"latlong.exr\" is a lat-long image"),
+        "{:?}",
+        s.warnings
+    );
+    let env = s.environment.as_ref().expect("environment map");
+    assert_eq!((env.image.width, env.image.height), (32, 32));
+    let (theta, phi) = (
+        std::f32::consts::PI * 3.5 / 16.0,
+        std::f32::consts::TAU * 12.5 / 32.0,
+    );
+    let d = Vec3::new(
+        theta.sin() * phi.cos(),
+        theta.sin() * phi.sin(),
+        theta.cos(),
+    );
+    assert!(env.eval(d).x > 100.0, "{}", env.eval(d));
+    assert!(env.eval(Vec3::new(d.x, -d.y, d.z)).x < 0.3);
+    // `convert` names the lat-long file, which reads back to the same converted map.
+    let out = dir.path().join("latlong.toml");
+    raylink::scene::convert::write_toml(&s, &out).unwrap();
+    let back = Scene::load(&out).unwrap_or_else(|e| panic!("{e}"));
+    let x = back.environment.as_ref().unwrap();
+    assert_eq!(x.file, Path::new("latlong.exr"));
+    assert_eq!(
+        (&x.image, x.transform, x.scale),
+        (&env.image, env.transform, env.scale)
+    );
 }
 
 #[test]

@@ -6,7 +6,7 @@ use super::spectrum::Kind;
 use super::state::AreaEmission;
 use super::{Loader, Loc};
 use crate::math::{Mat3, Rgb};
-use crate::scene::environment::Environment;
+use crate::scene::environment::{Environment, Mapping};
 use crate::scene::Light;
 use glam::DVec3;
 use std::path::PathBuf;
@@ -108,13 +108,16 @@ impl Loader {
                             m.y_axis.truncate().as_vec3(),
                             m.z_axis.truncate().as_vec3(),
                         );
-                        let env = Environment::load(
+                        let (env, mapping) = Environment::load_with_mapping(
                             &path,
                             PathBuf::from(&file),
                             transform,
                             Rgb::splat(scale),
                         )
                         .map_err(|e| loc.error(format!("{st}: {e}")))?;
+                        if mapping == Mapping::LatLong {
+                            self.warn(loc, format!("{st}: \"{file}\" is a lat-long image, converted to the equal-area mapping (pbrt-v4 itself needs `imgtool makeequiarea`)"));
+                        }
                         self.environment = Some(Arc::new(env));
                     }
                     (None, l) => self.background += l.unwrap_or(Rgb::ONE) * scale,
