@@ -234,6 +234,12 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
     for w in &scene0.warnings {
         eprintln!("warning: {w}");
     }
+    let outputs = frames
+        .iter()
+        .map(|&f| frame_path(&args.output, f))
+        .collect::<Result<Vec<_>>>()?;
+    let csv: Vec<PathBuf> = args.csv.iter().cloned().collect();
+    crate::render::refuse_aliases(outputs.iter().chain(&csv), &scene0.inputs)?;
     let integrator = match (args.integrator, scene0.settings.integrator) {
         (Some(i), _) => i,
         (None, None | Some(TechniqueKind::Whitted)) => AnimIntegrator::Whitted,

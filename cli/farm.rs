@@ -224,6 +224,7 @@ pub fn run_merge(args: MergeArgs) -> Result<(), Failure> {
     for out in &args.outputs {
         check_output_path(out).map_err(|e| Error::Invalid(e.to_string()))?;
     }
+    crate::render::refuse_aliases(&args.outputs, &args.parts)?;
     let merged = farm::merge::merge(&args.parts)?;
     let options = OutputOptions {
         exposure: args.exposure,

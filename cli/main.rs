@@ -142,16 +142,26 @@ impl Cli {
     }
 }
 
-/// The exit code of a failed run: 2 for bad input or options, 1 for the rest.
+/// The exit code of a failed run: 2 for bad input or options, 1 for a failure while working
+/// (a full disk, an I/O error), 128 + N when signal N stopped it.
 fn exit_code(failure: &Failure) -> u8 {
+    use std::io::ErrorKind::{
+        InvalidData, IsADirectory, NotADirectory, NotFound, PermissionDenied,
+    };
     match failure {
         Failure::Error(
-            Error::Input { .. }
-            | Error::Setting { .. }
-            | Error::Invalid(_)
-            | Error::Io { .. }
-            | Error::Memory { .. },
+            Error::Input { .. } | Error::Setting { .. } | Error::Invalid(_) | Error::Memory { .. },
         ) => 2,
+        // A file the user named that cannot be read as given is bad input; anything else
+        // that goes wrong reading or writing is a failure while working.
+        Failure::Error(Error::Io { source, .. })
+            if matches!(
+                source.kind(),
+                NotFound | PermissionDenied | IsADirectory | NotADirectory | InvalidData
+            ) =>
+        {
+            2
+        }
         // As a shell reports a process killed by the signal.
         Failure::Interrupted { signal, .. } => (128 + signal).clamp(1, 255) as u8,
         Failure::Error(_) => 1,
@@ -295,6 +305,8 @@ fn run_convert(cli: &Cli, args: ConvertArgs) -> Result<(), Failure> {
     }
     let control = cli.control(args.quiet, None)?;
     let scene: Scene = render::load_scene(&args.scene, &control)?;
+    let meshes = args.output.with_extension("meshes");
+    render::refuse_aliases([&args.output, &meshes], &scene.inputs)?;
     raylink::scene::convert::write_toml(&scene, &args.output)?;
     Ok(())
 }

@@ -75,6 +75,50 @@ fn output_options(args: &RenderArgs) -> Result<OutputOptions, Error> {
     })
 }
 
+/// The path as the file system resolves it, for comparing: the file's own if it exists, else
+/// its folder's followed by its name.
+fn resolved(path: &std::path::Path) -> PathBuf {
+    if let Ok(p) = path.canonicalize() {
+        return p;
+    }
+    let dir = path.parent().filter(|d| !d.as_os_str().is_empty());
+    let dir = dir.map_or_else(|| std::path::Path::new(".").into(), PathBuf::from);
+    match (dir.canonicalize(), path.file_name()) {
+        (Ok(d), Some(name)) => d.join(name),
+        _ => path.to_path_buf(),
+    }
+}
+
+/// An error if an output would overwrite one of the run's inputs (the scene, what it reads,
+/// a cache, network or checkpoint): checked before any work, so that nothing the user had
+/// is lost.
+pub fn refuse_aliases<'a>(
+    outputs: impl IntoIterator<Item = &'a PathBuf>,
+    inputs: impl IntoIterator<Item = &'a PathBuf>,
+) -> Result<(), Error> {
+    let inputs: Vec<(PathBuf, &PathBuf)> = inputs.into_iter().map(|p| (resolved(p), p)).collect();
+    for out in outputs {
+        let r = resolved(out);
+        if let Some((_, input)) = inputs.iter().find(|(i, _)| *i == r) {
+            return Err(Error::Invalid(format!(
+                "{}: the output is one of the inputs ({}); it would be overwritten",
+                out.display(),
+                input.display()
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The auxiliary images' files beside the first output.
+fn aov_paths(first: &std::path::Path) -> Vec<PathBuf> {
+    let stem = first.file_stem().unwrap_or_default().to_string_lossy();
+    Aov::ALL
+        .iter()
+        .map(|aov| first.with_file_name(format!("{stem}.{}.exr", aov.name())))
+        .collect()
+}
+
 /// Loads the scene and prints what its reader replaced.
 pub fn load_scene(path: &std::path::Path, control: &Control) -> Result<Scene, Error> {
     let scene = Scene::load_with(path, control)?;
@@ -138,6 +182,20 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     let out_options = output_options(&args)?;
     let scene = load_scene(&args.scene, &control)?;
     let mut job = options::job(&args, &scene, extra)?;
+    let files: Vec<PathBuf> = [&args.cache_file, &args.network.network_file]
+        .into_iter()
+        .flatten()
+        .cloned()
+        .collect();
+    let aovs = if args.aov {
+        aov_paths(&args.outputs[0])
+    } else {
+        Vec::new()
+    };
+    refuse_aliases(
+        args.outputs.iter().chain(&aovs),
+        scene.inputs.iter().chain(&files),
+    )?;
     job.region = farm::region(&args, &job)?;
     let settings = job.settings_key() + &format!(" half={}", args.half);
     let mut metadata = metadata(&args, &job);
@@ -214,14 +272,11 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
         ));
     }
     if args.aov {
-        let aovs = renderer
+        let images = renderer
             .render_aovs(&control)
             .ok_or_else(|| cli.interrupted("the auxiliary images", "the image was written"))?;
-        let first = &args.outputs[0];
-        let stem = first.file_stem().unwrap_or_default().to_string_lossy();
-        for (aov, img) in Aov::ALL.iter().zip(&aovs) {
-            let path = first.with_file_name(format!("{stem}.{}.exr", aov.name()));
-            write_image(&path, img, &metadata, &out_options)?;
+        for (path, img) in aovs.iter().zip(&images) {
+            write_image(path, img, &metadata, &out_options)?;
         }
     }
     if !args.quiet {

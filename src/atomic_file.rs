@@ -4,19 +4,57 @@
 
 use crate::{Error, Result};
 use std::io::Write;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicU64, Ordering};
+
+/// What every temporary file's name starts with, then the writing process's id.
+const TEMP_PREFIX: &str = ".raylink-tmp-";
+
+/// A temporary file beside `path` for writing it: `.raylink-tmp-PID-N.EXT`, hidden, unique
+/// per process and write, the target's extension kept (an image writer picks the format by
+/// it) and short whatever the target's name (it always fits the file system's name limit
+/// when the target's does).
+pub(crate) fn temp_path(path: &Path) -> PathBuf {
+    static COUNTER: AtomicU64 = AtomicU64::new(0);
+    let n = COUNTER.fetch_add(1, Ordering::Relaxed);
+    let ext = path
+        .extension()
+        .map(|e| format!(".{}", e.to_string_lossy()))
+        .unwrap_or_default();
+    parent(path).join(format!("{TEMP_PREFIX}{}-{n}{ext}", std::process::id()))
+}
+
+/// The directory holding `path` (`.` for a bare file name).
+fn parent(path: &Path) -> &Path {
+    path.parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."))
+}
+
+/// Removes the temporary files a raylink process that no longer runs left in `dir` (killed
+/// while writing, by a second Ctrl-C say). Best effort: what cannot be read or removed stays.
+pub fn remove_stale_temps(dir: &Path) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let Some(rest) = name.to_str().and_then(|n| n.strip_prefix(TEMP_PREFIX)) else {
+            continue;
+        };
+        let Some(pid) = rest.split('-').next().and_then(|p| p.parse::<u32>().ok()) else {
+            continue;
+        };
+        let alive = Path::new("/proc").join(pid.to_string()).exists();
+        if !alive && pid != std::process::id() {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
+}
 
 /// Writes `bytes` to `path` atomically; errors name `path`.
 pub fn write(path: &Path, bytes: &[u8]) -> Result<()> {
-    let dir = path
-        .parent()
-        .filter(|d| !d.as_os_str().is_empty())
-        .unwrap_or(Path::new("."));
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    let temp = dir.join(format!(".{name}.tmp-{}", std::process::id()));
+    let temp = temp_path(path);
     let result = (|| {
         let mut f = std::fs::File::create(&temp)?;
         f.write_all(bytes)?;
@@ -27,4 +65,39 @@ pub fn write(path: &Path, bytes: &[u8]) -> Result<()> {
         let _ = std::fs::remove_file(&temp);
         Error::io(path, e)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn temporary_names_are_short_hidden_and_keep_the_extension() {
+        let long = "x".repeat(250) + ".exr";
+        let t = temp_path(&Path::new("out").join(&long));
+        let name = t.file_name().unwrap().to_string_lossy().into_owned();
+        assert!(
+            name.starts_with(".raylink-tmp-") && name.ends_with(".exr"),
+            "{name}"
+        );
+        assert!(name.len() < 64, "{name}");
+        assert_eq!(t.parent(), Some(Path::new("out")));
+        assert_ne!(temp_path(Path::new("a.exr")), temp_path(Path::new("a.exr")));
+    }
+
+    #[test]
+    fn only_the_temporary_files_of_dead_processes_are_removed() {
+        let dir = tempfile::tempdir().unwrap();
+        // No process has a pid this large (the kernel's limit is 2^22).
+        let dead = dir.path().join(".raylink-tmp-4294967294-0.exr");
+        let ours = dir
+            .path()
+            .join(format!(".raylink-tmp-{}-7.exr", std::process::id()));
+        let other = dir.path().join("render.exr");
+        for f in [&dead, &ours, &other] {
+            std::fs::write(f, b"x").unwrap();
+        }
+        remove_stale_temps(dir.path());
+        assert!(!dead.exists() && ours.exists() && other.exists());
+    }
 }

@@ -86,6 +86,7 @@ fn mixed_scene() -> Scene {
         background: Rgb::ZERO,
         settings: Default::default(),
         setting_sources: Vec::new(),
+        inputs: Vec::new(),
         environment: None,
         warnings: Vec::new(),
     }

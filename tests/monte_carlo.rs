@@ -306,6 +306,7 @@ fn environment_map_lighting_matches_quadrature() {
         background: Rgb::ZERO,
         settings: Default::default(),
         setting_sources: Vec::new(),
+        inputs: Vec::new(),
         environment: Some(std::sync::Arc::new(env.clone())),
         warnings: vec![],
     };

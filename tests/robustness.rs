@@ -391,3 +391,94 @@ fn an_interrupted_animation_keeps_whole_frames() {
         assert_eq!((image.width, image.height), (160, 120));
     }
 }
+
+/// An output that is one of the run's inputs (the scene, a texture it reads, a cache) is
+/// refused before any work, and the input is left as it was.
+#[test]
+fn outputs_that_alias_inputs_are_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let mut image = raylink::Image::new(2, 2);
+    image.set(1, 1, raylink::math::Rgb::ONE);
+    let texture = dir.path().join("tex.png");
+    raylink::write_image(&texture, &image, &[], &Default::default()).unwrap();
+    let scene = dir.path().join("s.toml");
+    let text = std::fs::read_to_string(root.join("scenes/cornell-box.toml"))
+        .unwrap()
+        .replacen(
+            "[materials.floor]\ndiffuse = [0.725, 0.71, 0.68]",
+            "[materials.floor]\ndiffuse = { image = { file = \"tex.png\" } }",
+            1,
+        );
+    assert!(text.contains("tex.png"), "the floor material was not found");
+    std::fs::write(&scene, &text).unwrap();
+    let before: Vec<Vec<u8>> = [&scene, &texture]
+        .map(|p| std::fs::read(p).unwrap())
+        .to_vec();
+    let s = scene.to_str().unwrap();
+    for (out, extra) in [
+        (texture.clone(), vec![]),
+        (dir.path().join("c.exr"), vec!["--cache-file", "c.exr"]),
+    ] {
+        let cache_args: Vec<String> = extra
+            .iter()
+            .map(|a| {
+                if a.ends_with(".exr") {
+                    dir.path().join(a).to_string_lossy().into_owned()
+                } else {
+                    a.to_string()
+                }
+            })
+            .collect();
+        let mut args = vec![
+            "render",
+            s,
+            "-o",
+            out.to_str().unwrap(),
+            "--width",
+            "8",
+            "--height",
+            "8",
+        ];
+        if !cache_args.is_empty() {
+            args.extend(["--integrator", "irradiance-cache"]);
+            args.extend(cache_args.iter().map(String::as_str));
+        }
+        let run = common::raylink(&args);
+        common::assert_clean_failure_of(&args.join(" "), &run, &["is one of the inputs"]);
+    }
+    let run = common::raylink(&["convert", s, "-o", s]);
+    common::assert_clean_failure_of("convert onto itself", &run, &["is one of the inputs"]);
+    let after: Vec<Vec<u8>> = [&scene, &texture]
+        .map(|p| std::fs::read(p).unwrap())
+        .to_vec();
+    assert!(before == after, "an input changed");
+}
+
+/// A temporary file left by a raylink process that died while writing (a second Ctrl-C) is
+/// removed by the next render into that folder; an output name of 250 bytes, legal, works.
+#[test]
+fn stale_temporary_files_go_and_long_names_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    let stale = dir.path().join(".raylink-tmp-4294967294-3.exr");
+    std::fs::write(&stale, b"half an image").unwrap();
+    let out = dir.path().join("x".repeat(246) + ".exr");
+    let run = common::raylink(&[
+        "render",
+        "scenes/whitted.toml",
+        "-o",
+        out.to_str().unwrap(),
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "-q",
+    ]);
+    assert!(run.status.success(), "{}", common::stderr(&run));
+    assert!(out.exists() && !stale.exists());
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left.len(), 1, "{left:?}");
+}

@@ -31,6 +31,7 @@ fn empty_scene() -> Scene {
         background: Rgb::ZERO,
         settings: Default::default(),
         setting_sources: Vec::new(),
+        inputs: Vec::new(),
         environment: None,
         warnings: Vec::new(),
     }

@@ -14,7 +14,6 @@
 use std::fs;
 use std::io;
 use std::path::{Path, PathBuf};
-use std::sync::atomic::{AtomicU64, Ordering};
 
 use super::oiio::{self, PixelType};
 use super::{Image, MetaValue, Metadata};
@@ -123,11 +122,8 @@ pub fn check_output_path(path: &Path) -> Result<()> {
             ))
         }
     }
-    let probe = dir.join(format!(
-        ".raylink-probe-{}-{}",
-        std::process::id(),
-        unique()
-    ));
+    crate::atomic_file::remove_stale_temps(dir);
+    let probe = temp_path(path);
     match fs::OpenOptions::new()
         .write(true)
         .create_new(true)
@@ -340,22 +336,8 @@ fn parent_dir(path: &Path) -> &Path {
     }
 }
 
-fn unique() -> u64 {
-    static COUNTER: AtomicU64 = AtomicU64::new(0);
-    COUNTER.fetch_add(1, Ordering::Relaxed)
-}
-
-/// `.NAME.raylink-tmp-PID-N` next to `path`: hidden, unique per process and per write.
 fn temp_path(path: &Path) -> PathBuf {
-    let name = path
-        .file_name()
-        .map(|n| n.to_string_lossy().into_owned())
-        .unwrap_or_default();
-    parent_dir(path).join(format!(
-        ".{name}.raylink-tmp-{}-{}",
-        std::process::id(),
-        unique()
-    ))
+    crate::atomic_file::temp_path(path)
 }
 
 /// Errors from writing the temporary file are reported against the real target (the temporary
@@ -471,7 +453,10 @@ mod tests {
         assert_ne!(a, b);
         assert_eq!(a.parent(), Some(Path::new("out")));
         let name = a.file_name().unwrap().to_string_lossy().into_owned();
-        assert!(name.starts_with(".x.exr.raylink-tmp-"), "{name}");
+        assert!(
+            name.starts_with(".raylink-tmp-") && name.ends_with(".exr"),
+            "{name}"
+        );
         assert_eq!(temp_path(Path::new("x.png")).parent(), Some(Path::new(".")));
     }
 

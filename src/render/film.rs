@@ -107,7 +107,12 @@ impl Film {
         if invalid > (spp as u64 + pass as u64) * pixels {
             return Err("more dropped samples than samples".into());
         }
-        if sums.iter().chain(&splats).flatten().any(|v| !(*v >= 0.0)) {
+        if sums
+            .iter()
+            .chain(&splats)
+            .flatten()
+            .any(|v| v.is_nan() || *v < 0.0)
+        {
             return Err("a pixel sum is negative or not a number".into());
         }
         if sums.len() != self.sums.len() || splats.len() != self.splats.len() {

@@ -190,6 +190,7 @@ mod tests {
             background: Rgb::ZERO,
             settings: Default::default(),
             setting_sources: Vec::new(),
+            inputs: Vec::new(),
             environment: None,
             warnings: Vec::new(),
         };

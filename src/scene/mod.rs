@@ -48,6 +48,9 @@ pub struct Scene {
     pub settings: RenderSettings,
     /// Where the file gives each of its settings (for messages).
     pub setting_sources: Vec<SettingSource>,
+    /// Every file the scene was read from: the scene file, what it includes, its meshes,
+    /// textures and environment map (so that no output overwrites one of them).
+    pub inputs: Vec<PathBuf>,
     /// What the reader could not represent exactly and replaced by the closest substitute,
     /// one line each, `FILE:LINE: message` (for `raylink render` to print).
     pub warnings: Vec<String>,

@@ -138,6 +138,8 @@ struct Loader {
     source: PathBuf,
     /// Stops the reading between statements.
     cancel: CancelToken,
+    /// Every file read besides the scene file: includes, meshes, textures, maps.
+    inputs: Vec<PathBuf>,
 }
 
 impl Loader {
@@ -169,6 +171,7 @@ impl Loader {
             warned: HashSet::new(),
             source: path.to_path_buf(),
             cancel,
+            inputs: Vec::new(),
         }
     }
 
@@ -203,7 +206,7 @@ impl Loader {
             s.material = map[s.material];
         }
         Ok(Scene {
-            source: self.source,
+            source: self.source.clone(),
             camera,
             materials,
             shapes: self.shapes,
@@ -213,6 +216,9 @@ impl Loader {
             environment: self.environment,
             settings: self.settings,
             setting_sources: Vec::new(),
+            inputs: std::iter::once(self.source.clone())
+                .chain(self.inputs)
+                .collect(),
             warnings: self.warnings,
         })
     }

@@ -116,6 +116,7 @@ impl Loader {
                 }
                 p.ignore("edgelength");
                 let path = loc.dir().join(&file);
+                self.inputs.push(path.clone());
                 let mesh = ply::read(&path).map_err(|e| loc.error(format!("{st}: {e}")))?;
                 if mesh.skipped_faces > 0 {
                     self.warn(

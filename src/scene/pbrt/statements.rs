@@ -321,6 +321,7 @@ impl Loader {
                 if self.include_stack.len() > 64 {
                     return Err(loc.error(format!("{kw}: includes nest more than 64 deep")));
                 }
+                self.inputs.push(path.clone());
                 let text = std::fs::read_to_string(&path).map_err(|e| {
                     loc.error(format!(
                         "{kw} \"{name}\": cannot read {}: {e}",

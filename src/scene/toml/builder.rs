@@ -31,6 +31,8 @@ pub(super) struct Builder<'a> {
     names: HashMap<String, usize>,
     /// Scene material index of each MTL material already loaded, by OBJ file.
     obj_materials: HashMap<PathBuf, Vec<usize>>,
+    /// Every file read besides the scene file (meshes, textures, environment maps).
+    pub(super) inputs: std::cell::RefCell<Vec<PathBuf>>,
 }
 
 impl<'a> Builder<'a> {
@@ -42,6 +44,7 @@ impl<'a> Builder<'a> {
             materials: Vec::new(),
             names: HashMap::new(),
             obj_materials: HashMap::new(),
+            inputs: Default::default(),
         }
     }
 
@@ -123,6 +126,9 @@ impl<'a> Builder<'a> {
             environment,
             settings,
             setting_sources,
+            inputs: std::iter::once(ctx.path.to_path_buf())
+                .chain(self.inputs.take())
+                .collect(),
             warnings: Vec::new(),
         })
     }
@@ -259,6 +265,7 @@ impl<'a> Builder<'a> {
         let scale = non_negative(i.scale.unwrap_or(1.0)).map_err(fail("diffuse.image.scale"))?;
         let mapping =
             mapping(i.uscale, i.vscale, i.udelta, i.vdelta).map_err(fail("diffuse.image"))?;
+        self.inputs.borrow_mut().push(path.clone());
         let image = ImageTexture::load(
             &path,
             i.file.into(),
@@ -277,6 +284,7 @@ impl<'a> Builder<'a> {
         let scale = colour(desc.scale.map_or(Vec3::ONE, |s| s.0))
             .map_err(|m| ctx.fail(site, "environment.scale", m))?;
         let path = self.dir.join(&desc.file);
+        self.inputs.borrow_mut().push(path.clone());
         Environment::load(&path, desc.file.into(), Mat3::from_mat4(xf.m), scale)
             .map_err(|e| ctx.fail(site, "environment.file", e))
     }

@@ -227,6 +227,7 @@ impl Builder<'_> {
     ) -> crate::Result<Vec<Shape>> {
         let ctx = self.ctx;
         let path = self.dir.join(file);
+        self.inputs.borrow_mut().push(path.clone());
         let data = obj::load(&path, material.is_none()).map_err(|e| ctx.fail(site, "file", e))?;
         let mapping = match material {
             Some(_) => Vec::new(),
@@ -302,6 +303,7 @@ impl Builder<'_> {
     ) -> crate::Result<Vec<Shape>> {
         let ctx = self.ctx;
         let path = self.dir.join(file);
+        self.inputs.borrow_mut().push(path.clone());
         let mut mesh = crate::scene::ply::read(&path).map_err(|e| ctx.fail(site, "file", e))?;
         xf.place(&mut mesh.positions, &mut mesh.normals);
         if xf.flips {
