@@ -19,7 +19,7 @@ use toml::{Table, Value};
 pub fn read_first_frame(path: &Path, control: &Control) -> Result<Scene> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     control.cancel.check("reading the scene")?;
-    let doc = Document::parse_with(&text, path, Some(&control.cancel))?;
+    let doc = Document::parse_with(&text, path, Some(control))?;
     // Static files go straight to the reader, so its messages keep their line numbers.
     if !is_animation(doc.root()) {
         return doc.build();

@@ -114,7 +114,11 @@ impl Scene {
 
     /// [`load`](Self::load) under a job's controls: a cancel stops the reading (between
     /// statements of a pbrt file, between shapes of a TOML one) with
-    /// [`Error::Cancelled`](crate::Error::Cancelled).
+    /// [`Error::Cancelled`](crate::Error::Cancelled), and the memory budget bounds it while it
+    /// reads: the geometry read so far with its intersection structures (a pbrt object
+    /// instance counted before it is copied), and a pbrt file's text and tokens, are checked
+    /// against it ([`Error::Memory`](crate::Error::Memory)). A pbrt scene's text has fixed
+    /// limits besides ([`pbrt::MAX_SCENE_TEXT`], [`pbrt::MAX_INCLUDES`]).
     pub fn load_with(path: &Path, control: &crate::job::Control) -> crate::Result<Scene> {
         let phase = control.phase("reading", None, "");
         let scene = match path.extension().and_then(|e| e.to_str()) {

@@ -40,8 +40,23 @@ pub struct SyntaxError {
 }
 
 /// Splits a whole file into tokens.
+#[cfg(test)]
 pub fn tokenize(text: &str) -> Result<Vec<Token>, SyntaxError> {
+    tokenize_within(text, usize::MAX).map(|(tokens, _)| tokens)
+}
+
+/// Splits a whole file into tokens, keeping at most `max` of them: the tokens kept and how
+/// many the file has (more than kept when it has more than `max`, so that a file whose
+/// tokens would not fit in memory is measured without being held).
+pub fn tokenize_within(text: &str, max: usize) -> Result<(Vec<Token>, usize), SyntaxError> {
     let mut out = Vec::new();
+    let mut total = 0usize;
+    let mut keep = |out: &mut Vec<Token>, token: Token| {
+        total += 1;
+        if out.len() < max {
+            out.push(token);
+        }
+    };
     let mut chars = text.char_indices().peekable();
     let (mut line, mut col) = (1u32, 1u32);
     while let Some(&(i, c)) = chars.peek() {
@@ -72,7 +87,9 @@ pub fn tokenize(text: &str) -> Result<Vec<Token>, SyntaxError> {
             '[' | ']' => {
                 chars.next();
                 col += 1;
-                out.push(Token {
+                keep(
+                    &mut out,
+                    Token {
                     tok: if c == '[' { Tok::Open } else { Tok::Close },
                     line: tl,
                     col: tc,
@@ -113,7 +130,9 @@ pub fn tokenize(text: &str) -> Result<Vec<Token>, SyntaxError> {
                 if !closed {
                     return Err(err("unterminated string at the end of the file".into()));
                 }
-                out.push(Token {
+                keep(
+                    &mut out,
+                    Token {
                     tok: Tok::Str(s),
                     line: tl,
                     col: tc,
@@ -138,7 +157,9 @@ pub fn tokenize(text: &str) -> Result<Vec<Token>, SyntaxError> {
                 if !value.is_finite() {
                     return Err(err(format!("number `{word}` is not finite")));
                 }
-                out.push(Token {
+                keep(
+                    &mut out,
+                    Token {
                     tok: Tok::Num(value),
                     line: tl,
                     col: tc,
@@ -156,7 +177,9 @@ pub fn tokenize(text: &str) -> Result<Vec<Token>, SyntaxError> {
                         break;
                     }
                 }
-                out.push(Token {
+                keep(
+                    &mut out,
+                    Token {
                     tok: Tok::Word(text[start..end].to_string()),
                     line: tl,
                     col: tc,
@@ -170,7 +193,7 @@ pub fn tokenize(text: &str) -> Result<Vec<Token>, SyntaxError> {
             }
         }
     }
-    Ok(out)
+    Ok((out, total))
 }
 
 #[cfg(test)]
@@ -206,6 +229,12 @@ mod tests {
     #[test]
     fn escapes_in_strings() {
         assert_eq!(toks(r#""a\"b\\c\n""#), [Tok::Str("a\"b\\c\n".into())]);
+    }
+
+    #[test]
+    fn a_limited_tokenization_counts_what_it_does_not_keep() {
+        let (kept, total) = tokenize_within("Shape \"sphere\" \"float radius\" [ 2 ]", 2).unwrap();
+        assert_eq!((kept.len(), total), (2, 6));
     }
 
     #[test]

@@ -103,7 +103,7 @@ impl Loader {
                             self.warn(loc, format!("{st}: only one environment map is supported; the last one is used"));
                         }
                         let path = loc.dir().join(&file);
-                        self.inputs.push(path.clone());
+                        self.add_input(&path);
                         let transform = Mat3::from_cols(
                             m.x_axis.truncate().as_vec3(),
                             m.y_axis.truncate().as_vec3(),

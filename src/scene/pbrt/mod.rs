@@ -11,13 +11,16 @@
 //! closest substitute; docs/scene-format.md lists the mapping.
 //!
 //! Files: `statements.rs` runs each statement (and reads included files in place),
-//! `cursor.rs` reads a statement's arguments and parameter lists, `state.rs` holds the
-//! graphics state and its stack, `options.rs` the rendering options and the camera. The world
-//! block: `materials.rs`, `textures.rs`, `lights.rs` and `shape_statement.rs` (the geometry
-//! itself from `shapes.rs`), their spectrum and texture parameters from `param_values.rs`.
+//! `limits.rs` bounds the text read and the memory taken (object instances are counted
+//! before they are copied), `cursor.rs` reads a statement's arguments and parameter lists,
+//! `state.rs` holds the graphics state and its stack, `options.rs` the rendering options and
+//! the camera. The world block: `materials.rs`, `textures.rs`, `lights.rs` and
+//! `shape_statement.rs` (the geometry itself from `shapes.rs`), their spectrum and texture
+//! parameters from `param_values.rs`.
 
 mod cursor;
 mod lexer;
+mod limits;
 mod lights;
 mod materials;
 mod options;
@@ -32,7 +35,7 @@ mod textures;
 
 use super::environment::Environment;
 use super::{Camera, Light, Material, Scene, Shape, Texture};
-use crate::job::{CancelToken, Control};
+use crate::job::{CancelToken, Control, MemoryBudget};
 use crate::math::Rgb;
 use crate::scene::RenderSettings;
 use crate::Error;
@@ -44,10 +47,15 @@ use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
+pub(crate) use limits::Cost as GeometryCost;
+pub use limits::{MAX_INCLUDES, MAX_INCLUDE_DEPTH, MAX_SCENE_TEXT};
+
 /// Reads a pbrt-v4 scene file (and the files it includes).
 pub fn read(path: &Path, control: &Control) -> crate::Result<Scene> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
-    from_str_with(&text, path, control)
+    let mut loader = Loader::new(path, control);
+    let text = loader.read_text(path, None)?;
+    loader.run_file(path, &text, None)?;
+    loader.finish()
 }
 
 /// Reads pbrt-v4 scene text; `path` names it in messages and anchors relative paths.
@@ -55,9 +63,11 @@ pub fn from_str(text: &str, path: &Path) -> crate::Result<Scene> {
     from_str_with(text, path, &Control::default())
 }
 
-/// [`from_str`], stopped between statements once the control's token is cancelled.
+/// [`from_str`] under a job's controls: stopped between statements once the control's token
+/// is cancelled, and refused (before the memory is taken) once the text being read and the
+/// geometry read so far would need more than its memory budget.
 pub fn from_str_with(text: &str, path: &Path, control: &Control) -> crate::Result<Scene> {
-    let mut loader = Loader::new(path, control.cancel.clone());
+    let mut loader = Loader::new(path, control);
     loader.run_file(path, text, None)?;
     loader.finish()
 }
@@ -115,7 +125,7 @@ struct Loader {
     named_materials: HashMap<String, usize>,
     textures: HashMap<String, Texture>,
     float_textures: HashMap<String, FloatTexture>,
-    objects: HashMap<String, Vec<Shape>>,
+    objects: HashMap<String, limits::Object>,
     /// The object being defined: its name and shapes (in the definition's world space).
     object: Option<(String, Vec<Shape>)>,
     materials: Vec<Material>,
@@ -140,10 +150,16 @@ struct Loader {
     cancel: CancelToken,
     /// Every file read besides the scene file: includes, meshes, textures, maps.
     inputs: Vec<PathBuf>,
+    /// `inputs`, to record each file once.
+    input_set: HashSet<PathBuf>,
+    /// The memory the reading may take (see `limits.rs`).
+    budget: MemoryBudget,
+    /// What the reading has taken so far against its limits.
+    usage: limits::Usage,
 }
 
 impl Loader {
-    fn new(path: &Path, cancel: CancelToken) -> Loader {
+    fn new(path: &Path, control: &Control) -> Loader {
         Loader {
             include_stack: Vec::new(),
             state: GraphicsState::default(),
@@ -170,8 +186,11 @@ impl Loader {
             warnings: Vec::new(),
             warned: HashSet::new(),
             source: path.to_path_buf(),
-            cancel,
+            cancel: control.cancel.clone(),
             inputs: Vec::new(),
+            input_set: HashSet::new(),
+            budget: control.budget,
+            usage: limits::Usage::default(),
         }
     }
 

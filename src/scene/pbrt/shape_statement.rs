@@ -2,6 +2,7 @@
 //! rules (made in `shapes.rs`), given the current material or its emissive copy, and kept in
 //! the world or in the object being defined.
 
+use super::limits::Cost;
 use super::params::Params;
 use super::shapes;
 use super::{Loader, Loc};
@@ -116,7 +117,7 @@ impl Loader {
                 }
                 p.ignore("edgelength");
                 let path = loc.dir().join(&file);
-                self.inputs.push(path.clone());
+                self.add_input(&path);
                 let mesh = ply::read(&path).map_err(|e| loc.error(format!("{st}: {e}")))?;
                 if mesh.skipped_faces > 0 {
                     self.warn(
@@ -201,6 +202,10 @@ impl Loader {
                 )));
             }
         }
+        let cost = geometries
+            .iter()
+            .fold(Cost::default(), |c, g| c.add(Cost::of(g)));
+        self.reserve(loc, st, cost, !in_object)?;
         let material = self.shape_material(loc);
         let new = geometries
             .into_iter()

@@ -1,7 +1,8 @@
 //! Running statements: each keyword against the loader, and included files read in place.
 
 use super::cursor::Cursor;
-use super::lexer::{self, Tok};
+use super::lexer::Tok;
+use super::limits;
 use super::params::Params;
 use super::shapes;
 use super::state::{look_at, Block};
@@ -36,12 +37,7 @@ impl Loader {
             });
         }
         let file = Arc::new(path.to_path_buf());
-        let tokens = lexer::tokenize(text).map_err(|e| {
-            Error::input(
-                path,
-                format!("line {}, column {}: {}", e.line, e.col, e.msg),
-            )
-        })?;
+        let (tokens, bytes) = self.open_file(path, text, from)?;
         self.include_stack.push(key);
         let depth = self.stack.len();
         let mut cursor = Cursor {
@@ -54,6 +50,8 @@ impl Loader {
             self.statement(&mut cursor)?;
         }
         self.include_stack.pop();
+        drop(tokens);
+        self.close_file(bytes);
         if from.is_none() && self.stack.len() > depth {
             let (block, _, loc) = self.stack.last().expect("non-empty");
             return Err(loc.error(format!(
@@ -97,7 +95,7 @@ impl Loader {
             "ObjectEnd" => {
                 self.pop(Block::Object, &loc)?;
                 if let Some((name, shapes)) = self.object.take() {
-                    self.objects.insert(name, shapes);
+                    self.objects.insert(name, limits::Object::new(shapes));
                 }
             }
             "ObjectInstance" => {
@@ -108,11 +106,19 @@ impl Loader {
                         "ObjectInstance inside an object definition (pbrt does not nest instances)",
                     ));
                 }
+                let t = self.mirror * self.state.ctm;
                 let Some(def) = self.objects.get(&name) else {
                     return Err(loc.error(format!("ObjectInstance: no object named \"{name}\"")));
                 };
-                let t = self.mirror * self.state.ctm;
-                let copies: Vec<Shape> = def.iter().flat_map(|s| shapes::instance(s, &t)).collect();
+                // Counted before it is copied: what the copies will take.
+                let cost = def.instance_cost(shapes::uniform_scale(&t).is_some());
+                self.reserve(&loc, &format!("ObjectInstance \"{name}\""), cost, true)?;
+                let def = &self.objects[&name];
+                let copies: Vec<Shape> = def
+                    .shapes
+                    .iter()
+                    .flat_map(|s| shapes::instance(s, &t))
+                    .collect();
                 self.shapes.extend(copies);
             }
             "Identity" => self.set_ctm(&loc, |_| DMat4::IDENTITY),
@@ -318,16 +324,9 @@ impl Loader {
             "Include" | "Import" => {
                 let name = c.string(&loc, kw)?;
                 let path = loc.dir().join(&name);
-                if self.include_stack.len() > 64 {
-                    return Err(loc.error(format!("{kw}: includes nest more than 64 deep")));
-                }
-                self.inputs.push(path.clone());
-                let text = std::fs::read_to_string(&path).map_err(|e| {
-                    loc.error(format!(
-                        "{kw} \"{name}\": cannot read {}: {e}",
-                        path.display()
-                    ))
-                })?;
+                self.count_include(&loc, kw)?;
+                self.add_input(&path);
+                let text = self.read_text(&path, Some((&loc, &format!("{kw} \"{name}\""))))?;
                 self.run_file(&path, &text, Some(&loc))?;
             }
             other => {

@@ -92,7 +92,7 @@ impl Loader {
                 }
                 p.ignore("filter");
                 p.ignore("maxanisotropy");
-                self.inputs.push(path.clone());
+                self.add_input(&path);
                 let image = ImageTexture::load(
                     &path,
                     PathBuf::from(&file),
@@ -113,7 +113,7 @@ impl Loader {
                         let mut img = (*img).clone();
                         img.scale *= s;
                         let path = loc.dir().join(&img.file);
-                        self.inputs.push(path.clone());
+                        self.add_input(&path);
                         // Reload to keep the cached maximum right.
                         let img = ImageTexture::load(
                             &path,

@@ -15,6 +15,7 @@ use super::schema::{
 };
 use crate::math::{Mat3, Mat4, Rgb, Vec2, Vec3};
 use crate::scene::environment::Environment;
+use crate::scene::pbrt::GeometryCost;
 use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
 use crate::scene::{Camera, Light, Material, RenderSettings, Scene, Texture};
 use crate::Error;
@@ -101,12 +102,30 @@ impl<'a> Builder<'a> {
             ));
         }
         let mut shapes = Vec::new();
+        let mut cost = GeometryCost::default();
         for (i, desc) in file.shapes.into_iter().enumerate() {
-            if let Some(cancel) = ctx.cancel {
-                cancel.check("reading the scene")?;
+            if let Some(control) = ctx.control {
+                control.cancel.check("reading the scene")?;
             }
             let site = self.site(format!("shapes[{i}]"), desc.span());
-            shapes.extend(self.shape(&site, desc.into_inner())?);
+            let new = self.shape(&site, desc.into_inner())?;
+            if let Some(control) = ctx.control {
+                cost = new
+                    .iter()
+                    .fold(cost, |c, s| c.add(GeometryCost::of(&s.geometry)));
+                control.budget.check(
+                    &format!(
+                        "{}: line {}: {}: the scene's geometry ({} primitives so far) and its \
+                         intersection structures",
+                        ctx.path.display(),
+                        ctx.key_line(&site.span, ""),
+                        site.name,
+                        cost.primitives
+                    ),
+                    cost.bytes().saturating_add(ctx.text.len() as u64),
+                )?;
+            }
+            shapes.extend(new);
         }
 
         let mut lights = Vec::new();

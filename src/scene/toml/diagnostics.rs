@@ -10,8 +10,9 @@ use std::path::Path;
 pub(super) struct Ctx<'a> {
     pub(super) path: &'a Path,
     pub(super) text: &'a str,
-    /// Stops the reading of meshes between shapes.
-    pub(super) cancel: Option<&'a crate::job::CancelToken>,
+    /// The job's controls: a cancel stops the reading of meshes between shapes, and the
+    /// geometry read so far is checked against the memory budget after each shape.
+    pub(super) control: Option<&'a crate::job::Control>,
 }
 
 /// A table of the file, for messages: its name (`shapes[2]`) and where it is.

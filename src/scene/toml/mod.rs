@@ -51,13 +51,19 @@ impl<'a> Document<'a> {
         Document::parse_with(text, path, None)
     }
 
-    /// [`parse`](Self::parse), and a build that stops between shapes once `cancel` is set.
+    /// [`parse`](Self::parse), and a build under a job's controls: it stops between shapes
+    /// once the control's token is cancelled, and is refused once the shapes read so far (with
+    /// their intersection structures) would need more than its memory budget.
     pub(crate) fn parse_with(
         text: &'a str,
         path: &'a Path,
-        cancel: Option<&'a crate::job::CancelToken>,
+        control: Option<&'a crate::job::Control>,
     ) -> crate::Result<Document<'a>> {
-        let ctx = Ctx { path, text, cancel };
+        let ctx = Ctx {
+            path,
+            text,
+            control,
+        };
         let root = DeTable::parse(text).map_err(|e| ctx.toml_error(&e))?;
         Ok(Document { ctx, root })
     }
