@@ -109,13 +109,13 @@ impl Scene {
 
     /// Reads a scene file, choosing the reader by extension.
     pub fn load(path: &Path) -> crate::Result<Scene> {
-        Scene::load_with(path, &crate::job::Control::default())
+        Scene::load_with(path, &crate::control::Control::default())
     }
 
     /// [`load`](Self::load) under a job's controls: a cancel stops the reading (between
     /// statements of a pbrt file, between shapes of a TOML one) with
     /// [`Error::Cancelled`](crate::Error::Cancelled).
-    pub fn load_with(path: &Path, control: &crate::job::Control) -> crate::Result<Scene> {
+    pub fn load_with(path: &Path, control: &crate::control::Control) -> crate::Result<Scene> {
         let phase = control.phase("reading", None, "");
         let scene = match path.extension().and_then(|e| e.to_str()) {
             Some("toml") => animation::read_first_frame(path, control),

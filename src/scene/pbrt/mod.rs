@@ -32,7 +32,7 @@ mod textures;
 
 use super::environment::Environment;
 use super::{Camera, Light, Material, Scene, Shape, Texture};
-use crate::job::{CancelToken, Control};
+use crate::control::{CancelToken, Control};
 use crate::math::Rgb;
 use crate::scene::RenderSettings;
 use crate::Error;

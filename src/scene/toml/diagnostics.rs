@@ -11,7 +11,7 @@ pub(super) struct Ctx<'a> {
     pub(super) path: &'a Path,
     pub(super) text: &'a str,
     /// Stops the reading of meshes between shapes.
-    pub(super) cancel: Option<&'a crate::job::CancelToken>,
+    pub(super) cancel: Option<&'a crate::control::CancelToken>,
 }
 
 /// A table of the file, for messages: its name (`shapes[2]`) and where it is.

@@ -55,7 +55,7 @@ impl<'a> Document<'a> {
     pub(crate) fn parse_with(
         text: &'a str,
         path: &'a Path,
-        cancel: Option<&'a crate::job::CancelToken>,
+        cancel: Option<&'a crate::control::CancelToken>,
     ) -> crate::Result<Document<'a>> {
         let ctx = Ctx { path, text, cancel };
         let root = DeTable::parse(text).map_err(|e| ctx.toml_error(&e))?;
