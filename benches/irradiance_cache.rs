@@ -8,9 +8,11 @@
 //! path tracer needs to reach the cache's error (interpolated between the two sample counts
 //! that bracket it, error ∝ time^-1/2 between them) and the speedup.
 //!
-//! The reference is `RAYLINK_IC_REFERENCE` if set, else `target/indirect-room-reference.exr`;
-//! when missing it is rendered (4096 spp with another seed, about 15 minutes on 2 cores)
-//! and kept there.
+//! The reference is the stored `tests/data/indirect-room-reference-128x96.exr` (4096 spp with
+//! another seed, box-downsampled to 128x96; tests/data/README.md says how it was made). With
+//! `RAYLINK_IC_REFERENCE` set, it is that file instead (at 256x192, or already at 128x96);
+//! when that file is missing the reference is rendered at 256x192 (6 to 15 minutes on 2
+//! cores) and kept there.
 //!
 //! The same race runs on the Cornell box at 256x256 against Tungsten's render
 //! (`scenes/cornell-box-bitterli/TungstenRender-256.exr`, box-downsampled from 1024x1024, the
@@ -27,6 +29,9 @@ use std::time::Instant;
 const WIDTH: u32 = 256;
 const HEIGHT: u32 = 192;
 const REFERENCE_SPP: u32 = 4096;
+/// The room's reference, rendered by the path tracer at 4096 spp and 256x192 and
+/// box-downsampled to 128x96 (tests/data/README.md).
+const STORED_REFERENCE: &str = "tests/data/indirect-room-reference-128x96.exr";
 
 /// A render of `scene` at `size` with `settings` (a box filter, every core): its image and
 /// seconds, and the technique's report.
@@ -92,28 +97,44 @@ fn path_trace(scene: &Arc<Scene>, size: (u32, u32), spp: u32, seed: u64) -> (Ima
     (image, seconds)
 }
 
+/// The room's reference at 128x96 (see the module's documentation).
 fn room_reference(scene: &Arc<Scene>) -> Image {
-    let path = std::env::var_os("RAYLINK_IC_REFERENCE")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| {
-            Path::new(env!("CARGO_MANIFEST_DIR")).join("target/indirect-room-reference.exr")
-        });
-    if let Ok((image, _)) = read_image(&path) {
+    let Some(path) = std::env::var_os("RAYLINK_IC_REFERENCE").map(PathBuf::from) else {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(STORED_REFERENCE);
+        let (image, _) = read_image(&path).unwrap_or_else(|e| panic!("{e}"));
         eprintln!("reference: {}", path.display());
         return image;
-    }
-    eprintln!(
-        "rendering the reference ({REFERENCE_SPP} spp) to {}",
-        path.display()
-    );
-    let (image, seconds) = path_trace(scene, (WIDTH, HEIGHT), REFERENCE_SPP, 99);
-    eprintln!("reference rendered in {seconds:.0} s");
-    let options = OutputOptions {
-        exposure: 0.0,
-        half: false,
     };
-    write_image(&path, &image, &[], &options).unwrap();
-    image
+    let image = match read_image(&path) {
+        Ok((image, _)) => {
+            eprintln!("reference: {}", path.display());
+            image
+        }
+        Err(_) => {
+            eprintln!(
+                "rendering the reference ({REFERENCE_SPP} spp) to {}",
+                path.display()
+            );
+            let (image, seconds) = path_trace(scene, (WIDTH, HEIGHT), REFERENCE_SPP, 99);
+            eprintln!("reference rendered in {seconds:.0} s");
+            let options = OutputOptions {
+                exposure: 0.0,
+                half: false,
+            };
+            write_image(&path, &image, &[], &options).unwrap();
+            image
+        }
+    };
+    match (image.width, image.height) {
+        (WIDTH, HEIGHT) => half(&image),
+        (w, h) if (w, h) == (WIDTH / 2, HEIGHT / 2) => image,
+        (w, h) => panic!(
+            "{}: {w}x{h}, not {WIDTH}x{HEIGHT} or {}x{}",
+            path.display(),
+            WIDTH / 2,
+            HEIGHT / 2
+        ),
+    }
 }
 
 /// What a render is measured against: the reference, how a render is brought to its
@@ -198,7 +219,7 @@ fn race(
 fn main() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let scene = Arc::new(Scene::load(&root.join("scenes/indirect-room.toml")).unwrap());
-    let reference = half(&room_reference(&scene));
+    let reference = room_reference(&scene);
     // Radiance-style settings for an indirectly lit room: many bounces, many rays per
     // value, and a coarser minimum spacing (ar) than the defaults; the final pass needs few
     // samples since nothing in view is lit directly.

@@ -29,7 +29,7 @@ pub enum Error {
     Cancelled { stage: String },
     /// The work would need more memory than the job's budget allows.
     #[error("{what} would need {} of memory, more than the budget of {}{}",
-        crate::job::human_size(*needed), crate::job::human_size(*limit),
+        crate::control::human_size(*needed), crate::control::human_size(*limit),
         if *default_limit { " (3/4 of the physical memory)" } else { "" })]
     Memory {
         what: String,

@@ -40,6 +40,7 @@ pub mod bench;
 pub(crate) mod binary_file;
 pub(crate) mod bsdf;
 pub mod coherence;
+pub mod control;
 pub mod error;
 pub mod farm;
 #[doc(hidden)]

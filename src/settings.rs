@@ -133,7 +133,7 @@ pub enum NetworkOrder {
     ConjugateGradients,
 }
 
-/// What `relight` changes in a saved network (see [`crate::job::NetworkSettings::relight`]).
+/// What `relight` changes in a saved network (see `NetworkSettings::relight`).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Relight {
     /// Multiply the emission of the scene's material NAME by K.

@@ -226,3 +226,40 @@ fn cli_frame_range_matches_the_whole_sequence() {
         assert!(common::stderr(&out).contains("--frames"), "{spec}");
     }
 }
+
+/// A sub-range of the moving-light animation where only a point light's intensity changes
+/// (a change with no extent in space): every frame must equal its full render. It once
+/// placed the voxel grid around the light's position alone, recorded nothing there, and
+/// retraced nothing.
+#[test]
+fn a_light_that_only_dims_retraces_what_it_lights() {
+    for (width, height) in [("160", "120"), ("320", "240")] {
+        let dir = tempfile::tempdir().unwrap();
+        let pattern = dir.path().join("f_%02d.exr");
+        let out = common::raylink(&[
+            "animate",
+            "scenes/anim-light.toml",
+            "-o",
+            pattern.to_str().unwrap(),
+            "--frames",
+            "0..9",
+            "--width",
+            width,
+            "--height",
+            height,
+            "--verify",
+            "--stats",
+            "--quiet",
+        ]);
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{width}x{height}: {}{text}",
+            common::stderr(&out)
+        );
+        assert!(
+            text.contains("every frame identical to its full render"),
+            "{text}"
+        );
+    }
+}

@@ -108,7 +108,7 @@ fn network_files_are_reused_for_views_and_lighting() {
         &["--network-file", &file, "--slopes", "7"],
     );
     assert_eq!(other.status.code(), Some(2));
-    assert!(stderr(&other).contains("cornell.net") && stderr(&other).contains("parameters"));
+    assert!(stderr(&other).contains("cornell.net") && stderr(&other).contains("network settings"));
     let box_scene = network_render(
         "scenes/cornell-spheres.toml",
         &tmp_path(&dir, "f.exr"),

@@ -47,7 +47,11 @@ fn render(scene: &Path, out: &Path, extra: &[&str]) -> (std::process::Output, Du
 fn write_fan_out(dir: &Path, levels: usize) -> PathBuf {
     for i in 0..levels {
         let text = if i + 1 < levels {
-            format!("Include \"l{:02}.pbrt\"\nInclude \"l{:02}.pbrt\"\n", i + 1, i + 1)
+            format!(
+                "Include \"l{:02}.pbrt\"\nInclude \"l{:02}.pbrt\"\n",
+                i + 1,
+                i + 1
+            )
         } else {
             "Translate 0 0 0\n".to_string()
         };
@@ -71,7 +75,10 @@ fn include_fan_out_is_refused_quickly() {
         let main = write_fan_out(dir.path(), 40);
         let before = files_in(dir.path());
         let (out, time) = render(&main, &dir.path().join("out.exr"), extra);
-        eprintln!("include fan-out {extra:?}: {time:.2?}: {}", stderr(&out).trim());
+        eprintln!(
+            "include fan-out {extra:?}: {time:.2?}: {}",
+            stderr(&out).trim()
+        );
         assert_clean_failure_of(
             "include fan-out",
             &out,
@@ -92,7 +99,13 @@ fn write_instances(path: &Path, cells: usize, instances: usize) {
     s.push_str("ObjectBegin \"grid\"\nShape \"trianglemesh\" \"point3 P\" [");
     for j in 0..=cells {
         for i in 0..=cells {
-            write!(s, " {} {} 0", i as f32 / cells as f32, j as f32 / cells as f32).unwrap();
+            write!(
+                s,
+                " {} {} 0",
+                i as f32 / cells as f32,
+                j as f32 / cells as f32
+            )
+            .unwrap();
         }
     }
     s.push_str(" ] \"integer indices\" [");
@@ -103,13 +116,13 @@ fn write_instances(path: &Path, cells: usize, instances: usize) {
             write!(s, " {a} {b} {c} {a} {c} {d}").unwrap();
         }
     }
-    s.push_str(" ]\nObjectEnd\nScale 0.1 0.1 0.1\n");
+    s.push_str(" ]\nObjectEnd\nScale 0.5 0.5 0.5\n");
     for k in 0..instances {
         writeln!(
             s,
             "AttributeBegin Translate {} {} -1 ObjectInstance \"grid\" AttributeEnd",
-            k % 20,
-            k / 20 % 20
+            k as i64 % 4 - 2,
+            k as i64 / 4 % 4 - 2
         )
         .unwrap();
     }
@@ -128,8 +141,8 @@ fn an_instance_bomb_is_refused_within_the_memory_limit() {
     let before = files_in(dir.path());
     let (out, time) = render(&scene, &dir.path().join("out.exr"), &["--max-memory", "1G"]);
     // The largest peak of this process's children so far: an upper bound on this one's.
-    let usage = nix::sys::resource::getrusage(nix::sys::resource::UsageWho::RUSAGE_CHILDREN)
-        .unwrap();
+    let usage =
+        nix::sys::resource::getrusage(nix::sys::resource::UsageWho::RUSAGE_CHILDREN).unwrap();
     let peak_mib = usage.max_rss() as f64 / 1024.0;
     eprintln!(
         "instance bomb ({} KiB): {time:.2?}, peak RSS {peak_mib:.0} MiB: {}",
@@ -165,7 +178,8 @@ fn a_small_instanced_scene_renders() {
     }
     let (a, _) = read_image(&dir.path().join("one.exr")).unwrap();
     let (b, _) = read_image(&dir.path().join("eight.exr")).unwrap();
-    let lit = |pixels: &[raylink::math::Rgb]| pixels.iter().filter(|p| p.max_element() > 0.0).count();
+    let lit =
+        |pixels: &[raylink::math::Rgb]| pixels.iter().filter(|p| p.max_element() > 0.0).count();
     assert!(
         lit(&b.pixels) > lit(&a.pixels) && lit(&a.pixels) > 0,
         "the instances are missing: {} and {} lit values",

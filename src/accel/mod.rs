@@ -4,7 +4,7 @@
 pub mod bvh;
 pub mod embree;
 
-use crate::job::Control;
+use crate::control::Control;
 use crate::math::{Ray, Vec2, Vec3};
 use crate::scene::{Geometry, Scene, Shape, SurfacePoint};
 

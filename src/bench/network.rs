@@ -19,6 +19,7 @@
 
 use super::Spread;
 use crate::accel::{self, Backend};
+use crate::control::Control;
 use crate::integrators::illumination_network::distribute::{
     distribute, DistributeOptions, Solution,
 };
@@ -26,7 +27,6 @@ use crate::integrators::illumination_network::relight::LightBasis;
 use crate::integrators::illumination_network::render::NetworkRenderer;
 use crate::integrators::illumination_network::{file, Builder, Network, NetworkParams};
 use crate::integrators::Context;
-use crate::job::Control;
 use crate::math::Rgb;
 use crate::render::pixels::{render_pixels, PixelView};
 use crate::render::{PixelSampling, RenderStats, Tile};

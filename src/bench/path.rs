@@ -5,8 +5,9 @@
 use super::scenes::resolve;
 use super::{BenchConfig, Spread};
 use crate::accel::Backend;
+use crate::control::Control;
 use crate::image::filter::Filter;
-use crate::job::{Control, Job, MonteCarloSettings, Renderer, Technique};
+use crate::job::{Job, MonteCarloSettings, Renderer, Technique};
 use crate::Result;
 
 /// Samples per pixel of each timed render.

@@ -36,8 +36,11 @@ pub struct Changes {
     /// The changed objects' geometry (old and new places), one per box of `objects`: the
     /// voxels its surface touches are marked, both tables ([`surface_boxes`](Self::surface_boxes)).
     pub geometry: Vec<Arc<Geometry>>,
-    /// Boxes around lights whose intensity changed: shadow tables only.
+    /// Boxes around lights that moved, appeared or vanished: shadow tables only.
     pub shadows: Vec<Aabb>,
+    /// Point lights whose intensity alone changed (indices into the scene's lights): the
+    /// blocks whose shadow rays went to them, and only those, see the change.
+    pub dimmed: Vec<usize>,
     /// A light moved, appeared, vanished or turned: every block that found a surface may
     /// now face it differently.
     pub light_moved: bool,
@@ -256,7 +259,7 @@ impl FrameSummary {
             }
             return c;
         }
-        for (a, b) in self.lights.iter().zip(&next.lights) {
+        for (i, (a, b)) in self.lights.iter().zip(&next.lights).enumerate() {
             match (a, b) {
                 _ if a == b => {}
                 (
@@ -271,10 +274,10 @@ impl FrameSummary {
                 ) => {
                     if pa != pb {
                         c.light_moved = true;
-                    }
-                    if ia != ib || pa != pb {
                         c.shadows.push((*pa, *pa));
                         c.shadows.push((*pb, *pb));
+                    } else if ia != ib {
+                        c.dimmed.push(i);
                     }
                 }
                 // A directional light lights everything that faces it.

@@ -19,7 +19,7 @@ use super::segments::BlockSegments;
 use super::tables::{Table, VoxelTables};
 use crate::accel::{Accel, Hit};
 use crate::math::{Ray, Vec3};
-use crate::scene::Scene;
+use crate::scene::{Light, Scene};
 use std::cell::{Cell, RefCell};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -58,6 +58,9 @@ pub struct Recorded {
     /// Camera rays answered from an earlier hit, and camera rays.
     pub camera_reused: u64,
     pub camera_rays: u64,
+    /// The point lights the shadow rays went to: bit `i` for the scene's light `i`, the top
+    /// bit for every light from 63 on.
+    pub lights: u64,
 }
 
 impl Recorded {
@@ -68,6 +71,7 @@ impl Recorded {
             hit: false,
             camera_reused: 0,
             camera_rays: 0,
+            lights: 0,
         }
     }
 
@@ -147,6 +151,8 @@ pub struct RecordingAccel<'a> {
     /// one more query (the Whitted integrator asks for that hit anyway) instead of up to
     /// the light.
     nearest_blocker: bool,
+    /// The point lights shadow rays went to (see [`Recorded::lights`]).
+    lights: AtomicU64,
 }
 
 fn mark(set: &[AtomicU64], v: usize) {
@@ -202,6 +208,7 @@ impl<'a> RecordingAccel<'a> {
             camera_rays: AtomicU64::new(0),
             hit: AtomicBool::new(false),
             nearest_blocker,
+            lights: AtomicU64::new(0),
         }
     }
 
@@ -320,7 +327,28 @@ impl<'a> RecordingAccel<'a> {
         recorded.hit = self.hit.load(Ordering::Relaxed);
         recorded.camera_reused = self.camera_reused.load(Ordering::Relaxed);
         recorded.camera_rays = self.camera_rays.load(Ordering::Relaxed);
+        recorded.lights = self.lights.load(Ordering::Relaxed);
         recorded
+    }
+
+    /// Notes the point light a shadow segment goes to, if it goes to one: its end (t = 1 of
+    /// a segment from a surface to a light) is the light's position. A light whose
+    /// intensity alone changes is a change with no extent in space: the blocks whose shadow
+    /// rays went to it are the ones it reaches.
+    fn note_light(&self, ray: &Ray) {
+        let end = ray.origin + ray.dir;
+        let near = 1e-4 * ray.dir.length().max(1e-6);
+        for (i, light) in self.scene.lights.iter().enumerate() {
+            if let Light::Point { position, .. } = light {
+                if end.distance(*position) <= near {
+                    let bit = 1u64 << i.min(63);
+                    let seen = self.lights.load(Ordering::Relaxed);
+                    if seen & bit == 0 {
+                        self.lights.store(seen | bit, Ordering::Relaxed);
+                    }
+                }
+            }
+        }
     }
 
     /// Sets `block`'s bit in the tables of every voxel recorded.
@@ -403,6 +431,9 @@ impl Accel for RecordingAccel<'_> {
 
     fn occluded(&self, ray: &Ray) -> bool {
         let blocked = self.inner.occluded(ray);
+        if !self.scene.lights.is_empty() {
+            self.note_light(ray);
+        }
         // An unblocked segment is recorded to the light: anything that moves into it must
         // be seen. A blocked one only up to the nearest blocker when that is opaque: while
         // the blocker stays, nothing beyond it can change the answer (and if it moves, its

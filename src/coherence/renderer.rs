@@ -11,9 +11,9 @@ use super::record::{CameraHit, CameraReuse, Recorded, RecordingAccel, Records};
 use super::segments::{Changed, SegmentRecords};
 use super::tables::{BlockLayout, BlockSet, Table, VoxelTables};
 use crate::accel::Accel;
+use crate::control::{Control, MemoryBudget};
 use crate::image::Image;
 use crate::integrators::{Context, Integrator, MonteCarlo, RayStats};
-use crate::job::{Control, MemoryBudget};
 use crate::math::{Rgb, Vec3};
 use crate::render::driver::drive;
 use crate::render::pixels::PixelView;
@@ -142,6 +142,9 @@ pub struct CoherentRenderer {
     /// Per block, its camera rays and their hits in its last trace (section 3.3.3), while
     /// `camera_on`.
     camera: Vec<Vec<CameraHit>>,
+    /// Per block, the point lights its shadow rays went to in its last trace
+    /// ([`Recorded::lights`]).
+    lights: Vec<u64>,
     camera_on: bool,
 }
 
@@ -189,6 +192,7 @@ impl CoherentRenderer {
             position: 0,
             segment_budget: (MemoryBudget::default().limit() / 4).min(usize::MAX as u64) as usize,
             camera: vec![Vec::new(); layout.len()],
+            lights: vec![0; layout.len()],
             camera_on: true,
         }
     }
@@ -297,6 +301,7 @@ impl CoherentRenderer {
     pub fn reset(&mut self) {
         self.previous = None;
         self.camera = vec![Vec::new(); self.layout.len()];
+        self.lights = vec![0; self.layout.len()];
         self.store = Store::new(self.store.records(), self.grid.len(), &self.layout);
         self.position = 0;
         self.update_active();
@@ -368,6 +373,18 @@ impl CoherentRenderer {
                 let voxels =
                     |mask: &[bool]| Changed::new(ActiveVoxels::from_mask(self.grid.clone(), mask));
                 segments.collect(&voxels(&changed), &voxels(&any), &mut blocks);
+            }
+        }
+        // A light whose intensity alone changed: every block that sent it a shadow ray.
+        let dimmed = changes
+            .dimmed
+            .iter()
+            .fold(0u64, |m, &i| m | 1u64 << i.min(63));
+        if dimmed != 0 {
+            for (b, &lights) in self.lights.iter().enumerate() {
+                if lights & dimmed != 0 {
+                    blocks.insert(b);
+                }
             }
         }
         (blocks, count, Ok(changed))
@@ -504,7 +521,11 @@ impl CoherentRenderer {
             self.reset();
             control.cancel.check("a frame")?;
         }
+        for b in blocks.iter() {
+            self.lights[b] = 0;
+        }
         for ((b, t), (pixels, rays, recorded)) in tasks.iter().zip(results) {
+            self.lights[*b] |= recorded.lights;
             if let Store::Segments(store) = &mut self.store {
                 store.add(*b, recorded.segments, recorded.hit);
             }

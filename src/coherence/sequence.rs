@@ -8,11 +8,12 @@ use super::record::Records;
 use super::renderer::{CoherentRenderer, Engine, FrameStats};
 use super::tables::BlockLayout;
 use crate::accel::{self, Backend, DynamicAccel, Update};
+use crate::control::Control;
 use crate::image::Image;
 use crate::integrators::path::{PathOptions, PathTracer};
+use crate::integrators::technique::{MonteCarloSettings, WhittedSettings};
 use crate::integrators::whitted::{Whitted, WhittedOptions};
 use crate::integrators::{Context, RayStats};
-use crate::job::{Control, MonteCarloSettings, WhittedSettings};
 use crate::render::pixels::PixelView;
 use crate::render::progressive::ProgressiveOptions;
 use crate::scene::animation::Animation;
@@ -132,7 +133,7 @@ pub fn render_sequence(
     // The frames are the caller's progress; the renders inside them report nothing.
     let outer = control;
     let control = &Control {
-        progress: std::sync::Arc::new(crate::job::Silent),
+        progress: std::sync::Arc::new(crate::control::Silent),
         ..outer.clone()
     };
     let scene0 = anim.scene_at(frames[0])?;

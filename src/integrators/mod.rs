@@ -4,8 +4,10 @@
 pub mod bdpt;
 pub mod illumination_network;
 pub mod irradiance_cache;
+pub(crate) mod lifecycle;
 pub mod light;
 pub mod path;
+pub(crate) mod technique;
 pub mod whitted;
 
 use crate::accel::Accel;

@@ -7,29 +7,27 @@
 //! the image and its statistics back. Every front end (the command line, a farm job, an
 //! animation, a benchmark, an embedding program) renders through it.
 
-mod control;
-mod settings;
-pub(crate) mod technique;
-
-pub use control::{
+pub use crate::control::{
     human_size, parse_size, CancelToken, Control, MemoryBudget, Phase, Progress, Silent,
 };
-pub use settings::{
-    AntiAliasing, CacheSettings, MonteCarloSettings, NetworkBuilder, NetworkOrder, NetworkSettings,
-    Relight, Settings, Technique, TechniqueKind, WhittedSettings,
+pub use crate::integrators::technique::{
+    CacheSettings, MonteCarloSettings, NetworkSettings, Technique, WhittedSettings,
+};
+pub use crate::settings::{
+    AntiAliasing, NetworkBuilder, NetworkOrder, Relight, Settings, TechniqueKind,
 };
 
 use crate::accel::{self, Accel, Backend};
 use crate::image::Image;
+use crate::integrators::lifecycle::{self as technique, Lifecycle, Tiles, View};
 use crate::integrators::Context;
 use crate::render::aov::render_aovs;
 use crate::render::pixels::{render_pixels, PixelView};
-use crate::render::progressive::{render_passes, render_region, ProgressiveOptions};
+use crate::render::progressive::{render_passes, render_region};
 use crate::render::{Film, RenderStats, Tile};
 use crate::scene::{Scene, MAX_RESOLUTION};
 use crate::{Error, Result};
 use std::sync::Arc;
-use technique::{Lifecycle, Tiles};
 
 /// A render: what to render with, at what size, which pixels, with which random streams.
 #[derive(Clone, Debug, PartialEq)]
@@ -201,16 +199,15 @@ impl Job {
         s
     }
 
-    /// The Monte Carlo view of the job, for the progressive techniques.
-    pub(crate) fn progressive(&self, mc: &MonteCarloSettings) -> ProgressiveOptions {
-        ProgressiveOptions {
+    /// What a technique's preparation needs of the job.
+    pub(crate) fn view(&self) -> View {
+        View {
             width: self.width,
             height: self.height,
-            spp: mc.spp,
-            time_limit: mc.time_limit,
-            threads: self.threads,
+            region: self.region,
             seed: self.seed,
-            filter: mc.filter,
+            threads: self.threads,
+            accel: self.accel,
         }
     }
 
@@ -322,7 +319,7 @@ impl Renderer {
     pub fn prepare(&mut self, control: &Control) -> Result<()> {
         if !self.prepared {
             let ctx = Context::new(&self.scene, self.accel.as_ref());
-            self.technique.prepare(&ctx, &self.job, control)?;
+            self.technique.prepare(&ctx, &self.job.view(), control)?;
             self.prepared = true;
         }
         Ok(())
@@ -332,7 +329,15 @@ impl Renderer {
     /// irradiance cache's overture for this view, or a network's structure.
     pub fn precompute(&mut self, control: &Control) -> Result<()> {
         let ctx = Context::new(&self.scene, self.accel.as_ref());
-        self.technique.precompute(&ctx, &self.job, control)
+        self.technique
+            .precompute(&ctx, &self.job.view(), control)
+            .map_err(|e| match e {
+                Error::Invalid(why) => Error::Invalid(format!(
+                    "the {} integrator: {why}",
+                    self.job.technique.kind()
+                )),
+                e => e,
+            })
     }
 
     /// Statistics of the technique's preparation, one line each.
@@ -384,7 +389,7 @@ impl Renderer {
                 }
             }
             Tiles::Samples(integrator, mc) => {
-                let options = job.progressive(&mc);
+                let options = job.view().progressive(&mc);
                 if job.region.is_some() {
                     let (image, stats) =
                         render_region(&ctx, integrator, &options, &region, control)?;

@@ -6,10 +6,10 @@
 use super::driver::drive;
 use super::{place, Tile, MERGE_WINDOW};
 use crate::bsdf::Bsdf;
+use crate::control::Control;
 use crate::image::filter::Filter;
 use crate::image::Image;
 use crate::integrators::{Context, RayStats};
-use crate::job::Control;
 use crate::math::sobol::Sampler;
 use crate::math::Rgb;
 

@@ -5,7 +5,7 @@
 //! workers go on. Merging in a fixed order is what keeps an image the same bit for bit for
 //! any thread count or schedule.
 
-use crate::job::CancelToken;
+use crate::control::CancelToken;
 use crate::platform::set_flush_denormals;
 use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};

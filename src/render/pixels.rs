@@ -4,9 +4,9 @@
 
 use super::driver::drive;
 use super::{place, sampling, tiles_in, PixelSampling, RenderStats, Tile, MERGE_WINDOW};
+use crate::control::Control;
 use crate::image::Image;
 use crate::integrators::{Context, Integrator, RayStats};
-use crate::job::Control;
 use crate::math::Rgb;
 use std::time::Instant;
 

@@ -7,10 +7,10 @@
 use super::driver::drive;
 use super::film::pixel_value;
 use super::{place, tiles, tiles_in, Film, RenderStats, Tile, MERGE_WINDOW};
+use crate::control::Control;
 use crate::image::filter::{Filter, FilterSampler};
 use crate::image::Image;
 use crate::integrators::{Context, MonteCarlo, RayStats, Splat};
-use crate::job::Control;
 use crate::math::sobol::Sampler;
 use crate::math::{Ray, Rgb};
 use crate::scene::camera::CameraBasis;

@@ -8,7 +8,7 @@
 
 use super::toml::Document;
 use super::Scene;
-use crate::job::Control;
+use crate::control::Control;
 use crate::{Error, Result};
 use std::path::{Path, PathBuf};
 use toml::de::{DeTable, DeValue};

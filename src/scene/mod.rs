@@ -109,7 +109,7 @@ impl Scene {
 
     /// Reads a scene file, choosing the reader by extension.
     pub fn load(path: &Path) -> crate::Result<Scene> {
-        Scene::load_with(path, &crate::job::Control::default())
+        Scene::load_with(path, &crate::control::Control::default())
     }
 
     /// [`load`](Self::load) under a job's controls: a cancel stops the reading (between
@@ -119,7 +119,7 @@ impl Scene {
     /// instance counted before it is copied), and a pbrt file's text and tokens, are checked
     /// against it ([`Error::Memory`](crate::Error::Memory)). A pbrt scene's text has fixed
     /// limits besides ([`pbrt::MAX_SCENE_TEXT`], [`pbrt::MAX_INCLUDES`]).
-    pub fn load_with(path: &Path, control: &crate::job::Control) -> crate::Result<Scene> {
+    pub fn load_with(path: &Path, control: &crate::control::Control) -> crate::Result<Scene> {
         let phase = control.phase("reading", None, "");
         let scene = match path.extension().and_then(|e| e.to_str()) {
             Some("toml") => animation::read_first_frame(path, control),

@@ -4,12 +4,12 @@
 //! through the job API and the command line).
 
 use crate::accel::{self, Backend};
+use crate::control::Control;
 use crate::image::compare::{mean, rmse};
 use crate::image::filter::Filter;
 use crate::image::Image;
 use crate::integrators::irradiance_cache::{file, Cache, IcOptions, IrradianceCache};
 use crate::integrators::Context;
-use crate::job::Control;
 use crate::math::Vec3;
 use crate::render::progressive::{render_passes, ProgressiveOptions};
 use crate::scene::Scene;

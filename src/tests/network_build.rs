@@ -5,6 +5,7 @@
 use super::network_common::{build, cornell, params, scene};
 use super::network_scenes::{wall, CAMERA};
 use crate::accel::{self, Backend};
+use crate::control::Control;
 use crate::integrators::illumination_network::distribute::{distribute, DistributeOptions};
 use crate::integrators::illumination_network::patches::Patches;
 use crate::integrators::illumination_network::preprocess::{
@@ -13,7 +14,6 @@ use crate::integrators::illumination_network::preprocess::{
 use crate::integrators::illumination_network::ray_space::{axes, RaySpace};
 use crate::integrators::illumination_network::{Network, NetworkParams, ESCAPE};
 use crate::integrators::Context;
-use crate::job::Control;
 use crate::math::Vec3;
 
 /// The lines of every slot that meet a patch, weighted by their étendue, add up to π·area:

@@ -3,10 +3,10 @@
 
 use super::network_scenes::closed_box_text;
 use crate::accel::{self, Backend};
+use crate::control::Control;
 use crate::integrators::illumination_network::preprocess::Builder;
 use crate::integrators::illumination_network::{Network, NetworkParams};
 use crate::integrators::Context;
-use crate::job::Control;
 use crate::scene::Scene;
 use std::path::Path;
 

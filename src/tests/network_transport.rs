@@ -6,6 +6,7 @@
 use super::network_common::{build, closed_box, cornell, params, scene};
 use super::network_scenes::{sealed_box_text, wall, CAMERA};
 use crate::accel::{self, Backend};
+use crate::control::Control;
 use crate::image::compare::{box_downsample, bright_mask, mean, rmse};
 use crate::image::filter::Filter;
 use crate::image::Image;
@@ -17,7 +18,6 @@ use crate::integrators::illumination_network::render::NetworkRenderer;
 use crate::integrators::illumination_network::{Network, NetworkParams, NONE};
 use crate::integrators::path::{PathOptions, PathTracer};
 use crate::integrators::Context;
-use crate::job::Control;
 use crate::math::Vec3;
 use crate::render::pixels::{render_pixels, PixelView};
 use crate::render::progressive::{render_passes, ProgressiveOptions};

@@ -1,7 +1,7 @@
 //! Non-finite samples (issue 10), from a test integrator (moved from tests/robustness.rs,
 //! which keeps the command line's interruption, resume and memory-limit tests).
 
-use crate::job::Control;
+use crate::control::Control;
 use crate::render::progressive::{render_passes, ProgressiveOptions};
 use std::path::Path;
 

@@ -3,9 +3,9 @@
 //! are checked there, through the job API).
 
 use crate::accel::{self, Backend};
+use crate::control::Control;
 use crate::integrators::whitted::{Whitted, WhittedOptions};
 use crate::integrators::{Context, Integrator, RayStats};
-use crate::job::Control;
 use crate::math::{Ray, Rgb, Rng, Vec3};
 use crate::scene::{Camera, Geometry, Light, Material, QuadMesh, Scene, Shape, Texture};
 use std::f32::consts::PI;

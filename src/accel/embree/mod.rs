@@ -5,7 +5,7 @@
 mod sys;
 
 use super::{Accel, Hit, Update};
-use crate::job::CancelToken;
+use crate::control::CancelToken;
 use crate::math::{Ray, Vec3, Vec4};
 use crate::scene::{Geometry, QuadMesh, Scene as SceneDesc, TriangleMesh};
 use crate::{Error, Result};

@@ -5,8 +5,8 @@ use super::patches::Patches;
 use super::preprocess::{self, Builder, EndPacking, LinkInputs};
 use super::ray_space::RaySpace;
 use super::{LinkCode, Network, NetworkParams};
+use crate::control::Control;
 use crate::integrators::Context;
-use crate::job::Control;
 use crate::scene::Scene;
 use std::time::Instant;
 

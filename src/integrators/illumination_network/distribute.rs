@@ -81,7 +81,7 @@ impl Default for DistributeOptions {
 #[derive(Clone, Copy)]
 pub struct Run<'a> {
     pub start: std::time::Instant,
-    pub cancel: Option<&'a crate::job::CancelToken>,
+    pub cancel: Option<&'a crate::control::CancelToken>,
     /// Told the unshot flux as a fraction of the emitted before each sweep (progress).
     pub report: Option<&'a (dyn Fn(f64) + Sync)>,
 }

@@ -6,11 +6,13 @@
 use super::distribute::{self, DistributeOptions, Solution};
 use super::render::NetworkRenderer;
 use super::{file, relight, Network, NetworkParams};
+use crate::control::Control;
+use crate::integrators::lifecycle::{Lifecycle, Tiles, View};
+use crate::integrators::technique::NetworkSettings;
 use crate::integrators::{Context, Integrator, RayStats, Sample};
-use crate::job::technique::{Lifecycle, Tiles};
-use crate::job::{Control, Job, NetworkSettings, Relight};
 use crate::math::{Ray, Rgb, Rng};
 use crate::scene::Scene;
+use crate::settings::Relight;
 use crate::{Error, Result};
 use std::path::Path;
 
@@ -83,17 +85,17 @@ impl NetworkTechnique {
         }
     }
 
-    fn params(&self, job: &Job) -> NetworkParams {
+    fn params(&self, view: &View) -> NetworkParams {
         NetworkParams {
-            seed: job.seed,
+            seed: view.seed,
             ..self.settings.params
         }
     }
 
     /// The network itself, without light: loaded from the file if it exists, else built
     /// (and saved there).
-    fn structure(&self, ctx: &Context, job: &Job, control: &Control) -> Result<Network> {
-        let params = self.params(job);
+    fn structure(&self, ctx: &Context, view: &View, control: &Control) -> Result<Network> {
+        let params = self.params(view);
         let scene = ctx.scene;
         match &self.settings.file {
             Some(f) if f.exists() => {
@@ -128,7 +130,7 @@ impl NetworkTechnique {
 }
 
 impl Lifecycle for NetworkTechnique {
-    fn prepare(&mut self, ctx: &Context, job: &Job, control: &Control) -> Result<()> {
+    fn prepare(&mut self, ctx: &Context, view: &View, control: &Control) -> Result<()> {
         let scene = ctx.scene;
         let options = &self.settings.distribute;
         if !scene.lights.is_empty() && !self.settings.hybrid {
@@ -139,12 +141,12 @@ impl Lifecycle for NetworkTechnique {
         }
         let (net, solution) = match (&self.settings.relight, &self.settings.file) {
             (Some(relight), Some(f)) => {
-                let params = self.params(job);
+                let params = self.params(view);
                 let from = (f.as_path(), &params, options);
                 relight_network(from, relight, scene, &self.file_emission, control)?
             }
             _ => {
-                let net = self.structure(ctx, job, control)?;
+                let net = self.structure(ctx, view, control)?;
                 let surfaces = distribute::surfaces(&net, scene, options.light_scale);
                 check_bounded(&net, scene, &surfaces)?;
                 let phase = control.phase("distribution", None, "sweeps");
@@ -189,7 +191,7 @@ impl Lifecycle for NetworkTechnique {
         )
     }
 
-    fn precompute(&mut self, ctx: &Context, job: &Job, control: &Control) -> Result<()> {
+    fn precompute(&mut self, ctx: &Context, view: &View, control: &Control) -> Result<()> {
         if self.settings.file.is_none() {
             return Err(Error::setting(
                 "network_file",
@@ -197,7 +199,7 @@ impl Lifecycle for NetworkTechnique {
             ));
         }
         // The structure only: each render distributes the light itself.
-        self.structure(ctx, job, control).map(drop)
+        self.structure(ctx, view, control).map(drop)
     }
 
     fn report(&self) -> Vec<String> {

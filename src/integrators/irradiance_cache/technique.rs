@@ -4,10 +4,11 @@
 //! of the image reads the values the whole render would.
 
 use super::{file, IrradianceCache};
+use crate::control::Control;
 use crate::image::Image;
+use crate::integrators::lifecycle::{Lifecycle, Tiles, View};
+use crate::integrators::technique::{CacheSettings, MonteCarloSettings};
 use crate::integrators::Context;
-use crate::job::technique::{Lifecycle, Tiles};
-use crate::job::{CacheSettings, Control, Job, MonteCarloSettings};
 use crate::math::Rgb;
 use crate::render::progressive::ProgressiveOptions;
 use crate::scene::Scene;
@@ -31,24 +32,24 @@ impl CacheTechnique {
     }
 
     /// The cache for the job's view: loaded, completed by the overture, saved.
-    fn build(&mut self, ctx: &Context, job: &Job, control: &Control) -> Result<IrradianceCache> {
+    fn build(&mut self, ctx: &Context, view: &View, control: &Control) -> Result<IrradianceCache> {
         let options = self.settings.options;
-        let render = job.progressive(&self.render);
+        let render = view.progressive(&self.render);
         let file = self.settings.file.as_deref();
-        let view = match file {
-            Some(_) => view_key(ctx.scene, &render, job.accel),
+        let key = match file {
+            Some(_) => view_key(ctx.scene, &render, view.accel),
             None => 0,
         };
         let (loaded, frozen) = match file {
             // A new view starts from the values the last one computed.
             _ if self.built.is_some() => (self.built.take().map(|b| b.cache().clone()), false),
             Some(f) if f.exists() => {
-                let (cache, key) = file::load_with_view(f, ctx.scene, &options)?;
-                (Some(cache), key == Some(view))
+                let (cache, saved) = file::load_with_view(f, ctx.scene, &options)?;
+                (Some(cache), saved == Some(key))
             }
             _ => (None, false),
         };
-        if let (Some(f), false, Some(_)) = (file, frozen, job.region) {
+        if let (Some(f), false, Some(_)) = (file, frozen, view.region) {
             return Err(Error::input(
                 f,
                 "missing or not precomputed for this view (scene, size, samples, filter, \
@@ -84,7 +85,7 @@ impl CacheTechnique {
                 integrator.cache().len(),
                 f.display()
             )),
-            Some(f) => file::save_for_view(f, integrator.cache(), ctx.scene, &options, view)?,
+            Some(f) => file::save_for_view(f, integrator.cache(), ctx.scene, &options, key)?,
             None => {}
         }
         Ok(integrator)
@@ -92,8 +93,8 @@ impl CacheTechnique {
 }
 
 impl Lifecycle for CacheTechnique {
-    fn prepare(&mut self, ctx: &Context, job: &Job, control: &Control) -> Result<()> {
-        self.built = Some(self.build(ctx, job, control)?);
+    fn prepare(&mut self, ctx: &Context, view: &View, control: &Control) -> Result<()> {
+        self.built = Some(self.build(ctx, view, control)?);
         Ok(())
     }
 
@@ -108,14 +109,14 @@ impl Lifecycle for CacheTechnique {
         )
     }
 
-    fn precompute(&mut self, ctx: &Context, job: &Job, control: &Control) -> Result<()> {
+    fn precompute(&mut self, ctx: &Context, view: &View, control: &Control) -> Result<()> {
         if self.settings.file.is_none() {
             return Err(Error::setting(
                 "cache_file",
                 "is where a precomputed irradiance cache goes: give one",
             ));
         }
-        self.build(ctx, job, control).map(drop)
+        self.build(ctx, view, control).map(drop)
     }
 
     fn annotate(&self, ctx: &Context, image: &mut Image, control: &Control) {

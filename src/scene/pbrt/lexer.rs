@@ -90,10 +90,11 @@ pub fn tokenize_within(text: &str, max: usize) -> Result<(Vec<Token>, usize), Sy
                 keep(
                     &mut out,
                     Token {
-                    tok: if c == '[' { Tok::Open } else { Tok::Close },
-                    line: tl,
-                    col: tc,
-                });
+                        tok: if c == '[' { Tok::Open } else { Tok::Close },
+                        line: tl,
+                        col: tc,
+                    },
+                );
             }
             '"' => {
                 chars.next();
@@ -133,10 +134,11 @@ pub fn tokenize_within(text: &str, max: usize) -> Result<(Vec<Token>, usize), Sy
                 keep(
                     &mut out,
                     Token {
-                    tok: Tok::Str(s),
-                    line: tl,
-                    col: tc,
-                });
+                        tok: Tok::Str(s),
+                        line: tl,
+                        col: tc,
+                    },
+                );
             }
             c if c.is_ascii_digit() || c == '-' || c == '+' || c == '.' => {
                 let start = i;
@@ -160,10 +162,11 @@ pub fn tokenize_within(text: &str, max: usize) -> Result<(Vec<Token>, usize), Sy
                 keep(
                     &mut out,
                     Token {
-                    tok: Tok::Num(value),
-                    line: tl,
-                    col: tc,
-                });
+                        tok: Tok::Num(value),
+                        line: tl,
+                        col: tc,
+                    },
+                );
             }
             c if c.is_ascii_alphabetic() || c == '_' => {
                 let start = i;
@@ -180,10 +183,11 @@ pub fn tokenize_within(text: &str, max: usize) -> Result<(Vec<Token>, usize), Sy
                 keep(
                     &mut out,
                     Token {
-                    tok: Tok::Word(text[start..end].to_string()),
-                    line: tl,
-                    col: tc,
-                });
+                        tok: Tok::Word(text[start..end].to_string()),
+                        line: tl,
+                        col: tc,
+                    },
+                );
             }
             other => {
                 return Err(err(format!(

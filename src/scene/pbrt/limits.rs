@@ -206,7 +206,7 @@ impl Loader {
                 "{}: the scene's text would pass {} in all (every file counted each time it \
                  is included), raylink's fixed limit",
                 path.display(),
-                crate::job::human_size(MAX_SCENE_TEXT)
+                crate::control::human_size(MAX_SCENE_TEXT)
             ))
         };
         if size > room {
@@ -247,7 +247,7 @@ impl Loader {
             let msg = format!(
                 "the scene's text would pass {} in all (every file counted each time it is \
                  included), raylink's fixed limit",
-                crate::job::human_size(MAX_SCENE_TEXT)
+                crate::control::human_size(MAX_SCENE_TEXT)
             );
             return Err(match at {
                 Some(loc) => loc.error(msg),

@@ -20,8 +20,8 @@
 
 mod cursor;
 mod lexer;
-mod limits;
 mod lights;
+mod limits;
 mod materials;
 mod options;
 mod param_values;
@@ -35,7 +35,7 @@ mod textures;
 
 use super::environment::Environment;
 use super::{Camera, Light, Material, Scene, Shape, Texture};
-use crate::job::{CancelToken, Control, MemoryBudget};
+use crate::control::{CancelToken, Control, MemoryBudget};
 use crate::math::Rgb;
 use crate::scene::RenderSettings;
 use crate::Error;

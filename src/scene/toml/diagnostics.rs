@@ -12,7 +12,7 @@ pub(super) struct Ctx<'a> {
     pub(super) text: &'a str,
     /// The job's controls: a cancel stops the reading of meshes between shapes, and the
     /// geometry read so far is checked against the memory budget after each shape.
-    pub(super) control: Option<&'a crate::job::Control>,
+    pub(super) control: Option<&'a crate::control::Control>,
 }
 
 /// A table of the file, for messages: its name (`shapes[2]`) and where it is.

@@ -57,7 +57,7 @@ impl<'a> Document<'a> {
     pub(crate) fn parse_with(
         text: &'a str,
         path: &'a Path,
-        control: Option<&'a crate::job::Control>,
+        control: Option<&'a crate::control::Control>,
     ) -> crate::Result<Document<'a>> {
         let ctx = Ctx {
             path,

@@ -7,10 +7,10 @@ use super::packing::EndPacking;
 use super::row_buckets::{scan_slot_into, RowBuckets};
 use super::sorted_hits::SortedHits;
 use super::{Builder, LineHit};
+use crate::control::CancelToken;
 use crate::integrators::illumination_network::patches::Patches;
 use crate::integrators::illumination_network::ray_space::RaySpace;
 use crate::integrators::{Context, RayStats};
-use crate::job::CancelToken;
 use rayon::prelude::*;
 
 /// Slots linked by one task, one after the other: a few, so that the assembly reads each key

@@ -1,4 +1,4 @@
-//! A job's technique: its name and typed settings. [`Settings`] is the parameter set a front
+//! A technique with its settings: its name and typed settings. [`Settings`] is the parameter set a front
 //! end fills (from a scene file's render settings, then its own options on top), every
 //! entry optional; [`Technique::create`] picks the technique it names and builds that
 //! technique's settings from it, with the defaults and the checks of that technique (as
@@ -11,9 +11,7 @@ use crate::integrators::irradiance_cache::{self as ic, IcOptions};
 use crate::integrators::path::{DEFAULT_MAX_DEPTH, MAX_DEPTH_LIMIT};
 use crate::render::progressive::MAX_SPP;
 use crate::render::{PixelSampling, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD};
-pub use crate::settings::{
-    AntiAliasing, NetworkBuilder, NetworkOrder, Relight, Settings, TechniqueKind,
-};
+use crate::settings::{AntiAliasing, NetworkBuilder, Relight, Settings, TechniqueKind};
 use crate::{Error, Result};
 use std::path::PathBuf;
 

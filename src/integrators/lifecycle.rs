@@ -1,10 +1,11 @@
 //! The one technique lifecycle: a technique is created from its settings, prepares once
 //! (the irradiance cache's overture, the network's preprocess and distribution; nothing for
-//! the others), and then renders tiles through one of the two tile kernels. The renderer
-//! ([`super::Renderer`]) drives every technique the same way.
+//! the others), and then renders tiles through one of the two tile kernels. The job's
+//! renderer (`crate::job::Renderer`) drives every technique the same way.
 
-use super::settings::{MonteCarloSettings, Technique};
-use super::{Control, Job};
+use super::technique::{MonteCarloSettings, Technique};
+use crate::accel::Backend;
+use crate::control::Control;
 use crate::image::Image;
 use crate::integrators::bdpt::{Bdpt, BdptOptions};
 use crate::integrators::illumination_network::technique::NetworkTechnique;
@@ -13,9 +14,37 @@ use crate::integrators::light::{LightOptions, LightTracer};
 use crate::integrators::path::{PathOptions, PathTracer};
 use crate::integrators::whitted::{Whitted, WhittedOptions};
 use crate::integrators::{Context, Integrator, MonteCarlo};
-use crate::render::PixelSampling;
+use crate::render::progressive::ProgressiveOptions;
+use crate::render::{PixelSampling, Tile};
 use crate::scene::Scene;
 use crate::Result;
+
+/// What a technique's preparation needs of the view a job renders.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(crate) struct View {
+    pub width: u32,
+    pub height: u32,
+    /// Only these pixels (a part of the image), if any.
+    pub region: Option<Tile>,
+    pub seed: u64,
+    pub threads: Option<usize>,
+    pub accel: Backend,
+}
+
+impl View {
+    /// The Monte Carlo render of this view with `mc`'s samples and filter.
+    pub(crate) fn progressive(&self, mc: &MonteCarloSettings) -> ProgressiveOptions {
+        ProgressiveOptions {
+            width: self.width,
+            height: self.height,
+            spp: mc.spp,
+            time_limit: mc.time_limit,
+            threads: self.threads,
+            seed: self.seed,
+            filter: mc.filter,
+        }
+    }
+}
 
 /// What renders a prepared technique's tiles.
 pub(crate) enum Tiles<'a> {
@@ -30,7 +59,7 @@ pub(crate) enum Tiles<'a> {
 pub(crate) trait Lifecycle: Send + Sync {
     /// The work done before any tile: for the job's view (the irradiance cache's overture
     /// traces that view's camera rays). Runs once per renderer.
-    fn prepare(&mut self, _ctx: &Context, _job: &Job, _control: &Control) -> Result<()> {
+    fn prepare(&mut self, _ctx: &Context, _view: &View, _control: &Control) -> Result<()> {
         Ok(())
     }
 
@@ -44,11 +73,10 @@ pub(crate) trait Lifecycle: Send + Sync {
 
     /// The preparation alone, saved for render jobs to read (`precompute`): the techniques
     /// without one refuse.
-    fn precompute(&mut self, _ctx: &Context, job: &Job, _control: &Control) -> Result<()> {
-        Err(crate::Error::Invalid(format!(
-            "the {} integrator has nothing to precompute",
-            job.technique.kind()
-        )))
+    fn precompute(&mut self, _ctx: &Context, _view: &View, _control: &Control) -> Result<()> {
+        Err(crate::Error::Invalid(
+            "only the irradiance cache and the network have something to precompute".into(),
+        ))
     }
 
     /// Marks added to the finished image (the irradiance cache's points).
