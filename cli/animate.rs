@@ -6,7 +6,7 @@ use crate::options::AccelName;
 use crate::{Cli, Failure};
 
 use raylink::coherence::{
-    render_sequence, report, Records, SequenceJob, SequenceMode, SequenceTechnique,
+    render_sequence, report, Placement, Records, SequenceJob, SequenceMode, SequenceTechnique,
 };
 use raylink::image::output::check_output_path;
 use raylink::scene::animation::Animation;
@@ -79,7 +79,8 @@ pub struct AnimateArgs {
     /// by walking every segment as it is traced (less memory). Same frames, same blocks.
     #[arg(long, value_enum, default_value = "segments")]
     pub records: RecordsName,
-    /// Approximate number of voxels of the grid (over the region where the sequence changes).
+    /// Approximate number of voxels of the grid (over the scene, or with --lookahead over the
+    /// region where the sequence changes).
     /// More voxels retrace fewer pixels but cost more per recorded ray.
     #[arg(long, default_value_t = 8192)]
     pub voxels: u32,
@@ -88,6 +89,12 @@ pub struct AnimateArgs {
     /// the rest coherently; the frames equal those of the whole sequence bit for bit.
     #[arg(long, value_name = "A..B")]
     pub frames: Option<String>,
+    /// Read every frame before rendering the first, and place the voxel grid (and keep
+    /// records) only where later frames change something. By default the frames are made
+    /// online, each from the frames before it alone (the grid covers the scene and grows
+    /// when something leaves it). Same frames either way.
+    #[arg(long, conflicts_with = "no_coherence")]
+    pub lookahead: bool,
     /// Render every frame from scratch instead (the traditional frame-by-frame method).
     #[arg(long, conflicts_with = "verify")]
     pub no_coherence: bool,
@@ -301,6 +308,11 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
         voxels: args.voxels,
         blocks,
         overhead_reps: args.overhead_reps,
+        placement: if args.lookahead {
+            Placement::Lookahead
+        } else {
+            Placement::Online
+        },
     };
     raylink::Job {
         width: job.width,

@@ -1,8 +1,10 @@
 #!/usr/bin/env bash
 # Installs the Debian packages raylink builds against: Embree (libembree-dev: Embree 3 on
-# Debian 12, Embree 4 on Debian 13), OpenImageIO, libclang for bindgen, and a C++ compiler.
+# Debian 12, Embree 4 on Debian 13), OpenImageIO, libclang for bindgen, and a C++ compiler;
+# and bsdextrautils, whose `script` the progress tests run (Debian 13 moved it there from
+# the essential bsdutils).
 set -euo pipefail
-packages=(build-essential pkg-config libclang-dev libembree-dev libopenimageio-dev)
+packages=(build-essential pkg-config libclang-dev libembree-dev libopenimageio-dev bsdextrautils)
 sudo=""
 if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
 missing=()

@@ -233,33 +233,49 @@ fn cli_frame_range_matches_the_whole_sequence() {
 /// retraced nothing.
 #[test]
 fn a_light_that_only_dims_retraces_what_it_lights() {
-    for (width, height) in [("160", "120"), ("320", "240")] {
-        let dir = tempfile::tempdir().unwrap();
-        let pattern = dir.path().join("f_%02d.exr");
-        let out = common::raylink(&[
-            "animate",
-            "scenes/anim-light.toml",
-            "-o",
-            pattern.to_str().unwrap(),
-            "--frames",
-            "0..9",
-            "--width",
-            width,
-            "--height",
-            height,
-            "--verify",
-            "--stats",
-            "--quiet",
-        ]);
-        let text = String::from_utf8_lossy(&out.stdout);
-        assert!(
-            out.status.success(),
-            "{width}x{height}: {}{text}",
-            common::stderr(&out)
-        );
-        assert!(
-            text.contains("every frame identical to its full render"),
-            "{text}"
-        );
+    for placement in ["", "--lookahead"] {
+        for (width, height) in [("160", "120"), ("320", "240")] {
+            let dir = tempfile::tempdir().unwrap();
+            let pattern = dir.path().join("f_%02d.exr");
+            let mut args = vec![
+                "animate",
+                "scenes/anim-light.toml",
+                "-o",
+                pattern.to_str().unwrap(),
+                "--frames",
+                "0..9",
+                "--width",
+                width,
+                "--height",
+                height,
+                "--verify",
+                "--stats",
+                "--quiet",
+            ];
+            if !placement.is_empty() {
+                args.push(placement);
+            }
+            let out = common::raylink(&args);
+            let text = String::from_utf8_lossy(&out.stdout);
+            let case = format!("{width}x{height} {placement}");
+            assert!(
+                out.status.success(),
+                "{case}: {}{text}",
+                common::stderr(&out)
+            );
+            assert!(
+                text.contains("every frame identical to its full render"),
+                "{case}: {text}"
+            );
+            let mode = if placement.is_empty() {
+                "online"
+            } else {
+                "look-ahead"
+            };
+            assert!(
+                text.contains(&format!("placement: {mode}")),
+                "{case}: {text}"
+            );
+        }
     }
 }

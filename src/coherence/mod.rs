@@ -26,5 +26,6 @@ pub(crate) mod tables;
 pub use record::Records;
 pub use renderer::FrameStats;
 pub use sequence::{
-    render_sequence, FrameRow, Report, SequenceJob, SequenceMode, SequenceTechnique, Time,
+    render_sequence, FrameRow, Placement, Report, Sequence, SequenceJob, SequenceMode,
+    SequenceTechnique, Time,
 };

@@ -2,7 +2,7 @@
 //! paper, and a per-frame CSV.
 
 use super::record::Records;
-use super::sequence::{Report, Time};
+use super::sequence::{Placement, Report, Time};
 use crate::accel::Update;
 use std::fmt::Write as _;
 
@@ -174,11 +174,22 @@ pub fn summary(report: &Report) -> String {
             median(report.overhead.iter().map(|o| o.1).collect()),
         );
     }
-    let _ = writeln!(
-        s,
-        "preparation (reading every frame to place the grid): {:.2} s",
-        report.prepare_seconds
-    );
+    match report.placement {
+        Placement::Lookahead => {
+            let _ = writeln!(
+                s,
+                "placement: look-ahead (every frame read first to place the grid: {:.2} s)",
+                report.prepare_seconds
+            );
+        }
+        Placement::Online => {
+            let _ = writeln!(
+                s,
+                "placement: online (frame by frame; the grid grew {} times)",
+                report.regrids
+            );
+        }
+    }
     let verified: Option<Vec<bool>> = report.rows.iter().map(|r| r.identical).collect();
     if let Some(v) = verified.filter(|v| !v.is_empty()) {
         let _ = writeln!(
@@ -194,7 +205,7 @@ pub fn summary(report: &Report) -> String {
     let (lo, hi) = report.grid;
     let _ = writeln!(
         s,
-        "voxel grid: {} voxels ({} where changes happen) over [{:.2}, {:.2}, {:.2}]..[{:.2}, \
+        "voxel grid: {} voxels ({} keeping records) over [{:.2}, {:.2}, {:.2}]..[{:.2}, \
          {:.2}, {:.2}], {}x{} pixel blocks",
         report.voxels,
         report.active_voxels,

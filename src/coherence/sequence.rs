@@ -3,7 +3,8 @@
 //! statistics of Table 2 of Jevans's paper. The caller gets each frame as it is finished, to
 //! write or show it.
 
-use super::changes::FrameSummary;
+use super::changes::{Aabb, Changes, FrameSummary};
+use super::grid::Grid;
 use super::record::Records;
 use super::renderer::{CoherentRenderer, Engine, FrameStats};
 use super::tables::BlockLayout;
@@ -14,9 +15,11 @@ use crate::integrators::path::{PathOptions, PathTracer};
 use crate::integrators::technique::{MonteCarloSettings, WhittedSettings};
 use crate::integrators::whitted::{Whitted, WhittedOptions};
 use crate::integrators::{Context, RayStats};
+use crate::math::Vec3;
 use crate::render::pixels::PixelView;
 use crate::render::progressive::ProgressiveOptions;
 use crate::scene::animation::Animation;
+use crate::scene::{Light, Scene};
 use crate::{Error, Result};
 use std::time::Instant;
 
@@ -58,16 +61,18 @@ pub struct SequenceJob {
     pub blocks: (u32, u32),
     /// Render the first frame this many times both ways first, for the frame-0 overhead.
     pub overhead_reps: u32,
+    /// Where the grid goes: online (frame by frame) or foreseen from every frame.
+    pub placement: Placement,
 }
 
 /// The integrator of a sequence.
-enum Integrators {
+pub(crate) enum Integrators {
     Whitted(Whitted),
     Path(PathTracer),
 }
 
 impl SequenceJob {
-    fn integrators(&self) -> Integrators {
+    pub(crate) fn integrators(&self) -> Integrators {
         match self.technique {
             SequenceTechnique::Whitted(w) => Integrators::Whitted(Whitted::new(WhittedOptions {
                 max_depth: w.max_depth,
@@ -81,7 +86,7 @@ impl SequenceJob {
         }
     }
 
-    fn engine<'a>(&self, integrators: &'a Integrators) -> Engine<'a> {
+    pub(crate) fn engine<'a>(&self, integrators: &'a Integrators) -> Engine<'a> {
         match (integrators, self.technique) {
             (Integrators::Whitted(w), SequenceTechnique::Whitted(s)) => Engine::Whitted {
                 integrator: w,
@@ -110,8 +115,302 @@ impl SequenceJob {
     }
 }
 
+/// Where the voxel grid goes and which voxels keep records.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Placement {
+    /// Frame by frame, with no knowledge of the future (Jevans's method): the grid covers the
+    /// first frame's scene and grows when something leaves it (that frame is traced in
+    /// full), and every voxel keeps records. What an editor or a simulation feeding frames
+    /// one at a time gets from [`Sequence`].
+    #[default]
+    Online,
+    /// Every frame read first: the grid covers only the boxes that later frames change, and
+    /// a voxel keeps records only until the last frame that changes it.
+    Lookahead,
+}
+
+/// The grid an online sequence starts with: over the scene's shapes and point lights.
+pub(crate) fn online_grid(scene: &Scene, voxels: u32) -> Grid {
+    CoherentRenderer::grid_around(&extent(scene), voxels)
+}
+
+/// The grid a look-ahead sequence uses: over the boxes that the frame-to-frame `changes`
+/// mark (a change with no extent, a light's intensity, marks no box).
+pub(crate) fn lookahead_grid(changes: &[Changes], voxels: u32) -> Grid {
+    let boxes: Vec<Aabb> = changes
+        .iter()
+        .flat_map(|c| c.objects.iter().chain(&c.shadows))
+        .copied()
+        .collect();
+    CoherentRenderer::grid_around(&boxes, voxels)
+}
+
+/// The boxes of a scene that an online grid must hold: its shapes' bounds and its point
+/// lights (whose shadow segments end there).
+fn extent(scene: &Scene) -> Vec<Aabb> {
+    let mut boxes: Vec<Aabb> = scene.bounds().into_iter().collect();
+    for l in &scene.lights {
+        if let Light::Point { position, .. } = l {
+            boxes.push((*position, *position));
+        }
+    }
+    boxes
+}
+
+/// Whether `grid` holds every box of `boxes`.
+fn holds(grid: &Grid, boxes: &[Aabb]) -> bool {
+    boxes
+        .iter()
+        .all(|(lo, hi)| lo.cmpge(grid.lo).all() && hi.cmple(grid.hi).all())
+}
+
+/// A grid over `grid`'s box and `boxes`, a quarter larger on every side, so that an object
+/// moving steadily out of the scene makes it grow a few times rather than every frame.
+fn grown(grid: &Grid, boxes: &[Aabb], voxels: u32) -> Grid {
+    let mut all = boxes.to_vec();
+    all.push((grid.lo, grid.hi));
+    let tight = CoherentRenderer::grid_around(&all, voxels);
+    let pad = 0.25 * (tight.hi - tight.lo);
+    CoherentRenderer::grid_around(&[(tight.lo - pad, tight.hi + pad)], voxels)
+}
+
+/// A coherent sequence made one frame at a time: [`next`](Self::next) takes the next
+/// frame's scene and returns its image, traced only where something changed since the
+/// frame before. Frame k is made from frames up to k alone; an editor or a simulation can
+/// drive it with scenes as they come. [`render_sequence`] drives it from an animation.
+pub struct Sequence {
+    job: SequenceJob,
+    integrators: Integrators,
+    layout: BlockLayout,
+    coherent: Option<CoherentRenderer>,
+    dynamic: Option<Box<dyn DynamicAccel>>,
+    /// With [`Placement::Lookahead`]: the grid and the records' restriction, foreseen.
+    foreseen: Option<(Grid, Vec<Vec<Aabb>>)>,
+    full_notice: bool,
+    /// The most the records held after a frame: bytes, segments, bytes of camera hits.
+    peaks: (usize, usize, usize),
+    /// How many times the grid grew to hold the scene.
+    regrids: usize,
+}
+
+impl Sequence {
+    /// A sequence of `job`'s settings (its `frames`, `mode` and `overhead_reps` are the
+    /// driver's: [`next`](Self::next) renders whatever it is given, coherently).
+    pub fn new(job: &SequenceJob) -> Result<Sequence> {
+        if job.voxels == 0 || job.voxels > 1 << 24 {
+            return Err(Error::setting(
+                "voxels",
+                format!("must be between 1 and {}, got {}", 1 << 24, job.voxels),
+            ));
+        }
+        Ok(Sequence {
+            integrators: job.integrators(),
+            layout: BlockLayout::new(job.width, job.height, job.blocks.0, job.blocks.1),
+            job: job.clone(),
+            coherent: None,
+            dynamic: None,
+            foreseen: None,
+            full_notice: false,
+            peaks: (0, 0, 0),
+            regrids: 0,
+        })
+    }
+
+    /// Look-ahead: places the grid over what `changes` (frame k to k + 1, for the whole
+    /// sequence) mark and keeps records only where a later frame changes something. Before
+    /// the first frame.
+    pub(crate) fn foresee(&mut self, changes: &[Changes]) {
+        let grid = lookahead_grid(changes, self.job.voxels);
+        let probe = CoherentRenderer::with_records(grid.clone(), self.layout, self.job.records);
+        let marked = changes.iter().map(|c| probe.surface_boxes(c)).collect();
+        self.foreseen = Some((grid, marked));
+    }
+
+    /// The renderer of a sequence starting at `scene`.
+    fn start(&self, scene: &Scene, control: &Control) -> CoherentRenderer {
+        let grid = match &self.foreseen {
+            Some((grid, _)) => grid.clone(),
+            None => online_grid(scene, self.job.voxels),
+        };
+        self.renderer(grid, control)
+    }
+
+    fn renderer(&self, grid: Grid, control: &Control) -> CoherentRenderer {
+        let mut r = CoherentRenderer::with_records(grid, self.layout, self.job.records);
+        r.set_segment_budget((control.budget.limit() / 4).min(usize::MAX as u64) as usize);
+        if let Some((_, marked)) = &self.foreseen {
+            r.restrict_to_sequence(marked);
+        }
+        r
+    }
+
+    /// The CPU seconds of the first frame `scene` rendered coherently (recording) and in
+    /// full, `reps` times alternating which goes first: the frame-0 overhead. Before
+    /// the first [`next`](Self::next).
+    pub fn first_frame_overhead(
+        &mut self,
+        scene: &Scene,
+        reps: u32,
+        control: &Control,
+    ) -> Result<Vec<(f64, f64)>> {
+        let engine = self.job.engine(&self.integrators);
+        let mut coherent = self.start(scene, control);
+        let mut overhead = Vec::new();
+        for rep in 0..reps {
+            let full = || -> Result<f64> {
+                let clock = Clock::start();
+                let accel = accel::build(scene, self.job.accel, control)?;
+                engine.render_full(&Context::new(scene, accel.as_ref()), control)?;
+                Ok(clock.elapsed().cpu)
+            };
+            let mut recorded = || -> Result<f64> {
+                coherent.reset();
+                let clock = Clock::start();
+                let accel = accel::build_dynamic(scene, self.job.accel, control)?;
+                coherent.render_frame(scene, accel.as_ref(), &engine, control)?;
+                Ok(clock.elapsed().cpu)
+            };
+            // Alternating the order evens out whatever the first of a pair pays for.
+            overhead.push(if rep % 2 == 0 {
+                let f = full()?;
+                (recorded()?, f)
+            } else {
+                let c = recorded()?;
+                (c, full()?)
+            });
+        }
+        Ok(overhead)
+    }
+
+    /// Renders the next frame, `scene` (numbered `frame` in the statistics), from what the
+    /// frames before it recorded; with `verify`, renders it in full too and compares them
+    /// bit for bit. Notices (a frame traced in full, records cut down, the grid grown) go
+    /// to `control`'s progress; the renders inside report nothing.
+    pub fn next(
+        &mut self,
+        frame: i64,
+        scene: &Scene,
+        control: &Control,
+        verify: bool,
+    ) -> Result<(Image, FrameRow)> {
+        let outer = control;
+        let control = &Control {
+            progress: std::sync::Arc::new(crate::control::Silent),
+            ..outer.clone()
+        };
+        let (width, height) = (self.job.width, self.job.height);
+        let mut row = FrameRow {
+            frame,
+            ..FrameRow::default()
+        };
+        // The coherent renderer updates one structure from frame to frame; the full renders
+        // build their own, as a frame-by-frame renderer does.
+        let clock = Clock::start();
+        let mut coherent = match self.coherent.take() {
+            None => self.start(scene, control),
+            Some(c) if self.foreseen.is_some() || holds(&c.grid, &extent(scene)) => c,
+            Some(c) => {
+                // Something left the grid: records outside it cannot exist, so the grid grows
+                // and this frame is traced in full (section 3.3.2 re-subdivides in place).
+                let grid = grown(&c.grid, &extent(scene), self.job.voxels);
+                self.regrids += 1;
+                outer.note(&format!(
+                    "notice: frame {frame}: the scene left the voxel grid; the grid grows to \
+                     [{:.2},{:.2},{:.2}]..[{:.2},{:.2},{:.2}] and this frame is traced in full",
+                    grid.lo.x, grid.lo.y, grid.lo.z, grid.hi.x, grid.hi.y, grid.hi.z
+                ));
+                self.renderer(grid, control)
+            }
+        };
+        match self.dynamic.as_mut() {
+            None => self.dynamic = Some(accel::build_dynamic(scene, self.job.accel, control)?),
+            Some(d) => row.update = Some(d.update(scene)?),
+        }
+        let accel = self.dynamic.as_deref().expect("built above");
+        let engine = self.job.engine(&self.integrators);
+        let before = (coherent.records(), coherent.keeps_camera_hits());
+        let rendered = coherent.render_frame(scene, accel, &engine, control);
+        let (image, stats) = match rendered {
+            Ok(r) => r,
+            Err(e) => {
+                // A cancelled frame resets the records; the next frame starts afresh.
+                self.coherent = Some(coherent);
+                return Err(e);
+            }
+        };
+        if before != (coherent.records(), coherent.keeps_camera_hits()) {
+            outer.note(&format!(
+                "notice: frame {frame}: the records grew past a quarter of the memory budget; \
+                 going on with voxel tables and without keeping camera hits (same frames)"
+            ));
+        }
+        let p = &mut self.peaks;
+        p.0 = p.0.max(coherent.record_bytes());
+        p.1 = p.1.max(coherent.segments());
+        p.2 = p.2.max(coherent.camera_bytes());
+        row.time = clock.elapsed();
+        if !self.full_notice {
+            // (A sequence's first frame, and the first after the grid grew, are traced in
+            // full as a matter of course.)
+            if let Some(reason) = stats.full_reason.as_deref().filter(|r| *r != "first frame") {
+                outer.note(&format!(
+                    "notice: frame {frame}: every pixel retraced ({reason}); such frames are \
+                     rendered in full"
+                ));
+                self.full_notice = true;
+            }
+        }
+        row.coherent = stats;
+        if verify {
+            let clock = Clock::start();
+            let accel = accel::build(scene, self.job.accel, control)?;
+            let engine = self.job.engine(&self.integrators);
+            let (full, rays) = engine.render_full(&Context::new(scene, accel.as_ref()), control)?;
+            row.full = Some((rays, clock.elapsed()));
+            row.identical = Some(
+                (full.width, full.height) == (width, height)
+                    && full.pixels.len() == image.pixels.len()
+                    && full.pixels.iter().zip(&image.pixels).all(|(a, b)| {
+                        a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)
+                    }),
+            );
+        }
+        self.coherent = Some(coherent);
+        Ok((image, row))
+    }
+
+    /// The statistics of the sequence so far, around its `rows`.
+    pub fn report(&self, rows: Vec<FrameRow>, prepare_seconds: f64) -> Report {
+        let grid = self.coherent.as_ref().map(|c| &c.grid);
+        Report {
+            rows,
+            pixels_per_frame: self.job.width as u64 * self.job.height as u64,
+            records: self
+                .coherent
+                .as_ref()
+                .map_or(self.job.records, |c| c.records()),
+            record_bytes: self.peaks.0,
+            segments: self.peaks.1,
+            camera_bytes: self.peaks.2,
+            voxels: grid.map_or(0, |g| g.len()),
+            active_voxels: self.coherent.as_ref().map_or(0, |c| c.active_voxels()),
+            blocks: (self.layout.cols, self.layout.rows),
+            prepare_seconds,
+            grid: grid.map_or((Vec3::ZERO, Vec3::ZERO), |g| (g.lo, g.hi)),
+            overhead: Vec::new(),
+            placement: if self.foreseen.is_some() {
+                Placement::Lookahead
+            } else {
+                Placement::Online
+            },
+            regrids: self.regrids,
+        }
+    }
+}
+
 /// Renders `job`'s frames of `anim`, handing each finished frame to `on_frame` (to write or
-/// show it); returns the statistics. A cancel stops after the frame in hand with
+/// show it); returns the statistics. Online (the default placement), each frame is read
+/// only when it is rendered. A cancel stops after the frame in hand with
 /// [`Error::Cancelled`] naming the next frame; the frames handed over are whole.
 pub fn render_sequence(
     anim: &Animation,
@@ -123,160 +422,63 @@ pub fn render_sequence(
     if frames.is_empty() {
         return Err(Error::setting("frames", "is empty"));
     }
-    if job.voxels == 0 || job.voxels > 1 << 24 {
-        return Err(Error::setting(
-            "voxels",
-            format!("must be between 1 and {}, got {}", 1 << 24, job.voxels),
-        ));
-    }
-    let (width, height) = (job.width, job.height);
-    // The frames are the caller's progress; the renders inside them report nothing.
-    let outer = control;
-    let control = &Control {
+    let mut sequence = Sequence::new(job)?;
+    let quiet = Control {
         progress: std::sync::Arc::new(crate::control::Silent),
-        ..outer.clone()
+        ..control.clone()
     };
     let scene0 = anim.scene_at(frames[0])?;
+    let prepare = Instant::now();
+    if job.placement == Placement::Lookahead && job.mode != SequenceMode::Full {
+        // Reads every frame once first, to place the grid where things will change.
+        let mut changes = Vec::new();
+        let mut previous = FrameSummary::new(&scene0, None);
+        for &f in &frames[1..] {
+            quiet.cancel.check(&format!("reading frame {f}"))?;
+            let next = FrameSummary::new(&anim.scene_at(f)?, None);
+            changes.push(previous.diff(&next));
+            previous = next;
+        }
+        sequence.foresee(&changes);
+    }
+    let prepare_seconds = prepare.elapsed().as_secs_f64();
+    let overhead = if job.mode == SequenceMode::Full {
+        Vec::new()
+    } else {
+        sequence.first_frame_overhead(&scene0, job.overhead_reps, &quiet)?
+    };
+    let mut rows = Vec::new();
+    let progress = control.phase("frames", Some(frames.len() as u64), "frames");
     let integrators = job.integrators();
     let engine = job.engine(&integrators);
-    // Voxels only need records where something will change: the grid covers the boxes that
-    // the frame-to-frame changes mark (found by reading every frame once first), so its
-    // resolution goes where it matters and rays crossing the still parts cost nothing.
-    let prepare = Instant::now();
-    let mut changes = Vec::new();
-    let mut previous = FrameSummary::new(&scene0, None);
-    for &f in &frames[1..] {
-        let next = FrameSummary::new(&anim.scene_at(f)?, None);
-        changes.push(previous.diff(&next));
-        previous = next;
-    }
-    let boxes: Vec<_> = changes
-        .iter()
-        .flat_map(|c| c.objects.iter().chain(&c.shadows))
-        .copied()
-        .collect();
-    let grid = CoherentRenderer::grid_around(&boxes, job.voxels);
-    let layout = BlockLayout::new(width, height, job.blocks.0, job.blocks.1);
-    let mut coherent = CoherentRenderer::with_records(grid, layout, job.records);
-    coherent.set_segment_budget((control.budget.limit() / 4).min(usize::MAX as u64) as usize);
-    // Records are kept only where a later frame changes something: in the voxels that the
-    // changed objects' surfaces touch.
-    let marked: Vec<Vec<_>> = changes.iter().map(|c| coherent.surface_boxes(c)).collect();
-    coherent.restrict_to_sequence(&marked);
-    drop((changes, marked));
-    let prepare_seconds = prepare.elapsed().as_secs_f64();
-    let mut overhead = Vec::new();
-    for rep in 0..job.overhead_reps {
-        let full = || -> Result<f64> {
-            let clock = Clock::start();
-            let accel = accel::build(&scene0, job.accel, control)?;
-            engine.render_full(&Context::new(&scene0, accel.as_ref()), control)?;
-            Ok(clock.elapsed().cpu)
-        };
-        let mut recorded = || -> Result<f64> {
-            coherent.reset();
-            let clock = Clock::start();
-            let accel = accel::build_dynamic(&scene0, job.accel, control)?;
-            coherent.render_frame(&scene0, accel.as_ref(), &engine, control)?;
-            Ok(clock.elapsed().cpu)
-        };
-        // Alternating the order evens out whatever the first of a pair pays for.
-        overhead.push(if rep % 2 == 0 {
-            let f = full()?;
-            (recorded()?, f)
-        } else {
-            let c = recorded()?;
-            (c, full()?)
-        });
-    }
-    coherent.reset();
-    let mut rows = Vec::new();
-    let mut full_notice = false;
-    let progress = outer.phase("frames", Some(frames.len() as u64), "frames");
-    // The most the records held after a frame: bytes, segments, bytes of camera hits.
-    let (mut peak_bytes, mut peak_segments, mut peak_camera) = (0, 0, 0);
-    let mut dynamic: Option<Box<dyn DynamicAccel>> = None;
+    let mut scene0 = Some(scene0);
     for &f in frames {
         control.cancel.check(&format!("frame {f}"))?;
-        let scene = if f == frames[0] {
-            scene0.clone()
-        } else {
-            anim.scene_at(f)?
+        let scene = match scene0.take() {
+            Some(s) => s,
+            None => anim.scene_at(f)?,
         };
-        let mut row = FrameRow {
-            frame: f,
-            ..FrameRow::default()
-        };
-        let image: Image;
-        if job.mode == SequenceMode::Full {
+        let (image, row) = if job.mode == SequenceMode::Full {
             let clock = Clock::start();
-            let accel = accel::build(&scene, job.accel, control)?;
-            let (img, rays) = engine.render_full(&Context::new(&scene, accel.as_ref()), control)?;
-            row.full = Some((rays, clock.elapsed()));
-            image = img;
+            let accel = accel::build(&scene, job.accel, &quiet)?;
+            let (img, rays) = engine.render_full(&Context::new(&scene, accel.as_ref()), &quiet)?;
+            let row = FrameRow {
+                frame: f,
+                full: Some((rays, clock.elapsed())),
+                ..FrameRow::default()
+            };
+            (img, row)
         } else {
-            // The coherent renderer updates one structure from frame to frame; the full
-            // renders build their own, as a frame-by-frame renderer does.
-            let clock = Clock::start();
-            match dynamic.as_mut() {
-                None => dynamic = Some(accel::build_dynamic(&scene, job.accel, control)?),
-                Some(d) => row.update = Some(d.update(&scene)?),
-            }
-            let accel = dynamic.as_deref().expect("built above");
-            let before = (coherent.records(), coherent.keeps_camera_hits());
-            let (img, stats) = coherent.render_frame(&scene, accel, &engine, control)?;
-            if before != (coherent.records(), coherent.keeps_camera_hits()) {
-                outer.note(&format!(
-                    "notice: frame {f}: the records grew past a quarter of the memory budget; \
-                     going on with voxel tables and without keeping camera hits (same frames)"
-                ));
-            }
-            peak_bytes = peak_bytes.max(coherent.record_bytes());
-            peak_segments = peak_segments.max(coherent.segments());
-            peak_camera = peak_camera.max(coherent.camera_bytes());
-            row.time = clock.elapsed();
-            if f != frames[0] && stats.full_reason.is_some() && !full_notice {
-                outer.note(&format!(
-                    "notice: frame {f}: every pixel retraced ({}); such frames are rendered in \
-                     full",
-                    stats.full_reason.as_deref().unwrap_or("")
-                ));
-                full_notice = true;
-            }
-            row.coherent = stats;
-            if job.mode == SequenceMode::Verify {
-                let clock = Clock::start();
-                let accel = accel::build(&scene, job.accel, control)?;
-                let (full, rays) =
-                    engine.render_full(&Context::new(&scene, accel.as_ref()), control)?;
-                row.full = Some((rays, clock.elapsed()));
-                let same = full.pixels.len() == img.pixels.len()
-                    && full.pixels.iter().zip(&img.pixels).all(|(a, b)| {
-                        a.to_array().map(f32::to_bits) == b.to_array().map(f32::to_bits)
-                    });
-                row.identical = Some(same);
-            }
-            image = img;
-        }
+            sequence.next(f, &scene, control, job.mode == SequenceMode::Verify)?
+        };
         on_frame(f, &image, &row)?;
         progress.advance(1);
         rows.push(row);
     }
     progress.end(&format!("{} frames", rows.len()));
-    Ok(Report {
-        rows,
-        pixels_per_frame: width as u64 * height as u64,
-        records: coherent.records(),
-        record_bytes: peak_bytes,
-        camera_bytes: peak_camera,
-        segments: peak_segments,
-        voxels: coherent.grid.len(),
-        active_voxels: coherent.active_voxels(),
-        blocks: (layout.cols, layout.rows),
-        prepare_seconds,
-        grid: (coherent.grid.lo, coherent.grid.hi),
-        overhead,
-    })
+    let mut report = sequence.report(rows, prepare_seconds);
+    report.overhead = overhead;
+    Ok(report)
 }
 
 /// One row of the statistics.
@@ -343,4 +545,8 @@ pub struct Report {
     /// `--overhead-reps`: CPU seconds of the first frame rendered coherently and in full,
     /// per repeat.
     pub overhead: Vec<(f64, f64)>,
+    /// How the grid was placed.
+    pub placement: Placement,
+    /// How many times an online grid grew to hold the scene.
+    pub regrids: usize,
 }

@@ -4,19 +4,20 @@
 
 use super::coherence_scenes::{animated, BASE, MOVING};
 use crate::accel::{self, Backend, Update};
-use crate::coherence::changes::{surface_boxes, FrameSummary};
+use crate::coherence::changes::{surface_boxes, Changes, FrameSummary};
 use crate::coherence::grid::Grid;
 use crate::coherence::record::Records;
-use crate::coherence::renderer::{CoherentRenderer, Engine, FrameStats};
+use crate::coherence::renderer::{CoherentRenderer, FrameStats};
+use crate::coherence::sequence::{
+    lookahead_grid, Placement, Sequence, SequenceJob, SequenceMode, SequenceTechnique,
+};
 use crate::coherence::tables::BlockLayout;
 use crate::control::Control;
 use crate::image::Image;
-use crate::integrators::path::{PathOptions, PathTracer};
-use crate::integrators::whitted::{Whitted, WhittedOptions};
+use crate::integrators::technique::{MonteCarloSettings, WhittedSettings};
+use crate::integrators::whitted::WhittedOptions;
 use crate::integrators::Context;
 use crate::math::Vec3;
-use crate::render::pixels::PixelView;
-use crate::render::progressive::ProgressiveOptions;
 use crate::render::PixelSampling;
 use crate::scene::animation::Animation;
 use crate::scene::{Geometry, QuadMesh, TriangleMesh};
@@ -206,73 +207,87 @@ fn bits(image: &Image) -> Vec<[u32; 3]> {
         .collect()
 }
 
+/// The sequence `raylink animate` would make of `frames` (`--verify`, segment records,
+/// 4096 voxels, one of the two placements), with the test's integrator settings.
+fn sequence_job(
+    kind: Kind,
+    (w, h): (u32, u32),
+    blocks: (u32, u32),
+    frames: Vec<i64>,
+    placement: Placement,
+) -> SequenceJob {
+    let technique = match kind {
+        Kind::Whitted => SequenceTechnique::Whitted(WhittedSettings {
+            max_depth: WhittedOptions::default().max_depth,
+            area_samples: 4,
+            fresnel: WhittedOptions::default().fresnel,
+            sampling: PixelSampling::Adaptive {
+                threshold: 0.1,
+                max_depth: 1,
+            },
+        }),
+        Kind::Path => SequenceTechnique::Path(MonteCarloSettings {
+            max_depth: 4,
+            spp: 4,
+            time_limit: None,
+            filter: Default::default(),
+        }),
+    };
+    SequenceJob {
+        technique,
+        width: w,
+        height: h,
+        seed: 3,
+        threads: Some(2),
+        accel: Backend::Embree,
+        frames,
+        mode: SequenceMode::Verify,
+        records: Records::Segments,
+        voxels: 4096,
+        blocks,
+        overhead_reps: 0,
+        placement,
+    }
+}
+
 /// Renders every frame incrementally and from scratch; asserts they are identical and
-/// returns the per-frame statistics and the images.
+/// returns the per-frame statistics and the images. The grids are those `raylink animate`
+/// places: over the changes for the look-ahead renderers (four ways of keeping records, which
+/// must retrace the same blocks), and over the scene, growing, for the online one.
 fn run(text: &str, kind: Kind, blocks: (u32, u32)) -> Vec<(FrameStats, Image)> {
     let anim = Animation::from_str(text, Path::new("test.toml")).expect("the scene reads");
     let frames: Vec<i64> = anim.frame_numbers().collect();
     let scenes: Vec<_> = frames.iter().map(|&f| anim.scene_at(f).unwrap()).collect();
-    let (w, h) = (scenes[0].camera.width, scenes[0].camera.height);
-    let whitted = Whitted::new(WhittedOptions {
-        area_samples: 4,
-        ..WhittedOptions::default()
-    });
-    let path = PathTracer::new(PathOptions { max_depth: 4 });
-    let engine = match kind {
-        Kind::Whitted => Engine::Whitted {
-            integrator: &whitted,
-            view: PixelView {
-                width: w,
-                height: h,
-                sampling: PixelSampling::Adaptive {
-                    threshold: 0.1,
-                    max_depth: 1,
-                },
-                threads: Some(2),
-                seed: 3,
-            },
-        },
-        Kind::Path => Engine::MonteCarlo {
-            integrator: &path,
-            options: ProgressiveOptions {
-                width: w,
-                height: h,
-                spp: 4,
-                time_limit: None,
-                threads: Some(2),
-                seed: 3,
-                filter: Default::default(),
-            },
-        },
-    };
-    let mut boxes = Vec::new();
-    for s in &scenes {
-        boxes.extend(s.bounds());
-        for l in &s.lights {
-            if let crate::scene::Light::Point { position, .. } = l {
-                boxes.push((*position, *position));
-            }
-        }
-    }
-    let grid = CoherentRenderer::grid_around(&boxes, 4096);
-    let layout = BlockLayout::new(w, h, blocks.0, blocks.1);
+    let size = (scenes[0].camera.width, scenes[0].camera.height);
+    let job = sequence_job(kind, size, blocks, frames.clone(), Placement::Lookahead);
+    let integrators = job.integrators();
+    let engine = job.engine(&integrators);
+    let changes: Vec<Changes> = scenes
+        .windows(2)
+        .map(|w| FrameSummary::new(&w[0], None).diff(&FrameSummary::new(&w[1], None)))
+        .collect();
+    let grid = lookahead_grid(&changes, job.voxels);
+    let layout = BlockLayout::new(size.0, size.1, blocks.0, blocks.1);
     // The paper's voxel tables, recording everywhere.
     let mut r = CoherentRenderer::with_records(grid.clone(), layout, Records::Tables);
-    // Segment records, everywhere, and (what `raylink animate` does) only where a later
-    // frame changes something: both must retrace exactly the same blocks.
+    // Segment records, everywhere, and (what `raylink animate --lookahead` does) only where a
+    // later frame changes something: both must retrace exactly the same blocks.
     let mut segments = CoherentRenderer::with_records(grid.clone(), layout, Records::Segments);
     // Segment records over their memory budget after frame 0: turned into tables.
     let mut switched = CoherentRenderer::with_records(grid.clone(), layout, Records::Segments);
     switched.set_segment_budget(1);
     let mut sparse = CoherentRenderer::new(grid, layout);
-    let changes: Vec<Vec<_>> = scenes
-        .windows(2)
-        .map(|w| {
-            let c = FrameSummary::new(&w[0], None).diff(&FrameSummary::new(&w[1], None));
-            sparse.surface_boxes(&c)
-        })
-        .collect();
-    sparse.restrict_to_sequence(&changes);
+    let marked: Vec<Vec<_>> = changes.iter().map(|c| sparse.surface_boxes(c)).collect();
+    sparse.restrict_to_sequence(&marked);
+    // Online, as `raylink animate` makes frames by default.
+    let mut online = Sequence::new(&sequence_job(
+        kind,
+        size,
+        blocks,
+        frames.clone(),
+        Placement::Online,
+    ))
+    .unwrap();
     let mut out = Vec::new();
     // The incremental renderer moves one dynamic structure (Embree refits what moved); each
     // full render builds its own static one.
@@ -303,6 +318,9 @@ fn run(text: &str, kind: Kind, blocks: (u32, u32)) -> Vec<(FrameStats, Image)> {
             bits(&image) == bits(&full),
             "frame {f}: the incremental frame differs from the full render"
         );
+        let (image3, row) = online.next(*f, scene, &control, true).unwrap();
+        assert_eq!(row.identical, Some(true), "frame {f}: online");
+        assert!(bits(&image3) == bits(&full), "frame {f}: online");
         out.push((stats, image));
     }
     assert_eq!(switched.records(), Records::Tables);

@@ -4,6 +4,7 @@
 mod binary_files;
 mod bsdf;
 mod coherence;
+mod coherence_random;
 mod coherence_scenes;
 mod irradiance_cache;
 mod network_build;

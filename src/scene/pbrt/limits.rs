@@ -176,8 +176,10 @@ impl Loader {
         self.usage.includes += 1;
         if self.usage.includes > MAX_INCLUDES {
             return Err(loc.error(format!(
-                "{kw}: the scene runs more than {MAX_INCLUDES} Include and Import statements, \
-                 raylink's fixed limit (do its files include the same files over and over?)"
+                "{kw}: the scene {} runs more than {MAX_INCLUDES} Include and Import \
+                 statements, raylink's fixed limit (do its files include the same files over \
+                 and over?)",
+                self.source.display()
             )));
         }
         Ok(())
