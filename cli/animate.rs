@@ -111,6 +111,11 @@ pub struct AnimateArgs {
     /// and too noisy to compare once.
     #[arg(long, value_name = "N", default_value_t = 0)]
     pub overhead_reps: u32,
+    /// Also write, per frame, a map of what was retraced (pattern as -o): the kept pixels in
+    /// dim grey, red over the blocks retraced because something they saw changed, blue over
+    /// a frame traced in full.
+    #[arg(long, value_name = "PATTERN", conflicts_with = "no_coherence")]
+    pub retrace_map: Option<String>,
     /// Write the per-frame statistics to this CSV file.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<PathBuf>,
@@ -196,6 +201,17 @@ pub fn select_frames(spec: &str, all: std::ops::Range<i64>) -> Result<Vec<i64>> 
     Ok((a..=b).collect())
 }
 
+/// A frame-pattern error of `--output` said of `--retrace-map`.
+fn retrace_map_error(pattern: &str, e: Error) -> Error {
+    match e {
+        Error::Invalid(_) => Error::Invalid(format!(
+            "--retrace-map {pattern}: needs one frame number placeholder, %d or %0Nd (e.g. \
+             %04d)"
+        )),
+        other => other,
+    }
+}
+
 fn parse_blocks(s: &str) -> Result<(u32, u32)> {
     let bad = || {
         Error::Invalid(format!(
@@ -246,7 +262,27 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
         .map(|&f| frame_path(&args.output, f))
         .collect::<Result<Vec<_>>>()?;
     let csv: Vec<PathBuf> = args.csv.iter().cloned().collect();
-    crate::render::refuse_aliases(outputs.iter().chain(&csv), &scene0.inputs)?;
+    let maps = match &args.retrace_map {
+        Some(pattern) => {
+            let maps = frames
+                .iter()
+                .map(|&f| frame_path(pattern, f).map_err(|e| retrace_map_error(pattern, e)))
+                .collect::<Result<Vec<_>>>()?;
+            if maps.iter().any(|m| outputs.contains(m) || csv.contains(m)) {
+                return Err(Error::Invalid(format!(
+                    "--retrace-map {pattern}: names the same files as the frames or the CSV"
+                ))
+                .into());
+            }
+            if let Some(dir) = maps[0].parent().filter(|d| !d.as_os_str().is_empty()) {
+                std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+            }
+            check_output_path(&maps[0]).map_err(|e| Error::Invalid(e.to_string()))?;
+            maps
+        }
+        None => Vec::new(),
+    };
+    crate::render::refuse_aliases(outputs.iter().chain(&csv).chain(&maps), &scene0.inputs)?;
     let integrator = match (args.integrator, scene0.settings.integrator) {
         (Some(i), _) => i,
         (None, None | Some(TechniqueKind::Whitted)) => AnimIntegrator::Whitted,
@@ -347,6 +383,10 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
             &metadata,
             &out_options,
         )?;
+        if let Some(pattern) = &args.retrace_map {
+            let map = report::retrace_map(image, &row.coherent, blocks);
+            write_image(&frame_path(pattern, f)?, &map, &metadata, &out_options)?;
+        }
         written = Some(f);
         if row.identical == Some(false) {
             eprintln!(

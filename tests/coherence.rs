@@ -279,3 +279,60 @@ fn a_light_that_only_dims_retraces_what_it_lights() {
         }
     }
 }
+
+/// `--retrace-map` draws, per frame, exactly the pixels the statistics count as retraced: red
+/// over the retraced blocks of a coherent frame (as many as the CSV's `pixels_retraced`),
+/// blue over a frame traced in full; and it may not name the frames' own files.
+#[test]
+fn retrace_maps_show_the_retraced_pixels() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("moving.toml");
+    std::fs::write(&scene, animated("", MOVING)).unwrap();
+    let frames = dir.path().join("f_%d.exr");
+    let maps = dir.path().join("maps/m_%d.exr");
+    let csv = dir.path().join("stats.csv");
+    let out = common::raylink(&[
+        "animate",
+        scene.to_str().unwrap(),
+        "-o",
+        frames.to_str().unwrap(),
+        "--retrace-map",
+        maps.to_str().unwrap(),
+        "--csv",
+        csv.to_str().unwrap(),
+        "--block-table",
+        "8x6",
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let header: Vec<&str> = text.lines().next().unwrap().split(',').collect();
+    let column = header.iter().position(|h| *h == "pixels_retraced").unwrap();
+    for (f, line) in text.lines().skip(1).enumerate() {
+        let retraced: usize = line.split(',').nth(column).unwrap().parse().unwrap();
+        let path = dir.path().join(format!("maps/m_{f}.exr"));
+        let (map, _) = raylink::read_image(&path).unwrap();
+        let red = map.pixels.iter().filter(|p| p.x > 0.5 && p.z < 0.5).count();
+        let blue = map.pixels.iter().filter(|p| p.z > 0.5).count();
+        if f == 0 {
+            assert_eq!(
+                (red, blue),
+                (0, map.pixels.len()),
+                "frame 0 is traced in full"
+            );
+        } else {
+            assert_eq!((red, blue), (retraced, 0), "frame {f}");
+        }
+    }
+    let clash = common::raylink(&[
+        "animate",
+        scene.to_str().unwrap(),
+        "-o",
+        frames.to_str().unwrap(),
+        "--retrace-map",
+        frames.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(clash.status.code(), Some(2));
+    assert!(common::stderr(&clash).contains("--retrace-map"));
+}

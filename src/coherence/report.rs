@@ -1,9 +1,13 @@
 //! The statistics of a sequence for people: a summary in the manner of Table 2 of Jevans's
-//! paper, and a per-frame CSV.
+//! paper, a per-frame CSV, and a map of what each frame retraced.
 
 use super::record::Records;
+use super::renderer::FrameStats;
 use super::sequence::{Placement, Report, Time};
+use super::tables::BlockLayout;
 use crate::accel::Update;
+use crate::image::Image;
+use crate::math::Rgb;
 use std::fmt::Write as _;
 
 /// The per-frame CSV.
@@ -240,4 +244,66 @@ pub fn summary(report: &Report) -> String {
         );
     }
     s
+}
+
+/// A picture of what a coherent frame retraced (the paper's figure 4): the frame in dim grey
+/// where its pixels were kept from the frame before, red over the blocks retraced because
+/// something they saw changed, and blue over the whole frame when it was traced in full (the
+/// first frame, a grid that grew, a camera or world change: `stats.full_reason`).
+/// `blocks`: the block table's columns and rows.
+pub fn retrace_map(frame: &Image, stats: &FrameStats, blocks: (u32, u32)) -> Image {
+    let layout = BlockLayout::new(frame.width, frame.height, blocks.0, blocks.1);
+    let grey = |p: Rgb| 0.3 * (0.2126 * p.x + 0.7152 * p.y + 0.0722 * p.z).clamp(0.0, 1.0);
+    let mut map = Image::new(frame.width, frame.height);
+    for (m, p) in map.pixels.iter_mut().zip(&frame.pixels) {
+        *m = Rgb::splat(grey(*p));
+    }
+    let tint = if stats.full_reason.is_some() {
+        Rgb::new(0.1, 0.3, 1.0)
+    } else {
+        Rgb::new(1.0, 0.15, 0.1)
+    };
+    for &b in &stats.blocks {
+        let r = layout.rect(b);
+        for y in r.y0..r.y1 {
+            for x in r.x0..r.x1 {
+                let i = (y * frame.width + x) as usize;
+                map.pixels[i] = Rgb::splat(grey(frame.pixels[i])) + 0.7 * tint;
+            }
+        }
+    }
+    map
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_retrace_map_marks_exactly_the_retraced_blocks() {
+        let frame = Image::new(8, 6);
+        let stats = FrameStats {
+            blocks: vec![1, 4],
+            ..FrameStats::default()
+        };
+        let map = retrace_map(&frame, &stats, (4, 3));
+        let layout = BlockLayout::new(8, 6, 4, 3);
+        for y in 0..6 {
+            for x in 0..8 {
+                let block = (0..layout.len())
+                    .find(|&b| {
+                        let r = layout.rect(b);
+                        (r.x0..r.x1).contains(&x) && (r.y0..r.y1).contains(&y)
+                    })
+                    .unwrap();
+                let red = map.pixels[(y * 8 + x) as usize].x > 0.5;
+                assert_eq!(red, block == 1 || block == 4, "pixel {x},{y}");
+            }
+        }
+        let full = FrameStats {
+            full_reason: Some("first frame".into()),
+            ..stats
+        };
+        assert!(retrace_map(&frame, &full, (4, 3)).pixels[2].z > 0.5);
+    }
 }
