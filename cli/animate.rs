@@ -59,7 +59,7 @@ pub struct AnimateArgs {
     #[arg(long)]
     pub spp: Option<u32>,
     /// Adaptive anti-aliasing (Whitted): largest corner difference accepted.
-    #[arg(long)]
+    #[arg(long, value_parser = crate::options::finite_f32)]
     pub aa_threshold: Option<f32>,
     /// Adaptive anti-aliasing (Whitted): deepest subdivision level.
     #[arg(long)]
@@ -134,7 +134,7 @@ pub struct AnimateArgs {
     #[arg(long)]
     pub half: bool,
     /// Exposure in stops for 8-bit outputs.
-    #[arg(long, allow_negative_numbers = true)]
+    #[arg(long, value_parser = crate::options::finite_f32, allow_negative_numbers = true)]
     pub exposure: Option<f32>,
     /// No progress lines.
     #[arg(short, long)]

@@ -59,7 +59,7 @@ pub struct BenchArgs {
     pub network: bool,
     /// Network bench: comma-separated intercept steps, one network each [default:
     /// 0.03125,0.0078125 (16× the patches); 0.0625,0.03125 with --quick].
-    #[arg(long, value_delimiter = ',')]
+    #[arg(long, value_parser = crate::options::finite_f32, value_delimiter = ',')]
     pub network_steps: Option<Vec<f32>>,
     /// Network bench: slopes per axis [default: 20, the paper's 1,200 links per patch; 8
     /// with --quick].

@@ -52,7 +52,8 @@ pub struct MergeArgs {
     #[arg(short, long = "output", required = true, value_name = "FILE")]
     outputs: Vec<PathBuf>,
     /// Exposure in stops applied to 8-bit outputs (PNG, JPEG).
-    #[arg(long, default_value_t = 0.0, allow_negative_numbers = true)]
+    #[arg(long, value_parser = crate::options::finite_f32, default_value_t = 0.0,
+        allow_negative_numbers = true)]
     exposure: f32,
     /// Store EXR pixels as half floats instead of 32-bit floats.
     #[arg(long)]

@@ -143,16 +143,19 @@ pub struct RenderArgs {
     pub quiet: bool,
     /// Render whole sample passes until this many seconds have passed (--spp, if given,
     /// still caps the samples).
-    #[arg(long, value_name = "SECONDS", allow_negative_numbers = true, help_heading = MONTE_CARLO)]
+    #[arg(long, value_parser = finite_f64, value_name = "SECONDS", allow_negative_numbers = true,
+        help_heading = MONTE_CARLO)]
     pub time_limit: Option<f64>,
     /// Write the outputs after a pass when this many seconds have passed since the last
     /// write, so a long render can be watched.
-    #[arg(long, value_name = "SECONDS", help_heading = MONTE_CARLO)]
+    #[arg(long, value_parser = finite_f64, value_name = "SECONDS",
+        help_heading = MONTE_CARLO)]
     pub write_interval: Option<f64>,
     /// Save the film every this many seconds (after a pass) to OUTPUT.checkpoint beside the
     /// first output, for --resume. An interrupted render (SIGINT, SIGTERM) always saves one.
     /// The checkpoint is removed when the render ends.
-    #[arg(long, value_name = "SECONDS", help_heading = MONTE_CARLO)]
+    #[arg(long, value_parser = finite_f64, value_name = "SECONDS",
+        help_heading = MONTE_CARLO)]
     pub checkpoint_interval: Option<f64>,
     /// Continue an interrupted render from OUTPUT.checkpoint (same scene and options); the
     /// image equals that of an uninterrupted render.
@@ -164,14 +167,14 @@ pub struct RenderArgs {
     filter: Option<FilterName>,
     /// Radius of the pixel filter in pixels (default 0.5 for box, 2 for triangle, 1.5 for
     /// Gaussian).
-    #[arg(long, help_heading = MONTE_CARLO)]
+    #[arg(long, value_parser = finite_f32, help_heading = MONTE_CARLO)]
     filter_radius: Option<f32>,
     /// Anti-aliasing: adaptive (default) or uniform supersampling.
     #[arg(long, value_enum, help_heading = WHITTED)]
     aa: Option<AntiAliasingName>,
     /// Adaptive anti-aliasing: largest corner difference accepted without subdividing
     /// (default 0.1).
-    #[arg(long, help_heading = WHITTED)]
+    #[arg(long, value_parser = finite_f32, help_heading = WHITTED)]
     aa_threshold: Option<f32>,
     /// Adaptive anti-aliasing: deepest subdivision level, each level halving the square
     /// (default 3).
@@ -187,13 +190,13 @@ pub struct RenderArgs {
     #[arg(long, help_heading = CACHE)]
     ab: Option<u32>,
     /// Accuracy a: values are used where the estimated error is below a (default 0.15).
-    #[arg(long, help_heading = CACHE)]
+    #[arg(long, value_parser = finite_f32, help_heading = CACHE)]
     ic_accuracy: Option<f32>,
     /// Rays per primary value at the first bounce, halved per bounce (default 512).
     #[arg(long, help_heading = CACHE)]
     ic_samples: Option<u32>,
     /// A value's R is at least the scene's size / ar (default 64).
-    #[arg(long, help_heading = CACHE)]
+    #[arg(long, value_parser = finite_f32, help_heading = CACHE)]
     ar: Option<f32>,
     /// Load values from this file if it exists, and write the cache to it; a file holding
     /// this view's overture (raylink precompute) is only read.
@@ -212,7 +215,8 @@ pub struct RenderArgs {
     #[arg(long, help_heading = OUTPUT)]
     pub aov: bool,
     /// Exposure in stops applied to 8-bit outputs (PNG, JPEG).
-    #[arg(long, allow_negative_numbers = true, help_heading = OUTPUT)]
+    #[arg(long, value_parser = finite_f32, allow_negative_numbers = true,
+        help_heading = OUTPUT)]
     pub exposure: Option<f32>,
     /// Store EXR pixels as half floats instead of 32-bit floats.
     #[arg(long, help_heading = OUTPUT)]
@@ -226,14 +230,14 @@ pub struct NetworkArgs {
     #[arg(long, help_heading = NETWORK)]
     slopes: Option<u32>,
     /// Intercept step h, as a fraction of the scene's largest extent (default 1/64).
-    #[arg(long, help_heading = NETWORK)]
+    #[arg(long, value_parser = finite_f32, help_heading = NETWORK)]
     intercept_step: Option<f32>,
     /// Patch edge, as a fraction of the scene's largest extent (default: the intercept
     /// step).
-    #[arg(long, help_heading = NETWORK)]
+    #[arg(long, value_parser = finite_f32, help_heading = NETWORK)]
     patch_size: Option<f32>,
     /// Intercept jitter, a fraction of the intercept step (0 to 1; default 1).
-    #[arg(long, help_heading = NETWORK)]
+    #[arg(long, value_parser = finite_f32, help_heading = NETWORK)]
     network_jitter: Option<f32>,
     /// How links are found (default scan).
     #[arg(long, value_enum, help_heading = NETWORK)]
@@ -241,14 +245,14 @@ pub struct NetworkArgs {
     /// Stop distributing when the unshot flux is below this fraction of the emitted flux
     /// (default 0.001; conjugate gradients hold it to a tenth of that: their error is less
     /// even).
-    #[arg(long, help_heading = NETWORK)]
+    #[arg(long, value_parser = finite_f32, help_heading = NETWORK)]
     tolerance: Option<f32>,
     /// Load the network from this file if it exists (no preprocess), else build it and
     /// write it there.
     #[arg(long, value_name = "FILE", help_heading = NETWORK)]
     pub network_file: Option<PathBuf>,
     /// Multiply every emission by this factor (relighting a saved network; default 1).
-    #[arg(long, help_heading = NETWORK)]
+    #[arg(long, value_parser = finite_f32, help_heading = NETWORK)]
     light_scale: Option<f32>,
     /// Print patches, links, intersections, memory and timings.
     #[arg(long, help_heading = NETWORK)]
@@ -260,6 +264,25 @@ pub struct NetworkArgs {
     /// indirect light from the network.
     #[arg(long, help_heading = NETWORK)]
     network_hybrid: bool,
+}
+
+/// A 64-bit float option: NaN and the infinities are refused (clap's message names the
+/// option), as is a number beyond the type's range ("1e999").
+pub fn finite_f64(text: &str) -> Result<f64, String> {
+    let v: f64 = text.trim().parse().map_err(|e| format!("{e}"))?;
+    if !v.is_finite() {
+        return Err(format!("must be a finite number, got {v}"));
+    }
+    Ok(v)
+}
+
+/// [`finite_f64`] for a 32-bit float option ("1e39" is beyond its range).
+pub fn finite_f32(text: &str) -> Result<f32, String> {
+    let v: f32 = text.trim().parse().map_err(|e| format!("{e}"))?;
+    if !v.is_finite() {
+        return Err(format!("must be a finite number, got {v}"));
+    }
+    Ok(v)
 }
 
 /// The command-line name of a setting, for messages.
@@ -429,4 +452,74 @@ pub fn check(args: &RenderArgs) -> Result<(), Error> {
         return Err(Error::setting("threads", "must be at least 1"));
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use clap::error::ErrorKind;
+    use clap::CommandFactory;
+
+    /// Every option of every subcommand that takes a number (found from the command itself:
+    /// the options whose value clap parses, refusing "abc", that are not a choice of names;
+    /// so a new option is covered as it comes) refuses NaN, the infinities and numbers
+    /// beyond its type's range, naming the option. (tests/bad_inputs/options.txt runs some
+    /// through the program: exit code 2, one line.)
+    #[test]
+    fn nan_and_infinities_are_refused_by_every_numeric_option() {
+        let command = crate::Args::command();
+        let mut numeric = Vec::new();
+        for sub in command.get_subcommands() {
+            let name = sub.get_name();
+            for arg in sub.get_arguments() {
+                let Some(long) = arg.get_long() else { continue };
+                if !arg.get_action().takes_values() || !arg.get_possible_values().is_empty() {
+                    continue;
+                }
+                let parse = |value: &str| {
+                    command.clone().try_get_matches_from([
+                        "raylink",
+                        name,
+                        &format!("--{long}={value}"),
+                    ])
+                };
+                match parse("abc") {
+                    Err(e) if e.kind() == ErrorKind::ValueValidation => {
+                        numeric.push((name.to_string(), long.to_string()))
+                    }
+                    _ => continue,
+                }
+                for value in ["nan", "NaN", "inf", "-inf", "infinity", "1e999"] {
+                    let case = format!("raylink {name} --{long}={value}");
+                    match parse(value) {
+                        Err(e) => {
+                            let text = e.to_string();
+                            assert_eq!(e.kind(), ErrorKind::ValueValidation, "{case}: {text}");
+                            assert!(
+                                text.contains(&format!("'--{long} <")) && text.contains(value),
+                                "{case}: {text}"
+                            );
+                        }
+                        Ok(_) => panic!("{case} is accepted"),
+                    }
+                }
+            }
+        }
+        let names: Vec<String> = numeric.iter().map(|(s, o)| format!("{s} --{o}")).collect();
+        for known in [
+            "render --aa-threshold",
+            "render --time-limit",
+            "render --width",
+            "render --exposure",
+            "precompute --intercept-step",
+            "relight --light-scale",
+            "relight --tolerance",
+            "animate --exposure",
+            "animate --voxels",
+            "merge --exposure",
+            "bench --network-steps",
+        ] {
+            assert!(names.iter().any(|n| n == known), "{known} not in {names:?}");
+        }
+        assert!(names.len() > 80, "{} numeric options", names.len());
+    }
 }

@@ -117,3 +117,37 @@ pub fn network(data: &[u8]) {
     let path = put("network.rlnet", &bytes);
     one_line(net_file::load_all(&path, network_scene(), None));
 }
+
+/// [`network`] with both checksums made right for the bytes (where the header's counts place
+/// the prefix checksum within the file), so that the fuzzer explores what follows them: the
+/// node and link tables and the light basis, read by the whole load and the prefix's.
+pub fn network_sealed(data: &[u8]) {
+    use crate::binary_file::checksum;
+    use crate::integrators::illumination_network::file as net_file;
+    let mut bytes = net_file::FORMAT.start(data.len());
+    bytes.extend_from_slice(data);
+    let word = |at: usize| {
+        bytes
+            .get(at..at + 8)
+            .map(|w| u64::from_le_bytes(w.try_into().unwrap()))
+    };
+    // The nodes count (u32 at 48) and the basis length (u64 at 112) place the prefix checksum.
+    let nodes = word(48).map(|w| w & 0xffff_ffff);
+    let prefix = nodes
+        .zip(word(112))
+        .and_then(|(n, basis)| 120u64.checked_add(4 * n)?.checked_add(basis));
+    if let Some(p) = prefix.and_then(|p| usize::try_from(p).ok()) {
+        if p.checked_add(16).is_some_and(|end| end <= bytes.len()) {
+            let sum = checksum(&bytes[..p]);
+            bytes[p..p + 8].copy_from_slice(&sum.to_le_bytes());
+        }
+    }
+    if bytes.len() >= 20 {
+        let n = bytes.len() - 8;
+        let sum = checksum(&bytes[..n]);
+        bytes[n..].copy_from_slice(&sum.to_le_bytes());
+    }
+    let path = put("network-sealed.rlnet", &bytes);
+    one_line(net_file::load_all(&path, network_scene(), None));
+    one_line(net_file::load_prefix(&path, network_scene(), None));
+}

@@ -51,3 +51,8 @@ fn irradiance_cache_corpus() {
 fn network_corpus() {
     replay("network", raylink::fuzzing::network);
 }
+
+#[test]
+fn network_sealed_corpus() {
+    replay("network_sealed", raylink::fuzzing::network_sealed);
+}

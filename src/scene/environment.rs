@@ -85,7 +85,12 @@ impl Environment {
     ) -> Result<(Environment, Mapping), String> {
         let mapping = Mapping::of(image.width, image.height)?;
         let det = transform.determinant();
-        if !det.is_finite() || det.abs() < 1e-12 {
+        if !transform.is_finite() || !det.is_finite() {
+            return Err(format!(
+                "the environment's transform overflows: it is not finite (determinant {det})"
+            ));
+        }
+        if det.abs() < 1e-12 {
             return Err(format!(
                 "the environment's transform is singular (determinant {det})"
             ));

@@ -9,6 +9,7 @@ mod coherence_scenes;
 mod irradiance_cache;
 mod network_build;
 mod network_common;
+mod network_files;
 mod network_relight;
 mod network_scenes;
 mod network_transport;

@@ -155,6 +155,22 @@ fn read_header(
     }
     stats.seconds = f64::from_le_bytes(r.take::<8>().ok_or_else(truncated)?);
     let basis_len = usize::try_from(r.u64().ok_or_else(truncated)?).map_err(|_| truncated())?;
+    // The counts as a build writes them: at most one node per patch side, each link stored
+    // at both its ends or escaping, and a time that is one.
+    if nodes as u64 > 2 * cells as u64 {
+        return Err(bad(&format!(
+            "corrupt: {nodes} nodes for {cells} patches (2 sides each)"
+        )));
+    }
+    if stats.link_ends.checked_add(stats.escapes) != Some(n_links as u64) {
+        return Err(bad(&format!(
+            "corrupt: {n_links} links, where its build made {} link ends and {} escapes",
+            stats.link_ends, stats.escapes
+        )));
+    }
+    if stats.extra > n_links as u64 || !(stats.seconds.is_finite() && stats.seconds >= 0.0) {
+        return Err(bad("corrupt: its build statistics are not a build's"));
+    }
     Ok(Header {
         params,
         cells,
@@ -184,9 +200,19 @@ fn node_table(path: &Path, bytes: &[u8], cells: u32) -> Result<(Vec<u32>, Vec<u3
     let key_of_node = words(bytes);
     let keys = 2 * cells as usize;
     let mut node_of_key = vec![NONE; keys];
+    // Nodes are numbered in the order of their side keys.
     for (n, &k) in key_of_node.iter().enumerate() {
-        if k as usize >= keys || node_of_key[k as usize] != NONE {
-            return Err(FORMAT.error(path, "invalid node table"));
+        if k as usize >= keys {
+            return Err(FORMAT.error(
+                path,
+                &format!("invalid node table: node {n} is patch side {k}, past the last ({keys})"),
+            ));
+        }
+        if n > 0 && k <= key_of_node[n - 1] {
+            return Err(FORMAT.error(
+                path,
+                &format!("invalid node table: node {n}'s patch side {k} is out of order"),
+            ));
         }
         node_of_key[k as usize] = n as u32;
     }
@@ -207,7 +233,7 @@ fn basis_of(path: &Path, bytes: &[u8], nodes: usize, slots: usize) -> Result<Opt
     }
     LightBasis::from_bytes(bytes, nodes, slots)
         .map(Some)
-        .ok_or_else(|| FORMAT.error(path, "invalid light basis"))
+        .map_err(|why| FORMAT.error(path, &format!("invalid light basis: {why}")))
 }
 
 /// A network file opened up to the end of its prefix.
@@ -233,6 +259,9 @@ fn open_prefix(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> 
         .take((12 + HEADER) as u64)
         .read_to_end(&mut head)
         .map_err(|e| Error::io(path, e))?;
+    if !head.is_empty() && head.len() < 12 && FORMAT.magic.starts_with(&head[..head.len().min(8)]) {
+        return Err(bad("truncated"));
+    }
     if head.len() < 12 || &head[..8] != FORMAT.magic {
         return Err(bad("no raylink illumination network header"));
     }
@@ -255,10 +284,24 @@ fn open_prefix(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> 
             .checked_add(p)?
             .checked_add(16)
     });
-    if total != Some(len) {
-        return Err(bad(
-            "size does not match the node count (truncated or corrupt)",
-        ));
+    match total {
+        Some(total) if total > len => {
+            return Err(bad(&format!(
+                "truncated: {len} bytes, where its header's counts need {total}"
+            )))
+        }
+        Some(total) if total == len => {}
+        Some(total) => {
+            return Err(bad(&format!(
+                "size does not match the node count: {len} bytes, where its header's counts \
+                 need {total}"
+            )))
+        }
+        None => {
+            return Err(bad(
+                "size does not match the node count: its header's counts overflow",
+            ))
+        }
     }
     // Within the file's length (checked above).
     let prefix_len = prefix_len.unwrap_or_default() as usize;
@@ -424,6 +467,29 @@ fn link_flags(code: LinkCode, list: &[u32], slots: usize, nodes: usize) -> u8 {
     flags
 }
 
+/// What is wrong with a link table's offsets, if anything: they start at 0, end at the link
+/// count, and give every node at least one link (a build makes nodes only of patch sides
+/// that a line links to another).
+fn starts_problem(link_start: &[u32], n_links: usize) -> Option<String> {
+    use rayon::prelude::*;
+    if link_start[0] != 0 {
+        return Some(format!("the first node's links start at {}", link_start[0]));
+    }
+    let last = *link_start.last().expect("nodes + 1 offsets");
+    if last as usize != n_links {
+        return Some(format!(
+            "the links end at {last}, not at the link count {n_links}"
+        ));
+    }
+    link_start
+        .par_windows(2)
+        .position_first(|w| w[1] <= w[0])
+        .map(|n| match link_start[n + 1] < link_start[n] {
+            true => format!("node {n}'s links end before they start"),
+            false => format!("node {n} has no links"),
+        })
+}
+
 /// Reads a network written by [`save`] for the same scene geometry. `expected`, when given,
 /// must equal the stored parameters. Any other file is an [`Error::Input`] naming it.
 pub fn load(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> Result<Network> {
@@ -486,9 +552,8 @@ pub fn load_all(
     for w in link_start.iter_mut() {
         *w = u32::from_le(*w);
     }
-    let starts_ok = link_start[0] == 0
-        && link_start.windows(2).all(|w| w[0] <= w[1])
-        && link_start[nodes] as usize == n_links;
+    let starts = starts_problem(&link_start, n_links);
+    let starts_ok = starts.is_none();
     let code = LinkCode::new(slots, 2 * h.cells as usize).map_err(|e| bad(&e))?;
     // Per node, in parallel: W, and whether its links go to existing slots and nodes (flag 1)
     // in slot order (flag 2), checked four at a time (`link_flags`). (A bad slot reads a W
@@ -549,6 +614,9 @@ pub fn load_all(
     }
     let (key_of_node, node_of_key) = node_table(path, a, h.cells)?;
     let basis = basis_of(path, basis, nodes, slots)?;
+    if let Some(why) = starts {
+        return Err(bad(&format!("invalid link table: {why}")));
+    }
     let Some((etendue, escape_etendue, flags)) = checked else {
         return Err(bad("invalid link table"));
     };

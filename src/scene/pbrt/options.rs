@@ -46,7 +46,10 @@ impl Loader {
                 }
                 p.ignore("focaldistance");
                 let ctm = self.state.ctm;
-                if ctm.determinant().abs() < 1e-12 || !ctm.is_finite() {
+                if !ctm.is_finite() || !ctm.determinant().is_finite() {
+                    return Err(loc.error("Camera: the camera transform overflows (not finite)"));
+                }
+                if ctm.determinant().abs() < 1e-12 {
                     return Err(loc.error("Camera: the camera transform is singular"));
                 }
                 let camera_to_world = ctm.inverse();

@@ -68,7 +68,12 @@ impl Loader {
         let in_object = self.object.is_some();
         let m = if in_object { ctm } else { self.mirror * ctm };
         let det = glam::DMat3::from_mat4(m).determinant();
-        if !det.is_finite() || det.abs() < 1e-30 {
+        if !m.is_finite() || !det.is_finite() {
+            return Err(loc.error(format!(
+                "{st}: the transform overflows (it is not finite, determinant {det})"
+            )));
+        }
+        if det.abs() < 1e-30 {
             return Err(loc.error(format!(
                 "{st}: the transform is singular (determinant {det})"
             )));
@@ -198,7 +203,7 @@ impl Loader {
             };
             if !finite {
                 return Err(loc.error(format!(
-                    "{st}: the transform moves the shape out of the range of finite numbers"
+                    "{st}: the transform overflows: it moves the shape out of the range of finite numbers"
                 )));
             }
         }

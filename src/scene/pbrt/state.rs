@@ -53,12 +53,25 @@ impl Block {
 }
 
 impl Loader {
-    pub(super) fn set_ctm(&mut self, loc: &Loc, f: impl FnOnce(DMat4) -> DMat4) {
+    /// Applies statement `kw`'s change to the current transform; one that overflows (no
+    /// longer finite numbers, e.g. `Scale 1e200 ...` twice) is refused at its line.
+    pub(super) fn set_ctm(
+        &mut self,
+        loc: &Loc,
+        kw: &str,
+        f: impl FnOnce(DMat4) -> DMat4,
+    ) -> crate::Result<()> {
         if self.state.end_time_only {
-            let _ = loc;
-            return;
+            return Ok(());
         }
-        self.state.ctm = f(self.state.ctm);
+        let ctm = f(self.state.ctm);
+        if !ctm.is_finite() {
+            return Err(loc.error(format!(
+                "{kw}: the transform overflows (its matrix is no longer finite)"
+            )));
+        }
+        self.state.ctm = ctm;
+        Ok(())
     }
 
     pub(super) fn push(&mut self, block: Block, loc: &Loc) {

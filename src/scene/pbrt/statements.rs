@@ -121,18 +121,18 @@ impl Loader {
                     .collect();
                 self.shapes.extend(copies);
             }
-            "Identity" => self.set_ctm(&loc, |_| DMat4::IDENTITY),
+            "Identity" => self.set_ctm(&loc, kw, |_| DMat4::IDENTITY)?,
             "Translate" => {
                 let v = c.numbers(&loc, kw, 3)?;
-                self.set_ctm(&loc, |m| {
+                self.set_ctm(&loc, kw, |m| {
                     m * DMat4::from_translation(DVec3::new(v[0], v[1], v[2]))
-                });
+                })?;
             }
             "Scale" => {
                 let v = c.numbers(&loc, kw, 3)?;
-                self.set_ctm(&loc, |m| {
+                self.set_ctm(&loc, kw, |m| {
                     m * DMat4::from_scale(DVec3::new(v[0], v[1], v[2]))
-                });
+                })?;
             }
             "Rotate" => {
                 let v = c.numbers(&loc, kw, 4)?;
@@ -141,7 +141,7 @@ impl Loader {
                     return Err(loc.error("Rotate: the axis must not be zero"));
                 }
                 let r = DMat4::from_axis_angle(axis.normalize(), v[0].to_radians());
-                self.set_ctm(&loc, |m| m * r);
+                self.set_ctm(&loc, kw, |m| m * r)?;
             }
             "LookAt" => {
                 let v = c.numbers(&loc, kw, 9)?;
@@ -151,16 +151,16 @@ impl Loader {
                     DVec3::new(v[6], v[7], v[8]),
                 )
                 .map_err(|m| loc.error(format!("LookAt: {m}")))?;
-                self.set_ctm(&loc, |m| m * look);
+                self.set_ctm(&loc, kw, |m| m * look)?;
             }
             "Transform" | "ConcatTransform" => {
                 let v = c.matrix(&loc, kw)?;
                 // pbrt lists the matrix column by column.
                 let m = DMat4::from_cols_array(&v);
                 if kw == "Transform" {
-                    self.set_ctm(&loc, |_| m);
+                    self.set_ctm(&loc, kw, |_| m)?;
                 } else {
-                    self.set_ctm(&loc, |ctm| ctm * m);
+                    self.set_ctm(&loc, kw, |ctm| ctm * m)?;
                 }
             }
             "CoordinateSystem" => {

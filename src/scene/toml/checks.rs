@@ -82,7 +82,12 @@ impl Xform {
     pub(super) fn new(m: Mat4) -> Result<Xform, String> {
         let linear = Mat3::from_mat4(m);
         let det = linear.determinant();
-        if !det.is_finite() || det.abs() < 1e-30 {
+        if !m.is_finite() || !det.is_finite() {
+            return Err(format!(
+                "overflows: the combined transform is not finite (determinant {det})"
+            ));
+        }
+        if det.abs() < 1e-30 {
             return Err(format!("is singular (determinant {det})"));
         }
         Ok(Xform {

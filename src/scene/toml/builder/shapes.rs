@@ -121,7 +121,7 @@ impl Builder<'_> {
             return Err(ctx.fail(
                 site,
                 "transform",
-                "moves the shape out of the range of finite numbers",
+                "overflows: it moves the shape out of the range of finite numbers",
             ));
         }
         Ok(vec![Shape {
@@ -158,7 +158,7 @@ impl Builder<'_> {
                 return Err(ctx.fail(
                     site,
                     "transform",
-                    "moves the shape out of the range of finite numbers",
+                    "overflows: it moves the shape out of the range of finite numbers",
                 ));
             }
             mesh.positions.push(p);
@@ -276,7 +276,7 @@ impl Builder<'_> {
                 return Err(ctx.fail(
                     site,
                     "transform",
-                    "moves the shape out of the range of finite numbers",
+                    "overflows: it moves the shape out of the range of finite numbers",
                 ));
             }
             shapes.push(Shape {
@@ -323,7 +323,7 @@ impl Builder<'_> {
             return Err(ctx.fail(
                 site,
                 "transform",
-                "moves the shape out of the range of finite numbers",
+                "overflows: it moves the shape out of the range of finite numbers",
             ));
         }
         if shapes.iter().all(|s| s.geometry.area() <= 0.0) {
