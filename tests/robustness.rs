@@ -4,94 +4,14 @@
 
 use raylink::image::output::read_image;
 use raylink::image::{MetaValue, Metadata};
-use std::path::Path;
-use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
 
 mod common;
+use common::process::{catches, cpu_seconds, finish, signal, spawn, wait_for, wait_until};
 use common::{raylink, stderr};
 
-fn spawn(args: &[&str]) -> Child {
-    Command::new(env!("CARGO_BIN_EXE_raylink"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("the raylink binary starts")
-}
-
-fn signal(child: &Child, signal: nix::sys::signal::Signal) {
-    let pid = nix::unistd::Pid::from_raw(child.id() as i32);
-    nix::sys::signal::kill(pid, signal).expect("the signal is sent");
-}
-
-/// Waits until `path` exists (the render is under way), failing if the child ends first.
-fn wait_for(child: &mut Child, path: &Path) {
-    let start = Instant::now();
-    while !path.exists() {
-        if let Some(status) = child.try_wait().unwrap() {
-            panic!(
-                "the render ended ({status}) before {} appeared",
-                path.display()
-            );
-        }
-        assert!(
-            start.elapsed() < Duration::from_secs(120),
-            "no {}",
-            path.display()
-        );
-        std::thread::sleep(Duration::from_millis(5));
-    }
-}
-
-/// Waits until `ready(pid)`, failing if the child ends first.
-fn wait_until(child: &mut Child, ready: impl Fn(u32) -> bool) {
-    let start = Instant::now();
-    while !ready(child.id()) {
-        if let Some(status) = child.try_wait().unwrap() {
-            panic!("the render ended ({status}) too soon");
-        }
-        assert!(start.elapsed() < Duration::from_secs(120), "never ready");
-        std::thread::sleep(Duration::from_millis(5));
-    }
-}
-
-/// Whether the process has a handler for SIGTERM (bit 15 of SigCgt in /proc/PID/status).
+/// Whether the process has a handler for SIGTERM.
 fn catches_sigterm(pid: u32) -> bool {
-    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap_or_default();
-    status
-        .lines()
-        .find_map(|l| l.strip_prefix("SigCgt:"))
-        .and_then(|mask| u64::from_str_radix(mask.trim(), 16).ok())
-        .is_some_and(|mask| mask & (1 << (15 - 1)) != 0)
-}
-
-/// User plus system CPU time of a process.
-fn cpu_seconds(pid: u32) -> f64 {
-    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
-    // The fields after the command name (which is in parentheses).
-    let fields: Vec<&str> = stat
-        .rsplit_once(')')
-        .map(|(_, rest)| rest.split_whitespace().collect())
-        .unwrap_or_default();
-    let ticks = |i: usize| {
-        fields
-            .get(i)
-            .and_then(|v| v.parse::<f64>().ok())
-            .unwrap_or(0.0)
-    };
-    // utime and stime are fields 14 and 15 of the line, 11 and 12 after the name.
-    (ticks(11) + ticks(12)) / 100.0
-}
-
-/// Waits for the child after a signal; it must be gone within a generous bound (a hang, not
-/// a speed, is what this catches).
-fn finish(child: Child) -> std::process::Output {
-    let start = Instant::now();
-    let out = child.wait_with_output().unwrap();
-    assert!(start.elapsed() < Duration::from_secs(20), "slow to stop");
-    out
+    catches(pid, 15)
 }
 
 fn meta(m: &Metadata, key: &str) -> Option<MetaValue> {

@@ -11,5 +11,6 @@ mod network_common;
 mod network_relight;
 mod network_scenes;
 mod network_transport;
+mod oiio;
 mod robustness;
 mod whitted;
