@@ -286,7 +286,7 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     }
     if args.aov {
         let images = renderer
-            .render_aovs(&control)
+            .render_aovs(&control)?
             .ok_or_else(|| cli.interrupted("the auxiliary images", "the image was written"))?;
         for (path, img) in aovs.iter().zip(&images) {
             write_image(path, img, &metadata, &out_options)?;
@@ -334,7 +334,7 @@ fn render_with_checkpoints(
             ))
             .into());
         };
-        let blank = raylink::Film::new(width, height, mc.filter);
+        let blank = raylink::Film::new(width, height, mc.filter)?;
         let resumed = checkpoint::load(&found, &settings, blank, mc.spp)?;
         resumed_samples = resumed.samples;
         Some(resumed.film)
@@ -365,7 +365,7 @@ fn render_with_checkpoints(
             ));
             meta.push(("raylink:partial".into(), MetaValue::Int(1)));
             for out in &args.outputs {
-                write_image(out, &film.image(), &meta, out_options)?;
+                write_image(out, &film.image()?, &meta, out_options)?;
             }
             last_write = std::time::Instant::now();
         }

@@ -599,3 +599,59 @@ fn a_second_sigint_during_the_write_leaves_no_temporary_file() {
     }
     assert!(caught > 0, "no run was caught writing");
 }
+
+/// Memory the system refuses (here an address-space limit, `ulimit -v`, set in a shell that
+/// then runs raylink, 4 GiB) is an error naming what could not be allocated and how much,
+/// exit code 1, not an abort: the film of a path-traced 30000x30000 image (20 GiB), and the
+/// image of a Whitted one (10 GiB). `--max-memory 1T` lets the work past raylink's own
+/// estimate, which would refuse it first.
+#[test]
+fn allocations_the_system_refuses_are_errors_not_aborts() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_path = dir.path().join("huge.exr");
+    for (integrator, needle) in [
+        ("path", "for the film of a 30000x30000 image"),
+        ("whitted", "for a 30000x30000 image"),
+    ] {
+        let out = std::process::Command::new("sh")
+            .args(["-c", "ulimit -v 4194304 && exec \"$0\" \"$@\""])
+            .arg(env!("CARGO_BIN_EXE_raylink"))
+            .args([
+                "render",
+                "scenes/cornell-box.toml",
+                "--integrator",
+                integrator,
+                "--spp",
+                "1",
+                "--width",
+                "30000",
+                "--height",
+                "30000",
+                "--max-memory",
+                "1T",
+                "--quiet",
+                "-o",
+                out_path.to_str().unwrap(),
+            ])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        let err = stderr(&out);
+        assert_eq!(
+            out.status.code(),
+            Some(1),
+            "{integrator}: {err} {:?}",
+            out.status
+        );
+        assert_eq!(err.lines().count(), 1, "{integrator}: {err}");
+        assert!(
+            err.starts_with("raylink: error: cannot allocate ") && err.contains("GiB "),
+            "{integrator}: {err}"
+        );
+        assert!(
+            err.contains(needle) && err.contains("out of memory"),
+            "{err}"
+        );
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+}

@@ -199,14 +199,14 @@ fn write_image_impl(
             attributes.push(("Compression".into(), MetaValue::Str("jpeg:95".into())));
         }
         let scale = options.exposure.exp2();
-        (display_values(&image.pixels, scale), PixelType::U8)
+        (display_values(path, &image.pixels, scale)?, PixelType::U8)
     } else {
         let pixel = if format == Format::Exr && options.half {
             PixelType::Half
         } else {
             PixelType::Float
         };
-        let mut values = linear_values(&image.pixels);
+        let mut values = linear_values(path, &image.pixels)?;
         if format == Format::Hdr {
             // OpenImageIO's RGBE encoder mangles what RGBE cannot hold: a negative channel
             // comes back as garbage (-0.5 as 0.5), a channel above ~1.7e38 zeroes the pixel.
@@ -302,16 +302,22 @@ pub fn hdr_value(linear: f32) -> f32 {
 /// Below 2^127, the largest power of two RGBE's exponent byte can hold.
 const HDR_MAX: f32 = 1.0e38;
 
-fn display_values(pixels: &[Rgb], scale: f32) -> Vec<f32> {
-    pixels
-        .iter()
-        .flat_map(|p| [p.x, p.y, p.z])
-        .map(|v| display_value(v, scale))
-        .collect()
+/// The values to encode, three a pixel; [`Error::OutOfMemory`] if there is no room for them.
+fn channel_values(path: &Path, pixels: &[Rgb], f: impl Fn(f32) -> f32) -> Result<Vec<f32>> {
+    let mut values = Vec::new();
+    crate::error::try_reserve(&mut values, pixels.len() * 3, || {
+        format!("the pixels of {}", path.display())
+    })?;
+    values.extend(pixels.iter().flat_map(|p| [p.x, p.y, p.z]).map(f));
+    Ok(values)
 }
 
-fn linear_values(pixels: &[Rgb]) -> Vec<f32> {
-    pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect()
+fn display_values(path: &Path, pixels: &[Rgb], scale: f32) -> Result<Vec<f32>> {
+    channel_values(path, pixels, |v| display_value(v, scale))
+}
+
+fn linear_values(path: &Path, pixels: &[Rgb]) -> Result<Vec<f32>> {
+    channel_values(path, pixels, |v| v)
 }
 
 /// The directory holding `path` (`.` for a bare file name).

@@ -63,7 +63,7 @@ fn params_bytes(p: &NetworkParams) -> Vec<u8> {
 /// Writes the network (and a light basis, if given) to `path` atomically.
 pub fn save(path: &Path, net: &Network, scene: &Scene, basis: Option<&LightBasis>) -> Result<()> {
     let basis = basis.map(LightBasis::to_bytes).unwrap_or_default();
-    let mut b = FORMAT.start(64 + basis.len() + 4 * (net.links.len() + net.nodes()));
+    let mut b = FORMAT.try_start(64 + basis.len() + 4 * (net.links.len() + net.nodes()), path)?;
     b.extend_from_slice(&geometry_hash(scene).to_le_bytes());
     b.extend_from_slice(&params_bytes(&net.params));
     b.extend_from_slice(&net.patches.cells.to_le_bytes());
