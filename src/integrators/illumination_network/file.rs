@@ -467,7 +467,9 @@ pub fn load_all(
     let mut link_start = vec![0u32; nodes + 1];
     read_at(&mut link_start, at, Some(&mut sum))?;
     let at = at + 4 * (nodes as u64 + 1);
-    let mut links = vec![0u32; n_links];
+    let mut links = crate::error::try_vec(n_links, 0u32, || {
+        format!("the link table of {} ({n_links} links)", path.display())
+    })?;
     let (first, second) = links.split_at_mut(n_links / 2);
     let second_at = at + 4 * first.len() as u64;
     let (a, b) = rayon::join(
