@@ -205,7 +205,7 @@ pub fn write_part(
     }
     if args.aov {
         let aovs = renderer
-            .render_aovs(control)
+            .render_aovs(control)?
             .ok_or_else(|| cli.interrupted("the auxiliary images", "the part was written"))?;
         let first = &args.outputs[0];
         let stem = first.file_stem().unwrap_or_default().to_string_lossy();

@@ -86,10 +86,12 @@ struct ConvertArgs {
     quiet: bool,
 }
 
-/// Why a command failed: a library error, or a signal that stopped the work.
+/// Why a command failed: a library error, a signal that stopped the work, or a failure
+/// while working after a signal (exit 1, `detail` saying what was kept and what failed).
 pub enum Failure {
     Error(Error),
     Interrupted { signal: i32, detail: String },
+    Incomplete { detail: String },
 }
 
 impl From<Error> for Failure {
@@ -122,14 +124,16 @@ impl Cli {
 
     /// The failure of work stopped by a signal during `stage`, saying what was kept.
     pub fn interrupted(&self, stage: &str, kept: &str) -> Failure {
-        let signal = self.signals.received().unwrap_or(2);
         Failure::Interrupted {
-            signal,
-            detail: format!(
-                "interrupted by {} during {stage}: {kept}",
-                signals::name(signal)
-            ),
+            signal: self.signals.received().unwrap_or(2),
+            detail: format!("{} during {stage}: {kept}", self.stopped_by()),
         }
+    }
+
+    /// "interrupted by SIGINT" (or the signal received).
+    pub fn stopped_by(&self) -> String {
+        let signal = self.signals.received().unwrap_or(2);
+        format!("interrupted by {}", signals::name(signal))
     }
 
     /// `--network-stats` and the like: the technique's statistics.
@@ -143,8 +147,8 @@ impl Cli {
 }
 
 /// The exit code of a failed run: 2 for bad input or options, 1 for a failure while working
-/// (a full disk, an I/O error), 128 + N when signal N stopped it.
-fn exit_code(failure: &Failure) -> u8 {
+/// (a full disk, an I/O error), 128 + N when signal N (`signal`, the one received) stopped it.
+fn exit_code(failure: &Failure, signal: Option<i32>) -> u8 {
     use std::io::ErrorKind::{
         InvalidData, IsADirectory, NotADirectory, NotFound, PermissionDenied,
     };
@@ -164,14 +168,15 @@ fn exit_code(failure: &Failure) -> u8 {
         }
         // As a shell reports a process killed by the signal.
         Failure::Interrupted { signal, .. } => (128 + signal).clamp(1, 255) as u8,
-        Failure::Error(_) => 1,
+        Failure::Error(Error::Cancelled { .. }) => (128 + signal.unwrap_or(2)).clamp(1, 255) as u8,
+        Failure::Error(_) | Failure::Incomplete { .. } => 1,
     }
 }
 
 /// The one line a failure prints, in the command line's words: settings by their flags.
 fn message(cli: &Cli, failure: &Failure) -> String {
     let text = match failure {
-        Failure::Interrupted { detail, .. } => detail.clone(),
+        Failure::Interrupted { detail, .. } | Failure::Incomplete { detail } => detail.clone(),
         Failure::Error(Error::Setting { name, detail }) => format!("{} {detail}", flag(name)),
         Failure::Error(Error::Memory {
             what,
@@ -261,7 +266,7 @@ fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(failure) => {
             eprintln!("raylink: error: {}", message(&cli, &failure));
-            ExitCode::from(exit_code(&failure))
+            ExitCode::from(exit_code(&failure, cli.signals.received()))
         }
     }
 }

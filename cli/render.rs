@@ -218,8 +218,9 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
         );
     }
     let mut partial_note = String::new();
+    let mut unsaved = None;
     let rendered = if job.technique.monte_carlo().is_some() {
-        let (rendered, note) = render_with_checkpoints(
+        let (rendered, note, checkpoint_error) = render_with_checkpoints(
             &args,
             &mut renderer,
             &settings,
@@ -228,6 +229,7 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
             &control,
         )?;
         partial_note = note;
+        unsaved = checkpoint_error;
         rendered
     } else {
         renderer.render(&control)?
@@ -258,6 +260,17 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
             .iter()
             .map(|p| p.display().to_string())
             .collect();
+        if let Some(e) = unsaved {
+            // The image is kept; the film for --resume is not: a failure while working.
+            return Err(Failure::Incomplete {
+                detail: format!(
+                    "{} during the render: wrote the partial image {}, but the checkpoint \
+                     for --resume could not be saved: {e}",
+                    cli.stopped_by(),
+                    outputs.join(", ")
+                ),
+            });
+        }
         return Err(cli.interrupted(
             "the render",
             &format!(
@@ -273,7 +286,7 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     }
     if args.aov {
         let images = renderer
-            .render_aovs(&control)
+            .render_aovs(&control)?
             .ok_or_else(|| cli.interrupted("the auxiliary images", "the image was written"))?;
         for (path, img) in aovs.iter().zip(&images) {
             write_image(path, img, &metadata, &out_options)?;
@@ -287,7 +300,8 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
 
 /// A progressive render with --resume, --checkpoint-interval and --write-interval; the
 /// checkpoint of an interrupted render is saved. Returns the render and, if interrupted,
-/// what the checkpoint keeps.
+/// what the checkpoint keeps, or why it could not be saved (the partial image is still to
+/// be written).
 fn render_with_checkpoints(
     args: &RenderArgs,
     renderer: &mut Renderer,
@@ -295,7 +309,7 @@ fn render_with_checkpoints(
     metadata: &Metadata,
     out_options: &OutputOptions,
     control: &Control,
-) -> Result<(Rendered, String), Failure> {
+) -> Result<(Rendered, String, Option<Error>), Failure> {
     let job = renderer.job().clone();
     let (width, height) = (job.width, job.height);
     let mc = *job
@@ -320,7 +334,7 @@ fn render_with_checkpoints(
             ))
             .into());
         };
-        let blank = raylink::Film::new(width, height, mc.filter);
+        let blank = raylink::Film::new(width, height, mc.filter)?;
         let resumed = checkpoint::load(&found, &settings, blank, mc.spp)?;
         resumed_samples = resumed.samples;
         Some(resumed.film)
@@ -351,7 +365,7 @@ fn render_with_checkpoints(
             ));
             meta.push(("raylink:partial".into(), MetaValue::Int(1)));
             for out in &args.outputs {
-                write_image(out, &film.image(), &meta, out_options)?;
+                write_image(out, &film.image()?, &meta, out_options)?;
             }
             last_write = std::time::Instant::now();
         }
@@ -364,7 +378,9 @@ fn render_with_checkpoints(
         .expect("a whole progressive render has a film");
     let mut note = String::new();
     if rendered.stats.cancelled && rendered.stats.samples > 0 {
-        checkpoint::save(&checkpoint, film, &settings, rendered.stats.samples)?;
+        if let Err(e) = checkpoint::save(&checkpoint, film, &settings, rendered.stats.samples) {
+            return Ok((rendered, note, Some(e)));
+        }
         note = format!(
             "{:.2} of {} samples per pixel; the film is in {} for --resume",
             film.mean_spp(),
@@ -375,7 +391,7 @@ fn render_with_checkpoints(
         // The render is complete: its checkpoint is stale.
         let _ = std::fs::remove_file(&checkpoint);
     }
-    Ok((rendered, note))
+    Ok((rendered, note, None))
 }
 
 /// `raylink relight`: a network render that must load its network and may change the lights.

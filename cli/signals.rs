@@ -1,7 +1,8 @@
 //! SIGINT and SIGTERM. The first one cancels the running job through its cancel token: a
 //! render keeps what it finished (written marked partial) and the process exits with
 //! 128 + the signal's number. A second signal ends the process at once, with the signal's
-//! default action.
+//! default action, after removing the temporary files being written (so that an image being
+//! written is neither half-written nor left as a temporary file).
 
 use raylink::CancelToken;
 use signal_hook::consts::{SIGINT, SIGTERM};
@@ -32,7 +33,9 @@ impl Signals {
                         .compare_exchange(0, signal, Ordering::SeqCst, Ordering::SeqCst)
                         .is_ok();
                     if !first || !graceful {
-                        // The second one: the user does not want to wait.
+                        // The second one: the user does not want to wait. No file is created
+                        // or renamed while `_writes` is held.
+                        let _writes = raylink::atomic_file::remove_temporaries();
                         let _ = signal_hook::low_level::emulate_default_handler(signal);
                         std::process::exit(128 + signal);
                     }

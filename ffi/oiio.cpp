@@ -2,6 +2,7 @@
 
 #include "oiio.h"
 
+#include <OpenImageIO/filesystem.h>
 #include <OpenImageIO/imageio.h>
 #include <OpenImageIO/paramlist.h>
 #include <OpenImageIO/typedesc.h>
@@ -164,160 +165,184 @@ struct RaylinkOiioImage {
 
 namespace {
 
-// Where the pixels lie in the full image (OpenEXR's data and display windows).
-struct Window {
-    int x, y, full_width, full_height;
+} // namespace
+
+struct RaylinkOiioEncoded {
+    std::vector<unsigned char> bytes;
 };
 
-// raylink_oiio_write and raylink_oiio_write_window; `window` is null for a whole image.
-int write_impl(const char *path, const char *format, int width, int height, int nchannels,
-               const float *data, const char *const *channel_names, const RaylinkOiioAttr *attrs,
-               size_t nattrs, int pixel_type, const Window *window, char *err, size_t err_len) {
-    try {
-        if (path == nullptr || format == nullptr || data == nullptr ||
-            channel_names == nullptr || (attrs == nullptr && nattrs != 0)) {
-            set_error(err, err_len, "internal error: null pointer passed to raylink_oiio_write");
-            return 1;
-        }
-        if (width <= 0 || height <= 0 || nchannels <= 0) {
-            set_error(err, err_len,
-                      "invalid image size " + std::to_string(width) + "x" +
-                          std::to_string(height) + " with " + std::to_string(nchannels) +
-                          " channels");
-            return 1;
-        }
-        OIIO::TypeDesc stored;
-        if (!pixel_type_desc(pixel_type, &stored)) {
-            set_error(err, err_len, "invalid pixel type code " + std::to_string(pixel_type));
-            return 1;
-        }
+namespace {
 
-        auto out = OIIO::ImageOutput::create(format);
-        if (!out) {
-            set_error(err, err_len,
-                      with_detail(std::string("no OpenImageIO writer for format \"") + format +
-                                      "\"",
-                                  OIIO::geterror()));
-            return 1;
-        }
-
-        // OpenImageIO 2.4's JPEG writer keeps libjpeg's default error handler, which calls
-        // exit(): reject what libjpeg would refuse before it gets the chance.
-        const int jpeg_max_dimension = 65500;
-        if (std::strcmp(out->format_name(), "jpeg") == 0 &&
-            (width > jpeg_max_dimension || height > jpeg_max_dimension)) {
-            set_error(err, err_len,
-                      "JPEG images are limited to " + std::to_string(jpeg_max_dimension) +
-                          " pixels per side, not " + std::to_string(width) + "x" +
-                          std::to_string(height));
-            return 1;
-        }
-
-        OIIO::ImageSpec spec(width, height, nchannels, stored);
-        if (window != nullptr) {
-            if (window->x < 0 || window->y < 0 || window->full_width <= 0 ||
-                window->full_height <= 0 || window->x > window->full_width - width ||
-                window->y > window->full_height - height) {
-                set_error(err, err_len,
-                          "data window " + std::to_string(width) + "x" +
-                              std::to_string(height) + " at (" + std::to_string(window->x) +
-                              ", " + std::to_string(window->y) + ") does not fit in " +
-                              std::to_string(window->full_width) + "x" +
-                              std::to_string(window->full_height));
-                return 1;
-            }
-            spec.x = window->x;
-            spec.y = window->y;
-            spec.full_x = 0;
-            spec.full_y = 0;
-            spec.full_width = window->full_width;
-            spec.full_height = window->full_height;
-        }
-        spec.channelnames.clear();
-        spec.alpha_channel = -1;
-        for (int c = 0; c < nchannels; ++c) {
-            const char *name = channel_names[c] != nullptr ? channel_names[c] : "";
-            spec.channelnames.emplace_back(name);
-            if (std::strcmp(name, "A") == 0 || std::strcmp(name, "Alpha") == 0) {
-                spec.alpha_channel = c;
-            }
-        }
-        for (size_t i = 0; i < nattrs; ++i) {
-            const RaylinkOiioAttr &a = attrs[i];
-            if (a.name == nullptr) {
-                set_error(err, err_len, "internal error: attribute without a name");
-                return 1;
-            }
-            switch (a.type) {
-            case RAYLINK_OIIO_ATTR_STRING:
-                spec.attribute(a.name, a.string_value != nullptr ? a.string_value : "");
-                break;
-            case RAYLINK_OIIO_ATTR_INT:
-                spec.attribute(a.name, a.int_value);
-                break;
-            case RAYLINK_OIIO_ATTR_FLOAT:
-                spec.attribute(a.name, a.float_value);
-                break;
-            default:
-                set_error(err, err_len,
-                          std::string("internal error: attribute \"") + a.name +
-                              "\" has invalid type code " + std::to_string(a.type));
-                return 1;
-            }
-        }
-
-        if (!out->open(path, spec)) {
-            set_error(err, err_len,
-                      with_detail(std::string("cannot open for writing as ") + out->format_name(),
-                                  out->geterror(), OIIO::geterror()));
-            return 1;
-        }
-        if (!out->write_image(OIIO::TypeDesc(OIIO::TypeDesc::FLOAT), data)) {
-            std::string message = with_detail(std::string("writing ") + out->format_name() +
-                                                  " pixels failed",
-                                              out->geterror(), OIIO::geterror());
-            out->close();
-            set_error(err, err_len, message);
-            return 1;
-        }
-        if (!out->close()) {
-            set_error(err, err_len,
-                      with_detail(std::string("finishing the ") + out->format_name() +
-                                      " file failed",
-                                  out->geterror(), OIIO::geterror()));
-            return 1;
-        }
-        return 0;
-    } catch (const std::exception &e) {
-        set_error(err, err_len, std::string("OpenImageIO raised an exception: ") + e.what());
-        return 1;
-    } catch (...) {
-        set_error(err, err_len, "OpenImageIO raised an unknown exception");
+// raylink_oiio_encode: fills `encoded->bytes`; returns 0, or 1 with a message in `err`.
+int encode_impl(RaylinkOiioEncoded *encoded, const char *path, const char *format, int width,
+                int height, int nchannels, const float *data, const char *const *channel_names,
+                const RaylinkOiioAttr *attrs, size_t nattrs, int pixel_type,
+                const RaylinkOiioWindow *window, char *err, size_t err_len) {
+    if (path == nullptr || format == nullptr || data == nullptr ||
+        channel_names == nullptr || (attrs == nullptr && nattrs != 0)) {
+        set_error(err, err_len, "internal error: null pointer passed to raylink_oiio_encode");
         return 1;
     }
+    if (width <= 0 || height <= 0 || nchannels <= 0) {
+        set_error(err, err_len,
+                  "invalid image size " + std::to_string(width) + "x" +
+                      std::to_string(height) + " with " + std::to_string(nchannels) +
+                      " channels");
+        return 1;
+    }
+    OIIO::TypeDesc stored;
+    if (!pixel_type_desc(pixel_type, &stored)) {
+        set_error(err, err_len, "invalid pixel type code " + std::to_string(pixel_type));
+        return 1;
+    }
+
+    // The writer writes into `proxy`, which must outlive it (its destructor may close).
+    OIIO::Filesystem::IOVecOutput proxy(encoded->bytes);
+    auto out = OIIO::ImageOutput::create(format);
+    if (!out) {
+        set_error(err, err_len,
+                  with_detail(std::string("no OpenImageIO writer for format \"") + format +
+                                  "\"",
+                              OIIO::geterror()));
+        return 1;
+    }
+
+    // OpenImageIO 2.4's JPEG writer keeps libjpeg's default error handler, which calls
+    // exit(): reject what libjpeg would refuse before it gets the chance.
+    const int jpeg_max_dimension = 65500;
+    if (std::strcmp(out->format_name(), "jpeg") == 0 &&
+        (width > jpeg_max_dimension || height > jpeg_max_dimension)) {
+        set_error(err, err_len,
+                  "JPEG images are limited to " + std::to_string(jpeg_max_dimension) +
+                      " pixels per side, not " + std::to_string(width) + "x" +
+                      std::to_string(height));
+        return 1;
+    }
+
+    OIIO::ImageSpec spec(width, height, nchannels, stored);
+    if (window != nullptr) {
+        if (window->x < 0 || window->y < 0 || window->full_width <= 0 ||
+            window->full_height <= 0 || window->x > window->full_width - width ||
+            window->y > window->full_height - height) {
+            set_error(err, err_len,
+                      "data window " + std::to_string(width) + "x" +
+                          std::to_string(height) + " at (" + std::to_string(window->x) +
+                          ", " + std::to_string(window->y) + ") does not fit in " +
+                          std::to_string(window->full_width) + "x" +
+                          std::to_string(window->full_height));
+            return 1;
+        }
+        spec.x = window->x;
+        spec.y = window->y;
+        spec.full_x = 0;
+        spec.full_y = 0;
+        spec.full_width = window->full_width;
+        spec.full_height = window->full_height;
+    }
+    spec.channelnames.clear();
+    spec.alpha_channel = -1;
+    for (int c = 0; c < nchannels; ++c) {
+        const char *name = channel_names[c] != nullptr ? channel_names[c] : "";
+        spec.channelnames.emplace_back(name);
+        if (std::strcmp(name, "A") == 0 || std::strcmp(name, "Alpha") == 0) {
+            spec.alpha_channel = c;
+        }
+    }
+    for (size_t i = 0; i < nattrs; ++i) {
+        const RaylinkOiioAttr &a = attrs[i];
+        if (a.name == nullptr) {
+            set_error(err, err_len, "internal error: attribute without a name");
+            return 1;
+        }
+        switch (a.type) {
+        case RAYLINK_OIIO_ATTR_STRING:
+            spec.attribute(a.name, a.string_value != nullptr ? a.string_value : "");
+            break;
+        case RAYLINK_OIIO_ATTR_INT:
+            spec.attribute(a.name, a.int_value);
+            break;
+        case RAYLINK_OIIO_ATTR_FLOAT:
+            spec.attribute(a.name, a.float_value);
+            break;
+        default:
+            set_error(err, err_len,
+                      std::string("internal error: attribute \"") + a.name +
+                          "\" has invalid type code " + std::to_string(a.type));
+            return 1;
+        }
+    }
+
+    if (!out->supports("ioproxy") || !out->set_ioproxy(&proxy)) {
+        set_error(err, err_len,
+                  std::string("the OpenImageIO writer for ") + out->format_name() +
+                      " cannot write to memory");
+        return 1;
+    }
+    if (!out->open(path, spec)) {
+        set_error(err, err_len,
+                  with_detail(std::string("cannot open for writing as ") + out->format_name(),
+                              out->geterror(), OIIO::geterror()));
+        return 1;
+    }
+    if (!out->write_image(OIIO::TypeDesc(OIIO::TypeDesc::FLOAT), data)) {
+        std::string message = with_detail(std::string("writing ") + out->format_name() +
+                                              " pixels failed",
+                                          out->geterror(), OIIO::geterror());
+        out->close();
+        set_error(err, err_len, message);
+        return 1;
+    }
+    if (!out->close()) {
+        set_error(err, err_len,
+                  with_detail(std::string("finishing the ") + out->format_name() +
+                                  " file failed",
+                              out->geterror(), OIIO::geterror()));
+        return 1;
+    }
+    // A writer may leave a warning it did not fail on (OpenImageIO 2.4's TIFF writer about
+    // an Exif directory it had nothing for): retrieve it, so that it is not printed.
+    (void)out->geterror();
+    return 0;
 }
 
 } // namespace
 
-extern "C" int raylink_oiio_write(const char *path, const char *format, int width, int height,
-                                  int nchannels, const float *data,
-                                  const char *const *channel_names,
-                                  const RaylinkOiioAttr *attrs, size_t nattrs, int pixel_type,
-                                  char *err, size_t err_len) {
-    return write_impl(path, format, width, height, nchannels, data, channel_names, attrs, nattrs,
-                      pixel_type, nullptr, err, err_len);
+extern "C" RaylinkOiioEncoded *raylink_oiio_encode(const char *name, const char *format,
+                                                   int width, int height, int nchannels,
+                                                   const float *data,
+                                                   const char *const *channel_names,
+                                                   const RaylinkOiioAttr *attrs, size_t nattrs,
+                                                   int pixel_type,
+                                                   const RaylinkOiioWindow *window, char *err,
+                                                   size_t err_len) {
+    try {
+        std::unique_ptr<RaylinkOiioEncoded> encoded(new RaylinkOiioEncoded);
+        if (encode_impl(encoded.get(), name, format, width, height, nchannels, data,
+                        channel_names, attrs, nattrs, pixel_type, window, err, err_len) != 0) {
+            return nullptr;
+        }
+        return encoded.release();
+    } catch (const std::bad_alloc &) {
+        set_error(err, err_len, "out of memory while encoding the image");
+        return nullptr;
+    } catch (const std::exception &e) {
+        set_error(err, err_len, std::string("OpenImageIO raised an exception: ") + e.what());
+        return nullptr;
+    } catch (...) {
+        set_error(err, err_len, "OpenImageIO raised an unknown exception");
+        return nullptr;
+    }
 }
 
-extern "C" int raylink_oiio_write_window(const char *path, const char *format, int x, int y,
-                                         int width, int height, int full_width, int full_height,
-                                         int nchannels, const float *data,
-                                         const char *const *channel_names,
-                                         const RaylinkOiioAttr *attrs, size_t nattrs,
-                                         int pixel_type, char *err, size_t err_len) {
-    const Window window{x, y, full_width, full_height};
-    return write_impl(path, format, width, height, nchannels, data, channel_names, attrs, nattrs,
-                      pixel_type, &window, err, err_len);
+extern "C" const unsigned char *raylink_oiio_encoded_data(const RaylinkOiioEncoded *encoded) {
+    return encoded->bytes.data();
 }
+
+extern "C" size_t raylink_oiio_encoded_size(const RaylinkOiioEncoded *encoded) {
+    return encoded->bytes.size();
+}
+
+extern "C" void raylink_oiio_encoded_free(RaylinkOiioEncoded *encoded) { delete encoded; }
 
 extern "C" RaylinkOiioImage *raylink_oiio_read(const char *path, char *err, size_t err_len) {
     try {

@@ -42,28 +42,41 @@ typedef struct RaylinkOiioAttr {
     float float_value;
 } RaylinkOiioAttr;
 
-/* Writes a `width` x `height` image of `nchannels` interleaved float channels (`data` holds
- * width * height * nchannels floats, row-major, top row first) to `path`, with the writer for
- * `format` (an OpenImageIO format name such as "openexr", "png", "jpeg", "tiff", "hdr", or an
- * extension such as "exr"), independently of the extension of `path`. `channel_names` holds
- * `nchannels` names. The attributes become file metadata where the format supports them.
- * `pixel_type` (RAYLINK_OIIO_FLOAT/HALF/UINT8/UINT16) is the type stored in the file.
- * Returns 0 on success, nonzero on failure. On failure a partly written file may remain at
- * `path`: the caller removes it. */
-int raylink_oiio_write(const char *path, const char *format, int width, int height,
-                       int nchannels, const float *data, const char *const *channel_names,
-                       const RaylinkOiioAttr *attrs, size_t nattrs, int pixel_type, char *err,
-                       size_t err_len);
+/* Where the pixels of a region lie in the full image: the region's top-left pixel is (x, y)
+ * in a `full_width` x `full_height` image. */
+typedef struct RaylinkOiioWindow {
+    int x;
+    int y;
+    int full_width;
+    int full_height;
+} RaylinkOiioWindow;
 
-/* As raylink_oiio_write, for a `width` x `height` region of a `full_width` x `full_height`
- * image whose top-left pixel is (x, y): the file's data window is the region and its display
- * window the full image (OpenEXR keeps both; formats without data windows may not). The
- * region must lie inside the full image. */
-int raylink_oiio_write_window(const char *path, const char *format, int x, int y, int width,
-                              int height, int full_width, int full_height, int nchannels,
-                              const float *data, const char *const *channel_names,
-                              const RaylinkOiioAttr *attrs, size_t nattrs, int pixel_type,
-                              char *err, size_t err_len);
+/* An image file encoded in memory; free it with raylink_oiio_encoded_free. */
+typedef struct RaylinkOiioEncoded RaylinkOiioEncoded;
+
+/* Encodes a `width` x `height` image of `nchannels` interleaved float channels (`data` holds
+ * width * height * nchannels floats, row-major, top row first) into memory, as the file the
+ * OpenImageIO writer for `format` (a format name such as "openexr", "png", "jpeg", "tiff",
+ * "hdr", or an extension such as "exr") would write; the caller writes the bytes to disk
+ * itself, so that a failure there has its operating system's reason. No file is touched:
+ * `name` only names the file in messages. `channel_names` holds `nchannels` names. The
+ * attributes become file metadata where the format supports them. `pixel_type`
+ * (RAYLINK_OIIO_FLOAT/HALF/UINT8/UINT16) is the type stored in the file. With a `window`
+ * (NULL for a whole image), the image is that region of a larger one: the file's data window
+ * is the region and its display window the full image (OpenEXR keeps both; formats without
+ * data windows may not); the region must lie inside the full image. Returns NULL on failure
+ * (message in `err`). */
+RaylinkOiioEncoded *raylink_oiio_encode(const char *name, const char *format, int width,
+                                        int height, int nchannels, const float *data,
+                                        const char *const *channel_names,
+                                        const RaylinkOiioAttr *attrs, size_t nattrs,
+                                        int pixel_type, const RaylinkOiioWindow *window,
+                                        char *err, size_t err_len);
+
+/* The encoded file's bytes (raylink_oiio_encoded_size of them); they live as long as it. */
+const unsigned char *raylink_oiio_encoded_data(const RaylinkOiioEncoded *encoded);
+size_t raylink_oiio_encoded_size(const RaylinkOiioEncoded *encoded);
+void raylink_oiio_encoded_free(RaylinkOiioEncoded *encoded);
 
 /* An image read from a file; free it with raylink_oiio_image_free. */
 typedef struct RaylinkOiioImage RaylinkOiioImage;

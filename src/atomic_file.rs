@@ -1,11 +1,89 @@
 //! Writing a file so that it is either untouched or complete: the bytes go to a temporary
 //! file in the same directory, are synced, and the temporary file is renamed over the
 //! target. A failed run never leaves a half-written file or damages the one it replaces.
+//!
+//! The temporary files being written are listed process-wide (the one piece of global state
+//! of the library), so that a program ended by a signal while writing can remove them first:
+//! [`remove_temporaries`].
 
 use crate::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Mutex, MutexGuard};
+
+/// The temporary files this process is writing.
+static IN_FLIGHT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+fn in_flight() -> MutexGuard<'static, Vec<PathBuf>> {
+    // A panic elsewhere while holding the lock leaves the list as valid as before.
+    IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+/// Removes the temporary files this process is writing and returns holding the lock of
+/// their list, so that no new one is created until the guard is dropped: for a program about
+/// to end at once (on a second Ctrl-C), which keeps the guard until it exits. Called from an
+/// ordinary thread (a signal-handling thread), not from inside a signal handler.
+pub fn remove_temporaries() -> impl Drop {
+    let list = in_flight();
+    for path in list.iter() {
+        let _ = std::fs::remove_file(path);
+    }
+    list
+}
+
+/// A temporary file beside `path`, created empty and listed while it exists; removed on drop
+/// unless [`Temporary::persist`]ed (renamed over its target).
+pub(crate) struct Temporary {
+    path: PathBuf,
+    file: std::fs::File,
+}
+
+impl Temporary {
+    /// Creates a new temporary file for writing `target`.
+    pub(crate) fn create(target: &Path) -> std::io::Result<Temporary> {
+        let path = temp_path(target);
+        // Listed before it exists, and created under the lock: a removal by
+        // `remove_temporaries` either comes before (then waits for the list) or sees it.
+        let mut list = in_flight();
+        let file = std::fs::OpenOptions::new()
+            .write(true)
+            .create_new(true)
+            .open(&path)?;
+        list.push(path.clone());
+        Ok(Temporary { path, file })
+    }
+
+    pub(crate) fn file(&mut self) -> &mut std::fs::File {
+        &mut self.file
+    }
+
+    /// Syncs the file and renames it over `target`; on failure it is removed (on drop).
+    pub(crate) fn persist(mut self, target: &Path) -> std::io::Result<()> {
+        self.file.sync_all()?;
+        std::fs::rename(&self.path, target)?;
+        unlist(&self.path);
+        self.path = PathBuf::new();
+        Ok(())
+    }
+}
+
+impl Drop for Temporary {
+    fn drop(&mut self) {
+        if !self.path.as_os_str().is_empty() {
+            // Best effort: it may already be gone.
+            let _ = std::fs::remove_file(&self.path);
+            unlist(&self.path);
+        }
+    }
+}
+
+fn unlist(path: &Path) {
+    let mut list = in_flight();
+    if let Some(i) = list.iter().position(|p| p == path) {
+        list.swap_remove(i);
+    }
+}
 
 /// What every temporary file's name starts with, then the writing process's id.
 const TEMP_PREFIX: &str = ".raylink-tmp-";
@@ -52,19 +130,16 @@ pub fn remove_stale_temps(dir: &Path) {
     }
 }
 
-/// Writes `bytes` to `path` atomically; errors name `path`.
+/// Writes `bytes` to `path` atomically; errors name `path` and keep the operating system's
+/// reason (a full disk is `No space left on device`). On failure nothing is left behind and
+/// an existing `path` is unchanged.
 pub fn write(path: &Path, bytes: &[u8]) -> Result<()> {
-    let temp = temp_path(path);
     let result = (|| {
-        let mut f = std::fs::File::create(&temp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
-        std::fs::rename(&temp, path)
+        let mut temp = Temporary::create(path)?;
+        temp.file().write_all(bytes)?;
+        temp.persist(path)
     })();
-    result.map_err(|e| {
-        let _ = std::fs::remove_file(&temp);
-        Error::io(path, e)
-    })
+    result.map_err(|e| Error::io(path, e))
 }
 
 #[cfg(test)]

@@ -59,6 +59,18 @@ impl Format {
         b
     }
 
+    /// As [`Format::start`] for writing `path`, or [`Error::OutOfMemory`] if the buffer cannot
+    /// be allocated (a huge film or network).
+    pub fn try_start(&self, capacity: usize, path: &Path) -> Result<Vec<u8>> {
+        let mut b = Vec::new();
+        crate::error::try_reserve(&mut b, capacity.saturating_add(20), || {
+            format!("writing the {} {}", self.what, path.display())
+        })?;
+        b.extend_from_slice(self.magic);
+        b.extend_from_slice(&self.version.to_le_bytes());
+        Ok(b)
+    }
+
     /// Appends the checksum to a buffer made by [`Format::start`] and writes it atomically.
     pub fn save(&self, path: &Path, mut bytes: Vec<u8>) -> Result<()> {
         let sum = checksum(&bytes);

@@ -38,6 +38,10 @@ pub enum Error {
         /// The budget was the machine's default, not one the caller chose.
         default_limit: bool,
     },
+    /// Memory for `what` (`bytes` of it) could not be allocated: the system has none left to
+    /// give (or a limit such as `ulimit -v` refused it).
+    #[error("cannot allocate {} for {what}: out of memory", crate::control::human_size(*bytes))]
+    OutOfMemory { what: String, bytes: u64 },
     /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
     Io {
@@ -80,6 +84,29 @@ impl Error {
 }
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+/// A vector of `len` copies of `value`, or [`Error::OutOfMemory`] naming `what` if it cannot
+/// be allocated (instead of aborting the process, as `vec!` would).
+pub fn try_vec<T: Clone>(len: usize, value: T, what: impl FnOnce() -> String) -> Result<Vec<T>> {
+    let mut v = Vec::new();
+    try_reserve(&mut v, len, what)?;
+    v.resize(len, value);
+    Ok(v)
+}
+
+/// Reserves room for exactly `additional` more elements in `v`, or [`Error::OutOfMemory`]
+/// naming `what`.
+pub fn try_reserve<T>(
+    v: &mut Vec<T>,
+    additional: usize,
+    what: impl FnOnce() -> String,
+) -> Result<()> {
+    v.try_reserve_exact(additional)
+        .map_err(|_| Error::OutOfMemory {
+            what: what(),
+            bytes: (additional as u64).saturating_mul(std::mem::size_of::<T>() as u64),
+        })
+}
 
 /// `text` on one line: control characters (a newline inside a quoted string of the input,
 /// say) are written as escapes, so that every message stays one line.

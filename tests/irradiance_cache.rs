@@ -39,7 +39,7 @@ fn render(scene: &Scene, technique: Technique) -> (Image, Vec<String>) {
         .film
         .expect("a whole progressive render keeps its film");
     assert_eq!(film.invalid, 0);
-    (film.image(), renderer.report())
+    (film.image().unwrap(), renderer.report())
 }
 
 /// Tungsten's render, box-downsampled from 1024x1024 to 256x256 (scenes/cornell-box-bitterli).

@@ -64,7 +64,7 @@ fn render(scene: &Scene, kind: Kind, s: &Setup) -> Image {
         .film
         .expect("a whole progressive render keeps its film");
     assert_eq!(film.invalid, 0, "{kind:?}: non-finite samples");
-    film.image()
+    film.image().unwrap()
 }
 
 /// White furnace: in a closed cube whose walls have albedo ρ = 0.5 and emit Le = 1, every

@@ -4,94 +4,14 @@
 
 use raylink::image::output::read_image;
 use raylink::image::{MetaValue, Metadata};
-use std::path::Path;
-use std::process::{Child, Command, Stdio};
-use std::time::{Duration, Instant};
 
 mod common;
+use common::process::{catches, cpu_seconds, finish, signal, spawn, wait_for, wait_until};
 use common::{raylink, stderr};
 
-fn spawn(args: &[&str]) -> Child {
-    Command::new(env!("CARGO_BIN_EXE_raylink"))
-        .args(args)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .stdout(Stdio::null())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("the raylink binary starts")
-}
-
-fn signal(child: &Child, signal: nix::sys::signal::Signal) {
-    let pid = nix::unistd::Pid::from_raw(child.id() as i32);
-    nix::sys::signal::kill(pid, signal).expect("the signal is sent");
-}
-
-/// Waits until `path` exists (the render is under way), failing if the child ends first.
-fn wait_for(child: &mut Child, path: &Path) {
-    let start = Instant::now();
-    while !path.exists() {
-        if let Some(status) = child.try_wait().unwrap() {
-            panic!(
-                "the render ended ({status}) before {} appeared",
-                path.display()
-            );
-        }
-        assert!(
-            start.elapsed() < Duration::from_secs(120),
-            "no {}",
-            path.display()
-        );
-        std::thread::sleep(Duration::from_millis(5));
-    }
-}
-
-/// Waits until `ready(pid)`, failing if the child ends first.
-fn wait_until(child: &mut Child, ready: impl Fn(u32) -> bool) {
-    let start = Instant::now();
-    while !ready(child.id()) {
-        if let Some(status) = child.try_wait().unwrap() {
-            panic!("the render ended ({status}) too soon");
-        }
-        assert!(start.elapsed() < Duration::from_secs(120), "never ready");
-        std::thread::sleep(Duration::from_millis(5));
-    }
-}
-
-/// Whether the process has a handler for SIGTERM (bit 15 of SigCgt in /proc/PID/status).
+/// Whether the process has a handler for SIGTERM.
 fn catches_sigterm(pid: u32) -> bool {
-    let status = std::fs::read_to_string(format!("/proc/{pid}/status")).unwrap_or_default();
-    status
-        .lines()
-        .find_map(|l| l.strip_prefix("SigCgt:"))
-        .and_then(|mask| u64::from_str_radix(mask.trim(), 16).ok())
-        .is_some_and(|mask| mask & (1 << (15 - 1)) != 0)
-}
-
-/// User plus system CPU time of a process.
-fn cpu_seconds(pid: u32) -> f64 {
-    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).unwrap_or_default();
-    // The fields after the command name (which is in parentheses).
-    let fields: Vec<&str> = stat
-        .rsplit_once(')')
-        .map(|(_, rest)| rest.split_whitespace().collect())
-        .unwrap_or_default();
-    let ticks = |i: usize| {
-        fields
-            .get(i)
-            .and_then(|v| v.parse::<f64>().ok())
-            .unwrap_or(0.0)
-    };
-    // utime and stime are fields 14 and 15 of the line, 11 and 12 after the name.
-    (ticks(11) + ticks(12)) / 100.0
-}
-
-/// Waits for the child after a signal; it must be gone within a generous bound (a hang, not
-/// a speed, is what this catches).
-fn finish(child: Child) -> std::process::Output {
-    let start = Instant::now();
-    let out = child.wait_with_output().unwrap();
-    assert!(start.elapsed() < Duration::from_secs(20), "slow to stop");
-    out
+    catches(pid, 15)
 }
 
 fn meta(m: &Metadata, key: &str) -> Option<MetaValue> {
@@ -481,4 +401,257 @@ fn stale_temporary_files_go_and_long_names_fit() {
         .map(|e| e.unwrap().file_name())
         .collect();
     assert_eq!(left.len(), 1, "{left:?}");
+}
+
+/// A scene that takes seconds to read: `shapes` copies of a 28,800-triangle OBJ grid, in
+/// `dir`. Reading stops between shapes when asked to.
+fn slow_scene(dir: &std::path::Path, shapes: usize) -> std::path::PathBuf {
+    let n = 120;
+    let mut obj = String::new();
+    for i in 0..=n {
+        for j in 0..=n {
+            obj += &format!("v {} {} 0\n", i as f32 / n as f32, j as f32 / n as f32);
+        }
+    }
+    for i in 0..n {
+        for j in 0..n {
+            let a = i * (n + 1) + j + 1;
+            let (b, c) = (a + 1, a + n + 1);
+            obj += &format!("f {a} {b} {}\nf {a} {} {c}\n", c + 1, c + 1);
+        }
+    }
+    std::fs::write(dir.join("grid.obj"), obj).unwrap();
+    let mut toml = String::from(
+        "[camera]\nposition = [0.5, 0.5, 3]\nlook_at = [0.5, 0.5, 0]\n\
+         [materials.m]\ndiffuse = 0.5\n\
+         [[lights]]\ntype = \"point\"\nposition = [0.5, 0.5, 2]\nintensity = [1, 1, 1]\n",
+    );
+    for _ in 0..shapes {
+        toml += "[[shapes]]\ntype = \"obj\"\nfile = \"grid.obj\"\nmaterial = \"m\"\n";
+    }
+    let scene = dir.join("slow.toml");
+    std::fs::write(&scene, toml).unwrap();
+    scene
+}
+
+/// SIGINT while the scene is being read: exit 130 with the usual message naming the stage,
+/// and the image that was there before is untouched (nothing rendered, nothing written).
+/// `early`: the signal comes as soon as the handler is there, ~50 ms after the start; that
+/// it still lands in the reading shows the handlers are installed before any work.
+fn interrupt_scene_reading(early: bool) {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = slow_scene(dir.path(), 300);
+    let out_path = dir.path().join("kept.exr");
+    std::fs::write(&out_path, b"an earlier image").unwrap();
+    let start = std::time::Instant::now();
+    let mut child = spawn(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--width",
+        "16",
+        "--height",
+        "16",
+        "--quiet",
+        "-o",
+        out_path.to_str().unwrap(),
+    ]);
+    if early {
+        std::thread::sleep(std::time::Duration::from_millis(50));
+        // A loaded machine may take longer than that to start the process at all.
+        wait_until(&mut child, |pid| catches(pid, 2));
+        eprintln!("SIGINT after {:?}", start.elapsed());
+    } else {
+        wait_until(&mut child, |pid| catches(pid, 2) && cpu_seconds(pid) > 0.3);
+    }
+    signal(&child, nix::sys::signal::Signal::SIGINT);
+    let out = finish(child);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(130), "{err} {:?}", out.status);
+    assert!(
+        err.contains("raylink: error: interrupted by SIGINT during reading the scene"),
+        "{err}"
+    );
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(std::fs::read(&out_path).unwrap(), b"an earlier image");
+    assert!(common::process::temporaries(dir.path()).is_empty());
+}
+
+#[test]
+fn sigint_while_reading_the_scene_leaves_the_output_alone() {
+    interrupt_scene_reading(false);
+}
+
+#[test]
+fn sigint_right_after_the_start_is_handled() {
+    interrupt_scene_reading(true);
+}
+
+/// Whether a raylink temporary file with some bytes in it is in `dir` (an image being
+/// written, not the empty probe of the output folder).
+fn writing_in(dir: &std::path::Path) -> bool {
+    common::process::temporaries(dir)
+        .iter()
+        .any(|t| std::fs::metadata(dir.join(t)).is_ok_and(|m| m.len() > 0))
+}
+
+/// Polls `dir` until [`writing_in`] it, or the child ends (false).
+fn until_writing(child: &mut std::process::Child, dir: &std::path::Path) -> bool {
+    let start = std::time::Instant::now();
+    loop {
+        if writing_in(dir) {
+            return true;
+        }
+        if child.try_wait().unwrap().is_some() {
+            return false;
+        }
+        if start.elapsed() > std::time::Duration::from_secs(300) {
+            child.kill().unwrap();
+            panic!("the render did not end");
+        }
+        std::thread::sleep(std::time::Duration::from_micros(200));
+    }
+}
+
+/// A second SIGINT while the image is being written (a temporary file beside the output)
+/// ends the process at once, by the signal, and removes the temporary file; the outputs
+/// are absent or whole images. Four 2000x2000 EXR outputs of a 1-spp path tracing (40 MB
+/// each, noise compressing badly), each encoded then written and synced: the first SIGINT
+/// comes while the first is written, the second (once the first is acknowledged) while a
+/// later one is. A run in which the machine was too fast for that is tried again.
+#[test]
+fn a_second_sigint_during_the_write_leaves_no_temporary_file() {
+    use std::io::BufRead;
+    use std::os::unix::process::ExitStatusExt;
+    let mut caught = 0;
+    for attempt in 0..4 {
+        let dir = tempfile::tempdir().unwrap();
+        let outputs: Vec<String> = (0..4)
+            .map(|i| dir.path().join(format!("w{i}.exr")).display().to_string())
+            .collect();
+        let mut args = vec![
+            "render",
+            "scenes/cornell-box.toml",
+            "--integrator",
+            "path",
+            "--spp",
+            "1",
+            "--width",
+            "2000",
+            "--height",
+            "2000",
+            "--quiet",
+        ];
+        for o in &outputs {
+            args.extend(["-o", o.as_str()]);
+        }
+        let mut child = spawn(&args);
+        // The lines of stderr as they come.
+        let (lines, received) = std::sync::mpsc::channel();
+        let err_pipe = child.stderr.take().unwrap();
+        let reader = std::thread::spawn(move || {
+            for line in std::io::BufReader::new(err_pipe)
+                .lines()
+                .map_while(Result::ok)
+            {
+                let _ = lines.send(line);
+            }
+        });
+        let mut err = String::new();
+        let mut second_sent = false;
+        if until_writing(&mut child, dir.path()) {
+            signal(&child, nix::sys::signal::Signal::SIGINT);
+            // Signals that come together may be taken as one: wait for the first's note.
+            while let Ok(line) = received.recv_timeout(std::time::Duration::from_secs(60)) {
+                err += &line;
+                err.push('\n');
+                if line.contains("stopping after the work in hand") {
+                    break;
+                }
+            }
+            // The first output's temporary file is gone once it is renamed: wait for a
+            // later one.
+            while writing_in(dir.path()) && child.try_wait().unwrap().is_none() {
+                std::thread::sleep(std::time::Duration::from_micros(200));
+            }
+            if until_writing(&mut child, dir.path()) {
+                signal(&child, nix::sys::signal::Signal::SIGINT);
+                second_sent = true;
+            }
+        }
+        let status = child.wait().unwrap();
+        reader.join().unwrap();
+        err.extend(received.try_iter().map(|l| l + "\n"));
+        assert!(!err.contains("panicked"), "{err}");
+        if !second_sent || status.success() {
+            // The writes ended before the signals landed: no verdict from this run.
+            eprintln!("attempt {attempt}: not caught writing");
+            continue;
+        }
+        caught += 1;
+        assert_eq!(status.signal(), Some(2), "{err} {status:?}");
+        assert!(common::process::temporaries(dir.path()).is_empty());
+        for o in &outputs {
+            if std::path::Path::new(o).exists() {
+                read_image(std::path::Path::new(o)).unwrap_or_else(|e| panic!("{e}"));
+            }
+        }
+        break;
+    }
+    assert!(caught > 0, "no run was caught writing");
+}
+
+/// Memory the system refuses (here an address-space limit, `ulimit -v`, set in a shell that
+/// then runs raylink, 4 GiB) is an error naming what could not be allocated and how much,
+/// exit code 1, not an abort: the film of a path-traced 30000x30000 image (20 GiB), and the
+/// image of a Whitted one (10 GiB). `--max-memory 1T` lets the work past raylink's own
+/// estimate, which would refuse it first.
+#[test]
+fn allocations_the_system_refuses_are_errors_not_aborts() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_path = dir.path().join("huge.exr");
+    for (integrator, needle) in [
+        ("path", "for the film of a 30000x30000 image"),
+        ("whitted", "for a 30000x30000 image"),
+    ] {
+        let out = std::process::Command::new("sh")
+            .args(["-c", "ulimit -v 4194304 && exec \"$0\" \"$@\""])
+            .arg(env!("CARGO_BIN_EXE_raylink"))
+            .args([
+                "render",
+                "scenes/cornell-box.toml",
+                "--integrator",
+                integrator,
+                "--spp",
+                "1",
+                "--width",
+                "30000",
+                "--height",
+                "30000",
+                "--max-memory",
+                "1T",
+                "--quiet",
+                "-o",
+                out_path.to_str().unwrap(),
+            ])
+            .current_dir(env!("CARGO_MANIFEST_DIR"))
+            .output()
+            .unwrap();
+        let err = stderr(&out);
+        assert_eq!(
+            out.status.code(),
+            Some(1),
+            "{integrator}: {err} {:?}",
+            out.status
+        );
+        assert_eq!(err.lines().count(), 1, "{integrator}: {err}");
+        assert!(
+            err.starts_with("raylink: error: cannot allocate ") && err.contains("GiB "),
+            "{integrator}: {err}"
+        );
+        assert!(
+            err.contains(needle) && err.contains("out of memory"),
+            "{err}"
+        );
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }

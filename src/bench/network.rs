@@ -107,14 +107,19 @@ fn timed<T>(f: impl FnOnce() -> Result<T>) -> Result<(T, f64)> {
 }
 
 /// Renders a view of a distributed network.
-fn render_view(ctx: &Context, net: &Network, sol: &Solution, view: &PixelView) -> RenderStats {
+fn render_view(
+    ctx: &Context,
+    net: &Network,
+    sol: &Solution,
+    view: &PixelView,
+) -> Result<RenderStats> {
     let renderer = NetworkRenderer {
         net,
         solution: sol,
         hybrid: false,
     };
     let whole = Tile::whole(view.width, view.height);
-    render_pixels(ctx, &renderer, view, &whole, &Control::default()).1
+    Ok(render_pixels(ctx, &renderer, view, &whole, &Control::default())?.1)
 }
 
 /// Measures every network of the bench.
@@ -169,7 +174,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             let cpu = super::cpu_seconds() - cpu;
             let sol = distribute(&net, &scene, &options);
             t[12].push(start.elapsed().as_secs_f64());
-            let rs = render_view(&ctx, &net, &sol, &view);
+            let rs = render_view(&ctx, &net, &sol, &view)?;
             t[0].push(start.elapsed().as_secs_f64());
             t[1].push(net.stats.seconds);
             t[2].push(net.stats.link_seconds);
@@ -230,7 +235,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
                 .superpose(&prefix, &scene, &emission, &relit)
                 .map_err(bad)?;
             t[13].push(start.elapsed().as_secs_f64());
-            render_view(&ctx, &prefix, &sol, &view);
+            render_view(&ctx, &prefix, &sol, &view)?;
             t[7].push(start.elapsed().as_secs_f64());
             t[8].push(load);
             drop((prefix, sol));
@@ -241,7 +246,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             let ((net, basis), load) = timed(|| file::load_all(&path, &recoloured, Some(&params)))?;
             let basis = basis.ok_or_else(|| bad("the light basis was not stored".into()))?;
             let sol = basis.redistribute(&net, &recoloured, &emission, &relit);
-            render_view(&recoloured_ctx, &net, &sol, &view);
+            render_view(&recoloured_ctx, &net, &sol, &view)?;
             t[9].push(start.elapsed().as_secs_f64());
             t[10].push(load);
             t[14].push(sol.stats.seconds);
@@ -261,7 +266,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             let (sol, _) = basis
                 .relit_from_series(&prefix, &recoloured, &emission, &relit)
                 .map_err(bad)?;
-            render_view(&recoloured_ctx, &prefix, &sol, &view);
+            render_view(&recoloured_ctx, &prefix, &sol, &view)?;
             t[16].push(start.elapsed().as_secs_f64());
             t[17].push(load);
             drop((prefix, sol));

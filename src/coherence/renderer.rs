@@ -76,7 +76,7 @@ impl Engine<'_> {
         let (image, stats) = match self {
             Engine::Whitted { integrator, view } => {
                 let whole = Tile::whole(view.width, view.height);
-                crate::render::pixels::render_pixels(ctx, *integrator, view, &whole, control)
+                crate::render::pixels::render_pixels(ctx, *integrator, view, &whole, control)?
             }
             Engine::MonteCarlo {
                 integrator,
@@ -90,7 +90,7 @@ impl Engine<'_> {
                     &mut |_| Ok(()),
                     control,
                 )?;
-                (film.image(), stats)
+                (film.image()?, stats)
             }
         };
         if stats.cancelled {

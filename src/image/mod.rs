@@ -25,6 +25,18 @@ impl Image {
         }
     }
 
+    /// A black image, or [`crate::Error::OutOfMemory`] if its pixels cannot be allocated.
+    pub fn try_new(width: u32, height: u32) -> crate::Result<Self> {
+        let pixels = crate::error::try_vec(width as usize * height as usize, Rgb::ZERO, || {
+            format!("a {width}x{height} image")
+        })?;
+        Ok(Image {
+            width,
+            height,
+            pixels,
+        })
+    }
+
     pub fn get(&self, x: u32, y: u32) -> Rgb {
         self.pixels[(y * self.width + x) as usize]
     }

@@ -104,10 +104,51 @@ pub struct ImageToWrite<'a> {
 
 /// Writes `image` to `path`, encoded by the OpenImageIO writer for `format` (`"openexr"`,
 /// `"png"`, `"jpeg"`, `"tiff"`, `"hdr"`, or an extension such as `"exr"`) whatever the
-/// extension of `path`; `metadata` becomes file attributes where the format supports them. On
-/// failure a partly written file may be left at `path`: the caller removes it (see
-/// [`super::output::write_image`], which does).
+/// extension of `path`; `metadata` becomes file attributes where the format supports them.
+/// The image is encoded in memory ([`encode`]) and written with the standard library, so a
+/// failure to write has the operating system's reason ([`Error::Io`]). On failure a partly
+/// written file may be left at `path`: the caller removes it (see
+/// [`super::output::write_image`], which writes atomically).
 pub fn write(path: &Path, format: &str, image: ImageToWrite, metadata: &Metadata) -> Result<()> {
+    let encoded = encode(path, format, image, metadata)?;
+    std::fs::write(path, encoded.bytes()).map_err(|e| Error::io(path, e))
+}
+
+/// An image file encoded in memory by [`encode`].
+pub struct Encoded(std::ptr::NonNull<sys::RaylinkOiioEncoded>);
+
+impl Encoded {
+    /// The file's bytes.
+    pub fn bytes(&self) -> &[u8] {
+        // SAFETY: `self.0` is a live buffer owned by `self`; the accessors only read it, and
+        // its `size` bytes stay valid and unchanged as long as `self`, which the returned
+        // slice borrows.
+        unsafe {
+            let data = sys::raylink_oiio_encoded_data(self.0.as_ptr());
+            let size = sys::raylink_oiio_encoded_size(self.0.as_ptr());
+            if size == 0 || data.is_null() {
+                return &[];
+            }
+            std::slice::from_raw_parts(data, size)
+        }
+    }
+}
+
+impl Drop for Encoded {
+    fn drop(&mut self) {
+        // SAFETY: `self.0` came non-null from `raylink_oiio_encode` and is freed only here.
+        unsafe { sys::raylink_oiio_encoded_free(self.0.as_ptr()) }
+    }
+}
+
+/// Encodes `image` in memory as [`write`] would write it to `name` (which only names the
+/// file in messages; nothing is written).
+pub fn encode(
+    path: &Path,
+    format: &str,
+    image: ImageToWrite,
+    metadata: &Metadata,
+) -> Result<Encoded> {
     let ImageToWrite {
         width,
         height,
@@ -178,32 +219,10 @@ pub fn write(path: &Path, format: &str, image: ImageToWrite, metadata: &Metadata
         })
         .collect();
 
-    let mut err = ErrorBuffer::new();
-    let status = match window {
-        // SAFETY: every pointer is valid for the duration of the call: `c_path`, `c_format`
-        // and the strings behind `channel_ptrs` and `attrs` are owned CStrings that outlive
-        // it; `channel_ptrs` holds exactly `nchannels` pointers, `attrs` `attrs.len()`
-        // structs, and `data` exactly `w * h * nchannels` floats (checked above). The C side
-        // only reads them, writes at most `err.len()` bytes into `err`, and catches every
-        // C++ exception.
-        None => unsafe {
-            sys::raylink_oiio_write(
-                c_path.as_ptr(),
-                c_format.as_ptr(),
-                w,
-                h,
-                nchannels,
-                data.as_ptr(),
-                channel_ptrs.as_ptr(),
-                attrs.as_ptr(),
-                attrs.len(),
-                pixel.code(),
-                err.as_mut_ptr(),
-                err.len(),
-            )
-        },
+    let c_window = match window {
+        None => None,
         Some(win) => {
-            let (Ok(fw), Ok(fh)) = (
+            let (Ok(full_width), Ok(full_height)) = (
                 c_int::try_from(win.full_width),
                 c_int::try_from(win.full_height),
             ) else {
@@ -215,34 +234,47 @@ pub fn write(path: &Path, format: &str, image: ImageToWrite, metadata: &Metadata
             if win.full_x != 0 || win.full_y != 0 {
                 return Err(fail("the full image must start at (0, 0)".into()));
             }
-            // SAFETY: as for `raylink_oiio_write` above; the window is plain integers, which
-            // the C side checks against the image size.
-            unsafe {
-                sys::raylink_oiio_write_window(
-                    c_path.as_ptr(),
-                    c_format.as_ptr(),
-                    win.x,
-                    win.y,
-                    w,
-                    h,
-                    fw,
-                    fh,
-                    nchannels,
-                    data.as_ptr(),
-                    channel_ptrs.as_ptr(),
-                    attrs.as_ptr(),
-                    attrs.len(),
-                    pixel.code(),
-                    err.as_mut_ptr(),
-                    err.len(),
-                )
-            }
+            Some(sys::RaylinkOiioWindow {
+                x: win.x,
+                y: win.y,
+                full_width,
+                full_height,
+            })
         }
     };
-    if status != 0 {
-        return Err(fail(err.message()));
-    }
-    Ok(())
+    let window_ptr = c_window
+        .as_ref()
+        .map_or(std::ptr::null(), |w| w as *const sys::RaylinkOiioWindow);
+
+    let mut err = ErrorBuffer::new();
+    // SAFETY: every pointer is valid for the duration of the call: `c_path`, `c_format` and
+    // the strings behind `channel_ptrs` and `attrs` are owned CStrings that outlive it;
+    // `channel_ptrs` holds exactly `nchannels` pointers, `attrs` `attrs.len()` structs, and
+    // `data` exactly `w * h * nchannels` floats (checked above); `window_ptr` is null or
+    // points to `c_window`, alive here (plain integers, which the C side checks against the
+    // image size). The C side only reads them, writes at most `err.len()` bytes into `err`,
+    // and catches every C++ exception; it returns null or a buffer that we own and free
+    // exactly once (by `Encoded`'s Drop).
+    let encoded = unsafe {
+        sys::raylink_oiio_encode(
+            c_path.as_ptr(),
+            c_format.as_ptr(),
+            w,
+            h,
+            nchannels,
+            data.as_ptr(),
+            channel_ptrs.as_ptr(),
+            attrs.as_ptr(),
+            attrs.len(),
+            pixel.code(),
+            window_ptr,
+            err.as_mut_ptr(),
+            err.len(),
+        )
+    };
+    std::ptr::NonNull::new(encoded)
+        .map(Encoded)
+        .ok_or_else(|| fail(err.message()))
 }
 
 /// Reads the first subimage of the file at `path`, all channels converted to float.
@@ -467,6 +499,20 @@ mod sys {
         pub float_value: c_float,
     }
 
+    #[repr(C)]
+    pub struct RaylinkOiioWindow {
+        pub x: c_int,
+        pub y: c_int,
+        pub full_width: c_int,
+        pub full_height: c_int,
+    }
+
+    /// Opaque.
+    #[repr(C)]
+    pub struct RaylinkOiioEncoded {
+        _private: [u8; 0],
+    }
+
     /// Opaque.
     #[repr(C)]
     pub struct RaylinkOiioImage {
@@ -474,8 +520,8 @@ mod sys {
     }
 
     extern "C" {
-        pub fn raylink_oiio_write(
-            path: *const c_char,
+        pub fn raylink_oiio_encode(
+            name: *const c_char,
             format: *const c_char,
             width: c_int,
             height: c_int,
@@ -485,27 +531,13 @@ mod sys {
             attrs: *const RaylinkOiioAttr,
             nattrs: usize,
             pixel_type: c_int,
+            window: *const RaylinkOiioWindow,
             err: *mut c_char,
             err_len: usize,
-        ) -> c_int;
-        pub fn raylink_oiio_write_window(
-            path: *const c_char,
-            format: *const c_char,
-            x: c_int,
-            y: c_int,
-            width: c_int,
-            height: c_int,
-            full_width: c_int,
-            full_height: c_int,
-            nchannels: c_int,
-            data: *const c_float,
-            channel_names: *const *const c_char,
-            attrs: *const RaylinkOiioAttr,
-            nattrs: usize,
-            pixel_type: c_int,
-            err: *mut c_char,
-            err_len: usize,
-        ) -> c_int;
+        ) -> *mut RaylinkOiioEncoded;
+        pub fn raylink_oiio_encoded_data(encoded: *const RaylinkOiioEncoded) -> *const u8;
+        pub fn raylink_oiio_encoded_size(encoded: *const RaylinkOiioEncoded) -> usize;
+        pub fn raylink_oiio_encoded_free(encoded: *mut RaylinkOiioEncoded);
         pub fn raylink_oiio_image_window(
             image: *const RaylinkOiioImage,
             x: *mut c_int,
@@ -538,236 +570,5 @@ mod sys {
             attr: *mut RaylinkOiioAttr,
         ) -> c_int;
         pub fn raylink_oiio_version() -> *const c_char;
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn version_looks_like_a_version() {
-        let v = version();
-        let parts: Vec<&str> = v.split('.').collect();
-        assert_eq!(parts.len(), 3, "{v}");
-        assert!(parts.iter().all(|p| p.parse::<u32>().is_ok()), "{v}");
-        assert!(parts[0].parse::<u32>().unwrap() >= 2, "{v}");
-    }
-
-    #[test]
-    fn nul_bytes_are_errors_not_panics() {
-        let dir = tempfile::tempdir().unwrap();
-        let ok = dir.path().join("a.exr");
-        let rgb = ["R", "G", "B"];
-        // A 1x1 float write where exactly one of the strings carries a NUL byte.
-        let write_nul = |path: &Path, format: &str, channels: &[&str], meta: &Metadata| {
-            let e = write(
-                path,
-                format,
-                ImageToWrite {
-                    width: 1,
-                    height: 1,
-                    channels,
-                    data: &[0.0; 3],
-                    pixel_type: PixelType::Float,
-                    window: None,
-                },
-                meta,
-            );
-            assert!(e.unwrap_err().to_string().contains("NUL"));
-        };
-        let bad_path = Path::new("a\0b.exr");
-        write_nul(bad_path, "exr", &rgb, &Metadata::new());
-        assert!(read(bad_path).unwrap_err().to_string().contains("NUL"));
-        write_nul(&ok, "ex\0r", &rgb, &Metadata::new());
-        write_nul(&ok, "exr", &["R", "G\0", "B"], &Metadata::new());
-        write_nul(
-            &ok,
-            "exr",
-            &rgb,
-            &vec![("a\0b".to_string(), MetaValue::Int(1))],
-        );
-        write_nul(
-            &ok,
-            "exr",
-            &rgb,
-            &vec![("a".to_string(), MetaValue::Str("x\0y".into()))],
-        );
-        assert!(!ok.exists());
-    }
-
-    #[test]
-    fn bad_sizes_are_errors() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("a.exr");
-        let meta = Metadata::new();
-        let rgb = ["R", "G", "B"];
-        let e = write(
-            &path,
-            "exr",
-            ImageToWrite {
-                width: 2,
-                height: 2,
-                channels: &rgb,
-                data: &[0.0; 11],
-                pixel_type: PixelType::Float,
-                window: None,
-            },
-            &meta,
-        );
-        assert!(e.unwrap_err().to_string().contains("11 values"));
-        let e = write(
-            &path,
-            "exr",
-            ImageToWrite {
-                width: 0,
-                height: 2,
-                channels: &rgb,
-                data: &[],
-                pixel_type: PixelType::Float,
-                window: None,
-            },
-            &meta,
-        );
-        assert!(e.unwrap_err().to_string().contains("0x2"));
-        let e = write(
-            &path,
-            "exr",
-            ImageToWrite {
-                width: 1,
-                height: 1,
-                channels: &[],
-                data: &[],
-                pixel_type: PixelType::Float,
-                window: None,
-            },
-            &meta,
-        );
-        assert!(e.is_err());
-        let huge = u32::MAX;
-        let e = write(
-            &path,
-            "exr",
-            ImageToWrite {
-                width: huge,
-                height: 1,
-                channels: &rgb,
-                data: &[0.0; 3],
-                pixel_type: PixelType::Float,
-                window: None,
-            },
-            &meta,
-        );
-        assert!(e.is_err());
-        assert!(!path.exists());
-    }
-
-    #[test]
-    fn unknown_format_reports_oiio_error() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join("a.exr");
-        let e = write(
-            &path,
-            "nosuchformat",
-            ImageToWrite {
-                width: 1,
-                height: 1,
-                channels: &["Y"],
-                data: &[0.5],
-                pixel_type: PixelType::Float,
-                window: None,
-            },
-            &Metadata::new(),
-        )
-        .unwrap_err()
-        .to_string();
-        assert!(e.contains("nosuchformat"), "{e}");
-        assert!(e.starts_with(&path.display().to_string()), "{e}");
-        assert!(!e.contains('\n'), "{e}");
-        assert!(!path.exists());
-    }
-
-    #[test]
-    fn reading_a_missing_or_bad_file_fails_cleanly() {
-        let dir = tempfile::tempdir().unwrap();
-        let missing = dir.path().join("missing.exr");
-        let e = read(&missing).unwrap_err().to_string();
-        assert!(e.starts_with(&missing.display().to_string()), "{e}");
-        let garbage = dir.path().join("garbage.exr");
-        std::fs::write(&garbage, b"this is not an image").unwrap();
-        let e = read(&garbage).unwrap_err().to_string();
-        assert!(e.starts_with(&garbage.display().to_string()), "{e}");
-        assert!(!e.contains('\n'), "{e}");
-    }
-
-    #[test]
-    fn format_is_independent_of_the_extension() {
-        let dir = tempfile::tempdir().unwrap();
-        let path = dir.path().join(".x.png.tmp-1");
-        let data = [0.0f32, 0.5, 1.0, 0.25];
-        let meta = Metadata::new();
-        write(
-            &path,
-            "png",
-            ImageToWrite {
-                width: 2,
-                height: 2,
-                channels: &["Y"],
-                data: &data,
-                pixel_type: PixelType::U8,
-                window: None,
-            },
-            &meta,
-        )
-        .unwrap();
-        let raw = read(&path).unwrap();
-        assert_eq!(raw.format, "png");
-        assert_eq!(raw.pixel_type, Some(PixelType::U8));
-        assert_eq!((raw.width, raw.height), (2, 2));
-        assert_eq!(raw.channels, vec!["Y".to_string()]);
-        assert_eq!(raw.data[0], 0.0);
-        assert_eq!(raw.data[2], 1.0);
-        // 0.5 * 255 = 127.5 rounds to 128. (OIIO reads level k as k * (1/255), which may
-        // differ from k / 255 in the last bit.)
-        assert!(
-            (raw.data[1] - 128.0 / 255.0).abs() < 1e-6,
-            "{}",
-            raw.data[1]
-        );
-        // "exr" as an extension-like name, "tiff" as a format name.
-        let exr = dir.path().join("noext");
-        write(
-            &exr,
-            "exr",
-            ImageToWrite {
-                width: 2,
-                height: 2,
-                channels: &["Y"],
-                data: &data,
-                pixel_type: PixelType::Float,
-                window: None,
-            },
-            &meta,
-        )
-        .unwrap();
-        assert_eq!(read(&exr).unwrap().format, "openexr");
-        let tif = dir.path().join("tif.exr");
-        write(
-            &tif,
-            "tiff",
-            ImageToWrite {
-                width: 2,
-                height: 2,
-                channels: &["Y"],
-                data: &data,
-                pixel_type: PixelType::U16,
-                window: None,
-            },
-            &meta,
-        )
-        .unwrap();
-        let raw = read(&tif).unwrap();
-        assert_eq!(raw.format, "tiff");
-        assert_eq!(raw.pixel_type, Some(PixelType::U16));
     }
 }

@@ -13,7 +13,7 @@
 
 use std::fs;
 use std::io;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use super::oiio::{self, PixelType};
 use super::{Image, MetaValue, Metadata};
@@ -123,16 +123,10 @@ pub fn check_output_path(path: &Path) -> Result<()> {
         }
     }
     crate::atomic_file::remove_stale_temps(dir);
-    let probe = temp_path(path);
-    match fs::OpenOptions::new()
-        .write(true)
-        .create_new(true)
-        .open(&probe)
-    {
-        Ok(file) => {
-            drop(file);
-            // Best effort: a probe that cannot be removed is harmless.
-            let _ = fs::remove_file(&probe);
+    match crate::atomic_file::Temporary::create(path) {
+        // The probe is removed on drop (best effort: one that cannot be is harmless).
+        Ok(probe) => {
+            drop(probe);
             Ok(())
         }
         Err(e) => Err(Error::image(
@@ -143,9 +137,11 @@ pub fn check_output_path(path: &Path) -> Result<()> {
 }
 
 /// Writes `image` to `path` in the format its extension names, with `metadata` as file
-/// attributes (EXR header attributes; other formats keep what they can). The file is written
-/// to a hidden temporary file next to `path` and renamed over it only on success: on any
-/// failure the temporary file is removed and an existing `path` is left untouched.
+/// attributes (EXR header attributes; other formats keep what they can). The file is encoded
+/// in memory, written to a hidden temporary file next to `path`, synced, and renamed over
+/// `path` only once complete ([`crate::atomic_file::write`]): on any failure the temporary
+/// file is removed and an existing `path` is left untouched. A failure to write (a full disk)
+/// is an [`Error::Io`] with the operating system's reason.
 pub fn write_image(
     path: &Path,
     image: &Image,
@@ -203,14 +199,14 @@ fn write_image_impl(
             attributes.push(("Compression".into(), MetaValue::Str("jpeg:95".into())));
         }
         let scale = options.exposure.exp2();
-        (display_values(&image.pixels, scale), PixelType::U8)
+        (display_values(path, &image.pixels, scale)?, PixelType::U8)
     } else {
         let pixel = if format == Format::Exr && options.half {
             PixelType::Half
         } else {
             PixelType::Float
         };
-        let mut values = linear_values(&image.pixels);
+        let mut values = linear_values(path, &image.pixels)?;
         if format == Format::Hdr {
             // OpenImageIO's RGBE encoder mangles what RGBE cannot hold: a negative channel
             // comes back as garbage (-0.5 as 0.5), a channel above ~1.7e38 zeroes the pixel.
@@ -221,9 +217,8 @@ fn write_image_impl(
         (values, pixel)
     };
 
-    let temp = TempFile::new(temp_path(path));
-    oiio::write(
-        &temp.path,
+    let encoded = oiio::encode(
+        path,
         format.oiio_name(),
         oiio::ImageToWrite {
             width: image.width,
@@ -234,19 +229,10 @@ fn write_image_impl(
             window,
         },
         &attributes,
-    )
-    .map_err(|e| retarget(e, &temp.path, path))?;
-    fs::rename(&temp.path, path).map_err(|e| {
-        Error::image(
-            path,
-            format!(
-                "cannot move the finished image into place from {}: {e}",
-                temp.path.display()
-            ),
-        )
-    })?;
-    temp.disarm();
-    Ok(())
+    )?;
+    // The encoded bytes replace `path` only once they are all on disk.
+    drop(data);
+    crate::atomic_file::write(path, encoded.bytes())
 }
 
 /// Reads an image as RGB: `R`, `G`, `B` channels if present, otherwise one channel is
@@ -316,16 +302,22 @@ pub fn hdr_value(linear: f32) -> f32 {
 /// Below 2^127, the largest power of two RGBE's exponent byte can hold.
 const HDR_MAX: f32 = 1.0e38;
 
-fn display_values(pixels: &[Rgb], scale: f32) -> Vec<f32> {
-    pixels
-        .iter()
-        .flat_map(|p| [p.x, p.y, p.z])
-        .map(|v| display_value(v, scale))
-        .collect()
+/// The values to encode, three a pixel; [`Error::OutOfMemory`] if there is no room for them.
+fn channel_values(path: &Path, pixels: &[Rgb], f: impl Fn(f32) -> f32) -> Result<Vec<f32>> {
+    let mut values = Vec::new();
+    crate::error::try_reserve(&mut values, pixels.len() * 3, || {
+        format!("the pixels of {}", path.display())
+    })?;
+    values.extend(pixels.iter().flat_map(|p| [p.x, p.y, p.z]).map(f));
+    Ok(values)
 }
 
-fn linear_values(pixels: &[Rgb]) -> Vec<f32> {
-    pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect()
+fn display_values(path: &Path, pixels: &[Rgb], scale: f32) -> Result<Vec<f32>> {
+    channel_values(path, pixels, |v| display_value(v, scale))
+}
+
+fn linear_values(path: &Path, pixels: &[Rgb]) -> Result<Vec<f32>> {
+    channel_values(path, pixels, |v| v)
 }
 
 /// The directory holding `path` (`.` for a bare file name).
@@ -336,53 +328,10 @@ fn parent_dir(path: &Path) -> &Path {
     }
 }
 
-fn temp_path(path: &Path) -> PathBuf {
-    crate::atomic_file::temp_path(path)
-}
-
-/// Errors from writing the temporary file are reported against the real target (the temporary
-/// name would only confuse).
-fn retarget(error: Error, temp: &Path, target: &Path) -> Error {
-    match error {
-        Error::Image { detail, .. } => {
-            let temp_name = temp.display().to_string();
-            Error::image(
-                target,
-                detail.replace(&temp_name, &target.display().to_string()),
-            )
-        }
-        other => other,
-    }
-}
-
-/// A temporary file removed on drop unless disarmed (also on panic).
-struct TempFile {
-    path: PathBuf,
-    armed: bool,
-}
-
-impl TempFile {
-    fn new(path: PathBuf) -> Self {
-        TempFile { path, armed: true }
-    }
-
-    fn disarm(mut self) {
-        self.armed = false;
-    }
-}
-
-impl Drop for TempFile {
-    fn drop(&mut self) {
-        if self.armed {
-            // Best effort: it may never have been created.
-            let _ = fs::remove_file(&self.path);
-        }
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::atomic_file::temp_path;
 
     #[test]
     fn formats_by_extension_case_insensitive() {

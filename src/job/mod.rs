@@ -381,7 +381,7 @@ impl Renderer {
                     threads: job.threads,
                     seed: job.seed,
                 };
-                let (image, stats) = render_pixels(&ctx, integrator, &view, &region, control);
+                let (image, stats) = render_pixels(&ctx, integrator, &view, &region, control)?;
                 Rendered {
                     image,
                     stats,
@@ -403,7 +403,7 @@ impl Renderer {
                         render_passes(&ctx, integrator, &options, resume, after_pass, control)?;
                     stats.invalid = film.invalid;
                     Rendered {
-                        image: film.image(),
+                        image: film.image()?,
                         stats,
                         film: Some(film),
                     }
@@ -417,8 +417,9 @@ impl Renderer {
     }
 
     /// The auxiliary images of the job's pixels (albedo, normal, depth: what the camera
-    /// sees first, filtered as the image is), or `None` if cancelled.
-    pub fn render_aovs(&self, control: &Control) -> Option<[Image; 3]> {
+    /// sees first, filtered as the image is), or `None` if cancelled;
+    /// [`Error::OutOfMemory`] if they cannot be allocated.
+    pub fn render_aovs(&self, control: &Control) -> Result<Option<[Image; 3]>> {
         let ctx = Context::new(&self.scene, self.accel.as_ref());
         // The image's filter; the scene's for the techniques that have none.
         let filter = match self.job.technique.monte_carlo() {

@@ -44,13 +44,17 @@ pub(crate) fn render_aovs(
     region: &Tile,
     (filter, seed, threads): (Filter, u64, Option<usize>),
     control: &Control,
-) -> Option<[Image; 3]> {
+) -> crate::Result<Option<[Image; 3]>> {
     let mut camera = ctx.scene.camera.clone();
     camera.width = width;
     camera.height = height;
     let basis = camera.basis();
     let tiles = super::tiles_in(region);
-    let mut images = [0; 3].map(|_| Image::new(region.width(), region.height()));
+    let mut images = [
+        Image::try_new(region.width(), region.height())?,
+        Image::try_new(region.width(), region.height())?,
+        Image::try_new(region.width(), region.height())?,
+    ];
     let phase = control.phase("auxiliary images", Some(region.pixels()), "pixels");
     let driven = drive(
         &tiles,
@@ -94,5 +98,5 @@ pub(crate) fn render_aovs(
         },
     );
     phase.end("");
-    (!driven.cancelled).then_some(images)
+    Ok((!driven.cancelled).then_some(images))
 }

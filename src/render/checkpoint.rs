@@ -95,7 +95,7 @@ fn settings_of(path: &Path) -> Result<String> {
 /// on) to check a resume against.
 pub fn save(path: &Path, film: &Film, settings: &str, samples: u64) -> Result<()> {
     let (sums, splats) = film.accumulators();
-    let mut b = FORMAT.start(settings.len() + 48 * sums.len() + 64);
+    let mut b = FORMAT.try_start(settings.len() + 48 * sums.len() + 64, path)?;
     b.extend_from_slice(&(settings.len() as u64).to_le_bytes());
     b.extend_from_slice(settings.as_bytes());
     let (width, height) = film.size();

@@ -32,8 +32,9 @@ pub struct Film {
 }
 
 impl Film {
-    /// An empty film (no samples) of this size and filter.
-    pub fn new(width: u32, height: u32, filter: Filter) -> Film {
+    /// An empty film (no samples) of this size and filter, or
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if it cannot be allocated.
+    pub fn new(width: u32, height: u32, filter: Filter) -> crate::Result<Film> {
         // ∫ filter by the midpoint rule on a fine grid.
         let r = filter.radius();
         let n = 256;
@@ -47,18 +48,19 @@ impl Film {
         }
         integral *= (h * h) as f64;
         let pixels = width as usize * height as usize;
-        Film {
+        let what = || format!("the film of a {width}x{height} image");
+        Ok(Film {
             width,
             height,
             filter,
             filter_norm: 1.0 / integral,
-            sums: vec![[0.0; 3]; pixels],
-            splats: vec![[0.0; 3]; pixels],
+            sums: crate::error::try_vec(pixels, [0.0; 3], what)?,
+            splats: crate::error::try_vec(pixels, [0.0; 3], what)?,
             spp: 0,
             pass: 0,
             tiles_done: 0,
             invalid: 0,
-        }
+        })
     }
 
     pub fn size(&self) -> (u32, u32) {
@@ -173,9 +175,10 @@ impl Film {
         }
     }
 
-    /// The image after the samples taken so far.
-    pub fn image(&self) -> Image {
-        let mut image = Image::new(self.width, self.height);
+    /// The image after the samples taken so far, or
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if it cannot be allocated.
+    pub fn image(&self) -> crate::Result<Image> {
+        let mut image = Image::try_new(self.width, self.height)?;
         if self.is_partial_pass() {
             // An interrupted pass: each pixel by its own count; one light path per sample.
             let paths = self.mean_spp() * self.width as f64 * self.height as f64;
@@ -185,10 +188,10 @@ impl Film {
                 let per_sample = if n == 0 { 0.0 } else { 1.0 / n as f64 };
                 *px = pixel_value(self.sums[i], self.splats[i], per_sample, 1.0 / paths);
             }
-            return image;
+            return Ok(image);
         }
         if self.spp == 0 {
-            return image;
+            return Ok(image);
         }
         let per_sample = 1.0 / self.spp as f64;
         // Light paths: one per pixel sample over the whole image.
@@ -196,7 +199,7 @@ impl Film {
         for (i, px) in image.pixels.iter_mut().enumerate() {
             *px = pixel_value(self.sums[i], self.splats[i], per_sample, per_path);
         }
-        image
+        Ok(image)
     }
 }
 

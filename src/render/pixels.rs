@@ -22,18 +22,19 @@ pub(crate) struct PixelView {
 
 /// Renders the pixels of `region` of the image (the whole image or a part of it: a pixel's
 /// value does not depend on which others are rendered with it). Returns the region's image.
-/// A cancel leaves the tiles not merged black, and marks the statistics.
+/// A cancel leaves the tiles not merged black, and marks the statistics. The image that
+/// cannot be allocated is an [`Error::OutOfMemory`](crate::Error::OutOfMemory).
 pub(crate) fn render_pixels(
     ctx: &Context,
     integrator: &dyn Integrator,
     view: &PixelView,
     region: &Tile,
     control: &Control,
-) -> (Image, RenderStats) {
+) -> crate::Result<(Image, RenderStats)> {
     let tiles = tiles_in(region);
     let phase = control.phase("render", Some(region.pixels()), "pixels");
     let start = Instant::now();
-    let mut image = Image::new(region.width(), region.height());
+    let mut image = Image::try_new(region.width(), region.height())?;
     let mut stats = RenderStats::default();
     let driven = drive(
         &tiles,
@@ -52,7 +53,7 @@ pub(crate) fn render_pixels(
     stats.cancelled = driven.cancelled;
     stats.seconds = start.elapsed().as_secs_f64();
     phase.end(&stats.summary());
-    (image, stats)
+    Ok((image, stats))
 }
 
 /// The pixels of one tile (row-major), the rays traced and the samples taken.

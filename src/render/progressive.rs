@@ -229,7 +229,7 @@ pub(crate) fn render_region(
         "samples",
     );
     let start = Instant::now();
-    let mut image = Image::new(region.width(), region.height());
+    let mut image = Image::try_new(region.width(), region.height())?;
     let mut stats = RenderStats::default();
     let driven = drive(
         &tiles,
@@ -299,7 +299,7 @@ pub(crate) fn render_passes(
             }
             film
         }
-        None => Film::new(options.width, options.height, options.filter),
+        None => Film::new(options.width, options.height, options.filter)?,
     };
     let mut stats = RenderStats::default();
     let pixels = options.width as u64 * options.height as u64;

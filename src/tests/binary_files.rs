@@ -23,19 +23,24 @@ const SETTINGS: &str = "a test render";
 /// A checkpoint of an empty 8x8 film, and where its counts start in the file.
 fn empty_checkpoint(dir: &Path) -> (PathBuf, usize) {
     let path = dir.join("x.exr.checkpoint");
-    let film = Film::new(8, 8, Filter::default());
+    let film = Film::new(8, 8, Filter::default()).unwrap();
     checkpoint::save(&path, &film, SETTINGS, 0).unwrap();
     // Magic and version, the settings' length and text, then width and height.
     (path, 12 + 8 + SETTINGS.len() + 8)
 }
 
 fn load(path: &Path, target: u32) -> Result<(), String> {
-    checkpoint::load(path, SETTINGS, Film::new(8, 8, Filter::default()), target)
-        .map(drop)
-        .map_err(|e| match e {
-            Error::Input { detail, .. } => detail,
-            other => panic!("not an input error: {other}"),
-        })
+    checkpoint::load(
+        path,
+        SETTINGS,
+        Film::new(8, 8, Filter::default()).unwrap(),
+        target,
+    )
+    .map(drop)
+    .map_err(|e| match e {
+        Error::Input { detail, .. } => detail,
+        other => panic!("not an input error: {other}"),
+    })
 }
 
 fn set_u32(bytes: &mut [u8], at: usize, v: u32) {
@@ -99,7 +104,7 @@ fn checkpoints_with_impossible_counts_or_sums_are_refused() {
 fn checkpoints_of_other_renders_are_kept_apart() {
     let dir = tempfile::tempdir().unwrap();
     let output = dir.path().join("x.exr");
-    let film = Film::new(8, 8, Filter::default());
+    let film = Film::new(8, 8, Filter::default()).unwrap();
     // A first render leaves its checkpoint; a second, with another seed, must not replace it.
     let first = checkpoint::path_for(&output, "seed 1");
     checkpoint::save(&first, &film, "seed 1", 0).unwrap();

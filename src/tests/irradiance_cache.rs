@@ -56,7 +56,7 @@ fn render_ic(
     assert_eq!(film.invalid, 0);
     check(&ctx, &integrator);
     Run {
-        image: film.image(),
+        image: film.image().unwrap(),
         records: integrator.cache().len(),
         overture: integrator.stats.overture_primaries,
         misses: integrator.misses(),

@@ -13,5 +13,6 @@ mod network_files;
 mod network_relight;
 mod network_scenes;
 mod network_transport;
+mod oiio;
 mod robustness;
 mod whitted;

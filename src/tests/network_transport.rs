@@ -310,7 +310,9 @@ fn network_image(scene: &Scene, p: NetworkParams, size: u32, hybrid: bool) -> Im
         seed: 1,
     };
     let whole = Tile::whole(size, size);
-    render_pixels(&ctx, &renderer, &view, &whole, &Control::default()).0
+    render_pixels(&ctx, &renderer, &view, &whole, &Control::default())
+        .unwrap()
+        .0
 }
 
 /// The Cornell box against the path tracer: the relative RMSE of 4×4-pixel block means
@@ -343,7 +345,7 @@ fn cornell_box_approaches_the_path_tracer() {
     )
     .unwrap();
     // The light (rendered exactly by both) and its neighbours are left out of the blocks.
-    let full = film.image();
+    let full = film.image().unwrap();
     let mask = bright_mask(&full, 1.0);
     let masked = |img: &Image| {
         let mut img = img.clone();

@@ -2,6 +2,9 @@
 
 use std::process::{Command, Output};
 
+#[allow(dead_code)] // Not every test crate runs children it watches.
+pub mod process;
+
 /// Runs the binary from the repository root.
 pub fn raylink(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_raylink"))

@@ -164,7 +164,7 @@ impl Network {
         batches: &[LinkBatch],
         packing: EndPacking,
         code: LinkCode,
-    ) -> Result<Network, String> {
+    ) -> Result<Network, super::build::BuildError> {
         use rayon::prelude::*;
         let keys = 2 * patches.cells as usize;
         let block = packing.block();
@@ -209,11 +209,15 @@ impl Network {
             return Err(format!(
                 "the network would have {total} links, more than 32-bit offsets address; use \
                  a larger intercept_step or fewer slopes"
-            ));
+            )
+            .into());
         }
         let w = SlotWeights::new(&space);
-        // Zeroed pages come lazily from the system; each block fills its own part.
-        let mut links = vec![0u32; total];
+        // Each block fills its own part. The link table is reserved fallibly: memory the
+        // system refuses is an error, not an abort.
+        let mut links = crate::error::try_vec(total, 0u32, || {
+            format!("the link table of the illumination network ({total} links)")
+        })?;
         let mut link_start = vec![0u32; nodes + 1];
         let mut etendue = vec![0f32; nodes];
         let mut escape_etendue = vec![0f32; nodes];

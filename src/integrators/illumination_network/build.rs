@@ -32,6 +32,41 @@ pub struct BuildStats {
     pub assemble_seconds: f64,
 }
 
+/// Why a network could not be built: a problem of the scene or the parameters (a sentence),
+/// or an error of another kind (memory the system refused), kept as it is.
+#[derive(Debug)]
+pub(crate) enum BuildError {
+    Scene(String),
+    Error(crate::Error),
+}
+
+impl From<String> for BuildError {
+    fn from(s: String) -> Self {
+        BuildError::Scene(s)
+    }
+}
+
+impl From<&str> for BuildError {
+    fn from(s: &str) -> Self {
+        BuildError::Scene(s.to_string())
+    }
+}
+
+impl From<crate::Error> for BuildError {
+    fn from(e: crate::Error) -> Self {
+        BuildError::Error(e)
+    }
+}
+
+impl std::fmt::Display for BuildError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            BuildError::Scene(s) => f.write_str(s),
+            BuildError::Error(e) => e.fmt(f),
+        }
+    }
+}
+
 impl Network {
     /// Preprocess: patches and links for a scene. The Embree builder casts through `ctx`.
     pub fn build(
@@ -50,6 +85,7 @@ impl Network {
             true,
             &control,
         )
+        .map_err(|e| e.to_string())
     }
 
     /// [`Network::build`] under a job's controls: its memory budget bounds the network, and
@@ -71,7 +107,10 @@ impl Network {
             control,
         );
         control.cancel.check("the network preprocess")?;
-        built.map_err(|e| crate::Error::input(&scene.source, e))
+        built.map_err(|e| match e {
+            BuildError::Scene(e) => crate::Error::input(&scene.source, e),
+            BuildError::Error(e) => e,
+        })
     }
 
     /// [`Network::build`] with the preprocess's link ends packed as `packing(side keys)` says,
@@ -85,7 +124,7 @@ impl Network {
         packing: impl FnOnce(usize) -> Result<EndPacking, String>,
         drop_outer: bool,
         control: &Control,
-    ) -> Result<Network, String> {
+    ) -> Result<Network, BuildError> {
         params.validate().map_err(|e| e.to_string())?;
         let start = Instant::now();
         let bounds = scene.bounds().ok_or("the scene has no shapes")?;
@@ -104,7 +143,8 @@ impl Network {
                     "shape {} is a sphere: the scan converter projects polygons only; use \
                      the embree network builder",
                     p.shape
-                ));
+                )
+                .into());
             }
         }
         let keys = 2 * patches.cells as usize;

@@ -63,7 +63,7 @@ fn params_bytes(p: &NetworkParams) -> Vec<u8> {
 /// Writes the network (and a light basis, if given) to `path` atomically.
 pub fn save(path: &Path, net: &Network, scene: &Scene, basis: Option<&LightBasis>) -> Result<()> {
     let basis = basis.map(LightBasis::to_bytes).unwrap_or_default();
-    let mut b = FORMAT.start(64 + basis.len() + 4 * (net.links.len() + net.nodes()));
+    let mut b = FORMAT.try_start(64 + basis.len() + 4 * (net.links.len() + net.nodes()), path)?;
     b.extend_from_slice(&geometry_hash(scene).to_le_bytes());
     b.extend_from_slice(&params_bytes(&net.params));
     b.extend_from_slice(&net.patches.cells.to_le_bytes());
@@ -533,7 +533,9 @@ pub fn load_all(
     let mut link_start = vec![0u32; nodes + 1];
     read_at(&mut link_start, at, Some(&mut sum))?;
     let at = at + 4 * (nodes as u64 + 1);
-    let mut links = vec![0u32; n_links];
+    let mut links = crate::error::try_vec(n_links, 0u32, || {
+        format!("the link table of {} ({n_links} links)", path.display())
+    })?;
     let (first, second) = links.split_at_mut(n_links / 2);
     let second_at = at + 4 * first.len() as u64;
     let (a, b) = rayon::join(

@@ -76,7 +76,7 @@ pub fn save_for_view(
     options: &IcOptions,
     view: u64,
 ) -> Result<()> {
-    let mut b = FORMAT.start(40 * cache.len());
+    let mut b = FORMAT.try_start(40 * cache.len(), path)?;
     b.extend_from_slice(&header(scene, options));
     for level in &cache.levels {
         b.extend_from_slice(&(level.len() as u64).to_le_bytes());
