@@ -54,6 +54,8 @@ fi
 grep -q '^13\|^trixie' "$root/etc/debian_version" || { echo "not a trixie root: $(cat "$root/etc/debian_version")" >&2; exit 1; }
 mount -t proc proc "$root/proc"; mounts+=("$root/proc")
 bind /dev /dev
+# The pseudo-terminals (a separate mount) for the progress test's script(1).
+bind /dev/pts /dev/pts
 mkdir -p "$target"
 bind "$src" /src
 bind "$cargo_home" /opt/cargo

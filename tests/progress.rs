@@ -40,7 +40,11 @@ fn a_terminal_shows_the_overture_before_the_render_and_a_pipe_shows_no_bars() {
         .output()
         .expect("script (util-linux) runs");
     let shown = String::from_utf8_lossy(&run.stdout);
-    assert!(run.status.success(), "{shown}");
+    assert!(
+        run.status.success(),
+        "{shown}{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
     let overture = shown
         .find("overture [")
         .unwrap_or_else(|| panic!("no overture bar: {shown}"));

@@ -9,71 +9,9 @@ use raylink::{
 };
 use std::f32::consts::PI;
 
-fn camera() -> Camera {
-    Camera {
-        position: Vec3::new(0.0, 4.0, 6.0),
-        look_at: Vec3::ZERO,
-        up: Vec3::Y,
-        fov_deg: 40.0,
-        width: 64,
-        height: 48,
-    }
-}
-
-fn empty_scene() -> Scene {
-    Scene {
-        source: "test".into(),
-        camera: camera(),
-        materials: Vec::new(),
-        shapes: Vec::new(),
-        lights: Vec::new(),
-        ambient: Rgb::ZERO,
-        background: Rgb::ZERO,
-        settings: Default::default(),
-        setting_sources: Vec::new(),
-        inputs: Vec::new(),
-        environment: None,
-        warnings: Vec::new(),
-    }
-}
-
-fn add_material(scene: &mut Scene, m: Material) -> usize {
-    scene.materials.push(m);
-    scene.materials.len() - 1
-}
-
-/// A quad from four corners (normal (b-a) x (c-a)).
-fn quad(scene: &mut Scene, corners: [Vec3; 4], material: usize) {
-    scene.shapes.push(Shape {
-        geometry: Geometry::Quads(QuadMesh {
-            positions: corners.to_vec(),
-            indices: vec![[0, 1, 2, 3]],
-        }),
-        material,
-    });
-}
-
-/// The plane y = `y` from -s to s, facing up.
-fn floor(scene: &mut Scene, y: f32, s: f32, material: usize) {
-    quad(
-        scene,
-        [
-            Vec3::new(-s, y, -s),
-            Vec3::new(-s, y, s),
-            Vec3::new(s, y, s),
-            Vec3::new(s, y, -s),
-        ],
-        material,
-    );
-}
-
-fn diffuse(kd: Rgb) -> Material {
-    Material {
-        diffuse: Texture::Constant(kd),
-        specular: Rgb::ZERO,
-        ..Material::default()
-    }
-}
+#[path = "../src/tests/whitted_scenes.rs"]
+mod scenes;
+use scenes::{add_material, diffuse, empty_scene, floor, quad};
 
 /// Whitted's integrator with its defaults and `settings` (sampling, area samples).
 fn whitted_settings(settings: Settings) -> Technique {
