@@ -141,7 +141,7 @@ impl Drop for Encoded {
     }
 }
 
-/// Encodes `image` in memory as [`write`] would write it to `name` (which only names the
+/// Encodes `image` in memory as [`write()`] would write it to `name` (which only names the
 /// file in messages; nothing is written).
 pub fn encode(
     path: &Path,
