@@ -167,6 +167,15 @@ impl Control {
         }
     }
 
+    /// These controls with no progress: for work inside a phase whose progress the caller
+    /// reports itself (the renders of an animation's frames, say).
+    pub fn silenced(&self) -> Control {
+        Control {
+            progress: Arc::new(Silent),
+            ..self.clone()
+        }
+    }
+
     /// Starts reporting a phase; [`Phase::end`] closes it with its time.
     pub fn phase(&self, name: &'static str, total: Option<u64>, unit: &str) -> Phase<'_> {
         self.progress.begin(name, total, unit);

@@ -189,13 +189,11 @@ pub struct Settings {
     pub relight: Option<Relight>,
 }
 
-impl Settings {
-    /// These settings with every setting `over` gives replacing its own.
-    pub fn overlaid(self, over: &Settings) -> Settings {
-        macro_rules! pick {
-            ($($f:ident),*) => { Settings { $($f: over.$f.clone().or(self.$f),)* } };
-        }
-        pick!(
+/// Calls macro `$m` with the name of every field of [`Settings`]: the one list that
+/// [`Settings::overlaid`] and [`Settings::given`] go through, so a new setting is in both.
+macro_rules! for_each_setting {
+    ($m:ident) => {
+        $m!(
             integrator,
             spp,
             max_depth,
@@ -224,6 +222,16 @@ impl Settings {
             network_hybrid,
             relight
         )
+    };
+}
+
+impl Settings {
+    /// These settings with every setting `over` gives replacing its own.
+    pub fn overlaid(self, over: &Settings) -> Settings {
+        macro_rules! pick {
+            ($($f:ident),*) => { Settings { $($f: over.$f.clone().or(self.$f),)* } };
+        }
+        for_each_setting!(pick)
     }
 
     /// The names of the settings that are set.
@@ -232,35 +240,7 @@ impl Settings {
         macro_rules! given {
             ($($f:ident),*) => { $( if self.$f.is_some() { v.push(stringify!($f)); } )* };
         }
-        given!(
-            integrator,
-            spp,
-            max_depth,
-            time_limit,
-            filter,
-            aa,
-            aa_threshold,
-            aa_depth,
-            area_samples,
-            fresnel,
-            ab,
-            ic_accuracy,
-            ic_samples,
-            ar,
-            cache_file,
-            show_cache_points,
-            slopes,
-            intercept_step,
-            patch_size,
-            network_jitter,
-            network_builder,
-            tolerance,
-            network_file,
-            light_scale,
-            network_order,
-            network_hybrid,
-            relight
-        );
+        for_each_setting!(given);
         v
     }
 }

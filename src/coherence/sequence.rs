@@ -244,6 +244,16 @@ impl Sequence {
         r
     }
 
+    /// `scene` rendered from scratch, as a frame-by-frame renderer does (with a static
+    /// intersection structure of its own): the image, its rays and its time.
+    fn render_full(&self, scene: &Scene, control: &Control) -> Result<(Image, RayStats, Time)> {
+        let clock = Clock::start();
+        let accel = accel::build(scene, self.job.accel, control)?;
+        let engine = self.job.engine(&self.integrators);
+        let (image, rays) = engine.render_full(&Context::new(scene, accel.as_ref()), control)?;
+        Ok((image, rays, clock.elapsed()))
+    }
+
     /// The CPU seconds of the first frame `scene` rendered coherently (recording) and in
     /// full, `reps` times alternating which goes first: the frame-0 overhead. Before
     /// the first [`next`](Self::next).
@@ -257,12 +267,7 @@ impl Sequence {
         let mut coherent = self.start(scene, control);
         let mut overhead = Vec::new();
         for rep in 0..reps {
-            let full = || -> Result<f64> {
-                let clock = Clock::start();
-                let accel = accel::build(scene, self.job.accel, control)?;
-                engine.render_full(&Context::new(scene, accel.as_ref()), control)?;
-                Ok(clock.elapsed().cpu)
-            };
+            let full = || -> Result<f64> { Ok(self.render_full(scene, control)?.2.cpu) };
             let mut recorded = || -> Result<f64> {
                 coherent.reset();
                 let clock = Clock::start();
@@ -294,10 +299,7 @@ impl Sequence {
         verify: bool,
     ) -> Result<(Image, FrameRow)> {
         let outer = control;
-        let control = &Control {
-            progress: std::sync::Arc::new(crate::control::Silent),
-            ..outer.clone()
-        };
+        let control = &outer.silenced();
         let (width, height) = (self.job.width, self.job.height);
         let mut row = FrameRow {
             frame,
@@ -362,11 +364,8 @@ impl Sequence {
         }
         row.coherent = stats;
         if verify {
-            let clock = Clock::start();
-            let accel = accel::build(scene, self.job.accel, control)?;
-            let engine = self.job.engine(&self.integrators);
-            let (full, rays) = engine.render_full(&Context::new(scene, accel.as_ref()), control)?;
-            row.full = Some((rays, clock.elapsed()));
+            let (full, rays, time) = self.render_full(scene, control)?;
+            row.full = Some((rays, time));
             row.identical = Some(
                 (full.width, full.height) == (width, height)
                     && full.pixels.len() == image.pixels.len()
@@ -423,10 +422,7 @@ pub fn render_sequence(
         return Err(Error::setting("frames", "is empty"));
     }
     let mut sequence = Sequence::new(job)?;
-    let quiet = Control {
-        progress: std::sync::Arc::new(crate::control::Silent),
-        ..control.clone()
-    };
+    let quiet = control.silenced();
     let scene0 = anim.scene_at(frames[0])?;
     let prepare = Instant::now();
     if job.placement == Placement::Lookahead && job.mode != SequenceMode::Full {
@@ -449,8 +445,6 @@ pub fn render_sequence(
     };
     let mut rows = Vec::new();
     let progress = control.phase("frames", Some(frames.len() as u64), "frames");
-    let integrators = job.integrators();
-    let engine = job.engine(&integrators);
     let mut scene0 = Some(scene0);
     for &f in frames {
         control.cancel.check(&format!("frame {f}"))?;
@@ -459,12 +453,10 @@ pub fn render_sequence(
             None => anim.scene_at(f)?,
         };
         let (image, row) = if job.mode == SequenceMode::Full {
-            let clock = Clock::start();
-            let accel = accel::build(&scene, job.accel, &quiet)?;
-            let (img, rays) = engine.render_full(&Context::new(&scene, accel.as_ref()), &quiet)?;
+            let (img, rays, time) = sequence.render_full(&scene, &quiet)?;
             let row = FrameRow {
                 frame: f,
-                full: Some((rays, clock.elapsed())),
+                full: Some((rays, time)),
                 ..FrameRow::default()
             };
             (img, row)
