@@ -95,3 +95,64 @@ fn adaptive_traces_fewer_rays_than_4x4_and_stays_close_to_16x16() {
         "adaptive {e_adaptive} vs corners {e_corners}"
     );
 }
+
+/// A 32x32 view down −z (fov 40°) of one sphere of emission 1 whose image has radius
+/// `radius_px` pixels around raster position (`x`, `y`), on black, with no other light.
+fn small_sphere_scene(x: f32, y: f32, radius_px: f32) -> Scene {
+    let pixel = 2.0 * 20f32.to_radians().tan() / 32.0;
+    let distance = 10.0;
+    let (cx, cy) = ((x - 16.0) * pixel * distance, (16.0 - y) * pixel * distance);
+    let radius = radius_px * pixel * distance;
+    let text = format!(
+        "[camera]\nposition = [0, 0, 0]\nlook_at = [0, 0, -1]\nfov = 40\nwidth = 32\nheight = 32\n\
+         [world]\nambient = 0\nbackground = 0\n\
+         [materials.glow]\ndiffuse = 0\nemission = 1\n\
+         [[shapes]]\ntype = \"sphere\"\nmaterial = \"glow\"\ncenter = [{cx}, {cy}, -{distance}]\n\
+         radius = {radius}\n"
+    );
+    raylink::scene::toml::from_str(&text, Path::new("small-sphere.toml")).unwrap()
+}
+
+fn render_whitted(scene: Scene, sampling: Settings) -> Image {
+    let scene = Arc::new(scene);
+    let job = Job::new(&scene, whitted(sampling));
+    let control = Control::default();
+    Renderer::new(scene, job, &control)
+        .unwrap()
+        .render(&control)
+        .unwrap()
+        .image
+}
+
+#[test]
+fn adaptive_finds_a_sphere_smaller_than_a_pixel_between_its_corners() {
+    // Radius 0.3 px at the centre of pixel (16, 16): no pixel corner sees it.
+    let scene = || small_sphere_scene(16.5, 16.5, 0.3);
+    let corners_only = render_whitted(
+        scene(),
+        Settings {
+            aa: Some(AntiAliasing::Adaptive),
+            aa_depth: Some(0),
+            ..Settings::default()
+        },
+    );
+    assert!(
+        corners_only.pixels.iter().all(|p| p.max_element() == 0.0),
+        "the corners alone should miss the sphere"
+    );
+    // Default adaptive sampling (depth 3, an 8x8 lattice in the pixel) finds it; the pixel
+    // then holds its coverage, the disc's area π·0.3² = 0.283 of the pixel, up to the
+    // lattice's resolution, and no other pixel sees it.
+    let adaptive = render_whitted(scene(), Settings::default());
+    let coverage = std::f32::consts::PI * 0.3 * 0.3;
+    let found = adaptive.get(16, 16).x;
+    assert!(
+        (found - coverage).abs() < 0.2 * coverage,
+        "pixel (16, 16) holds {found}, coverage is {coverage}"
+    );
+    let total: f32 = adaptive.pixels.iter().map(|p| p.x).sum();
+    assert!(
+        (total - found).abs() < 1e-6,
+        "light outside the pixel: {total}"
+    );
+}

@@ -18,6 +18,7 @@ use crate::math::{Rgb, Vec3};
 use crate::render::driver::drive;
 use crate::render::pixels::PixelView;
 use crate::render::progressive::ProgressiveOptions;
+use crate::render::small_objects::SmallObjects;
 use crate::render::{Tile, MERGE_WINDOW};
 use crate::scene::Scene;
 use crate::Result;
@@ -52,11 +53,19 @@ impl Engine<'_> {
         }
     }
 
+    /// The objects smaller than a pixel that the one-pass kernel looks for between corners.
+    fn small_objects(&self, ctx: &Context) -> SmallObjects {
+        match self {
+            Engine::Whitted { view, .. } => view.small_objects(ctx),
+            Engine::MonteCarlo { .. } => SmallObjects::none(),
+        }
+    }
+
     /// Renders one block; returns its pixels and the rays traced.
-    fn region(&self, ctx: &Context, tile: &Tile) -> (Vec<Rgb>, RayStats) {
+    fn region(&self, ctx: &Context, small: &SmallObjects, tile: &Tile) -> (Vec<Rgb>, RayStats) {
         match self {
             Engine::Whitted { integrator, view } => {
-                let out = crate::render::pixels::render_tile(ctx, *integrator, view, tile);
+                let out = crate::render::pixels::render_tile(ctx, *integrator, view, small, tile);
                 (out.pixels, out.rays)
             }
             Engine::MonteCarlo {
@@ -131,6 +140,9 @@ pub struct CoherentRenderer {
     pub layout: BlockLayout,
     store: Store,
     previous: Option<(FrameSummary, Image)>,
+    /// The previous frame's objects smaller than a pixel: the adaptive sampler looks for
+    /// them without tracing a ray to them, so no record shows where they moved.
+    small: SmallObjects,
     /// With [`restrict_to_sequence`](Self::restrict_to_sequence): per voxel, the last
     /// position in the sequence at which it changes (0: never).
     last_change: Option<Vec<u32>>,
@@ -188,6 +200,7 @@ impl CoherentRenderer {
             grid,
             layout,
             previous: None,
+            small: SmallObjects::none(),
             last_change: None,
             position: 0,
             segment_budget: (MemoryBudget::default().limit() / 4).min(usize::MAX as u64) as usize,
@@ -409,6 +422,7 @@ impl CoherentRenderer {
         let ctx = Context::new(scene, accel);
         let light_choice = matches!(engine, Engine::MonteCarlo { .. }).then_some(&ctx.lights);
         let summary = FrameSummary::new(scene, light_choice);
+        let small = engine.small_objects(&ctx);
         let mut stats = FrameStats::default();
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(engine.threads().unwrap_or(0))
@@ -421,7 +435,10 @@ impl CoherentRenderer {
             }
             Some((previous, image)) => {
                 let changes = previous.diff(&summary);
-                let (blocks, voxels, changed) = pool.install(|| self.blocks_for(&changes));
+                let (mut blocks, voxels, changed) = pool.install(|| self.blocks_for(&changes));
+                for disc in small.differences(&self.small) {
+                    self.layout.insert_pixels(&disc.pixels(), &mut blocks);
+                }
                 stats.changed_voxels = voxels;
                 stats.full_reason = changed.as_ref().err().cloned();
                 (blocks, image, changed.ok())
@@ -506,7 +523,7 @@ impl CoherentRenderer {
                     });
                     recorder = recorder.with_camera(&summary.keys, reuse);
                 }
-                let (pixels, rays) = engine.region(&ctx.with_accel(&recorder), tile);
+                let (pixels, rays) = engine.region(&ctx.with_accel(&recorder), &small, tile);
                 if let Store::Tables(tables) = store {
                     recorder.flush(tables, *b);
                 }
@@ -556,6 +573,7 @@ impl CoherentRenderer {
         }
         stats.seconds = start.elapsed().as_secs_f64();
         self.previous = Some((summary, image.clone()));
+        self.small = small;
         self.position += 1;
         Ok((image, stats))
     }

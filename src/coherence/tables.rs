@@ -33,7 +33,6 @@ impl BlockLayout {
         self.cols as usize * self.rows as usize
     }
 
-    #[cfg(test)]
     /// The block holding pixel (x, y).
     pub fn block_of(&self, x: u32, y: u32) -> usize {
         let c = (x as u64 * self.cols as u64 / self.width as u64) as usize;
@@ -53,6 +52,15 @@ impl BlockLayout {
             x1: edge(c + 1, self.cols as u64, self.width),
             y0: edge(r, self.rows as u64, self.height),
             y1: edge(r + 1, self.rows as u64, self.height),
+        }
+    }
+
+    /// Adds the blocks holding the pixels of `pixels` (clipped to the image) to `into`.
+    pub fn insert_pixels(&self, pixels: &Tile, into: &mut BlockSet) {
+        for y in pixels.y0..pixels.y1.min(self.height) {
+            for x in pixels.x0..pixels.x1.min(self.width) {
+                into.insert(self.block_of(x, y));
+            }
         }
     }
 

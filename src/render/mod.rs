@@ -10,6 +10,7 @@ mod film;
 pub(crate) mod pixels;
 pub(crate) mod progressive;
 mod sampling;
+pub(crate) mod small_objects;
 
 pub use film::Film;
 pub use sampling::{PixelSampling, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD};

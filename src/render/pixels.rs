@@ -3,11 +3,13 @@
 //! camera ray (Whitted, the illumination network).
 
 use super::driver::drive;
+use super::small_objects::SmallObjects;
 use super::{place, sampling, tiles_in, PixelSampling, RenderStats, Tile, MERGE_WINDOW};
 use crate::control::Control;
 use crate::image::Image;
 use crate::integrators::{Context, Integrator, RayStats};
 use crate::math::Rgb;
+use crate::scene::camera::CameraBasis;
 use std::time::Instant;
 
 /// The view a one-pass render samples.
@@ -36,12 +38,13 @@ pub(crate) fn render_pixels(
     let start = Instant::now();
     let mut image = Image::try_new(region.width(), region.height())?;
     let mut stats = RenderStats::default();
+    let small = view.small_objects(ctx);
     let driven = drive(
         &tiles,
         view.threads,
         MERGE_WINDOW,
         &control.cancel,
-        |tile| render_tile(ctx, integrator, view, tile),
+        |tile| render_tile(ctx, integrator, view, &small, tile),
         |i, out| {
             place(&mut image, (region.x0, region.y0), &tiles[i], out.pixels);
             stats.rays.add(&out.rays);
@@ -56,22 +59,43 @@ pub(crate) fn render_pixels(
     Ok((image, stats))
 }
 
-/// The pixels of one tile (row-major), the rays traced and the samples taken.
+impl PixelView {
+    /// The camera of `ctx`'s scene at this view's size.
+    fn camera(&self, ctx: &Context) -> CameraBasis {
+        let mut camera = ctx.scene.camera.clone();
+        camera.width = self.width;
+        camera.height = self.height;
+        camera.basis()
+    }
+
+    /// The objects smaller than a pixel that the adaptive sampler must look for between
+    /// corners (none for uniform supersampling).
+    pub fn small_objects(&self, ctx: &Context) -> SmallObjects {
+        match self.sampling {
+            PixelSampling::Adaptive { max_depth, .. } if max_depth > 0 => {
+                SmallObjects::new(ctx.scene, &self.camera(ctx))
+            }
+            _ => SmallObjects::none(),
+        }
+    }
+}
+
+/// The pixels of one tile (row-major), the rays traced and the samples taken; `small` is
+/// [`PixelView::small_objects`] of the same scene and view.
 pub(crate) fn render_tile(
     ctx: &Context,
     integrator: &dyn Integrator,
     view: &PixelView,
+    small: &SmallObjects,
     tile: &Tile,
 ) -> TilePixels {
-    let mut camera = ctx.scene.camera.clone();
-    camera.width = view.width;
-    camera.height = view.height;
     let out = sampling::render_tile(
         ctx,
         integrator,
-        &camera.basis(),
+        &view.camera(ctx),
         &view.sampling,
         view.seed,
+        small,
         tile,
     );
     TilePixels {

@@ -1,5 +1,6 @@
 //! How pixels are sampled: Whitted's adaptive corner subdivision, or regular supersampling.
 
+use super::small_objects::{Disc, SmallObjects};
 use super::Tile;
 use crate::integrators::{Context, Integrator, RayStats, Sample};
 use crate::math::{Rgb, Rng};
@@ -125,13 +126,15 @@ pub(super) struct TileOutput {
     pub invalid: u64,
 }
 
-/// Renders one tile; returns its pixels (row-major), rays traced and samples taken.
+/// Renders one tile; returns its pixels (row-major), rays traced and samples taken. The
+/// adaptive sampler looks for the objects of `small` (made for this camera) between corners.
 pub(super) fn render_tile(
     ctx: &Context,
     integrator: &dyn Integrator,
     camera: &CameraBasis,
     sampling: &PixelSampling,
     seed: u64,
+    small: &SmallObjects,
     tile: &Tile,
 ) -> TileOutput {
     let mut r = TileRenderer {
@@ -172,6 +175,12 @@ pub(super) fn render_tile(
                 max_depth,
                 scale: 1 << max_depth,
                 cache: FxHashMap::default(),
+                small: small.in_rect(
+                    tile.x0 as f32,
+                    tile.y0 as f32,
+                    tile.x1 as f32,
+                    tile.y1 as f32,
+                ),
             };
             for y in tile.y0..tile.y1 {
                 for x in tile.x0..tile.x1 {
@@ -200,6 +209,8 @@ struct Adaptive<'a> {
     max_depth: u32,
     scale: u32,
     cache: FxHashMap<(u32, u32), Sample>,
+    /// The small objects whose discs overlap the tile.
+    small: Vec<Disc>,
 }
 
 impl Adaptive<'_> {
@@ -225,7 +236,9 @@ impl Adaptive<'_> {
             self.point(lx, ly + size),
             self.point(lx + size, ly + size),
         ];
-        if level < self.max_depth && self.differ(&corners) {
+        if level < self.max_depth
+            && (self.differ(&corners) || self.hides_small_object(lx, ly, size, &corners))
+        {
             let h = size / 2;
             return 0.25
                 * (self.square(lx, ly, h, level + 1)
@@ -236,11 +249,20 @@ impl Adaptive<'_> {
         corners.iter().map(|c| c.radiance).sum::<Rgb>() * 0.25
     }
 
+    /// Whether a small object's disc overlaps the square though no corner sees the object:
+    /// it may lie between the corners (Whitted's enlarged bounding spheres).
+    fn hides_small_object(&self, lx: u32, ly: u32, size: u32, corners: &[Sample; 4]) -> bool {
+        let inv = 1.0 / self.scale as f32;
+        let (x0, y0, side) = (lx as f32 * inv, ly as f32 * inv, size as f32 * inv);
+        self.small
+            .iter()
+            .any(|d| d.overlaps(x0, y0, side) && corners.iter().all(|c| c.object != d.object))
+    }
+
     /// Whether the corner values are not "nearly equal": they see different objects, or some
     /// channel differs by more than the threshold after compressing highlights (x/(1+x)), so
-    /// that contrast is judged as it will be displayed. Comparing first-hit objects stands in
-    /// for the paper's enlarged bounding spheres, which flag squares that a small object
-    /// may cross; Embree hides bounding volumes, and silhouettes are what they were for.
+    /// that contrast is judged as it will be displayed. Comparing first-hit objects finds
+    /// silhouettes; objects smaller than a pixel are found by [`Self::hides_small_object`].
     fn differ(&self, corners: &[Sample; 4]) -> bool {
         let first = corners[0].object;
         if corners.iter().any(|c| c.object != first) {

@@ -75,6 +75,11 @@ impl CameraBasis {
         (2.0 * self.center.0, 2.0 * self.center.1)
     }
 
+    /// Side of one (square) pixel on the image plane at unit distance in front of the pinhole.
+    pub fn pixel_size(&self) -> f32 {
+        self.right.length()
+    }
+
     /// Area of one pixel on the image plane at unit distance in front of the pinhole.
     pub fn pixel_area(&self) -> f32 {
         self.right.length() * self.down.length()

@@ -707,3 +707,33 @@ fn recorders_sharing_a_thread_keep_their_own_segments() {
         assert_eq!(sb.surface[0][0].x, 0.0);
     }
 }
+
+/// A sphere whose image is smaller than a pixel (radius 0.05 at distance 8.6: 0.29 px)
+/// moving behind a wall by about half a pixel a frame. No ray reaches it, but the adaptive
+/// sampler subdivides the wall's squares that its disc overlaps (it cannot know the sphere
+/// is hidden), so the pixels where it was and where it is change.
+const SMALL_HIDDEN_MOVING: &str = r#"
+[[shapes]]
+type = "quad"
+material = "wall"
+vertices = [[-0.5, 1.2, 1], [1.5, 1.2, 1], [1.5, 2.8, 1], [-0.5, 2.8, 1]]
+
+[[shapes]]
+type = "sphere"
+material = "mirror"
+center = [0.5, 2.0, -3]
+radius = 0.05
+
+[[shapes.keyframes]]
+frame = 0
+translate = [0, 0, 0]
+[[shapes.keyframes]]
+frame = 2
+translate = [0.2, 0.05, 0]
+"#;
+
+#[test]
+fn hidden_small_object_moving_matches_full_renders() {
+    let frames = run(&animated("", SMALL_HIDDEN_MOVING), Kind::Whitted, (16, 12));
+    check_moving(&frames, 16 * 12);
+}
