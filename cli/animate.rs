@@ -283,6 +283,7 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
         None => Vec::new(),
     };
     crate::render::refuse_aliases(outputs.iter().chain(&csv).chain(&maps), &scene0.inputs)?;
+    raylink::image::oiio::load()?;
     let integrator = match (args.integrator, scene0.settings.integrator) {
         (Some(i), _) => i,
         (None, None | Some(TechniqueKind::Whitted)) => AnimIntegrator::Whitted,

@@ -318,7 +318,9 @@ fn run_convert(cli: &Cli, args: ConvertArgs) -> Result<(), Failure> {
 
 /// Writes the man pages DIR/man/raylink.1 and raylink-SUBCOMMAND.1 (clap_mangen) and the
 /// completions DIR/completions/{raylink.bash,_raylink,raylink.fish} (clap_complete), all from
-/// the same definition the program parses.
+/// the same definition the program parses, and DIR/lib/libraylink_oiio.so, the interface to
+/// OpenImageIO the program carries, to install as /usr/lib/raylink/libraylink_oiio.so (the
+/// program loads it from there, and the package's dependencies are computed from it).
 fn generate_assets(dir: &std::path::Path) -> raylink::Result<()> {
     use clap_complete::{generate_to, Shell};
     let mut cmd = command().version(raylink::VERSION);
@@ -331,6 +333,10 @@ fn generate_assets(dir: &std::path::Path) -> raylink::Result<()> {
         generate_to(shell, &mut cmd, "raylink", &completions)
             .map_err(|e| Error::io(&completions, e))?;
     }
+    let lib = dir.join("lib");
+    std::fs::create_dir_all(&lib).map_err(|e| Error::io(&lib, e))?;
+    let object = lib.join(raylink::image::oiio::OBJECT_NAME);
+    std::fs::write(&object, raylink::image::oiio::object()).map_err(|e| Error::io(&object, e))?;
     Ok(())
 }
 
@@ -339,6 +345,6 @@ fn version_string() -> String {
     format!(
         "{} (Embree {embree}, OpenImageIO {})",
         raylink::VERSION,
-        raylink::image::oiio::version()
+        raylink::image::oiio::built_with()
     )
 }

@@ -196,6 +196,8 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
         args.outputs.iter().chain(&aovs),
         scene.inputs.iter().chain(&files),
     )?;
+    // What writes the image, before the work (it is not loaded at start-up).
+    raylink::image::oiio::load()?;
     job.region = farm::region(&args, &job)?;
     let settings = job.settings_key() + &format!(" half={}", args.half);
     let mut metadata = metadata(&args, &job);

@@ -468,6 +468,8 @@ extern "C" int raylink_oiio_image_attr(const RaylinkOiioImage *image, size_t ind
     return 0;
 }
 
+extern "C" int raylink_oiio_abi(void) { return RAYLINK_OIIO_ABI; }
+
 extern "C" const char *raylink_oiio_version(void) {
     try {
         // Function-local statics are initialised once, thread-safely (C++11).

@@ -125,6 +125,11 @@ int raylink_oiio_image_attr(const RaylinkOiioImage *image, size_t index, Raylink
  * static. */
 const char *raylink_oiio_version(void);
 
+/* The version of this interface, RAYLINK_OIIO_ABI: the program loads this library at run
+ * time and checks it was built from the same header. Raise it with every change here. */
+#define RAYLINK_OIIO_ABI 1
+int raylink_oiio_abi(void);
+
 #ifdef __cplusplus
 }
 #endif

@@ -22,6 +22,10 @@ step "build the .deb"
 if [ -n "${RAYLINK_DEB:-}" ]; then deb=$RAYLINK_DEB; else deb=$(packaging/build-deb.sh | tail -n 1); fi
 test -s "$deb"
 dpkg-deb --info "$deb" | sed -n '/Package:/,$p'
+# OpenImageIO is loaded at run time through /usr/lib/raylink/libraylink_oiio.so, whose
+# libraries dpkg-shlibdeps must have turned into dependencies.
+dpkg-deb --field "$deb" Depends | grep -q libopenimageio ||
+  { echo "the package does not depend on OpenImageIO" >&2; exit 1; }
 echo "size: $(stat -c %s "$deb") bytes"
 
 step "reference render from the source tree"
@@ -53,6 +57,11 @@ in_root apt-get update -q
 t_install=$(date +%s)
 in_root apt-get install -y -q --no-install-recommends "/tmp/$(basename "$deb")"
 in_root raylink --version
+# Installed, the program loads its interface to OpenImageIO from /usr/lib/raylink.
+in_root env LD_DEBUG=files raylink render /usr/share/raylink/scenes/cornell-box.toml \
+  --width 8 --height 8 --spp 1 --quiet -o /tmp/probe.png 2>&1 |
+  grep -q "file=/usr/lib/raylink/libraylink_oiio.so" ||
+  { echo "the installed libraylink_oiio.so was not loaded" >&2; exit 1; }
 in_root raylink render /usr/share/raylink/scenes/cornell-box.toml "${render_opts[@]}" -o /tmp/out.exr -o /tmp/out.png
 echo "install to first render: $(( $(date +%s) - t_install ))s"
 

@@ -18,6 +18,7 @@ for bin in "${binaries[@]}"; do
     echo "== valgrind $(basename "$bin")"
     # valgrind does not emulate the flush-to-zero bits of MXCSR, so that one test is skipped.
     valgrind --quiet --error-exitcode=99 --leak-check=full --show-leak-kinds=definite \
+        --suppressions=scripts/valgrind-ffi.supp \
         --errors-for-leak-kinds=definite "$bin" --test-threads=1 --skip flush_to_zero
 done
 echo "valgrind-ffi: no memory errors and no definite leaks in the wrapper tests"

@@ -24,6 +24,9 @@ pub enum Error {
     /// Embree reported an error.
     #[error("embree: {0}")]
     Embree(String),
+    /// A library loaded at run time (OpenImageIO) could not be loaded.
+    #[error("{0}")]
+    Library(String),
     /// The caller cancelled work that had nothing to keep.
     #[error("cancelled during {stage}; nothing was kept")]
     Cancelled { stage: String },

@@ -4,6 +4,7 @@
 pub mod compare;
 pub mod filter;
 pub mod oiio;
+mod oiio_sys;
 pub mod output;
 
 use crate::math::Rgb;

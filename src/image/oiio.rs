@@ -6,6 +6,7 @@
 use std::ffi::{c_char, c_int, CStr, CString};
 use std::path::Path;
 
+use super::oiio_sys::{self as sys, Api};
 use super::{MetaValue, Metadata};
 use crate::error::{Error, Result};
 
@@ -115,17 +116,20 @@ pub fn write(path: &Path, format: &str, image: ImageToWrite, metadata: &Metadata
 }
 
 /// An image file encoded in memory by [`encode`].
-pub struct Encoded(std::ptr::NonNull<sys::RaylinkOiioEncoded>);
+pub struct Encoded {
+    buffer: std::ptr::NonNull<sys::RaylinkOiioEncoded>,
+    api: &'static Api,
+}
 
 impl Encoded {
     /// The file's bytes.
     pub fn bytes(&self) -> &[u8] {
-        // SAFETY: `self.0` is a live buffer owned by `self`; the accessors only read it, and
+        // SAFETY: `self.buffer` is a live buffer owned by `self`; the accessors only read it, and
         // its `size` bytes stay valid and unchanged as long as `self`, which the returned
         // slice borrows.
         unsafe {
-            let data = sys::raylink_oiio_encoded_data(self.0.as_ptr());
-            let size = sys::raylink_oiio_encoded_size(self.0.as_ptr());
+            let data = (self.api.raylink_oiio_encoded_data)(self.buffer.as_ptr());
+            let size = (self.api.raylink_oiio_encoded_size)(self.buffer.as_ptr());
             if size == 0 || data.is_null() {
                 return &[];
             }
@@ -136,8 +140,9 @@ impl Encoded {
 
 impl Drop for Encoded {
     fn drop(&mut self) {
-        // SAFETY: `self.0` came non-null from `raylink_oiio_encode` and is freed only here.
-        unsafe { sys::raylink_oiio_encoded_free(self.0.as_ptr()) }
+        // SAFETY: `self.buffer` came non-null from `raylink_oiio_encode` and is freed only
+        // here.
+        unsafe { (self.api.raylink_oiio_encoded_free)(self.buffer.as_ptr()) }
     }
 }
 
@@ -158,6 +163,7 @@ pub fn encode(
         window,
     } = image;
     let fail = |detail: String| Error::image(path, detail);
+    let api = sys::api().map_err(fail)?;
     let c_path = path_to_cstring(path)?;
     let c_format = cstring(path, "format name", format)?;
     let nchannels = c_int::try_from(channels.len())
@@ -256,7 +262,7 @@ pub fn encode(
     // and catches every C++ exception; it returns null or a buffer that we own and free
     // exactly once (by `Encoded`'s Drop).
     let encoded = unsafe {
-        sys::raylink_oiio_encode(
+        (api.raylink_oiio_encode)(
             c_path.as_ptr(),
             c_format.as_ptr(),
             w,
@@ -273,58 +279,86 @@ pub fn encode(
         )
     };
     std::ptr::NonNull::new(encoded)
-        .map(Encoded)
+        .map(|buffer| Encoded { buffer, api })
         .ok_or_else(|| fail(err.message()))
 }
 
 /// Reads the first subimage of the file at `path`, all channels converted to float.
 pub fn read(path: &Path) -> Result<RawImage> {
+    let api = sys::api().map_err(|e| Error::image(path, e))?;
     let c_path = path_to_cstring(path)?;
     let mut err = ErrorBuffer::new();
     // SAFETY: `c_path` is a NUL-terminated string alive for the call; `err` is a writable
     // buffer of `err.len()` bytes. The C side catches every C++ exception and returns either
     // null or an image that we own and free exactly once (by `Handle`'s Drop).
-    let ptr = unsafe { sys::raylink_oiio_read(c_path.as_ptr(), err.as_mut_ptr(), err.len()) };
+    let ptr = unsafe { (api.raylink_oiio_read)(c_path.as_ptr(), err.as_mut_ptr(), err.len()) };
     if ptr.is_null() {
         return Err(Error::image(path, err.message()));
     }
-    Ok(Handle(ptr).to_raw())
+    Ok(Handle { image: ptr, api }.to_raw())
 }
 
-/// The version of the OpenImageIO library in use, e.g. `"2.4.7"`.
-pub fn version() -> String {
+/// The version of the OpenImageIO library in use, e.g. `"2.4.7"`; an error if it cannot be
+/// loaded.
+pub fn version() -> Result<String> {
+    let api = sys::api().map_err(Error::Library)?;
     // SAFETY: the function takes no arguments, catches all exceptions, and returns a pointer
     // to a static NUL-terminated string (never null).
-    let ptr = unsafe { sys::raylink_oiio_version() };
+    let ptr = unsafe { (api.raylink_oiio_version)() };
     // SAFETY: `ptr` is non-null, NUL-terminated and static (see above).
-    unsafe { CStr::from_ptr(ptr) }
+    Ok(unsafe { CStr::from_ptr(ptr) }
         .to_string_lossy()
-        .into_owned()
+        .into_owned())
 }
 
+/// Loads OpenImageIO now, if it is not yet loaded (it is loaded by the first image read or
+/// written): a program about to do long work before writing its image finds out first
+/// whether it will be able to.
+pub fn load() -> Result<()> {
+    sys::api().map(|_| ()).map_err(Error::Library)
+}
+
+/// The version of OpenImageIO raylink was built against (without loading it).
+pub fn built_with() -> &'static str {
+    env!("RAYLINK_OIIO_BUILD_VERSION")
+}
+
+/// The shared object that holds raylink's interface to OpenImageIO (the copy carried in the
+/// program), for installing beside the program as `../lib/raylink/` [`OBJECT_NAME`].
+pub fn object() -> &'static [u8] {
+    sys::EMBEDDED
+}
+
+/// The file name of [`object`] where it is installed.
+pub const OBJECT_NAME: &str = sys::FILE_NAME;
+
 /// Owns a `RaylinkOiioImage`; frees it on drop.
-struct Handle(*mut sys::RaylinkOiioImage);
+struct Handle {
+    image: *mut sys::RaylinkOiioImage,
+    api: &'static Api,
+}
 
 impl Drop for Handle {
     fn drop(&mut self) {
-        // SAFETY: `self.0` came non-null from `raylink_oiio_read` and is freed only here, once.
-        unsafe { sys::raylink_oiio_image_free(self.0) }
+        // SAFETY: `self.image` came non-null from `raylink_oiio_read` and is freed only here,
+        // once.
+        unsafe { (self.api.raylink_oiio_image_free)(self.image) }
     }
 }
 
 impl Handle {
     fn to_raw(&self) -> RawImage {
-        let h = self.0;
+        let (h, api) = (self.image, self.api);
         // SAFETY (all the accessor calls below): `h` is a live image owned by `self`, and the
         // accessors only read it. Returned strings and the pixel array live as long as the
         // image, and are copied into owned Rust values before `self` is dropped.
         let (width, height, nchannels, pixel_type, format) = unsafe {
             (
-                sys::raylink_oiio_image_width(h),
-                sys::raylink_oiio_image_height(h),
-                sys::raylink_oiio_image_nchannels(h),
-                sys::raylink_oiio_image_pixel_type(h),
-                owned_string(sys::raylink_oiio_image_format(h)),
+                (api.raylink_oiio_image_width)(h),
+                (api.raylink_oiio_image_height)(h),
+                (api.raylink_oiio_image_nchannels)(h),
+                (api.raylink_oiio_image_pixel_type)(h),
+                owned_string((api.raylink_oiio_image_format)(h)),
             )
         };
         // The C side guarantees positive sizes; convert without trusting it blindly.
@@ -333,7 +367,7 @@ impl Handle {
         let nchannels = usize::try_from(nchannels).unwrap_or(0);
         let channels = (0..nchannels)
             // SAFETY: see above; `c` < nchannels, and a null return is handled.
-            .map(|c| unsafe { owned_string(sys::raylink_oiio_image_channel_name(h, c as c_int)) })
+            .map(|c| unsafe { owned_string((api.raylink_oiio_image_channel_name)(h, c as c_int)) })
             .collect();
         let len = width as usize * height as usize * nchannels;
         let data = if len == 0 {
@@ -341,13 +375,13 @@ impl Handle {
         } else {
             // SAFETY: the C side holds exactly width * height * nchannels floats, alive as
             // long as `self`; we copy them out immediately.
-            unsafe { std::slice::from_raw_parts(sys::raylink_oiio_image_pixels(h), len) }.to_vec()
+            unsafe { std::slice::from_raw_parts((api.raylink_oiio_image_pixels)(h), len) }.to_vec()
         };
         let (mut x, mut y, mut full_x, mut full_y, mut full_width, mut full_height) =
             (0, 0, 0, 0, 0, 0);
         // SAFETY: see above; the six pointers are to distinct live locals the call fills.
         unsafe {
-            sys::raylink_oiio_image_window(
+            (api.raylink_oiio_image_window)(
                 h,
                 &mut x,
                 &mut y,
@@ -366,7 +400,7 @@ impl Handle {
             full_height: to_u32(full_height),
         };
         // SAFETY: see above.
-        let nattrs = unsafe { sys::raylink_oiio_image_nattrs(h) };
+        let nattrs = unsafe { (api.raylink_oiio_image_nattrs)(h) };
         let mut metadata = Metadata::with_capacity(nattrs);
         for index in 0..nattrs {
             let mut attr = sys::RaylinkOiioAttr {
@@ -378,7 +412,7 @@ impl Handle {
             };
             // SAFETY: `index` < nattrs and `attr` is a valid struct to fill; on success its
             // string pointers are null or NUL-terminated strings owned by the image.
-            if unsafe { sys::raylink_oiio_image_attr(h, index, &mut attr) } != 0 {
+            if unsafe { (api.raylink_oiio_image_attr)(h, index, &mut attr) } != 0 {
                 continue;
             }
             // SAFETY: as just said.
@@ -474,101 +508,5 @@ impl ErrorBuffer {
         } else {
             line
         }
-    }
-}
-
-/// Declarations matching `ffi/oiio.h`.
-mod sys {
-    use std::ffi::{c_char, c_float, c_int};
-
-    pub const RAYLINK_OIIO_FLOAT: c_int = 0;
-    pub const RAYLINK_OIIO_HALF: c_int = 1;
-    pub const RAYLINK_OIIO_UINT8: c_int = 2;
-    pub const RAYLINK_OIIO_UINT16: c_int = 3;
-
-    pub const RAYLINK_OIIO_ATTR_STRING: c_int = 0;
-    pub const RAYLINK_OIIO_ATTR_INT: c_int = 1;
-    pub const RAYLINK_OIIO_ATTR_FLOAT: c_int = 2;
-
-    #[repr(C)]
-    pub struct RaylinkOiioAttr {
-        pub name: *const c_char,
-        pub type_: c_int,
-        pub string_value: *const c_char,
-        pub int_value: c_int,
-        pub float_value: c_float,
-    }
-
-    #[repr(C)]
-    pub struct RaylinkOiioWindow {
-        pub x: c_int,
-        pub y: c_int,
-        pub full_width: c_int,
-        pub full_height: c_int,
-    }
-
-    /// Opaque.
-    #[repr(C)]
-    pub struct RaylinkOiioEncoded {
-        _private: [u8; 0],
-    }
-
-    /// Opaque.
-    #[repr(C)]
-    pub struct RaylinkOiioImage {
-        _private: [u8; 0],
-    }
-
-    extern "C" {
-        pub fn raylink_oiio_encode(
-            name: *const c_char,
-            format: *const c_char,
-            width: c_int,
-            height: c_int,
-            nchannels: c_int,
-            data: *const c_float,
-            channel_names: *const *const c_char,
-            attrs: *const RaylinkOiioAttr,
-            nattrs: usize,
-            pixel_type: c_int,
-            window: *const RaylinkOiioWindow,
-            err: *mut c_char,
-            err_len: usize,
-        ) -> *mut RaylinkOiioEncoded;
-        pub fn raylink_oiio_encoded_data(encoded: *const RaylinkOiioEncoded) -> *const u8;
-        pub fn raylink_oiio_encoded_size(encoded: *const RaylinkOiioEncoded) -> usize;
-        pub fn raylink_oiio_encoded_free(encoded: *mut RaylinkOiioEncoded);
-        pub fn raylink_oiio_image_window(
-            image: *const RaylinkOiioImage,
-            x: *mut c_int,
-            y: *mut c_int,
-            full_x: *mut c_int,
-            full_y: *mut c_int,
-            full_width: *mut c_int,
-            full_height: *mut c_int,
-        );
-        pub fn raylink_oiio_read(
-            path: *const c_char,
-            err: *mut c_char,
-            err_len: usize,
-        ) -> *mut RaylinkOiioImage;
-        pub fn raylink_oiio_image_free(image: *mut RaylinkOiioImage);
-        pub fn raylink_oiio_image_width(image: *const RaylinkOiioImage) -> c_int;
-        pub fn raylink_oiio_image_height(image: *const RaylinkOiioImage) -> c_int;
-        pub fn raylink_oiio_image_nchannels(image: *const RaylinkOiioImage) -> c_int;
-        pub fn raylink_oiio_image_pixel_type(image: *const RaylinkOiioImage) -> c_int;
-        pub fn raylink_oiio_image_format(image: *const RaylinkOiioImage) -> *const c_char;
-        pub fn raylink_oiio_image_channel_name(
-            image: *const RaylinkOiioImage,
-            index: c_int,
-        ) -> *const c_char;
-        pub fn raylink_oiio_image_pixels(image: *const RaylinkOiioImage) -> *const c_float;
-        pub fn raylink_oiio_image_nattrs(image: *const RaylinkOiioImage) -> usize;
-        pub fn raylink_oiio_image_attr(
-            image: *const RaylinkOiioImage,
-            index: usize,
-            attr: *mut RaylinkOiioAttr,
-        ) -> c_int;
-        pub fn raylink_oiio_version() -> *const c_char;
     }
 }

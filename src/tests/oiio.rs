@@ -7,7 +7,7 @@ use std::path::Path;
 
 #[test]
 fn version_looks_like_a_version() {
-    let v = version();
+    let v = version().unwrap();
     let parts: Vec<&str> = v.split('.').collect();
     assert_eq!(parts.len(), 3, "{v}");
     assert!(parts.iter().all(|p| p.parse::<u32>().is_ok()), "{v}");
