@@ -61,6 +61,8 @@ pub use accel::Backend;
 pub use error::{Error, Result};
 pub use image::output::{read_image, write_image, OutputOptions};
 pub use image::{Image, MetaValue, Metadata};
+/// The flux arriving at a set of surfaces, by gathering or by shooting.
+pub use integrators::flux;
 pub use job::{
     Aov, CancelToken, Control, Job, MemoryBudget, Progress, Relight, Rendered, Renderer, Settings,
     Technique, TechniqueKind,

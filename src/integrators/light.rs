@@ -7,9 +7,11 @@
 use super::path::russian_roulette;
 use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
+use crate::lights::EmissionSample;
 use crate::math::sobol::Sampler;
 use crate::math::{offset_origin, Ray, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
+use crate::scene::SurfacePoint;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LightOptions {
@@ -109,27 +111,16 @@ impl MonteCarlo for LightTracer {
                 }
             }
         }
-        let cos0 = if es.delta_dir || es.delta_pos || ctx.lights.is_infinite(es.light) {
-            1.0
-        } else {
-            es.n.dot(es.dir).abs()
-        };
-        let mut beta = es.radiance * (cos0 / (es.pdf_pos * es.pdf_dir));
-        let mut ray = if es.delta_pos || ctx.lights.is_infinite(es.light) {
-            Ray::new(es.p, es.dir)
-        } else {
-            Ray::new(offset_origin(es.p, es.n, es.dir), es.dir)
-        };
-        let mut depth = 0;
-        while depth < self.options.max_depth {
-            let Some(sp) = ctx.intersect(&ray, stats) else {
-                break;
-            };
-            depth += 1;
-            let m = &ctx.scene.materials[sp.material];
-            let wo = -ray.dir;
-            let bsdf = Bsdf::new(m, &sp, wo);
-            if bsdf.has_non_delta() {
+        walk(
+            ctx,
+            &es,
+            self.options.max_depth,
+            sampler,
+            stats,
+            |sp, bsdf, wo, beta, stats| {
+                if !bsdf.has_non_delta() {
+                    return;
+                }
                 if let Some(c) = connect_to_camera(ctx, camera, sp.p, sp.ng, stats) {
                     let f = bsdf.eval(wo, c.dir, Transport::Importance);
                     if f != Rgb::ZERO {
@@ -140,17 +131,55 @@ impl MonteCarlo for LightTracer {
                         });
                     }
                 }
-            }
-            let u = sampler.next_1d();
-            let Some(bs) = bsdf.sample(wo, u, sampler.next_2d(), Transport::Importance) else {
-                break;
-            };
-            beta *= bs.weight;
-            ray = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi);
-            if !russian_roulette(&mut beta, depth, sampler) {
-                break;
-            }
-        }
+            },
+        );
         direct
+    }
+}
+
+/// Follows the light path that starts with the emission sample `es` over at most
+/// `max_depth` surfaces: at each surface it reaches, calls `vertex(surface, bsdf, wo,
+/// beta, stats)` with the power `beta` the path carries there (radiance over the densities
+/// of its start and bounces), then continues by sampling the BSDF for importance transport,
+/// with Russian roulette.
+pub(crate) fn walk(
+    ctx: &Context,
+    es: &EmissionSample,
+    max_depth: u32,
+    sampler: &mut Sampler,
+    stats: &mut RayStats,
+    mut vertex: impl FnMut(&SurfacePoint, &Bsdf, Vec3, Rgb, &mut RayStats),
+) {
+    let at_infinity = ctx.lights.is_infinite(es.light);
+    let cos0 = if es.delta_dir || es.delta_pos || at_infinity {
+        1.0
+    } else {
+        es.n.dot(es.dir).abs()
+    };
+    let mut beta = es.radiance * (cos0 / (es.pdf_pos * es.pdf_dir));
+    let mut ray = if es.delta_pos || at_infinity {
+        Ray::new(es.p, es.dir)
+    } else {
+        Ray::new(offset_origin(es.p, es.n, es.dir), es.dir)
+    };
+    let mut depth = 0;
+    while depth < max_depth {
+        let Some(sp) = ctx.intersect(&ray, stats) else {
+            break;
+        };
+        depth += 1;
+        let m = &ctx.scene.materials[sp.material];
+        let wo = -ray.dir;
+        let bsdf = Bsdf::new(m, &sp, wo);
+        vertex(&sp, &bsdf, wo, beta, stats);
+        let u = sampler.next_1d();
+        let Some(bs) = bsdf.sample(wo, u, sampler.next_2d(), Transport::Importance) else {
+            break;
+        };
+        beta *= bs.weight;
+        ray = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi);
+        if !russian_roulette(&mut beta, depth, sampler) {
+            break;
+        }
     }
 }

@@ -1,7 +1,7 @@
 //! Lights: point and directional lights given in the scene, and area lights made from
 //! emissive shapes.
 
-use super::{Geometry, Scene};
+use super::{Geometry, Scene, Shape};
 use crate::math::{Rgb, Vec2, Vec3};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -60,42 +60,50 @@ impl AreaLight {
             .iter()
             .enumerate()
             .filter(|(_, s)| scene.materials[s.material].is_emissive())
-            .filter_map(|(i, s)| {
-                let radiance = scene.materials[s.material].emission;
-                let (kind, area) = match s.geometry {
-                    Geometry::Sphere { center, radius } => {
-                        (AreaKind::Sphere { center, radius }, s.geometry.area())
-                    }
-                    ref g => {
-                        let tris: Vec<LightTriangle> = g
-                            .triangles()
-                            .into_iter()
-                            .map(|[a, b, c]| LightTriangle {
-                                a,
-                                ab: b - a,
-                                ac: c - a,
-                                n: (b - a).cross(c - a).normalize_or_zero(),
-                            })
-                            .collect();
-                        let mut total = 0.0;
-                        let cdf = tris
-                            .iter()
-                            .map(|t| {
-                                total += 0.5 * t.ab.cross(t.ac).length();
-                                total
-                            })
-                            .collect();
-                        (AreaKind::Triangles { tris, cdf }, total)
-                    }
-                };
-                (area > 0.0).then_some(AreaLight {
-                    shape: i,
-                    radiance,
-                    area,
-                    kind,
-                })
-            })
+            .filter_map(|(i, s)| AreaLight::new(i, s, scene.materials[s.material].emission))
             .collect()
+    }
+
+    /// Shape `shape` of the scene as a surface to sample uniformly by area (with its
+    /// material's emission, which may be zero); `None` for a shape without area.
+    pub fn surface(scene: &Scene, shape: usize) -> Option<AreaLight> {
+        let s = scene.shapes.get(shape)?;
+        AreaLight::new(shape, s, scene.materials[s.material].emission)
+    }
+
+    fn new(i: usize, s: &Shape, radiance: Rgb) -> Option<AreaLight> {
+        let (kind, area) = match s.geometry {
+            Geometry::Sphere { center, radius } => {
+                (AreaKind::Sphere { center, radius }, s.geometry.area())
+            }
+            ref g => {
+                let tris: Vec<LightTriangle> = g
+                    .triangles()
+                    .into_iter()
+                    .map(|[a, b, c]| LightTriangle {
+                        a,
+                        ab: b - a,
+                        ac: c - a,
+                        n: (b - a).cross(c - a).normalize_or_zero(),
+                    })
+                    .collect();
+                let mut total = 0.0;
+                let cdf = tris
+                    .iter()
+                    .map(|t| {
+                        total += 0.5 * t.ab.cross(t.ac).length();
+                        total
+                    })
+                    .collect();
+                (AreaKind::Triangles { tris, cdf }, total)
+            }
+        };
+        (area > 0.0).then_some(AreaLight {
+            shape: i,
+            radiance,
+            area,
+            kind,
+        })
     }
 
     /// Centre and radius when the light is a sphere (which can be sampled by solid angle).
