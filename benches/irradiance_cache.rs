@@ -66,6 +66,7 @@ struct Cache {
     samples: u32,
     accuracy: f32,
     ar: f32,
+    gradients: bool,
 }
 
 impl Cache {
@@ -77,6 +78,7 @@ impl Cache {
             ic_samples: Some(self.samples),
             ic_accuracy: Some(self.accuracy),
             ar: Some(self.ar),
+            ic_gradients: Some(self.gradients),
             ..Settings::default()
         }
     }
@@ -168,11 +170,13 @@ fn race(
         let (image, seconds, report) = render(scene, size, c.settings(), 1);
         let error = rmse(&compare(&image), reference, mask);
         println!(
-            "| irradiance cache, a {}, {} rays, ab {}, ar {}, {} spp | {seconds:.2} | {error:.5} | {} |",
+            "| irradiance cache, a {}, {} rays, ab {}, ar {}, gradients {}, {} spp | {seconds:.2} | \
+             {error:.5} | {} |",
             c.accuracy,
             c.samples,
             c.bounces,
             c.ar,
+            if c.gradients { "on" } else { "off" },
             c.spp,
             report.join("; ")
         );
@@ -229,6 +233,11 @@ fn main() {
         samples: 2048,
         accuracy: 0.25,
         ar: 16.0,
+        gradients: true,
+    };
+    let plain = Cache {
+        gradients: false,
+        ..room
     };
     race(
         "Indirectly lit room, 256x192 (RMSE at 128x96)",
@@ -238,7 +247,18 @@ fn main() {
             compare: &half,
             mask: None,
         },
-        &[room, Cache { ar: 8.0, ..room }, Cache { ar: 4.0, ..room }],
+        &[
+            room,
+            Cache { ar: 8.0, ..room },
+            Cache { ar: 4.0, ..room },
+            Cache {
+                accuracy: 0.4,
+                ..room
+            },
+            plain,
+            Cache { ar: 8.0, ..plain },
+            Cache { ar: 4.0, ..plain },
+        ],
         REFERENCE_SPP / 4,
     );
 
@@ -252,6 +272,7 @@ fn main() {
         samples: 512,
         accuracy: 0.15,
         ar: 16.0,
+        gradients: true,
     };
     race(
         "Cornell box, 256x256, against Tungsten (light pixels excluded)",
@@ -267,6 +288,10 @@ fn main() {
                 bounces: 8,
                 ar: 32.0,
                 samples: 1024,
+                ..box_cache
+            },
+            Cache {
+                gradients: false,
                 ..box_cache
             },
         ],

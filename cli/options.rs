@@ -195,6 +195,10 @@ pub struct RenderArgs {
     /// Rays per primary value at the first bounce, halved per bounce (default 512).
     #[arg(long, help_heading = CACHE)]
     ic_samples: Option<u32>,
+    /// Ward & Heckbert's irradiance gradients: each value follows the irradiance around it
+    /// (default true).
+    #[arg(long, value_name = "BOOL", help_heading = CACHE)]
+    ic_gradients: Option<bool>,
     /// A value's R is at least the scene's size / ar (default 64).
     #[arg(long, value_parser = finite_f32, help_heading = CACHE)]
     ar: Option<f32>,
@@ -332,6 +336,7 @@ pub fn given_settings(args: &RenderArgs, scene: &Scene) -> Settings {
         ab: args.ab,
         ic_accuracy: args.ic_accuracy,
         ic_samples: args.ic_samples,
+        ic_gradients: args.ic_gradients,
         ar: args.ar,
         cache_file: args.cache_file.clone(),
         show_cache_points: args.show_cache_points.then_some(true),

@@ -66,6 +66,7 @@ impl TechniqueKind {
             "ab",
             "ic_accuracy",
             "ic_samples",
+            "ic_gradients",
             "ar",
             "cache_file",
             "show_cache_points",
@@ -170,6 +171,8 @@ pub struct Settings {
     pub ab: Option<u32>,
     pub ic_accuracy: Option<f32>,
     pub ic_samples: Option<u32>,
+    /// Irradiance cache: Ward & Heckbert's gradients (default on).
+    pub ic_gradients: Option<bool>,
     pub ar: Option<f32>,
     /// Irradiance cache: values are loaded from this file if it exists and saved to it.
     pub cache_file: Option<PathBuf>,
@@ -207,6 +210,7 @@ macro_rules! for_each_setting {
             ab,
             ic_accuracy,
             ic_samples,
+            ic_gradients,
             ar,
             cache_file,
             show_cache_points,

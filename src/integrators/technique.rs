@@ -117,6 +117,7 @@ impl Technique {
                         1 << 20,
                     )?,
                     ar: settings.ar.unwrap_or(ic::DEFAULT_AR),
+                    gradients: settings.ic_gradients.unwrap_or(ic::DEFAULT_GRADIENTS),
                     ..IcOptions::default()
                 };
                 options.validate()?;

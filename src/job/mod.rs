@@ -192,8 +192,8 @@ impl Job {
         if let Technique::IrradianceCache(_, c) = t {
             let o = &c.options;
             s += &format!(
-                " ab={} ic_accuracy={} ic_samples={} ar={}",
-                o.bounces, o.accuracy, o.samples, o.ar
+                " ab={} ic_accuracy={} ic_samples={} ar={} ic_gradients={}",
+                o.bounces, o.accuracy, o.samples, o.ar, o.gradients
             );
         }
         s

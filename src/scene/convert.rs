@@ -228,6 +228,7 @@ fn render(s: &RenderSettings) -> Option<RenderDesc> {
         ab: s.ab,
         accuracy: s.ic_accuracy,
         samples: s.ic_samples,
+        gradients: s.ic_gradients,
         ar: s.ar,
         cache_file: path(&s.cache_file),
     };

@@ -137,6 +137,7 @@ fn cache_records_no_render_computes_are_refused() {
         n: Vec3::Y,
         e: Rgb::splat(0.5),
         r: 0.1,
+        grad: Default::default(),
     };
     let save = |rec: Record| {
         let mut cache = Cache::new(&scene, &options);

@@ -3,11 +3,12 @@
 //!
 //! ```text
 //! magic  "RLIRRAD\0"            8 bytes
-//! version u32 (= 2)
+//! version u32 (= 4)
 //! scene hash u64                FNV-1a of the scene's geometry, materials and lights
-//! bounces u32, accuracy f32, samples u32, ar f32, ambient 3×f32
-//! per level (bounces of them): count u64, then count records of 10 f32
-//!                               (position 3, normal 3, irradiance 3, R)
+//! bounces u32, accuracy f32, samples u32, ar f32, ambient 3×f32, gradients u32 (0 or 1)
+//! per level (bounces of them): count u64, then count records of 28 f32
+//!                               (position 3, normal 3, irradiance 3, R, then the
+//!                               translational and rotational gradients, 3 per channel)
 //! view u64                      0, or the key of the render view whose overture the cache
 //!                               holds complete (`raylink precompute`; crate::farm)
 //! checksum u64                  of every byte before it (crate::binary_file)
@@ -15,8 +16,10 @@
 //!
 //! Records are stored per level in insertion order and re-inserted in that order, so a loaded
 //! cache is the same tree as the one saved. Files are written atomically
-//! (crate::binary_file). Version 1 differed only in its checksum, version 2 had no view key.
+//! (crate::binary_file). Version 1 differed only in its checksum, version 2 had no view key,
+//! version 3 no gradients.
 
+use super::gradients::Gradients;
 use super::octree::Octree;
 use super::record::Record;
 use super::{scene_cube, Cache, IcOptions};
@@ -26,7 +29,9 @@ use crate::scene::Scene;
 use crate::Result;
 use std::path::Path;
 
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
+/// Bytes of one record: 28 f32.
+const RECORD_BYTES: usize = 28 * 4;
 pub(crate) const FORMAT: Format = Format {
     magic: b"RLIRRAD\0",
     version: VERSION,
@@ -57,6 +62,7 @@ pub(crate) fn header(scene: &Scene, options: &IcOptions) -> Vec<u8> {
     for c in options.ambient.to_array() {
         b.extend_from_slice(&c.to_le_bytes());
     }
+    b.extend_from_slice(&u32::from(options.gradients).to_le_bytes());
     b
 }
 
@@ -76,19 +82,23 @@ pub fn save_for_view(
     options: &IcOptions,
     view: u64,
 ) -> Result<()> {
-    let mut b = FORMAT.try_start(40 * cache.len(), path)?;
+    let mut b = FORMAT.try_start(RECORD_BYTES * cache.len(), path)?;
     b.extend_from_slice(&header(scene, options));
     for level in &cache.levels {
         b.extend_from_slice(&(level.len() as u64).to_le_bytes());
         for r in level.records() {
-            for v in
-                r.p.to_array()
-                    .iter()
-                    .chain(&r.n.to_array())
-                    .chain(&r.e.to_array())
-                    .chain(&[r.r])
-            {
-                b.extend_from_slice(&v.to_le_bytes());
+            let g = &r.grad;
+            let vectors = [r.p, r.n, r.e]
+                .into_iter()
+                .chain(g.translation)
+                .chain(g.rotation);
+            for (i, v) in vectors.enumerate() {
+                for x in v.to_array() {
+                    b.extend_from_slice(&x.to_le_bytes());
+                }
+                if i == 2 {
+                    b.extend_from_slice(&r.r.to_le_bytes());
+                }
             }
         }
     }
@@ -120,7 +130,8 @@ pub fn load_with_view(
     }
     if body[..expected.len()] != expected[..] {
         return Err(bad(
-            "written with other cache settings (ab, ic_accuracy, ic_samples or ar)",
+            "written with other cache settings (ab, ic_accuracy, ic_samples, ar or \
+             ic_gradients)",
         ));
     }
     let mut rest = &body[expected.len()..];
@@ -132,22 +143,35 @@ pub fn load_with_view(
         }
         let count = u64::from_le_bytes(rest[..8].try_into().unwrap());
         rest = &rest[8..];
-        if count > (rest.len() / 40) as u64 {
+        if count > (rest.len() / RECORD_BYTES) as u64 {
             return Err(bad("truncated"));
         }
         let mut tree = Octree::new(center, side, options.accuracy_at(l as u32));
         for _ in 0..count {
-            let f: Vec<f32> = rest[..40]
+            let f: Vec<f32> = rest[..RECORD_BYTES]
                 .chunks_exact(4)
                 .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
                 .collect();
-            rest = &rest[40..];
+            rest = &rest[RECORD_BYTES..];
+            let v = |i: usize| Vec3::new(f[i], f[i + 1], f[i + 2]);
             let rec = Record {
-                p: Vec3::new(f[0], f[1], f[2]),
-                n: Vec3::new(f[3], f[4], f[5]),
-                e: Vec3::new(f[6], f[7], f[8]),
+                p: v(0),
+                n: v(3),
+                e: v(6),
                 r: f[9],
+                grad: Gradients {
+                    translation: [v(10), v(13), v(16)],
+                    rotation: [v(19), v(22), v(25)],
+                },
             };
+            // Gradients only where the settings compute them.
+            if !options.gradients && rec.grad != Gradients::default() {
+                return Err(bad(&format!(
+                    "value {} of bounce level {l} has gradients, but the cache settings \
+                     compute none",
+                    tree.len()
+                )));
+            }
             // Finite values, a unit normal, irradiance that is not negative, a radius within
             // the scene's cube, and a point inside it: anything else no render computes.
             let inside = (rec.p - center).abs().max_element() <= side;

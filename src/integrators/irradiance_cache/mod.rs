@@ -36,6 +36,7 @@
 //! starting contents of the overture.
 
 pub mod file;
+pub mod gradients;
 pub mod octree;
 pub mod record;
 pub(crate) mod technique;
@@ -54,6 +55,7 @@ use crate::render::progressive::{camera_sample, view_basis, ProgressiveOptions};
 use crate::scene::camera::CameraBasis;
 use crate::scene::{Scene, SurfacePoint};
 use crate::{Error, Result};
+use gradients::{Gradients, HemisphereSample};
 use octree::Octree;
 use record::{Record, WeightedSum};
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -64,6 +66,8 @@ pub const DEFAULT_ACCURACY: f32 = 0.15;
 pub const DEFAULT_SAMPLES: u32 = 512;
 pub const DEFAULT_BOUNCES: u32 = 4;
 pub const DEFAULT_AR: f32 = 64.0;
+/// Irradiance gradients are on unless turned off.
+pub const DEFAULT_GRADIENTS: bool = true;
 /// Specular bounces followed from one diffuse level.
 const MAX_SPECULAR_DEPTH: u32 = 8;
 
@@ -79,6 +83,8 @@ pub struct IcOptions {
     pub ar: f32,
     /// Irradiance used beyond the last level.
     pub ambient: Rgb,
+    /// Compute Ward & Heckbert's irradiance gradients and extrapolate values by them.
+    pub gradients: bool,
 }
 
 impl Default for IcOptions {
@@ -89,6 +95,7 @@ impl Default for IcOptions {
             samples: DEFAULT_SAMPLES,
             ar: DEFAULT_AR,
             ambient: Rgb::ZERO,
+            gradients: DEFAULT_GRADIENTS,
         }
     }
 }
@@ -507,6 +514,23 @@ impl IrradianceCache {
         self.misses.load(Ordering::Relaxed)
     }
 
+    /// A new primary value at a surface point with normal `n` (level 0), as the cache would
+    /// store it; for tests.
+    #[cfg(test)]
+    pub fn primary_value(&self, ctx: &Context, p: Vec3, n: Vec3) -> Record {
+        let mut stats = RayStats::default();
+        let mut walk = Walk {
+            ctx,
+            params: &self.params,
+            store: Store::Frozen(&self.cache),
+            primaries: 0,
+            stats: &mut stats,
+            overture: false,
+            cancel: None,
+        };
+        walk.primary(p, n, n, 0)
+    }
+
     /// The indirect irradiance the cache gives at a surface point with normal `n` (level 0),
     /// computing a primary value if S is empty; for tests.
     #[cfg(test)]
@@ -697,6 +721,13 @@ impl Walk<'_> {
         let (t, b) = crate::math::frame(n);
         let mut sum = Rgb::ZERO;
         let mut inv_d = 0.0f64;
+        let gradients = params.options.gradients;
+        let columns = 2 * strata as usize;
+        let mut samples = Vec::with_capacity(if gradients {
+            strata as usize * columns
+        } else {
+            0
+        });
         for j in 0..strata {
             if self.cancel.is_some_and(CancelToken::is_cancelled) {
                 break;
@@ -707,27 +738,55 @@ impl Walk<'_> {
                 let phi = PI * (k as f32 + rng.uniform()) / strata as f32;
                 let dir =
                     (t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + n * cos_t).normalize();
-                if dir.dot(ng) <= 0.0 {
-                    continue;
+                let mut sample = HemisphereSample {
+                    dir,
+                    cos_theta: cos_t,
+                    radiance: Rgb::ZERO,
+                    distance: f32::INFINITY,
+                };
+                if dir.dot(ng) > 0.0 {
+                    let ray = Ray::new(offset_origin(p, ng, dir), dir);
+                    if let Some(sp) = ctx.intersect(&ray, self.stats) {
+                        inv_d += 1.0 / (sp.t.max(1e-6) as f64);
+                        sample.radiance = self.shade(&ray, &sp, level + 1, false, 0, &mut rng);
+                        sample.distance = sp.t.max(1e-6);
+                        sum += sample.radiance;
+                    }
                 }
-                let ray = Ray::new(offset_origin(p, ng, dir), dir);
-                if let Some(sp) = ctx.intersect(&ray, self.stats) {
-                    inv_d += 1.0 / (sp.t.max(1e-6) as f64);
-                    sum += self.shade(&ray, &sp, level + 1, false, 0, &mut rng);
+                if gradients {
+                    samples.push(sample);
                 }
             }
         }
         let count = 2 * strata * strata;
         let e = sum * (PI / count as f32);
-        let r = if inv_d > 0.0 {
+        let mut r = if inv_d > 0.0 {
             (count as f64 / inv_d) as f32
         } else {
             params.r_max
         };
+        let mut grad = Gradients::default();
+        if gradients && samples.len() == count as usize {
+            grad = Gradients::from_samples(&samples, strata as usize, columns, n, (t, b));
+            if !grad.is_finite() {
+                grad = Gradients::default();
+            }
+            // A value may not reach farther than its translational gradient lets it stay
+            // positive (Tabellion & Lamorlette's gradient limit on R).
+            let slope = grad
+                .translation
+                .iter()
+                .map(|g| g.length())
+                .fold(0.0, f32::max);
+            if slope > 0.0 {
+                r = r.min(e.max_element() / slope);
+            }
+        }
         Record {
             p,
             n,
             e,
+            grad,
             r: r.clamp(params.r_min, params.r_max),
         }
     }

@@ -158,7 +158,9 @@ impl Octree {
     /// search meets them. That order depends only on the order the values were inserted in
     /// (which fixes the tree), and a cache file keeps it.
     pub fn accumulate(&self, p: Vec3, n: Vec3, sum: &mut WeightedSum) {
-        self.visit(0, p, n, &mut |i, w| sum.add(w, self.records[i as usize].e));
+        self.visit(0, p, n, &mut |i, w| {
+            sum.add(w, self.records[i as usize].extrapolated(p, n))
+        });
     }
 
     /// The secondary method: the weighted average over S (eq. 5), or None when S is empty.
@@ -235,6 +237,7 @@ mod tests {
             n: Vec3::Z,
             e: Rgb::ONE,
             r,
+            grad: Default::default(),
         };
         // a·R = 0.5 → depth 2 (side 2).
         assert_eq!(t.insert(rec(Vec3::new(1.0, 1.0, 1.0), 1.0)), 2);
@@ -264,6 +267,7 @@ mod tests {
                     n,
                     e: u3(&mut rng),
                     r,
+                    grad: Default::default(),
                 });
             }
             let mut total = 0;

@@ -1,19 +1,31 @@
 //! One cached indirect irradiance value and the secondary method's rules for using it (Ward,
 //! Rubinstein & Clear 1988, section 3.2).
 
+use super::gradients::Gradients;
 use crate::math::{Rgb, Vec3};
 
-/// A primary value: indirect irradiance `e` at `p` with unit normal `n`, and `r`, the
-/// harmonic mean distance to the surfaces seen by its sample rays.
+/// A primary value: indirect irradiance `e` at `p` with unit normal `n`, `r`, the harmonic
+/// mean distance to the surfaces seen by its sample rays, and the gradients of `e` (zero
+/// when not computed).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Record {
     pub p: Vec3,
     pub n: Vec3,
     pub e: Rgb,
     pub r: f32,
+    pub grad: Gradients,
 }
 
 impl Record {
+    /// The value extrapolated to (`p`, `n`) by its gradients (Ward & Heckbert 1992), never
+    /// negative; `e` itself without gradients.
+    pub fn extrapolated(&self, p: Vec3, n: Vec3) -> Rgb {
+        if self.grad == Gradients::default() {
+            return self.e;
+        }
+        (self.e + self.grad.change(self.p, self.n, p, n)).max(Rgb::ZERO)
+    }
+
     /// The weight of eq. 5, w_i(P) = 1 / (|P − Pi| / Ri + sqrt(1 − N(P)·N(Pi))). Infinite when
     /// P = Pi and the normals agree.
     pub fn weight(&self, p: Vec3, n: Vec3) -> f32 {
@@ -86,6 +98,7 @@ mod tests {
             n: Vec3::from(n).normalize(),
             e: Rgb::splat(e),
             r,
+            grad: Gradients::default(),
         }
     }
 

@@ -78,6 +78,8 @@ pub(crate) struct CacheDesc {
     pub(crate) accuracy: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) samples: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) gradients: Option<bool>,
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) ar: Option<f32>,
     /// Relative to the scene file.

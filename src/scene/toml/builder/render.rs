@@ -93,6 +93,7 @@ impl Builder<'_> {
             take!(ab, c.ab, t, "ab", &span);
             take!(ic_accuracy, c.accuracy, t, "accuracy", &span);
             take!(ic_samples, c.samples, t, "samples", &span);
+            take!(ic_gradients, c.gradients, t, "gradients", &span);
             take!(ar, c.ar, t, "ar", &span);
             let file = c.cache_file.map(|f| self.dir.join(f));
             take!(cache_file, file, t, "cache_file", &span);
