@@ -405,17 +405,16 @@ fn materials_map_to_raylink_fields() {
     ));
     let m = &s.materials;
     assert_eq!(m.len(), 6);
-    // Copper's normal-incidence reflectance: reddish.
-    assert!(
-        m[0].specular.x > 0.9 && m[0].specular.z < 0.6,
-        "{}",
-        m[0].specular
-    );
+    // Copper (pbrt's default conductor) with its complex Fresnel: reddish at normal
+    // incidence.
+    let cu = m[0].specular_at_normal();
+    assert!(cu.x > 0.9 && cu.z < 0.6, "{cu}");
+    assert_eq!(m[0].conductor, raylink::scene::Conductor::named("Cu"));
     assert_eq!(m[0].diffuse, raylink::scene::Texture::Constant(Rgb::ZERO));
     assert!(!m[0].fresnel);
     // Gold, roughness remapped to alpha = sqrt(0.25).
-    assert!(m[1].specular.x > m[1].specular.z);
-    assert!((m[1].roughness - 0.5).abs() < 1e-6);
+    assert_eq!(m[1].conductor, raylink::scene::Conductor::named("Au"));
+    assert!((m[1].roughness - 0.5).abs() < 1e-6 && m[1].roughness_v.is_none());
     assert_eq!(
         (m[2].specular, m[2].transmission, m[2].ior, m[2].fresnel),
         (Rgb::ONE, Rgb::ONE, 1.33, true)
@@ -430,6 +429,22 @@ fn materials_map_to_raylink_fields() {
         raylink::scene::Texture::Constant(Rgb::splat(0.5))
     );
     assert_eq!(m[5].name, "m");
+    // Anisotropic conductors keep α_x and α_y; `reflectance` gives the index with that
+    // normal-incidence reflectance (pbrt-v4: η = 1, k = 2√r/√(1−r)).
+    let s = world(&format!(
+        "Material \"conductor\" \"float uroughness\" 0.04 \"float vroughness\" 0.16 {TRI}\
+         Material \"conductor\" \"rgb reflectance\" [0.9 0.5 0.2] \"float roughness\" 0.3 \"bool remaproughness\" false {TRI}"
+    ));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let m = &s.materials;
+    assert!((m[0].roughness - 0.2).abs() < 1e-6);
+    assert!((m[0].roughness_v.unwrap() - 0.4).abs() < 1e-6);
+    let r = m[1].specular_at_normal();
+    assert!(
+        (r - Rgb::new(0.9, 0.5, 0.2)).abs().max_element() < 1e-4,
+        "{r}"
+    );
+    assert!((m[1].roughness - 0.3).abs() < 1e-6);
     // Unsupported material types: a warning and a substitute.
     let s = world(&format!("Material \"hair\" \"float eumelanin\" 1.3 {TRI}"));
     assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);

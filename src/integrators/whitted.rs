@@ -118,6 +118,11 @@ impl RayTree<'_> {
         } else {
             (m.specular, m.transmission)
         };
+        // A metal's mirror is weighted by its complex Fresnel reflectance at this angle.
+        let ks = match m.conductor {
+            Some(c) => m.specular * c.reflectance(cos_i),
+            None => ks,
+        };
 
         let (ks_weight, kt_weight) = (weight * ks.max_element(), weight * kt.max_element());
         if ks_weight > self.options.cutoff {
@@ -179,7 +184,7 @@ impl RayTree<'_> {
                 let h = (wi + view).normalize();
                 let spec = (m.phong_exponent + 8.0) / (8.0 * PI)
                     * n.dot(h).max(0.0).powf(m.phong_exponent);
-                color += m.specular * spec * e;
+                color += m.specular_at_normal() * spec * e;
             }
         }
         if diffuse_on {

@@ -12,10 +12,10 @@
 //! failed conversion never leaves a half-written scene behind.
 
 use super::toml::schema::{
-    CacheDesc, CameraDesc, CheckerDesc, DiffuseDesc, EnvironmentDesc, FileDesc, FilterDesc,
-    ImageDesc, LightDesc, LightKind, MaterialDesc, NetworkDesc, OneOrMany, Ordered, RenderDesc,
-    ShapeDesc, ShapeKind, Splat3, TextureTable, TransformOp, UvCheckerDesc, WhittedDesc, WorldDesc,
-    V3,
+    CacheDesc, CameraDesc, CheckerDesc, ConductorDesc, ConductorIndex, DiffuseDesc,
+    EnvironmentDesc, FileDesc, FilterDesc, ImageDesc, LightDesc, LightKind, MaterialDesc,
+    NetworkDesc, OneOrMany, Ordered, RenderDesc, RoughnessDesc, ShapeDesc, ShapeKind, Splat3,
+    TextureTable, TransformOp, UvCheckerDesc, WhittedDesc, WorldDesc, V3,
 };
 use super::{Camera, Geometry, Light, Material, RenderSettings, Scene, Texture};
 use crate::image::filter::Filter;
@@ -284,8 +284,17 @@ fn material(m: &Material, refs: Refs) -> MaterialDesc {
         transmission: Some(Splat3(m.transmission)),
         ior: Some(m.ior),
         phong_exponent: Some(m.phong_exponent),
-        roughness: Some(m.roughness),
+        roughness: Some(match m.roughness_v {
+            Some(v) => RoughnessDesc::Anisotropic(m.roughness, v),
+            None => RoughnessDesc::Isotropic(m.roughness),
+        }),
         fresnel: Some(m.fresnel),
+        conductor: m.conductor.map(|c| {
+            ConductorDesc::Index(ConductorIndex {
+                eta: Splat3(c.eta),
+                k: Splat3(c.k),
+            })
+        }),
         emission: Some(Splat3(m.emission)),
     }
 }

@@ -391,6 +391,8 @@ fn convert(m: &tobj::Material, mtl: &Path) -> crate::Result<Material> {
         transmission,
         ior,
         phong_exponent,
+        roughness_v: None,
+        conductor: None,
         roughness: 0.0,
         fresnel: false,
         emission,

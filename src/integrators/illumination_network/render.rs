@@ -54,9 +54,7 @@ impl NetworkRenderer<'_> {
             let refl = 2.0 * n.dot(wo) * n - wo;
             r += sfc.ks
                 * self.gather(node, k, refl, sfc.alpha, |wi| {
-                    let ggx = Ggx {
-                        alpha: sfc.alpha.max(1e-3),
-                    };
+                    let ggx = Ggx::isotropic(sfc.alpha.max(1e-3));
                     let (ci, co) = (n.dot(wi), n.dot(wo));
                     if ci <= 0.0 || co <= 0.0 {
                         return 0.0;
@@ -244,7 +242,7 @@ fn direct_diffuse(
     let sp = hit.surface_point(&ctx.scene.shapes, ray);
     let m = &ctx.scene.materials[sp.material];
     let mut kd = m.diffuse.eval(sp.p, sp.uv);
-    let total = kd + m.specular + m.transmission;
+    let total = kd + m.specular_at_normal() + m.transmission;
     for c in 0..3 {
         if total[c] > 1.0 {
             kd[c] /= total[c];

@@ -10,14 +10,14 @@ use super::checks::{
 };
 use super::diagnostics::{Ctx, Site};
 use super::schema::{
-    CameraDesc, DiffuseDesc, EnvironmentDesc, FileDesc, LightDesc, LightKind, MaterialDesc,
-    OneOrMany, Splat3, TextureTable, TransformOp,
+    CameraDesc, ConductorDesc, DiffuseDesc, EnvironmentDesc, FileDesc, LightDesc, LightKind,
+    MaterialDesc, OneOrMany, RoughnessDesc, Splat3, TextureTable, TransformOp,
 };
 use crate::math::{Mat3, Mat4, Rgb, Vec2, Vec3};
 use crate::scene::environment::Environment;
 use crate::scene::pbrt::GeometryCost;
 use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
-use crate::scene::{Camera, Light, Material, RenderSettings, Scene, Texture};
+use crate::scene::{Camera, Conductor, Light, Material, RenderSettings, Scene, Texture};
 use crate::Error;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -213,18 +213,49 @@ impl<'a> Builder<'a> {
             None => None,
             Some(c) => Some(colour(c.0).map_err(fail("ambient"))?),
         };
+        let conductor = match desc.conductor {
+            None => None,
+            Some(ConductorDesc::Named(n)) => Some(Conductor::named(&n).ok_or_else(|| {
+                let names: Vec<_> = Conductor::names().collect();
+                fail("conductor")(format!(
+                    "unknown metal \"{n}\"; known: {}",
+                    names.join(", ")
+                ))
+            })?),
+            Some(ConductorDesc::Index(i)) => Some(Conductor {
+                eta: colour(i.eta.0).map_err(fail("conductor"))?,
+                k: colour(i.k.0).map_err(fail("conductor"))?,
+            }),
+        };
+        // A metal reflects everything its Fresnel lets it unless a tint is given.
+        let specular_default = if conductor.is_some() {
+            Rgb::ONE
+        } else {
+            d.specular
+        };
+        let (roughness, roughness_v) = match desc.roughness {
+            None => (d.roughness, None),
+            Some(RoughnessDesc::Isotropic(a)) => (a, None),
+            Some(RoughnessDesc::Anisotropic(u, v)) => (u, Some(v)),
+        };
+        let roughness = non_negative(roughness).map_err(fail("roughness"))?;
+        let roughness_v = match roughness_v {
+            Some(v) => Some(non_negative(v).map_err(fail("roughness"))?),
+            None => None,
+        };
         Ok(Material {
             name,
             diffuse,
             ambient,
-            specular: col(desc.specular, "specular", d.specular)?,
+            specular: col(desc.specular, "specular", specular_default)?,
             transmission: col(desc.transmission, "transmission", d.transmission)?,
             ior: positive(desc.ior.unwrap_or(d.ior)).map_err(fail("ior"))?,
             phong_exponent: non_negative(desc.phong_exponent.unwrap_or(d.phong_exponent))
                 .map_err(fail("phong_exponent"))?,
-            roughness: non_negative(desc.roughness.unwrap_or(d.roughness))
-                .map_err(fail("roughness"))?,
+            roughness,
+            roughness_v,
             fresnel: desc.fresnel.unwrap_or(d.fresnel),
+            conductor,
             emission: col(desc.emission, "emission", d.emission)?,
         })
     }
