@@ -1006,3 +1006,47 @@ fn pbrt_examples_in_scenes_load_cleanly() {
     }
     assert!(n >= 1);
 }
+
+/// Cameras: `lensradius`/`focaldistance` make a thin lens (pbrt-v4's defaults: no lens,
+/// focus at 10⁶); `orthographic` takes its `screenwindow`'s width, by default 2 units along
+/// the shorter image axis; an off-centre window warns with the line.
+#[test]
+fn thin_lens_and_orthographic_cameras() {
+    use raylink::scene::Projection;
+    let camera = |cam: &str| {
+        load(&format!(
+            "Film \"rgb\" \"integer xresolution\" 200 \"integer yresolution\" 100\n\
+             Scale -1 1 1\nLookAt 0 0 5  0 0 0  0 1 0\n{cam}\nWorldBegin\n{TRI}"
+        ))
+    };
+    let s = camera("Camera \"perspective\" \"float lensradius\" 0.1 \"float focaldistance\" 4");
+    assert_eq!(
+        s.camera.projection,
+        Projection::ThinLens {
+            radius: 0.1,
+            focal_distance: 4.0
+        }
+    );
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let s = camera("Camera \"perspective\" \"float lensradius\" 0.1");
+    assert_eq!(
+        s.camera.projection,
+        Projection::ThinLens {
+            radius: 0.1,
+            focal_distance: 1e6
+        }
+    );
+    let s = camera("Camera \"orthographic\"");
+    assert_eq!(s.camera.projection, Projection::Orthographic { size: 4.0 });
+    let s = camera("Camera \"orthographic\" \"float screenwindow\" [-3 3 -1.5 1.5]");
+    assert_eq!(s.camera.projection, Projection::Orthographic { size: 6.0 });
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let s = camera("Camera \"orthographic\" \"float screenwindow\" [0 3 -1.5 1.5]");
+    assert_eq!(s.camera.projection, Projection::Orthographic { size: 3.0 });
+    assert!(
+        s.warnings.len() == 1
+            && s.warnings[0].contains(":4: Camera \"orthographic\": a screenwindow off the centre"),
+        "{:?}",
+        s.warnings
+    );
+}

@@ -7,7 +7,7 @@
 //! pbrt. Finite emitters only (area and point lights): directional lights and the
 //! background have no position to start a subpath from, and are left to the path tracer.
 
-use super::light::connect_to_camera;
+use super::light::{connect_to_camera, lens_sample};
 use super::path::russian_roulette;
 use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
@@ -133,7 +133,7 @@ impl Vertex {
     ) -> f32 {
         let w = (next.p - self.p).normalize();
         let pdf = match self.kind {
-            Kind::Camera => camera_pdf_dir(camera, w),
+            Kind::Camera => camera_pdf_dir(camera, self.p, w),
             Kind::Light { .. } => return self.pdf_light(ctx, next),
             Kind::Surface => match (self.bsdf, prev) {
                 (Some(b), Some(prev)) => b.pdf((prev.p - self.p).normalize(), w),
@@ -180,10 +180,12 @@ impl Vertex {
     }
 }
 
-/// Density in solid angle of the camera generating a ray along `w`: uniform over the film at
-/// unit distance, 1 / (A_film cos³θ). Zero outside the film.
-fn camera_pdf_dir(camera: &CameraBasis, w: Vec3) -> f32 {
-    match camera.raster(camera.origin + w) {
+/// Density in solid angle of the camera generating a ray along `w` from the lens point
+/// `lens`: uniform over the film at unit distance, 1 / (A_film cos³θ) (pbrt-v4's `PDF_We`;
+/// the lens point's own density is the same for every strategy and cancels). Zero outside
+/// the film.
+fn camera_pdf_dir(camera: &CameraBasis, lens: Vec3, w: Vec3) -> f32 {
+    match camera.raster_from(lens, lens + w) {
         Some((x, y, cos)) => {
             let (fw, fh) = camera.film_size();
             let m = camera.margin;
@@ -373,13 +375,14 @@ impl MonteCarlo for Bdpt {
         let max_depth = self.options.max_depth;
         // Camera subpath.
         let mut cam_path: Vec<Vertex> = Vec::with_capacity(max_depth as usize + 2);
+        // The camera vertex is where the ray leaves: the pinhole or a point of the lens.
         cam_path.push(Vertex::new(
             Kind::Camera,
-            camera.origin,
+            camera_ray.origin,
             Vec3::ZERO,
             Rgb::ONE,
         ));
-        let pdf_cam = camera_pdf_dir(camera, camera_ray.dir);
+        let pdf_cam = camera_pdf_dir(camera, camera_ray.origin, camera_ray.dir);
         random_walk(
             ctx,
             WalkStart {
@@ -470,7 +473,10 @@ impl MonteCarlo for Bdpt {
                         if !qs.connectible() {
                             continue;
                         }
-                        let Some(c) = connect_to_camera(ctx, camera, qs.p, qs.n, stats) else {
+                        // A lens point of its own (the pinhole draws nothing).
+                        let lens = lens_sample(camera, sampler);
+                        let Some(c) = connect_to_camera(ctx, camera, lens, (qs.p, qs.n), stats)
+                        else {
                             continue;
                         };
                         let value = if s == 1 {
@@ -483,8 +489,7 @@ impl MonteCarlo for Bdpt {
                             }
                             qs.beta * (cos_l * c.importance)
                         } else {
-                            let cam_v =
-                                Vertex::new(Kind::Camera, camera.origin, Vec3::ZERO, Rgb::ONE);
+                            let cam_v = Vertex::new(Kind::Camera, lens, Vec3::ZERO, Rgb::ONE);
                             qs.beta
                                 * qs.f(Some(&light_path[s - 2]), &cam_v, Transport::Importance)
                                 * c.importance
@@ -494,6 +499,7 @@ impl MonteCarlo for Bdpt {
                         }
                         let mut cam_only = cam_path.clone();
                         cam_only.truncate(1);
+                        cam_only[0].p = lens;
                         let w = Connection {
                             light: &light_path,
                             camera: &cam_only,

@@ -17,7 +17,7 @@ use super::toml::schema::{
     NetworkDesc, OneOrMany, Ordered, RenderDesc, RoughnessDesc, ShapeDesc, ShapeKind, Splat3,
     TextureTable, TransformOp, UvCheckerDesc, WhittedDesc, WorldDesc, V3,
 };
-use super::{Camera, Geometry, Light, Material, RenderSettings, Scene, Texture};
+use super::{Camera, Geometry, Light, Material, Projection, RenderSettings, Scene, Texture};
 use crate::image::filter::Filter;
 use crate::settings::{AntiAliasing, NetworkBuilder, NetworkOrder};
 use crate::Error;
@@ -171,6 +171,20 @@ fn camera(c: &Camera) -> CameraDesc {
         fov: Some(c.fov_deg),
         width: Some(c.width),
         height: Some(c.height),
+        projection: matches!(c.projection, Projection::Orthographic { .. })
+            .then(|| "orthographic".to_string()),
+        size: match c.projection {
+            Projection::Orthographic { size } => Some(size),
+            _ => None,
+        },
+        lens_radius: match c.projection {
+            Projection::ThinLens { radius, .. } => Some(radius),
+            _ => None,
+        },
+        focal_distance: match c.projection {
+            Projection::ThinLens { focal_distance, .. } => Some(focal_distance),
+            _ => None,
+        },
     }
 }
 

@@ -173,6 +173,7 @@ mod tests {
                 fov_deg: 45.0,
                 width: 1,
                 height: 1,
+                projection: crate::scene::Projection::Pinhole,
             },
             materials: vec![Material {
                 emission: Rgb::ONE,

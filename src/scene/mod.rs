@@ -16,7 +16,7 @@ pub mod settings;
 pub mod texture;
 pub mod toml;
 
-pub use camera::{Camera, MAX_RESOLUTION};
+pub use camera::{Camera, Projection, MAX_RESOLUTION};
 pub use environment::Environment;
 pub use geometry::{Geometry, QuadMesh, Shape, SurfacePoint, TriangleMesh};
 pub use light::Light;

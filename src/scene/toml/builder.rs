@@ -17,7 +17,9 @@ use crate::math::{Mat3, Mat4, Rgb, Vec2, Vec3};
 use crate::scene::environment::Environment;
 use crate::scene::pbrt::GeometryCost;
 use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
-use crate::scene::{Camera, Conductor, Light, Material, RenderSettings, Scene, Texture};
+use crate::scene::{
+    Camera, Conductor, Light, Material, Projection, RenderSettings, Scene, Texture,
+};
 use crate::Error;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -187,6 +189,7 @@ impl<'a> Builder<'a> {
             resolution(desc.width.unwrap_or(640)).map_err(|m| ctx.fail(&site, "width", m))?;
         let height =
             resolution(desc.height.unwrap_or(480)).map_err(|m| ctx.fail(&site, "height", m))?;
+        let projection = self.projection(&site, &desc)?;
         Ok(Camera {
             position,
             look_at,
@@ -194,6 +197,61 @@ impl<'a> Builder<'a> {
             fov_deg: fov,
             width,
             height,
+            projection,
+        })
+    }
+
+    /// `projection` ("perspective", the default, or "orthographic" with `size`), and a thin
+    /// lens for a perspective camera with `lens_radius` > 0 (`focal_distance` required).
+    fn projection(&self, site: &Site, desc: &CameraDesc) -> crate::Result<Projection> {
+        let ctx = self.ctx;
+        let fail = |key: &'static str| move |m: String| ctx.fail(site, key, m);
+        let orthographic = match desc.projection.as_deref() {
+            None | Some("perspective") => false,
+            Some("orthographic") => true,
+            Some(other) => {
+                return Err(fail("projection")(format!(
+                    "must be \"perspective\" or \"orthographic\", got \"{other}\""
+                )))
+            }
+        };
+        if orthographic {
+            for (key, given) in [
+                ("lens_radius", desc.lens_radius.is_some()),
+                ("focal_distance", desc.focal_distance.is_some()),
+            ] {
+                if given {
+                    return Err(fail(key)(
+                        "applies to the perspective projection only".into(),
+                    ));
+                }
+            }
+            let Some(size) = desc.size else {
+                return Err(fail("size")(
+                    "is required for the orthographic projection: the width of the view in scene units".into(),
+                ));
+            };
+            let size = positive(size).map_err(fail("size"))?;
+            return Ok(Projection::Orthographic { size });
+        }
+        if desc.size.is_some() {
+            return Err(fail("size")(
+                "applies to the orthographic projection only".into(),
+            ));
+        }
+        let radius = non_negative(desc.lens_radius.unwrap_or(0.0)).map_err(fail("lens_radius"))?;
+        if radius == 0.0 {
+            return Ok(Projection::Pinhole);
+        }
+        let Some(focal_distance) = desc.focal_distance else {
+            return Err(fail("focal_distance")(
+                "is required with lens_radius: the distance of the plane in focus".into(),
+            ));
+        };
+        let focal_distance = positive(focal_distance).map_err(fail("focal_distance"))?;
+        Ok(Projection::ThinLens {
+            radius,
+            focal_distance,
         })
     }
 
