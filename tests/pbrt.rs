@@ -4,7 +4,7 @@
 
 use raylink::image::Image;
 use raylink::math::{Rgb, Vec3};
-use raylink::scene::{Geometry, Scene};
+use raylink::scene::{Geometry, Light, Scene};
 use raylink::{Backend, Control, Job, Renderer, Settings, Technique, TechniqueKind};
 use std::path::{Path, PathBuf};
 
@@ -1049,4 +1049,45 @@ fn thin_lens_and_orthographic_cameras() {
         "{:?}",
         s.warnings
     );
+}
+
+/// Spot lights as pbrt-v4 defines them (`from`, `to`, `coneangle` 30, `conedelta` 5, `I`,
+/// `scale`, `power` = I·k_e with k_e = 2π((1 − cos start) + (cos start − cos end)/2)), and
+/// two-sided diffuse area lights, both without warnings.
+#[test]
+fn spot_lights_and_two_sided_area_lights() {
+    let s = world(&format!(
+        "LightSource \"spot\" \"point3 from\" [0 2 0] \"point3 to\" [0 0 0] \"rgb I\" [1 2 3] \"float scale\" 2\n\
+         LightSource \"spot\" \"float coneangle\" 40 \"float conedelta\" 10 \"float power\" 100\n\
+         AttributeBegin AreaLightSource \"diffuse\" \"bool twosided\" true {TRI} AttributeEnd\n"
+    ));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let Light::Spot {
+        position,
+        direction,
+        intensity,
+        cone_angle,
+        cone_delta,
+    } = s.lights[0]
+    else {
+        panic!("{:?}", s.lights[0])
+    };
+    // The header's `Scale -1 1 1` mirrors nothing on the y axis.
+    assert!(close(position, Vec3::new(0.0, 2.0, 0.0)), "{position}");
+    assert!(close(direction, Vec3::new(0.0, -1.0, 0.0)), "{direction}");
+    assert_eq!(
+        (intensity, cone_angle, cone_delta),
+        (Rgb::new(2.0, 4.0, 6.0), 30.0, 5.0)
+    );
+    let Light::Spot { intensity, .. } = s.lights[1] else {
+        panic!("{:?}", s.lights[1])
+    };
+    let (cs, ce) = (30f64.to_radians().cos(), 40f64.to_radians().cos());
+    let k_e = std::f64::consts::TAU * ((1.0 - cs) + (cs - ce) / 2.0);
+    assert!(
+        (intensity.x as f64 - 100.0 / k_e).abs() < 1e-4,
+        "{intensity}"
+    );
+    let emitter = s.materials.iter().find(|m| m.is_emissive()).unwrap();
+    assert!(emitter.two_sided_emission);
 }

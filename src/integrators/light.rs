@@ -7,6 +7,7 @@
 use super::path::russian_roulette;
 use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
+use crate::lights::Emitter;
 use crate::math::sobol::Sampler;
 use crate::math::{offset_origin, Ray, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
@@ -113,7 +114,11 @@ impl MonteCarlo for LightTracer {
         {
             let lens = lens_sample(camera, sampler);
             if let Some(c) = connect_to_camera(ctx, camera, lens, (es.p, es.n), stats) {
-                let cos_l = c.dir.dot(es.n);
+                // A two-sided light is seen from either side, whichever side it emitted to.
+                let cos_l = match &ctx.lights.emitters[es.light] {
+                    Emitter::Area(a) => a.emitting_cos(c.dir.dot(es.n)),
+                    _ => c.dir.dot(es.n),
+                };
                 if cos_l > 0.0 {
                     splats.push(Splat {
                         x: c.x,

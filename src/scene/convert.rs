@@ -310,6 +310,7 @@ fn material(m: &Material, refs: Refs) -> MaterialDesc {
             })
         }),
         emission: Some(Splat3(m.emission)),
+        two_sided_emission: m.two_sided_emission.then_some(true),
     }
 }
 
@@ -362,6 +363,8 @@ fn light(l: &Light) -> LightDesc {
         intensity: None,
         direction: None,
         irradiance: None,
+        cone_angle: None,
+        cone_delta: None,
     };
     match *l {
         Light::Point {
@@ -378,6 +381,20 @@ fn light(l: &Light) -> LightDesc {
             d.kind = LightKind::Directional;
             d.direction = Some(V3(direction));
             d.irradiance = Some(Splat3(irradiance));
+        }
+        Light::Spot {
+            position,
+            direction,
+            intensity,
+            cone_angle,
+            cone_delta,
+        } => {
+            d.kind = LightKind::Spot;
+            d.position = Some(V3(position));
+            d.direction = Some(V3(direction));
+            d.intensity = Some(Splat3(intensity));
+            d.cone_angle = Some(cone_angle);
+            d.cone_delta = Some(cone_delta);
         }
     }
     d

@@ -34,6 +34,9 @@ pub struct Material {
     pub conductor: Option<Conductor>,
     /// Emitted radiance; a shape with a non-zero emission is an area light.
     pub emission: Rgb,
+    /// Emit on both sides of the surface (pbrt's `twosided` area lights), not only on the
+    /// side the geometric normal faces.
+    pub two_sided_emission: bool,
 }
 
 impl Default for Material {
@@ -51,6 +54,7 @@ impl Default for Material {
             fresnel: false,
             conductor: None,
             emission: Rgb::ZERO,
+            two_sided_emission: false,
         }
     }
 }
@@ -58,6 +62,12 @@ impl Default for Material {
 impl Material {
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0
+    }
+
+    /// Whether the surface emits towards `wo` (pointing away from it), given its geometric
+    /// normal `ng`.
+    pub fn emits_towards(&self, wo: Vec3, ng: Vec3) -> bool {
+        self.is_emissive() && (self.two_sided_emission || wo.dot(ng) > 0.0)
     }
 
     pub fn is_transmissive(&self) -> bool {

@@ -393,6 +393,7 @@ fn convert(m: &tobj::Material, mtl: &Path) -> crate::Result<Material> {
         phong_exponent,
         roughness_v: None,
         conductor: None,
+        two_sided_emission: false,
         roughness: 0.0,
         fresnel: false,
         emission,

@@ -208,7 +208,7 @@ impl Integrator for NetworkRenderer<'_> {
             let pg = &net.patches.polygons[poly as usize];
             let side = u32::from(pg.normal_at(p).dot(wo) < 0.0);
             let m = &ctx.scene.materials[ctx.scene.shapes[hit.geom_id as usize].material];
-            if side == 0 {
+            if side == 0 || m.two_sided_emission {
                 radiance += m.emission * self.light_scale();
             }
             radiance += self.radiance_at(poly, p, side, wo);

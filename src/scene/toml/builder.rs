@@ -315,6 +315,7 @@ impl<'a> Builder<'a> {
             fresnel: desc.fresnel.unwrap_or(d.fresnel),
             conductor,
             emission: col(desc.emission, "emission", d.emission)?,
+            two_sided_emission: desc.two_sided_emission.unwrap_or(false),
         })
     }
 
@@ -462,12 +463,23 @@ impl<'a> Builder<'a> {
 
     fn light(&self, site: &Site, desc: LightDesc) -> crate::Result<Light> {
         let ctx = self.ctx;
-        let (name, takes, allowed): (&str, &str, [&str; 2]) = match desc.kind {
-            LightKind::Point => ("point", "position, intensity", ["position", "intensity"]),
+        let (name, takes, allowed): (&str, &str, &[&str]) = match desc.kind {
+            LightKind::Point => ("point", "position, intensity", &["position", "intensity"]),
             LightKind::Directional => (
                 "directional",
                 "direction, irradiance",
-                ["direction", "irradiance"],
+                &["direction", "irradiance"],
+            ),
+            LightKind::Spot => (
+                "spot",
+                "position, direction, intensity, cone_angle, cone_delta",
+                &[
+                    "position",
+                    "direction",
+                    "intensity",
+                    "cone_angle",
+                    "cone_delta",
+                ],
             ),
         };
         let present = [
@@ -475,6 +487,8 @@ impl<'a> Builder<'a> {
             ("intensity", desc.intensity.is_some()),
             ("direction", desc.direction.is_some()),
             ("irradiance", desc.irradiance.is_some()),
+            ("cone_angle", desc.cone_angle.is_some()),
+            ("cone_delta", desc.cone_delta.is_some()),
         ];
         for (key, is) in present {
             if is && !allowed.contains(&key) {
@@ -500,6 +514,31 @@ impl<'a> Builder<'a> {
                 irradiance: colour(desc.irradiance.ok_or_else(|| need("irradiance"))?.0)
                     .map_err(fail("irradiance"))?,
             },
+            LightKind::Spot => {
+                // pbrt-v4's defaults: a 30° cone, the last 5° of it falling off.
+                let cone_angle = desc.cone_angle.unwrap_or(30.0);
+                if !(cone_angle > 0.0 && cone_angle <= 180.0) {
+                    return Err(fail("cone_angle")(format!(
+                        "must be in (0, 180] degrees, got {cone_angle}"
+                    )));
+                }
+                let cone_delta = desc.cone_delta.unwrap_or(5.0);
+                if !(0.0..=cone_angle).contains(&cone_delta) {
+                    return Err(fail("cone_delta")(format!(
+                        "must be in [0, cone_angle = {cone_angle}] degrees, got {cone_delta}"
+                    )));
+                }
+                Light::Spot {
+                    position: finite3(desc.position.ok_or_else(|| need("position"))?.0)
+                        .map_err(fail("position"))?,
+                    direction: direction(desc.direction.ok_or_else(|| need("direction"))?.0)
+                        .map_err(fail("direction"))?,
+                    intensity: colour(desc.intensity.ok_or_else(|| need("intensity"))?.0)
+                        .map_err(fail("intensity"))?,
+                    cone_angle,
+                    cone_delta,
+                }
+            }
         })
     }
 }

@@ -191,6 +191,8 @@ pub(crate) struct MaterialDesc {
     pub(crate) conductor: Option<ConductorDesc>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) emission: Option<Splat3>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) two_sided_emission: Option<bool>,
 }
 
 pub(crate) enum DiffuseDesc {
@@ -377,6 +379,7 @@ pub(crate) struct RotateDesc {
 pub(crate) enum LightKind {
     Point,
     Directional,
+    Spot,
 }
 
 #[derive(Deserialize, Serialize)]
@@ -392,6 +395,10 @@ pub(crate) struct LightDesc {
     pub(crate) direction: Option<V3>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) irradiance: Option<Splat3>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) cone_angle: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) cone_delta: Option<f32>,
 }
 
 // ------------------------------------------------------------------------------------------

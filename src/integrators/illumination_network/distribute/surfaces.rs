@@ -64,7 +64,11 @@ pub fn surfaces_with(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<Surf
                     Some(v) => 0.5 * (m.roughness + v),
                     None => m.roughness,
                 },
-                emission: if side == 0 { emission[mi] } else { Rgb::ZERO },
+                emission: if side == 0 || m.two_sided_emission {
+                    emission[mi]
+                } else {
+                    Rgb::ZERO
+                },
             }
         })
         .collect()
