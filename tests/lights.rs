@@ -50,12 +50,12 @@ fn smooth_step(a: f64, b: f64, x: f64) -> f64 {
     t * t * (3.0 - 2.0 * t)
 }
 
-/// A spot light (I = 2, cone 30°, falloff over the last 10°, scale from `intensity`) one
-/// unit above a white (albedo 0.8) diffuse floor, pointing straight down, seen by an
+/// A spot light (I = 2, a 30° cone whose last 10° fall off) one unit above a white (albedo 0.8) diffuse floor, pointing straight down, seen by an
 /// orthographic camera from above: each pixel is ρ/π·E averaged over the pixel, with
 /// pbrt's E = I·SmoothStep(cos 30°, cos 20°, cos θ)·cos θ/d². Checked at pixels inside the
 /// inner cone, in the falloff band and outside the cone, within 0.5% (0 outside), for the
-/// path tracer and Whitted's ray tracer.
+/// path tracer, Whitted's ray tracer and the irradiance cache (whose direct light samples the
+/// spot).
 #[test]
 fn spot_irradiance_matches_pbrts_formula() {
     let (size, width) = (2.0f64, 100u32);
@@ -96,7 +96,19 @@ fn spot_irradiance_matches_pbrts_formula() {
         ..Settings::default()
     })
     .unwrap();
-    for (name, technique) in [("path", mc(Technique::Path, 64, 1)), ("whitted", whitted)] {
+    let cache = Technique::create(&Settings {
+        integrator: Some(TechniqueKind::IrradianceCache),
+        spp: Some(64),
+        max_depth: Some(1),
+        filter: Some(Filter::Box { radius: 0.5 }),
+        ..Settings::default()
+    })
+    .unwrap();
+    for (name, technique) in [
+        ("path", mc(Technique::Path, 64, 1)),
+        ("whitted", whitted),
+        ("cache", cache),
+    ] {
         let image = render_job(&scene, technique, 1);
         // Along the +x axis from the centre: tan θ of the pixel centre 0.01 .. 0.99.
         let row = width / 2;
