@@ -1,5 +1,5 @@
 //! Light sampling for the Monte Carlo integrators: every emitter of a scene (area lights,
-//! point and directional lights, and the constant background as an infinite light) behind one
+//! point, spot and directional lights, and the constant background as an infinite light) behind one
 //! interface. Emitters are chosen in proportion to their power. Two kinds of sampling:
 //! towards a point being shaded (`sample_li`, next-event estimation, with `pdf_li` for
 //! multiple importance sampling), and emission of a light path (`sample_le`, with `pdf_le`).
@@ -10,10 +10,13 @@ use crate::math::warp::{
 };
 use crate::math::{frame, luminance, Rgb, Vec2, Vec3};
 use crate::scene::environment::equal_area_square_to_sphere;
-use crate::scene::light::AreaLight;
+use crate::scene::light::{spot_cosines, spot_falloff, spot_solid_angle, AreaLight};
 use crate::scene::{Environment, Light, Scene};
 use std::f32::consts::PI;
 use std::sync::Arc;
+
+/// The largest f32 below 1.
+const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
 
 #[derive(Clone, Debug)]
 pub enum Emitter {
@@ -21,6 +24,14 @@ pub enum Emitter {
     Point {
         position: Vec3,
         intensity: Rgb,
+    },
+    /// pbrt-v4's spot light (see [`crate::scene::light::spot_falloff`]).
+    Spot {
+        position: Vec3,
+        direction: Vec3,
+        intensity: Rgb,
+        cos_start: f32,
+        cos_end: f32,
     },
     /// Light travelling along `direction` (unit).
     Directional {
@@ -103,7 +114,39 @@ impl EnvironmentSampler {
     }
 }
 
-impl Emitter {}
+impl Emitter {
+    /// Intensity of a point or spot light towards the unit direction `w` (zero for others).
+    pub fn intensity_towards(&self, w: Vec3) -> Rgb {
+        match *self {
+            Emitter::Point { intensity, .. } => intensity,
+            Emitter::Spot {
+                direction,
+                intensity,
+                cos_start,
+                cos_end,
+                ..
+            } => intensity * spot_falloff(w.dot(direction), cos_start, cos_end),
+            _ => Rgb::ZERO,
+        }
+    }
+
+    /// Solid-angle density with which [`LightSet::sample_le`] emits a point or spot light's
+    /// path along `w`.
+    pub fn pdf_dir_point(&self, w: Vec3) -> f32 {
+        match *self {
+            Emitter::Spot {
+                direction, cos_end, ..
+            } => {
+                if w.dot(direction) >= cos_end {
+                    uniform_cone_pdf(cos_end)
+                } else {
+                    0.0
+                }
+            }
+            _ => UNIFORM_SPHERE_PDF,
+        }
+    }
+}
 
 /// A sample of incident light at a shaded point.
 #[derive(Clone, Copy, Debug)]
@@ -175,6 +218,22 @@ impl LightSet {
                     direction: direction.normalize(),
                     irradiance,
                 },
+                Light::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    cone_angle,
+                    cone_delta,
+                } => {
+                    let (cos_start, cos_end) = spot_cosines(cone_angle, cone_delta);
+                    Emitter::Spot {
+                        position,
+                        direction: direction.normalize(),
+                        intensity,
+                        cos_start,
+                        cos_end,
+                    }
+                }
             });
         }
         let mut background = None;
@@ -194,8 +253,17 @@ impl LightSet {
         let power: Vec<f32> = emitters
             .iter()
             .map(|e| match e {
-                Emitter::Area(a) => PI * a.area * luminance(a.radiance),
+                Emitter::Area(a) => {
+                    let sides = if a.two_sided { 2.0 } else { 1.0 };
+                    sides * PI * a.area * luminance(a.radiance)
+                }
                 Emitter::Point { intensity, .. } => 4.0 * PI * luminance(*intensity),
+                Emitter::Spot {
+                    intensity,
+                    cos_start,
+                    cos_end,
+                    ..
+                } => spot_solid_angle(*cos_start, *cos_end) * luminance(*intensity),
                 Emitter::Directional { irradiance, .. } => {
                     PI * radius * radius * luminance(*irradiance)
                 }
@@ -327,7 +395,7 @@ impl LightSet {
                     return None;
                 }
                 let wi = d / dist2.sqrt();
-                let cos_l = -wi.dot(lp.n);
+                let cos_l = a.emitting_cos(-wi.dot(lp.n));
                 if cos_l <= 0.0 {
                     return None;
                 }
@@ -348,6 +416,22 @@ impl LightSet {
                 Some(LightSample {
                     radiance: *intensity / dist2,
                     wi: d / dist2.sqrt(),
+                    p: *position,
+                    pdf: sel,
+                    delta: true,
+                })
+            }
+            e @ Emitter::Spot { position, .. } => {
+                let d = *position - p;
+                let dist2 = d.length_squared();
+                let wi = d / dist2.sqrt();
+                let intensity = e.intensity_towards(-wi);
+                if intensity == Rgb::ZERO {
+                    return None;
+                }
+                Some(LightSample {
+                    radiance: intensity / dist2,
+                    wi,
                     p: *position,
                     pdf: sel,
                     delta: true,
@@ -397,7 +481,7 @@ impl LightSet {
                 }
                 let d = q - p;
                 let dist2 = d.length_squared();
-                let cos_l = -(d / dist2.sqrt()).dot(n);
+                let cos_l = a.emitting_cos(-(d / dist2.sqrt()).dot(n));
                 if cos_l <= 0.0 {
                     0.0
                 } else {
@@ -427,15 +511,29 @@ impl LightSet {
         let s = match &self.emitters[i] {
             Emitter::Area(a) => {
                 let lp = a.sample(u_pos);
-                let (t, b) = frame(lp.n);
+                // A two-sided light picks a side with half of u_dir.x (as pbrt-v4 does); `n`
+                // is then the normal of that side.
+                let (n, u_dir, side_pdf) = if !a.two_sided {
+                    (lp.n, u_dir, 1.0)
+                } else if u_dir.x < 0.5 {
+                    (
+                        lp.n,
+                        Vec2::new((2.0 * u_dir.x).min(ONE_MINUS_EPS), u_dir.y),
+                        0.5,
+                    )
+                } else {
+                    let ux = (2.0 * (u_dir.x - 0.5)).min(ONE_MINUS_EPS);
+                    (-lp.n, Vec2::new(ux, u_dir.y), 0.5)
+                };
+                let (t, b) = frame(n);
                 let l = cosine_hemisphere(u_dir);
                 EmissionSample {
                     p: lp.p,
-                    n: lp.n,
-                    dir: t * l.x + b * l.y + lp.n * l.z,
+                    n,
+                    dir: t * l.x + b * l.y + n * l.z,
                     radiance: a.radiance,
                     pdf_pos: sel / a.area,
-                    pdf_dir: l.z / PI,
+                    pdf_dir: side_pdf * l.z / PI,
                     delta_pos: false,
                     delta_dir: false,
                     light: i,
@@ -455,6 +553,28 @@ impl LightSet {
                 delta_dir: false,
                 light: i,
             },
+            e @ Emitter::Spot {
+                position,
+                direction,
+                cos_end,
+                ..
+            } => {
+                // Uniform over the cone, as pbrt-v4 does.
+                let (t, b) = frame(*direction);
+                let l = uniform_cone(u_dir, *cos_end);
+                let dir = (t * l.x + b * l.y + *direction * l.z).normalize();
+                EmissionSample {
+                    p: *position,
+                    n: Vec3::ZERO,
+                    dir,
+                    radiance: e.intensity_towards(dir),
+                    pdf_pos: sel,
+                    pdf_dir: uniform_cone_pdf(*cos_end),
+                    delta_pos: true,
+                    delta_dir: false,
+                    light: i,
+                }
+            }
             Emitter::Directional {
                 direction,
                 irradiance,

@@ -78,6 +78,7 @@ fn mixed_scene() -> Scene {
             fov_deg: 50.0,
             width: 64,
             height: 48,
+            projection: raylink::scene::Projection::Pinhole,
         },
         materials: vec![Material::default()],
         shapes,

@@ -336,6 +336,7 @@ fn environment_map_lighting_matches_quadrature() {
             fov_deg: 1.0,
             width: 4,
             height: 4,
+            projection: raylink::scene::Projection::Pinhole,
         },
         materials: vec![Material {
             diffuse: Texture::Constant(Rgb::splat(0.5)),

@@ -4,7 +4,7 @@
 
 use raylink::image::Image;
 use raylink::math::{Rgb, Vec3};
-use raylink::scene::{Geometry, Scene};
+use raylink::scene::{Geometry, Light, Scene};
 use raylink::{Backend, Control, Job, Renderer, Settings, Technique, TechniqueKind};
 use std::path::{Path, PathBuf};
 
@@ -405,17 +405,16 @@ fn materials_map_to_raylink_fields() {
     ));
     let m = &s.materials;
     assert_eq!(m.len(), 6);
-    // Copper's normal-incidence reflectance: reddish.
-    assert!(
-        m[0].specular.x > 0.9 && m[0].specular.z < 0.6,
-        "{}",
-        m[0].specular
-    );
+    // Copper (pbrt's default conductor) with its complex Fresnel: reddish at normal
+    // incidence.
+    let cu = m[0].specular_at_normal();
+    assert!(cu.x > 0.9 && cu.z < 0.6, "{cu}");
+    assert_eq!(m[0].conductor, raylink::scene::Conductor::named("Cu"));
     assert_eq!(m[0].diffuse, raylink::scene::Texture::Constant(Rgb::ZERO));
     assert!(!m[0].fresnel);
     // Gold, roughness remapped to alpha = sqrt(0.25).
-    assert!(m[1].specular.x > m[1].specular.z);
-    assert!((m[1].roughness - 0.5).abs() < 1e-6);
+    assert_eq!(m[1].conductor, raylink::scene::Conductor::named("Au"));
+    assert!((m[1].roughness - 0.5).abs() < 1e-6 && m[1].roughness_v.is_none());
     assert_eq!(
         (m[2].specular, m[2].transmission, m[2].ior, m[2].fresnel),
         (Rgb::ONE, Rgb::ONE, 1.33, true)
@@ -430,6 +429,22 @@ fn materials_map_to_raylink_fields() {
         raylink::scene::Texture::Constant(Rgb::splat(0.5))
     );
     assert_eq!(m[5].name, "m");
+    // Anisotropic conductors keep α_x and α_y; `reflectance` gives the index with that
+    // normal-incidence reflectance (pbrt-v4: η = 1, k = 2√r/√(1−r)).
+    let s = world(&format!(
+        "Material \"conductor\" \"float uroughness\" 0.04 \"float vroughness\" 0.16 {TRI}\
+         Material \"conductor\" \"rgb reflectance\" [0.9 0.5 0.2] \"float roughness\" 0.3 \"bool remaproughness\" false {TRI}"
+    ));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let m = &s.materials;
+    assert!((m[0].roughness - 0.2).abs() < 1e-6);
+    assert!((m[0].roughness_v.unwrap() - 0.4).abs() < 1e-6);
+    let r = m[1].specular_at_normal();
+    assert!(
+        (r - Rgb::new(0.9, 0.5, 0.2)).abs().max_element() < 1e-4,
+        "{r}"
+    );
+    assert!((m[1].roughness - 0.3).abs() < 1e-6);
     // Unsupported material types: a warning and a substitute.
     let s = world(&format!("Material \"hair\" \"float eumelanin\" 1.3 {TRI}"));
     assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
@@ -990,4 +1005,89 @@ fn pbrt_examples_in_scenes_load_cleanly() {
         }
     }
     assert!(n >= 1);
+}
+
+/// Cameras: `lensradius`/`focaldistance` make a thin lens (pbrt-v4's defaults: no lens,
+/// focus at 10⁶); `orthographic` takes its `screenwindow`'s width, by default 2 units along
+/// the shorter image axis; an off-centre window warns with the line.
+#[test]
+fn thin_lens_and_orthographic_cameras() {
+    use raylink::scene::Projection;
+    let camera = |cam: &str| {
+        load(&format!(
+            "Film \"rgb\" \"integer xresolution\" 200 \"integer yresolution\" 100\n\
+             Scale -1 1 1\nLookAt 0 0 5  0 0 0  0 1 0\n{cam}\nWorldBegin\n{TRI}"
+        ))
+    };
+    let s = camera("Camera \"perspective\" \"float lensradius\" 0.1 \"float focaldistance\" 4");
+    assert_eq!(
+        s.camera.projection,
+        Projection::ThinLens {
+            radius: 0.1,
+            focal_distance: 4.0
+        }
+    );
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let s = camera("Camera \"perspective\" \"float lensradius\" 0.1");
+    assert_eq!(
+        s.camera.projection,
+        Projection::ThinLens {
+            radius: 0.1,
+            focal_distance: 1e6
+        }
+    );
+    let s = camera("Camera \"orthographic\"");
+    assert_eq!(s.camera.projection, Projection::Orthographic { size: 4.0 });
+    let s = camera("Camera \"orthographic\" \"float screenwindow\" [-3 3 -1.5 1.5]");
+    assert_eq!(s.camera.projection, Projection::Orthographic { size: 6.0 });
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let s = camera("Camera \"orthographic\" \"float screenwindow\" [0 3 -1.5 1.5]");
+    assert_eq!(s.camera.projection, Projection::Orthographic { size: 3.0 });
+    assert!(
+        s.warnings.len() == 1
+            && s.warnings[0].contains(":4: Camera \"orthographic\": a screenwindow off the centre"),
+        "{:?}",
+        s.warnings
+    );
+}
+
+/// Spot lights as pbrt-v4 defines them (`from`, `to`, `coneangle` 30, `conedelta` 5, `I`,
+/// `scale`, `power` = I·k_e with k_e = 2π((1 − cos start) + (cos start − cos end)/2)), and
+/// two-sided diffuse area lights, both without warnings.
+#[test]
+fn spot_lights_and_two_sided_area_lights() {
+    let s = world(&format!(
+        "LightSource \"spot\" \"point3 from\" [0 2 0] \"point3 to\" [0 0 0] \"rgb I\" [1 2 3] \"float scale\" 2\n\
+         LightSource \"spot\" \"float coneangle\" 40 \"float conedelta\" 10 \"float power\" 100\n\
+         AttributeBegin AreaLightSource \"diffuse\" \"bool twosided\" true {TRI} AttributeEnd\n"
+    ));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let Light::Spot {
+        position,
+        direction,
+        intensity,
+        cone_angle,
+        cone_delta,
+    } = s.lights[0]
+    else {
+        panic!("{:?}", s.lights[0])
+    };
+    // The header's `Scale -1 1 1` mirrors nothing on the y axis.
+    assert!(close(position, Vec3::new(0.0, 2.0, 0.0)), "{position}");
+    assert!(close(direction, Vec3::new(0.0, -1.0, 0.0)), "{direction}");
+    assert_eq!(
+        (intensity, cone_angle, cone_delta),
+        (Rgb::new(2.0, 4.0, 6.0), 30.0, 5.0)
+    );
+    let Light::Spot { intensity, .. } = s.lights[1] else {
+        panic!("{:?}", s.lights[1])
+    };
+    let (cs, ce) = (30f64.to_radians().cos(), 40f64.to_radians().cos());
+    let k_e = std::f64::consts::TAU * ((1.0 - cs) + (cs - ce) / 2.0);
+    assert!(
+        (intensity.x as f64 - 100.0 / k_e).abs() < 1e-4,
+        "{intensity}"
+    );
+    let emitter = s.materials.iter().find(|m| m.is_emissive()).unwrap();
+    assert!(emitter.two_sided_emission);
 }

@@ -470,3 +470,34 @@ fn keyframes_without_an_animation_table_give_their_first_frame() {
         }
     );
 }
+
+/// Metals: a named metal or an explicit complex index, a default ks of 1 for a metal (its
+/// Fresnel does the colouring) or a tint, isotropic or anisotropic roughness; `raylink
+/// convert` writes them back so that they read the same.
+#[test]
+fn conductors_read_named_or_explicit_with_anisotropic_roughness() {
+    let text = format!(
+        "{CAMERA}[materials.cu]\nconductor = \"Cu\"\nroughness = [0.1, 0.3]\n\
+         [materials.custom]\nconductor = {{ eta = [1.5, 1, 0.5], k = 3 }}\nspecular = 0.5\nroughness = 0.2\n\
+         [[shapes]]\ntype = \"sphere\"\nmaterial = \"cu\"\n\
+         [[shapes]]\ntype = \"sphere\"\nmaterial = \"custom\"\n"
+    );
+    let s = parse(&text).unwrap_or_else(|e| panic!("{e}"));
+    let m = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap().clone();
+    let cu = m("cu");
+    assert_eq!(cu.conductor, raylink::scene::Conductor::named("Cu"));
+    assert_eq!(cu.specular, Vec3::ONE);
+    assert_eq!((cu.roughness, cu.roughness_v), (0.1, Some(0.3)));
+    let custom = m("custom");
+    let c = custom.conductor.unwrap();
+    assert_eq!((c.eta, c.k), (Vec3::new(1.5, 1.0, 0.5), Vec3::splat(3.0)));
+    assert_eq!(custom.specular, Vec3::splat(0.5));
+    assert_eq!((custom.roughness, custom.roughness_v), (0.2, None));
+    let dir = std::env::temp_dir().join(format!("raylink-conductors-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("metals.toml");
+    raylink::scene::convert::write_toml(&s, &out).unwrap();
+    let again = Scene::load(&out).unwrap_or_else(|e| panic!("{e}"));
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(again.materials, s.materials);
+}

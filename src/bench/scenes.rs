@@ -115,6 +115,7 @@ fn camera(position: Vec3, look_at: Vec3) -> Camera {
         fov_deg: 45.0,
         width: 640,
         height: 480,
+        projection: crate::scene::Projection::Pinhole,
     }
 }
 

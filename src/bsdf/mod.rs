@@ -6,7 +6,9 @@
 //!   microfacet lobe with α = `roughness`;
 //! - `transmission` kt with `ior`: smooth refraction;
 //! - `fresnel`: ks is weighted by the dielectric Fresnel reflectance F, kt by 1 − F and kd by
-//!   (1 − F(θi))(1 − F(θo)) (a coated surface), which makes ks = kt = 1 a glass.
+//!   (1 − F(θi))(1 − F(θo)) (a coated surface), which makes ks = kt = 1 a glass;
+//! - `conductor` (η, k): ks is weighted by the complex Fresnel reflectance of the metal per
+//!   channel (pbrt-v4's `ConductorBxDF`), smooth or GGX, isotropic or anisotropic.
 //!
 //! Every BSDF can evaluate, sample, and give the density of its samples, for both transport
 //! directions (Veach's thesis, ch. 5): in [`Transport::Radiance`] refraction scales radiance
@@ -20,6 +22,7 @@ pub use microfacet::Ggx;
 use crate::math::optics::{fresnel_dielectric, refract};
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::math::{frame, luminance, Rgb, Vec2, Vec3};
+use crate::scene::Conductor;
 use crate::scene::{Material, SurfacePoint};
 use std::f32::consts::FRAC_1_PI;
 
@@ -58,6 +61,7 @@ pub struct Bsdf {
     ior: f32,
     ggx: Option<Ggx>,
     fresnel: bool,
+    conductor: Option<Conductor>,
     /// Only the Lambertian lobe: the common case takes a short path.
     lambertian: bool,
 }
@@ -69,6 +73,9 @@ struct Lobes {
     transmit: f32,
     /// Fresnel reflectance at the outgoing direction (1 when Fresnel is off).
     f: f32,
+    /// What the mirror lobe reflects at the outgoing direction: ks·F, with the conductor's
+    /// Fresnel per channel.
+    mirror: Rgb,
     /// n_incident / n_transmitted for light leaving along wo's side.
     eta: f32,
 }
@@ -86,7 +93,8 @@ impl Bsdf {
             ng = -ng;
         }
         let (t, b) = frame(n);
-        let alpha = m.roughness.clamp(0.0, 1.0);
+        let (ax, ay) = m.alphas();
+        let (ax, ay) = (ax.clamp(0.0, 1.0), ay.clamp(0.0, 1.0));
         let lambertian =
             !m.fresnel && m.specular.max_element() <= 0.0 && m.transmission.max_element() <= 0.0;
         Bsdf {
@@ -99,8 +107,12 @@ impl Bsdf {
             kt: m.transmission,
             ior: m.ior,
             // Below this α the lobe is numerically a mirror.
-            ggx: (alpha >= 1e-3).then_some(Ggx { alpha }),
+            ggx: (ax.max(ay) >= 1e-3).then_some(Ggx {
+                alpha_x: ax,
+                alpha_y: ay,
+            }),
             fresnel: m.fresnel,
+            conductor: m.conductor,
             lambertian,
         }
     }
@@ -120,7 +132,10 @@ impl Bsdf {
 
     /// The diffuse reflectance (for albedo outputs).
     pub fn albedo(&self) -> Rgb {
-        self.kd + self.ks + self.kt
+        match self.conductor {
+            Some(c) => self.kd + self.ks * c.reflectance(1.0) + self.kt,
+            None => self.kd + self.ks + self.kt,
+        }
     }
 
     /// The shading normal, on the side the BSDF faces.
@@ -138,7 +153,13 @@ impl Bsdf {
         };
         let rest = if self.fresnel { 1.0 - f } else { 1.0 };
         let diffuse = luminance(self.kd) * rest;
-        let specular = luminance(self.ks) * f;
+        let (specular, mirror) = match self.conductor {
+            Some(c) => {
+                let mirror = self.ks * c.reflectance(lo.z.abs());
+                (luminance(mirror), mirror)
+            }
+            None => (luminance(self.ks) * f, self.ks * f),
+        };
         let transmit = luminance(self.kt) * rest;
         let total = diffuse + specular + transmit;
         let norm = if total > 0.0 { 1.0 / total } else { 0.0 };
@@ -147,6 +168,7 @@ impl Bsdf {
             specular: specular * norm,
             transmit: transmit * norm,
             f,
+            mirror,
             eta,
         }
     }
@@ -209,8 +231,16 @@ impl Bsdf {
         if let Some(ggx) = self.ggx {
             if self.ks.max_element() > 0.0 {
                 let h = (lo + li).normalize();
-                let fr = self.fresnel_at(lo.dot(h), eta);
-                f += self.ks * (ggx.d(h) * ggx.g(lo, li) * fr / (4.0 * lo.z * li.z));
+                let dg = ggx.d(h) * ggx.g(lo, li);
+                f += match self.conductor {
+                    Some(c) => {
+                        self.ks * c.reflectance(lo.dot(h).abs()) * (dg / (4.0 * lo.z * li.z))
+                    }
+                    None => {
+                        let fr = self.fresnel_at(lo.dot(h), eta);
+                        self.ks * (dg * fr / (4.0 * lo.z * li.z))
+                    }
+                };
             }
         }
         f * li.z * self.adjoint(wo, wi, lo, li, mode)
@@ -307,7 +337,7 @@ impl Bsdf {
             if gi * go <= 0.0 {
                 return None;
             }
-            let weight = self.ks * lobes.f / lobes.specular;
+            let weight = lobes.mirror / lobes.specular;
             let adj = self.adjoint(wo, wi, lo, li, mode);
             return Some(BsdfSample {
                 wi,

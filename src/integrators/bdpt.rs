@@ -7,14 +7,14 @@
 //! pbrt. Finite emitters only (area and point lights): directional lights and the
 //! background have no position to start a subpath from, and are left to the path tracer.
 
-use super::light::connect_to_camera;
+use super::light::{connect_to_camera, lens_sample};
 use super::path::russian_roulette;
 use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
 use crate::lights::Emitter;
 use crate::math::sobol::Sampler;
 use crate::math::warp::cosine_hemisphere;
-use crate::math::{frame, offset_origin, Ray, Rgb, Vec3};
+use crate::math::{frame, offset_origin, Ray, Rgb, Vec2, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::Scene;
 use std::f32::consts::PI;
@@ -36,15 +36,16 @@ impl Bdpt {
 
     /// Whether BDPT can render a scene: it needs every emitter to have a position.
     pub fn check_scene(scene: &Scene) -> Result<(), String> {
-        if !scene
-            .lights
-            .iter()
-            .all(|l| matches!(l, crate::scene::Light::Point { .. }))
-            || scene.background.max_element() > 0.0
+        if !scene.lights.iter().all(|l| {
+            matches!(
+                l,
+                crate::scene::Light::Point { .. } | crate::scene::Light::Spot { .. }
+            )
+        }) || scene.background.max_element() > 0.0
             || scene.environment.is_some()
         {
             return Err(
-                "the bdpt integrator supports area and point lights only; this scene has a \
+                "the bdpt integrator supports area, point and spot lights only; this scene has a \
                  directional light or a background: render it with the path integrator"
                     .into(),
             );
@@ -52,6 +53,9 @@ impl Bdpt {
         Ok(())
     }
 }
+
+/// The largest f32 below 1.
+const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 enum Kind {
@@ -133,7 +137,7 @@ impl Vertex {
     ) -> f32 {
         let w = (next.p - self.p).normalize();
         let pdf = match self.kind {
-            Kind::Camera => camera_pdf_dir(camera, w),
+            Kind::Camera => camera_pdf_dir(camera, self.p, w),
             Kind::Light { .. } => return self.pdf_light(ctx, next),
             Kind::Surface => match (self.bsdf, prev) {
                 (Some(b), Some(prev)) => b.pdf((prev.p - self.p).normalize(), w),
@@ -147,11 +151,35 @@ impl Vertex {
     fn pdf_light(&self, ctx: &Context, next: &Vertex) -> f32 {
         let w = (next.p - self.p).normalize();
         let pdf_dir = match self.kind {
-            Kind::Light { point: true, .. } => 1.0 / (4.0 * PI),
-            _ => w.dot(self.n).max(0.0) / PI,
+            Kind::Light { light, point: true } => ctx.lights.emitters[light].pdf_dir_point(w),
+            _ => match self.area_light(ctx) {
+                Some(a) if a.two_sided => 0.5 * w.dot(self.n).abs() / PI,
+                _ => w.dot(self.n).max(0.0) / PI,
+            },
         };
-        let _ = ctx;
         self.area_density(pdf_dir, next)
+    }
+
+    /// The area light this vertex lies on (a light subpath's start or an emitter hit).
+    fn area_light<'c>(&self, ctx: &'c Context) -> Option<&'c crate::scene::light::AreaLight> {
+        let light = match self.kind {
+            Kind::Light { light, .. } => light,
+            _ => self.light?,
+        };
+        match &ctx.lights.emitters[light] {
+            Emitter::Area(a) => Some(a),
+            _ => None,
+        }
+    }
+
+    /// The emission cosine towards unit `w` from an area-light vertex: 0 behind a one-sided
+    /// light, |cos| for a two-sided one.
+    fn emitting_cos(&self, ctx: &Context, w: Vec3) -> f32 {
+        let cos = w.dot(self.n);
+        match self.area_light(ctx) {
+            Some(a) => a.emitting_cos(cos),
+            None => cos.max(0.0),
+        }
     }
 
     /// Area density of choosing this emitter point when starting a light path.
@@ -165,7 +193,7 @@ impl Vertex {
         };
         match &ctx.lights.emitters[light] {
             Emitter::Area(a) => ctx.lights.pmf(light) / a.area,
-            Emitter::Point { .. } => ctx.lights.pmf(light),
+            Emitter::Point { .. } | Emitter::Spot { .. } => ctx.lights.pmf(light),
             _ => 0.0,
         }
     }
@@ -180,10 +208,12 @@ impl Vertex {
     }
 }
 
-/// Density in solid angle of the camera generating a ray along `w`: uniform over the film at
-/// unit distance, 1 / (A_film cos³θ). Zero outside the film.
-fn camera_pdf_dir(camera: &CameraBasis, w: Vec3) -> f32 {
-    match camera.raster(camera.origin + w) {
+/// Density in solid angle of the camera generating a ray along `w` from the lens point
+/// `lens`: uniform over the film at unit distance, 1 / (A_film cos³θ) (pbrt-v4's `PDF_We`;
+/// the lens point's own density is the same for every strategy and cancels). Zero outside
+/// the film.
+fn camera_pdf_dir(camera: &CameraBasis, lens: Vec3, w: Vec3) -> f32 {
+    match camera.raster_from(lens, lens + w) {
         Some((x, y, cos)) => {
             let (fw, fh) = camera.film_size();
             let m = camera.margin;
@@ -373,13 +403,14 @@ impl MonteCarlo for Bdpt {
         let max_depth = self.options.max_depth;
         // Camera subpath.
         let mut cam_path: Vec<Vertex> = Vec::with_capacity(max_depth as usize + 2);
+        // The camera vertex is where the ray leaves: the pinhole or a point of the lens.
         cam_path.push(Vertex::new(
             Kind::Camera,
-            camera.origin,
+            camera_ray.origin,
             Vec3::ZERO,
             Rgb::ONE,
         ));
-        let pdf_cam = camera_pdf_dir(camera, camera_ray.dir);
+        let pdf_cam = camera_pdf_dir(camera, camera_ray.origin, camera_ray.dir);
         random_walk(
             ctx,
             WalkStart {
@@ -404,21 +435,54 @@ impl MonteCarlo for Bdpt {
             v0.pdf_fwd = pdf_pos;
             v0.emission = le;
             let (dir, pdf_dir, cos) = if point {
-                let d = crate::math::warp::uniform_sphere(u_dir);
-                (d, 1.0 / (4.0 * PI), 1.0)
+                // Point lights emit over the sphere, spot lights over their cone.
+                match ctx.lights.emitters[light] {
+                    Emitter::Spot {
+                        direction, cos_end, ..
+                    } => {
+                        let (t, b) = frame(direction);
+                        let l = crate::math::warp::uniform_cone(u_dir, cos_end);
+                        let d = (t * l.x + b * l.y + direction * l.z).normalize();
+                        (d, crate::math::warp::uniform_cone_pdf(cos_end), 1.0)
+                    }
+                    _ => {
+                        let d = crate::math::warp::uniform_sphere(u_dir);
+                        (d, 1.0 / (4.0 * PI), 1.0)
+                    }
+                }
             } else {
-                let (t, b) = frame(n);
+                // A two-sided light picks a side with half of u_dir.x, as pbrt-v4 does.
+                let two_sided = v0.area_light(ctx).is_some_and(|a| a.two_sided);
+                let (side, u_dir, side_pdf) = if !two_sided {
+                    (n, u_dir, 1.0)
+                } else if u_dir.x < 0.5 {
+                    (
+                        n,
+                        Vec2::new((2.0 * u_dir.x).min(ONE_MINUS_EPS), u_dir.y),
+                        0.5,
+                    )
+                } else {
+                    let ux = (2.0 * (u_dir.x - 0.5)).min(ONE_MINUS_EPS);
+                    (-n, Vec2::new(ux, u_dir.y), 0.5)
+                };
+                let (t, b) = frame(side);
                 let l = cosine_hemisphere(u_dir);
-                (t * l.x + b * l.y + n * l.z, l.z / PI, l.z)
+                (t * l.x + b * l.y + side * l.z, side_pdf * l.z / PI, l.z)
             };
             light_path.push(v0);
             if pdf_dir > 0.0 {
                 let origin = if point { p } else { offset_origin(p, n, dir) };
+                // A spot light's intensity falls off towards the edge of its cone.
+                let le_dir = if point {
+                    ctx.lights.emitters[light].intensity_towards(dir)
+                } else {
+                    le
+                };
                 random_walk(
                     ctx,
                     WalkStart {
                         ray: Ray::new(origin, dir),
-                        beta: le * (cos / (pdf_pos * pdf_dir)),
+                        beta: le_dir * (cos / (pdf_pos * pdf_dir)),
                         pdf: pdf_dir,
                         max: max_depth,
                         mode: Transport::Importance,
@@ -448,7 +512,7 @@ impl MonteCarlo for Bdpt {
                             continue;
                         }
                         let to_prev = cam_path[t - 2].p - pt.p;
-                        if to_prev.dot(pt.n) <= 0.0 {
+                        if pt.emitting_cos(ctx, to_prev) <= 0.0 {
                             continue;
                         }
                         let l = pt.beta * pt.emission;
@@ -470,21 +534,23 @@ impl MonteCarlo for Bdpt {
                         if !qs.connectible() {
                             continue;
                         }
-                        let Some(c) = connect_to_camera(ctx, camera, qs.p, qs.n, stats) else {
+                        // A lens point of its own (the pinhole draws nothing).
+                        let lens = lens_sample(camera, sampler);
+                        let Some(c) = connect_to_camera(ctx, camera, lens, (qs.p, qs.n), stats)
+                        else {
                             continue;
                         };
                         let value = if s == 1 {
                             if qs.is_delta_light() {
                                 continue;
                             }
-                            let cos_l = c.dir.dot(qs.n);
+                            let cos_l = qs.emitting_cos(ctx, c.dir);
                             if cos_l <= 0.0 {
                                 continue;
                             }
                             qs.beta * (cos_l * c.importance)
                         } else {
-                            let cam_v =
-                                Vertex::new(Kind::Camera, camera.origin, Vec3::ZERO, Rgb::ONE);
+                            let cam_v = Vertex::new(Kind::Camera, lens, Vec3::ZERO, Rgb::ONE);
                             qs.beta
                                 * qs.f(Some(&light_path[s - 2]), &cam_v, Transport::Importance)
                                 * c.importance
@@ -494,6 +560,7 @@ impl MonteCarlo for Bdpt {
                         }
                         let mut cam_only = cam_path.clone();
                         cam_only.truncate(1);
+                        cam_only[0].p = lens;
                         let w = Connection {
                             light: &light_path,
                             camera: &cam_only,
@@ -522,10 +589,10 @@ impl MonteCarlo for Bdpt {
                         let wdir = d / dist2.sqrt();
                         let fq = if s == 1 {
                             // Emission of the light vertex towards pt.
-                            if qs.is_delta_light() {
-                                qs.emission
+                            if let Kind::Light { light, point: true } = qs.kind {
+                                ctx.lights.emitters[light].intensity_towards(-wdir)
                             } else {
-                                let cos_l = -wdir.dot(qs.n);
+                                let cos_l = qs.emitting_cos(ctx, -wdir);
                                 if cos_l <= 0.0 {
                                     continue;
                                 }
@@ -585,6 +652,11 @@ fn sample_light_point(
         Emitter::Point {
             position,
             intensity,
+        }
+        | Emitter::Spot {
+            position,
+            intensity,
+            ..
         } => Some((i, *position, Vec3::ZERO, sel, true, *intensity)),
         _ => None,
     }

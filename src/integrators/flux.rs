@@ -279,7 +279,7 @@ impl Paths<'_> {
                 let Some(l) = lights.light_of_shape(sp.shape) else {
                     return Rgb::ZERO;
                 };
-                if !m.is_emissive() || ray.dir.dot(sp.ng) >= 0.0 {
+                if !m.emits_towards(-ray.dir, sp.ng) {
                     return Rgb::ZERO;
                 }
                 (m.emission, lights.pdf_li(l, x, sp.p, sp.ng))
@@ -311,7 +311,7 @@ impl Paths<'_> {
             self.job.max_depth + 1,
             sampler,
             stats,
-            |sp, _, _, beta, _| {
+            |sp, _, _, beta, _, _| {
                 if self.in_set[sp.shape] {
                     arrived += beta;
                 }

@@ -106,13 +106,17 @@ pub(crate) fn create(technique: &Technique, scene: &Scene) -> Result<Box<dyn Lif
             }),
             settings: *mc,
         }),
-        Technique::Light(mc) => Box::new(MonteCarloTechnique {
-            integrator: LightTracer::new(LightOptions {
-                max_depth: mc.max_depth,
-            }),
-            settings: *mc,
-        }),
+        Technique::Light(mc) => {
+            refuse_orthographic(scene, "light")?;
+            Box::new(MonteCarloTechnique {
+                integrator: LightTracer::new(LightOptions {
+                    max_depth: mc.max_depth,
+                }),
+                settings: *mc,
+            })
+        }
         Technique::Bdpt(mc) => {
+            refuse_orthographic(scene, "bdpt")?;
             Bdpt::check_scene(scene).map_err(|e| crate::Error::input(&scene.source, e))?;
             Box::new(MonteCarloTechnique {
                 integrator: Bdpt::new(BdptOptions {
@@ -148,4 +152,21 @@ impl<T: MonteCarlo + Send> Lifecycle for MonteCarloTechnique<T> {
     fn tiles(&self) -> Tiles<'_> {
         Tiles::Samples(&self.integrator, self.settings)
     }
+}
+
+/// Light paths reach the camera by connecting to it, which an orthographic camera's
+/// importance (a delta in direction) does not allow; pbrt-v4 refuses it too.
+fn refuse_orthographic(scene: &Scene, integrator: &str) -> crate::Result<()> {
+    if matches!(
+        scene.camera.projection,
+        crate::scene::Projection::Orthographic { .. }
+    ) {
+        return Err(crate::Error::input(
+            &scene.source,
+            format!(
+                "the {integrator} integrator cannot connect light paths to an orthographic camera (projection = \"orthographic\"): use a perspective camera or the path integrator"
+            ),
+        ));
+    }
+    Ok(())
 }

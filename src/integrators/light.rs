@@ -1,13 +1,13 @@
 //! Light tracing: the shooting estimator, which solves the potential (importance) equation's
 //! adjoint problem (Dutré, Lafortune & Willems). Paths start on the lights, chosen by power,
-//! and every vertex is connected to the pinhole camera through the camera's importance W_e;
-//! each connection is splatted onto the film where it lands. One light path is traced per
+//! and every vertex is connected to the camera (the pinhole or a point of a thin lens) through
+//! the camera's importance W_e; each connection is splatted onto the film where it lands. One light path is traced per
 //! pixel sample, so a render with N samples per pixel traces N·width·height light paths.
 
 use super::path::russian_roulette;
 use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
-use crate::lights::EmissionSample;
+use crate::lights::{EmissionSample, Emitter};
 use crate::math::sobol::Sampler;
 use crate::math::{offset_origin, Ray, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
@@ -42,25 +42,28 @@ pub(crate) struct CameraConnection {
     pub importance: f32,
 }
 
-/// Connects point `p` (geometric normal `ng`) to the camera: `None` if it is outside the
-/// film (widened by the filter radius) or hidden.
+/// Connects point `p` (geometric normal `ng`) to the camera at the lens point `lens` (the
+/// pinhole, or a point of a thin lens drawn uniformly over it): `None` if it is outside the
+/// film (widened by the filter radius) or hidden. For a thin lens, the importance keeps the
+/// pinhole's form with θ and d measured from the lens point: pbrt-v4's
+/// We = 1/(A cos⁴θ · lens area) times cos θ over the lens-area density d²/(cos θ · lens area).
 pub(crate) fn connect_to_camera(
     ctx: &Context,
     camera: &CameraBasis,
-    p: Vec3,
-    ng: Vec3,
+    lens: Vec3,
+    (p, ng): (Vec3, Vec3),
     stats: &mut RayStats,
 ) -> Option<CameraConnection> {
-    let (x, y, cos_c) = camera.raster(p)?;
+    let (x, y, cos_c) = camera.raster_from(lens, p)?;
     let (w, h) = camera.film_size();
     let margin = camera.margin;
     if x < -margin || y < -margin || x >= w + margin || y >= h + margin {
         return None;
     }
-    let to_cam = camera.origin - p;
+    let to_cam = lens - p;
     let dist2 = to_cam.length_squared();
     let dir = to_cam / dist2.sqrt();
-    let shadow = Ray::segment(offset_origin(p, ng, dir), camera.origin);
+    let shadow = Ray::segment(offset_origin(p, ng, dir), lens);
     if ctx.occluded(&shadow, stats) {
         return None;
     }
@@ -71,6 +74,16 @@ pub(crate) fn connect_to_camera(
         dir,
         importance,
     })
+}
+
+/// The lens point of a connection to the camera: a uniform point of a thin lens (drawing
+/// two numbers), the pinhole otherwise (drawing none, so pinhole images keep their samples).
+pub(crate) fn lens_sample(camera: &CameraBasis, sampler: &mut Sampler) -> Vec3 {
+    if camera.has_lens() {
+        camera.lens_point(sampler.next_2d())
+    } else {
+        camera.origin
+    }
 }
 
 impl MonteCarlo for LightTracer {
@@ -100,8 +113,13 @@ impl MonteCarlo for LightTracer {
         // the background cannot be hit by camera rays either).
         if !es.delta_pos && !es.delta_dir && es.n != Vec3::ZERO && !ctx.lights.is_infinite(es.light)
         {
-            if let Some(c) = connect_to_camera(ctx, camera, es.p, es.n, stats) {
-                let cos_l = c.dir.dot(es.n);
+            let lens = lens_sample(camera, sampler);
+            if let Some(c) = connect_to_camera(ctx, camera, lens, (es.p, es.n), stats) {
+                // A two-sided light is seen from either side, whichever side it emitted to.
+                let cos_l = match &ctx.lights.emitters[es.light] {
+                    Emitter::Area(a) => a.emitting_cos(c.dir.dot(es.n)),
+                    _ => c.dir.dot(es.n),
+                };
                 if cos_l > 0.0 {
                     splats.push(Splat {
                         x: c.x,
@@ -117,11 +135,12 @@ impl MonteCarlo for LightTracer {
             self.options.max_depth,
             sampler,
             stats,
-            |sp, bsdf, wo, beta, stats| {
+            |sp, bsdf, wo, beta, stats, sampler| {
                 if !bsdf.has_non_delta() {
                     return;
                 }
-                if let Some(c) = connect_to_camera(ctx, camera, sp.p, sp.ng, stats) {
+                let lens = lens_sample(camera, sampler);
+                if let Some(c) = connect_to_camera(ctx, camera, lens, (sp.p, sp.ng), stats) {
                     let f = bsdf.eval(wo, c.dir, Transport::Importance);
                     if f != Rgb::ZERO {
                         splats.push(Splat {
@@ -139,16 +158,16 @@ impl MonteCarlo for LightTracer {
 
 /// Follows the light path that starts with the emission sample `es` over at most
 /// `max_depth` surfaces: at each surface it reaches, calls `vertex(surface, bsdf, wo,
-/// beta, stats)` with the power `beta` the path carries there (radiance over the densities
-/// of its start and bounces), then continues by sampling the BSDF for importance transport,
-/// with Russian roulette.
+/// beta, stats, sampler)` with the power `beta` the path carries there (radiance over the
+/// densities of its start and bounces), then continues by sampling the BSDF for importance
+/// transport, with Russian roulette.
 pub(crate) fn walk(
     ctx: &Context,
     es: &EmissionSample,
     max_depth: u32,
     sampler: &mut Sampler,
     stats: &mut RayStats,
-    mut vertex: impl FnMut(&SurfacePoint, &Bsdf, Vec3, Rgb, &mut RayStats),
+    mut vertex: impl FnMut(&SurfacePoint, &Bsdf, Vec3, Rgb, &mut RayStats, &mut Sampler),
 ) {
     let at_infinity = ctx.lights.is_infinite(es.light);
     let cos0 = if es.delta_dir || es.delta_pos || at_infinity {
@@ -171,7 +190,7 @@ pub(crate) fn walk(
         let m = &ctx.scene.materials[sp.material];
         let wo = -ray.dir;
         let bsdf = Bsdf::new(m, &sp, wo);
-        vertex(&sp, &bsdf, wo, beta, stats);
+        vertex(&sp, &bsdf, wo, beta, stats, sampler);
         let u = sampler.next_1d();
         let Some(bs) = bsdf.sample(wo, u, sampler.next_2d(), Transport::Importance) else {
             break;

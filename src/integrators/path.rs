@@ -127,7 +127,7 @@ impl MonteCarlo for PathTracer {
             };
             let m = &ctx.scene.materials[sp.material];
             let wo = -ray.dir;
-            if m.is_emissive() && wo.dot(sp.ng) > 0.0 {
+            if m.emits_towards(wo, sp.ng) {
                 let w = match lights.light_of_shape(sp.shape) {
                     Some(l) if !specular => {
                         power_heuristic(bsdf_pdf, lights.pdf_li(l, prev_p, sp.p, sp.ng))

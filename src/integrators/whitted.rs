@@ -3,8 +3,8 @@
 //!
 //!   I = ka·Ia + Σj kd·(N·Lj)·Ej + ks·S + kt·T
 //!
-//! with a Phong highlight for point and directional lights (the paper keeps Phong's model for
-//! light sources seen in reflection), a shadow ray per light attenuated by the kt of the
+//! with a Phong highlight for point, spot and directional lights (the paper keeps Phong's model
+//! for light sources seen in reflection), a shadow ray per light attenuated by the kt of the
 //! transmissive surfaces it passes, S and T traced recursively along the mirror and Snell
 //! directions, and a random normal perturbation for glossy and frosted surfaces.
 //!
@@ -17,6 +17,7 @@
 use super::{Context, Integrator, RayStats, Sample};
 pub use crate::math::optics::{fresnel_dielectric, reflect, refract};
 use crate::math::{frame, offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
+use crate::scene::light::{spot_cosines, spot_falloff};
 use crate::scene::{Light, Material, SurfacePoint};
 use std::f32::consts::{FRAC_1_PI, PI};
 
@@ -95,8 +96,8 @@ impl RayTree<'_> {
         let view = -d;
 
         let mut color = Rgb::ZERO;
-        if entering {
-            color += m.emission; // one-sided emitters, facing their geometric normal
+        if entering || m.two_sided_emission {
+            color += m.emission; // emitters face their geometric normal unless two-sided
         }
         let kd = m.diffuse.eval(sp.p, sp.uv);
         color += m.ambient.unwrap_or(kd) * ctx.scene.ambient;
@@ -117,6 +118,11 @@ impl RayTree<'_> {
             )
         } else {
             (m.specular, m.transmission)
+        };
+        // A metal's mirror is weighted by its complex Fresnel reflectance at this angle.
+        let ks = match m.conductor {
+            Some(c) => m.specular * c.reflectance(cos_i),
+            None => ks,
         };
 
         let (ks_weight, kt_weight) = (weight * ks.max_element(), weight * kt.max_element());
@@ -163,6 +169,23 @@ impl RayTree<'_> {
                     direction,
                     irradiance,
                 } => (-direction.normalize(), irradiance, None),
+                Light::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    cone_angle,
+                    cone_delta,
+                } => {
+                    let to = position - p;
+                    let d2 = to.length_squared();
+                    let wi = to / d2.sqrt();
+                    let (cos_start, cos_end) = spot_cosines(cone_angle, cone_delta);
+                    let falloff = spot_falloff(-wi.dot(direction.normalize()), cos_start, cos_end);
+                    if falloff == 0.0 {
+                        continue;
+                    }
+                    (wi, intensity * falloff / d2, Some(position))
+                }
             };
             let cos = n.dot(wi);
             if cos <= 0.0 || ng.dot(wi) <= 0.0 {
@@ -179,7 +202,7 @@ impl RayTree<'_> {
                 let h = (wi + view).normalize();
                 let spec = (m.phong_exponent + 8.0) / (8.0 * PI)
                     * n.dot(h).max(0.0).powf(m.phong_exponent);
-                color += m.specular * spec * e;
+                color += m.specular_at_normal() * spec * e;
             }
         }
         if diffuse_on {
@@ -215,7 +238,7 @@ impl RayTree<'_> {
             }
             let wi = to / d2.sqrt();
             let cos_s = n.dot(wi);
-            let cos_l = -y.n.dot(wi);
+            let cos_l = light.emitting_cos(-y.n.dot(wi));
             if cos_s <= 0.0 || cos_l <= 0.0 || ng.dot(wi) <= 0.0 {
                 continue;
             }

@@ -33,3 +33,91 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
     0.5 * (rs * rs + rp * rp)
 }
+
+/// Unpolarised Fresnel reflectance of a conductor (pbrt-v4's `FrComplex`) for the cosine
+/// `cos_i` of the incident angle and the complex index η + ik of the metal relative to the
+/// outside medium.
+pub fn fresnel_complex(cos_i: f32, eta: f32, k: f32) -> f32 {
+    let cos_i = cos_i.clamp(0.0, 1.0);
+    let sin2_i = 1.0 - cos_i * cos_i;
+    let n = Complex(eta, k);
+    // sin²θt = sin²θi / η², cos θt = √(1 − sin²θt), both complex.
+    let sin2_t = Complex(sin2_i, 0.0).div(n.mul(n));
+    let cos_t = Complex(1.0 - sin2_t.0, -sin2_t.1).sqrt();
+    let ci = Complex(cos_i, 0.0);
+    let n_ci = n.mul(ci);
+    let r_parl = n_ci.sub(cos_t).div(n_ci.add(cos_t));
+    let n_ct = n.mul(cos_t);
+    let r_perp = ci.sub(n_ct).div(ci.add(n_ct));
+    0.5 * (r_parl.norm() + r_perp.norm())
+}
+
+/// [`fresnel_complex`] per colour channel.
+pub fn fresnel_conductor(cos_i: f32, eta: Vec3, k: Vec3) -> Vec3 {
+    Vec3::new(
+        fresnel_complex(cos_i, eta.x, k.x),
+        fresnel_complex(cos_i, eta.y, k.y),
+        fresnel_complex(cos_i, eta.z, k.z),
+    )
+}
+
+/// Just enough complex arithmetic for [`fresnel_complex`]: (re, im).
+#[derive(Clone, Copy)]
+struct Complex(f32, f32);
+
+impl Complex {
+    fn add(self, o: Complex) -> Complex {
+        Complex(self.0 + o.0, self.1 + o.1)
+    }
+    fn sub(self, o: Complex) -> Complex {
+        Complex(self.0 - o.0, self.1 - o.1)
+    }
+    fn mul(self, o: Complex) -> Complex {
+        Complex(self.0 * o.0 - self.1 * o.1, self.0 * o.1 + self.1 * o.0)
+    }
+    fn div(self, o: Complex) -> Complex {
+        let d = o.norm();
+        Complex(
+            (self.0 * o.0 + self.1 * o.1) / d,
+            (self.1 * o.0 - self.0 * o.1) / d,
+        )
+    }
+    /// |z|².
+    fn norm(self) -> f32 {
+        self.0 * self.0 + self.1 * self.1
+    }
+    /// The principal square root (non-negative real part), as pbrt's `pstd::sqrt`.
+    fn sqrt(self) -> Complex {
+        let n = self.norm().sqrt();
+        if n == 0.0 {
+            return Complex(0.0, 0.0);
+        }
+        let t1 = (0.5 * (n + self.0.abs())).sqrt();
+        let t2 = 0.5 * self.1 / t1;
+        if self.0 >= 0.0 {
+            Complex(t1, t2)
+        } else {
+            Complex(t2.abs(), t1.copysign(self.1))
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// With k = 0 the complex equations are the dielectric ones; at normal incidence they
+    /// give ((η−1)² + k²) / ((η+1)² + k²); at grazing incidence every conductor reflects all.
+    #[test]
+    fn complex_fresnel_matches_closed_forms() {
+        for cos in [0.05f32, 0.3, 0.7, 1.0] {
+            let a = fresnel_complex(cos, 1.5, 0.0);
+            let b = fresnel_dielectric(cos, 1.0 / 1.5);
+            assert!((a - b).abs() < 1e-5, "cos {cos}: {a} vs {b}");
+        }
+        let (n, k) = (0.200438f32, 3.91295f32);
+        let f0 = ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k);
+        assert!((fresnel_complex(1.0, n, k) - f0).abs() < 1e-5);
+        assert!((fresnel_complex(0.0, n, k) - 1.0).abs() < 1e-5);
+    }
+}

@@ -71,7 +71,12 @@ pub(crate) fn render_aovs(
                         // A stream of its own, apart from the image's samples.
                         let mut s = Sampler::new(seed ^ 0xa0f, &[x as u64, y as u64], i);
                         let o = filter.sample(s.next_2d());
-                        let ray = basis.ray(x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y);
+                        let (fx, fy) = (x as f32 + 0.5 + o.x, y as f32 + 0.5 + o.y);
+                        let ray = if basis.has_lens() {
+                            basis.ray_through_lens(fx, fy, s.next_2d())
+                        } else {
+                            basis.ray(fx, fy)
+                        };
                         if let Some(sp) = ctx.intersect(&ray, &mut stats) {
                             let m = &ctx.scene.materials[sp.material];
                             let bsdf = Bsdf::new(m, &sp, -ray.dir);

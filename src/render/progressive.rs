@@ -166,7 +166,13 @@ pub(crate) fn camera_sample(
 ) -> (Sampler, Ray) {
     let mut sampler = Sampler::new(seed, &[x as u64, y as u64], i);
     let offset = filter.sample(sampler.next_2d());
-    let ray = camera.ray(x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
+    let (fx, fy) = (x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
+    // Only a thin lens draws a lens sample, so pinhole images keep their sample streams.
+    let ray = if camera.has_lens() {
+        camera.ray_through_lens(fx, fy, sampler.next_2d())
+    } else {
+        camera.ray(fx, fy)
+    };
     (sampler, ray)
 }
 

@@ -102,7 +102,12 @@ impl TileRenderer<'_> {
     fn sample(&mut self, x: f32, y: f32, key: &[u64]) -> Sample {
         let mut rng = Rng::for_key(self.seed, key);
         self.samples += 1;
-        let ray = self.camera.ray(x, y);
+        let ray = if self.camera.has_lens() {
+            let u = crate::math::Vec2::new(rng.uniform(), rng.uniform());
+            self.camera.ray_through_lens(x, y, u)
+        } else {
+            self.camera.ray(x, y)
+        };
         let mut sample = self
             .integrator
             .radiance(self.ctx, &ray, &mut rng, &mut self.stats);

@@ -12,12 +12,12 @@
 //! failed conversion never leaves a half-written scene behind.
 
 use super::toml::schema::{
-    CacheDesc, CameraDesc, CheckerDesc, DiffuseDesc, EnvironmentDesc, FileDesc, FilterDesc,
-    ImageDesc, LightDesc, LightKind, MaterialDesc, NetworkDesc, OneOrMany, Ordered, RenderDesc,
-    ShapeDesc, ShapeKind, Splat3, TextureTable, TransformOp, UvCheckerDesc, WhittedDesc, WorldDesc,
-    V3,
+    CacheDesc, CameraDesc, CheckerDesc, ConductorDesc, ConductorIndex, DiffuseDesc,
+    EnvironmentDesc, FileDesc, FilterDesc, ImageDesc, LightDesc, LightKind, MaterialDesc,
+    NetworkDesc, OneOrMany, Ordered, RenderDesc, RoughnessDesc, ShapeDesc, ShapeKind, Splat3,
+    TextureTable, TransformOp, UvCheckerDesc, WhittedDesc, WorldDesc, V3,
 };
-use super::{Camera, Geometry, Light, Material, RenderSettings, Scene, Texture};
+use super::{Camera, Geometry, Light, Material, Projection, RenderSettings, Scene, Texture};
 use crate::image::filter::Filter;
 use crate::settings::{AntiAliasing, NetworkBuilder, NetworkOrder};
 use crate::Error;
@@ -171,6 +171,20 @@ fn camera(c: &Camera) -> CameraDesc {
         fov: Some(c.fov_deg),
         width: Some(c.width),
         height: Some(c.height),
+        projection: matches!(c.projection, Projection::Orthographic { .. })
+            .then(|| "orthographic".to_string()),
+        size: match c.projection {
+            Projection::Orthographic { size } => Some(size),
+            _ => None,
+        },
+        lens_radius: match c.projection {
+            Projection::ThinLens { radius, .. } => Some(radius),
+            _ => None,
+        },
+        focal_distance: match c.projection {
+            Projection::ThinLens { focal_distance, .. } => Some(focal_distance),
+            _ => None,
+        },
     }
 }
 
@@ -285,9 +299,19 @@ fn material(m: &Material, refs: Refs) -> MaterialDesc {
         transmission: Some(Splat3(m.transmission)),
         ior: Some(m.ior),
         phong_exponent: Some(m.phong_exponent),
-        roughness: Some(m.roughness),
+        roughness: Some(match m.roughness_v {
+            Some(v) => RoughnessDesc::Anisotropic(m.roughness, v),
+            None => RoughnessDesc::Isotropic(m.roughness),
+        }),
         fresnel: Some(m.fresnel),
+        conductor: m.conductor.map(|c| {
+            ConductorDesc::Index(ConductorIndex {
+                eta: Splat3(c.eta),
+                k: Splat3(c.k),
+            })
+        }),
         emission: Some(Splat3(m.emission)),
+        two_sided_emission: m.two_sided_emission.then_some(true),
     }
 }
 
@@ -340,6 +364,8 @@ fn light(l: &Light) -> LightDesc {
         intensity: None,
         direction: None,
         irradiance: None,
+        cone_angle: None,
+        cone_delta: None,
     };
     match *l {
         Light::Point {
@@ -356,6 +382,20 @@ fn light(l: &Light) -> LightDesc {
             d.kind = LightKind::Directional;
             d.direction = Some(V3(direction));
             d.irradiance = Some(Splat3(irradiance));
+        }
+        Light::Spot {
+            position,
+            direction,
+            intensity,
+            cone_angle,
+            cone_delta,
+        } => {
+            d.kind = LightKind::Spot;
+            d.position = Some(V3(position));
+            d.direction = Some(V3(direction));
+            d.intensity = Some(Splat3(intensity));
+            d.cone_angle = Some(cone_angle);
+            d.cone_delta = Some(cone_delta);
         }
     }
     d

@@ -1,7 +1,7 @@
-//! Lights: point and directional lights given in the scene, and area lights made from
+//! Lights: point, spot and directional lights given in the scene, and area lights made from
 //! emissive shapes.
 
-use super::{Geometry, Scene, Shape};
+use super::{Geometry, Material, Scene, Shape};
 use crate::math::{Rgb, Vec2, Vec3};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -11,6 +11,42 @@ pub enum Light {
     /// Parallel light travelling along `direction`, with irradiance `irradiance` on a surface
     /// facing it.
     Directional { direction: Vec3, irradiance: Rgb },
+    /// pbrt-v4's spot light: intensity `intensity`·falloff(cos θ) (W/sr) from a point, with θ
+    /// the angle to `direction`; no light beyond `cone_angle` (degrees from the axis), full
+    /// intensity within `cone_angle` − `cone_delta`, a smooth step between (see
+    /// [`spot_falloff`]).
+    Spot {
+        position: Vec3,
+        direction: Vec3,
+        intensity: Rgb,
+        cone_angle: f32,
+        cone_delta: f32,
+    },
+}
+
+/// pbrt-v4's spot falloff: SmoothStep(cos_end, cos_start, cos θ), 0 outside the cone, 1
+/// inside the inner cone, a cubic Hermite step between.
+pub fn spot_falloff(cos: f32, cos_start: f32, cos_end: f32) -> f32 {
+    if cos_start == cos_end {
+        return if cos < cos_end { 0.0 } else { 1.0 };
+    }
+    let t = ((cos - cos_end) / (cos_start - cos_end)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// The spot light of pbrt-v4's `coneangle` and `conedelta` (degrees): (cos of the falloff's
+/// start, cos of the cone's edge).
+pub fn spot_cosines(cone_angle: f32, cone_delta: f32) -> (f32, f32) {
+    (
+        (cone_angle - cone_delta).to_radians().cos(),
+        cone_angle.to_radians().cos(),
+    )
+}
+
+/// The total power of a spot light per unit intensity: 2π((1 − cos_start) + (cos_start −
+/// cos_end)/2), pbrt-v4's k_e (what `power` divides by).
+pub fn spot_solid_angle(cos_start: f32, cos_end: f32) -> f32 {
+    std::f32::consts::TAU * ((1.0 - cos_start) + 0.5 * (cos_start - cos_end))
 }
 
 /// An emissive shape, ready for sampling points on it uniformly by area.
@@ -20,6 +56,8 @@ pub struct AreaLight {
     pub shape: usize,
     pub radiance: Rgb,
     pub area: f32,
+    /// Emits on both sides (the material's `two_sided_emission`).
+    pub two_sided: bool,
     kind: AreaKind,
 }
 
@@ -60,7 +98,7 @@ impl AreaLight {
             .iter()
             .enumerate()
             .filter(|(_, s)| scene.materials[s.material].is_emissive())
-            .filter_map(|(i, s)| AreaLight::new(i, s, scene.materials[s.material].emission))
+            .filter_map(|(i, s)| AreaLight::new(i, s, &scene.materials[s.material]))
             .collect()
     }
 
@@ -68,10 +106,10 @@ impl AreaLight {
     /// material's emission, which may be zero); `None` for a shape without area.
     pub fn surface(scene: &Scene, shape: usize) -> Option<AreaLight> {
         let s = scene.shapes.get(shape)?;
-        AreaLight::new(shape, s, scene.materials[s.material].emission)
+        AreaLight::new(shape, s, &scene.materials[s.material])
     }
 
-    fn new(i: usize, s: &Shape, radiance: Rgb) -> Option<AreaLight> {
+    fn new(i: usize, s: &Shape, material: &Material) -> Option<AreaLight> {
         let (kind, area) = match s.geometry {
             Geometry::Sphere { center, radius } => {
                 (AreaKind::Sphere { center, radius }, s.geometry.area())
@@ -100,10 +138,21 @@ impl AreaLight {
         };
         (area > 0.0).then_some(AreaLight {
             shape: i,
-            radiance,
+            radiance: material.emission,
             area,
+            two_sided: material.two_sided_emission,
             kind,
         })
+    }
+
+    /// The cosine factor of emission at a point whose normal makes cosine `cos` with the
+    /// direction of emission: `cos` on the front, 0 behind, |cos| for a two-sided light.
+    pub fn emitting_cos(&self, cos: f32) -> f32 {
+        if self.two_sided {
+            cos.abs()
+        } else {
+            cos.max(0.0)
+        }
     }
 
     /// Centre and radius when the light is a sphere (which can be sampled by solid angle).
@@ -181,6 +230,7 @@ mod tests {
                 fov_deg: 45.0,
                 width: 1,
                 height: 1,
+                projection: crate::scene::Projection::Pinhole,
             },
             materials: vec![Material {
                 emission: Rgb::ONE,

@@ -24,10 +24,19 @@ pub struct Material {
     /// distribution (glossy reflection, frosted transmission). 0 is a perfect mirror or
     /// clear glass.
     pub roughness: f32,
+    /// GGX α along the shading frame's bitangent when it differs from `roughness` (then α
+    /// along the tangent): an anisotropic lobe. `None` is isotropic.
+    pub roughness_v: Option<f32>,
     /// When true, ks and kt are weighted by the Fresnel reflectance at the hit.
     pub fresnel: bool,
+    /// A metal: ks is weighted by the conductor Fresnel reflectance of this complex index
+    /// (instead of the dielectric one or none).
+    pub conductor: Option<Conductor>,
     /// Emitted radiance; a shape with a non-zero emission is an area light.
     pub emission: Rgb,
+    /// Emit on both sides of the surface (pbrt's `twosided` area lights), not only on the
+    /// side the geometric normal faces.
+    pub two_sided_emission: bool,
 }
 
 impl Default for Material {
@@ -41,8 +50,11 @@ impl Default for Material {
             ior: 1.5,
             phong_exponent: 50.0,
             roughness: 0.0,
+            roughness_v: None,
             fresnel: false,
+            conductor: None,
             emission: Rgb::ZERO,
+            two_sided_emission: false,
         }
     }
 }
@@ -52,8 +64,100 @@ impl Material {
         self.emission.max_element() > 0.0
     }
 
+    /// Whether the surface emits towards `wo` (pointing away from it), given its geometric
+    /// normal `ng`.
+    pub fn emits_towards(&self, wo: Vec3, ng: Vec3) -> bool {
+        self.is_emissive() && (self.two_sided_emission || wo.dot(ng) > 0.0)
+    }
+
     pub fn is_transmissive(&self) -> bool {
         self.transmission.max_element() > 0.0
+    }
+
+    /// GGX (α_x, α_y).
+    pub fn alphas(&self) -> (f32, f32) {
+        (self.roughness, self.roughness_v.unwrap_or(self.roughness))
+    }
+
+    /// ks with a conductor's Fresnel reflectance at normal incidence folded in: the
+    /// specular coefficient for the techniques that have no angular Fresnel.
+    pub fn specular_at_normal(&self) -> Rgb {
+        match self.conductor {
+            Some(c) => self.specular * c.reflectance(1.0),
+            None => self.specular,
+        }
+    }
+}
+
+/// A conductor's complex index of refraction η + ik, per colour channel.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Conductor {
+    pub eta: Rgb,
+    pub k: Rgb,
+}
+
+/// RGB (η, k) of the named metals: the widely used reductions of the measured spectra that
+/// pbrt-v4 ships as `metal-<name>-eta` / `metal-<name>-k` (the values of pbrt-v3's and
+/// Mitsuba's RGB builds).
+const METALS: &[(&str, [f32; 3], [f32; 3])] = &[
+    (
+        "Cu",
+        [0.200438, 0.924033, 1.10221],
+        [3.91295, 2.45285, 2.14219],
+    ),
+    (
+        "Au",
+        [0.143119, 0.374957, 1.44248],
+        [3.98316, 2.38572, 1.60322],
+    ),
+    (
+        "Ag",
+        [0.155265, 0.116723, 0.138342],
+        [4.82835, 3.12225, 2.14696],
+    ),
+    (
+        "Al",
+        [1.65746, 0.880369, 0.521229],
+        [9.22387, 6.26952, 4.837],
+    ),
+    ("CuZn", [0.444, 0.527, 1.094], [3.695, 2.765, 1.829]),
+    ("MgO", [1.732, 1.736, 1.745], [0.0, 0.0, 0.0]),
+    ("TiO2", [2.557, 2.651, 2.811], [0.0, 0.0, 0.0]),
+];
+
+impl Conductor {
+    /// A named metal ("Cu", "Au", "Ag", "Al", "CuZn", "MgO", "TiO2"), `None` if unknown.
+    pub fn named(name: &str) -> Option<Conductor> {
+        METALS
+            .iter()
+            .find(|m| m.0 == name)
+            .map(|&(_, eta, k)| Conductor {
+                eta: Rgb::from(eta),
+                k: Rgb::from(k),
+            })
+    }
+
+    /// The names [`Conductor::named`] knows.
+    pub fn names() -> impl Iterator<Item = &'static str> {
+        METALS.iter().map(|m| m.0)
+    }
+
+    /// The conductor with normal-incidence reflectance `r` and no other parameter: η = 1,
+    /// k = 2√r / √(1 − r) (pbrt-v4's `ConductorMaterial` given a `reflectance`).
+    pub fn from_reflectance(r: Rgb) -> Conductor {
+        let k = |r: f32| {
+            let r = r.clamp(0.0, 0.9999);
+            2.0 * r.sqrt() / (1.0 - r).sqrt()
+        };
+        Conductor {
+            eta: Rgb::ONE,
+            k: Rgb::new(k(r.x), k(r.y), k(r.z)),
+        }
+    }
+
+    /// Fresnel reflectance per channel at incidence cosine `cos`.
+    pub fn reflectance(&self, cos: f32) -> Rgb {
+        crate::math::optics::fresnel_conductor(cos, self.eta, self.k)
     }
 }
 

@@ -16,11 +16,11 @@ pub mod settings;
 pub mod texture;
 pub mod toml;
 
-pub use camera::{Camera, MAX_RESOLUTION};
+pub use camera::{Camera, Projection, MAX_RESOLUTION};
 pub use environment::Environment;
 pub use geometry::{Geometry, QuadMesh, Shape, SurfacePoint, TriangleMesh};
 pub use light::Light;
-pub use material::{Material, Texture};
+pub use material::{Conductor, Material, Texture};
 pub use settings::{SettingSource, Settings as RenderSettings};
 
 use crate::math::{Rgb, Vec3};

@@ -13,6 +13,7 @@ pub(crate) fn camera() -> Camera {
         fov_deg: 40.0,
         width: 64,
         height: 48,
+        projection: Default::default(),
     }
 }
 

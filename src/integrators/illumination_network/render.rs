@@ -54,9 +54,7 @@ impl NetworkRenderer<'_> {
             let refl = 2.0 * n.dot(wo) * n - wo;
             r += sfc.ks
                 * self.gather(node, k, refl, sfc.alpha, |wi| {
-                    let ggx = Ggx {
-                        alpha: sfc.alpha.max(1e-3),
-                    };
+                    let ggx = Ggx::isotropic(sfc.alpha.max(1e-3));
                     let (ci, co) = (n.dot(wi), n.dot(wo));
                     if ci <= 0.0 || co <= 0.0 {
                         return 0.0;
@@ -210,7 +208,7 @@ impl Integrator for NetworkRenderer<'_> {
             let pg = &net.patches.polygons[poly as usize];
             let side = u32::from(pg.normal_at(p).dot(wo) < 0.0);
             let m = &ctx.scene.materials[ctx.scene.shapes[hit.geom_id as usize].material];
-            if side == 0 {
+            if side == 0 || m.two_sided_emission {
                 radiance += m.emission * self.light_scale();
             }
             radiance += self.radiance_at(poly, p, side, wo);
@@ -244,7 +242,7 @@ fn direct_diffuse(
     let sp = hit.surface_point(&ctx.scene.shapes, ray);
     let m = &ctx.scene.materials[sp.material];
     let mut kd = m.diffuse.eval(sp.p, sp.uv);
-    let total = kd + m.specular + m.transmission;
+    let total = kd + m.specular_at_normal() + m.transmission;
     for c in 0..3 {
         if total[c] > 1.0 {
             kd[c] /= total[c];

@@ -135,7 +135,7 @@ impl Lifecycle for NetworkTechnique {
         let options = &self.settings.distribute;
         if !scene.lights.is_empty() && !self.settings.hybrid {
             control.warn(
-                "the network carries only emissive surfaces; the scene's point and directional \
+                "the network carries only emissive surfaces; the scene's point, spot and directional \
                  lights light it only in hybrid mode",
             );
         }

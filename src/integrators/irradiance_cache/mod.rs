@@ -616,7 +616,7 @@ impl Walk<'_> {
         let m = &ctx.scene.materials[sp.material];
         let wo = -ray.dir.normalize();
         let mut l = Rgb::ZERO;
-        if emission && m.is_emissive() && wo.dot(sp.ng) > 0.0 {
+        if emission && m.emits_towards(wo, sp.ng) {
             l += m.emission;
         }
         let bsdf = Bsdf::new(m, sp, wo);
@@ -664,7 +664,7 @@ impl Walk<'_> {
             match ctx.intersect(&next, self.stats) {
                 Some(hit) => {
                     let hm = &ctx.scene.materials[hit.material];
-                    if hm.is_emissive() && bs.wi.dot(hit.ng) < 0.0 {
+                    if hm.emits_towards(-bs.wi, hit.ng) {
                         if let Some(li) = lights.light_of_shape(hit.shape) {
                             let w = power_heuristic(bs.pdf, lights.pdf_li(li, sp.p, hit.p, hit.ng));
                             l += bs.weight * hm.emission * w;

@@ -1,5 +1,5 @@
-//! Lights: area lights attached to the shapes that follow, and point, distant and infinite
-//! lights (an environment map or a constant background).
+//! Lights: area lights attached to the shapes that follow, and point, spot, distant and
+//! infinite lights (an environment map or a constant background).
 
 use super::params::Params;
 use super::spectrum::Kind;
@@ -7,6 +7,7 @@ use super::state::AreaEmission;
 use super::{Loader, Loc};
 use crate::math::{Mat3, Rgb};
 use crate::scene::environment::{Environment, Mapping};
+use crate::scene::light::{spot_cosines, spot_solid_angle};
 use crate::scene::Light;
 use glam::DVec3;
 use std::path::PathBuf;
@@ -25,19 +26,17 @@ impl Loader {
             .spectrum(p, "L", Kind::Illuminant, &st, loc)?
             .unwrap_or(Rgb::ONE);
         let scale = p.float_or("scale", 1.0).map_err(Self::pe(loc))? as f32;
-        if p.bool("twosided").map_err(Self::pe(loc))? == Some(true) {
-            self.warn(
-                loc,
-                format!("{st}: two-sided emission is not supported; the light emits on the front side only"),
-            );
-        }
+        let two_sided = p.bool("twosided").map_err(Self::pe(loc))? == Some(true);
         let radiance = l * scale;
         if !radiance.is_finite() || radiance.min_element() < 0.0 {
             return Err(loc.error(format!(
                 "{st}: the emitted radiance must be finite and not negative"
             )));
         }
-        self.state.area = (radiance.max_element() > 0.0).then_some(AreaEmission { radiance });
+        self.state.area = (radiance.max_element() > 0.0).then_some(AreaEmission {
+            radiance,
+            two_sided,
+        });
         Ok(())
     }
 
@@ -55,13 +54,13 @@ impl Loader {
             }
         };
         match ty {
-            "point" | "spot" | "goniometric" | "projection" => {
+            "point" | "goniometric" | "projection" => {
                 if ty != "point" {
                     self.warn(
                         loc,
                         format!("light \"{ty}\" is not supported; using a point light"),
                     );
-                    for q in ["coneangle", "conedelta", "to", "filename", "fov"] {
+                    for q in ["to", "filename", "fov"] {
                         p.ignore(q);
                     }
                 }
@@ -69,9 +68,53 @@ impl Loader {
                 let i = self
                     .spectrum(p, "I", Kind::Illuminant, st, loc)?
                     .unwrap_or(Rgb::ONE);
+                // pbrt-v4: `power` sets the intensity to power / 4π (times I's colour).
+                let power = p.float_or("power", -1.0).map_err(&pe)? as f32;
+                let k = if power > 0.0 {
+                    power / (4.0 * std::f32::consts::PI)
+                } else {
+                    1.0
+                };
                 self.lights.push(Light::Point {
                     position: m.transform_point3(from).as_vec3(),
-                    intensity: i * scale,
+                    intensity: i * scale * k,
+                });
+            }
+            "spot" => {
+                let from = point3("from", DVec3::ZERO)?;
+                let to = point3("to", DVec3::Z)?;
+                let dir = m.transform_vector3(to - from).normalize_or_zero();
+                if dir == DVec3::ZERO {
+                    return Err(loc.error(format!("{st}: \"from\" and \"to\" must differ")));
+                }
+                let cone_angle = p.float_or("coneangle", 30.0).map_err(&pe)? as f32;
+                let cone_delta = p.float_or("conedelta", 5.0).map_err(&pe)? as f32;
+                let valid = cone_angle > 0.0
+                    && cone_angle <= 180.0
+                    && (0.0..=cone_angle).contains(&cone_delta);
+                if !valid {
+                    return Err(loc.error(format!(
+                        "{st}: coneangle must be in (0, 180] and conedelta in [0, coneangle], got {cone_angle} and {cone_delta}"
+                    )));
+                }
+                let i = self
+                    .spectrum(p, "I", Kind::Illuminant, st, loc)?
+                    .unwrap_or(Rgb::ONE);
+                // pbrt-v4: `power` sets the intensity to power / k_e with k_e the cone's
+                // falloff-weighted solid angle.
+                let power = p.float_or("power", -1.0).map_err(&pe)? as f32;
+                let k = if power > 0.0 {
+                    let (cos_start, cos_end) = spot_cosines(cone_angle, cone_delta);
+                    power / spot_solid_angle(cos_start, cos_end)
+                } else {
+                    1.0
+                };
+                self.lights.push(Light::Spot {
+                    position: m.transform_point3(from).as_vec3(),
+                    direction: dir.as_vec3(),
+                    intensity: i * scale * k,
+                    cone_angle,
+                    cone_delta,
                 });
             }
             "distant" => {

@@ -1,32 +1,30 @@
-//! Materials: pbrt's material types as raylink's diffuse, specular and transmission
-//! coefficients (the closest substitute where raylink has no match).
+//! Materials: pbrt's material types as raylink's diffuse, specular, transmission and
+//! conductor lobes (the closest substitute where raylink has no match).
 
 use super::params::Params;
 use super::spectrum::{self, Kind};
 use super::{Loader, Loc};
 use crate::math::Rgb;
-use crate::scene::{Material, Texture};
+use crate::scene::{Conductor, Material, Texture};
 
 /// pbrt-v4's roughness remapping for the Trowbridge–Reitz distribution: alpha = √roughness.
 fn roughness_to_alpha(r: f64) -> f64 {
     r.max(0.0).sqrt()
 }
 
-/// Normal-incidence reflectance of a conductor, per channel.
-fn conductor_f0(eta: Rgb, k: Rgb) -> Rgb {
-    let f = |n: f32, k: f32| ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k);
-    Rgb::new(f(eta.x, k.x), f(eta.y, k.y), f(eta.z, k.z))
-}
-
 impl Loader {
-    /// Isotropic roughness of a material as raylink's alpha.
-    fn roughness(&mut self, p: &Params, prefix: &str, st: &str, loc: &Loc) -> crate::Result<f32> {
+    /// Roughness of a material as GGX (α_x, α_y): `uroughness`/`vroughness` (defaulting to
+    /// `roughness`), remapped by √ unless `remaproughness` is false, as pbrt-v4 does.
+    fn roughness(
+        &mut self,
+        p: &Params,
+        prefix: &str,
+        st: &str,
+        loc: &Loc,
+    ) -> crate::Result<(f32, f32)> {
         let r = self.float_param(p, &format!("{prefix}roughness"), 0.0, st, loc)?;
         let u = self.float_param(p, &format!("{prefix}uroughness"), r, st, loc)?;
         let v = self.float_param(p, &format!("{prefix}vroughness"), r, st, loc)?;
-        if u != v {
-            self.warn(loc, format!("{st}: anisotropic roughness is averaged"));
-        }
         let remap = p
             .bool("remaproughness")
             .map_err(Self::pe(loc))?
@@ -38,7 +36,44 @@ impl Loader {
                 x.max(0.0)
             }
         };
-        Ok((0.5 * (alpha(u) + alpha(v))) as f32)
+        Ok((alpha(u) as f32, alpha(v) as f32))
+    }
+
+    /// Isotropic roughness for the materials whose lobes are isotropic here: anisotropy is
+    /// averaged, with a warning.
+    fn isotropic_roughness(
+        &mut self,
+        p: &Params,
+        prefix: &str,
+        st: &str,
+        loc: &Loc,
+    ) -> crate::Result<f32> {
+        let (u, v) = self.roughness(p, prefix, st, loc)?;
+        if u != v {
+            self.warn(loc, format!("{st}: anisotropic roughness is averaged"));
+        }
+        Ok(0.5 * (u + v))
+    }
+
+    /// A conductor material's lobe: the metal's complex index from `eta`/`k` (copper by
+    /// default) or, given `reflectance`, the index with that normal-incidence reflectance.
+    fn conductor_material(
+        &mut self,
+        base: Material,
+        p: &Params,
+        prefix: &str,
+        st: &str,
+        loc: &Loc,
+    ) -> crate::Result<Material> {
+        let (ax, ay) = self.roughness(p, prefix, st, loc)?;
+        let conductor = self.conductor(p, prefix, st, loc)?;
+        Ok(Material {
+            specular: Rgb::ONE,
+            conductor: Some(conductor),
+            roughness: ax,
+            roughness_v: (ay != ax).then_some(ay),
+            ..base
+        })
     }
 
     /// An index of refraction ("float eta" or a spectrum).
@@ -65,14 +100,14 @@ impl Loader {
         Ok(rgb.element_sum() / 3.0)
     }
 
-    /// Conductor reflectance at normal incidence from `eta`/`k` or `reflectance`.
+    /// A conductor's complex index from `eta`/`k` or `reflectance`.
     fn conductor(
         &mut self,
         p: &Params,
         prefix: &str,
         st: &str,
         loc: &Loc,
-    ) -> crate::Result<Texture> {
+    ) -> crate::Result<Conductor> {
         let refl = format!("{prefix}reflectance");
         if p.find(&refl, &["rgb", "spectrum", "blackbody", "texture"])
             .ok()
@@ -81,7 +116,9 @@ impl Loader {
         {
             p.ignore(&format!("{prefix}eta"));
             p.ignore(&format!("{prefix}k"));
-            return self.texture_param(p, &refl, Rgb::ONE, st, loc);
+            let r = self.texture_param(p, &refl, Rgb::ONE, st, loc)?;
+            let r = self.texture_to_constant(r, st, loc);
+            return Ok(Conductor::from_reflectance(r));
         }
         let (cu_eta, cu_k) = spectrum::copper();
         let eta = match p.find(&format!("{prefix}eta"), &["float"]).ok().flatten() {
@@ -93,7 +130,7 @@ impl Loader {
         let k = self
             .spectrum(p, &format!("{prefix}k"), Kind::Unbounded, st, loc)?
             .unwrap_or(cu_k);
-        Ok(Texture::Constant(conductor_f0(eta, k)))
+        Ok(Conductor { eta, k })
     }
 
     pub(super) fn material(
@@ -141,19 +178,12 @@ impl Loader {
                 }
                 self.coated_diffuse(base, p, 1.5, st, loc)?
             }
-            "conductor" => {
-                let f0 = self.conductor(p, "", st, loc)?;
-                Material {
-                    specular: self.texture_to_constant(f0, st, loc),
-                    roughness: self.roughness(p, "", st, loc)?,
-                    ..base
-                }
-            }
+            "conductor" => self.conductor_material(base, p, "", st, loc)?,
             "dielectric" | "thindielectric" => {
                 if ty == "thindielectric" {
                     substitute(self, "using a smooth dielectric (refracting) surface");
                 }
-                let roughness = self.roughness(p, "", st, loc)?;
+                let roughness = self.isotropic_roughness(p, "", st, loc)?;
                 if roughness > 0.0 {
                     self.warn(
                         loc,
@@ -193,13 +223,8 @@ impl Loader {
                 ] {
                     p.ignore(q);
                 }
-                let f0 = self.conductor(p, "conductor.", st, loc)?;
                 let _ = self.roughness(p, "interface.", st, loc)?;
-                Material {
-                    specular: self.texture_to_constant(f0, st, loc),
-                    roughness: self.roughness(p, "conductor.", st, loc)?,
-                    ..base
-                }
+                self.conductor_material(base, p, "conductor.", st, loc)?
             }
             "subsurface" => {
                 substitute(self, "using a coated diffuse surface");
@@ -277,7 +302,7 @@ impl Loader {
             specular: Rgb::ONE,
             fresnel: true,
             ior: self.eta(p, "eta", eta, st, loc)?,
-            roughness: self.roughness(p, "", st, loc)?,
+            roughness: self.isotropic_roughness(p, "", st, loc)?,
             ..base
         })
     }

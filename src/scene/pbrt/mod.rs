@@ -130,7 +130,7 @@ struct Loader {
     object: Option<(String, Vec<Shape>)>,
     materials: Vec<Material>,
     default_material: Option<usize>,
-    emissive: HashMap<(usize, [u32; 3]), usize>,
+    emissive: HashMap<(usize, [u32; 3], bool), usize>,
     shapes: Vec<Shape>,
     lights: Vec<Light>,
     background: Rgb,

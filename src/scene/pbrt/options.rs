@@ -4,13 +4,18 @@
 use super::params::Params;
 use super::{Loader, Loc};
 use crate::image::filter::Filter;
-use crate::scene::{Camera, MAX_RESOLUTION};
+use crate::scene::{Camera, Projection, MAX_RESOLUTION};
 use crate::settings::TechniqueKind;
 use glam::{DMat3, DMat4, DVec3};
 
 pub(super) struct CameraDef {
     camera_to_world: DMat4,
     fov: f64,
+    /// `lensradius`, `focaldistance` (perspective).
+    lens: (f64, f64),
+    /// `screenwindow` of an orthographic camera (x0, x1, y0, y1); `None` for perspective.
+    /// An empty window stands for pbrt's default, set from the film's aspect at WorldBegin.
+    orthographic: Option<Vec<f64>>,
     loc: Loc,
 }
 
@@ -26,7 +31,8 @@ impl Loader {
         let pe = |e| loc.param_error(e);
         match kw {
             "Camera" => {
-                if ty != "perspective" {
+                let orthographic = ty == "orthographic";
+                if !orthographic && ty != "perspective" {
                     self.warn(
                         loc,
                         format!("Camera \"{ty}\" is not supported; using a perspective camera"),
@@ -38,13 +44,50 @@ impl Loader {
                         "Camera: fov must be in (0, 180) degrees, got {fov}"
                     )));
                 }
-                if p.float_or("lensradius", 0.0).map_err(pe)? > 0.0 {
+                let lens_radius = p.float_or("lensradius", 0.0).map_err(pe)?;
+                let focal_distance = p.float_or("focaldistance", 1e6).map_err(pe)?;
+                if !(lens_radius >= 0.0 && lens_radius.is_finite()) {
+                    return Err(loc.error(format!(
+                        "Camera: lensradius must be finite and not negative, got {lens_radius}"
+                    )));
+                }
+                if !(focal_distance > 0.0 && focal_distance.is_finite()) {
+                    return Err(loc.error(format!(
+                        "Camera: focaldistance must be positive, got {focal_distance}"
+                    )));
+                }
+                if orthographic && lens_radius > 0.0 {
                     self.warn(
                         loc,
-                        "Camera: depth of field (lensradius) is not supported; using a pinhole",
+                        "Camera \"orthographic\": depth of field (lensradius) is not supported; all in focus",
                     );
                 }
-                p.ignore("focaldistance");
+                let window = p
+                    .floats("screenwindow", "float")
+                    .map_err(pe)?
+                    .map(<[f64]>::to_vec);
+                let orthographic = if orthographic {
+                    let window = window.unwrap_or_default();
+                    if !window.is_empty()
+                        && (window.len() != 4
+                            || !window.iter().all(|v| v.is_finite())
+                            || window[1] <= window[0]
+                            || window[3] <= window[2])
+                    {
+                        return Err(loc.error(
+                            "Camera: screenwindow must be 4 finite numbers [x0 x1 y0 y1] with x0 < x1 and y0 < y1",
+                        ));
+                    }
+                    Some(window)
+                } else {
+                    if window.is_some() {
+                        self.warn(
+                            loc,
+                            "Camera \"perspective\": \"screenwindow\" is not supported; ignored",
+                        );
+                    }
+                    None
+                };
                 let ctm = self.state.ctm;
                 if !ctm.is_finite() || !ctm.determinant().is_finite() {
                     return Err(loc.error("Camera: the camera transform overflows (not finite)"));
@@ -58,6 +101,8 @@ impl Loader {
                 self.camera = Some(CameraDef {
                     camera_to_world,
                     fov,
+                    lens: (lens_radius, focal_distance),
+                    orthographic,
                     loc: loc.clone(),
                 });
             }
@@ -181,6 +226,7 @@ impl Loader {
             Some(c) => (c.camera_to_world, c.fov, c.loc.clone()),
             None => (DMat4::IDENTITY, 90.0, loc.clone()),
         };
+        let projection = self.projection(&cam_loc);
         let pos = c2w.transform_point3(DVec3::ZERO);
         let forward = c2w.transform_vector3(DVec3::Z).normalize_or_zero();
         let up = c2w.transform_vector3(DVec3::Y);
@@ -202,8 +248,46 @@ impl Loader {
             fov_deg: fov as f32,
             width: self.resolution.0,
             height: self.resolution.1,
+            projection,
         });
         Ok(())
+    }
+
+    /// raylink's projection for pbrt's camera: a thin lens for `lensradius` > 0; for an
+    /// orthographic camera, the screen window's width (pbrt's default window spans 2 units
+    /// along the shorter image axis). A window off the centre or of another aspect than the
+    /// film warns: raylink's orthographic film is centred and has square pixels.
+    fn projection(&mut self, loc: &Loc) -> Projection {
+        let Some(c) = &self.camera else {
+            return Projection::Pinhole;
+        };
+        let (lens, window) = (c.lens, c.orthographic.clone());
+        let (w, h) = (self.resolution.0 as f64, self.resolution.1 as f64);
+        match window {
+            None if lens.0 > 0.0 => Projection::ThinLens {
+                radius: lens.0 as f32,
+                focal_distance: lens.1 as f32,
+            },
+            None => Projection::Pinhole,
+            Some(win) if win.is_empty() => {
+                let aspect = w / h;
+                Projection::Orthographic {
+                    size: (2.0 * aspect.max(1.0)) as f32,
+                }
+            }
+            Some(win) => {
+                let (wx, wy) = (win[1] - win[0], win[3] - win[2]);
+                let centred =
+                    (win[0] + win[1]).abs() <= 1e-6 * wx && (win[2] + win[3]).abs() <= 1e-6 * wy;
+                if !centred || (wx / wy - w / h).abs() > 1e-3 * (w / h) {
+                    self.warn(
+                        loc,
+                        "Camera \"orthographic\": a screenwindow off the centre or of another aspect than the film is not supported; using a centred window of its width",
+                    );
+                }
+                Projection::Orthographic { size: wx as f32 }
+            }
+        }
     }
 }
 

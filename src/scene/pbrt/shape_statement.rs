@@ -34,12 +34,17 @@ impl Loader {
             self.warn(loc, "area lights in object instances are not supported (nor by pbrt-v4); the shapes do not emit");
             return base;
         }
-        let key = (base, area.radiance.to_array().map(f32::to_bits));
+        let key = (
+            base,
+            area.radiance.to_array().map(f32::to_bits),
+            area.two_sided,
+        );
         if let Some(&i) = self.emissive.get(&key) {
             return i;
         }
         let mut m = self.materials[base].clone();
         m.emission = area.radiance;
+        m.two_sided_emission = area.two_sided;
         m.name = if m.name.is_empty() {
             "emitter".into()
         } else {

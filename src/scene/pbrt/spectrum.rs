@@ -5,6 +5,7 @@
 //! the CIE 1931 matching functions (Wyman, Sloan and Shirley 2013).
 
 use crate::math::Rgb;
+use crate::scene::Conductor;
 
 /// What a spectrum stands for, which decides how it becomes RGB.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -20,33 +21,6 @@ pub enum Kind {
 
 /// Wavelengths (nm) standing for R, G and B when a spectrum is sampled per channel.
 const RGB_WAVELENGTHS: [f64; 3] = [610.0, 550.0, 465.0];
-
-/// (eta, k) of conductors at the R, G, B wavelengths, for pbrt-v4's named metal spectra.
-const METALS: &[(&str, [f32; 3], [f32; 3])] = &[
-    (
-        "Cu",
-        [0.200438, 0.924033, 1.10221],
-        [3.91295, 2.45285, 2.14219],
-    ),
-    (
-        "Au",
-        [0.143119, 0.374957, 1.44248],
-        [3.98316, 2.38572, 1.60322],
-    ),
-    (
-        "Ag",
-        [0.155265, 0.116723, 0.138342],
-        [4.82835, 3.12225, 2.14696],
-    ),
-    (
-        "Al",
-        [1.65746, 0.880369, 0.521229],
-        [9.22387, 6.26952, 4.837],
-    ),
-    ("CuZn", [0.444, 0.527, 1.094], [3.695, 2.765, 1.829]),
-    ("MgO", [1.732, 1.736, 1.745], [0.0, 0.0, 0.0]),
-    ("TiO2", [2.557, 2.651, 2.811], [0.0, 0.0, 0.0]),
-];
 
 /// Refractive indices (at the sodium d line) of pbrt-v4's named glasses.
 const GLASSES: &[(&str, f32)] = &[
@@ -67,10 +41,10 @@ const GLASSES: &[(&str, f32)] = &[
 pub fn named(name: &str) -> Option<(Rgb, bool)> {
     if let Some(rest) = name.strip_prefix("metal-") {
         let (metal, part) = rest.rsplit_once('-')?;
-        let &(_, eta, k) = METALS.iter().find(|m| m.0 == metal)?;
+        let c = Conductor::named(metal)?;
         return match part {
-            "eta" => Some((Rgb::from(eta), false)),
-            "k" => Some((Rgb::from(k), false)),
+            "eta" => Some((c.eta, false)),
+            "k" => Some((c.k, false)),
             _ => None,
         };
     }
@@ -89,7 +63,8 @@ pub fn named(name: &str) -> Option<(Rgb, bool)> {
 
 /// pbrt-v4's default conductor: copper.
 pub fn copper() -> (Rgb, Rgb) {
-    (Rgb::from(METALS[0].1), Rgb::from(METALS[0].2))
+    let c = Conductor::named("Cu").expect("copper is a named metal");
+    (c.eta, c.k)
 }
 
 /// A piecewise-linear spectrum given as (wavelength, value) pairs, as RGB.

@@ -9,6 +9,7 @@ use glam::{DMat4, DVec3};
 #[derive(Clone, Copy, Debug)]
 pub(super) struct AreaEmission {
     pub(super) radiance: Rgb,
+    pub(super) two_sided: bool,
 }
 
 #[derive(Clone, Debug)]

@@ -10,14 +10,16 @@ use super::checks::{
 };
 use super::diagnostics::{Ctx, Site};
 use super::schema::{
-    CameraDesc, DiffuseDesc, EnvironmentDesc, FileDesc, LightDesc, LightKind, MaterialDesc,
-    OneOrMany, Splat3, TextureTable, TransformOp,
+    CameraDesc, ConductorDesc, DiffuseDesc, EnvironmentDesc, FileDesc, LightDesc, LightKind,
+    MaterialDesc, OneOrMany, RoughnessDesc, Splat3, TextureTable, TransformOp,
 };
 use crate::math::{Mat3, Mat4, Rgb, Vec2, Vec3};
 use crate::scene::environment::Environment;
 use crate::scene::pbrt::GeometryCost;
 use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
-use crate::scene::{Camera, Light, Material, RenderSettings, Scene, Texture};
+use crate::scene::{
+    Camera, Conductor, Light, Material, Projection, RenderSettings, Scene, Texture,
+};
 use crate::Error;
 use std::collections::HashMap;
 use std::ops::Range;
@@ -187,6 +189,7 @@ impl<'a> Builder<'a> {
             resolution(desc.width.unwrap_or(640)).map_err(|m| ctx.fail(&site, "width", m))?;
         let height =
             resolution(desc.height.unwrap_or(480)).map_err(|m| ctx.fail(&site, "height", m))?;
+        let projection = self.projection(&site, &desc)?;
         Ok(Camera {
             position,
             look_at,
@@ -194,6 +197,61 @@ impl<'a> Builder<'a> {
             fov_deg: fov,
             width,
             height,
+            projection,
+        })
+    }
+
+    /// `projection` ("perspective", the default, or "orthographic" with `size`), and a thin
+    /// lens for a perspective camera with `lens_radius` > 0 (`focal_distance` required).
+    fn projection(&self, site: &Site, desc: &CameraDesc) -> crate::Result<Projection> {
+        let ctx = self.ctx;
+        let fail = |key: &'static str| move |m: String| ctx.fail(site, key, m);
+        let orthographic = match desc.projection.as_deref() {
+            None | Some("perspective") => false,
+            Some("orthographic") => true,
+            Some(other) => {
+                return Err(fail("projection")(format!(
+                    "must be \"perspective\" or \"orthographic\", got \"{other}\""
+                )))
+            }
+        };
+        if orthographic {
+            for (key, given) in [
+                ("lens_radius", desc.lens_radius.is_some()),
+                ("focal_distance", desc.focal_distance.is_some()),
+            ] {
+                if given {
+                    return Err(fail(key)(
+                        "applies to the perspective projection only".into(),
+                    ));
+                }
+            }
+            let Some(size) = desc.size else {
+                return Err(fail("size")(
+                    "is required for the orthographic projection: the width of the view in scene units".into(),
+                ));
+            };
+            let size = positive(size).map_err(fail("size"))?;
+            return Ok(Projection::Orthographic { size });
+        }
+        if desc.size.is_some() {
+            return Err(fail("size")(
+                "applies to the orthographic projection only".into(),
+            ));
+        }
+        let radius = non_negative(desc.lens_radius.unwrap_or(0.0)).map_err(fail("lens_radius"))?;
+        if radius == 0.0 {
+            return Ok(Projection::Pinhole);
+        }
+        let Some(focal_distance) = desc.focal_distance else {
+            return Err(fail("focal_distance")(
+                "is required with lens_radius: the distance of the plane in focus".into(),
+            ));
+        };
+        let focal_distance = positive(focal_distance).map_err(fail("focal_distance"))?;
+        Ok(Projection::ThinLens {
+            radius,
+            focal_distance,
         })
     }
 
@@ -213,19 +271,51 @@ impl<'a> Builder<'a> {
             None => None,
             Some(c) => Some(colour(c.0).map_err(fail("ambient"))?),
         };
+        let conductor = match desc.conductor {
+            None => None,
+            Some(ConductorDesc::Named(n)) => Some(Conductor::named(&n).ok_or_else(|| {
+                let names: Vec<_> = Conductor::names().collect();
+                fail("conductor")(format!(
+                    "unknown metal \"{n}\"; known: {}",
+                    names.join(", ")
+                ))
+            })?),
+            Some(ConductorDesc::Index(i)) => Some(Conductor {
+                eta: colour(i.eta.0).map_err(fail("conductor"))?,
+                k: colour(i.k.0).map_err(fail("conductor"))?,
+            }),
+        };
+        // A metal reflects everything its Fresnel lets it unless a tint is given.
+        let specular_default = if conductor.is_some() {
+            Rgb::ONE
+        } else {
+            d.specular
+        };
+        let (roughness, roughness_v) = match desc.roughness {
+            None => (d.roughness, None),
+            Some(RoughnessDesc::Isotropic(a)) => (a, None),
+            Some(RoughnessDesc::Anisotropic(u, v)) => (u, Some(v)),
+        };
+        let roughness = non_negative(roughness).map_err(fail("roughness"))?;
+        let roughness_v = match roughness_v {
+            Some(v) => Some(non_negative(v).map_err(fail("roughness"))?),
+            None => None,
+        };
         Ok(Material {
             name,
             diffuse,
             ambient,
-            specular: col(desc.specular, "specular", d.specular)?,
+            specular: col(desc.specular, "specular", specular_default)?,
             transmission: col(desc.transmission, "transmission", d.transmission)?,
             ior: positive(desc.ior.unwrap_or(d.ior)).map_err(fail("ior"))?,
             phong_exponent: non_negative(desc.phong_exponent.unwrap_or(d.phong_exponent))
                 .map_err(fail("phong_exponent"))?,
-            roughness: non_negative(desc.roughness.unwrap_or(d.roughness))
-                .map_err(fail("roughness"))?,
+            roughness,
+            roughness_v,
             fresnel: desc.fresnel.unwrap_or(d.fresnel),
+            conductor,
             emission: col(desc.emission, "emission", d.emission)?,
+            two_sided_emission: desc.two_sided_emission.unwrap_or(false),
         })
     }
 
@@ -373,12 +463,23 @@ impl<'a> Builder<'a> {
 
     fn light(&self, site: &Site, desc: LightDesc) -> crate::Result<Light> {
         let ctx = self.ctx;
-        let (name, takes, allowed): (&str, &str, [&str; 2]) = match desc.kind {
-            LightKind::Point => ("point", "position, intensity", ["position", "intensity"]),
+        let (name, takes, allowed): (&str, &str, &[&str]) = match desc.kind {
+            LightKind::Point => ("point", "position, intensity", &["position", "intensity"]),
             LightKind::Directional => (
                 "directional",
                 "direction, irradiance",
-                ["direction", "irradiance"],
+                &["direction", "irradiance"],
+            ),
+            LightKind::Spot => (
+                "spot",
+                "position, direction, intensity, cone_angle, cone_delta",
+                &[
+                    "position",
+                    "direction",
+                    "intensity",
+                    "cone_angle",
+                    "cone_delta",
+                ],
             ),
         };
         let present = [
@@ -386,6 +487,8 @@ impl<'a> Builder<'a> {
             ("intensity", desc.intensity.is_some()),
             ("direction", desc.direction.is_some()),
             ("irradiance", desc.irradiance.is_some()),
+            ("cone_angle", desc.cone_angle.is_some()),
+            ("cone_delta", desc.cone_delta.is_some()),
         ];
         for (key, is) in present {
             if is && !allowed.contains(&key) {
@@ -411,6 +514,31 @@ impl<'a> Builder<'a> {
                 irradiance: colour(desc.irradiance.ok_or_else(|| need("irradiance"))?.0)
                     .map_err(fail("irradiance"))?,
             },
+            LightKind::Spot => {
+                // pbrt-v4's defaults: a 30° cone, the last 5° of it falling off.
+                let cone_angle = desc.cone_angle.unwrap_or(30.0);
+                if !(cone_angle > 0.0 && cone_angle <= 180.0) {
+                    return Err(fail("cone_angle")(format!(
+                        "must be in (0, 180] degrees, got {cone_angle}"
+                    )));
+                }
+                let cone_delta = desc.cone_delta.unwrap_or(5.0);
+                if !(0.0..=cone_angle).contains(&cone_delta) {
+                    return Err(fail("cone_delta")(format!(
+                        "must be in [0, cone_angle = {cone_angle}] degrees, got {cone_delta}"
+                    )));
+                }
+                Light::Spot {
+                    position: finite3(desc.position.ok_or_else(|| need("position"))?.0)
+                        .map_err(fail("position"))?,
+                    direction: direction(desc.direction.ok_or_else(|| need("direction"))?.0)
+                        .map_err(fail("direction"))?,
+                    intensity: colour(desc.intensity.ok_or_else(|| need("intensity"))?.0)
+                        .map_err(fail("intensity"))?,
+                    cone_angle,
+                    cone_delta,
+                }
+            }
         })
     }
 }

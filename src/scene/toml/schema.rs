@@ -3,6 +3,7 @@
 //! toml's line and column) and `raylink convert` serialises them, so the two share one
 //! description of the format. Values are checked later, by the builder.
 
+pub(crate) use super::schema_metal::{ConductorDesc, ConductorIndex, RoughnessDesc};
 use crate::math::{Vec2, Vec3};
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde::ser::{SerializeMap, SerializeSeq, Serializer};
@@ -148,6 +149,14 @@ pub(crate) struct CameraDesc {
     pub(crate) width: Option<u32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) height: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) projection: Option<String>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) size: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) lens_radius: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) focal_distance: Option<f32>,
 }
 
 #[derive(Deserialize, Serialize)]
@@ -176,12 +185,16 @@ pub(crate) struct MaterialDesc {
     pub(crate) ior: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) phong_exponent: Option<f32>,
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
-    pub(crate) roughness: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) roughness: Option<RoughnessDesc>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) fresnel: Option<bool>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) conductor: Option<ConductorDesc>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) emission: Option<Splat3>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) two_sided_emission: Option<bool>,
 }
 
 pub(crate) enum DiffuseDesc {
@@ -368,6 +381,7 @@ pub(crate) struct RotateDesc {
 pub(crate) enum LightKind {
     Point,
     Directional,
+    Spot,
 }
 
 #[derive(Deserialize, Serialize)]
@@ -383,6 +397,10 @@ pub(crate) struct LightDesc {
     pub(crate) direction: Option<V3>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) irradiance: Option<Splat3>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) cone_angle: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) cone_delta: Option<f32>,
 }
 
 // ------------------------------------------------------------------------------------------
@@ -608,7 +626,7 @@ impl<'de, T: Deserialize<'de>> Deserialize<'de> for Ordered<T> {
 /// every `f32` but one pair (checked over all of them): `±7.038531e-26` lies so close to the
 /// midpoint between two `f32`s that its `f64` rounds across it. Such a value is written as
 /// its `f64`'s decimal instead (up to 17 digits), which reads back exactly.
-struct Exact(f32);
+pub(crate) struct Exact(pub(crate) f32);
 
 impl Serialize for Exact {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {

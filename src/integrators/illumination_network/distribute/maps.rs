@@ -179,9 +179,7 @@ pub(super) fn maps(
                         reflect.entries.push((o, 1.0));
                     }
                 } else {
-                    let ggx = Ggx {
-                        alpha: surface.alpha.max(1e-3),
-                    };
+                    let ggx = Ggx::isotropic(surface.alpha.max(1e-3));
                     let ci = n.dot(wi);
                     let lobe = |wo: Vec3| {
                         let co = n.dot(wo);

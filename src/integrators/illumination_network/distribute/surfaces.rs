@@ -44,7 +44,9 @@ pub fn surfaces_with(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<Surf
             let (s, t) = pg.cell_centre(cell);
             let p = net.space.to_world(pg.point(s, t));
             let kd = m.diffuse.eval(p, Vec2::new(s, t));
-            let (mut kd, mut ks, mut kt) = (kd, m.specular, m.transmission);
+            // A metal's lobe keeps its Fresnel at normal incidence: the network's lobes have no
+            // angular Fresnel.
+            let (mut kd, mut ks, mut kt) = (kd, m.specular_at_normal(), m.transmission);
             let total = kd + ks + kt;
             for c in 0..3 {
                 if total[c] > 1.0 {
@@ -57,8 +59,16 @@ pub fn surfaces_with(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<Surf
                 kd,
                 ks,
                 kt,
-                alpha: m.roughness,
-                emission: if side == 0 { emission[mi] } else { Rgb::ZERO },
+                // An anisotropic lobe becomes the isotropic one of mean α.
+                alpha: match m.roughness_v {
+                    Some(v) => 0.5 * (m.roughness + v),
+                    None => m.roughness,
+                },
+                emission: if side == 0 || m.two_sided_emission {
+                    emission[mi]
+                } else {
+                    Rgb::ZERO
+                },
             }
         })
         .collect()

@@ -1,0 +1,306 @@
+//! Spot lights (pbrt-v4's definition) and two-sided area lights: a spot's irradiance on a
+//! plane against pbrt's formula, path, light and bidirectional tracing agreeing on a
+//! spot-lit room, and a two-sided emitter lighting both of its sides alike.
+
+use raylink::image::filter::Filter;
+use raylink::image::Image;
+use raylink::job::{AntiAliasing, MonteCarloSettings};
+use raylink::scene::{Light, Scene};
+use raylink::{Backend, Control, Job, Renderer, Settings, Technique, TechniqueKind};
+use std::path::Path;
+
+fn manifest(p: &str) -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join(p)
+}
+
+fn parse(text: &str) -> Scene {
+    raylink::scene::toml::from_str(text, Path::new("lights.toml")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+fn render_job(scene: &Scene, technique: Technique, seed: u64) -> Image {
+    let job = Job {
+        width: scene.camera.width,
+        height: scene.camera.height,
+        region: None,
+        seed,
+        threads: None,
+        accel: Backend::Embree,
+        ..Job::new(scene, technique)
+    };
+    let control = Control::default();
+    Renderer::new(scene.clone(), job, &control)
+        .unwrap()
+        .render(&control)
+        .unwrap()
+        .image
+}
+
+fn mc(technique: fn(MonteCarloSettings) -> Technique, spp: u32, max_depth: u32) -> Technique {
+    technique(MonteCarloSettings {
+        max_depth,
+        spp,
+        time_limit: None,
+        filter: Filter::Box { radius: 0.5 },
+    })
+}
+
+/// pbrt-v4's smooth step.
+fn smooth_step(a: f64, b: f64, x: f64) -> f64 {
+    let t = ((x - a) / (b - a)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// A spot light (I = 2, a 30° cone whose last 10° fall off) one unit above a white (albedo 0.8) diffuse floor, pointing straight down, seen by an
+/// orthographic camera from above: each pixel is ρ/π·E averaged over the pixel, with
+/// pbrt's E = I·SmoothStep(cos 30°, cos 20°, cos θ)·cos θ/d². Checked at pixels inside the
+/// inner cone, in the falloff band and outside the cone, within 0.5% (0 outside), for the
+/// path tracer, Whitted's ray tracer and the irradiance cache (whose direct light samples the
+/// spot).
+#[test]
+fn spot_irradiance_matches_pbrts_formula() {
+    let (size, width) = (2.0f64, 100u32);
+    let scene = parse(&format!(
+        "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\nwidth = {width}\nheight = {width}\n\
+         projection = \"orthographic\"\nsize = {size}\n\
+         [materials.floor]\ndiffuse = 0.8\nphong_exponent = 0\n\
+         [[shapes]]\ntype = \"quad\"\nvertices = [[-5, -5, 0], [5, -5, 0], [5, 5, 0], [-5, 5, 0]]\nmaterial = \"floor\"\n\
+         [[lights]]\ntype = \"spot\"\nposition = [0, 0, 1]\ndirection = [0, 0, -1]\nintensity = 2\ncone_angle = 30\ncone_delta = 10\n"
+    ));
+    let (cos_end, cos_start) = (30f64.to_radians().cos(), 20f64.to_radians().cos());
+    let radiance_at = |x: f64, y: f64| {
+        let d2 = x * x + y * y + 1.0;
+        let cos = 1.0 / d2.sqrt();
+        0.8 / std::f64::consts::PI * 2.0 * smooth_step(cos_end, cos_start, cos) * cos / d2
+    };
+    // World (x, y) of raster (rx, ry): the film spans `size` across, x right, y up.
+    let pixel = size / width as f64;
+    let expected = |px: u32, py: u32| {
+        let n = 16;
+        let mut sum = 0.0;
+        for i in 0..n {
+            for j in 0..n {
+                let rx = px as f64 + (i as f64 + 0.5) / n as f64;
+                let ry = py as f64 + (j as f64 + 0.5) / n as f64;
+                let x = (rx - width as f64 / 2.0) * pixel;
+                let y = -(ry - width as f64 / 2.0) * pixel;
+                sum += radiance_at(x, y);
+            }
+        }
+        sum / (n * n) as f64
+    };
+    let whitted = Technique::create(&Settings {
+        integrator: Some(TechniqueKind::Whitted),
+        aa: Some(AntiAliasing::Uniform),
+        spp: Some(64),
+        max_depth: Some(1),
+        ..Settings::default()
+    })
+    .unwrap();
+    let cache = Technique::create(&Settings {
+        integrator: Some(TechniqueKind::IrradianceCache),
+        spp: Some(64),
+        max_depth: Some(1),
+        filter: Some(Filter::Box { radius: 0.5 }),
+        ..Settings::default()
+    })
+    .unwrap();
+    for (name, technique) in [
+        ("path", mc(Technique::Path, 64, 1)),
+        ("whitted", whitted),
+        ("cache", cache),
+    ] {
+        let image = render_job(&scene, technique, 1);
+        // Along the +x axis from the centre: tan θ of the pixel centre 0.01 .. 0.99.
+        let row = width / 2;
+        let mut checked = [0; 3];
+        for px in (width / 2..width).step_by(3) {
+            let x = (px as f64 + 0.5 - width as f64 / 2.0) * pixel;
+            let theta = x.atan().to_degrees();
+            let band = if theta < 19.5 {
+                0
+            } else if theta < 30.5 {
+                1
+            } else {
+                2
+            };
+            if (19.5..20.5).contains(&theta) || (29.5..30.5).contains(&theta) {
+                continue; // pixels straddling an edge of the band
+            }
+            let want = expected(px, row);
+            let got = image.get(px, row);
+            let got = (got.x + got.y + got.z) as f64 / 3.0;
+            if band == 2 {
+                assert_eq!(
+                    got, 0.0,
+                    "{name}: light outside the cone at θ = {theta:.1}°"
+                );
+            } else {
+                assert!(
+                    (got / want - 1.0).abs() < 0.005,
+                    "{name}: θ = {theta:.1}°: {got} vs pbrt's {want}"
+                );
+            }
+            checked[band] += 1;
+        }
+        eprintln!("{name}: pixels checked inside, in the falloff band, outside: {checked:?}");
+        assert!(checked.iter().all(|&c| c >= 3), "{checked:?}");
+    }
+}
+
+/// Per-pixel mean and variance of the mean over independent renders (different seeds).
+fn stats(images: &[Image]) -> (Vec<f64>, Vec<f64>) {
+    let k = images.len() as f64;
+    let n = images[0].pixels.len();
+    let (mut mean, mut var) = (vec![0.0; n], vec![0.0; n]);
+    for i in 0..n {
+        let v: Vec<f64> = images
+            .iter()
+            .map(|im| {
+                let p = im.pixels[i];
+                (p.x + p.y + p.z) as f64
+            })
+            .collect();
+        let m = v.iter().sum::<f64>() / k;
+        mean[i] = m;
+        var[i] = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (k - 1.0) / k;
+    }
+    (mean, var)
+}
+
+/// Welch's t per pixel between every pair of estimators: at most 1% of the pixels beyond 5
+/// standard errors, and the image-wide mean difference within 4 standard errors.
+fn assert_agree(results: &[(&str, Vec<f64>, Vec<f64>)]) {
+    for a in 0..results.len() {
+        for b in a + 1..results.len() {
+            let (ka, ma, va) = &results[a];
+            let (kb, mb, vb) = &results[b];
+            let mut outliers = 0;
+            let (mut diff, mut var) = (0.0, 0.0);
+            for i in 0..ma.len() {
+                let d = ma[i] - mb[i];
+                let se = (va[i] + vb[i]).sqrt();
+                diff += d;
+                var += va[i] + vb[i];
+                if se > 0.0 && (d / se).abs() > 5.0 || se == 0.0 && d.abs() > 1e-4 {
+                    outliers += 1;
+                }
+            }
+            let z = diff / var.sqrt();
+            eprintln!("{ka} vs {kb}: {outliers} pixels beyond 5 se, image-wide z = {z:.2}");
+            assert!(
+                outliers <= ma.len() / 100,
+                "{ka} vs {kb}: {outliers} outliers"
+            );
+            assert!(
+                z.abs() < 4.0,
+                "{ka} vs {kb}: mean differs by {z:.1} standard errors"
+            );
+        }
+    }
+}
+
+/// An estimator to compare: its name, its technique and its samples per pixel.
+type Run = (&'static str, fn(MonteCarloSettings) -> Technique, u32);
+
+fn agree(scene: &Scene, runs: [Run; 3]) {
+    let results: Vec<(&str, Vec<f64>, Vec<f64>)> = runs
+        .into_iter()
+        .map(|(name, technique, spp)| {
+            let images: Vec<Image> = (0..8)
+                .map(|seed| render_job(scene, mc(technique, spp, 5), 100 + seed))
+                .collect();
+            let (m, v) = stats(&images);
+            (name, m, v)
+        })
+        .collect();
+    assert_agree(&results);
+}
+
+/// The Cornell box lit only by a spot light under the ceiling aimed at the floor (its area
+/// light switched off): path tracing, light tracing (emission sampled within the cone) and
+/// BDPT agree, 8 seeds each.
+#[test]
+fn path_light_and_bidirectional_agree_under_a_spot() {
+    let mut scene = Scene::load(&manifest("scenes/cornell-box.toml")).unwrap();
+    scene.camera.width = 48;
+    scene.camera.height = 48;
+    for m in &mut scene.materials {
+        m.emission = raylink::math::Vec3::ZERO;
+    }
+    scene.lights.push(Light::Spot {
+        position: raylink::math::Vec3::new(0.0, 1.9, 0.0),
+        direction: raylink::math::Vec3::new(0.3, -1.0, 0.2),
+        intensity: raylink::math::Vec3::splat(3.0),
+        cone_angle: 35.0,
+        cone_delta: 15.0,
+    });
+    agree(
+        &scene,
+        [
+            ("path", Technique::Path, 16),
+            ("light", Technique::Light, 16),
+            ("bdpt", Technique::Bdpt, 8),
+        ],
+    );
+}
+
+/// A two-sided emitting square (radiance 1) halfway between two grey planes 1 unit above and
+/// below, seen edge-on from the side, direct light only: the upper and lower halves of the
+/// image match (within 1%) and are lit, for path tracing, light tracing and BDPT; the same
+/// square one-sided (facing up) leaves the lower half black. The three estimators agree on
+/// the two-sided scene.
+#[test]
+fn two_sided_emitter_lights_both_sides_alike() {
+    let scene = |two_sided: bool| {
+        parse(&format!(
+            "[camera]\nposition = [0, 0, 4]\nlook_at = [0, 0, 0]\nfov = 60\nwidth = 32\nheight = 32\n\
+             [materials.grey]\ndiffuse = 0.5\n\
+             [materials.lamp]\ndiffuse = 0\nemission = 1\ntwo_sided_emission = {two_sided}\n\
+             [[shapes]]\ntype = \"quad\"\nvertices = [[-3, 1, -3], [3, 1, -3], [3, 1, 3], [-3, 1, 3]]\nmaterial = \"grey\"\n\
+             [[shapes]]\ntype = \"quad\"\nvertices = [[-3, -1, -3], [-3, -1, 3], [3, -1, 3], [3, -1, -3]]\nmaterial = \"grey\"\n\
+             [[shapes]]\ntype = \"quad\"\nvertices = [[-0.5, 0, -0.5], [-0.5, 0, 0.5], [0.5, 0, 0.5], [0.5, 0, -0.5]]\nmaterial = \"lamp\"\n"
+        ))
+    };
+    let two = scene(true);
+    let one = scene(false);
+    assert!(two.materials.iter().any(|m| m.two_sided_emission));
+    let halves = |image: &Image| {
+        let (mut top, mut bottom) = (0.0f64, 0.0f64);
+        for y in 0..image.height {
+            for x in 0..image.width {
+                let p = image.get(x, y);
+                let v = (p.x + p.y + p.z) as f64;
+                if y < image.height / 2 {
+                    top += v;
+                } else {
+                    bottom += v;
+                }
+            }
+        }
+        (top, bottom)
+    };
+    for (name, technique, spp) in [
+        ("path", Technique::Path as fn(_) -> _, 256),
+        ("light", Technique::Light as fn(_) -> _, 256),
+        ("bdpt", Technique::Bdpt as fn(_) -> _, 128),
+    ] {
+        let (top, bottom) = halves(&render_job(&two, mc(technique, spp, 1), 3));
+        eprintln!("{name}: two-sided: top {top:.3} bottom {bottom:.3}");
+        assert!(
+            top > 1.0 && (top / bottom - 1.0).abs() < 0.01,
+            "{name}: {top} vs {bottom}"
+        );
+        let (top1, bottom1) = halves(&render_job(&one, mc(technique, spp, 1), 3));
+        eprintln!("{name}: one-sided: top {top1:.3} bottom {bottom1:.3}");
+        // The upward-facing lamp lights the upper plane (seen in the image's top half).
+        assert!(bottom1 < 1e-3 * top1 && (top1 / top - 1.0).abs() < 0.02);
+    }
+    agree(
+        &two,
+        [
+            ("path", Technique::Path, 32),
+            ("light", Technique::Light, 32),
+            ("bdpt", Technique::Bdpt, 16),
+        ],
+    );
+}
