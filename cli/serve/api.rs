@@ -316,7 +316,7 @@ impl Api {
     /// 32-bit floats, RGB, rows top to bottom.
     fn image(&self, r: &Request) -> Response {
         let kind = r.param("kind").unwrap_or("beauty");
-        let (image, version, spp): (Arc<Image>, u64, u32) = {
+        let (image, version, spp, view): (Arc<Image>, u64, u32, u64) = {
             let s = lock(&self.session.state);
             let aov = || {
                 s.aovs
@@ -326,7 +326,7 @@ impl Api {
             };
             match kind {
                 "beauty" => match &s.image {
-                    Some(i) => (i.clone(), s.image_version, s.spp),
+                    Some(i) => (i.clone(), s.image_version, s.spp, s.image_view),
                     None => return Response::text(409, "no image yet"),
                 },
                 "albedo" | "normal" | "depth" => {
@@ -335,7 +335,7 @@ impl Api {
                         .position(|k| *k == kind)
                         .unwrap_or(0);
                     match aov() {
-                        Some(a) => (Arc::new(a[i].clone()), s.view, 1),
+                        Some(a) => (Arc::new(a[i].clone()), s.view, 1, s.view),
                         None => {
                             drop(s);
                             self.session.want_aovs();
@@ -344,7 +344,7 @@ impl Api {
                     }
                 }
                 "reference" => match &self.session.base.reference {
-                    Some(i) => (Arc::new(i.clone()), 0, 0),
+                    Some(i) => (Arc::new(i.clone()), 0, 0, 0),
                     None => return Response::text(404, "no --reference image"),
                 },
                 _ => {
@@ -363,6 +363,7 @@ impl Api {
             .with_header("X-Height", image.height.to_string())
             .with_header("X-Version", version.to_string())
             .with_header("X-Spp", spp.to_string())
+            .with_header("X-View", view.to_string())
     }
 
     pub fn state(&self) -> Value {

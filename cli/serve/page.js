@@ -10,7 +10,7 @@ const studio = window.studio = {
   state: null,
   image: null,       // {kind, width, height, data: Float32Array, version, spp}
   reference: null,
-  history: [],       // every beauty image drawn: {version, spp, view, mean}
+  history: [],       // every beauty image drawn: {version, spp, view, mean, canvas}
   commands: 0,       // commands answered
 };
 
@@ -45,6 +45,7 @@ async function fetchImage(kind) {
     height: +response.headers.get('X-Height'),
     version: +response.headers.get('X-Version'),
     spp: +response.headers.get('X-Spp'),
+    view: +response.headers.get('X-View'),
     data: new Float32Array(buffer),
   };
 }
@@ -72,11 +73,11 @@ async function refresh() {
     const image = await fetchImage(kind);
     if (image && image.data.length === image.width * image.height * 3) {
       studio.image = image;
-      if (kind === 'beauty') {
-        studio.history.push({ version: image.version, spp: image.spp, view: s.view,
-                              mean: mean(image.data) });
-      }
       draw();
+      if (kind === 'beauty') {
+        studio.history.push({ version: image.version, spp: image.spp, view: image.view,
+                              mean: mean(image.data), canvas: studio.canvasStats().hash });
+      }
     }
   } finally {
     fetching = false;

@@ -49,6 +49,8 @@ pub struct State {
     /// The latest beauty image, and its own version (a new one for every image).
     pub image: Option<Arc<Image>>,
     pub image_version: u64,
+    /// The view `image` shows.
+    pub image_view: u64,
     /// Samples per pixel in `image` (the technique's for the pixel techniques).
     pub spp: u32,
     /// The camera of the view being rendered, and a count of the views.
@@ -164,6 +166,7 @@ impl Session {
                 version: 1,
                 image: None,
                 image_version: 0,
+                image_view: 0,
                 spp: 0,
                 camera,
                 view: 1,
@@ -249,6 +252,7 @@ impl Session {
         self.publish(|s| {
             s.image = Some(Arc::new(image));
             s.image_version += 1;
+            s.image_view = s.view;
             s.spp = spp;
             s.rmse = rmse;
             s.elapsed = s.started.elapsed().as_secs_f64();
