@@ -155,7 +155,8 @@ const fmt = (v, digits = 2) => v == null ? '–' : (+v).toFixed(digits);
 function figures(s) {
   const rows = [
     ['integrator', s.integrator],
-    ['samples', s.progressive ? `${s.spp} / ${s.target_spp} spp` : (s.status === 'done' ? 'done' : '…')],
+    ['samples', s.progressive ? `${s.spp} / ${s.target_spp} spp`
+      : s.status === 'done' ? 'done' : s.image_version ? 'preview: 1 a pixel' : '…'],
     ['elapsed', `${fmt(s.elapsed)} s`],
     ['ETA', s.eta == null ? '–' : `${fmt(s.eta, 1)} s`],
     ['Mrays/s', fmt(s.mrays)],

@@ -51,7 +51,8 @@ pub struct State {
     pub image_version: u64,
     /// The view `image` shows.
     pub image_view: u64,
-    /// Samples per pixel in `image` (the technique's for the pixel techniques).
+    /// Samples per pixel in `image`: for the pixel techniques 0 in a preview (one sample
+    /// at each pixel's centre), 1 in the finished image.
     pub spp: u32,
     /// The camera of the view being rendered, and a count of the views.
     pub camera: Camera,
@@ -431,6 +432,18 @@ fn render(
     };
     let mut first = true;
     let progressive = renderer.job().technique.monte_carlo().is_some();
+    if !progressive {
+        // One sample a pixel first: what a camera being dragged needs to follow it.
+        match renderer.render_preview(control) {
+            Ok(Some(r)) if !r.is_partial() => {
+                session.publish_image(r.image, 0);
+                first_image(session);
+                first = false;
+            }
+            Ok(_) | Err(Error::Cancelled { .. }) => return,
+            Err(e) => return fail(session, &e),
+        }
+    }
     let result = if progressive {
         renderer.render_progressive(control, None, &mut |film| {
             session.publish_image(film.image()?, film.spp);
