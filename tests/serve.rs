@@ -394,3 +394,60 @@ fn relighting_the_network_scales_the_image_as_the_lights() {
     assert!(darker < 0.9 * after, "{darker} vs {after}");
     assert_eq!(server.stop().code(), Some(130));
 }
+
+/// The auxiliary images, asked for by the page, are `raylink render --aov`'s bit for bit.
+#[test]
+fn the_served_aovs_are_the_render_commands() {
+    let server = Server::start(&PATH);
+    let first = server.get("/api/image?kind=albedo");
+    assert_eq!(first.status, 409, "computed only once asked for");
+    server.wait("the auxiliary images", |s| s["aovs"] == true);
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.exr");
+    let mut args = vec!["render", "--quiet", "--aov", "-o", out.to_str().unwrap()];
+    args.extend(PATH);
+    let run = raylink(&args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    for kind in ["albedo", "normal", "depth"] {
+        let served = server.get(&format!("/api/image?kind={kind}")).floats();
+        let (image, _) = raylink::read_image(&dir.path().join(format!("x.{kind}.exr"))).unwrap();
+        let expected: Vec<f32> = image.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
+        assert!(bits(&served) == bits(&expected), "{kind}");
+    }
+    assert_eq!(server.stop().code(), Some(130));
+}
+
+/// With `--reference`, the page gets the reference's floats and the RMSE of the image
+/// against it, as the library computes it.
+#[test]
+fn the_reference_and_its_rmse_are_served() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = dir.path().join("reference.exr");
+    let mut args = vec!["render", "--quiet", "-o", reference.to_str().unwrap()];
+    // Another seed: an image of the same scene with other noise.
+    args.extend(PATH.iter().map(|&a| if a == "5" { "9" } else { a }));
+    let run = raylink(&args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let mut args = PATH.to_vec();
+    args.extend(["--reference", reference.to_str().unwrap()]);
+    let server = Server::start(&args);
+    let s = server.wait_done(1);
+    let (expected, _) = raylink::read_image(&reference).unwrap();
+    let served = server.get("/api/image?kind=reference").floats();
+    let flat: Vec<f32> = expected
+        .pixels
+        .iter()
+        .flat_map(|p| [p.x, p.y, p.z])
+        .collect();
+    assert!(bits(&served) == bits(&flat));
+    let image = server.get("/api/image").floats();
+    let mut rendered = expected.clone();
+    for (p, c) in rendered.pixels.iter_mut().zip(image.chunks_exact(3)) {
+        *p = raylink::math::Vec3::new(c[0], c[1], c[2]);
+    }
+    // The library's f32 (JSON's parse of it may be an ulp off as f64).
+    let rmse = rendered.rmse(&expected);
+    assert!(rmse > 0.0);
+    assert_eq!(s["rmse"].as_f64().map(|r| r as f32), Some(rmse), "{s}");
+    assert_eq!(server.stop().code(), Some(130));
+}

@@ -9,7 +9,7 @@ use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::Arc;
-use std::time::Duration;
+use std::time::{Duration, Instant};
 
 /// Connections handled at once; the rest are answered 503 and closed.
 pub const MAX_CONNECTIONS: usize = 32;
@@ -17,7 +17,7 @@ pub const MAX_CONNECTIONS: usize = 32;
 const MAX_HEAD: usize = 16 * 1024;
 /// A request's body (the API's JSON is a few hundred bytes).
 pub const MAX_BODY: usize = 64 * 1024;
-/// How long a client may take to send its request, or to take a response's bytes.
+/// How long a client may take to send its whole request, or to take a write's bytes.
 const TIMEOUT: Duration = Duration::from_secs(10);
 
 /// A parsed request.
@@ -203,7 +203,6 @@ fn refuse_busy(mut stream: TcpStream) {
 
 fn connection(mut stream: TcpStream, handle: &(dyn Fn(&Request) -> Reply + Send + Sync)) {
     let _ = stream.set_nonblocking(false);
-    let _ = stream.set_read_timeout(Some(TIMEOUT));
     let _ = stream.set_write_timeout(Some(TIMEOUT));
     let _ = stream.set_nodelay(true);
     let request = match read_request(&mut stream) {
@@ -222,7 +221,25 @@ fn connection(mut stream: TcpStream, handle: &(dyn Fn(&Request) -> Reply + Send 
     }
 }
 
+/// Reads into `chunk` before the deadline: a client that trickles its request a byte at a
+/// time still has [`TIMEOUT`] in all.
+fn read_by(
+    stream: &mut TcpStream,
+    chunk: &mut [u8],
+    deadline: Instant,
+) -> Result<usize, ReadError> {
+    let left = deadline.saturating_duration_since(Instant::now());
+    if left.is_zero() || stream.set_read_timeout(Some(left)).is_err() {
+        return Err(ReadError::Gone);
+    }
+    match stream.read(chunk) {
+        Ok(0) | Err(_) => Err(ReadError::Gone),
+        Ok(n) => Ok(n),
+    }
+}
+
 fn read_request(stream: &mut TcpStream) -> Result<Request, ReadError> {
+    let deadline = Instant::now() + TIMEOUT;
     let mut buf = Vec::with_capacity(1024);
     let mut chunk = [0u8; 2048];
     let head_end = loop {
@@ -232,10 +249,8 @@ fn read_request(stream: &mut TcpStream) -> Result<Request, ReadError> {
         if buf.len() > MAX_HEAD {
             return Err(ReadError::Answer(431, "the request's head is too large"));
         }
-        match stream.read(&mut chunk) {
-            Ok(0) | Err(_) => return Err(ReadError::Gone),
-            Ok(n) => buf.extend_from_slice(&chunk[..n]),
-        }
+        let n = read_by(stream, &mut chunk, deadline)?;
+        buf.extend_from_slice(&chunk[..n]);
     };
     if head_end > MAX_HEAD {
         return Err(ReadError::Answer(431, "the request's head is too large"));
@@ -309,10 +324,8 @@ fn read_request(stream: &mut TcpStream) -> Result<Request, ReadError> {
     }
     while body.len() < length {
         let want = (length - body.len()).min(chunk.len());
-        match stream.read(&mut chunk[..want]) {
-            Ok(0) | Err(_) => return Err(ReadError::Gone),
-            Ok(n) => body.extend_from_slice(&chunk[..n]),
-        }
+        let n = read_by(stream, &mut chunk[..want], deadline)?;
+        body.extend_from_slice(&chunk[..n]);
     }
     request.body = body;
     Ok(request)
