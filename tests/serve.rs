@@ -244,6 +244,19 @@ fn a_non_loopback_bind_without_a_token_gets_a_random_one() {
     assert_eq!(server.stop().code(), Some(130));
 }
 
+/// Without a token, a server on another loopback address answers to it as its host (and
+/// still to no other name).
+#[test]
+fn a_server_answers_to_the_address_it_listens_on() {
+    let server = Server::start(&["--bind", "127.0.0.2", PATH[0], "--width", "8"]);
+    assert!(server.addr.starts_with("127.0.0.2:"), "{}", server.addr);
+    assert_eq!(server.token, None);
+    assert_eq!(server.get("/api/state").status, 200);
+    let other = b"GET /api/state HTTP/1.1\r\nHost: raylink.example:80\r\n\r\n";
+    assert_eq!(server.raw(other).status, 403);
+    assert_eq!(server.stop().code(), Some(130));
+}
+
 #[test]
 fn bad_options_are_one_line_errors() {
     let dir = tempfile::tempdir().unwrap();

@@ -25,8 +25,8 @@ const MAX_STREAMS: usize = 8;
 pub struct Api {
     pub session: Arc<Session>,
     pub token: Option<String>,
-    /// The port, for the host check.
-    pub port: u16,
+    /// The address listened on, for the host check.
+    pub addr: std::net::SocketAddr,
     pub page: String,
     pub save_dir: PathBuf,
     pub scene_name: String,
@@ -38,7 +38,7 @@ impl Api {
     pub fn new(
         session: Arc<Session>,
         token: Option<String>,
-        port: u16,
+        addr: std::net::SocketAddr,
         save_dir: PathBuf,
         scene_name: String,
     ) -> Api {
@@ -48,7 +48,7 @@ impl Api {
         Api {
             session,
             token,
-            port,
+            addr,
             page,
             save_dir,
             scene_name,
@@ -113,18 +113,20 @@ impl Api {
             }
             None => {
                 let host = r.header("host").unwrap_or_default();
-                let p = self.port;
+                let p = self.addr.port();
                 let local = [
                     format!("127.0.0.1:{p}"),
                     format!("localhost:{p}"),
                     format!("[::1]:{p}"),
+                    self.addr.to_string(),
                 ];
                 if local.iter().any(|l| l.eq_ignore_ascii_case(host)) {
                     Ok(())
                 } else {
                     Err(Response::text(
                         403,
-                        "this server answers only to 127.0.0.1, localhost or [::1] as its host",
+                        "this server answers only to its own address, 127.0.0.1, localhost or \
+                         [::1] as its host",
                     ))
                 }
             }

@@ -175,7 +175,7 @@ pub fn run(cli: &Cli, args: ServeArgs) -> Result<(), Failure> {
     let api = Arc::new(api::Api::new(
         session.clone(),
         token.clone(),
-        addr.port(),
+        addr,
         save_dir,
         scene_name.clone(),
     ));

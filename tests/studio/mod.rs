@@ -76,9 +76,14 @@ impl Server {
         let (authority, query) = rest.split_once('/').unwrap();
         let port = authority.rsplit(':').next().unwrap();
         let token = query.strip_prefix("?token=").map(str::to_string);
+        // A server on every address is reached through loopback.
+        let addr = match authority.strip_prefix("0.0.0.0:") {
+            Some(_) => format!("127.0.0.1:{port}"),
+            None => authority.to_string(),
+        };
         Server {
             child: Some(child),
-            addr: format!("127.0.0.1:{port}"),
+            addr,
             token,
             url,
         }
