@@ -333,7 +333,12 @@ pub fn work(session: &Session, mut renderer: Renderer) {
                     });
                     Some(at)
                 }
-                Err(Error::Cancelled { .. }) => continue,
+                Err(Error::Cancelled { .. }) => {
+                    // Interrupted by a camera move: still to do, unless a newer one came.
+                    let mut inbox = lock(&session.inbox);
+                    inbox.relight.get_or_insert((request, at));
+                    continue;
+                }
                 Err(e) => {
                     fail(session, &e);
                     continue;
