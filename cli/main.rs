@@ -9,6 +9,7 @@ mod farm;
 mod options;
 mod progress;
 mod render;
+mod serve;
 mod signals;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
@@ -65,6 +66,21 @@ enum Command {
     /// distribution, and so does a new colour for a material with a stored reflectance
     /// series (--reflectance-series).
     Relight(render::RelightArgs),
+    /// raylink studio: a live view of the render in the browser (docs/studio.md). Takes the
+    /// render options; orbit, pan and zoom restart the render, the network relights, the
+    /// page saves images to --save-dir.
+    #[command(
+        mut_arg("outputs", |a| a.required(false).hide(true)),
+        mut_arg("write_interval", |a| a.hide(true)),
+        mut_arg("checkpoint_interval", |a| a.hide(true)),
+        mut_arg("resume", |a| a.hide(true)),
+        mut_arg("aov", |a| a.hide(true)),
+        mut_arg("exposure", |a| a.hide(true)),
+        mut_arg("half", |a| a.hide(true)),
+        mut_arg("tile", |a| a.hide(true)),
+        mut_arg("crop", |a| a.hide(true))
+    )]
+    Serve(serve::ServeArgs),
     /// Packaging: write the man page (raylink.1) and the bash, zsh and fish completions
     /// generated from this command line into DIR.
     #[command(hide = true)]
@@ -243,6 +259,7 @@ fn main() -> ExitCode {
             | Command::Precompute(_)
             | Command::Animate(_)
             | Command::Convert(_)
+            | Command::Serve(_)
     );
     let signals = match Signals::install(CancelToken::new(), graceful) {
         Ok(s) => s,
@@ -260,6 +277,7 @@ fn main() -> ExitCode {
         Command::Precompute(a) => render::run_precompute(&cli, a),
         Command::Merge(a) => farm::run_merge(a),
         Command::Relight(a) => render::run_relight(&cli, a),
+        Command::Serve(a) => serve::run(&cli, a),
         Command::GenerateAssets { dir } => generate_assets(&dir).map_err(Failure::from),
     };
     match result {

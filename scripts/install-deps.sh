@@ -2,9 +2,11 @@
 # Installs the Debian packages raylink builds against: Embree (libembree-dev: Embree 3 on
 # Debian 12, Embree 4 on Debian 13), OpenImageIO, libclang for bindgen, and a C++ compiler;
 # and bsdextrautils, whose `script` the progress tests run (Debian 13 moved it there from
-# the essential bsdutils).
+# the essential bsdutils); and chromium with chromium-driver, the headless browser that
+# tests/studio_browser.rs drives through WebDriver to test `raylink serve`'s page.
 set -euo pipefail
-packages=(build-essential pkg-config libclang-dev libembree-dev libopenimageio-dev bsdextrautils)
+packages=(build-essential pkg-config libclang-dev libembree-dev libopenimageio-dev bsdextrautils
+  chromium chromium-driver)
 sudo=""
 if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
 missing=()

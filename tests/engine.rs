@@ -273,3 +273,61 @@ fn a_cancelled_parse_of_a_large_scene_stops_within_a_second() {
         other => panic!("expected a cancel while reading, got {other:?}"),
     }
 }
+
+/// A preview is the job with one sample at each pixel's centre (`aa = uniform, spp = 1`),
+/// bit for bit, from the same prepared technique; the job's own render is unchanged by it;
+/// the progressive techniques have none.
+#[test]
+fn a_preview_is_the_one_sample_render_of_the_view() {
+    let room = scene("network-room.toml");
+    let network = |spp, aa| Settings {
+        integrator: Some(TechniqueKind::Network),
+        slopes: Some(6),
+        intercept_step: Some(0.0625),
+        spp: Some(spp),
+        aa,
+        ..Settings::default()
+    };
+    let control = Control::default();
+    for (kind, scene) in [
+        (TechniqueKind::Whitted, scene("whitted.toml")),
+        (TechniqueKind::Network, room.clone()),
+    ] {
+        let settings = |spp, aa| match kind {
+            TechniqueKind::Network => network(spp, aa),
+            _ => Settings {
+                integrator: Some(kind),
+                spp: Some(spp),
+                aa,
+                ..Settings::default()
+            },
+        };
+        let full = job(&scene, settings(4, None), (24, 18));
+        let mut renderer = Renderer::new(scene.clone(), full.clone(), &control).unwrap();
+        let preview = renderer.render_preview(&control).unwrap().unwrap();
+        let after = renderer.render(&control).unwrap();
+        let uniform = Some(raylink::job::AntiAliasing::Uniform);
+        let one = job(&scene, settings(1, uniform), (24, 18));
+        let expected = Renderer::new(scene.clone(), one, &control)
+            .unwrap()
+            .render(&control)
+            .unwrap();
+        assert_eq!(checksum(&preview), checksum(&expected), "{kind}");
+        let fresh = Renderer::new(scene.clone(), full, &control)
+            .unwrap()
+            .render(&control)
+            .unwrap();
+        assert_eq!(checksum(&after), checksum(&fresh), "{kind}");
+        assert_ne!(checksum(&preview), checksum(&after), "{kind}");
+    }
+    let path = job(
+        &room,
+        Settings {
+            integrator: Some(TechniqueKind::Path),
+            ..Settings::default()
+        },
+        (8, 6),
+    );
+    let mut renderer = Renderer::new(room, path, &control).unwrap();
+    assert!(renderer.render_preview(&control).unwrap().is_none());
+}

@@ -24,6 +24,7 @@ use crate::integrators::Context;
 use crate::render::aov::render_aovs;
 use crate::render::pixels::{render_pixels, PixelView};
 use crate::render::progressive::{render_passes, render_region};
+use crate::render::PixelSampling;
 use crate::render::{Film, RenderStats, Tile};
 use crate::scene::{Scene, MAX_RESOLUTION};
 use crate::{Error, Result};
@@ -414,6 +415,33 @@ impl Renderer {
             self.technique.annotate(&ctx, &mut rendered.image, control);
         }
         Ok(rendered)
+    }
+
+    /// A quick first image of the view, for interactive front ends (a camera being moved):
+    /// the pixel techniques (Whitted, the network, the irradiance cache) take one sample at
+    /// each pixel's centre instead of the job's anti-aliasing or supersampling; the same
+    /// image as a job with `aa = uniform, spp = 1`. `None` for the progressive techniques,
+    /// whose first pass already is such an image. [`render`](Self::render) is unchanged.
+    pub fn render_preview(&mut self, control: &Control) -> Result<Option<Rendered>> {
+        self.prepare(control)?;
+        let ctx = Context::new(&self.scene, self.accel.as_ref());
+        let Tiles::Pixels(integrator, _) = self.technique.tiles() else {
+            return Ok(None);
+        };
+        let job = &self.job;
+        let view = PixelView {
+            width: job.width,
+            height: job.height,
+            sampling: PixelSampling::Uniform { n: 1 },
+            threads: job.threads,
+            seed: job.seed,
+        };
+        let (image, stats) = render_pixels(&ctx, integrator, &view, &job.pixels(), control)?;
+        Ok(Some(Rendered {
+            image,
+            stats,
+            film: None,
+        }))
     }
 
     /// The auxiliary images of the job's pixels (albedo, normal, depth: what the camera

@@ -66,6 +66,19 @@ fn relative(target: &Path, base: &Path) -> Option<PathBuf> {
     Some(out)
 }
 
+/// The `[camera]` table of a scene file for `camera`, as text to paste into one: what the
+/// scene reader reads back as the same camera (floats as their shortest exact decimals).
+pub fn camera_toml(camera: &Camera) -> String {
+    #[derive(serde::Serialize)]
+    struct Table {
+        camera: CameraDesc,
+    }
+    toml::to_string(&Table {
+        camera: self::camera(camera),
+    })
+    .unwrap_or_default()
+}
+
 /// Writes `scene` as TOML to `output`, its meshes as PLY files beside it.
 pub fn write_toml(scene: &Scene, output: &Path) -> crate::Result<()> {
     let out_dir = output
@@ -477,5 +490,33 @@ impl MeshDir {
 impl Drop for MeshDir {
     fn drop(&mut self) {
         let _ = std::fs::remove_dir_all(&self.tmp);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Vec3;
+
+    /// The snippet, pasted as a scene's `[camera]`, reads back as the same camera to the
+    /// bit, for coordinates that are not short decimals (the reader normalises `up`).
+    #[test]
+    fn camera_toml_reads_back_as_the_same_camera() {
+        let camera = Camera {
+            position: Vec3::new(1.0 / 3.0, -2.5e-7, 4.6),
+            look_at: Vec3::new(2.0, 1.3, -0.1),
+            up: Vec3::new(0.1, 0.9, 0.0).normalize(),
+            fov_deg: 55.5,
+            width: 64,
+            height: 48,
+        };
+        let snippet = camera_toml(&camera);
+        assert!(snippet.starts_with("[camera]\n"), "{snippet}");
+        let text = format!(
+            "{snippet}\n[materials.m]\n\n[[shapes]]\ntype = \"sphere\"\nmaterial = \"m\"\n\
+             center = [0, 0, 0]\nradius = 1\n"
+        );
+        let scene = crate::scene::toml::from_str(&text, Path::new("pasted.toml")).unwrap();
+        assert_eq!(scene.camera, camera);
     }
 }

@@ -1,0 +1,496 @@
+//! The studio's routes: the page, the state as JSON, the events stream, the images as raw
+//! floats, and the commands (camera, relight, save). Every request is checked first: the
+//! token when one is set, else that it names this machine as its host (a page elsewhere
+//! cannot reach the server through a name that resolves here); commands must be JSON
+//! (which a page of another origin cannot send without the server's consent) from no other
+//! origin. The paths are matched as whole strings: none reaches the file system.
+
+use super::http::{Reply, Request, Response};
+use super::session::{lock, RelightRequest, Session, State, Status};
+use raylink::math::Vec3;
+use raylink::{write_image, Image, MetaValue, OutputOptions};
+use serde::Deserialize;
+use serde_json::{json, Value};
+use std::collections::BTreeMap;
+use std::io::Write;
+use std::path::PathBuf;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
+use std::time::Duration;
+
+/// Event streams open at once (each holds a connection).
+const MAX_STREAMS: usize = 8;
+
+/// What the routes need.
+pub struct Api {
+    pub session: Arc<Session>,
+    pub token: Option<String>,
+    /// The address listened on, for the host check.
+    pub addr: std::net::SocketAddr,
+    pub page: String,
+    pub save_dir: PathBuf,
+    pub scene_name: String,
+    streams: Arc<AtomicUsize>,
+    saves: Mutex<u32>,
+}
+
+impl Api {
+    pub fn new(
+        session: Arc<Session>,
+        token: Option<String>,
+        addr: std::net::SocketAddr,
+        save_dir: PathBuf,
+        scene_name: String,
+    ) -> Api {
+        let page = include_str!("page.html")
+            .replace("/*STYLE*/", include_str!("page.css"))
+            .replace("/*SCRIPT*/", include_str!("page.js"));
+        Api {
+            session,
+            token,
+            addr,
+            page,
+            save_dir,
+            scene_name,
+            streams: Arc::new(AtomicUsize::new(0)),
+            saves: Mutex::new(0),
+        }
+    }
+
+    pub fn handle(&self, r: &Request) -> Reply {
+        if let Err(refused) = self.admit(r) {
+            return Reply::Full(refused);
+        }
+        let get = r.method == "GET";
+        let response = match (r.path.as_str(), get) {
+            ("/", true) => Response::new(200, "text/html; charset=utf-8", self.page.clone())
+                .with_header(
+                    "Content-Security-Policy",
+                    "default-src 'none'; script-src 'unsafe-inline'; style-src \
+                     'unsafe-inline'; connect-src 'self'; img-src 'self' blob: data:"
+                        .into(),
+                ),
+            ("/api/state", true) => Response::json(&self.state()),
+            ("/api/events", true) => return self.events(),
+            ("/api/image", true) => self.image(r),
+            ("/api/camera.toml", true) => {
+                let camera = lock(&self.session.state).camera.clone();
+                Response::new(
+                    200,
+                    "text/plain; charset=utf-8",
+                    raylink::scene::convert::camera_toml(&camera),
+                )
+            }
+            ("/api/camera", false) => self.command(r, |api, body| api.camera(body)),
+            ("/api/relight", false) => self.command(r, |api, body| api.relight(body)),
+            ("/api/save", false) => self.command(r, |api, body| api.save(body)),
+            (
+                "/" | "/api/state" | "/api/events" | "/api/image" | "/api/camera.toml"
+                | "/api/camera" | "/api/relight" | "/api/save",
+                _,
+            ) => Response::text(405, "method not allowed"),
+            _ => Response::text(404, "not found"),
+        };
+        Reply::Full(response)
+    }
+
+    /// The token, or (without one) the host check.
+    fn admit(&self, r: &Request) -> Result<(), Response> {
+        match &self.token {
+            Some(token) => {
+                let given = r.param("token").or_else(|| {
+                    r.header("authorization")
+                        .and_then(|a| a.strip_prefix("Bearer "))
+                });
+                match given {
+                    None => Err(Response::text(401, "a token is needed: ?token=T")
+                        .with_header("WWW-Authenticate", "Bearer".into())),
+                    Some(g) if !same(g.trim().as_bytes(), token.as_bytes()) => {
+                        Err(Response::text(403, "wrong token"))
+                    }
+                    Some(_) => Ok(()),
+                }
+            }
+            None => {
+                let host = r.header("host").unwrap_or_default();
+                let p = self.addr.port();
+                let local = [
+                    format!("127.0.0.1:{p}"),
+                    format!("localhost:{p}"),
+                    format!("[::1]:{p}"),
+                    self.addr.to_string(),
+                ];
+                if local.iter().any(|l| l.eq_ignore_ascii_case(host)) {
+                    Ok(())
+                } else {
+                    Err(Response::text(
+                        403,
+                        "this server answers only to its own address, 127.0.0.1, localhost or \
+                         [::1] as its host",
+                    ))
+                }
+            }
+        }
+    }
+
+    /// A JSON command: refused unless JSON from this origin; a body that is not what
+    /// `run` expects is a 400.
+    fn command(
+        &self,
+        r: &Request,
+        run: impl FnOnce(&Api, &[u8]) -> Result<Value, (u16, String)>,
+    ) -> Response {
+        let json = r
+            .header("content-type")
+            .is_some_and(|t| t.to_ascii_lowercase().starts_with("application/json"));
+        if !json {
+            return Response::text(415, "commands are JSON: Content-Type: application/json");
+        }
+        if let (Some(origin), Some(host)) = (r.header("origin"), r.header("host")) {
+            if origin != format!("http://{host}") {
+                return Response::text(403, "a command from another origin");
+            }
+        }
+        match run(self, &r.body) {
+            Ok(v) => Response::json(&v),
+            Err((status, why)) => Response::text(status, &why),
+        }
+    }
+
+    fn camera(&self, body: &[u8]) -> Result<Value, (u16, String)> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Body {
+            position: [f32; 3],
+            look_at: [f32; 3],
+            up: Option<[f32; 3]>,
+            fov: Option<f32>,
+        }
+        let b: Body = parse(body)?;
+        let mut camera = lock(&self.session.state).camera.clone();
+        camera.position = Vec3::from(b.position);
+        camera.look_at = Vec3::from(b.look_at);
+        if let Some(up) = b.up {
+            camera.up = Vec3::from(up);
+        }
+        if let Some(fov) = b.fov {
+            camera.fov_deg = fov;
+        }
+        let forward = camera.look_at - camera.position;
+        let finite = [camera.position, camera.look_at, camera.up]
+            .iter()
+            .all(|v| v.is_finite())
+            && camera.fov_deg.is_finite();
+        if !finite
+            || forward.length() < 1e-6
+            || camera.up.length() < 1e-6
+            || forward.normalize().cross(camera.up.normalize()).length() < 1e-4
+            || !(0.1..=179.0).contains(&camera.fov_deg)
+        {
+            return Err((
+                400,
+                "a camera needs finite vectors, look_at apart from position, an up not along \
+                 the view, and a fov between 0.1 and 179 degrees"
+                    .into(),
+            ));
+        }
+        self.session.set_camera(camera);
+        Ok(json!({"ok": true}))
+    }
+
+    fn relight(&self, body: &[u8]) -> Result<Value, (u16, String)> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Body {
+            #[serde(default)]
+            lights: BTreeMap<String, f32>,
+            #[serde(default)]
+            materials: BTreeMap<String, f32>,
+        }
+        let b: Body = parse(body)?;
+        let base = &self.session.base;
+        let mut request = lock(&self.session.state).relight.clone();
+        for (given, known, what, max) in [
+            (&b.lights, &mut request.lights, "light", 1e4f32),
+            (&b.materials, &mut request.materials, "material", 2.0),
+        ] {
+            for (name, &k) in given {
+                let Some(entry) = known.iter_mut().find(|(n, _)| n == name) else {
+                    return Err((400, format!("no {what} named {name:?}")));
+                };
+                if !(k.is_finite() && (0.0..=max).contains(&k)) {
+                    return Err((400, format!("{what} {name:?}: a factor from 0 to {max}")));
+                }
+                entry.1 = k;
+            }
+        }
+        // A diffuse colour must reflect less than all the light it gets.
+        for (name, k) in &request.materials {
+            let m = base.scene.materials.iter().find(|m| &m.name == name);
+            if let Some(raylink::scene::Texture::Constant(c)) = m.map(|m| &m.diffuse) {
+                if c.max_element() * k >= 1.0 {
+                    return Err((
+                        400,
+                        format!("material {name:?}: {k} times its colour reflects 1 or more"),
+                    ));
+                }
+            }
+        }
+        self.session.relight(RelightRequest {
+            lights: request.lights,
+            materials: request.materials,
+        });
+        Ok(json!({"ok": true}))
+    }
+
+    fn save(&self, body: &[u8]) -> Result<Value, (u16, String)> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Body {
+            format: String,
+            exposure: Option<f32>,
+        }
+        let b: Body = parse(body)?;
+        let ext = match b.format.as_str() {
+            "exr" | "png" => b.format.as_str(),
+            _ => return Err((400, "format: exr or png".into())),
+        };
+        let exposure = b.exposure.unwrap_or(0.0);
+        if !(exposure.is_finite() && exposure.abs() <= 20.0) {
+            return Err((400, "exposure: -20 to 20 stops".into()));
+        }
+        let (image, spp, partial) = {
+            let s = lock(&self.session.state);
+            let Some(image) = s.image.clone() else {
+                return Err((409, "no image yet".into()));
+            };
+            (image, s.spp, s.status != Status::Done)
+        };
+        // One save at a time, so that two never pick the same name.
+        let mut count = lock(&self.saves);
+        let path = loop {
+            *count += 1;
+            let p = self.save_dir.join(format!("studio-{:04}.{ext}", *count));
+            if !p.exists() {
+                break p;
+            }
+            if *count > 9999 {
+                return Err((
+                    409,
+                    "the save directory has studio-0001 to 9999 already".into(),
+                ));
+            }
+        };
+        let job = &self.session.base.job;
+        let mut meta = vec![
+            (
+                "Software".to_string(),
+                MetaValue::Str(format!("raylink {} studio", raylink::VERSION)),
+            ),
+            (
+                "raylink:scene".into(),
+                MetaValue::Str(self.scene_name.clone()),
+            ),
+            (
+                "raylink:integrator".into(),
+                MetaValue::Str(job.technique.kind().to_string()),
+            ),
+            ("raylink:seed".into(), MetaValue::Str(job.seed.to_string())),
+            (
+                "raylink:samples_per_pixel".into(),
+                MetaValue::Float(spp as f32),
+            ),
+        ];
+        if partial {
+            meta.push(("raylink:partial".into(), MetaValue::Int(1)));
+        }
+        let options = OutputOptions {
+            exposure: if ext == "png" { exposure } else { 0.0 },
+            half: false,
+        };
+        write_image(&path, &image, &meta, &options)
+            .map_err(|e| (500, raylink::error::one_line(&e.to_string())))?;
+        let name = path.file_name().unwrap_or_default().to_string_lossy();
+        Ok(json!({"file": name, "path": path.display().to_string()}))
+    }
+
+    /// The image of `?kind=` (beauty, albedo, normal, depth, reference) as little-endian
+    /// 32-bit floats, RGB, rows top to bottom.
+    fn image(&self, r: &Request) -> Response {
+        let kind = r.param("kind").unwrap_or("beauty");
+        let (image, version, spp, view): (Arc<Image>, u64, u32, u64) = {
+            let s = lock(&self.session.state);
+            let aov = || {
+                s.aovs
+                    .as_ref()
+                    .filter(|a| a.0 == s.view)
+                    .map(|a| a.1.clone())
+            };
+            match kind {
+                "beauty" => match &s.image {
+                    Some(i) => (i.clone(), s.image_version, s.spp, s.image_view),
+                    None => return Response::text(409, "no image yet"),
+                },
+                "albedo" | "normal" | "depth" => {
+                    let i = ["albedo", "normal", "depth"]
+                        .iter()
+                        .position(|k| *k == kind)
+                        .unwrap_or(0);
+                    match aov() {
+                        Some(a) => (Arc::new(a[i].clone()), s.view, 1, s.view),
+                        None => {
+                            drop(s);
+                            self.session.want_aovs();
+                            return Response::text(409, "computing the auxiliary images");
+                        }
+                    }
+                }
+                "reference" => match &self.session.base.reference {
+                    Some(i) => (Arc::new(i.clone()), 0, 0, 0),
+                    None => return Response::text(404, "no --reference image"),
+                },
+                _ => {
+                    return Response::text(400, "kind: beauty, albedo, normal, depth or reference")
+                }
+            }
+        };
+        let mut body = Vec::with_capacity(image.pixels.len() * 12);
+        for p in &image.pixels {
+            for c in [p.x, p.y, p.z] {
+                body.extend_from_slice(&c.to_le_bytes());
+            }
+        }
+        Response::new(200, "application/octet-stream", body)
+            .with_header("X-Width", image.width.to_string())
+            .with_header("X-Height", image.height.to_string())
+            .with_header("X-Version", version.to_string())
+            .with_header("X-Spp", spp.to_string())
+            .with_header("X-View", view.to_string())
+    }
+
+    pub fn state(&self) -> Value {
+        let s = lock(&self.session.state);
+        state_json(&self.session, &s)
+    }
+
+    /// Server-sent events: the state as one `data:` line whenever it changes (at most
+    /// every 30 ms), a comment every 15 s so that a closed page is noticed.
+    fn events(&self) -> Reply {
+        if self.streams.fetch_add(1, Ordering::SeqCst) >= MAX_STREAMS {
+            self.streams.fetch_sub(1, Ordering::SeqCst);
+            return Reply::Full(Response::text(503, "too many event streams"));
+        }
+        let (session, streams) = (self.session.clone(), self.streams.clone());
+        Reply::Stream(Box::new(move |stream| {
+            let _ = stream_events(&session, stream);
+            streams.fetch_sub(1, Ordering::SeqCst);
+        }))
+    }
+}
+
+fn stream_events(session: &Session, stream: &mut std::net::TcpStream) -> std::io::Result<()> {
+    stream.write_all(
+        b"HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\n\
+          Connection: close\r\nX-Content-Type-Options: nosniff\r\n\r\n",
+    )?;
+    let mut seen = 0;
+    loop {
+        let text = {
+            let mut s = lock(&session.state);
+            let deadline = std::time::Instant::now() + Duration::from_secs(15);
+            while s.version == seen && !session.quitting() {
+                let left = deadline.saturating_duration_since(std::time::Instant::now());
+                if left.is_zero() {
+                    break;
+                }
+                s = session
+                    .changed
+                    .wait_timeout(s, left)
+                    .unwrap_or_else(|e| e.into_inner())
+                    .0;
+            }
+            if session.quitting() {
+                return Ok(());
+            }
+            if s.version == seen {
+                ": keep-alive\n\n".to_string()
+            } else {
+                seen = s.version;
+                format!("data: {}\n\n", state_json(session, &s))
+            }
+        };
+        stream.write_all(text.as_bytes())?;
+        stream.flush()?;
+        std::thread::sleep(Duration::from_millis(30));
+    }
+}
+
+fn state_json(session: &Session, s: &State) -> Value {
+    let base = &session.base;
+    let (status, error) = match &s.status {
+        Status::Preparing => ("preparing", None),
+        Status::Rendering => ("rendering", None),
+        Status::Done => ("done", None),
+        Status::Failed(e) => ("failed", Some(e.clone())),
+    };
+    let c = &s.camera;
+    let v = |v: Vec3| [v.x, v.y, v.z];
+    let p = &session.progress;
+    let elapsed = if s.status == Status::Done {
+        s.elapsed
+    } else {
+        s.started.elapsed().as_secs_f64()
+    };
+    let colour = |name: &str| {
+        base.scene
+            .materials
+            .iter()
+            .find(|m| m.name == name)
+            .and_then(|m| match m.diffuse {
+                raylink::scene::Texture::Constant(c) => Some([c.x, c.y, c.z]),
+                _ => None,
+            })
+    };
+    json!({
+        "version": s.version,
+        "image_version": s.image_version,
+        "width": base.job.width,
+        "height": base.job.height,
+        "integrator": base.job.technique.kind().to_string(),
+        "progressive": base.job.technique.monte_carlo().is_some(),
+        "spp": s.spp,
+        "target_spp": base.job.technique.monte_carlo().map(|m| m.spp),
+        "status": status,
+        "error": error,
+        "elapsed": elapsed,
+        "eta": if s.status == Status::Done { None } else { p.eta() },
+        "phase": *lock(&p.phase),
+        "rays": s.rays,
+        "mrays": s.mrays,
+        "view": s.view,
+        "view_ms": s.view_ms,
+        "relight_ms": s.relight_ms,
+        "relight_prepare_ms": s.relight_prepare_ms,
+        "camera": {"position": v(c.position), "look_at": v(c.look_at), "up": v(c.up),
+                   "fov": c.fov_deg},
+        "lights": s.relight.lights.iter().map(|(n, k)| json!({"name": n, "factor": k}))
+            .collect::<Vec<_>>(),
+        "materials": s.relight.materials.iter()
+            .map(|(n, k)| json!({"name": n, "factor": k, "colour": colour(n)}))
+            .collect::<Vec<_>>(),
+        "aovs": s.aovs.as_ref().is_some_and(|a| a.0 == s.view),
+        "reference": base.reference.is_some(),
+        "rmse": s.rmse,
+        "notes": s.notes,
+    })
+}
+
+/// A JSON body as `T`; a 400 naming what is wrong.
+fn parse<T: for<'de> Deserialize<'de>>(body: &[u8]) -> Result<T, (u16, String)> {
+    serde_json::from_slice(body).map_err(|e| (400, format!("malformed JSON: {e}")))
+}
+
+/// Equality in a time that does not depend on where the strings differ.
+fn same(a: &[u8], b: &[u8]) -> bool {
+    a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
+}

@@ -1,0 +1,482 @@
+//! The studio's render session: one worker thread owns the library's [`Renderer`] and runs
+//! one job at a time; the HTTP threads read what it published ([`State`]) and leave it
+//! commands ([`Inbox`]): a new camera or a relight cancels the job in hand through its
+//! [`CancelToken`] and starts the next one. Progressive renders publish the film after
+//! every pass; the network renders each view from the network it prepared once.
+
+use raylink::job::Technique;
+use raylink::scene::Camera;
+use raylink::scene::Texture;
+use raylink::{
+    CancelToken, Control, Error, Image, Job, MemoryBudget, Progress, Relight, Renderer, Scene,
+};
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::{Arc, Condvar, Mutex, MutexGuard};
+use std::time::Instant;
+
+/// A relight: a factor per light (emissive material) and per diffuse material, by name.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct RelightRequest {
+    pub lights: Vec<(String, f32)>,
+    pub materials: Vec<(String, f32)>,
+}
+
+/// Commands from the page to the worker, and the cancel token of the job in hand (kept
+/// here so that a command and the cancel of the job it replaces are one step).
+#[derive(Default)]
+pub struct Inbox {
+    camera: Option<(Camera, Instant)>,
+    relight: Option<(RelightRequest, Instant)>,
+    /// The page shows an auxiliary image: compute them for every view.
+    aovs_wanted: bool,
+    quit: bool,
+    cancel: CancelToken,
+}
+
+/// Where the worker stands.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Status {
+    Preparing,
+    Rendering,
+    Done,
+    Failed(String),
+}
+
+/// What the worker published: the page's state and the latest images.
+pub struct State {
+    /// Bumped whenever anything here changes; the events stream announces it.
+    pub version: u64,
+    /// The latest beauty image, and its own version (a new one for every image).
+    pub image: Option<Arc<Image>>,
+    pub image_version: u64,
+    /// The view `image` shows.
+    pub image_view: u64,
+    /// Samples per pixel in `image`: for the pixel techniques 0 in a preview (one sample
+    /// at each pixel's centre), 1 in the finished image.
+    pub spp: u32,
+    /// The camera of the view being rendered, and a count of the views.
+    pub camera: Camera,
+    pub view: u64,
+    pub status: Status,
+    /// When the job in hand started, and how long the last one took.
+    pub started: Instant,
+    pub elapsed: f64,
+    /// The finished render's rays and Mrays/s.
+    pub rays: Option<u64>,
+    pub mrays: Option<f64>,
+    /// The last camera move's time to its first image, and the last relight's time to its
+    /// image (its preparation alone in `relight_prepare_ms`).
+    pub view_ms: Option<f64>,
+    pub relight_ms: Option<f64>,
+    pub relight_prepare_ms: Option<f64>,
+    /// The factors of the last relight.
+    pub relight: RelightRequest,
+    /// Albedo, normal and depth of `aov_view`.
+    pub aovs: Option<(u64, Arc<[Image; 3]>)>,
+    /// RMSE of `image` against the reference.
+    pub rmse: Option<f64>,
+    pub notes: Vec<String>,
+}
+
+/// What the session shares between the worker and the HTTP threads.
+pub struct Session {
+    pub state: Mutex<State>,
+    pub changed: Condvar,
+    inbox: Mutex<Inbox>,
+    wake: Condvar,
+    pub progress: Arc<Counter>,
+    /// What does not change while serving.
+    pub base: Base,
+}
+
+/// The session's fixed facts.
+pub struct Base {
+    pub scene: Arc<Scene>,
+    pub job: Job,
+    pub budget: MemoryBudget,
+    pub reference: Option<Image>,
+    /// The lights (emissive materials) and the diffuse materials with one colour that a
+    /// relight can change, for the network integrator.
+    pub lights: Vec<String>,
+    pub materials: Vec<String>,
+}
+
+/// The progress sink of the jobs: the phase and its units done, for the ETA.
+#[derive(Default)]
+pub struct Counter {
+    pub phase: Mutex<String>,
+    pub total: AtomicU64,
+    pub done: AtomicU64,
+    pub started: Mutex<Option<Instant>>,
+    notes: Mutex<Vec<String>>,
+}
+
+impl Progress for Counter {
+    fn begin(&self, phase: &str, total: Option<u64>, _unit: &str) {
+        *lock(&self.phase) = phase.to_string();
+        self.total.store(total.unwrap_or(0), Ordering::Relaxed);
+        self.done.store(0, Ordering::Relaxed);
+        *lock(&self.started) = Some(Instant::now());
+    }
+    fn advance(&self, units: u64) {
+        self.done.fetch_add(units, Ordering::Relaxed);
+    }
+    fn note(&self, line: &str) {
+        let mut notes = lock(&self.notes);
+        notes.push(line.to_string());
+        let excess = notes.len().saturating_sub(8);
+        notes.drain(..excess);
+    }
+    fn warn(&self, line: &str) {
+        self.note(&format!("warning: {line}"));
+    }
+}
+
+impl Counter {
+    /// Seconds left in the phase in hand at its pace so far, if it has a known size.
+    pub fn eta(&self) -> Option<f64> {
+        let (total, done) = (
+            self.total.load(Ordering::Relaxed),
+            self.done.load(Ordering::Relaxed),
+        );
+        let started = (*lock(&self.started))?;
+        if total == 0 || done == 0 || done >= total {
+            return None;
+        }
+        let elapsed = started.elapsed().as_secs_f64();
+        Some(elapsed / done as f64 * (total - done) as f64)
+    }
+
+    pub fn notes(&self) -> Vec<String> {
+        lock(&self.notes).clone()
+    }
+}
+
+/// A lock that survives a panicked holder (the data are plain values).
+pub fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
+    m.lock().unwrap_or_else(|e| e.into_inner())
+}
+
+impl Session {
+    pub fn new(base: Base) -> Session {
+        let mut camera = base.scene.camera.clone();
+        camera.width = base.job.width;
+        camera.height = base.job.height;
+        Session {
+            state: Mutex::new(State {
+                version: 1,
+                image: None,
+                image_version: 0,
+                image_view: 0,
+                spp: 0,
+                camera,
+                view: 1,
+                status: Status::Preparing,
+                started: Instant::now(),
+                elapsed: 0.0,
+                rays: None,
+                mrays: None,
+                view_ms: None,
+                relight_ms: None,
+                relight_prepare_ms: None,
+                relight: RelightRequest {
+                    lights: base.lights.iter().map(|n| (n.clone(), 1.0)).collect(),
+                    materials: base.materials.iter().map(|n| (n.clone(), 1.0)).collect(),
+                },
+                aovs: None,
+                rmse: None,
+                notes: Vec::new(),
+            }),
+            changed: Condvar::new(),
+            inbox: Mutex::new(Inbox::default()),
+            wake: Condvar::new(),
+            progress: Arc::new(Counter::default()),
+            base,
+        }
+    }
+
+    /// Looks through `camera` next, cancelling the job in hand.
+    pub fn set_camera(&self, camera: Camera) {
+        let mut inbox = lock(&self.inbox);
+        inbox.camera = Some((camera, Instant::now()));
+        inbox.cancel.cancel();
+        self.wake.notify_all();
+    }
+
+    /// Relights next, cancelling the job in hand.
+    pub fn relight(&self, request: RelightRequest) {
+        let mut inbox = lock(&self.inbox);
+        inbox.relight = Some((request, Instant::now()));
+        inbox.cancel.cancel();
+        self.wake.notify_all();
+    }
+
+    /// The page shows auxiliary images: compute them (now, and for every view).
+    pub fn want_aovs(&self) {
+        let mut inbox = lock(&self.inbox);
+        if !inbox.aovs_wanted {
+            inbox.aovs_wanted = true;
+            self.wake.notify_all();
+        }
+    }
+
+    /// Stops the worker (after the job in hand is cancelled) and every event stream.
+    pub fn quit(&self) {
+        let mut inbox = lock(&self.inbox);
+        inbox.quit = true;
+        inbox.cancel.cancel();
+        self.wake.notify_all();
+        drop(inbox);
+        self.publish(|_| {});
+    }
+
+    pub fn quitting(&self) -> bool {
+        lock(&self.inbox).quit
+    }
+
+    /// Changes the state and tells the event streams.
+    fn publish(&self, change: impl FnOnce(&mut State)) {
+        let mut s = lock(&self.state);
+        change(&mut s);
+        s.version += 1;
+        self.changed.notify_all();
+    }
+
+    /// A new beauty image (after a pass, or the finished render).
+    fn publish_image(&self, image: Image, spp: u32) {
+        let rmse = self
+            .base
+            .reference
+            .as_ref()
+            .filter(|r| (r.width, r.height) == (image.width, image.height))
+            .map(|r| image.rmse(r) as f64);
+        self.publish(|s| {
+            s.image = Some(Arc::new(image));
+            s.image_version += 1;
+            s.image_view = s.view;
+            s.spp = spp;
+            s.rmse = rmse;
+            s.elapsed = s.started.elapsed().as_secs_f64();
+        });
+    }
+
+    fn control(&self, cancel: CancelToken) -> Control {
+        Control {
+            cancel,
+            budget: self.base.budget,
+            progress: self.progress.clone(),
+        }
+    }
+}
+
+/// What the worker was asked to do next.
+struct Next {
+    camera: Option<(Camera, Instant)>,
+    relight: Option<(RelightRequest, Instant)>,
+    aovs: bool,
+    cancel: CancelToken,
+}
+
+/// The worker: renders the first view, then whatever the page asks for, until [`Session::quit`].
+pub fn work(session: &Session, mut renderer: Renderer) {
+    let mut pending_first = true;
+    let mut aovs_done_for = 0;
+    loop {
+        let next = {
+            let mut inbox = lock(&session.inbox);
+            loop {
+                let view = lock(&session.state).view;
+                let aovs_missing = inbox.aovs_wanted && aovs_done_for != view;
+                if inbox.quit {
+                    return;
+                }
+                if pending_first
+                    || inbox.camera.is_some()
+                    || inbox.relight.is_some()
+                    || aovs_missing
+                {
+                    break;
+                }
+                inbox = session.wake.wait(inbox).unwrap_or_else(|e| e.into_inner());
+            }
+            inbox.cancel = CancelToken::new();
+            Next {
+                camera: inbox.camera.take(),
+                relight: inbox.relight.take(),
+                aovs: inbox.aovs_wanted,
+                cancel: inbox.cancel.clone(),
+            }
+        };
+        let control = session.control(next.cancel.clone());
+        let fresh = pending_first || next.camera.is_some() || next.relight.is_some();
+        pending_first = false;
+        if fresh {
+            // What is shown is no longer the finished image of what was asked for.
+            session.publish(|s| s.status = Status::Preparing);
+        }
+        let asked = next.camera.as_ref().map(|c| c.1);
+        if let Some((camera, _)) = next.camera {
+            renderer.set_camera(camera.clone());
+            session.publish(|s| {
+                s.camera = camera;
+                s.view += 1;
+            });
+        }
+        let relit = match next.relight {
+            Some((request, at)) => match rebuild(session, &request, &control) {
+                Ok(r) => {
+                    renderer = r;
+                    let ms = at.elapsed().as_secs_f64() * 1e3;
+                    session.publish(|s| {
+                        s.relight = request;
+                        s.relight_prepare_ms = Some(ms);
+                    });
+                    Some(at)
+                }
+                Err(Error::Cancelled { .. }) => {
+                    // Interrupted by a camera move: still to do, unless a newer one came.
+                    let mut inbox = lock(&session.inbox);
+                    inbox.relight.get_or_insert((request, at));
+                    continue;
+                }
+                Err(e) => {
+                    fail(session, &e);
+                    continue;
+                }
+            },
+            None => None,
+        };
+        let view = lock(&session.state).view;
+        if next.aovs && aovs_done_for != view {
+            match renderer.render_aovs(&control) {
+                Ok(Some(images)) => {
+                    aovs_done_for = view;
+                    session.publish(|s| s.aovs = Some((view, Arc::new(images))));
+                }
+                Ok(None) | Err(Error::Cancelled { .. }) => continue,
+                Err(e) => fail(session, &e),
+            }
+        }
+        if fresh {
+            render(session, &mut renderer, &control, asked, relit);
+        }
+    }
+}
+
+/// A renderer for the relit scene: the lights' factors through the library's relight of the
+/// network file, the materials' by the scene's diffuse colours.
+fn rebuild(
+    session: &Session,
+    request: &RelightRequest,
+    control: &Control,
+) -> raylink::Result<Renderer> {
+    let base = &session.base;
+    let mut scene = (*base.scene).clone();
+    scene.camera = lock(&session.state).camera.clone();
+    for (name, k) in &request.materials {
+        let original = base.scene.materials.iter().find(|m| &m.name == name);
+        let target = scene.materials.iter_mut().find(|m| &m.name == name);
+        if let (Some(o), Some(m)) = (original, target) {
+            if let Texture::Constant(c) = o.diffuse {
+                m.diffuse = Texture::Constant(c * *k);
+            }
+        }
+    }
+    let mut job = base.job.clone();
+    match &mut job.technique {
+        // The network relights its saved file (its light basis) once it has been saved.
+        Technique::Network(n) if n.file.as_ref().is_some_and(|f| f.exists()) => {
+            n.relight = Some(Relight {
+                lights: request.lights.clone(),
+                ..Relight::default()
+            });
+        }
+        // Any other technique renders the scene with the lights changed.
+        _ => {
+            for (name, k) in &request.lights {
+                if let Some(m) = scene.materials.iter_mut().find(|m| &m.name == name) {
+                    m.emission *= *k;
+                }
+            }
+        }
+    }
+    let mut renderer = Renderer::new(scene, job, control)?;
+    renderer.prepare(control)?;
+    Ok(renderer)
+}
+
+fn fail(session: &Session, e: &Error) {
+    let text = raylink::error::one_line(&e.to_string());
+    session.publish(|s| s.status = Status::Failed(text));
+}
+
+/// Renders the view: a progressive render publishes every pass, the others their image.
+fn render(
+    session: &Session,
+    renderer: &mut Renderer,
+    control: &Control,
+    asked: Option<Instant>,
+    relit: Option<Instant>,
+) {
+    session.publish(|s| {
+        s.status = Status::Rendering;
+        s.started = Instant::now();
+        s.rays = None;
+        s.mrays = None;
+    });
+    let first_image = |session: &Session| {
+        let now = Instant::now();
+        session.publish(|s| {
+            if let Some(t) = asked {
+                s.view_ms = Some((now - t).as_secs_f64() * 1e3);
+            }
+            if let Some(t) = relit {
+                s.relight_ms = Some((now - t).as_secs_f64() * 1e3);
+            }
+        });
+    };
+    let mut first = true;
+    let progressive = renderer.job().technique.monte_carlo().is_some();
+    if !progressive {
+        // One sample a pixel first: what a camera being dragged needs to follow it.
+        match renderer.render_preview(control) {
+            Ok(Some(r)) if !r.is_partial() => {
+                session.publish_image(r.image, 0);
+                first_image(session);
+                first = false;
+            }
+            Ok(_) | Err(Error::Cancelled { .. }) => return,
+            Err(e) => return fail(session, &e),
+        }
+    }
+    let result = if progressive {
+        renderer.render_progressive(control, None, &mut |film| {
+            session.publish_image(film.image()?, film.spp);
+            if std::mem::take(&mut first) {
+                first_image(session);
+            }
+            Ok(())
+        })
+    } else {
+        renderer.render(control)
+    };
+    match result {
+        Ok(r) if r.is_partial() => {}
+        Ok(r) => {
+            let spp = r.film.as_ref().map_or(1, |f| f.spp);
+            session.publish_image(r.image, spp);
+            if first {
+                first_image(session);
+            }
+            session.publish(|s| {
+                s.status = Status::Done;
+                s.rays = Some(r.stats.rays.total());
+                s.mrays = Some(r.stats.mrays_per_second());
+                s.elapsed = r.stats.seconds;
+                s.notes = session.progress.notes();
+            });
+        }
+        Err(Error::Cancelled { .. }) => {}
+        Err(e) => fail(session, &e),
+    }
+}

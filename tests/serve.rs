@@ -1,0 +1,466 @@
+//! `raylink serve` through its HTTP API: what it refuses (tokens, paths, malformed
+//! commands, floods, bad options) and that what it renders and saves is what `raylink
+//! render` writes, bit for bit.
+
+mod common;
+mod studio;
+
+use common::{assert_clean_failure_of, raylink, stderr};
+use std::io::Read;
+use std::net::TcpStream;
+use std::time::{Duration, Instant};
+use studio::{mean, Server};
+
+const PATH: [&str; 11] = [
+    "scenes/cornell-box.toml",
+    "--integrator",
+    "path",
+    "--width",
+    "32",
+    "--height",
+    "24",
+    "--spp",
+    "16",
+    "--seed",
+    "5",
+];
+
+const NETWORK: [&str; 9] = [
+    "scenes/network-room.toml",
+    "--width",
+    "48",
+    "--height",
+    "36",
+    "--slopes",
+    "6",
+    "--intercept-step",
+    "0.0625",
+];
+
+/// The render command's image, read back through the library.
+fn rendered(args: &[&str]) -> Vec<f32> {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.exr");
+    let mut all = vec!["render", "--quiet", "-o", out.to_str().unwrap()];
+    all.extend(args);
+    let run = raylink(&all);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let (image, _) = raylink::read_image(&out).unwrap();
+    image.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect()
+}
+
+fn bits(v: &[f32]) -> Vec<u32> {
+    v.iter().map(|x| x.to_bits()).collect()
+}
+
+#[test]
+fn with_a_token_every_request_must_carry_it() {
+    let server = Server::start(&["--token", "s3cret-token", PATH[0], "--width", "8"]);
+    let host = format!("Host: {}\r\n", server.addr);
+    let ask = |target: &str, extra: &str| {
+        server
+            .raw(format!("GET {target} HTTP/1.1\r\n{host}{extra}\r\n").as_bytes())
+            .status
+    };
+    for path in ["/", "/api/state", "/api/events", "/api/image", "/nothing"] {
+        assert_eq!(ask(path, ""), 401, "{path} without a token");
+        assert_eq!(ask(&format!("{path}?token=wrong"), ""), 403, "{path}");
+        assert_eq!(
+            ask(&format!("{path}?token=s3cret-tokeN"), ""),
+            403,
+            "{path}"
+        );
+        assert_eq!(ask(path, "Authorization: Bearer wrong\r\n"), 403, "{path}");
+    }
+    assert_eq!(ask("/api/state?token=s3cret-token", ""), 200);
+    assert_eq!(
+        ask("/api/state", "Authorization: Bearer s3cret-token\r\n"),
+        200
+    );
+    let page = server.get("/");
+    assert_eq!(page.status, 200);
+    assert!(page.text().contains("raylink studio"));
+    // A command without the token changes nothing.
+    let raw = format!(
+        "POST /api/camera HTTP/1.1\r\n{host}Content-Type: application/json\r\n\
+         Content-Length: 47\r\n\r\n{{\"position\":[0,1,9],\"look_at\":[0,1,0],\"fov\":30}}"
+    );
+    assert_eq!(server.raw(raw.as_bytes()).status, 401);
+    assert_eq!(server.state()["view"], 1);
+    assert_eq!(server.stop().code(), Some(130));
+}
+
+#[test]
+fn no_path_in_a_request_reaches_the_file_system() {
+    let server = Server::start(&[PATH[0], "--width", "8"]);
+    let host = &server.addr;
+    for target in [
+        "/../Cargo.toml",
+        "/%2e%2e/Cargo.toml",
+        "/%2e%2e%2fCargo.toml",
+        "/..%2fCargo.toml",
+        "/api/../../Cargo.toml",
+        "/Cargo.toml",
+        "/cli/serve/page.js",
+        "//etc/passwd",
+        "/etc/passwd",
+        "/%2Fetc%2Fpasswd",
+        "/api/image/../../../../etc/passwd",
+        "/api/image?kind=../../Cargo.toml",
+        "/%zz",
+        "/%00",
+        "http://localhost/../Cargo.toml",
+        "../Cargo.toml",
+        "C:\\Windows\\win.ini",
+    ] {
+        let r = server.raw(format!("GET {target} HTTP/1.1\r\nHost: {host}\r\n\r\n").as_bytes());
+        assert!((400..500).contains(&r.status), "{target}: {}", r.status);
+        let body = r.text();
+        assert!(
+            !body.contains("[package]") && !body.contains("root:") && !body.contains("studio"),
+            "{target}: {body}"
+        );
+    }
+    // Not from another host name (a page elsewhere reaching this one by DNS).
+    let r = server.raw(b"GET /api/state HTTP/1.1\r\nHost: attacker.example:80\r\n\r\n");
+    assert_eq!(r.status, 403);
+    assert_eq!(server.get("/api/state").status, 200);
+    assert_eq!(server.stop().code(), Some(130));
+}
+
+#[test]
+fn malformed_commands_are_refused_and_the_server_goes_on() {
+    let server = Server::start(&PATH);
+    let json = "Content-Type: application/json\r\n";
+    for (body, status) in [
+        ("{bad", 400),
+        ("", 400),
+        ("[]", 400),
+        ("{\"position\":[0,1]}", 400),
+        ("{\"position\":[0,1,9],\"look_at\":[0,1,0],\"zoom\":2}", 400),
+        ("{\"position\":[0,1,9],\"look_at\":[0,1,9]}", 400),
+        (
+            "{\"position\":[0,1,9],\"look_at\":[0,1,0],\"fov\":500}",
+            400,
+        ),
+        (
+            "{\"position\":[0,1,9],\"look_at\":[0,1,0],\"up\":[0,0,1]}",
+            400,
+        ),
+    ] {
+        let r = server.request("POST", "/api/camera", json, body.as_bytes());
+        assert_eq!(r.status, status, "{body}: {}", r.text());
+    }
+    for (path, body) in [
+        ("/api/relight", "{\"lights\":{\"nothing\":2}}"),
+        ("/api/relight", "{\"lights\":{\"light\":-1}}"),
+        ("/api/relight", "{\"materials\":{\"floor\":1.5}}"),
+        ("/api/save", "{\"format\":\"exr\",\"path\":\"/tmp/x.exr\"}"),
+        ("/api/save", "{\"format\":\"../x\"}"),
+    ] {
+        let r = server.request("POST", path, json, body.as_bytes());
+        assert_eq!(r.status, 400, "{path} {body}: {}", r.text());
+    }
+    let good = b"{\"position\":[0,1,9],\"look_at\":[0,1,0]}";
+    assert_eq!(server.request("POST", "/api/camera", "", good).status, 415);
+    let other = "Content-Type: application/json\r\nOrigin: http://attacker.example\r\n";
+    assert_eq!(
+        server.request("POST", "/api/camera", other, good).status,
+        403
+    );
+    let big = vec![b' '; 65 * 1024];
+    assert_eq!(
+        server.request("POST", "/api/camera", json, &big).status,
+        413
+    );
+    assert_eq!(server.get("/api/camera").status, 405);
+    assert_eq!(server.request("DELETE", "/", "", b"").status, 405);
+    assert_eq!(server.get("/api/nothing").status, 404);
+    let r = server.raw(b"NONSENSE\r\n\r\n");
+    assert_eq!(r.status, 400);
+    let huge_head = format!("GET / HTTP/1.1\r\nX: {}\r\n\r\n", "a".repeat(20_000));
+    assert_eq!(server.raw(huge_head.as_bytes()).status, 431);
+    // None of these moved the camera; the server still answers and renders.
+    let s = server.wait_done(1);
+    assert_eq!(s["spp"], 16);
+    assert_eq!(server.stop().code(), Some(130));
+}
+
+/// Hundreds of idle connections: the server handles 32 at a time and answers the rest 503
+/// at once (it starts no thread for them), then serves again when they close.
+#[test]
+fn a_flood_of_connections_is_bounded_and_the_server_recovers() {
+    let server = Server::start(&[PATH[0], "--width", "8"]);
+    let flood: Vec<TcpStream> = (0..300)
+        .map(|_| TcpStream::connect(&server.addr).unwrap())
+        .collect();
+    // Every connection accepted: the probe, made last, is refused as busy.
+    let start = Instant::now();
+    let probe = loop {
+        let r = server.get("/api/state");
+        if r.status == 503 || start.elapsed() > Duration::from_secs(5) {
+            break r;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    };
+    assert_eq!(probe.status, 503, "{}", probe.text());
+    let mut busy = 0;
+    for mut s in flood.iter() {
+        s.set_read_timeout(Some(Duration::from_millis(1))).unwrap();
+        let mut buf = [0u8; 64];
+        if let Ok(n) = s.read(&mut buf) {
+            busy += buf[..n].starts_with(b"HTTP/1.1 503") as usize;
+        }
+    }
+    assert!(
+        (300 - 32..300).contains(&busy),
+        "{busy} of 300 refused as busy"
+    );
+    drop(flood);
+    let start = Instant::now();
+    loop {
+        let r = server.get("/api/state");
+        if r.status == 200 {
+            break;
+        }
+        assert!(start.elapsed() < Duration::from_secs(15), "{}", r.status);
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert_eq!(server.stop().code(), Some(130));
+}
+
+#[test]
+fn a_non_loopback_bind_without_a_token_gets_a_random_one() {
+    let server = Server::start(&["--bind", "0.0.0.0", PATH[0], "--width", "8"]);
+    let token = server.token.clone().expect("a token printed with the URL");
+    assert!(
+        token.len() == 32 && token.bytes().all(|b| b.is_ascii_hexdigit()),
+        "{token}"
+    );
+    let host = &server.addr;
+    let no_token = format!("GET /api/state HTTP/1.1\r\nHost: {host}\r\n\r\n");
+    assert_eq!(server.raw(no_token.as_bytes()).status, 401);
+    assert_eq!(server.get("/api/state").status, 200);
+    assert_eq!(server.stop().code(), Some(130));
+}
+
+/// Without a token, a server on another loopback address answers to it as its host (and
+/// still to no other name).
+#[test]
+fn a_server_answers_to_the_address_it_listens_on() {
+    let server = Server::start(&["--bind", "127.0.0.2", PATH[0], "--width", "8"]);
+    assert!(server.addr.starts_with("127.0.0.2:"), "{}", server.addr);
+    assert_eq!(server.token, None);
+    assert_eq!(server.get("/api/state").status, 200);
+    let other = b"GET /api/state HTTP/1.1\r\nHost: raylink.example:80\r\n\r\n";
+    assert_eq!(server.raw(other).status, 403);
+    assert_eq!(server.stop().code(), Some(130));
+}
+
+#[test]
+fn bad_options_are_one_line_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let small = dir.path().join("small.exr");
+    let w = raylink(&[
+        "render",
+        PATH[0],
+        "--width",
+        "4",
+        "--height",
+        "4",
+        "--quiet",
+        "-o",
+        small.to_str().unwrap(),
+    ]);
+    assert!(w.status.success(), "{}", stderr(&w));
+    for (args, needles) in [
+        (vec!["--bind", "localhost"], vec!["--bind", "IP address"]),
+        (vec!["--token", "a b"], vec!["--token"]),
+        (vec!["-o", "x.png"], vec!["-o/--output", "serve"]),
+        (vec!["--resume"], vec!["--resume", "serve"]),
+        (vec!["--save-dir", "/nonexistent/dir"], vec!["--save-dir"]),
+        (
+            vec!["--reference", small.to_str().unwrap()],
+            vec!["small.exr", "4x4"],
+        ),
+        (vec!["--spp", "0"], vec!["--spp"]),
+    ] {
+        let mut all = vec!["serve", PATH[0], "--port", "0", "--integrator", "path"];
+        all.extend(&args);
+        let out = raylink(&all);
+        assert_clean_failure_of(&format!("{args:?}"), &out, &needles);
+    }
+}
+
+/// The served images equal the render command's, bit for bit: the path tracer (its
+/// passes, then the whole image) and the network.
+#[test]
+fn the_served_image_is_the_render_commands_bit_for_bit() {
+    for args in [&PATH[..], &NETWORK[..]] {
+        let server = Server::start(args);
+        let state = server.wait_done(1);
+        let served = server.get("/api/image").floats();
+        let expected = rendered(args);
+        assert_eq!(served.len(), expected.len(), "{args:?}");
+        assert!(mean(&expected) > 0.0);
+        assert!(bits(&served) == bits(&expected), "{args:?}: {state}");
+        // The saved EXR too: under a name of the server's, in --save-dir (here the root).
+        assert_eq!(server.stop().code(), Some(130));
+    }
+}
+
+#[test]
+fn saving_writes_the_image_under_generated_names_in_the_save_dir() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut args = PATH.to_vec();
+    args.extend(["--save-dir", dir.path().to_str().unwrap()]);
+    let server = Server::start(&args);
+    server.wait_done(1);
+    let served = server.get("/api/image").floats();
+    let json = "Content-Type: application/json\r\n";
+    let first = server.request("POST", "/api/save", json, b"{\"format\":\"exr\"}");
+    assert_eq!(first.status, 200, "{}", first.text());
+    assert_eq!(first.json()["file"], "studio-0001.exr");
+    let second = server.request("POST", "/api/save", json, b"{\"format\":\"png\"}");
+    assert_eq!(second.json()["file"], "studio-0002.png");
+    let (image, _) = raylink::read_image(&dir.path().join("studio-0001.exr")).unwrap();
+    let saved: Vec<f32> = image.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
+    assert!(bits(&saved) == bits(&served));
+    assert!(dir.path().join("studio-0002.png").exists());
+    let mut names: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .map(|e| e.unwrap().file_name().into_string().unwrap())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["studio-0001.exr", "studio-0002.png"]);
+    assert_eq!(server.stop().code(), Some(130));
+}
+
+/// A camera move renders the new view from the network built once, and that view equals
+/// `raylink render` of the scene with the page's "copy camera" snippet as its camera.
+#[test]
+fn a_moved_camera_renders_as_the_scene_with_the_copied_camera() {
+    let server = Server::start(&NETWORK);
+    server.wait_done(1);
+    let first = server.get("/api/image").floats();
+    let moved = b"{\"position\":[3.1,2.2,4.2],\"look_at\":[1.5,1.1,0.5],\"up\":[0,1,0],\"fov\":50}";
+    let json = "Content-Type: application/json\r\n";
+    assert_eq!(
+        server.request("POST", "/api/camera", json, moved).status,
+        200
+    );
+    let state = server.wait_done(2);
+    assert!(state["view_ms"].as_f64().is_some(), "{state}");
+    let served = server.get("/api/image").floats();
+    assert!(bits(&served) != bits(&first));
+    let snippet = server.get("/api/camera.toml").text();
+    assert!(snippet.starts_with("[camera]"), "{snippet}");
+    // The scene with its [camera] table replaced by the snippet.
+    let text = std::fs::read_to_string("scenes/network-room.toml").unwrap();
+    let start = text.find("[camera]").unwrap();
+    let end = start + text[start..].find("\n[render]").unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("moved.toml");
+    let pasted = format!("{}{snippet}{}", &text[..start], &text[end..]);
+    std::fs::write(&scene, pasted).unwrap();
+    let mut args = NETWORK.to_vec();
+    args[0] = scene.to_str().unwrap();
+    assert!(bits(&served) == bits(&rendered(&args)));
+    assert_eq!(server.stop().code(), Some(130));
+}
+
+/// The network's lamp at twice its strength doubles the image (superposition of the
+/// light basis: within the distribution's tolerance, 0.1%; allowed 1%); a material's
+/// colour scaled changes it; the relight's time is reported.
+#[test]
+fn relighting_the_network_scales_the_image_as_the_lights() {
+    let server = Server::start(&NETWORK);
+    let s = server.wait_done(1);
+    let lights: Vec<&str> = s["lights"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(lights, ["lamp"]);
+    let before = mean(&server.get("/api/image").floats());
+    let json = "Content-Type: application/json\r\n";
+    let r = server.request("POST", "/api/relight", json, b"{\"lights\":{\"lamp\":2}}");
+    assert_eq!(r.status, 200, "{}", r.text());
+    let s = server.wait("the relit image", |s| {
+        s["status"] == "done" && s["relight_ms"].is_number()
+    });
+    let after = mean(&server.get("/api/image").floats());
+    let ratio = after / before;
+    assert!((ratio - 2.0).abs() < 0.02, "{ratio}: {s}");
+    let r = server.request(
+        "POST",
+        "/api/relight",
+        json,
+        b"{\"materials\":{\"white\":0.5}}",
+    );
+    assert_eq!(r.status, 200);
+    server.wait("the recoloured image", |s| {
+        s["status"] == "done" && s["materials"][0]["factor"] == 0.5
+    });
+    let darker = mean(&server.get("/api/image").floats());
+    assert!(darker < 0.9 * after, "{darker} vs {after}");
+    assert_eq!(server.stop().code(), Some(130));
+}
+
+/// The auxiliary images, asked for by the page, are `raylink render --aov`'s bit for bit.
+#[test]
+fn the_served_aovs_are_the_render_commands() {
+    let server = Server::start(&PATH);
+    let first = server.get("/api/image?kind=albedo");
+    assert_eq!(first.status, 409, "computed only once asked for");
+    server.wait("the auxiliary images", |s| s["aovs"] == true);
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.exr");
+    let mut args = vec!["render", "--quiet", "--aov", "-o", out.to_str().unwrap()];
+    args.extend(PATH);
+    let run = raylink(&args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    for kind in ["albedo", "normal", "depth"] {
+        let served = server.get(&format!("/api/image?kind={kind}")).floats();
+        let (image, _) = raylink::read_image(&dir.path().join(format!("x.{kind}.exr"))).unwrap();
+        let expected: Vec<f32> = image.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
+        assert!(bits(&served) == bits(&expected), "{kind}");
+    }
+    assert_eq!(server.stop().code(), Some(130));
+}
+
+/// With `--reference`, the page gets the reference's floats and the RMSE of the image
+/// against it, as the library computes it.
+#[test]
+fn the_reference_and_its_rmse_are_served() {
+    let dir = tempfile::tempdir().unwrap();
+    let reference = dir.path().join("reference.exr");
+    let mut args = vec!["render", "--quiet", "-o", reference.to_str().unwrap()];
+    // Another seed: an image of the same scene with other noise.
+    args.extend(PATH.iter().map(|&a| if a == "5" { "9" } else { a }));
+    let run = raylink(&args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let mut args = PATH.to_vec();
+    args.extend(["--reference", reference.to_str().unwrap()]);
+    let server = Server::start(&args);
+    let s = server.wait_done(1);
+    let (expected, _) = raylink::read_image(&reference).unwrap();
+    let served = server.get("/api/image?kind=reference").floats();
+    let flat: Vec<f32> = expected
+        .pixels
+        .iter()
+        .flat_map(|p| [p.x, p.y, p.z])
+        .collect();
+    assert!(bits(&served) == bits(&flat));
+    let image = server.get("/api/image").floats();
+    let mut rendered = expected.clone();
+    for (p, c) in rendered.pixels.iter_mut().zip(image.chunks_exact(3)) {
+        *p = raylink::math::Vec3::new(c[0], c[1], c[2]);
+    }
+    // The library's f32 (JSON's parse of it may be an ulp off as f64).
+    let rmse = rendered.rmse(&expected);
+    assert!(rmse > 0.0);
+    assert_eq!(s["rmse"].as_f64().map(|r| r as f32), Some(rmse), "{s}");
+    assert_eq!(server.stop().code(), Some(130));
+}
