@@ -117,20 +117,9 @@ fn bounding_sphere(geometry: &Geometry) -> Option<(Vec3, f32)> {
     Some(((lo + hi) * 0.5, (hi - lo).length() * 0.5))
 }
 
-/// The disc on the film that holds the projection of the sphere, `None` when the sphere
-/// reaches behind the pinhole (its projection is not small).
+/// The disc on the film that holds the image of the sphere.
 fn project(camera: &CameraBasis, center: Vec3, radius: f32) -> Option<Disc> {
-    let d = center - camera.origin;
-    let z = d.dot(camera.forward);
-    let distance = d.length();
-    if z <= radius || distance <= radius {
-        return None;
-    }
-    let (x, y, cos) = camera.raster(center)?;
-    // The sphere's silhouette subtends a half-angle asin(r/d) around its centre; on the film
-    // its image is stretched by up to 1/cos² off the axis. Overestimating only costs samples.
-    let tan = radius / (distance * distance - radius * radius).sqrt();
-    let r = tan / (camera.pixel_size() * cos * cos);
+    let (x, y, r) = camera.sphere_image(center, radius)?;
     Some(Disc {
         x,
         y,
@@ -152,6 +141,7 @@ mod tests {
             fov_deg: 60.0,
             width: 64,
             height: 64,
+            projection: Default::default(),
         }
         .basis()
     }

@@ -110,6 +110,26 @@ impl CameraBasis {
         Some((x, y, z / d.length()))
     }
 
+    /// The disc on the film (centre and radius in pixels) that holds the image of the sphere
+    /// of `radius` around `center`; `None` when the sphere reaches behind the camera.
+    pub fn sphere_image(&self, center: Vec3, radius: f32) -> Option<(f32, f32, f32)> {
+        let d = center - self.origin;
+        if self.orthographic {
+            let x = self.center.0 + d.dot(self.right) / self.right.length_squared();
+            let y = self.center.1 + d.dot(self.down) / self.down.length_squared();
+            return Some((x, y, radius / self.right.length()));
+        }
+        let (z, distance) = (d.dot(self.forward), d.length());
+        if z <= radius || distance <= radius {
+            return None;
+        }
+        let (x, y, cos) = self.raster(center)?;
+        // The silhouette subtends a half-angle asin(r/d) around the centre; off the axis
+        // the film stretches it by up to 1/cos². Overestimating is harmless.
+        let tan = radius / (distance * distance - radius * radius).sqrt();
+        Some((x, y, tan / (self.right.length() * cos * cos)))
+    }
+
     /// [`raster`](Self::raster) for the ray from the lens point `lens` to `p`: the film
     /// position of the focal-plane point that ray passes through (pbrt-v4's
     /// `PerspectiveCamera::We`), and the cosine between the camera axis and the ray.
@@ -131,11 +151,6 @@ impl CameraBasis {
     /// Width and height of the film in pixels.
     pub fn film_size(&self) -> (f32, f32) {
         (2.0 * self.center.0, 2.0 * self.center.1)
-    }
-
-    /// Side of one (square) pixel on the image plane at unit distance in front of the pinhole.
-    pub fn pixel_size(&self) -> f32 {
-        self.right.length()
     }
 
     /// Area of one pixel on the image plane at unit distance in front of the pinhole.

@@ -509,6 +509,10 @@ mod tests {
             fov_deg: 55.5,
             width: 64,
             height: 48,
+            projection: crate::scene::camera::Projection::ThinLens {
+                radius: 0.0625,
+                focal_distance: 4.25,
+            },
         };
         let snippet = camera_toml(&camera);
         assert!(snippet.starts_with("[camera]\n"), "{snippet}");
