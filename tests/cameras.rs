@@ -10,6 +10,8 @@ use raylink::scene::{Projection, Scene};
 use raylink::{Backend, Control, Job, Renderer, Technique};
 use std::path::Path;
 
+mod agreement;
+
 fn render(
     scene: &Scene,
     technique: fn(MonteCarloSettings) -> Technique,
@@ -130,26 +132,6 @@ fn defocus_blur_matches_the_circle_of_confusion() {
     }
 }
 
-/// Per-pixel mean and variance of the mean over independent renders (different seeds).
-fn stats(images: &[Image]) -> (Vec<f64>, Vec<f64>) {
-    let k = images.len() as f64;
-    let n = images[0].pixels.len();
-    let (mut mean, mut var) = (vec![0.0; n], vec![0.0; n]);
-    for i in 0..n {
-        let v: Vec<f64> = images
-            .iter()
-            .map(|im| {
-                let p = im.pixels[i];
-                (p.x + p.y + p.z) as f64
-            })
-            .collect();
-        let m = v.iter().sum::<f64>() / k;
-        mean[i] = m;
-        var[i] = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (k - 1.0) / k;
-    }
-    (mean, var)
-}
-
 /// The Cornell box through a thin lens (radius 0.25, focused on the short box 5.5 units
 /// away, the back wall and the ceiling visibly blurred): path tracing (camera rays through
 /// the lens), light tracing (connections to lens points, pbrt-v4's thin-lens importance)
@@ -176,37 +158,11 @@ fn path_light_and_bidirectional_agree_through_a_lens() {
         let images: Vec<Image> = (0..seeds)
             .map(|seed| render(&scene, technique, (spp, 5, 100 + seed)).unwrap())
             .collect();
-        let (m, v) = stats(&images);
+        let (m, v) = agreement::stats(&images);
         (name, m, v)
     })
     .collect();
-    for a in 0..results.len() {
-        for b in a + 1..results.len() {
-            let (ka, ma, va) = &results[a];
-            let (kb, mb, vb) = &results[b];
-            let mut outliers = 0;
-            let (mut diff, mut var) = (0.0, 0.0);
-            for i in 0..ma.len() {
-                let d = ma[i] - mb[i];
-                let se = (va[i] + vb[i]).sqrt();
-                diff += d;
-                var += va[i] + vb[i];
-                if se > 0.0 && (d / se).abs() > 5.0 || se == 0.0 && d.abs() > 1e-4 {
-                    outliers += 1;
-                }
-            }
-            let z = diff / var.sqrt();
-            eprintln!("{ka} vs {kb}: {outliers} pixels beyond 5 se, image-wide z = {z:.2}");
-            assert!(
-                outliers <= ma.len() / 100,
-                "{ka} vs {kb}: {outliers} outliers"
-            );
-            assert!(
-                z.abs() < 4.0,
-                "{ka} vs {kb}: mean differs by {z:.1} standard errors"
-            );
-        }
-    }
+    agreement::assert_agree(&results, |_, _, _| true);
 }
 
 /// An orthographic camera of `size` 4 across a 64-pixel-wide film shows an emitting sphere of

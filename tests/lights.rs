@@ -9,6 +9,8 @@ use raylink::scene::{Light, Scene};
 use raylink::{Backend, Control, Job, Renderer, Settings, Technique, TechniqueKind};
 use std::path::Path;
 
+mod agreement;
+
 fn manifest(p: &str) -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(p)
 }
@@ -147,58 +149,6 @@ fn spot_irradiance_matches_pbrts_formula() {
     }
 }
 
-/// Per-pixel mean and variance of the mean over independent renders (different seeds).
-fn stats(images: &[Image]) -> (Vec<f64>, Vec<f64>) {
-    let k = images.len() as f64;
-    let n = images[0].pixels.len();
-    let (mut mean, mut var) = (vec![0.0; n], vec![0.0; n]);
-    for i in 0..n {
-        let v: Vec<f64> = images
-            .iter()
-            .map(|im| {
-                let p = im.pixels[i];
-                (p.x + p.y + p.z) as f64
-            })
-            .collect();
-        let m = v.iter().sum::<f64>() / k;
-        mean[i] = m;
-        var[i] = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (k - 1.0) / k;
-    }
-    (mean, var)
-}
-
-/// Welch's t per pixel between every pair of estimators: at most 1% of the pixels beyond 5
-/// standard errors, and the image-wide mean difference within 4 standard errors.
-fn assert_agree(results: &[(&str, Vec<f64>, Vec<f64>)]) {
-    for a in 0..results.len() {
-        for b in a + 1..results.len() {
-            let (ka, ma, va) = &results[a];
-            let (kb, mb, vb) = &results[b];
-            let mut outliers = 0;
-            let (mut diff, mut var) = (0.0, 0.0);
-            for i in 0..ma.len() {
-                let d = ma[i] - mb[i];
-                let se = (va[i] + vb[i]).sqrt();
-                diff += d;
-                var += va[i] + vb[i];
-                if se > 0.0 && (d / se).abs() > 5.0 || se == 0.0 && d.abs() > 1e-4 {
-                    outliers += 1;
-                }
-            }
-            let z = diff / var.sqrt();
-            eprintln!("{ka} vs {kb}: {outliers} pixels beyond 5 se, image-wide z = {z:.2}");
-            assert!(
-                outliers <= ma.len() / 100,
-                "{ka} vs {kb}: {outliers} outliers"
-            );
-            assert!(
-                z.abs() < 4.0,
-                "{ka} vs {kb}: mean differs by {z:.1} standard errors"
-            );
-        }
-    }
-}
-
 /// An estimator to compare: its name, its technique and its samples per pixel.
 type Run = (&'static str, fn(MonteCarloSettings) -> Technique, u32);
 
@@ -209,11 +159,11 @@ fn agree(scene: &Scene, runs: [Run; 3]) {
             let images: Vec<Image> = (0..8)
                 .map(|seed| render_job(scene, mc(technique, spp, 5), 100 + seed))
                 .collect();
-            let (m, v) = stats(&images);
+            let (m, v) = agreement::stats(&images);
             (name, m, v)
         })
         .collect();
-    assert_agree(&results);
+    agreement::assert_agree(&results, |_, _, _| true);
 }
 
 /// The Cornell box lit only by a spot light under the ceiling aimed at the floor (its area

@@ -10,6 +10,8 @@ use raylink::scene::Scene;
 use raylink::{Backend, Control, Job, Renderer, Technique};
 use std::path::Path;
 
+mod agreement;
+
 fn manifest(p: &str) -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(p)
 }
@@ -19,6 +21,16 @@ enum Kind {
     Path,
     Light,
     Bdpt,
+}
+
+impl Kind {
+    fn name(self) -> &'static str {
+        match self {
+            Kind::Path => "Path",
+            Kind::Light => "Light",
+            Kind::Bdpt => "Bdpt",
+        }
+    }
 }
 
 fn technique(kind: Kind, mc: MonteCarloSettings) -> Technique {
@@ -103,27 +115,6 @@ fn white_furnace() {
     }
 }
 
-/// Per-pixel mean and variance of the mean over independent renders (different seeds).
-fn stats(images: &[Image]) -> (Vec<f64>, Vec<f64>) {
-    let k = images.len() as f64;
-    let n = images[0].pixels.len();
-    let mut mean = vec![0.0; n];
-    let mut var = vec![0.0; n];
-    for i in 0..n {
-        let v: Vec<f64> = images
-            .iter()
-            .map(|im| {
-                let p = im.pixels[i];
-                (p.x + p.y + p.z) as f64
-            })
-            .collect();
-        let m = v.iter().sum::<f64>() / k;
-        mean[i] = m;
-        var[i] = v.iter().map(|x| (x - m) * (x - m)).sum::<f64>() / (k - 1.0) / k;
-    }
-    (mean, var)
-}
-
 /// Adjoint consistency: path tracing (gathering), light tracing (shooting) and BDPT render
 /// the Cornell box to the same image. Each is rendered with 8 seeds; per pixel, the
 /// difference of two estimators' means divided by its standard error (Welch's t, 7+ degrees
@@ -171,7 +162,7 @@ fn sees_shapes(scene: &Scene, shapes: &[u32]) -> Vec<bool> {
 fn check_adjoint(scene: &Scene, specular_shapes: &[u32]) {
     let seeds = 8;
     let specular = sees_shapes(scene, specular_shapes);
-    let results: Vec<(Kind, Vec<f64>, Vec<f64>)> =
+    let results: Vec<(&str, Vec<f64>, Vec<f64>)> =
         [(Kind::Path, 16), (Kind::Light, 32), (Kind::Bdpt, 8)]
             .into_iter()
             .map(|(kind, spp)| {
@@ -192,46 +183,12 @@ fn check_adjoint(scene: &Scene, specular_shapes: &[u32]) {
                         )
                     })
                     .collect();
-                let (m, v) = stats(&images);
-                (kind, m, v)
+                let (m, v) = agreement::stats(&images);
+                (kind.name(), m, v)
             })
             .collect();
-    for a in 0..results.len() {
-        for b in a + 1..results.len() {
-            let (ka, ma, va) = &results[a];
-            let (kb, mb, vb) = &results[b];
-            let light = matches!(ka, Kind::Light) || matches!(kb, Kind::Light);
-            let mut outliers = 0;
-            let mut compared = 0;
-            let (mut diff, mut var) = (0.0, 0.0);
-            for i in 0..ma.len() {
-                if light && specular[i] {
-                    continue;
-                }
-                compared += 1;
-                let d = ma[i] - mb[i];
-                let se = (va[i] + vb[i]).sqrt();
-                diff += d;
-                var += va[i] + vb[i];
-                if se > 0.0 && (d / se).abs() > 5.0 || se == 0.0 && d.abs() > 1e-4 {
-                    outliers += 1;
-                }
-            }
-            let z = diff / var.sqrt();
-            eprintln!(
-                "{ka:?} vs {kb:?}: {outliers} of {compared} pixels beyond 5 se, image-wide \
-                 z = {z:.2}"
-            );
-            assert!(
-                outliers <= compared / 100,
-                "{ka:?} vs {kb:?}: {outliers} outliers"
-            );
-            assert!(
-                z.abs() < 4.0,
-                "{ka:?} vs {kb:?}: mean differs by {z:.1} standard errors"
-            );
-        }
-    }
+    let light = |a: &str, b: &str| a == "Light" || b == "Light";
+    agreement::assert_agree(&results, |a, b, i| !(light(a, b) && specular[i]));
 }
 
 /// Renders `scene` with the path tracer at 256x256 (64 bounces, box filter) and returns the
