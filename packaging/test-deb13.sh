@@ -54,6 +54,9 @@ else
   tar -C "$root" -xf "$build_tar"
 fi
 grep -q '^13\|^trixie' "$root/etc/debian_version" || { echo "not a trixie root: $(cat "$root/etc/debian_version")" >&2; exit 1; }
+# debootstrap writes no /etc/hosts: without it "localhost" does not resolve, and chromedriver
+# cannot reach the browser it starts (the studio's browser test).
+printf '127.0.0.1 localhost\n::1 localhost ip6-localhost ip6-loopback\n' > "$root/etc/hosts"
 mount -t proc proc "$root/proc"; mounts+=("$root/proc")
 bind /dev /dev
 # The pseudo-terminals (a separate mount) for the progress test's script(1).

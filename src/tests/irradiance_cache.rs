@@ -344,7 +344,10 @@ fn second_view_reuses_the_first_views_values() {
 /// Ward & Heckbert's gradients on the sphere-on-plane scene, against the quadrature: at
 /// points of the sphere's underside, a value extrapolated by its gradients to a point moved
 /// along the surface's tangents (0.1, a tenth of the radius) and to a normal turned by 0.1
-/// rad is much closer to the true irradiance there than the value itself.
+/// rad is much closer to the true irradiance there than the value itself. (The gradient
+/// takes hit distances as at least the smallest radius, scene size / ar: the plane is 100
+/// wide, so ar is raised from 64 to 1024 to keep that floor, 0.1, below the distances
+/// that matter here, about 1.)
 #[test]
 fn gradients_predict_the_change_of_irradiance() {
     let scene = Scene::load(&manifest("tests/scenes/sphere-on-plane.toml")).unwrap();
@@ -352,6 +355,7 @@ fn gradients_predict_the_change_of_irradiance() {
         bounces: 1,
         samples: 4096,
         gradients: true,
+        ar: 1024.0,
         ..IcOptions::default()
     };
     // [translations, rotations]: summed errors of the value itself and extrapolated.

@@ -749,7 +749,10 @@ impl Walk<'_> {
                     if let Some(sp) = ctx.intersect(&ray, self.stats) {
                         inv_d += 1.0 / (sp.t.max(1e-6) as f64);
                         sample.radiance = self.shade(&ray, &sp, level + 1, false, 0, &mut rng);
-                        sample.distance = sp.t.max(1e-6);
+                        // The gradient divides by the nearer distance of two strata: no
+                        // nearer than a value's smallest radius, or sample noise in corners
+                        // turns into huge gradients.
+                        sample.distance = sp.t.max(params.r_min);
                         sum += sample.radiance;
                     }
                 }
@@ -760,7 +763,7 @@ impl Walk<'_> {
         }
         let count = 2 * strata * strata;
         let e = sum * (PI / count as f32);
-        let mut r = if inv_d > 0.0 {
+        let r = if inv_d > 0.0 {
             (count as f64 / inv_d) as f32
         } else {
             params.r_max
@@ -770,16 +773,6 @@ impl Walk<'_> {
             grad = Gradients::from_samples(&samples, strata as usize, columns, n, (t, b));
             if !grad.is_finite() {
                 grad = Gradients::default();
-            }
-            // A value may not reach farther than its translational gradient lets it stay
-            // positive (Tabellion & Lamorlette's gradient limit on R).
-            let slope = grad
-                .translation
-                .iter()
-                .map(|g| g.length())
-                .fold(0.0, f32::max);
-            if slope > 0.0 {
-                r = r.min(e.max_element() / slope);
             }
         }
         Record {
