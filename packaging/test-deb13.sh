@@ -18,7 +18,7 @@ target=${RAYLINK_DEB13_TARGET:-$cache/target-trixie}
 cargo_home=${CARGO_HOME:-$HOME/.cargo}
 rustup_home=${RUSTUP_HOME:-$HOME/.rustup}
 toolchain=$(rustup show active-toolchain | cut -d' ' -f1)
-# chromium and chromium-driver: the studio's browser test (as scripts/install-deps.sh).
+# chromium and chromium-driver: the studio's browser test (as scripts/install-deps.sh --tests).
 build_deps=(build-essential pkg-config libclang-dev libembree-dev libopenimageio-dev ca-certificates bsdextrautils
   chromium chromium-driver)
 t0=$(date +%s)

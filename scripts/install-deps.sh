@@ -1,12 +1,17 @@
 #!/usr/bin/env bash
 # Installs the Debian packages raylink builds against: Embree (libembree-dev: Embree 3 on
-# Debian 12, Embree 4 on Debian 13), OpenImageIO, libclang for bindgen, and a C++ compiler;
-# and bsdextrautils, whose `script` the progress tests run (Debian 13 moved it there from
-# the essential bsdutils); and chromium with chromium-driver, the headless browser that
-# tests/studio_browser.rs drives through WebDriver to test `raylink serve`'s page.
+# Debian 12, Embree 4 on Debian 13), OpenImageIO, libclang for bindgen, and a C++ compiler.
+# With --tests, also what the test suite runs: bsdextrautils, whose `script` the progress
+# tests run (Debian 13 moved it there from the essential bsdutils), and chromium with
+# chromium-driver, the headless browser that tests/studio_browser.rs drives through
+# WebDriver to test `raylink serve`'s page (a large download a render does not need).
 set -euo pipefail
-packages=(build-essential pkg-config libclang-dev libembree-dev libopenimageio-dev bsdextrautils
-  chromium chromium-driver)
+packages=(build-essential pkg-config libclang-dev libembree-dev libopenimageio-dev)
+case "${1:-}" in
+  "") ;;
+  --tests) packages+=(bsdextrautils chromium chromium-driver) ;;
+  *) echo "usage: scripts/install-deps.sh [--tests]" >&2; exit 2 ;;
+esac
 sudo=""
 if [ "$(id -u)" -ne 0 ]; then sudo="sudo"; fi
 missing=()
