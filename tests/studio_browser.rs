@@ -2,7 +2,7 @@
 //! WebDriver protocol (plain HTTP and JSON here). The page must show the progressive image
 //! as it converges, orbit on a mouse drag, and relight the network from a slider with the
 //! image scaling as the light. Chromium and chromedriver are Debian packages that
-//! scripts/install-deps.sh installs; without them this test fails (it is not skipped).
+//! scripts/install-deps.sh --tests installs; without them this test fails (it is not skipped).
 
 mod studio;
 
@@ -79,7 +79,7 @@ impl Browser {
             assert!(
                 Path::new(tool).exists(),
                 "{tool} is missing: install the Debian packages chromium and chromium-driver \
-                 (scripts/install-deps.sh does)"
+                 (scripts/install-deps.sh --tests does)"
             );
         }
         let port = free_port();
