@@ -5,7 +5,7 @@
 
 use crate::lights::LightSet;
 use crate::math::Vec3;
-use crate::scene::{Geometry, Light, QuadMesh, Scene, Shape, TriangleMesh};
+use crate::scene::{Geometry, Light, Scene, Shape};
 use rustc_hash::FxHashMap;
 use std::hash::{Hash, Hasher};
 use std::sync::Arc;
@@ -69,17 +69,6 @@ impl Changes {
 fn hash_f32s(h: &mut impl Hasher, v: impl IntoIterator<Item = f32>) {
     for x in v {
         x.to_bits().hash(h);
-    }
-}
-
-fn shape_bounds(shape: &Shape) -> Aabb {
-    match &shape.geometry {
-        Geometry::Sphere { center, radius } => (*center - *radius, *center + *radius),
-        Geometry::Triangles(TriangleMesh { positions, .. })
-        | Geometry::Quads(QuadMesh { positions, .. }) => positions.iter().fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), p| (lo.min(*p), hi.max(*p)),
-        ),
     }
 }
 
@@ -189,7 +178,7 @@ impl FrameSummary {
             let key = shape_fingerprint(shape, &materials[shape.material]);
             keys.push(key);
             shapes.entry(key).or_default().push((
-                shape_bounds(shape),
+                shape.geometry.bounds(),
                 emits,
                 Arc::new(shape.geometry.clone()),
             ));

@@ -105,16 +105,11 @@ impl SmallObjects {
 
 /// A sphere around the shape: exact for a sphere, around the box of a mesh's vertices.
 fn bounding_sphere(geometry: &Geometry) -> Option<(Vec3, f32)> {
-    let positions = match geometry {
-        Geometry::Sphere { center, radius } => return Some((*center, *radius)),
-        Geometry::Triangles(m) => &m.positions,
-        Geometry::Quads(q) => &q.positions,
-    };
-    let first = *positions.first()?;
-    let (lo, hi) = positions
-        .iter()
-        .fold((first, first), |(lo, hi), p| (lo.min(*p), hi.max(*p)));
-    Some(((lo + hi) * 0.5, (hi - lo).length() * 0.5))
+    if let Geometry::Sphere { center, radius } = geometry {
+        return Some((*center, *radius));
+    }
+    let (lo, hi) = geometry.bounds();
+    (lo.cmple(hi).all()).then(|| ((lo + hi) * 0.5, (hi - lo).length() * 0.5))
 }
 
 /// The disc on the film that holds the image of the sphere.

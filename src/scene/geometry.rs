@@ -63,6 +63,19 @@ impl Geometry {
         }
     }
 
+    /// The axis-aligned box around the shape (inverted, lo > hi, for a mesh without
+    /// vertices).
+    pub fn bounds(&self) -> (Vec3, Vec3) {
+        match self {
+            Geometry::Sphere { center, radius } => (*center - *radius, *center + *radius),
+            Geometry::Triangles(TriangleMesh { positions, .. })
+            | Geometry::Quads(QuadMesh { positions, .. }) => positions.iter().fold(
+                (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                |(lo, hi), p| (lo.min(*p), hi.max(*p)),
+            ),
+        }
+    }
+
     /// Surface area.
     pub fn area(&self) -> f32 {
         match self {

@@ -61,19 +61,9 @@ impl Scene {
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for shape in &self.shapes {
-            match &shape.geometry {
-                Geometry::Sphere { center, radius } => {
-                    lo = lo.min(*center - *radius);
-                    hi = hi.max(*center + *radius);
-                }
-                Geometry::Triangles(TriangleMesh { positions, .. })
-                | Geometry::Quads(QuadMesh { positions, .. }) => {
-                    for p in positions {
-                        lo = lo.min(*p);
-                        hi = hi.max(*p);
-                    }
-                }
-            }
+            let (a, b) = shape.geometry.bounds();
+            lo = lo.min(a);
+            hi = hi.max(b);
         }
         (lo.x <= hi.x).then_some((lo, hi))
     }
