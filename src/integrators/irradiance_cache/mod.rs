@@ -508,6 +508,19 @@ impl IrradianceCache {
         shown
     }
 
+    /// A walk that reads the finished cache and stores nothing (the final render's).
+    fn reader<'a>(&'a self, ctx: &'a Context<'a>, stats: &'a mut RayStats) -> Walk<'a> {
+        Walk {
+            ctx,
+            params: &self.params,
+            store: Store::Frozen(&self.cache),
+            primaries: 0,
+            stats,
+            overture: false,
+            cancel: None,
+        }
+    }
+
     /// Primary values the final render computed without storing them (for tests).
     #[cfg(test)]
     pub fn misses(&self) -> u64 {
@@ -519,15 +532,7 @@ impl IrradianceCache {
     #[cfg(test)]
     pub fn primary_value(&self, ctx: &Context, p: Vec3, n: Vec3) -> Record {
         let mut stats = RayStats::default();
-        let mut walk = Walk {
-            ctx,
-            params: &self.params,
-            store: Store::Frozen(&self.cache),
-            primaries: 0,
-            stats: &mut stats,
-            overture: false,
-            cancel: None,
-        };
+        let mut walk = self.reader(ctx, &mut stats);
         walk.primary(p, n, n, 0)
     }
 
@@ -536,15 +541,7 @@ impl IrradianceCache {
     #[cfg(test)]
     pub fn irradiance(&self, ctx: &Context, p: Vec3, n: Vec3) -> Rgb {
         let mut stats = RayStats::default();
-        let mut walk = Walk {
-            ctx,
-            params: &self.params,
-            store: Store::Frozen(&self.cache),
-            primaries: 0,
-            stats: &mut stats,
-            overture: false,
-            cancel: None,
-        };
+        let mut walk = self.reader(ctx, &mut stats);
         walk.indirect(p, n, n, 0)
     }
 }
@@ -560,15 +557,7 @@ impl MonteCarlo for IrradianceCache {
         _splats: &mut Vec<Splat>,
     ) -> Rgb {
         let mut rng = sample_rng(self.params.seed, sampler);
-        let mut walk = Walk {
-            ctx,
-            params: &self.params,
-            store: Store::Frozen(&self.cache),
-            primaries: 0,
-            stats,
-            overture: false,
-            cancel: None,
-        };
+        let mut walk = self.reader(ctx, stats);
         let l = walk.trace(ray, 0, true, 0, &mut rng);
         if walk.primaries > 0 {
             self.misses.fetch_add(walk.primaries, Ordering::Relaxed);
