@@ -147,21 +147,14 @@ fn path_light_and_bidirectional_agree_through_a_lens() {
         radius: 0.25,
         focal_distance: 5.5,
     };
-    let seeds = 8;
-    let results: Vec<(&str, Vec<f64>, Vec<f64>)> = [
-        ("path", Technique::Path as fn(_) -> _, 16),
-        ("light", Technique::Light as fn(_) -> _, 32),
-        ("bdpt", Technique::Bdpt as fn(_) -> _, 8),
-    ]
-    .into_iter()
-    .map(|(name, technique, spp)| {
-        let images: Vec<Image> = (0..seeds)
-            .map(|seed| render(&scene, technique, (spp, 5, 100 + seed)).unwrap())
-            .collect();
-        let (m, v) = agreement::stats(&images);
-        (name, m, v)
-    })
-    .collect();
+    let results = agreement::over_seeds(
+        [
+            ("path", (Technique::Path as fn(_) -> _, 16)),
+            ("light", (Technique::Light as fn(_) -> _, 32)),
+            ("bdpt", (Technique::Bdpt as fn(_) -> _, 8)),
+        ],
+        |&(technique, spp), seed| render(&scene, technique, (spp, 5, seed)).unwrap(),
+    );
     agreement::assert_agree(&results, |_, _, _| true);
 }
 

@@ -153,16 +153,10 @@ fn spot_irradiance_matches_pbrts_formula() {
 type Run = (&'static str, fn(MonteCarloSettings) -> Technique, u32);
 
 fn agree(scene: &Scene, runs: [Run; 3]) {
-    let results: Vec<(&str, Vec<f64>, Vec<f64>)> = runs
-        .into_iter()
-        .map(|(name, technique, spp)| {
-            let images: Vec<Image> = (0..8)
-                .map(|seed| render_job(scene, mc(technique, spp, 5), 100 + seed))
-                .collect();
-            let (m, v) = agreement::stats(&images);
-            (name, m, v)
-        })
-        .collect();
+    let results = agreement::over_seeds(
+        runs.map(|(name, technique, spp)| (name, (technique, spp))),
+        |&(technique, spp), seed| render_job(scene, mc(technique, spp, 5), seed),
+    );
     agreement::assert_agree(&results, |_, _, _| true);
 }
 

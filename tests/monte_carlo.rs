@@ -160,33 +160,26 @@ fn sees_shapes(scene: &Scene, shapes: &[u32]) -> Vec<bool> {
 }
 
 fn check_adjoint(scene: &Scene, specular_shapes: &[u32]) {
-    let seeds = 8;
     let specular = sees_shapes(scene, specular_shapes);
-    let results: Vec<(&str, Vec<f64>, Vec<f64>)> =
-        [(Kind::Path, 16), (Kind::Light, 32), (Kind::Bdpt, 8)]
-            .into_iter()
-            .map(|(kind, spp)| {
-                let images: Vec<Image> = (0..seeds)
-                    .map(|seed| {
-                        render(
-                            scene,
-                            kind,
-                            &Setup {
-                                width: 48,
-                                height: 48,
-                                spp,
-                                max_depth: 5,
-                                seed: 100 + seed,
-                                threads: None,
-                                filter: Filter::Box { radius: 0.5 },
-                            },
-                        )
-                    })
-                    .collect();
-                let (m, v) = agreement::stats(&images);
-                (kind.name(), m, v)
-            })
-            .collect();
+    let runs = [(Kind::Path, 16), (Kind::Light, 32), (Kind::Bdpt, 8)];
+    let results = agreement::over_seeds(
+        runs.map(|(kind, spp)| (kind.name(), (kind, spp))),
+        |&(kind, spp), seed| {
+            render(
+                scene,
+                kind,
+                &Setup {
+                    width: 48,
+                    height: 48,
+                    spp,
+                    max_depth: 5,
+                    seed,
+                    threads: None,
+                    filter: Filter::Box { radius: 0.5 },
+                },
+            )
+        },
+    );
     let light = |a: &str, b: &str| a == "Light" || b == "Light";
     agreement::assert_agree(&results, |a, b, i| !(light(a, b) && specular[i]));
 }

@@ -25,6 +25,21 @@ pub fn stats(images: &[Image]) -> (Vec<f64>, Vec<f64>) {
     (mean, var)
 }
 
+/// For each of `runs` (a name and what to render), [`stats`] over 8 renders by `render`
+/// with seeds 100 to 107, as [`assert_agree`] takes them.
+pub fn over_seeds<'a, R>(
+    runs: impl IntoIterator<Item = (&'a str, R)>,
+    render: impl Fn(&R, u64) -> Image,
+) -> Vec<(&'a str, Vec<f64>, Vec<f64>)> {
+    runs.into_iter()
+        .map(|(name, run)| {
+            let images: Vec<Image> = (100..108).map(|seed| render(&run, seed)).collect();
+            let (m, v) = stats(&images);
+            (name, m, v)
+        })
+        .collect()
+}
+
 /// Asserts that every pair of `results` (name, per-pixel means and variances from
 /// [`stats`]) agrees: at most 1% of the compared pixels beyond 5 standard errors, and the
 /// image-wide mean difference within 4. `compared(a, b, i)` says whether pixel `i` counts
