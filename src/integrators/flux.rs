@@ -21,6 +21,7 @@ use crate::control::Control;
 use crate::math::sobol::Sampler;
 use crate::math::warp::{cosine_hemisphere, power_heuristic};
 use crate::math::{frame, offset_origin, Ray, Rgb, Vec3};
+use crate::scene::camera::CameraBasis;
 use crate::scene::light::AreaLight;
 use crate::scene::Scene;
 use crate::{Error, Result};
@@ -104,6 +105,7 @@ pub fn estimate(scene: &Scene, job: &FluxJob, control: &Control) -> Result<Flux>
         tracer: PathTracer::new(PathOptions {
             max_depth: job.max_depth,
         }),
+        camera: scene.camera.basis(),
     };
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(job.threads.unwrap_or(0))
@@ -186,6 +188,8 @@ struct Paths<'a> {
     areas: &'a [f32],
     total_area: f32,
     tracer: PathTracer,
+    /// The scene's camera, which the path tracer takes but does not use.
+    camera: CameraBasis,
 }
 
 impl Paths<'_> {
@@ -258,10 +262,14 @@ impl Paths<'_> {
         let d = cosine_hemisphere(sampler.next_2d());
         let dir = t * d.x + b * d.y + n * d.z;
         let ray = Ray::new(offset_origin(x.p, n, dir), dir);
-        let camera = self.ctx.scene.camera.basis();
-        let arriving = self
-            .tracer
-            .sample(self.ctx, &camera, &ray, sampler, stats, &mut Vec::new());
+        let arriving = self.tracer.sample(
+            self.ctx,
+            &self.camera,
+            &ray,
+            sampler,
+            stats,
+            &mut Vec::new(),
+        );
         // The path tracer counts what the direction reaches first in full, as seen from a
         // camera; an emitter there takes its share of the light sample's weight instead.
         let first = self.emitted_first(&ray, x.p, pdf_dir(d.z), stats);
