@@ -18,8 +18,15 @@ fn scratch() -> &'static Path {
     })
 }
 
+/// `name` in the scratch folder, for this thread (tests replay corpora on several threads).
+fn scratch_path(name: &str) -> PathBuf {
+    let thread = format!("{:?}", std::thread::current().id());
+    let thread: String = thread.chars().filter(char::is_ascii_digit).collect();
+    scratch().join(format!("{thread}-{name}"))
+}
+
 fn put(name: &str, bytes: &[u8]) -> PathBuf {
-    let path = scratch().join(name);
+    let path = scratch_path(name);
     std::fs::write(&path, bytes).expect("the scratch file can be written");
     path
 }
@@ -83,7 +90,7 @@ pub fn irradiance_cache(data: &[u8]) {
     let mut bytes = ic_file::FORMAT.start(data.len() + 64);
     bytes.extend_from_slice(&ic_file::header(scene, &options));
     bytes.extend_from_slice(data);
-    let path = scratch().join("cache.rlic");
+    let path = scratch_path("cache.rlic");
     ic_file::FORMAT
         .save(&path, bytes)
         .expect("the scratch file can be written");
@@ -150,4 +157,44 @@ pub fn network_sealed(data: &[u8]) {
     let path = put("network-sealed.rlnet", &bytes);
     one_line(net_file::load_all(&path, network_scene(), None));
     one_line(net_file::load_prefix(&path, network_scene(), None));
+}
+
+/// The checkpoint target's render: its settings string, film size (two tiles) and samples per
+/// pixel (the fuzz inputs are checkpoint bodies after this settings string).
+pub const CHECKPOINT_SETTINGS: &str = "fuzz checkpoint";
+pub const CHECKPOINT_SIZE: (u32, u32) = (17, 2);
+pub const CHECKPOINT_SPP: u32 = 64;
+
+/// A render checkpoint's counts and sums: the bytes follow a valid header and the settings of
+/// a fixed render, and the file gets a valid checksum, so that the fuzzer explores the
+/// semantic checks (sizes, passes, tiles, sample totals, values) behind it, as `--resume`
+/// reads it. Returns whether the checkpoint was accepted.
+pub fn checkpoint(data: &[u8]) -> bool {
+    use crate::render::{checkpoint, Film};
+    let settings = CHECKPOINT_SETTINGS.as_bytes();
+    let mut bytes = checkpoint::FORMAT.start(data.len() + settings.len() + 16);
+    bytes.extend_from_slice(&(settings.len() as u64).to_le_bytes());
+    bytes.extend_from_slice(settings);
+    bytes.extend_from_slice(data);
+    let path = scratch_path("render.checkpoint");
+    checkpoint::FORMAT
+        .save(&path, bytes)
+        .expect("the scratch file can be written");
+    let (width, height) = CHECKPOINT_SIZE;
+    let blank = Film::new(width, height, crate::image::filter::Filter::default())
+        .expect("the fuzz film can be made");
+    if let Some(resumed) = one_line(checkpoint::load(
+        &path,
+        CHECKPOINT_SETTINGS,
+        blank,
+        CHECKPOINT_SPP,
+    )) {
+        // What is accepted must be a film a render of CHECKPOINT_SPP passes through.
+        assert!(
+            resumed.film.spp < CHECKPOINT_SPP,
+            "accepted a finished film"
+        );
+        return true;
+    }
+    false
 }

@@ -56,3 +56,37 @@ fn network_corpus() {
 fn network_sealed_corpus() {
     replay("network_sealed", raylink::fuzzing::network_sealed);
 }
+
+#[test]
+fn checkpoint_corpus() {
+    replay("checkpoint", |data| {
+        raylink::fuzzing::checkpoint(data);
+    });
+}
+
+/// The checkpoint seeds are named for what they are: `valid_*` films a 64-sample render
+/// passes through are accepted; the crafted ones (a pass of 2^20 under way, counts past the
+/// target, negative or NaN sums, samples the passes cannot hold, ...) are refused.
+#[test]
+fn checkpoint_seeds_accepted_and_refused_by_meaning() {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("fuzz/corpus/checkpoint");
+    let (mut valid, mut refused) = (0, 0);
+    for entry in std::fs::read_dir(&dir).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().into_owned();
+        if name.len() == 40 && name.bytes().all(|b| b.is_ascii_hexdigit()) {
+            continue; // added by the fuzzer: no meaning in its name
+        }
+        let accepted = raylink::fuzzing::checkpoint(&std::fs::read(&path).unwrap());
+        assert_eq!(accepted, name.starts_with("valid_"), "{name}");
+        if accepted {
+            valid += 1;
+        } else {
+            refused += 1;
+        }
+    }
+    assert!(
+        valid >= 4 && refused >= 10,
+        "{valid} valid, {refused} refused seeds"
+    );
+}

@@ -20,7 +20,7 @@ use crate::binary_file::{Format, Reader};
 use crate::Result;
 use std::path::{Path, PathBuf};
 
-const FORMAT: Format = Format {
+pub(crate) const FORMAT: Format = Format {
     magic: b"RLCHKPT\0",
     version: 1,
     what: "render checkpoint",
