@@ -1,6 +1,6 @@
 //! Locates the system Embree (4, else 3) and OpenImageIO, generates Embree bindings with
 //! bindgen and compiles the small C API over OpenImageIO in `ffi/oiio.cpp` and the processor
-//! and clock functions in `ffi/platform.c`.
+//! and clock functions in `ffi/platform.c` and the exception guards in `ffi/exceptions.cpp`.
 
 use std::env;
 use std::path::{Path, PathBuf};
@@ -20,6 +20,7 @@ fn main() {
     println!("cargo:rerun-if-changed=ffi/oiio.cpp");
     println!("cargo:rerun-if-changed=ffi/platform.h");
     println!("cargo:rerun-if-changed=ffi/platform.c");
+    println!("cargo:rerun-if-changed=ffi/exceptions.cpp");
     println!("cargo:rerun-if-env-changed=EMBREE_DIR");
     println!("cargo::rustc-check-cfg=cfg(embree4)");
     println!("cargo::rustc-check-cfg=cfg(embree3)");
@@ -42,6 +43,13 @@ fn build_platform() {
         .file("ffi/platform.c")
         .warnings(true)
         .compile("raylink_platform");
+    // The exception guards are C++ (std::set_terminate, try around dlopen); libstdc++ is
+    // Embree's already.
+    cc::Build::new()
+        .cpp(true)
+        .file("ffi/exceptions.cpp")
+        .warnings(true)
+        .compile("raylink_exceptions");
 }
 
 fn fail(message: &str) -> ! {

@@ -221,7 +221,12 @@ fn message(cli: &Cli, failure: &Failure) -> String {
     raylink::error::one_line(&text)
 }
 
+/// Memory the system refuses ends the program with one line and exit status 1, not an abort.
+#[global_allocator]
+static ALLOCATOR: raylink::platform::ExitOnOutOfMemory = raylink::platform::ExitOnOutOfMemory;
+
 fn main() -> ExitCode {
+    raylink::platform::exit_on_uncaught_exceptions();
     // Only --version needs Embree's version; don't start a device (and its thread pool) for
     // every other command.
     let asks_version = std::env::args_os()

@@ -1,6 +1,8 @@
 #include "platform.h"
 
+#include <stdio.h>
 #include <time.h>
+#include <unistd.h>
 #if defined(__x86_64__)
 #include <xmmintrin.h>
 #endif
@@ -28,4 +30,19 @@ double raylink_process_cpu_seconds(void) {
         return -1.0;
     }
     return (double)t.tv_sec + (double)t.tv_nsec * 1e-9;
+}
+
+void raylink_exit_out_of_memory(unsigned long long bytes) {
+    char line[256];
+    /* snprintf with integer conversions only: it does not allocate. */
+    int n = snprintf(line, sizeof line,
+                     "raylink: error: cannot allocate %llu bytes: out of memory (a process limit "
+                     "such as ulimit -v, or other programs using the memory)\n",
+                     bytes);
+    if (n > 0) {
+        size_t len = (size_t)n < sizeof line ? (size_t)n : sizeof line - 1;
+        ssize_t written = write(2, line, len);
+        (void)written;
+    }
+    _exit(1);
 }

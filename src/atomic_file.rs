@@ -32,6 +32,20 @@ pub fn remove_temporaries() -> impl Drop {
     list
 }
 
+/// Removes the temporary files this process is writing, unless their list is being changed
+/// (then nothing): for a process ending at once because memory ran out, which must not wait
+/// for a lock this thread may hold.
+pub(crate) fn remove_temporaries_if_free() {
+    let list = match IN_FLIGHT.try_lock() {
+        Ok(list) => list,
+        Err(std::sync::TryLockError::Poisoned(e)) => e.into_inner(),
+        Err(std::sync::TryLockError::WouldBlock) => return,
+    };
+    for path in list.iter() {
+        let _ = std::fs::remove_file(path);
+    }
+}
+
 /// A temporary file beside `path`, created empty and listed while it exists; removed on drop
 /// unless [`Temporary::persist`]ed (renamed over its target).
 pub(crate) struct Temporary {

@@ -104,11 +104,10 @@ pub fn try_reserve<T>(
     additional: usize,
     what: impl FnOnce() -> String,
 ) -> Result<()> {
-    v.try_reserve_exact(additional)
-        .map_err(|_| Error::OutOfMemory {
-            what: what(),
-            bytes: (additional as u64).saturating_mul(std::mem::size_of::<T>() as u64),
-        })
+    crate::platform::fallible(|| v.try_reserve_exact(additional)).map_err(|_| Error::OutOfMemory {
+        what: what(),
+        bytes: (additional as u64).saturating_mul(std::mem::size_of::<T>() as u64),
+    })
 }
 
 /// `text` on one line: control characters (a newline inside a quoted string of the input,

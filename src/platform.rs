@@ -1,6 +1,10 @@
 //! The processor and operating-system settings the renderer needs: flush-to-zero for the
 //! threads that trace rays, and the process's CPU time for figures that must hold on a
-//! shared machine. A thin wrapper over `ffi/platform.c`.
+//! shared machine, and a one-line exit instead of an abort when the system refuses memory.
+//! A thin wrapper over `ffi/platform.c` and `ffi/exceptions.cpp`.
+
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::cell::Cell;
 
 /// Turns flush-to-zero and denormals-are-zero on for the calling thread. Embree asks for
 /// both on every thread that traces rays (denormal arithmetic is many times slower); the
@@ -24,12 +28,123 @@ pub fn cpu_seconds() -> f64 {
     unsafe { sys::raylink_process_cpu_seconds() }.max(0.0)
 }
 
+/// The system allocator for a program (the command line) that would rather end with one line
+/// and exit status 1 than abort when the system refuses memory (a process limit such as
+/// `ulimit -v`, other programs using the memory). Install it with
+/// `#[global_allocator] static A: ExitOnOutOfMemory = ExitOnOutOfMemory;`.
+///
+/// Allocations that can fail without ending the program ([`fallible`], which the library's
+/// `try_reserve` uses for its large buffers) still get their error; any other refused
+/// allocation removes the temporary files being written, writes
+/// `raylink: error: cannot allocate N bytes: out of memory (...)` and exits at once.
+pub struct ExitOnOutOfMemory;
+
+// SAFETY: every method forwards to the system allocator with the same arguments and returns
+// its result; the only addition, on a null result, ends the process without returning.
+unsafe impl GlobalAlloc for ExitOnOutOfMemory {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        // SAFETY: the caller's contract for `layout` is the system allocator's.
+        checked(unsafe { System.alloc(layout) }, layout.size())
+    }
+
+    unsafe fn alloc_zeroed(&self, layout: Layout) -> *mut u8 {
+        // SAFETY: as `alloc`.
+        checked(unsafe { System.alloc_zeroed(layout) }, layout.size())
+    }
+
+    unsafe fn realloc(&self, ptr: *mut u8, layout: Layout, new_size: usize) -> *mut u8 {
+        // SAFETY: `ptr` and `layout` come from this allocator, which is the system's.
+        checked(unsafe { System.realloc(ptr, layout, new_size) }, new_size)
+    }
+
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        // SAFETY: `ptr` and `layout` come from this allocator, which is the system's.
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+thread_local! {
+    /// Set while this thread runs [`fallible`]: a refused allocation is returned as such.
+    static FALLIBLE: Cell<bool> = const { Cell::new(false) };
+    /// Set while this thread is ending the process, so that an allocation on the way (a long
+    /// path's name) does not start it again.
+    static ENDING: Cell<bool> = const { Cell::new(false) };
+}
+
+/// Runs `f` (a `try_reserve`) with refused allocations returned to it as errors, under
+/// [`ExitOnOutOfMemory`] as under the system allocator.
+pub fn fallible<T>(f: impl FnOnce() -> T) -> T {
+    let before = FALLIBLE.with(|c| c.replace(true));
+    let result = f();
+    FALLIBLE.with(|c| c.set(before));
+    result
+}
+
+fn checked(ptr: *mut u8, bytes: usize) -> *mut u8 {
+    if ptr.is_null() && !FALLIBLE.with(Cell::get) {
+        if !ENDING.with(|c| c.replace(true)) {
+            crate::atomic_file::remove_temporaries_if_free();
+        }
+        // SAFETY: writes one line with a stack buffer and ends the process.
+        unsafe { sys::raylink_exit_out_of_memory(bytes as u64) }
+    }
+    ptr
+}
+
+/// From now on an uncaught C++ exception (Embree's task scheduler throws one when the system
+/// refuses it memory in the middle of a build) removes the temporary files being written,
+/// writes one line naming it and ends the process with status 1, instead of aborting. For
+/// programs, as [`ExitOnOutOfMemory`].
+pub fn exit_on_uncaught_exceptions() {
+    // SAFETY: stores a function pointer and sets the C++ terminate handler; the handler
+    // calls `remove_temporaries_before_exit`, which neither unwinds nor returns an error.
+    unsafe { sys::raylink_exit_on_terminate(remove_temporaries_before_exit) }
+}
+
+extern "C" fn remove_temporaries_before_exit() {
+    if !ENDING.with(|c| c.replace(true)) {
+        crate::atomic_file::remove_temporaries_if_free();
+    }
+}
+
+/// Loads the shared object at `path` (as `dlopen` with `RTLD_NOW | RTLD_LOCAL`), with a C++
+/// exception from its libraries' initialisers (memory the system refuses while they start)
+/// returned as an error: one unwinding into Rust would abort the process.
+///
+/// # Safety
+/// Loading runs the object's initialisers and those of the libraries it needs: the caller
+/// vouches that they only set up their own state.
+pub(crate) unsafe fn load_library(path: &std::path::Path) -> Result<libloading::Library, String> {
+    use std::os::unix::ffi::OsStrExt;
+    let c_path = std::ffi::CString::new(path.as_os_str().as_bytes())
+        .map_err(|_| format!("{}: a path with a NUL byte", path.display()))?;
+    let mut err = [0 as std::os::raw::c_char; 512];
+    // SAFETY: both buffers are valid for the call and `err` for its length; the caller
+    // vouches for the initialisers.
+    let handle = unsafe { sys::raylink_dlopen(c_path.as_ptr(), err.as_mut_ptr(), err.len()) };
+    if handle.is_null() {
+        // SAFETY: the C function always terminates `err`.
+        let reason = unsafe { std::ffi::CStr::from_ptr(err.as_ptr()) };
+        return Err(reason.to_string_lossy().into_owned());
+    }
+    // SAFETY: `handle` is a live handle from dlopen, owned from here on by the Library,
+    // which closes it when dropped.
+    Ok(unsafe { libloading::os::unix::Library::from_raw(handle) }.into())
+}
+
 /// Declarations matching `ffi/platform.h`.
 mod sys {
     extern "C" {
         pub fn raylink_flush_denormals();
         pub fn raylink_flush_denormals_enabled() -> std::os::raw::c_int;
         pub fn raylink_process_cpu_seconds() -> f64;
+        pub fn raylink_exit_out_of_memory(bytes: u64) -> !;
+        pub fn raylink_exit_on_terminate(before_exit: extern "C" fn());
+        pub fn raylink_dlopen(
+            path: *const std::os::raw::c_char,
+            err: *mut std::os::raw::c_char,
+            err_len: usize,
+        ) -> *mut std::os::raw::c_void;
     }
 }
 

@@ -147,8 +147,13 @@ fn load() -> Result<Api, String> {
     }
     // The carried copy, through an anonymous in-memory file; without one (no /proc), a
     // private temporary file removed once loaded.
-    from_memory()
-        .or_else(|memory| from_temporary_file().map_err(|file| format!("{memory}; {file}")))
+    // The same reason twice (a library OpenImageIO needs that cannot be mapped) is said once.
+    from_memory().or_else(|memory| {
+        from_temporary_file().map_err(|file| match file == memory {
+            true => file,
+            false => format!("{memory}; {file}"),
+        })
+    })
 }
 
 fn from_memory() -> Result<Api, String> {
@@ -188,7 +193,7 @@ fn installed() -> Option<PathBuf> {
 fn open(path: &Path) -> Result<Api, String> {
     // SAFETY: loading runs the object's initialisers: OpenImageIO's and its libraries',
     // which only set up their own state.
-    let library = unsafe { libloading::Library::new(path) }
+    let library = unsafe { crate::platform::load_library(path) }
         .map_err(|e| format!("cannot load OpenImageIO: {e}"))?;
     // SAFETY: the symbols are looked up by the names and types of `ffi/oiio.h`; the ABI
     // number confirms the object was built from that header.
