@@ -11,10 +11,11 @@
 //! - The hash is FNV-1a 64 over the width, the height and the bits of every f32 channel of
 //!   every pixel as the image reader returns them, not over the file's bytes (EXR metadata
 //!   holds render times).
-//! - Images are only promised identical for the same Embree (and libm), so the table is keyed
-//!   by the Embree version `raylink --version` prints: the lines under `[embree X.Y.Z]` are
-//!   that version's, `case output hash` each. Without a section for the running Embree, the
-//!   test says so and passes without rendering.
+//! - Images are only promised identical for the same Embree (and libm) on the same kind of
+//!   processor (Embree picks its AVX-512, AVX2, AVX or SSE kernels at run time), so the table
+//!   is keyed by the Embree version `raylink --version` prints and that instruction set: the
+//!   lines under `[embree X.Y.Z ISA]` are theirs, `case output hash` each. Without a section
+//!   for the running Embree and processor, the test says so and passes without rendering.
 //! - Every differing, missing or unexpected line is printed before the test fails.
 //! - `RAYLINK_RECORD_HASHES=1 cargo test --test bit_identity -- --nocapture` renders every
 //!   case and rewrites the running Embree's section of the table (other sections are kept)
@@ -59,7 +60,35 @@ fn pixel_hash(path: &Path) -> Result<u64, String> {
     Ok(hash)
 }
 
-/// The Embree version the binary reports, as the table's section key (`embree 3.13.5`).
+/// The widest instruction set Embree's kernels use on this processor (it picks them at run
+/// time; the AVX-512 and AVX2 kernels differ in the last bits of some hits).
+fn embree_isa() -> &'static str {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::is_x86_feature_detected as has;
+        if has!("avx512f")
+            && has!("avx512cd")
+            && has!("avx512dq")
+            && has!("avx512bw")
+            && has!("avx512vl")
+        {
+            return "avx512";
+        }
+        if has!("avx2") && has!("fma") && has!("bmi1") && has!("bmi2") && has!("lzcnt") {
+            return "avx2";
+        }
+        if has!("avx") {
+            return "avx";
+        }
+        if has!("sse4.2") {
+            return "sse4.2";
+        }
+    }
+    "other"
+}
+
+/// The Embree version the binary reports and the instruction set its kernels use here, as
+/// the table's section key (`embree 3.13.5 avx2`).
 fn embree_key() -> String {
     let out = common::raylink(&["--version"]);
     let text = String::from_utf8_lossy(&out.stdout).into_owned();
@@ -68,7 +97,7 @@ fn embree_key() -> String {
         .map(|(_, rest)| rest.split([',', ')', ' ']).next().unwrap_or(""))
         .filter(|v| v.chars().next().is_some_and(|c| c.is_ascii_digit()));
     match version {
-        Some(v) => format!("embree {v}"),
+        Some(v) => format!("embree {v} {}", embree_isa()),
         None => panic!("no Embree version in `raylink --version`: {text:?}"),
     }
 }
@@ -133,7 +162,8 @@ impl Table {
             self.header = [
                 "# Pixel hashes of the renders of tests/bit_identity.rs (FNV-1a 64 of each image's",
                 "# width, height and f32 channel bits), by the Embree version `raylink --version`",
-                "# prints; `case output hash` a line. Rewrite the running Embree's section with",
+                "# prints and the instruction set of its kernels; `case output hash` a line.",
+                "# Rewrite the running Embree's section with",
                 "#   RAYLINK_RECORD_HASHES=1 cargo test --test bit_identity -- --nocapture",
             ]
             .map(String::from)
