@@ -703,8 +703,11 @@ fn recorders_sharing_a_thread_keep_their_own_segments() {
         };
         assert_eq!((sa.surface.len(), sa.shadow.len()), (3, 0));
         assert_eq!((sb.surface.len(), sb.shadow.len()), (1, 1));
-        assert!(sa.surface.iter().all(|s| s[0].x != 0.0));
-        assert_eq!(sb.surface[0][0].x, 0.0);
+        // (Kept within a lattice step of the ray: the first end's x is the ray's.)
+        let q = crate::coherence::segments::Quantiser::new(&voxels.fine);
+        let x = |s: &[[u16; 3]; 2]| q.decode(s[0]).x;
+        assert!(sa.surface.iter().all(|s| x(s).abs() > 0.1));
+        assert!(x(&sb.surface[0]).abs() <= q.error());
     }
 }
 
