@@ -398,17 +398,18 @@ impl ActiveVoxels {
             Vec3A::from(dir),
         );
         let t0 = if t0 > 0.0 { t0 } else { 0.0 };
-        // Both ends beyond one face (`ends_beyond_one_face`; a NaN or infinite t1 skips it).
         if t1 < f32::INFINITY {
             let (a, b) = (o + d * t0, o + d * t1);
-            if ((a.cmpgt(hi) & b.cmpgt(hi)) | (a.cmplt(lo) & b.cmplt(lo))).any() {
-                return None;
-            }
             // Both ends inside (most segments, online, where the box is the whole grid): the
             // segment is its own clip. (The slab test below could move an end lying on a
             // side by a rounding error; a NaN fails the comparisons.)
             if (a.cmpge(lo) & a.cmple(hi) & b.cmpge(lo) & b.cmple(hi)).all() {
                 return Some([a, b]);
+            }
+            // Both ends beyond one face (`ends_beyond_one_face`; a NaN or infinite t1 skips
+            // it).
+            if ((a.cmpgt(hi) & b.cmpgt(hi)) | (a.cmplt(lo) & b.cmplt(lo))).any() {
+                return None;
             }
         }
         // A zero direction gives ±∞ (outside the slab: the segment misses) or NaN (on its

@@ -166,8 +166,9 @@ pub struct RecordingAccel<'a> {
     nearest_blocker: bool,
     /// The point lights shadow rays went to (see [`Recorded::lights`]).
     lights: AtomicU64,
-    /// The scene's point lights: their bit in `lights` and their position.
+    /// The scene's point lights: their bit in `lights` and their position; all their bits.
     point_lights: Vec<(u64, Vec3A)>,
+    point_bits: u64,
 }
 
 fn mark(set: &[AtomicU64], v: usize) {
@@ -207,6 +208,15 @@ impl<'a> RecordingAccel<'a> {
                 list.clear();
             }
         });
+        let point_lights: Vec<(u64, Vec3A)> = scene
+            .lights
+            .iter()
+            .enumerate()
+            .filter_map(|(i, light)| match light {
+                Light::Point { position, .. } => Some((1u64 << i.min(63), (*position).into())),
+                _ => None,
+            })
+            .collect();
         RecordingAccel {
             inner,
             scene,
@@ -225,15 +235,8 @@ impl<'a> RecordingAccel<'a> {
             hit: AtomicBool::new(false),
             nearest_blocker,
             lights: AtomicU64::new(0),
-            point_lights: scene
-                .lights
-                .iter()
-                .enumerate()
-                .filter_map(|(i, light)| match light {
-                    Light::Point { position, .. } => Some((1u64 << i.min(63), (*position).into())),
-                    _ => None,
-                })
-                .collect(),
+            point_bits: point_lights.iter().fold(0, |m, l| m | l.0),
+            point_lights,
         }
     }
 
@@ -362,16 +365,22 @@ impl<'a> RecordingAccel<'a> {
     /// intensity alone changes is a change with no extent in space: the blocks whose shadow
     /// rays went to it are the ones it reaches.
     fn note_light(&self, ray: &Ray) {
+        let seen = self.lights.load(Ordering::Relaxed);
+        // Once every point light is noted (after a few shadow rays of a block), nothing to do.
+        if seen & self.point_bits == self.point_bits {
+            return;
+        }
         // (Squared distances: no square root on every shadow ray.)
         let end = Vec3A::from(ray.origin + ray.dir);
         let near2 = 1e-8 * ray.dir.length_squared().max(1e-12);
+        let mut now = seen;
         for &(bit, position) in &self.point_lights {
-            if end.distance_squared(position) <= near2 {
-                let seen = self.lights.load(Ordering::Relaxed);
-                if seen & bit == 0 {
-                    self.lights.store(seen | bit, Ordering::Relaxed);
-                }
+            if now & bit == 0 && end.distance_squared(position) <= near2 {
+                now |= bit;
             }
+        }
+        if now != seen {
+            self.lights.store(now, Ordering::Relaxed);
         }
     }
 
