@@ -81,7 +81,7 @@ pub struct AnimateArgs {
     pub records: RecordsName,
     /// Approximate number of voxels of the grid (over the scene, or with --lookahead over the
     /// region where the sequence changes). More voxels retrace fewer pixels but cost more to
-    /// look up. Default: 65536 online, 8192 with --lookahead.
+    /// look up. Default: 65536 online with segment records, else 8192.
     #[arg(long)]
     pub voxels: Option<u32>,
     /// Render only these frames of the sequence: A..B (both included), A.., ..B or A, in the
@@ -323,6 +323,10 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
         Technique::Path(mc) => SequenceTechnique::Path(mc),
         _ => unreachable!("the settings name whitted or path"),
     };
+    let records = match args.records {
+        RecordsName::Tables => Records::Tables,
+        RecordsName::Segments => Records::Segments,
+    };
     let placement = if args.lookahead {
         Placement::Lookahead
     } else {
@@ -343,11 +347,8 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
         } else {
             SequenceMode::Coherent
         },
-        records: match args.records {
-            RecordsName::Tables => Records::Tables,
-            RecordsName::Segments => Records::Segments,
-        },
-        voxels: args.voxels.unwrap_or(placement.default_voxels()),
+        records,
+        voxels: args.voxels.unwrap_or(placement.default_voxels(records)),
         blocks,
         overhead_reps: args.overhead_reps,
         placement,
