@@ -80,10 +80,10 @@ pub struct AnimateArgs {
     #[arg(long, value_enum, default_value = "segments")]
     pub records: RecordsName,
     /// Approximate number of voxels of the grid (over the scene, or with --lookahead over the
-    /// region where the sequence changes).
-    /// More voxels retrace fewer pixels but cost more per recorded ray.
-    #[arg(long, default_value_t = 8192)]
-    pub voxels: u32,
+    /// region where the sequence changes). More voxels retrace fewer pixels but cost more to
+    /// look up. Default: 65536 online with segment records, else 8192.
+    #[arg(long)]
+    pub voxels: Option<u32>,
     /// Render only these frames of the sequence: A..B (both included), A.., ..B or A, in the
     /// scene's frame numbers (e.g. one render-farm job's share). Frame A is traced in full,
     /// the rest coherently; the frames equal those of the whole sequence bit for bit.
@@ -323,6 +323,15 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
         Technique::Path(mc) => SequenceTechnique::Path(mc),
         _ => unreachable!("the settings name whitted or path"),
     };
+    let records = match args.records {
+        RecordsName::Tables => Records::Tables,
+        RecordsName::Segments => Records::Segments,
+    };
+    let placement = if args.lookahead {
+        Placement::Lookahead
+    } else {
+        Placement::Online
+    };
     let job = SequenceJob {
         technique,
         width: args.width.unwrap_or(scene0.camera.width),
@@ -338,18 +347,11 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
         } else {
             SequenceMode::Coherent
         },
-        records: match args.records {
-            RecordsName::Tables => Records::Tables,
-            RecordsName::Segments => Records::Segments,
-        },
-        voxels: args.voxels,
+        records,
+        voxels: args.voxels.unwrap_or(placement.default_voxels(records)),
         blocks,
         overhead_reps: args.overhead_reps,
-        placement: if args.lookahead {
-            Placement::Lookahead
-        } else {
-            Placement::Online
-        },
+        placement,
     };
     raylink::Job {
         width: job.width,

@@ -6,8 +6,10 @@
 //!   small bit set private to the task (it stays in the cache, and the rays of one block
 //!   cross mostly the same voxels), then set in the shared voxel tables once per voxel when
 //!   the task ends.
-//! - Segments: the segment, clipped to the box around the recording voxels, is copied into
-//!   the thread's buffer; the block keeps an exact-size copy when the task ends.
+//! - Segments: the segment, clipped to the box around the recording voxels and quantised
+//!   (segments.rs), is pushed to the thread's buffer, made as large as the thread's last
+//!   task needed; the block takes the lists when the task ends, shrunk in place (no copy:
+//!   frame 0 writes every record once).
 //!
 //! Camera rays are also kept with their hits ([`CameraHit`]): when the block is retraced, a
 //! camera ray that crosses no changed voxel up to its hit gets that hit again without a
@@ -15,11 +17,12 @@
 //! stored hit; with Embree, which cannot start a traversal part-way, the whole query goes).
 
 use super::grid::ActiveVoxels;
-use super::segments::BlockSegments;
+use super::segments::{BlockSegments, Quantiser};
 use super::tables::{Table, VoxelTables};
 use crate::accel::{Accel, Hit};
 use crate::math::{Ray, Vec3};
 use crate::scene::{Light, Scene};
+use glam::Vec3A;
 use std::cell::{Cell, RefCell};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 use std::sync::Mutex;
@@ -80,15 +83,23 @@ impl Recorded {
         self.camera.clear();
     }
 
-    /// An exact-size copy of the lists (segments sealed).
-    fn copy(&self) -> Recorded {
-        let mut segments = self.segments.clone();
-        segments.seal();
-        Recorded {
-            segments,
-            camera: self.camera.clone(),
+    /// The lists (segments sealed), shrunk to their length; in their place, empty lists
+    /// with room for a quarter more than these held (the next task's blocks are alike).
+    fn take(&mut self) -> Recorded {
+        let room = |n: usize| n + n / 4;
+        let next = Recorded {
+            segments: BlockSegments::with_capacity(
+                room(self.segments.surface.len()),
+                room(self.segments.shadow.len()),
+            ),
+            camera: Vec::with_capacity(room(self.camera.len())),
             ..Recorded::new()
-        }
+        };
+        let mut taken = std::mem::replace(self, next);
+        taken.segments.seal();
+        taken.segments.shrink_to_fit();
+        taken.camera.shrink_to_fit();
+        taken
     }
 
     fn append(&mut self, other: Recorded) {
@@ -131,6 +142,8 @@ pub struct RecordingAccel<'a> {
     scene: &'a Scene,
     voxels: &'a ActiveVoxels,
     records: Records,
+    /// Segments: the lattice their points are kept on.
+    quantiser: Quantiser,
     /// Tables: voxels crossed by rays looking for surfaces, and by shadow rays (one bit per
     /// voxel).
     surface: Vec<AtomicU64>,
@@ -153,6 +166,9 @@ pub struct RecordingAccel<'a> {
     nearest_blocker: bool,
     /// The point lights shadow rays went to (see [`Recorded::lights`]).
     lights: AtomicU64,
+    /// The scene's point lights: their bit in `lights` and their position; all their bits.
+    point_lights: Vec<(u64, Vec3A)>,
+    point_bits: u64,
 }
 
 fn mark(set: &[AtomicU64], v: usize) {
@@ -192,11 +208,21 @@ impl<'a> RecordingAccel<'a> {
                 list.clear();
             }
         });
+        let point_lights: Vec<(u64, Vec3A)> = scene
+            .lights
+            .iter()
+            .enumerate()
+            .filter_map(|(i, light)| match light {
+                Light::Point { position, .. } => Some((1u64 << i.min(63), (*position).into())),
+                _ => None,
+            })
+            .collect();
         RecordingAccel {
             inner,
             scene,
             voxels,
             records,
+            quantiser: Quantiser::new(&voxels.fine),
             surface: zeros(),
             shadow: zeros(),
             serial,
@@ -209,6 +235,8 @@ impl<'a> RecordingAccel<'a> {
             hit: AtomicBool::new(false),
             nearest_blocker,
             lights: AtomicU64::new(0),
+            point_bits: point_lights.iter().fold(0, |m, l| m | l.0),
+            point_lights,
         }
     }
 
@@ -299,22 +327,23 @@ impl<'a> RecordingAccel<'a> {
 
     #[inline(never)]
     fn keep(&self, table: Table, origin: Vec3, dir: Vec3, t0: f32, t1: f32) {
-        let Some(s) = self.voxels.clip_segment(origin, dir, t0, t1) else {
+        let Some([a, b]) = self.voxels.clip_segment(origin, dir, t0, t1) else {
             return;
         };
+        let q = &self.quantiser;
+        let s = [q.encode(a), q.encode(b)];
         self.with_lists(|list| list.segments.push(table, s));
     }
 
     /// What was recorded: the segments (sealed), the camera hits, whether any ray found a
     /// surface, and the camera rays answered from stored hits.
     pub fn finish(self) -> Recorded {
-        // The thread's buffer keeps its (warm) memory for the next task; the block keeps an
-        // exact copy, made (and its segments' box) while the lists are in this thread's
-        // cache, not when the block is stored.
+        // The block takes the thread's lists, and their box is made while they are in this
+        // thread's cache, not when the block is stored.
         let mut recorded = LOCAL.with_borrow_mut(|(owner, list)| {
             if *owner == self.serial {
                 *owner = 0;
-                list.copy()
+                list.take()
             } else {
                 Recorded::new()
             }
@@ -336,18 +365,22 @@ impl<'a> RecordingAccel<'a> {
     /// intensity alone changes is a change with no extent in space: the blocks whose shadow
     /// rays went to it are the ones it reaches.
     fn note_light(&self, ray: &Ray) {
-        let end = ray.origin + ray.dir;
-        let near = 1e-4 * ray.dir.length().max(1e-6);
-        for (i, light) in self.scene.lights.iter().enumerate() {
-            if let Light::Point { position, .. } = light {
-                if end.distance(*position) <= near {
-                    let bit = 1u64 << i.min(63);
-                    let seen = self.lights.load(Ordering::Relaxed);
-                    if seen & bit == 0 {
-                        self.lights.store(seen | bit, Ordering::Relaxed);
-                    }
-                }
+        let seen = self.lights.load(Ordering::Relaxed);
+        // Once every point light is noted (after a few shadow rays of a block), nothing to do.
+        if seen & self.point_bits == self.point_bits {
+            return;
+        }
+        // (Squared distances: no square root on every shadow ray.)
+        let end = Vec3A::from(ray.origin + ray.dir);
+        let near2 = 1e-8 * ray.dir.length_squared().max(1e-12);
+        let mut now = seen;
+        for &(bit, position) in &self.point_lights {
+            if now & bit == 0 && end.distance_squared(position) <= near2 {
+                now |= bit;
             }
+        }
+        if now != seen {
+            self.lights.store(now, Ordering::Relaxed);
         }
     }
 
@@ -431,7 +464,7 @@ impl Accel for RecordingAccel<'_> {
 
     fn occluded(&self, ray: &Ray) -> bool {
         let blocked = self.inner.occluded(ray);
-        if !self.scene.lights.is_empty() {
+        if !self.point_lights.is_empty() {
             self.note_light(ray);
         }
         // An unblocked segment is recorded to the light: anything that moves into it must

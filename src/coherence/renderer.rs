@@ -8,7 +8,7 @@
 use super::changes::{Changes, FrameSummary};
 use super::grid::{ActiveVoxels, Grid};
 use super::record::{CameraHit, CameraReuse, Recorded, RecordingAccel, Records};
-use super::segments::{Changed, SegmentRecords};
+use super::segments::{Changed, Quantiser, SegmentRecords};
 use super::tables::{BlockLayout, BlockSet, Table, VoxelTables};
 use crate::accel::Accel;
 use crate::control::{Control, MemoryBudget};
@@ -167,10 +167,10 @@ enum Store {
 }
 
 impl Store {
-    fn new(records: Records, voxels: usize, layout: &BlockLayout) -> Store {
+    fn new(records: Records, grid: &Grid, layout: &BlockLayout) -> Store {
         match records {
-            Records::Tables => Store::Tables(VoxelTables::new(voxels, layout)),
-            Records::Segments => Store::Segments(SegmentRecords::new(layout)),
+            Records::Tables => Store::Tables(VoxelTables::new(grid.len(), layout)),
+            Records::Segments => Store::Segments(SegmentRecords::new(layout, grid)),
         }
     }
 
@@ -195,7 +195,7 @@ impl CoherentRenderer {
 
     pub fn with_records(grid: Grid, layout: BlockLayout, records: Records) -> CoherentRenderer {
         CoherentRenderer {
-            store: Store::new(records, grid.len(), &layout),
+            store: Store::new(records, &grid, &layout),
             voxels: ActiveVoxels::all(grid.clone()),
             grid,
             layout,
@@ -315,7 +315,7 @@ impl CoherentRenderer {
         self.previous = None;
         self.camera = vec![Vec::new(); self.layout.len()];
         self.lights = vec![0; self.layout.len()];
-        self.store = Store::new(self.store.records(), self.grid.len(), &self.layout);
+        self.store = Store::new(self.store.records(), &self.grid, &self.layout);
         self.position = 0;
         self.update_active();
     }
@@ -337,6 +337,10 @@ impl CoherentRenderer {
             let reason = "something changed outside the voxel grid".to_string();
             return (BlockSet::all(&self.layout), 0, Err(reason));
         }
+        // A kept segment lies within a lattice step of the traced one (segments.rs; so do
+        // the tables made from segments past the budget): the boxes grow by that step more,
+        // which stays within the margin of `restrict_to_sequence`.
+        let margin = margin + Quantiser::new(&self.grid).error();
         let mut changed = vec![false; self.grid.len()];
         for (lo, hi) in self.surface_boxes(&Changes {
             shadows: Vec::new(),
@@ -383,8 +387,10 @@ impl CoherentRenderer {
                     .zip(&shadow_only)
                     .map(|(a, b)| a | b)
                     .collect();
-                let voxels =
-                    |mask: &[bool]| Changed::new(ActiveVoxels::from_mask(self.grid.clone(), mask));
+                let voxels = |mask: &[bool]| {
+                    let voxels = ActiveVoxels::from_mask(self.grid.clone(), mask);
+                    Changed::new(voxels, segments.quantiser())
+                };
                 segments.collect(&voxels(&changed), &voxels(&any), &mut blocks);
             }
         }
