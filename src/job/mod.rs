@@ -212,15 +212,16 @@ impl Job {
         }
     }
 
-    /// Bytes per pixel of the film, the finished tiles, the image and an output's conversion
-    /// buffer.
+    /// Bytes per pixel of the film, the finished tiles, the image, an output's conversion
+    /// buffer and its encoded file (held in memory before it is written; at most about the
+    /// float pixels).
     fn bytes_per_pixel(&self) -> u64 {
         let film = if self.technique.monte_carlo().is_some() {
             48 + 24
         } else {
             24
         };
-        film + 12 + 16
+        film + 12 + 16 + 16
     }
 }
 
