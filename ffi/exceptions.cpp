@@ -17,9 +17,11 @@ namespace {
 
 void (*run_before_exit)(void) = nullptr;
 
-void write_line(const char* line, int n) {
+// Writes the line snprintf made of `n` characters into a buffer of `size` (cut to fit).
+void write_line(const char* line, int n, size_t size) {
     if (n > 0) {
-        ssize_t written = write(2, line, static_cast<size_t>(n));
+        size_t len = static_cast<size_t>(n) < size ? static_cast<size_t>(n) : size - 1;
+        ssize_t written = write(2, line, len);
         (void)written;
     }
 }
@@ -51,7 +53,7 @@ void write_line(const char* line, int n) {
         n = std::snprintf(line, sizeof line,
                           "raylink: error: Embree stopped with an uncaught exception\n");
     }
-    write_line(line, n < static_cast<int>(sizeof line) ? n : static_cast<int>(sizeof line) - 1);
+    write_line(line, n, sizeof line);
     _exit(1);
 }
 

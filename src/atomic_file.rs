@@ -26,9 +26,7 @@ fn in_flight() -> MutexGuard<'static, Vec<PathBuf>> {
 /// ordinary thread (a signal-handling thread), not from inside a signal handler.
 pub fn remove_temporaries() -> impl Drop {
     let list = in_flight();
-    for path in list.iter() {
-        let _ = std::fs::remove_file(path);
-    }
+    remove_all(&list);
     list
 }
 
@@ -41,7 +39,11 @@ pub(crate) fn remove_temporaries_if_free() {
         Err(std::sync::TryLockError::Poisoned(e)) => e.into_inner(),
         Err(std::sync::TryLockError::WouldBlock) => return,
     };
-    for path in list.iter() {
+    remove_all(&list);
+}
+
+fn remove_all(paths: &[PathBuf]) {
+    for path in paths {
         let _ = std::fs::remove_file(path);
     }
 }

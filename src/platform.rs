@@ -82,9 +82,7 @@ pub fn fallible<T>(f: impl FnOnce() -> T) -> T {
 
 fn checked(ptr: *mut u8, bytes: usize) -> *mut u8 {
     if ptr.is_null() && !FALLIBLE.with(Cell::get) {
-        if !ENDING.with(|c| c.replace(true)) {
-            crate::atomic_file::remove_temporaries_if_free();
-        }
+        remove_temporaries_before_exit();
         // SAFETY: writes one line with a stack buffer and ends the process.
         unsafe { sys::raylink_exit_out_of_memory(bytes as u64) }
     }
@@ -101,6 +99,7 @@ pub fn exit_on_uncaught_exceptions() {
     unsafe { sys::raylink_exit_on_terminate(remove_temporaries_before_exit) }
 }
 
+/// Removes the temporary files being written, once per thread however the exit comes.
 extern "C" fn remove_temporaries_before_exit() {
     if !ENDING.with(|c| c.replace(true)) {
         crate::atomic_file::remove_temporaries_if_free();

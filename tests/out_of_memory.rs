@@ -3,12 +3,11 @@
 //! records, the network's tables, the film, the image), the run ends with exit status 1 and a
 //! `raylink: error:` line, never an abort, and leaves no file behind.
 
+mod common;
+
+use common::stderr;
 use std::os::unix::process::ExitStatusExt;
 use std::process::{Command, Output};
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).trim_end().to_string()
-}
 
 /// `raylink ARGS` under an address-space limit of `kib` KiB.
 fn under_limit(kib: u64, args: &[&str]) -> Output {

@@ -6,6 +6,7 @@ use std::process::{Command, Output};
 pub mod process;
 
 /// Runs the binary from the repository root.
+#[allow(dead_code)] // Not every test crate runs raylink this way.
 pub fn raylink(args: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_raylink"))
         .args(args)
