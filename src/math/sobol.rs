@@ -12,6 +12,8 @@ use super::Vec2;
 pub struct Sampler {
     key: u64,
     index: u32,
+    /// `index` with its bits reversed: the first step of every dimension pair's shuffle.
+    index_reversed: u32,
     dimension: u32,
 }
 
@@ -29,10 +31,6 @@ fn laine_karras(mut x: u32, seed: u32) -> u32 {
     x ^= x.wrapping_mul(0xc7afe638);
     x ^= x.wrapping_mul(0x8d22f6e6);
     x
-}
-
-fn nested_uniform_scramble(x: u32, seed: u32) -> u32 {
-    laine_karras(x.reverse_bits(), seed).reverse_bits()
 }
 
 /// Sobol's second dimension (primitive polynomial x + 1), by the direction number of each
@@ -57,14 +55,15 @@ const fn sobol_dim1_bits(mut index: u32, first_bit: u32) -> u32 {
 
 /// The second dimension is linear over GF(2) in the index bits: the value is the XOR of
 /// one table entry per index byte (a shuffled index has all 32 bits set at random, so a
-/// bit-by-bit loop would take 32 steps).
-const SOBOL_DIM1_TABLE: [[u32; 256]; 4] = {
+/// bit-by-bit loop would take 32 steps). The entries are stored bit-reversed, since the
+/// scramble that follows works on the reversed value.
+const SOBOL_DIM1_REVERSED: [[u32; 256]; 4] = {
     let mut t = [[0u32; 256]; 4];
     let mut byte = 0;
     while byte < 4 {
         let mut b = 0;
         while b < 256 {
-            t[byte][b] = sobol_dim1_bits(b as u32, 8 * byte as u32);
+            t[byte][b] = sobol_dim1_bits(b as u32, 8 * byte as u32).reverse_bits();
             b += 1;
         }
         byte += 1;
@@ -72,8 +71,9 @@ const SOBOL_DIM1_TABLE: [[u32; 256]; 4] = {
     t
 };
 
-fn sobol_dim1(index: u32) -> u32 {
-    let t = &SOBOL_DIM1_TABLE;
+/// Sobol's second dimension of `index`, bit-reversed.
+fn sobol_dim1_reversed(index: u32) -> u32 {
+    let t = &SOBOL_DIM1_REVERSED;
     t[0][(index & 0xff) as usize]
         ^ t[1][((index >> 8) & 0xff) as usize]
         ^ t[2][((index >> 16) & 0xff) as usize]
@@ -99,6 +99,7 @@ impl Sampler {
         Sampler {
             key: h,
             index,
+            index_reversed: index.reverse_bits(),
             dimension: 0,
         }
     }
@@ -117,9 +118,12 @@ impl Sampler {
             );
         }
         // Shuffle the index (a nested uniform scramble), then scramble both coordinates.
-        let index = nested_uniform_scramble(self.index, h as u32);
-        let x = nested_uniform_scramble(index.reverse_bits(), (h >> 32) as u32);
-        let y = nested_uniform_scramble(sobol_dim1(index), (h >> 16) as u32 ^ 0x9e37_79b9);
+        // Each scramble is reverse(LK(reverse(v))): the reversals that cancel are left out
+        // (Sobol's first dimension is the reversed index itself), which keeps every value.
+        let index = laine_karras(self.index_reversed, h as u32).reverse_bits();
+        let x = laine_karras(index, (h >> 32) as u32).reverse_bits();
+        let y =
+            laine_karras(sobol_dim1_reversed(index), (h >> 16) as u32 ^ 0x9e37_79b9).reverse_bits();
         Vec2::new(
             (x as f32 * TO_UNIT).min(ONE_MINUS_EPSILON),
             (y as f32 * TO_UNIT).min(ONE_MINUS_EPSILON),
@@ -141,7 +145,43 @@ mod tests {
         let mut rng = crate::math::Rng::for_key(2, &[]);
         for _ in 0..10_000 {
             let i = rng.next_u32();
-            assert_eq!(sobol_dim1(i), sobol_dim1_bits(i, 0));
+            assert_eq!(sobol_dim1_reversed(i), sobol_dim1_bits(i, 0).reverse_bits());
+        }
+    }
+
+    /// pbrt-v4's padded Sobol value written out as the paper defines it (every nested
+    /// uniform scramble as reverse, Laine-Karras, reverse), for the dimension pairs that
+    /// are not hashed.
+    fn defined_value(sampler: &Sampler, dimension: u32) -> Vec2 {
+        let nested = |x: u32, seed: u32| laine_karras(x.reverse_bits(), seed).reverse_bits();
+        let h = mix64(sampler.key ^ (dimension as u64).wrapping_mul(0xd1b5_4a32_d192_ed03));
+        let index = nested(sampler.index, h as u32);
+        let x = nested(index.reverse_bits(), (h >> 32) as u32);
+        let y = nested(sobol_dim1_bits(index, 0), (h >> 16) as u32 ^ 0x9e37_79b9);
+        Vec2::new(
+            (x as f32 * TO_UNIT).min(ONE_MINUS_EPSILON),
+            (y as f32 * TO_UNIT).min(ONE_MINUS_EPSILON),
+        )
+    }
+
+    #[test]
+    fn values_are_the_defined_scrambles() {
+        let mut rng = crate::math::Rng::for_key(5, &[]);
+        for _ in 0..2_000 {
+            let mut s = Sampler::new(
+                rng.next_u32() as u64,
+                &[rng.next_u32() as u64],
+                rng.next_u32(),
+            );
+            let start = s.clone();
+            for d in 0..SOBOL_PAIRS {
+                let v = s.next_2d();
+                let want = defined_value(&start, d);
+                assert_eq!(
+                    (v.x.to_bits(), v.y.to_bits()),
+                    (want.x.to_bits(), want.y.to_bits())
+                );
+            }
         }
     }
 
