@@ -43,26 +43,68 @@ where
     T: Sync,
     R: Send,
 {
-    let n = items.len();
+    drive_indexed(
+        items.len(),
+        threads,
+        window,
+        cancel,
+        |i| work(&items[i]),
+        |i, r| {
+            merge(i, r);
+            Merge::Continue
+        },
+    )
+}
+
+/// What the merging side wants after a result.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Merge {
+    Continue,
+    /// Start no more items and merge no more results: the work is complete as it stands
+    /// (a time limit reached at the end of a pass, an error to report).
+    Stop,
+}
+
+/// [`drive`] over the items `0..n` given by index, where `merge` may end the work early
+/// ([`Merge::Stop`]): the later items' results are dropped and [`Driven::cancelled`] is
+/// not set. This lets one drive run through many passes over an image with no pause
+/// between them.
+pub(crate) fn drive_indexed<R>(
+    n: usize,
+    threads: Option<usize>,
+    window: usize,
+    cancel: &CancelToken,
+    work: impl Fn(usize) -> R + Sync,
+    mut merge: impl FnMut(usize, R) -> Merge,
+) -> Driven
+where
+    R: Send,
+{
     let window = window.max(1);
     let next = AtomicUsize::new(0);
     // The count merged so far, which workers wait on when too far ahead; and whether a
-    // worker died (so that the others stop waiting for its item).
+    // worker died or the merge stopped (so that the others stop waiting and starting).
     let merged_count = Mutex::new(0usize);
     let advanced = Condvar::new();
     let failed = AtomicBool::new(false);
+    let stopped = AtomicBool::new(false);
     let (send, receive) = mpsc::channel::<(usize, R)>();
     let mut merged = 0;
     std::thread::scope(|scope| {
         for _ in 0..worker_count(threads, n) {
             let send = send.clone();
-            let (next, merged_count, advanced, failed, work) =
-                (&next, &merged_count, &advanced, &failed, &work);
+            let (next, merged_count, advanced, failed, stopped, work) =
+                (&next, &merged_count, &advanced, &failed, &stopped, &work);
+            let halted = move || {
+                cancel.is_cancelled()
+                    || failed.load(Ordering::Relaxed)
+                    || stopped.load(Ordering::Relaxed)
+            };
             scope.spawn(move || {
                 set_flush_denormals();
                 let _alarm = Alarm { failed, advanced };
                 loop {
-                    if cancel.is_cancelled() || failed.load(Ordering::Relaxed) {
+                    if halted() {
                         break;
                     }
                     let i = next.fetch_add(1, Ordering::Relaxed);
@@ -71,20 +113,17 @@ where
                     }
                     let mut m = merged_count.lock().unwrap_or_else(|e| e.into_inner());
                     // A cancel sends no wake-up: look at it now and then while waiting.
-                    while i >= *m + window
-                        && !failed.load(Ordering::Relaxed)
-                        && !cancel.is_cancelled()
-                    {
+                    while i >= *m + window && !halted() {
                         m = advanced
                             .wait_timeout(m, std::time::Duration::from_millis(20))
                             .unwrap_or_else(|e| e.into_inner())
                             .0;
                     }
                     drop(m);
-                    if cancel.is_cancelled() || failed.load(Ordering::Relaxed) {
+                    if halted() {
                         break;
                     }
-                    if send.send((i, work(&items[i]))).is_err() {
+                    if send.send((i, work(i))).is_err() {
                         break;
                     }
                 }
@@ -93,7 +132,7 @@ where
         drop(send);
         // Results that arrived before their predecessors, by index - merged.
         let mut waiting: VecDeque<Option<R>> = VecDeque::new();
-        for (i, r) in receive.iter() {
+        'receive: for (i, r) in receive.iter() {
             let slot = i - merged;
             if waiting.len() <= slot {
                 waiting.resize_with(slot + 1, || None);
@@ -102,8 +141,13 @@ where
             let before = merged;
             while let Some(Some(_)) = waiting.front() {
                 let r = waiting.pop_front().flatten().expect("checked above");
-                merge(merged, r);
+                let flow = merge(merged, r);
                 merged += 1;
+                if flow == Merge::Stop {
+                    stopped.store(true, Ordering::Relaxed);
+                    advanced.notify_all();
+                    break 'receive;
+                }
             }
             if merged != before {
                 *merged_count.lock().unwrap_or_else(|e| e.into_inner()) = merged;
@@ -113,7 +157,7 @@ where
     });
     Driven {
         merged,
-        cancelled: merged < n,
+        cancelled: merged < n && !stopped.load(Ordering::Relaxed),
     }
 }
 
@@ -191,6 +235,36 @@ mod tests {
             .iter()
             .enumerate()
             .all(|(k, &(i, r))| k == i && r as usize == i));
+    }
+
+    #[test]
+    fn a_stop_from_the_merge_ends_the_work_after_that_item() {
+        for threads in [1, 2, 3] {
+            let mut merged = Vec::new();
+            let d = drive_indexed(
+                10_000,
+                Some(threads),
+                16,
+                &CancelToken::new(),
+                |i| i * 2,
+                |i, r| {
+                    merged.push(r);
+                    if i == 100 {
+                        Merge::Stop
+                    } else {
+                        Merge::Continue
+                    }
+                },
+            );
+            assert_eq!(
+                d,
+                Driven {
+                    merged: 101,
+                    cancelled: false
+                }
+            );
+            assert_eq!(merged, (0..=100).map(|i| i * 2).collect::<Vec<_>>());
+        }
     }
 
     #[test]

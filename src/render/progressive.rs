@@ -4,7 +4,7 @@
 //! from light paths are merged in tile order, so the image is the same bit for bit for any
 //! thread count.
 
-use super::driver::drive;
+use super::driver::{drive, drive_indexed, Merge};
 use super::film::pixel_value;
 use super::{place, tiles, tiles_in, Film, RenderStats, Tile, MERGE_WINDOW};
 use crate::control::Control;
@@ -319,64 +319,85 @@ pub(crate) fn render_passes(
     );
     let start = Instant::now();
     phase.advance((film.mean_spp() * pixels as f64) as u64);
-    while film.spp < options.spp {
-        // A resumed film may be in the middle of a pass.
-        let n = if film.is_partial_pass() {
-            film.pass
-        } else {
-            next_pass(film.spp, options.spp)
-        };
-        film.pass = n;
-        let pass_start = Instant::now();
-        let samples = film.spp..film.spp + n;
-        // Tiles are merged in image order, so a pass finished after a resume adds the same
-        // numbers in the same order as an uninterrupted one.
-        let todo = &tiles[film.tiles_done as usize..];
-        let driven = drive(
-            todo,
-            options.threads,
-            MERGE_WINDOW,
-            &control.cancel,
-            |tile| s.tile_pass(tile, samples.clone()),
-            |i, r| {
-                let tile = &todo[i];
-                let w = tile.width();
-                for (k, v) in r.sums.iter().enumerate() {
-                    let (x, y) = (tile.x0 + k as u32 % w, tile.y0 + k as u32 / w);
-                    let p = &mut film.sums[(y * options.width + x) as usize];
-                    p[0] += v[0];
-                    p[1] += v[1];
-                    p[2] += v[2];
-                }
-                for splat in &r.splats {
-                    film.add_splat(splat);
-                }
-                stats.rays.add(&r.rays);
-                stats.samples += n as u64 * r.sums.len() as u64;
-                film.invalid += r.invalid;
-                film.tiles_done += 1;
-                phase.advance(n as u64 * tile.pixels());
-            },
-        );
-        if driven.cancelled {
-            stats.cancelled = true;
-            if film.tiles_done == 0 {
-                film.pass = 0;
+    // Every pass still to take, as (first sample, samples); a resumed film may be in the
+    // middle of one. The passes run as one stream of tiles with no pause between them, and
+    // tiles are merged in pass and image order, so a pass finished after a resume adds the
+    // same numbers in the same order as an uninterrupted one.
+    let mut passes = Vec::new();
+    let mut done = film.spp;
+    if film.is_partial_pass() {
+        passes.push((done, film.pass));
+        done += film.pass;
+    }
+    while done < options.spp {
+        let n = next_pass(done, options.spp);
+        passes.push((done, n));
+        done += n;
+    }
+    let skipped = film.tiles_done as usize;
+    let locate = |k: usize| ((k + skipped) / tiles.len(), (k + skipped) % tiles.len());
+    let mut failure = None;
+    let mut pass_start = Instant::now();
+    let driven = drive_indexed(
+        (passes.len() * tiles.len()).saturating_sub(skipped),
+        options.threads,
+        MERGE_WINDOW,
+        &control.cancel,
+        |k| {
+            let (p, t) = locate(k);
+            let (first, n) = passes[p];
+            s.tile_pass(&tiles[t], first..first + n)
+        },
+        |k, r| {
+            let (p, t) = locate(k);
+            let (tile, n) = (&tiles[t], passes[p].1);
+            film.pass = n;
+            let w = tile.width();
+            for (k, v) in r.sums.iter().enumerate() {
+                let (x, y) = (tile.x0 + k as u32 % w, tile.y0 + k as u32 / w);
+                let px = &mut film.sums[(y * options.width + x) as usize];
+                px[0] += v[0];
+                px[1] += v[1];
+                px[2] += v[2];
             }
-            break;
-        }
-        film.spp += n;
-        film.pass = 0;
-        film.tiles_done = 0;
-        after_pass(&film)?;
-        if let Some(limit) = options.time_limit {
-            // Stop when another pass like the last one would overrun the limit.
-            let elapsed = start.elapsed().as_secs_f64();
-            let pass = pass_start.elapsed().as_secs_f64();
-            let next = next_pass(film.spp, options.spp.max(film.spp + 1)) as f64 / n as f64;
-            if elapsed + pass * next > limit {
-                break;
+            for splat in &r.splats {
+                film.add_splat(splat);
             }
+            stats.rays.add(&r.rays);
+            stats.samples += n as u64 * r.sums.len() as u64;
+            film.invalid += r.invalid;
+            film.tiles_done += 1;
+            phase.advance(n as u64 * tile.pixels());
+            if (film.tiles_done as usize) < tiles.len() {
+                return Merge::Continue;
+            }
+            film.spp += n;
+            film.pass = 0;
+            film.tiles_done = 0;
+            if let Err(e) = after_pass(&film) {
+                failure = Some(e);
+                return Merge::Stop;
+            }
+            if let Some(limit) = options.time_limit {
+                // Stop when another pass like the last one would overrun the limit.
+                let elapsed = start.elapsed().as_secs_f64();
+                let pass = pass_start.elapsed().as_secs_f64();
+                let next = next_pass(film.spp, options.spp.max(film.spp + 1)) as f64 / n as f64;
+                if elapsed + pass * next > limit {
+                    return Merge::Stop;
+                }
+            }
+            pass_start = Instant::now();
+            Merge::Continue
+        },
+    );
+    if let Some(e) = failure {
+        return Err(e);
+    }
+    if driven.cancelled {
+        stats.cancelled = true;
+        if film.tiles_done == 0 {
+            film.pass = 0;
         }
     }
     stats.seconds = start.elapsed().as_secs_f64();
