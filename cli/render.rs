@@ -345,7 +345,7 @@ fn render_with_checkpoints(
     };
     let mut last_write = std::time::Instant::now();
     let mut last_checkpoint = std::time::Instant::now();
-    let mut rendered = renderer.render_progressive(control, resume, &mut |film| {
+    let mut after_pass = |film: &raylink::Film, _: raylink::Shown, _: &raylink::RenderStats| {
         if args
             .checkpoint_interval
             .is_some_and(|t| last_checkpoint.elapsed().as_secs_f64() >= t)
@@ -372,7 +372,9 @@ fn render_with_checkpoints(
             last_write = std::time::Instant::now();
         }
         Ok(())
-    })?;
+    };
+    let watch = raylink::Watch::after_passes(&mut after_pass);
+    let mut rendered = renderer.render_progressive(control, resume, watch)?;
     rendered.stats.samples += resumed_samples;
     let film = rendered
         .film

@@ -67,7 +67,7 @@ pub use job::{
     Aov, CancelToken, Control, Job, MemoryBudget, Progress, Relight, Rendered, Renderer, Settings,
     Technique, TechniqueKind,
 };
-pub use render::{checkpoint, Film, RenderStats, Tile};
+pub use render::{checkpoint, Film, RenderStats, Shown, Tile, Watch};
 pub use scene::Scene;
 
 /// Version of this crate, as printed by `raylink --version`.

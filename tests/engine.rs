@@ -3,8 +3,8 @@
 //! controls; the image does not depend on the thread count.
 
 use raylink::{
-    CancelToken, Control, Error, Job, MemoryBudget, Rendered, Renderer, Scene, Settings, Technique,
-    TechniqueKind,
+    CancelToken, Control, Error, Film, Job, MemoryBudget, RenderStats, Rendered, Renderer, Scene,
+    Settings, Shown, Technique, TechniqueKind, Watch,
 };
 use std::path::Path;
 use std::sync::Arc;
@@ -330,4 +330,51 @@ fn a_preview_is_the_one_sample_render_of_the_view() {
     );
     let mut renderer = Renderer::new(room, path, &control).unwrap();
     assert!(renderer.render_preview(&control).unwrap().is_none());
+}
+
+#[test]
+fn a_watched_render_shows_its_film_mid_pass_and_ends_the_same() {
+    let box_scene = scene("cornell-box.toml");
+    let settings = Settings {
+        integrator: Some(TechniqueKind::Path),
+        spp: Some(8),
+        ..Settings::default()
+    };
+    let render = |mid_pass: Option<Duration>, seen: &mut Vec<(Shown, f64, u32, u64)>| {
+        let control = Control::default();
+        let mut renderer = Renderer::new(
+            box_scene.clone(),
+            job(&box_scene, settings.clone(), (64, 48)),
+            &control,
+        )
+        .unwrap();
+        let mut show = |film: &Film, shown: Shown, stats: &RenderStats| {
+            assert_eq!(film.is_partial_pass(), shown == Shown::MidPass);
+            let image = film.image()?;
+            assert!(image.pixels.iter().all(|p| p.is_finite()));
+            seen.push((shown, film.mean_spp(), film.spp, stats.rays.total()));
+            Ok(())
+        };
+        let watch = Watch {
+            film: &mut show,
+            mid_pass,
+        };
+        checksum(&renderer.render_progressive(&control, None, watch).unwrap())
+    };
+    let (mut passes, mut every_tile) = (Vec::new(), Vec::new());
+    let plain = render(None, &mut passes);
+    // A zero interval shows the film after every tile: 12 tiles a pass.
+    let watched = render(Some(Duration::ZERO), &mut every_tile);
+    assert_eq!(plain, watched, "watching changed the image");
+    let after: Vec<u32> = passes.iter().map(|s| s.2).collect();
+    assert_eq!(after, [1, 2, 4, 8], "{passes:?}");
+    assert!(passes.iter().all(|s| s.0 == Shown::AfterPass));
+    let mid = every_tile.iter().filter(|s| s.0 == Shown::MidPass).count();
+    assert_eq!(mid, 4 * 11, "{every_tile:?}");
+    assert!(
+        every_tile
+            .windows(2)
+            .all(|w| w[0].1 < w[1].1 && w[0].3 <= w[1].3),
+        "samples and rays grow from one showing to the next: {every_tile:?}"
+    );
 }

@@ -318,7 +318,7 @@ impl Api {
     /// 32-bit floats, RGB, rows top to bottom.
     fn image(&self, r: &Request) -> Response {
         let kind = r.param("kind").unwrap_or("beauty");
-        let (image, version, spp, view): (Arc<Image>, u64, u32, u64) = {
+        let (image, version, spp, view): (Arc<Image>, u64, f64, u64) = {
             let s = lock(&self.session.state);
             let aov = || {
                 s.aovs
@@ -337,7 +337,7 @@ impl Api {
                         .position(|k| *k == kind)
                         .unwrap_or(0);
                     match aov() {
-                        Some(a) => (Arc::new(a[i].clone()), s.view, 1, s.view),
+                        Some(a) => (Arc::new(a[i].clone()), s.view, 1.0, s.view),
                         None => {
                             drop(s);
                             self.session.want_aovs();
@@ -346,7 +346,7 @@ impl Api {
                     }
                 }
                 "reference" => match &self.session.base.reference {
-                    Some(i) => (Arc::new(i.clone()), 0, 0, 0),
+                    Some(i) => (Arc::new(i.clone()), 0, 0.0, 0),
                     None => return Response::text(404, "no --reference image"),
                 },
                 _ => {

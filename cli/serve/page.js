@@ -151,11 +151,13 @@ studio.canvasStats = () => {
 // ---- state --------------------------------------------------------------------------
 
 const fmt = (v, digits = 2) => v == null ? '–' : (+v).toFixed(digits);
+// Samples per pixel: a mean with a fraction in the middle of a pass.
+const sppText = (v) => Number.isInteger(v) ? `${v}` : v.toFixed(1);
 
 function figures(s) {
   const rows = [
     ['integrator', s.integrator],
-    ['samples', s.progressive ? `${s.spp} / ${s.target_spp} spp`
+    ['samples', s.progressive ? `${sppText(s.spp)} / ${s.target_spp} spp`
       : s.status === 'done' ? 'done' : s.image_version ? 'preview: 1 a pixel' : '…'],
     ['elapsed', `${fmt(s.elapsed)} s`],
     ['ETA', s.eta == null ? '–' : `${fmt(s.eta, 1)} s`],
@@ -178,7 +180,7 @@ function onState(s) {
   const first = !studio.state;
   studio.state = s;
   if (first) setup(s);
-  const what = s.progressive ? `${s.spp}/${s.target_spp} spp` : s.phase;
+  const what = s.progressive ? `${sppText(s.spp)}/${s.target_spp} spp` : s.phase;
   $('status').textContent = `${s.status} · ${what} · ${fmt(s.elapsed, 1)} s` +
     (s.eta != null ? ` · ETA ${fmt(s.eta, 1)} s` : '') +
     (s.mrays != null ? ` · ${fmt(s.mrays)} Mrays/s` : '');

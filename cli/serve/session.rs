@@ -8,11 +8,12 @@ use raylink::job::Technique;
 use raylink::scene::Camera;
 use raylink::scene::Texture;
 use raylink::{
-    CancelToken, Control, Error, Image, Job, MemoryBudget, Progress, Relight, Renderer, Scene,
+    CancelToken, Control, Error, Film, Image, Job, MemoryBudget, Progress, Relight, RenderStats,
+    Renderer, Scene, Shown, Watch,
 };
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
-use std::time::Instant;
+use std::time::{Duration, Instant};
 
 /// A relight: a factor per light (emissive material) and per diffuse material, by name.
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -51,9 +52,10 @@ pub struct State {
     pub image_version: u64,
     /// The view `image` shows.
     pub image_view: u64,
-    /// Samples per pixel in `image`: for the pixel techniques 0 in a preview (one sample
-    /// at each pixel's centre), 1 in the finished image.
-    pub spp: u32,
+    /// Samples per pixel in `image`, on average over the pixels (in the middle of a pass,
+    /// some tiles have one more pass than others): for the pixel techniques 0 in a preview
+    /// (one sample at each pixel's centre), 1 in the finished image.
+    pub spp: f64,
     /// The camera of the view being rendered, and a count of the views.
     pub camera: Camera,
     pub view: u64,
@@ -61,7 +63,8 @@ pub struct State {
     /// When the job in hand started, and how long the last one took.
     pub started: Instant,
     pub elapsed: f64,
-    /// The finished render's rays and Mrays/s.
+    /// The render's rays and Mrays/s so far (a progressive render's as it goes, the others'
+    /// when they finish).
     pub rays: Option<u64>,
     pub mrays: Option<f64>,
     /// The last camera move's time to its first image, and the last relight's time to its
@@ -168,7 +171,7 @@ impl Session {
                 image: None,
                 image_version: 0,
                 image_view: 0,
-                spp: 0,
+                spp: 0.0,
                 camera,
                 view: 1,
                 status: Status::Preparing,
@@ -243,7 +246,7 @@ impl Session {
     }
 
     /// A new beauty image (after a pass, or the finished render).
-    fn publish_image(&self, image: Image, spp: u32) {
+    fn publish_image(&self, image: Image, spp: f64) {
         let rmse = self
             .base
             .reference
@@ -410,7 +413,12 @@ fn fail(session: &Session, e: &Error) {
     session.publish(|s| s.status = Status::Failed(text));
 }
 
-/// Renders the view: a progressive render publishes every pass, the others their image.
+/// How often a progressive render's image is published in the middle of a pass: later
+/// passes take seconds, and a live view wants several images a second.
+const MID_PASS_UPDATES: Duration = Duration::from_millis(50);
+
+/// Renders the view: a progressive render publishes every pass and, between, its film
+/// every [`MID_PASS_UPDATES`]; the others publish their image.
 fn render(
     session: &Session,
     renderer: &mut Renderer,
@@ -441,7 +449,7 @@ fn render(
         // One sample a pixel first: what a camera being dragged needs to follow it.
         match renderer.render_preview(control) {
             Ok(Some(r)) if !r.is_partial() => {
-                session.publish_image(r.image, 0);
+                session.publish_image(r.image, 0.0);
                 first_image(session);
                 first = false;
             }
@@ -450,20 +458,29 @@ fn render(
         }
     }
     let result = if progressive {
-        renderer.render_progressive(control, None, &mut |film| {
-            session.publish_image(film.image()?, film.spp);
+        let mut show = |film: &Film, _: Shown, stats: &RenderStats| {
+            session.publish_image(film.image()?, film.mean_spp());
+            session.publish(|s| {
+                s.rays = Some(stats.rays.total());
+                s.mrays = Some(stats.mrays_per_second());
+            });
             if std::mem::take(&mut first) {
                 first_image(session);
             }
             Ok(())
-        })
+        };
+        let watch = Watch {
+            film: &mut show,
+            mid_pass: Some(MID_PASS_UPDATES),
+        };
+        renderer.render_progressive(control, None, watch)
     } else {
         renderer.render(control)
     };
     match result {
         Ok(r) if r.is_partial() => {}
         Ok(r) => {
-            let spp = r.film.as_ref().map_or(1, |f| f.spp);
+            let spp = r.film.as_ref().map_or(1.0, |f| f.spp as f64);
             session.publish_image(r.image, spp);
             if first {
                 first_image(session);

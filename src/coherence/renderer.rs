@@ -96,7 +96,7 @@ impl Engine<'_> {
                     *integrator,
                     options,
                     None,
-                    &mut |_| Ok(()),
+                    crate::render::Watch::after_passes(&mut |_, _, _| Ok(())),
                     control,
                 )?;
                 (film.image()?, stats)

@@ -25,7 +25,7 @@ use crate::render::aov::render_aovs;
 use crate::render::pixels::{render_pixels, PixelView};
 use crate::render::progressive::{render_passes, render_region};
 use crate::render::PixelSampling;
-use crate::render::{Film, RenderStats, Tile};
+use crate::render::{Film, RenderStats, Tile, Watch};
 use crate::scene::{Scene, MAX_RESOLUTION};
 use crate::{Error, Result};
 use std::sync::Arc;
@@ -349,17 +349,18 @@ impl Renderer {
 
     /// Renders the job. A cancel returns what was finished, marked partial.
     pub fn render(&mut self, control: &Control) -> Result<Rendered> {
-        self.render_progressive(control, None, &mut |_| Ok(()))
+        self.render_progressive(control, None, Watch::after_passes(&mut |_, _, _| Ok(())))
     }
 
     /// Renders the job, continuing a progressive render from `resume` (a film saved by an
-    /// earlier, cancelled render of the same job), with `after_pass` seeing the film after
-    /// every whole pass of samples (to write it, or a checkpoint).
+    /// earlier, cancelled render of the same job), with `watch` seeing the film after every
+    /// whole pass of samples (to write it, or a checkpoint) and, if it asks, in the middle
+    /// of passes (a live view).
     pub fn render_progressive(
         &mut self,
         control: &Control,
         resume: Option<Film>,
-        after_pass: &mut dyn FnMut(&Film) -> Result<()>,
+        watch: Watch,
     ) -> Result<Rendered> {
         self.prepare(control)?;
         let ctx = Context::new(&self.scene, self.accel.as_ref());
@@ -402,7 +403,7 @@ impl Renderer {
                     }
                 } else {
                     let (film, mut stats) =
-                        render_passes(&ctx, integrator, &options, resume, after_pass, control)?;
+                        render_passes(&ctx, integrator, &options, resume, watch, control)?;
                     stats.invalid = film.invalid;
                     Rendered {
                         image: film.image()?,

@@ -11,9 +11,11 @@ pub(crate) mod pixels;
 pub(crate) mod progressive;
 mod sampling;
 pub(crate) mod small_objects;
+mod watch;
 
 pub use film::Film;
 pub use sampling::{PixelSampling, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD};
+pub use watch::{Shown, Watch};
 
 use crate::integrators::RayStats;
 

@@ -6,7 +6,7 @@
 
 use super::driver::{drive, drive_indexed, Merge};
 use super::film::pixel_value;
-use super::{place, tiles, tiles_in, Film, RenderStats, Tile, MERGE_WINDOW};
+use super::{place, tiles, tiles_in, Film, RenderStats, Shown, Tile, Watch, MERGE_WINDOW};
 use crate::control::Control;
 use crate::image::filter::{Filter, FilterSampler};
 use crate::image::Image;
@@ -281,15 +281,15 @@ pub(crate) fn reachable(spp: u32, target: u32) -> bool {
 /// Renders with a Monte Carlo integrator in passes, continuing from `resume` (a film saved by
 /// an earlier, cancelled run with the same scene and options: see [`super::checkpoint`]) if
 /// given; the result is the same bit for bit as a render that was never cancelled.
-/// `after_pass` sees the film after every whole pass (to write intermediate files or
-/// checkpoints); an error from it stops the render. On a cancel the render returns after the
+/// `watch` sees the film after every whole pass (to write intermediate files or
+/// checkpoints) and, if it asks, in the middle of passes; an error from it stops the render. On a cancel the render returns after the
 /// tiles in hand with [`RenderStats::cancelled`] set; the film then holds every tile merged.
 pub(crate) fn render_passes(
     ctx: &Context,
     integrator: &dyn MonteCarlo,
     options: &ProgressiveOptions,
     resume: Option<Film>,
-    after_pass: &mut dyn FnMut(&Film) -> Result<()>,
+    watch: Watch,
     control: &Control,
 ) -> Result<(Film, RenderStats)> {
     let s = Samples::new(ctx, integrator, options);
@@ -338,6 +338,7 @@ pub(crate) fn render_passes(
     let locate = |k: usize| ((k + skipped) / tiles.len(), (k + skipped) % tiles.len());
     let mut failure = None;
     let mut pass_start = Instant::now();
+    let mut shown = Instant::now();
     let driven = drive_indexed(
         (passes.len() * tiles.len()).saturating_sub(skipped),
         options.threads,
@@ -369,15 +370,25 @@ pub(crate) fn render_passes(
             film.tiles_done += 1;
             phase.advance(n as u64 * tile.pixels());
             if (film.tiles_done as usize) < tiles.len() {
+                if watch.mid_pass.is_some_and(|d| shown.elapsed() >= d) {
+                    stats.seconds = start.elapsed().as_secs_f64();
+                    if let Err(e) = (watch.film)(&film, Shown::MidPass, &stats) {
+                        failure = Some(e);
+                        return Merge::Stop;
+                    }
+                    shown = Instant::now();
+                }
                 return Merge::Continue;
             }
             film.spp += n;
             film.pass = 0;
             film.tiles_done = 0;
-            if let Err(e) = after_pass(&film) {
+            stats.seconds = start.elapsed().as_secs_f64();
+            if let Err(e) = (watch.film)(&film, Shown::AfterPass, &stats) {
                 failure = Some(e);
                 return Merge::Stop;
             }
+            shown = Instant::now();
             if let Some(limit) = options.time_limit {
                 // Stop when another pass like the last one would overrun the limit.
                 let elapsed = start.elapsed().as_secs_f64();

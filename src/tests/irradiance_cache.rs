@@ -52,7 +52,15 @@ fn render_ic(
     let accel = accel::build(scene, Backend::Embree, &control).unwrap();
     let ctx = Context::new(scene, accel.as_ref());
     let integrator = IrradianceCache::build(&ctx, o, ic, cache, &control).unwrap();
-    let (film, _) = render_passes(&ctx, &integrator, o, None, &mut |_| Ok(()), &control).unwrap();
+    let (film, _) = render_passes(
+        &ctx,
+        &integrator,
+        o,
+        None,
+        crate::render::Watch::after_passes(&mut |_, _, _| Ok(())),
+        &control,
+    )
+    .unwrap();
     assert_eq!(film.invalid, 0);
     check(&ctx, &integrator);
     Run {

@@ -45,8 +45,15 @@ fn non_finite_samples_are_dropped_and_counted() {
         seed: 3,
         filter: Default::default(),
     };
-    let (film, _) =
-        render_passes(&ctx, &Faulty, &options, None, &mut |_| Ok(()), &control).unwrap();
+    let (film, _) = render_passes(
+        &ctx,
+        &Faulty,
+        &options,
+        None,
+        crate::render::Watch::after_passes(&mut |_, _, _| Ok(())),
+        &control,
+    )
+    .unwrap();
     let image = film.image().unwrap();
     assert!(image.pixels.iter().all(|p| p.is_finite()));
     // About a fifth of 16·16·64 samples fail; each pixel keeps its share of good ones.
