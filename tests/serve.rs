@@ -464,3 +464,71 @@ fn the_reference_and_its_rmse_are_served() {
     assert_eq!(s["rmse"].as_f64().map(|r| r as f32), Some(rmse), "{s}");
     assert_eq!(server.stop().code(), Some(130));
 }
+
+/// A keyframed scene's frame slider: each frame asked for is the frame `raylink animate`
+/// writes, bit for bit, and a frame after the one before it is rendered coherently (fewer
+/// pixels retraced, with their map served); frames outside the animation are refused.
+#[test]
+fn the_frame_slider_renders_frames_coherently_as_animate_does() {
+    const ANIM: [&str; 5] = ["scenes/anim-bounce.toml", "--width", "48", "--height", "36"];
+    let server = Server::start(&ANIM);
+    let first = server.wait_done(1);
+    assert_eq!(first["frames"], serde_json::json!([0, 11]), "{first}");
+    assert!(first["frame"].is_null());
+    let json = "Content-Type: application/json\r\n";
+    let show = |frame: i64| {
+        let before = server.state()["image_version"].as_u64().unwrap();
+        let body = format!("{{\"frame\":{frame}}}");
+        let r = server.request("POST", "/api/frame", json, body.as_bytes());
+        assert_eq!(r.status, 200, "{}", r.text());
+        let state = server.wait(&format!("frame {frame}"), |s| {
+            s["status"] == "done" && s["image_version"].as_u64() > Some(before)
+        });
+        assert_eq!(state["frame"], frame, "{state}");
+        (state, server.get("/api/image").floats())
+    };
+    let (full, _) = show(4);
+    assert_eq!(
+        full["retraced"].as_f64(),
+        Some(1.0),
+        "the first frame is traced in full"
+    );
+    let (next, served) = show(5);
+    let retraced = next["retraced"].as_f64().unwrap();
+    // The ball moves over part of the image: about a quarter retraced at this size.
+    assert!(retraced > 0.0 && retraced < 0.6, "frame 5 after 4: {next}");
+    let map = server.get("/api/image?kind=retrace");
+    assert_eq!(map.status, 200);
+    assert_eq!(map.floats().len(), served.len());
+    // `raylink animate` of frame 5 alone (its first frame, traced in full).
+    let dir = tempfile::tempdir().unwrap();
+    let pattern = dir.path().join("f%d.exr");
+    let mut args = vec!["animate", "--quiet", "--frames", "5", "-o"];
+    args.push(pattern.to_str().unwrap());
+    args.extend(&ANIM[..]);
+    let run = raylink(&args);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let (image, _) = raylink::read_image(&dir.path().join("f5.exr")).unwrap();
+    let expected: Vec<f32> = image.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
+    assert!(mean(&expected) > 0.0);
+    assert!(
+        bits(&served) == bits(&expected),
+        "frame 5 differs from animate's"
+    );
+    for bad in [
+        b"{\"frame\":12}".as_slice(),
+        b"{\"frame\":-1}",
+        b"{\"frame\":\"x\"}",
+    ] {
+        let r = server.request("POST", "/api/frame", json, bad);
+        assert_eq!(r.status, 400, "{}", r.text());
+    }
+    assert_eq!(server.stop().code(), Some(130));
+    // A scene without keyframes has no slider.
+    let still = Server::start(&PATH);
+    still.wait_done(1);
+    assert!(still.state()["frames"].is_null());
+    let r = still.request("POST", "/api/frame", json, b"{\"frame\":0}");
+    assert_eq!(r.status, 409, "{}", r.text());
+    assert_eq!(still.stop().code(), Some(130));
+}

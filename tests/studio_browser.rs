@@ -339,4 +339,39 @@ fn the_page_converges_orbits_and_relights_in_chromium() {
         "{shown}"
     );
     browser.screenshot(&artifacts().join("studio.png"));
+    drop(network);
+
+    // A keyframed scene: the frame slider, and the retraced pixels shown.
+    let bounce = Server::start(&["scenes/anim-bounce.toml", "--width", "64", "--height", "48"]);
+    browser.open(&bounce.url);
+    let still = browser.wait("the bouncing ball's scene", SETTLED);
+    let slider = "const i = document.getElementById('frame'); i.value = FRAME;
+         i.dispatchEvent(new Event('input')); return !document.getElementById('animation').hidden;";
+    let settled_at = |frame: u32| {
+        SETTLED.replace(
+            "&& h[h.length - 1];",
+            &format!("&& s.state.frame === {frame} && h[h.length - 1];"),
+        )
+    };
+    assert_eq!(browser.js(&slider.replace("FRAME", "4")), true, "no slider");
+    let four = browser.wait("frame 4", &settled_at(4));
+    browser.js(&slider.replace("FRAME", "5"));
+    let five = browser.wait("frame 5", &settled_at(5));
+    assert_ne!(four["canvas"], five["canvas"], "the ball did not move");
+    assert_ne!(still["canvas"], five["canvas"]);
+    let retraced = browser.js("return studio.state.retraced");
+    assert!(
+        retraced.as_f64().is_some_and(|r| r > 0.0 && r < 0.6),
+        "{retraced}"
+    );
+    // The retraced pixels' view draws the map: another picture than the frame.
+    browser.js(
+        "const k = document.getElementById('kind'); k.value = 'retrace';
+         k.dispatchEvent(new Event('change')); return true;",
+    );
+    let map = browser.wait(
+        "the retrace map",
+        "return studio.image && studio.image.kind === 'retrace' && studio.canvasStats().hash",
+    );
+    assert_ne!(map, five["canvas"]);
 }

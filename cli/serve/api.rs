@@ -83,10 +83,11 @@ impl Api {
             }
             ("/api/camera", false) => self.command(r, |api, body| api.camera(body)),
             ("/api/relight", false) => self.command(r, |api, body| api.relight(body)),
+            ("/api/frame", false) => self.command(r, |api, body| api.frame(body)),
             ("/api/save", false) => self.command(r, |api, body| api.save(body)),
             (
                 "/" | "/api/state" | "/api/events" | "/api/image" | "/api/camera.toml"
-                | "/api/camera" | "/api/relight" | "/api/save",
+                | "/api/camera" | "/api/relight" | "/api/frame" | "/api/save",
                 _,
             ) => Response::text(405, "method not allowed"),
             _ => Response::text(404, "not found"),
@@ -243,6 +244,23 @@ impl Api {
         Ok(json!({"ok": true}))
     }
 
+    fn frame(&self, body: &[u8]) -> Result<Value, (u16, String)> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Body {
+            frame: i64,
+        }
+        let b: Body = parse(body)?;
+        let Some((first, last)) = self.session.base.frames else {
+            return Err((409, "the scene has no keyframes".into()));
+        };
+        if !(first..=last).contains(&b.frame) {
+            return Err((400, format!("frame: {first} to {last}")));
+        }
+        self.session.set_frame(b.frame);
+        Ok(json!({"ok": true}))
+    }
+
     fn save(&self, body: &[u8]) -> Result<Value, (u16, String)> {
         #[derive(Deserialize)]
         #[serde(deny_unknown_fields)]
@@ -349,8 +367,15 @@ impl Api {
                     Some(i) => (Arc::new(i.clone()), 0, 0.0, 0),
                     None => return Response::text(404, "no --reference image"),
                 },
+                "retrace" => match &s.retrace_map {
+                    Some(i) => (i.clone(), s.image_version, s.spp, s.image_view),
+                    None => return Response::text(409, "no frame rendered coherently yet"),
+                },
                 _ => {
-                    return Response::text(400, "kind: beauty, albedo, normal, depth or reference")
+                    return Response::text(
+                        400,
+                        "kind: beauty, albedo, normal, depth, reference or retrace",
+                    )
                 }
             }
         };
@@ -467,6 +492,9 @@ fn state_json(session: &Session, s: &State) -> Value {
         "phase": *lock(&p.phase),
         "rays": s.rays,
         "mrays": s.mrays,
+        "frames": base.frames,
+        "frame": s.frame,
+        "retraced": s.retraced,
         "view": s.view,
         "view_ms": s.view_ms,
         "relight_ms": s.relight_ms,

@@ -4,6 +4,7 @@
 //! the signal, as a render).
 
 mod api;
+mod frames;
 mod http;
 mod session;
 
@@ -161,6 +162,14 @@ pub fn run(cli: &Cli, args: ServeArgs) -> Result<(), Failure> {
     let addr = listener
         .local_addr()
         .map_err(|e| Error::Invalid(format!("the listening socket: {e}")))?;
+    // A keyframed scene gets a frame slider.
+    let animated = args.scene.extension().is_some_and(|e| e == "toml");
+    let frames = match animated {
+        true => Some(raylink::scene::animation::Animation::read(&args.scene)?)
+            .filter(|a| a.is_animated())
+            .map(|a| frames::Frames::new(a, &job)),
+        false => None,
+    };
     let scene = Arc::new(scene);
     let renderer = Renderer::new(scene.clone(), job.clone(), &control)?;
     let scene_name = args.scene.display().to_string();
@@ -171,6 +180,10 @@ pub fn run(cli: &Cli, args: ServeArgs) -> Result<(), Failure> {
         reference,
         lights,
         materials,
+        frames: frames.as_ref().map(|f| {
+            let numbers = f.animation.frame_numbers();
+            (numbers.start, numbers.end - 1)
+        }),
     }));
     let api = Arc::new(api::Api::new(
         session.clone(),
@@ -194,7 +207,7 @@ pub fn run(cli: &Cli, args: ServeArgs) -> Result<(), Failure> {
         let session = session.clone();
         std::thread::Builder::new()
             .name("raylink-studio".into())
-            .spawn(move || session::work(&session, renderer))
+            .spawn(move || session::work(&session, renderer, frames))
             .map_err(|e| Error::Invalid(format!("cannot start the render thread: {e}")))?
     };
     let stop = Arc::new(AtomicBool::new(false));

@@ -63,10 +63,13 @@ async function refresh() {
   const s = studio.state;
   if (!s) return;
   const kind = $('kind').value;
-  const wanted = kind === 'beauty' ? s.image_version : s.view;
+  // The retrace map comes with each frame's image.
+  const withImage = kind === 'beauty' || kind === 'retrace';
+  const wanted = withImage ? s.image_version : s.view;
   const have = studio.image;
-  if (kind === 'beauty' && s.image_version === 0) return;
-  if (kind !== 'beauty' && !s.aovs && have && have.kind === kind) return;
+  if (withImage && s.image_version === 0) return;
+  if (kind === 'retrace' && s.retraced == null) return;
+  if (!withImage && !s.aovs && have && have.kind === kind) return;
   if (have && have.kind === kind && have.version === wanted) return;
   fetching = true;
   try {
@@ -166,6 +169,7 @@ function figures(s) {
     ['relight → image', s.relight_ms == null ? '–' : `${fmt(s.relight_ms, 0)} ms`],
     ['relight alone', s.relight_prepare_ms == null ? '–' : `${fmt(s.relight_prepare_ms, 0)} ms`],
   ];
+  if (s.retraced != null) rows.push(['retraced', `${fmt(s.retraced * 100, 1)}% of the pixels`]);
   if (s.reference) rows.push(['RMSE vs reference', s.rmse == null ? '–' : s.rmse.toPrecision(4)]);
   const dl = $('figures');
   dl.replaceChildren();
@@ -212,6 +216,18 @@ function setup(s) {
   $('reference-controls').hidden = !s.reference;
   if (s.reference) {
     fetchImage('reference').then((r) => { studio.reference = r; draw(); });
+  }
+  if (s.frames) {
+    const [first, last] = s.frames;
+    const input = $('frame');
+    Object.assign(input, { min: first, max: last, value: s.frame ?? first });
+    $('frame-value').textContent = input.value;
+    $('animation').hidden = false;
+    document.querySelector('#kind option[value="retrace"]').hidden = false;
+    input.addEventListener('input', () => {
+      $('frame-value').textContent = input.value;
+      queue('frame', () => ({ frame: +input.value }));
+    });
   }
   if (s.integrator === 'network' && (s.lights.length || s.materials.length)) {
     $('relight').hidden = false;

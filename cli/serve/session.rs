@@ -4,6 +4,7 @@
 //! [`CancelToken`] and starts the next one. Progressive renders publish the film after
 //! every pass; the network renders each view from the network it prepared once.
 
+use super::frames::Frames;
 use raylink::job::Technique;
 use raylink::scene::Camera;
 use raylink::scene::Texture;
@@ -28,6 +29,8 @@ pub struct RelightRequest {
 pub struct Inbox {
     camera: Option<(Camera, Instant)>,
     relight: Option<(RelightRequest, Instant)>,
+    /// A frame of a keyframed scene to show.
+    frame: Option<(i64, Instant)>,
     /// The page shows an auxiliary image: compute them for every view.
     aovs_wanted: bool,
     quit: bool,
@@ -78,6 +81,11 @@ pub struct State {
     pub aovs: Option<(u64, Arc<[Image; 3]>)>,
     /// RMSE of `image` against the reference.
     pub rmse: Option<f64>,
+    /// The frame of a keyframed scene shown (`None`: the scene as loaded), the map of the
+    /// pixels its render retraced, and their share.
+    pub frame: Option<i64>,
+    pub retrace_map: Option<Arc<Image>>,
+    pub retraced: Option<f64>,
     pub notes: Vec<String>,
 }
 
@@ -102,6 +110,8 @@ pub struct Base {
     /// relight can change, for the network integrator.
     pub lights: Vec<String>,
     pub materials: Vec<String>,
+    /// A keyframed scene's first and last frame numbers.
+    pub frames: Option<(i64, i64)>,
 }
 
 /// The progress sink of the jobs: the phase and its units done, for the ETA.
@@ -188,6 +198,9 @@ impl Session {
                 },
                 aovs: None,
                 rmse: None,
+                frame: None,
+                retrace_map: None,
+                retraced: None,
                 notes: Vec::new(),
             }),
             changed: Condvar::new(),
@@ -210,6 +223,14 @@ impl Session {
     pub fn relight(&self, request: RelightRequest) {
         let mut inbox = lock(&self.inbox);
         inbox.relight = Some((request, Instant::now()));
+        inbox.cancel.cancel();
+        self.wake.notify_all();
+    }
+
+    /// Shows frame `frame` of the keyframed scene next, cancelling the job in hand.
+    pub fn set_frame(&self, frame: i64) {
+        let mut inbox = lock(&self.inbox);
+        inbox.frame = Some((frame, Instant::now()));
         inbox.cancel.cancel();
         self.wake.notify_all();
     }
@@ -247,6 +268,11 @@ impl Session {
 
     /// A new beauty image (after a pass, or the finished render).
     fn publish_image(&self, image: Image, spp: f64) {
+        self.publish_image_with(image, spp, |_| {});
+    }
+
+    /// A new beauty image and what goes with it, published together.
+    fn publish_image_with(&self, image: Image, spp: f64, with: impl FnOnce(&mut State)) {
         let rmse = self
             .base
             .reference
@@ -260,6 +286,7 @@ impl Session {
             s.spp = spp;
             s.rmse = rmse;
             s.elapsed = s.started.elapsed().as_secs_f64();
+            with(s);
         });
     }
 
@@ -276,12 +303,13 @@ impl Session {
 struct Next {
     camera: Option<(Camera, Instant)>,
     relight: Option<(RelightRequest, Instant)>,
+    frame: Option<(i64, Instant)>,
     aovs: bool,
     cancel: CancelToken,
 }
 
 /// The worker: renders the first view, then whatever the page asks for, until [`Session::quit`].
-pub fn work(session: &Session, mut renderer: Renderer) {
+pub fn work(session: &Session, mut renderer: Renderer, mut frames: Option<Frames>) {
     let mut pending_first = true;
     let mut aovs_done_for = 0;
     loop {
@@ -296,6 +324,7 @@ pub fn work(session: &Session, mut renderer: Renderer) {
                 if pending_first
                     || inbox.camera.is_some()
                     || inbox.relight.is_some()
+                    || inbox.frame.is_some()
                     || aovs_missing
                 {
                     break;
@@ -306,18 +335,29 @@ pub fn work(session: &Session, mut renderer: Renderer) {
             Next {
                 camera: inbox.camera.take(),
                 relight: inbox.relight.take(),
+                frame: inbox.frame.take(),
                 aovs: inbox.aovs_wanted,
                 cancel: inbox.cancel.clone(),
             }
         };
         let control = session.control(next.cancel.clone());
-        let fresh = pending_first || next.camera.is_some() || next.relight.is_some();
+        let fresh = pending_first
+            || next.camera.is_some()
+            || next.relight.is_some()
+            || next.frame.is_some();
         pending_first = false;
         if fresh {
             // What is shown is no longer the finished image of what was asked for.
             session.publish(|s| s.status = Status::Preparing);
         }
-        let asked = next.camera.as_ref().map(|c| c.1);
+        let asked = next
+            .camera
+            .as_ref()
+            .map(|c| c.1)
+            .or(next.frame.map(|f| f.1));
+        if let Some((frame, _)) = next.frame {
+            session.publish(|s| s.frame = Some(frame));
+        }
         if let Some((camera, _)) = next.camera {
             renderer.set_camera(camera.clone());
             session.publish(|s| {
@@ -360,9 +400,53 @@ pub fn work(session: &Session, mut renderer: Renderer) {
                 Err(e) => fail(session, &e),
             }
         }
-        if fresh {
-            render(session, &mut renderer, &control, asked, relit);
+        let frame = lock(&session.state).frame;
+        match (&mut frames, frame) {
+            (Some(frames), Some(frame)) if fresh => {
+                render_frame(session, frames, frame, &control, asked)
+            }
+            _ if fresh => render(session, &mut renderer, &control, asked, relit),
+            _ => {}
         }
+    }
+}
+
+/// Renders frame `frame` of the keyframed scene through the current camera.
+fn render_frame(
+    session: &Session,
+    frames: &mut Frames,
+    frame: i64,
+    control: &Control,
+    asked: Option<Instant>,
+) {
+    let camera = {
+        let mut s = lock(&session.state);
+        s.status = Status::Rendering;
+        s.started = Instant::now();
+        s.camera.clone()
+    };
+    match frames.render(frame, &camera, control) {
+        Ok(f) => {
+            let spp = session
+                .base
+                .job
+                .technique
+                .monte_carlo()
+                .map_or(1, |m| m.spp);
+            session.publish_image_with(f.image, spp as f64, |s| {
+                if let Some(t) = asked {
+                    s.view_ms = Some(t.elapsed().as_secs_f64() * 1e3);
+                }
+                s.retrace_map = f.map.map(Arc::new);
+                s.retraced = Some(f.retraced);
+                s.status = Status::Done;
+                s.rays = Some(f.rays);
+                s.mrays = Some(f.rays as f64 / f.seconds.max(1e-9) / 1e6);
+                s.elapsed = f.seconds;
+            });
+        }
+        Err(Error::Cancelled { .. }) => {}
+        Err(e) => fail(session, &e),
     }
 }
 
