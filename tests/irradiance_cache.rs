@@ -1,6 +1,6 @@
 //! Irradiance caching (Ward et al. 1988) through the job API and the command line: the
-//! Cornell box against Tungsten's reference and raylink's path tracer, and cache files
-//! between two runs of `raylink`. (The tests that look inside the cache, its irradiance,
+//! Cornell box against Tungsten's reference and raylink's path tracer, glossy spheres
+//! against the path tracer, and cache files between two runs of `raylink`. (The tests that look inside the cache, its irradiance,
 //! values and files, are unit tests in src/tests/irradiance_cache.rs.)
 
 use raylink::image::compare::{box_downsample, bright_mask, mean, rmse};
@@ -8,6 +8,7 @@ use raylink::image::filter::Filter;
 use raylink::image::output::read_image;
 use raylink::image::Image;
 use raylink::job::MonteCarloSettings;
+use raylink::math::Vec3;
 use raylink::scene::Scene;
 use raylink::{Backend, Control, Job, Renderer, Settings, Technique, TechniqueKind};
 use std::path::Path;
@@ -97,6 +98,71 @@ fn cornell_box_against_tungsten_and_path_tracer() {
         assert!((m[c] / r[c] - 1.0).abs() < 0.02, "mean {m} vs {r}");
     }
     assert!(e_ic < 0.02, "IC RMSE {e_ic}");
+}
+
+/// The pixels of a 128x128 render of `scene` to leave out of a mean over the sphere of
+/// `radius` around `center`: all but those whose centre lies within 0.8 of the radius of
+/// its image (the rim's pixels mix in the background).
+fn outside_sphere(scene: &Scene, center: Vec3, radius: f32) -> Vec<bool> {
+    let mut camera = scene.camera.clone();
+    (camera.width, camera.height) = (128, 128);
+    let (cx, cy, r) = camera.basis().sphere_image(center, radius).unwrap();
+    let inner = 0.8 * r;
+    (0..128 * 128)
+        .map(|i| {
+            let (x, y) = ((i % 128) as f32 + 0.5, (i / 128) as f32 + 0.5);
+            (x - cx).powi(2) + (y - cy).powi(2) > inner * inner
+        })
+        .collect()
+}
+
+/// Glossy surfaces reflect indirect light: in a Cornell box with a rough gold sphere (GGX
+/// alone) and a blue plastic one (Lambertian and GGX), mostly lit by the walls they
+/// reflect, the mean of each sphere's pixels with the cache agrees with the path tracer's
+/// within 3% per channel. Over seeds, the path tracer's means at 128 spp vary by about 0.3%
+/// (σ) and the cache's by about 0.4% (mostly its one glossy ray per sample); at seed 3 the
+/// cache is within 0.4% (gold) and 0.4% (plastic). With the glossy indirect light dropped
+/// (the cached diffuse part alone) the same test measured 52% (gold, red) and 36%
+/// (plastic, red) below the path tracer.
+#[test]
+fn glossy_spheres_against_path_tracer() {
+    let scene = Scene::load(&manifest("tests/scenes/cornell-glossy.toml")).unwrap();
+    let ic = Technique::create(&Settings {
+        integrator: Some(TechniqueKind::IrradianceCache),
+        ab: Some(7),
+        ar: Some(16.0),
+        ic_samples: Some(256),
+        spp: Some(32),
+        filter: Some(BOX),
+        ..Settings::default()
+    })
+    .unwrap();
+    let (ic_image, report) = render(&scene, ic);
+    let pt = Technique::Path(MonteCarloSettings {
+        max_depth: 64,
+        spp: 128,
+        time_limit: None,
+        filter: BOX,
+    });
+    let (pt_image, _) = render(&scene, pt);
+    eprintln!("glossy spheres: {}", report.join("; "));
+    for (name, center, radius) in [
+        ("gold", Vec3::new(-0.5, 0.3, -0.4), 0.3),
+        ("plastic", Vec3::new(0.45, 0.35, -0.5), 0.35),
+    ] {
+        let outside = outside_sphere(&scene, center, radius);
+        let (m, r) = (
+            mean(&ic_image, Some(&outside)),
+            mean(&pt_image, Some(&outside)),
+        );
+        eprintln!("{name}: IC mean {m} vs path {r} (ratio {})", m / r);
+        for c in 0..3 {
+            assert!(
+                (m[c] / r[c] - 1.0).abs() < 0.03,
+                "{name}: IC {m} vs path {r}"
+            );
+        }
+    }
 }
 
 /// The command line: a second view with --cache-file loads the values and computes none in

@@ -199,15 +199,37 @@ impl Bsdf {
     /// f(wo, wi)·|cos θi| for the non-delta lobes (with the adjoint correction in importance
     /// transport). Both directions point away from the surface.
     pub fn eval(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Rgb {
+        match self.eval_lobes(wo, wi, mode) {
+            Some((diffuse, glossy, cos, adjoint)) => (diffuse + glossy) * cos * adjoint,
+            None => Rgb::ZERO,
+        }
+    }
+
+    /// Whether the BSDF has a glossy lobe: GGX reflection, neither diffuse nor a delta.
+    pub fn has_glossy(&self) -> bool {
+        self.ggx.is_some() && self.ks.max_element() > 0.0
+    }
+
+    /// The glossy (GGX) lobe's share of [`Bsdf::eval`]: f_glossy(wo, wi)·|cos θi|.
+    pub fn eval_glossy(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Rgb {
+        match self.eval_lobes(wo, wi, mode) {
+            Some((_, glossy, cos, adjoint)) => glossy * cos * adjoint,
+            None => Rgb::ZERO,
+        }
+    }
+
+    /// The diffuse and glossy parts of f(wo, wi), |cos θi| and the adjoint correction; `None`
+    /// where no non-delta lobe connects the two directions.
+    fn eval_lobes(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Option<(Rgb, Rgb, f32, f32)> {
         let (go, gi) = (wo.dot(self.ng), wi.dot(self.ng));
         // Only reflection is non-delta: both directions on one side, geometrically and for
         // the shading normal alike (otherwise light would leak through the surface).
         if go * gi <= 0.0 {
-            return Rgb::ZERO;
+            return None;
         }
         let (mut lo, mut li) = (self.local(wo), self.local(wi));
         if lo.z * go <= 0.0 || li.z * gi <= 0.0 {
-            return Rgb::ZERO;
+            return None;
         }
         let eta = if lo.z >= 0.0 {
             1.0 / self.ior
@@ -219,20 +241,21 @@ impl Bsdf {
             lo = -lo;
             li = -li;
         }
-        let mut f = Rgb::ZERO;
+        let mut diffuse = Rgb::ZERO;
         if self.kd.max_element() > 0.0 {
             let coat = if self.fresnel {
                 (1.0 - fresnel_dielectric(lo.z, eta)) * (1.0 - fresnel_dielectric(li.z, eta))
             } else {
                 1.0
             };
-            f += self.kd * (FRAC_1_PI * coat);
+            diffuse = self.kd * (FRAC_1_PI * coat);
         }
+        let mut glossy = Rgb::ZERO;
         if let Some(ggx) = self.ggx {
             if self.ks.max_element() > 0.0 {
                 let h = (lo + li).normalize();
                 let dg = ggx.d(h) * ggx.g(lo, li);
-                f += match self.conductor {
+                glossy = match self.conductor {
                     Some(c) => {
                         self.ks * c.reflectance(lo.dot(h).abs()) * (dg / (4.0 * lo.z * li.z))
                     }
@@ -243,7 +266,7 @@ impl Bsdf {
                 };
             }
         }
-        f * li.z * self.adjoint(wo, wi, lo, li, mode)
+        Some((diffuse, glossy, li.z, self.adjoint(wo, wi, lo, li, mode)))
     }
 
     /// Density (solid angle) with which [`Bsdf::sample`] produces `wi` from `wo` through a

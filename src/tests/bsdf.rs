@@ -233,6 +233,50 @@ fn coated_diffuse_and_mirror_mixtures() {
     }
 }
 
+/// The glossy share of f·cos is the GGX lobe alone: all of it for a rough metal, f·cos less
+/// the Lambertian kd/π·cos for a plastic without Fresnel, nothing for a mirror mixture or a
+/// Lambertian surface (which have no glossy lobe).
+#[test]
+fn glossy_share_is_the_ggx_lobe() {
+    let kd = Rgb::new(0.15, 0.2, 0.35);
+    let metal = material(|m| {
+        m.specular = Rgb::new(1.0, 0.78, 0.34);
+        m.roughness = 0.25;
+    });
+    let plastic = material(|m| {
+        m.diffuse = Texture::Constant(kd);
+        m.specular = Rgb::splat(0.5);
+        m.roughness = 0.15;
+    });
+    let mirror_mix = material(|m| {
+        m.diffuse = Texture::Constant(kd);
+        m.specular = Rgb::splat(0.3);
+    });
+    let lambert = material(|m| m.diffuse = Texture::Constant(kd));
+    let wi = Vec3::new(-0.5, -0.2, 0.84).normalize();
+    for wo in directions() {
+        let wo = wo.normalize();
+        let mode = Transport::Radiance;
+        let b = Bsdf::new(&metal, &point(), wo);
+        assert!(b.has_glossy());
+        assert_eq!(b.eval_glossy(wo, wi, mode), b.eval(wo, wi, mode));
+        let b = Bsdf::new(&plastic, &point(), wo);
+        assert!(b.has_glossy());
+        let diffuse = b.eval(wo, wi, mode) - b.eval_glossy(wo, wi, mode);
+        let want = kd * (std::f32::consts::FRAC_1_PI * wi.z);
+        assert!(
+            (diffuse - want).abs().max_element() < 1e-6,
+            "{diffuse} vs {want}"
+        );
+        assert!(b.eval_glossy(wo, wi, mode).min_element() > 0.0);
+        for m in [&mirror_mix, &lambert] {
+            let b = Bsdf::new(m, &point(), wo);
+            assert!(!b.has_glossy());
+            assert_eq!(b.eval_glossy(wo, wi, mode), Rgb::ZERO);
+        }
+    }
+}
+
 /// A smooth dielectric is all delta: the expected weight of a sample is R + T·(ηi/ηt)² in
 /// radiance transport and R + T in importance transport, i.e. energy is conserved for
 /// importance and radiance follows the (η)² law.

@@ -112,21 +112,29 @@ fn furnace_irradiance_is_analytic() {
 }
 
 /// The same seed gives the same image, bit for bit, on 1 and 2 threads (72x72 pixels: the
-/// overture's phases have up to four 32x32 tiles each).
+/// overture's phases have up to four 32x32 tiles each), with diffuse walls alone and with
+/// glossy spheres, whose traced glossy rays the final render follows as the overture did
+/// (no misses).
 #[test]
 fn images_do_not_depend_on_thread_count() {
-    let scene = Scene::load(&manifest("scenes/cornell-box.toml")).unwrap();
-    let ic = IcOptions {
-        bounces: 2,
-        samples: 64,
-        accuracy: 0.3,
-        ..IcOptions::default()
-    };
-    let a = render_ic(&scene, ic, &options(72, 72, 2, Some(1)), None, |_, _| {});
-    let b = render_ic(&scene, ic, &options(72, 72, 2, Some(2)), None, |_, _| {});
-    assert!(a.image.pixels == b.image.pixels, "images differ");
-    assert_eq!(a.records, b.records);
-    assert_eq!(a.misses, b.misses);
+    for path in [
+        "scenes/cornell-box.toml",
+        "tests/scenes/cornell-glossy.toml",
+    ] {
+        let scene = Scene::load(&manifest(path)).unwrap();
+        let ic = IcOptions {
+            bounces: 2,
+            samples: 64,
+            accuracy: 0.3,
+            ..IcOptions::default()
+        };
+        let a = render_ic(&scene, ic, &options(72, 72, 2, Some(1)), None, |_, _| {});
+        let b = render_ic(&scene, ic, &options(72, 72, 2, Some(2)), None, |_, _| {});
+        assert!(a.image.pixels == b.image.pixels, "{path}: images differ");
+        assert_eq!(a.records, b.records, "{path}");
+        assert_eq!(a.misses, b.misses, "{path}");
+        assert_eq!(a.misses, 0, "{path}");
+    }
 }
 
 /// A second render that loads the first one's cache file computes no new primary values in

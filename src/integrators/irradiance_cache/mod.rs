@@ -1,11 +1,14 @@
 //! Irradiance caching (Ward, Rubinstein & Clear, "A Ray Tracing Solution for Diffuse
 //! Interreflection", 1988).
 //!
-//! Radiance leaving a surface toward the eye is L = Le + direct + specular + ρ/π·E, where the
-//! direct term comes from next-event estimation (one light sample per shading point, as in the
-//! path tracer, without MIS: emitters reached by other rays are not counted), specular paths
-//! (mirrors, glass) are followed by sampling the BSDF's delta lobes, and E, the *indirect*
-//! irradiance, comes from the cache:
+//! Radiance leaving a surface toward the eye is L = Le + direct + specular + glossy + ρ/π·E,
+//! where the direct term combines one light sample and one BSDF sample by multiple importance
+//! sampling (emitters reached by any other ray are not counted), specular paths (mirrors,
+//! glass) are followed by sampling the BSDF's delta lobes, the glossy term is the GGX lobe's
+//! share of that same BSDF sample's ray, weighted f_glossy·cosθ/pdf and shaded without
+//! emission one level deeper (one ray per shading point, as a path tracer takes; the pixel's
+//! samples average it), and E, the *indirect* irradiance of the diffuse lobe, comes from the
+//! cache:
 //!
 //! - **Primary method** (`primary`): n strata in sin²θ by 2n strata in φ, one jittered ray
 //!   each: θ_j = asin(√((j + X)/n)), φ_k = π(k + Y)/n for j < n, k < 2n (eq. 2 with
@@ -633,9 +636,11 @@ impl Walk<'_> {
                 l += kd * FRAC_1_PI * e;
             }
         }
-        // One BSDF sample: a non-delta direction completes the direct-light MIS pair
-        // (emitters only: the indirect part is the cache's); a delta direction is a specular
-        // path, followed.
+        // One BSDF sample. A delta direction is a specular path, followed. A non-delta
+        // direction completes the direct-light MIS pair (emitters only) and, on a glossy
+        // surface, carries its glossy indirect light: the lobe's share f_glossy·cosθ/pdf of
+        // the light leaving the surface hit without its emission, shaded one level deeper
+        // (as a primary value's ray is). The cache holds only the diffuse part.
         let u_lobe = rng.uniform();
         let u = Vec2::new(rng.uniform(), rng.uniform());
         let Some(bs) = bsdf.sample(wo, u_lobe, u, Transport::Radiance) else {
@@ -649,9 +654,22 @@ impl Walk<'_> {
             if specular_depth < MAX_SPECULAR_DEPTH {
                 l += bs.weight * self.trace(&next, level, emission, specular_depth + 1, rng);
             }
-        } else if direct && !lights.is_empty() {
-            match ctx.intersect(&next, self.stats) {
-                Some(hit) => {
+            return l;
+        }
+        let mis = direct && !lights.is_empty();
+        // Beyond the last level, as for diffuse light, no glossy indirect light.
+        let glossy = if bsdf.has_glossy() && level < self.params.options.bounces {
+            bsdf.eval_glossy(wo, bs.wi, Transport::Radiance) / bs.pdf
+        } else {
+            Rgb::ZERO
+        };
+        let glossy = (glossy.max_element() > 0.0).then_some(glossy);
+        if !mis && glossy.is_none() {
+            return l;
+        }
+        match ctx.intersect(&next, self.stats) {
+            Some(hit) => {
+                if mis {
                     let hm = &ctx.scene.materials[hit.material];
                     if hm.emits_towards(-bs.wi, hit.ng) {
                         if let Some(li) = lights.light_of_shape(hit.shape) {
@@ -660,14 +678,15 @@ impl Walk<'_> {
                         }
                     }
                 }
-                None => {
-                    if let Some(bg) = lights.background_light() {
-                        let w = power_heuristic(
-                            bs.pdf,
-                            lights.pdf_li(bg, sp.p, sp.p + bs.wi, Vec3::ZERO),
-                        );
-                        l += bs.weight * lights.background_radiance(bs.wi) * w;
-                    }
+                if let Some(weight) = glossy {
+                    l += weight * self.shade(&next, &hit, level + 1, false, 0, rng);
+                }
+            }
+            None => {
+                if let Some(bg) = lights.background_light().filter(|_| mis) {
+                    let w =
+                        power_heuristic(bs.pdf, lights.pdf_li(bg, sp.p, sp.p + bs.wi, Vec3::ZERO));
+                    l += bs.weight * lights.background_radiance(bs.wi) * w;
                 }
             }
         }
