@@ -3,7 +3,7 @@
 //!
 //! ```text
 //! magic  "RLIRRAD\0"            8 bytes
-//! version u32 (= 4)
+//! version u32 (= 5)
 //! scene hash u64                FNV-1a of the scene's geometry, materials and lights
 //! bounces u32, accuracy f32, samples u32, ar f32, ambient 3×f32, gradients u32 (0 or 1)
 //! per level (bounces of them): count u64, then count records of 28 f32
@@ -17,7 +17,7 @@
 //! Records are stored per level in insertion order and re-inserted in that order, so a loaded
 //! cache is the same tree as the one saved. Files are written atomically
 //! (crate::binary_file). Version 1 differed only in its checksum, version 2 had no view key,
-//! version 3 no gradients.
+//! version 3 no gradients, version 4 values computed without glossy interreflection.
 
 use super::gradients::Gradients;
 use super::octree::Octree;
@@ -29,7 +29,7 @@ use crate::scene::Scene;
 use crate::Result;
 use std::path::Path;
 
-pub const VERSION: u32 = 4;
+pub const VERSION: u32 = 5;
 /// Bytes of one record: 28 f32.
 const RECORD_BYTES: usize = 28 * 4;
 pub(crate) const FORMAT: Format = Format {
