@@ -38,7 +38,7 @@ while True:
         arrivals.append((time.time() - start, spp))
     if s['status'] in ('done', 'failed'):
         break
-    time.sleep(0.005)
+    time.sleep(0.02)
 first = [a for a in arrivals if a[0] <= arrivals[0][0] + 1.0]
 print(f"render {s['elapsed']:.2f} s, {len(arrivals)} images; in the first second after the "
       f"first image: {len(first)}")

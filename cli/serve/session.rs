@@ -497,12 +497,18 @@ fn fail(session: &Session, e: &Error) {
     session.publish(|s| s.status = Status::Failed(text));
 }
 
-/// How often a progressive render's image is published in the middle of a pass: later
-/// passes take seconds, and a live view wants several images a second.
-const MID_PASS_UPDATES: Duration = Duration::from_millis(50);
+/// How often a progressive render's image is published in the middle of a pass, early in
+/// the render: later passes take seconds, and a live view wants several images a second.
+const MID_PASS_UPDATES: Duration = Duration::from_millis(90);
+
+/// Later, the gap between images grows with the render's time (this share of it): each
+/// image costs the render (the page fetches megabytes of floats on the same cores), and
+/// a long render changes slowly.
+const LATER_GAP: f64 = 1.0 / 20.0;
 
 /// Renders the view: a progressive render publishes every pass and, between, its film
-/// every [`MID_PASS_UPDATES`]; the others publish their image.
+/// every [`MID_PASS_UPDATES`] early on ([`LATER_GAP`] later); the others publish their
+/// image.
 fn render(
     session: &Session,
     renderer: &mut Renderer,
@@ -542,7 +548,13 @@ fn render(
         }
     }
     let result = if progressive {
-        let mut show = |film: &Film, _: Shown, stats: &RenderStats| {
+        let mut last = Instant::now();
+        let mut show = |film: &Film, shown: Shown, stats: &RenderStats| {
+            let gap = MID_PASS_UPDATES.max(Duration::from_secs_f64(stats.seconds * LATER_GAP));
+            if shown == Shown::MidPass && last.elapsed() < gap {
+                return Ok(());
+            }
+            last = Instant::now();
             session.publish_image(film.image()?, film.mean_spp());
             session.publish(|s| {
                 s.rays = Some(stats.rays.total());
