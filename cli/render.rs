@@ -19,7 +19,8 @@ use std::sync::Arc;
 pub struct RelightArgs {
     #[command(flatten)]
     pub render: RenderArgs,
-    /// Multiply the emission of the scene's material NAME by K (repeatable).
+    /// Multiply the emission of the scene's material NAME by K, or by R,G,B channel by
+    /// channel (a colour; repeatable).
     #[arg(long = "light", value_name = "NAME=K")]
     lights: Vec<String>,
     /// Recompute the light basis (one distribution per emissive material) for the scene's
@@ -431,15 +432,11 @@ pub fn run_relight(cli: &Cli, args: RelightArgs) -> Result<(), Failure> {
     }
     let mut lights = Vec::new();
     for l in &args.lights {
-        let parsed = l
-            .split_once('=')
-            .and_then(|(name, k)| Some((name.to_string(), k.trim().parse::<f32>().ok()?)))
-            .filter(|(name, k)| !name.is_empty() && k.is_finite() && *k >= 0.0);
-        match parsed {
+        match parse_light(l) {
             Some(p) => lights.push(p),
             None => {
                 return Err(Error::Invalid(format!(
-                    "--light takes NAME=K with K a non-negative number, got \"{l}\""
+                    "--light takes NAME=K or NAME=R,G,B with non-negative numbers, got \"{l}\""
                 ))
                 .into())
             }
@@ -455,6 +452,22 @@ pub fn run_relight(cli: &Cli, args: RelightArgs) -> Result<(), Failure> {
         ..Settings::default()
     };
     run_render(cli, render, extra)
+}
+
+/// `NAME=K` (every channel times K) or `NAME=R,G,B`, with finite non-negative factors.
+fn parse_light(text: &str) -> Option<(String, raylink::math::Rgb)> {
+    let (name, factors) = text.split_once('=')?;
+    let k: Vec<f32> = factors
+        .split(',')
+        .map(|f| f.trim().parse::<f32>().ok())
+        .collect::<Option<_>>()?;
+    let k = match k[..] {
+        [k] => raylink::math::Rgb::splat(k),
+        [r, g, b] => raylink::math::Rgb::new(r, g, b),
+        _ => return None,
+    };
+    let valid = !name.is_empty() && k.is_finite() && k.min_element() >= 0.0;
+    valid.then(|| (name.to_string(), k))
 }
 
 /// `raylink precompute`: the irradiance cache (`--cache-file`) of one view, or the

@@ -64,7 +64,7 @@ fn main() -> Result<(), raylink::Error> {
     // The lamp twice as bright, from the saved network's light basis.
     let relit = Settings {
         relight: Some(Relight {
-            lights: vec![("lamp".into(), 2.0)],
+            lights: vec![("lamp".into(), raylink::math::Rgb::splat(2.0))],
             ..Relight::default()
         }),
         ..settings

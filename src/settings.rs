@@ -3,6 +3,7 @@
 //! into a technique with its defaults and checks.
 
 use crate::image::filter::Filter;
+use crate::math::Rgb;
 use std::path::PathBuf;
 
 /// The light-transport techniques, by name.
@@ -137,8 +138,10 @@ pub enum NetworkOrder {
 /// What `relight` changes in a saved network (see `NetworkSettings::relight`).
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Relight {
-    /// Multiply the emission of the scene's material NAME by K.
-    pub lights: Vec<(String, f32)>,
+    /// Multiply the emission of the scene's material NAME by K, channel by channel (a
+    /// strength and a colour: `Rgb::splat(2.0)` doubles it, `Rgb::new(1.0, 0.5, 0.5)` tints
+    /// it red).
+    pub lights: Vec<(String, Rgb)>,
     /// Compute and store the light basis afresh (replacing the file's).
     pub store_basis: bool,
     /// Store a reflectance series for each of these diffuse materials with the basis.

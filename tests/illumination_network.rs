@@ -276,11 +276,27 @@ fn relight_subcommand_reuses_the_network() {
     );
     assert!(per_light.status.success(), "{}", stderr(&per_light));
     assert!(stderr(&per_light).contains("0 sweeps"));
+    // A colour, channel by channel: red doubled, blue off.
+    let tinted = network_relight(
+        "scenes/cornell-box.toml",
+        &tmp_path(&dir, "r6.exr"),
+        &file,
+        &["--light", "light=2,1,0"],
+    );
+    assert!(tinted.status.success(), "{}", stderr(&tinted));
     let (r1, r2, r3) = (img("r1.exr"), img("r2.exr"), img("r3.exr"));
+    let r6 = img("r6.exr");
     assert!(r1.pixels.iter().any(|p| p.x > 0.0));
-    for ((a, b), c) in r1.pixels.iter().zip(&r2.pixels).zip(&r3.pixels) {
+    for (((a, b), c), t) in r1
+        .pixels
+        .iter()
+        .zip(&r2.pixels)
+        .zip(&r3.pixels)
+        .zip(&r6.pixels)
+    {
         assert_eq!(*a * 2.0, *b);
         assert_eq!(*b, *c);
+        assert_eq!((t.x, t.y, t.z), (b.x, a.y, 0.0));
     }
     // The basis (one solution per emissive material, each to the tolerance) against the
     // render's single distribution.
@@ -341,6 +357,8 @@ fn relight_subcommand_reuses_the_network() {
     for (args, needle) in [
         (vec!["--light", "nosuch=2"], "nosuch"),
         (vec!["--light", "light"], "NAME=K"),
+        (vec!["--light", "light=1,2"], "NAME=R,G,B"),
+        (vec!["--light", "light=1,-1,1"], "NAME=R,G,B"),
         (vec!["--integrator", "path"], "network integrator"),
     ] {
         let out = network_relight(

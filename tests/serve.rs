@@ -401,10 +401,38 @@ fn relighting_the_network_scales_the_image_as_the_lights() {
     );
     assert_eq!(r.status, 200);
     server.wait("the recoloured image", |s| {
-        s["status"] == "done" && s["materials"][0]["factor"] == 0.5
+        s["status"] == "done" && s["materials"][0]["factor"] == serde_json::json!([0.5, 0.5, 0.5])
     });
     let darker = mean(&server.get("/api/image").floats());
     assert!(darker < 0.9 * after, "{darker} vs {after}");
+    // A colour: the lamp's channels each by their own factor (the image, lit by the lamp
+    // alone, follows channel by channel).
+    let channels = |v: &[f32]| -> [f64; 3] {
+        let mut m = [0.0f64; 3];
+        for p in v.chunks(3) {
+            for c in 0..3 {
+                m[c] += p[c] as f64;
+            }
+        }
+        m
+    };
+    let white = channels(&server.get("/api/image").floats());
+    let body = b"{\"lights\":{\"lamp\":[2,1,0.5]}}";
+    assert_eq!(
+        server.request("POST", "/api/relight", json, body).status,
+        200
+    );
+    server.wait("the tinted lamp", |s| {
+        s["status"] == "done" && s["lights"][0]["factor"] == serde_json::json!([2.0, 1.0, 0.5])
+    });
+    let tinted = channels(&server.get("/api/image").floats());
+    for (c, k) in [1.0, 0.5, 0.25].into_iter().enumerate() {
+        let ratio = tinted[c] / white[c];
+        assert!(
+            (ratio - k).abs() < 0.01 * k,
+            "channel {c}: x{ratio}, expected x{k}"
+        );
+    }
     assert_eq!(server.stop().code(), Some(130));
 }
 

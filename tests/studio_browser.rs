@@ -339,6 +339,23 @@ fn the_page_converges_orbits_and_relights_in_chromium() {
         "{shown}"
     );
     browser.screenshot(&artifacts().join("studio.png"));
+    // The lamp's colour picked red: no green or blue light is left in the room.
+    browser.js(
+        "const i = document.querySelector('input[data-name=\"light lamp colour\"]');
+         i.value = '#ff0000'; i.dispatchEvent(new Event('input')); return true;",
+    );
+    browser.wait(
+        "the red lamp",
+        &SETTLED.replace(
+            "&& h[h.length - 1];",
+            "&& s.state.lights[0].factor[1] === 0 && h[h.length - 1];",
+        ),
+    );
+    let rgb = browser.js("const d = studio.image.data, m = [0, 0, 0];
+         for (let i = 0; i < d.length; i++) m[i % 3] += d[i];
+         return m;");
+    let rgb: Vec<f64> = serde_json::from_value(rgb).unwrap();
+    assert!(rgb[0] > 0.0 && rgb[1] == 0.0 && rgb[2] == 0.0, "{rgb:?}");
     drop(network);
 
     // A keyframed scene: the frame slider, and the retraced pixels shown.

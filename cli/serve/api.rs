@@ -7,7 +7,7 @@
 
 use super::http::{Reply, Request, Response};
 use super::session::{lock, RelightRequest, Session, State, Status};
-use raylink::math::Vec3;
+use raylink::math::{Rgb, Vec3};
 use raylink::{write_image, Image, MetaValue, OutputOptions};
 use serde::Deserialize;
 use serde_json::{json, Value};
@@ -204,9 +204,16 @@ impl Api {
         #[serde(deny_unknown_fields)]
         struct Body {
             #[serde(default)]
-            lights: BTreeMap<String, f32>,
+            lights: BTreeMap<String, Factor>,
             #[serde(default)]
-            materials: BTreeMap<String, f32>,
+            materials: BTreeMap<String, Factor>,
+        }
+        /// One factor for every channel, or one a channel (a colour).
+        #[derive(Deserialize)]
+        #[serde(untagged)]
+        enum Factor {
+            All(f32),
+            Channels([f32; 3]),
         }
         let b: Body = parse(body)?;
         let base = &self.session.base;
@@ -215,12 +222,19 @@ impl Api {
             (&b.lights, &mut request.lights, "light", 1e4f32),
             (&b.materials, &mut request.materials, "material", 2.0),
         ] {
-            for (name, &k) in given {
+            for (name, k) in given {
                 let Some(entry) = known.iter_mut().find(|(n, _)| n == name) else {
                     return Err((400, format!("no {what} named {name:?}")));
                 };
-                if !(k.is_finite() && (0.0..=max).contains(&k)) {
-                    return Err((400, format!("{what} {name:?}: a factor from 0 to {max}")));
+                let k = match *k {
+                    Factor::All(k) => Rgb::splat(k),
+                    Factor::Channels(k) => Rgb::from(k),
+                };
+                if !(k.is_finite() && k.min_element() >= 0.0 && k.max_element() <= max) {
+                    return Err((
+                        400,
+                        format!("{what} {name:?}: a factor (or one a channel) from 0 to {max}"),
+                    ));
                 }
                 entry.1 = k;
             }
@@ -229,10 +243,11 @@ impl Api {
         for (name, k) in &request.materials {
             let m = base.scene.materials.iter().find(|m| &m.name == name);
             if let Some(raylink::scene::Texture::Constant(c)) = m.map(|m| &m.diffuse) {
-                if c.max_element() * k >= 1.0 {
+                if (*c * *k).max_element() >= 1.0 {
+                    let k = k.to_array();
                     return Err((
                         400,
-                        format!("material {name:?}: {k} times its colour reflects 1 or more"),
+                        format!("material {name:?}: {k:?} times its colour reflects 1 or more"),
                     ));
                 }
             }
@@ -501,10 +516,11 @@ fn state_json(session: &Session, s: &State) -> Value {
         "relight_prepare_ms": s.relight_prepare_ms,
         "camera": {"position": v(c.position), "look_at": v(c.look_at), "up": v(c.up),
                    "fov": c.fov_deg},
-        "lights": s.relight.lights.iter().map(|(n, k)| json!({"name": n, "factor": k}))
+        "lights": s.relight.lights.iter()
+            .map(|(n, k)| json!({"name": n, "factor": k.to_array()}))
             .collect::<Vec<_>>(),
         "materials": s.relight.materials.iter()
-            .map(|(n, k)| json!({"name": n, "factor": k, "colour": colour(n)}))
+            .map(|(n, k)| json!({"name": n, "factor": k.to_array(), "colour": colour(n)}))
             .collect::<Vec<_>>(),
         "aovs": s.aovs.as_ref().is_some_and(|a| a.0 == s.view),
         "reference": base.reference.is_some(),

@@ -209,7 +209,44 @@ function slider(parent, label, value, max, send) {
   return input;
 }
 
+// A colour input beside a slider: its linear RGB (sRGB decoded), white by default.
+const linear = (c) => c <= 0.04045 ? c / 12.92 : Math.pow((c + 0.055) / 1.055, 2.4);
+const hex = (rgb) => '#' + rgb.map((v) =>
+  Math.round(Math.min(Math.max(srgb(Math.min(Math.max(v, 0), 1)), 0), 1) * 255)
+    .toString(16).padStart(2, '0')).join('');
+function colourInput(parent, label, rgb, send, touched) {
+  const input = document.createElement('input');
+  Object.assign(input, { type: 'color', value: hex(rgb), title: `${label} colour` });
+  input.dataset.name = `${label} colour`;
+  // A colour given before (a tint in the server's state) is kept.
+  if (touched) input.dataset.touched = '1';
+  // Until it is touched, the colour (rounded to 8 bits a channel) is not sent.
+  input.addEventListener('input', () => { input.dataset.touched = '1'; send(); });
+  parent.lastChild.append(input);
+  return input;
+}
+const colourOf = (input) => [1, 3, 5].map((i) => linear(parseInt(input.value.slice(i, i + 2), 16) / 255));
+
+// Relight controls: per light a strength and a colour; per material a factor on its colour
+// and a colour that replaces it.
 const lightInputs = {}, materialInputs = {};
+function relightBody(s) {
+  const lights = {}, materials = {};
+  for (const [n, { strength, colour }] of Object.entries(lightInputs)) {
+    lights[n] = colour.dataset.touched
+      ? colourOf(colour).map((c) => +strength.value * c) : +strength.value;
+  }
+  for (const m of s.materials) {
+    const { factor, colour } = materialInputs[m.name];
+    if (!colour.dataset.touched) { materials[m.name] = +factor.value; continue; }
+    const picked = colourOf(colour);
+    // The factor on each channel of the material's own colour that gives the colour picked,
+    // kept below reflecting all light.
+    materials[m.name] = m.colour.map((c, i) => c > 0
+      ? Math.min(+factor.value * picked[i] / c, 0.99 / c, 2) : +factor.value);
+  }
+  return { lights, materials };
+}
 
 function setup(s) {
   $('scene').textContent = `${s.integrator}, ${s.width}×${s.height}`;
@@ -231,15 +268,26 @@ function setup(s) {
   }
   if (s.integrator === 'network' && (s.lights.length || s.materials.length)) {
     $('relight').hidden = false;
-    const send = () => queue('relight', () => ({
-      lights: Object.fromEntries(Object.entries(lightInputs).map(([n, i]) => [n, +i.value])),
-      materials: Object.fromEntries(Object.entries(materialInputs).map(([n, i]) => [n, +i.value])),
-    }));
-    for (const l of s.lights) lightInputs[l.name] = slider($('lights'), `light ${l.name}`, l.factor, 4, send);
+    const send = () => queue('relight', () => relightBody(s));
+    for (const l of s.lights) {
+      const strength = Math.max(...l.factor);
+      const label = `light ${l.name}`;
+      lightInputs[l.name] = {
+        strength: slider($('lights'), label, strength, 4, send),
+        colour: colourInput($('lights'), label, l.factor.map((k) => strength > 0 ? k / strength : 1),
+                            send, l.factor.some((k) => k !== strength)),
+      };
+    }
     for (const m of s.materials) {
       const top = m.colour ? 0.99 / Math.max(...m.colour) : 1;
-      materialInputs[m.name] = slider($('materials'), `material ${m.name}`, m.factor,
-                                      Math.floor(Math.min(top, 2) * 100) / 100, send);
+      const label = `material ${m.name}`;
+      const factor = Math.max(...m.factor);
+      materialInputs[m.name] = {
+        factor: slider($('materials'), label, factor, Math.floor(Math.min(top, 2) * 100) / 100, send),
+        // The colour shown is the material's at factor 1: picking it again changes nothing.
+        colour: colourInput($('materials'), label, m.colour.map((c, i) => c * m.factor[i] / (factor || 1)),
+                            send, m.factor.some((k) => k !== factor)),
+      };
     }
   }
 }

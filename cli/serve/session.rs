@@ -6,6 +6,7 @@
 
 use super::frames::Frames;
 use raylink::job::Technique;
+use raylink::math::Rgb;
 use raylink::scene::Camera;
 use raylink::scene::Texture;
 use raylink::{
@@ -19,8 +20,10 @@ use std::time::{Duration, Instant};
 /// A relight: a factor per light (emissive material) and per diffuse material, by name.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct RelightRequest {
-    pub lights: Vec<(String, f32)>,
-    pub materials: Vec<(String, f32)>,
+    /// Factors on each light's emission and each material's colour, channel by channel (a
+    /// strength times a colour).
+    pub lights: Vec<(String, Rgb)>,
+    pub materials: Vec<(String, Rgb)>,
 }
 
 /// Commands from the page to the worker, and the cancel token of the job in hand (kept
@@ -193,8 +196,12 @@ impl Session {
                 relight_ms: None,
                 relight_prepare_ms: None,
                 relight: RelightRequest {
-                    lights: base.lights.iter().map(|n| (n.clone(), 1.0)).collect(),
-                    materials: base.materials.iter().map(|n| (n.clone(), 1.0)).collect(),
+                    lights: base.lights.iter().map(|n| (n.clone(), Rgb::ONE)).collect(),
+                    materials: base
+                        .materials
+                        .iter()
+                        .map(|n| (n.clone(), Rgb::ONE))
+                        .collect(),
                 },
                 aovs: None,
                 rmse: None,
