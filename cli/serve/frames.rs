@@ -5,8 +5,8 @@
 //! image; any other integrator renders each frame in full.
 
 use raylink::coherence::report::retrace_map;
+use raylink::coherence::SequenceTechnique;
 use raylink::coherence::{Placement, Records, Sequence, SequenceJob, SequenceMode};
-use raylink::coherence::{SequenceTechnique, Time};
 use raylink::image::Image;
 use raylink::scene::animation::Animation;
 use raylink::scene::Camera;
@@ -94,12 +94,11 @@ impl Frames {
         *sequence = Some(engine);
         let stats = &row.coherent;
         let pixels = (job.width as u64 * job.height as u64).max(1);
-        let Time { wall, .. } = row.time;
         Ok(Frame {
             map: Some(retrace_map(&image, stats, BLOCKS)),
             retraced: stats.pixels_retraced as f64 / pixels as f64,
             rays: stats.rays.total(),
-            seconds: wall,
+            seconds: row.time.wall,
             image,
         })
     }

@@ -163,12 +163,12 @@ pub fn run(cli: &Cli, args: ServeArgs) -> Result<(), Failure> {
         .local_addr()
         .map_err(|e| Error::Invalid(format!("the listening socket: {e}")))?;
     // A keyframed scene gets a frame slider.
-    let animated = args.scene.extension().is_some_and(|e| e == "toml");
-    let frames = match animated {
-        true => Some(raylink::scene::animation::Animation::read(&args.scene)?)
+    let frames = if args.scene.extension().is_some_and(|e| e == "toml") {
+        Some(raylink::scene::animation::Animation::read(&args.scene)?)
             .filter(|a| a.is_animated())
-            .map(|a| frames::Frames::new(a, &job)),
-        false => None,
+            .map(|a| frames::Frames::new(a, &job))
+    } else {
+        None
     };
     let scene = Arc::new(scene);
     let renderer = Renderer::new(scene.clone(), job.clone(), &control)?;

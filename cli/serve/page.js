@@ -212,8 +212,7 @@ function slider(parent, label, value, max, send) {
 // A colour input beside a slider: its linear RGB (sRGB decoded), white by default.
 const linear = (c) => c <= 0.04045 ? c / 12.92 : Math.pow((c + 0.055) / 1.055, 2.4);
 const hex = (rgb) => '#' + rgb.map((v) =>
-  Math.round(Math.min(Math.max(srgb(Math.min(Math.max(v, 0), 1)), 0), 1) * 255)
-    .toString(16).padStart(2, '0')).join('');
+  Math.round(srgb(Math.min(Math.max(v, 0), 1)) * 255).toString(16).padStart(2, '0')).join('');
 function colourInput(parent, label, rgb, send, touched) {
   const input = document.createElement('input');
   Object.assign(input, { type: 'color', value: hex(rgb), title: `${label} colour` });

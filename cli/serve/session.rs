@@ -2,7 +2,8 @@
 //! one job at a time; the HTTP threads read what it published ([`State`]) and leave it
 //! commands ([`Inbox`]): a new camera or a relight cancels the job in hand through its
 //! [`CancelToken`] and starts the next one. Progressive renders publish the film after
-//! every pass; the network renders each view from the network it prepared once.
+//! every pass and in between; the network renders each view from the network it prepared
+//! once; a keyframed scene's frames go through [`Frames`].
 
 use super::frames::Frames;
 use raylink::job::Technique;
@@ -562,8 +563,7 @@ fn render(
                 return Ok(());
             }
             last = Instant::now();
-            session.publish_image(film.image()?, film.mean_spp());
-            session.publish(|s| {
+            session.publish_image_with(film.image()?, film.mean_spp(), |s| {
                 s.rays = Some(stats.rays.total());
                 s.mrays = Some(stats.mrays_per_second());
             });

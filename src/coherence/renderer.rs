@@ -96,7 +96,7 @@ impl Engine<'_> {
                     *integrator,
                     options,
                     None,
-                    crate::render::Watch::after_passes(&mut |_, _, _| Ok(())),
+                    crate::render::Watch::nobody(),
                     control,
                 )?;
                 (film.image()?, stats)

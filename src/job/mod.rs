@@ -349,7 +349,7 @@ impl Renderer {
 
     /// Renders the job. A cancel returns what was finished, marked partial.
     pub fn render(&mut self, control: &Control) -> Result<Rendered> {
-        self.render_progressive(control, None, Watch::after_passes(&mut |_, _, _| Ok(())))
+        self.render_progressive(control, None, Watch::nobody())
     }
 
     /// Renders the job, continuing a progressive render from `resume` (a film saved by an

@@ -282,8 +282,9 @@ pub(crate) fn reachable(spp: u32, target: u32) -> bool {
 /// an earlier, cancelled run with the same scene and options: see [`super::checkpoint`]) if
 /// given; the result is the same bit for bit as a render that was never cancelled.
 /// `watch` sees the film after every whole pass (to write intermediate files or
-/// checkpoints) and, if it asks, in the middle of passes; an error from it stops the render. On a cancel the render returns after the
-/// tiles in hand with [`RenderStats::cancelled`] set; the film then holds every tile merged.
+/// checkpoints) and, if it asks, in the middle of passes; an error from it stops the
+/// render. On a cancel the render returns after the tiles in hand with
+/// [`RenderStats::cancelled`] set; the film then holds every tile merged.
 pub(crate) fn render_passes(
     ctx: &Context,
     integrator: &dyn MonteCarlo,

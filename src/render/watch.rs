@@ -26,6 +26,16 @@ pub struct Watch<'a> {
     pub mid_pass: Option<Duration>,
 }
 
+impl Watch<'static> {
+    /// Shows the film to no one (a render whose caller needs only its result).
+    pub fn nobody() -> Watch<'static> {
+        // The closure captures nothing: leaking its box allocates nothing.
+        Watch::after_passes(Box::leak(Box::new(
+            |_: &Film, _: Shown, _: &RenderStats| Ok(()),
+        )))
+    }
+}
+
 impl<'a> Watch<'a> {
     /// Shows the film after whole passes only.
     pub fn after_passes(

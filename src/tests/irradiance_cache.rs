@@ -57,7 +57,7 @@ fn render_ic(
         &integrator,
         o,
         None,
-        crate::render::Watch::after_passes(&mut |_, _, _| Ok(())),
+        crate::render::Watch::nobody(),
         &control,
     )
     .unwrap();

@@ -340,7 +340,7 @@ fn cornell_box_approaches_the_path_tracer() {
         &PathTracer::new(PathOptions { max_depth: 64 }),
         &options,
         None,
-        crate::render::Watch::after_passes(&mut |_, _, _| Ok(())),
+        crate::render::Watch::nobody(),
         &Control::default(),
     )
     .unwrap();
