@@ -20,6 +20,7 @@
 use super::Spread;
 use crate::accel::{self, Backend};
 use crate::control::Control;
+use crate::integrators::illumination_network::corners::Corners;
 use crate::integrators::illumination_network::distribute::{
     distribute, DistributeOptions, Solution,
 };
@@ -113,10 +114,12 @@ fn render_view(
     sol: &Solution,
     view: &PixelView,
 ) -> Result<RenderStats> {
+    let corners = Corners::new(net, sol, false);
     let renderer = NetworkRenderer {
         net,
         solution: sol,
         hybrid: false,
+        corners: Some(&corners),
     };
     let whole = Tile::whole(view.width, view.height);
     Ok(render_pixels(ctx, &renderer, view, &whole, &Control::default())?.1)

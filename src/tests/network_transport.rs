@@ -4,12 +4,13 @@
 //! against the path tracer at two resolutions.
 
 use super::network_common::{build, closed_box, cornell, params, scene};
-use super::network_scenes::{sealed_box_text, wall, CAMERA};
+use super::network_scenes::{closed_box_text, sealed_box_text, wall, CAMERA};
 use crate::accel::{self, Backend};
 use crate::control::Control;
 use crate::image::compare::{box_downsample, bright_mask, mean, rmse};
 use crate::image::filter::Filter;
 use crate::image::Image;
+use crate::integrators::illumination_network::corners::Corners;
 use crate::integrators::illumination_network::distribute::{
     distribute, DistributeOptions, Solution,
 };
@@ -289,16 +290,15 @@ fn a_sealed_box_that_absorbs_no_light_is_refused_in_an_open_scene() {
     assert_eq!(lossless_channel(&net, &surfaces(&net, &g, 1.0)), None);
 }
 
+/// The network's image of `scene` (its own camera), rendered from the patches' corner
+/// values where the sides are diffuse and checked against the same image worked out pixel
+/// by pixel from the patches: the two are equal bit for bit.
 fn network_image(scene: &Scene, p: NetworkParams, size: u32, hybrid: bool) -> Image {
     let accel = accel::build(scene, Backend::Embree, &Control::default()).unwrap();
     let ctx = Context::new(scene, accel.as_ref());
     let net = Network::build(scene, &ctx, p, Builder::Scan).unwrap();
     let sol = distribute(&net, scene, &DistributeOptions::default());
-    let renderer = NetworkRenderer {
-        net: &net,
-        solution: &sol,
-        hybrid,
-    };
+    let corners = Corners::new(&net, &sol, hybrid);
     let view = PixelView {
         width: size,
         height: size,
@@ -310,9 +310,60 @@ fn network_image(scene: &Scene, p: NetworkParams, size: u32, hybrid: bool) -> Im
         seed: 1,
     };
     let whole = Tile::whole(size, size);
-    render_pixels(&ctx, &renderer, &view, &whole, &Control::default())
-        .unwrap()
-        .0
+    let [fast, patches] = [Some(&corners), None].map(|corners| {
+        let renderer = NetworkRenderer {
+            net: &net,
+            solution: &sol,
+            hybrid,
+            corners,
+        };
+        render_pixels(&ctx, &renderer, &view, &whole, &Control::default())
+            .unwrap()
+            .0
+    });
+    let bits = |i: &Image| -> Vec<[u32; 3]> {
+        i.pixels
+            .iter()
+            .map(|p| p.to_array().map(f32::to_bits))
+            .collect()
+    };
+    assert!(
+        bits(&fast) == bits(&patches),
+        "the corner values change the image"
+    );
+    fast
+}
+
+/// A box with a glossy and a mirror wall among diffuse ones: the directional sides are left
+/// to the per-pixel gather, the diffuse ones read their corners, and the image is the one
+/// worked out from the patches, bit for bit.
+#[test]
+fn corner_values_leave_a_mixed_image_unchanged() {
+    let mut text = closed_box_text(
+        "[materials.m]\ndiffuse = [0.6, 0.5, 0.4]\n[materials.floor]\ndiffuse = 0.2\n\
+         specular = 0.4\nroughness = 0.2\n[materials.mirror]\ndiffuse = 0\nspecular = 0.8\n\
+         [materials.lamp]\ndiffuse = 0\nemission = 4\n",
+        "m",
+        "floor",
+    );
+    text += "[[shapes]]\ntype = \"quad\"\nmaterial = \"mirror\"\n\
+             vertices = [[0.25, 0.2, 0.2], [0.25, 0.8, 0.2], [0.25, 0.8, 0.8], [0.25, 0.2, 0.8]]\n";
+    text += "[[shapes]]\ntype = \"quad\"\nmaterial = \"lamp\"\n\
+             vertices = [[0.3, 0.99, 0.3], [0.7, 0.99, 0.3], [0.7, 0.99, 0.7], [0.3, 0.99, 0.7]]\n";
+    let s = scene(&text);
+    let net = build(&s, params(6, 1.0 / 16.0), Builder::Scan);
+    let sol = distribute(&net, &s, &DistributeOptions::default());
+    let corners = Corners::new(&net, &sol, false);
+    let sides = 2 * net.patches.polygons.len() as u32;
+    let with = (0..sides)
+        .filter(|&k| corners.of_patch(&net, k / 2, k % 2, 0, 0).is_some())
+        .count();
+    assert!(
+        with > 0 && with < sides as usize,
+        "{with} of {sides} sides from corners"
+    );
+    let img = network_image(&s, params(6, 1.0 / 16.0), 24, false);
+    assert!(img.pixels.iter().any(|p| p.max_element() > 0.0));
 }
 
 /// The Cornell box against the path tracer: the relative RMSE of 4×4-pixel block means

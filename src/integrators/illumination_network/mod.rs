@@ -9,7 +9,8 @@
 //!   (the slot and the node at the other end).
 //! - [`distribute`]: light carried over the links until convergence, with reflectance maps
 //!   for diffuse (the paper's bypass), mirror, glossy, transmission and frosted surfaces.
-//! - [`render`]: eye rays find the patch; interpolation over patches and slopes (figure 6).
+//! - [`render`]: eye rays find the patch; interpolation over patches and slopes (figure 6),
+//!   from the patches' [`corners`] where they are diffuse.
 //! - [`file`](mod@file): saving and loading networks, so views and lighting change without a preprocess.
 //!
 //! Units: a link carries *flux*; a slot's étendue w converts between radiance and flux. A
@@ -24,6 +25,7 @@
 
 mod assembly;
 mod build;
+pub mod corners;
 pub mod distribute;
 mod etendue;
 pub mod file;

@@ -12,6 +12,7 @@
 //! Patches without a node on the side seen (no line reached them) are left out of the
 //! averages. The image is a pure function of the network, its solution and the camera.
 
+use super::corners::Corners;
 use super::distribute::{candidates, local, Solution};
 use super::{Network, ESCAPE, NONE};
 use crate::bsdf::Ggx;
@@ -25,6 +26,9 @@ pub struct NetworkRenderer<'a> {
     /// Hybrid mode: the diffuse reflection of light coming straight from the emitters is
     /// computed per pixel with a light sample and a shadow ray; the network gives the rest.
     pub hybrid: bool,
+    /// The corner values of the all-diffuse polygon sides (the same image, sooner), or
+    /// `None` to work every pixel out from the patches.
+    pub corners: Option<&'a Corners>,
 }
 
 impl NetworkRenderer<'_> {
@@ -147,6 +151,12 @@ impl NetworkRenderer<'_> {
             (y as u32).min(pg.nt - 1) as i32,
         );
         let (fx, fy) = (x - i as f32, y - j as f32);
+        if let Some(c) = self
+            .corners
+            .and_then(|c| c.of_patch(self.net, poly, side, i as u32, j as u32))
+        {
+            return bilinear([[c[0], c[1]], [c[2], c[3]]], fx, fy);
+        }
         // Values of the 4×4 block around the cell (cells i−1..=i+1), computed once.
         let mut value = [[None::<Rgb>; 3]; 3];
         for (a, row) in value.iter_mut().enumerate() {
@@ -174,21 +184,32 @@ impl NetworkRenderer<'_> {
             }
             (n > 0).then(|| sum / n as f32)
         };
-        let mut sum = Rgb::ZERO;
-        let mut wsum = 0.0;
-        for (ca, wa) in [(0, 1.0 - fx), (1, fx)] {
-            for (cb, wb) in [(0, 1.0 - fy), (1, fy)] {
-                if let Some(v) = corner(ca, cb) {
-                    sum += v * (wa * wb);
-                    wsum += wa * wb;
-                }
+        bilinear(
+            [[corner(0, 0), corner(0, 1)], [corner(1, 0), corner(1, 1)]],
+            fx,
+            fy,
+        )
+    }
+}
+
+/// The bilinear interpolation of a patch's corners at (fx, fy), over the corners that have
+/// a value.
+#[inline]
+fn bilinear(corners: [[Option<Rgb>; 2]; 2], fx: f32, fy: f32) -> Rgb {
+    let mut sum = Rgb::ZERO;
+    let mut wsum = 0.0;
+    for (row, wa) in corners.iter().zip([1.0 - fx, fx]) {
+        for (v, wb) in row.iter().zip([1.0 - fy, fy]) {
+            if let Some(v) = v {
+                sum += *v * (wa * wb);
+                wsum += wa * wb;
             }
         }
-        if wsum > 0.0 {
-            sum / wsum
-        } else {
-            Rgb::ZERO
-        }
+    }
+    if wsum > 0.0 {
+        sum / wsum
+    } else {
+        Rgb::ZERO
     }
 }
 

@@ -3,6 +3,7 @@
 //! light is distributed over it; a relight starts from the file's light basis or reflectance
 //! series where it can (no distribution at all). Renders of any view then read it.
 
+use super::corners::Corners;
 use super::distribute::{self, DistributeOptions, Solution};
 use super::render::NetworkRenderer;
 use super::{file, relight, Network, NetworkParams};
@@ -28,6 +29,7 @@ struct Prepared {
     net: Network,
     solution: Solution,
     hybrid: bool,
+    corners: Corners,
 }
 
 impl Integrator for Prepared {
@@ -36,6 +38,7 @@ impl Integrator for Prepared {
             net: &self.net,
             solution: &self.solution,
             hybrid: self.hybrid,
+            corners: Some(&self.corners),
         }
         .radiance(ctx, ray, rng, stats)
     }
@@ -176,10 +179,12 @@ impl Lifecycle for NetworkTechnique {
                 (net, solution)
             }
         };
+        let hybrid = self.settings.hybrid;
         self.prepared = Some(Prepared {
+            corners: Corners::new(&net, &solution, hybrid),
             net,
             solution,
-            hybrid: self.settings.hybrid,
+            hybrid,
         });
         Ok(())
     }
@@ -232,7 +237,7 @@ impl Lifecycle for NetworkTechnique {
             format!(
                 "network stats: memory {:.1} MB network + {:.1} MB buffers, {} map entries",
                 network.memory() as f64 / 1e6,
-                solution.memory() as f64 / 1e6,
+                (solution.memory() + p.corners.memory()) as f64 / 1e6,
                 st.map_entries,
             ),
             format!(
