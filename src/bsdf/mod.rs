@@ -19,7 +19,7 @@ mod microfacet;
 
 pub use microfacet::Ggx;
 
-use crate::math::optics::{fresnel_dielectric, refract};
+use crate::math::optics::{fresnel_dielectric, fresnel_dielectric_mean, refract};
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::math::{frame, luminance, Rgb, Vec2, Vec3};
 use crate::scene::Conductor;
@@ -136,6 +136,23 @@ impl Bsdf {
             Some(c) => self.kd + self.ks * c.reflectance(1.0) + self.kt,
             None => self.kd + self.ks + self.kt,
         }
+    }
+
+    /// What the coat lets through of diffuse light that arrives evenly from every direction
+    /// and leaves toward `wo`: (1 − F(θo)) times the cosine-weighted mean of 1 − F(θi) (the
+    /// diffuse lobe's factor (1 − F(θi))(1 − F(θo)) averaged over the incident light); 1
+    /// without a coat. Irradiance caches multiply their diffuse part by it.
+    pub fn diffuse_coat(&self, wo: Vec3) -> f32 {
+        if !self.fresnel {
+            return 1.0;
+        }
+        let lo = self.local(wo);
+        let eta = if lo.z >= 0.0 {
+            1.0 / self.ior
+        } else {
+            self.ior
+        };
+        (1.0 - fresnel_dielectric(lo.z.abs(), eta)) * (1.0 - fresnel_dielectric_mean(eta))
     }
 
     /// The shading normal, on the side the BSDF faces.

@@ -34,6 +34,31 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     0.5 * (rs * rs + rp * rp)
 }
 
+/// The cosine-weighted mean of a dielectric's Fresnel reflectance over the hemisphere,
+/// 2∫₀¹ F(μ) μ dμ (what the interface reflects of light arriving evenly from every
+/// direction), for `eta` = n_incident / n_transmitted, by the midpoint rule at 1024 points
+/// (within 1e-4 of the integral). The last value of each thread is kept: a scene asks for
+/// few etas.
+pub fn fresnel_dielectric_mean(eta: f32) -> f32 {
+    thread_local! {
+        static LAST: std::cell::Cell<(u32, f32)> = const { std::cell::Cell::new((u32::MAX, 0.0)) };
+    }
+    let (key, value) = LAST.get();
+    if key == eta.to_bits() {
+        return value;
+    }
+    const N: u32 = 1024;
+    let sum: f64 = (0..N)
+        .map(|i| {
+            let mu = (i as f32 + 0.5) / N as f32;
+            2.0 * (fresnel_dielectric(mu, eta) * mu) as f64
+        })
+        .sum();
+    let mean = (sum / N as f64) as f32;
+    LAST.set((eta.to_bits(), mean));
+    mean
+}
+
 /// Unpolarised Fresnel reflectance of a conductor (pbrt-v4's `FrComplex`) for the cosine
 /// `cos_i` of the incident angle and the complex index η + ik of the metal relative to the
 /// outside medium.
@@ -119,5 +144,36 @@ mod tests {
         let f0 = ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k);
         assert!((fresnel_complex(1.0, n, k) - f0).abs() < 1e-5);
         assert!((fresnel_complex(0.0, n, k) - 1.0).abs() < 1e-5);
+    }
+
+    /// The mean Fresnel reflectance against a fine integration, and against physics: an
+    /// interface lets through from inside what it lets through from outside divided by η²
+    /// (1 − F̄(η) = (1 − F̄(1/η)) / η²), and none of it at η = 1. Glass (1.5) from outside
+    /// reflects about 9.2% of even light.
+    #[test]
+    fn mean_fresnel_reflectance() {
+        for eta in [1.0f32 / 2.4, 1.0 / 1.5, 1.0 / 1.33, 1.33, 1.5, 2.4] {
+            let n = 1_000_000;
+            let fine: f64 = (0..n)
+                .map(|i| {
+                    let mu = (i as f64 + 0.5) / n as f64;
+                    2.0 * fresnel_dielectric(mu as f32, eta) as f64 * mu
+                })
+                .sum::<f64>()
+                / n as f64;
+            let mean = fresnel_dielectric_mean(eta) as f64;
+            assert!((mean - fine).abs() < 1e-4, "eta {eta}: {mean} vs {fine}");
+            if eta > 1.0 {
+                let outside = fresnel_dielectric_mean(1.0 / eta) as f64;
+                let through = (1.0 - outside) / (eta as f64 * eta as f64);
+                assert!(
+                    (1.0 - mean - through).abs() < 1e-3,
+                    "eta {eta}: {mean} vs {through}"
+                );
+            }
+        }
+        assert!(fresnel_dielectric_mean(1.0) < 1e-6);
+        let glass = fresnel_dielectric_mean(1.0 / 1.5);
+        assert!((glass - 0.092).abs() < 0.002, "{glass}");
     }
 }

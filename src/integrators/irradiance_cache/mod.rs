@@ -627,13 +627,13 @@ impl Walk<'_> {
             if direct {
                 l += sample_direct(ctx, &bsdf, sp, wo, u_choice, u_light, self.stats);
             }
-            // Indirect diffuse: ρ/π · E.
+            // Indirect diffuse: ρ/π · E, through a coat as for light arriving evenly.
             let kd = m.diffuse.eval(sp.p, sp.uv);
             if kd.max_element() > 0.0 {
                 let n = bsdf.shading_normal();
                 let ng = if sp.ng.dot(n) >= 0.0 { sp.ng } else { -sp.ng };
                 let e = self.indirect(sp.p, n, ng, level);
-                l += kd * FRAC_1_PI * e;
+                l += kd * (FRAC_1_PI * bsdf.diffuse_coat(wo)) * e;
             }
         }
         // One BSDF sample. A delta direction is a specular path, followed. A non-delta
