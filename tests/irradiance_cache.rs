@@ -153,6 +153,18 @@ fn sphere_means(file: &str, spheres: &[(&str, Vec3, f32)]) -> Vec<(String, [f32;
         .collect()
 }
 
+/// Each channel of each mean of the cache within `tolerance` of the path tracer's, relative.
+fn assert_means_within(means: Vec<(String, [f32; 3], [f32; 3])>, tolerance: f32) {
+    for (name, m, r) in means {
+        for c in 0..3 {
+            assert!(
+                (m[c] / r[c] - 1.0).abs() < tolerance,
+                "{name}: IC {m:?} vs path {r:?}"
+            );
+        }
+    }
+}
+
 /// The spheres of cornell-glossy.toml and cornell-coated.toml.
 const SPHERES: [Vec3; 2] = [Vec3::new(-0.5, 0.3, -0.4), Vec3::new(0.45, 0.35, -0.5)];
 const RADII: [f32; 2] = [0.3, 0.35];
@@ -171,14 +183,10 @@ fn glossy_spheres_against_path_tracer() {
         ("gold", SPHERES[0], RADII[0]),
         ("plastic", SPHERES[1], RADII[1]),
     ];
-    for (name, m, r) in sphere_means("tests/scenes/cornell-glossy.toml", &spheres) {
-        for c in 0..3 {
-            assert!(
-                (m[c] / r[c] - 1.0).abs() < 0.03,
-                "{name}: IC {m:?} vs path {r:?}"
-            );
-        }
-    }
+    assert_means_within(
+        sphere_means("tests/scenes/cornell-glossy.toml", &spheres),
+        0.03,
+    );
 }
 
 /// A coat lets diffuse light in and out at its Fresnel transmittance: in the Cornell box
@@ -193,14 +201,10 @@ fn coated_spheres_against_path_tracer() {
         ("smooth", SPHERES[0], RADII[0]),
         ("rough", SPHERES[1], RADII[1]),
     ];
-    for (name, m, r) in sphere_means("tests/scenes/cornell-coated.toml", &spheres) {
-        for c in 0..3 {
-            assert!(
-                (m[c] / r[c] - 1.0).abs() < 0.03,
-                "{name}: IC {m:?} vs path {r:?}"
-            );
-        }
-    }
+    assert_means_within(
+        sphere_means("tests/scenes/cornell-coated.toml", &spheres),
+        0.03,
+    );
 }
 
 /// The command line: a second view with --cache-file loads the values and computes none in
