@@ -229,7 +229,8 @@ fn sphere_on_plane_first_bounce(p: Vec3, n: Vec3, grid: u32) -> f64 {
 /// Section 4 of the paper: the first bounce on a sphere resting on a plane, against the
 /// quadrature above at the sphere points the camera sees (one per pixel). Direct light (a
 /// directional light) is exact in every integrator, so only the indirect irradiance is
-/// compared. Returns the mean relative error and the number of values cached.
+/// compared. Returns the mean relative error and the number of values cached, and prints
+/// them with the largest error on a line that `reproduce/ward.py` reads.
 fn sphere_on_plane_error(accuracy: f32, gradients: bool) -> (f64, usize) {
     let scene = Scene::load(&manifest("tests/scenes/sphere-on-plane.toml")).unwrap();
     let ic = IcOptions {
@@ -240,6 +241,7 @@ fn sphere_on_plane_error(accuracy: f32, gradients: bool) -> (f64, usize) {
         ..IcOptions::default()
     };
     let mut err = (0.0f64, 0usize);
+    let mut largest = 0.0f64;
     let run = render_ic(&scene, ic, &options(48, 48, 1, None), None, |ctx, integ| {
         let basis = scene.camera.basis();
         let mut stats = Default::default();
@@ -254,7 +256,9 @@ fn sphere_on_plane_error(accuracy: f32, gradients: bool) -> (f64, usize) {
                 }
                 let want = sphere_on_plane_first_bounce(sp.p, sp.ns, 256);
                 let got = integ.irradiance(ctx, sp.p, sp.ns)[0] as f64;
-                err.0 += ((got - want) / want).abs();
+                let e = ((got - want) / want).abs();
+                largest = largest.max(e);
+                err.0 += e;
                 err.1 += 1;
             }
         }
@@ -264,7 +268,13 @@ fn sphere_on_plane_error(accuracy: f32, gradients: bool) -> (f64, usize) {
         "only {} points on the sphere's underside",
         err.1
     );
-    (err.0 / err.1 as f64, run.records)
+    let mean = err.0 / err.1 as f64;
+    eprintln!(
+        "sphere on plane: a = {accuracy}, gradients {gradients}: mean error {mean:.5}, \
+         largest {largest:.5}, {} values, {} points",
+        run.records, err.1
+    );
+    (mean, run.records)
 }
 
 /// Without gradients (the 1988 method) the mean relative error grows with a (measured:

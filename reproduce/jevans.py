@@ -4,7 +4,7 @@ paper's figures. Renders the sequence with `raylink animate --verify` (every coh
 checked against its full render in the same run, which also gives the traditional
 algorithm's rays and CPU time), one ray per pixel as in the paper.
 
-  python3 scripts/table2.py [--raylink PATH] [--width 640 --height 480] [--frames A..B]
+  python3 reproduce/jevans.py [--raylink PATH] [--width 640 --height 480] [--frames A..B]
                             [--overhead-reps 5]
 
 The paper counted primary rays (one per pixel): its "# Rays" columns compare with the
