@@ -20,12 +20,11 @@
 use super::Spread;
 use crate::accel::{self, Backend};
 use crate::control::Control;
-use crate::integrators::illumination_network::corners::Corners;
 use crate::integrators::illumination_network::distribute::{
     distribute, DistributeOptions, Solution,
 };
 use crate::integrators::illumination_network::relight::LightBasis;
-use crate::integrators::illumination_network::render::NetworkRenderer;
+use crate::integrators::illumination_network::render::{NetworkRenderer, Tables};
 use crate::integrators::illumination_network::{file, Builder, Network, NetworkParams};
 use crate::integrators::Context;
 use crate::math::Rgb;
@@ -114,12 +113,12 @@ fn render_view(
     sol: &Solution,
     view: &PixelView,
 ) -> Result<RenderStats> {
-    let corners = Corners::new(net, sol, false);
+    let tables = Tables::new(net, sol, false);
     let renderer = NetworkRenderer {
         net,
         solution: sol,
         hybrid: false,
-        corners: Some(&corners),
+        tables: Some(&tables),
     };
     let whole = Tile::whole(view.width, view.height);
     Ok(render_pixels(ctx, &renderer, view, &whole, &Control::default())?.1)

@@ -10,12 +10,11 @@ use crate::control::Control;
 use crate::image::compare::{box_downsample, bright_mask, mean, rmse};
 use crate::image::filter::Filter;
 use crate::image::Image;
-use crate::integrators::illumination_network::corners::Corners;
 use crate::integrators::illumination_network::distribute::{
     distribute, DistributeOptions, Solution,
 };
 use crate::integrators::illumination_network::preprocess::Builder;
-use crate::integrators::illumination_network::render::NetworkRenderer;
+use crate::integrators::illumination_network::render::{NetworkRenderer, Tables};
 use crate::integrators::illumination_network::{Network, NetworkParams, NONE};
 use crate::integrators::path::{PathOptions, PathTracer};
 use crate::integrators::Context;
@@ -290,15 +289,16 @@ fn a_sealed_box_that_absorbs_no_light_is_refused_in_an_open_scene() {
     assert_eq!(lossless_channel(&net, &surfaces(&net, &g, 1.0)), None);
 }
 
-/// The network's image of `scene` (its own camera), rendered from the patches' corner
-/// values where the sides are diffuse and checked against the same image worked out pixel
-/// by pixel from the patches: the two are equal bit for bit.
+/// The network's image of `scene` (its own camera), rendered with the tables worked out
+/// once per solution (the diffuse sides' corner values, the slots' directions) and checked
+/// against the same image worked out pixel by pixel from the patches and the ray space: the
+/// two are equal bit for bit.
 fn network_image(scene: &Scene, p: NetworkParams, size: u32, hybrid: bool) -> Image {
     let accel = accel::build(scene, Backend::Embree, &Control::default()).unwrap();
     let ctx = Context::new(scene, accel.as_ref());
     let net = Network::build(scene, &ctx, p, Builder::Scan).unwrap();
     let sol = distribute(&net, scene, &DistributeOptions::default());
-    let corners = Corners::new(&net, &sol, hybrid);
+    let tables = Tables::new(&net, &sol, hybrid);
     let view = PixelView {
         width: size,
         height: size,
@@ -310,12 +310,12 @@ fn network_image(scene: &Scene, p: NetworkParams, size: u32, hybrid: bool) -> Im
         seed: 1,
     };
     let whole = Tile::whole(size, size);
-    let [fast, patches] = [Some(&corners), None].map(|corners| {
+    let [fast, patches] = [Some(&tables), None].map(|tables| {
         let renderer = NetworkRenderer {
             net: &net,
             solution: &sol,
             hybrid,
-            corners,
+            tables,
         };
         render_pixels(&ctx, &renderer, &view, &whole, &Control::default())
             .unwrap()
@@ -329,16 +329,16 @@ fn network_image(scene: &Scene, p: NetworkParams, size: u32, hybrid: bool) -> Im
     };
     assert!(
         bits(&fast) == bits(&patches),
-        "the corner values change the image"
+        "the render tables change the image"
     );
     fast
 }
 
-/// A box with a glossy and a mirror wall among diffuse ones: the directional sides are left
-/// to the per-pixel gather, the diffuse ones read their corners, and the image is the one
-/// worked out from the patches, bit for bit.
+/// A box with a glossy floor and a mirror panel among diffuse walls: the directional sides
+/// are left to the per-pixel gather (over the slot table), the diffuse ones read their
+/// corners, and the image is the one worked out from the patches, bit for bit.
 #[test]
-fn corner_values_leave_a_mixed_image_unchanged() {
+fn render_tables_leave_a_mixed_image_unchanged() {
     let mut text = closed_box_text(
         "[materials.m]\ndiffuse = [0.6, 0.5, 0.4]\n[materials.floor]\ndiffuse = 0.2\n\
          specular = 0.4\nroughness = 0.2\n[materials.mirror]\ndiffuse = 0\nspecular = 0.8\n\
@@ -353,7 +353,7 @@ fn corner_values_leave_a_mixed_image_unchanged() {
     let s = scene(&text);
     let net = build(&s, params(6, 1.0 / 16.0), Builder::Scan);
     let sol = distribute(&net, &s, &DistributeOptions::default());
-    let corners = Corners::new(&net, &sol, false);
+    let corners = Tables::new(&net, &sol, false).corners;
     let sides = 2 * net.patches.polygons.len() as u32;
     let with = (0..sides)
         .filter(|&k| corners.of_patch(&net, k / 2, k % 2, 0, 0).is_some())

@@ -44,7 +44,7 @@ mod solution;
 mod surfaces;
 mod sweeps;
 
-pub(crate) use maps::{candidates, local};
+pub(crate) use maps::{for_each_candidate, local};
 pub use solution::{DistributeStats, Solution};
 pub use surfaces::{lossless_channel, surfaces, surfaces_with, Surface};
 pub use sweeps::distribute_from;

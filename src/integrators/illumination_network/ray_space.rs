@@ -46,6 +46,47 @@ pub struct RaySpace {
     pub scale: f32,
 }
 
+/// Each slot's unit direction and étendue, worked out once for the renderer's gathers
+/// (the same values as [`RaySpace::direction_towards`] and [`RaySpace::etendue`]).
+pub struct SlotGeometry {
+    unit: Vec<Vec3>,
+    etendue: Vec<f32>,
+}
+
+impl SlotGeometry {
+    pub fn new(space: &RaySpace) -> SlotGeometry {
+        let slots = 0..space.slots() as u32;
+        SlotGeometry {
+            unit: slots
+                .clone()
+                .map(|l| space.direction(l).normalize())
+                .collect(),
+            etendue: slots.map(|l| space.etendue(l)).collect(),
+        }
+    }
+
+    /// [`RaySpace::direction_towards`]: the slot's unit direction into the hemisphere of `n`.
+    #[inline]
+    pub fn direction_towards(&self, slot: u32, n: Vec3) -> Vec3 {
+        let d = self.unit[slot as usize];
+        if d.dot(n) < 0.0 {
+            -d
+        } else {
+            d
+        }
+    }
+
+    #[inline]
+    pub fn etendue(&self, slot: u32) -> f32 {
+        self.etendue[slot as usize]
+    }
+
+    /// Bytes held.
+    pub fn memory(&self) -> usize {
+        self.unit.len() * std::mem::size_of::<Vec3>() + self.etendue.len() * 4
+    }
+}
+
 #[cfg(test)]
 /// One line of the grid.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]

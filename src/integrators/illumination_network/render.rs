@@ -13,7 +13,8 @@
 //! averages. The image is a pure function of the network, its solution and the camera.
 
 use super::corners::Corners;
-use super::distribute::{candidates, local, Solution};
+use super::distribute::{for_each_candidate, local, Solution};
+use super::ray_space::SlotGeometry;
 use super::{Network, ESCAPE, NONE};
 use crate::bsdf::Ggx;
 use crate::integrators::{Context, Integrator, RayStats, Sample};
@@ -26,9 +27,30 @@ pub struct NetworkRenderer<'a> {
     /// Hybrid mode: the diffuse reflection of light coming straight from the emitters is
     /// computed per pixel with a light sample and a shadow ray; the network gives the rest.
     pub hybrid: bool,
-    /// The corner values of the all-diffuse polygon sides (the same image, sooner), or
-    /// `None` to work every pixel out from the patches.
-    pub corners: Option<&'a Corners>,
+    /// What is worked out once per solution (the same image, sooner), or `None` to work
+    /// every pixel out from the patches and the ray space.
+    pub tables: Option<&'a Tables>,
+}
+
+/// What rendering works out once per solution: the corner values of the all-diffuse
+/// polygon sides and each slot's direction and étendue.
+pub struct Tables {
+    pub corners: Corners,
+    pub slots: SlotGeometry,
+}
+
+impl Tables {
+    pub fn new(net: &Network, solution: &Solution, hybrid: bool) -> Tables {
+        Tables {
+            corners: Corners::new(net, solution, hybrid),
+            slots: SlotGeometry::new(&net.space),
+        }
+    }
+
+    /// Bytes held.
+    pub fn memory(&self) -> usize {
+        self.corners.memory() + self.slots.memory()
+    }
 }
 
 impl NetworkRenderer<'_> {
@@ -117,18 +139,19 @@ impl NetworkRenderer<'_> {
         } else {
             let radius = ((3.0 * alpha * space.slopes as f32 / 2.0).ceil() as i64 + 1)
                 .min(space.slopes as i64);
-            let mut buf = Vec::new();
-            candidates(space, centre, radius, &mut buf);
-            for l in buf {
+            for_each_candidate(space, centre, radius, |l| {
                 if links[l as usize] < ESCAPE {
-                    let wi = space.direction_towards(l, n);
-                    let wgt = lobe(wi) * space.etendue(l);
+                    let (wi, etendue) = match self.tables {
+                        Some(t) => (t.slots.direction_towards(l, n), t.slots.etendue(l)),
+                        None => (space.direction_towards(l, n), space.etendue(l)),
+                    };
+                    let wgt = lobe(wi) * etendue;
                     if wgt > 0.0 && wgt.is_finite() {
                         sum += row[l as usize] * wgt;
                         wsum += wgt;
                     }
                 }
-            }
+            });
         }
         if wsum > 0.0 {
             sum / wsum
@@ -152,8 +175,8 @@ impl NetworkRenderer<'_> {
         );
         let (fx, fy) = (x - i as f32, y - j as f32);
         if let Some(c) = self
-            .corners
-            .and_then(|c| c.of_patch(self.net, poly, side, i as u32, j as u32))
+            .tables
+            .and_then(|t| t.corners.of_patch(self.net, poly, side, i as u32, j as u32))
         {
             return bilinear([[c[0], c[1]], [c[2], c[3]]], fx, fy);
         }

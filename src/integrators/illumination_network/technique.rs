@@ -3,9 +3,8 @@
 //! light is distributed over it; a relight starts from the file's light basis or reflectance
 //! series where it can (no distribution at all). Renders of any view then read it.
 
-use super::corners::Corners;
 use super::distribute::{self, DistributeOptions, Solution};
-use super::render::NetworkRenderer;
+use super::render::{NetworkRenderer, Tables};
 use super::{file, relight, Network, NetworkParams};
 use crate::control::Control;
 use crate::integrators::lifecycle::{Lifecycle, Tiles, View};
@@ -29,7 +28,7 @@ struct Prepared {
     net: Network,
     solution: Solution,
     hybrid: bool,
-    corners: Corners,
+    tables: Tables,
 }
 
 impl Integrator for Prepared {
@@ -38,7 +37,7 @@ impl Integrator for Prepared {
             net: &self.net,
             solution: &self.solution,
             hybrid: self.hybrid,
-            corners: Some(&self.corners),
+            tables: Some(&self.tables),
         }
         .radiance(ctx, ray, rng, stats)
     }
@@ -181,7 +180,7 @@ impl Lifecycle for NetworkTechnique {
         };
         let hybrid = self.settings.hybrid;
         self.prepared = Some(Prepared {
-            corners: Corners::new(&net, &solution, hybrid),
+            tables: Tables::new(&net, &solution, hybrid),
             net,
             solution,
             hybrid,
@@ -237,7 +236,7 @@ impl Lifecycle for NetworkTechnique {
             format!(
                 "network stats: memory {:.1} MB network + {:.1} MB buffers, {} map entries",
                 network.memory() as f64 / 1e6,
-                (solution.memory() + p.corners.memory()) as f64 / 1e6,
+                (solution.memory() + p.tables.memory()) as f64 / 1e6,
                 st.map_entries,
             ),
             format!(

@@ -19,10 +19,16 @@ pub struct SparseMap {
 /// `dir`'s slope coordinates in each family whose slope range it is near.
 pub(crate) fn candidates(space: &RaySpace, dir: Vec3, radius: i64, out: &mut Vec<u32>) {
     out.clear();
+    for_each_candidate(space, dir, radius, |l| out.push(l));
+}
+
+/// [`candidates`], one at a time and in the same order, without a list.
+#[inline]
+pub(crate) fn for_each_candidate(space: &RaySpace, dir: Vec3, radius: i64, mut f: impl FnMut(u32)) {
     let s = space.slopes as i64;
     let margin = (radius + 1) as f32 * space.slope_step();
-    for f in 0..3u32 {
-        let (a, u, v) = axes(f);
+    for family in 0..3u32 {
+        let (a, u, v) = axes(family);
         if dir[a].abs() < 1e-6 {
             continue;
         }
@@ -36,7 +42,7 @@ pub(crate) fn candidates(space: &RaySpace, dir: Vec3, radius: i64, out: &mut Vec
         );
         for ku in (cu - radius).max(0)..=(cu + radius).min(s - 1) {
             for kv in (cv - radius).max(0)..=(cv + radius).min(s - 1) {
-                out.push(space.slot(f, ku as u32, kv as u32));
+                f(space.slot(family, ku as u32, kv as u32));
             }
         }
     }
