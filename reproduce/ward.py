@@ -4,10 +4,12 @@ section 4's validation, a sphere resting on a plane under a parallel light, the 
 on the sphere's underside computed by the cache against a quadrature of the exact
 integral, for several accuracies a, without gradients (the 1988 method) and with Ward &
 Heckbert's gradients. The paper found the mean error about a fourth and the largest about
-twice the split sphere's estimate 1.4a, growing linearly with a. Prints a Markdown table
-(docs/reproductions.md holds its output).
+twice the split sphere's estimate 1.4a, growing linearly with a. Then the paper's figure
+5a and 5b in a room lit only by the bounce of an uplight (scenes/indirect-room.toml): the
+image, and the same image with the first-bounce values the camera sees marked in red
+(--show-cache-points). Prints Markdown tables (docs/reproductions.md holds their output).
 
-  python3 reproduce/ward.py
+  python3 reproduce/ward.py [--raylink PATH] [--out DIR]
 
 Runs the library's tests that measure it (src/tests/irradiance_cache.rs,
 `sphere_on_plane_matches_quadrature` and `gradients_lower_the_error_for_the_values_cached`)
@@ -18,12 +20,33 @@ import re
 import subprocess
 import sys
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+from common import ROOT, image_args
 LINE = re.compile(r'sphere on plane: a = ([\d.]+), gradients (true|false): mean error ([\d.]+), '
                   r'largest ([\d.]+), (\d+) values, (\d+) points')
 
 
+def room(raylink, out):
+    """Figure 5a and 5b: the room's image and its cache points; returns the overture's line."""
+    overture = None
+    for name, extra in [('repro-ward-room.png', []),
+                        ('repro-ward-room-points.png', ['--show-cache-points'])]:
+        image = os.path.join(out, name)
+        cmd = [raylink, 'render', 'scenes/indirect-room.toml', '-o', image] + extra
+        run = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
+        if run.returncode != 0:
+            sys.exit(f"{' '.join(cmd)} failed:\n{run.stderr}")
+        m = re.search(r'overture: (\d+) values .*?per bounce level: \[([\d, ]+)\] \(([\d.]+) s\)',
+                      run.stderr)
+        marked = re.search(r'marked (\d+) irradiance cache values', run.stderr)
+        overture = overture or m
+        print(f'{os.path.relpath(image, ROOT)}', file=sys.stderr)
+    if not overture or not marked:
+        sys.exit(f'no overture or marked values in the output of {cmd}:\n{run.stderr}')
+    return overture, int(marked[1])
+
+
 def main():
+    args = image_args(__doc__)
     cmd = ['cargo', 'test', '--quiet', '--release', '--lib', '--',
            'sphere_on_plane_matches_quadrature', 'gradients_lower_the_error_for_the_values_cached',
            '--nocapture', '--test-threads', '1']
@@ -48,6 +71,13 @@ def main():
               f'| {cell(True)} |')
     print(f'\nErrors relative to the quadrature at {points} points of the sphere\'s underside, '
           '2048 rays a value, one bounce.')
+    overture, marked = room(args.raylink, args.out)
+    print('\n| the room (320x240, 7 bounces, a = 0.25, 2048 rays a first-bounce value) | raylink |')
+    print('|---|---|')
+    print(f'| values computed | {overture[1]} |')
+    print(f'| per bounce, first to last | {overture[2]} |')
+    print(f'| first-bounce values the camera sees (marked) | {marked} |')
+    print(f'| time to compute them (the overture) | {float(overture[3]):.1f} s |')
 
 
 if __name__ == '__main__':
