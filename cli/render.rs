@@ -122,11 +122,19 @@ fn aov_paths(first: &std::path::Path) -> Vec<PathBuf> {
 
 /// Loads the scene and prints what its reader replaced.
 pub fn load_scene(path: &std::path::Path, control: &Control) -> Result<Scene, Error> {
-    let scene = Scene::load_with(path, control)?;
+    load_scene_and_animation(path, control).map(|(scene, _)| scene)
+}
+
+/// [`load_scene`], and the keyframes of a native TOML scene that has them, from one reading.
+pub fn load_scene_and_animation(
+    path: &std::path::Path,
+    control: &Control,
+) -> Result<(Scene, Option<raylink::scene::animation::Animation>), Error> {
+    let (scene, animation) = Scene::load_with_animation(path, control)?;
     for w in &scene.warnings {
         eprintln!("warning: {w}");
     }
-    Ok(scene)
+    Ok((scene, animation))
 }
 
 /// What every render records in its images.

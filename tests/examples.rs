@@ -62,3 +62,20 @@ fn network_relight_renders_two_views_and_doubles_the_lamp() {
     assert!((ratio - 2.0).abs() < 1e-3, "{out}");
     assert!(number(&out, "side ") != number(&out, "front "), "{out}");
 }
+
+#[test]
+fn flux_agreement_finds_gathering_and_shooting_alike() {
+    let scene = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/cornell-spheres.toml");
+    let out = run("flux_agreement", &[scene, "20000"]);
+    // Three sets, each with a positive flux both ways within 4 standard errors.
+    let rows: Vec<&str> = out.lines().filter(|l| l.contains(" ± ")).collect();
+    assert_eq!(rows.len(), 3, "{out}");
+    for row in rows {
+        let cells: Vec<&str> = row.split('|').map(str::trim).collect();
+        let sigmas: f64 = cells[4].parse().unwrap_or_else(|_| panic!("{row}"));
+        assert!(sigmas < 4.0, "{row}");
+        for estimate in &cells[2..4] {
+            assert!(number(estimate, "") > 0.0, "{row}");
+        }
+    }
+}

@@ -117,7 +117,7 @@ pub fn run(cli: &Cli, args: ServeArgs) -> Result<(), Failure> {
         .into());
     }
     let control = cli.control(true, args.max_memory.as_deref())?;
-    let scene = render::load_scene(&args.scene, &control)?;
+    let (scene, animation) = render::load_scene_and_animation(&args.scene, &control)?;
     let mut job = options::job(&args, &scene, Settings::default())?;
     // The network's relights read its file: without --network-file, one for this run.
     let mut temporary = None;
@@ -163,13 +163,9 @@ pub fn run(cli: &Cli, args: ServeArgs) -> Result<(), Failure> {
         .local_addr()
         .map_err(|e| Error::Invalid(format!("the listening socket: {e}")))?;
     // A keyframed scene gets a frame slider.
-    let frames = if args.scene.extension().is_some_and(|e| e == "toml") {
-        Some(raylink::scene::animation::Animation::read(&args.scene)?)
-            .filter(|a| a.is_animated())
-            .map(|a| frames::Frames::new(a, &job))
-    } else {
-        None
-    };
+    let frames = animation
+        .filter(|a| a.is_animated())
+        .map(|a| frames::Frames::new(a, &job));
     let scene = Arc::new(scene);
     let renderer = Renderer::new(scene.clone(), job.clone(), &control)?;
     let scene_name = args.scene.display().to_string();

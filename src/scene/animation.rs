@@ -17,15 +17,21 @@ use toml::{Table, Value};
 /// Reads a native TOML scene; an animated one gives its first frame (so `raylink render`
 /// renders the first frame of an animation).
 pub fn read_first_frame(path: &Path, control: &Control) -> Result<Scene> {
+    read_with_animation(path, control).map(|(scene, _)| scene)
+}
+
+/// Reads a native TOML scene once: the scene (an animated one's first frame) and, if the
+/// file has keyframes or an `[animation]` table, its [`Animation`].
+pub fn read_with_animation(path: &Path, control: &Control) -> Result<(Scene, Option<Animation>)> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     control.cancel.check("reading the scene")?;
     let doc = Document::parse_with(&text, path, Some(control))?;
     // Static files go straight to the reader, so its messages keep their line numbers.
     if !is_animation(doc.root()) {
-        return doc.build();
+        return Ok((doc.build()?, None));
     }
     let anim = Animation::from_document(doc)?;
-    anim.scene_at(anim.start)
+    Ok((anim.scene_at(anim.start)?, Some(anim)))
 }
 
 /// Whether a parsed scene file is an animation: it has a top-level `animation` key (the

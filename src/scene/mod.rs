@@ -110,10 +110,19 @@ impl Scene {
     /// against it ([`Error::Memory`](crate::Error::Memory)). A pbrt scene's text has fixed
     /// limits besides ([`pbrt::MAX_SCENE_TEXT`], [`pbrt::MAX_INCLUDES`]).
     pub fn load_with(path: &Path, control: &crate::control::Control) -> crate::Result<Scene> {
+        Scene::load_with_animation(path, control).map(|(scene, _)| scene)
+    }
+
+    /// [`Scene::load_with`], and the keyframes of a native TOML scene that has them, from
+    /// one reading of the file.
+    pub fn load_with_animation(
+        path: &Path,
+        control: &crate::control::Control,
+    ) -> crate::Result<(Scene, Option<animation::Animation>)> {
         let phase = control.phase("reading", None, "");
-        let scene = match path.extension().and_then(|e| e.to_str()) {
-            Some("toml") => animation::read_first_frame(path, control),
-            Some("pbrt") => pbrt::read(path, control),
+        let (scene, animation) = match path.extension().and_then(|e| e.to_str()) {
+            Some("toml") => animation::read_with_animation(path, control),
+            Some("pbrt") => pbrt::read(path, control).map(|s| (s, None)),
             _ => Err(crate::Error::input(
                 path,
                 "unknown scene format: expected a .toml or .pbrt scene file",
@@ -125,6 +134,6 @@ impl Scene {
             scene.shapes.len(),
             scene.primitive_count()
         ));
-        Ok(scene)
+        Ok((scene, animation))
     }
 }
