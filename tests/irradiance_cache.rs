@@ -116,9 +116,16 @@ fn outside_sphere(scene: &Scene, center: Vec3, radius: f32) -> Vec<bool> {
         .collect()
 }
 
-/// The means of the irradiance cache's and the path tracer's pixels over each sphere
-/// (name, centre, radius) of the 128x128 scene `file`, the path tracer at 128 spp.
-fn sphere_means(file: &str, spheres: &[(&str, Vec3, f32)]) -> Vec<(String, [f32; 3], [f32; 3])> {
+/// The spheres of cornell-glossy.toml and cornell-coated.toml: centre and radius.
+const SPHERES: [(Vec3, f32); 2] = [
+    (Vec3::new(-0.5, 0.3, -0.4), 0.3),
+    (Vec3::new(0.45, 0.35, -0.5), 0.35),
+];
+
+/// Renders the 128x128 scene `file` (one of the two above) with the cache and with the path
+/// tracer at 128 spp, and checks each channel of the cache's mean over each sphere (named
+/// `names`) within `tolerance` of the path tracer's, relative.
+fn assert_sphere_means_within(file: &str, names: [&str; 2], tolerance: f32) {
     let scene = Scene::load(&manifest(file)).unwrap();
     let ic = Technique::create(&Settings {
         integrator: Some(TechniqueKind::IrradianceCache),
@@ -139,35 +146,21 @@ fn sphere_means(file: &str, spheres: &[(&str, Vec3, f32)]) -> Vec<(String, [f32;
     });
     let (pt_image, _) = render(&scene, pt);
     eprintln!("{file}: {}", report.join("; "));
-    spheres
-        .iter()
-        .map(|&(name, center, radius)| {
-            let outside = outside_sphere(&scene, center, radius);
-            let (m, r) = (
-                mean(&ic_image, Some(&outside)),
-                mean(&pt_image, Some(&outside)),
-            );
-            eprintln!("{name}: IC mean {m} vs path {r} (ratio {})", m / r);
-            (name.to_string(), m.to_array(), r.to_array())
-        })
-        .collect()
-}
-
-/// Each channel of each mean of the cache within `tolerance` of the path tracer's, relative.
-fn assert_means_within(means: Vec<(String, [f32; 3], [f32; 3])>, tolerance: f32) {
-    for (name, m, r) in means {
+    for (name, (center, radius)) in names.into_iter().zip(SPHERES) {
+        let outside = outside_sphere(&scene, center, radius);
+        let (m, r) = (
+            mean(&ic_image, Some(&outside)),
+            mean(&pt_image, Some(&outside)),
+        );
+        eprintln!("{name}: IC mean {m} vs path {r} (ratio {})", m / r);
         for c in 0..3 {
             assert!(
                 (m[c] / r[c] - 1.0).abs() < tolerance,
-                "{name}: IC {m:?} vs path {r:?}"
+                "{name}: IC {m} vs path {r}"
             );
         }
     }
 }
-
-/// The spheres of cornell-glossy.toml and cornell-coated.toml.
-const SPHERES: [Vec3; 2] = [Vec3::new(-0.5, 0.3, -0.4), Vec3::new(0.45, 0.35, -0.5)];
-const RADII: [f32; 2] = [0.3, 0.35];
 
 /// Glossy surfaces reflect indirect light: in a Cornell box with a rough gold sphere (GGX
 /// alone) and a blue plastic one (Lambertian and GGX), mostly lit by the walls they
@@ -179,12 +172,9 @@ const RADII: [f32; 2] = [0.3, 0.35];
 /// (plastic, red) below the path tracer.
 #[test]
 fn glossy_spheres_against_path_tracer() {
-    let spheres = [
-        ("gold", SPHERES[0], RADII[0]),
-        ("plastic", SPHERES[1], RADII[1]),
-    ];
-    assert_means_within(
-        sphere_means("tests/scenes/cornell-glossy.toml", &spheres),
+    assert_sphere_means_within(
+        "tests/scenes/cornell-glossy.toml",
+        ["gold", "plastic"],
         0.03,
     );
 }
@@ -197,12 +187,9 @@ fn glossy_spheres_against_path_tracer() {
 /// it: within 1%, at seed 3).
 #[test]
 fn coated_spheres_against_path_tracer() {
-    let spheres = [
-        ("smooth", SPHERES[0], RADII[0]),
-        ("rough", SPHERES[1], RADII[1]),
-    ];
-    assert_means_within(
-        sphere_means("tests/scenes/cornell-coated.toml", &spheres),
+    assert_sphere_means_within(
+        "tests/scenes/cornell-coated.toml",
+        ["smooth", "rough"],
         0.03,
     );
 }

@@ -147,11 +147,7 @@ impl Bsdf {
             return 1.0;
         }
         let lo = self.local(wo);
-        let eta = if lo.z >= 0.0 {
-            1.0 / self.ior
-        } else {
-            self.ior
-        };
+        let eta = self.eta_leaving(lo);
         (1.0 - fresnel_dielectric(lo.z.abs(), eta)) * (1.0 - fresnel_dielectric_mean(eta))
     }
 
@@ -160,9 +156,18 @@ impl Bsdf {
         self.n
     }
 
+    /// n_incident / n_transmitted for light leaving along local direction `lo`'s side: from
+    /// outside (the side of `ng`) 1/ior, from inside ior.
+    fn eta_leaving(&self, lo: Vec3) -> f32 {
+        if lo.z >= 0.0 {
+            1.0 / self.ior
+        } else {
+            self.ior
+        }
+    }
+
     fn lobes(&self, lo: Vec3) -> Lobes {
-        let outside = lo.z >= 0.0;
-        let eta = if outside { 1.0 / self.ior } else { self.ior };
+        let eta = self.eta_leaving(lo);
         let f = if self.fresnel {
             fresnel_dielectric(lo.z.abs(), eta)
         } else {
@@ -248,11 +253,7 @@ impl Bsdf {
         if lo.z * go <= 0.0 || li.z * gi <= 0.0 {
             return None;
         }
-        let eta = if lo.z >= 0.0 {
-            1.0 / self.ior
-        } else {
-            self.ior
-        };
+        let eta = self.eta_leaving(lo);
         if lo.z < 0.0 {
             // Seen from inside a transmissive surface: mirror both to the upper side.
             lo = -lo;

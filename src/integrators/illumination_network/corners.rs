@@ -8,6 +8,7 @@
 //! directional node is left to the per-pixel gather (its corners depend on the eye).
 
 use super::distribute::Solution;
+use super::render::diffuse_radiance;
 use super::{Network, NONE};
 use crate::math::Rgb;
 
@@ -32,7 +33,7 @@ impl Corners {
             for side in 0..2u32 {
                 let cells = pg.first_cell..pg.first_cell + pg.ns * pg.nt;
                 let node = |cell: u32| net.node_of_key[(cell * 2 + side) as usize];
-                let mut nodes = cells.clone().map(node).filter(|&n| n != NONE).peekable();
+                let mut nodes = cells.map(node).filter(|&n| n != NONE).peekable();
                 let any = nodes.peek().is_some();
                 if !any || nodes.any(|n| solution.dir_index[n as usize] != NONE) {
                     continue;
@@ -41,13 +42,6 @@ impl Corners {
                     return Corners { first, values };
                 };
                 first[p * 2 + side as usize] = start;
-                let radiance = |n: u32| {
-                    let mut r = solution.diffuse[n as usize];
-                    if hybrid {
-                        r -= solution.direct[n as usize];
-                    }
-                    r
-                };
                 for i in 0..=pg.ns as i64 {
                     for j in 0..=pg.nt as i64 {
                         let mut sum = Rgb::ZERO;
@@ -60,7 +54,7 @@ impl Corners {
                                 let cell = pg.first_cell + ci as u32 * pg.nt + cj as u32;
                                 let nd = node(cell);
                                 if nd != NONE {
-                                    sum += radiance(nd);
+                                    sum += diffuse_radiance(solution, nd, hybrid);
                                     n += 1;
                                 }
                             }

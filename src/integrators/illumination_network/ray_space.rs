@@ -46,6 +46,16 @@ pub struct RaySpace {
     pub scale: f32,
 }
 
+/// `d` or −d, whichever lies in the hemisphere of `n`.
+#[inline]
+fn towards(d: Vec3, n: Vec3) -> Vec3 {
+    if d.dot(n) < 0.0 {
+        -d
+    } else {
+        d
+    }
+}
+
 /// Each slot's unit direction and étendue, worked out once for the renderer's gathers
 /// (the same values as [`RaySpace::direction_towards`] and [`RaySpace::etendue`]).
 pub struct SlotGeometry {
@@ -68,12 +78,7 @@ impl SlotGeometry {
     /// [`RaySpace::direction_towards`]: the slot's unit direction into the hemisphere of `n`.
     #[inline]
     pub fn direction_towards(&self, slot: u32, n: Vec3) -> Vec3 {
-        let d = self.unit[slot as usize];
-        if d.dot(n) < 0.0 {
-            -d
-        } else {
-            d
-        }
+        towards(self.unit[slot as usize], n)
     }
 
     #[inline]
@@ -230,12 +235,7 @@ impl RaySpace {
 
     /// The unit direction of a slot oriented into the hemisphere of `n`.
     pub fn direction_towards(&self, slot: u32, n: Vec3) -> Vec3 {
-        let d = self.direction(slot).normalize();
-        if d.dot(n) < 0.0 {
-            -d
-        } else {
-            d
-        }
+        towards(self.direction(slot).normalize(), n)
     }
 
     /// The family of a direction and its continuous slope coordinates (s_u, s_v) in [−1, 1].

@@ -65,10 +65,7 @@ impl NetworkRenderer<'_> {
     /// happen to have links, a blotchy pattern; the gather only averages over them.
     fn node_radiance(&self, node: u32, wo: Vec3) -> Rgb {
         let sol = self.solution;
-        let mut r = sol.diffuse[node as usize];
-        if self.hybrid {
-            r -= sol.direct[node as usize];
-        }
+        let mut r = diffuse_radiance(sol, node, self.hybrid);
         let k = sol.dir_index[node as usize];
         if k == NONE {
             return r;
@@ -213,6 +210,17 @@ impl NetworkRenderer<'_> {
             fy,
         )
     }
+}
+
+/// A node's diffuse radiance (the same toward every direction): its out-buffer, without
+/// the direct light in hybrid mode (added per pixel there).
+#[inline]
+pub(super) fn diffuse_radiance(solution: &Solution, node: u32, hybrid: bool) -> Rgb {
+    let mut r = solution.diffuse[node as usize];
+    if hybrid {
+        r -= solution.direct[node as usize];
+    }
+    r
 }
 
 /// The bilinear interpolation of a patch's corners at (fx, fy), over the corners that have
