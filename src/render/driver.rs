@@ -91,6 +91,7 @@ where
     let (send, receive) = mpsc::channel::<(usize, R)>();
     let mut merged = 0;
     std::thread::scope(|scope| {
+        let mut workers = 0;
         for _ in 0..worker_count(threads, n) {
             let send = send.clone();
             let (next, merged_count, advanced, failed, stopped, work) =
@@ -100,7 +101,12 @@ where
                     || failed.load(Ordering::Relaxed)
                     || stopped.load(Ordering::Relaxed)
             };
-            scope.spawn(move || {
+            // A thread the system refuses (no memory for its stack, too many threads) is
+            // one worker fewer: the results do not depend on how many there are.
+            if spawn_refused(workers) {
+                break;
+            }
+            let spawned = std::thread::Builder::new().spawn_scoped(scope, move || {
                 set_flush_denormals();
                 let _alarm = Alarm { failed, advanced };
                 loop {
@@ -128,8 +134,27 @@ where
                     }
                 }
             });
+            if spawned.is_err() {
+                break;
+            }
+            workers += 1;
         }
         drop(send);
+        if workers == 0 {
+            // Not one thread: the work and the merge on this one, in order.
+            for i in 0..n {
+                if cancel.is_cancelled() {
+                    break;
+                }
+                let flow = merge(i, work(i));
+                merged += 1;
+                if flow == Merge::Stop {
+                    stopped.store(true, Ordering::Relaxed);
+                    break;
+                }
+            }
+            return;
+        }
         // Results that arrived before their predecessors, by index - merged.
         let mut waiting: VecDeque<Option<R>> = VecDeque::new();
         'receive: for (i, r) in receive.iter() {
@@ -159,6 +184,26 @@ where
         merged,
         cancelled: merged < n && !stopped.load(Ordering::Relaxed),
     }
+}
+
+#[cfg(test)]
+thread_local! {
+    /// Tests: how many workers a drive on this thread may start before the system is made to
+    /// refuse the next (`None`: no limit).
+    static SPAWNS_ALLOWED: std::cell::Cell<Option<usize>> = const { std::cell::Cell::new(None) };
+}
+
+/// Whether to act as if the system refused worker number `started` (tests only).
+fn spawn_refused(started: usize) -> bool {
+    #[cfg(test)]
+    if SPAWNS_ALLOWED
+        .get()
+        .is_some_and(|allowed| started >= allowed)
+    {
+        return true;
+    }
+    let _ = started;
+    false
 }
 
 /// Wakes the other workers if this one unwinds, so that none waits for its item forever.
@@ -208,6 +253,36 @@ mod tests {
                 let expected: Vec<_> = (0..500).map(|i| (i as usize, i * i)).collect();
                 assert_eq!(seen, expected, "{threads} threads, window {window}");
             }
+        }
+    }
+
+    /// Threads the system refuses: with one worker of four the drive goes on with it, with
+    /// none the calling thread does the work; either way every item is merged in order.
+    #[test]
+    fn threads_the_system_refuses_leave_fewer_workers() {
+        let items: Vec<u64> = (0..300).collect();
+        for allowed in [0, 1] {
+            SPAWNS_ALLOWED.set(Some(allowed));
+            let mut seen = Vec::new();
+            let d = drive(
+                &items,
+                Some(4),
+                8,
+                &CancelToken::new(),
+                |&x| x * 3,
+                |i, r| seen.push((i, r)),
+            );
+            SPAWNS_ALLOWED.set(None);
+            assert_eq!(
+                d,
+                Driven {
+                    merged: 300,
+                    cancelled: false
+                },
+                "{allowed} allowed"
+            );
+            let expected: Vec<_> = (0..300).map(|i| (i as usize, i * 3)).collect();
+            assert_eq!(seen, expected, "{allowed} allowed");
         }
     }
 
