@@ -17,7 +17,7 @@
 //! stored hit; with Embree, which cannot start a traversal part-way, the whole query goes).
 
 use super::grid::ActiveVoxels;
-use super::segments::{BlockSegments, Quantiser};
+use super::segments::{BlockSegments, Point16, Quantiser};
 use super::tables::{Table, VoxelTables};
 use crate::accel::{Accel, Hit};
 use crate::math::{Ray, Vec3};
@@ -88,10 +88,7 @@ impl Recorded {
     fn take(&mut self) -> Recorded {
         let room = |n: usize| n + n / 4;
         let next = Recorded {
-            segments: BlockSegments::with_capacity(
-                room(self.segments.surface.len()),
-                room(self.segments.shadow.len()),
-            ),
+            segments: BlockSegments::with_room_of(&self.segments),
             camera: Vec::with_capacity(room(self.camera.len())),
             ..Recorded::new()
         };
@@ -169,6 +166,14 @@ pub struct RecordingAccel<'a> {
     /// The scene's point lights: their bit in `lights` and their position; all their bits.
     point_lights: Vec<(u64, Vec3A)>,
     point_bits: u64,
+    /// The point lights' positions on the segments' lattice, packed: a shadow segment that
+    /// ends at one is kept by its start in that light's list.
+    light_ends: Vec<u64>,
+}
+
+/// A lattice point in one word, to compare in one instruction.
+fn packed(p: Point16) -> u64 {
+    u64::from(p[0]) | u64::from(p[1]) << 16 | u64::from(p[2]) << 32
 }
 
 fn mark(set: &[AtomicU64], v: usize) {
@@ -217,12 +222,16 @@ impl<'a> RecordingAccel<'a> {
                 _ => None,
             })
             .collect();
+        let quantiser = Quantiser::new(&voxels.fine);
+        let light_ends = (point_lights.iter())
+            .map(|&(_, p)| packed(quantiser.encode(p)))
+            .collect();
         RecordingAccel {
             inner,
             scene,
             voxels,
             records,
-            quantiser: Quantiser::new(&voxels.fine),
+            quantiser,
             surface: zeros(),
             shadow: zeros(),
             serial,
@@ -237,6 +246,7 @@ impl<'a> RecordingAccel<'a> {
             lights: AtomicU64::new(0),
             point_bits: point_lights.iter().fold(0, |m, l| m | l.0),
             point_lights,
+            light_ends,
         }
     }
 
@@ -333,6 +343,27 @@ impl<'a> RecordingAccel<'a> {
         let q = &self.quantiser;
         let s = [q.encode(a), q.encode(b)];
         self.with_lists(|list| list.segments.push(table, s));
+    }
+
+    /// Records the shadow segment `origin + t·dir`, `t ∈ [t0, t1]`. With segments, one that
+    /// is a segment towards a point (`whole`: t1 is the ray's end, at most 1) is kept to
+    /// t = 1, the point itself: a little longer than traced (a conservative record), and
+    /// when that point is a light's, by its start in the light's list (half the memory).
+    #[inline(never)]
+    fn keep_shadow(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32, whole: bool) {
+        if self.records == Records::Tables || !whole || t1 > 1.0 {
+            return self.record(Table::Shadow, origin, dir, t0, t1);
+        }
+        let Some([a, b]) = self.voxels.clip_segment(origin, dir, t0, 1.0) else {
+            return;
+        };
+        let q = &self.quantiser;
+        let s = [q.encode(a), q.encode(b)];
+        let light = self.light_ends.iter().position(|&e| e == packed(s[1]));
+        self.with_lists(|list| match light {
+            Some(slot) => list.segments.push_to_end(slot, s[1], s[0]),
+            None => list.segments.push(Table::Shadow, s),
+        });
     }
 
     /// What was recorded: the segments (sealed), the camera hits, whether any ray found a
@@ -485,7 +516,63 @@ impl Accel for RecordingAccel<'_> {
             LAST.set(Some((*ray, hit)));
             LAST_OWNER.set(self.serial);
         }
-        self.record(Table::Shadow, ray.origin, ray.dir, ray.tmin, end);
+        self.keep_shadow(ray.origin, ray.dir, ray.tmin, end, end == ray.tmax);
         blocked
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::accel::{self, Backend};
+    use crate::coherence::grid::Grid;
+    use crate::control::Control;
+    use crate::scene::animation::Animation;
+    use crate::tests::coherence_scenes::{animated, MOVING};
+    use std::path::Path;
+
+    /// A shadow ray to a point light is kept by its start in the light's list, reaching the
+    /// light (not stopping short of it as traced); one stopped at an opaque blocker, and one
+    /// that goes to no light, are kept whole, as traced.
+    #[test]
+    fn shadow_segments_to_a_point_light_are_kept_to_the_light() {
+        let scene = Animation::from_str(&animated("", MOVING), Path::new("t.toml"))
+            .unwrap()
+            .scene_at(0)
+            .unwrap();
+        let accel = accel::build(&scene, Backend::Embree, &Control::default()).unwrap();
+        let light = match scene.lights[0] {
+            Light::Point { position, .. } => position,
+            _ => unreachable!("the scene's light is a point light"),
+        };
+        let (lo, hi) = scene.bounds().unwrap();
+        let voxels = ActiveVoxels::all(Grid::new(lo.min(light), hi.max(light), [8, 8, 8]));
+        let q = Quantiser::new(&voxels.fine);
+        let near = |a: Vec3, b: Vec3| (a - b).abs().max_element() <= q.error();
+        let recorder =
+            RecordingAccel::new(accel.as_ref(), &scene, &voxels, true, Records::Segments);
+        // From the lit floor to the light, from below the floor to the light (the floor
+        // blocks it), and from the floor to a point that is no light.
+        let lit = Vec3::new(2.0, 1e-3, 2.0);
+        let below = Vec3::new(2.0, -1.0, 2.0);
+        assert!(!recorder.occluded(&Ray::segment(lit, light)));
+        assert!(recorder.occluded(&Ray::segment(below, light)));
+        recorder.occluded(&Ray::segment(lit, Vec3::new(3.0, 2.0, 1.0)));
+        let recorded = recorder.finish();
+        let s = &recorded.segments;
+        assert_eq!(recorded.lights, 1);
+        assert_eq!(s.to_end.len(), 1);
+        let (end, starts) = &s.to_end[0];
+        assert_eq!(starts.len(), 1);
+        assert!(near(q.decode(*end), light) && near(q.decode(starts[0]), lit));
+        // The blocked one ends at the floor, the other at its end.
+        assert_eq!(s.shadow.len(), 2);
+        let floor = below + (light - below) * (1.0 / (light.y - below.y));
+        assert!(
+            near(q.decode(s.shadow[0][1]), floor),
+            "{:?}",
+            q.decode(s.shadow[0][1])
+        );
+        assert!(near(q.decode(s.shadow[1][1]), Vec3::new(3.0, 2.0, 1.0)));
     }
 }

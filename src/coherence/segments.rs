@@ -9,7 +9,9 @@
 //! points instead of a walk (docs/animation.md, "Segment records", has the measurements).
 //!
 //! The points are kept in 16 bits an axis over the grid's box ([`Quantiser`]): 12 bytes a
-//! segment, half the memory (and the memory traffic of frame 0) of two `Vec3`. A kept
+//! segment, half the memory (and the memory traffic of frame 0) of two `Vec3`. Most shadow
+//! segments end at a point light, which a block's segments share: those are kept as their
+//! start alone, in a list per end point (6 bytes a segment). A kept
 //! segment is then within one step of the 16-bit lattice of the traced one, so the renderer
 //! grows the changed boxes by that step ([`Quantiser::error`]): a segment that met a changed
 //! object still crosses a voxel marked changed, and the frames stay the same.
@@ -90,6 +92,9 @@ pub struct BlockSegments {
     pub surface: Vec<Segment>,
     /// Segments of shadow rays.
     pub shadow: Vec<Segment>,
+    /// More shadow segments, kept by their start in a list per end point they share (a
+    /// point light's, in the recorder's slot for that light).
+    pub to_end: Vec<(Point16, Vec<Point16>)>,
     /// The box around every segment of both lists (empty: lo > hi), made by
     /// [`seal`](Self::seal) when the lists are complete (not per push: recording is the
     /// part every ray pays for).
@@ -108,16 +113,22 @@ impl BlockSegments {
         BlockSegments {
             surface: Vec::new(),
             shadow: Vec::new(),
+            to_end: Vec::new(),
             lo: [u16::MAX; 3],
             hi: [0; 3],
         }
     }
 
-    /// Empty lists with room for `surface` and `shadow` segments.
-    pub fn with_capacity(surface: usize, shadow: usize) -> BlockSegments {
+    /// Empty lists with room for as many segments as `like` holds in each, and a quarter
+    /// more (the next task's blocks are alike).
+    pub fn with_room_of(like: &BlockSegments) -> BlockSegments {
+        let room = |n: usize| n + n / 4;
         BlockSegments {
-            surface: Vec::with_capacity(surface),
-            shadow: Vec::with_capacity(shadow),
+            surface: Vec::with_capacity(room(like.surface.len())),
+            shadow: Vec::with_capacity(room(like.shadow.len())),
+            to_end: (like.to_end.iter())
+                .map(|(end, starts)| (*end, Vec::with_capacity(room(starts.len()))))
+                .collect(),
             ..BlockSegments::new()
         }
     }
@@ -130,6 +141,27 @@ impl BlockSegments {
         }
     }
 
+    /// Adds the shadow segment `[start, end]` to the list in `slot`, which keeps the
+    /// segments ending at `end` (a slot holds one end point: the recorder gives each point
+    /// light its own).
+    #[inline]
+    pub fn push_to_end(&mut self, slot: usize, end: Point16, start: Point16) {
+        if slot >= self.to_end.len() {
+            self.to_end.resize(slot + 1, (end, Vec::new()));
+        }
+        let (e, starts) = &mut self.to_end[slot];
+        if starts.is_empty() {
+            *e = end;
+        }
+        debug_assert_eq!(*e, end, "a slot keeps one end point");
+        starts.push(start);
+    }
+
+    /// The shadow segments kept by their end point: `[start, end]` each.
+    fn ending(&self) -> impl Iterator<Item = Segment> + '_ {
+        (self.to_end.iter()).flat_map(|(end, starts)| starts.iter().map(|&a| [a, *end]))
+    }
+
     /// Adds another part's segments (a block traced in several tiles); the box is the union
     /// of both boxes (exact if both lists were sealed).
     pub fn append(&mut self, mut other: BlockSegments) {
@@ -139,6 +171,12 @@ impl BlockSegments {
         } else {
             self.surface.append(&mut other.surface);
             self.shadow.append(&mut other.shadow);
+            for (end, mut starts) in other.to_end {
+                match self.to_end.iter_mut().find(|(e, _)| *e == end) {
+                    Some((_, mine)) => mine.append(&mut starts),
+                    None => self.to_end.push((end, starts)),
+                }
+            }
             for k in 0..3 {
                 self.lo[k] = self.lo[k].min(other.lo[k]);
                 self.hi[k] = self.hi[k].max(other.hi[k]);
@@ -154,7 +192,10 @@ impl BlockSegments {
     /// Makes the box around the segments.
     pub fn seal(&mut self) {
         let (mut lo, mut hi) = ([u16::MAX; 3], [0u16; 3]);
-        for p in self.surface.iter().chain(&self.shadow).flatten() {
+        let ends = (self.to_end.iter()).filter(|(_, starts)| !starts.is_empty());
+        let points = (self.surface.iter().chain(&self.shadow).flatten())
+            .chain(ends.flat_map(|(end, starts)| starts.iter().chain([end])));
+        for p in points {
             for k in 0..3 {
                 lo[k] = lo[k].min(p[k]);
                 hi[k] = hi[k].max(p[k]);
@@ -168,17 +209,35 @@ impl BlockSegments {
     pub fn shrink_to_fit(&mut self) {
         self.surface.shrink_to_fit();
         self.shadow.shrink_to_fit();
+        self.to_end.retain(|(_, starts)| !starts.is_empty());
+        for (_, starts) in &mut self.to_end {
+            starts.shrink_to_fit();
+        }
+        self.to_end.shrink_to_fit();
     }
 
     /// Empties the lists, keeping their memory.
     pub fn clear(&mut self) {
         self.surface.clear();
         self.shadow.clear();
+        self.to_end.clear();
         (self.lo, self.hi) = ([u16::MAX; 3], [0; 3]);
     }
 
     pub fn len(&self) -> usize {
-        self.surface.len() + self.shadow.len()
+        let ending: usize = self.to_end.iter().map(|(_, starts)| starts.len()).sum();
+        self.surface.len() + self.shadow.len() + ending
+    }
+
+    /// Bytes the lists take (their capacity).
+    pub fn memory_bytes(&self) -> usize {
+        let point = std::mem::size_of::<Point16>();
+        let ending: usize = (self.to_end.iter())
+            .map(|(_, starts)| starts.capacity() * point)
+            .sum();
+        (self.surface.capacity() + self.shadow.capacity()) * 2 * point
+            + self.to_end.capacity() * std::mem::size_of::<(Point16, Vec<Point16>)>()
+            + ending
     }
 
     pub fn is_empty(&self) -> bool {
@@ -188,19 +247,19 @@ impl BlockSegments {
     /// Whether a segment crosses a voxel of `changed` (surface segments) or of `shadows`
     /// (shadow segments; `shadows` holds `changed`). The lists must be sealed.
     fn crosses(&self, changed: &Changed, shadows: &Changed) -> bool {
-        let test = |list: &[Segment], c: &Changed| {
-            c.overlaps(self.lo, self.hi)
-                && list.iter().any(|&[a, b]| {
-                    let (lo, hi) = (
-                        [0, 1, 2].map(|k| a[k].min(b[k])),
-                        [0, 1, 2].map(|k| a[k].max(b[k])),
-                    );
-                    c.overlaps(lo, hi)
-                        && c.voxels
-                            .crosses([c.quantiser.decode(a), c.quantiser.decode(b)])
-                })
+        let crosses = |c: &Changed, [a, b]: Segment| {
+            let (lo, hi) = (
+                [0, 1, 2].map(|k| a[k].min(b[k])),
+                [0, 1, 2].map(|k| a[k].max(b[k])),
+            );
+            c.overlaps(lo, hi) && (c.voxels).crosses([c.quantiser.decode(a), c.quantiser.decode(b)])
         };
-        test(&self.surface, changed) || test(&self.shadow, shadows)
+        let surface = || self.surface.iter().any(|&s| crosses(changed, s));
+        let shadow = || {
+            shadows.overlaps(self.lo, self.hi)
+                && (self.shadow.iter().copied().chain(self.ending())).any(|s| crosses(shadows, s))
+        };
+        (changed.overlaps(self.lo, self.hi) && surface()) || shadow()
     }
 }
 
@@ -305,11 +364,11 @@ impl SegmentRecords {
     pub fn to_tables(&self, voxels: &ActiveVoxels, layout: &BlockLayout) -> VoxelTables {
         let tables = VoxelTables::new(voxels.fine.len(), layout);
         self.blocks.par_iter().enumerate().for_each(|(b, s)| {
-            for (table, list) in [(Table::Surface, &s.surface), (Table::Shadow, &s.shadow)] {
-                for &[a, e] in list {
-                    let (a, e) = (self.quantiser.decode(a), self.quantiser.decode(e));
-                    voxels.walk(a, e - a, 0.0, 1.0, |v| tables.set(table, v, b));
-                }
+            let surface = s.surface.iter().map(|&s| (Table::Surface, s));
+            let shadow = (s.shadow.iter().copied().chain(s.ending())).map(|s| (Table::Shadow, s));
+            for (table, [a, e]) in surface.chain(shadow) {
+                let (a, e) = (self.quantiser.decode(a), self.quantiser.decode(e));
+                voxels.walk(a, e - a, 0.0, 1.0, |v| tables.set(table, v, b));
             }
         });
         for b in self.hits.iter() {
@@ -327,7 +386,7 @@ impl SegmentRecords {
     pub fn memory_bytes(&self) -> usize {
         self.blocks
             .iter()
-            .map(|s| (s.surface.capacity() + s.shadow.capacity()) * std::mem::size_of::<Segment>())
+            .map(BlockSegments::memory_bytes)
             .sum::<usize>()
             + self.hits.words.len() * 8
     }
@@ -496,6 +555,75 @@ mod tests {
             "{crossing} of {total}"
         );
         assert!(differ * 500 < total, "{differ} of {total} differ");
+    }
+
+    /// Shadow segments kept by their end point answer every question as the same segments
+    /// kept whole: their box, count, the blocks a changed set finds, and the tables made
+    /// from them, also when a block's parts are appended (one slot holding its end in
+    /// both, another only in the second part).
+    #[test]
+    fn segments_kept_by_their_end_are_the_same_segments() {
+        let grid = grid();
+        let q = Quantiser::new(&grid);
+        let layout = BlockLayout::new(32, 16, 4, 2);
+        let mut rng = Rng::for_key(9, &[1]);
+        let point = |rng: &mut Rng| {
+            let u = Vec3::new(rng.uniform(), rng.uniform(), rng.uniform());
+            q.encode((grid.lo + u * (grid.hi - grid.lo)).into())
+        };
+        let ends = [point(&mut rng), point(&mut rng), point(&mut rng)];
+        let (mut by_end, mut whole) = (
+            SegmentRecords::new(&layout, &grid),
+            SegmentRecords::new(&layout, &grid),
+        );
+        for b in 0..layout.len() {
+            for part in 0..2 {
+                let (mut e, mut w) = (BlockSegments::new(), BlockSegments::new());
+                for i in 0..(b % 5) * 3 {
+                    let start = point(&mut rng);
+                    let slot = (i + part + b) % if part == 0 { 2 } else { 3 };
+                    e.push_to_end(slot, ends[slot], start);
+                    w.push(Table::Shadow, [start, ends[slot]]);
+                    let surface = [point(&mut rng), point(&mut rng)];
+                    e.push(Table::Surface, surface);
+                    w.push(Table::Surface, surface);
+                }
+                e.seal();
+                w.seal();
+                assert_eq!((e.lo, e.hi, e.len()), (w.lo, w.hi, w.len()));
+                by_end.add(b, e, false);
+                whole.add(b, w, false);
+            }
+        }
+        assert_eq!(by_end.segments(), whole.segments());
+        let mut found_any = 0;
+        for round in 0..30 {
+            let mut select = Rng::for_key(9, &[2, round]);
+            let mask: Vec<bool> = (0..grid.len()).map(|_| select.uniform() < 0.02).collect();
+            let changed = Changed::new(ActiveVoxels::from_mask(grid.clone(), &mask), q);
+            let none = Changed::new(ActiveVoxels::from_mask(grid.clone(), &[]), q);
+            for (c, s) in [(&changed, &changed), (&none, &changed), (&changed, &none)] {
+                let (mut a, mut b) = (BlockSet::new(&layout), BlockSet::new(&layout));
+                by_end.collect(c, s, &mut a);
+                whole.collect(c, s, &mut b);
+                assert_eq!(a.words, b.words, "round {round}");
+                found_any += a.count();
+            }
+        }
+        assert!(found_any > 0);
+        let all = ActiveVoxels::all(grid.clone());
+        let (ta, tb) = (
+            by_end.to_tables(&all, &layout),
+            whole.to_tables(&all, &layout),
+        );
+        for v in 0..grid.len() {
+            for t in [Table::Surface, Table::Shadow] {
+                let (mut a, mut b) = (BlockSet::new(&layout), BlockSet::new(&layout));
+                ta.collect(t, v, &mut a);
+                tb.collect(t, v, &mut b);
+                assert_eq!(a.words, b.words);
+            }
+        }
     }
 
     #[test]

@@ -5,7 +5,7 @@ mod binary_files;
 mod bsdf;
 mod coherence;
 mod coherence_random;
-mod coherence_scenes;
+pub(crate) mod coherence_scenes;
 mod irradiance_cache;
 mod network_build;
 mod network_common;
