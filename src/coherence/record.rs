@@ -169,6 +169,10 @@ pub struct RecordingAccel<'a> {
     /// The point lights' positions on the segments' lattice, packed: a shadow segment that
     /// ends at one is kept by its start in that light's list.
     light_ends: Vec<u64>,
+    /// The shared lists' slots: one per point light (in the order of `light_ends`), then the
+    /// camera's, whose segments start at `camera`.
+    slots: Vec<(Table, bool, Vec3, Point16)>,
+    camera: Vec3,
 }
 
 /// A lattice point in one word, to compare in one instruction.
@@ -223,8 +227,19 @@ impl<'a> RecordingAccel<'a> {
             })
             .collect();
         let quantiser = Quantiser::new(&voxels.fine);
-        let light_ends = (point_lights.iter())
-            .map(|&(_, p)| packed(quantiser.encode(p)))
+        let ends: Vec<Point16> = (point_lights.iter())
+            .map(|&(_, p)| quantiser.encode(p))
+            .collect();
+        let light_ends = ends.iter().map(|&e| packed(e)).collect();
+        let camera = scene.camera.position;
+        let slots = (ends.iter())
+            .map(|&e| (Table::Shadow, false, quantiser.decode(e), e))
+            .chain([(
+                Table::Surface,
+                true,
+                camera,
+                quantiser.encode(camera.into()),
+            )])
             .collect();
         RecordingAccel {
             inner,
@@ -247,6 +262,8 @@ impl<'a> RecordingAccel<'a> {
             point_bits: point_lights.iter().fold(0, |m, l| m | l.0),
             point_lights,
             light_ends,
+            slots,
+            camera,
         }
     }
 
@@ -361,9 +378,30 @@ impl<'a> RecordingAccel<'a> {
         let s = [q.encode(a), q.encode(b)];
         let light = self.light_ends.iter().position(|&e| e == packed(s[1]));
         self.with_lists(|list| match light {
-            Some(slot) => list.segments.push_to_end(slot, s[1], s[0]),
+            Some(slot) => list.segments.push_shared(slot, self.slots[slot], s[0]),
             None => list.segments.push(Table::Shadow, s),
         });
+    }
+
+    /// Notes a camera ray that got `hit`, and records its segment as any ray looking for a
+    /// surface, but by its end in the camera's list when it leaves from the camera's
+    /// position (a pinhole; with segments).
+    #[inline(never)]
+    fn keep_camera(&self, ray: &Ray, hit: Option<Hit>) {
+        if hit.is_some() {
+            self.hit.store(true, Ordering::Relaxed);
+        }
+        let t1 = hit.map_or(ray.tmax, |h| h.t);
+        let from_camera = ray.origin.to_array() == self.camera.to_array() && ray.tmin == 0.0;
+        if self.records == Records::Tables || !from_camera {
+            return self.record(Table::Surface, ray.origin, ray.dir, ray.tmin, t1);
+        }
+        let Some([_, b]) = self.voxels.clip_segment(ray.origin, ray.dir, 0.0, t1) else {
+            return;
+        };
+        let end = self.quantiser.encode(b);
+        let slot = self.slots.len() - 1;
+        self.with_lists(|list| list.segments.push_shared(slot, self.slots[slot], end));
     }
 
     /// What was recorded: the segments (sealed), the camera hits, whether any ray found a
@@ -470,7 +508,9 @@ impl Accel for RecordingAccel<'_> {
 
     fn intersect_camera(&self, ray: &Ray) -> Option<Hit> {
         let Some(keys) = self.shape_keys else {
-            return self.intersect(ray);
+            let hit = self.inner.intersect(ray);
+            self.keep_camera(ray, hit);
+            return hit;
         };
         bump(&self.camera_rays);
         let hit = match self.stored_hit(ray) {
@@ -481,7 +521,7 @@ impl Accel for RecordingAccel<'_> {
             None => self.inner.intersect(ray),
         };
         // Recorded as any ray looking for a surface, and kept with its hit for next time.
-        self.record_surface(ray, hit);
+        self.keep_camera(ray, hit);
         let shape = hit.map_or(0, |h| keys[h.geom_id as usize]);
         self.with_lists(|list| {
             list.camera.push(CameraHit {
@@ -533,9 +573,10 @@ mod tests {
 
     /// A shadow ray to a point light is kept by its start in the light's list, reaching the
     /// light (not stopping short of it as traced); one stopped at an opaque blocker, and one
-    /// that goes to no light, are kept whole, as traced.
+    /// that goes to no light, are kept whole, as traced. A camera ray from the camera is kept
+    /// by its end in the camera's list; one from elsewhere whole.
     #[test]
-    fn shadow_segments_to_a_point_light_are_kept_to_the_light() {
+    fn shared_ends_are_kept_once() {
         let scene = Animation::from_str(&animated("", MOVING), Path::new("t.toml"))
             .unwrap()
             .scene_at(0)
@@ -561,10 +602,34 @@ mod tests {
         let recorded = recorder.finish();
         let s = &recorded.segments;
         assert_eq!(recorded.lights, 1);
-        assert_eq!(s.to_end.len(), 1);
-        let (end, starts) = &s.to_end[0];
-        assert_eq!(starts.len(), 1);
-        assert!(near(q.decode(*end), light) && near(q.decode(starts[0]), lit));
+        assert_eq!(s.shared.len(), 1);
+        let l = &s.shared[0];
+        assert_eq!(
+            (l.table, l.start, l.others.len()),
+            (Table::Shadow, false, 1)
+        );
+        assert!(near(l.point, light) && near(q.decode(l.others[0]), lit));
+        // A camera ray is kept by its hit in the camera's list, from the camera itself.
+        let camera = scene.camera.position;
+        let down = Vec3::new(0.0, -1.4, -3.5);
+        let recorder =
+            RecordingAccel::new(accel.as_ref(), &scene, &voxels, true, Records::Segments);
+        let hit = recorder.intersect_camera(&Ray::new(camera, down)).unwrap();
+        let elsewhere = Ray::new(camera + Vec3::X * 0.01, down);
+        recorder.intersect_camera(&elsewhere).unwrap();
+        let c = recorder.finish().segments;
+        // (Empty lists are dropped: the light's.)
+        assert_eq!(c.shared.len(), 1);
+        let l = &c.shared[0];
+        assert_eq!(
+            (l.table, l.start, l.others.len()),
+            (Table::Surface, true, 1)
+        );
+        assert_eq!(l.point, camera);
+        assert!(near(q.decode(l.others[0]), camera + down * hit.t));
+        // (The ray from elsewhere is kept whole.)
+        assert_eq!(c.surface.len(), 1);
+        assert!(near(q.decode(c.surface[0][0]), elsewhere.origin));
         // The blocked one ends at the floor, the other at its end.
         assert_eq!(s.shadow.len(), 2);
         let floor = below + (light - below) * (1.0 / (light.y - below.y));

@@ -9,9 +9,10 @@
 //! points instead of a walk (docs/animation.md, "Segment records", has the measurements).
 //!
 //! The points are kept in 16 bits an axis over the grid's box ([`Quantiser`]): 12 bytes a
-//! segment, half the memory (and the memory traffic of frame 0) of two `Vec3`. Most shadow
-//! segments end at a point light, which a block's segments share: those are kept as their
-//! start alone, in a list per end point (6 bytes a segment). A kept
+//! segment, half the memory (and the memory traffic of frame 0) of two `Vec3`. Most
+//! segments share one end with others of their block (a pinhole camera's position, a point
+//! light's): those are kept as their other end alone, in a list per shared point ([`Shared`],
+//! 6 bytes a segment). A kept
 //! segment is then within one step of the 16-bit lattice of the traced one, so the renderer
 //! grows the changed boxes by that step ([`Quantiser::error`]): a segment that met a changed
 //! object still crosses a voxel marked changed, and the frames stay the same.
@@ -85,6 +86,37 @@ impl Quantiser {
     }
 }
 
+/// Segments of one table that share one end point, kept as their other ends.
+#[derive(Clone, Debug)]
+pub struct Shared {
+    pub table: Table,
+    /// Whether the shared point is the segments' start (a camera's position) or their end
+    /// (a light's).
+    pub start: bool,
+    /// The shared point, exact (it may lie outside the grid, as a camera often does).
+    pub point: Vec3,
+    /// The shared point on the lattice (clamped to its box): what boxes are made of. The
+    /// box of the key and another end holds the segment's part inside the grid.
+    pub key: Point16,
+    pub others: Vec<Point16>,
+}
+
+impl Shared {
+    /// The segment to `other` (or from it), with the box of its lattice ends.
+    #[inline]
+    fn segment(&self, q: &Quantiser, other: Point16) -> ([Vec3; 2], Point16, Point16) {
+        let (o, k) = (q.decode(other), self.key);
+        let ends = if self.start {
+            [self.point, o]
+        } else {
+            [o, self.point]
+        };
+        let lo = [0, 1, 2].map(|i| k[i].min(other[i]));
+        let hi = [0, 1, 2].map(|i| k[i].max(other[i]));
+        (ends, lo, hi)
+    }
+}
+
 /// What one block's rays recorded.
 #[derive(Clone, Debug)]
 pub struct BlockSegments {
@@ -92,9 +124,9 @@ pub struct BlockSegments {
     pub surface: Vec<Segment>,
     /// Segments of shadow rays.
     pub shadow: Vec<Segment>,
-    /// More shadow segments, kept by their start in a list per end point they share (a
-    /// point light's, in the recorder's slot for that light).
-    pub to_end: Vec<(Point16, Vec<Point16>)>,
+    /// More segments, kept by their other end in a list per end point they share (in the
+    /// recorder's slot for that point).
+    pub shared: Vec<Shared>,
     /// The box around every segment of both lists (empty: lo > hi), made by
     /// [`seal`](Self::seal) when the lists are complete (not per push: recording is the
     /// part every ray pays for).
@@ -113,7 +145,7 @@ impl BlockSegments {
         BlockSegments {
             surface: Vec::new(),
             shadow: Vec::new(),
-            to_end: Vec::new(),
+            shared: Vec::new(),
             lo: [u16::MAX; 3],
             hi: [0; 3],
         }
@@ -126,8 +158,11 @@ impl BlockSegments {
         BlockSegments {
             surface: Vec::with_capacity(room(like.surface.len())),
             shadow: Vec::with_capacity(room(like.shadow.len())),
-            to_end: (like.to_end.iter())
-                .map(|(end, starts)| (*end, Vec::with_capacity(room(starts.len()))))
+            shared: (like.shared.iter())
+                .map(|l| Shared {
+                    others: Vec::with_capacity(room(l.others.len())),
+                    ..*l
+                })
                 .collect(),
             ..BlockSegments::new()
         }
@@ -141,25 +176,44 @@ impl BlockSegments {
         }
     }
 
-    /// Adds the shadow segment `[start, end]` to the list in `slot`, which keeps the
-    /// segments ending at `end` (a slot holds one end point: the recorder gives each point
-    /// light its own).
+    /// Adds a segment from `other` to the shared point (or from the shared point when
+    /// `start`) to the list in `slot`, which keeps the segments of `table` sharing `point`
+    /// (`key` on the lattice). The recorder gives each shared point a slot of its own.
     #[inline]
-    pub fn push_to_end(&mut self, slot: usize, end: Point16, start: Point16) {
-        if slot >= self.to_end.len() {
-            self.to_end.resize(slot + 1, (end, Vec::new()));
+    pub fn push_shared(&mut self, slot: usize, list: (Table, bool, Vec3, Point16), other: Point16) {
+        let (table, start, point, key) = list;
+        let fresh = || Shared {
+            table,
+            start,
+            point,
+            key,
+            others: Vec::new(),
+        };
+        if slot >= self.shared.len() {
+            self.shared.resize_with(slot + 1, fresh);
         }
-        let (e, starts) = &mut self.to_end[slot];
-        if starts.is_empty() {
-            *e = end;
+        let l = &mut self.shared[slot];
+        if l.others.is_empty() {
+            *l = Shared {
+                others: std::mem::take(&mut l.others),
+                ..fresh()
+            };
         }
-        debug_assert_eq!(*e, end, "a slot keeps one end point");
-        starts.push(start);
+        debug_assert!(
+            l.point == point && l.table == table,
+            "a slot keeps one point"
+        );
+        l.others.push(other);
     }
 
-    /// The shadow segments kept by their end point: `[start, end]` each.
-    fn ending(&self) -> impl Iterator<Item = Segment> + '_ {
-        (self.to_end.iter()).flat_map(|(end, starts)| starts.iter().map(|&a| [a, *end]))
+    /// Every segment of `table` kept in a shared list, with the box of its lattice ends.
+    fn shared_of(
+        &self,
+        table: Table,
+        q: Quantiser,
+    ) -> impl Iterator<Item = ([Vec3; 2], Point16, Point16)> + '_ {
+        (self.shared.iter().filter(move |l| l.table == table))
+            .flat_map(move |l| l.others.iter().map(move |&o| l.segment(&q, o)))
     }
 
     /// Adds another part's segments (a block traced in several tiles); the box is the union
@@ -171,10 +225,13 @@ impl BlockSegments {
         } else {
             self.surface.append(&mut other.surface);
             self.shadow.append(&mut other.shadow);
-            for (end, mut starts) in other.to_end {
-                match self.to_end.iter_mut().find(|(e, _)| *e == end) {
-                    Some((_, mine)) => mine.append(&mut starts),
-                    None => self.to_end.push((end, starts)),
+            for mut l in other.shared {
+                let same = |m: &&mut Shared| {
+                    (m.table, m.start, m.point.to_array()) == (l.table, l.start, l.point.to_array())
+                };
+                match self.shared.iter_mut().find(same) {
+                    Some(mine) => mine.others.append(&mut l.others),
+                    None => self.shared.push(l),
                 }
             }
             for k in 0..3 {
@@ -192,9 +249,9 @@ impl BlockSegments {
     /// Makes the box around the segments.
     pub fn seal(&mut self) {
         let (mut lo, mut hi) = ([u16::MAX; 3], [0u16; 3]);
-        let ends = (self.to_end.iter()).filter(|(_, starts)| !starts.is_empty());
+        let lists = (self.shared.iter()).filter(|l| !l.others.is_empty());
         let points = (self.surface.iter().chain(&self.shadow).flatten())
-            .chain(ends.flat_map(|(end, starts)| starts.iter().chain([end])));
+            .chain(lists.flat_map(|l| l.others.iter().chain([&l.key])));
         for p in points {
             for k in 0..3 {
                 lo[k] = lo[k].min(p[k]);
@@ -209,35 +266,35 @@ impl BlockSegments {
     pub fn shrink_to_fit(&mut self) {
         self.surface.shrink_to_fit();
         self.shadow.shrink_to_fit();
-        self.to_end.retain(|(_, starts)| !starts.is_empty());
-        for (_, starts) in &mut self.to_end {
-            starts.shrink_to_fit();
+        self.shared.retain(|l| !l.others.is_empty());
+        for l in &mut self.shared {
+            l.others.shrink_to_fit();
         }
-        self.to_end.shrink_to_fit();
+        self.shared.shrink_to_fit();
     }
 
     /// Empties the lists, keeping their memory.
     pub fn clear(&mut self) {
         self.surface.clear();
         self.shadow.clear();
-        self.to_end.clear();
+        self.shared.clear();
         (self.lo, self.hi) = ([u16::MAX; 3], [0; 3]);
     }
 
     pub fn len(&self) -> usize {
-        let ending: usize = self.to_end.iter().map(|(_, starts)| starts.len()).sum();
-        self.surface.len() + self.shadow.len() + ending
+        let shared: usize = self.shared.iter().map(|l| l.others.len()).sum();
+        self.surface.len() + self.shadow.len() + shared
     }
 
     /// Bytes the lists take (their capacity).
     pub fn memory_bytes(&self) -> usize {
         let point = std::mem::size_of::<Point16>();
-        let ending: usize = (self.to_end.iter())
-            .map(|(_, starts)| starts.capacity() * point)
+        let shared: usize = (self.shared.iter())
+            .map(|l| l.others.capacity() * point)
             .sum();
         (self.surface.capacity() + self.shadow.capacity()) * 2 * point
-            + self.to_end.capacity() * std::mem::size_of::<(Point16, Vec<Point16>)>()
-            + ending
+            + self.shared.capacity() * std::mem::size_of::<Shared>()
+            + shared
     }
 
     pub fn is_empty(&self) -> bool {
@@ -247,19 +304,17 @@ impl BlockSegments {
     /// Whether a segment crosses a voxel of `changed` (surface segments) or of `shadows`
     /// (shadow segments; `shadows` holds `changed`). The lists must be sealed.
     fn crosses(&self, changed: &Changed, shadows: &Changed) -> bool {
-        let crosses = |c: &Changed, [a, b]: Segment| {
-            let (lo, hi) = (
-                [0, 1, 2].map(|k| a[k].min(b[k])),
-                [0, 1, 2].map(|k| a[k].max(b[k])),
-            );
-            c.overlaps(lo, hi) && (c.voxels).crosses([c.quantiser.decode(a), c.quantiser.decode(b)])
+        let q = changed.quantiser;
+        let test = |c: &Changed, table: Table, list: &[Segment]| {
+            c.overlaps(self.lo, self.hi)
+                && (list.iter().any(|&[a, b]| {
+                    let lo = [0, 1, 2].map(|k| a[k].min(b[k]));
+                    let hi = [0, 1, 2].map(|k| a[k].max(b[k]));
+                    c.overlaps(lo, hi) && c.voxels.crosses([q.decode(a), q.decode(b)])
+                }) || (self.shared_of(table, q))
+                    .any(|(ends, lo, hi)| c.overlaps(lo, hi) && c.voxels.crosses(ends)))
         };
-        let surface = || self.surface.iter().any(|&s| crosses(changed, s));
-        let shadow = || {
-            shadows.overlaps(self.lo, self.hi)
-                && (self.shadow.iter().copied().chain(self.ending())).any(|s| crosses(shadows, s))
-        };
-        (changed.overlaps(self.lo, self.hi) && surface()) || shadow()
+        test(changed, Table::Surface, &self.surface) || test(shadows, Table::Shadow, &self.shadow)
     }
 }
 
@@ -364,11 +419,13 @@ impl SegmentRecords {
     pub fn to_tables(&self, voxels: &ActiveVoxels, layout: &BlockLayout) -> VoxelTables {
         let tables = VoxelTables::new(voxels.fine.len(), layout);
         self.blocks.par_iter().enumerate().for_each(|(b, s)| {
-            let surface = s.surface.iter().map(|&s| (Table::Surface, s));
-            let shadow = (s.shadow.iter().copied().chain(s.ending())).map(|s| (Table::Shadow, s));
-            for (table, [a, e]) in surface.chain(shadow) {
-                let (a, e) = (self.quantiser.decode(a), self.quantiser.decode(e));
-                voxels.walk(a, e - a, 0.0, 1.0, |v| tables.set(table, v, b));
+            let q = self.quantiser;
+            for (table, list) in [(Table::Surface, &s.surface), (Table::Shadow, &s.shadow)] {
+                let whole = list.iter().map(|&[a, e]| [q.decode(a), q.decode(e)]);
+                let shared = s.shared_of(table, q).map(|(ends, _, _)| ends);
+                for [a, e] in whole.chain(shared) {
+                    voxels.walk(a, e - a, 0.0, 1.0, |v| tables.set(table, v, b));
+                }
             }
         });
         for b in self.hits.iter() {
@@ -557,12 +614,12 @@ mod tests {
         assert!(differ * 500 < total, "{differ} of {total} differ");
     }
 
-    /// Shadow segments kept by their end point answer every question as the same segments
-    /// kept whole: their box, count, the blocks a changed set finds, and the tables made
+    /// Segments kept in shared lists (shadow segments by their start, surface segments by
+    /// their end) answer every question as the same segments kept whole: their box, count, the blocks a changed set finds, and the tables made
     /// from them, also when a block's parts are appended (one slot holding its end in
     /// both, another only in the second part).
     #[test]
-    fn segments_kept_by_their_end_are_the_same_segments() {
+    fn segments_in_shared_lists_are_the_same_segments() {
         let grid = grid();
         let q = Quantiser::new(&grid);
         let layout = BlockLayout::new(32, 16, 4, 2);
@@ -582,11 +639,17 @@ mod tests {
                 for i in 0..(b % 5) * 3 {
                     let start = point(&mut rng);
                     let slot = (i + part + b) % if part == 0 { 2 } else { 3 };
-                    e.push_to_end(slot, ends[slot], start);
+                    let list = (Table::Shadow, false, q.decode(ends[slot]), ends[slot]);
+                    e.push_shared(slot, list, start);
                     w.push(Table::Shadow, [start, ends[slot]]);
                     let surface = [point(&mut rng), point(&mut rng)];
                     e.push(Table::Surface, surface);
                     w.push(Table::Surface, surface);
+                    // A surface segment from a shared start (slot 3: a camera's).
+                    let end = point(&mut rng);
+                    let from = (Table::Surface, true, q.decode(ends[0]), ends[0]);
+                    e.push_shared(3, from, end);
+                    w.push(Table::Surface, [ends[0], end]);
                 }
                 e.seal();
                 w.seal();
