@@ -138,6 +138,21 @@ fn gathering_shooting_and_bidirectional_agree_on_glossy_and_specular_spheres() {
     check_adjoint(&scene, &[1, 2]);
 }
 
+/// The same with the glass sphere made rough (GGX α = 0.3, reflection and refraction):
+/// light now reaches the camera through it by every strategy, light tracing included, so
+/// only the mirror sphere's pixels are left out of the comparisons with light tracing.
+#[test]
+fn gathering_shooting_and_bidirectional_agree_through_rough_glass() {
+    let mut scene = Scene::load(&manifest("scenes/cornell-spheres.toml")).unwrap();
+    let glass = scene
+        .materials
+        .iter_mut()
+        .find(|m| m.name == "glass")
+        .expect("the scene has a glass material");
+    glass.roughness = 0.3;
+    check_adjoint(&scene, &[1]);
+}
+
 /// Whether each pixel of a 48x48 view sees any of `shapes` at its centre or corners.
 fn sees_shapes(scene: &Scene, shapes: &[u32]) -> Vec<bool> {
     let accel = raylink::accel::build(scene, Backend::Embree, &Control::default()).unwrap();

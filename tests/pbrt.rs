@@ -445,6 +445,26 @@ fn materials_map_to_raylink_fields() {
         "{r}"
     );
     assert!((m[1].roughness - 0.3).abs() < 1e-6);
+    // A rough dielectric is glass with GGX reflection and refraction, without a warning:
+    // isotropic, or anisotropic (u along the tangent, v along the bitangent), remapped
+    // unless `remaproughness` is false.
+    let s = world(&format!(
+        "Material \"dielectric\" \"float roughness\" 0.09 {TRI}\
+         Material \"dielectric\" \"float uroughness\" 0.04 \"float vroughness\" 0.25 {TRI}\
+         Material \"dielectric\" \"float roughness\" 0.2 \"bool remaproughness\" false {TRI}"
+    ));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let m = &s.materials;
+    for g in m {
+        assert_eq!(
+            (g.specular, g.transmission, g.ior, g.fresnel),
+            (Rgb::ONE, Rgb::ONE, 1.5, true)
+        );
+    }
+    assert!((m[0].roughness - 0.3).abs() < 1e-6 && m[0].roughness_v.is_none());
+    assert!((m[1].roughness - 0.2).abs() < 1e-6);
+    assert!((m[1].roughness_v.unwrap() - 0.5).abs() < 1e-6);
+    assert!((m[2].roughness - 0.2).abs() < 1e-6 && m[2].roughness_v.is_none());
     // Unsupported material types: a warning and a substitute.
     let s = world(&format!("Material \"hair\" \"float eumelanin\" 1.3 {TRI}"));
     assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);

@@ -4,9 +4,12 @@
 //! - `diffuse` kd: Lambertian reflection kd/π;
 //! - `specular` ks: reflection, a perfect mirror when `roughness` is 0, otherwise a GGX
 //!   microfacet lobe with α = `roughness`;
-//! - `transmission` kt with `ior`: smooth refraction;
+//! - `transmission` kt with `ior`: smooth refraction when `roughness` is 0, otherwise GGX
+//!   microfacet refraction sharing the reflection's microfacets (a rough dielectric
+//!   interface, [`dielectric`]);
 //! - `fresnel`: ks is weighted by the dielectric Fresnel reflectance F, kt by 1 − F and kd by
-//!   (1 − F(θi))(1 − F(θo)) (a coated surface), which makes ks = kt = 1 a glass;
+//!   (1 − F(θi))(1 − F(θo)) (a coated surface), which makes ks = kt = 1 a glass (rough when
+//!   `roughness` > 0, F then taken at each microfacet);
 //! - `conductor` (η, k): ks is weighted by the complex Fresnel reflectance of the metal per
 //!   channel (pbrt-v4's `ConductorBxDF`), smooth or GGX, isotropic or anisotropic.
 //!
@@ -15,9 +18,12 @@
 //! by (ηi/ηt)², and in [`Transport::Importance`] the shading-normal correction
 //! |wo·ns||wi·ng| / (|wo·ng||wi·ns|) keeps the adjoint BSDF consistent.
 
+mod dielectric;
 mod microfacet;
 
 pub use microfacet::Ggx;
+
+use dielectric::RoughInterface;
 
 use crate::math::optics::{fresnel_dielectric, fresnel_dielectric_mean, refract};
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
@@ -62,6 +68,8 @@ pub struct Bsdf {
     ggx: Option<Ggx>,
     fresnel: bool,
     conductor: Option<Conductor>,
+    /// The transmission is a GGX lobe (rough refraction), not a delta.
+    rough_transmission: bool,
     /// Only the Lambertian lobe: the common case takes a short path.
     lambertian: bool,
 }
@@ -97,6 +105,15 @@ impl Bsdf {
         let (ax, ay) = (ax.clamp(0.0, 1.0), ay.clamp(0.0, 1.0));
         let lambertian =
             !m.fresnel && m.specular.max_element() <= 0.0 && m.transmission.max_element() <= 0.0;
+        // Below this α the lobe is numerically a mirror.
+        let ggx = (ax.max(ay) >= 1e-3).then_some(Ggx {
+            alpha_x: ax,
+            alpha_y: ay,
+        });
+        // An index-matched interface refracts every microfacet's light straight on: a delta
+        // whatever the roughness.
+        let rough_transmission =
+            transmissive && ggx.is_some() && m.conductor.is_none() && m.ior != 1.0;
         Bsdf {
             t,
             b,
@@ -106,13 +123,10 @@ impl Bsdf {
             ks: m.specular,
             kt: m.transmission,
             ior: m.ior,
-            // Below this α the lobe is numerically a mirror.
-            ggx: (ax.max(ay) >= 1e-3).then_some(Ggx {
-                alpha_x: ax,
-                alpha_y: ay,
-            }),
+            ggx,
             fresnel: m.fresnel,
             conductor: m.conductor,
+            rough_transmission,
             lambertian,
         }
     }
@@ -127,7 +141,7 @@ impl Bsdf {
 
     /// Whether scattering can be anything but a perfect mirror or refraction.
     pub fn has_non_delta(&self) -> bool {
-        self.kd.max_element() > 0.0 || (self.ggx.is_some() && self.ks.max_element() > 0.0)
+        self.kd.max_element() > 0.0 || self.has_glossy()
     }
 
     /// The diffuse reflectance (for albedo outputs).
@@ -175,14 +189,21 @@ impl Bsdf {
         };
         let rest = if self.fresnel { 1.0 - f } else { 1.0 };
         let diffuse = luminance(self.kd) * rest;
-        let (specular, mirror) = match self.conductor {
+        let (mut specular, mirror) = match self.conductor {
             Some(c) => {
                 let mirror = self.ks * c.reflectance(lo.z.abs());
                 (luminance(mirror), mirror)
             }
             None => (luminance(self.ks) * f, self.ks * f),
         };
-        let transmit = luminance(self.kt) * rest;
+        let mut transmit = luminance(self.kt) * rest;
+        if self.rough_transmission {
+            // One microfacet lobe reflects and refracts. F at the macro normal only sets its
+            // share against the diffuse lobe; beyond the critical angle it is 1, yet tilted
+            // microfacets still refract, so the lobe keeps a small share.
+            specular = (specular + transmit).max(1e-2 * luminance(self.kt));
+            transmit = 0.0;
+        }
         let total = diffuse + specular + transmit;
         let norm = if total > 0.0 { 1.0 / total } else { 0.0 };
         Lobes {
@@ -195,12 +216,23 @@ impl Bsdf {
         }
     }
 
-    fn fresnel_at(&self, cos: f32, eta: f32) -> f32 {
-        if self.fresnel {
-            fresnel_dielectric(cos, eta)
-        } else {
-            1.0
+    /// The GGX interface seen from local direction `lo`'s side (a dielectric's microfacets:
+    /// not a conductor's).
+    fn interface(&self, lo: Vec3) -> Option<RoughInterface> {
+        if self.conductor.is_some() {
+            return None;
         }
+        Some(RoughInterface {
+            ggx: self.ggx?,
+            ks: self.ks,
+            kt: if self.rough_transmission {
+                self.kt
+            } else {
+                Rgb::ZERO
+            },
+            fresnel: self.fresnel,
+            eta: self.eta_leaving(lo),
+        })
     }
 
     /// Correction for shading normals in importance transport (1 for radiance).
@@ -227,12 +259,14 @@ impl Bsdf {
         }
     }
 
-    /// Whether the BSDF has a glossy lobe: GGX reflection, neither diffuse nor a delta.
+    /// Whether the BSDF has a glossy lobe: GGX reflection or refraction, neither diffuse nor
+    /// a delta.
     pub fn has_glossy(&self) -> bool {
-        self.ggx.is_some() && self.ks.max_element() > 0.0
+        self.ggx.is_some() && (self.ks.max_element() > 0.0 || self.rough_transmission)
     }
 
-    /// The glossy (GGX) lobe's share of [`Bsdf::eval`]: f_glossy(wo, wi)·|cos θi|.
+    /// The glossy (GGX) lobes' share of [`Bsdf::eval`]: f_glossy(wo, wi)·|cos θi|, rough
+    /// refraction included.
     pub fn eval_glossy(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Rgb {
         match self.eval_lobes(wo, wi, mode) {
             Some((_, glossy, cos, adjoint)) => glossy * cos * adjoint,
@@ -240,24 +274,37 @@ impl Bsdf {
         }
     }
 
-    /// The diffuse and glossy parts of f(wo, wi), |cos θi| and the adjoint correction; `None`
-    /// where no non-delta lobe connects the two directions.
-    fn eval_lobes(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Option<(Rgb, Rgb, f32, f32)> {
+    /// Local `wo` and `wi` if some non-delta lobe may connect them: on one side for
+    /// reflection, on opposite sides only through a rough refraction, and each on the same
+    /// side of the shading normal as of the geometric one (otherwise light would leak
+    /// through the surface).
+    fn connectable(&self, wo: Vec3, wi: Vec3) -> Option<(Vec3, Vec3)> {
         let (go, gi) = (wo.dot(self.ng), wi.dot(self.ng));
-        // Only reflection is non-delta: both directions on one side, geometrically and for
-        // the shading normal alike (otherwise light would leak through the surface).
-        if go * gi <= 0.0 {
+        if go * gi == 0.0 || (go * gi < 0.0 && !self.rough_transmission) {
             return None;
         }
-        let (mut lo, mut li) = (self.local(wo), self.local(wi));
+        let (lo, li) = (self.local(wo), self.local(wi));
         if lo.z * go <= 0.0 || li.z * gi <= 0.0 {
             return None;
         }
+        Some((lo, li))
+    }
+
+    /// The diffuse and glossy parts of f(wo, wi), |cos θi| and the adjoint correction; `None`
+    /// where no non-delta lobe connects the two directions.
+    fn eval_lobes(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Option<(Rgb, Rgb, f32, f32)> {
+        let (mut lo, mut li) = self.connectable(wo, wi)?;
         let eta = self.eta_leaving(lo);
+        let interface = self.interface(lo);
         if lo.z < 0.0 {
             // Seen from inside a transmissive surface: mirror both to the upper side.
             lo = -lo;
             li = -li;
+        }
+        let adjoint = self.adjoint(wo, wi, lo, li, mode);
+        if li.z < 0.0 {
+            let glossy = interface.map_or(Rgb::ZERO, |i| i.eval(lo, li, mode));
+            return Some((Rgb::ZERO, glossy, -li.z, adjoint));
         }
         let mut diffuse = Rgb::ZERO;
         if self.kd.max_element() > 0.0 {
@@ -271,46 +318,47 @@ impl Bsdf {
         let mut glossy = Rgb::ZERO;
         if let Some(ggx) = self.ggx {
             if self.ks.max_element() > 0.0 {
-                let h = (lo + li).normalize();
-                let dg = ggx.d(h) * ggx.g(lo, li);
-                glossy = match self.conductor {
-                    Some(c) => {
+                glossy = match (self.conductor, interface) {
+                    (Some(c), _) => {
+                        let h = (lo + li).normalize();
+                        let dg = ggx.d(h) * ggx.g(lo, li);
                         self.ks * c.reflectance(lo.dot(h).abs()) * (dg / (4.0 * lo.z * li.z))
                     }
-                    None => {
-                        let fr = self.fresnel_at(lo.dot(h), eta);
-                        self.ks * (dg * fr / (4.0 * lo.z * li.z))
-                    }
+                    (None, Some(i)) => i.eval(lo, li, mode),
+                    (None, None) => Rgb::ZERO,
                 };
             }
         }
-        Some((diffuse, glossy, li.z, self.adjoint(wo, wi, lo, li, mode)))
+        Some((diffuse, glossy, li.z, adjoint))
     }
 
     /// Density (solid angle) with which [`Bsdf::sample`] produces `wi` from `wo` through a
     /// non-delta lobe.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let (go, gi) = (wo.dot(self.ng), wi.dot(self.ng));
-        if go * gi <= 0.0 {
+        let Some((mut lo, mut li)) = self.connectable(wo, wi) else {
             return 0.0;
-        }
-        let (mut lo, mut li) = (self.local(wo), self.local(wi));
-        if lo.z * go <= 0.0 || li.z * gi <= 0.0 {
-            return 0.0;
-        }
+        };
         if self.lambertian {
             return cosine_hemisphere_pdf(li.z.abs());
         }
         let lobes = self.lobes(lo);
+        let interface = self.interface(lo);
         if lo.z < 0.0 {
             lo = -lo;
             li = -li;
         }
-        let mut pdf = lobes.diffuse * cosine_hemisphere_pdf(li.z);
-        if let Some(ggx) = self.ggx {
-            if lobes.specular > 0.0 {
-                let h = (lo + li).normalize();
-                pdf += lobes.specular * ggx.visible_pdf(lo, h) / (4.0 * lo.dot(h).abs());
+        let mut pdf = 0.0;
+        if li.z > 0.0 {
+            pdf += lobes.diffuse * cosine_hemisphere_pdf(li.z);
+        }
+        if lobes.specular > 0.0 {
+            match (self.ggx, interface) {
+                (_, Some(i)) => pdf += i.pdf(lo, li, lobes.specular),
+                (Some(ggx), None) if li.z > 0.0 => {
+                    let h = (lo + li).normalize();
+                    pdf += lobes.specular * ggx.visible_pdf(lo, h) / (4.0 * lo.dot(h).abs());
+                }
+                _ => {}
             }
         }
         pdf
@@ -346,6 +394,10 @@ impl Bsdf {
             // A non-delta lobe: the weight comes from the whole mixture.
             let li = if u_lobe < lobes.diffuse {
                 cosine_hemisphere(u)
+            } else if let Some(interface) = self.interface(lo_raw) {
+                // The rest of u_lobe chooses between reflection and refraction.
+                let u_choice = ((u_lobe - lobes.diffuse) / lobes.specular).min(1.0);
+                interface.sample(lo, u_choice, u)?
             } else {
                 let h = self.ggx?.sample_visible(lo, u);
                 let li = 2.0 * lo.dot(h) * h - lo;
@@ -355,7 +407,8 @@ impl Bsdf {
                 li
             };
             let wi = self.world(li * side);
-            if wi.dot(self.ng) * go <= 0.0 {
+            // The geometric normal must agree on the side wi is on.
+            if wi.dot(self.ng) * go * li.z <= 0.0 {
                 return None;
             }
             let pdf = self.pdf(wo, wi);

@@ -19,7 +19,8 @@ pub struct Material {
     pub ior: f32,
     /// Exponent n of the Phong highlight.
     pub phong_exponent: f32,
-    /// Microfacet roughness, GGX α: the Monte Carlo integrators use a GGX reflection lobe;
+    /// Microfacet roughness, GGX α: the Monte Carlo integrators use GGX reflection (and
+    /// refraction, for a transmissive material) lobes;
     /// Whitted's integrator draws the normal of each reflected or refracted ray from the GGX
     /// distribution (glossy reflection, frosted transmission). 0 is a perfect mirror or
     /// clear glass.

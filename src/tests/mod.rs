@@ -15,4 +15,5 @@ mod network_scenes;
 mod network_transport;
 mod oiio;
 mod robustness;
+mod rough_glass;
 mod whitted;

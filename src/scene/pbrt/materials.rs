@@ -183,19 +183,15 @@ impl Loader {
                 if ty == "thindielectric" {
                     substitute(self, "using a smooth dielectric (refracting) surface");
                 }
-                let roughness = self.isotropic_roughness(p, "", st, loc)?;
-                if roughness > 0.0 {
-                    self.warn(
-                        loc,
-                        format!("{st}: rough dielectric: the reflection is rough, the transmission stays smooth"),
-                    );
-                }
+                // GGX reflection and refraction, as pbrt's DielectricBxDF.
+                let (ax, ay) = self.roughness(p, "", st, loc)?;
                 Material {
                     specular: Rgb::ONE,
                     transmission: Rgb::ONE,
                     fresnel: true,
                     ior: self.eta(p, "eta", 1.5, st, loc)?,
-                    roughness,
+                    roughness: ax,
+                    roughness_v: (ay != ax).then_some(ay),
                     ..base
                 }
             }
