@@ -153,6 +153,25 @@ fn gathering_shooting_and_bidirectional_agree_through_rough_glass() {
     check_adjoint(&scene, &[1]);
 }
 
+/// The same with the glass sphere made a translucent shell (Lambertian reflection 0.3,
+/// Lambertian transmission 0.5): light tracing is compared on it too.
+#[test]
+fn gathering_shooting_and_bidirectional_agree_through_diffuse_transmission() {
+    let mut scene = Scene::load(&manifest("scenes/cornell-spheres.toml")).unwrap();
+    let glass = scene
+        .materials
+        .iter_mut()
+        .find(|m| m.name == "glass")
+        .expect("the scene has a glass material");
+    *glass = raylink::scene::Material {
+        name: glass.name.clone(),
+        diffuse: raylink::scene::Texture::Constant(raylink::math::Rgb::splat(0.3)),
+        diffuse_transmission: raylink::math::Rgb::splat(0.5),
+        ..Default::default()
+    };
+    check_adjoint(&scene, &[1]);
+}
+
 /// Whether each pixel of a 48x48 view sees any of `shapes` at its centre or corners.
 fn sees_shapes(scene: &Scene, shapes: &[u32]) -> Vec<bool> {
     let accel = raylink::accel::build(scene, Backend::Embree, &Control::default()).unwrap();

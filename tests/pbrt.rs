@@ -465,6 +465,25 @@ fn materials_map_to_raylink_fields() {
     assert!((m[1].roughness - 0.2).abs() < 1e-6);
     assert!((m[1].roughness_v.unwrap() - 0.5).abs() < 1e-6);
     assert!((m[2].roughness - 0.2).abs() < 1e-6 && m[2].roughness_v.is_none());
+    // Diffuse transmission: reflectance and transmittance (0.25 each by default) times
+    // `scale`, without a warning.
+    let s = world(&format!(
+        "Material \"diffusetransmission\" {TRI}\
+         Material \"diffusetransmission\" \"rgb reflectance\" [0.2 0.4 0.1] \"rgb transmittance\" [0.3 0.5 0.1] \"float scale\" 2 {TRI}"
+    ));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let m = &s.materials;
+    assert_eq!(
+        m[0].diffuse,
+        raylink::scene::Texture::Constant(Rgb::splat(0.25))
+    );
+    assert_eq!(m[0].diffuse_transmission, Rgb::splat(0.25));
+    assert_eq!(
+        m[1].diffuse,
+        raylink::scene::Texture::Constant(Rgb::new(0.4, 0.8, 0.2))
+    );
+    assert_eq!(m[1].diffuse_transmission, Rgb::new(0.6, 1.0, 0.2));
+    assert_eq!((m[1].specular, m[1].transmission), (Rgb::ZERO, Rgb::ZERO));
     // Unsupported material types: a warning and a substitute.
     let s = world(&format!("Material \"hair\" \"float eumelanin\" 1.3 {TRI}"));
     assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);

@@ -501,3 +501,32 @@ fn conductors_read_named_or_explicit_with_anisotropic_roughness() {
     std::fs::remove_dir_all(&dir).unwrap();
     assert_eq!(again.materials, s.materials);
 }
+
+/// `diffuse_transmission` is a colour (one number or three), zero by default, and survives
+/// a conversion to TOML and back.
+#[test]
+fn diffuse_transmission_reads_and_round_trips() {
+    let text = format!(
+        "{CAMERA}[materials.leaf]\ndiffuse = [0.2, 0.4, 0.1]\ndiffuse_transmission = [0.3, 0.5, 0.1]\n\
+         [materials.paper]\ndiffuse_transmission = 0.25\n\
+         [[shapes]]\ntype = \"sphere\"\nmaterial = \"leaf\"\n\
+         [[shapes]]\ntype = \"sphere\"\nmaterial = \"paper\"\n\
+         [[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\n"
+    );
+    let s = parse(&text).unwrap_or_else(|e| panic!("{e}"));
+    let m = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap().clone();
+    assert_eq!(m("leaf").diffuse_transmission, Vec3::new(0.3, 0.5, 0.1));
+    assert_eq!(m("paper").diffuse_transmission, Vec3::splat(0.25));
+    assert_eq!(m("white").diffuse_transmission, Vec3::ZERO);
+    let bad = parse(&format!(
+        "{CAMERA}[materials.bad]\ndiffuse_transmission = -1\n[[shapes]]\ntype = \"sphere\"\nmaterial = \"bad\"\n"
+    ));
+    assert!(bad.is_err());
+    let dir = std::env::temp_dir().join(format!("raylink-leaf-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("leaf.toml");
+    raylink::scene::convert::write_toml(&s, &out).unwrap();
+    let again = Scene::load(&out).unwrap_or_else(|e| panic!("{e}"));
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(again.materials, s.materials);
+}

@@ -2,6 +2,8 @@
 //! scene [`Material`] at a surface point and interprets its coefficients as lobes:
 //!
 //! - `diffuse` kd: Lambertian reflection kd/π;
+//! - `diffuse_transmission` kdt: Lambertian transmission kdt/π to the other side (pbrt-v4's
+//!   `DiffuseTransmissionBxDF` with kd), not weighted by Fresnel;
 //! - `specular` ks: reflection, a perfect mirror when `roughness` is 0, otherwise a GGX
 //!   microfacet lobe with α = `roughness`;
 //! - `transmission` kt with `ior`: smooth refraction when `roughness` is 0, otherwise GGX
@@ -61,6 +63,7 @@ pub struct Bsdf {
     n: Vec3,
     ng: Vec3,
     kd: Rgb,
+    kdt: Rgb,
     ks: Rgb,
     kt: Rgb,
     /// Index of refraction inside (the side opposite `ng`) relative to outside.
@@ -77,6 +80,7 @@ pub struct Bsdf {
 /// Lobe selection probabilities for a given outgoing direction.
 struct Lobes {
     diffuse: f32,
+    diffuse_transmit: f32,
     specular: f32,
     transmit: f32,
     /// Fresnel reflectance at the outgoing direction (1 when Fresnel is off).
@@ -103,8 +107,10 @@ impl Bsdf {
         let (t, b) = frame(n);
         let (ax, ay) = m.alphas();
         let (ax, ay) = (ax.clamp(0.0, 1.0), ay.clamp(0.0, 1.0));
-        let lambertian =
-            !m.fresnel && m.specular.max_element() <= 0.0 && m.transmission.max_element() <= 0.0;
+        let lambertian = !m.fresnel
+            && m.specular.max_element() <= 0.0
+            && m.transmission.max_element() <= 0.0
+            && m.diffuse_transmission.max_element() <= 0.0;
         // Below this α the lobe is numerically a mirror.
         let ggx = (ax.max(ay) >= 1e-3).then_some(Ggx {
             alpha_x: ax,
@@ -120,6 +126,7 @@ impl Bsdf {
             n,
             ng,
             kd: m.diffuse.eval(sp.p, sp.uv),
+            kdt: m.diffuse_transmission,
             ks: m.specular,
             kt: m.transmission,
             ior: m.ior,
@@ -141,14 +148,14 @@ impl Bsdf {
 
     /// Whether scattering can be anything but a perfect mirror or refraction.
     pub fn has_non_delta(&self) -> bool {
-        self.kd.max_element() > 0.0 || self.has_glossy()
+        self.kd.max_element() > 0.0 || self.kdt.max_element() > 0.0 || self.has_glossy()
     }
 
     /// The diffuse reflectance (for albedo outputs).
     pub fn albedo(&self) -> Rgb {
         match self.conductor {
-            Some(c) => self.kd + self.ks * c.reflectance(1.0) + self.kt,
-            None => self.kd + self.ks + self.kt,
+            Some(c) => self.kd + self.kdt + self.ks * c.reflectance(1.0) + self.kt,
+            None => self.kd + self.kdt + self.ks + self.kt,
         }
     }
 
@@ -204,10 +211,12 @@ impl Bsdf {
             specular = (specular + transmit).max(1e-2 * luminance(self.kt));
             transmit = 0.0;
         }
-        let total = diffuse + specular + transmit;
+        let diffuse_transmit = luminance(self.kdt);
+        let total = diffuse + diffuse_transmit + specular + transmit;
         let norm = if total > 0.0 { 1.0 / total } else { 0.0 };
         Lobes {
             diffuse: diffuse * norm,
+            diffuse_transmit: diffuse_transmit * norm,
             specular: specular * norm,
             transmit: transmit * norm,
             f,
@@ -275,12 +284,13 @@ impl Bsdf {
     }
 
     /// Local `wo` and `wi` if some non-delta lobe may connect them: on one side for
-    /// reflection, on opposite sides only through a rough refraction, and each on the same
-    /// side of the shading normal as of the geometric one (otherwise light would leak
-    /// through the surface).
+    /// reflection, on opposite sides only through a rough refraction or a diffuse
+    /// transmission, and each on the same side of the shading normal as of the geometric
+    /// one (otherwise light would leak through the surface).
     fn connectable(&self, wo: Vec3, wi: Vec3) -> Option<(Vec3, Vec3)> {
         let (go, gi) = (wo.dot(self.ng), wi.dot(self.ng));
-        if go * gi == 0.0 || (go * gi < 0.0 && !self.rough_transmission) {
+        let transmits = self.rough_transmission || self.kdt.max_element() > 0.0;
+        if go * gi == 0.0 || (go * gi < 0.0 && !transmits) {
             return None;
         }
         let (lo, li) = (self.local(wo), self.local(wi));
@@ -303,8 +313,12 @@ impl Bsdf {
         }
         let adjoint = self.adjoint(wo, wi, lo, li, mode);
         if li.z < 0.0 {
-            let glossy = interface.map_or(Rgb::ZERO, |i| i.eval(lo, li, mode));
-            return Some((Rgb::ZERO, glossy, -li.z, adjoint));
+            let diffuse = self.kdt * FRAC_1_PI;
+            let glossy = match interface {
+                Some(i) if self.rough_transmission => i.eval(lo, li, mode),
+                _ => Rgb::ZERO,
+            };
+            return Some((diffuse, glossy, -li.z, adjoint));
         }
         let mut diffuse = Rgb::ZERO;
         if self.kd.max_element() > 0.0 {
@@ -350,6 +364,8 @@ impl Bsdf {
         let mut pdf = 0.0;
         if li.z > 0.0 {
             pdf += lobes.diffuse * cosine_hemisphere_pdf(li.z);
+        } else {
+            pdf += lobes.diffuse_transmit * cosine_hemisphere_pdf(-li.z);
         }
         if lobes.specular > 0.0 {
             match (self.ggx, interface) {
@@ -389,14 +405,18 @@ impl Bsdf {
         // Work with wo on the upper side.
         let lo = lo_raw * side;
         let go = wo.dot(self.ng);
-        if u_lobe < lobes.diffuse || (u_lobe < lobes.diffuse + lobes.specular && self.ggx.is_some())
-        {
+        // Lobes in the order diffuse, diffuse transmission, specular, transmission.
+        let diffuse_end = lobes.diffuse + lobes.diffuse_transmit;
+        let specular_end = diffuse_end + lobes.specular;
+        if u_lobe < diffuse_end || (u_lobe < specular_end && self.ggx.is_some()) {
             // A non-delta lobe: the weight comes from the whole mixture.
             let li = if u_lobe < lobes.diffuse {
                 cosine_hemisphere(u)
+            } else if u_lobe < diffuse_end {
+                -cosine_hemisphere(u)
             } else if let Some(interface) = self.interface(lo_raw) {
                 // The rest of u_lobe chooses between reflection and refraction.
-                let u_choice = ((u_lobe - lobes.diffuse) / lobes.specular).min(1.0);
+                let u_choice = ((u_lobe - diffuse_end) / lobes.specular).min(1.0);
                 interface.sample(lo, u_choice, u)?
             } else {
                 let h = self.ggx?.sample_visible(lo, u);
@@ -423,7 +443,7 @@ impl Bsdf {
                 delta: false,
             });
         }
-        if u_lobe < lobes.diffuse + lobes.specular {
+        if u_lobe < specular_end {
             // Perfect mirror.
             let li = Vec3::new(-lo.x, -lo.y, lo.z);
             let wi = self.world(li * side);

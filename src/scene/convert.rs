@@ -310,6 +310,8 @@ fn material(m: &Material, refs: Refs) -> MaterialDesc {
         ambient: m.ambient.map(Splat3),
         specular: Some(Splat3(m.specular)),
         transmission: Some(Splat3(m.transmission)),
+        diffuse_transmission: (m.diffuse_transmission.max_element() > 0.0)
+            .then_some(Splat3(m.diffuse_transmission)),
         ior: Some(m.ior),
         phong_exponent: Some(m.phong_exponent),
         roughness: Some(match m.roughness_v {

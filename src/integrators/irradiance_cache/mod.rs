@@ -629,11 +629,17 @@ impl Walk<'_> {
             }
             // Indirect diffuse: ρ/π · E, through a coat as for light arriving evenly.
             let kd = m.diffuse.eval(sp.p, sp.uv);
+            let kdt = m.diffuse_transmission;
+            let n = bsdf.shading_normal();
+            let ng = if sp.ng.dot(n) >= 0.0 { sp.ng } else { -sp.ng };
             if kd.max_element() > 0.0 {
-                let n = bsdf.shading_normal();
-                let ng = if sp.ng.dot(n) >= 0.0 { sp.ng } else { -sp.ng };
                 let e = self.indirect(sp.p, n, ng, level);
                 l += kd * (FRAC_1_PI * bsdf.diffuse_coat(wo)) * e;
+            }
+            // Diffuse transmission: kdt/π · the irradiance arriving on the other side.
+            if kdt.max_element() > 0.0 {
+                let e = self.indirect(sp.p, -n, -ng, level);
+                l += kdt * FRAC_1_PI * e;
             }
         }
         // One BSDF sample. A delta direction is a specular path, followed. A non-delta

@@ -196,14 +196,29 @@ impl Loader {
                 }
             }
             "diffusetransmission" => {
-                substitute(
-                    self,
-                    "using its diffuse reflection (transmission is dropped)",
-                );
-                p.ignore("transmittance");
-                p.ignore("scale");
+                // pbrt-v4's DiffuseTransmissionBxDF: R/π on wo's side, T/π through, both
+                // times `scale`.
+                let scale = self.float_param(p, "scale", 1.0, st, loc)? as f32;
+                let constant = |this: &mut Loader, t: Texture, what: &str| match t {
+                    Texture::Constant(c) => c,
+                    other => {
+                        this.warn(
+                            loc,
+                            format!("{st}: a textured \"{what}\" is replaced by its maximum"),
+                        );
+                        other.max_value()
+                    }
+                };
+                let t = self.texture_param(p, "transmittance", Rgb::splat(0.25), st, loc)?;
+                let t = constant(self, t, "transmittance");
+                let r = self.texture_param(p, "reflectance", Rgb::splat(0.25), st, loc)?;
+                let r = match r {
+                    r if scale == 1.0 => r,
+                    r => Texture::Constant(constant(self, r, "reflectance") * scale),
+                };
                 Material {
-                    diffuse: self.texture_param(p, "reflectance", Rgb::splat(0.25), st, loc)?,
+                    diffuse: r,
+                    diffuse_transmission: t * scale,
                     ..base
                 }
             }

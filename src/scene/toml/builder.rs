@@ -307,6 +307,11 @@ impl<'a> Builder<'a> {
             ambient,
             specular: col(desc.specular, "specular", specular_default)?,
             transmission: col(desc.transmission, "transmission", d.transmission)?,
+            diffuse_transmission: col(
+                desc.diffuse_transmission,
+                "diffuse_transmission",
+                d.diffuse_transmission,
+            )?,
             ior: positive(desc.ior.unwrap_or(d.ior)).map_err(fail("ior"))?,
             phong_exponent: non_negative(desc.phong_exponent.unwrap_or(d.phong_exponent))
                 .map_err(fail("phong_exponent"))?,

@@ -181,6 +181,8 @@ pub(crate) struct MaterialDesc {
     pub(crate) specular: Option<Splat3>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) transmission: Option<Splat3>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) diffuse_transmission: Option<Splat3>,
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) ior: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
