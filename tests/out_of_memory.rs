@@ -7,17 +7,36 @@ mod common;
 
 use common::stderr;
 use std::os::unix::process::ExitStatusExt;
-use std::process::{Command, Output};
+use std::process::{Command, Output, Stdio};
+use std::time::{Duration, Instant};
 
 /// `raylink ARGS` under an address-space limit of `kib` KiB.
 fn under_limit(kib: u64, args: &[&str]) -> Output {
-    Command::new("sh")
+    under_limit_within(kib, args, Duration::from_secs(600))
+        .unwrap_or_else(|| panic!("raylink {args:?} under {kib} KiB still ran after 600 s"))
+}
+
+/// [`under_limit`], or `None` if the run has not ended within `limit` (it is then killed).
+fn under_limit_within(kib: u64, args: &[&str], limit: Duration) -> Option<Output> {
+    let mut child = Command::new("sh")
         .args(["-c", &format!("ulimit -v {kib} && exec \"$0\" \"$@\"")])
         .arg(env!("CARGO_BIN_EXE_raylink"))
         .args(args)
         .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .unwrap()
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    let start = Instant::now();
+    while child.try_wait().unwrap().is_none() {
+        if start.elapsed() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            return None;
+        }
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    Some(child.wait_with_output().unwrap())
 }
 
 /// Memory the system refuses (here an address-space limit, `ulimit -v`, set in a shell that
@@ -74,10 +93,16 @@ fn allocations_the_system_refuses_are_errors_not_aborts() {
 }
 
 /// `raylink render` of the Cornell box with `integrator` at `size`x`size`, 4 samples per pixel,
-/// to `out`, under `mib` MiB of address space.
-fn render_under(mib: u64, integrator: &str, size: u32, out: &std::path::Path) -> Output {
+/// to `out`, under `mib` MiB of address space; `None` if it has not ended within `limit`.
+fn render_under(
+    mib: u64,
+    integrator: &str,
+    size: u32,
+    out: &std::path::Path,
+    limit: Duration,
+) -> Option<Output> {
     let size = size.to_string();
-    under_limit(
+    under_limit_within(
         mib * 1024,
         &[
             "render",
@@ -94,6 +119,7 @@ fn render_under(mib: u64, integrator: &str, size: u32, out: &std::path::Path) ->
             "-o",
             out.to_str().unwrap(),
         ],
+        limit,
     )
 }
 
@@ -103,15 +129,23 @@ fn render_under(mib: u64, integrator: &str, size: u32, out: &std::path::Path) ->
 /// image): each run either renders (exit 0, an image) or fails with exit 1 and its last line
 /// a `raylink: error:` naming memory; none is ended by a signal (SIGABRT from Rust's
 /// allocation failure or from Embree's task scheduler's uncaught exception), and a failed
-/// run leaves no file. (The last line: libpng prints a line of its own when OpenImageIO's
-/// writer fails.)
+/// run leaves no file, and none runs on past two minutes. (The last line: libpng prints a
+/// line of its own when OpenImageIO's writer fails.)
+///
+/// Below the least memory, Embree's task scheduler (TBB) fails to start its threads: it
+/// aborts or crashes there, and once under load it was seen to hang, so the search gives each
+/// of those runs half a minute.
 #[test]
 fn memory_refused_in_any_phase_ends_with_an_error_not_an_abort() {
     let dir = tempfile::tempdir().unwrap();
     let tiny = dir.path().join("tiny.png");
+    let renders = |mib| {
+        let run = render_under(mib, "whitted", 8, &tiny, Duration::from_secs(30));
+        run.is_some_and(|out| out.status.success())
+    };
     let start = (400..4096)
         .step_by(20)
-        .find(|&mib| render_under(mib, "whitted", 8, &tiny).status.success())
+        .find(|&mib| renders(mib))
         .expect("a tiny render within 4 GiB");
     std::fs::remove_file(&tiny).unwrap();
     let mut failed = std::collections::BTreeSet::new();
@@ -119,7 +153,8 @@ fn memory_refused_in_any_phase_ends_with_an_error_not_an_abort() {
     for integrator in ["path", "irradiance-cache", "network", "whitted"] {
         for mib in (start..=start + 400).step_by(20) {
             let out_path = dir.path().join(format!("{integrator}-{mib}.png"));
-            let out = render_under(mib, integrator, 200, &out_path);
+            let out = render_under(mib, integrator, 200, &out_path, Duration::from_secs(120))
+                .unwrap_or_else(|| panic!("{integrator} under {mib} MiB still ran after 120 s"));
             let err = stderr(&out);
             let case = format!("{integrator} under {mib} MiB: {:?} {err}", out.status);
             assert_eq!(out.status.signal(), None, "{case}");
