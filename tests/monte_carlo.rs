@@ -143,13 +143,7 @@ fn gathering_shooting_and_bidirectional_agree_on_glossy_and_specular_spheres() {
 /// only the mirror sphere's pixels are left out of the comparisons with light tracing.
 #[test]
 fn gathering_shooting_and_bidirectional_agree_through_rough_glass() {
-    let mut scene = Scene::load(&manifest("scenes/cornell-spheres.toml")).unwrap();
-    let glass = scene
-        .materials
-        .iter_mut()
-        .find(|m| m.name == "glass")
-        .expect("the scene has a glass material");
-    glass.roughness = 0.3;
+    let scene = cornell_spheres_with_glass(|glass| glass.roughness = 0.3);
     check_adjoint(&scene, &[1]);
 }
 
@@ -157,19 +151,27 @@ fn gathering_shooting_and_bidirectional_agree_through_rough_glass() {
 /// Lambertian transmission 0.5): light tracing is compared on it too.
 #[test]
 fn gathering_shooting_and_bidirectional_agree_through_diffuse_transmission() {
+    let scene = cornell_spheres_with_glass(|glass| {
+        *glass = raylink::scene::Material {
+            name: glass.name.clone(),
+            diffuse: raylink::scene::Texture::Constant(raylink::math::Rgb::splat(0.3)),
+            diffuse_transmission: raylink::math::Rgb::splat(0.5),
+            ..Default::default()
+        }
+    });
+    check_adjoint(&scene, &[1]);
+}
+
+/// `scenes/cornell-spheres.toml` with its glass material changed by `edit`.
+fn cornell_spheres_with_glass(edit: impl FnOnce(&mut raylink::scene::Material)) -> Scene {
     let mut scene = Scene::load(&manifest("scenes/cornell-spheres.toml")).unwrap();
     let glass = scene
         .materials
         .iter_mut()
         .find(|m| m.name == "glass")
         .expect("the scene has a glass material");
-    *glass = raylink::scene::Material {
-        name: glass.name.clone(),
-        diffuse: raylink::scene::Texture::Constant(raylink::math::Rgb::splat(0.3)),
-        diffuse_transmission: raylink::math::Rgb::splat(0.5),
-        ..Default::default()
-    };
-    check_adjoint(&scene, &[1]);
+    edit(glass);
+    scene
 }
 
 /// Whether each pixel of a 48x48 view sees any of `shapes` at its centre or corners.

@@ -17,7 +17,7 @@
 //! stored hit; with Embree, which cannot start a traversal part-way, the whole query goes).
 
 use super::grid::ActiveVoxels;
-use super::segments::{BlockSegments, Point16, Quantiser};
+use super::segments::{BlockSegments, Point16, Quantiser, Segment};
 use super::tables::{Table, VoxelTables};
 use crate::accel::{Accel, Hit};
 use crate::math::{Ray, Vec3};
@@ -166,18 +166,10 @@ pub struct RecordingAccel<'a> {
     /// The scene's point lights: their bit in `lights` and their position; all their bits.
     point_lights: Vec<(u64, Vec3A)>,
     point_bits: u64,
-    /// The point lights' positions on the segments' lattice, packed: a shadow segment that
-    /// ends at one is kept by its start in that light's list.
-    light_ends: Vec<u64>,
-    /// The shared lists' slots: one per point light (in the order of `light_ends`), then the
-    /// camera's, whose segments start at `camera`.
+    /// The shared lists' slots: one per point light (in the order of `point_lights`; a
+    /// shadow segment that ends at one's lattice point is kept by its start in its list),
+    /// then the camera's, whose segments start at the camera's exact position.
     slots: Vec<(Table, bool, Vec3, Point16)>,
-    camera: Vec3,
-}
-
-/// A lattice point in one word, to compare in one instruction.
-fn packed(p: Point16) -> u64 {
-    u64::from(p[0]) | u64::from(p[1]) << 16 | u64::from(p[2]) << 32
 }
 
 fn mark(set: &[AtomicU64], v: usize) {
@@ -227,13 +219,10 @@ impl<'a> RecordingAccel<'a> {
             })
             .collect();
         let quantiser = Quantiser::new(&voxels.fine);
-        let ends: Vec<Point16> = (point_lights.iter())
-            .map(|&(_, p)| quantiser.encode(p))
-            .collect();
-        let light_ends = ends.iter().map(|&e| packed(e)).collect();
         let camera = scene.camera.position;
-        let slots = (ends.iter())
-            .map(|&e| (Table::Shadow, false, quantiser.decode(e), e))
+        let slots = (point_lights.iter())
+            .map(|&(_, p)| quantiser.encode(p))
+            .map(|e| (Table::Shadow, false, quantiser.decode(e), e))
             .chain([(
                 Table::Surface,
                 true,
@@ -261,9 +250,7 @@ impl<'a> RecordingAccel<'a> {
             lights: AtomicU64::new(0),
             point_bits: point_lights.iter().fold(0, |m, l| m | l.0),
             point_lights,
-            light_ends,
             slots,
-            camera,
         }
     }
 
@@ -325,11 +312,17 @@ impl<'a> RecordingAccel<'a> {
     /// Notes a ray looking for a surface that got `hit`, and records its segment (to the hit,
     /// or to the end of the ray).
     fn record_surface(&self, ray: &Ray, hit: Option<Hit>) {
+        let end = self.reached(ray, hit);
+        self.record(Table::Surface, ray.origin, ray.dir, ray.tmin, end);
+    }
+
+    /// Notes whether a ray looking for a surface found one (`hit`); where its segment ends.
+    #[inline]
+    fn reached(&self, ray: &Ray, hit: Option<Hit>) -> f32 {
         if hit.is_some() {
             self.hit.store(true, Ordering::Relaxed);
         }
-        let end = hit.map_or(ray.tmax, |h| h.t);
-        self.record(Table::Surface, ray.origin, ray.dir, ray.tmin, end);
+        hit.map_or(ray.tmax, |h| h.t)
     }
 
     /// Records the segment `origin + t·dir`, `t ∈ [t0, t1]`.
@@ -354,12 +347,17 @@ impl<'a> RecordingAccel<'a> {
 
     #[inline(never)]
     fn keep(&self, table: Table, origin: Vec3, dir: Vec3, t0: f32, t1: f32) {
-        let Some([a, b]) = self.voxels.clip_segment(origin, dir, t0, t1) else {
-            return;
-        };
-        let q = &self.quantiser;
-        let s = [q.encode(a), q.encode(b)];
-        self.with_lists(|list| list.segments.push(table, s));
+        if let Some(s) = self.on_lattice(origin, dir, t0, t1) {
+            self.with_lists(|list| list.segments.push(table, s));
+        }
+    }
+
+    /// The segment `origin + t·dir`, `t ∈ [t0, t1]`, clipped to the recording box and
+    /// quantised; `None` if it misses the box.
+    #[inline(always)]
+    fn on_lattice(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32) -> Option<Segment> {
+        let [a, b] = self.voxels.clip_segment(origin, dir, t0, t1)?;
+        Some([self.quantiser.encode(a), self.quantiser.encode(b)])
     }
 
     /// Records the shadow segment `origin + t·dir`, `t ∈ [t0, t1]`. With segments, one that
@@ -371,12 +369,11 @@ impl<'a> RecordingAccel<'a> {
         if self.records == Records::Tables || !whole || t1 > 1.0 {
             return self.record(Table::Shadow, origin, dir, t0, t1);
         }
-        let Some([a, b]) = self.voxels.clip_segment(origin, dir, t0, 1.0) else {
+        let Some(s) = self.on_lattice(origin, dir, t0, 1.0) else {
             return;
         };
-        let q = &self.quantiser;
-        let s = [q.encode(a), q.encode(b)];
-        let light = self.light_ends.iter().position(|&e| e == packed(s[1]));
+        let lights = &self.slots[..self.slots.len() - 1];
+        let light = lights.iter().position(|&(_, _, _, key)| key == s[1]);
         self.with_lists(|list| match light {
             Some(slot) => list.segments.push_shared(slot, self.slots[slot], s[0]),
             None => list.segments.push(Table::Shadow, s),
@@ -388,20 +385,16 @@ impl<'a> RecordingAccel<'a> {
     /// position (a pinhole; with segments).
     #[inline(never)]
     fn keep_camera(&self, ray: &Ray, hit: Option<Hit>) {
-        if hit.is_some() {
-            self.hit.store(true, Ordering::Relaxed);
-        }
-        let t1 = hit.map_or(ray.tmax, |h| h.t);
-        let from_camera = ray.origin.to_array() == self.camera.to_array() && ray.tmin == 0.0;
+        let t1 = self.reached(ray, hit);
+        let slot = self.slots.len() - 1;
+        let camera = self.slots[slot].2;
+        let from_camera = ray.origin.to_array() == camera.to_array() && ray.tmin == 0.0;
         if self.records == Records::Tables || !from_camera {
             return self.record(Table::Surface, ray.origin, ray.dir, ray.tmin, t1);
         }
-        let Some([_, b]) = self.voxels.clip_segment(ray.origin, ray.dir, 0.0, t1) else {
-            return;
-        };
-        let end = self.quantiser.encode(b);
-        let slot = self.slots.len() - 1;
-        self.with_lists(|list| list.segments.push_shared(slot, self.slots[slot], end));
+        if let Some([_, end]) = self.on_lattice(ray.origin, ray.dir, 0.0, t1) {
+            self.with_lists(|list| list.segments.push_shared(slot, self.slots[slot], end));
+        }
     }
 
     /// What was recorded: the segments (sealed), the camera hits, whether any ray found a
