@@ -29,7 +29,7 @@ use dielectric::RoughInterface;
 
 use crate::math::optics::{fresnel_dielectric, fresnel_dielectric_mean, refract};
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
-use crate::math::{frame, luminance, Rgb, Vec2, Vec3};
+use crate::math::{frame, luminance, Rgb, Rng, Vec2, Vec3};
 use crate::scene::Conductor;
 use crate::scene::{Material, SurfacePoint};
 use std::f32::consts::FRAC_1_PI;
@@ -378,6 +378,51 @@ impl Bsdf {
             }
         }
         pdf
+    }
+
+    /// What the BSDF sends toward `wo` of light arriving evenly over the hemisphere on `wo`'s
+    /// side and over the other one: ∫ f·|cos θi| dωi over each (the directional albedo split
+    /// by side). Exact for smooth lobes; with a rough or diffuse one, an estimate from a
+    /// stratified `n`×`n` set of samples, the same at every call.
+    pub fn albedo_by_side(&self, wo: Vec3, n: u32, mode: Transport) -> (Rgb, Rgb) {
+        let lo = self.local(wo);
+        if !self.has_non_delta() {
+            let lobes = self.lobes(lo);
+            if lobes.transmit <= 0.0 {
+                return (lobes.mirror, Rgb::ZERO);
+            }
+            let rest = if self.fresnel { 1.0 - lobes.f } else { 1.0 };
+            let scale = match mode {
+                Transport::Radiance => lobes.eta * lobes.eta,
+                Transport::Importance => 1.0,
+            };
+            return (lobes.mirror, self.kt * (rest * scale));
+        }
+        let (mut same, mut other) = (Rgb::ZERO, Rgb::ZERO);
+        let count = (n * n).max(1);
+        // Jittered strata for the direction, and the lobe choice's strata in a shuffled
+        // order: a fixed stream, so every call gives the same estimate.
+        let mut rng = Rng::for_key(0x616c_6265, &[]);
+        let mut order: Vec<u32> = (0..count).collect();
+        for i in (1..order.len()).rev() {
+            order.swap(i, rng.next_u32() as usize % (i + 1));
+        }
+        for (k, &stratum) in order.iter().enumerate() {
+            let (i, j) = (k as u32 % n, k as u32 / n);
+            let u = Vec2::new(
+                (i as f32 + rng.uniform()) / n as f32,
+                (j as f32 + rng.uniform()) / n as f32,
+            );
+            let u_lobe = (stratum as f32 + rng.uniform()) / count as f32;
+            if let Some(s) = self.sample(wo, u_lobe, u, mode) {
+                if s.wi.dot(self.ng) * wo.dot(self.ng) > 0.0 {
+                    same += s.weight;
+                } else {
+                    other += s.weight;
+                }
+            }
+        }
+        (same / count as f32, other / count as f32)
     }
 
     /// Samples a direction `wi` from `wo`; `u_lobe` picks the lobe and `u` the direction.
