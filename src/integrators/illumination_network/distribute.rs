@@ -4,18 +4,16 @@
 //! **Reflectance.** Each node's reflectance maps incoming links to outgoing links:
 //! - diffuse kd: the paper's bypass: incoming flux is summed into one accumulator and leaves
 //!   as the same radiance kd·Φ/W on every slot (flux ∝ w);
-//! - specular ks, roughness below half a slope step (mirror at this resolution): the
-//!   reflected direction split bilinearly over the linked (or escaping) ones of its four
-//!   bounding slots, else the nearest linked slot;
-//! - specular ks, roughness α (glossy): a GGX lobe D·G/(4 cosθi cosθo) times the étendue of
-//!   the outgoing slot, over the slots near the reflected direction, normalised;
-//! - transmission kt: the identity onto the other side of the patch (the same line continues),
-//!   or with roughness α (frosted) a lobe of angular width α around it.
+//! - the rest of the material (specular, transmission, roughness, Fresnel, refraction, a
+//!   metal): the path tracer's BSDF without its diffuse lobe, as a table from in-slots to
+//!   out-slots, T(l → o) = ∫ f cos θ dω over o's cell of directions averaged over l's,
+//!   estimated by sampling the BSDF once per group of nodes with the same surface and normal
+//!   (a planar polygon's), then for each node the light of out-slots that no line of its
+//!   patch takes is moved to the neighbouring slots that carry it (`maps.rs`).
 //!
-//! Every row of a directional map is normalised to 1 and scaled by ks or kt, so a row sums
-//! exactly to the material's albedo (kd + ks + kt is scaled down to at most 1 per channel,
-//! Fresnel weighting is not modelled). Directional maps are built here, not in the
-//! preprocess: they depend on materials, which relighting may change.
+//! A table's rows sum to the BSDF's directional albedo (kd + ks + kt is scaled down to at
+//! most 1 per channel, with Fresnel the larger of ks and kd + kt). Tables are built here, not
+//! in the preprocess: they depend on materials, which relighting may change.
 //!
 //! **Order.** Jacobi sweeps: in each sweep every node gathers what its neighbours shot in the
 //! previous sweep over its links (links are symmetric, so gathering over a node's own links is
@@ -32,7 +30,7 @@
 //! sequential.
 //!
 //! Files: `surfaces.rs` (the nodes' surfaces from the scene's materials), `maps.rs` (the
-//! directional nodes' reflectance maps), `gather.rs` (what a node gathers over its links),
+//! directional nodes' reflectance tables), `gather.rs` (what a node gathers over its links),
 //! `sweeps.rs` (the Jacobi sweeps, warm starts, and the choice of order), `shoot.rs` (largest
 //! unshot first), `conjugate_gradients.rs`, and `solution.rs` (what rendering reads).
 
@@ -46,6 +44,7 @@ mod sweeps;
 
 pub(crate) use maps::{for_each_candidate, local};
 pub use solution::{DistributeStats, Solution};
+pub(crate) use surfaces::most_scattered;
 pub use surfaces::{lossless_channel, surfaces, surfaces_with, Surface};
 pub use sweeps::distribute_from;
 

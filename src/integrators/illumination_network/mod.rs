@@ -30,6 +30,7 @@ pub mod distribute;
 mod etendue;
 pub mod file;
 mod link_code;
+mod lobe_albedo;
 mod params;
 pub mod patches;
 pub mod preprocess;

@@ -259,8 +259,8 @@ impl RaySpace {
         (s + 1.0) / self.slope_step() - 0.5
     }
 
-    /// The slot whose direction is nearest (in slope space) to `d` (either orientation).
-    #[cfg(test)]
+    /// The slot whose direction is nearest (in slope space) to `d` (either orientation): the
+    /// slot whose cell of directions holds `d`.
     pub fn nearest_slot(&self, d: Vec3) -> u32 {
         let (f, su, sv) = self.slopes_of(d);
         let k = |s: f32| (self.slope_coord(s).round().max(0.0) as u32).min(self.slopes - 1);

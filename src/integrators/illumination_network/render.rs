@@ -6,20 +6,27 @@
 //!   average of the (up to four) patches sharing it, and the hit point interpolates the four
 //!   corners (figure 6 b, c);
 //! - for directional patches, the radiance that arrived over the links around the mirror
-//!   direction of the eye (bilinearly over the four bounding slots, figure 6 a, or under the
-//!   glossy lobe), for every patch of the 8-neighbourhood before the spatial interpolation.
+//!   and refracted directions of the eye (bilinearly over the four bounding slots, figure 6 a,
+//!   or under the glossy lobe), weighted by what the material's BSDF reflects and transmits
+//!   toward the eye, for every patch of the 8-neighbourhood before the spatial interpolation.
 //!
 //! Patches without a node on the side seen (no line reached them) are left out of the
 //! averages. The image is a pure function of the network, its solution and the camera.
 
 use super::corners::Corners;
-use super::distribute::{for_each_candidate, local, Solution};
+use super::distribute::{for_each_candidate, local, most_scattered, Solution, Surface};
+use super::lobe_albedo::{self, albedo_at, same_lobes, LobeAlbedo};
 use super::ray_space::SlotGeometry;
 use super::{Network, ESCAPE, NONE};
 use crate::bsdf::Ggx;
 use crate::integrators::{Context, Integrator, RayStats, Sample};
+use crate::math::optics::refract;
 use crate::math::{offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
+
+/// A directional surface seen from one side (its geometric normal) and what its lobes reflect
+/// and transmit toward one eye direction.
+type AlbedoCache = Option<(Surface, Vec3, (Rgb, Rgb))>;
 
 pub struct NetworkRenderer<'a> {
     pub net: &'a Network,
@@ -37,19 +44,25 @@ pub struct NetworkRenderer<'a> {
 pub struct Tables {
     pub corners: Corners,
     pub slots: SlotGeometry,
+    /// What each directional surface reflects and transmits toward the eye.
+    pub albedo: Vec<LobeAlbedo>,
 }
 
 impl Tables {
     pub fn new(net: &Network, solution: &Solution, hybrid: bool) -> Tables {
+        let sides = (0..net.nodes() as u32).map(|node| net.node_place(node).2);
         Tables {
             corners: Corners::new(net, solution, hybrid),
             slots: SlotGeometry::new(&net.space),
+            albedo: lobe_albedo::tables(&solution.surfaces, sides),
         }
     }
 
     /// Bytes held.
     pub fn memory(&self) -> usize {
-        self.corners.memory() + self.slots.memory()
+        self.corners.memory()
+            + self.slots.memory()
+            + self.albedo.iter().map(LobeAlbedo::memory).sum::<usize>()
     }
 }
 
@@ -63,7 +76,9 @@ impl NetworkRenderer<'_> {
     /// does the same with the other side's incoming radiance around −wo. Reading the
     /// out-buffer of the eye's slot instead (the paper) shows which slots of each small patch
     /// happen to have links, a blotchy pattern; the gather only averages over them.
-    fn node_radiance(&self, node: u32, wo: Vec3) -> Rgb {
+    /// `cache` keeps the last directional surface's albedo toward `wo` (the patches around a
+    /// hit usually share theirs).
+    fn node_radiance(&self, node: u32, wo: Vec3, cache: &mut AlbedoCache) -> Rgb {
         let sol = self.solution;
         let mut r = diffuse_radiance(sol, node, self.hybrid);
         let k = sol.dir_index[node as usize];
@@ -73,9 +88,29 @@ impl NetworkRenderer<'_> {
         let net = self.net;
         let sfc = &sol.surfaces[node as usize];
         let n = net.node_normal(node);
-        if sfc.ks.max_element() > 0.0 {
+        let (_, _, side) = net.node_place(node);
+        let ng = if side == 0 { n } else { -n };
+        // What the lobes send toward the eye of light arriving on each side (Fresnel and a
+        // metal's colour included); the light is gathered around the mirror and the refracted
+        // directions of the eye.
+        let (reflected, transmitted) = match cache {
+            Some((s, m, albedo)) if same_lobes(s, sfc) && *m == ng => *albedo,
+            _ => {
+                let cos = n.dot(wo);
+                let table = self
+                    .tables
+                    .and_then(|t| t.albedo.iter().find(|a| a.is_for(sfc, side)));
+                let albedo = match table {
+                    Some(t) => t.at(cos),
+                    None => albedo_at(sfc, side, cos),
+                };
+                *cache = Some((*sfc, ng, albedo));
+                albedo
+            }
+        };
+        if reflected.max_element() > 0.0 {
             let refl = 2.0 * n.dot(wo) * n - wo;
-            r += sfc.ks
+            r += reflected
                 * self.gather(node, k, refl, sfc.alpha, |wi| {
                     let ggx = Ggx::isotropic(sfc.alpha.max(1e-3));
                     let (ci, co) = (n.dot(wi), n.dot(wo));
@@ -86,30 +121,36 @@ impl NetworkRenderer<'_> {
                     ggx.d(local(n.dot(h))) * ggx.g(local(co), local(ci)) / (4.0 * ci * co)
                 });
         }
-        if sfc.kt.max_element() > 0.0 {
+        if transmitted.max_element() > 0.0 {
             let twin = net.twin(node);
-            if twin != NONE && sol.dir_index[twin as usize] != NONE {
-                let sigma2 = (sfc.alpha * sfc.alpha).max(1e-12);
-                let through = -wo;
-                r += sfc.kt
-                    * self.gather(
-                        twin,
-                        sol.dir_index[twin as usize],
-                        through,
-                        sfc.alpha,
-                        |wi| {
-                            let c = wi.dot(through).clamp(-1.0, 1.0);
-                            let th = c.acos();
-                            (-0.5 * th * th / sigma2).exp()
-                        },
-                    );
+            // Light from the other side along the refracted line (n_eye / n_other).
+            let eta = if side == 0 {
+                1.0 / sfc.optics.ior
+            } else {
+                sfc.optics.ior
+            };
+            let through = refract(-wo, n, eta);
+            if let (Some(through), true) = (through, twin != NONE) {
+                if sol.dir_index[twin as usize] != NONE {
+                    let sigma2 = (sfc.alpha * sfc.alpha).max(1e-12);
+                    r += transmitted
+                        * self.gather(
+                            twin,
+                            sol.dir_index[twin as usize],
+                            through,
+                            sfc.alpha,
+                            |wi| {
+                                let c = wi.dot(through).clamp(-1.0, 1.0);
+                                let th = c.acos();
+                                (-0.5 * th * th / sigma2).exp()
+                            },
+                        );
+                }
             }
         }
         r
     }
 
-    /// Incoming radiance of directional node `node` (row `k`) around direction `centre`
-    /// (pointing away from the node), as seen through a lobe of width `alpha`.
     fn gather(
         &self,
         node: u32,
@@ -179,6 +220,7 @@ impl NetworkRenderer<'_> {
         }
         // Values of the 4×4 block around the cell (cells i−1..=i+1), computed once.
         let mut value = [[None::<Rgb>; 3]; 3];
+        let mut cache = None;
         for (a, row) in value.iter_mut().enumerate() {
             for (b, v) in row.iter_mut().enumerate() {
                 let (ci, cj) = (i + a as i32 - 1, j + b as i32 - 1);
@@ -188,7 +230,7 @@ impl NetworkRenderer<'_> {
                 let cell = pg.first_cell + ci as u32 * pg.nt + cj as u32;
                 let node = self.net.node_of_key[(cell * 2 + side) as usize];
                 if node != NONE {
-                    *v = Some(self.node_radiance(node, wo));
+                    *v = Some(self.node_radiance(node, wo, &mut cache));
                 }
             }
         }
@@ -294,7 +336,7 @@ fn direct_diffuse(
     let sp = hit.surface_point(&ctx.scene.shapes, ray);
     let m = &ctx.scene.materials[sp.material];
     let mut kd = m.diffuse.eval(sp.p, sp.uv);
-    let total = kd + m.specular_at_normal() + m.transmission;
+    let total = most_scattered(m, kd);
     for c in 0..3 {
         if total[c] > 1.0 {
             kd[c] /= total[c];

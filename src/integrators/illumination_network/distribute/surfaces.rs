@@ -1,23 +1,88 @@
 //! The nodes' surfaces from the scene's materials, and the check that light can leave.
 
+use crate::bsdf::Bsdf;
 use crate::integrators::illumination_network::{Network, ESCAPE, NONE};
-use crate::math::{Rgb, Vec2};
-use crate::scene::Scene;
+use crate::math::{Rgb, Vec2, Vec3};
+use crate::scene::{Conductor, Material, Scene, SurfacePoint, Texture};
 
 /// The surface of one node.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct Surface {
     pub kd: Rgb,
+    /// The specular lobe's reflectance at normal incidence (a metal's Fresnel included).
     pub ks: Rgb,
     pub kt: Rgb,
     pub alpha: f32,
+    /// What else the directional lobes' BSDF is made of.
+    pub optics: Optics,
     /// Emitted radiance (fronts of emissive materials only).
     pub emission: Rgb,
+}
+
+/// A node material's optics besides its coefficients: the directional lobes scatter as the
+/// path tracer's BSDF of the same material without its diffuse lobe.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Optics {
+    /// ks before a metal's Fresnel reflectance.
+    pub specular: Rgb,
+    pub ior: f32,
+    pub fresnel: bool,
+    pub conductor: Option<Conductor>,
+}
+
+impl Default for Optics {
+    fn default() -> Self {
+        Optics {
+            specular: Rgb::ZERO,
+            ior: 1.0,
+            fresnel: false,
+            conductor: None,
+        }
+    }
 }
 
 impl Surface {
     pub fn directional(&self) -> bool {
         self.ks.max_element() > 0.0 || self.kt.max_element() > 0.0
+    }
+
+    /// The BSDF of the directional lobes (specular and transmission) at a node with unit
+    /// normal `n` (facing the node's side) on a patch whose geometric normal is `ng`
+    /// (orientation tells a transmitting material's inside from its outside).
+    pub(crate) fn directional_bsdf(&self, ng: Vec3, n: Vec3) -> Bsdf {
+        let m = Material {
+            diffuse: Texture::Constant(Rgb::ZERO),
+            specular: self.optics.specular,
+            transmission: self.kt,
+            ior: self.optics.ior,
+            roughness: self.alpha,
+            fresnel: self.optics.fresnel,
+            conductor: self.optics.conductor,
+            ..Material::default()
+        };
+        let sp = SurfacePoint {
+            p: Vec3::ZERO,
+            ng,
+            ns: ng,
+            uv: Vec2::ZERO,
+            t: 0.0,
+            shape: 0,
+            material: 0,
+        };
+        Bsdf::new(&m, &sp, n)
+    }
+}
+
+/// The most material `m` (with diffuse colour `kd` at the point) can reflect and transmit of
+/// the light arriving from one direction, per channel: kd + ks + kt, or with Fresnel weighting,
+/// where ks takes F and kd and kt share 1 − F, the larger of ks and kd + kt (a glass is
+/// ks = kt = 1). The network scales a material down to at most 1.
+pub(crate) fn most_scattered(m: &Material, kd: Rgb) -> Rgb {
+    let (ks, kt) = (m.specular_at_normal(), m.transmission);
+    if m.fresnel {
+        ks.max(kd + kt)
+    } else {
+        kd + ks + kt
     }
 }
 
@@ -44,15 +109,15 @@ pub fn surfaces_with(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<Surf
             let (s, t) = pg.cell_centre(cell);
             let p = net.space.to_world(pg.point(s, t));
             let kd = m.diffuse.eval(p, Vec2::new(s, t));
-            // A metal's lobe keeps its Fresnel at normal incidence: the network's lobes have no
-            // angular Fresnel.
             let (mut kd, mut ks, mut kt) = (kd, m.specular_at_normal(), m.transmission);
-            let total = kd + ks + kt;
+            let mut specular = m.specular;
+            let total = most_scattered(m, kd);
             for c in 0..3 {
                 if total[c] > 1.0 {
                     kd[c] /= total[c];
                     ks[c] /= total[c];
                     kt[c] /= total[c];
+                    specular[c] /= total[c];
                 }
             }
             Surface {
@@ -63,6 +128,12 @@ pub fn surfaces_with(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<Surf
                 alpha: match m.roughness_v {
                     Some(v) => 0.5 * (m.roughness + v),
                     None => m.roughness,
+                },
+                optics: Optics {
+                    specular,
+                    ior: m.ior,
+                    fresnel: m.fresnel,
+                    conductor: m.conductor,
                 },
                 emission: if side == 0 || m.two_sided_emission {
                     emission[mi]

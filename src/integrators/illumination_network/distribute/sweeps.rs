@@ -2,7 +2,7 @@
 
 use super::conjugate_gradients;
 use super::gather::Ends;
-use super::maps::{apply, maps, SparseMap};
+use super::maps::Maps;
 use super::shoot::shoot;
 use super::{DistributeOptions, DistributeStats, Order, Solution, Surface};
 use crate::integrators::illumination_network::{Network, SlotWeights, ESCAPE, NONE};
@@ -56,14 +56,8 @@ pub fn distribute_from(
             dir_nodes.push(i as u32);
         }
     }
-    let maps: Vec<(SparseMap, SparseMap)> = dir_nodes
-        .par_iter()
-        .map(|&n| maps(net, n, &surfaces[n as usize], net.twin(n)))
-        .collect();
-    let map_entries = maps
-        .iter()
-        .map(|(r, t)| (r.entries.len() + t.entries.len()) as u64)
-        .sum();
+    let maps = Maps::new(net, &dir_nodes, &surfaces);
+    let map_entries = maps.entries();
 
     if options.order == Order::Shoot && dir_nodes.is_empty() {
         return shoot(net, surfaces, options, run);
@@ -244,18 +238,17 @@ pub fn distribute_from(
             .for_each(|(k, out)| {
                 out.fill(Rgb::ZERO);
                 let node = dir_nodes[k] as usize;
-                let (reflect, _) = &maps[k];
                 let own = &in_buf[k * slots..(k + 1) * slots];
-                apply(reflect, own, surfaces[node].ks, out);
+                maps.reflect(k, own, out);
                 let twin = net.twin(node as u32);
                 if twin != NONE {
                     let t = dir_index[twin as usize];
                     if t != NONE {
-                        let (_, transmit) = &maps[t as usize];
                         let theirs = &in_buf[t as usize * slots..(t as usize + 1) * slots];
-                        apply(transmit, theirs, surfaces[twin as usize].kt, out);
+                        maps.transmit(t as usize, theirs, out);
                     }
                 }
+                maps.settle(k, out);
                 // Flux to radiance on the slots the maps reach (linked or escaping ones, the
                 // others stay zero); a slot with several links spreads its flux over all of them.
                 for (l, m) in slot_runs(net, node as u32) {

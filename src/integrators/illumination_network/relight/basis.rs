@@ -95,7 +95,7 @@ fn order_code(o: distribute::Order) -> u32 {
 }
 
 /// A hash of everything a solution depends on besides the emission: each node's material
-/// and its (kd, ks, kt, α), and whether it is an emitter's front.
+/// and its (kd, ks, kt, α) and optics, and whether it is an emitter's front.
 pub fn reflectance_hash(net: &Network, scene: &Scene, surfaces: &[Surface]) -> u64 {
     let mut bytes = Vec::with_capacity(surfaces.len() * 48);
     for (node, s) in surfaces.iter().enumerate() {
@@ -108,6 +108,17 @@ pub fn reflectance_hash(net: &Network, scene: &Scene, surfaces: &[Surface]) -> u
             }
         }
         bytes.extend_from_slice(&s.alpha.to_bits().to_le_bytes());
+        let o = &s.optics;
+        let conductor = o.conductor.map_or([0.0; 6], |c| {
+            [c.eta.x, c.eta.y, c.eta.z, c.k.x, c.k.y, c.k.z]
+        });
+        for v in [o.specular.x, o.specular.y, o.specular.z, o.ior]
+            .into_iter()
+            .chain(conductor)
+        {
+            bytes.extend_from_slice(&v.to_bits().to_le_bytes());
+        }
+        bytes.push(u8::from(o.fresnel));
     }
     fnv1a(&bytes)
 }
