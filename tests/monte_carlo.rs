@@ -636,3 +636,121 @@ fn lat_long_sun_is_importance_sampled_without_bias() {
         assert!(sky_only[c] / latlong[c] < 0.2, "the sun must dominate");
     }
 }
+
+/// The same with the glass sphere made a thin sheet (`thin = true`: reflection R, straight
+/// transmission 1 − R); light tracing cannot see through its delta lobes, as for glass.
+#[test]
+fn gathering_shooting_and_bidirectional_agree_through_a_thin_sheet() {
+    let scene = cornell_spheres_with_glass(|glass| glass.thin = true);
+    check_adjoint(&scene, &[1, 2]);
+}
+
+/// A scene from TOML text.
+fn scene_from(text: &str) -> Scene {
+    raylink::scene::toml::from_str(text, Path::new("test.toml")).unwrap_or_else(|e| panic!("{e}"))
+}
+
+const THIN_GLASS: &str =
+    "[materials.pane]\ndiffuse = 0\nspecular = 1\ntransmission = 1\nfresnel = true\nthin = true\n";
+
+/// Furnace through thin sheets: a thin-glass sphere and a pane in front of it under a
+/// uniform background of radiance 1 reflect R and pass 1 − R at every interaction, so every
+/// pixel of the path tracer stays 1 whatever the bounces between them (R + T = 1).
+#[test]
+fn thin_sheets_in_a_white_furnace_stay_white() {
+    let scene = scene_from(&format!(
+        "[camera]\nposition = [0.2, -4, 0.3]\nlook_at = [0, 0, 0]\nup = [0, 0, 1]\nfov = 40\nwidth = 16\nheight = 12\n\
+         [world]\nbackground = 1\n{THIN_GLASS}\
+         [[shapes]]\ntype = \"sphere\"\nmaterial = \"pane\"\nradius = 1\n\
+         [[shapes]]\ntype = \"quad\"\nmaterial = \"pane\"\n\
+         vertices = [[-3, -2, -3], [3, -1.5, -3], [3, -1.5, 3], [-3, -2, 3]]\n"
+    ));
+    let setup = Setup {
+        width: 16,
+        height: 12,
+        spp: 64,
+        max_depth: 12,
+        seed: 3,
+        threads: None,
+        filter: Filter::Box { radius: 0.5 },
+    };
+    // (BDPT and light tracing take no background light.)
+    let image = render(&scene, Kind::Path, &setup);
+    let worst = image
+        .pixels
+        .iter()
+        .map(|p| (*p - raylink::math::Rgb::ONE).abs().max_element())
+        .fold(0.0f32, f32::max);
+    eprintln!("thin furnace: worst pixel off by {worst}");
+    // Every sample weighs exactly 1 (the lobes are chosen with probabilities R and T):
+    // only truncation (R^11 < 1e-11) and rounding remain. (Were the pane one refracting
+    // glass face, the light it lets in would be scaled by 1/1.5².)
+    assert!(worst < 1e-4, "a pixel is off by {worst}");
+}
+
+/// A camera looks through a pane tilted by 45° at a wall whose left half glows (radiance
+/// 1 left of x = 0.05, which cuts a pixel column; the reflection sees only black). A thin sheet passes the light straight on: each
+/// pixel is T(θ) (θ its ray's angle to the pane) times the same pixel without the pane,
+/// within 5 standard errors; a glass slab 0.5 thick would shift the edge by about 1.5
+/// pixels.
+#[test]
+fn a_thin_pane_does_not_displace_what_is_behind_it() {
+    let (w, h, spp) = (32u32, 8u32, 1024u32);
+    let pane = "[[shapes]]\ntype = \"quad\"\nmaterial = \"pane\"\n\
+                vertices = [[-20, -20, 15], [20, -20, -25], [20, 20, -25], [-20, 20, 15]]\n";
+    let text = |with_pane: bool| {
+        format!(
+            "[camera]\nposition = [0, 0, 0]\nlook_at = [0, 0, -1]\nup = [0, 1, 0]\nfov = 20\nwidth = {w}\nheight = {h}\n\
+             [materials.glow]\ndiffuse = 0\nemission = 1\n{THIN_GLASS}\
+             [[shapes]]\ntype = \"quad\"\nmaterial = \"glow\"\n\
+             vertices = [[-20, -20, -10], [0.05, -20, -10], [0.05, 20, -10], [-20, 20, -10]]\n{}",
+            if with_pane { pane } else { "" }
+        )
+    };
+    let setup = Setup {
+        width: w,
+        height: h,
+        spp,
+        max_depth: 4,
+        seed: 9,
+        threads: None,
+        filter: Filter::Box { radius: 0.5 },
+    };
+    let bare = render(&scene_from(&text(false)), Kind::Path, &setup);
+    let scene = scene_from(&text(true));
+    let through = render(&scene, Kind::Path, &setup);
+    let basis = scene.camera.basis();
+    let normal = raylink::math::Vec3::new(1.0, 0.0, 1.0).normalize();
+    let mut edge = 0;
+    for y in 0..h {
+        for x in 0..w {
+            let i = (y * w + x) as usize;
+            let (a, b) = (bare.pixels[i].x as f64, through.pixels[i].x as f64);
+            let cos = basis
+                .ray(x as f32 + 0.5, y as f32 + 0.5)
+                .dir
+                .normalize()
+                .dot(normal)
+                .abs();
+            let f = {
+                // The sheet's transmittance 1 − 2F/(1 + F) (F of one face, η = 1.5).
+                let c = cos as f64;
+                let ct = (1.0 - (1.0 - c * c) / 2.25).sqrt();
+                let rs = (c - 1.5 * ct) / (c + 1.5 * ct);
+                let rp = (1.5 * c - ct) / (1.5 * c + ct);
+                0.5 * (rs * rs + rp * rp)
+            };
+            let t = 1.0 - 2.0 * f / (1.0 + f);
+            // Bernoulli variances: coverage a of the bare pixel, T·a through the pane.
+            let n = spp as f64;
+            let se = ((a * (1.0 - a) * t * t + t * a * (1.0 - t * a)) / n).sqrt();
+            assert!(
+                (b - t * a).abs() <= 5.0 * se + 1e-4,
+                "pixel ({x}, {y}): {b} through the pane, {a} × T {t} without"
+            );
+            edge += usize::from(a > 0.05 && a < 0.95);
+        }
+    }
+    // The glowing half's edge runs through the image.
+    assert!(edge >= h as usize, "no edge pixels");
+}

@@ -484,6 +484,21 @@ fn materials_map_to_raylink_fields() {
     );
     assert_eq!(m[1].diffuse_transmission, Rgb::new(0.6, 1.0, 0.2));
     assert_eq!((m[1].specular, m[1].transmission), (Rgb::ZERO, Rgb::ZERO));
+    // A thin dielectric is a thin sheet of index `eta` (1.5), without a warning.
+    let s = world(&format!(
+        "Material \"thindielectric\" {TRI}\
+         Material \"thindielectric\" \"float eta\" 1.33 {TRI}"
+    ));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let m = &s.materials;
+    for (g, eta) in m.iter().zip([1.5, 1.33]) {
+        assert_eq!(
+            (g.specular, g.transmission, g.ior, g.fresnel, g.thin),
+            (Rgb::ONE, Rgb::ONE, eta, true, true)
+        );
+        assert_eq!((g.roughness, g.roughness_v), (0.0, None));
+    }
+    assert!(!world(&format!("Material \"dielectric\" {TRI}")).materials[0].thin);
     // Unsupported material types: a warning and a substitute.
     let s = world(&format!("Material \"hair\" \"float eumelanin\" 1.3 {TRI}"));
     assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);

@@ -530,3 +530,33 @@ fn diffuse_transmission_reads_and_round_trips() {
     std::fs::remove_dir_all(&dir).unwrap();
     assert_eq!(again.materials, s.materials);
 }
+
+/// `thin` is a boolean, false by default, refused with a roughness (a thin sheet is smooth),
+/// and survives a conversion to TOML and back.
+#[test]
+fn thin_sheets_read_and_round_trip() {
+    let text = format!(
+        "{CAMERA}[materials.pane]\ndiffuse = 0\nspecular = 1\ntransmission = 1\nfresnel = true\nthin = true\nior = 1.33\n\
+         [[shapes]]\ntype = \"sphere\"\nmaterial = \"pane\"\n\
+         [[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\n"
+    );
+    let s = parse(&text).unwrap_or_else(|e| panic!("{e}"));
+    let m = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap().clone();
+    assert!(m("pane").thin && m("pane").fresnel && m("pane").ior == 1.33);
+    assert!(!m("white").thin);
+    for roughness in ["0.2", "[0, 0.1]"] {
+        let bad = parse(&format!(
+            "{CAMERA}[materials.bad]\nthin = true\nroughness = {roughness}\n[[shapes]]\ntype = \"sphere\"\nmaterial = \"bad\"\n"
+        ));
+        let Err(e) = bad else {
+            panic!("a rough thin sheet is accepted")
+        };
+        let e = e.to_string();
+        assert!(e.contains("roughness") && e.contains("thin"), "{e}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("pane.toml");
+    raylink::scene::convert::write_toml(&s, &out).unwrap();
+    let again = Scene::load(&out).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(again.materials, s.materials);
+}

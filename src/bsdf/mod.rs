@@ -12,6 +12,9 @@
 //! - `fresnel`: ks is weighted by the dielectric Fresnel reflectance F, kt by 1 − F and kd by
 //!   (1 − F(θi))(1 − F(θo)) (a coated surface), which makes ks = kt = 1 a glass (rough when
 //!   `roughness` > 0, F then taken at each microfacet);
+//! - `thin`: a thin dielectric sheet (pbrt-v4's `ThinDielectricBxDF`): kt passes light
+//!   straight through, F becomes the sheet's reflectance R (both faces, light bouncing between
+//!   them summed), seen alike from both sides, and the lobes are smooth whatever `roughness`;
 //! - `conductor` (η, k): ks is weighted by the complex Fresnel reflectance of the metal per
 //!   channel (pbrt-v4's `ConductorBxDF`), smooth or GGX, isotropic or anisotropic.
 //!
@@ -27,7 +30,9 @@ pub use microfacet::Ggx;
 
 use dielectric::RoughInterface;
 
-use crate::math::optics::{fresnel_dielectric, fresnel_dielectric_mean, refract};
+use crate::math::optics::{
+    fresnel_dielectric, fresnel_dielectric_mean, fresnel_thin_dielectric, refract,
+};
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::math::{frame, luminance, Rgb, Rng, Vec2, Vec3};
 use crate::scene::Conductor;
@@ -73,6 +78,8 @@ pub struct Bsdf {
     conductor: Option<Conductor>,
     /// The transmission is a GGX lobe (rough refraction), not a delta.
     rough_transmission: bool,
+    /// A thin sheet: straight-through transmission, the sheet's reflectance for F.
+    thin: bool,
     /// Only the Lambertian lobe: the common case takes a short path.
     lambertian: bool,
 }
@@ -111,8 +118,8 @@ impl Bsdf {
             && m.specular.max_element() <= 0.0
             && m.transmission.max_element() <= 0.0
             && m.diffuse_transmission.max_element() <= 0.0;
-        // Below this α the lobe is numerically a mirror.
-        let ggx = (ax.max(ay) >= 1e-3).then_some(Ggx {
+        // Below this α the lobe is numerically a mirror; a thin sheet is smooth.
+        let ggx = (ax.max(ay) >= 1e-3 && !m.thin).then_some(Ggx {
             alpha_x: ax,
             alpha_y: ay,
         });
@@ -134,6 +141,7 @@ impl Bsdf {
             fresnel: m.fresnel,
             conductor: m.conductor,
             rough_transmission,
+            thin: m.thin,
             lambertian,
         }
     }
@@ -178,9 +186,9 @@ impl Bsdf {
     }
 
     /// n_incident / n_transmitted for light leaving along local direction `lo`'s side: from
-    /// outside (the side of `ng`) 1/ior, from inside ior.
+    /// outside (the side of `ng`) 1/ior, from inside ior; a thin sheet has both sides outside.
     fn eta_leaving(&self, lo: Vec3) -> f32 {
-        if lo.z >= 0.0 {
+        if lo.z >= 0.0 || self.thin {
             1.0 / self.ior
         } else {
             self.ior
@@ -189,7 +197,9 @@ impl Bsdf {
 
     fn lobes(&self, lo: Vec3) -> Lobes {
         let eta = self.eta_leaving(lo);
-        let f = if self.fresnel {
+        let f = if self.fresnel && self.thin {
+            fresnel_thin_dielectric(lo.z, self.ior)
+        } else if self.fresnel {
             fresnel_dielectric(lo.z.abs(), eta)
         } else {
             1.0
@@ -393,8 +403,8 @@ impl Bsdf {
             }
             let rest = if self.fresnel { 1.0 - lobes.f } else { 1.0 };
             let scale = match mode {
-                Transport::Radiance => lobes.eta * lobes.eta,
-                Transport::Importance => 1.0,
+                Transport::Radiance if !self.thin => lobes.eta * lobes.eta,
+                _ => 1.0,
             };
             return (lobes.mirror, self.kt * (rest * scale));
         }
@@ -508,15 +518,19 @@ impl Bsdf {
         if lobes.transmit <= 0.0 {
             return None;
         }
-        // Smooth refraction.
-        let li = refract(-lo, Vec3::Z, lobes.eta)?;
-        let wi = self.world(li * side);
+        // Smooth refraction; straight on through a thin sheet.
+        let (li, wi) = if self.thin {
+            (-lo, -wo)
+        } else {
+            let li = refract(-lo, Vec3::Z, lobes.eta)?;
+            (li, self.world(li * side))
+        };
         if wi.dot(self.ng) * go >= 0.0 {
             return None;
         }
         let rest = if self.fresnel { 1.0 - lobes.f } else { 1.0 };
         let mut weight = self.kt * rest / lobes.transmit;
-        if mode == Transport::Radiance {
+        if mode == Transport::Radiance && !self.thin {
             weight *= lobes.eta * lobes.eta;
         }
         weight *= self.adjoint(wo, wi, lo, li, mode);

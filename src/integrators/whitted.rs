@@ -108,10 +108,16 @@ impl RayTree<'_> {
         }
         let fresnel = self.options.fresnel || m.fresnel;
         let cos_i = view.dot(n).clamp(0.0, 1.0);
-        let refracted = refract(d, n, eta);
+        // A thin sheet passes light straight on (both sides are outside) and is smooth.
+        let transmits = m.thin || refract(d, n, eta).is_some();
+        let roughness = if m.thin { 0.0 } else { m.roughness };
         let (ks, kt) = if fresnel {
             // 1 under total internal reflection: everything goes to ks·S.
-            let reflectance = fresnel_dielectric(cos_i, eta);
+            let reflectance = if m.thin {
+                m.thin_reflectance(cos_i)
+            } else {
+                fresnel_dielectric(cos_i, eta)
+            };
             (
                 m.specular * reflectance,
                 m.transmission * (1.0 - reflectance),
@@ -127,19 +133,23 @@ impl RayTree<'_> {
 
         let (ks_weight, kt_weight) = (weight * ks.max_element(), weight * kt.max_element());
         if ks_weight > self.options.cutoff {
-            let dir = self.perturbed(n, ng, m.roughness, |n| reflect(d, n), 1.0);
+            let dir = self.perturbed(n, ng, roughness, |n| reflect(d, n), 1.0);
             let r = Ray::new(offset_origin(sp.p, ng, dir), dir);
             color += ks * self.trace(&r, depth + 1, ks_weight).0;
         }
         // T is zero under total internal reflection (the paper's imaginary kf).
-        if kt_weight > self.options.cutoff && refracted.is_some() {
-            let dir = self.perturbed(
-                n,
-                ng,
-                m.roughness,
-                |n| refract(d, n, eta).unwrap_or(d),
-                -1.0,
-            );
+        if kt_weight > self.options.cutoff && transmits {
+            let dir = if m.thin {
+                d
+            } else {
+                self.perturbed(
+                    n,
+                    ng,
+                    m.roughness,
+                    |n| refract(d, n, eta).unwrap_or(d),
+                    -1.0,
+                )
+            };
             let r = Ray::new(offset_origin(sp.p, ng, dir), dir);
             color += kt * self.trace(&r, depth + 1, kt_weight).0;
         }

@@ -34,6 +34,21 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
     0.5 * (rs * rs + rp * rp)
 }
 
+/// Reflectance of a thin dielectric sheet of index `ior` in vacuum (pbrt-v4's
+/// `ThinDielectricBxDF`) for the cosine `cos_i` of the incident angle on either side: the
+/// first interface reflects F, and of the light that enters, the share bouncing between the
+/// two parallel interfaces and leaving back is summed as a geometric series,
+/// R = F + (1 − F)²F / (1 − F²). The sheet transmits 1 − R, undeviated.
+pub fn fresnel_thin_dielectric(cos_i: f32, ior: f32) -> f32 {
+    let r = fresnel_dielectric(cos_i.abs(), 1.0 / ior);
+    if r < 1.0 {
+        let t = 1.0 - r;
+        r + t * t * r / (1.0 - r * r)
+    } else {
+        r
+    }
+}
+
 /// The cosine-weighted mean of a dielectric's Fresnel reflectance over the hemisphere,
 /// 2∫₀¹ F(μ) μ dμ (what the interface reflects of light arriving evenly from every
 /// direction), for `eta` = n_incident / n_transmitted, by the midpoint rule at 1024 points

@@ -319,6 +319,7 @@ fn material(m: &Material, refs: Refs) -> MaterialDesc {
             None => RoughnessDesc::Isotropic(m.roughness),
         }),
         fresnel: Some(m.fresnel),
+        thin: m.thin.then_some(true),
         conductor: m.conductor.map(|c| {
             ConductorDesc::Index(ConductorIndex {
                 eta: Splat3(c.eta),

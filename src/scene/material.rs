@@ -34,6 +34,12 @@ pub struct Material {
     pub roughness_v: Option<f32>,
     /// When true, ks and kt are weighted by the Fresnel reflectance at the hit.
     pub fresnel: bool,
+    /// A thin sheet (a window pane, a soap film; pbrt's `thindielectric`): both sides are
+    /// outside, kt passes light straight through without bending it (no refraction, no η²),
+    /// and with `fresnel` ks and kt are weighted by the sheet's reflectance R and 1 − R,
+    /// which sum the light bouncing between its two faces. The sheet is smooth: roughness is
+    /// ignored.
+    pub thin: bool,
     /// A metal: ks is weighted by the conductor Fresnel reflectance of this complex index
     /// (instead of the dielectric one or none).
     pub conductor: Option<Conductor>,
@@ -58,6 +64,7 @@ impl Default for Material {
             roughness: 0.0,
             roughness_v: None,
             fresnel: false,
+            thin: false,
             conductor: None,
             emission: Rgb::ZERO,
             two_sided_emission: false,
@@ -85,13 +92,33 @@ impl Material {
         (self.roughness, self.roughness_v.unwrap_or(self.roughness))
     }
 
-    /// ks with a conductor's Fresnel reflectance at normal incidence folded in: the
-    /// specular coefficient for the techniques that have no angular Fresnel.
+    /// ks with a conductor's (or a thin sheet's) Fresnel reflectance at normal incidence
+    /// folded in: the specular coefficient for the techniques that have no angular Fresnel.
     pub fn specular_at_normal(&self) -> Rgb {
         match self.conductor {
             Some(c) => self.specular * c.reflectance(1.0),
+            None if self.thin_fresnel() => self.specular * self.thin_reflectance(1.0),
             None => self.specular,
         }
+    }
+
+    /// kt with a thin sheet's Fresnel transmittance at normal incidence folded in (as
+    /// [`Material::specular_at_normal`]).
+    pub fn transmission_at_normal(&self) -> Rgb {
+        if self.thin_fresnel() {
+            self.transmission * (1.0 - self.thin_reflectance(1.0))
+        } else {
+            self.transmission
+        }
+    }
+
+    fn thin_fresnel(&self) -> bool {
+        self.thin && self.fresnel
+    }
+
+    /// The thin sheet's reflectance R at incidence cosine `cos` (either side).
+    pub fn thin_reflectance(&self, cos: f32) -> f32 {
+        crate::math::optics::fresnel_thin_dielectric(cos, self.ior)
     }
 }
 

@@ -397,6 +397,7 @@ fn convert(m: &tobj::Material, mtl: &Path) -> crate::Result<Material> {
         two_sided_emission: false,
         roughness: 0.0,
         fresnel: false,
+        thin: false,
         emission,
     })
 }

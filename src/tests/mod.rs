@@ -17,4 +17,5 @@ mod network_transport;
 mod oiio;
 mod robustness;
 mod rough_glass;
+mod thin_sheet;
 mod whitted;

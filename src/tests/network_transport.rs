@@ -145,14 +145,15 @@ fn mirror_floor_box_conserves_energy() {
 
 /// Two rooms of the unit cube split by a panel at x = ½, lit in the left room: an opaque
 /// panel leaves the right room exactly dark (no link crosses a surface); a clear or frosted
-/// panel (kt = 0.5) lights it, and energy balances (emitted = absorbed + unshot, nothing
-/// escapes).
+/// panel (kt = 0.5) or a thin glass sheet lights it, and energy balances (emitted = absorbed
+/// + unshot, nothing escapes).
 #[test]
 fn transmission_carries_light_through_a_panel() {
     for panel in [
         "diffuse = 0.5",
         "diffuse = 0.2\ntransmission = 0.5",
         "diffuse = 0.2\ntransmission = 0.5\nroughness = 0.3",
+        "diffuse = 0\nspecular = 1\ntransmission = 1\nfresnel = true\nthin = true",
     ] {
         let mut text = format!(
             "{CAMERA}\n[materials.m]\ndiffuse = 0.5\n[materials.panel]\n{panel}\n\

@@ -11,7 +11,7 @@ use crate::scene::{Camera, Geometry, Light, Material, QuadMesh, Scene, Shape, Te
 use std::f32::consts::PI;
 
 #[path = "whitted_scenes.rs"]
-mod scenes;
+pub(super) mod scenes;
 use scenes::{add_material, diffuse, empty_scene, floor, quad};
 
 fn radiance(scene: &Scene, ray: Ray, options: WhittedOptions) -> Rgb {

@@ -129,7 +129,10 @@ impl NetworkRenderer<'_> {
             } else {
                 sfc.optics.ior
             };
-            let through = refract(-wo, n, eta);
+            let through = match sfc.optics.thin {
+                true => Some(-wo),
+                false => refract(-wo, n, eta),
+            };
             if let (Some(through), true) = (through, twin != NONE) {
                 if sol.dir_index[twin as usize] != NONE {
                     let sigma2 = (sfc.alpha * sfc.alpha).max(1e-12);

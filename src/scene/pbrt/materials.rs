@@ -179,10 +179,16 @@ impl Loader {
                 self.coated_diffuse(base, p, 1.5, st, loc)?
             }
             "conductor" => self.conductor_material(base, p, "", st, loc)?,
-            "dielectric" | "thindielectric" => {
-                if ty == "thindielectric" {
-                    substitute(self, "using a smooth dielectric (refracting) surface");
-                }
+            "thindielectric" => Material {
+                // pbrt-v4's ThinDielectricBxDF: a smooth sheet, no roughness.
+                specular: Rgb::ONE,
+                transmission: Rgb::ONE,
+                fresnel: true,
+                thin: true,
+                ior: self.eta(p, "eta", 1.5, st, loc)?,
+                ..base
+            },
+            "dielectric" => {
                 // GGX reflection and refraction, as pbrt's DielectricBxDF.
                 let (ax, ay) = self.roughness(p, "", st, loc)?;
                 Material {

@@ -301,6 +301,12 @@ impl<'a> Builder<'a> {
             Some(v) => Some(non_negative(v).map_err(fail("roughness"))?),
             None => None,
         };
+        let thin = desc.thin.unwrap_or(d.thin);
+        if thin && (roughness > 0.0 || roughness_v.is_some_and(|v| v > 0.0)) {
+            return Err(fail("roughness")(
+                "a thin sheet (`thin = true`) is smooth: roughness must be 0".into(),
+            ));
+        }
         Ok(Material {
             name,
             diffuse,
@@ -318,6 +324,7 @@ impl<'a> Builder<'a> {
             roughness,
             roughness_v,
             fresnel: desc.fresnel.unwrap_or(d.fresnel),
+            thin,
             conductor,
             emission: col(desc.emission, "emission", d.emission)?,
             two_sided_emission: desc.two_sided_emission.unwrap_or(false),

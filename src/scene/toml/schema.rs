@@ -192,6 +192,8 @@ pub(crate) struct MaterialDesc {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) fresnel: Option<bool>,
     #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) thin: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) conductor: Option<ConductorDesc>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) emission: Option<Splat3>,

@@ -222,7 +222,12 @@ fn group_key(net: &Network, node: u32, s: &Surface) -> Vec<u32> {
     for v in [s.ks, s.kt, n, o.specular] {
         key.extend(v.to_array().map(f32::to_bits));
     }
-    key.extend([s.alpha.to_bits(), o.ior.to_bits(), u32::from(o.fresnel)]);
+    key.extend([
+        s.alpha.to_bits(),
+        o.ior.to_bits(),
+        u32::from(o.fresnel),
+        u32::from(o.thin),
+    ]);
     if let Some(c) = o.conductor {
         key.extend(c.eta.to_array().map(f32::to_bits));
         key.extend(c.k.to_array().map(f32::to_bits));
@@ -352,7 +357,11 @@ fn table(
                     let o = space.nearest_slot(2.0 * n.dot(wi) * n - wi);
                     add(&mut reflect.entries, rs, o, r / samples as f32);
                 }
-                if let (true, Some(d)) = (transmits && t != Rgb::ZERO, refract(-wi, n, eta)) {
+                let through = match surface.optics.thin {
+                    true => Some(-wi),
+                    false => refract(-wi, n, eta),
+                };
+                if let (true, Some(d)) = (transmits && t != Rgb::ZERO, through) {
                     let o = space.nearest_slot(d);
                     add(&mut transmit.entries, ts, o, t / samples as f32);
                 }

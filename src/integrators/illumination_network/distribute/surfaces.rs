@@ -27,6 +27,8 @@ pub struct Optics {
     pub specular: Rgb,
     pub ior: f32,
     pub fresnel: bool,
+    /// A thin sheet: transmission straight on, the sheet's reflectance for Fresnel's.
+    pub thin: bool,
     pub conductor: Option<Conductor>,
 }
 
@@ -36,6 +38,7 @@ impl Default for Optics {
             specular: Rgb::ZERO,
             ior: 1.0,
             fresnel: false,
+            thin: false,
             conductor: None,
         }
     }
@@ -57,6 +60,7 @@ impl Surface {
             ior: self.optics.ior,
             roughness: self.alpha,
             fresnel: self.optics.fresnel,
+            thin: self.optics.thin,
             conductor: self.optics.conductor,
             ..Material::default()
         };
@@ -124,8 +128,10 @@ pub fn surfaces_with(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<Surf
                 kd,
                 ks,
                 kt,
-                // An anisotropic lobe becomes the isotropic one of mean α.
+                // An anisotropic lobe becomes the isotropic one of mean α; a thin sheet is
+                // smooth (its transmission is the straight line on).
                 alpha: match m.roughness_v {
+                    _ if m.thin => 0.0,
                     Some(v) => 0.5 * (m.roughness + v),
                     None => m.roughness,
                 },
@@ -133,6 +139,7 @@ pub fn surfaces_with(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<Surf
                     specular,
                     ior: m.ior,
                     fresnel: m.fresnel,
+                    thin: m.thin,
                     conductor: m.conductor,
                 },
                 emission: if side == 0 || m.two_sided_emission {

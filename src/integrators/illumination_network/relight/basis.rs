@@ -118,7 +118,7 @@ pub fn reflectance_hash(net: &Network, scene: &Scene, surfaces: &[Surface]) -> u
         {
             bytes.extend_from_slice(&v.to_bits().to_le_bytes());
         }
-        bytes.push(u8::from(o.fresnel));
+        bytes.extend([u8::from(o.fresnel), u8::from(o.thin)]);
     }
     fnv1a(&bytes)
 }
