@@ -1145,3 +1145,45 @@ fn spot_lights_and_two_sided_area_lights() {
     let emitter = s.materials.iter().find(|m| m.is_emissive()).unwrap();
     assert!(emitter.two_sided_emission);
 }
+
+/// `mix` chooses its second material with probability `amount` at each hit: read without a
+/// warning as a mix of the two named materials, which are kept (before it) even when no
+/// shape uses them; under an area light, both its materials emit.
+#[test]
+fn mix_materials_keep_both_materials() {
+    let named = "MakeNamedMaterial \"white\" \"string type\" \"diffuse\" \"rgb reflectance\" [1 1 1]\n\
+                 MakeNamedMaterial \"glass\" \"string type\" \"dielectric\"\n\
+                 MakeNamedMaterial \"both\" \"string type\" \"mix\" \"string materials\" [\"white\" \"glass\"] \"float amount\" 0.3\n";
+    let s = world(&format!("{named}NamedMaterial \"both\"\n{TRI}"));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let i = s.shapes[0].material;
+    let mix = s.materials[i].mix.expect("a mix");
+    assert!((mix.amount - 0.3).abs() < 1e-6);
+    let [a, b] = mix.materials;
+    assert!(a < i && b < i, "the mixed materials come before the mix");
+    assert_eq!(
+        s.materials[a].diffuse,
+        raylink::scene::Texture::Constant(Rgb::ONE)
+    );
+    assert!(s.materials[b].fresnel && s.materials[b].transmission == Rgb::ONE);
+    // The mix's own fields are those of the material with the larger weight.
+    assert_eq!(s.materials[i].diffuse, s.materials[a].diffuse);
+    // Under an area light both mixed materials emit, as the mix does.
+    let s = world(&format!(
+        "{named}AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [2 2 2]\nNamedMaterial \"both\"\n{TRI}AttributeEnd\n"
+    ));
+    let m = &s.materials[s.shapes[0].material];
+    assert_eq!(m.emission, Rgb::splat(2.0));
+    for j in m.mix.unwrap().materials {
+        assert_eq!(s.materials[j].emission, Rgb::splat(2.0));
+        assert!(s.materials[j].mix.is_none());
+    }
+    // Two names are needed.
+    let dir = tempfile::tempdir().unwrap();
+    let bad = load_in(
+        dir.path(),
+        &format!("{HEADER}{named}MakeNamedMaterial \"x\" \"string type\" \"mix\" \"string materials\" [\"white\"]\nNamedMaterial \"x\"\n{TRI}"),
+        &[],
+    );
+    assert!(bad.is_err());
+}

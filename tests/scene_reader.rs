@@ -560,3 +560,56 @@ fn thin_sheets_read_and_round_trip() {
     let again = Scene::load(&out).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(again.materials, s.materials);
 }
+
+/// `mix = { materials = [a, b], amount }` names two materials defined before it; it takes
+/// no other key, its materials must emit alike, and it survives a conversion to TOML and
+/// back.
+#[test]
+fn mixes_read_refuse_bad_input_and_round_trip() {
+    let head = format!(
+        "{CAMERA}[materials.glass]\nspecular = 1\ntransmission = 1\nfresnel = true\ndiffuse = 0\n\
+         [materials.lamp]\nemission = 2\n"
+    );
+    let shape = "[[shapes]]\ntype = \"sphere\"\nmaterial = \"both\"\n";
+    let s = parse(&format!(
+        "{head}[materials.both]\nmix = {{ materials = [\"white\", \"glass\"], amount = 0.25 }}\n{shape}"
+    ))
+    .unwrap_or_else(|e| panic!("{e}"));
+    let names: Vec<&str> = s.materials.iter().map(|m| m.name.as_str()).collect();
+    let both = &s.materials[s.shapes[0].material];
+    let mix = both.mix.expect("a mix");
+    assert_eq!(mix.materials.map(|i| names[i]), ["white", "glass"]);
+    assert_eq!(mix.amount, 0.25);
+    assert_eq!(both.diffuse, s.materials[mix.materials[0]].diffuse);
+    for (text, want) in [
+        (
+            "mix = { materials = [\"white\", \"nothing\"] }",
+            "not a material",
+        ),
+        ("mix = { materials = [\"white\"] }", "two materials"),
+        (
+            "mix = { materials = [\"white\", \"glass\"], amount = 1.5 }",
+            "[0, 1]",
+        ),
+        ("mix = { materials = [\"white\", \"lamp\"] }", "emit"),
+        (
+            "mix = { materials = [\"white\", \"glass\"] }\ndiffuse = 1",
+            "no other key",
+        ),
+        (
+            "mix = { materials = [\"white\", \"both\"] }",
+            "not a material",
+        ),
+    ] {
+        let e = match parse(&format!("{head}[materials.both]\n{text}\n{shape}")) {
+            Ok(_) => panic!("{text}: accepted"),
+            Err(e) => e.to_string(),
+        };
+        assert!(e.contains(want), "{text}: {e}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("mix.toml");
+    raylink::scene::convert::write_toml(&s, &out).unwrap();
+    let again = Scene::load(&out).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(again.materials, s.materials);
+}

@@ -137,6 +137,19 @@ fn triangle_boxes(p: [Vec3; 3], size: f32, depth: u32, out: &mut Vec<Aabb>) {
     }
 }
 
+/// Material `i` as text, with the materials a mix chooses from (to `depth` levels): a change
+/// to any of them changes it.
+fn material_text(scene: &Scene, i: usize, depth: usize) -> String {
+    let m = &scene.materials[i];
+    let mut text = format!("{m:?}");
+    if let Some(mix) = m.mix.filter(|_| depth > 0) {
+        for j in mix.materials {
+            text += &material_text(scene, j, depth - 1);
+        }
+    }
+    text
+}
+
 fn shape_fingerprint(shape: &Shape, material: &str) -> u64 {
     let mut h = std::collections::hash_map::DefaultHasher::new();
     material.hash(&mut h);
@@ -169,7 +182,9 @@ impl FrameSummary {
     /// `light_choice`: the integrator picks lights by power from a [`LightSet`] (the Monte
     /// Carlo integrators), so every pixel depends on every light's power.
     pub fn new(scene: &Scene, light_choice: Option<&LightSet>) -> FrameSummary {
-        let materials: Vec<String> = scene.materials.iter().map(|m| format!("{m:?}")).collect();
+        let materials: Vec<String> = (0..scene.materials.len())
+            .map(|i| material_text(scene, i, 8))
+            .collect();
         let mut shapes: FxHashMap<u64, Vec<(Aabb, bool, Arc<Geometry>)>> = FxHashMap::default();
         let mut keys = Vec::with_capacity(scene.shapes.len());
         for shape in &scene.shapes {

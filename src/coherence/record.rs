@@ -541,7 +541,7 @@ impl Accel for RecordingAccel<'_> {
             let hit = self.inner.intersect(ray);
             if let Some(h) = hit {
                 let shape = &self.scene.shapes[h.geom_id as usize];
-                if !self.scene.materials[shape.material].is_transmissive() {
+                if !self.scene.may_transmit(shape.material) {
                     end = h.t;
                 }
             }

@@ -26,6 +26,8 @@ pub struct Context<'a> {
     pub area_lights: Vec<AreaLight>,
     /// Every emitter, for the Monte Carlo integrators.
     pub lights: LightSet,
+    /// Whether some material is a mix (resolved at each hit).
+    mixes: bool,
 }
 
 impl<'a> Context<'a> {
@@ -37,6 +39,7 @@ impl<'a> Context<'a> {
             accel,
             area_lights,
             lights,
+            mixes: scene.materials.iter().any(|m| m.mix.is_some()),
         }
     }
 
@@ -48,6 +51,7 @@ impl<'a> Context<'a> {
             accel,
             area_lights: self.area_lights.clone(),
             lights: self.lights.clone(),
+            mixes: self.mixes,
         }
     }
 
@@ -55,7 +59,17 @@ impl<'a> Context<'a> {
     pub fn intersect(&self, ray: &Ray, stats: &mut RayStats) -> Option<SurfacePoint> {
         stats.closest += 1;
         let hit = self.accel.intersect(ray)?;
-        Some(hit.surface_point(&self.scene.shapes, ray))
+        Some(self.complete(&hit, ray))
+    }
+
+    /// The surface point of a hit, with a mixed material resolved to the one chosen there.
+    #[inline]
+    fn complete(&self, hit: &crate::accel::Hit, ray: &Ray) -> SurfacePoint {
+        let mut sp = hit.surface_point(&self.scene.shapes, ray);
+        if self.mixes {
+            sp.material = self.scene.material_at(sp.material, sp.p, -ray.dir);
+        }
+        sp
     }
 
     /// The closest surface along ray `depth` of a path: [`intersect`](Self::intersect),
@@ -72,7 +86,7 @@ impl<'a> Context<'a> {
         }
         stats.closest += 1;
         let hit = self.accel.intersect_camera(ray)?;
-        Some(hit.surface_point(&self.scene.shapes, ray))
+        Some(self.complete(&hit, ray))
     }
 
     /// The closest hit along the ray as the backend reports it (shape and primitive), for

@@ -13,7 +13,7 @@
 
 use super::toml::schema::{
     CacheDesc, CameraDesc, CheckerDesc, ConductorDesc, ConductorIndex, DiffuseDesc,
-    EnvironmentDesc, FileDesc, FilterDesc, ImageDesc, LightDesc, LightKind, MaterialDesc,
+    EnvironmentDesc, FileDesc, FilterDesc, ImageDesc, LightDesc, LightKind, MaterialDesc, MixDesc,
     NetworkDesc, OneOrMany, Ordered, RenderDesc, RoughnessDesc, ShapeDesc, ShapeKind, Splat3,
     TextureTable, TransformOp, UvCheckerDesc, WhittedDesc, WorldDesc, V3,
 };
@@ -118,7 +118,7 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::Result<()> {
                 .materials
                 .iter()
                 .zip(&keys)
-                .map(|(m, key)| (key.clone(), spanned(material(m, refs))))
+                .map(|(m, key)| (key.clone(), spanned(material(m, &keys, refs))))
                 .collect(),
         ),
         shapes: Vec::new(),
@@ -304,7 +304,17 @@ fn render(s: &RenderSettings) -> Option<RenderDesc> {
     })
 }
 
-fn material(m: &Material, refs: Refs) -> MaterialDesc {
+fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
+    if let Some(mix) = m.mix {
+        // Its other fields follow from its two materials.
+        return MaterialDesc {
+            mix: Some(MixDesc {
+                materials: mix.materials.iter().map(|&i| keys[i].clone()).collect(),
+                amount: Some(mix.amount),
+            }),
+            ..MaterialDesc::default()
+        };
+    }
     MaterialDesc {
         diffuse: Some(diffuse(&m.diffuse, refs)),
         ambient: m.ambient.map(Splat3),
@@ -328,6 +338,7 @@ fn material(m: &Material, refs: Refs) -> MaterialDesc {
         }),
         emission: Some(Splat3(m.emission)),
         two_sided_emission: m.two_sided_emission.then_some(true),
+        mix: None,
     }
 }
 

@@ -1,3 +1,4 @@
+use super::mix::Mix;
 use super::texture::{ImageTexture, UvMapping};
 use crate::math::{Rgb, Vec2, Vec3};
 use std::sync::Arc;
@@ -48,6 +49,9 @@ pub struct Material {
     /// Emit on both sides of the surface (pbrt's `twosided` area lights), not only on the
     /// side the geometric normal faces.
     pub two_sided_emission: bool,
+    /// A mix of two other materials, one chosen at each hit ([`Mix`]); the fields above are
+    /// then those of the one with the larger weight.
+    pub mix: Option<Mix>,
 }
 
 impl Default for Material {
@@ -68,6 +72,7 @@ impl Default for Material {
             conductor: None,
             emission: Rgb::ZERO,
             two_sided_emission: false,
+            mix: None,
         }
     }
 }

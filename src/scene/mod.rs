@@ -9,6 +9,7 @@ pub mod environment;
 mod geometry;
 pub mod light;
 mod material;
+mod mix;
 pub mod obj;
 pub mod pbrt;
 pub mod ply;
@@ -21,6 +22,7 @@ pub use environment::Environment;
 pub use geometry::{Geometry, QuadMesh, Shape, SurfacePoint, TriangleMesh};
 pub use light::Light;
 pub use material::{Conductor, Material, Texture};
+pub use mix::Mix;
 pub use settings::{SettingSource, Settings as RenderSettings};
 
 use crate::math::{Rgb, Vec3};

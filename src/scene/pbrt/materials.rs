@@ -259,27 +259,22 @@ impl Loader {
                 }
             }
             "mix" => {
+                // pbrt-v4's MixMaterial: the second material with probability `amount`,
+                // chosen at each hit (a textured amount is read as pbrt's float textures
+                // are: constant, else the default with a warning).
                 let names = p.strings("materials").map_err(Self::pe(loc))?;
-                let amount = self.float_param(p, "amount", 0.5, st, loc)?;
-                let pick = names
-                    .as_ref()
-                    .and_then(|n| n.get(if amount < 0.5 { 0 } else { 1 }))
-                    .cloned();
-                substitute(
-                    self,
-                    "using the one of its two materials with the larger weight",
-                );
-                match pick.and_then(|n| self.named_materials.get(&n).copied()) {
-                    Some(i) => Material {
-                        name,
-                        ..self.materials[i].clone()
-                    },
-                    None => {
-                        return Err(loc.error(format!(
-                            "{st}: \"materials\" must name two materials defined before"
-                        )))
-                    }
-                }
+                let amount = self.float_param(p, "amount", 0.5, st, loc)? as f32;
+                let found = names.as_deref().and_then(|n| match n {
+                    [a, b] => Some((*self.named_materials.get(a)?, *self.named_materials.get(b)?)),
+                    _ => None,
+                });
+                let Some((a, b)) = found else {
+                    return Err(loc.error(format!(
+                        "{st}: \"materials\" must name two materials defined before"
+                    )));
+                };
+                let (ma, mb) = (&self.materials[a], &self.materials[b]);
+                Material::mix_of(name, (a, ma), (b, mb), amount)
             }
             _ => {
                 // measured, hair and anything else.

@@ -214,15 +214,12 @@ impl Loader {
         if self.shapes.is_empty() {
             return Err(crate::Error::input(&self.source, "the scene has no shapes"));
         }
-        // Keep only the materials shapes use, in their order.
+        // Keep only the materials shapes use (and those their mixes choose from, first), in
+        // their order.
         let mut map = vec![usize::MAX; self.materials.len()];
         let mut materials = Vec::new();
         for s in &mut self.shapes {
-            if map[s.material] == usize::MAX {
-                map[s.material] = materials.len();
-                materials.push(self.materials[s.material].clone());
-            }
-            s.material = map[s.material];
+            s.material = keep_material(&self.materials, s.material, &mut map, &mut materials);
         }
         Ok(Scene {
             source: self.source.clone(),
@@ -241,4 +238,26 @@ impl Loader {
             warnings: self.warnings,
         })
     }
+}
+
+/// The index of `materials[i]` among the `kept` materials, adding it (after the materials
+/// it mixes, so that a mix refers only to materials before it) if `map` has none yet.
+fn keep_material(
+    materials: &[Material],
+    i: usize,
+    map: &mut [usize],
+    kept: &mut Vec<Material>,
+) -> usize {
+    if map[i] == usize::MAX {
+        let mut m = materials[i].clone();
+        if let Some(mix) = &mut m.mix {
+            // The readers build mixes of materials defined before them: no cycle.
+            for j in &mut mix.materials {
+                *j = keep_material(materials, *j, map, kept);
+            }
+        }
+        map[i] = kept.len();
+        kept.push(m);
+    }
+    map[i]
 }

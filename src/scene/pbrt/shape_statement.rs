@@ -34,17 +34,24 @@ impl Loader {
             self.warn(loc, "area lights in object instances are not supported (nor by pbrt-v4); the shapes do not emit");
             return base;
         }
-        let key = (
-            base,
-            area.radiance.to_array().map(f32::to_bits),
-            area.two_sided,
-        );
+        self.emissive_copy(base, area.radiance, area.two_sided)
+    }
+
+    /// The copy of material `base` that emits `radiance`; for a mix, a mix of its
+    /// materials' emissive copies (whichever is chosen at a hit emits).
+    fn emissive_copy(&mut self, base: usize, radiance: Rgb, two_sided: bool) -> usize {
+        let key = (base, radiance.to_array().map(f32::to_bits), two_sided);
         if let Some(&i) = self.emissive.get(&key) {
             return i;
         }
         let mut m = self.materials[base].clone();
-        m.emission = area.radiance;
-        m.two_sided_emission = area.two_sided;
+        if let Some(mix) = &mut m.mix {
+            for j in &mut mix.materials {
+                *j = self.emissive_copy(*j, radiance, two_sided);
+            }
+        }
+        m.emission = radiance;
+        m.two_sided_emission = two_sided;
         m.name = if m.name.is_empty() {
             "emitter".into()
         } else {

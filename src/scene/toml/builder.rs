@@ -11,7 +11,7 @@ use super::checks::{
 use super::diagnostics::{Ctx, Site};
 use super::schema::{
     CameraDesc, ConductorDesc, DiffuseDesc, EnvironmentDesc, FileDesc, LightDesc, LightKind,
-    MaterialDesc, OneOrMany, RoughnessDesc, Splat3, TextureTable, TransformOp,
+    MaterialDesc, MixDesc, OneOrMany, RoughnessDesc, Splat3, TextureTable, TransformOp,
 };
 use crate::math::{Mat3, Mat4, Rgb, Vec2, Vec3};
 use crate::scene::environment::Environment;
@@ -258,6 +258,24 @@ impl<'a> Builder<'a> {
     fn material(&self, site: &Site, name: String, desc: MaterialDesc) -> crate::Result<Material> {
         let ctx = self.ctx;
         let fail = |key: &'static str| move |m: String| ctx.fail(site, key, m);
+        if let Some(mix) = desc.mix {
+            let others = [
+                desc.diffuse.is_some(),
+                desc.ambient.is_some(),
+                desc.specular.is_some(),
+                desc.transmission.is_some(),
+                desc.diffuse_transmission.is_some(),
+                desc.ior.is_some(),
+                desc.phong_exponent.is_some(),
+                desc.roughness.is_some(),
+                desc.fresnel.is_some(),
+                desc.thin.is_some(),
+                desc.conductor.is_some(),
+                desc.emission.is_some(),
+                desc.two_sided_emission.is_some(),
+            ];
+            return self.mix(site, name, mix, others.contains(&true));
+        }
         let d = Material::default();
         let col = |v: Option<Splat3>, key: &'static str, default: Rgb| -> crate::Result<Rgb> {
             v.map_or(Ok(default), |c| colour(c.0).map_err(fail(key)))
@@ -328,7 +346,51 @@ impl<'a> Builder<'a> {
             conductor,
             emission: col(desc.emission, "emission", d.emission)?,
             two_sided_emission: desc.two_sided_emission.unwrap_or(false),
+            mix: None,
         })
+    }
+
+    /// A mix of two materials defined before it (by name): the second chosen with
+    /// probability `amount` (default 0.5, within [0, 1]). It has no other key: its emission
+    /// is its materials', which must emit alike.
+    fn mix(
+        &self,
+        site: &Site,
+        name: String,
+        mix: MixDesc,
+        other_keys: bool,
+    ) -> crate::Result<Material> {
+        let ctx = self.ctx;
+        let fail = |m: String| ctx.fail(site, "mix", m);
+        if other_keys {
+            return Err(fail(
+                "a mix takes no other key: set them on its two materials".into(),
+            ));
+        }
+        let [a, b] = <[String; 2]>::try_from(mix.materials).map_err(|m| {
+            fail(format!(
+                "\"materials\" must name two materials, got {}",
+                m.len()
+            ))
+        })?;
+        let find = |n: &str| {
+            self.names
+                .get(n)
+                .copied()
+                .ok_or_else(|| fail(format!("\"{n}\" is not a material defined before this one")))
+        };
+        let (ia, ib) = (find(&a)?, find(&b)?);
+        let amount = mix.amount.unwrap_or(0.5);
+        if !(0.0..=1.0).contains(&amount) {
+            return Err(fail(format!("amount must be within [0, 1], got {amount}")));
+        }
+        let (ma, mb) = (&self.materials[ia], &self.materials[ib]);
+        if (ma.emission, ma.two_sided_emission) != (mb.emission, mb.two_sided_emission) {
+            return Err(fail(format!(
+                "\"{a}\" and \"{b}\" emit differently: the shapes of a mix emit alike"
+            )));
+        }
+        Ok(Material::mix_of(name, (ia, ma), (ib, mb), amount))
     }
 
     fn texture(&self, site: &Site, t: TextureTable) -> crate::Result<Texture> {

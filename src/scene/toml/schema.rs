@@ -170,7 +170,7 @@ pub(crate) struct WorldDesc {
     pub(crate) environment: Option<EnvironmentDesc>,
 }
 
-#[derive(Deserialize, Serialize)]
+#[derive(Default, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct MaterialDesc {
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -199,6 +199,17 @@ pub(crate) struct MaterialDesc {
     pub(crate) emission: Option<Splat3>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) two_sided_emission: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) mix: Option<MixDesc>,
+}
+
+/// `mix = { materials = ["a", "b"], amount = 0.3 }`.
+#[derive(Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct MixDesc {
+    pub(crate) materials: Vec<String>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) amount: Option<f32>,
 }
 
 pub(crate) enum DiffuseDesc {

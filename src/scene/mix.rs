@@ -1,0 +1,152 @@
+//! Mixed materials (pbrt-v4's `MixMaterial`): at each hit one of two materials is chosen,
+//! the second with probability `amount`, by a hash of the hit point and the direction the
+//! ray arrived from. The choice is a function of the scene alone (no random stream, no
+//! thread), so images stay the same for any thread count, and on average over the hits
+//! the surface scatters as the blend (1 − amount)·f₀ + amount·f₁.
+//!
+//! The choice is made where a ray's hit becomes a surface point
+//! ([`crate::integrators::Context::intersect`]), so every integrator that follows rays
+//! sees one plain material. Techniques that read a shape's material without a ray (the
+//! illumination network's patches) see the mix's own fields: those of its material with the
+//! larger weight.
+
+use super::{Material, Scene};
+use crate::math::Vec3;
+
+/// Nested mixes deeper than this resolve to the material reached (a guard against a cycle,
+/// which the readers do not build).
+const MAX_NESTING: usize = 16;
+
+/// The two materials of a mix, as indices into the scene's materials, and the probability
+/// of choosing the second.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Mix {
+    pub materials: [usize; 2],
+    pub amount: f32,
+}
+
+impl Mix {
+    /// The material chosen at point `p` for a ray arriving from direction `wo` (pointing
+    /// away from the surface).
+    pub fn choose(&self, p: Vec3, wo: Vec3) -> usize {
+        if self.amount <= 0.0 {
+            return self.materials[0];
+        }
+        if self.amount >= 1.0 {
+            return self.materials[1];
+        }
+        let key = [p.x, p.y, p.z, wo.x, wo.y, wo.z].map(|v| u64::from(v.to_bits()));
+        let u = hash_to_unit(&key, self.materials);
+        self.materials[usize::from(u < self.amount)]
+    }
+}
+
+/// A uniform number in [0, 1) from the bits of `key` and the mix's materials (so nested
+/// mixes choose independently).
+fn hash_to_unit(key: &[u64; 6], materials: [usize; 2]) -> f32 {
+    let mut h = 0x243f_6a88_85a3_08d3u64 ^ materials[0] as u64 ^ ((materials[1] as u64) << 32);
+    for &k in key {
+        h = splitmix(h ^ k.wrapping_mul(0x9e37_79b9_7f4a_7c15));
+    }
+    (h >> 40) as f32 * (1.0 / (1u64 << 24) as f32)
+}
+
+/// SplitMix64's finaliser.
+fn splitmix(mut z: u64) -> u64 {
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+impl Material {
+    /// The mix of materials `a` and `b` (indices and values) named `name`: it chooses `b`
+    /// with probability `amount`. Its own fields are those of the material with the larger
+    /// weight (the first when equal), for the techniques that read them directly, and its
+    /// emission is the two materials' (which must be the same: a light's shapes emit alike).
+    pub fn mix_of(
+        name: String,
+        a: (usize, &Material),
+        b: (usize, &Material),
+        amount: f32,
+    ) -> Material {
+        let dominant = if amount > 0.5 { b.1 } else { a.1 };
+        Material {
+            name,
+            mix: Some(Mix {
+                materials: [a.0, b.0],
+                amount: amount.clamp(0.0, 1.0),
+            }),
+            ..dominant.clone()
+        }
+    }
+}
+
+impl Scene {
+    /// The plain material that scatters at point `p` of a shape of material `index`, for a
+    /// ray arriving from `wo`: `index` itself unless it is a mix.
+    pub fn material_at(&self, mut index: usize, p: Vec3, wo: Vec3) -> usize {
+        for _ in 0..MAX_NESTING {
+            match self.materials[index].mix {
+                Some(mix) => index = mix.choose(p, wo),
+                None => break,
+            }
+        }
+        index
+    }
+
+    /// Whether material `index` transmits light, for a mix whether any of its materials
+    /// may.
+    pub fn may_transmit(&self, index: usize) -> bool {
+        self.may_transmit_nested(index, MAX_NESTING)
+    }
+
+    fn may_transmit_nested(&self, index: usize, depth: usize) -> bool {
+        let m = &self.materials[index];
+        match m.mix {
+            Some(mix) if depth > 0 => mix
+                .materials
+                .iter()
+                .any(|&i| self.may_transmit_nested(i, depth - 1)),
+            _ => m.is_transmissive(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::Rng;
+
+    /// Over many hits the second material's share is `amount` (within 5 binomial standard
+    /// errors), and the choice is the same for the same hit and direction.
+    #[test]
+    fn the_second_material_is_chosen_with_probability_amount() {
+        let mut rng = Rng::for_key(1, &[]);
+        for amount in [0.1f32, 0.3, 0.5, 0.9] {
+            let mix = Mix {
+                materials: [3, 7],
+                amount,
+            };
+            let n = 100_000;
+            let mut second = 0;
+            for _ in 0..n {
+                let p = Vec3::new(rng.uniform(), rng.uniform(), 0.0) * 10.0;
+                let wo = Vec3::new(rng.uniform() - 0.5, 0.3, 1.0).normalize();
+                let c = mix.choose(p, wo);
+                assert_eq!(c, mix.choose(p, wo));
+                second += usize::from(c == 7);
+            }
+            let share = second as f64 / n as f64;
+            let se = (amount as f64 * (1.0 - amount as f64) / n as f64).sqrt();
+            assert!(
+                (share - amount as f64).abs() < 5.0 * se,
+                "{share} vs {amount}"
+            );
+        }
+        let never = Mix {
+            materials: [3, 7],
+            amount: 0.0,
+        };
+        assert_eq!(never.choose(Vec3::ONE, Vec3::Z), 3);
+    }
+}
