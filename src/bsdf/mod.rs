@@ -84,6 +84,11 @@ pub struct Bsdf {
     lambertian: bool,
 }
 
+/// The mirror image of a local direction about the normal.
+fn mirror(lo: Vec3) -> Vec3 {
+    Vec3::new(-lo.x, -lo.y, lo.z)
+}
+
 /// Lobe selection probabilities for a given outgoing direction.
 struct Lobes {
     diffuse: f32,
@@ -390,6 +395,28 @@ impl Bsdf {
         pdf
     }
 
+    /// Where the smooth lobes scatter `wo`: its mirror image and the line through the surface
+    /// (refracted by the index, straight on through a thin sheet; `None` beyond the critical
+    /// angle). Rough lobes scatter around these.
+    pub fn smooth_directions(&self, wo: Vec3) -> (Vec3, Option<Vec3>) {
+        let lo_raw = self.local(wo);
+        let side = lo_raw.z.signum();
+        let lo = lo_raw * side;
+        let reflected = self.world(mirror(lo) * side);
+        let through = self.through(wo, lo, side, self.eta_leaving(lo_raw));
+        (reflected, through.map(|(_, wi)| wi))
+    }
+
+    /// The transmitted direction of `wo` (local `lo` on the upper side, `side` its sign):
+    /// local and world, refracted with `eta`, or straight on through a thin sheet.
+    fn through(&self, wo: Vec3, lo: Vec3, side: f32, eta: f32) -> Option<(Vec3, Vec3)> {
+        if self.thin {
+            return Some((-lo, -wo));
+        }
+        let li = refract(-lo, Vec3::Z, eta)?;
+        Some((li, self.world(li * side)))
+    }
+
     /// What the BSDF sends toward `wo` of light arriving evenly over the hemisphere on `wo`'s
     /// side and over the other one: ∫ f·|cos θi| dωi over each (the directional albedo split
     /// by side). Exact for smooth lobes; with a rough or diffuse one, an estimate from a
@@ -500,7 +527,7 @@ impl Bsdf {
         }
         if u_lobe < specular_end {
             // Perfect mirror.
-            let li = Vec3::new(-lo.x, -lo.y, lo.z);
+            let li = mirror(lo);
             let wi = self.world(li * side);
             let gi = wi.dot(self.ng);
             if gi * go <= 0.0 {
@@ -519,12 +546,7 @@ impl Bsdf {
             return None;
         }
         // Smooth refraction; straight on through a thin sheet.
-        let (li, wi) = if self.thin {
-            (-lo, -wo)
-        } else {
-            let li = refract(-lo, Vec3::Z, lobes.eta)?;
-            (li, self.world(li * side))
-        };
+        let (li, wi) = self.through(wo, lo, side, lobes.eta)?;
         if wi.dot(self.ng) * go >= 0.0 {
             return None;
         }

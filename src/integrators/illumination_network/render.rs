@@ -20,7 +20,6 @@ use super::ray_space::SlotGeometry;
 use super::{Network, ESCAPE, NONE};
 use crate::bsdf::Ggx;
 use crate::integrators::{Context, Integrator, RayStats, Sample};
-use crate::math::optics::refract;
 use crate::math::{offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
@@ -73,7 +72,9 @@ impl NetworkRenderer<'_> {
     /// links: a mirror takes the incoming radiance at the reflected direction, interpolated
     /// over the linked slots among the four bounding it; a glossy lobe averages the incoming
     /// radiance of the linked slots under the lobe, weighted by lobe × étendue; transmission
-    /// does the same with the other side's incoming radiance around −wo. Reading the
+    /// does the same with the other side's incoming radiance around the line through the
+    /// surface (refracted, or −wo through a thin sheet). Each is weighted by what the BSDF
+    /// reflects or transmits toward `wo`. Reading the
     /// out-buffer of the eye's slot instead (the paper) shows which slots of each small patch
     /// happen to have links, a blotchy pattern; the gather only averages over them.
     /// `cache` keeps the last directional surface's albedo toward `wo` (the patches around a
@@ -123,16 +124,8 @@ impl NetworkRenderer<'_> {
         }
         if transmitted.max_element() > 0.0 {
             let twin = net.twin(node);
-            // Light from the other side along the refracted line (n_eye / n_other).
-            let eta = if side == 0 {
-                1.0 / sfc.optics.ior
-            } else {
-                sfc.optics.ior
-            };
-            let through = match sfc.optics.thin {
-                true => Some(-wo),
-                false => refract(-wo, n, eta),
-            };
+            // Light from the other side along the line through the surface.
+            let (_, through) = sfc.directional_bsdf(ng, n).smooth_directions(wo);
             if let (Some(through), true) = (through, twin != NONE) {
                 if sol.dir_index[twin as usize] != NONE {
                     let sigma2 = (sfc.alpha * sfc.alpha).max(1e-12);
@@ -154,6 +147,8 @@ impl NetworkRenderer<'_> {
         r
     }
 
+    /// Incoming radiance of directional node `node` (row `k`) around direction `centre`
+    /// (pointing away from the node), as seen through a lobe of width `alpha`.
     fn gather(
         &self,
         node: u32,

@@ -5,7 +5,6 @@ use super::Surface;
 use crate::bsdf::Transport;
 use crate::integrators::illumination_network::ray_space::{axes, RaySpace};
 use crate::integrators::illumination_network::{Network, NONE};
-use crate::math::optics::refract;
 use crate::math::{Rgb, Rng, Vec2, Vec3};
 use rayon::prelude::*;
 use std::collections::HashMap;
@@ -323,12 +322,6 @@ fn table(
     let samples = grid * grid;
     let transmits = surface.kt.max_element() > 0.0;
     let smooth = !bsdf.has_non_delta();
-    // n_incident / n_transmitted for light arriving on the node's side (outside: ng's).
-    let eta = if side == 0 {
-        1.0 / surface.optics.ior
-    } else {
-        surface.optics.ior
-    };
     let ds = space.slope_step();
     let mut reflect = SparseMap {
         offsets: vec![0],
@@ -353,14 +346,11 @@ fn table(
             if smooth {
                 // Both lobes at once, each with its weight: no lobe choice to sample.
                 let (r, t) = bsdf.albedo_by_side(wi, 1, Transport::Importance);
+                let (reflected, through) = bsdf.smooth_directions(wi);
                 if r != Rgb::ZERO {
-                    let o = space.nearest_slot(2.0 * n.dot(wi) * n - wi);
+                    let o = space.nearest_slot(reflected);
                     add(&mut reflect.entries, rs, o, r / samples as f32);
                 }
-                let through = match surface.optics.thin {
-                    true => Some(-wi),
-                    false => refract(-wi, n, eta),
-                };
                 if let (true, Some(d)) = (transmits && t != Rgb::ZERO, through) {
                     let o = space.nearest_slot(d);
                     add(&mut transmit.entries, ts, o, t / samples as f32);
