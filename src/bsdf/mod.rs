@@ -16,7 +16,9 @@
 //!   straight through, F becomes the sheet's reflectance R (both faces, light bouncing between
 //!   them summed), seen alike from both sides, and the lobes are smooth whatever `roughness`;
 //! - `conductor` (η, k): ks is weighted by the complex Fresnel reflectance of the metal per
-//!   channel (pbrt-v4's `ConductorBxDF`), smooth or GGX, isotropic or anisotropic.
+//!   channel (pbrt-v4's `ConductorBxDF`), smooth or GGX, isotropic or anisotropic;
+//! - `brdf`: a tabulated reflectance ([`TabulatedBrdf`]) in place of all the lobes above,
+//!   sampled by the cosine.
 //!
 //! Every BSDF can evaluate, sample, and give the density of its samples, for both transport
 //! directions (Veach's thesis, ch. 5): in [`Transport::Radiance`] refraction scales radiance
@@ -25,8 +27,10 @@
 
 mod dielectric;
 mod microfacet;
+mod tabulated;
 
 pub use microfacet::Ggx;
+pub use tabulated::TabulatedBrdf;
 
 use dielectric::RoughInterface;
 
@@ -59,9 +63,9 @@ pub struct BsdfSample {
     pub delta: bool,
 }
 
-/// The BSDF at one surface point.
+/// The BSDF at one surface point (borrowing a tabulated material's table).
 #[derive(Clone, Copy, Debug)]
-pub struct Bsdf {
+pub struct Bsdf<'a> {
     /// Shading frame: tangent, bitangent, normal (the normal on the side of `ng`).
     t: Vec3,
     b: Vec3,
@@ -82,6 +86,8 @@ pub struct Bsdf {
     thin: bool,
     /// Only the Lambertian lobe: the common case takes a short path.
     lambertian: bool,
+    /// A tabulated reflectance, the only lobe when present.
+    table: Option<&'a TabulatedBrdf>,
 }
 
 /// The mirror image of a local direction about the normal.
@@ -104,18 +110,28 @@ struct Lobes {
     eta: f32,
 }
 
-impl Bsdf {
+impl<'a> Bsdf<'a> {
     /// The BSDF of `m` at `sp`. Opaque surfaces reflect on both sides: when `wo` (the
     /// direction the path arrived from, pointing away) is behind the geometric normal, the
     /// frame is flipped to face it. Transmissive surfaces keep their orientation, which tells
     /// inside from outside.
-    pub fn new(m: &Material, sp: &SurfacePoint, wo: Vec3) -> Bsdf {
+    pub fn new(m: &'a Material, sp: &SurfacePoint, wo: Vec3) -> Bsdf<'a> {
         let transmissive = m.transmission.max_element() > 0.0;
         let (mut n, mut ng) = (sp.ns, sp.ng);
         if !transmissive && wo.dot(ng) < 0.0 {
             n = -n;
             ng = -ng;
         }
+        match &m.brdf {
+            Some(table) => Bsdf::tabulated(table, n, ng),
+            None => Bsdf::of_lobes(m, sp, n, ng),
+        }
+    }
+
+    /// The BSDF of `m`'s lobes (its table, if any, aside) at `sp`, with shading normal `n`
+    /// and geometric normal `ng` as [`Bsdf::new`] orients them.
+    pub(crate) fn of_lobes(m: &Material, sp: &SurfacePoint, n: Vec3, ng: Vec3) -> Bsdf<'a> {
+        let transmissive = m.transmission.max_element() > 0.0;
         let (t, b) = frame(n);
         let (ax, ay) = m.alphas();
         let (ax, ay) = (ax.clamp(0.0, 1.0), ay.clamp(0.0, 1.0));
@@ -148,6 +164,31 @@ impl Bsdf {
             rough_transmission,
             thin: m.thin,
             lambertian,
+            table: None,
+        }
+    }
+
+    /// The BSDF of a tabulated reflectance with shading normal `n` and geometric normal
+    /// `ng`, both on the side the light leaves toward.
+    pub fn tabulated(table: &'a TabulatedBrdf, n: Vec3, ng: Vec3) -> Bsdf<'a> {
+        let (t, b) = frame(n);
+        Bsdf {
+            t,
+            b,
+            n,
+            ng,
+            kd: Rgb::ZERO,
+            kdt: Rgb::ZERO,
+            ks: Rgb::ZERO,
+            kt: Rgb::ZERO,
+            ior: 1.0,
+            ggx: None,
+            fresnel: false,
+            conductor: None,
+            rough_transmission: false,
+            thin: false,
+            lambertian: false,
+            table: Some(table),
         }
     }
 
@@ -166,6 +207,9 @@ impl Bsdf {
 
     /// The diffuse reflectance (for albedo outputs).
     pub fn albedo(&self) -> Rgb {
+        if let Some(table) = self.table {
+            return table.most_reflected();
+        }
         match self.conductor {
             Some(c) => self.kd + self.kdt + self.ks * c.reflectance(1.0) + self.kt,
             None => self.kd + self.kdt + self.ks + self.kt,
@@ -283,14 +327,15 @@ impl Bsdf {
         }
     }
 
-    /// Whether the BSDF has a glossy lobe: GGX reflection or refraction, neither diffuse nor
-    /// a delta.
+    /// Whether the BSDF has a glossy lobe: GGX reflection or refraction or a tabulated
+    /// reflectance, neither diffuse nor a delta.
     pub fn has_glossy(&self) -> bool {
-        self.ggx.is_some() && (self.ks.max_element() > 0.0 || self.rough_transmission)
+        self.table.is_some()
+            || (self.ggx.is_some() && (self.ks.max_element() > 0.0 || self.rough_transmission))
     }
 
-    /// The glossy (GGX) lobes' share of [`Bsdf::eval`]: f_glossy(wo, wi)·|cos θi|, rough
-    /// refraction included.
+    /// The glossy lobes' share of [`Bsdf::eval`]: f_glossy(wo, wi)·|cos θi|, rough refraction
+    /// and a tabulated reflectance included.
     pub fn eval_glossy(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Rgb {
         match self.eval_lobes(wo, wi, mode) {
             Some((_, glossy, cos, adjoint)) => glossy * cos * adjoint,
@@ -319,6 +364,15 @@ impl Bsdf {
     /// where no non-delta lobe connects the two directions.
     fn eval_lobes(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Option<(Rgb, Rgb, f32, f32)> {
         let (mut lo, mut li) = self.connectable(wo, wi)?;
+        if let Some(table) = self.table {
+            // The light arrives along wi for radiance, along wo for importance.
+            let f = match mode {
+                Transport::Radiance => table.eval(li, lo),
+                Transport::Importance => table.eval(lo, li),
+            };
+            let adjoint = self.adjoint(wo, wi, lo, li, mode);
+            return Some((Rgb::ZERO, f, li.z, adjoint));
+        }
         let eta = self.eta_leaving(lo);
         let interface = self.interface(lo);
         if lo.z < 0.0 {
@@ -367,7 +421,7 @@ impl Bsdf {
         let Some((mut lo, mut li)) = self.connectable(wo, wi) else {
             return 0.0;
         };
-        if self.lambertian {
+        if self.lambertian || self.table.is_some() {
             return cosine_hemisphere_pdf(li.z.abs());
         }
         let lobes = self.lobes(lo);
@@ -490,9 +544,11 @@ impl Bsdf {
         // Lobes in the order diffuse, diffuse transmission, specular, transmission.
         let diffuse_end = lobes.diffuse + lobes.diffuse_transmit;
         let specular_end = diffuse_end + lobes.specular;
-        if u_lobe < diffuse_end || (u_lobe < specular_end && self.ggx.is_some()) {
-            // A non-delta lobe: the weight comes from the whole mixture.
-            let li = if u_lobe < lobes.diffuse {
+        let table = self.table.is_some();
+        if table || u_lobe < diffuse_end || (u_lobe < specular_end && self.ggx.is_some()) {
+            // A non-delta lobe: the weight comes from the whole mixture; a table is sampled
+            // by the cosine.
+            let li = if table || u_lobe < lobes.diffuse {
                 cosine_hemisphere(u)
             } else if u_lobe < diffuse_end {
                 -cosine_hemisphere(u)

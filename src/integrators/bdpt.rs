@@ -69,12 +69,12 @@ enum Kind {
 }
 
 #[derive(Clone, Copy, Debug)]
-struct Vertex {
+struct Vertex<'a> {
     kind: Kind,
     p: Vec3,
     /// Geometric normal (zero for the camera and point lights).
     n: Vec3,
-    bsdf: Option<Bsdf>,
+    bsdf: Option<Bsdf<'a>>,
     /// Emitted radiance of the surface (for s = 0), with its emitter index.
     emission: Rgb,
     light: Option<usize>,
@@ -85,8 +85,8 @@ struct Vertex {
     pdf_rev: f32,
 }
 
-impl Vertex {
-    fn new(kind: Kind, p: Vec3, n: Vec3, beta: Rgb) -> Vertex {
+impl Vertex<'_> {
+    fn new(kind: Kind, p: Vec3, n: Vec3, beta: Rgb) -> Self {
         Vertex {
             kind,
             p,
@@ -238,10 +238,10 @@ struct WalkStart {
 }
 
 /// Extends `path` by a random walk from `start`.
-fn random_walk(
-    ctx: &Context,
+fn random_walk<'a>(
+    ctx: &Context<'a>,
     start: WalkStart,
-    path: &mut Vec<Vertex>,
+    path: &mut Vec<Vertex<'a>>,
     sampler: &mut Sampler,
     stats: &mut RayStats,
 ) {
@@ -308,14 +308,14 @@ fn remap0(x: f32) -> f32 {
 /// The strategy (s, t): the path made of the light subpath's first `s` vertices connected to
 /// the camera subpath's first `t`.
 #[derive(Clone, Copy)]
-struct Connection<'p> {
-    light: &'p [Vertex],
-    camera: &'p [Vertex],
+struct Connection<'p, 'a> {
+    light: &'p [Vertex<'a>],
+    camera: &'p [Vertex<'a>],
     s: usize,
     t: usize,
 }
 
-impl Connection<'_> {
+impl Connection<'_, '_> {
     /// The multiple importance sampling weight of the strategy for the path made of
     /// `light[..s]` and `camera[..t]`, with `sampled` replacing the connection vertex that
     /// strategy sampled anew (the camera for t = 1).

@@ -15,6 +15,7 @@
 //! (radiance is constant along rays in vacuum).
 
 use super::{Context, Integrator, RayStats, Sample};
+use crate::bsdf::{Bsdf, Transport};
 pub use crate::math::optics::{fresnel_dielectric, reflect, refract};
 use crate::math::{frame, offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
 use crate::scene::light::{spot_cosines, spot_falloff};
@@ -159,7 +160,13 @@ impl RayTree<'_> {
     /// The diffuse term Σ kd/π·(N·L)·E and the Phong highlight, with shadow rays.
     fn direct(&mut self, m: &Material, kd: Rgb, p: Vec3, ng: Vec3, n: Vec3, view: Vec3) -> Rgb {
         let ctx = self.ctx;
-        let diffuse_on = kd.max_element() > 0.0;
+        // A tabulated reflectance takes the diffuse term's place: f toward the view.
+        let table = m.brdf.as_ref().map(|t| Bsdf::tabulated(t, n, ng));
+        let reflect = |wi: Vec3| match &table {
+            Some(b) => b.eval(view, wi, Transport::Radiance) / n.dot(wi),
+            None => kd * FRAC_1_PI,
+        };
+        let diffuse_on = kd.max_element() > 0.0 || table.is_some();
         let highlight_on = m.specular.max_element() > 0.0 && m.phong_exponent > 0.0;
         if !diffuse_on && !highlight_on {
             return Rgb::ZERO;
@@ -206,7 +213,7 @@ impl RayTree<'_> {
                 continue;
             }
             let e = irradiance * cos * transmittance;
-            color += kd * FRAC_1_PI * e;
+            color += reflect(wi) * e;
             if highlight_on {
                 // Energy-normalised Blinn-Phong lobe: (n+8)/(8π)·(N·H)^n.
                 let h = (wi + view).normalize();
@@ -217,20 +224,25 @@ impl RayTree<'_> {
         }
         if diffuse_on {
             for light in &ctx.area_lights {
-                color += kd * FRAC_1_PI * self.area_irradiance(light, p, ng, n);
+                color += match table {
+                    Some(_) => self.area_light(light, p, ng, n, Some(&reflect)),
+                    None => kd * FRAC_1_PI * self.area_light(light, p, ng, n, None),
+                };
             }
         }
         color
     }
 
-    /// Irradiance at `p` from an area light, by stratified sampling of its area, each sample
-    /// with its own shadow ray.
-    fn area_irradiance(
+    /// Irradiance at `p` from an area light, or with `reflect` (f toward the view, by the
+    /// direction to the light) the light reflected, by stratified sampling of its area, each
+    /// sample with its own shadow ray.
+    fn area_light(
         &mut self,
         light: &crate::scene::light::AreaLight,
         p: Vec3,
         ng: Vec3,
         n: Vec3,
+        reflect: Option<&dyn Fn(Vec3) -> Rgb>,
     ) -> Rgb {
         let side = (self.options.area_samples.max(1) as f32).sqrt().ceil() as u32;
         let count = side * side;
@@ -253,7 +265,8 @@ impl RayTree<'_> {
                 continue;
             }
             let t = self.transmittance(p, ng, wi, Some(y.p));
-            sum += light.radiance * t * (cos_s * cos_l / d2);
+            let e = light.radiance * t * (cos_s * cos_l / d2);
+            sum += reflect.map_or(e, |f| f(wi) * e);
         }
         sum * (light.area / count as f32)
     }

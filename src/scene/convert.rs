@@ -315,6 +315,14 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
             ..MaterialDesc::default()
         };
     }
+    if let Some(table) = &m.brdf {
+        return MaterialDesc {
+            brdf: Some(refs.to(&table.file)),
+            emission: Some(Splat3(m.emission)),
+            two_sided_emission: m.two_sided_emission.then_some(true),
+            ..MaterialDesc::default()
+        };
+    }
     MaterialDesc {
         diffuse: Some(diffuse(&m.diffuse, refs)),
         ambient: m.ambient.map(Splat3),
@@ -339,6 +347,7 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
         emission: Some(Splat3(m.emission)),
         two_sided_emission: m.two_sided_emission.then_some(true),
         mix: None,
+        brdf: None,
     }
 }
 

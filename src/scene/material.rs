@@ -1,5 +1,6 @@
 use super::mix::Mix;
 use super::texture::{ImageTexture, UvMapping};
+use crate::bsdf::TabulatedBrdf;
 use crate::math::{Rgb, Vec2, Vec3};
 use std::sync::Arc;
 
@@ -52,6 +53,9 @@ pub struct Material {
     /// A mix of two other materials, one chosen at each hit ([`Mix`]); the fields above are
     /// then those of the one with the larger weight.
     pub mix: Option<Mix>,
+    /// A tabulated reflectance in place of the diffuse, specular and transmission lobes (an
+    /// opaque surface reflecting on both sides).
+    pub brdf: Option<Arc<TabulatedBrdf>>,
 }
 
 impl Default for Material {
@@ -73,6 +77,7 @@ impl Default for Material {
             emission: Rgb::ZERO,
             two_sided_emission: false,
             mix: None,
+            brdf: None,
         }
     }
 }

@@ -6,9 +6,9 @@
 //!
 //! The choice is made where a ray's hit becomes a surface point
 //! ([`crate::integrators::Context::intersect`]), so every integrator that follows rays
-//! sees one plain material. Techniques that read a shape's material without a ray (the
-//! illumination network's patches) see the mix's own fields: those of its material with the
-//! larger weight.
+//! sees one plain material. The mix's own fields are those of its material with the larger
+//! weight; the illumination network, which reads a shape's material without a ray, blends
+//! the two materials' reflectance instead.
 
 use super::{Material, Scene};
 use crate::math::Vec3;

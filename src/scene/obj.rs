@@ -398,6 +398,7 @@ fn convert(m: &tobj::Material, mtl: &Path) -> crate::Result<Material> {
         roughness: 0.0,
         fresnel: false,
         thin: false,
+        brdf: None,
         mix: None,
         emission,
     })

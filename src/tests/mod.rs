@@ -17,5 +17,6 @@ mod network_transport;
 mod oiio;
 mod robustness;
 mod rough_glass;
+mod tabulated_brdf;
 mod thin_sheet;
 mod whitted;

@@ -74,7 +74,8 @@ fn reflectance_and_transmittance_match_the_closed_form() {
                     }
                 }
                 // A tinted sheet: the lobes are picked by luminance, kt·T over its share.
-                let bsdf = Bsdf::new(&thin_glass(ior, kt), &point(), wo);
+                let glass = thin_glass(ior, kt);
+                let bsdf = Bsdf::new(&glass, &point(), wo);
                 let t = bsdf
                     .sample(wo, 0.999_999, Vec2::ZERO, Transport::Radiance)
                     .unwrap();

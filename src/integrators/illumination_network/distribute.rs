@@ -44,7 +44,7 @@ mod sweeps;
 
 pub(crate) use maps::{for_each_candidate, local};
 pub use solution::{DistributeStats, Solution};
-pub(crate) use surfaces::most_scattered;
+pub(crate) use surfaces::network_kd;
 pub use surfaces::{lossless_channel, surfaces, surfaces_with, Surface};
 pub use sweeps::distribute_from;
 

@@ -44,9 +44,9 @@ fn interpolate(cos: f32, mut value: impl FnMut(usize) -> (Rgb, Rgb)) -> (Rgb, Rg
 impl LobeAlbedo {
     pub fn new(surface: Surface, side: u32) -> LobeAlbedo {
         LobeAlbedo {
+            bins: (0..BINS).map(|k| bin(&surface, side, k)).collect(),
             surface,
             side,
-            bins: (0..BINS).map(|k| bin(&surface, side, k)).collect(),
         }
     }
 
@@ -64,10 +64,10 @@ impl LobeAlbedo {
     }
 }
 
-/// Whether two surfaces have the same directional lobes (their diffuse colour and emission
-/// aside).
+/// Whether two surfaces have the same directional lobes of their own (their diffuse colour,
+/// emission and a mix's other part aside).
 pub fn same_lobes(a: &Surface, b: &Surface) -> bool {
-    (a.ks, a.kt, a.alpha, a.optics) == (b.ks, b.kt, b.alpha, b.optics)
+    (a.ks, a.kt, a.alpha, &a.optics) == (b.ks, b.kt, b.alpha, &b.optics)
 }
 
 /// [`LobeAlbedo::at`] without a table: the two bins needed, worked out now.
@@ -75,13 +75,24 @@ pub fn albedo_at(surface: &Surface, side: u32, cos: f32) -> (Rgb, Rgb) {
     interpolate(cos, |k| bin(surface, side, k))
 }
 
-/// The tables of every directional surface and side among `surfaces`, in order of first use.
+/// The tables of every directional part of a surface (a mix has two) and side among
+/// `surfaces`, in order of first use.
 pub fn tables(surfaces: &[Surface], sides: impl Iterator<Item = u32>) -> Vec<LobeAlbedo> {
     let mut out: Vec<LobeAlbedo> = Vec::new();
     for (s, side) in surfaces.iter().zip(sides) {
-        if s.directional() && !out.iter().any(|t| t.is_for(s, side)) {
-            out.push(LobeAlbedo::new(*s, side));
+        for (_, part) in s.parts() {
+            if part.has_own_lobes() && !out.iter().any(|t| t.is_for(part, side)) {
+                out.push(LobeAlbedo::new(own_lobes(part), side));
+            }
         }
     }
     out
+}
+
+/// A part's own lobes, without a mix's other part (what [`same_lobes`] compares).
+fn own_lobes(part: &Surface) -> Surface {
+    Surface {
+        blend: None,
+        ..part.clone()
+    }
 }

@@ -14,13 +14,13 @@
 //! averages. The image is a pure function of the network, its solution and the camera.
 
 use super::corners::Corners;
-use super::distribute::{for_each_candidate, local, most_scattered, Solution, Surface};
+use super::distribute::{for_each_candidate, local, network_kd, Solution, Surface};
 use super::lobe_albedo::{self, albedo_at, same_lobes, LobeAlbedo};
 use super::ray_space::SlotGeometry;
 use super::{Network, ESCAPE, NONE};
-use crate::bsdf::Ggx;
+use crate::bsdf::{Ggx, Transport};
 use crate::integrators::{Context, Integrator, RayStats, Sample};
-use crate::math::{offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
+use crate::math::{luminance, offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
 /// A directional surface seen from one side (its geometric normal) and what its lobes reflect
@@ -86,8 +86,30 @@ impl NetworkRenderer<'_> {
         if k == NONE {
             return r;
         }
+        // A mix's two parts, each weighted; a plain surface is one part of weight 1.
+        for (weight, part) in sol.surfaces[node as usize].parts() {
+            if part.has_own_lobes() {
+                self.part_radiance(node, k, part, weight, wo, cache, &mut r);
+            }
+        }
+        r
+    }
+
+    /// r += `weight` × what the own directional lobes of `sfc` (a part of node `node`'s
+    /// surface, row `k`) send toward `wo` ([`NetworkRenderer::node_radiance`]).
+    #[allow(clippy::too_many_arguments)]
+    fn part_radiance(
+        &self,
+        node: u32,
+        k: u32,
+        sfc: &Surface,
+        weight: f32,
+        wo: Vec3,
+        cache: &mut AlbedoCache,
+        r: &mut Rgb,
+    ) {
+        let sol = self.solution;
         let net = self.net;
-        let sfc = &sol.surfaces[node as usize];
         let n = net.node_normal(node);
         let (_, _, side) = net.node_place(node);
         let ng = if side == 0 { n } else { -n };
@@ -105,13 +127,21 @@ impl NetworkRenderer<'_> {
                     Some(t) => t.at(cos),
                     None => albedo_at(sfc, side, cos),
                 };
-                *cache = Some((*sfc, ng, albedo));
+                *cache = Some((sfc.clone(), ng, albedo));
                 albedo
             }
         };
+        let (reflected, transmitted) = (reflected * weight, transmitted * weight);
+        if let (Some(table), true) = (&sfc.optics.brdf, reflected.max_element() > 0.0) {
+            // A table may reflect anywhere: the whole hemisphere, under f itself.
+            let bsdf = crate::bsdf::Bsdf::tabulated(table, n, n);
+            let lobe = |wi: Vec3| luminance(bsdf.eval(wo, wi, Transport::Radiance));
+            *r += reflected * self.gather_hemisphere(node, k, lobe);
+            return;
+        }
         if reflected.max_element() > 0.0 {
             let refl = 2.0 * n.dot(wo) * n - wo;
-            r += reflected
+            *r += reflected
                 * self.gather(node, k, refl, sfc.alpha, |wi| {
                     let ggx = Ggx::isotropic(sfc.alpha.max(1e-3));
                     let (ci, co) = (n.dot(wi), n.dot(wo));
@@ -129,7 +159,7 @@ impl NetworkRenderer<'_> {
             if let (Some(through), true) = (through, twin != NONE) {
                 if sol.dir_index[twin as usize] != NONE {
                     let sigma2 = (sfc.alpha * sfc.alpha).max(1e-12);
-                    r += transmitted
+                    *r += transmitted
                         * self.gather(
                             twin,
                             sol.dir_index[twin as usize],
@@ -144,7 +174,6 @@ impl NetworkRenderer<'_> {
                 }
             }
         }
-        r
     }
 
     /// Incoming radiance of directional node `node` (row `k`) around direction `centre`
@@ -159,9 +188,7 @@ impl NetworkRenderer<'_> {
     ) -> Rgb {
         let net = self.net;
         let space = &net.space;
-        let slots = net.slots();
-        let row = &self.solution.incoming[k as usize * slots..(k as usize + 1) * slots];
-        let links = &self.solution.dir_rows[k as usize * slots..(k as usize + 1) * slots];
+        let (row, links) = self.rows(k);
         let n = net.node_normal(node);
         let mut sum = Rgb::ZERO;
         let mut wsum = 0.0;
@@ -189,11 +216,39 @@ impl NetworkRenderer<'_> {
                 }
             });
         }
-        if wsum > 0.0 {
-            sum / wsum
-        } else {
-            Rgb::ZERO
+        weighted_mean(sum, wsum)
+    }
+
+    /// The incoming radiance and the links of directional row `k`, per slot.
+    fn rows(&self, k: u32) -> (&[Rgb], &[u32]) {
+        let slots = self.net.slots();
+        let range = k as usize * slots..(k as usize + 1) * slots;
+        (
+            &self.solution.incoming[range.clone()],
+            &self.solution.dir_rows[range],
+        )
+    }
+
+    /// Incoming radiance of directional node `node` (row `k`) over its whole hemisphere,
+    /// weighted by `lobe(wi)` (f·cos θi) and each slot's solid angle.
+    fn gather_hemisphere(&self, node: u32, k: u32, lobe: impl Fn(Vec3) -> f32) -> Rgb {
+        let space = &self.net.space;
+        let (row, links) = self.rows(k);
+        let n = self.net.node_normal(node);
+        let ds = space.slope_step();
+        let (mut sum, mut wsum) = (Rgb::ZERO, 0.0);
+        for l in 0..row.len() as u32 {
+            if links[l as usize] < ESCAPE {
+                let d = space.direction(l);
+                let solid_angle = ds * ds / d.length_squared().powf(1.5);
+                let wgt = lobe(space.direction_towards(l, n)) * solid_angle;
+                if wgt > 0.0 && wgt.is_finite() {
+                    sum += row[l as usize] * wgt;
+                    wsum += wgt;
+                }
+            }
         }
+        weighted_mean(sum, wsum)
     }
 
     /// Reflected radiance toward the eye at unit-space point `p` of polygon `poly`, side
@@ -322,8 +377,18 @@ impl NetworkRenderer<'_> {
     }
 }
 
+/// sum / wsum, zero without weight.
+fn weighted_mean(sum: Rgb, wsum: f32) -> Rgb {
+    if wsum > 0.0 {
+        sum / wsum
+    } else {
+        Rgb::ZERO
+    }
+}
+
 /// The diffuse reflection of direct light at a hit: one light sample, one shadow ray
-/// (kd/π · Le · cosθ / pdf), with kd scaled as the network scales it (kd + ks + kt ≤ 1).
+/// (kd/π · Le · cosθ / pdf), with kd as the network has it (scaled to kd + ks + kt ≤ 1, a
+/// mix's blend).
 fn direct_diffuse(
     ctx: &Context,
     ray: &Ray,
@@ -332,14 +397,7 @@ fn direct_diffuse(
     stats: &mut RayStats,
 ) -> Rgb {
     let sp = hit.surface_point(&ctx.scene.shapes, ray);
-    let m = &ctx.scene.materials[sp.material];
-    let mut kd = m.diffuse.eval(sp.p, sp.uv);
-    let total = most_scattered(m, kd);
-    for c in 0..3 {
-        if total[c] > 1.0 {
-            kd[c] /= total[c];
-        }
-    }
+    let kd = network_kd(ctx.scene, sp.material, sp.p, sp.uv);
     if kd == Rgb::ZERO {
         return Rgb::ZERO;
     }

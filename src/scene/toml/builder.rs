@@ -13,6 +13,7 @@ use super::schema::{
     CameraDesc, ConductorDesc, DiffuseDesc, EnvironmentDesc, FileDesc, LightDesc, LightKind,
     MaterialDesc, MixDesc, OneOrMany, RoughnessDesc, Splat3, TextureTable, TransformOp,
 };
+use crate::bsdf::TabulatedBrdf;
 use crate::math::{Mat3, Mat4, Rgb, Vec2, Vec3};
 use crate::scene::environment::Environment;
 use crate::scene::pbrt::GeometryCost;
@@ -273,8 +274,44 @@ impl<'a> Builder<'a> {
                 desc.conductor.is_some(),
                 desc.emission.is_some(),
                 desc.two_sided_emission.is_some(),
+                desc.brdf.is_some(),
             ];
             return self.mix(site, name, mix, others.contains(&true));
+        }
+        if let Some(file) = &desc.brdf {
+            let lobes = [
+                ("diffuse", desc.diffuse.is_some()),
+                ("ambient", desc.ambient.is_some()),
+                ("specular", desc.specular.is_some()),
+                ("transmission", desc.transmission.is_some()),
+                ("diffuse_transmission", desc.diffuse_transmission.is_some()),
+                ("ior", desc.ior.is_some()),
+                ("phong_exponent", desc.phong_exponent.is_some()),
+                ("roughness", desc.roughness.is_some()),
+                ("fresnel", desc.fresnel.is_some()),
+                ("thin", desc.thin.is_some()),
+                ("conductor", desc.conductor.is_some()),
+            ];
+            if let Some((key, _)) = lobes.iter().find(|k| k.1) {
+                return Err(fail(key)(
+                    "a material with a tabulated `brdf` takes no other lobe".into(),
+                ));
+            }
+            let path = self.dir.join(file);
+            self.inputs.borrow_mut().push(path.clone());
+            let table = TabulatedBrdf::read(&path, file.into()).map_err(fail("brdf"))?;
+            let d = Material::default();
+            return Ok(Material {
+                name,
+                diffuse: Texture::Constant(Rgb::ZERO),
+                specular: Rgb::ZERO,
+                emission: desc
+                    .emission
+                    .map_or(Ok(d.emission), |c| colour(c.0).map_err(fail("emission")))?,
+                two_sided_emission: desc.two_sided_emission.unwrap_or(false),
+                brdf: Some(std::sync::Arc::new(table)),
+                ..d
+            });
         }
         let d = Material::default();
         let col = |v: Option<Splat3>, key: &'static str, default: Rgb| -> crate::Result<Rgb> {
@@ -347,6 +384,7 @@ impl<'a> Builder<'a> {
             emission: col(desc.emission, "emission", d.emission)?,
             two_sided_emission: desc.two_sided_emission.unwrap_or(false),
             mix: None,
+            brdf: None,
         })
     }
 

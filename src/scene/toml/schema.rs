@@ -201,6 +201,9 @@ pub(crate) struct MaterialDesc {
     pub(crate) two_sided_emission: Option<bool>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) mix: Option<MixDesc>,
+    /// A tabulated BRDF file, in place of the lobes.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) brdf: Option<String>,
 }
 
 /// `mix = { materials = ["a", "b"], amount = 0.3 }`.

@@ -2,7 +2,7 @@
 //! from in-slots to out-slots, built from the materials at each distribution.
 
 use super::Surface;
-use crate::bsdf::Transport;
+use crate::bsdf::{Bsdf, Transport};
 use crate::integrators::illumination_network::ray_space::{axes, RaySpace};
 use crate::integrators::illumination_network::{Network, NONE};
 use crate::math::{Rgb, Rng, Vec2, Vec3};
@@ -211,25 +211,17 @@ fn apply(map: &SparseMap, input: &[Rgb], out: &mut [Rgb]) {
     }
 }
 
-/// What makes two nodes' tables the same: the surface (not its emission), the normal and the
-/// side of the patch (a transmitting material's inside).
+/// What makes two nodes' tables the same: the surface's directional lobes (not its diffuse
+/// colour or emission), the normal and the side of the patch (a transmitting material's
+/// inside).
 fn group_key(net: &Network, node: u32, s: &Surface) -> Vec<u32> {
     let (_, _, side) = net.node_place(node);
     let n = net.node_normal(node);
     let mut key = vec![side];
-    let o = &s.optics;
-    for v in [s.ks, s.kt, n, o.specular] {
-        key.extend(v.to_array().map(f32::to_bits));
-    }
-    key.extend([
-        s.alpha.to_bits(),
-        o.ior.to_bits(),
-        u32::from(o.fresnel),
-        u32::from(o.thin),
-    ]);
-    if let Some(c) = o.conductor {
-        key.extend(c.eta.to_array().map(f32::to_bits));
-        key.extend(c.k.to_array().map(f32::to_bits));
+    key.extend(n.to_array().map(f32::to_bits));
+    for (weight, part) in s.parts() {
+        key.push(weight.to_bits());
+        key.extend(part.lobe_key());
     }
     key
 }
@@ -310,73 +302,40 @@ fn table(
     let n = net.node_normal(node);
     let (_, _, side) = net.node_place(node);
     let ng = if side == 0 { n } else { -n };
-    let bsdf = surface.directional_bsdf(ng, n);
-    let most = if bsdf.has_non_delta() {
-        MAX_ROUGH_SAMPLES
-    } else {
-        MAX_SMOOTH_SAMPLES
-    };
-    let grid = (count.saturating_mul(MIN_SAMPLES).clamp(MIN_SAMPLES, most) as f32)
-        .sqrt()
-        .floor() as u32;
-    let samples = grid * grid;
-    let transmits = surface.kt.max_element() > 0.0;
-    let smooth = !bsdf.has_non_delta();
-    let ds = space.slope_step();
+    // Each part of the surface (a mix has two) with its weight, BSDF and samples per row.
+    let parts: Vec<_> = surface
+        .parts()
+        .map(|(weight, part)| {
+            let bsdf = part.directional_bsdf(ng, n);
+            let most = if bsdf.has_non_delta() {
+                MAX_ROUGH_SAMPLES
+            } else {
+                MAX_SMOOTH_SAMPLES
+            };
+            let grid = (count.saturating_mul(MIN_SAMPLES).clamp(MIN_SAMPLES, most) as f32)
+                .sqrt()
+                .floor() as u32;
+            (weight, bsdf, grid)
+        })
+        .collect();
+    let transmits = surface.parts().any(|(_, p)| p.kt.max_element() > 0.0);
     let mut reflect = SparseMap {
         offsets: vec![0],
         ..SparseMap::default()
     };
     let mut transmit = reflect.clone();
     for l in 0..space.slots() as u32 {
-        let (family, su, sv) = space.slot_slopes(l);
-        let (a, u, v) = axes(family);
-        let mut rng = Rng::for_key(0x6d61_7073, &[group, l as u64]);
         let (rs, ts) = (reflect.entries.len(), transmit.entries.len());
-        for k in 0..samples {
-            // Stratified over the cell, and (in another order of the strata) over the BSDF's
-            // lobe choice and direction.
-            let (i, j) = ((k % grid) as f32, (k / grid) as f32);
-            let mut d = [0.0; 3];
-            d[a] = 1.0;
-            d[u] = su + ((i + rng.uniform()) / grid as f32 - 0.5) * ds;
-            d[v] = sv + ((j + rng.uniform()) / grid as f32 - 0.5) * ds;
-            let wi = Vec3::from_array(d).normalize();
-            let wi = if wi.dot(n) < 0.0 { -wi } else { wi };
-            if smooth {
-                // Both lobes at once, each with its weight: no lobe choice to sample.
-                let (r, t) = bsdf.albedo_by_side(wi, 1, Transport::Importance);
-                let (reflected, through) = bsdf.smooth_directions(wi);
-                if r != Rgb::ZERO {
-                    let o = space.nearest_slot(reflected);
-                    add(&mut reflect.entries, rs, o, r / samples as f32);
-                }
-                if let (true, Some(d)) = (transmits && t != Rgb::ZERO, through) {
-                    let o = space.nearest_slot(d);
-                    add(&mut transmit.entries, ts, o, t / samples as f32);
-                }
-                continue;
-            }
-            let p = (k * 7 + 3) % samples;
-            let (pi, pj) = ((p % grid) as f32, (p / grid) as f32);
-            let uv = Vec2::new(
-                (pi + rng.uniform()) / grid as f32,
-                (pj + rng.uniform()) / grid as f32,
-            );
-            let u_lobe = (((k * 13 + 5) % samples) as f32 + rng.uniform()) / samples as f32;
-            let Some(s) = bsdf.sample(wi, u_lobe, uv, Transport::Importance) else {
-                continue;
+        for (k, (weight, bsdf, grid)) in parts.iter().enumerate() {
+            // The first part's stream is keyed as a plain surface's.
+            let key = [group, l as u64, k as u64];
+            let mut rng = Rng::for_key(0x6d61_7073, &key[..2 + usize::from(k > 0)]);
+            let mut row = Row {
+                reflect: &mut reflect.entries,
+                transmit: transmits.then_some(&mut transmit.entries),
+                starts: (rs, ts),
             };
-            let weight = s.weight / samples as f32;
-            if !weight.is_finite() || weight == Rgb::ZERO {
-                continue;
-            }
-            let o = space.nearest_slot(s.wi);
-            if s.wi.dot(n) > 0.0 {
-                add(&mut reflect.entries, rs, o, weight);
-            } else if transmits {
-                add(&mut transmit.entries, ts, o, weight);
-            }
+            sample_row(space, n, l, bsdf, *grid, *weight, &mut rng, &mut row);
         }
         prune(&mut reflect.entries, rs);
         prune(&mut transmit.entries, ts);
@@ -384,6 +343,87 @@ fn table(
         transmit.offsets.push(transmit.entries.len() as u32);
     }
     (reflect, transmit)
+}
+
+/// The entries of one row of the reflection and transmission tables being built (no
+/// transmission table when the surface transmits nothing) and where the row starts in each.
+struct Row<'e> {
+    reflect: &'e mut Vec<(u32, Rgb)>,
+    transmit: Option<&'e mut Vec<(u32, Rgb)>>,
+    starts: (usize, usize),
+}
+
+impl Row<'_> {
+    /// Adds `weight` to out-slot `o`, reflected or (when it can) transmitted.
+    fn add(&mut self, reflected: bool, o: u32, weight: Rgb) {
+        if reflected {
+            add(self.reflect, self.starts.0, o, weight);
+        } else if let Some(t) = self.transmit.as_deref_mut() {
+            add(t, self.starts.1, o, weight);
+        }
+    }
+}
+
+/// Adds `scale` × the transfer of `bsdf` from in-slot `l` to `row`, from `grid`² samples
+/// (module comment of [`table`]).
+#[allow(clippy::too_many_arguments)]
+fn sample_row(
+    space: &RaySpace,
+    n: Vec3,
+    l: u32,
+    bsdf: &Bsdf,
+    grid: u32,
+    scale: f32,
+    rng: &mut Rng,
+    row: &mut Row,
+) {
+    let samples = grid * grid;
+    let smooth = !bsdf.has_non_delta();
+    let ds = space.slope_step();
+    let (family, su, sv) = space.slot_slopes(l);
+    let (a, u, v) = axes(family);
+    for k in 0..samples {
+        // Stratified over the cell, and (in another order of the strata) over the BSDF's
+        // lobe choice and direction.
+        let (i, j) = ((k % grid) as f32, (k / grid) as f32);
+        let mut d = [0.0; 3];
+        d[a] = 1.0;
+        d[u] = su + ((i + rng.uniform()) / grid as f32 - 0.5) * ds;
+        d[v] = sv + ((j + rng.uniform()) / grid as f32 - 0.5) * ds;
+        let wi = Vec3::from_array(d).normalize();
+        let wi = if wi.dot(n) < 0.0 { -wi } else { wi };
+        if smooth {
+            // Both lobes at once, each with its weight: no lobe choice to sample.
+            let (r, t) = bsdf.albedo_by_side(wi, 1, Transport::Importance);
+            let (reflected, through) = bsdf.smooth_directions(wi);
+            if r != Rgb::ZERO {
+                row.add(
+                    true,
+                    space.nearest_slot(reflected),
+                    r / samples as f32 * scale,
+                );
+            }
+            if let (true, Some(d)) = (t != Rgb::ZERO, through) {
+                row.add(false, space.nearest_slot(d), t / samples as f32 * scale);
+            }
+            continue;
+        }
+        let p = (k * 7 + 3) % samples;
+        let (pi, pj) = ((p % grid) as f32, (p / grid) as f32);
+        let uv = Vec2::new(
+            (pi + rng.uniform()) / grid as f32,
+            (pj + rng.uniform()) / grid as f32,
+        );
+        let u_lobe = (((k * 13 + 5) % samples) as f32 + rng.uniform()) / samples as f32;
+        let Some(s) = bsdf.sample(wi, u_lobe, uv, Transport::Importance) else {
+            continue;
+        };
+        let weight = s.weight / samples as f32 * scale;
+        if !weight.is_finite() || weight == Rgb::ZERO {
+            continue;
+        }
+        row.add(s.wi.dot(n) > 0.0, space.nearest_slot(s.wi), weight);
+    }
 }
 
 /// The share of a row's light its largest entries must carry; the rest (the far tail of a
@@ -435,7 +475,7 @@ mod tests {
         let node = (0..net.nodes() as u32)
             .find(|&i| net.node_normal(i).y > 0.9 && surfaces[i as usize].directional())
             .expect("a floor node");
-        let surface = surfaces[node as usize];
+        let surface = surfaces[node as usize].clone();
         let (r, t) = table(&net, node, &surface, 0, u32::MAX);
         (net, surface, node, r, t)
     }

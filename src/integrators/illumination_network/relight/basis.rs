@@ -95,7 +95,8 @@ fn order_code(o: distribute::Order) -> u32 {
 }
 
 /// A hash of everything a solution depends on besides the emission: each node's material
-/// and its (kd, ks, kt, α) and optics, and whether it is an emitter's front.
+/// and its (kd, ks, kt, α), optics and a mix's other part, and whether it is an emitter's
+/// front.
 pub fn reflectance_hash(net: &Network, scene: &Scene, surfaces: &[Surface]) -> u64 {
     let mut bytes = Vec::with_capacity(surfaces.len() * 48);
     for (node, s) in surfaces.iter().enumerate() {
@@ -119,6 +120,15 @@ pub fn reflectance_hash(net: &Network, scene: &Scene, surfaces: &[Surface]) -> u
             bytes.extend_from_slice(&v.to_bits().to_le_bytes());
         }
         bytes.extend([u8::from(o.fresnel), u8::from(o.thin)]);
+        if let Some(t) = &o.brdf {
+            bytes.extend_from_slice(&t.digest().to_le_bytes());
+        }
+        if let Some(b) = &s.blend {
+            let other = b.other.lobe_key();
+            for v in std::iter::once(b.amount.to_bits()).chain(other) {
+                bytes.extend_from_slice(&v.to_le_bytes());
+            }
+        }
     }
     fnv1a(&bytes)
 }

@@ -79,7 +79,7 @@ fn blanked(surfaces: &[Surface], materials: &[usize], m: usize) -> Vec<Surface> 
                     ..Surface::default()
                 }
             } else {
-                *s
+                s.clone()
             }
         })
         .collect()
@@ -175,7 +175,10 @@ impl ReflectanceSeries {
             let sent = arriving(net, &materials, m, &y);
             series.sweeps += 1;
             let surfaces = (blank.iter().zip(&sent))
-                .map(|(s, e)| Surface { emission: *e, ..*s })
+                .map(|(s, e)| Surface {
+                    emission: *e,
+                    ..s.clone()
+                })
                 .collect();
             let sol =
                 distribute::distribute_surfaces(net, surfaces, options, distribute::Run::now());
