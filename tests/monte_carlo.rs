@@ -155,7 +155,7 @@ fn gathering_shooting_and_bidirectional_agree_through_diffuse_transmission() {
         *glass = raylink::scene::Material {
             name: glass.name.clone(),
             diffuse: raylink::scene::Texture::Constant(raylink::math::Rgb::splat(0.3)),
-            diffuse_transmission: raylink::math::Rgb::splat(0.5),
+            diffuse_transmission: raylink::scene::Texture::Constant(raylink::math::Rgb::splat(0.5)),
             ..Default::default()
         }
     });

@@ -477,13 +477,30 @@ fn materials_map_to_raylink_fields() {
         m[0].diffuse,
         raylink::scene::Texture::Constant(Rgb::splat(0.25))
     );
-    assert_eq!(m[0].diffuse_transmission, Rgb::splat(0.25));
+    assert_eq!(
+        m[0].diffuse_transmission,
+        raylink::scene::Texture::Constant(Rgb::splat(0.25))
+    );
     assert_eq!(
         m[1].diffuse,
         raylink::scene::Texture::Constant(Rgb::new(0.4, 0.8, 0.2))
     );
-    assert_eq!(m[1].diffuse_transmission, Rgb::new(0.6, 1.0, 0.2));
+    assert_eq!(
+        m[1].diffuse_transmission,
+        raylink::scene::Texture::Constant(Rgb::new(0.6, 1.0, 0.2))
+    );
     assert_eq!((m[1].specular, m[1].transmission), (Rgb::ZERO, Rgb::ZERO));
+    // A textured transmittance stays a texture (a leaf's veins), without a warning.
+    let s = world(&format!(
+        "Texture \"c\" \"spectrum\" \"checkerboard\" \"rgb tex1\" [0.5 0.5 0.5] \"rgb tex2\" [0.1 0.2 0.3]\n\
+         Material \"diffusetransmission\" \"texture transmittance\" \"c\" {TRI}"
+    ));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let t = &s.materials[0].diffuse_transmission;
+    assert!(
+        matches!(t, raylink::scene::Texture::UvChecker { .. }),
+        "{t:?}"
+    );
     // A thin dielectric is a thin sheet of index `eta` (1.5), without a warning.
     let s = world(&format!(
         "Material \"thindielectric\" {TRI}\

@@ -502,22 +502,42 @@ fn conductors_read_named_or_explicit_with_anisotropic_roughness() {
     assert_eq!(again.materials, s.materials);
 }
 
-/// `diffuse_transmission` is a colour (one number or three), zero by default, and survives
-/// a conversion to TOML and back.
+/// `diffuse_transmission` is a colour (one number or three) or a texture, zero by default,
+/// and survives a conversion to TOML and back.
 #[test]
 fn diffuse_transmission_reads_and_round_trips() {
     let text = format!(
         "{CAMERA}[materials.leaf]\ndiffuse = [0.2, 0.4, 0.1]\ndiffuse_transmission = [0.3, 0.5, 0.1]\n\
          [materials.paper]\ndiffuse_transmission = 0.25\n\
+         [materials.veined]\ndiffuse_transmission = {{ checker = {{ even = 0.5, odd = 0.1 }} }}\n\
          [[shapes]]\ntype = \"sphere\"\nmaterial = \"leaf\"\n\
          [[shapes]]\ntype = \"sphere\"\nmaterial = \"paper\"\n\
+         [[shapes]]\ntype = \"sphere\"\nmaterial = \"veined\"\n\
          [[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\n"
     );
     let s = parse(&text).unwrap_or_else(|e| panic!("{e}"));
     let m = |name: &str| s.materials.iter().find(|m| m.name == name).unwrap().clone();
-    assert_eq!(m("leaf").diffuse_transmission, Vec3::new(0.3, 0.5, 0.1));
-    assert_eq!(m("paper").diffuse_transmission, Vec3::splat(0.25));
-    assert_eq!(m("white").diffuse_transmission, Vec3::ZERO);
+    let constant = raylink::scene::Texture::Constant;
+    assert_eq!(
+        m("leaf").diffuse_transmission,
+        constant(Vec3::new(0.3, 0.5, 0.1))
+    );
+    assert_eq!(m("paper").diffuse_transmission, constant(Vec3::splat(0.25)));
+    assert_eq!(
+        m("veined").diffuse_transmission,
+        raylink::scene::Texture::Checker {
+            even: Vec3::splat(0.5),
+            odd: Vec3::splat(0.1),
+            size: 1.0
+        }
+    );
+    assert_eq!(m("white").diffuse_transmission, constant(Vec3::ZERO));
+    let bad = parse(&format!(
+        "{CAMERA}[materials.bad]\ndiffuse_transmission = {{ checker = {{ even = -1, odd = 0 }} }}\n\
+         [[shapes]]\ntype = \"sphere\"\nmaterial = \"bad\"\n"
+    ));
+    let e = bad.unwrap_err().to_string();
+    assert!(e.contains("bad.diffuse_transmission.checker.even"), "{e}");
     let bad = parse(&format!(
         "{CAMERA}[materials.bad]\ndiffuse_transmission = -1\n[[shapes]]\ntype = \"sphere\"\nmaterial = \"bad\"\n"
     ));

@@ -138,7 +138,7 @@ impl<'a> Bsdf<'a> {
         let lambertian = !m.fresnel
             && m.specular.max_element() <= 0.0
             && m.transmission.max_element() <= 0.0
-            && m.diffuse_transmission.max_element() <= 0.0;
+            && m.diffuse_transmission.max_value().max_element() <= 0.0;
         // Below this α the lobe is numerically a mirror; a thin sheet is smooth.
         let ggx = (ax.max(ay) >= 1e-3 && !m.thin).then_some(Ggx {
             alpha_x: ax,
@@ -154,7 +154,7 @@ impl<'a> Bsdf<'a> {
             n,
             ng,
             kd: m.diffuse.eval(sp.p, sp.uv),
-            kdt: m.diffuse_transmission,
+            kdt: m.diffuse_transmission.eval(sp.p, sp.uv),
             ks: m.specular,
             kt: m.transmission,
             ior: m.ior,

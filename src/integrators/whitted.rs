@@ -102,7 +102,7 @@ impl RayTree<'_> {
         }
         let kd = m.diffuse.eval(sp.p, sp.uv);
         color += m.ambient.unwrap_or(kd) * ctx.scene.ambient;
-        color += self.direct(m, kd, sp.p, ng, n, view);
+        color += self.direct(m, kd, sp, ng, n, view);
 
         if depth + 1 >= self.options.max_depth {
             return color;
@@ -157,9 +157,19 @@ impl RayTree<'_> {
         color
     }
 
-    /// The diffuse term Σ kd/π·(N·L)·E and the Phong highlight, with shadow rays.
-    fn direct(&mut self, m: &Material, kd: Rgb, p: Vec3, ng: Vec3, n: Vec3, view: Vec3) -> Rgb {
+    /// The diffuse term Σ kd/π·(N·L)·E, the Phong highlight, and a translucent sheet's
+    /// kdt/π·|N·L|·E of the lights behind it, with shadow rays.
+    fn direct(
+        &mut self,
+        m: &Material,
+        kd: Rgb,
+        sp: &SurfacePoint,
+        ng: Vec3,
+        n: Vec3,
+        view: Vec3,
+    ) -> Rgb {
         let ctx = self.ctx;
+        let p = sp.p;
         // A tabulated reflectance takes the diffuse term's place: f toward the view.
         let table = m.brdf.as_ref().map(|t| Bsdf::tabulated(t, n, ng));
         let reflect = |wi: Vec3| match &table {
@@ -168,7 +178,10 @@ impl RayTree<'_> {
         };
         let diffuse_on = kd.max_element() > 0.0 || table.is_some();
         let highlight_on = m.specular.max_element() > 0.0 && m.phong_exponent > 0.0;
-        if !diffuse_on && !highlight_on {
+        // A translucent sheet passes kdt/π of the light from behind it.
+        let kdt = m.diffuse_transmission.eval(p, sp.uv);
+        let translucent = kdt.max_element() > 0.0;
+        if !diffuse_on && !highlight_on && !translucent {
             return Rgb::ZERO;
         }
         let mut color = Rgb::ZERO;
@@ -205,11 +218,17 @@ impl RayTree<'_> {
                 }
             };
             let cos = n.dot(wi);
-            if cos <= 0.0 || ng.dot(wi) <= 0.0 {
+            let front = cos > 0.0 && ng.dot(wi) > 0.0;
+            let behind = translucent && cos < 0.0 && ng.dot(wi) < 0.0;
+            if !front && !behind {
                 continue;
             }
             let transmittance = self.transmittance(p, ng, wi, target);
             if transmittance == Rgb::ZERO {
+                continue;
+            }
+            if behind {
+                color += kdt * FRAC_1_PI * (irradiance * -cos * transmittance);
                 continue;
             }
             let e = irradiance * cos * transmittance;
@@ -228,6 +247,11 @@ impl RayTree<'_> {
                     Some(_) => self.area_light(light, p, ng, n, Some(&reflect)),
                     None => kd * FRAC_1_PI * self.area_light(light, p, ng, n, None),
                 };
+            }
+        }
+        if translucent {
+            for light in &ctx.area_lights {
+                color += kdt * FRAC_1_PI * self.area_light(light, p, -ng, -n, None);
             }
         }
         color

@@ -328,8 +328,9 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
         ambient: m.ambient.map(Splat3),
         specular: Some(Splat3(m.specular)),
         transmission: Some(Splat3(m.transmission)),
-        diffuse_transmission: (m.diffuse_transmission.max_element() > 0.0)
-            .then_some(Splat3(m.diffuse_transmission)),
+        diffuse_transmission: (m.diffuse_transmission
+            != Texture::Constant(crate::math::Vec3::ZERO))
+        .then(|| diffuse(&m.diffuse_transmission, refs)),
         ior: Some(m.ior),
         phong_exponent: Some(m.phong_exponent),
         roughness: Some(match m.roughness_v {

@@ -20,7 +20,7 @@ pub struct Material {
     /// Lambertian transmission to the other side (a thin translucent sheet: paper, leaves,
     /// a lampshade), kdt/π; pbrt's `diffusetransmission`. The Monte Carlo integrators and
     /// the irradiance cache use it.
-    pub diffuse_transmission: Rgb,
+    pub diffuse_transmission: Texture,
     /// Index of refraction of the material's inside (outside is vacuum, 1).
     pub ior: f32,
     /// Exponent n of the Phong highlight.
@@ -66,7 +66,7 @@ impl Default for Material {
             ambient: None,
             specular: Rgb::ZERO,
             transmission: Rgb::ZERO,
-            diffuse_transmission: Rgb::ZERO,
+            diffuse_transmission: Texture::Constant(Rgb::ZERO),
             ior: 1.5,
             phong_exponent: 50.0,
             roughness: 0.0,

@@ -389,7 +389,7 @@ fn convert(m: &tobj::Material, mtl: &Path) -> crate::Result<Material> {
         ambient,
         specular,
         transmission,
-        diffuse_transmission: Vec3::ZERO,
+        diffuse_transmission: Texture::Constant(Vec3::ZERO),
         ior,
         phong_exponent,
         roughness_v: None,

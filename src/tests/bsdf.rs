@@ -387,7 +387,7 @@ fn anisotropic_lobe_follows_the_larger_alpha() {
 fn leaf() -> Material {
     material(|m| {
         m.diffuse = Texture::Constant(Rgb::new(0.2, 0.4, 0.1));
-        m.diffuse_transmission = Rgb::new(0.3, 0.5, 0.1);
+        m.diffuse_transmission = Texture::Constant(Rgb::new(0.3, 0.5, 0.1));
     })
 }
 
@@ -395,7 +395,7 @@ fn leaf() -> Material {
 fn diffuse_transmission_sampling() {
     let coated = material(|m| {
         m.diffuse = Texture::Constant(Rgb::splat(0.3));
-        m.diffuse_transmission = Rgb::splat(0.4);
+        m.diffuse_transmission = Texture::Constant(Rgb::splat(0.4));
         m.specular = Rgb::ONE;
         m.fresnel = true;
         m.roughness = 0.3;

@@ -212,3 +212,37 @@ fn total_internal_reflection_inside_glass() {
     let grazing = radiance(&scene, at(60.0), fresnel);
     assert!(close(grazing, 0.25 * floor_glow, 1e-5), "{grazing}");
 }
+
+/// A translucent sheet (kdt, no kd) seen from above shows kdt/π·|N·L|·I/r² of a point light
+/// below it, and nothing of one above it; without kdt the light below is not seen.
+#[test]
+fn a_translucent_sheet_passes_the_light_behind_it() {
+    let kdt = Rgb::new(0.5, 0.3, 0.1);
+    let sheet = |kdt: Rgb, light: Vec3| {
+        let mut scene = empty_scene();
+        let m = add_material(
+            &mut scene,
+            Material {
+                diffuse_transmission: Texture::Constant(kdt),
+                ..diffuse(Rgb::ZERO)
+            },
+        );
+        floor(&mut scene, 1.0, 4.0, m);
+        scene.lights.push(Light::Point {
+            position: light,
+            intensity: Rgb::splat(20.0),
+        });
+        scene
+    };
+    let view = Ray::new(Vec3::new(0.3, 3.0, 0.2), Vec3::NEG_Y);
+    let below = Vec3::new(0.0, -1.0, 0.0);
+    let got = radiance(&sheet(kdt, below), view, WhittedOptions::default());
+    let to = below - Vec3::new(0.3, 1.0, 0.2);
+    let expected = kdt / PI * 20.0 * (-to.normalize().y) / to.length_squared();
+    assert!(close(got, expected, 1e-4), "{got} vs {expected}");
+    let above = Vec3::new(0.0, 2.0, 0.0);
+    let got = radiance(&sheet(kdt, above), view, WhittedOptions::default());
+    assert_eq!(got, Rgb::ZERO);
+    let got = radiance(&sheet(Rgb::ZERO, below), view, WhittedOptions::default());
+    assert_eq!(got, Rgb::ZERO);
+}

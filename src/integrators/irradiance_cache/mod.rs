@@ -629,7 +629,7 @@ impl Walk<'_> {
             }
             // Indirect diffuse: ρ/π · E, through a coat as for light arriving evenly.
             let kd = m.diffuse.eval(sp.p, sp.uv);
-            let kdt = m.diffuse_transmission;
+            let kdt = m.diffuse_transmission.eval(sp.p, sp.uv);
             let n = bsdf.shading_normal();
             let ng = if sp.ng.dot(n) >= 0.0 { sp.ng } else { -sp.ng };
             if kd.max_element() > 0.0 {

@@ -215,16 +215,18 @@ impl Loader {
                         other.max_value()
                     }
                 };
-                let t = self.texture_param(p, "transmittance", Rgb::splat(0.25), st, loc)?;
-                let t = constant(self, t, "transmittance");
-                let r = self.texture_param(p, "reflectance", Rgb::splat(0.25), st, loc)?;
-                let r = match r {
-                    r if scale == 1.0 => r,
-                    r => Texture::Constant(constant(self, r, "reflectance") * scale),
+                // A texture is kept as it is unless `scale` must multiply it.
+                let scaled = |this: &mut Loader, t: Texture, what: &str| match t {
+                    t if scale == 1.0 => t,
+                    t => Texture::Constant(constant(this, t, what) * scale),
                 };
+                let t = self.texture_param(p, "transmittance", Rgb::splat(0.25), st, loc)?;
+                let t = scaled(self, t, "transmittance");
+                let r = self.texture_param(p, "reflectance", Rgb::splat(0.25), st, loc)?;
+                let r = scaled(self, r, "reflectance");
                 Material {
                     diffuse: r,
-                    diffuse_transmission: t * scale,
+                    diffuse_transmission: t,
                     ..base
                 }
             }

@@ -320,7 +320,14 @@ impl<'a> Builder<'a> {
         let diffuse = match desc.diffuse {
             None => d.diffuse,
             Some(DiffuseDesc::Colour(c)) => Texture::Constant(colour(c).map_err(fail("diffuse"))?),
-            Some(DiffuseDesc::Texture(t)) => self.texture(site, t)?,
+            Some(DiffuseDesc::Texture(t)) => self.texture(site, "diffuse", t)?,
+        };
+        let diffuse_transmission = match desc.diffuse_transmission {
+            None => d.diffuse_transmission.clone(),
+            Some(DiffuseDesc::Colour(c)) => {
+                Texture::Constant(colour(c).map_err(fail("diffuse_transmission"))?)
+            }
+            Some(DiffuseDesc::Texture(t)) => self.texture(site, "diffuse_transmission", t)?,
         };
         let ambient = match desc.ambient {
             None => None,
@@ -368,11 +375,7 @@ impl<'a> Builder<'a> {
             ambient,
             specular: col(desc.specular, "specular", specular_default)?,
             transmission: col(desc.transmission, "transmission", d.transmission)?,
-            diffuse_transmission: col(
-                desc.diffuse_transmission,
-                "diffuse_transmission",
-                d.diffuse_transmission,
-            )?,
+            diffuse_transmission,
             ior: positive(desc.ior.unwrap_or(d.ior)).map_err(fail("ior"))?,
             phong_exponent: non_negative(desc.phong_exponent.unwrap_or(d.phong_exponent))
                 .map_err(fail("phong_exponent"))?,
@@ -431,9 +434,11 @@ impl<'a> Builder<'a> {
         Ok(Material::mix_of(name, (ia, ma), (ib, mb), amount))
     }
 
-    fn texture(&self, site: &Site, t: TextureTable) -> crate::Result<Texture> {
+    fn texture(&self, site: &Site, key: &str, t: TextureTable) -> crate::Result<Texture> {
         let ctx = self.ctx;
-        let fail = |key: &'static str| move |m: String| ctx.fail(site, key, m);
+        // Errors name the field under the material's key (`diffuse.checker.even`, ...).
+        let fail =
+            |field: &'static str| move |m: String| ctx.fail(site, &format!("{key}.{field}"), m);
         let count = [
             t.checker.is_some(),
             t.uv_checker.is_some(),
@@ -445,7 +450,7 @@ impl<'a> Builder<'a> {
         if count != 1 {
             return Err(ctx.fail(
                 site,
-                "diffuse",
+                key,
                 "a texture table takes exactly one of checker, uv_checker or image",
             ));
         }
@@ -458,17 +463,17 @@ impl<'a> Builder<'a> {
         };
         if let Some(c) = t.checker {
             return Ok(Texture::Checker {
-                even: colour(c.even.0).map_err(fail("diffuse.checker.even"))?,
-                odd: colour(c.odd.0).map_err(fail("diffuse.checker.odd"))?,
-                size: positive(c.size.unwrap_or(1.0)).map_err(fail("diffuse.checker.size"))?,
+                even: colour(c.even.0).map_err(fail("checker.even"))?,
+                odd: colour(c.odd.0).map_err(fail("checker.odd"))?,
+                size: positive(c.size.unwrap_or(1.0)).map_err(fail("checker.size"))?,
             });
         }
         if let Some(c) = t.uv_checker {
             return Ok(Texture::UvChecker {
-                even: colour(c.even.0).map_err(fail("diffuse.uv_checker.even"))?,
-                odd: colour(c.odd.0).map_err(fail("diffuse.uv_checker.odd"))?,
+                even: colour(c.even.0).map_err(fail("uv_checker.even"))?,
+                odd: colour(c.odd.0).map_err(fail("uv_checker.odd"))?,
                 mapping: mapping(c.uscale, c.vscale, c.udelta, c.vdelta)
-                    .map_err(fail("diffuse.uv_checker"))?,
+                    .map_err(fail("uv_checker"))?,
             });
         }
         let i = t.image.expect("counted above");
@@ -478,14 +483,13 @@ impl<'a> Builder<'a> {
             Some(e) => Encoding::parse(&e).ok_or_else(|| {
                 ctx.fail(
                     site,
-                    "diffuse.image.encoding",
+                    &format!("{key}.image.encoding"),
                     format!("must be \"linear\", \"sRGB\" or \"gamma G\", got \"{e}\""),
                 )
             })?,
         };
-        let scale = non_negative(i.scale.unwrap_or(1.0)).map_err(fail("diffuse.image.scale"))?;
-        let mapping =
-            mapping(i.uscale, i.vscale, i.udelta, i.vdelta).map_err(fail("diffuse.image"))?;
+        let scale = non_negative(i.scale.unwrap_or(1.0)).map_err(fail("image.scale"))?;
+        let mapping = mapping(i.uscale, i.vscale, i.udelta, i.vdelta).map_err(fail("image"))?;
         self.inputs.borrow_mut().push(path.clone());
         let image = ImageTexture::load(
             &path,
@@ -495,7 +499,7 @@ impl<'a> Builder<'a> {
             i.invert.unwrap_or(false),
             mapping,
         )
-        .map_err(|e| ctx.fail(site, "diffuse.image.file", e))?;
+        .map_err(|e| ctx.fail(site, &format!("{key}.image.file"), e))?;
         Ok(Texture::Image(std::sync::Arc::new(image)))
     }
 

@@ -182,7 +182,7 @@ pub(crate) struct MaterialDesc {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) transmission: Option<Splat3>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub(crate) diffuse_transmission: Option<Splat3>,
+    pub(crate) diffuse_transmission: Option<DiffuseDesc>,
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) ior: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
