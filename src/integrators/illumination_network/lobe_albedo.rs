@@ -26,7 +26,12 @@ pub struct LobeAlbedo {
 fn bin(surface: &Surface, side: u32, k: usize) -> (Rgb, Rgb) {
     let c = (k as f32 + 0.5) / BINS as f32;
     let ng = if side == 0 { Vec3::Z } else { -Vec3::Z };
-    let bsdf = surface.directional_bsdf(ng, Vec3::Z);
+    // Rendering gathers a translucent sheet's kdt apart, over the whole hemisphere.
+    let lobes = Surface {
+        kdt: Rgb::ZERO,
+        ..surface.clone()
+    };
+    let bsdf = lobes.directional_bsdf(ng, Vec3::Z);
     let wo = Vec3::new((1.0 - c * c).max(0.0).sqrt(), 0.0, c);
     bsdf.albedo_by_side(wo, SAMPLES, Transport::Radiance)
 }
@@ -67,7 +72,7 @@ impl LobeAlbedo {
 /// Whether two surfaces have the same directional lobes of their own (their diffuse colour,
 /// emission and a mix's other part aside).
 pub fn same_lobes(a: &Surface, b: &Surface) -> bool {
-    (a.ks, a.kt, a.alpha, &a.optics) == (b.ks, b.kt, b.alpha, &b.optics)
+    (a.ks, a.kt, a.kdt, a.alpha, &a.optics) == (b.ks, b.kt, b.kdt, b.alpha, &b.optics)
 }
 
 /// [`LobeAlbedo::at`] without a table: the two bins needed, worked out now.

@@ -174,6 +174,13 @@ impl NetworkRenderer<'_> {
                 }
             }
         }
+        let twin = net.twin(node);
+        if sfc.kdt.max_element() > 0.0 && twin != NONE && sol.dir_index[twin as usize] != NONE {
+            // A translucent sheet: kdt × the cosine-weighted mean radiance arriving behind.
+            let behind = net.node_normal(twin);
+            let k = sol.dir_index[twin as usize];
+            *r += sfc.kdt * weight * self.gather_hemisphere(twin, k, |wi| wi.dot(behind));
+        }
     }
 
     /// Incoming radiance of directional node `node` (row `k`) around direction `centre`

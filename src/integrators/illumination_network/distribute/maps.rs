@@ -318,7 +318,8 @@ fn table(
             (weight, bsdf, grid)
         })
         .collect();
-    let transmits = surface.parts().any(|(_, p)| p.kt.max_element() > 0.0);
+    let transmits =
+        (surface.parts()).any(|(_, p)| p.kt.max_element() > 0.0 || p.kdt.max_element() > 0.0);
     let mut reflect = SparseMap {
         offsets: vec![0],
         ..SparseMap::default()

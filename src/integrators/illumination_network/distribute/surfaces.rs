@@ -13,6 +13,9 @@ pub struct Surface {
     /// The specular lobe's reflectance at normal incidence (a metal's Fresnel included).
     pub ks: Rgb,
     pub kt: Rgb,
+    /// Lambertian transmission (a translucent sheet), carried by the tables as the other
+    /// directional lobes.
+    pub kdt: Rgb,
     pub alpha: f32,
     /// What else the directional lobes' BSDF is made of.
     pub optics: Optics,
@@ -66,7 +69,7 @@ impl Surface {
 
     /// Whether the surface has directional lobes of its own (a mix's other part aside).
     pub fn has_own_lobes(&self) -> bool {
-        self.ks.max_element() > 0.0 || self.kt.max_element() > 0.0
+        self.ks.max_element() > 0.0 || self.kt.max_element() > 0.0 || self.kdt.max_element() > 0.0
     }
 
     /// The surfaces whose directional lobes this one scatters by, with their weights: itself
@@ -79,12 +82,12 @@ impl Surface {
             .filter(|(w, _)| *w > 0.0)
     }
 
-    /// The bits of this surface's own directional lobes (ks, kt, α and optics; not a
+    /// The bits of this surface's own directional lobes (ks, kt, kdt, α and optics; not a
     /// mix's other part): equal keys, equal lobes.
     pub fn lobe_key(&self) -> Vec<u32> {
         let o = &self.optics;
         let mut key = Vec::with_capacity(24);
-        for v in [self.ks, self.kt, o.specular] {
+        for v in [self.ks, self.kt, self.kdt, o.specular] {
             key.extend(v.to_array().map(f32::to_bits));
         }
         key.extend([
@@ -105,9 +108,13 @@ impl Surface {
     }
 
     /// The most the surface scatters of the light from one direction, per channel, as the
-    /// network bounds it: kd plus the weighted ks + kt of its parts.
+    /// network bounds it: kd plus the weighted ks + kt + kdt of its parts.
     pub fn scattered(&self) -> Rgb {
-        self.kd + self.parts().map(|(w, p)| (p.ks + p.kt) * w).sum::<Rgb>()
+        self.kd
+            + self
+                .parts()
+                .map(|(w, p)| (p.ks + p.kt + p.kdt) * w)
+                .sum::<Rgb>()
     }
 
     /// The BSDF of the directional lobes (specular and transmission) at a node with unit
@@ -121,6 +128,7 @@ impl Surface {
             diffuse: Texture::Constant(Rgb::ZERO),
             specular: self.optics.specular,
             transmission: self.kt,
+            diffuse_transmission: Texture::Constant(self.kdt),
             ior: self.optics.ior,
             roughness: self.alpha,
             fresnel: self.optics.fresnel,
@@ -150,15 +158,16 @@ impl Surface {
 /// The most material `m` (with diffuse colour `kd` at the point) can reflect and transmit of
 /// the light arriving from one direction, per channel: kd + ks + kt, or with Fresnel weighting,
 /// where ks takes F and kd and kt share 1 − F, the larger of ks and kd + kt (a glass is
-/// ks = kt = 1). The network scales a material down to at most 1.
-fn most_scattered(m: &Material, kd: Rgb) -> Rgb {
+/// ks = kt = 1); plus kdt, which Fresnel does not weight. The network scales a material down
+/// to at most 1.
+fn most_scattered(m: &Material, kd: Rgb, kdt: Rgb) -> Rgb {
     let (ks, kt) = (m.specular_at_normal(), m.transmission);
     if let Some(table) = &m.brdf {
         table.most_reflected()
     } else if m.fresnel {
-        ks.max(kd + kt)
+        ks.max(kd + kt) + kdt
     } else {
-        kd + ks + kt
+        kd + ks + kt + kdt
     }
 }
 
@@ -228,16 +237,18 @@ pub(crate) fn network_kd(scene: &Scene, mi: usize, p: Vec3, uv: Vec2) -> Rgb {
 fn plain_surface(m: &Material, p: Vec3, uv: Vec2) -> Surface {
     let kd = m.diffuse.eval(p, uv);
     let (mut kd, mut ks, mut kt) = (kd, m.specular_at_normal(), m.transmission);
+    let mut kdt = m.diffuse_transmission.eval(p, uv);
     let mut specular = m.specular;
     if let Some(table) = &m.brdf {
         (kd, ks, specular) = (Rgb::ZERO, table.most_reflected(), Rgb::ZERO);
     }
-    let total = most_scattered(m, kd);
+    let total = most_scattered(m, kd, kdt);
     for c in 0..3 {
         if total[c] > 1.0 {
             kd[c] /= total[c];
             ks[c] /= total[c];
             kt[c] /= total[c];
+            kdt[c] /= total[c];
             specular[c] /= total[c];
         }
     }
@@ -245,6 +256,7 @@ fn plain_surface(m: &Material, p: Vec3, uv: Vec2) -> Surface {
         kd,
         ks,
         kt,
+        kdt,
         // An anisotropic lobe becomes the isotropic one of mean α; a thin sheet is smooth
         // (its transmission is the straight line on).
         alpha: match m.roughness_v {
@@ -295,7 +307,8 @@ pub fn lossless_channel(net: &Network, surfaces: &[Surface]) -> Option<(usize, u
                 seen[emitter] = true;
                 stack.push(emitter as u32);
                 while let Some(i) = stack.pop() {
-                    let transmits = surfaces[i as usize].parts().any(|(_, p)| p.kt[c] > 0.0);
+                    let transmits = (surfaces[i as usize].parts())
+                        .any(|(_, p)| p.kt[c] > 0.0 || p.kdt[c] > 0.0);
                     let through = transmits.then(|| net.twin(i));
                     let links = net.links_of(i).iter().map(|&l| net.code.target(l));
                     for t in links.chain(through) {

@@ -123,6 +123,11 @@ pub fn reflectance_hash(net: &Network, scene: &Scene, surfaces: &[Surface]) -> u
         if let Some(t) = &o.brdf {
             bytes.extend_from_slice(&t.digest().to_le_bytes());
         }
+        if s.kdt != Rgb::ZERO {
+            for c in 0..3 {
+                bytes.extend_from_slice(&s.kdt[c].to_bits().to_le_bytes());
+            }
+        }
         if let Some(b) = &s.blend {
             let other = b.other.lobe_key();
             for v in std::iter::once(b.amount.to_bits()).chain(other) {
