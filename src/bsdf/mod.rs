@@ -18,7 +18,7 @@
 //! - `conductor` (η, k): ks is weighted by the complex Fresnel reflectance of the metal per
 //!   channel (pbrt-v4's `ConductorBxDF`), smooth or GGX, isotropic or anisotropic;
 //! - `brdf`: a tabulated reflectance ([`TabulatedBrdf`]) in place of all the lobes above,
-//!   sampled by the cosine.
+//!   importance-sampled from the table mixed with the cosine.
 //!
 //! Every BSDF can evaluate, sample, and give the density of its samples, for both transport
 //! directions (Veach's thesis, ch. 5): in [`Transport::Radiance`] refraction scales radiance
@@ -421,7 +421,11 @@ impl<'a> Bsdf<'a> {
         let Some((mut lo, mut li)) = self.connectable(wo, wi) else {
             return 0.0;
         };
-        if self.lambertian || self.table.is_some() {
+        if let Some(table) = self.table {
+            // Sampled given wo whatever the transport: one density serves both.
+            return table.pdf(lo, li);
+        }
+        if self.lambertian {
             return cosine_hemisphere_pdf(li.z.abs());
         }
         let lobes = self.lobes(lo);
@@ -546,9 +550,10 @@ impl<'a> Bsdf<'a> {
         let specular_end = diffuse_end + lobes.specular;
         let table = self.table.is_some();
         if table || u_lobe < diffuse_end || (u_lobe < specular_end && self.ggx.is_some()) {
-            // A non-delta lobe: the weight comes from the whole mixture; a table is sampled
-            // by the cosine.
-            let li = if table || u_lobe < lobes.diffuse {
+            // A non-delta lobe: the weight comes from the whole mixture.
+            let li = if let Some(t) = self.table {
+                t.sample(lo, u_lobe, u)
+            } else if u_lobe < lobes.diffuse {
                 cosine_hemisphere(u)
             } else if u_lobe < diffuse_end {
                 -cosine_hemisphere(u)

@@ -65,6 +65,11 @@ pub(super) fn check(name: &str, m: &Material, wo: Vec3) {
 
 /// [`check`] with the density integrated at `sub`² points a bin (more for narrow lobes).
 pub(super) fn check_at(name: &str, m: &Material, wo: Vec3, sub: usize) {
+    check_in(name, m, wo, sub, Transport::Radiance);
+}
+
+/// [`check_at`] in transport `mode`.
+pub(super) fn check_in(name: &str, m: &Material, wo: Vec3, sub: usize, mode: Transport) {
     let wo = wo.normalize();
     let bsdf = Bsdf::new(m, &point(), wo);
     let n = 400_000;
@@ -74,7 +79,7 @@ pub(super) fn check_at(name: &str, m: &Material, wo: Vec3, sub: usize) {
     for _ in 0..n {
         let u_lobe = rng.uniform();
         let u = Vec2::new(rng.uniform(), rng.uniform());
-        let Some(s) = bsdf.sample(wo, u_lobe, u, Transport::Radiance) else {
+        let Some(s) = bsdf.sample(wo, u_lobe, u, mode) else {
             continue;
         };
         assert!((s.wi.length() - 1.0).abs() < 1e-3, "{name}: wi not unit");
@@ -84,7 +89,7 @@ pub(super) fn check_at(name: &str, m: &Material, wo: Vec3, sub: usize) {
         non_delta += 1;
         counts[bin_of(s.wi)] += 1.0;
         // The weight is eval/pdf.
-        let expect = bsdf.eval(wo, s.wi, Transport::Radiance) / bsdf.pdf(wo, s.wi);
+        let expect = bsdf.eval(wo, s.wi, mode) / bsdf.pdf(wo, s.wi);
         assert!(
             (s.weight - expect).abs().max_element() <= 1e-3 * expect.max_element().max(1.0),
             "{name}: weight {} vs eval/pdf {}",

@@ -15,9 +15,17 @@
 //! 0.25 0.3 0.31             # θi slowest, then φi, θo, and φo fastest
 //! ```
 
-use crate::math::{Rgb, Vec3};
+mod sampling;
+
+use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
+use crate::math::{Rgb, Vec2, Vec3};
+use sampling::Sampler;
 use std::f32::consts::{PI, TAU};
 use std::path::{Path, PathBuf};
+
+/// The share of a table's samples drawn from its own distribution ([`TabulatedBrdf::sample`]);
+/// the rest follow the cosine, so every direction where f > 0 can be drawn.
+pub const TABLE_SHARE: f32 = 0.9;
 
 /// A tabulated BRDF.
 #[derive(Debug, PartialEq)]
@@ -32,6 +40,8 @@ pub struct TabulatedBrdf {
     most_reflected: Rgb,
     /// A hash of the grid and values: what a saved solution made with the table checks.
     digest: u64,
+    /// Importance sampling of the table; `None` for a constant table (sampled by the cosine).
+    sampler: Option<Sampler>,
 }
 
 /// One axis's place of an angle: the two grid indices around it and the weight of the second.
@@ -88,8 +98,10 @@ impl TabulatedBrdf {
             values,
             most_reflected: Rgb::ZERO,
             digest: crate::binary_file::fnv1a(&bytes),
+            sampler: None,
         };
         table.most_reflected = table.largest_albedo();
+        table.sampler = Sampler::build(&table);
         Ok(table)
     }
 
@@ -195,6 +207,31 @@ impl TabulatedBrdf {
             }
         }
         f
+    }
+
+    /// A direction (local, upper hemisphere) sampled given local direction `given`: with
+    /// probability [`TABLE_SHARE`] from the table's distribution for `given` (chosen by
+    /// `u_lobe`), otherwise by the cosine; a constant table always by the cosine (`u`
+    /// alone). The same whichever argument of f `given` is: see the `sampling` module.
+    pub fn sample(&self, given: Vec3, u_lobe: f32, u: Vec2) -> Vec3 {
+        let cosine_share = 1.0 - TABLE_SHARE;
+        match &self.sampler {
+            Some(s) if u_lobe >= cosine_share => {
+                let u_row = ((u_lobe - cosine_share) / TABLE_SHARE).min(1.0 - f32::EPSILON);
+                s.sample(given, u_row, [u.x, u.y])
+            }
+            _ => cosine_hemisphere(u),
+        }
+    }
+
+    /// The density in solid angle with which [`TabulatedBrdf::sample`] draws `sampled`
+    /// given `given` (both local).
+    pub fn pdf(&self, given: Vec3, sampled: Vec3) -> f32 {
+        let cosine = cosine_hemisphere_pdf(sampled.z);
+        match &self.sampler {
+            Some(s) => (1.0 - TABLE_SHARE) * cosine + TABLE_SHARE * s.pdf(given, sampled),
+            None => cosine,
+        }
     }
 
     /// A hash of the table's grid and values.
