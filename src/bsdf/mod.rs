@@ -30,6 +30,8 @@ mod microfacet;
 mod tabulated;
 
 pub use microfacet::Ggx;
+#[cfg(test)]
+pub use tabulated::synthetic_merl;
 pub use tabulated::TabulatedBrdf;
 
 use dielectric::RoughInterface;

@@ -1,6 +1,7 @@
 //! A reflectance given as a table: samples of the BRDF f(θi, φi, θo, φo) on a grid of
 //! angles in the surface's shading frame, read from a text file and interpolated
-//! multilinearly. With a single φi the BRDF is isotropic: it depends on φo − φi only.
+//! multilinearly. With a single φi the BRDF is isotropic: it depends on φo − φi only. A
+//! file named `*.binary` is instead a MERL measured BRDF ([`merl`]).
 //!
 //! The file (`docs/materials.md` has an example):
 //!
@@ -15,10 +16,14 @@
 //! 0.25 0.3 0.31             # θi slowest, then φi, θo, and φo fastest
 //! ```
 
+mod merl;
 mod sampling;
 
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::math::{Rgb, Vec2, Vec3};
+#[cfg(test)]
+pub use merl::synthetic as synthetic_merl;
+use merl::Merl;
 use sampling::Sampler;
 use std::f32::consts::{PI, TAU};
 use std::path::{Path, PathBuf};
@@ -42,6 +47,9 @@ pub struct TabulatedBrdf {
     digest: u64,
     /// Importance sampling of the table; `None` for a constant table (sampled by the cosine).
     sampler: Option<Sampler>,
+    /// A MERL measured BRDF, which `eval` looks up; the grid then holds it sampled on a
+    /// grid of angles for the sampling structure only.
+    merl: Option<Merl>,
 }
 
 /// One axis's place of an angle: the two grid indices around it and the weight of the second.
@@ -85,29 +93,77 @@ impl TabulatedBrdf {
         {
             return Err(format!("values must be finite and not negative, got {v}"));
         }
-        let axes = axes_degrees.map(|a| a.iter().map(|d| d.to_radians()).collect());
+        let axes: [Vec<f32>; 4] = axes_degrees.map(|a| a.iter().map(|d| d.to_radians()).collect());
         let bits = axes
             .iter()
             .flatten()
             .copied()
             .chain(values.iter().flat_map(|v| v.to_array()));
         let bytes: Vec<u8> = bits.flat_map(|x| x.to_bits().to_le_bytes()).collect();
+        let digest = crate::binary_file::fnv1a(&bytes);
+        Ok(Self::assemble(axes, values, None, digest))
+    }
+
+    /// The table of a grid (angles in radians) or of a MERL BRDF with its grid for
+    /// sampling: the albedo and sampling structure computed.
+    fn assemble(
+        axes: [Vec<f32>; 4],
+        values: Vec<Rgb>,
+        merl: Option<Merl>,
+        digest: u64,
+    ) -> TabulatedBrdf {
         let mut table = TabulatedBrdf {
             file: PathBuf::new(),
             axes,
             values,
             most_reflected: Rgb::ZERO,
-            digest: crate::binary_file::fnv1a(&bytes),
+            digest,
             sampler: None,
+            merl,
         };
         table.most_reflected = table.largest_albedo();
         table.sampler = Sampler::build(&table);
-        Ok(table)
+        table
+    }
+
+    /// A MERL measured BRDF from the bytes of its file (the `merl` module describes the
+    /// format); `Err` says what is wrong.
+    pub fn from_merl(bytes: &[u8]) -> Result<TabulatedBrdf, String> {
+        let merl = Merl::parse(bytes)?;
+        // The grid the sampling structure is built on: every 2° in θ, 5° in φo − φi.
+        let thetas: Vec<f32> = (0..=45).map(|k| (2 * k) as f32).collect();
+        let phis: Vec<f32> = (0..72).map(|k| (5 * k) as f32).collect();
+        let dir = |t: f32, p: f32| {
+            let (t, p) = (t.min(89.9).to_radians(), p.to_radians());
+            Vec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos())
+        };
+        let mut values = Vec::with_capacity(thetas.len() * thetas.len() * phis.len());
+        for &ti in &thetas {
+            for &to in &thetas {
+                for &po in &phis {
+                    values.push(merl.eval(dir(ti, 0.0), dir(to, po)));
+                }
+            }
+        }
+        let radians = |a: &[f32]| a.iter().map(|d| d.to_radians()).collect::<Vec<f32>>();
+        let axes = [
+            radians(&thetas),
+            vec![0.0],
+            radians(&thetas),
+            radians(&phis),
+        ];
+        let digest = crate::binary_file::fnv1a(bytes);
+        Ok(Self::assemble(axes, values, Some(merl), digest))
     }
 
     /// Reads the text format of the module documentation from `path`, which the scene
     /// names `file`; errors name the file and line.
     pub fn read(path: &Path, file: PathBuf) -> Result<TabulatedBrdf, String> {
+        if path.extension().is_some_and(|e| e == "binary") {
+            let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+            let table = Self::from_merl(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
+            return Ok(TabulatedBrdf { file, ..table });
+        }
         let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
         let table = Self::parse(&text).map_err(|e| format!("{}:{e}", path.display()))?;
         Ok(TabulatedBrdf { file, ..table })
@@ -173,6 +229,9 @@ impl TabulatedBrdf {
     /// f for light arriving along local direction `li` and leaving along `lo` (both in the
     /// shading frame, on the side of its normal).
     pub fn eval(&self, li: Vec3, lo: Vec3) -> Rgb {
+        if let Some(merl) = &self.merl {
+            return merl.eval(li, lo);
+        }
         let (ti, pi) = angles(li);
         let (to, po) = angles(lo);
         let [a_ti, a_pi, a_to, a_po] = &self.axes;
