@@ -325,9 +325,15 @@ impl TabulatedBrdf {
     }
 
     fn largest_albedo(&self) -> Rgb {
+        // An isotropic table reflects alike toward every φo: one azimuth is enough.
+        let phis = if self.axes[1].len() == 1 {
+            &self.axes[3][..1]
+        } else {
+            &self.axes[3][..]
+        };
         let mut most = Rgb::ZERO;
         for &t in &self.axes[2] {
-            for &p in &self.axes[3] {
+            for &p in phis {
                 let lo = Vec3::new(t.sin() * p.cos(), t.sin() * p.sin(), t.cos().max(1e-4));
                 most = most.max(self.albedo(lo.normalize()));
             }
