@@ -9,10 +9,11 @@ use crate::bsdf::{Bsdf, TabulatedBrdf, Transport};
 use crate::control::Control;
 use crate::image::filter::Filter;
 use crate::image::Image;
+use crate::integrators::bdpt::{Bdpt, BdptOptions};
 use crate::integrators::path::{PathOptions, PathTracer};
-use crate::integrators::Context;
+use crate::integrators::{Context, MonteCarlo};
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
-use crate::math::{Rgb, Rng, Vec2, Vec3};
+use crate::math::{luminance, Rgb, Rng, Vec2, Vec3};
 use crate::render::progressive::{render_passes, ProgressiveOptions};
 use crate::scene::{Material, Scene};
 use std::sync::Arc;
@@ -246,28 +247,25 @@ fn lamp_box(floor: &str) -> Scene {
 }
 
 fn path_image(scene: &Scene) -> Image {
+    image_by(scene, &PathTracer::new(PathOptions { max_depth: 8 }), 16)
+}
+
+/// `scene` rendered by `integrator` at `spp` samples per pixel, seed 5.
+fn image_by(scene: &Scene, integrator: &dyn MonteCarlo, spp: u32) -> Image {
     let accel = accel::build(scene, Backend::Embree, &Control::default()).unwrap();
     let ctx = Context::new(scene, accel.as_ref());
     let options = ProgressiveOptions {
         width: 24,
         height: 24,
-        spp: 16,
+        spp,
         time_limit: None,
         threads: None,
         seed: 5,
         filter: Filter::Box { radius: 0.5 },
     };
-    let integrator = PathTracer::new(PathOptions { max_depth: 8 });
     let watch = crate::render::Watch::nobody();
-    let (film, _) = render_passes(
-        &ctx,
-        &integrator,
-        &options,
-        None,
-        watch,
-        &Control::default(),
-    )
-    .unwrap();
+    let (film, _) =
+        render_passes(&ctx, integrator, &options, None, watch, &Control::default()).unwrap();
     film.image().unwrap()
 }
 
@@ -302,6 +300,47 @@ fn a_constant_table_renders_as_the_lambertian_surface() {
     eprintln!("table vs Lambertian: {mean:.2e} mean, {worst:.2e} worst; albedo 0.45: {off:.3}");
     assert!(mean < 1e-4 && worst < 1e-3, "{mean}, {worst}");
     assert!(off > 100.0 * mean.max(1e-5), "{off}");
+}
+
+/// A glossy floor that is not reciprocal (GGX α 0.2 times 0.2 + cos θi, every 2° in θ and
+/// 4° in φ) renders alike in the path tracer and in BDPT, which combines the table's
+/// sampling density in both directions (radiance and importance) by multiple importance
+/// sampling: the images' means agree within 1.5%, and within 3% in each quarter (measured
+/// 0.05% and 0.19%; evaluating the table with its arguments swapped in importance transport
+/// gives 2.3% and 10%).
+#[test]
+fn path_tracing_and_bdpt_agree_on_a_glossy_table() {
+    let ggx = material(|m| {
+        m.specular = Rgb::splat(0.8);
+        m.roughness = 0.2;
+    });
+    let table = table_with(&ggx, 2.0, 4.0, false, |t| 0.2 + t.to_radians().cos());
+    let mut scene = lamp_box("diffuse = 0.5");
+    let floor = scene
+        .materials
+        .iter()
+        .position(|m| m.name == "floor")
+        .unwrap();
+    scene.materials[floor].diffuse = crate::scene::Texture::Constant(Rgb::ZERO);
+    scene.materials[floor].brdf = Some(Arc::new(table));
+    let path = image_by(&scene, &PathTracer::new(PathOptions { max_depth: 8 }), 1024);
+    let bdpt = image_by(&scene, &Bdpt::new(BdptOptions { max_depth: 8 }), 1024);
+    let mean = |img: &Image, quarter: Option<usize>| {
+        let mut sum = 0.0f64;
+        for (k, p) in img.pixels.iter().enumerate() {
+            let (x, y) = (k % 24, k / 24);
+            if quarter.is_none_or(|q| q == (x / 12) + 2 * (y / 12)) {
+                sum += luminance(*p) as f64;
+            }
+        }
+        sum
+    };
+    let whole = (mean(&path, None) - mean(&bdpt, None)).abs() / mean(&bdpt, None);
+    let worst = (0..4)
+        .map(|q| (mean(&path, Some(q)) - mean(&bdpt, Some(q))).abs() / mean(&bdpt, Some(q)))
+        .fold(0.0, f64::max);
+    eprintln!("path vs BDPT on a glossy table: {whole:.4} in the mean, {worst:.4} worst quarter");
+    assert!(whole < 0.015 && worst < 0.03, "{whole}, {worst}");
 }
 
 /// A scene naming a table loads it and its path; errors in the table name the table's file and

@@ -3,7 +3,7 @@
 //! multilinearly. With a single φi the BRDF is isotropic: it depends on φo − φi only. A
 //! file named `*.binary` is instead a MERL measured BRDF ([`merl`]).
 //!
-//! The file (`docs/materials.md` has an example):
+//! The file (`docs/scene-format.md`, "Tabulated BRDFs", documents it):
 //!
 //! ```text
 //! # comments and blank lines are skipped
