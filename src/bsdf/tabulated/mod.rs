@@ -75,7 +75,9 @@ impl TabulatedBrdf {
                 return Err(format!("{name}: the angles must increase"));
             }
         }
-        let count: usize = axes_degrees.iter().map(Vec::len).product();
+        let count = (axes_degrees.iter())
+            .try_fold(1usize, |n, a| n.checked_mul(a.len()))
+            .unwrap_or(usize::MAX);
         if values.len() != count {
             return Err(format!(
                 "{} values for a grid of {} ({} × {} × {} × {})",
@@ -176,6 +178,8 @@ impl TabulatedBrdf {
         let mut values = Vec::new();
         let mut in_values = false;
         let mut last = 0;
+        // The line of each axis, for its errors.
+        let mut axis_lines = [0; 4];
         for (i, raw) in text.lines().enumerate() {
             let line = raw.split('#').next().unwrap_or("").trim();
             let at = i + 1;
@@ -194,11 +198,17 @@ impl TabulatedBrdf {
             };
             if in_values {
                 let v = numbers(words)?;
-                values.push(match v[..] {
+                let value = match v[..] {
                     [g] => Rgb::splat(g),
                     [r, g, b] => Rgb::new(r, g, b),
                     _ => return Err(format!("{at}: a value is one number or three (r g b)")),
-                });
+                };
+                if !value.is_finite() || value.min_element() < 0.0 {
+                    return Err(format!(
+                        "{at}: values must be finite and not negative, got {value}"
+                    ));
+                }
+                values.push(value);
                 continue;
             }
             let key = words.next().unwrap_or("");
@@ -218,12 +228,19 @@ impl TabulatedBrdf {
                 return Err(format!("{at}: {key} is given twice"));
             }
             axes[k] = Some(numbers(words)?);
+            axis_lines[k] = at;
         }
         if !in_values {
             return Err(format!("{}: no \"values\" line", last.max(1)));
         }
         let axes = axes.map(Option::unwrap_or_default);
-        TabulatedBrdf::new(axes, values).map_err(|e| format!("{last}: {e}"))
+        TabulatedBrdf::new(axes, values).map_err(|e| {
+            // An axis's error names the axis first: point at its line.
+            let line = (NAMES.iter().zip(axis_lines))
+                .find(|(name, _)| e.starts_with(*name))
+                .map_or(last, |(_, line)| line);
+            format!("{line}: {e}")
+        })
     }
 
     /// f for light arriving along local direction `li` and leaving along `lo` (both in the
@@ -477,13 +494,13 @@ mod tests {
             ("theta_i 0 95\n".to_string(), "1: no \"values\""),
             (
                 "theta_i 0 95\nphi_i 0\ntheta_o 0\nphi_o 0\nvalues\n1\n2\n".into(),
-                "7: theta_i: 95 is outside [0, 90]",
+                "1: theta_i: 95 is outside [0, 90]",
             ),
             ("theta_i 0\nvalues\n".into(), "2: phi_i must come before"),
             ("gamma 1\n".into(), "1: unknown key \"gamma\""),
             (
                 format!("{head}values\n1\n-1\n1\n1\n"),
-                "9: values must be finite",
+                "7: values must be finite",
             ),
             ("phi_o 0 90 45\nphi_o 1\n".into(), "2: phi_o is given twice"),
         ] {
