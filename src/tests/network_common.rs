@@ -4,9 +4,12 @@
 use super::network_scenes::closed_box_text;
 use crate::accel::{self, Backend};
 use crate::control::Control;
+use crate::image::filter::Filter;
+use crate::image::Image;
 use crate::integrators::illumination_network::preprocess::Builder;
 use crate::integrators::illumination_network::{Network, NetworkParams};
-use crate::integrators::Context;
+use crate::integrators::{Context, MonteCarlo};
+use crate::render::progressive::{render_passes, ProgressiveOptions};
 use crate::scene::Scene;
 use std::path::Path;
 
@@ -33,6 +36,32 @@ pub(crate) fn build(scene: &Scene, p: NetworkParams, builder: Builder) -> Networ
     let accel = accel::build(scene, Backend::Embree, &Control::default()).unwrap();
     let ctx = Context::new(scene, accel.as_ref());
     Network::build(scene, &ctx, p, builder).unwrap()
+}
+
+/// `scene` rendered by a Monte Carlo `integrator` (the references of the network and table
+/// tests) at `size`×`size` pixels, `spp` samples per pixel, seed `seed`, a box filter.
+pub(crate) fn monte_carlo_image(
+    scene: &Scene,
+    integrator: &dyn MonteCarlo,
+    size: u32,
+    spp: u32,
+    seed: u64,
+) -> Image {
+    let accel = accel::build(scene, Backend::Embree, &Control::default()).unwrap();
+    let ctx = Context::new(scene, accel.as_ref());
+    let options = ProgressiveOptions {
+        width: size,
+        height: size,
+        spp,
+        time_limit: None,
+        threads: None,
+        seed,
+        filter: Filter::Box { radius: 0.5 },
+    };
+    let watch = crate::render::Watch::nobody();
+    let (film, _) =
+        render_passes(&ctx, integrator, &options, None, watch, &Control::default()).unwrap();
+    film.image().unwrap()
 }
 
 pub(crate) fn cornell() -> Scene {

@@ -4,12 +4,11 @@
 //! that light sent the wrong way shows; and the reflectance tables themselves: rows that sum
 //! to the BSDF's albedo, and reciprocity.
 
-use super::network_common::{build, params, scene};
+use super::network_common::{build, monte_carlo_image, params, scene};
 use super::network_scenes::wall;
 use crate::accel::{self, Backend};
 use crate::control::Control;
 use crate::image::compare::{box_downsample, bright_mask};
-use crate::image::filter::Filter;
 use crate::image::Image;
 use crate::integrators::bdpt::{Bdpt, BdptOptions};
 use crate::integrators::illumination_network::distribute::{distribute, DistributeOptions};
@@ -18,7 +17,6 @@ use crate::integrators::illumination_network::render::{NetworkRenderer, Tables};
 use crate::integrators::Context;
 use crate::math::Vec3;
 use crate::render::pixels::{render_pixels, PixelView};
-use crate::render::progressive::{render_passes, ProgressiveOptions};
 use crate::render::{PixelSampling, Tile};
 use crate::scene::Scene;
 
@@ -71,27 +69,13 @@ fn lamp_box(place: Place, material: &str) -> Scene {
 /// caustics a path from the camera rarely does), 2,048 samples per pixel, 32 bounces, a box
 /// filter; its blocks differ between seeds by about 1%.
 fn reference_image(scene: &Scene) -> Image {
-    let accel = accel::build(scene, Backend::Embree, &Control::default()).unwrap();
-    let ctx = Context::new(scene, accel.as_ref());
-    let options = ProgressiveOptions {
-        width: SIZE,
-        height: SIZE,
-        spp: 2048,
-        time_limit: None,
-        threads: None,
-        seed: 3,
-        filter: Filter::Box { radius: 0.5 },
-    };
-    let (film, _) = render_passes(
-        &ctx,
+    monte_carlo_image(
+        scene,
         &Bdpt::new(BdptOptions { max_depth: 32 }),
-        &options,
-        None,
-        crate::render::Watch::nobody(),
-        &Control::default(),
+        SIZE,
+        2048,
+        3,
     )
-    .unwrap();
-    film.image().unwrap()
 }
 
 /// The network's image of `scene` with `slopes` slopes and h = 1/32.

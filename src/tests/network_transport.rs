@@ -3,12 +3,11 @@
 //! orders against each other, a scene that absorbs no light refused, and the Cornell box and
 //! a room lit by a lamp under its ceiling against the path tracer.
 
-use super::network_common::{build, closed_box, cornell, params, scene};
+use super::network_common::{build, closed_box, cornell, monte_carlo_image, params, scene};
 use super::network_scenes::{closed_box_text, sealed_box_text, wall, CAMERA};
 use crate::accel::{self, Backend};
 use crate::control::Control;
 use crate::image::compare::{box_downsample, bright_mask, mean, rmse};
-use crate::image::filter::Filter;
 use crate::image::Image;
 use crate::integrators::illumination_network::distribute::{
     distribute, DistributeOptions, Solution,
@@ -20,7 +19,6 @@ use crate::integrators::path::{PathOptions, PathTracer};
 use crate::integrators::Context;
 use crate::math::Vec3;
 use crate::render::pixels::{render_pixels, PixelView};
-use crate::render::progressive::{render_passes, ProgressiveOptions};
 use crate::render::{PixelSampling, Tile};
 use crate::scene::Scene;
 
@@ -385,28 +383,9 @@ fn render_tables_leave_a_mixed_image_unchanged() {
 fn cornell_box_approaches_the_path_tracer() {
     let scene = cornell();
     let size = 32;
-    let accel = accel::build(&scene, Backend::Embree, &Control::default()).unwrap();
-    let ctx = Context::new(&scene, accel.as_ref());
-    let options = ProgressiveOptions {
-        width: size,
-        height: size,
-        spp: 1024,
-        time_limit: None,
-        threads: None,
-        seed: 5,
-        filter: Filter::Box { radius: 0.5 },
-    };
-    let (film, _) = render_passes(
-        &ctx,
-        &PathTracer::new(PathOptions { max_depth: 64 }),
-        &options,
-        None,
-        crate::render::Watch::nobody(),
-        &Control::default(),
-    )
-    .unwrap();
+    let path = PathTracer::new(PathOptions { max_depth: 64 });
     // The light (rendered exactly by both) and its neighbours are left out of the blocks.
-    let full = film.image().unwrap();
+    let full = monte_carlo_image(&scene, &path, size, 1024, 5);
     let mask = bright_mask(&full, 1.0);
     let masked = |img: &Image| {
         let mut img = img.clone();
@@ -477,24 +456,10 @@ fn a_lamp_under_the_ceiling_lights_the_room_as_the_path_tracer() {
     }
     let scene = scene(&text);
     let size = 32;
-    let accel = accel::build(&scene, Backend::Embree, &Control::default()).unwrap();
-    let ctx = Context::new(&scene, accel.as_ref());
     let blocks = |img: &Image| box_downsample(img, 4, 4).unwrap();
     let path_blocks = |max_depth: u32| {
-        let options = ProgressiveOptions {
-            width: size,
-            height: size,
-            spp: 1024,
-            time_limit: None,
-            threads: None,
-            seed: 5,
-            filter: Filter::Box { radius: 0.5 },
-        };
         let tracer = PathTracer::new(PathOptions { max_depth });
-        let watch = crate::render::Watch::nobody();
-        let (film, _) =
-            render_passes(&ctx, &tracer, &options, None, watch, &Control::default()).unwrap();
-        blocks(&film.image().unwrap())
+        blocks(&monte_carlo_image(&scene, &tracer, size, 1024, 5))
     };
     let (reference, cut) = (path_blocks(64), path_blocks(8));
     let network = blocks(&network_image(&scene, params(12, 1.0 / 32.0), size, false));

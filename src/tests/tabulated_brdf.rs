@@ -3,18 +3,14 @@
 //! the path tracer, and a scene file naming one loads it (or says what is wrong with it).
 
 use super::bsdf::{check, check_in, directions, material, point};
-use super::network_common::scene;
-use crate::accel::{self, Backend};
+use super::network_common::{monte_carlo_image, scene};
 use crate::bsdf::{Bsdf, TabulatedBrdf, Transport};
-use crate::control::Control;
-use crate::image::filter::Filter;
 use crate::image::Image;
 use crate::integrators::bdpt::{Bdpt, BdptOptions};
 use crate::integrators::path::{PathOptions, PathTracer};
-use crate::integrators::{Context, MonteCarlo};
+use crate::integrators::MonteCarlo;
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::math::{luminance, Rgb, Rng, Vec2, Vec3};
-use crate::render::progressive::{render_passes, ProgressiveOptions};
 use crate::scene::{Material, Scene};
 use std::sync::Arc;
 
@@ -250,23 +246,9 @@ fn path_image(scene: &Scene) -> Image {
     image_by(scene, &PathTracer::new(PathOptions { max_depth: 8 }), 16)
 }
 
-/// `scene` rendered by `integrator` at `spp` samples per pixel, seed 5.
+/// `scene` rendered by `integrator` at 24×24 pixels, `spp` samples per pixel, seed 5.
 fn image_by(scene: &Scene, integrator: &dyn MonteCarlo, spp: u32) -> Image {
-    let accel = accel::build(scene, Backend::Embree, &Control::default()).unwrap();
-    let ctx = Context::new(scene, accel.as_ref());
-    let options = ProgressiveOptions {
-        width: 24,
-        height: 24,
-        spp,
-        time_limit: None,
-        threads: None,
-        seed: 5,
-        filter: Filter::Box { radius: 0.5 },
-    };
-    let watch = crate::render::Watch::nobody();
-    let (film, _) =
-        render_passes(&ctx, integrator, &options, None, watch, &Control::default()).unwrap();
-    film.image().unwrap()
+    monte_carlo_image(scene, integrator, 24, spp, 5)
 }
 
 /// A table holding the constant 0.5/π is the Lambertian floor of albedo 0.5: the path
