@@ -272,15 +272,15 @@ fn textures_checkerboard_and_imagemap() {
     .unwrap();
     let uv = raylink::math::Vec2::new;
     let checker = &s.materials[0].diffuse;
-    assert_eq!(checker.eval(Vec3::ZERO, uv(0.1, 0.1)), Rgb::X);
-    assert_eq!(checker.eval(Vec3::ZERO, uv(0.3, 0.1)), Rgb::Z);
+    assert_eq!(checker.eval(Vec3::ZERO, uv(0.1, 0.1), Vec3::Z), Rgb::X);
+    assert_eq!(checker.eval(Vec3::ZERO, uv(0.3, 0.1), Vec3::Z), Rgb::Z);
     let img = &s.materials[1].diffuse;
-    let left = img.eval(Vec3::ZERO, uv(0.25, 0.5));
+    let left = img.eval(Vec3::ZERO, uv(0.25, 0.5), Vec3::Z);
     assert!(
         (left.x - raylink::image::output::srgb_decode(128.0 / 255.0)).abs() < 1e-3,
         "{left}"
     );
-    assert!((img.eval(Vec3::ZERO, uv(0.75, 0.5)).x - 1.0).abs() < 1e-3);
+    assert!((img.eval(Vec3::ZERO, uv(0.75, 0.5), Vec3::Z).x - 1.0).abs() < 1e-3);
 }
 
 /// Spot lights as pbrt-v4 defines them (`from`, `to`, `coneangle` 30, `conedelta` 5, `I`,

@@ -135,7 +135,10 @@ impl<'a> Bsdf<'a> {
     pub(crate) fn of_lobes(m: &Material, sp: &SurfacePoint, n: Vec3, ng: Vec3) -> Bsdf<'a> {
         let transmissive = m.transmission.max_element() > 0.0;
         let (t, b) = frame(n);
-        let (ax, ay) = m.alphas();
+        let (ax, ay) = match &m.roughness_map {
+            Some(map) => map.alphas(sp.p, sp.uv, sp.ng),
+            None => m.alphas(),
+        };
         let (ax, ay) = (ax.clamp(0.0, 1.0), ay.clamp(0.0, 1.0));
         let lambertian = !m.fresnel
             && m.specular.max_element() <= 0.0
@@ -155,8 +158,8 @@ impl<'a> Bsdf<'a> {
             b,
             n,
             ng,
-            kd: m.diffuse.eval(sp.p, sp.uv),
-            kdt: m.diffuse_transmission.eval(sp.p, sp.uv),
+            kd: m.diffuse.eval(sp.p, sp.uv, sp.ng),
+            kdt: m.diffuse_transmission.eval(sp.p, sp.uv, sp.ng),
             ks: m.specular,
             kt: m.transmission,
             ior: m.ior,

@@ -28,6 +28,8 @@ pub struct Context<'a> {
     pub lights: LightSet,
     /// Whether some material is a mix (resolved at each hit).
     mixes: bool,
+    /// Whether some material has a normal or bump map (applied at each hit).
+    details: bool,
 }
 
 impl<'a> Context<'a> {
@@ -40,6 +42,7 @@ impl<'a> Context<'a> {
             area_lights,
             lights,
             mixes: scene.materials.iter().any(|m| m.mix.is_some()),
+            details: scene.materials.iter().any(|m| m.normal_detail.is_some()),
         }
     }
 
@@ -52,6 +55,7 @@ impl<'a> Context<'a> {
             area_lights: self.area_lights.clone(),
             lights: self.lights.clone(),
             mixes: self.mixes,
+            details: self.details,
         }
     }
 
@@ -62,12 +66,20 @@ impl<'a> Context<'a> {
         Some(self.complete(&hit, ray))
     }
 
-    /// The surface point of a hit, with a mixed material resolved to the one chosen there.
+    /// The surface point of a hit, with a mixed material resolved to the one chosen there
+    /// and the shading normal turned by the material's normal or bump map.
     #[inline]
     fn complete(&self, hit: &crate::accel::Hit, ray: &Ray) -> SurfacePoint {
         let mut sp = hit.surface_point(&self.scene.shapes, ray);
         if self.mixes {
             sp.material = self.scene.material_at(sp.material, sp.p, -ray.dir);
+        }
+        if self.details {
+            if let Some(detail) = &self.scene.materials[sp.material].normal_detail {
+                let geometry = &self.scene.shapes[sp.shape].geometry;
+                let d = geometry.tangents(hit.prim_id as usize, hit.u, hit.v, sp.p, sp.ng);
+                sp.ns = detail.shading_normal(sp.ns, sp.ng, sp.p, sp.uv, &d);
+            }
         }
         sp
     }

@@ -100,7 +100,7 @@ impl RayTree<'_> {
         if entering || m.two_sided_emission {
             color += m.emission; // emitters face their geometric normal unless two-sided
         }
-        let kd = m.diffuse.eval(sp.p, sp.uv);
+        let kd = m.diffuse.eval(sp.p, sp.uv, sp.ng);
         color += m.ambient.unwrap_or(kd) * ctx.scene.ambient;
         color += self.direct(m, kd, sp, ng, n, view);
 
@@ -179,7 +179,7 @@ impl RayTree<'_> {
         let diffuse_on = kd.max_element() > 0.0 || table.is_some();
         let highlight_on = m.specular.max_element() > 0.0 && m.phong_exponent > 0.0;
         // A translucent sheet passes kdt/π of the light from behind it.
-        let kdt = m.diffuse_transmission.eval(p, sp.uv);
+        let kdt = m.diffuse_transmission.eval(p, sp.uv, sp.ng);
         let translucent = kdt.max_element() > 0.0;
         if !diffuse_on && !highlight_on && !translucent {
             return Rgb::ZERO;

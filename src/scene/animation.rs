@@ -591,7 +591,9 @@ radius = 1
         // Linear material: a quarter of the way at frame 1.
         let s = a.scene_at(1).unwrap();
         let m = &s.materials[s.shapes[0].material];
-        let kd = m.diffuse.eval(Vec3::ZERO, crate::math::Vec2::ZERO);
+        let kd = m
+            .diffuse
+            .eval(Vec3::ZERO, crate::math::Vec2::ZERO, Vec3::ZERO);
         assert!(
             (kd.x - 0.6).abs() < 1e-6 && (kd.y - 0.2).abs() < 1e-6,
             "{kd}"

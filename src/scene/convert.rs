@@ -13,11 +13,14 @@
 
 use super::toml::schema::{
     CacheDesc, CameraDesc, CheckerDesc, ConductorDesc, ConductorIndex, DiffuseDesc,
-    EnvironmentDesc, FileDesc, FilterDesc, ImageDesc, LightDesc, LightKind, MaterialDesc, MixDesc,
-    NetworkDesc, OneOrMany, Ordered, RenderDesc, RoughnessDesc, ShapeDesc, ShapeKind, Splat3,
-    TextureTable, TransformOp, UvCheckerDesc, WhittedDesc, WorldDesc, V3,
+    DirectionMixDesc, EnvironmentDesc, FileDesc, FilterDesc, ImageDesc, LightDesc, LightKind,
+    MaterialDesc, MixDesc, NetworkDesc, OneOrMany, Ordered, RenderDesc, RoughnessDesc, ScaleDesc,
+    ShapeDesc, ShapeKind, Splat3, TextureMixDesc, TextureTable, TransformOp, UvCheckerDesc,
+    WhittedDesc, WorldDesc, V3,
 };
-use super::{Camera, Geometry, Light, Material, Projection, RenderSettings, Scene, Texture};
+use super::{
+    Camera, Geometry, Light, Material, NormalDetail, Projection, RenderSettings, Scene, Texture,
+};
 use crate::image::filter::Filter;
 use crate::settings::{AntiAliasing, NetworkBuilder, NetworkOrder};
 use crate::Error;
@@ -333,10 +336,18 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
         .then(|| diffuse(&m.diffuse_transmission, refs)),
         ior: Some(m.ior),
         phong_exponent: Some(m.phong_exponent),
-        roughness: Some(match m.roughness_v {
-            Some(v) => RoughnessDesc::Anisotropic(m.roughness, v),
-            None => RoughnessDesc::Isotropic(m.roughness),
+        roughness: Some(match (&m.roughness_map, m.roughness_v) {
+            (Some(map), _) => match diffuse(&map.u, refs) {
+                DiffuseDesc::Texture(t) => RoughnessDesc::Texture(Box::new(t)),
+                DiffuseDesc::Colour(c) => RoughnessDesc::Isotropic(c.x),
+            },
+            (None, Some(v)) => RoughnessDesc::Anisotropic(m.roughness, v),
+            (None, None) => RoughnessDesc::Isotropic(m.roughness),
         }),
+        remap_roughness: m
+            .roughness_map
+            .as_ref()
+            .and_then(|r| r.remap.then_some(true)),
         fresnel: Some(m.fresnel),
         thin: m.thin.then_some(true),
         conductor: m.conductor.map(|c| {
@@ -349,6 +360,14 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
         two_sided_emission: m.two_sided_emission.then_some(true),
         mix: None,
         brdf: None,
+        normal_map: match &m.normal_detail {
+            Some(NormalDetail::Map(image)) => Some(refs.to(&image.file)),
+            _ => None,
+        },
+        bump: match &m.normal_detail {
+            Some(NormalDetail::Bump(t)) => Some(diffuse(t, refs)),
+            _ => None,
+        },
     }
 }
 
@@ -361,11 +380,9 @@ fn diffuse(t: &Texture, refs: Refs) -> DiffuseDesc {
                 odd: Splat3(*odd),
                 size: Some(*size),
             }),
-            uv_checker: None,
-            image: None,
+            ..TextureTable::default()
         },
         Texture::UvChecker { even, odd, mapping } => TextureTable {
-            checker: None,
             uv_checker: Some(UvCheckerDesc {
                 even: Splat3(*even),
                 odd: Splat3(*odd),
@@ -374,11 +391,9 @@ fn diffuse(t: &Texture, refs: Refs) -> DiffuseDesc {
                 udelta: Some(mapping.offset.x),
                 vdelta: Some(mapping.offset.y),
             }),
-            image: None,
+            ..TextureTable::default()
         },
         Texture::Image(img) => TextureTable {
-            checker: None,
-            uv_checker: None,
             image: Some(ImageDesc {
                 file: refs.to(&img.file),
                 encoding: Some(img.encoding.name()),
@@ -389,6 +404,28 @@ fn diffuse(t: &Texture, refs: Refs) -> DiffuseDesc {
                 udelta: Some(img.mapping.offset.x),
                 vdelta: Some(img.mapping.offset.y),
             }),
+            ..TextureTable::default()
+        },
+        Texture::Scale(t) => TextureTable {
+            scale: Some(Box::new(ScaleDesc {
+                texture: diffuse(&t[0], refs),
+                by: diffuse(&t[1], refs),
+            })),
+            ..TextureTable::default()
+        },
+        Texture::Mix(m) => TextureTable {
+            mix: Some(Box::new(TextureMixDesc {
+                textures: [diffuse(&m.textures[0], refs), diffuse(&m.textures[1], refs)],
+                amount: diffuse(&m.amount, refs),
+            })),
+            ..TextureTable::default()
+        },
+        Texture::DirectionMix(t, dir) => TextureTable {
+            direction_mix: Some(Box::new(DirectionMixDesc {
+                textures: [diffuse(&t[0], refs), diffuse(&t[1], refs)],
+                direction: V3(*dir),
+            })),
+            ..TextureTable::default()
         },
     };
     DiffuseDesc::Texture(table)

@@ -1,5 +1,6 @@
 use super::mix::Mix;
-use super::texture::{ImageTexture, UvMapping};
+use super::normal_detail::NormalDetail;
+use super::texture::Texture;
 use crate::bsdf::TabulatedBrdf;
 use crate::math::{Rgb, Vec2, Vec3};
 use std::sync::Arc;
@@ -56,6 +57,52 @@ pub struct Material {
     /// A tabulated reflectance in place of the diffuse, specular and transmission lobes (an
     /// opaque surface reflecting on both sides).
     pub brdf: Option<Arc<TabulatedBrdf>>,
+    /// A roughness that varies over the surface, in place of `roughness` and `roughness_v`
+    /// for the Monte Carlo integrators (the other techniques use those, set to the map's
+    /// largest value).
+    pub roughness_map: Option<Arc<RoughnessMap>>,
+    /// A normal map or bump map turning the shading normal.
+    pub normal_detail: Option<NormalDetail>,
+}
+
+/// A roughness given by textures (pbrt's textured `roughness`, `uroughness`, `vroughness`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct RoughnessMap {
+    /// The roughness along the tangent, and along the bitangent too when `v` is `None`.
+    pub u: Texture,
+    pub v: Option<Texture>,
+    /// The textures give pbrt's roughness r, and GGX α = √r (pbrt's `remaproughness`);
+    /// otherwise they give α.
+    pub remap: bool,
+}
+
+impl RoughnessMap {
+    /// GGX (α_x, α_y) at position `p`, texture coordinates `uv`, geometric normal `n`.
+    pub fn alphas(&self, p: Vec3, uv: Vec2, n: Vec3) -> (f32, f32) {
+        let alpha = |t: &Texture| {
+            let r = t.eval_float(p, uv, n).max(0.0);
+            if self.remap {
+                r.sqrt()
+            } else {
+                r
+            }
+        };
+        let ax = alpha(&self.u);
+        (ax, self.v.as_ref().map_or(ax, alpha))
+    }
+
+    /// The largest α the map gives (for the techniques that take one roughness).
+    pub fn max_alpha(&self) -> f32 {
+        let top = |t: &Texture| {
+            let r = t.max_value().x.max(0.0);
+            if self.remap {
+                r.sqrt()
+            } else {
+                r
+            }
+        };
+        top(&self.u).max(self.v.as_ref().map_or(0.0, top))
+    }
 }
 
 impl Default for Material {
@@ -78,6 +125,8 @@ impl Default for Material {
             two_sided_emission: false,
             mix: None,
             brdf: None,
+            roughness_map: None,
+            normal_detail: None,
         }
     }
 }
@@ -201,64 +250,5 @@ impl Conductor {
     /// Fresnel reflectance per channel at incidence cosine `cos`.
     pub fn reflectance(&self, cos: f32) -> Rgb {
         crate::math::optics::fresnel_conductor(cos, self.eta, self.k)
-    }
-}
-
-/// A colour that may vary over a surface.
-#[derive(Clone, Debug, PartialEq)]
-pub enum Texture {
-    Constant(Rgb),
-    /// A solid (3-D) checkerboard in world space: cubes of side `size` alternate colours.
-    Checker {
-        even: Rgb,
-        odd: Rgb,
-        size: f32,
-    },
-    /// A checkerboard over the surface's (u, v) (pbrt's 2-D `checkerboard`): `even` where
-    /// floor(s) + floor(t) is even for (s, t) = `mapping`(u, v).
-    UvChecker {
-        even: Rgb,
-        odd: Rgb,
-        mapping: UvMapping,
-    },
-    /// An image looked up by (u, v).
-    Image(Arc<ImageTexture>),
-}
-
-impl Texture {
-    /// The colour at world position `p` with surface coordinates `uv`.
-    pub fn eval(&self, p: Vec3, uv: Vec2) -> Rgb {
-        match *self {
-            Texture::Constant(c) => c,
-            Texture::Checker { even, odd, size } => {
-                // A small bias keeps faces that lie exactly on a cell boundary on one side.
-                let cell = ((p + Vec3::splat(1e-4)) / size).floor();
-                if (cell.x + cell.y + cell.z).rem_euclid(2.0) < 0.5 {
-                    even
-                } else {
-                    odd
-                }
-            }
-            Texture::UvChecker { even, odd, mapping } => {
-                let st = mapping.map(uv).floor();
-                if (st.x + st.y).rem_euclid(2.0) < 0.5 {
-                    even
-                } else {
-                    odd
-                }
-            }
-            Texture::Image(ref image) => image.eval(uv),
-        }
-    }
-
-    /// The largest value the texture takes (for contribution bounds and validation).
-    pub fn max_value(&self) -> Rgb {
-        match *self {
-            Texture::Constant(c) => c,
-            Texture::Checker { even, odd, .. } | Texture::UvChecker { even, odd, .. } => {
-                even.max(odd)
-            }
-            Texture::Image(ref image) => image.max_value(),
-        }
     }
 }

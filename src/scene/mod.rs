@@ -10,10 +10,12 @@ mod geometry;
 pub mod light;
 mod material;
 mod mix;
+pub mod normal_detail;
 pub mod obj;
 pub mod pbrt;
 pub mod ply;
 pub mod settings;
+pub mod tangents;
 pub mod texture;
 pub mod toml;
 
@@ -21,9 +23,11 @@ pub use camera::{Camera, Projection, MAX_RESOLUTION};
 pub use environment::Environment;
 pub use geometry::{Geometry, QuadMesh, Shape, SurfacePoint, TriangleMesh};
 pub use light::Light;
-pub use material::{Conductor, Material, Texture};
+pub use material::{Conductor, Material, RoughnessMap};
 pub use mix::Mix;
+pub use normal_detail::NormalDetail;
 pub use settings::{SettingSource, Settings as RenderSettings};
+pub use texture::Texture;
 
 use crate::math::{Rgb, Vec3};
 use std::path::{Path, PathBuf};

@@ -401,6 +401,8 @@ fn convert(m: &tobj::Material, mtl: &Path) -> crate::Result<Material> {
         brdf: None,
         mix: None,
         emission,
+        roughness_map: None,
+        normal_detail: None,
     })
 }
 

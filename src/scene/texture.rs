@@ -1,10 +1,11 @@
-//! Image textures: an image looked up by surface (u, v), bilinearly, repeating. As in
-//! pbrt-v4, v = 0 is the bottom row of the image file.
+//! Textures: values that vary over a surface. Image textures are looked up by surface
+//! (u, v), bilinearly, repeating; as in pbrt-v4, v = 0 is the bottom row of the image file.
 
 use crate::image::output::{read_image, srgb_decode};
 use crate::image::Image;
-use crate::math::{Rgb, Vec2};
+use crate::math::{Rgb, Vec2, Vec3};
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// Maps surface (u, v) to texture (s, t) = (u, v) · scale + offset (pbrt's `uscale`,
 /// `vscale`, `udelta`, `vdelta`).
@@ -106,16 +107,32 @@ impl ImageTexture {
         invert: bool,
         mapping: UvMapping,
     ) -> crate::Result<ImageTexture> {
-        let (mut image, _) = read_image(path)?;
+        let (image, _) = read_image(path)?;
+        if image.pixels.is_empty() {
+            return Err(crate::Error::image(path, "the image has no pixels"));
+        }
+        Ok(ImageTexture::from_image(
+            image, file, encoding, scale, invert, mapping,
+        ))
+    }
+
+    /// The texture of an image in memory (its values as stored, decoded by `encoding`);
+    /// `file` names it in messages and converted scenes. The image must have pixels.
+    pub fn from_image(
+        mut image: Image,
+        file: PathBuf,
+        encoding: Encoding,
+        scale: f32,
+        invert: bool,
+        mapping: UvMapping,
+    ) -> ImageTexture {
+        assert!(!image.pixels.is_empty(), "an image texture needs pixels");
         for p in &mut image.pixels {
             *p = Rgb::new(
                 encoding.decode(p.x),
                 encoding.decode(p.y),
                 encoding.decode(p.z),
             );
-        }
-        if image.pixels.is_empty() {
-            return Err(crate::Error::image(path, "the image has no pixels"));
         }
         let max = image
             .pixels
@@ -126,7 +143,7 @@ impl ImageTexture {
         } else {
             max * scale.max(0.0)
         };
-        Ok(ImageTexture {
+        ImageTexture {
             file,
             encoding,
             scale,
@@ -134,7 +151,7 @@ impl ImageTexture {
             mapping,
             image,
             max,
-        })
+        }
     }
 
     pub fn image(&self) -> &Image {
@@ -167,5 +184,118 @@ impl ImageTexture {
         } else {
             v
         }
+    }
+}
+
+/// A colour that may vary over a surface. Float-valued parameters (roughness, a bump map's
+/// displacement, a mix's amount) are textures too, read from the first channel, as pbrt-v4
+/// reads a float image.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Texture {
+    Constant(Rgb),
+    /// A solid (3-D) checkerboard in world space: cubes of side `size` alternate colours.
+    Checker {
+        even: Rgb,
+        odd: Rgb,
+        size: f32,
+    },
+    /// A checkerboard over the surface's (u, v) (pbrt's 2-D `checkerboard`): `even` where
+    /// floor(s) + floor(t) is even for (s, t) = `mapping`(u, v).
+    UvChecker {
+        even: Rgb,
+        odd: Rgb,
+        mapping: UvMapping,
+    },
+    /// An image looked up by (u, v).
+    Image(Arc<ImageTexture>),
+    /// The product of two textures (pbrt's `scale`: `tex` times `scale`).
+    Scale(Box<[Texture; 2]>),
+    /// (1 − amount)·first + amount·second, the amount a float texture (pbrt's `mix`).
+    Mix(Box<TextureMix>),
+    /// |n·dir|·first + (1 − |n·dir|)·second with n the geometric normal (pbrt's
+    /// `directionmix`).
+    DirectionMix(Box<[Texture; 2]>, Vec3),
+}
+
+/// The parts of a [`Texture::Mix`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct TextureMix {
+    pub textures: [Texture; 2],
+    pub amount: Texture,
+}
+
+impl Texture {
+    /// The colour at world position `p` with surface coordinates `uv` and geometric normal
+    /// `n`.
+    pub fn eval(&self, p: Vec3, uv: Vec2, n: Vec3) -> Rgb {
+        match self {
+            Texture::Constant(c) => *c,
+            Texture::Checker { even, odd, size } => {
+                // A small bias keeps faces that lie exactly on a cell boundary on one side.
+                let cell = ((p + Vec3::splat(1e-4)) / *size).floor();
+                if (cell.x + cell.y + cell.z).rem_euclid(2.0) < 0.5 {
+                    *even
+                } else {
+                    *odd
+                }
+            }
+            Texture::UvChecker { even, odd, mapping } => {
+                let st = mapping.map(uv).floor();
+                if (st.x + st.y).rem_euclid(2.0) < 0.5 {
+                    *even
+                } else {
+                    *odd
+                }
+            }
+            Texture::Image(image) => image.eval(uv),
+            Texture::Scale(t) => t[0].eval(p, uv, n) * t[1].eval_float(p, uv, n),
+            Texture::Mix(m) => {
+                let a = m.amount.eval_float(p, uv, n);
+                let [t0, t1] = &m.textures;
+                // Each side only where it has weight, as pbrt-v4 does.
+                let v0 = if a != 1.0 {
+                    t0.eval(p, uv, n)
+                } else {
+                    Rgb::ZERO
+                };
+                let v1 = if a != 0.0 {
+                    t1.eval(p, uv, n)
+                } else {
+                    Rgb::ZERO
+                };
+                v0 * (1.0 - a) + v1 * a
+            }
+            Texture::DirectionMix(t, dir) => {
+                let a = n.dot(*dir).abs();
+                t[0].eval(p, uv, n) * a + t[1].eval(p, uv, n) * (1.0 - a)
+            }
+        }
+    }
+
+    /// The value of a float texture: the first channel.
+    pub fn eval_float(&self, p: Vec3, uv: Vec2, n: Vec3) -> f32 {
+        match self {
+            Texture::Constant(c) => c.x,
+            other => other.eval(p, uv, n).x,
+        }
+    }
+
+    /// The largest value the texture takes (for contribution bounds and validation).
+    pub fn max_value(&self) -> Rgb {
+        match self {
+            Texture::Constant(c) => *c,
+            Texture::Checker { even, odd, .. } | Texture::UvChecker { even, odd, .. } => {
+                even.max(*odd)
+            }
+            Texture::Image(image) => image.max_value(),
+            Texture::Scale(t) => t[0].max_value() * t[1].max_value().x,
+            Texture::Mix(m) => m.textures[0].max_value().max(m.textures[1].max_value()),
+            Texture::DirectionMix(t, _) => t[0].max_value().max(t[1].max_value()),
+        }
+    }
+
+    /// Whether the texture is the same everywhere.
+    pub fn is_constant(&self) -> bool {
+        matches!(self, Texture::Constant(_))
     }
 }

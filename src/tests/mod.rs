@@ -14,6 +14,7 @@ mod network_files;
 mod network_relight;
 mod network_scenes;
 mod network_transport;
+mod normal_detail;
 mod oiio;
 mod robustness;
 mod rough_glass;

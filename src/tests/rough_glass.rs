@@ -286,3 +286,63 @@ fn small_alpha_converges_to_smooth_glass() {
         );
     }
 }
+
+/// A roughness map reaches the BSDF: in each cell of a checkerboard of α 0.1 and 0.5 the
+/// BSDF is the one of a constant roughness equal to the cell's, for a rough glass and a
+/// rough metal.
+#[test]
+fn a_roughness_map_sets_the_roughness_at_each_point() {
+    use crate::scene::texture::UvMapping;
+    use crate::scene::{Conductor, RoughnessMap, Texture};
+    use std::sync::Arc;
+    let checker = Texture::UvChecker {
+        even: Rgb::splat(0.1),
+        odd: Rgb::splat(0.5),
+        mapping: UvMapping::default(),
+    };
+    let metal = |alpha: f32| {
+        material(|m| {
+            m.specular = Rgb::ONE;
+            m.conductor = Conductor::named("Au");
+            m.roughness = alpha;
+        })
+    };
+    let glass = |alpha: f32| rough_glass(alpha, alpha);
+    for (plain, alpha_of) in [
+        (&glass as &dyn Fn(f32) -> Material, "glass"),
+        (&metal, "metal"),
+    ] {
+        let mut mapped = plain(0.5);
+        mapped.roughness_map = Some(Arc::new(RoughnessMap {
+            u: checker.clone(),
+            v: None,
+            remap: false,
+        }));
+        for (uv, alpha) in [(Vec2::new(0.5, 0.5), 0.1), (Vec2::new(1.5, 0.5), 0.5)] {
+            let sp = crate::scene::SurfacePoint { uv, ..point() };
+            let constant = plain(alpha);
+            let wo = Vec3::new(0.3, 0.1, 0.9).normalize();
+            let (a, b) = (Bsdf::new(&mapped, &sp, wo), Bsdf::new(&constant, &sp, wo));
+            for wi in [
+                Vec3::new(-0.25, -0.1, 0.95).normalize(),
+                Vec3::new(-0.5, 0.2, 0.8).normalize(),
+                Vec3::new(0.1, 0.3, -0.9).normalize(),
+            ] {
+                let (x, y) = (
+                    a.eval(wo, wi, Transport::Radiance),
+                    b.eval(wo, wi, Transport::Radiance),
+                );
+                assert_eq!(x, y, "{alpha_of} α {alpha}");
+                assert_eq!(a.pdf(wo, wi), b.pdf(wo, wi));
+            }
+        }
+        // The two cells differ, so the comparison can fail.
+        let wo = Vec3::new(0.3, 0.1, 0.9).normalize();
+        let wi = Vec3::new(-0.25, -0.1, 0.95).normalize();
+        let f = |alpha: f32| {
+            let m = plain(alpha);
+            Bsdf::new(&m, &point(), wo).eval(wo, wi, Transport::Radiance)
+        };
+        assert!((f(0.1) - f(0.5)).abs().max_element() > 0.1, "{alpha_of}");
+    }
+}

@@ -404,7 +404,7 @@ fn direct_diffuse(
     stats: &mut RayStats,
 ) -> Rgb {
     let sp = hit.surface_point(&ctx.scene.shapes, ray);
-    let kd = network_kd(ctx.scene, sp.material, sp.p, sp.uv);
+    let kd = network_kd(ctx.scene, sp.material, sp.p, sp.uv, sp.ng);
     if kd == Rgb::ZERO {
         return Rgb::ZERO;
     }

@@ -628,8 +628,8 @@ impl Walk<'_> {
                 l += sample_direct(ctx, &bsdf, sp, wo, u_choice, u_light, self.stats);
             }
             // Indirect diffuse: ρ/π · E, through a coat as for light arriving evenly.
-            let kd = m.diffuse.eval(sp.p, sp.uv);
-            let kdt = m.diffuse_transmission.eval(sp.p, sp.uv);
+            let kd = m.diffuse.eval(sp.p, sp.uv, sp.ng);
+            let kdt = m.diffuse_transmission.eval(sp.p, sp.uv, sp.ng);
             let n = bsdf.shading_normal();
             let ng = if sp.ng.dot(n) >= 0.0 { sp.ng } else { -sp.ng };
             if kd.max_element() > 0.0 {

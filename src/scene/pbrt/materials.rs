@@ -5,7 +5,10 @@ use super::params::Params;
 use super::spectrum::{self, Kind};
 use super::{Loader, Loc};
 use crate::math::Rgb;
-use crate::scene::{Conductor, Material, Texture};
+use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
+use crate::scene::{Conductor, Material, NormalDetail, RoughnessMap, Texture};
+use std::path::PathBuf;
+use std::sync::Arc;
 
 /// pbrt-v4's roughness remapping for the Trowbridge–Reitz distribution: alpha = √roughness.
 fn roughness_to_alpha(r: f64) -> f64 {
@@ -14,7 +17,59 @@ fn roughness_to_alpha(r: f64) -> f64 {
 
 impl Loader {
     /// Roughness of a material as GGX (α_x, α_y): `uroughness`/`vroughness` (defaulting to
-    /// `roughness`), remapped by √ unless `remaproughness` is false, as pbrt-v4 does.
+    /// `roughness`), remapped by √ unless `remaproughness` is false, as pbrt-v4 does. Where
+    /// one of them varies by texture, the map, and its largest α for both.
+    fn roughness_map(
+        &mut self,
+        p: &Params,
+        prefix: &str,
+        st: &str,
+        loc: &Loc,
+    ) -> crate::Result<((f32, f32), Option<RoughnessMap>)> {
+        let remap = p
+            .bool("remaproughness")
+            .map_err(Self::pe(loc))?
+            .unwrap_or(true);
+        let varies = ["roughness", "uroughness", "vroughness"]
+            .iter()
+            .any(|n| self.names_varying_texture(p, &format!("{prefix}{n}")));
+        if !varies {
+            // Constants in double precision, as they are read.
+            let r = self.float_param(p, &format!("{prefix}roughness"), 0.0, st, loc)?;
+            let u = self.float_param(p, &format!("{prefix}uroughness"), r, st, loc)?;
+            let v = self.float_param(p, &format!("{prefix}vroughness"), r, st, loc)?;
+            let alpha = |x: f64| {
+                if remap {
+                    roughness_to_alpha(x)
+                } else {
+                    x.max(0.0)
+                }
+            };
+            return Ok(((alpha(u) as f32, alpha(v) as f32), None));
+        }
+        let r = self.float_texture_param(p, &format!("{prefix}roughness"), 0.0, st, loc)?;
+        let along = |this: &mut Loader, name: String| -> crate::Result<Texture> {
+            match p
+                .find(&name, &["float", "texture"])
+                .map_err(Self::pe(loc))?
+            {
+                Some(_) => this.float_texture_param(p, &name, 0.0, st, loc),
+                None => Ok(r.clone()),
+            }
+        };
+        let u = along(self, format!("{prefix}uroughness"))?;
+        let v = along(self, format!("{prefix}vroughness"))?;
+        let map = RoughnessMap {
+            v: (v != u).then_some(v),
+            u,
+            remap,
+        };
+        let top = map.max_alpha();
+        Ok(((top, top), Some(map)))
+    }
+
+    /// [`Loader::roughness_map`] for the materials that take one roughness: a textured one
+    /// is its largest value, with a warning.
     fn roughness(
         &mut self,
         p: &Params,
@@ -22,21 +77,14 @@ impl Loader {
         st: &str,
         loc: &Loc,
     ) -> crate::Result<(f32, f32)> {
-        let r = self.float_param(p, &format!("{prefix}roughness"), 0.0, st, loc)?;
-        let u = self.float_param(p, &format!("{prefix}uroughness"), r, st, loc)?;
-        let v = self.float_param(p, &format!("{prefix}vroughness"), r, st, loc)?;
-        let remap = p
-            .bool("remaproughness")
-            .map_err(Self::pe(loc))?
-            .unwrap_or(true);
-        let alpha = |x: f64| {
-            if remap {
-                roughness_to_alpha(x)
-            } else {
-                x.max(0.0)
-            }
-        };
-        Ok((alpha(u) as f32, alpha(v) as f32))
+        let (alphas, map) = self.roughness_map(p, prefix, st, loc)?;
+        if map.is_some() {
+            self.warn(
+                loc,
+                format!("{st}: a textured roughness is replaced by its largest value"),
+            );
+        }
+        Ok(alphas)
     }
 
     /// Isotropic roughness for the materials whose lobes are isotropic here: anisotropy is
@@ -65,13 +113,14 @@ impl Loader {
         st: &str,
         loc: &Loc,
     ) -> crate::Result<Material> {
-        let (ax, ay) = self.roughness(p, prefix, st, loc)?;
+        let ((ax, ay), map) = self.roughness_map(p, prefix, st, loc)?;
         let conductor = self.conductor(p, prefix, st, loc)?;
         Ok(Material {
             specular: Rgb::ONE,
             conductor: Some(conductor),
             roughness: ax,
             roughness_v: (ay != ax).then_some(ay),
+            roughness_map: map.map(Arc::new),
             ..base
         })
     }
@@ -190,7 +239,7 @@ impl Loader {
             },
             "dielectric" => {
                 // GGX reflection and refraction, as pbrt's DielectricBxDF.
-                let (ax, ay) = self.roughness(p, "", st, loc)?;
+                let ((ax, ay), map) = self.roughness_map(p, "", st, loc)?;
                 Material {
                     specular: Rgb::ONE,
                     transmission: Rgb::ONE,
@@ -198,6 +247,7 @@ impl Loader {
                     ior: self.eta(p, "eta", 1.5, st, loc)?,
                     roughness: ax,
                     roughness_v: (ay != ax).then_some(ay),
+                    roughness_map: map.map(Arc::new),
                     ..base
                 }
             }
@@ -205,25 +255,10 @@ impl Loader {
                 // pbrt-v4's DiffuseTransmissionBxDF: R/π on wo's side, T/π through, both
                 // times `scale`.
                 let scale = self.float_param(p, "scale", 1.0, st, loc)? as f32;
-                let constant = |this: &mut Loader, t: Texture, what: &str| match t {
-                    Texture::Constant(c) => c,
-                    other => {
-                        this.warn(
-                            loc,
-                            format!("{st}: a textured \"{what}\" is replaced by its maximum"),
-                        );
-                        other.max_value()
-                    }
-                };
-                // A texture is kept as it is unless `scale` must multiply it.
-                let scaled = |this: &mut Loader, t: Texture, what: &str| match t {
-                    t if scale == 1.0 => t,
-                    t => Texture::Constant(constant(this, t, what) * scale),
-                };
                 let t = self.texture_param(p, "transmittance", Rgb::splat(0.25), st, loc)?;
-                let t = scaled(self, t, "transmittance");
+                let t = self.scaled(t, scale, st, loc)?;
                 let r = self.texture_param(p, "reflectance", Rgb::splat(0.25), st, loc)?;
-                let r = scaled(self, r, "reflectance");
+                let r = self.scaled(r, scale, st, loc)?;
                 Material {
                     diffuse: r,
                     diffuse_transmission: t,
@@ -290,16 +325,52 @@ impl Loader {
                 }
             }
         };
-        for q in ["displacement", "normalmap"] {
-            if p.find(q, &["texture", "string", "float"])
-                .ok()
-                .flatten()
-                .is_some()
-            {
-                self.warn(loc, format!("{st}: \"{q}\" is not supported; ignored"));
+        let normal_detail = self.normal_detail(p, st, loc)?;
+        Ok(Material { normal_detail, ..m })
+    }
+
+    /// pbrt-v4's `normalmap` (an image file, read linear) or `displacement` (a float
+    /// texture, for bump mapping); a material given both uses the normal map, as pbrt-v4
+    /// does.
+    fn normal_detail(
+        &mut self,
+        p: &Params,
+        st: &str,
+        loc: &Loc,
+    ) -> crate::Result<Option<NormalDetail>> {
+        let file = p.string("normalmap").map_err(Self::pe(loc))?;
+        let bump = match p
+            .find("displacement", &["texture", "float"])
+            .map_err(Self::pe(loc))?
+        {
+            Some(_) => Some(self.float_texture_param(p, "displacement", 0.0, st, loc)?),
+            None => None,
+        };
+        if let Some(file) = file {
+            if bump.is_some() {
+                self.warn(
+                    loc,
+                    format!("{st}: \"displacement\" is ignored beside a normal map"),
+                );
             }
+            let path = loc.dir().join(&file);
+            self.add_input(&path);
+            let image = ImageTexture::load(
+                &path,
+                PathBuf::from(&file),
+                Encoding::Linear,
+                1.0,
+                false,
+                UvMapping::default(),
+            )
+            .map_err(|e| loc.error(format!("{st}: normal map: {e}")))?;
+            return Ok(Some(NormalDetail::Map(Arc::new(image))));
         }
-        Ok(m)
+        Ok(match bump {
+            // A constant displacement moves nothing.
+            Some(Texture::Constant(_)) | None => None,
+            Some(t) => Some(NormalDetail::Bump(t)),
+        })
     }
 
     /// A diffuse base under a dielectric coat: Fresnel-weighted specular over diffuse.

@@ -108,10 +108,12 @@ impl Loc {
     }
 }
 
-/// Float textures: only constants have a value raylink can use.
-#[derive(Clone, Copy, Debug)]
+/// Float textures: constants, textures raylink evaluates where a parameter takes one
+/// (their value in the first channel), and classes it cannot evaluate.
+#[derive(Clone, Debug)]
 enum FloatTexture {
     Constant(f64),
+    Varying(Texture),
     Unsupported,
 }
 

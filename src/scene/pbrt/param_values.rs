@@ -113,6 +113,17 @@ impl Loader {
         let qloc = loc.at(q.line, q.col);
         match self.float_textures.get(&tex) {
             Some(FloatTexture::Constant(v)) => Ok(*v),
+            Some(FloatTexture::Varying(t)) => {
+                let top = f64::from(t.max_value().x);
+                self.warn(
+                    &qloc,
+                    format!(
+                        "{statement}: \"{name}\" cannot vary here; using the largest value of \
+                         texture \"{tex}\", {top}"
+                    ),
+                );
+                Ok(top)
+            }
             Some(FloatTexture::Unsupported) => {
                 self.warn(
                     &qloc,
@@ -122,6 +133,53 @@ impl Loader {
                     ),
                 );
                 Ok(default)
+            }
+            None => Err(qloc.error(format!("{statement}: no float texture named \"{tex}\""))),
+        }
+    }
+
+    /// Whether parameter `name` names a float texture that varies over the surface.
+    pub(super) fn names_varying_texture(&self, p: &Params, name: &str) -> bool {
+        let Ok(Some(q)) = p.find(name, &["texture"]) else {
+            return false;
+        };
+        matches!(
+            q.strs().first().and_then(|t| self.float_textures.get(t)),
+            Some(FloatTexture::Varying(_))
+        )
+    }
+
+    /// A float parameter that may vary by texture, as a texture (its value in the first
+    /// channel); a texture of a class raylink cannot evaluate is `default` with a warning.
+    pub(super) fn float_texture_param(
+        &mut self,
+        p: &Params,
+        name: &str,
+        default: f64,
+        statement: &str,
+        loc: &Loc,
+    ) -> crate::Result<Texture> {
+        let constant = |v: f64| Texture::Constant(Rgb::splat(v as f32));
+        let Some(q) = p.find(name, &["float", "texture"]).map_err(Self::pe(loc))? else {
+            return Ok(constant(default));
+        };
+        if q.ty == "float" {
+            return Ok(constant(q.nums()[0]));
+        }
+        let tex = q.strs()[0].clone();
+        let qloc = loc.at(q.line, q.col);
+        match self.float_textures.get(&tex) {
+            Some(FloatTexture::Constant(v)) => Ok(constant(*v)),
+            Some(FloatTexture::Varying(t)) => Ok(t.clone()),
+            Some(FloatTexture::Unsupported) => {
+                self.warn(
+                    &qloc,
+                    format!(
+                        "{statement}: \"{name}\" varies by texture \"{tex}\", which raylink \
+                         cannot evaluate; using {default}"
+                    ),
+                );
+                Ok(constant(default))
             }
             None => Err(qloc.error(format!("{statement}: no float texture named \"{tex}\""))),
         }

@@ -1,12 +1,12 @@
-//! Textures: constant, checkerboard, image map and scale as raylink's, float textures kept
-//! where they are constants.
+//! Textures: constant, checkerboard, image map, scale, mix and direction mix as raylink's,
+//! for spectrum and float textures alike (a float texture's value in the first channel).
 
 use super::params::Params;
 use super::{FloatTexture, Loader, Loc};
-use crate::math::{Rgb, Vec2};
-use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
+use crate::math::{Rgb, Vec2, Vec3};
+use crate::scene::texture::{Encoding, ImageTexture, TextureMix, UvMapping};
 use crate::scene::Texture;
-use glam::DMat4;
+use glam::{DMat4, DVec3};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -31,17 +31,7 @@ impl Loader {
             }
         };
         if is_float {
-            let v = match class {
-                "constant" => {
-                    FloatTexture::Constant(p.float_or("value", 1.0).map_err(Self::pe(loc))?)
-                }
-                _ => {
-                    for q in &p.list {
-                        p.ignore(&q.name);
-                    }
-                    FloatTexture::Unsupported
-                }
-            };
+            let v = self.float_texture(class, p, st, loc)?;
             self.float_textures.insert(name.to_string(), v);
             return Ok(());
         }
@@ -70,80 +60,25 @@ impl Loader {
                     Texture::UvChecker { even, odd, mapping }
                 }
             }
-            "imagemap" => {
-                let file = p
-                    .string("filename")
-                    .map_err(Self::pe(loc))?
-                    .ok_or_else(|| loc.error(format!("{st} needs a \"string filename\"")))?;
-                let path = loc.dir().join(&file);
-                let encoding = match p.string("encoding").map_err(Self::pe(loc))? {
-                    None => Encoding::default_for(&path),
-                    Some(e) => Encoding::parse(&e).ok_or_else(|| {
-                        loc.error(format!(
-                            "{st}: unknown encoding \"{e}\" (linear, sRGB or gamma G)"
-                        ))
-                    })?,
-                };
-                let scale = p.float_or("scale", 1.0).map_err(Self::pe(loc))? as f32;
-                let invert = p.bool("invert").map_err(Self::pe(loc))?.unwrap_or(false);
-                let wrap = p.string("wrap").map_err(Self::pe(loc))?;
-                if wrap.as_deref().is_some_and(|w| w != "repeat") {
-                    self.warn(loc, format!("{st}: only \"repeat\" wrapping is supported"));
-                }
-                p.ignore("filter");
-                p.ignore("maxanisotropy");
-                self.add_input(&path);
-                let image = ImageTexture::load(
-                    &path,
-                    PathBuf::from(&file),
-                    encoding,
-                    scale,
-                    invert,
-                    mapping,
-                )
-                .map_err(|e| loc.error(format!("{st}: {e}")))?;
-                Texture::Image(Arc::new(image))
-            }
+            "imagemap" => self.image_texture(p, mapping, st, loc)?,
             "scale" => {
                 let tex = self.texture_param(p, "tex", Rgb::ONE, st, loc)?;
-                let s = self.float_param(p, "scale", 1.0, st, loc)? as f32;
-                match tex {
-                    Texture::Constant(c) => Texture::Constant(c * s),
-                    Texture::Image(img) => {
-                        let mut img = (*img).clone();
-                        img.scale *= s;
-                        let path = loc.dir().join(&img.file);
-                        self.add_input(&path);
-                        // Reload to keep the cached maximum right.
-                        let img = ImageTexture::load(
-                            &path,
-                            img.file.clone(),
-                            img.encoding,
-                            img.scale,
-                            img.invert,
-                            img.mapping,
-                        )
-                        .map_err(|e| loc.error(format!("{st}: {e}")))?;
-                        Texture::Image(Arc::new(img))
-                    }
-                    other => {
-                        if s != 1.0 {
-                            self.warn(loc, format!("{st}: scaling this texture is not supported"));
-                        }
-                        other
-                    }
+                match self.float_texture_param(p, "scale", 1.0, st, loc)? {
+                    Texture::Constant(s) => self.scaled(tex, s.x, st, loc)?,
+                    by => Texture::Scale(Box::new([tex, by])),
                 }
             }
-            "mix" | "directionmix" => {
-                self.warn(
-                    loc,
-                    format!("texture \"{class}\" is not supported; using its first texture"),
-                );
-                p.ignore("amount");
-                p.ignore("dir");
-                let t = self.texture_param(p, "tex1", Rgb::ZERO, st, loc)?;
-                p.ignore("tex2");
-                t
+            "mix" => {
+                let a = self.texture_param(p, "tex1", Rgb::ZERO, st, loc)?;
+                let b = self.texture_param(p, "tex2", Rgb::ONE, st, loc)?;
+                let amount = self.float_texture_param(p, "amount", 0.5, st, loc)?;
+                mix(a, b, amount)
+            }
+            "directionmix" => {
+                let a = self.texture_param(p, "tex1", Rgb::ZERO, st, loc)?;
+                let b = self.texture_param(p, "tex2", Rgb::ONE, st, loc)?;
+                let dir = self.mix_direction(p, st, loc)?;
+                Texture::DirectionMix(Box::new([a, b]), dir)
             }
             _ => {
                 for q in &p.list {
@@ -158,6 +93,168 @@ impl Loader {
         };
         self.textures.insert(name.to_string(), tex);
         Ok(())
+    }
+
+    /// `tex` times `s`: folded into a constant or an image's scale, else a product.
+    pub(super) fn scaled(
+        &mut self,
+        tex: Texture,
+        s: f32,
+        st: &str,
+        loc: &Loc,
+    ) -> crate::Result<Texture> {
+        Ok(match tex {
+            Texture::Constant(c) => Texture::Constant(c * s),
+            Texture::Image(img) if s != 1.0 => {
+                let mut img = (*img).clone();
+                img.scale *= s;
+                let path = loc.dir().join(&img.file);
+                self.add_input(&path);
+                // Reload to keep the cached maximum right.
+                let img = ImageTexture::load(
+                    &path,
+                    img.file.clone(),
+                    img.encoding,
+                    img.scale,
+                    img.invert,
+                    img.mapping,
+                )
+                .map_err(|e| loc.error(format!("{st}: {e}")))?;
+                Texture::Image(Arc::new(img))
+            }
+            other if s == 1.0 => other,
+            other => Texture::Scale(Box::new([other, Texture::Constant(Rgb::splat(s))])),
+        })
+    }
+
+    /// An `imagemap` texture's image.
+    fn image_texture(
+        &mut self,
+        p: &Params,
+        mapping: UvMapping,
+        st: &str,
+        loc: &Loc,
+    ) -> crate::Result<Texture> {
+        let file = p
+            .string("filename")
+            .map_err(Self::pe(loc))?
+            .ok_or_else(|| loc.error(format!("{st} needs a \"string filename\"")))?;
+        let path = loc.dir().join(&file);
+        let encoding = match p.string("encoding").map_err(Self::pe(loc))? {
+            None => Encoding::default_for(&path),
+            Some(e) => Encoding::parse(&e).ok_or_else(|| {
+                loc.error(format!(
+                    "{st}: unknown encoding \"{e}\" (linear, sRGB or gamma G)"
+                ))
+            })?,
+        };
+        let scale = p.float_or("scale", 1.0).map_err(Self::pe(loc))? as f32;
+        let invert = p.bool("invert").map_err(Self::pe(loc))?.unwrap_or(false);
+        let wrap = p.string("wrap").map_err(Self::pe(loc))?;
+        if wrap.as_deref().is_some_and(|w| w != "repeat") {
+            self.warn(loc, format!("{st}: only \"repeat\" wrapping is supported"));
+        }
+        p.ignore("filter");
+        p.ignore("maxanisotropy");
+        self.add_input(&path);
+        let image = ImageTexture::load(
+            &path,
+            PathBuf::from(&file),
+            encoding,
+            scale,
+            invert,
+            mapping,
+        )
+        .map_err(|e| loc.error(format!("{st}: {e}")))?;
+        Ok(Texture::Image(Arc::new(image)))
+    }
+
+    /// A float texture of class `class`: its value in the first channel.
+    fn float_texture(
+        &mut self,
+        class: &str,
+        p: &Params,
+        st: &str,
+        loc: &Loc,
+    ) -> crate::Result<FloatTexture> {
+        let tex = match class {
+            "constant" => {
+                return Ok(FloatTexture::Constant(
+                    p.float_or("value", 1.0).map_err(Self::pe(loc))?,
+                ))
+            }
+            "imagemap" => {
+                let mapping = self.mapping(p, st, loc)?;
+                self.image_texture(p, mapping, st, loc)?
+            }
+            "checkerboard" => {
+                let mapping = self.mapping(p, st, loc)?;
+                let even = self.float_param(p, "tex1", 1.0, st, loc)? as f32;
+                let odd = self.float_param(p, "tex2", 0.0, st, loc)? as f32;
+                let (even, odd) = (Rgb::splat(even), Rgb::splat(odd));
+                match p.int("dimension").map_err(Self::pe(loc))?.unwrap_or(2) {
+                    3 => Texture::Checker {
+                        even,
+                        odd,
+                        size: 1.0,
+                    },
+                    _ => Texture::UvChecker { even, odd, mapping },
+                }
+            }
+            "scale" => {
+                let tex = self.float_texture_param(p, "tex", 1.0, st, loc)?;
+                match self.float_texture_param(p, "scale", 1.0, st, loc)? {
+                    Texture::Constant(s) => self.scaled(tex, s.x, st, loc)?,
+                    by => Texture::Scale(Box::new([tex, by])),
+                }
+            }
+            "mix" => {
+                let a = self.float_texture_param(p, "tex1", 0.0, st, loc)?;
+                let b = self.float_texture_param(p, "tex2", 1.0, st, loc)?;
+                let amount = self.float_texture_param(p, "amount", 0.5, st, loc)?;
+                mix(a, b, amount)
+            }
+            "directionmix" => {
+                let a = self.float_texture_param(p, "tex1", 0.0, st, loc)?;
+                let b = self.float_texture_param(p, "tex2", 1.0, st, loc)?;
+                let dir = self.mix_direction(p, st, loc)?;
+                Texture::DirectionMix(Box::new([a, b]), dir)
+            }
+            _ => {
+                for q in &p.list {
+                    p.ignore(&q.name);
+                }
+                return Ok(FloatTexture::Unsupported);
+            }
+        };
+        Ok(match tex {
+            Texture::Constant(c) => FloatTexture::Constant(f64::from(c.x)),
+            varying => FloatTexture::Varying(varying),
+        })
+    }
+
+    /// A `directionmix` texture's `dir` (default +y), from the texture's space to the
+    /// world's, as a unit vector.
+    fn mix_direction(&mut self, p: &Params, st: &str, loc: &Loc) -> crate::Result<Vec3> {
+        let dir = match p
+            .find("dir", &["vector3", "vector"])
+            .map_err(Self::pe(loc))?
+        {
+            Some(q) => match q.nums() {
+                [x, y, z] => DVec3::new(*x, *y, *z),
+                _ => {
+                    return Err(loc
+                        .at(q.line, q.col)
+                        .error(format!("{st}: \"dir\" takes 3 numbers")))
+                }
+            },
+            None => DVec3::Y,
+        };
+        let world = self.state.ctm.transform_vector3(dir);
+        world
+            .try_normalize()
+            .map(|d| d.as_vec3())
+            .ok_or_else(|| loc.error(format!("{st}: \"dir\" must not be the zero vector")))
     }
 
     fn mapping(&mut self, p: &Params, st: &str, loc: &Loc) -> crate::Result<UvMapping> {
@@ -183,5 +280,17 @@ impl Loader {
                 p.float_or("vdelta", 0.0).map_err(&pe)? as f32,
             ),
         })
+    }
+}
+
+/// (1 − amount)·a + amount·b, folded when the amount is a constant 0 or 1.
+fn mix(a: Texture, b: Texture, amount: Texture) -> Texture {
+    match amount {
+        Texture::Constant(c) if c.x <= 0.0 => a,
+        Texture::Constant(c) if c.x >= 1.0 => b,
+        amount => Texture::Mix(Box::new(TextureMix {
+            textures: [a, b],
+            amount,
+        })),
     }
 }

@@ -4,6 +4,7 @@
 
 mod render;
 mod shapes;
+mod textures;
 
 use super::checks::{
     colour, direction, finite, finite3, matrix, non_negative, positive, resolution, Xform,
@@ -11,15 +12,14 @@ use super::checks::{
 use super::diagnostics::{Ctx, Site};
 use super::schema::{
     CameraDesc, ConductorDesc, DiffuseDesc, EnvironmentDesc, FileDesc, LightDesc, LightKind,
-    MaterialDesc, MixDesc, OneOrMany, RoughnessDesc, Splat3, TextureTable, TransformOp,
+    MaterialDesc, MixDesc, OneOrMany, RoughnessDesc, Splat3, TransformOp,
 };
 use crate::bsdf::TabulatedBrdf;
-use crate::math::{Mat3, Mat4, Rgb, Vec2, Vec3};
+use crate::math::{Mat3, Mat4, Rgb, Vec3};
 use crate::scene::environment::Environment;
 use crate::scene::pbrt::GeometryCost;
-use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
 use crate::scene::{
-    Camera, Conductor, Light, Material, Projection, RenderSettings, Scene, Texture,
+    Camera, Conductor, Light, Material, Projection, RenderSettings, RoughnessMap, Scene, Texture,
 };
 use crate::Error;
 use std::collections::HashMap;
@@ -275,6 +275,9 @@ impl<'a> Builder<'a> {
                 desc.emission.is_some(),
                 desc.two_sided_emission.is_some(),
                 desc.brdf.is_some(),
+                desc.normal_map.is_some(),
+                desc.bump.is_some(),
+                desc.remap_roughness.is_some(),
             ];
             return self.mix(site, name, mix, others.contains(&true));
         }
@@ -319,15 +322,11 @@ impl<'a> Builder<'a> {
         };
         let diffuse = match desc.diffuse {
             None => d.diffuse,
-            Some(DiffuseDesc::Colour(c)) => Texture::Constant(colour(c).map_err(fail("diffuse"))?),
-            Some(DiffuseDesc::Texture(t)) => self.texture(site, "diffuse", t)?,
+            Some(t) => self.texture(site, "diffuse", t)?,
         };
         let diffuse_transmission = match desc.diffuse_transmission {
             None => d.diffuse_transmission.clone(),
-            Some(DiffuseDesc::Colour(c)) => {
-                Texture::Constant(colour(c).map_err(fail("diffuse_transmission"))?)
-            }
-            Some(DiffuseDesc::Texture(t)) => self.texture(site, "diffuse_transmission", t)?,
+            Some(t) => self.texture(site, "diffuse_transmission", t)?,
         };
         let ambient = match desc.ambient {
             None => None,
@@ -353,17 +352,34 @@ impl<'a> Builder<'a> {
         } else {
             d.specular
         };
+        let mut roughness_map = None;
         let (roughness, roughness_v) = match desc.roughness {
             None => (d.roughness, None),
             Some(RoughnessDesc::Isotropic(a)) => (a, None),
             Some(RoughnessDesc::Anisotropic(u, v)) => (u, Some(v)),
+            Some(RoughnessDesc::Texture(t)) => {
+                let map = RoughnessMap {
+                    u: self.texture(site, "roughness", DiffuseDesc::Texture(*t))?,
+                    v: None,
+                    remap: desc.remap_roughness.unwrap_or(false),
+                };
+                let top = map.max_alpha();
+                roughness_map = Some(std::sync::Arc::new(map));
+                (top, None)
+            }
         };
         let roughness = non_negative(roughness).map_err(fail("roughness"))?;
         let roughness_v = match roughness_v {
             Some(v) => Some(non_negative(v).map_err(fail("roughness"))?),
             None => None,
         };
+        // pbrt's remapping of its roughness r to α = √r (a textured one at each point).
+        let (roughness, roughness_v) = match desc.remap_roughness {
+            Some(true) if roughness_map.is_none() => (roughness.sqrt(), roughness_v.map(f32::sqrt)),
+            _ => (roughness, roughness_v),
+        };
         let thin = desc.thin.unwrap_or(d.thin);
+        let normal_detail = self.normal_detail(site, desc.normal_map, desc.bump)?;
         if thin && (roughness > 0.0 || roughness_v.is_some_and(|v| v > 0.0)) {
             return Err(fail("roughness")(
                 "a thin sheet (`thin = true`) is smooth: roughness must be 0".into(),
@@ -388,6 +404,8 @@ impl<'a> Builder<'a> {
             two_sided_emission: desc.two_sided_emission.unwrap_or(false),
             mix: None,
             brdf: None,
+            roughness_map,
+            normal_detail,
         })
     }
 
@@ -432,75 +450,6 @@ impl<'a> Builder<'a> {
             )));
         }
         Ok(Material::mix_of(name, (ia, ma), (ib, mb), amount))
-    }
-
-    fn texture(&self, site: &Site, key: &str, t: TextureTable) -> crate::Result<Texture> {
-        let ctx = self.ctx;
-        // Errors name the field under the material's key (`diffuse.checker.even`, ...).
-        let fail =
-            |field: &'static str| move |m: String| ctx.fail(site, &format!("{key}.{field}"), m);
-        let count = [
-            t.checker.is_some(),
-            t.uv_checker.is_some(),
-            t.image.is_some(),
-        ]
-        .iter()
-        .filter(|&&b| b)
-        .count();
-        if count != 1 {
-            return Err(ctx.fail(
-                site,
-                key,
-                "a texture table takes exactly one of checker, uv_checker or image",
-            ));
-        }
-        let mapping = |us: Option<f32>, vs: Option<f32>, ud: Option<f32>, vd: Option<f32>| {
-            let f = |v: Option<f32>, d: f32| finite(v.unwrap_or(d));
-            Ok::<_, String>(UvMapping {
-                scale: Vec2::new(f(us, 1.0)?, f(vs, 1.0)?),
-                offset: Vec2::new(f(ud, 0.0)?, f(vd, 0.0)?),
-            })
-        };
-        if let Some(c) = t.checker {
-            return Ok(Texture::Checker {
-                even: colour(c.even.0).map_err(fail("checker.even"))?,
-                odd: colour(c.odd.0).map_err(fail("checker.odd"))?,
-                size: positive(c.size.unwrap_or(1.0)).map_err(fail("checker.size"))?,
-            });
-        }
-        if let Some(c) = t.uv_checker {
-            return Ok(Texture::UvChecker {
-                even: colour(c.even.0).map_err(fail("uv_checker.even"))?,
-                odd: colour(c.odd.0).map_err(fail("uv_checker.odd"))?,
-                mapping: mapping(c.uscale, c.vscale, c.udelta, c.vdelta)
-                    .map_err(fail("uv_checker"))?,
-            });
-        }
-        let i = t.image.expect("counted above");
-        let path = self.dir.join(&i.file);
-        let encoding = match i.encoding {
-            None => Encoding::default_for(&path),
-            Some(e) => Encoding::parse(&e).ok_or_else(|| {
-                ctx.fail(
-                    site,
-                    &format!("{key}.image.encoding"),
-                    format!("must be \"linear\", \"sRGB\" or \"gamma G\", got \"{e}\""),
-                )
-            })?,
-        };
-        let scale = non_negative(i.scale.unwrap_or(1.0)).map_err(fail("image.scale"))?;
-        let mapping = mapping(i.uscale, i.vscale, i.udelta, i.vdelta).map_err(fail("image"))?;
-        self.inputs.borrow_mut().push(path.clone());
-        let image = ImageTexture::load(
-            &path,
-            i.file.into(),
-            encoding,
-            scale,
-            i.invert.unwrap_or(false),
-            mapping,
-        )
-        .map_err(|e| ctx.fail(site, &format!("{key}.image.file"), e))?;
-        Ok(Texture::Image(std::sync::Arc::new(image)))
     }
 
     fn environment(&self, site: &Site, desc: EnvironmentDesc) -> crate::Result<Environment> {

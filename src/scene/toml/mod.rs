@@ -18,6 +18,7 @@ mod checks;
 mod diagnostics;
 pub(crate) mod schema;
 mod schema_metal;
+mod schema_texture;
 
 use super::Scene;
 use builder::Builder;

@@ -4,6 +4,10 @@
 //! description of the format. Values are checked later, by the builder.
 
 pub(crate) use super::schema_metal::{ConductorDesc, ConductorIndex, RoughnessDesc};
+pub(crate) use super::schema_texture::{
+    CheckerDesc, DiffuseDesc, DirectionMixDesc, ImageDesc, ScaleDesc, TextureMixDesc, TextureTable,
+    UvCheckerDesc,
+};
 use crate::math::{Vec2, Vec3};
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde::ser::{SerializeMap, SerializeSeq, Serializer};
@@ -189,6 +193,9 @@ pub(crate) struct MaterialDesc {
     pub(crate) phong_exponent: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) roughness: Option<RoughnessDesc>,
+    /// A textured roughness gives pbrt's roughness r, and α = √r.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) remap_roughness: Option<bool>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) fresnel: Option<bool>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -201,6 +208,12 @@ pub(crate) struct MaterialDesc {
     pub(crate) two_sided_emission: Option<bool>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) mix: Option<MixDesc>,
+    /// A tangent-space normal map (an image file).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) normal_map: Option<String>,
+    /// A bump map: displacement along the normal in scene units (a float texture).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) bump: Option<DiffuseDesc>,
     /// A tabulated BRDF file, in place of the lobes.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) brdf: Option<String>,
@@ -213,67 +226,6 @@ pub(crate) struct MixDesc {
     pub(crate) materials: Vec<String>,
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) amount: Option<f32>,
-}
-
-pub(crate) enum DiffuseDesc {
-    Colour(Vec3),
-    Texture(TextureTable),
-}
-
-/// `{ checker = {..} }`, `{ uv_checker = {..} }` or `{ image = {..} }`.
-#[derive(Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct TextureTable {
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub(crate) checker: Option<CheckerDesc>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub(crate) uv_checker: Option<UvCheckerDesc>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub(crate) image: Option<ImageDesc>,
-}
-
-#[derive(Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct UvCheckerDesc {
-    pub(crate) even: Splat3,
-    pub(crate) odd: Splat3,
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
-    pub(crate) uscale: Option<f32>,
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
-    pub(crate) vscale: Option<f32>,
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
-    pub(crate) udelta: Option<f32>,
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
-    pub(crate) vdelta: Option<f32>,
-}
-
-#[derive(Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct ImageDesc {
-    pub(crate) file: String,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub(crate) encoding: Option<String>,
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
-    pub(crate) scale: Option<f32>,
-    #[serde(skip_serializing_if = "Option::is_none")]
-    pub(crate) invert: Option<bool>,
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
-    pub(crate) uscale: Option<f32>,
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
-    pub(crate) vscale: Option<f32>,
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
-    pub(crate) udelta: Option<f32>,
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
-    pub(crate) vdelta: Option<f32>,
-}
-
-#[derive(Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub(crate) struct CheckerDesc {
-    pub(crate) even: Splat3,
-    pub(crate) odd: Splat3,
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
-    pub(crate) size: Option<f32>,
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]
@@ -514,7 +466,7 @@ impl<'de> Deserialize<'de> for Idx3 {
 }
 
 /// Accepts a number (splatted) or three numbers.
-struct Splat3Visitor;
+pub(super) struct Splat3Visitor;
 
 impl<'de> Visitor<'de> for Splat3Visitor {
     type Value = Vec3;
@@ -538,38 +490,6 @@ impl<'de> Visitor<'de> for Splat3Visitor {
 impl<'de> Deserialize<'de> for Splat3 {
     fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
         d.deserialize_any(Splat3Visitor).map(Splat3)
-    }
-}
-
-impl<'de> Deserialize<'de> for DiffuseDesc {
-    fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
-        struct Vis;
-        impl<'de> Visitor<'de> for Vis {
-            type Value = DiffuseDesc;
-            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str(
-                    "a number, an array of 3 numbers or a table { checker = { .. } }, \
-                     { uv_checker = { .. } } or { image = { .. } }",
-                )
-            }
-            fn visit_i64<E: de::Error>(self, v: i64) -> Result<DiffuseDesc, E> {
-                Splat3Visitor.visit_i64(v).map(DiffuseDesc::Colour)
-            }
-            fn visit_u64<E: de::Error>(self, v: u64) -> Result<DiffuseDesc, E> {
-                Splat3Visitor.visit_u64(v).map(DiffuseDesc::Colour)
-            }
-            fn visit_f64<E: de::Error>(self, v: f64) -> Result<DiffuseDesc, E> {
-                Splat3Visitor.visit_f64(v).map(DiffuseDesc::Colour)
-            }
-            fn visit_seq<A: SeqAccess<'de>>(self, seq: A) -> Result<DiffuseDesc, A::Error> {
-                Splat3Visitor.visit_seq(seq).map(DiffuseDesc::Colour)
-            }
-            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<DiffuseDesc, A::Error> {
-                TextureTable::deserialize(de::value::MapAccessDeserializer::new(map))
-                    .map(DiffuseDesc::Texture)
-            }
-        }
-        d.deserialize_any(Vis)
     }
 }
 
@@ -665,7 +585,7 @@ fn exact_f32<S: Serializer>(x: &f32, s: S) -> Result<S::Ok, S::Error> {
     Exact(*x).serialize(s)
 }
 
-fn opt_f32<S: Serializer>(x: &Option<f32>, s: S) -> Result<S::Ok, S::Error> {
+pub(super) fn opt_f32<S: Serializer>(x: &Option<f32>, s: S) -> Result<S::Ok, S::Error> {
     x.map(Exact).serialize(s)
 }
 
@@ -678,7 +598,7 @@ fn opt_rows<S: Serializer>(rows: &Option<Vec<Vec<f32>>>, s: S) -> Result<S::Ok, 
     rows.serialize(s)
 }
 
-fn numbers<S: Serializer>(s: S, values: &[f32]) -> Result<S::Ok, S::Error> {
+pub(super) fn numbers<S: Serializer>(s: S, values: &[f32]) -> Result<S::Ok, S::Error> {
     let mut seq = s.serialize_seq(Some(values.len()))?;
     for &x in values {
         seq.serialize_element(&Exact(x))?;
@@ -707,15 +627,6 @@ impl Serialize for Idx3 {
 impl Serialize for Splat3 {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         numbers(s, &self.0.to_array())
-    }
-}
-
-impl Serialize for DiffuseDesc {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        match self {
-            DiffuseDesc::Colour(c) => numbers(s, &c.to_array()),
-            DiffuseDesc::Texture(t) => t.serialize(s),
-        }
     }
 }
 

@@ -2,6 +2,7 @@
 //! `roughness` (one α, or α along the tangent and the bitangent).
 
 use super::schema::Splat3;
+use super::schema_texture::TextureTable;
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde::ser::{SerializeSeq, Serializer};
 use serde::{Deserialize, Serialize};
@@ -49,11 +50,12 @@ impl Serialize for ConductorDesc {
     }
 }
 
-/// `roughness = 0.2` or `roughness = [0.1, 0.4]` (anisotropic: α_x, α_y).
-#[derive(Clone, Copy, Debug)]
+/// `roughness = 0.2`, `roughness = [0.1, 0.4]` (anisotropic: α_x, α_y) or a texture table
+/// of α.
 pub(crate) enum RoughnessDesc {
     Isotropic(f32),
     Anisotropic(f32, f32),
+    Texture(Box<TextureTable>),
 }
 
 impl<'de> Deserialize<'de> for RoughnessDesc {
@@ -62,7 +64,7 @@ impl<'de> Deserialize<'de> for RoughnessDesc {
         impl<'de> Visitor<'de> for Vis {
             type Value = RoughnessDesc;
             fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
-                f.write_str("a number or an array of 2 numbers [u, v]")
+                f.write_str("a number, an array of 2 numbers [u, v] or a texture table")
             }
             fn visit_i64<E: de::Error>(self, v: i64) -> Result<RoughnessDesc, E> {
                 Ok(RoughnessDesc::Isotropic(v as f32))
@@ -83,6 +85,10 @@ impl<'de> Deserialize<'de> for RoughnessDesc {
                     _ => Err(de::Error::invalid_length(values.len(), &self)),
                 }
             }
+            fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<RoughnessDesc, A::Error> {
+                TextureTable::deserialize(de::value::MapAccessDeserializer::new(map))
+                    .map(|t| RoughnessDesc::Texture(Box::new(t)))
+            }
         }
         d.deserialize_any(Vis)
     }
@@ -90,9 +96,10 @@ impl<'de> Deserialize<'de> for RoughnessDesc {
 
 impl Serialize for RoughnessDesc {
     fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        match *self {
-            RoughnessDesc::Isotropic(a) => super::schema::Exact(a).serialize(s),
-            RoughnessDesc::Anisotropic(u, v) => {
+        match self {
+            RoughnessDesc::Isotropic(a) => super::schema::Exact(*a).serialize(s),
+            RoughnessDesc::Texture(t) => t.serialize(s),
+            &RoughnessDesc::Anisotropic(u, v) => {
                 let mut seq = s.serialize_seq(Some(2))?;
                 seq.serialize_element(&super::schema::Exact(u))?;
                 seq.serialize_element(&super::schema::Exact(v))?;

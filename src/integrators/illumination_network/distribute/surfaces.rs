@@ -192,30 +192,36 @@ pub fn surfaces_with(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<Surf
             let mi = scene.shapes[pg.shape as usize].material;
             let m = &scene.materials[mi];
             let (s, t) = pg.cell_centre(cell);
-            let p = net.space.to_world(pg.point(s, t));
+            let local = pg.point(s, t);
+            let p = net.space.to_world(local);
+            // The geometric normal, for textures that depend on it.
+            let n = match pg.sphere {
+                Some((centre, _)) => (local - centre).normalize_or_zero(),
+                None => pg.n.normalize_or_zero(),
+            };
             Surface {
                 emission: if side == 0 || m.two_sided_emission {
                     emission[mi]
                 } else {
                     Rgb::ZERO
                 },
-                ..surface_of(scene, mi, p, Vec2::new(s, t))
+                ..surface_of(scene, mi, p, Vec2::new(s, t), n)
             }
         })
         .collect()
 }
 
 /// The surface (without emission) of material `mi` at point `p` with texture coordinates
-/// `uv`. A mix blends its two materials: their diffuse colours, and their directional lobes
+/// `uv` and geometric normal `n`. A mix blends its two materials: their diffuse colours, and their directional lobes
 /// through [`Blend`]; a material of a nested mix is its material with the larger weight.
-fn surface_of(scene: &Scene, mi: usize, p: Vec3, uv: Vec2) -> Surface {
+fn surface_of(scene: &Scene, mi: usize, p: Vec3, uv: Vec2, n: Vec3) -> Surface {
     let m = &scene.materials[mi];
     let Some(mix) = m.mix else {
-        return plain_surface(m, p, uv);
+        return plain_surface(m, p, uv, n);
     };
     let [a, b] = mix
         .materials
-        .map(|i| plain_surface(&scene.materials[i], p, uv));
+        .map(|i| plain_surface(&scene.materials[i], p, uv, n));
     let t = mix.amount;
     Surface {
         kd: a.kd * (1.0 - t) + b.kd * t,
@@ -229,15 +235,15 @@ fn surface_of(scene: &Scene, mi: usize, p: Vec3, uv: Vec2) -> Surface {
 
 /// The diffuse colour the network gives material `mi` at `p` (scaled down with the rest of
 /// the material to scatter at most all the light; a mix's blend).
-pub(crate) fn network_kd(scene: &Scene, mi: usize, p: Vec3, uv: Vec2) -> Rgb {
-    surface_of(scene, mi, p, uv).kd
+pub(crate) fn network_kd(scene: &Scene, mi: usize, p: Vec3, uv: Vec2, n: Vec3) -> Rgb {
+    surface_of(scene, mi, p, uv, n).kd
 }
 
 /// The surface of a material that is not a mix (a mix's own fields otherwise).
-fn plain_surface(m: &Material, p: Vec3, uv: Vec2) -> Surface {
-    let kd = m.diffuse.eval(p, uv);
+fn plain_surface(m: &Material, p: Vec3, uv: Vec2, n: Vec3) -> Surface {
+    let kd = m.diffuse.eval(p, uv, n);
     let (mut kd, mut ks, mut kt) = (kd, m.specular_at_normal(), m.transmission);
-    let mut kdt = m.diffuse_transmission.eval(p, uv);
+    let mut kdt = m.diffuse_transmission.eval(p, uv, n);
     let mut specular = m.specular;
     if let Some(table) = &m.brdf {
         (kd, ks, specular) = (Rgb::ZERO, table.most_reflected(), Rgb::ZERO);
