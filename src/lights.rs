@@ -10,7 +10,9 @@ use crate::math::warp::{
 };
 use crate::math::{frame, luminance, Rgb, Vec2, Vec3};
 use crate::scene::environment::equal_area_square_to_sphere;
-use crate::scene::light::{spot_cosines, spot_falloff, spot_solid_angle, AreaLight};
+use crate::scene::light::{
+    spot_cosines, spot_falloff, spot_solid_angle, AreaLight, GoniometricMap,
+};
 use crate::scene::{Environment, Light, Scene};
 use std::f32::consts::PI;
 use std::sync::Arc;
@@ -32,6 +34,12 @@ pub enum Emitter {
         intensity: Rgb,
         cos_start: f32,
         cos_end: f32,
+    },
+    /// A point light whose intensity varies as its map shows.
+    Goniometric {
+        position: Vec3,
+        intensity: Rgb,
+        map: Arc<GoniometricMap>,
     },
     /// Light travelling along `direction` (unit).
     Directional {
@@ -126,6 +134,9 @@ impl Emitter {
                 cos_end,
                 ..
             } => intensity * spot_falloff(w.dot(direction), cos_start, cos_end),
+            Emitter::Goniometric {
+                intensity, ref map, ..
+            } => intensity * map.value(w),
             _ => Rgb::ZERO,
         }
     }
@@ -218,6 +229,15 @@ impl LightSet {
                     direction: direction.normalize(),
                     irradiance,
                 },
+                Light::Goniometric {
+                    position,
+                    intensity,
+                    ref map,
+                } => Emitter::Goniometric {
+                    position,
+                    intensity,
+                    map: map.clone(),
+                },
                 Light::Spot {
                     position,
                     direction,
@@ -264,6 +284,9 @@ impl LightSet {
                     cos_end,
                     ..
                 } => spot_solid_angle(*cos_start, *cos_end) * luminance(*intensity),
+                Emitter::Goniometric { intensity, map, .. } => {
+                    4.0 * PI * map.mean() * luminance(*intensity)
+                }
                 Emitter::Directional { irradiance, .. } => {
                     PI * radius * radius * luminance(*irradiance)
                 }
@@ -421,7 +444,7 @@ impl LightSet {
                     delta: true,
                 })
             }
-            e @ Emitter::Spot { position, .. } => {
+            e @ (Emitter::Spot { position, .. } | Emitter::Goniometric { position, .. }) => {
                 let d = *position - p;
                 let dist2 = d.length_squared();
                 let wi = d / dist2.sqrt();
@@ -553,6 +576,20 @@ impl LightSet {
                 delta_dir: false,
                 light: i,
             },
+            e @ Emitter::Goniometric { position, .. } => {
+                let dir = uniform_sphere(u_dir);
+                EmissionSample {
+                    p: *position,
+                    n: Vec3::ZERO,
+                    dir,
+                    radiance: e.intensity_towards(dir),
+                    pdf_pos: sel,
+                    pdf_dir: UNIFORM_SPHERE_PDF,
+                    delta_pos: true,
+                    delta_dir: false,
+                    light: i,
+                }
+            }
             e @ Emitter::Spot {
                 position,
                 direction,

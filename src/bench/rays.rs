@@ -120,7 +120,9 @@ fn light_point(
     match area_lights.get(i) {
         Some(light) => light.sample(u).p,
         None => match &scene.lights[i - area_lights.len()] {
-            Light::Point { position, .. } | Light::Spot { position, .. } => *position,
+            Light::Point { position, .. }
+            | Light::Spot { position, .. }
+            | Light::Goniometric { position, .. } => *position,
             Light::Directional { direction, .. } => p - direction.normalize() * 1e4,
         },
     }

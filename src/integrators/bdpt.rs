@@ -39,14 +39,17 @@ impl Bdpt {
         if !scene.lights.iter().all(|l| {
             matches!(
                 l,
-                crate::scene::Light::Point { .. } | crate::scene::Light::Spot { .. }
+                crate::scene::Light::Point { .. }
+                    | crate::scene::Light::Spot { .. }
+                    | crate::scene::Light::Goniometric { .. }
             )
         }) || scene.background.max_element() > 0.0
             || scene.environment.is_some()
         {
             return Err(
-                "the bdpt integrator supports area, point and spot lights only; this scene has a \
-                 directional light or a background: render it with the path integrator"
+                "the bdpt integrator supports area, point, spot and goniometric lights only; this \
+                 scene has a directional light or a background: render it with the path \
+                 integrator"
                     .into(),
             );
         }
@@ -193,7 +196,9 @@ impl Vertex<'_> {
         };
         match &ctx.lights.emitters[light] {
             Emitter::Area(a) => ctx.lights.pmf(light) / a.area,
-            Emitter::Point { .. } | Emitter::Spot { .. } => ctx.lights.pmf(light),
+            Emitter::Point { .. } | Emitter::Spot { .. } | Emitter::Goniometric { .. } => {
+                ctx.lights.pmf(light)
+            }
             _ => 0.0,
         }
     }
@@ -654,6 +659,11 @@ fn sample_light_point(
             intensity,
         }
         | Emitter::Spot {
+            position,
+            intensity,
+            ..
+        }
+        | Emitter::Goniometric {
             position,
             intensity,
             ..

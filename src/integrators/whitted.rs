@@ -216,6 +216,20 @@ impl RayTree<'_> {
                     }
                     (wi, intensity * falloff / d2, Some(position))
                 }
+                Light::Goniometric {
+                    position,
+                    intensity,
+                    ref map,
+                } => {
+                    let to = position - p;
+                    let d2 = to.length_squared();
+                    let wi = to / d2.sqrt();
+                    let value = map.value(-wi);
+                    if value == 0.0 {
+                        continue;
+                    }
+                    (wi, intensity * value / d2, Some(position))
+                }
             };
             let cos = n.dot(wi);
             let front = cos > 0.0 && ng.dot(wi) > 0.0;

@@ -125,7 +125,11 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::Result<()> {
                 .collect(),
         ),
         shapes: Vec::new(),
-        lights: scene.lights.iter().map(|l| spanned(light(l))).collect(),
+        lights: scene
+            .lights
+            .iter()
+            .map(|l| spanned(light(l, refs)))
+            .collect(),
         render: render(&scene.settings).map(spanned),
     };
     let mut meshes = MeshDir::new(&out_dir, format!("{stem}.meshes"));
@@ -205,25 +209,10 @@ fn camera(c: &Camera) -> CameraDesc {
 }
 
 fn world(scene: &Scene, refs: Refs) -> WorldDesc {
-    let environment = scene.environment.as_ref().map(|env| {
-        let m = env.transform;
-        let mut rows: Vec<Vec<f32>> = (0..3)
-            .map(|r| {
-                let row = m.row(r);
-                vec![row.x, row.y, row.z, 0.0]
-            })
-            .collect();
-        rows.push(vec![0.0, 0.0, 0.0, 1.0]);
-        EnvironmentDesc {
-            file: refs.to(&env.file),
-            scale: Some(Splat3(env.scale)),
-            transform: Some(OneOrMany::One(TransformOp {
-                translate: None,
-                rotate: None,
-                scale: None,
-                matrix: Some(rows),
-            })),
-        }
+    let environment = scene.environment.as_ref().map(|env| EnvironmentDesc {
+        file: refs.to(&env.file),
+        scale: Some(Splat3(env.scale)),
+        transform: Some(OneOrMany::One(matrix_step(env.transform))),
     });
     WorldDesc {
         ambient: Some(Splat3(scene.ambient)),
@@ -431,7 +420,7 @@ fn diffuse(t: &Texture, refs: Refs) -> DiffuseDesc {
     DiffuseDesc::Texture(table)
 }
 
-fn light(l: &Light) -> LightDesc {
+fn light(l: &Light, refs: Refs) -> LightDesc {
     let mut d = LightDesc {
         kind: LightKind::Point,
         position: None,
@@ -440,6 +429,8 @@ fn light(l: &Light) -> LightDesc {
         irradiance: None,
         cone_angle: None,
         cone_delta: None,
+        image: None,
+        transform: None,
     };
     match *l {
         Light::Point {
@@ -471,8 +462,36 @@ fn light(l: &Light) -> LightDesc {
             d.cone_angle = Some(cone_angle);
             d.cone_delta = Some(cone_delta);
         }
+        Light::Goniometric {
+            position,
+            intensity,
+            ref map,
+        } => {
+            d.kind = LightKind::Goniometric;
+            d.position = Some(V3(position));
+            d.intensity = Some(Splat3(intensity));
+            d.image = Some(refs.to(&map.file));
+            d.transform = Some(OneOrMany::One(matrix_step(map.transform)));
+        }
     }
     d
+}
+
+/// A transform step of the 3×3 matrix `m` (rows, in 4×4 form).
+fn matrix_step(m: crate::math::Mat3) -> TransformOp {
+    let mut rows: Vec<Vec<f32>> = (0..3)
+        .map(|r| {
+            let row = m.row(r);
+            vec![row.x, row.y, row.z, 0.0]
+        })
+        .collect();
+    rows.push(vec![0.0, 0.0, 0.0, 1.0]);
+    TransformOp {
+        translate: None,
+        rotate: None,
+        scale: None,
+        matrix: Some(rows),
+    }
 }
 
 /// The `NAME.meshes` folder: meshes go to a temporary folder that replaces it only once all

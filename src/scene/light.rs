@@ -1,8 +1,12 @@
-//! Lights: point, spot and directional lights given in the scene, and area lights made from
-//! emissive shapes.
+//! Lights: point, spot, goniometric and directional lights given in the scene, and area
+//! lights made from emissive shapes.
 
+use super::environment::equal_area_sphere_to_square;
 use super::{Geometry, Material, Scene, Shape};
-use crate::math::{Rgb, Vec2, Vec3};
+use crate::image::Image;
+use crate::math::{Mat3, Rgb, Vec2, Vec3};
+use std::path::PathBuf;
+use std::sync::Arc;
 
 #[derive(Clone, Debug, PartialEq)]
 pub enum Light {
@@ -22,6 +26,78 @@ pub enum Light {
         cone_angle: f32,
         cone_delta: f32,
     },
+    /// pbrt-v4's goniometric light: intensity `intensity` (W/sr) from a point, times the
+    /// value its image shows towards each direction ([`GoniometricMap`]).
+    Goniometric {
+        position: Vec3,
+        intensity: Rgb,
+        map: Arc<GoniometricMap>,
+    },
+}
+
+/// A goniometric light's distribution: a square image in the equal-area octahedral mapping
+/// (as pbrt-v4's), its channels averaged, looked up at the nearest texel. Its frame is
+/// pbrt-v4's: the light's +y is the map's pole (+z of the mapping).
+#[derive(Clone, Debug, PartialEq)]
+pub struct GoniometricMap {
+    /// The image file as the scene names it.
+    pub file: PathBuf,
+    /// The light's frame: its directions to the world's.
+    pub transform: Mat3,
+    world_to_map: Mat3,
+    size: u32,
+    values: Vec<f32>,
+    mean: f32,
+}
+
+impl GoniometricMap {
+    /// The map of `image` (square) in the frame `transform` (invertible).
+    pub fn new(file: PathBuf, image: &Image, transform: Mat3) -> Result<GoniometricMap, String> {
+        if image.width != image.height || image.width == 0 {
+            return Err(format!(
+                "a goniometric image must be square (the equal-area mapping), got {}x{}",
+                image.width, image.height
+            ));
+        }
+        if transform.determinant().abs() < 1e-12 || !transform.is_finite() {
+            return Err("the light's transform must be invertible".into());
+        }
+        let values: Vec<f32> = image
+            .pixels
+            .iter()
+            .map(|p| p.max(Rgb::ZERO).element_sum() / 3.0)
+            .collect();
+        let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64;
+        // pbrt-v4 swaps y and z: the light's y is the mapping's pole.
+        let swap = Mat3::from_cols(Vec3::X, Vec3::Z, Vec3::Y);
+        Ok(GoniometricMap {
+            file,
+            transform,
+            world_to_map: swap * transform.inverse(),
+            size: image.width,
+            values,
+            mean: mean as f32,
+        })
+    }
+
+    /// The image's value towards world direction `w`.
+    pub fn value(&self, w: Vec3) -> f32 {
+        let d = (self.world_to_map * w).normalize_or_zero();
+        if d == Vec3::ZERO {
+            return 0.0;
+        }
+        let uv = equal_area_sphere_to_square(d);
+        let n = self.size;
+        let x = ((uv.x * n as f32) as u32).min(n - 1);
+        let y = ((uv.y * n as f32) as u32).min(n - 1);
+        self.values[(y * n + x) as usize]
+    }
+
+    /// The mean value over all directions (texels cover equal solid angles): the light's
+    /// power is 4π · mean · intensity.
+    pub fn mean(&self) -> f32 {
+        self.mean
+    }
 }
 
 /// pbrt-v4's spot falloff: SmoothStep(cos_end, cos_start, cos θ), 0 outside the cone, 1

@@ -1,5 +1,5 @@
-//! Lights: area lights attached to the shapes that follow, and point, spot, distant and
-//! infinite lights (an environment map or a constant background).
+//! Lights: area lights attached to the shapes that follow, and point, spot, goniometric,
+//! distant and infinite lights (an environment map or a constant background).
 
 use super::params::Params;
 use super::spectrum::Kind;
@@ -7,7 +7,7 @@ use super::state::AreaEmission;
 use super::{Loader, Loc};
 use crate::math::{Mat3, Rgb};
 use crate::scene::environment::{Environment, Mapping};
-use crate::scene::light::{spot_cosines, spot_solid_angle};
+use crate::scene::light::{spot_cosines, spot_solid_angle, GoniometricMap};
 use crate::scene::Light;
 use glam::DVec3;
 use std::path::PathBuf;
@@ -54,7 +54,41 @@ impl Loader {
             }
         };
         match ty {
-            "point" | "goniometric" | "projection" => {
+            "goniometric" => {
+                // pbrt-v4's GoniometricLight: at the origin of the light's space, its
+                // intensity I × scale × the image's value, the image's pole the light's +y.
+                let file = p
+                    .string("filename")
+                    .map_err(&pe)?
+                    .ok_or_else(|| loc.error(format!("{st} needs a \"string filename\"")))?;
+                let path = loc.dir().join(&file);
+                self.add_input(&path);
+                let (image, _) = crate::image::output::read_image(&path)
+                    .map_err(|e| loc.error(format!("{st}: {e}")))?;
+                let frame = Mat3::from_cols(
+                    m.x_axis.truncate().as_vec3(),
+                    m.y_axis.truncate().as_vec3(),
+                    m.z_axis.truncate().as_vec3(),
+                );
+                let map = GoniometricMap::new(PathBuf::from(&file), &image, frame)
+                    .map_err(|e| loc.error(format!("{st}: \"{file}\": {e}")))?;
+                let i = self
+                    .spectrum(p, "I", Kind::Illuminant, st, loc)?
+                    .unwrap_or(Rgb::ONE);
+                // pbrt-v4: `power` divides by k_e = 4π × the image's mean.
+                let power = p.float_or("power", -1.0).map_err(&pe)? as f32;
+                let k = if power > 0.0 && map.mean() > 0.0 {
+                    power / (4.0 * std::f32::consts::PI * map.mean())
+                } else {
+                    1.0
+                };
+                self.lights.push(Light::Goniometric {
+                    position: m.transform_point3(DVec3::ZERO).as_vec3(),
+                    intensity: i * scale * k,
+                    map: Arc::new(map),
+                });
+            }
+            "point" | "projection" => {
                 if ty != "point" {
                     self.warn(
                         loc,

@@ -17,6 +17,7 @@ use super::schema::{
 use crate::bsdf::TabulatedBrdf;
 use crate::math::{Mat3, Mat4, Rgb, Vec3};
 use crate::scene::environment::Environment;
+use crate::scene::light::GoniometricMap;
 use crate::scene::pbrt::GeometryCost;
 use crate::scene::{
     Camera, Conductor, Light, Material, Projection, RenderSettings, RoughnessMap, Scene, Texture,
@@ -546,6 +547,11 @@ impl<'a> Builder<'a> {
                     "cone_delta",
                 ],
             ),
+            LightKind::Goniometric => (
+                "goniometric",
+                "position, intensity, image, transform",
+                &["position", "intensity", "image", "transform"],
+            ),
         };
         let present = [
             ("position", desc.position.is_some()),
@@ -554,6 +560,8 @@ impl<'a> Builder<'a> {
             ("irradiance", desc.irradiance.is_some()),
             ("cone_angle", desc.cone_angle.is_some()),
             ("cone_delta", desc.cone_delta.is_some()),
+            ("image", desc.image.is_some()),
+            ("transform", desc.transform.is_some()),
         ];
         for (key, is) in present {
             if is && !allowed.contains(&key) {
@@ -602,6 +610,23 @@ impl<'a> Builder<'a> {
                         .map_err(fail("intensity"))?,
                     cone_angle,
                     cone_delta,
+                }
+            }
+            LightKind::Goniometric => {
+                let file = desc.image.ok_or_else(|| need("image"))?;
+                let frame = Mat3::from_mat4(self.transform(site, desc.transform)?.m);
+                let path = self.dir.join(&file);
+                self.inputs.borrow_mut().push(path.clone());
+                let (image, _) = crate::image::output::read_image(&path)
+                    .map_err(|e| ctx.fail(site, "image", e))?;
+                let map = GoniometricMap::new(file.into(), &image, frame)
+                    .map_err(|e| ctx.fail(site, "image", e))?;
+                Light::Goniometric {
+                    position: finite3(desc.position.ok_or_else(|| need("position"))?.0)
+                        .map_err(fail("position"))?,
+                    intensity: colour(desc.intensity.ok_or_else(|| need("intensity"))?.0)
+                        .map_err(fail("intensity"))?,
+                    map: std::sync::Arc::new(map),
                 }
             }
         })

@@ -352,6 +352,7 @@ pub(crate) enum LightKind {
     Point,
     Directional,
     Spot,
+    Goniometric,
 }
 
 #[derive(Deserialize, Serialize)]
@@ -371,6 +372,12 @@ pub(crate) struct LightDesc {
     pub(crate) cone_angle: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) cone_delta: Option<f32>,
+    /// A goniometric light's image (square, equal-area).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) image: Option<String>,
+    /// A goniometric light's frame (its rotation; translations are ignored).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) transform: Option<OneOrMany<TransformOp>>,
 }
 
 // ------------------------------------------------------------------------------------------
