@@ -42,6 +42,7 @@ fn mixed_scene() -> Scene {
     shapes.push(Shape {
         geometry: Geometry::Quads(quads),
         material: 0,
+        alpha: None,
     });
     // A fan of 24 thin triangles around (0, 1, -1).
     let centre = Vec3::new(0.0, 1.0, -1.0);
@@ -67,6 +68,7 @@ fn mixed_scene() -> Scene {
                 radius: r,
             },
             material: 0,
+            alpha: None,
         });
     }
     Scene {
@@ -376,6 +378,7 @@ fn empty_scene_and_single_primitive() {
             radius: 1.0,
         },
         material: 0,
+        alpha: None,
     });
     let (embree, bvh) = backends(&scene);
     let (e, b) = (

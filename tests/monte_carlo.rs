@@ -368,6 +368,7 @@ fn environment_map_lighting_matches_quadrature() {
                 radius: 1.0,
             },
             material: 0,
+            alpha: None,
         }],
         lights: vec![],
         ambient: Rgb::ZERO,

@@ -140,6 +140,7 @@ fn busy_scene() -> Scene {
                 radius: 0.7,
             },
             material: m,
+            alpha: None,
         });
     }
     let lamp = add_material(

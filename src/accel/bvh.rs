@@ -10,9 +10,13 @@
 //! - spheres: Embree's point-sphere test: the nearer root in `[tmin, tmax]`, else the farther
 //!   one; Ng points outwards; u = v = 0; prim_id 0.
 //!
+//! A shape with an alpha has a [`Cutout`] that every candidate hit on it passes before it
+//! counts (a sphere's exit point is tried when its entry point is cut out, as Embree does).
+//!
 //! Primitives are stored in BVH leaf order, so a leaf indexes them directly, as three indices
 //! into the scene's shared vertices.
 
+use super::cutout::Cutout;
 use super::{Accel, Hit};
 use crate::math::{Ray, Vec3};
 use crate::scene::{Geometry, Scene};
@@ -85,6 +89,8 @@ pub struct BvhAccel {
     prims: Vec<[u32; 3]>,
     kinds: Vec<Kind>,
     ids: Vec<Ids>,
+    /// Each shape's alpha test, by geometry id; empty when no shape has one.
+    cutouts: Vec<Option<Cutout>>,
 }
 
 fn to_a(p: Vec3) -> Vec3A {
@@ -288,6 +294,7 @@ impl BvhAccel {
             prims: Vec::new(),
             kinds: Vec::new(),
             ids: Vec::new(),
+            cutouts: Vec::new(),
         };
         accel.rebuild(scene)?;
         Ok(accel)
@@ -299,6 +306,10 @@ impl BvhAccel {
     pub fn rebuild(&mut self, scene: &Scene) -> Result<()> {
         let (vertices, prims, meta) = collect_prims(scene);
         self.vertices = vertices;
+        self.cutouts = Cutout::of_scene(scene);
+        if self.cutouts.iter().all(Option::is_none) {
+            self.cutouts.clear();
+        }
         if prims.is_empty() {
             self.bvh = CwBvh::default();
             self.prims.clear();
@@ -354,6 +365,7 @@ impl BvhAccel {
             + self.prims.capacity() * std::mem::size_of::<[u32; 3]>()
             + self.kinds.capacity() * std::mem::size_of::<Kind>()
             + self.ids.capacity() * std::mem::size_of::<Ids>()
+            + self.cutouts.capacity() * std::mem::size_of::<Option<Cutout>>()
     }
 
     /// A primitive's vertices.
@@ -367,6 +379,57 @@ impl BvhAccel {
     /// Number of primitives in the tree (a quad counts as two triangles).
     pub fn primitive_count(&self) -> usize {
         self.prims.len()
+    }
+}
+
+impl BvhAccel {
+    /// The distance of slot `i`'s hit in `[tmin, tmax]` that its shape's alpha keeps
+    /// (infinity for none), and the lower bound that finds it again (a sphere's exit point
+    /// needs one above the entry point).
+    #[inline(always)]
+    fn kept_hit(&self, i: usize, org: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> (f32, f32) {
+        let prim = self.gather(&self.prims[i]);
+        let kind = self.kinds[i];
+        let t = prim.hit_t(kind, org, dir, tmin, tmax);
+        if self.cutouts.is_empty() || !t.is_finite() {
+            return (t, tmin);
+        }
+        match &self.cutouts[self.ids[i].geom_id as usize] {
+            None => (t, tmin),
+            Some(cutout) => self.cutout_hit(cutout, i, org, dir, tmin, tmax, t),
+        }
+    }
+
+    #[inline(never)]
+    #[allow(clippy::too_many_arguments)]
+    fn cutout_hit(
+        &self,
+        cutout: &Cutout,
+        i: usize,
+        org: Vec3A,
+        dir: Vec3A,
+        tmin: f32,
+        tmax: f32,
+        t: f32,
+    ) -> (f32, f32) {
+        let prim = self.gather(&self.prims[i]);
+        let kind = self.kinds[i];
+        let prim_id = self.ids[i].prim_id;
+        let keeps = |t: f32, tmin: f32| {
+            let (u, v, _) = prim.details(kind, org, dir, tmin, t);
+            cutout.keeps_hit(to_vec3(org), to_vec3(dir), t, prim_id, u, v)
+        };
+        if keeps(t, tmin) {
+            return (t, tmin);
+        }
+        if kind == Kind::Sphere {
+            let exit_min = t.next_up();
+            let exit = prim.hit_t(kind, org, dir, exit_min, tmax);
+            if exit.is_finite() && keeps(exit, exit_min) {
+                return (exit, exit_min);
+            }
+        }
+        (f32::INFINITY, tmin)
     }
 }
 
@@ -411,23 +474,21 @@ impl Accel for BvhAccel {
         let mut tmax = ray.tmax;
         let mut best = None;
         self.traverse(org, dir, ray.tmax, |i| {
-            let t = self
-                .gather(&self.prims[i])
-                .hit_t(self.kinds[i], org, dir, ray.tmin, tmax);
+            let (t, tmin) = self.kept_hit(i, org, dir, ray.tmin, tmax);
             // A hit exactly at the current tmax replaces the last one, as in Embree.
             if t <= tmax && t.is_finite() {
                 tmax = t;
-                best = Some(i);
+                best = Some((i, tmin));
                 Visit::Shorten(t)
             } else {
                 Visit::Continue
             }
         });
-        let i = best?;
+        let (i, tmin) = best?;
         let m = self.ids[i];
-        let (u, v, ng) =
-            self.gather(&self.prims[i])
-                .details(self.kinds[i], org, dir, ray.tmin, tmax);
+        let (u, v, ng) = self
+            .gather(&self.prims[i])
+            .details(self.kinds[i], org, dir, tmin, tmax);
         Some(Hit {
             t: tmax,
             u,
@@ -442,9 +503,7 @@ impl Accel for BvhAccel {
         let (org, dir) = (to_a(ray.origin), to_a(ray.dir));
         let mut hit = false;
         self.traverse(org, dir, ray.tmax, |i| {
-            let t = self
-                .gather(&self.prims[i])
-                .hit_t(self.kinds[i], org, dir, ray.tmin, ray.tmax);
+            let (t, _) = self.kept_hit(i, org, dir, ray.tmin, ray.tmax);
             hit = t.is_finite();
             if hit {
                 Visit::Stop

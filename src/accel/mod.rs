@@ -2,10 +2,11 @@
 //! which backend answers.
 
 pub mod bvh;
+mod cutout;
 pub mod embree;
 
 use crate::control::Control;
-use crate::math::{Ray, Vec2, Vec3};
+use crate::math::{Ray, Vec3};
 use crate::scene::{Geometry, Scene, Shape, SurfacePoint};
 
 /// The closest hit along a ray.
@@ -32,40 +33,27 @@ impl Hit {
         let shape = &shapes[hit.geom_id as usize];
         let p = ray.at(hit.t);
         let ng = hit.ng.normalize();
-        let (ns, uv) = match &shape.geometry {
-            Geometry::Sphere { center, .. } => {
-                let n = (p - *center).normalize();
-                let uv = Vec2::new(
-                    0.5 + n.z.atan2(n.x) / std::f32::consts::TAU,
-                    n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
-                );
-                (n, uv)
-            }
-            Geometry::Triangles(mesh) => {
-                let [a, b, c] = mesh.indices[hit.prim_id as usize].map(|i| i as usize);
-                let w = Vec3::new(1.0 - hit.u - hit.v, hit.u, hit.v);
-                let ns = match &mesh.normals {
-                    Some(n) => {
-                        let n = (n[a] * w.x + n[b] * w.y + n[c] * w.z).normalize_or_zero();
-                        if n == Vec3::ZERO {
-                            ng
-                        } else if n.dot(ng) < 0.0 {
-                            // Keep the shading normal on the geometric side.
-                            -n
-                        } else {
-                            n
-                        }
+        let ns = match &shape.geometry {
+            Geometry::Sphere { center, .. } => (p - *center).normalize(),
+            Geometry::Triangles(mesh) => match &mesh.normals {
+                Some(n) => {
+                    let [a, b, c] = mesh.indices[hit.prim_id as usize].map(|i| i as usize);
+                    let w = Vec3::new(1.0 - hit.u - hit.v, hit.u, hit.v);
+                    let n = (n[a] * w.x + n[b] * w.y + n[c] * w.z).normalize_or_zero();
+                    if n == Vec3::ZERO {
+                        ng
+                    } else if n.dot(ng) < 0.0 {
+                        // Keep the shading normal on the geometric side.
+                        -n
+                    } else {
+                        n
                     }
-                    None => ng,
-                };
-                let uv = match &mesh.uvs {
-                    Some(t) => t[a] * w.x + t[b] * w.y + t[c] * w.z,
-                    None => Vec2::new(hit.u, hit.v),
-                };
-                (ns, uv)
-            }
-            Geometry::Quads(_) => (ng, Vec2::new(hit.u, hit.v)),
+                }
+                None => ng,
+            },
+            Geometry::Quads(_) => ng,
         };
+        let uv = shape.geometry.hit_uv(hit.prim_id, hit.u, hit.v, p);
         SurfacePoint {
             p,
             ng,

@@ -150,6 +150,7 @@ pub fn sphere_field(triangles: usize) -> Scene {
             indices: vec![[0, 1, 2, 3]],
         }),
         material: 0,
+        alpha: None,
     });
     let mut rng = Rng::for_key(17, &[count as u64]);
     for i in 0..count {
@@ -163,6 +164,7 @@ pub fn sphere_field(triangles: usize) -> Scene {
         scene.shapes.push(Shape {
             geometry: Geometry::Triangles(uv_sphere(center, radius)),
             material: 0,
+            alpha: None,
         });
     }
     scene
@@ -257,6 +259,7 @@ pub fn mesh_shape(positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Shape {
             indices,
         }),
         material: 0,
+        alpha: None,
     }
 }
 

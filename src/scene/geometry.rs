@@ -1,3 +1,4 @@
+use super::alpha::Alpha;
 use crate::math::{Vec2, Vec3};
 
 /// A piece of geometry and the material it is made of.
@@ -6,6 +7,8 @@ pub struct Shape {
     pub geometry: Geometry,
     /// Index into `Scene::materials`.
     pub material: usize,
+    /// Where the surface is present (None: everywhere). Rays pass through cut-out parts.
+    pub alpha: Option<Alpha>,
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -76,6 +79,23 @@ impl Geometry {
         }
     }
 
+    /// The surface (u, v) of a hit at `p` on primitive `prim_id`, whose barycentric (or, for
+    /// quads, bilinear) coordinates are `u`, `v`: spheres map latitude and longitude, meshes
+    /// interpolate their uvs (or give u, v themselves without them).
+    pub fn hit_uv(&self, prim_id: u32, u: f32, v: f32, p: Vec3) -> Vec2 {
+        match self {
+            Geometry::Sphere { center, .. } => sphere_uv((p - *center).normalize()),
+            Geometry::Triangles(mesh) => match &mesh.uvs {
+                Some(t) => {
+                    let [a, b, c] = mesh.indices[prim_id as usize].map(|i| i as usize);
+                    t[a] * (1.0 - u - v) + t[b] * u + t[c] * v
+                }
+                None => Vec2::new(u, v),
+            },
+            Geometry::Quads(_) => Vec2::new(u, v),
+        }
+    }
+
     /// Surface area.
     pub fn area(&self) -> f32 {
         match self {
@@ -87,6 +107,14 @@ impl Geometry {
                 .sum(),
         }
     }
+}
+
+/// The uv of a point on a sphere whose outward unit normal is `n`.
+pub fn sphere_uv(n: Vec3) -> Vec2 {
+    Vec2::new(
+        0.5 + n.z.atan2(n.x) / std::f32::consts::TAU,
+        n.y.clamp(-1.0, 1.0).acos() / std::f32::consts::PI,
+    )
 }
 
 /// Where a ray met a surface, with what shading needs.

@@ -318,6 +318,7 @@ mod tests {
                     indices: vec![[0, 1, 2, 3], [4, 5, 6, 7]],
                 }),
                 material: 0,
+                alpha: None,
             }],
             lights: vec![],
             ambient: Rgb::ZERO,

@@ -2,6 +2,7 @@
 //! integrators never know which file it came from. Geometry is stored in world space:
 //! readers apply transforms when they load.
 
+pub mod alpha;
 pub mod animation;
 pub mod camera;
 pub mod convert;
@@ -19,6 +20,7 @@ pub mod tangents;
 pub mod texture;
 pub mod toml;
 
+pub use alpha::Alpha;
 pub use camera::{Camera, Projection, MAX_RESOLUTION};
 pub use environment::Environment;
 pub use geometry::{Geometry, QuadMesh, Shape, SurfacePoint, TriangleMesh};

@@ -47,6 +47,7 @@ pub(crate) fn quad(scene: &mut Scene, corners: [Vec3; 4], material: usize) {
             indices: vec![[0, 1, 2, 3]],
         }),
         material,
+        alpha: None,
     });
 }
 

@@ -4,6 +4,7 @@
 
 mod sys;
 
+use super::cutout::Cutout;
 use super::{Accel, Hit, Update};
 use crate::control::CancelToken;
 use crate::math::{Ray, Vec3, Vec4};
@@ -172,6 +173,8 @@ pub struct Scene {
     next_id: GeometryId,
     /// Geometries get refit quality (see [`Scene::new_dynamic`]).
     dynamic: bool,
+    /// The alpha tests Embree's filter functions were handed (kept alive here).
+    cutouts: Vec<Arc<Cutout>>,
 }
 
 // SAFETY: Embree allows concurrent queries on a committed scene; every change goes through
@@ -224,6 +227,7 @@ impl Scene {
             committed: false,
             next_id: 0,
             dynamic,
+            cutouts: Vec::new(),
         })
     }
 
@@ -384,6 +388,31 @@ impl Scene {
         Ok(())
     }
 
+    /// Runs `cutout` on every candidate hit on geometry `id`, in closest-hit and occlusion
+    /// queries alike (Embree's intersection and occlusion filter functions); the hits it
+    /// rejects are skipped and traversal goes on. Takes effect at the next commit.
+    pub fn set_cutout(&mut self, id: GeometryId, cutout: Arc<Cutout>) -> Result<()> {
+        if id >= self.next_id {
+            return Err(Error::Embree(format!("no geometry {id} to filter")));
+        }
+        let user = Arc::as_ptr(&cutout) as *mut c_void;
+        // SAFETY: the scene is live and `id` attached to it. The user pointer is a `Cutout`
+        // kept alive in `self.cutouts` as long as the scene (the geometry goes with it);
+        // the filter only reads it.
+        unsafe {
+            let geometry = sys::rtcGetGeometry(self.raw, id);
+            self.device.check("finding a geometry")?;
+            sys::rtcSetGeometryUserData(geometry, user);
+            sys::rtcSetGeometryIntersectFilterFunction(geometry, Some(cutout_filter));
+            sys::rtcSetGeometryOccludedFilterFunction(geometry, Some(cutout_filter));
+            sys::rtcCommitGeometry(geometry);
+        }
+        self.device.check("setting a geometry's filter")?;
+        self.cutouts.push(cutout);
+        self.committed = false;
+        Ok(())
+    }
+
     /// Builds the acceleration structure; queries are valid from then until the next change.
     pub fn commit(&mut self) -> Result<()> {
         self.commit_cancellable(&CancelToken::new())
@@ -447,6 +476,40 @@ impl Scene {
         query::occluded(self.raw, &mut r);
         // Embree marks an occluded ray by setting tfar to -inf.
         r.tfar == f32::NEG_INFINITY
+    }
+}
+
+/// Embree's filter for a geometry with a [`Cutout`]: clears the valid flag of each hit the
+/// alpha test rejects. It must not unwind into C: `keeps_hit` only reads and computes.
+unsafe extern "C" fn cutout_filter(args: *const sys::RTCFilterFunctionNArguments) {
+    // SAFETY: Embree passes valid arguments: `valid` holds N flags, `ray` and `hit` N rays
+    // and hits in SOA layout (each field an array of N 4-byte values, in the order of
+    // `RTCRay` and `RTCHit`, the candidate distance in tfar), and the user pointer is the
+    // `Cutout` that `Scene::set_cutout` registered.
+    unsafe {
+        let args = &*args;
+        let n = args.N as usize;
+        let cutout = &*(args.geometryUserPtr as *const Cutout);
+        let ray = args.ray as *const f32;
+        let hit = args.hit as *const f32;
+        let ray_field = |field: usize, i: usize| *ray.add(field * n + i);
+        let hit_field = |field: usize, i: usize| *hit.add(field * n + i);
+        for i in 0..n {
+            let valid = args.valid.add(i);
+            if *valid == 0 {
+                continue;
+            }
+            // RTCRay: org_x, org_y, org_z, tnear, dir_x, dir_y, dir_z, time, tfar, ...
+            let origin = Vec3::new(ray_field(0, i), ray_field(1, i), ray_field(2, i));
+            let dir = Vec3::new(ray_field(4, i), ray_field(5, i), ray_field(6, i));
+            let t = ray_field(8, i);
+            // RTCHit: Ng_x, Ng_y, Ng_z, u, v, primID, ...
+            let (u, v) = (hit_field(3, i), hit_field(4, i));
+            let prim_id = hit_field(5, i).to_bits();
+            if !cutout.keeps_hit(origin, dir, t, prim_id, u, v) {
+                *valid = 0;
+            }
+        }
     }
 }
 
@@ -609,9 +672,15 @@ impl EmbreeAccel {
     /// same device. A static accel is rebuilt.
     pub fn update(&mut self, desc: &SceneDesc) -> Result<Update> {
         let keys: Vec<ShapeKey> = desc.shapes.iter().map(|s| shape_key(&s.geometry)).collect();
-        let same_topology = self.shapes.as_ref().is_some_and(|old| {
-            old.len() == keys.len() && old.iter().zip(&keys).all(|(a, b)| a.topology == b.topology)
-        });
+        // A cut-out's filter holds its shape's geometry and alpha as they were: scenes with
+        // cut-outs are built again (their spheres' uvs would move with a refit).
+        let cutouts =
+            !self.scene.cutouts.is_empty() || desc.shapes.iter().any(|s| s.alpha.is_some());
+        let same_topology = !cutouts
+            && self.shapes.as_ref().is_some_and(|old| {
+                old.len() == keys.len()
+                    && old.iter().zip(&keys).all(|(a, b)| a.topology == b.topology)
+            });
         if !same_topology {
             let scene = if self.shapes.is_some() {
                 Scene::new_dynamic(&self.device)?
@@ -663,14 +732,17 @@ impl EmbreeAccel {
         shapes: Option<Vec<ShapeKey>>,
         cancel: &CancelToken,
     ) -> Result<EmbreeAccel> {
-        for shape in &desc.shapes {
-            match &shape.geometry {
+        for (shape, cutout) in desc.shapes.iter().zip(Cutout::of_scene(desc)) {
+            let id = match &shape.geometry {
                 Geometry::Sphere { center, radius } => {
                     scene.attach_spheres(&[center.extend(*radius)])?
                 }
                 Geometry::Triangles(m) => scene.attach_triangles(&m.positions, &m.indices)?,
                 Geometry::Quads(q) => scene.attach_quads(&q.positions, &q.indices)?,
             };
+            if let Some(cutout) = cutout {
+                scene.set_cutout(id, Arc::new(cutout))?;
+            }
             cancel.check("the intersection structure's build")?;
         }
         scene.commit_cancellable(cancel)?;

@@ -349,6 +349,7 @@ mod tests {
                 radius: 1.0,
             },
             material: 0,
+            alpha: None,
         };
         let object = Object::new(vec![ball.clone(), ball]);
         assert_eq!(object.instance_cost(true).primitives, 2);

@@ -18,6 +18,7 @@
 //! `shape_statement.rs` (the geometry itself from `shapes.rs`), their spectrum and texture
 //! parameters from `param_values.rs`.
 
+mod alpha;
 mod cursor;
 mod lexer;
 mod lights;

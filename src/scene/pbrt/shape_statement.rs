@@ -66,13 +66,12 @@ impl Loader {
         let st = format!("Shape \"{ty}\"");
         let st = st.as_str();
         let pe = Self::pe(loc);
-        if let Some(q) = p.find("alpha", &["float", "texture"]).map_err(&pe)? {
-            if q.ty == "texture" || q.nums()[0] < 1.0 {
-                self.warn(
-                    loc,
-                    format!("{st}: \"alpha\" cut-outs are not supported; the shape is opaque"),
-                );
-            }
+        let alpha = self.shape_alpha(p, st, loc)?;
+        if alpha.is_some() && self.state.area.is_some() {
+            self.warn(
+                loc,
+                format!("{st}: an emitting shape's cut-out parts still emit light"),
+            );
         }
         p.ignore("emission");
         // pbrt's transform for the shape; the world mirror (if any) comes on top.
@@ -224,9 +223,11 @@ impl Loader {
             .fold(Cost::default(), |c, g| c.add(Cost::of(g)));
         self.reserve(loc, st, cost, !in_object)?;
         let material = self.shape_material(loc);
-        let new = geometries
-            .into_iter()
-            .map(|geometry| Shape { geometry, material });
+        let new = geometries.into_iter().map(|geometry| Shape {
+            geometry,
+            material,
+            alpha: alpha.clone(),
+        });
         match &mut self.object {
             Some((_, shapes)) => shapes.extend(new),
             None => self.shapes.extend(new),

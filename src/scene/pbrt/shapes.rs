@@ -230,6 +230,7 @@ pub fn instance(shape: &Shape, t: &DMat4) -> Vec<Shape> {
         .map(|geometry| Shape {
             geometry,
             material: shape.material,
+            alpha: shape.alpha.clone(),
         })
         .collect()
 }
@@ -276,6 +277,7 @@ mod tests {
                 ..Default::default()
             }),
             material: 0,
+            alpha: None,
         };
         // Mirror z: the triangle lies in z = 0 and faced +z; it must face -z now.
         let m = DMat4::from_scale(DVec3::new(1.0, 1.0, -1.0));

@@ -127,6 +127,7 @@ impl Builder<'_> {
         Ok(vec![Shape {
             geometry,
             material: material.unwrap_or_default(),
+            alpha: None,
         }])
     }
 
@@ -282,6 +283,7 @@ impl Builder<'_> {
             shapes.push(Shape {
                 geometry,
                 material: index,
+                alpha: None,
             });
         }
         if shapes.iter().all(|s| s.geometry.area() <= 0.0) {
@@ -317,7 +319,11 @@ impl Builder<'_> {
         let shapes: Vec<Shape> = mesh
             .into_geometry()
             .into_iter()
-            .map(|geometry| Shape { geometry, material })
+            .map(|geometry| Shape {
+                geometry,
+                material,
+                alpha: None,
+            })
             .collect();
         if shapes.iter().any(|s| !geometry_is_finite(&s.geometry)) {
             return Err(ctx.fail(
