@@ -370,3 +370,39 @@ fn pbrt_alpha_textures_are_constants_and_image_maps() {
         .to_string();
     assert!(e.contains("no float texture named \"nothing\""), "{e}");
 }
+
+/// The TOML format's `alpha = 0.5` and `alpha = { image = { .. } }`, and the TOML the pbrt
+/// converter writes keeps them.
+#[test]
+fn toml_alpha_reads_and_survives_conversion() {
+    let dir = tempfile::tempdir().unwrap();
+    checker_mask(dir.path());
+    let main = dir.path().join("leaves.toml");
+    std::fs::write(
+        &main,
+        "[camera]\nposition = [0, 1, 5]\nlook_at = [0, 0, 0]\n\
+         [materials.leaf]\ndiffuse = 0.5\n\
+         [[shapes]]\ntype = \"quad\"\nvertices = [[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]]\n\
+         material = \"leaf\"\nalpha = { image = { file = \"mask.pgm\", encoding = \"linear\" } }\n\
+         [[shapes]]\ntype = \"sphere\"\nmaterial = \"leaf\"\nalpha = 0.25\n\
+         [[shapes]]\ntype = \"sphere\"\ncenter = [3, 0, 0]\nmaterial = \"leaf\"\nalpha = 1\n",
+    )
+    .unwrap();
+    let check = |scene: &Scene| {
+        match &scene.shapes[0].alpha {
+            Some(a @ Alpha::Image(_)) => {
+                assert_eq!(a.value(Vec2::new(0.25, 0.75)), 1.0);
+                assert_eq!(a.value(Vec2::new(0.25, 0.25)), 0.0);
+            }
+            other => panic!("{other:?}"),
+        }
+        assert!(matches!(scene.shapes[1].alpha, Some(Alpha::Constant(a)) if a == 0.25));
+        assert!(scene.shapes[2].alpha.is_none());
+    };
+    let scene = Scene::load(&main).unwrap();
+    check(&scene);
+    assert!(scene.inputs.iter().any(|p| p.ends_with("mask.pgm")));
+    let out = dir.path().join("written.toml");
+    raylink::scene::convert::write_toml(&scene, &out).unwrap();
+    check(&Scene::load(&out).unwrap());
+}

@@ -12,14 +12,15 @@
 //! failed conversion never leaves a half-written scene behind.
 
 use super::toml::schema::{
-    CacheDesc, CameraDesc, CheckerDesc, ConductorDesc, ConductorIndex, DiffuseDesc,
+    AlphaDesc, CacheDesc, CameraDesc, CheckerDesc, ConductorDesc, ConductorIndex, DiffuseDesc,
     DirectionMixDesc, EnvironmentDesc, FileDesc, FilterDesc, ImageDesc, LightDesc, LightKind,
     MaterialDesc, MixDesc, NetworkDesc, OneOrMany, Ordered, RenderDesc, RoughnessDesc, ScaleDesc,
     ShapeDesc, ShapeKind, Splat3, TextureMixDesc, TextureTable, TransformOp, UvCheckerDesc,
     WhittedDesc, WorldDesc, V3,
 };
 use super::{
-    Camera, Geometry, Light, Material, NormalDetail, Projection, RenderSettings, Scene, Texture,
+    Alpha, Camera, Geometry, Light, Material, NormalDetail, Projection, RenderSettings, Scene,
+    Texture,
 };
 use crate::image::filter::Filter;
 use crate::settings::{AntiAliasing, NetworkBuilder, NetworkOrder};
@@ -148,6 +149,13 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::Result<()> {
             }
         };
         desc.material = Some(keys[shape.material].clone());
+        desc.alpha = shape.alpha.as_ref().map(|a| match a {
+            Alpha::Constant(a) => AlphaDesc::Constant(*a as f64),
+            Alpha::Image(image) => match diffuse(&Texture::Image(image.clone()), refs) {
+                DiffuseDesc::Texture(t) => AlphaDesc::Texture(t),
+                DiffuseDesc::Colour(_) => unreachable!("an image gives a texture table"),
+            },
+        });
         file.shapes.push(spanned(desc));
     }
     let body = toml::to_string(&file).map_err(|e| {

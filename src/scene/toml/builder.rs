@@ -112,7 +112,12 @@ impl<'a> Builder<'a> {
                 control.cancel.check("reading the scene")?;
             }
             let site = self.site(format!("shapes[{i}]"), desc.span());
-            let new = self.shape(&site, desc.into_inner())?;
+            let mut desc = desc.into_inner();
+            let alpha = self.alpha(&site, desc.alpha.take())?;
+            let mut new = self.shape(&site, desc)?;
+            if alpha.is_some() {
+                new.iter_mut().for_each(|s| s.alpha = alpha.clone());
+            }
             if let Some(control) = ctx.control {
                 cost = new
                     .iter()

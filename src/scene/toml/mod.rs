@@ -17,6 +17,7 @@ mod builder;
 mod checks;
 mod diagnostics;
 pub(crate) mod schema;
+mod schema_alpha;
 mod schema_metal;
 mod schema_texture;
 

@@ -3,6 +3,7 @@
 //! toml's line and column) and `raylink convert` serialises them, so the two share one
 //! description of the format. Values are checked later, by the builder.
 
+pub(crate) use super::schema_alpha::AlphaDesc;
 pub(crate) use super::schema_metal::{ConductorDesc, ConductorIndex, RoughnessDesc};
 pub(crate) use super::schema_texture::{
     CheckerDesc, DiffuseDesc, DirectionMixDesc, ImageDesc, ScaleDesc, TextureMixDesc, TextureTable,
@@ -287,6 +288,9 @@ pub(crate) struct ShapeDesc {
     pub(crate) uvs: Option<Vec<V2>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) file: Option<String>,
+    /// Where the surface is present (see `schema_alpha.rs`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) alpha: Option<AlphaDesc>,
 }
 
 impl ShapeDesc {
@@ -304,6 +308,7 @@ impl ShapeDesc {
             normals: None,
             uvs: None,
             file: None,
+            alpha: None,
         }
     }
 

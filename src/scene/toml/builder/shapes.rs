@@ -4,12 +4,41 @@ use super::super::checks::{
     check_area, direction, finite3, geometry_is_finite, planar_convex, positive, Xform,
 };
 use super::super::diagnostics::Site;
-use super::super::schema::{Idx3, ShapeDesc, ShapeKind, V2, V3};
+use super::super::schema::{AlphaDesc, DiffuseDesc, Idx3, ShapeDesc, ShapeKind, V2, V3};
 use super::Builder;
 use crate::math::Vec3;
-use crate::scene::{obj, Geometry, QuadMesh, Shape, TriangleMesh};
+use crate::scene::{obj, Alpha, Geometry, QuadMesh, Shape, Texture, TriangleMesh};
 
 impl Builder<'_> {
+    /// A shape's `alpha`: None when absent or 1 (opaque).
+    pub(super) fn alpha(
+        &self,
+        site: &Site,
+        desc: Option<AlphaDesc>,
+    ) -> crate::Result<Option<Alpha>> {
+        let ctx = self.ctx;
+        match desc {
+            None => Ok(None),
+            Some(AlphaDesc::Constant(a)) if (0.0..=1.0).contains(&a) => {
+                Ok((a < 1.0).then_some(Alpha::Constant(a as f32)))
+            }
+            Some(AlphaDesc::Constant(a)) => {
+                Err(ctx.fail(site, "alpha", format!("must be in [0, 1], got {a}")))
+            }
+            Some(AlphaDesc::Texture(t)) if t.image.is_some() => {
+                match self.texture(site, "alpha", DiffuseDesc::Texture(t))? {
+                    Texture::Image(image) => Ok(Some(Alpha::Image(image))),
+                    _ => Err(ctx.fail(site, "alpha", "takes one image table")),
+                }
+            }
+            Some(AlphaDesc::Texture(_)) => Err(ctx.fail(
+                site,
+                "alpha",
+                "takes a number in [0, 1] or { image = { file = \"..\" } }",
+            )),
+        }
+    }
+
     pub(super) fn shape(&mut self, site: &Site, mut desc: ShapeDesc) -> crate::Result<Vec<Shape>> {
         let ctx = self.ctx;
         let kind = desc.kind;
