@@ -406,3 +406,25 @@ fn toml_alpha_reads_and_survives_conversion() {
     raylink::scene::convert::write_toml(&scene, &out).unwrap();
     check(&Scene::load(&out).unwrap());
 }
+
+/// An animation's accel moved to the next frame keeps (or drops) the cut-outs of that frame.
+#[test]
+fn dynamic_accels_follow_alpha_between_frames() {
+    let rays = upward_rays(2000);
+    let control = Control::default();
+    let blocked = |a: &dyn Accel| rays.iter().filter(|r| a.occluded(r)).count();
+    for backend in Backend::ALL {
+        let half = layers(0.0, 0.5);
+        let mut accel = raylink::accel::build_dynamic(&half, backend, &control).unwrap();
+        let first = blocked(accel.as_ref());
+        accel.update(&half).unwrap();
+        assert_eq!(blocked(accel.as_ref()), first, "{backend}");
+        let mut opaque = half.clone();
+        opaque.shapes[1].alpha = None;
+        accel.update(&opaque).unwrap();
+        assert_eq!(blocked(accel.as_ref()), rays.len(), "{backend}");
+        accel.update(&half).unwrap();
+        assert_eq!(blocked(accel.as_ref()), first, "{backend}");
+        assert!(first < rays.len() * 3 / 4, "{backend}: {first}");
+    }
+}
