@@ -400,6 +400,8 @@ impl BvhAccel {
         }
     }
 
+    /// `kept_hit` for a hit at `t` on a shape with a cut-out (kept out of line: opaque
+    /// scenes never come here).
     #[inline(never)]
     #[allow(clippy::too_many_arguments)]
     fn cutout_hit(
