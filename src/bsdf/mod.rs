@@ -17,6 +17,9 @@
 //!   them summed), seen alike from both sides, and the lobes are smooth whatever `roughness`;
 //! - `conductor` (η, k): ks is weighted by the complex Fresnel reflectance of the metal per
 //!   channel (pbrt-v4's `ConductorBxDF`), smooth or GGX, isotropic or anisotropic;
+//! - `coating`: a dielectric coat over the diffuse kd or the conductor, light bouncing
+//!   between the two included ([`layered`], pbrt-v4's `LayeredBxDF`), in place of the lobes
+//!   above for evaluation and sampling; f and the density are estimates;
 //! - `brdf`: a tabulated reflectance ([`TabulatedBrdf`]) in place of all the lobes above,
 //!   importance-sampled from the table mixed with the cosine.
 //!
@@ -26,6 +29,8 @@
 //! |wo·ns||wi·ng| / (|wo·ng||wi·ns|) keeps the adjoint BSDF consistent.
 
 mod dielectric;
+mod layer;
+mod layered;
 mod microfacet;
 mod tabulated;
 
@@ -35,6 +40,7 @@ pub use tabulated::synthetic_merl;
 pub use tabulated::TabulatedBrdf;
 
 use dielectric::RoughInterface;
+use layered::Layered;
 
 use crate::math::optics::{
     fresnel_dielectric, fresnel_dielectric_mean, fresnel_thin_dielectric, refract,
@@ -90,6 +96,10 @@ pub struct Bsdf<'a> {
     lambertian: bool,
     /// A tabulated reflectance, the only lobe when present.
     table: Option<&'a TabulatedBrdf>,
+    /// A coat over the diffuse or conductor base: evaluated and sampled in place of the
+    /// lobes, which the approximating techniques (the irradiance cache's diffuse and glossy
+    /// parts) still read.
+    layered: Option<Layered>,
 }
 
 /// The mirror image of a local direction about the normal.
@@ -153,12 +163,13 @@ impl<'a> Bsdf<'a> {
         // whatever the roughness.
         let rough_transmission =
             transmissive && ggx.is_some() && m.conductor.is_none() && m.ior != 1.0;
+        let kd = m.diffuse.eval(sp.p, sp.uv, sp.ng);
         Bsdf {
             t,
             b,
             n,
             ng,
-            kd: m.diffuse.eval(sp.p, sp.uv, sp.ng),
+            kd,
             kdt: m.diffuse_transmission.eval(sp.p, sp.uv, sp.ng),
             ks: m.specular,
             kt: m.transmission,
@@ -170,6 +181,7 @@ impl<'a> Bsdf<'a> {
             thin: m.thin,
             lambertian,
             table: None,
+            layered: m.coating.map(|c| Layered::new(&c, kd, m.conductor, ggx)),
         }
     }
 
@@ -194,6 +206,7 @@ impl<'a> Bsdf<'a> {
             thin: false,
             lambertian: false,
             table: Some(table),
+            layered: None,
         }
     }
 
@@ -207,6 +220,9 @@ impl<'a> Bsdf<'a> {
 
     /// Whether scattering can be anything but a perfect mirror or refraction.
     pub fn has_non_delta(&self) -> bool {
+        if let Some(l) = self.layered {
+            return l.has_non_delta();
+        }
         self.kd.max_element() > 0.0 || self.kdt.max_element() > 0.0 || self.has_glossy()
     }
 
@@ -326,6 +342,12 @@ impl<'a> Bsdf<'a> {
     /// f(wo, wi)·|cos θi| for the non-delta lobes (with the adjoint correction in importance
     /// transport). Both directions point away from the surface.
     pub fn eval(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Rgb {
+        if let Some(l) = self.layered {
+            let Some((lo, li)) = self.connectable(wo, wi) else {
+                return Rgb::ZERO;
+            };
+            return l.f(lo, li, mode) * li.z.abs() * self.adjoint(wo, wi, lo, li, mode);
+        }
         match self.eval_lobes(wo, wi, mode) {
             Some((diffuse, glossy, cos, adjoint)) => (diffuse + glossy) * cos * adjoint,
             None => Rgb::ZERO,
@@ -430,6 +452,10 @@ impl<'a> Bsdf<'a> {
             // Sampled given wo whatever the transport: one density serves both.
             return table.pdf(lo, li);
         }
+        if let Some(l) = self.layered {
+            // The walk's directions do not depend on the transport.
+            return l.pdf(lo, li, Transport::Radiance);
+        }
         if self.lambertian {
             return cosine_hemisphere_pdf(li.z.abs());
         }
@@ -486,7 +512,7 @@ impl<'a> Bsdf<'a> {
     /// stratified `n`×`n` set of samples, the same at every call.
     pub fn albedo_by_side(&self, wo: Vec3, n: u32, mode: Transport) -> (Rgb, Rgb) {
         let lo = self.local(wo);
-        if !self.has_non_delta() {
+        if !self.has_non_delta() && self.layered.is_none() {
             let lobes = self.lobes(lo);
             if lobes.transmit <= 0.0 {
                 return (lobes.mirror, Rgb::ZERO);
@@ -525,11 +551,42 @@ impl<'a> Bsdf<'a> {
         (same / count as f32, other / count as f32)
     }
 
+    /// A direction from the coat's random walk: its weight, and for MIS the estimated
+    /// density of the direction (the walk's own density, for a delta path).
+    fn sample_layered(
+        &self,
+        l: &Layered,
+        wo: Vec3,
+        lo: Vec3,
+        u_lobe: f32,
+        u: Vec2,
+        mode: Transport,
+    ) -> Option<BsdfSample> {
+        let s = l.sample(lo, u_lobe, u, mode)?;
+        let wi = self.world(s.wi);
+        if wi.dot(self.ng) * wo.dot(self.ng) <= 0.0 {
+            return None;
+        }
+        let pdf = if s.specular { s.pdf } else { self.pdf(wo, wi) };
+        if pdf <= 0.0 {
+            return None;
+        }
+        Some(BsdfSample {
+            wi,
+            weight: s.weight * self.adjoint(wo, wi, lo, s.wi, mode),
+            pdf,
+            delta: s.specular,
+        })
+    }
+
     /// Samples a direction `wi` from `wo`; `u_lobe` picks the lobe and `u` the direction.
     pub fn sample(&self, wo: Vec3, u_lobe: f32, u: Vec2, mode: Transport) -> Option<BsdfSample> {
         let lo_raw = self.local(wo);
         if lo_raw.z == 0.0 {
             return None;
+        }
+        if let Some(l) = self.layered {
+            return self.sample_layered(&l, wo, lo_raw, u_lobe, u, mode);
         }
         if self.lambertian {
             let li = cosine_hemisphere(u) * lo_raw.z.signum();

@@ -63,6 +63,10 @@ pub struct Material {
     pub roughness_map: Option<Arc<RoughnessMap>>,
     /// A normal map or bump map turning the shading normal.
     pub normal_detail: Option<NormalDetail>,
+    /// A dielectric coat over the material's base: its diffuse kd, or its conductor (with
+    /// `roughness`) when it has one. The Monte Carlo integrators then use the layered BSDF
+    /// ([`Coating`]); the other fields stay what the approximating techniques read.
+    pub coating: Option<Coating>,
 }
 
 /// A roughness given by textures (pbrt's textured `roughness`, `uroughness`, `vroughness`).
@@ -127,6 +131,7 @@ impl Default for Material {
             brdf: None,
             roughness_map: None,
             normal_detail: None,
+            coating: None,
         }
     }
 }
@@ -178,6 +183,54 @@ impl Material {
     /// The thin sheet's reflectance R at incidence cosine `cos` (either side).
     pub fn thin_reflectance(&self, cos: f32) -> f32 {
         crate::math::optics::fresnel_thin_dielectric(cos, self.ior)
+    }
+}
+
+/// A dielectric coat over a base (pbrt-v4's `coateddiffuse` and `coatedconductor`): light
+/// refracts into a slab of index `ior` and `thickness`, bounces between the base and the coat
+/// (absorbed along the way, optionally scattered by a medium), and leaves through the coat.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Coating {
+    /// Index of refraction of the coat (outside is vacuum).
+    pub ior: f32,
+    /// GGX α of the coat's interface; 0 is smooth.
+    pub roughness: f32,
+    /// GGX α along the bitangent when it differs from `roughness`.
+    pub roughness_v: Option<f32>,
+    /// Thickness in units of the medium's mean free path: light crossing it at angle θ keeps
+    /// exp(−thickness/|cos θ|).
+    pub thickness: f32,
+    /// Single-scattering albedo of the medium in the coat; 0 is an absorbing, non-scattering
+    /// coat.
+    pub albedo: Rgb,
+    /// Henyey–Greenstein asymmetry of the medium's scattering.
+    pub g: f32,
+    /// Longest random walk through the layers.
+    pub max_depth: u32,
+    /// Random walks per evaluation.
+    pub samples: u32,
+}
+
+impl Default for Coating {
+    /// pbrt-v4's defaults: a smooth coat of index 1.5 and thickness 0.01.
+    fn default() -> Self {
+        Coating {
+            ior: 1.5,
+            roughness: 0.0,
+            roughness_v: None,
+            thickness: 0.01,
+            albedo: Rgb::ZERO,
+            g: 0.0,
+            max_depth: 10,
+            samples: 1,
+        }
+    }
+}
+
+impl Coating {
+    /// GGX (α_x, α_y) of the coat.
+    pub fn alphas(&self) -> (f32, f32) {
+        (self.roughness, self.roughness_v.unwrap_or(self.roughness))
     }
 }
 

@@ -25,7 +25,7 @@ pub use camera::{Camera, Projection, MAX_RESOLUTION};
 pub use environment::Environment;
 pub use geometry::{Geometry, QuadMesh, Shape, SurfacePoint, TriangleMesh};
 pub use light::Light;
-pub use material::{Conductor, Material, RoughnessMap};
+pub use material::{Coating, Conductor, Material, RoughnessMap};
 pub use mix::Mix;
 pub use normal_detail::NormalDetail;
 pub use settings::{SettingSource, Settings as RenderSettings};

@@ -399,6 +399,7 @@ fn convert(m: &tobj::Material, mtl: &Path) -> crate::Result<Material> {
         fresnel: false,
         thin: false,
         brdf: None,
+        coating: None,
         mix: None,
         emission,
         roughness_map: None,

@@ -7,6 +7,7 @@ mod coherence;
 mod coherence_random;
 pub(crate) mod coherence_scenes;
 mod irradiance_cache;
+mod layered;
 mod network_build;
 pub(crate) mod network_common;
 mod network_directional;

@@ -412,6 +412,7 @@ impl<'a> Builder<'a> {
             brdf: None,
             roughness_map,
             normal_detail,
+            coating: None,
         })
     }
 
