@@ -12,15 +12,15 @@
 //! failed conversion never leaves a half-written scene behind.
 
 use super::toml::schema::{
-    AlphaDesc, CacheDesc, CameraDesc, CheckerDesc, ConductorDesc, ConductorIndex, DiffuseDesc,
-    DirectionMixDesc, EnvironmentDesc, FileDesc, FilterDesc, ImageDesc, LightDesc, LightKind,
-    MaterialDesc, MixDesc, NetworkDesc, OneOrMany, Ordered, RenderDesc, RoughnessDesc, ScaleDesc,
-    ShapeDesc, ShapeKind, Splat3, TextureMixDesc, TextureTable, TransformOp, UvCheckerDesc,
-    WhittedDesc, WorldDesc, V3,
+    AlphaDesc, CacheDesc, CameraDesc, CheckerDesc, CoatingDesc, ConductorDesc, ConductorIndex,
+    DiffuseDesc, DirectionMixDesc, EnvironmentDesc, FileDesc, FilterDesc, ImageDesc, LightDesc,
+    LightKind, MaterialDesc, MixDesc, NetworkDesc, OneOrMany, Ordered, RenderDesc, RoughnessDesc,
+    ScaleDesc, ShapeDesc, ShapeKind, Splat3, TextureMixDesc, TextureTable, TransformOp,
+    UvCheckerDesc, WhittedDesc, WorldDesc, V3,
 };
 use super::{
-    Alpha, Camera, Geometry, Light, Material, NormalDetail, Projection, RenderSettings, Scene,
-    Texture,
+    Alpha, Camera, Coating, Geometry, Light, Material, NormalDetail, Projection, RenderSettings,
+    Scene, Texture,
 };
 use crate::image::filter::Filter;
 use crate::settings::{AntiAliasing, NetworkBuilder, NetworkOrder};
@@ -323,6 +323,9 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
             ..MaterialDesc::default()
         };
     }
+    if let Some(c) = &m.coating {
+        return coated(m, c, refs);
+    }
     MaterialDesc {
         diffuse: Some(diffuse(&m.diffuse, refs)),
         ambient: m.ambient.map(Splat3),
@@ -357,14 +360,61 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
         two_sided_emission: m.two_sided_emission.then_some(true),
         mix: None,
         brdf: None,
-        normal_map: match &m.normal_detail {
-            Some(NormalDetail::Map(image)) => Some(refs.to(&image.file)),
-            _ => None,
-        },
-        bump: match &m.normal_detail {
-            Some(NormalDetail::Bump(t)) => Some(diffuse(t, refs)),
-            _ => None,
-        },
+        normal_map: normal_map(m, refs),
+        bump: bump(m, refs),
+        coating: None,
+    }
+}
+
+/// A coated material: the base and the coat; the keys that follow from the coat (ior,
+/// fresnel, a diffuse base's roughness) are left out.
+fn coated(m: &Material, c: &Coating, refs: Refs) -> MaterialDesc {
+    let roughness = |a: f32, v: Option<f32>| match v {
+        Some(v) => RoughnessDesc::Anisotropic(a, v),
+        None => RoughnessDesc::Isotropic(a),
+    };
+    MaterialDesc {
+        diffuse: Some(diffuse(&m.diffuse, refs)),
+        ambient: m.ambient.map(Splat3),
+        specular: Some(Splat3(m.specular)),
+        phong_exponent: Some(m.phong_exponent),
+        roughness: m.conductor.map(|_| roughness(m.roughness, m.roughness_v)),
+        conductor: m.conductor.map(|c| {
+            ConductorDesc::Index(ConductorIndex {
+                eta: Splat3(c.eta),
+                k: Splat3(c.k),
+            })
+        }),
+        emission: Some(Splat3(m.emission)),
+        two_sided_emission: m.two_sided_emission.then_some(true),
+        normal_map: normal_map(m, refs),
+        bump: bump(m, refs),
+        coating: Some(CoatingDesc {
+            ior: Some(c.ior),
+            roughness: Some(roughness(c.roughness, c.roughness_v)),
+            thickness: Some(c.thickness),
+            albedo: Some(Splat3(c.albedo)),
+            g: Some(c.g),
+            max_depth: Some(c.max_depth),
+            samples: Some(c.samples),
+        }),
+        ..MaterialDesc::default()
+    }
+}
+
+/// A material's normal map, as the file it was read from.
+fn normal_map(m: &Material, refs: Refs) -> Option<String> {
+    match &m.normal_detail {
+        Some(NormalDetail::Map(image)) => Some(refs.to(&image.file)),
+        _ => None,
+    }
+}
+
+/// A material's bump map.
+fn bump(m: &Material, refs: Refs) -> Option<DiffuseDesc> {
+    match &m.normal_detail {
+        Some(NormalDetail::Bump(t)) => Some(diffuse(t, refs)),
+        _ => None,
     }
 }
 

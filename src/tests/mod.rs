@@ -8,6 +8,7 @@ mod coherence_random;
 pub(crate) mod coherence_scenes;
 mod irradiance_cache;
 mod layered;
+mod layered_furnace;
 mod network_build;
 pub(crate) mod network_common;
 mod network_directional;

@@ -1,12 +1,13 @@
 //! Materials: pbrt's material types as raylink's diffuse, specular, transmission and
-//! conductor lobes (the closest substitute where raylink has no match).
+//! conductor lobes, and its coated materials as a [`Coating`] over them (the closest
+//! substitute where raylink has no match).
 
 use super::params::Params;
 use super::spectrum::{self, Kind};
 use super::{Loader, Loc};
 use crate::math::Rgb;
 use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
-use crate::scene::{Conductor, Material, NormalDetail, RoughnessMap, Texture};
+use crate::scene::{Coating, Conductor, Material, NormalDetail, RoughnessMap, Texture};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -222,10 +223,19 @@ impl Loader {
                 ..base
             },
             "coateddiffuse" => {
-                for q in ["thickness", "albedo", "g", "maxdepth", "nsamples"] {
-                    p.ignore(q);
+                // The coat's mirror as Fresnel-weighted specular, for the techniques that
+                // approximate the layers.
+                let c = self.coating(p, "", "eta", st, loc)?;
+                Material {
+                    diffuse: self.texture_param(p, "reflectance", Rgb::splat(0.5), st, loc)?,
+                    specular: Rgb::ONE,
+                    fresnel: true,
+                    ior: c.ior,
+                    roughness: c.roughness,
+                    roughness_v: c.roughness_v,
+                    coating: Some(c),
+                    ..base
                 }
-                self.coated_diffuse(base, p, 1.5, st, loc)?
             }
             "conductor" => self.conductor_material(base, p, "", st, loc)?,
             "thindielectric" => Material {
@@ -266,19 +276,34 @@ impl Loader {
                 }
             }
             "coatedconductor" => {
-                substitute(self, "using the conductor without its coating");
-                for q in [
-                    "thickness",
-                    "albedo",
-                    "g",
-                    "maxdepth",
-                    "nsamples",
-                    "interface.eta",
-                ] {
-                    p.ignore(q);
+                let coating = self.coating(p, "interface.", "interface.eta", st, loc)?;
+                // pbrt-v4 names the metal's reflectance without the prefix.
+                let metal = if p
+                    .find("reflectance", &["rgb", "spectrum", "texture"])
+                    .ok()
+                    .flatten()
+                    .is_some()
+                {
+                    let (ax, ay) = self.roughness(p, "conductor.", st, loc)?;
+                    p.ignore("conductor.eta");
+                    p.ignore("conductor.k");
+                    let r = self.texture_param(p, "reflectance", Rgb::ONE, st, loc)?;
+                    Material {
+                        specular: Rgb::ONE,
+                        conductor: Some(Conductor::from_reflectance(
+                            self.texture_to_constant(r, st, loc),
+                        )),
+                        roughness: ax,
+                        roughness_v: (ay != ax).then_some(ay),
+                        ..base
+                    }
+                } else {
+                    self.conductor_material(base, p, "conductor.", st, loc)?
+                };
+                Material {
+                    coating: Some(coating),
+                    ..metal
                 }
-                let _ = self.roughness(p, "interface.", st, loc)?;
-                self.conductor_material(base, p, "conductor.", st, loc)?
             }
             "subsurface" => {
                 substitute(self, "using a coated diffuse surface");
@@ -371,6 +396,72 @@ impl Loader {
             Some(Texture::Constant(_)) | None => None,
             Some(t) => Some(NormalDetail::Bump(t)),
         })
+    }
+
+    /// The coat of pbrt-v4's coated materials: its roughness (`{prefix}roughness`, ..), index
+    /// `eta_name`, `thickness`, the medium's `albedo` and `g`, `maxdepth` and `nsamples`.
+    fn coating(
+        &mut self,
+        p: &Params,
+        prefix: &str,
+        eta_name: &str,
+        st: &str,
+        loc: &Loc,
+    ) -> crate::Result<Coating> {
+        let d = Coating::default();
+        let (ax, ay) = self.roughness(p, prefix, st, loc)?;
+        let thickness = self.float_param(p, "thickness", d.thickness as f64, st, loc)? as f32;
+        let g = self.float_param(p, "g", d.g as f64, st, loc)? as f32;
+        let albedo = self.texture_param(p, "albedo", d.albedo, st, loc)?;
+        let albedo = match albedo {
+            Texture::Constant(c) => c,
+            other => {
+                self.warn(
+                    loc,
+                    format!("{st}: a textured \"albedo\" is replaced by its maximum"),
+                );
+                other.max_value()
+            }
+        };
+        let count = |name: &str, default: u32| -> crate::Result<u32> {
+            match p.int(name).map_err(Self::pe(loc))? {
+                None => Ok(default),
+                Some(n) if (1..=1_000_000).contains(&n) => Ok(n as u32),
+                Some(n) => Err(loc.error(format!(
+                    "{st}: \"{name}\" must be between 1 and 1000000, got {n}"
+                ))),
+            }
+        };
+        let coating = Coating {
+            ior: self.eta(p, eta_name, d.ior, st, loc)?,
+            roughness: ax,
+            roughness_v: (ay != ax).then_some(ay),
+            thickness,
+            albedo,
+            g,
+            max_depth: count("maxdepth", d.max_depth)?,
+            samples: count("nsamples", d.samples)?,
+        };
+        if !(thickness >= 0.0 && thickness.is_finite()) {
+            return Err(loc.error(format!(
+                "{st}: \"thickness\" must be a finite number >= 0, got {thickness}"
+            )));
+        }
+        if !(g > -1.0 && g < 1.0) {
+            return Err(loc.error(format!("{st}: \"g\" must be within (-1, 1), got {g}")));
+        }
+        if !(albedo.min_element() >= 0.0 && albedo.max_element() <= 1.0) {
+            return Err(loc.error(format!(
+                "{st}: \"albedo\" must be within [0, 1], got {albedo}"
+            )));
+        }
+        if !(coating.ior > 0.0 && coating.ior.is_finite()) {
+            return Err(loc.error(format!(
+                "{st}: \"{eta_name}\" must be positive, got {}",
+                coating.ior
+            )));
+        }
+        Ok(coating)
     }
 
     /// A diffuse base under a dielectric coat: Fresnel-weighted specular over diffuse.

@@ -2,6 +2,7 @@
 //! [`schema`](super::schema)), bakes transforms into world-space geometry, and resolves
 //! material names, meshes, textures and environment maps relative to the file.
 
+mod coating;
 mod render;
 mod shapes;
 mod textures;
@@ -284,6 +285,7 @@ impl<'a> Builder<'a> {
                 desc.normal_map.is_some(),
                 desc.bump.is_some(),
                 desc.remap_roughness.is_some(),
+                desc.coating.is_some(),
             ];
             return self.mix(site, name, mix, others.contains(&true));
         }
@@ -300,6 +302,7 @@ impl<'a> Builder<'a> {
                 ("fresnel", desc.fresnel.is_some()),
                 ("thin", desc.thin.is_some()),
                 ("conductor", desc.conductor.is_some()),
+                ("coating", desc.coating.is_some()),
             ];
             if let Some((key, _)) = lobes.iter().find(|k| k.1) {
                 return Err(fail(key)(
@@ -321,6 +324,9 @@ impl<'a> Builder<'a> {
                 brdf: Some(std::sync::Arc::new(table)),
                 ..d
             });
+        }
+        if desc.coating.is_some() {
+            self.check_coated_keys(site, &desc)?;
         }
         let d = Material::default();
         let col = |v: Option<Splat3>, key: &'static str, default: Rgb| -> crate::Result<Rgb> {
@@ -391,7 +397,13 @@ impl<'a> Builder<'a> {
                 "a thin sheet (`thin = true`) is smooth: roughness must be 0".into(),
             ));
         }
-        Ok(Material {
+        // A coat's mirror reflects everything its Fresnel lets it unless a tint is given.
+        let specular_default = if desc.coating.is_some() {
+            Rgb::ONE
+        } else {
+            specular_default
+        };
+        let m = Material {
             name,
             diffuse,
             ambient,
@@ -413,7 +425,11 @@ impl<'a> Builder<'a> {
             roughness_map,
             normal_detail,
             coating: None,
-        })
+        };
+        match desc.coating {
+            Some(c) => self.coated(site, c, m),
+            None => Ok(m),
+        }
     }
 
     /// A mix of two materials defined before it (by name): the second chosen with

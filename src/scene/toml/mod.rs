@@ -18,6 +18,7 @@ mod checks;
 mod diagnostics;
 pub(crate) mod schema;
 mod schema_alpha;
+mod schema_coating;
 mod schema_metal;
 mod schema_texture;
 

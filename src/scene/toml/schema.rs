@@ -4,6 +4,7 @@
 //! description of the format. Values are checked later, by the builder.
 
 pub(crate) use super::schema_alpha::AlphaDesc;
+pub(crate) use super::schema_coating::CoatingDesc;
 pub(crate) use super::schema_metal::{ConductorDesc, ConductorIndex, RoughnessDesc};
 pub(crate) use super::schema_texture::{
     CheckerDesc, DiffuseDesc, DirectionMixDesc, ImageDesc, ScaleDesc, TextureMixDesc, TextureTable,
@@ -218,6 +219,9 @@ pub(crate) struct MaterialDesc {
     /// A tabulated BRDF file, in place of the lobes.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) brdf: Option<String>,
+    /// A dielectric coat over the diffuse or conductor base.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) coating: Option<CoatingDesc>,
 }
 
 /// `mix = { materials = ["a", "b"], amount = 0.3 }`.
