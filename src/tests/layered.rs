@@ -236,12 +236,16 @@ fn layered_brdf_is_reciprocal() {
 /// Sampling agrees with evaluation: E[weight·g(wi)] over the walk's samples equals ∫ f |cos|
 /// g dωi by quadrature of `eval` (plus the coat's mirror F(θo)·g(mirror) when it is smooth),
 /// within 4 standard errors and 1% for the quadrature's own noise, for three test functions,
-/// in both transport modes.
+/// in both transport modes, with and without a scattering medium in the coat.
 #[test]
 fn sampling_agrees_with_evaluation() {
     let mut metal = coated_diffuse(0.0, 0.25, 0.01);
     metal.conductor = Conductor::named("Cu");
     metal.roughness = 0.2;
+    // A scattering medium in a thick rough coat.
+    let mut milky = coated_diffuse(0.5, 0.2, 0.5);
+    let c = milky.coating.as_mut().unwrap();
+    (c.albedo, c.g) = (Rgb::new(0.9, 0.6, 0.3), 0.4);
     let tests: [(&str, &dyn Fn(Vec3) -> f32); 3] = [
         ("1", &|_| 1.0),
         ("z²", &|w: Vec3| w.z * w.z),
@@ -251,6 +255,7 @@ fn sampling_agrees_with_evaluation() {
         ("smooth", coated_diffuse(0.7, 0.0, 0.01)),
         ("rough", coated_diffuse(0.7, 0.3, 0.01)),
         ("metal", metal),
+        ("milky", milky),
     ] {
         let smooth = m.coating.unwrap().roughness == 0.0;
         for mode in [Transport::Radiance, Transport::Importance] {
