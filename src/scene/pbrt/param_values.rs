@@ -94,36 +94,28 @@ impl Loader {
         Ok(Texture::Constant(c.unwrap_or(default)))
     }
 
-    /// A float parameter that may also name a (constant) float texture.
-    pub(super) fn float_param(
+    /// A float parameter's value: a number (given, a constant texture's, or `default` when
+    /// absent or when it names a texture of a class raylink cannot evaluate, with a
+    /// warning), or a texture that varies.
+    fn float_value(
         &mut self,
         p: &Params,
         name: &str,
         default: f64,
         statement: &str,
         loc: &Loc,
-    ) -> crate::Result<f64> {
+    ) -> crate::Result<Result<f64, Texture>> {
         let Some(q) = p.find(name, &["float", "texture"]).map_err(Self::pe(loc))? else {
-            return Ok(default);
+            return Ok(Ok(default));
         };
         if q.ty == "float" {
-            return Ok(q.nums()[0]);
+            return Ok(Ok(q.nums()[0]));
         }
         let tex = q.strs()[0].clone();
         let qloc = loc.at(q.line, q.col);
         match self.float_textures.get(&tex) {
-            Some(FloatTexture::Constant(v)) => Ok(*v),
-            Some(FloatTexture::Varying(t)) => {
-                let top = f64::from(t.max_value().x);
-                self.warn(
-                    &qloc,
-                    format!(
-                        "{statement}: \"{name}\" cannot vary here; using the largest value of \
-                         texture \"{tex}\", {top}"
-                    ),
-                );
-                Ok(top)
-            }
+            Some(FloatTexture::Constant(v)) => Ok(Ok(*v)),
+            Some(FloatTexture::Varying(t)) => Ok(Err(t.clone())),
             Some(FloatTexture::Unsupported) => {
                 self.warn(
                     &qloc,
@@ -132,9 +124,35 @@ impl Loader {
                          cannot evaluate; using {default}"
                     ),
                 );
-                Ok(default)
+                Ok(Ok(default))
             }
             None => Err(qloc.error(format!("{statement}: no float texture named \"{tex}\""))),
+        }
+    }
+
+    /// A float parameter that may also name a float texture: a varying one gives its
+    /// largest value, with a warning.
+    pub(super) fn float_param(
+        &mut self,
+        p: &Params,
+        name: &str,
+        default: f64,
+        statement: &str,
+        loc: &Loc,
+    ) -> crate::Result<f64> {
+        match self.float_value(p, name, default, statement, loc)? {
+            Ok(v) => Ok(v),
+            Err(t) => {
+                let top = f64::from(t.max_value().x);
+                self.warn(
+                    loc,
+                    format!(
+                        "{statement}: \"{name}\" cannot vary here; using its texture's \
+                         largest value, {top}"
+                    ),
+                );
+                Ok(top)
+            }
         }
     }
 
@@ -159,30 +177,10 @@ impl Loader {
         statement: &str,
         loc: &Loc,
     ) -> crate::Result<Texture> {
-        let constant = |v: f64| Texture::Constant(Rgb::splat(v as f32));
-        let Some(q) = p.find(name, &["float", "texture"]).map_err(Self::pe(loc))? else {
-            return Ok(constant(default));
-        };
-        if q.ty == "float" {
-            return Ok(constant(q.nums()[0]));
-        }
-        let tex = q.strs()[0].clone();
-        let qloc = loc.at(q.line, q.col);
-        match self.float_textures.get(&tex) {
-            Some(FloatTexture::Constant(v)) => Ok(constant(*v)),
-            Some(FloatTexture::Varying(t)) => Ok(t.clone()),
-            Some(FloatTexture::Unsupported) => {
-                self.warn(
-                    &qloc,
-                    format!(
-                        "{statement}: \"{name}\" varies by texture \"{tex}\", which raylink \
-                         cannot evaluate; using {default}"
-                    ),
-                );
-                Ok(constant(default))
-            }
-            None => Err(qloc.error(format!("{statement}: no float texture named \"{tex}\""))),
-        }
+        Ok(match self.float_value(p, name, default, statement, loc)? {
+            Ok(v) => Texture::Constant(Rgb::splat(v as f32)),
+            Err(t) => t,
+        })
     }
 
     /// raylink's specular coefficient is a colour, not a texture: a textured one uses its
