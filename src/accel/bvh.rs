@@ -10,7 +10,7 @@
 //! - spheres: Embree's point-sphere test: the nearer root in `[tmin, tmax]`, else the farther
 //!   one; Ng points outwards; u = v = 0; prim_id 0.
 //!
-//! A shape with an alpha has a [`Cutout`] that every candidate hit on it passes before it
+//! A shape with an alpha has a `Cutout` that every candidate hit on it passes before it
 //! counts (a sphere's exit point is tried when its entry point is cut out, as Embree does).
 //!
 //! Primitives are stored in BVH leaf order, so a leaf indexes them directly, as three indices

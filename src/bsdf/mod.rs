@@ -47,7 +47,7 @@ use crate::math::optics::{
 };
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::math::{frame, luminance, Rgb, Rng, Vec2, Vec3};
-use crate::scene::Conductor;
+use crate::scene::{Coating, Conductor};
 use crate::scene::{Material, SurfacePoint};
 use std::f32::consts::FRAC_1_PI;
 
@@ -99,7 +99,9 @@ pub struct Bsdf<'a> {
     /// A coat over the diffuse or conductor base: evaluated and sampled in place of the
     /// lobes, which the approximating techniques (the irradiance cache's diffuse and glossy
     /// parts) still read.
-    layered: Option<Layered>,
+    /// A coat over the diffuse or conductor base (borrowed: the walk's state is built when
+    /// it is needed, so that uncoated BSDFs stay small).
+    coating: Option<&'a Coating>,
 }
 
 /// The mirror image of a local direction about the normal.
@@ -136,11 +138,14 @@ impl<'a> Bsdf<'a> {
         }
         match &m.brdf {
             Some(table) => Bsdf::tabulated(table, n, ng),
-            None => Bsdf::of_lobes(m, sp, n, ng),
+            None => Bsdf {
+                coating: m.coating.as_ref(),
+                ..Bsdf::of_lobes(m, sp, n, ng)
+            },
         }
     }
 
-    /// The BSDF of `m`'s lobes (its table, if any, aside) at `sp`, with shading normal `n`
+    /// The BSDF of `m`'s lobes (its table and coat, if any, aside) at `sp`, with shading normal `n`
     /// and geometric normal `ng` as [`Bsdf::new`] orients them.
     pub(crate) fn of_lobes(m: &Material, sp: &SurfacePoint, n: Vec3, ng: Vec3) -> Bsdf<'a> {
         let transmissive = m.transmission.max_element() > 0.0;
@@ -181,7 +186,7 @@ impl<'a> Bsdf<'a> {
             thin: m.thin,
             lambertian,
             table: None,
-            layered: m.coating.map(|c| Layered::new(&c, kd, m.conductor, ggx)),
+            coating: None,
         }
     }
 
@@ -206,8 +211,14 @@ impl<'a> Bsdf<'a> {
             thin: false,
             lambertian: false,
             table: Some(table),
-            layered: None,
+            coating: None,
         }
+    }
+
+    /// The coat's layered BSDF, if the surface has a coat.
+    fn layered(&self) -> Option<Layered> {
+        self.coating
+            .map(|c| Layered::new(c, self.kd, self.conductor, self.ggx))
     }
 
     fn local(&self, v: Vec3) -> Vec3 {
@@ -220,7 +231,7 @@ impl<'a> Bsdf<'a> {
 
     /// Whether scattering can be anything but a perfect mirror or refraction.
     pub fn has_non_delta(&self) -> bool {
-        if let Some(l) = self.layered {
+        if let Some(l) = self.layered() {
             return l.has_non_delta();
         }
         self.kd.max_element() > 0.0 || self.kdt.max_element() > 0.0 || self.has_glossy()
@@ -342,7 +353,7 @@ impl<'a> Bsdf<'a> {
     /// f(wo, wi)·|cos θi| for the non-delta lobes (with the adjoint correction in importance
     /// transport). Both directions point away from the surface.
     pub fn eval(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Rgb {
-        if let Some(l) = self.layered {
+        if let Some(l) = self.layered() {
             let Some((lo, li)) = self.connectable(wo, wi) else {
                 return Rgb::ZERO;
             };
@@ -452,7 +463,7 @@ impl<'a> Bsdf<'a> {
             // Sampled given wo whatever the transport: one density serves both.
             return table.pdf(lo, li);
         }
-        if let Some(l) = self.layered {
+        if let Some(l) = self.layered() {
             // The walk's directions do not depend on the transport.
             return l.pdf(lo, li, Transport::Radiance);
         }
@@ -512,7 +523,7 @@ impl<'a> Bsdf<'a> {
     /// stratified `n`×`n` set of samples, the same at every call.
     pub fn albedo_by_side(&self, wo: Vec3, n: u32, mode: Transport) -> (Rgb, Rgb) {
         let lo = self.local(wo);
-        if !self.has_non_delta() && self.layered.is_none() {
+        if !self.has_non_delta() && self.coating.is_none() {
             let lobes = self.lobes(lo);
             if lobes.transmit <= 0.0 {
                 return (lobes.mirror, Rgb::ZERO);
@@ -585,7 +596,7 @@ impl<'a> Bsdf<'a> {
         if lo_raw.z == 0.0 {
             return None;
         }
-        if let Some(l) = self.layered {
+        if let Some(l) = self.layered() {
             return self.sample_layered(&l, wo, lo_raw, u_lobe, u, mode);
         }
         if self.lambertian {
