@@ -84,6 +84,8 @@ fn mixed_scene() -> Scene {
         },
         materials: vec![Material::default()],
         shapes,
+        prototypes: Vec::new(),
+        instances: Vec::new(),
         lights: Vec::new(),
         ambient: Rgb::splat(0.1),
         background: Rgb::ZERO,

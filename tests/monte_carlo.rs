@@ -370,6 +370,8 @@ fn environment_map_lighting_matches_quadrature() {
             material: 0,
             alpha: None,
         }],
+        prototypes: Vec::new(),
+        instances: Vec::new(),
         lights: vec![],
         ambient: Rgb::ZERO,
         background: Rgb::ZERO,

@@ -93,8 +93,9 @@ fn include_fan_out_is_refused_quickly() {
     }
 }
 
-/// One object of `triangles` triangles (a grid) and `instances` instances of it.
-fn write_instances(path: &Path, cells: usize, instances: usize) {
+/// One object of `triangles` triangles (a grid) and `instances` instances of it; a
+/// `cut_out` object has an alpha, so each instance copies its shapes.
+fn write_instances(path: &Path, cells: usize, instances: usize, cut_out: bool) {
     let mut s = String::from(HEADER);
     s.push_str("ObjectBegin \"grid\"\nShape \"trianglemesh\" \"point3 P\" [");
     for j in 0..=cells {
@@ -116,7 +117,12 @@ fn write_instances(path: &Path, cells: usize, instances: usize) {
             write!(s, " {a} {b} {c} {a} {c} {d}").unwrap();
         }
     }
-    s.push_str(" ]\nObjectEnd\nScale 0.5 0.5 0.5\n");
+    s.push_str(if cut_out {
+        " ] \"float alpha\" 0.5\n"
+    } else {
+        " ]\n"
+    });
+    s.push_str("ObjectEnd\nScale 0.5 0.5 0.5\n");
     for k in 0..instances {
         writeln!(
             s,
@@ -129,14 +135,16 @@ fn write_instances(path: &Path, cells: usize, instances: usize) {
     std::fs::write(path, s).unwrap();
 }
 
-/// An object of 20,000 triangles instanced 20,000 times (400 million triangles) under
-/// `--max-memory 1G`: refused before the copies pass the limit, saying what it would need,
-/// with the process's peak memory well under the limit.
+/// A cut-out object of 20,000 triangles instanced 20,000 times (400 million triangles, each
+/// placement a copy: the alpha test works on world-space shapes) under `--max-memory 1G`:
+/// refused before the copies pass the limit, saying what it would need, with the process's
+/// peak memory well under the limit. (Instances of an opaque object share one copy:
+/// tests/instancing.rs renders such a scene.)
 #[test]
 fn an_instance_bomb_is_refused_within_the_memory_limit() {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("bomb.pbrt");
-    write_instances(&scene, 100, 20_000);
+    write_instances(&scene, 100, 20_000, true);
     let size = std::fs::metadata(&scene).unwrap().len();
     let before = files_in(dir.path());
     let (out, time) = render(&scene, &dir.path().join("out.exr"), &["--max-memory", "1G"]);
@@ -170,8 +178,8 @@ fn an_instance_bomb_is_refused_within_the_memory_limit() {
 fn a_small_instanced_scene_renders() {
     let dir = tempfile::tempdir().unwrap();
     let (one, eight) = (dir.path().join("one.pbrt"), dir.path().join("eight.pbrt"));
-    write_instances(&one, 4, 1);
-    write_instances(&eight, 4, 8);
+    write_instances(&one, 4, 1, false);
+    write_instances(&eight, 4, 8, false);
     for (scene, name) in [(&one, "one.exr"), (&eight, "eight.exr")] {
         let (out, _) = render(scene, &dir.path().join(name), &["--max-memory", "256M"]);
         assert!(out.status.success(), "{}", stderr(&out));

@@ -304,12 +304,16 @@ fn shapes_spheres_disks_bilinear_patches_and_instances() {
     };
     assert_eq!(q.indices, vec![[0, 1, 3, 2]]);
     assert!((s.shapes[0].geometry.area() - 1.0).abs() < 1e-6);
-    // Instances are world-space copies under each instance's transform.
-    let s = world(&format!(
+    // Instances place one stored object under each instance's transform; as copies, they
+    // are where the transforms put them.
+    let placed = world(&format!(
         "ObjectBegin \"tri\" Translate 0 0 1 {TRI} ObjectEnd\n\
          AttributeBegin Translate 10 0 0 ObjectInstance \"tri\" AttributeEnd\n\
          ObjectInstance \"tri\"\n"
     ));
+    assert_eq!(placed.shapes.len(), 0);
+    assert_eq!((placed.prototypes.len(), placed.instances.len()), (1, 2));
+    let s = placed.flattened();
     assert_eq!(s.shapes.len(), 2);
     assert!(close(first_triangle(&s)[0], Vec3::new(10.0, 0.0, 1.0)));
     assert!(close(

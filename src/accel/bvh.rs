@@ -15,11 +15,15 @@
 //!
 //! Primitives are stored in BVH leaf order, so a leaf indexes them directly, as three indices
 //! into the scene's shared vertices.
+//!
+//! Instances make a second level: each prototype has a BVH of its own, and the scene's BVH
+//! holds one slot per instance, boxed by its placed prototype; a ray reaching the slot is
+//! carried into the prototype's space and traced through its BVH, as Embree does.
 
 use super::cutout::Cutout;
 use super::{Accel, Hit};
 use crate::math::{Ray, Vec3};
-use crate::scene::{Geometry, Scene};
+use crate::scene::{Geometry, Instance, Scene, Shape};
 use crate::Result;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::builder::build_cwbvh;
@@ -52,6 +56,8 @@ enum Kind {
     QuadSecond,
     /// `p[0]` is the centre, `p[1].x` the radius.
     Sphere,
+    /// A placed prototype: the slot's first index is the instance's.
+    Instance,
 }
 
 /// One primitive's geometry, gathered from the shared vertices: three vertices, or a
@@ -91,6 +97,9 @@ pub struct BvhAccel {
     ids: Vec<Ids>,
     /// Each shape's alpha test, by geometry id; empty when no shape has one.
     cutouts: Vec<Option<Cutout>>,
+    /// One BVH per prototype, and the instances placing them (slots of kind `Instance`).
+    prototypes: Vec<BvhAccel>,
+    instances: Vec<Instance>,
 }
 
 fn to_a(p: Vec3) -> Vec3A {
@@ -101,12 +110,20 @@ fn to_vec3(p: Vec3A) -> Vec3 {
     Vec3::new(p.x, p.y, p.z)
 }
 
-/// The scene's vertices, and its primitives in shape order (the BVH reorders them).
-fn collect_prims(scene: &Scene) -> (Vec<Vec3A>, Vec<[u32; 3]>, Vec<Meta>) {
+fn from_glam(p: glam::Vec3A) -> Vec3A {
+    Vec3A::new(p.x, p.y, p.z)
+}
+
+fn to_glam(p: Vec3A) -> glam::Vec3A {
+    glam::Vec3A::new(p.x, p.y, p.z)
+}
+
+/// The shapes' vertices, and their primitives in shape order (the BVH reorders them).
+fn collect_prims(shapes: &[Shape]) -> (Vec<Vec3A>, Vec<[u32; 3]>, Vec<Meta>) {
     let mut vertices = Vec::new();
     let mut prims = Vec::new();
     let mut meta = Vec::new();
-    for (geom_id, shape) in scene.shapes.iter().enumerate() {
+    for (geom_id, shape) in shapes.iter().enumerate() {
         let base = vertices.len() as u32;
         let mut push = |p: [u32; 3], prim_id: usize, kind: Kind| {
             prims.push(p.map(|k| base + k));
@@ -146,6 +163,7 @@ impl Prim {
                 let r = Vec3A::splat(self.p[1].x);
                 Aabb::new(self.p[0] - r, self.p[0] + r)
             }
+            Kind::Instance => unreachable!("an instance's box is its placed prototype's"),
             _ => Aabb::from_points(&self.p),
         }
     }
@@ -288,27 +306,76 @@ impl BvhAccel {
     /// Builds the BVH over every shape of the scene (shape `i` answers as geometry `i`). The
     /// build runs on the current rayon pool.
     pub fn build(scene: &Scene) -> Result<BvhAccel> {
-        let mut accel = BvhAccel {
+        let mut accel = BvhAccel::empty();
+        accel.rebuild(scene)?;
+        Ok(accel)
+    }
+
+    fn empty() -> BvhAccel {
+        BvhAccel {
             bvh: CwBvh::default(),
             vertices: Vec::new(),
             prims: Vec::new(),
             kinds: Vec::new(),
             ids: Vec::new(),
             cutouts: Vec::new(),
-        };
-        accel.rebuild(scene)?;
-        Ok(accel)
+            prototypes: Vec::new(),
+            instances: Vec::new(),
+        }
     }
 
     /// Rebuilds the BVH from the scene's current geometry: the entry point for animation
     /// (moved vertices, added or removed shapes). obvhs's PLOC builder is fast enough to
     /// rebuild every frame, which keeps the tree as good as a fresh one (a refit would not).
     pub fn rebuild(&mut self, scene: &Scene) -> Result<()> {
-        let (vertices, prims, meta) = collect_prims(scene);
+        self.prototypes = scene
+            .prototypes
+            .iter()
+            .map(|p| {
+                let mut level = BvhAccel::empty();
+                level.fill(&p.shapes, &[], &scene.source)?;
+                // Prototypes are opaque (the readers place shapes with an alpha as copies).
+                level.cutouts.clear();
+                Ok(level)
+            })
+            .collect::<Result<_>>()?;
+        self.instances = scene.instances.clone();
+        let boxes: Vec<Aabb> = scene
+            .instances
+            .iter()
+            .map(|i| {
+                let own = scene.prototypes[i.prototype as usize].bounds();
+                if own.0.x > own.1.x {
+                    // An empty object: a point box whose BVH finds nothing.
+                    return Aabb::new(Vec3A::ZERO, Vec3A::ZERO);
+                }
+                let (lo, hi) = i.world_bounds(own);
+                Aabb::new(to_a(lo), to_a(hi))
+            })
+            .collect();
+        self.fill(&scene.shapes, &boxes, &scene.source)
+    }
+
+    /// Builds this level over `shapes` and, after them, one slot per box in `instances`.
+    fn fill(
+        &mut self,
+        shapes: &[Shape],
+        instances: &[Aabb],
+        source: &std::path::Path,
+    ) -> Result<()> {
+        let (vertices, mut prims, mut meta) = collect_prims(shapes);
         self.vertices = vertices;
-        self.cutouts = Cutout::of_scene(scene);
+        self.cutouts = Cutout::of_shapes(shapes);
         if self.cutouts.iter().all(Option::is_none) {
             self.cutouts.clear();
+        }
+        for i in 0..instances.len() {
+            prims.push([i as u32, 0, 0]);
+            meta.push(Meta {
+                geom_id: i as u32,
+                prim_id: 0,
+                kind: Kind::Instance,
+            });
         }
         if prims.is_empty() {
             self.bvh = CwBvh::default();
@@ -320,19 +387,20 @@ impl BvhAccel {
         let aabbs: Vec<Aabb> = prims
             .iter()
             .zip(&meta)
-            .map(|(p, m)| self.gather(p).aabb(m.kind))
+            .map(|(p, m)| match m.kind {
+                Kind::Instance => instances[p[0] as usize],
+                kind => self.gather(p).aabb(kind),
+            })
             .collect();
         if let Some(i) = aabbs
             .iter()
             .position(|b| !(b.min.is_finite() && b.max.is_finite()))
         {
-            return Err(crate::Error::input(
-                &scene.source,
-                format!(
-                    "primitive {} of shape {} is not finite",
-                    meta[i].prim_id, meta[i].geom_id
-                ),
-            ));
+            let what = match meta[i].kind {
+                Kind::Instance => format!("instance {}", meta[i].geom_id),
+                _ => format!("primitive {} of shape {}", meta[i].prim_id, meta[i].geom_id),
+            };
+            return Err(crate::Error::input(source, format!("{what} is not finite")));
         }
         let mut bvh = build_cwbvh(
             &aabbs,
@@ -366,6 +434,12 @@ impl BvhAccel {
             + self.kinds.capacity() * std::mem::size_of::<Kind>()
             + self.ids.capacity() * std::mem::size_of::<Ids>()
             + self.cutouts.capacity() * std::mem::size_of::<Option<Cutout>>()
+            + self.instances.capacity() * std::mem::size_of::<Instance>()
+            + self
+                .prototypes
+                .iter()
+                .map(BvhAccel::memory_bytes)
+                .sum::<usize>()
     }
 
     /// A primitive's vertices.
@@ -470,22 +544,40 @@ impl BvhAccel {
     }
 }
 
-impl Accel for BvhAccel {
-    fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        let (org, dir) = (to_a(ray.origin), to_a(ray.dir));
-        let mut tmax = ray.tmax;
+impl BvhAccel {
+    /// The closest hit with `tmin <= t <= tmax` of a ray in this level's space (for a
+    /// prototype's level, the normal in the prototype's space).
+    fn closest(&self, org: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> Option<Hit> {
+        let mut tmax = tmax;
         let mut best = None;
-        self.traverse(org, dir, ray.tmax, |i| {
-            let (t, tmin) = self.kept_hit(i, org, dir, ray.tmin, tmax);
+        let mut placed = None;
+        let instanced = !self.instances.is_empty();
+        self.traverse(org, dir, tmax, |i| {
+            if instanced && self.kinds[i] == Kind::Instance {
+                return match self.instance_closest(i, org, dir, tmin, tmax) {
+                    Some(hit) => {
+                        tmax = hit.t;
+                        placed = Some(hit);
+                        best = None;
+                        Visit::Shorten(hit.t)
+                    }
+                    None => Visit::Continue,
+                };
+            }
+            let (t, tmin) = self.kept_hit(i, org, dir, tmin, tmax);
             // A hit exactly at the current tmax replaces the last one, as in Embree.
             if t <= tmax && t.is_finite() {
                 tmax = t;
                 best = Some((i, tmin));
+                placed = None;
                 Visit::Shorten(t)
             } else {
                 Visit::Continue
             }
         });
+        if placed.is_some() {
+            return placed;
+        }
         let (i, tmin) = best?;
         let m = self.ids[i];
         let (u, v, ng) = self
@@ -498,15 +590,42 @@ impl Accel for BvhAccel {
             ng: to_vec3(ng),
             geom_id: m.geom_id,
             prim_id: m.prim_id,
+            instance: None,
         })
     }
 
-    fn occluded(&self, ray: &Ray) -> bool {
-        let (org, dir) = (to_a(ray.origin), to_a(ray.dir));
+    /// The closest hit within slot `i`'s instance: the ray carried into its prototype's
+    /// space (t is the same there: the direction is transformed, not normalised).
+    #[inline(never)]
+    fn instance_closest(
+        &self,
+        i: usize,
+        org: Vec3A,
+        dir: Vec3A,
+        tmin: f32,
+        tmax: f32,
+    ) -> Option<Hit> {
+        let k = self.prims[i][0];
+        let instance = &self.instances[k as usize];
+        let (o, d) = to_object(instance, org, dir);
+        let mut hit = self.prototypes[instance.prototype as usize].closest(o, d, tmin, tmax)?;
+        hit.ng = instance.normal_to_world(hit.ng);
+        hit.instance = Some(k);
+        Some(hit)
+    }
+
+    /// Whether anything lies along a ray in this level's space within `[tmin, tmax]`.
+    fn any_hit(&self, org: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> bool {
         let mut hit = false;
-        self.traverse(org, dir, ray.tmax, |i| {
-            let (t, _) = self.kept_hit(i, org, dir, ray.tmin, ray.tmax);
-            hit = t.is_finite();
+        let instanced = !self.instances.is_empty();
+        self.traverse(org, dir, tmax, |i| {
+            hit = if instanced && self.kinds[i] == Kind::Instance {
+                let instance = &self.instances[self.prims[i][0] as usize];
+                let (o, d) = to_object(instance, org, dir);
+                self.prototypes[instance.prototype as usize].any_hit(o, d, tmin, tmax)
+            } else {
+                self.kept_hit(i, org, dir, tmin, tmax).0.is_finite()
+            };
             if hit {
                 Visit::Stop
             } else {
@@ -514,5 +633,25 @@ impl Accel for BvhAccel {
             }
         });
         hit
+    }
+}
+
+/// A ray's origin and direction in an instance's prototype space.
+#[inline(always)]
+fn to_object(instance: &Instance, org: Vec3A, dir: Vec3A) -> (Vec3A, Vec3A) {
+    let m = instance.to_object();
+    (
+        from_glam(m.transform_point3a(to_glam(org))),
+        from_glam(m.transform_vector3a(to_glam(dir))),
+    )
+}
+
+impl Accel for BvhAccel {
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.closest(to_a(ray.origin), to_a(ray.dir), ray.tmin, ray.tmax)
+    }
+
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.any_hit(to_a(ray.origin), to_a(ray.dir), ray.tmin, ray.tmax)
     }
 }

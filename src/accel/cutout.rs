@@ -3,7 +3,7 @@
 //! occlusion queries both pass through the cut-out parts and go on to what lies behind.
 
 use crate::math::{Ray, Vec3};
-use crate::scene::{Alpha, Geometry, Scene};
+use crate::scene::{Alpha, Geometry, Scene, Shape};
 
 /// What the alpha test of one shape needs: its alpha, and its geometry for the hit's uv.
 #[derive(Debug)]
@@ -17,8 +17,12 @@ pub struct Cutout {
 impl Cutout {
     /// The cut-outs of a scene's shapes, indexed by shape (None for opaque shapes).
     pub fn of_scene(scene: &Scene) -> Vec<Option<Cutout>> {
-        scene
-            .shapes
+        Cutout::of_shapes(&scene.shapes)
+    }
+
+    /// The cut-outs of `shapes`, indexed by shape (None for opaque shapes).
+    pub fn of_shapes(shapes: &[Shape]) -> Vec<Option<Cutout>> {
+        shapes
             .iter()
             .enumerate()
             .map(|(i, shape)| {

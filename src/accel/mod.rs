@@ -7,7 +7,7 @@ pub mod embree;
 
 use crate::control::Control;
 use crate::math::{Ray, Vec3};
-use crate::scene::{Geometry, Scene, Shape, SurfacePoint};
+use crate::scene::{Geometry, Scene, SurfacePoint};
 
 /// The closest hit along a ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -16,44 +16,55 @@ pub struct Hit {
     /// Barycentric coordinates of the hit (triangles: weights of vertices 1 and 2).
     pub u: f32,
     pub v: f32,
-    /// Unnormalised geometric normal, oriented by the primitive's winding:
-    /// (v1 − v0) × (v2 − v0) for triangles, outward for spheres.
+    /// Unnormalised geometric normal in world space, oriented by the primitive's winding:
+    /// (v1 − v0) × (v2 − v0) for triangles, outward for spheres (for an instance, that of
+    /// its prototype carried to world space by the inverse transpose).
     pub ng: Vec3,
-    /// Index of the shape in `Scene::shapes`.
+    /// Index of the shape in `Scene::shapes`, or in the instance's prototype.
     pub geom_id: u32,
     /// Index of the primitive within the shape.
     pub prim_id: u32,
+    /// The instance hit (index into `Scene::instances`), `None` for the scene's own shapes.
+    pub instance: Option<u32>,
 }
 
 impl Hit {
     /// Completes the intersection: position, normals and uv of the hit primitive of
-    /// `shapes` (the scene's, which the structure was built from).
-    pub fn surface_point(&self, shapes: &[Shape], ray: &Ray) -> SurfacePoint {
+    /// `scene` (the one the structure was built from).
+    pub fn surface_point(&self, scene: &Scene, ray: &Ray) -> SurfacePoint {
         let hit = self;
-        let shape = &shapes[hit.geom_id as usize];
         let p = ray.at(hit.t);
         let ng = hit.ng.normalize();
+        let (shape, instance) = match hit.instance {
+            None => (&scene.shapes[hit.geom_id as usize], None),
+            Some(i) => {
+                let instance = &scene.instances[i as usize];
+                let prototype = &scene.prototypes[instance.prototype as usize];
+                (&prototype.shapes[hit.geom_id as usize], Some(instance))
+            }
+        };
+        // Shading normals and uvs come from the shape in its own space.
+        let local = instance.map_or(p, |i| i.point_to_object(p));
+        let to_world = |n: Vec3| instance.map_or(n, |i| i.normal_to_world(n).normalize_or_zero());
         let ns = match &shape.geometry {
-            Geometry::Sphere { center, .. } => (p - *center).normalize(),
+            Geometry::Sphere { center, .. } => match instance {
+                None => (p - *center).normalize(),
+                Some(_) => on_side(to_world(local - *center), ng),
+            },
             Geometry::Triangles(mesh) => match &mesh.normals {
                 Some(n) => {
                     let [a, b, c] = mesh.indices[hit.prim_id as usize].map(|i| i as usize);
                     let w = Vec3::new(1.0 - hit.u - hit.v, hit.u, hit.v);
-                    let n = (n[a] * w.x + n[b] * w.y + n[c] * w.z).normalize_or_zero();
-                    if n == Vec3::ZERO {
-                        ng
-                    } else if n.dot(ng) < 0.0 {
-                        // Keep the shading normal on the geometric side.
-                        -n
-                    } else {
-                        n
-                    }
+                    on_side(
+                        to_world((n[a] * w.x + n[b] * w.y + n[c] * w.z).normalize_or_zero()),
+                        ng,
+                    )
                 }
                 None => ng,
             },
             Geometry::Quads(_) => ng,
         };
-        let uv = shape.geometry.hit_uv(hit.prim_id, hit.u, hit.v, p);
+        let uv = shape.geometry.hit_uv(hit.prim_id, hit.u, hit.v, local);
         SurfacePoint {
             p,
             ng,
@@ -61,8 +72,20 @@ impl Hit {
             uv,
             t: hit.t,
             shape: hit.geom_id as usize,
+            instance: hit.instance,
             material: shape.material,
         }
+    }
+}
+
+/// Unit shading normal `n` kept on the geometric side of `ng` (`ng` itself for a zero `n`).
+fn on_side(n: Vec3, ng: Vec3) -> Vec3 {
+    if n == Vec3::ZERO {
+        ng
+    } else if n.dot(ng) < 0.0 {
+        -n
+    } else {
+        n
     }
 }
 

@@ -93,6 +93,8 @@ fn base_scene(name: String, camera: Camera, light: Vec3) -> Scene {
         camera,
         materials: vec![Material::default()],
         shapes: Vec::new(),
+        prototypes: Vec::new(),
+        instances: Vec::new(),
         lights: vec![Light::Point {
             position: light,
             intensity: Rgb::splat(100.0),

@@ -160,6 +160,9 @@ pub fn scene_hash(scene: &Scene) -> u64 {
         scene.environment
     )
     .expect("hashing never fails");
+    if scene.has_instances() {
+        write!(h, "|{:?}|{:?}", scene.prototypes, scene.instances).expect("hashing never fails");
+    }
     h.0
 }
 

@@ -269,7 +269,7 @@ fn random_walk<'a>(
         v.bsdf = Some(bsdf);
         if m.is_emissive() {
             v.emission = m.emission;
-            v.light = ctx.lights.light_of_shape(sp.shape);
+            v.light = sp.world_shape().and_then(|s| ctx.lights.light_of_shape(s));
         }
         let prev = path.last().expect("a walk starts from a vertex");
         v.pdf_fwd = prev.area_density(pdf, &v);

@@ -284,7 +284,7 @@ impl Paths<'_> {
         let (le, pdf_light) = match self.ctx.intersect(ray, stats) {
             Some(sp) => {
                 let m = &self.ctx.scene.materials[sp.material];
-                let Some(l) = lights.light_of_shape(sp.shape) else {
+                let Some(l) = sp.world_shape().and_then(|s| lights.light_of_shape(s)) else {
                     return Rgb::ZERO;
                 };
                 if !m.emits_towards(-ray.dir, sp.ng) {
@@ -320,7 +320,7 @@ impl Paths<'_> {
             sampler,
             stats,
             |sp, _, _, beta, _, _| {
-                if self.in_set[sp.shape] {
+                if sp.world_shape().is_some_and(|s| self.in_set[s]) {
                     arrived += beta;
                 }
             },

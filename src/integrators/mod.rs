@@ -70,14 +70,16 @@ impl<'a> Context<'a> {
     /// and the shading normal turned by the material's normal or bump map.
     #[inline]
     fn complete(&self, hit: &crate::accel::Hit, ray: &Ray) -> SurfacePoint {
-        let mut sp = hit.surface_point(&self.scene.shapes, ray);
+        let mut sp = hit.surface_point(self.scene, ray);
         if self.mixes {
             sp.material = self.scene.material_at(sp.material, sp.p, -ray.dir);
         }
         if self.details {
             if let Some(detail) = &self.scene.materials[sp.material].normal_detail {
-                let geometry = &self.scene.shapes[sp.shape].geometry;
-                let d = geometry.tangents(hit.prim_id as usize, hit.u, hit.v, sp.p, sp.ng);
+                let d =
+                    self.scene
+                        .placed_shape(&sp)
+                        .tangents(hit.prim_id as usize, hit.u, hit.v, &sp);
                 sp.ns = detail.shading_normal(sp.ns, sp.ng, sp.p, sp.uv, &d);
             }
         }

@@ -128,7 +128,7 @@ impl MonteCarlo for PathTracer {
             let m = &ctx.scene.materials[sp.material];
             let wo = -ray.dir;
             if m.emits_towards(wo, sp.ng) {
-                let w = match lights.light_of_shape(sp.shape) {
+                let w = match sp.world_shape().and_then(|s| lights.light_of_shape(s)) {
                     Some(l) if !specular => {
                         power_heuristic(bsdf_pdf, lights.pdf_li(l, prev_p, sp.p, sp.ng))
                     }

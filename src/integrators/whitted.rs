@@ -78,7 +78,10 @@ impl RayTree<'_> {
         let Some(sp) = ctx.intersect_at_depth(ray, depth, self.stats) else {
             return (ctx.scene.background, u32::MAX);
         };
-        (self.shade(ray, &sp, depth, weight), sp.shape as u32)
+        (
+            self.shade(ray, &sp, depth, weight),
+            ctx.scene.object_id(&sp),
+        )
     }
 
     fn shade(&mut self, ray: &Ray, sp: &SurfacePoint, depth: u32, weight: f32) -> Rgb {

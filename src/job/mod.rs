@@ -274,6 +274,10 @@ impl Renderer {
         // Created for the scene as given: a relight keeps its emissions as the file's.
         let technique = technique::create(&job.technique, &scene)?;
         if let Technique::Network(n) = &job.technique {
+            // The network's patches are world-space shapes.
+            if scene.has_instances() {
+                scene = Arc::new(scene.flattened());
+            }
             if let Some(relit) =
                 crate::integrators::illumination_network::technique::relit_scene(&scene, n)?
             {

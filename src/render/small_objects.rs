@@ -72,8 +72,16 @@ impl SmallObjects {
             .shapes
             .iter()
             .enumerate()
-            .filter_map(|(i, shape)| {
-                let (center, radius) = bounding_sphere(&shape.geometry)?;
+            .map(|(i, shape)| (i, bounding_sphere(&shape.geometry)))
+            .chain(scene.instances.iter().enumerate().map(|(k, instance)| {
+                let own = scene.prototypes[instance.prototype as usize].bounds();
+                let (lo, hi) = instance.world_bounds(own);
+                let sphere =
+                    (lo.cmple(hi).all()).then(|| ((lo + hi) * 0.5, (hi - lo).length() * 0.5));
+                (scene.shapes.len() + k, sphere)
+            }))
+            .filter_map(|(i, sphere)| {
+                let (center, radius) = sphere?;
                 let disc = project(camera, center, radius)?;
                 (disc.r < SMALL_RADIUS).then_some(Disc {
                     object: i as u32,

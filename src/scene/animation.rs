@@ -31,7 +31,7 @@ pub fn read_with_animation(path: &Path, control: &Control) -> Result<(Scene, Opt
         return Ok((doc.build()?, None));
     }
     let anim = Animation::from_document(doc)?;
-    Ok((anim.scene_at(anim.start)?, Some(anim)))
+    Ok((anim.placed_scene_at(anim.start)?, Some(anim)))
 }
 
 /// Whether a parsed scene file is an animation: it has a top-level `animation` key (the
@@ -201,7 +201,7 @@ impl Animation {
         }
         anim.base = base;
         // Frame `start` must read: most mistakes show up here, with the reader's message.
-        anim.scene_at(anim.start)?;
+        anim.placed_scene_at(anim.start)?;
         Ok(anim)
     }
 
@@ -215,8 +215,17 @@ impl Animation {
         self.start..self.start + self.frames as i64
     }
 
-    /// The scene at frame `frame` (keyframes before the first / after the last hold).
+    /// The scene at frame `frame` (keyframes before the first / after the last hold), its
+    /// instances placed as world-space copies: the animation renderer follows world-space
+    /// shapes from frame to frame.
     pub fn scene_at(&self, frame: i64) -> Result<Scene> {
+        let mut scene = self.placed_scene_at(frame)?;
+        scene.flatten_instances();
+        Ok(scene)
+    }
+
+    /// The scene at frame `frame`, its instances kept.
+    fn placed_scene_at(&self, frame: i64) -> Result<Scene> {
         let text = to_text(&self.table_at(frame as f64)?);
         super::toml::from_str(&text, &self.path).map_err(|e| match e {
             Error::Input { path, detail } if self.is_animated() => Error::Input {

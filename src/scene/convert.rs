@@ -13,10 +13,10 @@
 
 use super::toml::schema::{
     AlphaDesc, CacheDesc, CameraDesc, CheckerDesc, CoatingDesc, ConductorDesc, ConductorIndex,
-    DiffuseDesc, DirectionMixDesc, EnvironmentDesc, FileDesc, FilterDesc, ImageDesc, LightDesc,
-    LightKind, MaterialDesc, MixDesc, NetworkDesc, OneOrMany, Ordered, RenderDesc, RoughnessDesc,
-    ScaleDesc, ShapeDesc, ShapeKind, Splat3, TextureMixDesc, TextureTable, TransformOp,
-    UvCheckerDesc, WhittedDesc, WorldDesc, V3,
+    DiffuseDesc, DirectionMixDesc, EnvironmentDesc, FileDesc, FilterDesc, ImageDesc, InstanceDesc,
+    LightDesc, LightKind, MaterialDesc, MixDesc, NetworkDesc, ObjectDesc, OneOrMany, Ordered,
+    RenderDesc, RoughnessDesc, ScaleDesc, ShapeDesc, ShapeKind, Splat3, TextureMixDesc,
+    TextureTable, TransformOp, UvCheckerDesc, WhittedDesc, WorldDesc, V3,
 };
 use super::{
     Alpha, Camera, Coating, Geometry, Light, Material, NormalDetail, Projection, RenderSettings,
@@ -126,6 +126,8 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::Result<()> {
                 .collect(),
         ),
         shapes: Vec::new(),
+        objects: Vec::new(),
+        instances: Vec::new(),
         lights: scene
             .lights
             .iter()
@@ -135,28 +137,34 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::Result<()> {
     };
     let mut meshes = MeshDir::new(&out_dir, format!("{stem}.meshes"));
     for (i, shape) in scene.shapes.iter().enumerate() {
-        let mut desc = match &shape.geometry {
-            Geometry::Sphere { center, radius } => {
-                let mut d = ShapeDesc::new(ShapeKind::Sphere);
-                d.center = Some(V3(*center));
-                d.radius = Some(*radius);
-                d
-            }
-            g => {
-                let mut d = ShapeDesc::new(ShapeKind::Ply);
-                d.file = Some(meshes.write(i, g)?);
-                d
-            }
-        };
-        desc.material = Some(keys[shape.material].clone());
-        desc.alpha = shape.alpha.as_ref().map(|a| match a {
-            Alpha::Constant(a) => AlphaDesc::Constant(*a as f64),
-            Alpha::Image(image) => match diffuse(&Texture::Image(image.clone()), refs) {
-                DiffuseDesc::Texture(t) => AlphaDesc::Texture(t),
-                DiffuseDesc::Colour(_) => unreachable!("an image gives a texture table"),
-            },
-        });
+        let desc = shape_desc(shape, &mut meshes, i, &keys, refs)?;
         file.shapes.push(spanned(desc));
+    }
+    // Objects' meshes are numbered after the scene's own.
+    let mut next = scene.shapes.len();
+    let mut names: Vec<String> = Vec::new();
+    for (i, prototype) in scene.prototypes.iter().enumerate() {
+        let name = if prototype.name.is_empty() || names.contains(&prototype.name) {
+            format!("object{i}")
+        } else {
+            prototype.name.clone()
+        };
+        let mut shapes = Vec::new();
+        for shape in &prototype.shapes {
+            shapes.push(spanned(shape_desc(shape, &mut meshes, next, &keys, refs)?));
+            next += 1;
+        }
+        file.objects.push(spanned(ObjectDesc {
+            name: name.clone(),
+            shapes,
+        }));
+        names.push(name);
+    }
+    for instance in &scene.instances {
+        file.instances.push(spanned(InstanceDesc {
+            object: names[instance.prototype as usize].clone(),
+            transform: Some(OneOrMany::One(affine_step(&instance.matrix))),
+        }));
     }
     let body = toml::to_string(&file).map_err(|e| {
         Error::Invalid(format!(
@@ -533,6 +541,51 @@ fn light(l: &Light, refs: Refs) -> LightDesc {
         }
     }
     d
+}
+
+/// One shape as a `[[shapes]]` table; a mesh goes to the mesh folder as file `i`.
+fn shape_desc(
+    shape: &crate::scene::Shape,
+    meshes: &mut MeshDir,
+    i: usize,
+    keys: &[String],
+    refs: Refs,
+) -> crate::Result<ShapeDesc> {
+    let mut desc = match &shape.geometry {
+        Geometry::Sphere { center, radius } => {
+            let mut d = ShapeDesc::new(ShapeKind::Sphere);
+            d.center = Some(V3(*center));
+            d.radius = Some(*radius);
+            d
+        }
+        g => {
+            let mut d = ShapeDesc::new(ShapeKind::Ply);
+            d.file = Some(meshes.write(i, g)?);
+            d
+        }
+    };
+    desc.material = Some(keys[shape.material].clone());
+    desc.alpha = shape.alpha.as_ref().map(|a| match a {
+        Alpha::Constant(a) => AlphaDesc::Constant(*a as f64),
+        Alpha::Image(image) => match diffuse(&Texture::Image(image.clone()), refs) {
+            DiffuseDesc::Texture(t) => AlphaDesc::Texture(t),
+            DiffuseDesc::Colour(_) => unreachable!("an image gives a texture table"),
+        },
+    });
+    Ok(desc)
+}
+
+/// A transform step of the affine matrix `m` (its rows; the last is [0, 0, 0, 1]).
+fn affine_step(m: &glam::DMat4) -> TransformOp {
+    let rows = (0..4)
+        .map(|r| m.row(r).to_array().map(|x| x as f32).to_vec())
+        .collect();
+    TransformOp {
+        translate: None,
+        rotate: None,
+        scale: None,
+        matrix: Some(rows),
+    }
 }
 
 /// A transform step of the 3×3 matrix `m` (rows, in 4×4 form).

@@ -127,7 +127,18 @@ pub struct SurfacePoint {
     pub ns: Vec3,
     pub uv: Vec2,
     pub t: f32,
-    /// Index of the shape in `Scene::shapes`.
+    /// Index of the shape in `Scene::shapes`, or for a hit on an instance, in its
+    /// prototype's shapes.
     pub shape: usize,
+    /// The instance hit (index into `Scene::instances`), `None` for the scene's own shapes.
+    pub instance: Option<u32>,
     pub material: usize,
+}
+
+impl SurfacePoint {
+    /// The index of the shape in `Scene::shapes`, `None` for a point on an instance (whose
+    /// shapes neither emit nor can be named in a set).
+    pub fn world_shape(&self) -> Option<usize> {
+        self.instance.is_none().then_some(self.shape)
+    }
 }

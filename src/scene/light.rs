@@ -320,6 +320,8 @@ mod tests {
                 material: 0,
                 alpha: None,
             }],
+            prototypes: Vec::new(),
+            instances: Vec::new(),
             lights: vec![],
             ambient: Rgb::ZERO,
             background: Rgb::ZERO,

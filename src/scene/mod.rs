@@ -1,6 +1,7 @@
 //! The scene description. Every reader (native TOML, OBJ, later pbrt) produces a [`Scene`];
-//! integrators never know which file it came from. Geometry is stored in world space:
-//! readers apply transforms when they load.
+//! integrators never know which file it came from. Geometry is stored in world space
+//! (readers apply transforms when they load), except objects placed by instances, stored
+//! once in their own space ([`instance`]).
 
 pub mod alpha;
 pub mod animation;
@@ -8,6 +9,7 @@ pub mod camera;
 pub mod convert;
 pub mod environment;
 mod geometry;
+pub mod instance;
 pub mod light;
 mod material;
 mod mix;
@@ -24,6 +26,7 @@ pub use alpha::Alpha;
 pub use camera::{Camera, Projection, MAX_RESOLUTION};
 pub use environment::Environment;
 pub use geometry::{Geometry, QuadMesh, Shape, SurfacePoint, TriangleMesh};
+pub use instance::{Instance, Prototype};
 pub use light::Light;
 pub use material::{Coating, Conductor, Material, RoughnessMap};
 pub use mix::Mix;
@@ -43,6 +46,10 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Each shape refers to a material by index into `materials`.
     pub shapes: Vec<Shape>,
+    /// Objects placed by instances, each stored once in its own space.
+    pub prototypes: instance::Prototypes,
+    /// Placements of `prototypes`.
+    pub instances: Vec<Instance>,
     /// Point and directional lights. Shapes whose material emits are area lights as well.
     pub lights: Vec<Light>,
     /// Whitted's ambient intensity Ia; a material's ambient coefficient scales it.
@@ -73,19 +80,30 @@ impl Scene {
             lo = lo.min(a);
             hi = hi.max(b);
         }
+        for instance in &self.instances {
+            let own = self.prototypes[instance.prototype as usize].bounds();
+            if own.0.x <= own.1.x {
+                let (a, b) = instance.world_bounds(own);
+                lo = lo.min(a);
+                hi = hi.max(b);
+            }
+        }
         (lo.x <= hi.x).then_some((lo, hi))
     }
 
-    /// Triangles (a quad counts as two) and spheres.
+    /// Triangles (a quad counts as two) and spheres stored: the scene's own shapes, each
+    /// prototype once, and one per instance (its place in the top-level structure).
     pub fn primitive_count(&self) -> usize {
         self.shapes
             .iter()
-            .map(|s| match &s.geometry {
-                Geometry::Sphere { .. } => 1,
-                Geometry::Triangles(m) => m.indices.len(),
-                Geometry::Quads(q) => 2 * q.indices.len(),
-            })
-            .sum()
+            .map(|s| s.geometry.primitive_count())
+            .sum::<usize>()
+            + self
+                .prototypes
+                .iter()
+                .map(|p| p.primitive_count())
+                .sum::<usize>()
+            + self.instances.len()
     }
 
     /// An error about a setting this scene's file gives, as one naming the file, line and
@@ -136,8 +154,17 @@ impl Scene {
                 "unknown scene format: expected a .toml or .pbrt scene file",
             )),
         }?;
+        let placed = if scene.has_instances() {
+            format!(
+                ", {} instances of {} objects",
+                scene.instances.len(),
+                scene.prototypes.len()
+            )
+        } else {
+            String::new()
+        };
         phase.end(&format!(
-            "{}: {} shapes, {} primitives",
+            "{}: {} shapes, {} primitives{placed}",
             path.display(),
             scene.shapes.len(),
             scene.primitive_count()

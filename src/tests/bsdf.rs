@@ -17,6 +17,7 @@ pub(super) fn point() -> SurfacePoint {
         uv: Vec2::ZERO,
         t: 1.0,
         shape: 0,
+        instance: None,
         material: 0,
     }
 }

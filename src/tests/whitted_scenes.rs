@@ -23,6 +23,8 @@ pub(crate) fn empty_scene() -> Scene {
         camera: camera(),
         materials: Vec::new(),
         shapes: Vec::new(),
+        prototypes: Vec::new(),
+        instances: Vec::new(),
         lights: Vec::new(),
         ambient: Rgb::ZERO,
         background: Rgb::ZERO,

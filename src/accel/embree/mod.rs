@@ -2,13 +2,14 @@
 //! the [`Accel`] implementation on top of it. This module and `sys` hold the only
 //! unsafe Embree code; the differences between Embree 3 and 4 stay inside `query`.
 
+mod instances;
 mod sys;
 
 use super::cutout::Cutout;
 use super::{Accel, Hit, Update};
 use crate::control::CancelToken;
 use crate::math::{Ray, Vec3, Vec4};
-use crate::scene::{Geometry, QuadMesh, Scene as SceneDesc, TriangleMesh};
+use crate::scene::{Geometry, Instance, QuadMesh, Scene as SceneDesc, TriangleMesh};
 use crate::{Error, Result};
 use std::ffi::{c_char, c_void, CStr, CString};
 use std::sync::atomic::{AtomicI64, Ordering};
@@ -464,6 +465,8 @@ impl Scene {
             ng: Vec3::new(h.Ng_x, h.Ng_y, h.Ng_z),
             geom_id: h.geomID,
             prim_id: h.primID,
+            // The instance geometry's id; the normal is in the instanced scene's space.
+            instance: (h.instID[0] != sys::RTC_INVALID_GEOMETRY_ID).then_some(h.instID[0]),
         })
     }
 
@@ -587,15 +590,31 @@ mod query {
     }
 }
 
+/// Adds one shape's geometry to `scene`.
+fn attach_geometry(scene: &mut Scene, geometry: &Geometry) -> Result<GeometryId> {
+    match geometry {
+        Geometry::Sphere { center, radius } => scene.attach_spheres(&[center.extend(*radius)]),
+        Geometry::Triangles(m) => scene.attach_triangles(&m.positions, &m.indices),
+        Geometry::Quads(q) => scene.attach_quads(&q.positions, &q.indices),
+    }
+}
+
 /// The version string of the Embree library raylink runs on.
 pub fn version() -> Result<String> {
     Ok(Device::new()?.version())
 }
 
-/// [`Accel`] over an Embree scene holding one geometry per scene shape.
+/// [`Accel`] over an Embree scene holding one geometry per scene shape, then one instance
+/// geometry per scene instance.
 pub struct EmbreeAccel {
     scene: Scene,
     device: Device,
+    /// One Embree scene per prototype, held as long as the instances refer to them.
+    _prototypes: Vec<Scene>,
+    /// The scene's instances, for their normals' transforms; instance `i` is geometry
+    /// `first_instance + i`.
+    instances: Vec<Instance>,
+    first_instance: u32,
     /// For a dynamic accel: what each geometry was built from, to tell a vertex update
     /// (refit) from a change of topology (rebuild).
     shapes: Option<Vec<ShapeKey>>,
@@ -676,6 +695,8 @@ impl EmbreeAccel {
         // cut-outs are built again (their spheres' uvs would move with a refit).
         let cutouts =
             !self.scene.cutouts.is_empty() || desc.shapes.iter().any(|s| s.alpha.is_some());
+        // Instances are placed again by a rebuild too.
+        let cutouts = cutouts || !self.instances.is_empty() || desc.has_instances();
         let same_topology = !cutouts
             && self.shapes.as_ref().is_some_and(|old| {
                 old.len() == keys.len()
@@ -733,22 +754,36 @@ impl EmbreeAccel {
         cancel: &CancelToken,
     ) -> Result<EmbreeAccel> {
         for (shape, cutout) in desc.shapes.iter().zip(Cutout::of_scene(desc)) {
-            let id = match &shape.geometry {
-                Geometry::Sphere { center, radius } => {
-                    scene.attach_spheres(&[center.extend(*radius)])?
-                }
-                Geometry::Triangles(m) => scene.attach_triangles(&m.positions, &m.indices)?,
-                Geometry::Quads(q) => scene.attach_quads(&q.positions, &q.indices)?,
-            };
+            let id = attach_geometry(&mut scene, &shape.geometry)?;
             if let Some(cutout) = cutout {
                 scene.set_cutout(id, Arc::new(cutout))?;
             }
+            cancel.check("the intersection structure's build")?;
+        }
+        let mut prototypes = Vec::with_capacity(desc.prototypes.len());
+        for prototype in &desc.prototypes {
+            let mut own = Scene::new(&device)?;
+            for shape in &prototype.shapes {
+                attach_geometry(&mut own, &shape.geometry)?;
+            }
+            own.commit_cancellable(cancel)?;
+            prototypes.push(own);
+        }
+        let first_instance = scene.next_id;
+        for instance in &desc.instances {
+            scene.attach_instance(
+                &prototypes[instance.prototype as usize],
+                instance.to_world(),
+            )?;
             cancel.check("the intersection structure's build")?;
         }
         scene.commit_cancellable(cancel)?;
         Ok(EmbreeAccel {
             scene,
             device,
+            _prototypes: prototypes,
+            instances: desc.instances.clone(),
+            first_instance,
             shapes,
         })
     }
@@ -761,7 +796,13 @@ impl EmbreeAccel {
 
 impl Accel for EmbreeAccel {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        self.scene.intersect(ray)
+        let mut hit = self.scene.intersect(ray)?;
+        if let Some(id) = hit.instance {
+            let i = id - self.first_instance;
+            hit.ng = self.instances[i as usize].normal_to_world(hit.ng);
+            hit.instance = Some(i);
+        }
+        Some(hit)
     }
 
     fn occluded(&self, ray: &Ray) -> bool {

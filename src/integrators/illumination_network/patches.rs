@@ -194,6 +194,9 @@ fn merge(t0: [u32; 3], t1: [u32; 3]) -> Option<[u32; 4]> {
 impl Patches {
     /// Cuts the scene's polygons (and spheres) into patches.
     pub fn new(scene: &Scene, space: &RaySpace, patch_size: f32) -> Result<Patches, String> {
+        if scene.has_instances() {
+            return Err("the network needs world-space shapes: flatten the instances first".into());
+        }
         let mut polygons = Vec::new();
         let mut prim_polygon = Vec::new();
         // Cells are numbered once every polygon exists.

@@ -403,7 +403,7 @@ fn direct_diffuse(
     rng: &mut Rng,
     stats: &mut RayStats,
 ) -> Rgb {
-    let sp = hit.surface_point(&ctx.scene.shapes, ray);
+    let sp = hit.surface_point(ctx.scene, ray);
     let kd = network_kd(ctx.scene, sp.material, sp.p, sp.uv, sp.ng);
     if kd == Rgb::ZERO {
         return Rgb::ZERO;

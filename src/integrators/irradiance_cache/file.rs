@@ -40,7 +40,7 @@ pub(crate) const FORMAT: Format = Format {
 
 /// A hash of what the cached values depend on in the scene (not the camera).
 pub fn scene_hash(scene: &Scene) -> u64 {
-    let text = format!(
+    let mut text = format!(
         "{:?}|{:?}|{:?}|{:?}|{:?}",
         scene.materials,
         scene.shapes,
@@ -48,6 +48,9 @@ pub fn scene_hash(scene: &Scene) -> u64 {
         scene.background,
         scene.environment.as_ref().map(|e| format!("{e:?}").len())
     );
+    if scene.has_instances() {
+        text += &format!("|{:?}|{:?}", scene.prototypes, scene.instances);
+    }
     fnv1a(text.as_bytes())
 }
 

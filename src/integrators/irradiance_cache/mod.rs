@@ -678,7 +678,7 @@ impl Walk<'_> {
                 if mis {
                     let hm = &ctx.scene.materials[hit.material];
                     if hm.emits_towards(-bs.wi, hit.ng) {
-                        if let Some(li) = lights.light_of_shape(hit.shape) {
+                        if let Some(li) = hit.world_shape().and_then(|s| lights.light_of_shape(s)) {
                             let w = power_heuristic(bs.pdf, lights.pdf_li(li, sp.p, hit.p, hit.ng));
                             l += bs.weight * hm.emission * w;
                         }

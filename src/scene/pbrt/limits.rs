@@ -88,17 +88,24 @@ impl Cost {
     }
 }
 
-/// An object defined by `ObjectBegin`/`ObjectEnd`: its shapes, and what one instance of it
-/// costs, with its spheres kept as spheres (an instance transform that scales uniformly) or
-/// tessellated (one that does not).
+/// An object defined by `ObjectBegin`/`ObjectEnd`: the shapes an instance shares (stored
+/// once, as a prototype, when first placed), the shapes each placement copies into world
+/// space, and what one placement's copies cost, with their spheres kept as spheres (a
+/// transform that scales uniformly) or tessellated (one that does not).
 pub(super) struct Object {
     pub(super) shapes: Vec<Shape>,
+    pub(super) shared: Vec<Shape>,
+    /// The prototype made of `shared`, once placed.
+    pub(super) prototype: Option<u32>,
     uniform: Cost,
     tessellated: Cost,
 }
 
 impl Object {
-    pub(super) fn new(shapes: Vec<Shape>) -> Object {
+    /// The object of `shapes`, of which those for which `copied` holds are copied into
+    /// world space at each placement.
+    pub(super) fn new(shapes: Vec<Shape>, copied: impl Fn(&Shape) -> bool) -> Object {
+        let (shapes, shared): (Vec<Shape>, Vec<Shape>) = shapes.into_iter().partition(copied);
         let spheres = shapes
             .iter()
             .filter(|s| matches!(s.geometry, Geometry::Sphere { .. }))
@@ -117,8 +124,22 @@ impl Object {
         .add(shapes::tessellated_sphere_cost().times(spheres));
         Object {
             shapes,
+            shared,
+            prototype: None,
             uniform,
             tessellated,
+        }
+    }
+
+    /// The intersection structure's share of the prototype (its data is counted as read).
+    pub(super) fn prototype_cost(&self) -> Cost {
+        let data = self
+            .shared
+            .iter()
+            .fold(Cost::default(), |c, s| c.add(Cost::of(&s.geometry)));
+        Cost {
+            data: 0,
+            primitives: data.primitives,
         }
     }
 
@@ -351,7 +372,7 @@ mod tests {
             material: 0,
             alpha: None,
         };
-        let object = Object::new(vec![ball.clone(), ball]);
+        let object = Object::new(vec![ball.clone(), ball], |_| true);
         assert_eq!(object.instance_cost(true).primitives, 2);
         let t = shapes::tessellated_sphere_cost();
         assert!(t.primitives > 1000, "{t:?}");

@@ -20,6 +20,7 @@
 
 mod alpha;
 mod cursor;
+mod instances;
 mod lexer;
 mod lights;
 mod limits;
@@ -35,7 +36,7 @@ mod statements;
 mod textures;
 
 use super::environment::Environment;
-use super::{Camera, Light, Material, Scene, Shape, Texture};
+use super::{Camera, Instance, Light, Material, Prototype, Scene, Shape, Texture};
 use crate::control::{CancelToken, Control, MemoryBudget};
 use crate::math::Rgb;
 use crate::scene::RenderSettings;
@@ -50,6 +51,7 @@ use std::sync::Arc;
 
 pub(crate) use limits::Cost as GeometryCost;
 pub use limits::{MAX_INCLUDES, MAX_INCLUDE_DEPTH, MAX_SCENE_TEXT};
+pub(crate) use shapes::instance as placed_copies;
 
 /// Reads a pbrt-v4 scene file (and the files it includes).
 pub fn read(path: &Path, control: &Control) -> crate::Result<Scene> {
@@ -131,6 +133,9 @@ struct Loader {
     objects: HashMap<String, limits::Object>,
     /// The object being defined: its name and shapes (in the definition's world space).
     object: Option<(String, Vec<Shape>)>,
+    /// The objects placed so far, each once, and their placements.
+    prototypes: Vec<Prototype>,
+    instances: Vec<Instance>,
     materials: Vec<Material>,
     default_material: Option<usize>,
     emissive: HashMap<(usize, [u32; 3], bool), usize>,
@@ -174,6 +179,8 @@ impl Loader {
             float_textures: HashMap::new(),
             objects: HashMap::new(),
             object: None,
+            prototypes: Vec::new(),
+            instances: Vec::new(),
             materials: Vec::new(),
             default_material: None,
             emissive: HashMap::new(),
@@ -214,14 +221,15 @@ impl Loader {
                 "the file has no WorldBegin (truncated file?)",
             ));
         };
-        if self.shapes.is_empty() {
+        if self.shapes.is_empty() && self.instances.is_empty() {
             return Err(crate::Error::input(&self.source, "the scene has no shapes"));
         }
         // Keep only the materials shapes use (and those their mixes choose from, first), in
         // their order.
         let mut map = vec![usize::MAX; self.materials.len()];
         let mut materials = Vec::new();
-        for s in &mut self.shapes {
+        let placed = self.prototypes.iter_mut().flat_map(|p| &mut p.shapes);
+        for s in self.shapes.iter_mut().chain(placed) {
             s.material = keep_material(&self.materials, s.material, &mut map, &mut materials);
         }
         Ok(Scene {
@@ -229,6 +237,8 @@ impl Loader {
             camera,
             materials,
             shapes: self.shapes,
+            prototypes: self.prototypes.into_iter().map(Arc::new).collect(),
+            instances: self.instances,
             lights: self.lights,
             ambient: Rgb::ZERO,
             background: self.background,

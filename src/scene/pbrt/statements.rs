@@ -4,10 +4,8 @@ use super::cursor::Cursor;
 use super::lexer::Tok;
 use super::limits;
 use super::params::Params;
-use super::shapes;
 use super::state::{look_at, Block};
 use super::{Loader, Loc};
-use crate::scene::Shape;
 use crate::Error;
 use glam::{DMat4, DVec3};
 use std::path::Path;
@@ -95,7 +93,8 @@ impl Loader {
             "ObjectEnd" => {
                 self.pop(Block::Object, &loc)?;
                 if let Some((name, shapes)) = self.object.take() {
-                    self.objects.insert(name, limits::Object::new(shapes));
+                    let object = limits::Object::new(shapes, |s| self.copied_when_placed(s));
+                    self.objects.insert(name, object);
                 }
             }
             "ObjectInstance" => {
@@ -107,19 +106,10 @@ impl Loader {
                     ));
                 }
                 let t = self.mirror * self.state.ctm;
-                let Some(def) = self.objects.get(&name) else {
+                if !self.objects.contains_key(&name) {
                     return Err(loc.error(format!("ObjectInstance: no object named \"{name}\"")));
-                };
-                // Counted before it is copied: what the copies will take.
-                let cost = def.instance_cost(shapes::uniform_scale(&t).is_some());
-                self.reserve(&loc, &format!("ObjectInstance \"{name}\""), cost, true)?;
-                let def = &self.objects[&name];
-                let copies: Vec<Shape> = def
-                    .shapes
-                    .iter()
-                    .flat_map(|s| shapes::instance(s, &t))
-                    .collect();
-                self.shapes.extend(copies);
+                }
+                self.place_object(&name, &t, &loc)?;
             }
             "Identity" => self.set_ctm(&loc, kw, |_| DMat4::IDENTITY)?,
             "Translate" => {

@@ -3,6 +3,7 @@
 //! material names, meshes, textures and environment maps relative to the file.
 
 mod coating;
+mod instances;
 mod render;
 mod shapes;
 mod textures;
@@ -19,7 +20,6 @@ use crate::bsdf::TabulatedBrdf;
 use crate::math::{Mat3, Mat4, Rgb, Vec3};
 use crate::scene::environment::Environment;
 use crate::scene::light::GoniometricMap;
-use crate::scene::pbrt::GeometryCost;
 use crate::scene::{
     Camera, Conductor, Light, Material, Projection, RenderSettings, RoughnessMap, Scene, Texture,
 };
@@ -100,43 +100,7 @@ impl<'a> Builder<'a> {
             self.materials.push(material);
         }
 
-        if file.shapes.is_empty() {
-            return Err(Error::input(
-                ctx.path,
-                "the scene has no shapes: add at least one [[shapes]] table",
-            ));
-        }
-        let mut shapes = Vec::new();
-        let mut cost = GeometryCost::default();
-        for (i, desc) in file.shapes.into_iter().enumerate() {
-            if let Some(control) = ctx.control {
-                control.cancel.check("reading the scene")?;
-            }
-            let site = self.site(format!("shapes[{i}]"), desc.span());
-            let mut desc = desc.into_inner();
-            let alpha = self.alpha(&site, desc.alpha.take())?;
-            let mut new = self.shape(&site, desc)?;
-            if alpha.is_some() {
-                new.iter_mut().for_each(|s| s.alpha = alpha.clone());
-            }
-            if let Some(control) = ctx.control {
-                cost = new
-                    .iter()
-                    .fold(cost, |c, s| c.add(GeometryCost::of(&s.geometry)));
-                control.budget.check(
-                    &format!(
-                        "{}: line {}: {}: the scene's geometry ({} primitives so far) and its \
-                         intersection structures",
-                        ctx.path.display(),
-                        ctx.key_line(&site.span, ""),
-                        site.name,
-                        cost.primitives
-                    ),
-                    cost.bytes().saturating_add(ctx.text.len() as u64),
-                )?;
-            }
-            shapes.extend(new);
-        }
+        let placed = self.placed(file.shapes, file.objects, file.instances)?;
 
         let mut lights = Vec::new();
         for (i, desc) in file.lights.into_iter().enumerate() {
@@ -148,7 +112,9 @@ impl<'a> Builder<'a> {
             source: ctx.path.to_path_buf(),
             camera,
             materials: self.materials,
-            shapes,
+            shapes: placed.shapes,
+            prototypes: placed.prototypes,
+            instances: placed.instances,
             lights,
             ambient,
             background,

@@ -19,6 +19,7 @@ mod diagnostics;
 pub(crate) mod schema;
 mod schema_alpha;
 mod schema_coating;
+mod schema_instance;
 mod schema_metal;
 mod schema_texture;
 

@@ -5,6 +5,7 @@
 
 pub(crate) use super::schema_alpha::AlphaDesc;
 pub(crate) use super::schema_coating::CoatingDesc;
+pub(crate) use super::schema_instance::{InstanceDesc, ObjectDesc};
 pub(crate) use super::schema_metal::{ConductorDesc, ConductorIndex, RoughnessDesc};
 pub(crate) use super::schema_texture::{
     CheckerDesc, DiffuseDesc, DirectionMixDesc, ImageDesc, ScaleDesc, TextureMixDesc, TextureTable,
@@ -28,6 +29,10 @@ pub(crate) struct FileDesc {
     pub(crate) materials: Ordered<Spanned<MaterialDesc>>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub(crate) shapes: Vec<Spanned<ShapeDesc>>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub(crate) objects: Vec<Spanned<ObjectDesc>>,
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub(crate) instances: Vec<Spanned<InstanceDesc>>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub(crate) lights: Vec<Spanned<LightDesc>>,
     #[serde(skip_serializing_if = "Option::is_none")]

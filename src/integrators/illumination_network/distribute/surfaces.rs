@@ -143,6 +143,7 @@ impl Surface {
             uv: Vec2::ZERO,
             t: 0.0,
             shape: 0,
+            instance: None,
             material: 0,
         };
         // Oriented as Bsdf::new orients it toward n: an opaque surface faces n's side.
