@@ -275,7 +275,7 @@ impl LightSet {
             .map(|e| match e {
                 Emitter::Area(a) => {
                     let sides = if a.two_sided { 2.0 } else { 1.0 };
-                    sides * PI * a.area * luminance(a.radiance)
+                    sides * PI * a.area * luminance(a.mean_radiance())
                 }
                 Emitter::Point { intensity, .. } => 4.0 * PI * luminance(*intensity),
                 Emitter::Spot {
@@ -402,8 +402,12 @@ impl LightSet {
                         let tc = to_c.dot(wi);
                         let disc = (r * r - (d2 - tc * tc)).max(0.0);
                         let q = p + wi * (tc - disc.sqrt());
+                        let radiance = a.radiance_at(&a.sphere_point(q, (q - c) / r));
+                        if radiance == Rgb::ZERO {
+                            return None;
+                        }
                         return Some(LightSample {
-                            radiance: a.radiance,
+                            radiance,
                             wi,
                             p: q,
                             pdf: sel * uniform_cone_pdf(cos_max),
@@ -419,11 +423,12 @@ impl LightSet {
                 }
                 let wi = d / dist2.sqrt();
                 let cos_l = a.emitting_cos(-wi.dot(lp.n));
-                if cos_l <= 0.0 {
+                let radiance = a.radiance_at(&lp);
+                if cos_l <= 0.0 || radiance == Rgb::ZERO {
                     return None;
                 }
                 Some(LightSample {
-                    radiance: a.radiance,
+                    radiance,
                     wi,
                     p: lp.p,
                     pdf: sel * dist2 / (cos_l * a.area),
@@ -554,7 +559,7 @@ impl LightSet {
                     p: lp.p,
                     n,
                     dir: t * l.x + b * l.y + n * l.z,
-                    radiance: a.radiance,
+                    radiance: a.radiance_at(&lp),
                     pdf_pos: sel / a.area,
                     pdf_dir: side_pdf * l.z / PI,
                     delta_pos: false,

@@ -184,7 +184,7 @@ fn gathering_shooting_and_bidirectional_agree_on_a_mix() {
         "mix".into(),
         (glass, &scene.materials[glass]),
         (white, &scene.materials[white]),
-        0.4,
+        raylink::scene::Texture::Constant(raylink::math::Vec3::splat(0.4)),
     );
     scene.materials.push(mix);
     let mixed = scene.materials.len() - 1;

@@ -335,7 +335,7 @@ fn mix_materials_keep_both_materials() {
     let s = world(&format!("{named}NamedMaterial \"both\"\n{TRI}"));
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     let i = s.shapes[0].material;
-    let mix = s.materials[i].mix.expect("a mix");
+    let mix = s.materials[i].mix.clone().expect("a mix");
     assert!((mix.amount - 0.3).abs() < 1e-6);
     let [a, b] = mix.materials;
     assert!(a < i && b < i, "the mixed materials come before the mix");
@@ -352,7 +352,7 @@ fn mix_materials_keep_both_materials() {
     ));
     let m = &s.materials[s.shapes[0].material];
     assert_eq!(m.emission, Rgb::splat(2.0));
-    for j in m.mix.unwrap().materials {
+    for j in m.mix.as_ref().unwrap().materials {
         assert_eq!(s.materials[j].emission, Rgb::splat(2.0));
         assert!(s.materials[j].mix.is_none());
     }

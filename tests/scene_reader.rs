@@ -597,7 +597,7 @@ fn mixes_read_refuse_bad_input_and_round_trip() {
     .unwrap_or_else(|e| panic!("{e}"));
     let names: Vec<&str> = s.materials.iter().map(|m| m.name.as_str()).collect();
     let both = &s.materials[s.shapes[0].material];
-    let mix = both.mix.expect("a mix");
+    let mix = both.mix.clone().expect("a mix");
     assert_eq!(mix.materials.map(|i| names[i]), ["white", "glass"]);
     assert_eq!(mix.amount, 0.25);
     assert_eq!(both.diffuse, s.materials[mix.materials[0]].diffuse);

@@ -268,7 +268,7 @@ fn random_walk<'a>(
         let mut v = Vertex::new(Kind::Surface, sp.p, sp.ng, beta);
         v.bsdf = Some(bsdf);
         if m.is_emissive() {
-            v.emission = m.emission;
+            v.emission = m.emission_at(sp.p, sp.uv, sp.ng);
             v.light = sp.world_shape().and_then(|s| ctx.lights.light_of_shape(s));
         }
         let prev = path.last().expect("a walk starts from a vertex");
@@ -652,7 +652,7 @@ fn sample_light_point(
     match &ctx.lights.emitters[i] {
         Emitter::Area(a) => {
             let lp = a.sample(u);
-            Some((i, lp.p, lp.n, sel / a.area, false, a.radiance))
+            Some((i, lp.p, lp.n, sel / a.area, false, a.radiance_at(&lp)))
         }
         Emitter::Point {
             position,

@@ -290,7 +290,10 @@ impl Paths<'_> {
                 if !m.emits_towards(-ray.dir, sp.ng) {
                     return Rgb::ZERO;
                 }
-                (m.emission, lights.pdf_li(l, x, sp.p, sp.ng))
+                (
+                    m.emission_at(sp.p, sp.uv, sp.ng),
+                    lights.pdf_li(l, x, sp.p, sp.ng),
+                )
             }
             None => match lights.background_light() {
                 Some(bg) => (

@@ -72,7 +72,9 @@ impl<'a> Context<'a> {
     fn complete(&self, hit: &crate::accel::Hit, ray: &Ray) -> SurfacePoint {
         let mut sp = hit.surface_point(self.scene, ray);
         if self.mixes {
-            sp.material = self.scene.material_at(sp.material, sp.p, -ray.dir);
+            sp.material = self
+                .scene
+                .material_at(sp.material, sp.p, sp.uv, sp.ng, -ray.dir);
         }
         if self.details {
             if let Some(detail) = &self.scene.materials[sp.material].normal_detail {

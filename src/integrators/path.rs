@@ -134,7 +134,7 @@ impl MonteCarlo for PathTracer {
                     }
                     _ => 1.0,
                 };
-                radiance += beta * m.emission * w;
+                radiance += beta * m.emission_at(sp.p, sp.uv, sp.ng) * w;
             }
             if depth == self.options.max_depth {
                 break;

@@ -101,7 +101,8 @@ impl RayTree<'_> {
 
         let mut color = Rgb::ZERO;
         if entering || m.two_sided_emission {
-            color += m.emission; // emitters face their geometric normal unless two-sided
+            // Emitters face their geometric normal unless two-sided.
+            color += m.emission_at(sp.p, sp.uv, sp.ng);
         }
         let kd = m.diffuse.eval(sp.p, sp.uv, sp.ng);
         color += m.ambient.unwrap_or(kd) * ctx.scene.ambient;
@@ -115,6 +116,7 @@ impl RayTree<'_> {
         // A thin sheet passes light straight on (both sides are outside) and is smooth.
         let transmits = m.thin || refract(d, n, eta).is_some();
         let roughness = if m.thin { 0.0 } else { m.roughness };
+        let specular = m.specular_at(sp.p, sp.uv, sp.ng);
         let (ks, kt) = if fresnel {
             // 1 under total internal reflection: everything goes to ks·S.
             let reflectance = if m.thin {
@@ -122,16 +124,13 @@ impl RayTree<'_> {
             } else {
                 fresnel_dielectric(cos_i, eta)
             };
-            (
-                m.specular * reflectance,
-                m.transmission * (1.0 - reflectance),
-            )
+            (specular * reflectance, m.transmission * (1.0 - reflectance))
         } else {
-            (m.specular, m.transmission)
+            (specular, m.transmission)
         };
         // A metal's mirror is weighted by its complex Fresnel reflectance at this angle.
-        let ks = match m.conductor {
-            Some(c) => m.specular * c.reflectance(cos_i),
+        let ks = match m.conductor_at(sp.p, sp.uv, sp.ng) {
+            Some(c) => specular * c.reflectance(cos_i),
             None => ks,
         };
 
@@ -306,7 +305,7 @@ impl RayTree<'_> {
                 continue;
             }
             let t = self.transmittance(p, ng, wi, Some(y.p));
-            let e = light.radiance * t * (cos_s * cos_l / d2);
+            let e = light.radiance_at(&y) * t * (cos_s * cos_l / d2);
             sum += reflect.map_or(e, |f| f(wi) * e);
         }
         sum * (light.area / count as f32)

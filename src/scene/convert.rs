@@ -313,12 +313,16 @@ fn render(s: &RenderSettings) -> Option<RenderDesc> {
 }
 
 fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
-    if let Some(mix) = m.mix {
+    if let Some(mix) = &m.mix {
         // Its other fields follow from its two materials.
+        let amount = match &mix.amount_map {
+            Some(t) => diffuse(t, refs),
+            None => DiffuseDesc::Colour(crate::math::Vec3::splat(mix.amount)),
+        };
         return MaterialDesc {
             mix: Some(MixDesc {
                 materials: mix.materials.iter().map(|&i| keys[i].clone()).collect(),
-                amount: Some(mix.amount),
+                amount: Some(amount),
             }),
             ..MaterialDesc::default()
         };
@@ -326,7 +330,7 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
     if let Some(table) = &m.brdf {
         return MaterialDesc {
             brdf: Some(refs.to(&table.file)),
-            emission: Some(Splat3(m.emission)),
+            emission: Some(varying(&m.emission_map, m.emission, refs)),
             two_sided_emission: m.two_sided_emission.then_some(true),
             ..MaterialDesc::default()
         };
@@ -337,7 +341,7 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
     MaterialDesc {
         diffuse: Some(diffuse(&m.diffuse, refs)),
         ambient: m.ambient.map(Splat3),
-        specular: Some(Splat3(m.specular)),
+        specular: Some(varying(&m.specular_map, m.specular, refs)),
         transmission: Some(Splat3(m.transmission)),
         diffuse_transmission: (m.diffuse_transmission
             != Texture::Constant(crate::math::Vec3::ZERO))
@@ -358,13 +362,8 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
             .and_then(|r| r.remap.then_some(true)),
         fresnel: Some(m.fresnel),
         thin: m.thin.then_some(true),
-        conductor: m.conductor.map(|c| {
-            ConductorDesc::Index(ConductorIndex {
-                eta: Splat3(c.eta),
-                k: Splat3(c.k),
-            })
-        }),
-        emission: Some(Splat3(m.emission)),
+        conductor: conductor(m, refs),
+        emission: Some(varying(&m.emission_map, m.emission, refs)),
         two_sided_emission: m.two_sided_emission.then_some(true),
         mix: None,
         brdf: None,
@@ -384,16 +383,11 @@ fn coated(m: &Material, c: &Coating, refs: Refs) -> MaterialDesc {
     MaterialDesc {
         diffuse: Some(diffuse(&m.diffuse, refs)),
         ambient: m.ambient.map(Splat3),
-        specular: Some(Splat3(m.specular)),
+        specular: Some(varying(&m.specular_map, m.specular, refs)),
         phong_exponent: Some(m.phong_exponent),
         roughness: m.conductor.map(|_| roughness(m.roughness, m.roughness_v)),
-        conductor: m.conductor.map(|c| {
-            ConductorDesc::Index(ConductorIndex {
-                eta: Splat3(c.eta),
-                k: Splat3(c.k),
-            })
-        }),
-        emission: Some(Splat3(m.emission)),
+        conductor: conductor(m, refs),
+        emission: Some(varying(&m.emission_map, m.emission, refs)),
         two_sided_emission: m.two_sided_emission.then_some(true),
         normal_map: normal_map(m, refs),
         bump: bump(m, refs),
@@ -424,6 +418,25 @@ fn bump(m: &Material, refs: Refs) -> Option<DiffuseDesc> {
         Some(NormalDetail::Bump(t)) => Some(diffuse(t, refs)),
         _ => None,
     }
+}
+
+/// A metal's index, or its varying reflectance.
+fn conductor(m: &Material, refs: Refs) -> Option<ConductorDesc> {
+    if let Some(r) = &m.reflectance_map {
+        return Some(ConductorDesc::Reflectance(diffuse(r, refs)));
+    }
+    m.conductor.map(|c| {
+        ConductorDesc::Index(ConductorIndex {
+            eta: Splat3(c.eta),
+            k: Splat3(c.k),
+        })
+    })
+}
+
+/// A colour that a texture may replace.
+fn varying(map: &Option<Texture>, c: crate::math::Vec3, refs: Refs) -> DiffuseDesc {
+    map.as_ref()
+        .map_or(DiffuseDesc::Colour(c), |t| diffuse(t, refs))
 }
 
 fn diffuse(t: &Texture, refs: Refs) -> DiffuseDesc {

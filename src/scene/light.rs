@@ -1,7 +1,10 @@
 //! Lights: point, spot, goniometric and directional lights given in the scene, and area
 //! lights made from emissive shapes.
 
+use super::alpha::Alpha;
 use super::environment::equal_area_sphere_to_square;
+use super::geometry::sphere_uv;
+use super::texture::Texture;
 use super::{Geometry, Material, Scene, Shape};
 use crate::image::Image;
 use crate::math::{Mat3, Rgb, Vec2, Vec3};
@@ -135,6 +138,78 @@ pub struct AreaLight {
     /// Emits on both sides (the material's `two_sided_emission`).
     pub two_sided: bool,
     kind: AreaKind,
+    /// What makes the emission vary over the surface, if anything.
+    varying: Option<Arc<Varying>>,
+}
+
+/// An emission texture and the shape's cut-out, with what finds a sampled point's uv.
+#[derive(Debug)]
+struct Varying {
+    texture: Option<Texture>,
+    alpha: Option<Alpha>,
+    /// For each light triangle, how its points map to the shape's uv.
+    uv_maps: Vec<UvMap>,
+}
+
+/// How the points of a light triangle map to surface (u, v), as the hits on the shape do.
+#[derive(Clone, Copy, Debug)]
+enum UvMap {
+    /// The uvs at the triangle's vertices, interpolated.
+    Linear([Vec2; 3]),
+    /// A quad (v0, v1, v2, v3) with Embree's parameterisation: barycentrics of (v0, v1, v3),
+    /// or mirrored ones of (v2, v3, v1) beyond its diagonal.
+    Quad([Vec3; 4]),
+}
+
+impl UvMap {
+    /// The uv of the point with barycentrics (`b1`, `b2`) on the triangle, at `p`.
+    fn uv(&self, b1: f32, b2: f32, p: Vec3) -> Vec2 {
+        match *self {
+            UvMap::Linear([a, b, c]) => a * (1.0 - b1 - b2) + b * b1 + c * b2,
+            UvMap::Quad([v0, v1, v2, v3]) => {
+                let (u, v) = barycentrics(p, v0, v1, v3);
+                if u + v <= 1.0 {
+                    Vec2::new(u, v)
+                } else {
+                    let (u, v) = barycentrics(p, v2, v3, v1);
+                    Vec2::new(1.0 - u, 1.0 - v)
+                }
+            }
+        }
+    }
+}
+
+/// Barycentrics (towards `b`, towards `c`) of `p` in the plane of triangle (`a`, `b`, `c`).
+fn barycentrics(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> (f32, f32) {
+    let (e1, e2, d) = (b - a, c - a, p - a);
+    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (d1, d2) = (d.dot(e1), d.dot(e2));
+    let det = d11 * d22 - d12 * d12;
+    if det == 0.0 {
+        return (0.0, 0.0);
+    }
+    ((d22 * d1 - d12 * d2) / det, (d11 * d2 - d12 * d1) / det)
+}
+
+impl Varying {
+    /// The uv map of each light triangle of `g` (in [`Geometry::triangles`]' order).
+    fn uv_maps(g: &Geometry) -> Vec<UvMap> {
+        match g {
+            Geometry::Sphere { .. } => Vec::new(),
+            Geometry::Triangles(m) => (0..m.indices.len())
+                .map(|i| {
+                    let corners = [Vec2::ZERO, Vec2::X, Vec2::Y];
+                    UvMap::Linear(match &m.uvs {
+                        Some(t) => m.indices[i].map(|k| t[k as usize]),
+                        None => corners,
+                    })
+                })
+                .collect(),
+            Geometry::Quads(q) => (0..q.indices.len())
+                .flat_map(|i| [UvMap::Quad(q.quad(i)); 2])
+                .collect(),
+        }
+    }
 }
 
 #[derive(Clone, Debug)]
@@ -159,11 +234,13 @@ struct LightTriangle {
     n: Vec3,
 }
 
-/// A point on a light with its unit normal (the side that emits).
+/// A point on a light with its unit normal (the side that emits) and, when the light's
+/// emission varies, its surface (u, v) (zero otherwise).
 #[derive(Clone, Copy, Debug)]
 pub struct LightPoint {
     pub p: Vec3,
     pub n: Vec3,
+    pub uv: Vec2,
 }
 
 impl AreaLight {
@@ -212,13 +289,79 @@ impl AreaLight {
                 (AreaKind::Triangles { tris, cdf }, total)
             }
         };
+        let varying = (material.emission_map.is_some() || s.alpha.is_some()).then(|| {
+            Arc::new(Varying {
+                texture: material.emission_map.clone(),
+                alpha: s.alpha.clone(),
+                uv_maps: Varying::uv_maps(&s.geometry),
+            })
+        });
         (area > 0.0).then_some(AreaLight {
             shape: i,
             radiance: material.emission,
             area,
             two_sided: material.two_sided_emission,
             kind,
+            varying,
         })
+    }
+
+    /// Whether the emitted radiance varies over the surface (a texture or a cut-out).
+    pub fn varies(&self) -> bool {
+        self.varying.is_some()
+    }
+
+    /// The radiance emitted at a point of the light: its texture's value there, times the
+    /// shape's alpha (a cut-out part emits nothing; a half-present part, half on average, as
+    /// hits on it are kept with probability alpha).
+    pub fn radiance_at(&self, lp: &LightPoint) -> Rgb {
+        let Some(v) = &self.varying else {
+            return self.radiance;
+        };
+        let le = match &v.texture {
+            Some(t) => t.eval(lp.p, lp.uv, lp.n).max(Rgb::ZERO),
+            None => self.radiance,
+        };
+        match &v.alpha {
+            // NaN counts as opaque, as for hits.
+            Some(a) => {
+                let a = a.value(lp.uv);
+                if a.is_nan() {
+                    le
+                } else {
+                    le * a.clamp(0.0, 1.0)
+                }
+            }
+            None => le,
+        }
+    }
+
+    /// The point of a sphere light at `p` with outward normal `n` (for points found other
+    /// than by [`AreaLight::sample`]).
+    pub fn sphere_point(&self, p: Vec3, n: Vec3) -> LightPoint {
+        let uv = if self.varying.is_some() {
+            sphere_uv(n)
+        } else {
+            Vec2::ZERO
+        };
+        LightPoint { p, n, uv }
+    }
+
+    /// The mean over the light's area of the radiance it emits, from a grid of points
+    /// (the light's power, for choosing among lights, is proportional to it).
+    pub fn mean_radiance(&self) -> Rgb {
+        if self.varying.is_none() {
+            return self.radiance;
+        }
+        const SIDE: u32 = 64;
+        let mut sum = Rgb::ZERO;
+        for j in 0..SIDE {
+            for i in 0..SIDE {
+                let u = Vec2::new(i as f32 + 0.5, j as f32 + 0.5) / SIDE as f32;
+                sum += self.radiance_at(&self.sample(u));
+            }
+        }
+        sum / (SIDE * SIDE) as f32
     }
 
     /// The cosine factor of emission at a point whose normal makes cosine `cos` with the
@@ -247,10 +390,7 @@ impl AreaLight {
                 let r = (1.0 - z * z).max(0.0).sqrt();
                 let phi = std::f32::consts::TAU * u.y;
                 let n = Vec3::new(r * phi.cos(), r * phi.sin(), z);
-                LightPoint {
-                    p: *center + n * *radius,
-                    n,
-                }
+                self.sphere_point(*center + n * *radius, n)
             }
             AreaKind::Triangles { tris, cdf } => {
                 let total = *cdf.last().expect("area lights have triangles");
@@ -270,10 +410,12 @@ impl AreaLight {
                 // Uniform over the triangle (Shirley's square-root warp).
                 let su = ux.sqrt();
                 let (b1, b2) = (su * (1.0 - u.y), su * u.y);
-                LightPoint {
-                    p: t.a + t.ab * b1 + t.ac * b2,
-                    n: t.n,
-                }
+                let p = t.a + t.ab * b1 + t.ac * b2;
+                let uv = self
+                    .varying
+                    .as_ref()
+                    .map_or(Vec2::ZERO, |v| v.uv_maps[i].uv(b1, b2, p));
+                LightPoint { p, n: t.n, uv }
             }
         }
     }

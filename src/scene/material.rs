@@ -14,8 +14,11 @@ pub struct Material {
     pub diffuse: Texture,
     /// ka: ambient reflectance; `None` means "the diffuse colour", the usual choice.
     pub ambient: Option<Rgb>,
-    /// ks: specular (mirror) reflection coefficient; also scales the Phong highlight.
+    /// ks: specular (mirror) reflection coefficient; also scales the Phong highlight. With
+    /// `specular_map` it is the map's largest value (for the illumination network).
     pub specular: Rgb,
+    /// A ks varying over the surface, in place of `specular` where a ray hits.
+    pub specular_map: Option<Texture>,
     /// kt: transmission coefficient.
     pub transmission: Rgb,
     /// Lambertian transmission to the other side (a thin translucent sheet: paper, leaves,
@@ -46,8 +49,15 @@ pub struct Material {
     /// A metal: ks is weighted by the conductor Fresnel reflectance of this complex index
     /// (instead of the dielectric one or none).
     pub conductor: Option<Conductor>,
-    /// Emitted radiance; a shape with a non-zero emission is an area light.
+    /// A conductor given by its normal-incidence reflectance varying over the surface
+    /// (pbrt's textured `reflectance`): at each hit, [`Conductor::from_reflectance`] of the
+    /// map's value in place of `conductor` (which is that of the map's largest value).
+    pub reflectance_map: Option<Texture>,
+    /// Emitted radiance; a shape with a non-zero emission is an area light. With
+    /// `emission_map` it is the map's mean (for the illumination network).
     pub emission: Rgb,
+    /// Emitted radiance varying over the surface, in place of `emission` at each point.
+    pub emission_map: Option<Texture>,
     /// Emit on both sides of the surface (pbrt's `twosided` area lights), not only on the
     /// side the geometric normal faces.
     pub two_sided_emission: bool,
@@ -116,6 +126,7 @@ impl Default for Material {
             diffuse: Texture::Constant(Rgb::splat(0.5)),
             ambient: None,
             specular: Rgb::ZERO,
+            specular_map: None,
             transmission: Rgb::ZERO,
             diffuse_transmission: Texture::Constant(Rgb::ZERO),
             ior: 1.5,
@@ -125,7 +136,9 @@ impl Default for Material {
             fresnel: false,
             thin: false,
             conductor: None,
+            reflectance_map: None,
             emission: Rgb::ZERO,
+            emission_map: None,
             two_sided_emission: false,
             mix: None,
             brdf: None,
@@ -145,6 +158,30 @@ impl Material {
     /// normal `ng`.
     pub fn emits_towards(&self, wo: Vec3, ng: Vec3) -> bool {
         self.is_emissive() && (self.two_sided_emission || wo.dot(ng) > 0.0)
+    }
+
+    /// Emitted radiance at position `p`, surface coordinates `uv`, geometric normal `n`.
+    pub fn emission_at(&self, p: Vec3, uv: Vec2, n: Vec3) -> Rgb {
+        match &self.emission_map {
+            Some(t) => t.eval(p, uv, n).max(Rgb::ZERO),
+            None => self.emission,
+        }
+    }
+
+    /// ks at position `p`, surface coordinates `uv`, geometric normal `n`.
+    pub fn specular_at(&self, p: Vec3, uv: Vec2, n: Vec3) -> Rgb {
+        match &self.specular_map {
+            Some(t) => t.eval(p, uv, n),
+            None => self.specular,
+        }
+    }
+
+    /// The conductor at position `p`, surface coordinates `uv`, geometric normal `n`.
+    pub fn conductor_at(&self, p: Vec3, uv: Vec2, n: Vec3) -> Option<Conductor> {
+        match &self.reflectance_map {
+            Some(t) => Some(Conductor::from_reflectance(t.eval(p, uv, n))),
+            None => self.conductor,
+        }
     }
 
     pub fn is_transmissive(&self) -> bool {

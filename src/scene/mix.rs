@@ -10,8 +10,9 @@
 //! weight; the illumination network, which reads a shape's material without a ray, blends
 //! the two materials' reflectance instead.
 
-use super::{Material, Scene};
-use crate::math::Vec3;
+use super::{Material, Scene, Texture};
+use crate::math::{Vec2, Vec3};
+use std::sync::Arc;
 
 /// Nested mixes deeper than this resolve to the material reached (a guard against a cycle,
 /// which the readers do not build).
@@ -19,25 +20,32 @@ const MAX_NESTING: usize = 16;
 
 /// The two materials of a mix, as indices into the scene's materials, and the probability
 /// of choosing the second.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Mix {
     pub materials: [usize; 2],
+    /// The probability; with `amount_map`, the map's mean (for the illumination network).
     pub amount: f32,
+    /// A probability varying over the surface (a float texture), in place of `amount`.
+    pub amount_map: Option<Arc<Texture>>,
 }
 
 impl Mix {
-    /// The material chosen at point `p` for a ray arriving from direction `wo` (pointing
-    /// away from the surface).
-    pub fn choose(&self, p: Vec3, wo: Vec3) -> usize {
-        if self.amount <= 0.0 {
+    /// The material chosen at point `p` with surface coordinates `uv` and geometric normal
+    /// `n`, for a ray arriving from direction `wo` (pointing away from the surface).
+    pub fn choose(&self, p: Vec3, uv: Vec2, n: Vec3, wo: Vec3) -> usize {
+        let amount = match &self.amount_map {
+            Some(t) => t.eval_float(p, uv, n),
+            None => self.amount,
+        };
+        if amount <= 0.0 {
             return self.materials[0];
         }
-        if self.amount >= 1.0 {
+        if amount >= 1.0 {
             return self.materials[1];
         }
         let key = [p.x, p.y, p.z, wo.x, wo.y, wo.z].map(|v| u64::from(v.to_bits()));
         let u = hash_to_unit(&key, self.materials);
-        self.materials[usize::from(u < self.amount)]
+        self.materials[usize::from(u < amount)]
     }
 }
 
@@ -63,18 +71,25 @@ impl Material {
     /// with probability `amount`. Its own fields are those of the material with the larger
     /// weight (the first when equal), for the techniques that read them directly, and its
     /// emission is the two materials' (which must be the same: a light's shapes emit alike).
+    /// A varying `amount` is chosen by at each hit; its mean decides the larger weight.
     pub fn mix_of(
         name: String,
         a: (usize, &Material),
         b: (usize, &Material),
-        amount: f32,
+        amount: Texture,
     ) -> Material {
-        let dominant = if amount > 0.5 { b.1 } else { a.1 };
+        let (mean, amount_map) = match amount {
+            Texture::Constant(c) => (c.x, None),
+            t => (t.mean_value().x, Some(Arc::new(t))),
+        };
+        let mean = mean.clamp(0.0, 1.0);
+        let dominant = if mean > 0.5 { b.1 } else { a.1 };
         Material {
             name,
             mix: Some(Mix {
                 materials: [a.0, b.0],
-                amount: amount.clamp(0.0, 1.0),
+                amount: mean,
+                amount_map,
             }),
             ..dominant.clone()
         }
@@ -82,12 +97,13 @@ impl Material {
 }
 
 impl Scene {
-    /// The plain material that scatters at point `p` of a shape of material `index`, for a
-    /// ray arriving from `wo`: `index` itself unless it is a mix.
-    pub fn material_at(&self, mut index: usize, p: Vec3, wo: Vec3) -> usize {
+    /// The plain material that scatters at point `p` (surface coordinates `uv`, geometric
+    /// normal `n`) of a shape of material `index`, for a ray arriving from `wo`: `index`
+    /// itself unless it is a mix.
+    pub fn material_at(&self, mut index: usize, p: Vec3, uv: Vec2, n: Vec3, wo: Vec3) -> usize {
         for _ in 0..MAX_NESTING {
-            match self.materials[index].mix {
-                Some(mix) => index = mix.choose(p, wo),
+            match &self.materials[index].mix {
+                Some(mix) => index = mix.choose(p, uv, n, wo),
                 None => break,
             }
         }
@@ -102,7 +118,7 @@ impl Scene {
 
     fn may_transmit_nested(&self, index: usize, depth: usize) -> bool {
         let m = &self.materials[index];
-        match m.mix {
+        match &m.mix {
             Some(mix) if depth > 0 => mix
                 .materials
                 .iter()
@@ -126,14 +142,15 @@ mod tests {
             let mix = Mix {
                 materials: [3, 7],
                 amount,
+                amount_map: None,
             };
             let n = 100_000;
             let mut second = 0;
             for _ in 0..n {
                 let p = Vec3::new(rng.uniform(), rng.uniform(), 0.0) * 10.0;
                 let wo = Vec3::new(rng.uniform() - 0.5, 0.3, 1.0).normalize();
-                let c = mix.choose(p, wo);
-                assert_eq!(c, mix.choose(p, wo));
+                let c = mix.choose(p, Vec2::ZERO, Vec3::Z, wo);
+                assert_eq!(c, mix.choose(p, Vec2::ZERO, Vec3::Z, wo));
                 second += usize::from(c == 7);
             }
             let share = second as f64 / n as f64;
@@ -146,7 +163,8 @@ mod tests {
         let never = Mix {
             materials: [3, 7],
             amount: 0.0,
+            amount_map: None,
         };
-        assert_eq!(never.choose(Vec3::ONE, Vec3::Z), 3);
+        assert_eq!(never.choose(Vec3::ONE, Vec2::ZERO, Vec3::Z, Vec3::Z), 3);
     }
 }

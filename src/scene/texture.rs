@@ -95,6 +95,7 @@ pub struct ImageTexture {
     pub mapping: UvMapping,
     image: Image,
     max: Rgb,
+    mean: Rgb,
 }
 
 impl ImageTexture {
@@ -143,6 +144,16 @@ impl ImageTexture {
         } else {
             max * scale.max(0.0)
         };
+        let value = |p: Rgb| {
+            let v = p * scale;
+            if invert {
+                (Rgb::ONE - v).max(Rgb::ZERO)
+            } else {
+                v
+            }
+        };
+        let sum = image.pixels.iter().fold(Rgb::ZERO, |s, &p| s + value(p));
+        let mean = sum / image.pixels.len() as f32;
         ImageTexture {
             file,
             encoding,
@@ -151,6 +162,7 @@ impl ImageTexture {
             mapping,
             image,
             max,
+            mean,
         }
     }
 
@@ -160,6 +172,11 @@ impl ImageTexture {
 
     pub fn max_value(&self) -> Rgb {
         self.max
+    }
+
+    /// The mean over the image's pixels.
+    pub fn mean_value(&self) -> Rgb {
+        self.mean
     }
 
     /// The value at surface coordinates `uv`.
@@ -291,6 +308,26 @@ impl Texture {
             Texture::Scale(t) => t[0].max_value() * t[1].max_value().x,
             Texture::Mix(m) => m.textures[0].max_value().max(m.textures[1].max_value()),
             Texture::DirectionMix(t, _) => t[0].max_value().max(t[1].max_value()),
+        }
+    }
+
+    /// The texture's mean over one period of its pattern (exact for a constant, a
+    /// checkerboard and an image; a product or mix of textures takes the product or mix of
+    /// their means, and a direction mix weighs its two textures equally). The techniques
+    /// that take one value per surface use it.
+    pub fn mean_value(&self) -> Rgb {
+        match self {
+            Texture::Constant(c) => *c,
+            Texture::Checker { even, odd, .. } | Texture::UvChecker { even, odd, .. } => {
+                (*even + *odd) * 0.5
+            }
+            Texture::Image(image) => image.mean_value(),
+            Texture::Scale(t) => t[0].mean_value() * t[1].mean_value().x,
+            Texture::Mix(m) => {
+                let a = m.amount.mean_value().x;
+                m.textures[0].mean_value() * (1.0 - a) + m.textures[1].mean_value() * a
+            }
+            Texture::DirectionMix(t, _) => (t[0].mean_value() + t[1].mean_value()) * 0.5,
         }
     }
 

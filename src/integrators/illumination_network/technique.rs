@@ -141,6 +141,18 @@ impl Lifecycle for NetworkTechnique {
                  lights light it only in hybrid mode",
             );
         }
+        if let Some(m) = scene.materials.iter().find(|m| {
+            m.emission_map.is_some()
+                || m.specular_map.is_some()
+                || m.reflectance_map.is_some()
+                || m.mix.as_ref().is_some_and(|x| x.amount_map.is_some())
+        }) {
+            control.warn(&format!(
+                "material \"{}\" varies by texture: the network takes one value per patch (an \
+                 emission's or a mix amount's mean, a specular colour's largest value)",
+                m.name
+            ));
+        }
         let (net, solution) = match (&self.settings.relight, &self.settings.file) {
             (Some(relight), Some(f)) => {
                 let params = self.params(view);

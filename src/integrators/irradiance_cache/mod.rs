@@ -609,7 +609,7 @@ impl Walk<'_> {
         let wo = -ray.dir.normalize();
         let mut l = Rgb::ZERO;
         if emission && m.emits_towards(wo, sp.ng) {
-            l += m.emission;
+            l += m.emission_at(sp.p, sp.uv, sp.ng);
         }
         let bsdf = Bsdf::new(m, sp, wo);
         let non_delta = bsdf.has_non_delta();
@@ -680,7 +680,7 @@ impl Walk<'_> {
                     if hm.emits_towards(-bs.wi, hit.ng) {
                         if let Some(li) = hit.world_shape().and_then(|s| lights.light_of_shape(s)) {
                             let w = power_heuristic(bs.pdf, lights.pdf_li(li, sp.p, hit.p, hit.ng));
-                            l += bs.weight * hm.emission * w;
+                            l += bs.weight * hm.emission_at(hit.p, hit.uv, hit.ng) * w;
                         }
                     }
                 }

@@ -8,7 +8,8 @@ use super::{Loader, Loc};
 use crate::math::{Mat3, Rgb};
 use crate::scene::environment::{Environment, Mapping};
 use crate::scene::light::{spot_cosines, spot_solid_angle, GoniometricMap};
-use crate::scene::Light;
+use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
+use crate::scene::{Light, Texture};
 use glam::DVec3;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -22,22 +23,63 @@ impl Loader {
                 format!("{st} is not supported; using a diffuse area light"),
             );
         }
-        let l = self
-            .spectrum(p, "L", Kind::Illuminant, &st, loc)?
-            .unwrap_or(Rgb::ONE);
         let scale = p.float_or("scale", 1.0).map_err(Self::pe(loc))? as f32;
         let two_sided = p.bool("twosided").map_err(Self::pe(loc))? == Some(true);
-        let radiance = l * scale;
+        let l = self.spectrum(p, "L", Kind::Illuminant, &st, loc)?;
+        let file = p.string("filename").map_err(Self::pe(loc))?;
+        // pbrt-v4's image-textured emitter: Le(uv) = scale × the image at uv.
+        let texture = match (file, l) {
+            (Some(_), Some(_)) => {
+                return Err(loc.error(format!("{st}: give either \"L\" or \"filename\", not both")))
+            }
+            (Some(file), None) => {
+                let path = loc.dir().join(&file);
+                self.add_input(&path);
+                let image = ImageTexture::load(
+                    &path,
+                    PathBuf::from(&file),
+                    Encoding::default_for(&path),
+                    scale,
+                    false,
+                    UvMapping::default(),
+                )
+                .map_err(|e| loc.error(format!("{st}: {e}")))?;
+                Some(Texture::Image(Arc::new(image)))
+            }
+            (None, _) => None,
+        };
+        let radiance = match &texture {
+            Some(t) => t.mean_value(),
+            None => l.unwrap_or(Rgb::ONE) * scale,
+        };
         if !radiance.is_finite() || radiance.min_element() < 0.0 {
             return Err(loc.error(format!(
                 "{st}: the emitted radiance must be finite and not negative"
             )));
         }
+        let radiance = self.area_key(radiance, two_sided, texture);
         self.state.area = (radiance.max_element() > 0.0).then_some(AreaEmission {
             radiance,
             two_sided,
         });
         Ok(())
+    }
+
+    /// The radiance that names an area light among those of the file: its own, moved by
+    /// the least amount needed to tell a textured light from every other (the graphics
+    /// state carries the radiance; the texture is found by it in `area_textures`).
+    fn area_key(&mut self, mut radiance: Rgb, two_sided: bool, texture: Option<Texture>) -> Rgb {
+        let key = |r: Rgb| (r.to_array().map(f32::to_bits), two_sided);
+        while let Some(t) = self.area_textures.get(&key(radiance)) {
+            if texture.as_ref() == Some(t) {
+                return radiance;
+            }
+            radiance.z = f32::from_bits(radiance.z.to_bits() + 1);
+        }
+        if let Some(t) = texture {
+            self.area_textures.insert(key(radiance), t);
+        }
+        radiance
     }
 
     pub(super) fn light(&mut self, ty: &str, p: &Params, loc: &Loc) -> crate::Result<()> {

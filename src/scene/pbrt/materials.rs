@@ -115,10 +115,11 @@ impl Loader {
         loc: &Loc,
     ) -> crate::Result<Material> {
         let ((ax, ay), map) = self.roughness_map(p, prefix, st, loc)?;
-        let conductor = self.conductor(p, prefix, st, loc)?;
+        let (conductor, reflectance_map) = self.conductor(p, prefix, st, loc)?;
         Ok(Material {
             specular: Rgb::ONE,
             conductor: Some(conductor),
+            reflectance_map,
             roughness: ax,
             roughness_v: (ay != ax).then_some(ay),
             roughness_map: map.map(Arc::new),
@@ -150,14 +151,15 @@ impl Loader {
         Ok(rgb.element_sum() / 3.0)
     }
 
-    /// A conductor's complex index from `eta`/`k` or `reflectance`.
+    /// A conductor's complex index from `eta`/`k` or `reflectance`, and a textured
+    /// reflectance (the index is then that of its largest value).
     fn conductor(
         &mut self,
         p: &Params,
         prefix: &str,
         st: &str,
         loc: &Loc,
-    ) -> crate::Result<Conductor> {
+    ) -> crate::Result<(Conductor, Option<Texture>)> {
         let refl = format!("{prefix}reflectance");
         if p.find(&refl, &["rgb", "spectrum", "blackbody", "texture"])
             .ok()
@@ -167,8 +169,7 @@ impl Loader {
             p.ignore(&format!("{prefix}eta"));
             p.ignore(&format!("{prefix}k"));
             let r = self.texture_param(p, &refl, Rgb::ONE, st, loc)?;
-            let r = self.texture_to_constant(r, st, loc);
-            return Ok(Conductor::from_reflectance(r));
+            return Ok(reflectance_conductor(r));
         }
         let (cu_eta, cu_k) = spectrum::copper();
         let eta = match p.find(&format!("{prefix}eta"), &["float"]).ok().flatten() {
@@ -180,7 +181,7 @@ impl Loader {
         let k = self
             .spectrum(p, &format!("{prefix}k"), Kind::Unbounded, st, loc)?
             .unwrap_or(cu_k);
-        Ok(Conductor { eta, k })
+        Ok((Conductor { eta, k }, None))
     }
 
     pub(super) fn material(
@@ -288,11 +289,11 @@ impl Loader {
                     p.ignore("conductor.eta");
                     p.ignore("conductor.k");
                     let r = self.texture_param(p, "reflectance", Rgb::ONE, st, loc)?;
+                    let (conductor, reflectance_map) = reflectance_conductor(r);
                     Material {
                         specular: Rgb::ONE,
-                        conductor: Some(Conductor::from_reflectance(
-                            self.texture_to_constant(r, st, loc),
-                        )),
+                        conductor: Some(conductor),
+                        reflectance_map,
                         roughness: ax,
                         roughness_v: (ay != ax).then_some(ay),
                         ..base
@@ -321,11 +322,10 @@ impl Loader {
                 }
             }
             "mix" => {
-                // pbrt-v4's MixMaterial: the second material with probability `amount`,
-                // chosen at each hit (a textured amount is read as pbrt's float textures
-                // are: constant, else the default with a warning).
+                // pbrt-v4's MixMaterial: the second material with probability `amount`
+                // (a float texture, evaluated at the hit), chosen at each hit.
                 let names = p.strings("materials").map_err(Self::pe(loc))?;
-                let amount = self.float_param(p, "amount", 0.5, st, loc)? as f32;
+                let amount = self.float_texture_param(p, "amount", 0.5, st, loc)?;
                 let found = names.as_deref().and_then(|n| match n {
                     [a, b] => Some((*self.named_materials.get(a)?, *self.named_materials.get(b)?)),
                     _ => None,
@@ -481,5 +481,15 @@ impl Loader {
             roughness: self.isotropic_roughness(p, "", st, loc)?,
             ..base
         })
+    }
+}
+
+/// The conductor of pbrt-v4's `reflectance` r (η = 1, k from r): a constant, or one varying
+/// with a texture (then the conductor of its largest value stands for it where one value
+/// is taken).
+fn reflectance_conductor(r: Texture) -> (Conductor, Option<Texture>) {
+    match r {
+        Texture::Constant(c) => (Conductor::from_reflectance(c), None),
+        t => (Conductor::from_reflectance(t.max_value()), Some(t)),
     }
 }

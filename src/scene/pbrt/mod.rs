@@ -139,6 +139,8 @@ struct Loader {
     materials: Vec<Material>,
     default_material: Option<usize>,
     emissive: HashMap<(usize, [u32; 3], bool), usize>,
+    /// Image-textured area lights, by their (radiance, two-sided) in the graphics state.
+    area_textures: HashMap<([u32; 3], bool), Texture>,
     shapes: Vec<Shape>,
     lights: Vec<Light>,
     background: Rgb,
@@ -184,6 +186,7 @@ impl Loader {
             materials: Vec::new(),
             default_material: None,
             emissive: HashMap::new(),
+            area_textures: HashMap::new(),
             shapes: Vec::new(),
             lights: Vec::new(),
             background: Rgb::ZERO,

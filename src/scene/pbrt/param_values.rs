@@ -183,15 +183,15 @@ impl Loader {
         })
     }
 
-    /// raylink's specular coefficient is a colour, not a texture: a textured one uses its
-    /// largest value.
+    /// A colour where raylink takes no texture (a spectrum checkerboard's `tex1`, `tex2`):
+    /// a textured one uses its largest value.
     pub(super) fn texture_to_constant(&mut self, t: Texture, st: &str, loc: &Loc) -> Rgb {
         match t {
             Texture::Constant(c) => c,
             other => {
                 self.warn(
                     loc,
-                    format!("{st}: a textured specular colour is replaced by its maximum"),
+                    format!("{st}: a texture here is replaced by its largest value"),
                 );
                 other.max_value()
             }

@@ -51,6 +51,10 @@ impl Loader {
             }
         }
         m.emission = radiance;
+        m.emission_map = self
+            .area_textures
+            .get(&(radiance.to_array().map(f32::to_bits), two_sided))
+            .cloned();
         m.two_sided_emission = two_sided;
         m.name = if m.name.is_empty() {
             "emitter".into()
@@ -67,12 +71,6 @@ impl Loader {
         let st = st.as_str();
         let pe = Self::pe(loc);
         let alpha = self.shape_alpha(p, st, loc)?;
-        if alpha.is_some() && self.state.area.is_some() {
-            self.warn(
-                loc,
-                format!("{st}: an emitting shape's cut-out parts still emit light"),
-            );
-        }
         p.ignore("emission");
         // pbrt's transform for the shape; the world mirror (if any) comes on top.
         let ctm = self.state.ctm;

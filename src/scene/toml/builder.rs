@@ -279,13 +279,13 @@ impl<'a> Builder<'a> {
             self.inputs.borrow_mut().push(path.clone());
             let table = TabulatedBrdf::read(&path, file.into()).map_err(fail("brdf"))?;
             let d = Material::default();
+            let (emission, emission_map) = self.emission(site, desc.emission)?;
             return Ok(Material {
                 name,
                 diffuse: Texture::Constant(Rgb::ZERO),
                 specular: Rgb::ZERO,
-                emission: desc
-                    .emission
-                    .map_or(Ok(d.emission), |c| colour(c.0).map_err(fail("emission")))?,
+                emission,
+                emission_map,
                 two_sided_emission: desc.two_sided_emission.unwrap_or(false),
                 brdf: Some(std::sync::Arc::new(table)),
                 ..d
@@ -310,6 +310,7 @@ impl<'a> Builder<'a> {
             None => None,
             Some(c) => Some(colour(c.0).map_err(fail("ambient"))?),
         };
+        let mut reflectance_map = None;
         let conductor = match desc.conductor {
             None => None,
             Some(ConductorDesc::Named(n)) => Some(Conductor::named(&n).ok_or_else(|| {
@@ -323,6 +324,14 @@ impl<'a> Builder<'a> {
                 eta: colour(i.eta.0).map_err(fail("conductor"))?,
                 k: colour(i.k.0).map_err(fail("conductor"))?,
             }),
+            Some(ConductorDesc::Reflectance(r)) => {
+                let r = self.texture(site, "conductor.reflectance", r)?;
+                let top = r.max_value();
+                if !r.is_constant() {
+                    reflectance_map = Some(r);
+                }
+                Some(Conductor::from_reflectance(top))
+            }
         };
         // A metal reflects everything its Fresnel lets it unless a tint is given.
         let specular_default = if conductor.is_some() {
@@ -369,11 +378,21 @@ impl<'a> Builder<'a> {
         } else {
             specular_default
         };
+        let (specular, specular_map) = match desc.specular {
+            None => (specular_default, None),
+            Some(t) => match self.texture(site, "specular", t)? {
+                Texture::Constant(c) => (c, None),
+                t => (t.max_value(), Some(t)),
+            },
+        };
+        let (emission, emission_map) = self.emission(site, desc.emission)?;
         let m = Material {
             name,
             diffuse,
             ambient,
-            specular: col(desc.specular, "specular", specular_default)?,
+            specular,
+            specular_map,
+            reflectance_map,
             transmission: col(desc.transmission, "transmission", d.transmission)?,
             diffuse_transmission,
             ior: positive(desc.ior.unwrap_or(d.ior)).map_err(fail("ior"))?,
@@ -384,7 +403,8 @@ impl<'a> Builder<'a> {
             fresnel: desc.fresnel.unwrap_or(d.fresnel),
             thin,
             conductor,
-            emission: col(desc.emission, "emission", d.emission)?,
+            emission,
+            emission_map,
             two_sided_emission: desc.two_sided_emission.unwrap_or(false),
             mix: None,
             brdf: None,
@@ -428,17 +448,44 @@ impl<'a> Builder<'a> {
                 .ok_or_else(|| fail(format!("\"{n}\" is not a material defined before this one")))
         };
         let (ia, ib) = (find(&a)?, find(&b)?);
-        let amount = mix.amount.unwrap_or(0.5);
-        if !(0.0..=1.0).contains(&amount) {
-            return Err(fail(format!("amount must be within [0, 1], got {amount}")));
+        let amount = match mix.amount {
+            None => Texture::Constant(Rgb::splat(0.5)),
+            Some(t) => self.texture(site, "mix.amount", t)?,
+        };
+        let top = amount.max_value().x;
+        if let Texture::Constant(c) = amount {
+            if !(0.0..=1.0).contains(&c.x) {
+                return Err(fail(format!("amount must be within [0, 1], got {}", c.x)));
+            }
+        } else if top > 1.0 {
+            return Err(fail(format!(
+                "amount must be within [0, 1], its texture reaches {top}"
+            )));
         }
         let (ma, mb) = (&self.materials[ia], &self.materials[ib]);
-        if (ma.emission, ma.two_sided_emission) != (mb.emission, mb.two_sided_emission) {
+        let emits = |m: &Material| (m.emission, m.two_sided_emission, m.emission_map.clone());
+        if emits(ma) != emits(mb) {
             return Err(fail(format!(
                 "\"{a}\" and \"{b}\" emit differently: the shapes of a mix emit alike"
             )));
         }
         Ok(Material::mix_of(name, (ia, ma), (ib, mb), amount))
+    }
+
+    /// A material's emission: a colour, or a texture (then the colour is its mean, for the
+    /// techniques that take one value per surface).
+    fn emission(
+        &self,
+        site: &Site,
+        desc: Option<DiffuseDesc>,
+    ) -> crate::Result<(Rgb, Option<Texture>)> {
+        Ok(match desc {
+            None => (Rgb::ZERO, None),
+            Some(t) => match self.texture(site, "emission", t)? {
+                Texture::Constant(c) => (c, None),
+                t => (t.mean_value(), Some(t)),
+            },
+        })
     }
 
     fn environment(&self, site: &Site, desc: EnvironmentDesc) -> crate::Result<Environment> {

@@ -189,7 +189,7 @@ pub(crate) struct MaterialDesc {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) ambient: Option<Splat3>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub(crate) specular: Option<Splat3>,
+    pub(crate) specular: Option<DiffuseDesc>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) transmission: Option<Splat3>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -210,7 +210,7 @@ pub(crate) struct MaterialDesc {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) conductor: Option<ConductorDesc>,
     #[serde(skip_serializing_if = "Option::is_none")]
-    pub(crate) emission: Option<Splat3>,
+    pub(crate) emission: Option<DiffuseDesc>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) two_sided_emission: Option<bool>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -234,8 +234,18 @@ pub(crate) struct MaterialDesc {
 #[serde(deny_unknown_fields)]
 pub(crate) struct MixDesc {
     pub(crate) materials: Vec<String>,
-    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
-    pub(crate) amount: Option<f32>,
+    /// A number or a float texture.
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_amount")]
+    pub(crate) amount: Option<DiffuseDesc>,
+}
+
+/// A mix's amount: one number when constant, else its texture table.
+fn opt_amount<S: Serializer>(v: &Option<DiffuseDesc>, s: S) -> Result<S::Ok, S::Error> {
+    match v {
+        Some(DiffuseDesc::Colour(c)) => opt_f32(&Some(c.x), s),
+        Some(t) => t.serialize(s),
+        None => s.serialize_none(),
+    }
 }
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Deserialize, Serialize)]

@@ -2,16 +2,32 @@
 //! `roughness` (one α, or α along the tangent and the bitangent).
 
 use super::schema::Splat3;
-use super::schema_texture::TextureTable;
+use super::schema_texture::{DiffuseDesc, TextureTable};
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde::ser::{SerializeSeq, Serializer};
 use serde::{Deserialize, Serialize};
 use std::fmt;
 
-/// `conductor = "Cu"` or `conductor = { eta = [r, g, b], k = [r, g, b] }`.
+/// `conductor = "Cu"`, `conductor = { eta = [r, g, b], k = [r, g, b] }` or `conductor =
+/// { reflectance = colour or texture }` (the normal-incidence reflectance, pbrt's).
 pub(crate) enum ConductorDesc {
     Named(String),
     Index(ConductorIndex),
+    Reflectance(DiffuseDesc),
+}
+
+/// The table form, before it is told apart.
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ConductorTable {
+    eta: Option<Splat3>,
+    k: Option<Splat3>,
+    reflectance: Option<DiffuseDesc>,
+}
+
+#[derive(Serialize)]
+struct ReflectanceTable<'a> {
+    reflectance: &'a DiffuseDesc,
 }
 
 #[derive(Deserialize, Serialize)]
@@ -33,8 +49,16 @@ impl<'de> Deserialize<'de> for ConductorDesc {
                 Ok(ConductorDesc::Named(v.to_string()))
             }
             fn visit_map<A: MapAccess<'de>>(self, map: A) -> Result<ConductorDesc, A::Error> {
-                ConductorIndex::deserialize(de::value::MapAccessDeserializer::new(map))
-                    .map(ConductorDesc::Index)
+                let t = ConductorTable::deserialize(de::value::MapAccessDeserializer::new(map))?;
+                match (t.eta, t.k, t.reflectance) {
+                    (Some(eta), Some(k), None) => {
+                        Ok(ConductorDesc::Index(ConductorIndex { eta, k }))
+                    }
+                    (None, None, Some(r)) => Ok(ConductorDesc::Reflectance(r)),
+                    _ => Err(de::Error::custom(
+                        "a conductor table takes `eta` and `k`, or `reflectance` alone",
+                    )),
+                }
             }
         }
         d.deserialize_any(Vis)
@@ -46,6 +70,7 @@ impl Serialize for ConductorDesc {
         match self {
             ConductorDesc::Named(n) => s.serialize_str(n),
             ConductorDesc::Index(i) => i.serialize(s),
+            ConductorDesc::Reflectance(r) => ReflectanceTable { reflectance: r }.serialize(s),
         }
     }
 }

@@ -217,7 +217,7 @@ pub fn surfaces_with(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<Surf
 /// through [`Blend`]; a material of a nested mix is its material with the larger weight.
 fn surface_of(scene: &Scene, mi: usize, p: Vec3, uv: Vec2, n: Vec3) -> Surface {
     let m = &scene.materials[mi];
-    let Some(mix) = m.mix else {
+    let Some(mix) = &m.mix else {
         return plain_surface(m, p, uv, n);
     };
     let [a, b] = mix
