@@ -495,4 +495,72 @@ mod tests {
         );
         assert!((right as f32 / n as f32 - 1.0 / 3.0).abs() < 0.005);
     }
+
+    /// Sampled points carry the uv a hit there would have: a mesh's interpolated uvs, and
+    /// Embree's parameterisation of a quad that is not a parallelogram (both triangles).
+    #[test]
+    fn sampled_points_carry_the_uv_of_a_hit_there() {
+        let textured = Material {
+            emission: Rgb::ONE,
+            emission_map: Some(Texture::Constant(Rgb::ONE)),
+            ..Material::default()
+        };
+        let positions = vec![
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(0.0, 2.0, 0.0),
+        ];
+        let mesh = Shape {
+            geometry: Geometry::Triangles(crate::scene::TriangleMesh {
+                uvs: Some(
+                    positions
+                        .iter()
+                        .map(|p| Vec2::new(p.x, p.y) * 0.25)
+                        .collect(),
+                ),
+                positions,
+                normals: None,
+                indices: vec![[0, 1, 2]],
+            }),
+            material: 0,
+            alpha: None,
+        };
+        // A trapezoid: v0 v1 v2 v3 with v2 nearer the y axis than a parallelogram's.
+        let [v0, v1, v2, v3] = [
+            Vec3::new(0.0, 0.0, 0.0),
+            Vec3::new(4.0, 0.0, 0.0),
+            Vec3::new(2.0, 2.0, 0.0),
+            Vec3::new(0.0, 2.0, 0.0),
+        ];
+        let quad = Shape {
+            geometry: Geometry::Quads(QuadMesh {
+                positions: vec![v0, v1, v2, v3],
+                indices: vec![[0, 1, 2, 3]],
+            }),
+            material: 0,
+            alpha: None,
+        };
+        let mesh = AreaLight::new(0, &mesh, &textured).unwrap();
+        let quad = AreaLight::new(1, &quad, &textured).unwrap();
+        let mut rng = crate::math::Rng::for_key(9, &[]);
+        let (mut first, mut second) = (0, 0);
+        for _ in 0..2000 {
+            let u = Vec2::new(rng.uniform(), rng.uniform());
+            let lp = mesh.sample(u);
+            assert!((lp.uv - Vec2::new(lp.p.x, lp.p.y) * 0.25).length() < 1e-5);
+            // Embree's quad: p = v0 + u(v1 − v0) + v(v3 − v0) below the diagonal v1–v3,
+            // p = v2 + (1 − u)(v3 − v2) + (1 − v)(v1 − v2) above it.
+            let lp = quad.sample(u);
+            let (a, b) = (lp.uv.x, lp.uv.y);
+            let p = if a + b <= 1.0 {
+                first += 1;
+                v0 + (v1 - v0) * a + (v3 - v0) * b
+            } else {
+                second += 1;
+                v2 + (v3 - v2) * (1.0 - a) + (v1 - v2) * (1.0 - b)
+            };
+            assert!((p - lp.p).length() < 1e-4, "{p} against {}", lp.p);
+        }
+        assert!(first > 100 && second > 100);
+    }
 }

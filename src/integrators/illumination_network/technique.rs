@@ -141,18 +141,7 @@ impl Lifecycle for NetworkTechnique {
                  lights light it only in hybrid mode",
             );
         }
-        if let Some(m) = scene.materials.iter().find(|m| {
-            m.emission_map.is_some()
-                || m.specular_map.is_some()
-                || m.reflectance_map.is_some()
-                || m.mix.as_ref().is_some_and(|x| x.amount_map.is_some())
-        }) {
-            control.warn(&format!(
-                "material \"{}\" varies by texture: the network takes one value per patch (an \
-                 emission's or a mix amount's mean, a specular colour's largest value)",
-                m.name
-            ));
-        }
+        warn_one_value_per_patch(scene, control);
         let (net, solution) = match (&self.settings.relight, &self.settings.file) {
             (Some(relight), Some(f)) => {
                 let params = self.params(view);
@@ -397,4 +386,28 @@ fn relight_network(
         }
     };
     Ok((network, solution))
+}
+
+/// Warns of what the network cannot vary over a patch: a textured emission, specular
+/// colour or mix amount, and an emitter's cut-out.
+fn warn_one_value_per_patch(scene: &Scene, control: &Control) {
+    if let Some(m) = scene.materials.iter().find(|m| {
+        m.emission_map.is_some()
+            || m.specular_map.is_some()
+            || m.reflectance_map.is_some()
+            || m.mix.as_ref().is_some_and(|x| x.amount_map.is_some())
+    }) {
+        control.warn(&format!(
+            "material \"{}\" varies by texture: the network takes one value per patch (an \
+             emission's or a mix amount's mean, a specular colour's largest value)",
+            m.name
+        ));
+    }
+    let cut_out_emitter = scene
+        .shapes
+        .iter()
+        .any(|s| s.alpha.is_some() && scene.materials[s.material].is_emissive());
+    if cut_out_emitter {
+        control.warn("an emitter has an alpha cut-out: the network lets all of it emit");
+    }
 }
