@@ -449,3 +449,33 @@ fn textured_parameters_survive_conversion_to_toml() {
         "the mean of 0.2 and 0.8"
     );
 }
+
+/// A plain area light and an image one whose mean radiance is the plain one's stay apart:
+/// each shape emits its own.
+#[test]
+fn pbrt_plain_and_textured_lights_of_equal_mean_stay_apart() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut pgm = b"P5\n2 2\n255\n".to_vec();
+    pgm.extend([255u8; 4]);
+    let scene = pbrt::load_in(
+        dir.path(),
+        &format!(
+            "{}AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [0.5 0.5 0.5]\n{}AttributeEnd\n\
+             AttributeBegin\nAreaLightSource \"diffuse\" \"string filename\" \"one.pgm\" \"float scale\" 0.5\n{}AttributeEnd\n\
+             AttributeBegin\nAreaLightSource \"diffuse\" \"rgb L\" [0.5 0.5 0.5]\n{}AttributeEnd\n",
+            pbrt::HEADER,
+            pbrt::TRI,
+            pbrt::TRI,
+            pbrt::TRI
+        ),
+        &[("one.pgm", &pgm)],
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let lamp = |i: usize| &scene.materials[scene.shapes[i].material];
+    assert!(lamp(0).emission_map.is_none());
+    assert!(lamp(1).emission_map.is_some());
+    assert!(lamp(2).emission_map.is_none());
+    for i in 0..3 {
+        assert!((lamp(i).emission - Vec3::splat(0.5)).abs().max_element() < 1e-6);
+    }
+}

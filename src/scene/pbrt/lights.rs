@@ -66,19 +66,18 @@ impl Loader {
     }
 
     /// The radiance that names an area light among those of the file: its own, moved by
-    /// the least amount needed to tell a textured light from every other (the graphics
-    /// state carries the radiance; the texture is found by it in `area_textures`).
+    /// the least amount needed to tell a textured light from every other, plain or
+    /// textured (the graphics state carries the radiance, emissive copies are shared by
+    /// it, and the texture is found by it in `area_textures`).
     fn area_key(&mut self, mut radiance: Rgb, two_sided: bool, texture: Option<Texture>) -> Rgb {
         let key = |r: Rgb| (r.to_array().map(f32::to_bits), two_sided);
         while let Some(t) = self.area_textures.get(&key(radiance)) {
-            if texture.as_ref() == Some(t) {
+            if *t == texture {
                 return radiance;
             }
             radiance.z = f32::from_bits(radiance.z.to_bits() + 1);
         }
-        if let Some(t) = texture {
-            self.area_textures.insert(key(radiance), t);
-        }
+        self.area_textures.insert(key(radiance), texture);
         radiance
     }
 

@@ -139,8 +139,9 @@ struct Loader {
     materials: Vec<Material>,
     default_material: Option<usize>,
     emissive: HashMap<(usize, [u32; 3], bool), usize>,
-    /// Image-textured area lights, by their (radiance, two-sided) in the graphics state.
-    area_textures: HashMap<([u32; 3], bool), Texture>,
+    /// Area lights' textures (`None`: a plain light), by their (radiance, two-sided) in
+    /// the graphics state, which tells them apart.
+    area_textures: HashMap<([u32; 3], bool), Option<Texture>>,
     shapes: Vec<Shape>,
     lights: Vec<Light>,
     background: Rgb,

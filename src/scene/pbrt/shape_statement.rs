@@ -54,7 +54,8 @@ impl Loader {
         m.emission_map = self
             .area_textures
             .get(&(radiance.to_array().map(f32::to_bits), two_sided))
-            .cloned();
+            .cloned()
+            .flatten();
         m.two_sided_emission = two_sided;
         m.name = if m.name.is_empty() {
             "emitter".into()
