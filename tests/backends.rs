@@ -43,6 +43,7 @@ fn mixed_scene() -> Scene {
         geometry: Geometry::Quads(quads),
         material: 0,
         alpha: None,
+        motion: None,
     });
     // A fan of 24 thin triangles around (0, 1, -1).
     let centre = Vec3::new(0.0, 1.0, -1.0);
@@ -69,6 +70,7 @@ fn mixed_scene() -> Scene {
             },
             material: 0,
             alpha: None,
+            motion: None,
         });
     }
     Scene {
@@ -311,6 +313,7 @@ fn ray_intervals_are_respected() {
         dir: Vec3::new(0.0, -100.0, 0.0),
         tmin: 0.0,
         tmax: 1.0,
+        time: 0.0,
     };
     for accel in [&embree as &dyn Accel, &bvh] {
         let hit = accel.intersect(&close).expect("the floor is just below");
@@ -381,6 +384,7 @@ fn empty_scene_and_single_primitive() {
         },
         material: 0,
         alpha: None,
+        motion: None,
     });
     let (embree, bvh) = backends(&scene);
     let (e, b) = (

@@ -369,6 +369,7 @@ fn environment_map_lighting_matches_quadrature() {
             },
             material: 0,
             alpha: None,
+            motion: None,
         }],
         prototypes: Vec::new(),
         instances: Vec::new(),

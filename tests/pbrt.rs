@@ -215,7 +215,8 @@ fn transforms_match_hand_computed_matrices() {
         "CoordSysTransform \"camera\"",
         [v(0., 0., 5.), v(1., 0., 5.), v(0., 1., 5.)],
     );
-    // ActiveTransform EndTime: transforms for the end of the shutter are ignored.
+    // ActiveTransform EndTime: transforms for the end of the shutter leave the shape at
+    // shutter open as it was (they move it by shutter close).
     assert_maps(
         "ActiveTransform EndTime Translate 5 5 5 ActiveTransform All",
         [v(0., 0., 0.), v(1., 0., 0.), v(0., 1., 0.)],

@@ -141,6 +141,7 @@ fn busy_scene() -> Scene {
             },
             material: m,
             alpha: None,
+            motion: None,
         });
     }
     let lamp = add_material(

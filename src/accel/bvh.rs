@@ -23,7 +23,7 @@
 use super::cutout::Cutout;
 use super::{Accel, Hit};
 use crate::math::{Ray, Vec3};
-use crate::scene::{Geometry, Instance, Scene, Shape};
+use crate::scene::{Geometry, Instance, QuadMesh, Scene, Shape, TriangleMesh};
 use crate::Result;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::builder::build_cwbvh;
@@ -100,6 +100,9 @@ pub struct BvhAccel {
     /// One BVH per prototype, and the instances placing them (slots of kind `Instance`).
     prototypes: Vec<BvhAccel>,
     instances: Vec<Instance>,
+    /// `vertices` at shutter close, empty when no shape moves: a primitive is met
+    /// interpolated between the two at the ray's time.
+    motion: Vec<Vec3A>,
 }
 
 fn to_a(p: Vec3) -> Vec3A {
@@ -116,6 +119,27 @@ fn from_glam(p: glam::Vec3A) -> Vec3A {
 
 fn to_glam(p: Vec3A) -> glam::Vec3A {
     glam::Vec3A::new(p.x, p.y, p.z)
+}
+
+/// Every shape's vertices at shutter close, in the order of `collect_prims`'s (empty when
+/// nothing moves).
+fn collect_motion(shapes: &[Shape]) -> Vec<Vec3A> {
+    if !shapes.iter().any(|s| s.moves()) {
+        return Vec::new();
+    }
+    let mut vertices = Vec::new();
+    for shape in shapes {
+        match shape.motion.as_ref().unwrap_or(&shape.geometry) {
+            Geometry::Sphere { center, radius } => {
+                vertices.extend([to_a(*center), Vec3A::new(*radius, 0.0, 0.0)]);
+            }
+            Geometry::Triangles(TriangleMesh { positions, .. })
+            | Geometry::Quads(QuadMesh { positions, .. }) => {
+                vertices.extend(positions.iter().map(|p| to_a(*p)))
+            }
+        }
+    }
+    vertices
 }
 
 /// The shapes' vertices, and their primitives in shape order (the BVH reorders them).
@@ -321,6 +345,7 @@ impl BvhAccel {
             cutouts: Vec::new(),
             prototypes: Vec::new(),
             instances: Vec::new(),
+            motion: Vec::new(),
         }
     }
 
@@ -363,8 +388,15 @@ impl BvhAccel {
         instances: &[Aabb],
         source: &std::path::Path,
     ) -> Result<()> {
+        if let Some(i) = shapes.iter().position(|s| !s.motion_matches()) {
+            return Err(crate::Error::input(
+                source,
+                format!("shape {i} moves into a shape of another kind or topology"),
+            ));
+        }
         let (vertices, mut prims, mut meta) = collect_prims(shapes);
         self.vertices = vertices;
+        self.motion = collect_motion(shapes);
         self.cutouts = Cutout::of_shapes(shapes);
         if self.cutouts.iter().all(Option::is_none) {
             self.cutouts.clear();
@@ -389,7 +421,11 @@ impl BvhAccel {
             .zip(&meta)
             .map(|(p, m)| match m.kind {
                 Kind::Instance => instances[p[0] as usize],
-                kind => self.gather(p).aabb(kind),
+                kind if self.motion.is_empty() => self.gather(p, 0.0).aabb(kind),
+                kind => self
+                    .gather(p, 0.0)
+                    .aabb(kind)
+                    .union(&self.gather(p, 1.0).aabb(kind)),
             })
             .collect();
         if let Some(i) = aabbs
@@ -434,6 +470,7 @@ impl BvhAccel {
             + self.kinds.capacity() * std::mem::size_of::<Kind>()
             + self.ids.capacity() * std::mem::size_of::<Ids>()
             + self.cutouts.capacity() * std::mem::size_of::<Option<Cutout>>()
+            + self.motion.capacity() * std::mem::size_of::<Vec3A>()
             + self.instances.capacity() * std::mem::size_of::<Instance>()
             + self
                 .prototypes
@@ -442,11 +479,19 @@ impl BvhAccel {
                 .sum::<usize>()
     }
 
-    /// A primitive's vertices.
+    /// A primitive's vertices at shutter time `time`.
     #[inline(always)]
-    fn gather(&self, p: &[u32; 3]) -> Prim {
+    fn gather(&self, p: &[u32; 3], time: f32) -> Prim {
+        if self.motion.is_empty() {
+            return Prim {
+                p: p.map(|k| self.vertices[k as usize]),
+            };
+        }
         Prim {
-            p: p.map(|k| self.vertices[k as usize]),
+            p: p.map(|k| {
+                let (a, b) = (self.vertices[k as usize], self.motion[k as usize]);
+                a + (b - a) * time
+            }),
         }
     }
 
@@ -461,8 +506,9 @@ impl BvhAccel {
     /// (infinity for none), and the lower bound that finds it again (a sphere's exit point
     /// needs one above the entry point).
     #[inline(always)]
-    fn kept_hit(&self, i: usize, org: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> (f32, f32) {
-        let prim = self.gather(&self.prims[i]);
+    fn kept_hit(&self, i: usize, ray: &Ray, org: Vec3A, dir: Vec3A, tmax: f32) -> (f32, f32) {
+        let tmin = ray.tmin;
+        let prim = self.gather(&self.prims[i], ray.time);
         let kind = self.kinds[i];
         let t = prim.hit_t(kind, org, dir, tmin, tmax);
         if self.cutouts.is_empty() || !t.is_finite() {
@@ -470,25 +516,23 @@ impl BvhAccel {
         }
         match &self.cutouts[self.ids[i].geom_id as usize] {
             None => (t, tmin),
-            Some(cutout) => self.cutout_hit(cutout, i, org, dir, tmin, tmax, t),
+            Some(cutout) => self.cutout_hit(cutout, i, (org, dir, ray.time), tmin, tmax, t),
         }
     }
 
     /// `kept_hit` for a hit at `t` on a shape with a cut-out (kept out of line: opaque
     /// scenes never come here).
     #[inline(never)]
-    #[allow(clippy::too_many_arguments)]
     fn cutout_hit(
         &self,
         cutout: &Cutout,
         i: usize,
-        org: Vec3A,
-        dir: Vec3A,
+        (org, dir, time): (Vec3A, Vec3A, f32),
         tmin: f32,
         tmax: f32,
         t: f32,
     ) -> (f32, f32) {
-        let prim = self.gather(&self.prims[i]);
+        let prim = self.gather(&self.prims[i], time);
         let kind = self.kinds[i];
         let prim_id = self.ids[i].prim_id;
         let keeps = |t: f32, tmin: f32| {
@@ -545,16 +589,16 @@ impl BvhAccel {
 }
 
 impl BvhAccel {
-    /// The closest hit with `tmin <= t <= tmax` of a ray in this level's space (for a
-    /// prototype's level, the normal in the prototype's space).
-    fn closest(&self, org: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> Option<Hit> {
+    /// The closest hit with `ray.tmin <= t <= tmax` of `ray` at `org` along `dir` in this
+    /// level's space (for a prototype's level, the normal in the prototype's space).
+    fn closest(&self, ray: &Ray, org: Vec3A, dir: Vec3A, tmax: f32) -> Option<Hit> {
         let mut tmax = tmax;
         let mut best = None;
         let mut placed = None;
         let instanced = !self.instances.is_empty();
         self.traverse(org, dir, tmax, |i| {
             if instanced && self.kinds[i] == Kind::Instance {
-                return match self.instance_closest(i, org, dir, tmin, tmax) {
+                return match self.instance_closest(i, ray, org, dir, tmax) {
                     Some(hit) => {
                         tmax = hit.t;
                         placed = Some(hit);
@@ -564,7 +608,7 @@ impl BvhAccel {
                     None => Visit::Continue,
                 };
             }
-            let (t, tmin) = self.kept_hit(i, org, dir, tmin, tmax);
+            let (t, tmin) = self.kept_hit(i, ray, org, dir, tmax);
             // A hit exactly at the current tmax replaces the last one, as in Embree.
             if t <= tmax && t.is_finite() {
                 tmax = t;
@@ -580,9 +624,9 @@ impl BvhAccel {
         }
         let (i, tmin) = best?;
         let m = self.ids[i];
-        let (u, v, ng) = self
-            .gather(&self.prims[i])
-            .details(self.kinds[i], org, dir, tmin, tmax);
+        let (u, v, ng) =
+            self.gather(&self.prims[i], ray.time)
+                .details(self.kinds[i], org, dir, tmin, tmax);
         Some(Hit {
             t: tmax,
             u,
@@ -600,31 +644,31 @@ impl BvhAccel {
     fn instance_closest(
         &self,
         i: usize,
+        ray: &Ray,
         org: Vec3A,
         dir: Vec3A,
-        tmin: f32,
         tmax: f32,
     ) -> Option<Hit> {
         let k = self.prims[i][0];
         let instance = &self.instances[k as usize];
         let (o, d) = to_object(instance, org, dir);
-        let mut hit = self.prototypes[instance.prototype as usize].closest(o, d, tmin, tmax)?;
+        let mut hit = self.prototypes[instance.prototype as usize].closest(ray, o, d, tmax)?;
         hit.ng = instance.normal_to_world(hit.ng);
         hit.instance = Some(k);
         Some(hit)
     }
 
-    /// Whether anything lies along a ray in this level's space within `[tmin, tmax]`.
-    fn any_hit(&self, org: Vec3A, dir: Vec3A, tmin: f32, tmax: f32) -> bool {
+    /// Whether anything lies along `ray`, at `org` along `dir` in this level's space.
+    fn any_hit(&self, ray: &Ray, org: Vec3A, dir: Vec3A) -> bool {
         let mut hit = false;
         let instanced = !self.instances.is_empty();
-        self.traverse(org, dir, tmax, |i| {
+        self.traverse(org, dir, ray.tmax, |i| {
             hit = if instanced && self.kinds[i] == Kind::Instance {
                 let instance = &self.instances[self.prims[i][0] as usize];
                 let (o, d) = to_object(instance, org, dir);
-                self.prototypes[instance.prototype as usize].any_hit(o, d, tmin, tmax)
+                self.prototypes[instance.prototype as usize].any_hit(ray, o, d)
             } else {
-                self.kept_hit(i, org, dir, tmin, tmax).0.is_finite()
+                self.kept_hit(i, ray, org, dir, ray.tmax).0.is_finite()
             };
             if hit {
                 Visit::Stop
@@ -648,10 +692,10 @@ fn to_object(instance: &Instance, org: Vec3A, dir: Vec3A) -> (Vec3A, Vec3A) {
 
 impl Accel for BvhAccel {
     fn intersect(&self, ray: &Ray) -> Option<Hit> {
-        self.closest(to_a(ray.origin), to_a(ray.dir), ray.tmin, ray.tmax)
+        self.closest(ray, to_a(ray.origin), to_a(ray.dir), ray.tmax)
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
-        self.any_hit(to_a(ray.origin), to_a(ray.dir), ray.tmin, ray.tmax)
+        self.any_hit(ray, to_a(ray.origin), to_a(ray.dir))
     }
 }

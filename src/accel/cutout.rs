@@ -43,6 +43,7 @@ impl Cutout {
             dir,
             tmin: 0.0,
             tmax: t,
+            time: 0.0,
         };
         let uv = self.geometry.hit_uv(prim_id, u, v, ray.at(t));
         self.alpha.keeps_hit(uv, origin, dir, self.geom_id, prim_id)

@@ -7,7 +7,7 @@ pub mod embree;
 
 use crate::control::Control;
 use crate::math::{Ray, Vec3};
-use crate::scene::{Geometry, Scene, SurfacePoint};
+use crate::scene::{Geometry, Scene, SurfacePoint, TriangleMesh};
 
 /// The closest hit along a ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -43,28 +43,38 @@ impl Hit {
                 (&prototype.shapes[hit.geom_id as usize], Some(instance))
             }
         };
-        // Shading normals and uvs come from the shape in its own space.
+        // Shading normals and uvs come from the shape in its own space, and a moving shape
+        // is shaded as it is at the ray's time (instanced shapes do not move).
         let local = instance.map_or(p, |i| i.point_to_object(p));
         let to_world = |n: Vec3| instance.map_or(n, |i| i.normal_to_world(n).normalize_or_zero());
+        let sphere = shape.sphere_at(ray.time);
         let ns = match &shape.geometry {
-            Geometry::Sphere { center, .. } => match instance {
-                None => (p - *center).normalize(),
-                Some(_) => on_side(to_world(local - *center), ng),
+            Geometry::Sphere { .. } => match instance {
+                None => (p - sphere.map_or(p, |s| s.0)).normalize(),
+                Some(_) => on_side(to_world(local - sphere.map_or(local, |s| s.0)), ng),
             },
             Geometry::Triangles(mesh) => match &mesh.normals {
                 Some(n) => {
                     let [a, b, c] = mesh.indices[hit.prim_id as usize].map(|i| i as usize);
                     let w = Vec3::new(1.0 - hit.u - hit.v, hit.u, hit.v);
-                    on_side(
-                        to_world((n[a] * w.x + n[b] * w.y + n[c] * w.z).normalize_or_zero()),
-                        ng,
-                    )
+                    let mut n = n[a] * w.x + n[b] * w.y + n[c] * w.z;
+                    if let Some(Geometry::Triangles(TriangleMesh {
+                        normals: Some(n1), ..
+                    })) = &shape.motion
+                    {
+                        let m = n1[a] * w.x + n1[b] * w.y + n1[c] * w.z;
+                        n = crate::scene::lerp(n, m, ray.time);
+                    }
+                    on_side(to_world(n.normalize_or_zero()), ng)
                 }
                 None => ng,
             },
             Geometry::Quads(_) => ng,
         };
-        let uv = shape.geometry.hit_uv(hit.prim_id, hit.u, hit.v, local);
+        let uv = match sphere {
+            Some((center, _)) => crate::scene::sphere_uv((local - center).normalize()),
+            None => shape.geometry.hit_uv(hit.prim_id, hit.u, hit.v, local),
+        };
         SurfacePoint {
             p,
             ng,
@@ -74,6 +84,7 @@ impl Hit {
             shape: hit.geom_id as usize,
             instance: hit.instance,
             material: shape.material,
+            time: ray.time,
         }
     }
 }

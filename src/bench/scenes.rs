@@ -153,6 +153,7 @@ pub fn sphere_field(triangles: usize) -> Scene {
         }),
         material: 0,
         alpha: None,
+        motion: None,
     });
     let mut rng = Rng::for_key(17, &[count as u64]);
     for i in 0..count {
@@ -167,6 +168,7 @@ pub fn sphere_field(triangles: usize) -> Scene {
             geometry: Geometry::Triangles(uv_sphere(center, radius)),
             material: 0,
             alpha: None,
+            motion: None,
         });
     }
     scene
@@ -262,6 +264,7 @@ pub fn mesh_shape(positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Shape {
         }),
         material: 0,
         alpha: None,
+        motion: None,
     }
 }
 

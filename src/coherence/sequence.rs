@@ -440,6 +440,11 @@ pub fn render_sequence(
     let mut sequence = Sequence::new(job)?;
     let quiet = control.silenced();
     let scene0 = anim.scene_at(frames[0])?;
+    // Records of what each ray met hold for one time: moving shapes stay at shutter open.
+    if scene0.moves() {
+        control.warn(&crate::scene::motion::still_warning("animation renderer"));
+    }
+    let scene0 = scene0.into_shutter_open();
     let prepare = Instant::now();
     if job.placement == Placement::Lookahead && job.mode != SequenceMode::Full {
         // Reads every frame once first, to place the grid where things will change.
@@ -447,7 +452,7 @@ pub fn render_sequence(
         let mut previous = FrameSummary::new(&scene0, None);
         for &f in &frames[1..] {
             quiet.cancel.check(&format!("reading frame {f}"))?;
-            let next = FrameSummary::new(&anim.scene_at(f)?, None);
+            let next = FrameSummary::new(&anim.scene_at(f)?.into_shutter_open(), None);
             changes.push(previous.diff(&next));
             previous = next;
         }
@@ -466,7 +471,7 @@ pub fn render_sequence(
         control.cancel.check(&format!("frame {f}"))?;
         let scene = match scene0.take() {
             Some(s) => s,
-            None => anim.scene_at(f)?,
+            None => anim.scene_at(f)?.into_shutter_open(),
         };
         let (image, row) = if job.mode == SequenceMode::Full {
             let (img, rays, time) = sequence.render_full(&scene, &quiet)?;

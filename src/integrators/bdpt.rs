@@ -293,7 +293,7 @@ fn random_walk<'a>(
         beta *= bs.weight;
         let (cur, prev) = (path[n - 1], path[n - 2]);
         path[n - 2].pdf_rev = cur.area_density(pdf_rev, &prev);
-        ray = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi);
+        ray = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi).at_time(sp.time);
         // Russian roulette keeps long subpaths rare; the MIS weights need not know about it
         // (they still sum to one over the strategies of a path).
         if beta == Rgb::ZERO || !russian_roulette(&mut beta, bounces, sampler) {
@@ -486,7 +486,7 @@ impl MonteCarlo for Bdpt {
                 random_walk(
                     ctx,
                     WalkStart {
-                        ray: Ray::new(origin, dir),
+                        ray: Ray::new(origin, dir).at_time(camera_ray.time),
                         beta: le_dir * (cos / (pdf_pos * pdf_dir)),
                         pdf: pdf_dir,
                         max: max_depth,
@@ -541,8 +541,14 @@ impl MonteCarlo for Bdpt {
                         }
                         // A lens point of its own (the pinhole draws nothing).
                         let lens = lens_sample(camera, sampler);
-                        let Some(c) = connect_to_camera(ctx, camera, lens, (qs.p, qs.n), stats)
-                        else {
+                        let Some(c) = connect_to_camera(
+                            ctx,
+                            camera,
+                            lens,
+                            (qs.p, qs.n),
+                            camera_ray.time,
+                            stats,
+                        ) else {
                             continue;
                         };
                         let value = if s == 1 {
@@ -621,7 +627,7 @@ impl MonteCarlo for Bdpt {
                         } else {
                             offset_origin(qs.p, qs.n, -wdir)
                         };
-                        if ctx.occluded(&Ray::segment(from, to), stats) {
+                        if ctx.occluded(&Ray::segment(from, to).at_time(camera_ray.time), stats) {
                             continue;
                         }
                         let w = Connection {

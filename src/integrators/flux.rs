@@ -320,6 +320,7 @@ impl Paths<'_> {
             self.ctx,
             &es,
             self.job.max_depth + 1,
+            0.0,
             sampler,
             stats,
             |sp, _, _, beta, _, _| {

@@ -52,6 +52,7 @@ pub(crate) fn connect_to_camera(
     camera: &CameraBasis,
     lens: Vec3,
     (p, ng): (Vec3, Vec3),
+    time: f32,
     stats: &mut RayStats,
 ) -> Option<CameraConnection> {
     let (x, y, cos_c) = camera.raster_from(lens, p)?;
@@ -63,7 +64,7 @@ pub(crate) fn connect_to_camera(
     let to_cam = lens - p;
     let dist2 = to_cam.length_squared();
     let dir = to_cam / dist2.sqrt();
-    let shadow = Ray::segment(offset_origin(p, ng, dir), lens);
+    let shadow = Ray::segment(offset_origin(p, ng, dir), lens).at_time(time);
     if ctx.occluded(&shadow, stats) {
         return None;
     }
@@ -114,7 +115,9 @@ impl MonteCarlo for LightTracer {
         if !es.delta_pos && !es.delta_dir && es.n != Vec3::ZERO && !ctx.lights.is_infinite(es.light)
         {
             let lens = lens_sample(camera, sampler);
-            if let Some(c) = connect_to_camera(ctx, camera, lens, (es.p, es.n), stats) {
+            if let Some(c) =
+                connect_to_camera(ctx, camera, lens, (es.p, es.n), camera_ray.time, stats)
+            {
                 // A two-sided light is seen from either side, whichever side it emitted to.
                 let cos_l = match &ctx.lights.emitters[es.light] {
                     Emitter::Area(a) => a.emitting_cos(c.dir.dot(es.n)),
@@ -133,6 +136,7 @@ impl MonteCarlo for LightTracer {
             ctx,
             &es,
             self.options.max_depth,
+            camera_ray.time,
             sampler,
             stats,
             |sp, bsdf, wo, beta, stats, sampler| {
@@ -140,7 +144,8 @@ impl MonteCarlo for LightTracer {
                     return;
                 }
                 let lens = lens_sample(camera, sampler);
-                if let Some(c) = connect_to_camera(ctx, camera, lens, (sp.p, sp.ng), stats) {
+                if let Some(c) = connect_to_camera(ctx, camera, lens, (sp.p, sp.ng), sp.time, stats)
+                {
                     let f = bsdf.eval(wo, c.dir, Transport::Importance);
                     if f != Rgb::ZERO {
                         splats.push(Splat {
@@ -165,6 +170,7 @@ pub(crate) fn walk(
     ctx: &Context,
     es: &EmissionSample,
     max_depth: u32,
+    time: f32,
     sampler: &mut Sampler,
     stats: &mut RayStats,
     mut vertex: impl FnMut(&SurfacePoint, &Bsdf, Vec3, Rgb, &mut RayStats, &mut Sampler),
@@ -180,7 +186,8 @@ pub(crate) fn walk(
         Ray::new(es.p, es.dir)
     } else {
         Ray::new(offset_origin(es.p, es.n, es.dir), es.dir)
-    };
+    }
+    .at_time(time);
     let mut depth = 0;
     while depth < max_depth {
         let Some(sp) = ctx.intersect(&ray, stats) else {
@@ -196,7 +203,7 @@ pub(crate) fn walk(
             break;
         };
         beta *= bs.weight;
-        ray = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi);
+        ray = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi).at_time(sp.time);
         if !russian_roulette(&mut beta, depth, sampler) {
             break;
         }

@@ -78,7 +78,7 @@ pub(crate) fn sample_direct(
     if f == Rgb::ZERO || ls.pdf <= 0.0 {
         return Rgb::ZERO;
     }
-    let shadow = Ray::segment(offset_origin(sp.p, sp.ng, ls.wi), ls.p);
+    let shadow = Ray::segment(offset_origin(sp.p, sp.ng, ls.wi), ls.p).at_time(sp.time);
     if ctx.occluded(&shadow, stats) {
         return Rgb::ZERO;
     }
@@ -154,7 +154,7 @@ impl MonteCarlo for PathTracer {
             bsdf_pdf = bs.pdf;
             specular = bs.delta;
             prev_p = sp.p;
-            ray = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi);
+            ray = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi).at_time(sp.time);
             if !russian_roulette(&mut beta, depth, sampler) {
                 break;
             }

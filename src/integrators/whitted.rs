@@ -69,6 +69,8 @@ struct RayTree<'a> {
     ctx: &'a Context<'a>,
     rng: &'a mut Rng,
     stats: &'a mut RayStats,
+    /// The camera ray's shutter time, which every ray of the tree keeps.
+    time: f32,
 }
 
 impl RayTree<'_> {
@@ -137,7 +139,7 @@ impl RayTree<'_> {
         let (ks_weight, kt_weight) = (weight * ks.max_element(), weight * kt.max_element());
         if ks_weight > self.options.cutoff {
             let dir = self.perturbed(n, ng, roughness, |n| reflect(d, n), 1.0);
-            let r = Ray::new(offset_origin(sp.p, ng, dir), dir);
+            let r = Ray::new(offset_origin(sp.p, ng, dir), dir).at_time(self.time);
             color += ks * self.trace(&r, depth + 1, ks_weight).0;
         }
         // T is zero under total internal reflection (the paper's imaginary kf).
@@ -153,7 +155,7 @@ impl RayTree<'_> {
                     -1.0,
                 )
             };
-            let r = Ray::new(offset_origin(sp.p, ng, dir), dir);
+            let r = Ray::new(offset_origin(sp.p, ng, dir), dir).at_time(self.time);
             color += kt * self.trace(&r, depth + 1, kt_weight).0;
         }
         color
@@ -316,9 +318,13 @@ impl RayTree<'_> {
     /// infinity.
     fn transmittance(&mut self, p: Vec3, ng: Vec3, wi: Vec3, target: Option<Vec3>) -> Rgb {
         let ctx = self.ctx;
-        let towards_light = |from: Vec3| match target {
-            Some(end) => Ray::segment(from, end),
-            None => Ray::new(from, wi),
+        let time = self.time;
+        let towards_light = |from: Vec3| {
+            match target {
+                Some(end) => Ray::segment(from, end),
+                None => Ray::new(from, wi),
+            }
+            .at_time(time)
         };
         let mut ray = towards_light(offset_origin(p, ng, wi));
         if !ctx.occluded(&ray, self.stats) {
@@ -383,6 +389,7 @@ impl Integrator for Whitted {
             ctx,
             rng,
             stats,
+            time: ray.time,
         };
         let (radiance, object) = tree.trace(ray, 0, 1.0);
         Sample { radiance, object }

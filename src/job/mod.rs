@@ -242,6 +242,24 @@ impl Rendered {
     }
 }
 
+/// The scene at shutter open, for a moving scene and a technique that cannot follow time
+/// (the irradiance cache and the illumination network keep values per point or patch):
+/// warned once.
+fn still_scene(scene: &Scene, technique: &Technique, control: &Control) -> Option<Scene> {
+    let name = match technique {
+        Technique::IrradianceCache(..) => "irradiance-cache integrator",
+        Technique::Network(_) => "network integrator",
+        _ => return None,
+    };
+    match scene.at_shutter_open() {
+        std::borrow::Cow::Owned(still) => {
+            control.warn(&crate::scene::motion::still_warning(name));
+            Some(still)
+        }
+        std::borrow::Cow::Borrowed(_) => None,
+    }
+}
+
 /// Renders a [`Job`]: holds the scene, its intersection structure and the prepared
 /// technique, so that a network or cache prepared once serves every render after it.
 pub struct Renderer {
@@ -283,6 +301,9 @@ impl Renderer {
             {
                 scene = Arc::new(relit);
             }
+        }
+        if let Some(still) = still_scene(&scene, &job.technique, control) {
+            scene = Arc::new(still);
         }
         control.cancel.check("loading")?;
         let phase = control.phase("building", None, "");

@@ -18,6 +18,9 @@ pub struct Ray {
     pub dir: Vec3,
     pub tmin: f32,
     pub tmax: f32,
+    /// When the ray travels, as a fraction of the shutter interval (0 at shutter open, 1 at
+    /// close): moving shapes are met where they are then.
+    pub time: f32,
 }
 
 impl Ray {
@@ -27,7 +30,13 @@ impl Ray {
             dir,
             tmin: 0.0,
             tmax: f32::INFINITY,
+            time: 0.0,
         }
+    }
+
+    /// The same ray at shutter time `time` (rays spawned along a path keep the path's time).
+    pub fn at_time(self, time: f32) -> Self {
+        Ray { time, ..self }
     }
 
     /// The segment from `from` to `to`, both ends excluded by a relative epsilon; for shadow rays.
@@ -37,6 +46,7 @@ impl Ray {
             dir: to - from,
             tmin: 0.0,
             tmax: 1.0 - SHADOW_EPSILON,
+            time: 0.0,
         }
     }
 

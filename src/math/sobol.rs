@@ -134,6 +134,17 @@ impl Sampler {
     pub fn next_1d(&mut self) -> f32 {
         self.next_2d().x
     }
+
+    /// The shutter time of this sample, in \[0, 1): a stratified value from a stream of its
+    /// own, so drawing it leaves the other dimensions (and still scenes' images) as they were.
+    pub fn shutter_time(&self) -> f32 {
+        let mut own = Sampler {
+            key: mix64(self.key ^ 0x7133_5a11_c0de_d1e5),
+            dimension: 0,
+            ..self.clone()
+        };
+        own.next_1d()
+    }
 }
 
 #[cfg(test)]

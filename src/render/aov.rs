@@ -76,7 +76,8 @@ pub(crate) fn render_aovs(
                             basis.ray_through_lens(fx, fy, s.next_2d())
                         } else {
                             basis.ray(fx, fy)
-                        };
+                        }
+                        .at_time(s.shutter_time());
                         if let Some(sp) = ctx.intersect(&ray, &mut stats) {
                             let m = &ctx.scene.materials[sp.material];
                             let bsdf = Bsdf::new(m, &sp, -ray.dir);

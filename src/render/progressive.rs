@@ -173,6 +173,8 @@ pub(crate) fn camera_sample(
     } else {
         camera.ray(fx, fy)
     };
+    // From a stream of its own: still scenes keep their images, whatever the time.
+    let ray = ray.at_time(sampler.shutter_time());
     (sampler, ray)
 }
 

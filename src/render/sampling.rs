@@ -87,6 +87,9 @@ impl PixelSampling {
     }
 }
 
+/// Mixed into the seed of the stream a sample's shutter time comes from.
+const SHUTTER_STREAM: u64 = 0x5417_7e27_11ae_0001;
+
 struct TileRenderer<'a> {
     ctx: &'a Context<'a>,
     integrator: &'a dyn Integrator,
@@ -108,6 +111,9 @@ impl TileRenderer<'_> {
         } else {
             self.camera.ray(x, y)
         };
+        // The shutter time from a stream of its own, so `rng` (and still scenes' images)
+        // stay as they were.
+        let ray = ray.at_time(Rng::for_key(self.seed ^ SHUTTER_STREAM, key).uniform());
         let mut sample = self
             .integrator
             .radiance(self.ctx, &ray, &mut rng, &mut self.stats);

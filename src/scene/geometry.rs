@@ -9,6 +9,95 @@ pub struct Shape {
     pub material: usize,
     /// Where the surface is present (None: everywhere). Rays pass through cut-out parts.
     pub alpha: Option<Alpha>,
+    /// The geometry at shutter close, for a shape that moves during the exposure (None: it
+    /// stays still). Same kind and topology as `geometry`; between the two, vertices (a
+    /// sphere's centre and radius) move linearly with the ray's time.
+    pub motion: Option<Geometry>,
+}
+
+impl Shape {
+    /// Whether the shape moves during the exposure (readers give a `motion` only to shapes
+    /// whose geometry at close differs).
+    pub fn moves(&self) -> bool {
+        self.motion.is_some()
+    }
+
+    /// A sphere's centre and radius at shutter time `time` (in \[0, 1\]).
+    pub fn sphere_at(&self, time: f32) -> Option<(Vec3, f32)> {
+        let Geometry::Sphere { center, radius } = self.geometry else {
+            return None;
+        };
+        match self.motion {
+            Some(Geometry::Sphere {
+                center: c1,
+                radius: r1,
+            }) => Some((lerp(center, c1, time), radius + (r1 - radius) * time)),
+            _ => Some((center, radius)),
+        }
+    }
+
+    /// The shape's geometry at shutter time `time`: itself when still.
+    pub fn geometry_at(&self, time: f32) -> std::borrow::Cow<'_, Geometry> {
+        use std::borrow::Cow;
+        let Some(end) = self.motion.as_ref().filter(|_| time != 0.0) else {
+            return Cow::Borrowed(&self.geometry);
+        };
+        let mix = |a: &[Vec3], b: &[Vec3]| -> Vec<Vec3> {
+            a.iter().zip(b).map(|(p, q)| lerp(*p, *q, time)).collect()
+        };
+        Cow::Owned(match (&self.geometry, end) {
+            (Geometry::Triangles(a), Geometry::Triangles(b)) => Geometry::Triangles(TriangleMesh {
+                positions: mix(&a.positions, &b.positions),
+                normals: match (&a.normals, &b.normals) {
+                    (Some(n0), Some(n1)) => Some(mix(n0, n1)),
+                    (n, _) => n.clone(),
+                },
+                ..a.clone()
+            }),
+            (Geometry::Quads(a), Geometry::Quads(b)) => Geometry::Quads(QuadMesh {
+                positions: mix(&a.positions, &b.positions),
+                indices: a.indices.clone(),
+            }),
+            _ => {
+                let (center, radius) = self.sphere_at(time).unwrap_or((Vec3::ZERO, 0.0));
+                Geometry::Sphere { center, radius }
+            }
+        })
+    }
+
+    /// The box around the shape over the whole exposure.
+    pub fn bounds_over_shutter(&self) -> (Vec3, Vec3) {
+        let (lo, hi) = self.geometry.bounds();
+        match &self.motion {
+            Some(end) => {
+                let (lo1, hi1) = end.bounds();
+                (lo.min(lo1), hi.max(hi1))
+            }
+            None => (lo, hi),
+        }
+    }
+
+    /// Whether `motion`, if any, has the kind and topology of `geometry` (what the
+    /// intersection backends need to move one into the other).
+    pub fn motion_matches(&self) -> bool {
+        match (&self.geometry, &self.motion) {
+            (_, None) => true,
+            (Geometry::Sphere { .. }, Some(Geometry::Sphere { .. })) => true,
+            (Geometry::Triangles(a), Some(Geometry::Triangles(b))) => {
+                a.positions.len() == b.positions.len() && a.indices == b.indices
+            }
+            (Geometry::Quads(a), Some(Geometry::Quads(b))) => {
+                a.positions.len() == b.positions.len() && a.indices == b.indices
+            }
+            _ => false,
+        }
+    }
+}
+
+/// `a` moved linearly towards `b` by `t`; exactly `a` when `b == a`, so still vertices stay
+/// put at every time.
+pub fn lerp(a: Vec3, b: Vec3, t: f32) -> Vec3 {
+    a + (b - a) * t
 }
 
 #[derive(Clone, Debug, PartialEq)]
@@ -133,6 +222,8 @@ pub struct SurfacePoint {
     /// The instance hit (index into `Scene::instances`), `None` for the scene's own shapes.
     pub instance: Option<u32>,
     pub material: usize,
+    /// The shutter time of the ray that met it: rays leaving the point travel then too.
+    pub time: f32,
 }
 
 impl SurfacePoint {

@@ -461,6 +461,7 @@ mod tests {
                 }),
                 material: 0,
                 alpha: None,
+                motion: None,
             }],
             prototypes: Vec::new(),
             instances: Vec::new(),

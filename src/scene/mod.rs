@@ -13,6 +13,7 @@ pub mod instance;
 pub mod light;
 mod material;
 mod mix;
+pub mod motion;
 pub mod normal_detail;
 pub mod obj;
 pub mod pbrt;
@@ -25,7 +26,7 @@ pub mod toml;
 pub use alpha::Alpha;
 pub use camera::{Camera, Projection, MAX_RESOLUTION};
 pub use environment::Environment;
-pub use geometry::{Geometry, QuadMesh, Shape, SurfacePoint, TriangleMesh};
+pub use geometry::{lerp, sphere_uv, Geometry, QuadMesh, Shape, SurfacePoint, TriangleMesh};
 pub use instance::{Instance, Prototype};
 pub use light::Light;
 pub use material::{Coating, Conductor, Material, RoughnessMap};
@@ -76,7 +77,7 @@ impl Scene {
     pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
         let (mut lo, mut hi) = (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY));
         for shape in &self.shapes {
-            let (a, b) = shape.geometry.bounds();
+            let (a, b) = shape.bounds_over_shutter();
             lo = lo.min(a);
             hi = hi.max(b);
         }

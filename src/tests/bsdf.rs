@@ -19,6 +19,7 @@ pub(super) fn point() -> SurfacePoint {
         shape: 0,
         instance: None,
         material: 0,
+        time: 0.0,
     }
 }
 

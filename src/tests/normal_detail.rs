@@ -109,6 +109,7 @@ fn scene(geometry: Geometry, detail: Option<NormalDetail>) -> Scene {
         geometry,
         material: m,
         alpha: None,
+        motion: None,
     });
     let to_light = Vec3::new(0.5, 3f32.sqrt() / 2.0, 0.0);
     scene.lights.push(Light::Directional {

@@ -50,6 +50,7 @@ pub(crate) fn quad(scene: &mut Scene, corners: [Vec3; 4], material: usize) {
         }),
         material,
         alpha: None,
+        motion: None,
     });
 }
 

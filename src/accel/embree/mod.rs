@@ -3,6 +3,7 @@
 //! unsafe Embree code; the differences between Embree 3 and 4 stay inside `query`.
 
 mod instances;
+mod motion;
 mod sys;
 
 use super::cutout::Cutout;
@@ -537,7 +538,7 @@ fn to_rtc_ray(ray: &Ray) -> sys::RTCRay {
         dir_x: ray.dir.x,
         dir_y: ray.dir.y,
         dir_z: ray.dir.z,
-        time: 0.0,
+        time: ray.time,
         tfar: ray.tmax,
         // Embree 4's default geometry mask is 1, Embree 3's all ones: all ones hits both.
         mask: u32::MAX,
@@ -695,8 +696,10 @@ impl EmbreeAccel {
         // cut-outs are built again (their spheres' uvs would move with a refit).
         let cutouts =
             !self.scene.cutouts.is_empty() || desc.shapes.iter().any(|s| s.alpha.is_some());
-        // Instances are placed again by a rebuild too.
+        // Instances are placed again by a rebuild too, and moving shapes (two vertex
+        // buffers) are built again.
         let cutouts = cutouts || !self.instances.is_empty() || desc.has_instances();
+        let cutouts = cutouts || desc.shapes.iter().any(|s| s.motion.is_some());
         let same_topology = !cutouts
             && self.shapes.as_ref().is_some_and(|old| {
                 old.len() == keys.len()
@@ -754,7 +757,11 @@ impl EmbreeAccel {
         cancel: &CancelToken,
     ) -> Result<EmbreeAccel> {
         for (shape, cutout) in desc.shapes.iter().zip(Cutout::of_scene(desc)) {
-            let id = attach_geometry(&mut scene, &shape.geometry)?;
+            let id = if shape.moves() {
+                scene.attach_moving(shape)?
+            } else {
+                attach_geometry(&mut scene, &shape.geometry)?
+            };
             if let Some(cutout) = cutout {
                 scene.set_cutout(id, Arc::new(cutout))?;
             }
@@ -778,6 +785,8 @@ impl EmbreeAccel {
             cancel.check("the intersection structure's build")?;
         }
         scene.commit_cancellable(cancel)?;
+        // Moving geometries cannot be refitted in place: `update` rebuilds them.
+        let shapes = shapes.filter(|_| !desc.shapes.iter().any(|s| s.motion.is_some()));
         Ok(EmbreeAccel {
             scene,
             device,

@@ -1,7 +1,8 @@
-//! `ObjectInstance`: an object's shapes placed by the current transform. Shapes that emit or
-//! have an alpha are copied into world space at each placement (light sampling and the
-//! cut-out tests work on world-space shapes); the others are stored once, as a prototype,
-//! and placed as an instance, so memory grows with the objects, not with their placements.
+//! `ObjectInstance`: an object's shapes placed by the current transform. Shapes that emit,
+//! move or have an alpha are copied into world space at each placement (light sampling,
+//! motion and the cut-out tests work on world-space shapes); the others are stored once, as
+//! a prototype, and placed as an instance, so memory grows with the objects, not with their
+//! placements.
 
 use super::limits::Cost;
 use super::{shapes, Loader, Loc};
@@ -11,7 +12,7 @@ use glam::DMat4;
 impl Loader {
     /// Whether a shape of an object is copied at each placement rather than instanced.
     pub(super) fn copied_when_placed(&self, shape: &Shape) -> bool {
-        shape.alpha.is_some() || self.materials[shape.material].is_emissive()
+        shape.alpha.is_some() || shape.moves() || self.materials[shape.material].is_emissive()
     }
 
     /// Places object `name` (defined) by `t`, object to world.

@@ -371,6 +371,7 @@ mod tests {
             },
             material: 0,
             alpha: None,
+            motion: None,
         };
         let object = Object::new(vec![ball.clone(), ball], |_| true);
         assert_eq!(object.instance_cost(true).primitives, 2);

@@ -25,6 +25,7 @@ mod lexer;
 mod lights;
 mod limits;
 mod materials;
+mod motion;
 mod options;
 mod param_values;
 mod params;
@@ -167,6 +168,8 @@ struct Loader {
     budget: MemoryBudget,
     /// What the reading has taken so far against its limits.
     usage: limits::Usage,
+    /// `TransformTimes` and the camera's shutter.
+    timing: motion::Timing,
 }
 
 impl Loader {
@@ -205,6 +208,7 @@ impl Loader {
             input_set: HashSet::new(),
             budget: control.budget,
             usage: limits::Usage::default(),
+            timing: motion::Timing::default(),
         }
     }
 

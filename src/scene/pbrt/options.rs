@@ -44,6 +44,21 @@ impl Loader {
                         "Camera: fov must be in (0, 180) degrees, got {fov}"
                     )));
                 }
+                let open = p.float_or("shutteropen", 0.0).map_err(pe)?;
+                let close = p.float_or("shutterclose", 1.0).map_err(pe)?;
+                if !(open.is_finite() && close.is_finite() && open <= close) {
+                    return Err(loc.error(format!(
+                        "Camera: shutteropen must not be after shutterclose, got {open} and {close}"
+                    )));
+                }
+                self.timing.shutter = (open, close);
+                if self.state.end_ctm != self.state.ctm {
+                    self.warn(
+                        loc,
+                        "Camera: a moving camera is not supported; it stays where it is at the \
+                         start time",
+                    );
+                }
                 let lens_radius = p.float_or("lensradius", 0.0).map_err(pe)?;
                 let focal_distance = p.float_or("focaldistance", 1e6).map_err(pe)?;
                 if !(lens_radius >= 0.0 && lens_radius.is_finite()) {
@@ -220,6 +235,7 @@ impl Loader {
     /// sees exactly pbrt's image.
     pub(super) fn begin_world(&mut self, loc: &Loc) -> crate::Result<()> {
         self.state.ctm = DMat4::IDENTITY;
+        self.state.end_ctm = DMat4::IDENTITY;
         self.coordinate_systems
             .insert("world".into(), DMat4::IDENTITY);
         let (c2w, fov, cam_loc) = match &self.camera {

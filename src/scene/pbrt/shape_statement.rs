@@ -222,10 +222,17 @@ impl Loader {
             .fold(Cost::default(), |c, g| c.add(Cost::of(g)));
         self.reserve(loc, st, cost, !in_object)?;
         let material = self.shape_material(loc);
-        let new = geometries.into_iter().map(|geometry| Shape {
+        let end = if in_object {
+            self.state.end_ctm
+        } else {
+            self.mirror * self.state.end_ctm
+        };
+        let geometries = self.moving(loc, st, geometries, (m, end));
+        let new = geometries.into_iter().map(|(geometry, motion)| Shape {
             geometry,
             material,
             alpha: alpha.clone(),
+            motion,
         });
         match &mut self.object {
             Some((_, shapes)) => shapes.extend(new),

@@ -231,6 +231,7 @@ pub fn instance(shape: &Shape, t: &DMat4) -> Vec<Shape> {
             geometry,
             material: shape.material,
             alpha: shape.alpha.clone(),
+            motion: None,
         })
         .collect()
 }
@@ -278,6 +279,7 @@ mod tests {
             }),
             material: 0,
             alpha: None,
+            motion: None,
         };
         // Mirror z: the triangle lies in z = 0 and faced +z; it must face -z now.
         let m = DMat4::from_scale(DVec3::new(1.0, 1.0, -1.0));

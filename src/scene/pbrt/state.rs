@@ -19,9 +19,12 @@ pub(super) struct GraphicsState {
     /// Index into `Loader::materials`; `None` is pbrt's default (diffuse, reflectance 0.5).
     pub(super) material: Option<usize>,
     pub(super) area: Option<AreaEmission>,
-    /// `ActiveTransform EndTime`: transform statements only change the end transform,
-    /// which raylink (no motion blur) ignores.
+    /// `ActiveTransform EndTime`: transform statements only change the end transform.
     pub(super) end_time_only: bool,
+    /// The transform at `TransformTimes`' end time (`ctm` holds at its start time).
+    pub(super) end_ctm: DMat4,
+    /// `ActiveTransform StartTime`: transform statements only change the start transform.
+    pub(super) start_time_only: bool,
 }
 
 impl Default for GraphicsState {
@@ -32,6 +35,8 @@ impl Default for GraphicsState {
             material: None,
             area: None,
             end_time_only: false,
+            end_ctm: DMat4::IDENTITY,
+            start_time_only: false,
         }
     }
 }
@@ -60,18 +65,23 @@ impl Loader {
         &mut self,
         loc: &Loc,
         kw: &str,
-        f: impl FnOnce(DMat4) -> DMat4,
+        f: impl Fn(DMat4) -> DMat4,
     ) -> crate::Result<()> {
-        if self.state.end_time_only {
-            return Ok(());
-        }
-        let ctm = f(self.state.ctm);
-        if !ctm.is_finite() {
+        let ctm = match self.state.end_time_only {
+            true => self.state.ctm,
+            false => f(self.state.ctm),
+        };
+        let end_ctm = match self.state.start_time_only {
+            true => self.state.end_ctm,
+            false => f(self.state.end_ctm),
+        };
+        if !ctm.is_finite() || !end_ctm.is_finite() {
             return Err(loc.error(format!(
                 "{kw}: the transform overflows (its matrix is no longer finite)"
             )));
         }
         self.state.ctm = ctm;
+        self.state.end_ctm = end_ctm;
         Ok(())
     }
 
@@ -95,6 +105,7 @@ impl Loader {
             Some((_, saved_state, _)) => {
                 if block == Block::Transform {
                     self.state.ctm = saved_state.ctm;
+                    self.state.end_ctm = saved_state.end_ctm;
                 } else {
                     self.state = saved_state;
                 }

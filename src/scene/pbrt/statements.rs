@@ -160,7 +160,10 @@ impl Loader {
             "CoordSysTransform" => {
                 let name = c.string(&loc, kw)?;
                 match self.coordinate_systems.get(&name) {
-                    Some(&m) => self.state.ctm = m,
+                    Some(&m) => {
+                        self.state.ctm = m;
+                        self.state.end_ctm = m;
+                    }
                     None => self.warn(
                         &loc,
                         format!("CoordSysTransform: unknown coordinate system \"{name}\"; ignored"),
@@ -173,14 +176,17 @@ impl Loader {
                 };
                 c.i += 1;
                 match which.as_str() {
-                    "StartTime" | "All" => self.state.end_time_only = false,
+                    "All" => {
+                        self.state.end_time_only = false;
+                        self.state.start_time_only = false;
+                    }
+                    "StartTime" => {
+                        self.state.end_time_only = false;
+                        self.state.start_time_only = true;
+                    }
                     "EndTime" => {
                         self.state.end_time_only = true;
-                        self.warn(
-                            &loc,
-                            "ActiveTransform EndTime: motion blur is not supported; the end \
-                             transforms are ignored",
-                        );
+                        self.state.start_time_only = false;
                     }
                     other => {
                         return Err(loc.error(format!(
@@ -190,11 +196,14 @@ impl Loader {
                 }
             }
             "TransformTimes" => {
-                c.numbers(&loc, kw, 2)?;
-                self.warn(
-                    &loc,
-                    "TransformTimes: motion blur is not supported; ignored",
-                );
+                let t = c.numbers(&loc, kw, 2)?;
+                if !(t[0].is_finite() && t[1].is_finite() && t[0] <= t[1]) {
+                    return Err(loc.error(format!(
+                        "TransformTimes takes a start and an end time, start <= end, got {} {}",
+                        t[0], t[1]
+                    )));
+                }
+                self.timing.transform = (t[0], t[1]);
             }
             "ReverseOrientation" => {
                 self.state.reverse_orientation = !self.state.reverse_orientation

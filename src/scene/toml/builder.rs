@@ -4,6 +4,7 @@
 
 mod coating;
 mod instances;
+mod motion;
 mod render;
 mod shapes;
 mod textures;
@@ -500,6 +501,16 @@ impl<'a> Builder<'a> {
     }
 
     fn transform(&self, site: &Site, desc: Option<OneOrMany<TransformOp>>) -> crate::Result<Xform> {
+        self.transform_steps(site, desc, "transform")
+    }
+
+    /// The transform of a list of steps given under `key` (`transform`, `motion`).
+    fn transform_steps(
+        &self,
+        site: &Site,
+        desc: Option<OneOrMany<TransformOp>>,
+        key: &str,
+    ) -> crate::Result<Xform> {
         let ctx = self.ctx;
         let (ops, single) = match desc {
             None => (Vec::new(), true),
@@ -509,9 +520,9 @@ impl<'a> Builder<'a> {
         let mut m = Mat4::IDENTITY;
         for (i, op) in ops.into_iter().enumerate() {
             let field = if single {
-                "transform".to_string()
+                key.to_string()
             } else {
-                format!("transform[{i}]")
+                format!("{key}[{i}]")
             };
             let fail = |key: &str, msg: String| {
                 let f = if key.is_empty() {
@@ -559,7 +570,7 @@ impl<'a> Builder<'a> {
             // Steps apply in order: the later one acts on the result of the earlier.
             m = step * m;
         }
-        Xform::new(m).map_err(|e| ctx.fail(site, "transform", e))
+        Xform::new(m).map_err(|e| ctx.fail(site, key, e))
     }
 
     fn light(&self, site: &Site, desc: LightDesc) -> crate::Result<Light> {

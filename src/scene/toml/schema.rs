@@ -310,6 +310,9 @@ pub(crate) struct ShapeDesc {
     /// Where the surface is present (see `schema_alpha.rs`).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) alpha: Option<AlphaDesc>,
+    /// Steps that move the shape, after `transform`, by shutter close (motion blur).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) motion: Option<OneOrMany<TransformOp>>,
 }
 
 impl ShapeDesc {
@@ -328,6 +331,7 @@ impl ShapeDesc {
             uvs: None,
             file: None,
             alpha: None,
+            motion: None,
         }
     }
 

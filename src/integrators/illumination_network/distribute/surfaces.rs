@@ -145,6 +145,7 @@ impl Surface {
             shape: 0,
             instance: None,
             material: 0,
+            time: 0.0,
         };
         // Oriented as Bsdf::new orients it toward n: an opaque surface faces n's side.
         let face = if self.kt.max_element() <= 0.0 && n.dot(ng) < 0.0 {

@@ -1,7 +1,7 @@
 //! `[[shapes]]`, `[[objects]]` and `[[instances]]`: shapes in world space, and objects
-//! stored once and placed by instances. An object's shapes that emit or have an alpha are
-//! copied into world space at each placement (light sampling and the cut-out tests work on
-//! world-space shapes); the others are placed as instances of one prototype.
+//! stored once and placed by instances. An object's shapes that emit, move or have an alpha
+//! are copied into world space at each placement (light sampling, motion and the cut-out
+//! tests work on world-space shapes); the others are placed as instances of one prototype.
 
 use super::super::diagnostics::Site;
 use super::super::schema::{InstanceDesc, ObjectDesc, ShapeDesc};
@@ -61,9 +61,9 @@ impl Builder<'_> {
                 ));
             }
             let list = self.shape_list(desc.shapes, &format!("objects[{i}].shapes"), &mut cost)?;
-            let (copied, shared): (Vec<Shape>, Vec<Shape>) = list
-                .into_iter()
-                .partition(|s| s.alpha.is_some() || self.materials[s.material].is_emissive());
+            let (copied, shared): (Vec<Shape>, Vec<Shape>) = list.into_iter().partition(|s| {
+                s.alpha.is_some() || s.moves() || self.materials[s.material].is_emissive()
+            });
             let prototype = (!shared.is_empty()).then(|| {
                 prototypes.push(Arc::new(Prototype {
                     name: desc.name.clone(),
@@ -125,7 +125,9 @@ impl Builder<'_> {
             let site = self.site(format!("{name}[{i}]"), desc.span());
             let mut desc = desc.into_inner();
             let alpha = self.alpha(&site, desc.alpha.take())?;
+            let motion = desc.motion.take();
             let mut new = self.shape(&site, desc)?;
+            self.motion(&site, motion, &mut new)?;
             if alpha.is_some() {
                 new.iter_mut().for_each(|s| s.alpha = alpha.clone());
             }

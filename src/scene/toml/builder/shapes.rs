@@ -157,6 +157,7 @@ impl Builder<'_> {
             geometry,
             material: material.unwrap_or_default(),
             alpha: None,
+            motion: None,
         }])
     }
 
@@ -313,6 +314,7 @@ impl Builder<'_> {
                 geometry,
                 material: index,
                 alpha: None,
+                motion: None,
             });
         }
         if shapes.iter().all(|s| s.geometry.area() <= 0.0) {
@@ -352,6 +354,7 @@ impl Builder<'_> {
                 geometry,
                 material,
                 alpha: None,
+                motion: None,
             })
             .collect();
         if shapes.iter().any(|s| !geometry_is_finite(&s.geometry)) {

@@ -1,0 +1,62 @@
+//! A shape's `motion`: transform steps that move it, after its `transform`, by shutter
+//! close. The shape as built is its geometry at shutter open.
+
+use super::super::checks::geometry_is_finite;
+use super::super::diagnostics::Site;
+use super::super::schema::{OneOrMany, TransformOp};
+use super::Builder;
+use crate::scene::{Geometry, Shape};
+
+impl Builder<'_> {
+    /// Gives `shapes` (built from one `[[shapes]]` table) their geometry at shutter close.
+    pub(super) fn motion(
+        &self,
+        site: &Site,
+        desc: Option<OneOrMany<TransformOp>>,
+        shapes: &mut [Shape],
+    ) -> crate::Result<()> {
+        let Some(desc) = desc else {
+            return Ok(());
+        };
+        let ctx = self.ctx;
+        let xf = self.transform_steps(site, Some(desc), "motion")?;
+        if xf.flips {
+            return Err(ctx.fail(
+                site,
+                "motion",
+                "cannot mirror: a shape moving straight into its mirror image passes through \
+                 flat",
+            ));
+        }
+        for shape in shapes.iter_mut() {
+            let mut end = shape.geometry.clone();
+            match &mut end {
+                Geometry::Sphere { center, radius } => {
+                    let scale = xf.uniform_scale().ok_or_else(|| {
+                        ctx.fail(
+                            site,
+                            "motion",
+                            "a sphere cannot take a non-uniform scale or shear (it would be an \
+                             ellipsoid)",
+                        )
+                    })?;
+                    *center = xf.point(*center);
+                    *radius *= scale;
+                }
+                Geometry::Triangles(m) => xf.place(&mut m.positions, &mut m.normals),
+                Geometry::Quads(q) => xf.place(&mut q.positions, &mut None),
+            }
+            if !geometry_is_finite(&end) {
+                return Err(ctx.fail(
+                    site,
+                    "motion",
+                    "overflows: it moves the shape out of the range of finite numbers",
+                ));
+            }
+            if end != shape.geometry {
+                shape.motion = Some(end);
+            }
+        }
+        Ok(())
+    }
+}
