@@ -347,5 +347,35 @@ fn a_bad_motion_is_one_line_naming_the_file_and_line() {
     }
 }
 
+/// `raylink convert` writes a pbrt shape's translation over the shutter as the TOML
+/// `motion`: the converted scene moves the same way; a rotation it cannot write is an error.
+#[test]
+fn convert_writes_a_translation_as_motion() {
+    let dir = tempfile::tempdir().unwrap();
+    let (input, output) = (dir.path().join("in.pbrt"), dir.path().join("out.toml"));
+    let scene = |motion: &str| {
+        format!(
+            "{}AttributeBegin\nActiveTransform EndTime\n{motion}\nActiveTransform All\n\
+             Shape \"sphere\" \"float radius\" 0.5\nShape \"bilinearmesh\" \"point3 P\" \
+             [0 0 0 1 0 0 0 1 0 1 1 0]\nAttributeEnd\n",
+            common_pbrt::HEADER
+        )
+    };
+    std::fs::write(&input, scene("Translate 1 2 0")).unwrap();
+    let read = raylink::scene::convert::convert(&input, &output).unwrap();
+    let written = Scene::load(&output).unwrap();
+    assert_eq!(read.shapes.len(), written.shapes.len());
+    for (a, b) in read.shapes.iter().zip(&written.shapes) {
+        assert!(a.motion.is_some());
+        let (end_a, end_b) = (a.motion.as_ref().unwrap(), b.motion.as_ref().unwrap());
+        let (lo_a, hi_a) = end_a.bounds();
+        let (lo_b, hi_b) = end_b.bounds();
+        assert!((lo_a - lo_b).length() < 1e-5 && (hi_a - hi_b).length() < 1e-5);
+    }
+    std::fs::write(&input, scene("Rotate 30 0 0 1")).unwrap();
+    let e = raylink::scene::convert::convert(&input, &output).unwrap_err();
+    assert!(e.to_string().contains("more than a translation"), "{e}");
+}
+
 #[path = "common/pbrt.rs"]
 mod common_pbrt;

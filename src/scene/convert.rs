@@ -137,7 +137,24 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::Result<()> {
     };
     let mut meshes = MeshDir::new(&out_dir, format!("{stem}.meshes"));
     for (i, shape) in scene.shapes.iter().enumerate() {
-        let desc = shape_desc(shape, &mut meshes, i, &keys, refs)?;
+        let mut desc = shape_desc(shape, &mut meshes, i, &keys, refs)?;
+        desc.motion = match &shape.motion {
+            None => None,
+            Some(end) => Some(OneOrMany::One(TransformOp {
+                translate: Some(V3(translation(&shape.geometry, end).ok_or_else(|| {
+                    Error::input(
+                        &scene.source,
+                        format!(
+                            "shape {i} moves by more than a translation over the shutter; the \
+                             TOML `motion` written by convert holds translations only"
+                        ),
+                    )
+                })?)),
+                rotate: None,
+                scale: None,
+                matrix: None,
+            })),
+        };
         file.shapes.push(spanned(desc));
     }
     // Objects' meshes are numbered after the scene's own.
@@ -599,6 +616,31 @@ fn affine_step(m: &glam::DMat4) -> TransformOp {
         scale: None,
         matrix: Some(rows),
     }
+}
+
+/// The one offset that moves every vertex of `start` onto `end` (a moving shape's
+/// geometry at shutter open and close), if there is one.
+fn translation(start: &Geometry, end: &Geometry) -> Option<crate::math::Vec3> {
+    let (a, b): (Vec<crate::math::Vec3>, Vec<crate::math::Vec3>) = match (start, end) {
+        (
+            Geometry::Sphere { center, radius },
+            Geometry::Sphere {
+                center: c,
+                radius: r,
+            },
+        ) => (radius == r).then(|| (vec![*center], vec![*c]))?,
+        (Geometry::Triangles(m), Geometry::Triangles(n)) => {
+            (m.positions.clone(), n.positions.clone())
+        }
+        (Geometry::Quads(m), Geometry::Quads(n)) => (m.positions.clone(), n.positions.clone()),
+        _ => return None,
+    };
+    let d = *b.first()? - *a.first()?;
+    let same = a.iter().zip(&b).all(|(p, q)| {
+        let tolerance = 1e-5 * (1.0 + p.abs().max_element());
+        ((*q - *p) - d).abs().max_element() <= tolerance
+    });
+    same.then_some(d)
 }
 
 /// A transform step of the 3×3 matrix `m` (rows, in 4×4 form).
