@@ -347,6 +347,41 @@ fn a_bad_motion_is_one_line_naming_the_file_and_line() {
     }
 }
 
+/// The irradiance cache keeps values per point: it renders a moving scene as it is at
+/// shutter open, the same image as the scene without `motion`.
+#[test]
+fn the_irradiance_cache_renders_the_scene_at_shutter_open() {
+    let moving = parse(&streak_toml());
+    let still = moving.at_shutter_open().into_owned();
+    assert!(!still.moves());
+    let render = |scene: &Scene| {
+        let technique = Technique::create(&raylink::Settings {
+            integrator: Some(raylink::TechniqueKind::IrradianceCache),
+            spp: Some(4),
+            ..raylink::Settings::default()
+        })
+        .unwrap();
+        let job = Job {
+            width: 64,
+            height: 16,
+            region: None,
+            seed: 5,
+            threads: Some(2),
+            accel: Backend::Bvh,
+            ..Job::new(scene, technique)
+        };
+        let control = Control::default();
+        let rendered = Renderer::new(scene.clone(), job, &control)
+            .unwrap()
+            .render(&control)
+            .unwrap();
+        rendered.image
+    };
+    let (a, b) = (render(&moving), render(&still));
+    assert!(a.pixels == b.pixels, "the cache blurred the moving sphere");
+    assert!(a.pixels.iter().any(|p| p.x > 0.5), "the sphere is in view");
+}
+
 /// `raylink convert` writes a pbrt shape's translation over the shutter as the TOML
 /// `motion`: the converted scene moves the same way; a rotation it cannot write is an error.
 #[test]

@@ -36,35 +36,6 @@ impl Shape {
         }
     }
 
-    /// The shape's geometry at shutter time `time`: itself when still.
-    pub fn geometry_at(&self, time: f32) -> std::borrow::Cow<'_, Geometry> {
-        use std::borrow::Cow;
-        let Some(end) = self.motion.as_ref().filter(|_| time != 0.0) else {
-            return Cow::Borrowed(&self.geometry);
-        };
-        let mix = |a: &[Vec3], b: &[Vec3]| -> Vec<Vec3> {
-            a.iter().zip(b).map(|(p, q)| lerp(*p, *q, time)).collect()
-        };
-        Cow::Owned(match (&self.geometry, end) {
-            (Geometry::Triangles(a), Geometry::Triangles(b)) => Geometry::Triangles(TriangleMesh {
-                positions: mix(&a.positions, &b.positions),
-                normals: match (&a.normals, &b.normals) {
-                    (Some(n0), Some(n1)) => Some(mix(n0, n1)),
-                    (n, _) => n.clone(),
-                },
-                ..a.clone()
-            }),
-            (Geometry::Quads(a), Geometry::Quads(b)) => Geometry::Quads(QuadMesh {
-                positions: mix(&a.positions, &b.positions),
-                indices: a.indices.clone(),
-            }),
-            _ => {
-                let (center, radius) = self.sphere_at(time).unwrap_or((Vec3::ZERO, 0.0));
-                Geometry::Sphere { center, radius }
-            }
-        })
-    }
-
     /// The box around the shape over the whole exposure.
     pub fn bounds_over_shutter(&self) -> (Vec3, Vec3) {
         let (lo, hi) = self.geometry.bounds();
