@@ -289,6 +289,9 @@ impl Renderer {
             &format!("a {}x{} image", job.width, job.height),
             job.width as u64 * job.height as u64 * job.bytes_per_pixel(),
         )?;
+        if let Some(still) = still_scene(&scene, &job.technique, control) {
+            scene = Arc::new(still);
+        }
         // Created for the scene as given: a relight keeps its emissions as the file's.
         let technique = technique::create(&job.technique, &scene)?;
         if let Technique::Network(n) = &job.technique {
@@ -301,9 +304,6 @@ impl Renderer {
             {
                 scene = Arc::new(relit);
             }
-        }
-        if let Some(still) = still_scene(&scene, &job.technique, control) {
-            scene = Arc::new(still);
         }
         control.cancel.check("loading")?;
         let phase = control.phase("building", None, "");
