@@ -425,3 +425,76 @@ fn a_hundred_instances_of_a_big_object_match_their_copies() {
         assert!(mean < 2e-4 && same > 0.995, "{backend}: {mean} {same}");
     }
 }
+
+/// A moving shape in an object is copied at each placement, its motion placed with it: the
+/// instanced scene renders as the same moving shapes written in place.
+#[test]
+fn moving_shapes_in_objects_move_at_every_placement() {
+    let dir = tempfile::tempdir().unwrap();
+    let head = r#"
+[camera]
+position = [0, 1, 6]
+look_at = [0, 0.5, 0]
+width = 96
+height = 72
+
+[world]
+background = [0.4, 0.4, 0.4]
+
+[materials.grey]
+diffuse = 0.6
+"#;
+    let placed = format!(
+        "{head}
+[[objects]]
+name = \"ball\"
+[[objects.shapes]]
+type = \"sphere\"
+material = \"grey\"
+center = [0, 0.5, 0]
+radius = 0.4
+motion = {{ translate = [0.5, 0, 0] }}
+
+[[instances]]
+object = \"ball\"
+transform = {{ translate = [-1.5, 0, 0] }}
+
+[[instances]]
+object = \"ball\"
+transform = [{{ scale = 2 }}, {{ translate = [1, -0.5, 0] }}]
+"
+    );
+    let inline = format!(
+        "{head}
+[[shapes]]
+type = \"sphere\"
+material = \"grey\"
+center = [-1.5, 0.5, 0]
+radius = 0.4
+motion = {{ translate = [0.5, 0, 0] }}
+
+[[shapes]]
+type = \"sphere\"
+material = \"grey\"
+center = [1, 0.5, 0]
+radius = 0.8
+motion = {{ translate = [1, 0, 0] }}
+"
+    );
+    let (a, b) = (
+        dir.path().join("placed.toml"),
+        dir.path().join("inline.toml"),
+    );
+    std::fs::write(&a, placed).unwrap();
+    std::fs::write(&b, inline).unwrap();
+    let (placed, inline) = (Scene::load(&a).unwrap(), Scene::load(&b).unwrap());
+    assert!(placed.instances.is_empty());
+    assert_eq!(placed.shapes.len(), 2);
+    assert!(placed.shapes.iter().all(|s| s.motion.is_some()));
+    let (mean, same) = compare(
+        &render(&placed, Backend::Embree),
+        &render(&inline, Backend::Embree),
+        1e-3,
+    );
+    assert!(mean < 1e-4 && same > 0.995, "{mean} {same}");
+}

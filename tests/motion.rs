@@ -194,7 +194,7 @@ fn backends_meet_moving_shapes_at_the_ray_time() {
             let hit = accel
                 .intersect(&ray)
                 .unwrap_or_else(|| panic!("{backend} t={time}"));
-            let sp = hit.surface_point(&scene.shapes, &ray);
+            let sp = hit.surface_point(&scene, &ray);
             assert_eq!(sp.shape, 0);
             let want_t = 5.0 - (0.25f32 - 0.09).sqrt();
             assert!(

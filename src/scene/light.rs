@@ -525,6 +525,7 @@ mod tests {
             }),
             material: 0,
             alpha: None,
+            motion: None,
         };
         // A trapezoid: v0 v1 v2 v3 with v2 nearer the y axis than a parallelogram's.
         let [v0, v1, v2, v3] = [
@@ -540,6 +541,7 @@ mod tests {
             }),
             material: 0,
             alpha: None,
+            motion: None,
         };
         let mesh = AreaLight::new(0, &mesh, &textured).unwrap();
         let quad = AreaLight::new(1, &quad, &textured).unwrap();

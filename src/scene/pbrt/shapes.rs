@@ -188,8 +188,27 @@ pub(super) fn tessellated_sphere_cost() -> Cost {
 /// The instance's normals are the definition's carried as normals (pbrt-v4 does not flip
 /// them for a mirroring instance transform).
 pub fn instance(shape: &Shape, t: &DMat4) -> Vec<Shape> {
+    let geometries = placed_geometry(&shape.geometry, t);
+    // A moving shape's end goes through the same placement, into as many pieces.
+    let mut ends = shape
+        .motion
+        .as_ref()
+        .map(|end| placed_geometry(end, t).into_iter());
+    geometries
+        .into_iter()
+        .map(|geometry| Shape {
+            geometry,
+            material: shape.material,
+            alpha: shape.alpha.clone(),
+            motion: ends.as_mut().and_then(Iterator::next),
+        })
+        .collect()
+}
+
+/// `geometry` copied by transform `t`: a sphere under a non-uniform scale is tessellated.
+fn placed_geometry(geometry: &Geometry, t: &DMat4) -> Vec<Geometry> {
     let flip = swaps_handedness(t);
-    let geometries = match &shape.geometry {
+    match geometry {
         Geometry::Sphere { center, radius } => match uniform_scale(t) {
             Some(s) => vec![Geometry::Sphere {
                 center: point(t, *center),
@@ -224,16 +243,7 @@ pub fn instance(shape: &Shape, t: &DMat4) -> Vec<Shape> {
             1.0,
             flip,
         ),
-    };
-    geometries
-        .into_iter()
-        .map(|geometry| Shape {
-            geometry,
-            material: shape.material,
-            alpha: shape.alpha.clone(),
-            motion: None,
-        })
-        .collect()
+    }
 }
 
 #[cfg(test)]
