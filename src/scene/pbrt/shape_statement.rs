@@ -227,7 +227,19 @@ impl Loader {
         } else {
             self.mirror * self.state.end_ctm
         };
-        let geometries = self.moving(loc, st, geometries, (m, end));
+        let mut geometries = self.moving(loc, st, geometries, (m, end));
+        if self.materials[material].is_emissive() && geometries.iter().any(|g| g.1.is_some()) {
+            // Light samples are taken on still emitters: an emitter that moved would light
+            // its surroundings from where it was at shutter open.
+            self.warn(
+                loc,
+                format!(
+                    "{st}: a moving area light is not supported (nor by pbrt-v4); it stays \
+                     where it is at shutter open"
+                ),
+            );
+            geometries.iter_mut().for_each(|g| g.1 = None);
+        }
         let new = geometries.into_iter().map(|(geometry, motion)| Shape {
             geometry,
             material,

@@ -29,6 +29,16 @@ impl Builder<'_> {
             ));
         }
         for shape in shapes.iter_mut() {
+            if self.materials[shape.material].is_emissive() {
+                // Light samples are taken on still emitters: one that moved would light its
+                // surroundings from where it was at shutter open.
+                return Err(ctx.fail(
+                    site,
+                    "motion",
+                    "an emitting shape cannot move (its light would not move with it); move \
+                     the shapes it lights instead, or use an animation",
+                ));
+            }
             let mut end = shape.geometry.clone();
             match &mut end {
                 Geometry::Sphere { center, radius } => {
