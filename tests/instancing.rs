@@ -8,6 +8,7 @@ use common::{assert_clean_failure_of, raylink, stderr};
 use raylink::image::output::read_image;
 use raylink::image::Image;
 use raylink::scene::Scene;
+use raylink::settings::AntiAliasing;
 use raylink::{Backend, Control, Job, Renderer, Settings, Technique, TechniqueKind};
 use std::fmt::Write as _;
 use std::path::Path;
@@ -17,13 +18,20 @@ const H: u32 = 72;
 
 /// A path-traced render of `scene` (16 samples per pixel, 3 bounces).
 fn render(scene: &Scene, backend: Backend) -> Image {
-    let technique = Technique::create(&Settings {
-        integrator: Some(TechniqueKind::Path),
-        spp: Some(16),
-        max_depth: Some(3),
-        ..Settings::default()
-    })
-    .unwrap();
+    render_with(
+        scene,
+        backend,
+        Settings {
+            integrator: Some(TechniqueKind::Path),
+            spp: Some(16),
+            max_depth: Some(3),
+            ..Settings::default()
+        },
+    )
+}
+
+fn render_with(scene: &Scene, backend: Backend, settings: Settings) -> Image {
+    let technique = Technique::create(&settings).unwrap();
     let job = Job {
         width: W,
         height: H,
@@ -129,6 +137,28 @@ fn instances_render_as_their_world_space_copies() {
         assert!(mean < 1e-5, "{backend}: mean difference {mean}");
         assert!(same > 0.999, "{backend}: only {same} of the pixels agree");
     }
+}
+
+/// Whitted's adaptive anti-aliasing subdivides where the corners of a square see different
+/// objects: each shape of each instance is an object, as each copy is, so the instanced
+/// render subdivides where the copies' does and gives the same image.
+#[test]
+fn whitted_subdivides_instances_as_their_copies() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = instanced_scene(dir.path());
+    let whitted = || Settings {
+        integrator: Some(TechniqueKind::Whitted),
+        aa: Some(AntiAliasing::Adaptive),
+        ..Settings::default()
+    };
+    let a = render_with(&scene, Backend::Embree, whitted());
+    let b = render_with(&scene.flattened(), Backend::Embree, whitted());
+    let (mean, same) = compare(&a, &b, 1e-3);
+    eprintln!(
+        "Whitted adaptive, instanced vs copies: {mean:.2e}, {:.2}%",
+        100.0 * same
+    );
+    assert!(mean < 1e-4 && same > 0.995, "{mean} {same}");
 }
 
 /// Both backends trace instances alike: Embree's instance geometry and the BVH's second level.

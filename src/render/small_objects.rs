@@ -7,6 +7,7 @@
 
 use super::Tile;
 use crate::scene::camera::CameraBasis;
+use crate::scene::instance::object_id;
 use crate::scene::{Geometry, Scene};
 use glam::Vec3;
 
@@ -68,25 +69,32 @@ impl SmallObjects {
 
     /// The small objects of `scene` seen through `camera`.
     pub fn new(scene: &Scene, camera: &CameraBasis) -> SmallObjects {
-        let discs = scene
+        let world = scene
             .shapes
             .iter()
             .enumerate()
-            .map(|(i, shape)| (i, bounding_sphere(&shape.geometry)))
-            .chain(scene.instances.iter().enumerate().map(|(k, instance)| {
-                let own = scene.prototypes[instance.prototype as usize].bounds();
-                let (lo, hi) = instance.world_bounds(own);
-                let sphere =
-                    (lo.cmple(hi).all()).then(|| ((lo + hi) * 0.5, (hi - lo).length() * 0.5));
-                (scene.shapes.len() + k, sphere)
-            }))
-            .filter_map(|(i, sphere)| {
+            .map(|(i, shape)| (object_id(None, i), bounding_sphere(&shape.geometry)));
+        // An instance's shapes, each its own object as its copy would be.
+        let placed = scene
+            .instances
+            .iter()
+            .enumerate()
+            .flat_map(|(k, instance)| {
+                let prototype = &scene.prototypes[instance.prototype as usize];
+                prototype.shapes.iter().enumerate().map(move |(j, shape)| {
+                    let sphere = bounding_sphere(&shape.geometry).map(|(c, r)| {
+                        let c = instance.to_world().transform_point3(c);
+                        (c, r * instance.max_stretch())
+                    });
+                    (object_id(Some(k as u32), j), sphere)
+                })
+            });
+        let discs = world
+            .chain(placed)
+            .filter_map(|(object, sphere)| {
                 let (center, radius) = sphere?;
                 let disc = project(camera, center, radius)?;
-                (disc.r < SMALL_RADIUS).then_some(Disc {
-                    object: i as u32,
-                    ..disc
-                })
+                (disc.r < SMALL_RADIUS).then_some(Disc { object, ..disc })
             })
             .collect();
         SmallObjects { discs }

@@ -177,18 +177,38 @@ impl Scene {
         }
     }
 
-    /// An id for the object `sp` lies on: a world shape's index, or for an instance, the
-    /// number of shapes plus its index (Whitted's anti-aliasing compares them).
+    /// An id for the object `sp` lies on (Whitted's anti-aliasing compares them).
     pub fn object_id(&self, sp: &SurfacePoint) -> u32 {
-        match sp.instance {
-            None => sp.shape as u32,
-            Some(k) => (self.shapes.len() as u32).saturating_add(k),
-        }
+        object_id(sp.instance, sp.shape)
     }
 
     /// Whether the scene places objects by instances.
     pub fn has_instances(&self) -> bool {
         !self.instances.is_empty()
+    }
+}
+
+/// An id for shape `shape` of the scene (`instance` None) or of instance `instance`'s
+/// prototype: a world shape's index, below 2³¹; an instance's shape gets a hash of the pair
+/// with the top bit set (two pairs rarely share one, and then only miss a subdivision).
+pub fn object_id(instance: Option<u32>, shape: usize) -> u32 {
+    match instance {
+        None => shape as u32,
+        Some(k) => {
+            let mut z = (u64::from(k) << 32 | shape as u64).wrapping_add(0x9e37_79b9_7f4a_7c15);
+            z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+            z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+            0x8000_0000 | ((z ^ (z >> 31)) as u32 & 0x7fff_ffff)
+        }
+    }
+}
+
+impl Instance {
+    /// The largest factor by which the placement stretches a length.
+    pub fn max_stretch(&self) -> f32 {
+        let m = self.to_world.matrix3;
+        // The Frobenius norm bounds the largest singular value.
+        (m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared()).sqrt()
     }
 }
 
