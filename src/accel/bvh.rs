@@ -365,11 +365,13 @@ impl BvhAccel {
             })
             .collect::<Result<_>>()?;
         self.instances = scene.instances.clone();
+        // Each prototype's box once, not once per instance.
+        let own_boxes: Vec<_> = scene.prototypes.iter().map(|p| p.bounds()).collect();
         let boxes: Vec<Aabb> = scene
             .instances
             .iter()
             .map(|i| {
-                let own = scene.prototypes[i.prototype as usize].bounds();
+                let own = own_boxes[i.prototype as usize];
                 if own.0.x > own.1.x {
                     // An empty object: a point box whose BVH finds nothing.
                     return Aabb::new(Vec3A::ZERO, Vec3A::ZERO);

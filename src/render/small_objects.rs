@@ -74,15 +74,26 @@ impl SmallObjects {
             .iter()
             .enumerate()
             .map(|(i, shape)| (object_id(None, i), bounding_sphere(&shape.geometry)));
-        // An instance's shapes, each its own object as its copy would be.
+        // An instance's shapes, each its own object as its copy would be; each prototype
+        // shape's sphere is found once, not once per instance.
+        let spheres: Vec<Vec<_>> = scene
+            .prototypes
+            .iter()
+            .map(|p| {
+                p.shapes
+                    .iter()
+                    .map(|s| bounding_sphere(&s.geometry))
+                    .collect()
+            })
+            .collect();
         let placed = scene
             .instances
             .iter()
             .enumerate()
             .flat_map(|(k, instance)| {
-                let prototype = &scene.prototypes[instance.prototype as usize];
-                prototype.shapes.iter().enumerate().map(move |(j, shape)| {
-                    let sphere = bounding_sphere(&shape.geometry).map(|(c, r)| {
+                let own = &spheres[instance.prototype as usize];
+                own.iter().enumerate().map(move |(j, sphere)| {
+                    let sphere = sphere.map(|(c, r)| {
                         let c = instance.to_world().transform_point3(c);
                         (c, r * instance.max_stretch())
                     });

@@ -81,8 +81,9 @@ impl Scene {
             lo = lo.min(a);
             hi = hi.max(b);
         }
+        let own_boxes: Vec<_> = self.prototypes.iter().map(|p| p.bounds()).collect();
         for instance in &self.instances {
-            let own = self.prototypes[instance.prototype as usize].bounds();
+            let own = own_boxes[instance.prototype as usize];
             if own.0.x <= own.1.x {
                 let (a, b) = instance.world_bounds(own);
                 lo = lo.min(a);
