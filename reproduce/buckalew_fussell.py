@@ -61,7 +61,8 @@ def render(raylink, scene, image, extra):
     (intersections,) = find(r'(\d+) line-patch intersections')
     network_mb, buffers_mb = find(r'memory ([\d.]+) MB network \+ ([\d.]+) MB buffers')
     pre, dist, sweeps = find(r'preprocess ([\d.]+) s .*distribution ([\d.]+) s, (\d+) sweeps')
-    (rendered,) = find(r'rendered in ([\d.]+) s')
+    # The image's own time: the summary's total includes the network's preparation.
+    (rendered,) = find(r'rendered in [\d.]+ s \([\d.]+ s preparing, ([\d.]+) s the image\)')
     return {
         'patches': int(patches), 'nodes': int(nodes), 'slots': int(slots),
         'links': int(links), 'per_node': float(per_node),

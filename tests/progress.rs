@@ -68,6 +68,37 @@ fn a_terminal_shows_the_overture_before_the_render_and_a_pipe_shows_no_bars() {
         text.contains("overture: ") && text.contains("rendered in"),
         "{text}"
     );
+    // The summary counts the overture: its total is the overture's time and the image's.
+    let number = |s: &str| {
+        s.trim()
+            .parse::<f64>()
+            .unwrap_or_else(|_| panic!("{s:?}: {text}"))
+    };
+    let overture_line = text.lines().find(|l| l.starts_with("overture: ")).unwrap();
+    let overture = number(
+        overture_line
+            .rsplit_once('(')
+            .unwrap()
+            .1
+            .trim_end_matches(" s)"),
+    );
+    let summary = text
+        .lines()
+        .find(|l| l.starts_with("rendered in "))
+        .unwrap();
+    let times = summary
+        .trim_start_matches("rendered in ")
+        .split_once(':')
+        .unwrap()
+        .0;
+    let (total, parts) = times
+        .split_once(" s (")
+        .unwrap_or_else(|| panic!("{summary}"));
+    let (preparing, image) = parts.split_once(" s preparing, ").unwrap();
+    let (total, preparing) = (number(total), number(preparing));
+    let image = number(image.trim_end_matches(" s the image)"));
+    assert!(preparing >= overture - 0.01, "{text}");
+    assert!((total - preparing - image).abs() <= 0.011, "{text}");
     // And nothing with --quiet.
     let mut quiet = argv.clone();
     quiet.push("--quiet");

@@ -63,6 +63,11 @@ pub(crate) trait Lifecycle: Send + Sync {
         Ok(())
     }
 
+    /// Whether [`prepare`](Self::prepare) does any work (its time is then reported).
+    fn prepares(&self) -> bool {
+        false
+    }
+
     /// Whether the preparation depends on the view (a new camera prepares again).
     fn view_dependent(&self) -> bool {
         false

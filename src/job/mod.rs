@@ -29,6 +29,7 @@ use crate::render::{Film, RenderStats, Tile, Watch};
 use crate::scene::{Scene, MAX_RESOLUTION};
 use crate::{Error, Result};
 use std::sync::Arc;
+use std::time::Instant;
 
 /// A render: what to render with, at what size, which pixels, with which random streams.
 #[derive(Clone, Debug, PartialEq)]
@@ -387,7 +388,9 @@ impl Renderer {
         resume: Option<Film>,
         watch: Watch,
     ) -> Result<Rendered> {
+        let preparing = (!self.prepared && self.technique.prepares()).then(Instant::now);
         self.prepare(control)?;
+        let prepare_seconds = preparing.map_or(0.0, |t| t.elapsed().as_secs_f64());
         let ctx = Context::new(&self.scene, self.accel.as_ref());
         let job = &self.job;
         let region = job.pixels();
@@ -441,6 +444,7 @@ impl Renderer {
         if !rendered.stats.cancelled {
             self.technique.annotate(&ctx, &mut rendered.image, control);
         }
+        rendered.stats.prepare_seconds = prepare_seconds;
         Ok(rendered)
     }
 

@@ -25,7 +25,12 @@ pub const TILE_SIZE: u32 = 16;
 /// What a render did.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub struct RenderStats {
+    /// Seconds rendering the image's tiles.
     pub seconds: f64,
+    /// Seconds the technique spent preparing before the first tile (the irradiance
+    /// cache's overture, the network's transport), 0 for techniques with nothing to prepare
+    /// or a renderer prepared by an earlier render.
+    pub prepare_seconds: f64,
     pub rays: RayStats,
     /// Image samples (camera rays) taken.
     pub samples: u64,
@@ -40,11 +45,20 @@ impl RenderStats {
         self.rays.total() as f64 / self.seconds.max(1e-9) / 1e6
     }
 
-    /// A one-line summary.
+    /// A one-line summary: the whole time, preparation included, then the image's rays.
     pub fn summary(&self) -> String {
+        let time = if self.prepare_seconds > 0.0 {
+            format!(
+                "{:.2} s ({:.2} s preparing, {:.2} s the image)",
+                self.prepare_seconds + self.seconds,
+                self.prepare_seconds,
+                self.seconds
+            )
+        } else {
+            format!("{:.2} s", self.seconds)
+        };
         format!(
-            "rendered in {:.2} s: {} rays ({} camera samples), {:.2} Mrays/s",
-            self.seconds,
+            "rendered in {time}: {} rays ({} camera samples), {:.2} Mrays/s",
             self.rays.total(),
             self.samples,
             self.mrays_per_second()

@@ -132,6 +132,10 @@ impl NetworkTechnique {
 }
 
 impl Lifecycle for NetworkTechnique {
+    fn prepares(&self) -> bool {
+        true
+    }
+
     fn prepare(&mut self, ctx: &Context, view: &View, control: &Control) -> Result<()> {
         let scene = ctx.scene;
         let options = &self.settings.distribute;

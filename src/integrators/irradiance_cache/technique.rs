@@ -93,6 +93,10 @@ impl CacheTechnique {
 }
 
 impl Lifecycle for CacheTechnique {
+    fn prepares(&self) -> bool {
+        true
+    }
+
     fn prepare(&mut self, ctx: &Context, view: &View, control: &Control) -> Result<()> {
         self.built = Some(self.build(ctx, view, control)?);
         Ok(())
