@@ -14,7 +14,8 @@ another (e.g. the full 1024x1024 TungstenRender.exr) for larger sizes.
 
 Time to equal error: the error of an unbiased estimator falls as 1/sqrt(samples), so a run
 of t seconds with error e reaches --target-rmse E in t (e/E)^2 (and spp (e/E)^2 samples).
-The medians over the runs are compared.
+The medians over the runs are compared (the minimum time to that error is printed too);
+--reps must be at least 3.
 
 Filters: --filter default keeps each renderer's own (Mitsuba's tent from the scene file,
 splatting each sample into the pixels it covers; raylink's from scenes/cornell-box.toml,
@@ -49,8 +50,8 @@ def summary(name, times, errors, spp, target):
     spp_needed = [spp * (e / target) ** 2 for e in errors]
     med = statistics.median
     print(f"{name:<28} time {med(times):6.2f} s (min {min(times):.2f}), "
-          f"RMSE {med(errors):.5f}, to RMSE {target}: {med(to_target):6.2f} s, "
-          f"{med(spp_needed):5.0f} spp")
+          f"RMSE {med(errors):.5f}, to RMSE {target}: {med(to_target):6.2f} s "
+          f"(min {min(to_target):.2f}), {med(spp_needed):5.0f} spp")
     return med(times), med(to_target)
 
 
@@ -66,6 +67,8 @@ def main():
     ap.add_argument("--reference", default=os.path.join(SCENE, "TungstenRender-256.exr"),
                     help="Tungsten's render; its size must be a multiple of --size")
     args = ap.parse_args()
+    if args.reps < 3:
+        ap.error(f"--reps must be at least 3 (a median of interleaved runs), got {args.reps}")
     import drjit as dr
     import mitsuba as mi
     mi.set_variant("scalar_rgb")
@@ -104,7 +107,7 @@ def main():
 
     load_before = os.getloadavg()
     runs = {"mitsuba": [], "raylink": []}
-    for rep in range(max(args.reps, 1)):
+    for rep in range(args.reps):
         runs["mitsuba"].append(mitsuba_run(rep))
         runs["raylink"].append(raylink_run(rep))
     load_after = os.getloadavg()

@@ -2,7 +2,7 @@
 //! (the terminal, Markdown, CSV and an SVG chart).
 
 use crate::options::AccelName;
-use raylink::bench::{measure, network, path, report, scenes, BenchConfig};
+use raylink::bench::{equal_error, measure, network, path, report, scenes, BenchConfig};
 use raylink::{Error, Result};
 use std::path::PathBuf;
 
@@ -20,7 +20,8 @@ pub struct BenchArgs {
     /// Comma-separated thread counts [default: 1 and all cores].
     #[arg(long, value_delimiter = ',')]
     pub threads: Option<Vec<usize>>,
-    /// Timed repetitions of each ray kind [default: 7, 2 with --quick].
+    /// Timed repetitions of each ray kind [default: 7, 2 with --quick; with --path-tracer
+    /// at least 3, default 7, 3 with --quick].
     #[arg(long)]
     pub reps: Option<usize>,
     /// Untimed warm-up runs before the repetitions [default: 2, 1 with --quick].
@@ -47,8 +48,10 @@ pub struct BenchArgs {
     /// No progress lines on stderr.
     #[arg(short, long)]
     pub quiet: bool,
-    /// Measure the path tracer instead (Cornell box, 512x512 unless --width/--height, max
-    /// depth 8): paths/s and Mrays/s per backend and thread count; writes path.md.
+    /// Measure the path tracer instead, per backend and thread count, the runs interleaved:
+    /// paths/s and Mrays/s on the Cornell box (512x512 unless --width/--height, max depth 8),
+    /// and the time to RMSE 0.0056 against Tungsten's render (256x256, 64 spp per render, 4
+    /// with --quick, 7 bounces); the load average before and after; writes path.md.
     #[arg(long)]
     pub path_tracer: bool,
     /// Measure illumination networks instead (the office scene, or the first of --scenes, at
@@ -85,13 +88,20 @@ fn config(args: &BenchArgs) -> Result<BenchConfig> {
             .unwrap_or_else(|| ladder.split(',').map(String::from).collect()),
         backends: args.backends.iter().map(|b| b.backend()).collect(),
         threads,
-        reps: args.reps.unwrap_or(if q { 2 } else { 7 }),
+        reps: args.reps.unwrap_or(match (q, args.path_tracer) {
+            (false, _) => 7,
+            (true, false) => 2,
+            (true, true) => path::MIN_REPS,
+        }),
         warmup: args.warmup.unwrap_or(if q { 1 } else { 2 }),
         build_reps: args.build_reps.unwrap_or(if q { 1 } else { 3 }),
         width: args.width.unwrap_or(if q { 64 } else { 640 }),
         height: args.height.unwrap_or(if q { 48 } else { 480 }),
         seed: args.seed,
     };
+    if args.path_tracer && !args.network {
+        path::validate(&config)?;
+    }
     config.validate(args.network)?;
     Ok(config)
 }
@@ -137,12 +147,17 @@ pub fn run(args: &BenchArgs) -> Result<()> {
     if args.path_tracer {
         config.width = args.width.unwrap_or(512);
         config.height = args.height.unwrap_or(512);
-        let rows = path::measure(&config, &mut |line| {
+        let spp = if args.quick {
+            equal_error::QUICK_SPP
+        } else {
+            equal_error::SPP
+        };
+        let report = path::measure(&config, spp, &mut |line| {
             if !quiet {
                 eprintln!("bench: {line}");
             }
         })?;
-        let markdown = path::markdown(&rows, &config);
+        let markdown = path::markdown(&report, &config);
         let file = args.out.join("path.md");
         std::fs::write(&file, &markdown).map_err(|e| Error::io(&file, e))?;
         println!("{markdown}");

@@ -140,19 +140,22 @@ fn bench_rejects_bad_options() {
     }
 }
 
-/// `raylink bench --path-tracer` reports positive path and ray rates for each backend.
+/// `raylink bench --path-tracer` reports positive path and ray rates for each backend, the
+/// load average, and each backend's error against Tungsten's render with the time and samples
+/// to RMSE 0.0056 (`--quick`: 4 spp per error render, about 0.029).
 #[test]
 fn path_tracer_bench_reports_each_backend() {
     let dir = tempfile::tempdir().unwrap();
     let out = raylink(&[
         "bench",
         "--path-tracer",
+        "--quick",
         "--width",
         "24",
         "--height",
         "24",
         "--reps",
-        "1",
+        "3",
         "--warmup",
         "0",
         "--threads",
@@ -163,18 +166,68 @@ fn path_tracer_bench_reports_each_backend() {
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
     let md = std::fs::read_to_string(dir.path().join("path.md")).unwrap();
-    for backend in ["Embree", "Bvh"] {
-        let row = md
+    assert!(md.contains("of 3 interleaved runs"), "{md}");
+    let load = md.split("load average (1 min) ").nth(1).unwrap_or_default();
+    let first = load.split(' ').next().unwrap_or_default();
+    assert!(
+        first == "unknown" || first.parse::<f64>().is_ok_and(|l| l >= 0.0),
+        "{md}"
+    );
+    let (throughput, error) = md
+        .split_once("Time to equal error")
+        .unwrap_or_else(|| panic!("no error table in {md}"));
+    assert!(error.contains("TungstenRender-256.exr"), "{md}");
+    let numbers = |table: &str, backend: &str| -> Vec<f64> {
+        let row = table
             .lines()
             .find(|l| l.starts_with(&format!("| {backend} | 1 |")))
             .unwrap_or_else(|| panic!("no {backend} row in {md}"));
-        let numbers: Vec<f64> = row
-            .split(['|', '(', ')', ' '])
+        row.split(['|', '(', ')', ' '])
             .filter_map(|w| w.split('-').next()?.parse().ok())
-            .collect();
+            .collect()
+    };
+    for backend in ["Embree", "Bvh"] {
+        let t = numbers(throughput, backend);
+        assert!(t.len() >= 3 && t[1..].iter().all(|v| *v > 0.0), "{t:?}");
+        // threads, then median and min of: render s, RMSE, s to target, spp to target.
+        let e = numbers(error, backend);
+        assert_eq!(e.len(), 9, "{e:?} in {md}");
+        assert!(e[1..].iter().all(|v| *v > 0.0), "{e:?}");
+        let (seconds, rmse, to_target, spp) = (e[1], e[3], e[5], e[7]);
+        assert!(rmse < 0.05, "RMSE {rmse} at 4 spp");
+        let scale = (rmse / 0.0056).powi(2);
+        // spp · (e/E)² grows with e: its median over 3 runs is that of the median RMSE (up to
+        // the printed digits).
         assert!(
-            numbers.len() >= 3 && numbers[1..].iter().all(|v| *v > 0.0),
-            "{row}"
+            (spp / (4.0 * scale) - 1.0).abs() < 0.01,
+            "{spp} spp for {rmse}"
         );
+        assert!(to_target > seconds, "{to_target} s from {seconds} s");
+    }
+}
+
+/// The path tracer bench needs at least 3 timed runs: fewer is an error naming --reps,
+/// before anything is measured or written.
+#[test]
+fn path_tracer_bench_needs_three_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_dir = dir.path().join("results");
+    for reps in ["0", "1", "2"] {
+        let out = raylink(&[
+            "bench",
+            "--path-tracer",
+            "--reps",
+            reps,
+            "--out",
+            out_dir.to_str().unwrap(),
+        ]);
+        assert_eq!(out.status.code(), Some(2), "{reps}: {}", stderr(&out));
+        let err = stderr(&out);
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(
+            err.starts_with("raylink: error: --reps ") && err.contains("at least 3"),
+            "{err}"
+        );
+        assert!(!out_dir.exists());
     }
 }

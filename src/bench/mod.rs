@@ -5,6 +5,7 @@
 //! repetitions after warm-up runs, with the minimum and maximum as its spread. Results go to
 //! the terminal (a Markdown table), a CSV file and an SVG chart.
 
+pub mod equal_error;
 pub mod network;
 pub mod path;
 pub mod rays;

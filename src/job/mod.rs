@@ -331,6 +331,15 @@ impl Renderer {
         &self.scene
     }
 
+    /// Renders with another seed from now on (for a Monte Carlo technique, an independent
+    /// image); a technique prepares again, as its preparation may draw on the seed.
+    pub fn set_seed(&mut self, seed: u64) {
+        if seed != self.job.seed {
+            self.job.seed = seed;
+            self.prepared = false;
+        }
+    }
+
     /// Looks through another camera (its size is the job's). A view-independent technique
     /// (the network, and those with nothing to prepare) renders the new view from what it
     /// prepared; the irradiance cache runs its overture for the new view on the next render,
