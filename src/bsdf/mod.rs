@@ -353,13 +353,31 @@ impl<'a> Bsdf<'a> {
     /// f(wo, wi)·|cos θi| for the non-delta lobes (with the adjoint correction in importance
     /// transport). Both directions point away from the surface.
     pub fn eval(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Rgb {
+        match self.connectable(wo, wi) {
+            Some((lo, li)) => self.eval_connected(wo, wi, lo, li, mode),
+            None => Rgb::ZERO,
+        }
+    }
+
+    /// [`eval`](Self::eval) and [`pdf`](Self::pdf) of one pair of directions (next-event
+    /// estimation needs both), taking the directions into the shading frame once.
+    pub fn eval_and_pdf(&self, wo: Vec3, wi: Vec3, mode: Transport) -> (Rgb, f32) {
+        match self.connectable(wo, wi) {
+            Some((lo, li)) => (
+                self.eval_connected(wo, wi, lo, li, mode),
+                self.pdf_connected(lo, li),
+            ),
+            None => (Rgb::ZERO, 0.0),
+        }
+    }
+
+    /// [`eval`](Self::eval) of directions that [`connectable`](Self::connectable) took to
+    /// the shading frame as `lo`, `li`.
+    fn eval_connected(&self, wo: Vec3, wi: Vec3, lo: Vec3, li: Vec3, mode: Transport) -> Rgb {
         if let Some(l) = self.layered() {
-            let Some((lo, li)) = self.connectable(wo, wi) else {
-                return Rgb::ZERO;
-            };
             return l.f(lo, li, mode) * li.z.abs() * self.adjoint(wo, wi, lo, li, mode);
         }
-        match self.eval_lobes(wo, wi, mode) {
+        match self.eval_lobes(wo, wi, lo, li, mode) {
             Some((diffuse, glossy, cos, adjoint)) => (diffuse + glossy) * cos * adjoint,
             None => Rgb::ZERO,
         }
@@ -375,7 +393,10 @@ impl<'a> Bsdf<'a> {
     /// The glossy lobes' share of [`Bsdf::eval`]: f_glossy(wo, wi)·|cos θi|, rough refraction
     /// and a tabulated reflectance included.
     pub fn eval_glossy(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Rgb {
-        match self.eval_lobes(wo, wi, mode) {
+        let Some((lo, li)) = self.connectable(wo, wi) else {
+            return Rgb::ZERO;
+        };
+        match self.eval_lobes(wo, wi, lo, li, mode) {
             Some((_, glossy, cos, adjoint)) => glossy * cos * adjoint,
             None => Rgb::ZERO,
         }
@@ -398,10 +419,17 @@ impl<'a> Bsdf<'a> {
         Some((lo, li))
     }
 
-    /// The diffuse and glossy parts of f(wo, wi), |cos θi| and the adjoint correction; `None`
-    /// where no non-delta lobe connects the two directions.
-    fn eval_lobes(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Option<(Rgb, Rgb, f32, f32)> {
-        let (mut lo, mut li) = self.connectable(wo, wi)?;
+    /// The diffuse and glossy parts of f(wo, wi), |cos θi| and the adjoint correction, given
+    /// the directions in the shading frame as [`connectable`](Self::connectable) returns
+    /// them; `None` where no lobe connects them.
+    fn eval_lobes(
+        &self,
+        wo: Vec3,
+        wi: Vec3,
+        mut lo: Vec3,
+        mut li: Vec3,
+        mode: Transport,
+    ) -> Option<(Rgb, Rgb, f32, f32)> {
         if let Some(table) = self.table {
             // The light arrives along wi for radiance, along wo for importance.
             let f = match mode {
@@ -456,9 +484,15 @@ impl<'a> Bsdf<'a> {
     /// Density (solid angle) with which [`Bsdf::sample`] produces `wi` from `wo` through a
     /// non-delta lobe.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        let Some((mut lo, mut li)) = self.connectable(wo, wi) else {
-            return 0.0;
-        };
+        match self.connectable(wo, wi) {
+            Some((lo, li)) => self.pdf_connected(lo, li),
+            None => 0.0,
+        }
+    }
+
+    /// [`pdf`](Self::pdf) of directions that [`connectable`](Self::connectable) took to the
+    /// shading frame.
+    fn pdf_connected(&self, mut lo: Vec3, mut li: Vec3) -> f32 {
         if let Some(table) = self.table {
             // Sampled given wo whatever the transport: one density serves both.
             return table.pdf(lo, li);
@@ -647,8 +681,7 @@ impl<'a> Bsdf<'a> {
             if wi.dot(self.ng) * go * li.z <= 0.0 {
                 return None;
             }
-            let pdf = self.pdf(wo, wi);
-            let f = self.eval(wo, wi, mode);
+            let (f, pdf) = self.eval_and_pdf(wo, wi, mode);
             if pdf <= 0.0 || f == Rgb::ZERO {
                 return None;
             }

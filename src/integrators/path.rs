@@ -74,7 +74,7 @@ pub(crate) fn sample_direct(
     let Some(ls) = ctx.lights.sample_li(sp.p, u_choice, u_light) else {
         return Rgb::ZERO;
     };
-    let f = bsdf.eval(wo, ls.wi, Transport::Radiance);
+    let (f, bsdf_pdf) = bsdf.eval_and_pdf(wo, ls.wi, Transport::Radiance);
     if f == Rgb::ZERO || ls.pdf <= 0.0 {
         return Rgb::ZERO;
     }
@@ -85,7 +85,7 @@ pub(crate) fn sample_direct(
     let w = if ls.delta {
         1.0
     } else {
-        power_heuristic(ls.pdf, bsdf.pdf(wo, ls.wi))
+        power_heuristic(ls.pdf, bsdf_pdf)
     };
     f * ls.radiance * (w / ls.pdf)
 }

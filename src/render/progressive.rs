@@ -61,6 +61,8 @@ struct Samples<'a> {
     camera: CameraBasis,
     seed: u64,
     filter: FilterSampler,
+    /// Whether anything moves during the exposure (else rays need no shutter time).
+    moving: bool,
 }
 
 impl<'a> Samples<'a> {
@@ -75,6 +77,7 @@ impl<'a> Samples<'a> {
             camera: view_basis(ctx.scene, options),
             seed: options.seed,
             filter: FilterSampler::new(options.filter),
+            moving: ctx.scene.moves(),
         }
     }
 
@@ -88,8 +91,14 @@ impl<'a> Samples<'a> {
     ) -> [f64; 3] {
         let mut sum = [0.0f64; 3];
         for i in samples {
-            let (mut sampler, ray) =
-                camera_sample(&self.camera, self.seed, &self.filter, (x, y), i);
+            let (mut sampler, ray) = camera_sample(
+                &self.camera,
+                self.seed,
+                &self.filter,
+                self.moving,
+                (x, y),
+                i,
+            );
             let before = result.splats.len();
             let l = self.integrator.sample(
                 self.ctx,
@@ -157,10 +166,13 @@ impl<'a> Samples<'a> {
 /// Camera sample `i` of pixel (x, y): its ray, through the pixel centre moved by an offset
 /// drawn from the filter, and its sampler with that offset's numbers drawn. Anything that
 /// must see exactly the render's camera rays (the irradiance cache's overture) calls this.
+/// The ray gets a shutter time only if the scene is `moving`: a still scene looks the same
+/// at any time, and drawing the time costs as much as a bounce's sample values.
 pub(crate) fn camera_sample(
     camera: &CameraBasis,
     seed: u64,
     filter: &FilterSampler,
+    moving: bool,
     (x, y): (u32, u32),
     i: u32,
 ) -> (Sampler, Ray) {
@@ -173,8 +185,12 @@ pub(crate) fn camera_sample(
     } else {
         camera.ray(fx, fy)
     };
-    // From a stream of its own: still scenes keep their images, whatever the time.
-    let ray = ray.at_time(sampler.shutter_time());
+    // From a stream of its own: drawing it leaves the other dimensions as they were.
+    let ray = if moving {
+        ray.at_time(sampler.shutter_time())
+    } else {
+        ray
+    };
     (sampler, ray)
 }
 

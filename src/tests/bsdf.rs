@@ -90,8 +90,16 @@ pub(super) fn check_in(name: &str, m: &Material, wo: Vec3, sub: usize, mode: Tra
         }
         non_delta += 1;
         counts[bin_of(s.wi)] += 1.0;
-        // The weight is eval/pdf.
-        let expect = bsdf.eval(wo, s.wi, mode) / bsdf.pdf(wo, s.wi);
+        // The weight is eval/pdf; and both at once are the two apart, to the bit (next-event
+        // estimation takes them together).
+        let (f, pdf) = (bsdf.eval(wo, s.wi, mode), bsdf.pdf(wo, s.wi));
+        let (f_both, pdf_both) = bsdf.eval_and_pdf(wo, s.wi, mode);
+        assert_eq!(
+            (f.to_array().map(f32::to_bits), pdf.to_bits()),
+            (f_both.to_array().map(f32::to_bits), pdf_both.to_bits()),
+            "{name}: eval_and_pdf differs from eval and pdf"
+        );
+        let expect = f / pdf;
         assert!(
             (s.weight - expect).abs().max_element() <= 1e-3 * expect.max_element().max(1.0),
             "{name}: weight {} vs eval/pdf {}",

@@ -386,6 +386,7 @@ impl IrradianceCache {
             });
         }
         let filter = FilterSampler::new(render.filter);
+        let moving = ctx.scene.moves();
         let (mut primaries, mut rays) = (0, 0);
         let schedule = overture_schedule(render.width, render.height, render.spp);
         let parts = schedule.iter().map(|p| p.len() as u64).sum();
@@ -419,7 +420,8 @@ impl IrradianceCache {
                         if control.cancel.is_cancelled() {
                             break;
                         }
-                        let (mut sampler, ray) = camera_sample(&camera, seed, &filter, (x, y), i);
+                        let (mut sampler, ray) =
+                            camera_sample(&camera, seed, &filter, moving, (x, y), i);
                         let mut rng = sample_rng(seed, &mut sampler);
                         walk.trace(&ray, 0, true, 0, &mut rng);
                     }
