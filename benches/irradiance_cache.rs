@@ -251,6 +251,12 @@ fn main() {
             room,
             Cache { ar: 8.0, ..room },
             Cache { ar: 4.0, ..room },
+            // The scene file's settings.
+            Cache {
+                samples: 1024,
+                ar: 4.0,
+                ..room
+            },
             Cache {
                 accuracy: 0.4,
                 ..room

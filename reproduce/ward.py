@@ -31,7 +31,10 @@ def room(raylink, out):
     for name, extra in [('repro-ward-room.png', []),
                         ('repro-ward-room-points.png', ['--show-cache-points'])]:
         image = os.path.join(out, name)
-        cmd = [raylink, 'render', 'scenes/indirect-room.toml', '-o', image] + extra
+        # 2048 rays a value and ar 8: denser values than the scene's own settings, so that
+        # the figure shows where they crowd.
+        cmd = [raylink, 'render', 'scenes/indirect-room.toml', '--ic-samples', '2048',
+               '--ar', '8', '-o', image] + extra
         run = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True)
         if run.returncode != 0:
             sys.exit(f"{' '.join(cmd)} failed:\n{run.stderr}")
