@@ -3,16 +3,18 @@
 //! where it is blocked) and camera rays see through its holes, on both backends; fractional
 //! alpha blocks that fraction of rays, the same rays on both backends, deterministically.
 
+#[path = "common/render.rs"]
+mod render_common;
+
 use raylink::accel::bvh::BvhAccel;
 use raylink::accel::embree::EmbreeAccel;
 use raylink::accel::Accel;
-use raylink::image::filter::Filter;
 use raylink::image::Image;
-use raylink::job::MonteCarloSettings;
 use raylink::math::{Ray, Rng, Vec2, Vec3};
 use raylink::scene::texture::{Encoding, ImageTexture, UvMapping};
 use raylink::scene::{Alpha, Scene};
-use raylink::{Backend, Control, Job, Renderer, Technique};
+use raylink::{Backend, Control, Technique};
+use render_common::{boxed, image, View};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -21,27 +23,8 @@ fn parse(text: &str) -> Scene {
 }
 
 fn render(scene: &Scene, backend: Backend, threads: usize, spp: u32) -> Image {
-    let technique = Technique::Path(MonteCarloSettings {
-        max_depth: 1,
-        spp,
-        time_limit: None,
-        filter: Filter::Box { radius: 0.5 },
-    });
-    let job = Job {
-        width: scene.camera.width,
-        height: scene.camera.height,
-        region: None,
-        seed: 3,
-        threads: Some(threads),
-        accel: backend,
-        ..Job::new(scene, technique)
-    };
-    let control = Control::default();
-    Renderer::new(scene.clone(), job, &control)
-        .unwrap()
-        .render(&control)
-        .unwrap()
-        .image
+    let view = View::of(scene, 3, Some(threads), backend);
+    image(scene, Technique::Path(boxed(1, spp)), view)
 }
 
 /// An 8x8 binary PGM: opaque (255) in the texels whose u < 0.5 xor v < 0.5 (row 0 is the

@@ -2,6 +2,9 @@
 //! normal orientation on random rays, the same occlusion answers, and the same images, up to
 //! floating-point ties (which are counted and bounded).
 
+#[path = "common/render.rs"]
+mod render_common;
+
 use raylink::accel::bvh::BvhAccel;
 use raylink::accel::embree::EmbreeAccel;
 use raylink::accel::{Accel, Backend, Hit};
@@ -9,7 +12,8 @@ use raylink::bench::{rays, scenes};
 use raylink::image::Image;
 use raylink::math::{Ray, Rgb, Rng, Vec3};
 use raylink::scene::{Camera, Geometry, Material, QuadMesh, Scene, Shape};
-use raylink::{Control, Job, Renderer, Settings, Technique, TechniqueKind};
+use raylink::{Settings, Technique, TechniqueKind};
+use render_common::{image, View};
 use std::path::Path;
 
 fn load(name: &str) -> Scene {
@@ -432,21 +436,13 @@ fn render_with(scene: &Scene, backend: Backend) -> Image {
         ..Settings::default()
     })
     .unwrap();
-    let job = Job {
-        width: W,
-        height: H,
-        region: None,
+    let view = View {
+        size: (W, H),
         seed: 3,
         threads: None,
         accel: backend,
-        ..Job::new(scene, technique)
     };
-    let control = Control::default();
-    Renderer::new(scene.clone(), job, &control)
-        .unwrap()
-        .render(&control)
-        .unwrap()
-        .image
+    image(scene, technique, view)
 }
 
 /// Whitted renders through both backends (128×96, one sample per pixel, area lights sampled):

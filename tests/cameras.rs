@@ -3,11 +3,14 @@
 //! agreeing through the lens, an orthographic sphere's size independent of its distance,
 //! and the light-path integrators refusing an orthographic camera.
 
-use raylink::image::filter::Filter;
+#[path = "common/render.rs"]
+mod render_common;
+
 use raylink::image::Image;
 use raylink::job::MonteCarloSettings;
 use raylink::scene::{Projection, Scene};
-use raylink::{Backend, Control, Job, Renderer, Technique};
+use raylink::{Backend, Technique};
+use render_common::{boxed, try_image, View};
 use std::path::Path;
 
 mod agreement;
@@ -17,24 +20,8 @@ fn render(
     technique: fn(MonteCarloSettings) -> Technique,
     (spp, max_depth, seed): (u32, u32, u64),
 ) -> raylink::Result<Image> {
-    let mc = MonteCarloSettings {
-        max_depth,
-        spp,
-        time_limit: None,
-        filter: Filter::Box { radius: 0.5 },
-    };
-    let job = Job {
-        width: scene.camera.width,
-        height: scene.camera.height,
-        region: None,
-        seed,
-        threads: None,
-        accel: Backend::Embree,
-        ..Job::new(scene, technique(mc))
-    };
-    let control = Control::default();
-    let rendered = Renderer::new(scene.clone(), job, &control)?.render(&control)?;
-    Ok(rendered.film.unwrap().image().unwrap())
+    let view = View::of(scene, seed, None, Backend::Embree);
+    try_image(scene, technique(boxed(max_depth, spp)), view)
 }
 
 fn manifest(p: &str) -> std::path::PathBuf {

@@ -3,6 +3,9 @@
 //! metal object's pixel is exactly its directional albedo: the complex Fresnel reflectance
 //! for a smooth metal, a numerically integrated single-scattering albedo for a rough one.
 
+#[path = "common/render.rs"]
+mod render_common;
+
 use raylink::image::filter::Filter;
 use raylink::image::Image;
 use raylink::job::AntiAliasing;
@@ -10,6 +13,7 @@ use raylink::job::MonteCarloSettings;
 use raylink::scene::{Conductor, Scene};
 use raylink::settings::NetworkBuilder;
 use raylink::{Backend, Control, Job, Renderer, Settings, Technique, TechniqueKind};
+use render_common::{boxed, image, View};
 use std::path::Path;
 
 const SIZE: u32 = 48;
@@ -30,27 +34,13 @@ fn scene(roughness: f32) -> Scene {
 }
 
 fn render(scene: &Scene, technique: fn(MonteCarloSettings) -> Technique, spp: u32) -> Image {
-    let mc = MonteCarloSettings {
-        max_depth: 2,
-        spp,
-        time_limit: None,
-        filter: Filter::Box { radius: 0.5 },
-    };
-    let job = Job {
-        width: SIZE,
-        height: SIZE,
-        region: None,
+    let view = View {
+        size: (SIZE, SIZE),
         seed: 5,
         threads: None,
         accel: Backend::Embree,
-        ..Job::new(scene, technique(mc))
     };
-    let control = Control::default();
-    let rendered = Renderer::new(scene.clone(), job, &control)
-        .unwrap()
-        .render(&control)
-        .unwrap();
-    rendered.film.unwrap().image().unwrap()
+    image(scene, technique(boxed(2, spp)), view)
 }
 
 /// A render with the technique's default settings, `spp` samples per pixel and a box

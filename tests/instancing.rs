@@ -3,13 +3,16 @@
 //! a 20,000-triangle object render within a gigabyte.
 
 mod common;
+#[path = "common/render.rs"]
+mod render_common;
 
 use common::{assert_clean_failure_of, raylink, stderr};
 use raylink::image::output::read_image;
 use raylink::image::Image;
 use raylink::scene::Scene;
 use raylink::settings::AntiAliasing;
-use raylink::{Backend, Control, Job, Renderer, Settings, Technique, TechniqueKind};
+use raylink::{Backend, Settings, Technique, TechniqueKind};
+use render_common::{image, View};
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -31,22 +34,13 @@ fn render(scene: &Scene, backend: Backend) -> Image {
 }
 
 fn render_with(scene: &Scene, backend: Backend, settings: Settings) -> Image {
-    let technique = Technique::create(&settings).unwrap();
-    let job = Job {
-        width: W,
-        height: H,
-        region: None,
+    let view = View {
+        size: (W, H),
         seed: 5,
         threads: None,
         accel: backend,
-        ..Job::new(scene, technique)
     };
-    let control = Control::default();
-    Renderer::new(scene.clone(), job, &control)
-        .unwrap()
-        .render(&control)
-        .unwrap()
-        .image
+    image(scene, Technique::create(&settings).unwrap(), view)
 }
 
 /// An object of smooth-shaded triangles (a pyramid whose unit vertex normals lean outwards)

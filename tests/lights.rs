@@ -3,11 +3,15 @@
 //! tracing agreeing on a room it lights, and a two-sided emitter lighting both of its sides
 //! alike.
 
+#[path = "common/render.rs"]
+mod render_common;
+
 use raylink::image::filter::Filter;
 use raylink::image::Image;
 use raylink::job::{AntiAliasing, MonteCarloSettings};
 use raylink::scene::{Light, Scene};
-use raylink::{Backend, Control, Job, Renderer, Settings, Technique, TechniqueKind};
+use raylink::{Backend, Settings, Technique, TechniqueKind};
+use render_common::{image, View};
 use std::path::Path;
 
 mod agreement;
@@ -21,21 +25,11 @@ fn parse(text: &str) -> Scene {
 }
 
 fn render_job(scene: &Scene, technique: Technique, seed: u64) -> Image {
-    let job = Job {
-        width: scene.camera.width,
-        height: scene.camera.height,
-        region: None,
-        seed,
-        threads: None,
-        accel: Backend::Embree,
-        ..Job::new(scene, technique)
-    };
-    let control = Control::default();
-    Renderer::new(scene.clone(), job, &control)
-        .unwrap()
-        .render(&control)
-        .unwrap()
-        .image
+    image(
+        scene,
+        technique,
+        View::of(scene, seed, None, Backend::Embree),
+    )
 }
 
 fn mc(technique: fn(MonteCarloSettings) -> Technique, spp: u32, max_depth: u32) -> Technique {

@@ -2,12 +2,14 @@
 //! the hit, so the image is the blend of the two within Monte Carlo error, and the same
 //! for any thread count.
 
+#[path = "common/render.rs"]
+mod render_common;
+
 use raylink::image::compare::mean;
-use raylink::image::filter::Filter;
 use raylink::image::Image;
-use raylink::job::MonteCarloSettings;
 use raylink::scene::Scene;
-use raylink::{Backend, Control, Job, Renderer, Technique};
+use raylink::{Backend, Technique};
+use render_common::{boxed, image, View};
 use std::path::Path;
 
 /// A white (kd = 1) and a black diffuse material and their mix choosing black with
@@ -26,31 +28,13 @@ fn scene(material: &str) -> Scene {
 }
 
 fn render(scene: &Scene, spp: u32, threads: usize) -> Image {
-    let mc = MonteCarloSettings {
-        max_depth: 3,
-        spp,
-        time_limit: None,
-        filter: Filter::Box { radius: 0.5 },
-    };
-    let job = Job {
-        width: 16,
-        height: 16,
-        region: None,
+    let view = View {
+        size: (16, 16),
         seed: 5,
         threads: Some(threads),
         accel: Backend::Embree,
-        ..Job::new(scene, Technique::Path(mc))
     };
-    let control = Control::default();
-    let rendered = Renderer::new(scene.clone(), job, &control)
-        .unwrap()
-        .render(&control)
-        .unwrap();
-    rendered
-        .film
-        .expect("a progressive render keeps its film")
-        .image()
-        .unwrap()
+    image(scene, Technique::Path(boxed(3, spp)), view)
 }
 
 /// The mix renders 0.7 × the white square's radiance: the image mean within 4 standard

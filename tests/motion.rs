@@ -4,15 +4,16 @@
 //! `motion` key, and a bad `motion` refused with one line.
 
 use raylink::accel::{self, Backend};
-use raylink::image::filter::Filter;
 use raylink::image::Image;
-use raylink::job::MonteCarloSettings;
 use raylink::math::{Ray, Vec3};
 use raylink::scene::{Geometry, Scene};
-use raylink::{Control, Job, Renderer, Technique};
+use raylink::{Control, Technique};
 use std::path::Path;
 
 mod common;
+#[path = "common/render.rs"]
+mod render_common;
+use render_common::{boxed, image, View};
 
 /// Pixels per scene unit of the streak scene: an orthographic view 8 units across 128 pixels.
 const SCALE: f64 = 16.0;
@@ -39,27 +40,8 @@ fn parse(text: &str) -> Scene {
 }
 
 fn render(scene: &Scene, backend: Backend, threads: usize, spp: u32) -> Image {
-    let mc = MonteCarloSettings {
-        max_depth: 1,
-        spp,
-        time_limit: None,
-        filter: Filter::Box { radius: 0.5 },
-    };
-    let job = Job {
-        width: scene.camera.width,
-        height: scene.camera.height,
-        region: None,
-        seed: 11,
-        threads: Some(threads),
-        accel: backend,
-        ..Job::new(scene, Technique::Path(mc))
-    };
-    let control = Control::default();
-    let rendered = Renderer::new(scene.clone(), job, &control)
-        .unwrap()
-        .render(&control)
-        .unwrap();
-    rendered.film.unwrap().image().unwrap()
+    let view = View::of(scene, 11, Some(threads), backend);
+    image(scene, Technique::Path(boxed(1, spp)), view)
 }
 
 /// The exact box-filtered image of the streak: at each of 16x16 points of a pixel, the
@@ -362,21 +344,13 @@ fn the_irradiance_cache_renders_the_scene_at_shutter_open() {
             ..raylink::Settings::default()
         })
         .unwrap();
-        let job = Job {
-            width: 64,
-            height: 16,
-            region: None,
+        let view = View {
+            size: (64, 16),
             seed: 5,
             threads: Some(2),
             accel: Backend::Bvh,
-            ..Job::new(scene, technique)
         };
-        let control = Control::default();
-        let rendered = Renderer::new(scene.clone(), job, &control)
-            .unwrap()
-            .render(&control)
-            .unwrap();
-        rendered.image
+        image(scene, technique, view)
     };
     let (a, b) = (render(&moving), render(&still));
     assert!(a.pixels == b.pixels, "the cache blurred the moving sphere");

@@ -8,13 +8,15 @@
 
 #[path = "common/pbrt.rs"]
 mod pbrt;
+#[path = "common/render.rs"]
+mod render_common;
+use render_common::{boxed, image, View};
 
-use raylink::image::filter::Filter;
 use raylink::image::Image;
 use raylink::job::MonteCarloSettings;
 use raylink::math::{Vec2, Vec3};
 use raylink::scene::Scene;
-use raylink::{Backend, Control, Job, Renderer, Technique};
+use raylink::{Backend, Technique};
 use std::path::Path;
 
 fn parse_in(dir: &Path, text: &str) -> Scene {
@@ -31,27 +33,8 @@ fn parse(text: &str) -> Scene {
 type Kind = fn(MonteCarloSettings) -> Technique;
 
 fn render(scene: &Scene, kind: Kind, max_depth: u32, spp: u32) -> Image {
-    let technique = kind(MonteCarloSettings {
-        max_depth,
-        spp,
-        time_limit: None,
-        filter: Filter::Box { radius: 0.5 },
-    });
-    let job = Job {
-        width: scene.camera.width,
-        height: scene.camera.height,
-        region: None,
-        seed: 11,
-        threads: Some(2),
-        accel: Backend::Bvh,
-        ..Job::new(scene, technique)
-    };
-    let control = Control::default();
-    Renderer::new(scene.clone(), job, &control)
-        .unwrap()
-        .render(&control)
-        .unwrap()
-        .image
+    let view = View::of(scene, 11, Some(2), Backend::Bvh);
+    image(scene, kind(boxed(max_depth, spp)), view)
 }
 
 fn grey(image: &Image, x: u32, y: u32) -> f64 {
