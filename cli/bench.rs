@@ -73,7 +73,7 @@ pub struct BenchArgs {
 /// The bench's configuration from the options.
 fn config(args: &BenchArgs) -> Result<BenchConfig> {
     let q = args.quick;
-    let all = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let all = raylink::platform::cores();
     let mut threads = args.threads.clone().unwrap_or_else(|| vec![1, all]);
     threads.dedup();
     let ladder = if q {

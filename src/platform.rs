@@ -21,6 +21,12 @@ pub fn flush_denormals_enabled() -> bool {
     unsafe { sys::raylink_flush_denormals_enabled() != 0 }
 }
 
+/// The hardware threads this process may run on (1 where the system cannot say): what
+/// "every core" means for thread counts.
+pub fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
 /// CPU time of the process so far (user + system, every thread, also threads that have
 /// ended), to the nanosecond; 0 where the clock cannot be read.
 pub fn cpu_seconds() -> f64 {

@@ -20,6 +20,7 @@ use crate::accel::Backend;
 use crate::control::Control;
 use crate::image::filter::Filter;
 use crate::job::{Job, MonteCarloSettings, Renderer, Technique};
+use crate::platform::cores;
 use crate::{Error, Result};
 
 /// Samples per pixel of each timed throughput render.
@@ -98,11 +99,6 @@ fn parse_load(text: &str) -> Option<f64> {
 /// A load average as printed: two decimals, or "unknown".
 pub fn load_text(load: Option<f64>) -> String {
     load.map_or_else(|| "unknown".into(), |l| format!("{l:.2}"))
-}
-
-/// The machine's cores, as the report states them.
-fn cores() -> usize {
-    std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 
 /// A renderer per configuration, and the error part's.

@@ -112,7 +112,7 @@ fn both_backends(config: &BenchConfig) -> bool {
 pub fn markdown(rows: &[Row], config: &BenchConfig) -> String {
     let mut out = String::new();
     let embree = crate::accel::embree::version().unwrap_or_else(|_| "unavailable".into());
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let cores = crate::platform::cores();
     let _ = writeln!(
         out,
         "raylink {} bench: Embree {embree} against obvhs 0.4 (CWBVH), on {} ({cores} hardware \

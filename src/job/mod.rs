@@ -74,8 +74,7 @@ impl Job {
         }
         if let Some(threads) = self.threads {
             // Threads past a few per core only cost memory and start-up.
-            let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-            let limit = (16 * cores).max(64);
+            let limit = (16 * crate::platform::cores()).max(64);
             if threads == 0 || threads > limit {
                 return Err(Error::setting(
                     "threads",

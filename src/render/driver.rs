@@ -22,8 +22,9 @@ pub(crate) struct Driven {
 
 /// Worker threads for `threads` (`None`: every core), never more than there are items.
 pub(crate) fn worker_count(threads: Option<usize>, items: usize) -> usize {
-    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
-    threads.unwrap_or(cores).clamp(1, items.max(1))
+    threads
+        .unwrap_or_else(crate::platform::cores)
+        .clamp(1, items.max(1))
 }
 
 /// Runs `work` on each of `items` on `threads` workers and hands every result to `merge`
