@@ -33,12 +33,7 @@ pub const REFERENCE: &str = "scenes/cornell-box-bitterli/TungstenRender-256.exr"
 /// The reference file: relative to the working directory, else to the source tree; `None`
 /// if it is in neither.
 pub fn reference_path() -> Option<PathBuf> {
-    let relative = PathBuf::from(REFERENCE);
-    if relative.exists() {
-        return Some(relative);
-    }
-    let source = Path::new(env!("CARGO_MANIFEST_DIR")).join(REFERENCE);
-    source.exists().then_some(source)
+    super::scenes::repository_file(REFERENCE)
 }
 
 /// The reference at [`SIZE`]×[`SIZE`] and the mask of its light's pixels.

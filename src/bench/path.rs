@@ -128,13 +128,14 @@ pub fn measure(
         time_limit: None,
         filter: Filter::default(),
     });
+    let missing = format!(
+        "no {} in the working directory or the source tree",
+        equal_error::REFERENCE
+    );
     let reference = match equal_error::reference_path() {
         Some(path) => Some(Reference::load(&path)?),
         None => {
-            progress(&format!(
-                "time to equal error skipped: no {} in the working directory or the source tree",
-                equal_error::REFERENCE
-            ));
+            progress(&format!("time to equal error skipped: {missing}"));
             None
         }
     };
@@ -256,12 +257,7 @@ pub fn measure(
         load_before,
         load_after,
         error_spp,
-        reference: reference.map(|r| r.path).ok_or_else(|| {
-            format!(
-                "no {} in the working directory or the source tree",
-                equal_error::REFERENCE
-            )
-        }),
+        reference: reference.map(|r| r.path).ok_or(missing),
     })
 }
 

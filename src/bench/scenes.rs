@@ -60,14 +60,22 @@ pub fn resolve(name: &str) -> Result<Scene> {
     SceneSpec::parse(name)?.load()
 }
 
-/// scenes/cornell-box.toml, relative to the working directory, else to the source tree.
+/// A file of the repository, `relative` to the working directory where it is there, else
+/// to the source tree; `None` if it is in neither.
+pub fn repository_file(relative: &str) -> Option<PathBuf> {
+    [
+        PathBuf::from(relative),
+        Path::new(env!("CARGO_MANIFEST_DIR")).join(relative),
+    ]
+    .into_iter()
+    .find(|p| p.exists())
+}
+
+/// scenes/cornell-box.toml, relative to the working directory, else to the source tree (where
+/// a missing file is reported when the scene is read).
 fn cornell_path() -> PathBuf {
-    let relative = PathBuf::from("scenes/cornell-box.toml");
-    if relative.exists() {
-        relative
-    } else {
-        Path::new(env!("CARGO_MANIFEST_DIR")).join(relative)
-    }
+    const CORNELL: &str = "scenes/cornell-box.toml";
+    repository_file(CORNELL).unwrap_or_else(|| Path::new(env!("CARGO_MANIFEST_DIR")).join(CORNELL))
 }
 
 /// "5000", "10k", "1m", "2.5m" → a count.
