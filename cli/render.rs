@@ -345,7 +345,7 @@ fn render_with_checkpoints(
             ))
             .into());
         };
-        let blank = raylink::Film::new(width, height, mc.filter)?;
+        let blank = raylink::Film::new(width, height, mc.filter, mc.reconstruction)?;
         let resumed = checkpoint::load(&found, &settings, blank, mc.spp)?;
         resumed_samples = resumed.samples;
         Some(resumed.film)

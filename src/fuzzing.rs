@@ -181,8 +181,13 @@ pub fn checkpoint(data: &[u8]) -> bool {
         .save(&path, bytes)
         .expect("the scratch file can be written");
     let (width, height) = CHECKPOINT_SIZE;
-    let blank = Film::new(width, height, crate::image::filter::Filter::default())
-        .expect("the fuzz film can be made");
+    let blank = Film::new(
+        width,
+        height,
+        crate::image::filter::Filter::default(),
+        crate::image::filter::Reconstruction::Splat,
+    )
+    .expect("the fuzz film can be made");
     if let Some(resumed) = one_line(checkpoint::load(
         &path,
         CHECKPOINT_SETTINGS,

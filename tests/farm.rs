@@ -84,9 +84,9 @@ fn tiles_equal_whole(
     (parts, a)
 }
 
-/// Path tracing with a Gaussian of radius 2 (filter importance sampling: each sample's
-/// offset is drawn from the filter, so a pixel never takes another pixel's samples) and
-/// several passes: five bands equal the whole image, and so does a crop.
+/// Path tracing with a Gaussian of radius 2 (each sample splatted into the pixels within 2
+/// of it, so a part's border pixels take samples of pixels outside it) and several passes:
+/// five bands equal the whole image, and so does a crop that starts inside a render tile.
 #[test]
 fn path_traced_tiles_with_a_wide_filter_equal_the_whole_render() {
     let dir = tempfile::tempdir().unwrap();

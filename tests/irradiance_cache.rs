@@ -82,6 +82,7 @@ fn cornell_box_against_tungsten_and_path_tracer() {
         spp: 64,
         time_limit: None,
         filter: BOX,
+        reconstruction: raylink::image::filter::Reconstruction::Splat,
     });
     let (pt_image, _) = render(&scene, pt);
     let pt_seconds = start.elapsed().as_secs_f64();
@@ -143,6 +144,7 @@ fn assert_sphere_means_within(file: &str, names: [&str; 2], tolerance: f32) {
         spp: 128,
         time_limit: None,
         filter: BOX,
+        reconstruction: raylink::image::filter::Reconstruction::Splat,
     });
     let (pt_image, _) = render(&scene, pt);
     eprintln!("{file}: {}", report.join("; "));

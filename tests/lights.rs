@@ -38,6 +38,7 @@ fn mc(technique: fn(MonteCarloSettings) -> Technique, spp: u32, max_depth: u32) 
         spp,
         time_limit: None,
         filter: Filter::Box { radius: 0.5 },
+        reconstruction: raylink::image::filter::Reconstruction::Splat,
     })
 }
 

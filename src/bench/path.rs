@@ -18,7 +18,7 @@ use super::scenes::resolve;
 use super::{BenchConfig, Spread};
 use crate::accel::Backend;
 use crate::control::Control;
-use crate::image::filter::Filter;
+use crate::image::filter::{Filter, Reconstruction};
 use crate::job::{Job, MonteCarloSettings, Renderer, Technique};
 use crate::platform::cores;
 use crate::{Error, Result};
@@ -127,6 +127,7 @@ pub fn measure(
         spp: SPP,
         time_limit: None,
         filter: Filter::default(),
+        reconstruction: Reconstruction::Splat,
     });
     let missing = format!(
         "no {} in the working directory or the source tree",

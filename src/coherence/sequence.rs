@@ -108,6 +108,8 @@ impl SequenceJob {
                     threads: self.threads,
                     seed: self.seed,
                     filter: mc.filter,
+                    // Unchanged blocks are copied: a pixel must depend on its own samples.
+                    reconstruction: crate::image::filter::Reconstruction::Importance,
                 },
             },
             _ => unreachable!("the integrators are made from the same technique"),

@@ -42,6 +42,7 @@ impl View {
             threads: self.threads,
             seed: self.seed,
             filter: mc.filter,
+            reconstruction: mc.reconstruction,
         }
     }
 }

@@ -5,7 +5,7 @@
 //! pbrt-v4's `Integrator::Create` reads a parameter dictionary). Errors name the setting
 //! ([`Error::Setting`]).
 
-use crate::image::filter::Filter;
+use crate::image::filter::{Filter, Reconstruction};
 use crate::integrators::illumination_network as net;
 use crate::integrators::irradiance_cache::{self as ic, IcOptions};
 use crate::integrators::path::{DEFAULT_MAX_DEPTH, MAX_DEPTH_LIMIT};
@@ -43,6 +43,9 @@ pub struct MonteCarloSettings {
     pub spp: u32,
     pub time_limit: Option<f64>,
     pub filter: Filter,
+    /// How camera samples become pixels: splatted through the filter (the default), or
+    /// drawn from it so that each pixel depends on its own samples alone.
+    pub reconstruction: Reconstruction,
 }
 
 /// The irradiance cache's own settings.
@@ -246,6 +249,7 @@ fn monte_carlo(s: &Settings, max_depth: u32) -> Result<MonteCarloSettings> {
         spp,
         time_limit: s.time_limit,
         filter,
+        reconstruction: Reconstruction::Splat,
     })
 }
 

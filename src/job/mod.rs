@@ -216,8 +216,10 @@ impl Job {
     /// buffer and its encoded file (held in memory before it is written; at most about the
     /// float pixels).
     fn bytes_per_pixel(&self) -> u64 {
+        // Monte Carlo: sums, weights and light-path splats, and tile results (the
+        // splatted ones reach past their tiles).
         let film = if self.technique.monte_carlo().is_some() {
-            48 + 24
+            56 + 32
         } else {
             24
         };

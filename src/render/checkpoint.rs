@@ -3,12 +3,13 @@
 //! would have made. Little-endian binary in raylink's container (`binary_file.rs`):
 //!
 //! ```text
-//! magic "RLCHKPT\0", version u32 (= 1)
+//! magic "RLCHKPT\0", version u32 (= 2)
 //! settings  u64 length + UTF-8       everything the pixels depend on (scene hash, options)
 //! width u32, height u32
 //! spp u32, pass u32, tiles_done u32  finished passes; the pass in progress and its tiles done
 //! invalid u64, samples u64           dropped samples; camera samples taken
-//! sums   width·height × 3 f64        per pixel: sum of its sample estimates
+//! sums   width·height × 3 f64        per pixel: sum of its sample estimates (weighted)
+//! weights width·height × f64         per pixel: sum of its splatted samples' weights
 //! splats width·height × 3 f64        per pixel: filter-weighted light-path splats
 //! checksum u64
 //! ```
@@ -22,7 +23,7 @@ use std::path::{Path, PathBuf};
 
 pub(crate) const FORMAT: Format = Format {
     magic: b"RLCHKPT\0",
-    version: 1,
+    version: 2,
     what: "render checkpoint",
 };
 
@@ -94,8 +95,8 @@ fn settings_of(path: &Path) -> Result<String> {
 /// Writes `film` atomically, with `settings` (a description of everything the pixels depend
 /// on) to check a resume against.
 pub fn save(path: &Path, film: &Film, settings: &str, samples: u64) -> Result<()> {
-    let (sums, splats) = film.accumulators();
-    let mut b = FORMAT.try_start(settings.len() + 48 * sums.len() + 64, path)?;
+    let (sums, weights, splats) = film.accumulators();
+    let mut b = FORMAT.try_start(settings.len() + 56 * sums.len() + 64, path)?;
     b.extend_from_slice(&(settings.len() as u64).to_le_bytes());
     b.extend_from_slice(settings.as_bytes());
     let (width, height) = film.size();
@@ -105,10 +106,14 @@ pub fn save(path: &Path, film: &Film, settings: &str, samples: u64) -> Result<()
     }
     b.extend_from_slice(&film.invalid.to_le_bytes());
     b.extend_from_slice(&samples.to_le_bytes());
-    for px in sums.iter().chain(splats) {
-        for c in px {
-            b.extend_from_slice(&c.to_le_bytes());
-        }
+    for c in sums.iter().flatten() {
+        b.extend_from_slice(&c.to_le_bytes());
+    }
+    for w in weights {
+        b.extend_from_slice(&w.to_le_bytes());
+    }
+    for c in splats.iter().flatten() {
+        b.extend_from_slice(&c.to_le_bytes());
     }
     FORMAT.save(path, b)
 }
@@ -150,34 +155,35 @@ pub fn load(path: &Path, settings: &str, blank: Film, target: u32) -> Result<Res
     let invalid = r.u64().ok_or_else(|| bad("truncated"))?;
     let samples = r.u64().ok_or_else(|| bad("truncated"))?;
     let pixels = width as usize * height as usize;
-    if r.rest.len() != 48 * pixels {
+    if r.rest.len() != 56 * pixels {
         return Err(bad("truncated or trailing data"));
     }
     let mut values = r
         .rest
         .chunks_exact(8)
         .map(|c| f64::from_le_bytes(c.try_into().unwrap()));
-    let mut read = |n: usize| -> Vec<[f64; 3]> {
-        (0..n)
-            .map(|_| {
-                let mut px = [0.0; 3];
-                for c in &mut px {
-                    *c = values.next().unwrap_or(f64::NAN);
-                }
-                px
-            })
-            .collect()
-    };
-    let sums = read(pixels);
-    let splats = read(pixels);
-    if sums.iter().chain(&splats).flatten().any(|v| !v.is_finite()) {
+    let mut next = || values.next().unwrap_or(f64::NAN);
+    let sums: Vec<[f64; 3]> = (0..pixels).map(|_| [next(), next(), next()]).collect();
+    let weights: Vec<f64> = (0..pixels).map(|_| next()).collect();
+    let splats: Vec<[f64; 3]> = (0..pixels).map(|_| [next(), next(), next()]).collect();
+    if sums
+        .iter()
+        .chain(&splats)
+        .flatten()
+        .chain(&weights)
+        .any(|v| !v.is_finite())
+    {
         return Err(bad("a pixel value is not finite"));
     }
     if samples > (spp as u64 + pass as u64) * pixels as u64 {
         return Err(bad("counts more samples than its passes hold"));
     }
     let film = blank
-        .restored((sums, splats), (spp, pass, tiles_done, invalid), target)
+        .restored(
+            (sums, weights, splats),
+            (spp, pass, tiles_done, invalid),
+            target,
+        )
         .map_err(|e| bad(&e))?;
     Ok(Resumed { film, samples })
 }

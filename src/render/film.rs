@@ -1,9 +1,10 @@
-//! The film of a Monte Carlo render: per pixel, the sum of its sample estimates and the
+//! The film of a Monte Carlo render: per pixel, the sum of its camera samples' estimates
+//! (filter-weighted when samples are splatted, with the sum of their weights) and the
 //! filter-weighted splats of light paths, with the count of passes taken. The image is their
 //! mean; a checkpoint stores them exactly.
 
-use super::{tiles, TILE_SIZE};
-use crate::image::filter::Filter;
+use super::{tiles, Tile, TILE_SIZE};
+use crate::image::filter::{Filter, FilterWeights, Reconstruction};
 use crate::image::Image;
 use crate::integrators::Splat;
 use crate::math::{Rgb, Vec2};
@@ -14,10 +15,14 @@ pub struct Film {
     pub(crate) width: u32,
     pub(crate) height: u32,
     pub(crate) filter: Filter,
+    pub(crate) reconstruction: Reconstruction,
     /// 1 / ∫ filter over the plane, in pixel units.
     filter_norm: f64,
-    /// Per pixel: the sum of its camera-sample estimates.
+    /// Per pixel: the sum of its camera-sample estimates (filter-weighted, if splatted).
     pub(crate) sums: Vec<[f64; 3]>,
+    /// Per pixel: the sum of the filter weights of the camera samples splatted into it
+    /// (unused when each sample counts in its own pixel alone).
+    pub(crate) weights: Vec<f64>,
     /// Per pixel: splatted contributions, filter-weighted.
     splats: Vec<[f64; 3]>,
     /// Samples per pixel of every finished pass.
@@ -32,9 +37,14 @@ pub struct Film {
 }
 
 impl Film {
-    /// An empty film (no samples) of this size and filter, or
+    /// An empty film (no samples) of this size, filter and reconstruction, or
     /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if it cannot be allocated.
-    pub fn new(width: u32, height: u32, filter: Filter) -> crate::Result<Film> {
+    pub fn new(
+        width: u32,
+        height: u32,
+        filter: Filter,
+        reconstruction: Reconstruction,
+    ) -> crate::Result<Film> {
         // ∫ filter by the midpoint rule on a fine grid.
         let r = filter.radius();
         let n = 256;
@@ -53,8 +63,10 @@ impl Film {
             width,
             height,
             filter,
+            reconstruction,
             filter_norm: 1.0 / integral,
             sums: crate::error::try_vec(pixels, [0.0; 3], what)?,
+            weights: crate::error::try_vec(pixels, 0.0, what)?,
             splats: crate::error::try_vec(pixels, [0.0; 3], what)?,
             spp: 0,
             pass: 0,
@@ -67,9 +79,10 @@ impl Film {
         (self.width, self.height)
     }
 
-    /// The per-pixel sums of sample estimates and of splats (for checkpoints).
-    pub(crate) fn accumulators(&self) -> (&[[f64; 3]], &[[f64; 3]]) {
-        (&self.sums, &self.splats)
+    /// The per-pixel sums of sample estimates, of their weights and of light-path splats
+    /// (for checkpoints).
+    pub(crate) fn accumulators(&self) -> (&[[f64; 3]], &[f64], &[[f64; 3]]) {
+        (&self.sums, &self.weights, &self.splats)
     }
 
     /// The pass in progress: its size and the tiles that have it (0, 0 between passes).
@@ -82,7 +95,7 @@ impl Film {
     /// passes through, and the sums finite and not negative.
     pub(crate) fn restored(
         mut self,
-        (sums, splats): (Vec<[f64; 3]>, Vec<[f64; 3]>),
+        (sums, weights, splats): (Vec<[f64; 3]>, Vec<f64>, Vec<[f64; 3]>),
         (spp, pass, tiles_done, invalid): (u32, u32, u32, u64),
         target: u32,
     ) -> std::result::Result<Film, String> {
@@ -113,14 +126,19 @@ impl Film {
             .iter()
             .chain(&splats)
             .flatten()
+            .chain(&weights)
             .any(|v| v.is_nan() || *v < 0.0)
         {
             return Err("a pixel sum is negative or not a number".into());
         }
-        if sums.len() != self.sums.len() || splats.len() != self.splats.len() {
+        if sums.len() != self.sums.len()
+            || weights.len() != self.weights.len()
+            || splats.len() != self.splats.len()
+        {
             return Err("wrong number of pixels".into());
         }
         self.sums = sums;
+        self.weights = weights;
         self.splats = splats;
         self.spp = spp;
         self.pass = pass;
@@ -155,6 +173,23 @@ impl Film {
             .sum()
     }
 
+    /// Adds a tile's camera samples: `sums` (and, splatted, `weights`) over `rect`,
+    /// row-major.
+    pub(crate) fn add_camera(&mut self, rect: &Tile, sums: &[[f64; 3]], weights: &[f64]) {
+        let w = rect.width();
+        for (k, v) in sums.iter().enumerate() {
+            let (x, y) = (rect.x0 + k as u32 % w, rect.y0 + k as u32 / w);
+            let i = (y * self.width + x) as usize;
+            let px = &mut self.sums[i];
+            px[0] += v[0];
+            px[1] += v[1];
+            px[2] += v[2];
+            if let Some(weight) = weights.get(k) {
+                self.weights[i] += weight;
+            }
+        }
+    }
+
     pub(crate) fn add_splat(&mut self, s: &Splat) {
         let r = self.filter.radius();
         let x0 = ((s.x - r - 0.5).ceil().max(0.0)) as i64;
@@ -179,6 +214,16 @@ impl Film {
     /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if it cannot be allocated.
     pub fn image(&self) -> crate::Result<Image> {
         let mut image = Image::try_new(self.width, self.height)?;
+        if self.reconstruction == Reconstruction::Splat {
+            // Each pixel is its weighted mean, whatever its samples: a pass cut short needs
+            // no counting. One light path per camera sample.
+            let paths = self.mean_spp() * self.width as f64 * self.height as f64;
+            let per_path = if paths > 0.0 { 1.0 / paths } else { 0.0 };
+            for (i, px) in image.pixels.iter_mut().enumerate() {
+                *px = weighted_value(self.sums[i], self.weights[i], self.splats[i], per_path);
+            }
+            return Ok(image);
+        }
         if self.is_partial_pass() {
             // An interrupted pass: each pixel by its own count; one light path per sample.
             let paths = self.mean_spp() * self.width as f64 * self.height as f64;
@@ -203,6 +248,81 @@ impl Film {
     }
 }
 
+/// The value of a film pixel from its splatted camera samples' weighted sum and weights and
+/// its light-path splats (as [`Film::image`] computes it); black where no sample reached.
+pub(crate) fn weighted_value(sum: [f64; 3], weight: f64, splat: [f64; 3], per_path: f64) -> Rgb {
+    let per_weight = if weight > 0.0 { 1.0 / weight } else { 0.0 };
+    pixel_value(sum, splat, per_weight, per_path)
+}
+
+/// Camera samples splatted into the pixels of `rect` (a tile and the pixels its filter
+/// reaches, within the pixels rendered) before they join the film.
+pub(crate) struct Footprint {
+    pub rect: Tile,
+    /// Row-major over `rect`: weighted sums and weights.
+    pub sums: Vec<[f64; 3]>,
+    pub weights: Vec<f64>,
+}
+
+impl Footprint {
+    /// The pixels of `bounds` that the samples of `tile` can reach through a filter of
+    /// `reach` pixels.
+    pub fn new(tile: &Tile, reach: u32, bounds: &Tile) -> Footprint {
+        let rect = Tile {
+            x0: tile.x0.saturating_sub(reach).max(bounds.x0),
+            y0: tile.y0.saturating_sub(reach).max(bounds.y0),
+            x1: (tile.x1 + reach).min(bounds.x1),
+            y1: (tile.y1 + reach).min(bounds.y1),
+        };
+        let pixels = rect.pixels() as usize;
+        Footprint {
+            rect,
+            sums: vec![[0.0; 3]; pixels],
+            weights: vec![0.0; pixels],
+        }
+    }
+
+    /// Adds a sample at raster position `at` with `value` to every pixel whose centre its
+    /// filter reaches; a dropped sample (no value) adds its weights alone, as black.
+    pub fn add(&mut self, filter: &FilterWeights, at: (f32, f32), value: Option<Rgb>) {
+        let r = filter.radius();
+        let rect = &self.rect;
+        let span = |s: f32, lo: u32, hi: u32| {
+            let a = (s - r - 0.5).ceil().max(lo as f32);
+            let b = (s + r - 0.5).floor().min(hi as f32 - 1.0);
+            (a as u32, b as i64)
+        };
+        let (x0, x1) = span(at.0, rect.x0, rect.x1);
+        let (y0, y1) = span(at.1, rect.y0, rect.y1);
+        let v = value.map_or([0.0; 3], |l| [l.x as f64, l.y as f64, l.z as f64]);
+        // The radius is at most 16 pixels, so a sample reaches at most 33 columns.
+        let mut wx = [0.0f32; 34];
+        let columns = (x0 as i64..=x1).zip(wx.iter_mut());
+        for (x, c) in columns {
+            *c = filter.weight_1d(x as f32 + 0.5 - at.0);
+        }
+        let w = rect.width() as usize;
+        for y in y0 as i64..=y1 {
+            let wy = filter.weight_1d(y as f32 + 0.5 - at.1);
+            if wy <= 0.0 {
+                continue;
+            }
+            let row = (y as u32 - rect.y0) as usize * w;
+            for (x, wx) in (x0 as i64..=x1).zip(wx) {
+                let wt = (wx * wy) as f64;
+                if wt > 0.0 {
+                    let i = row + (x as u32 - rect.x0) as usize;
+                    let px = &mut self.sums[i];
+                    px[0] += wt * v[0];
+                    px[1] += wt * v[1];
+                    px[2] += wt * v[2];
+                    self.weights[i] += wt;
+                }
+            }
+        }
+    }
+}
+
 /// The value of a film pixel from its sample sum and splats (as [`Film::image`] computes it).
 pub(crate) fn pixel_value(sum: [f64; 3], splat: [f64; 3], per_sample: f64, per_path: f64) -> Rgb {
     Rgb::new(
@@ -223,5 +343,60 @@ impl std::fmt::Debug for Film {
             .field("tiles_done", &self.tiles_done)
             .field("invalid", &self.invalid)
             .finish_non_exhaustive()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A splatted sample gives each pixel within the filter's radius the filter's weight at
+    /// that pixel's centre (through the table, within its tolerance), and nothing to the
+    /// others; a footprint cut by the image's edge keeps its pixels' weights as they are.
+    #[test]
+    fn a_splat_weighs_each_pixel_by_the_filter_at_its_centre() {
+        let filter = Filter::Gaussian {
+            radius: 2.0,
+            sigma: 0.5,
+        };
+        let weights = FilterWeights::new(filter);
+        let tile = Tile {
+            x0: 4,
+            y0: 4,
+            x1: 8,
+            y1: 8,
+        };
+        let at = (5.3, 7.8);
+        let value = Rgb::new(2.0, 1.0, 0.5);
+        let whole = Tile::whole(20, 20);
+        let mut f = Footprint::new(&tile, 3, &whole);
+        assert_eq!((f.rect.x0, f.rect.y0, f.rect.x1, f.rect.y1), (1, 1, 11, 11));
+        f.add(&weights, at, Some(value));
+        let mut reached = 0;
+        for (k, w) in f.weights.iter().enumerate() {
+            let (x, y) = (f.rect.x0 + k as u32 % 10, f.rect.y0 + k as u32 / 10);
+            let d = Vec2::new(x as f32 + 0.5 - at.0, y as f32 + 0.5 - at.1);
+            let exact = filter.eval(d) as f64;
+            assert!((w - exact).abs() < 1e-5, "({x}, {y}): {w} vs {exact}");
+            assert!((f.sums[k][0] - 2.0 * w).abs() < 1e-12);
+            reached += (*w > 0.0) as u32;
+        }
+        assert_eq!(reached, 16);
+        // The same sample cut by an image whose last column is 5 and last row 7.
+        let edge = Tile::whole(6, 8);
+        let mut cut = Footprint::new(&tile, 3, &edge);
+        cut.add(&weights, at, Some(value));
+        for (k, w) in cut.weights.iter().enumerate() {
+            let (x, y) = (
+                cut.rect.x0 + k as u32 % cut.rect.width(),
+                cut.rect.y0 + k as u32 / cut.rect.width(),
+            );
+            let i = ((y - f.rect.y0) * 10 + x - f.rect.x0) as usize;
+            assert_eq!(*w, f.weights[i], "({x}, {y})");
+        }
+        // A pixel's value is its samples' weighted mean: a constant stays that constant.
+        let i = ((7 - f.rect.y0) * 10 + 5 - f.rect.x0) as usize;
+        let v = weighted_value(f.sums[i], f.weights[i], [0.0; 3], 0.0);
+        assert!((v - value).abs().max_element() < 1e-6, "{v}");
     }
 }

@@ -1,14 +1,16 @@
 //! The Monte Carlo render loop: whole sample passes over the image until the sample count or
 //! the time limit is reached. Sample `i` of pixel (x, y) always draws the same sample values
-//! (keyed by seed, pixel and `i`), each pixel sums its samples in index order, and splats
-//! from light paths are merged in tile order, so the image is the same bit for bit for any
-//! thread count.
+//! (keyed by seed, pixel and `i`), each tile sums its samples in pixel and index order, and
+//! tiles (their camera samples splatted over their neighbours' pixels, and light paths'
+//! splats) are merged in pass and tile order, so the image is the same bit for bit for any
+//! thread count. A part of the image takes the tiles that reach it in the same order, so
+//! it gets the same bits too.
 
 use super::driver::{drive, drive_indexed, Merge};
-use super::film::pixel_value;
+use super::film::{pixel_value, weighted_value, Footprint};
 use super::{place, tiles, tiles_in, Film, RenderStats, Shown, Tile, Watch, MERGE_WINDOW};
 use crate::control::Control;
-use crate::image::filter::{Filter, FilterSampler};
+use crate::image::filter::{Filter, FilterSampler, FilterWeights, Reconstruction};
 use crate::image::Image;
 use crate::integrators::{Context, MonteCarlo, RayStats, Splat};
 use crate::math::sobol::Sampler;
@@ -33,23 +35,68 @@ pub(crate) struct ProgressiveOptions {
     pub threads: Option<usize>,
     pub seed: u64,
     pub filter: Filter,
+    pub reconstruction: Reconstruction,
 }
 
 /// What one tile produced in one pass.
 struct TileResult {
-    sums: Vec<[f64; 3]>,
+    /// Its camera samples: over the tile itself (no weights), or splatted over the pixels
+    /// they reach.
+    camera: Footprint,
     splats: Vec<Splat>,
     rays: RayStats,
     invalid: u64,
 }
 
 impl TileResult {
-    fn new(pixels: usize) -> TileResult {
+    /// An empty result for `tile`'s samples, received by the pixels of `bounds`.
+    fn new(tile: &Tile, splat: Option<&Splatting>, bounds: &Tile) -> TileResult {
+        let camera = match splat {
+            Some(s) => Footprint::new(tile, s.reach, bounds),
+            None => Footprint {
+                rect: *tile,
+                sums: Vec::with_capacity(tile.pixels() as usize),
+                weights: Vec::new(),
+            },
+        };
         TileResult {
-            sums: Vec::with_capacity(pixels),
+            camera,
             splats: Vec::new(),
             rays: RayStats::default(),
             invalid: 0,
+        }
+    }
+}
+
+/// Where a pixel's camera samples fall: offsets drawn from the filter (each sample counts
+/// in its own pixel), or spread uniformly over the pixel (samples are splatted).
+pub(crate) enum PixelJitter {
+    Filter(FilterSampler),
+    Uniform,
+}
+
+impl PixelJitter {
+    pub fn new(filter: Filter, reconstruction: Reconstruction) -> PixelJitter {
+        match reconstruction {
+            Reconstruction::Importance => PixelJitter::Filter(FilterSampler::new(filter)),
+            Reconstruction::Splat => PixelJitter::Uniform,
+        }
+    }
+}
+
+/// How splatted samples reach pixels: the filter's weights and how many pixels past its
+/// own a sample can reach.
+struct Splatting {
+    weights: FilterWeights,
+    reach: u32,
+}
+
+impl Splatting {
+    fn new(filter: Filter) -> Splatting {
+        Splatting {
+            weights: FilterWeights::new(filter),
+            // A sample anywhere in its pixel reaches centres within the radius.
+            reach: (filter.radius() + 0.5).ceil() as u32,
         }
     }
 }
@@ -60,7 +107,9 @@ struct Samples<'a> {
     integrator: &'a dyn MonteCarlo,
     camera: CameraBasis,
     seed: u64,
-    filter: FilterSampler,
+    jitter: PixelJitter,
+    /// With splatting, the filter's weights.
+    splat: Option<Splatting>,
     /// Whether anything moves during the exposure (else rays need no shutter time).
     moving: bool,
 }
@@ -76,13 +125,16 @@ impl<'a> Samples<'a> {
             integrator,
             camera: view_basis(ctx.scene, options),
             seed: options.seed,
-            filter: FilterSampler::new(options.filter),
+            jitter: PixelJitter::new(options.filter, options.reconstruction),
+            splat: (options.reconstruction == Reconstruction::Splat)
+                .then(|| Splatting::new(options.filter)),
             moving: ctx.scene.moves(),
         }
     }
 
     /// The sum of the estimates of samples `samples` of pixel `(x, y)`: what one pass adds
-    /// to the pixel. Splats, rays and dropped samples go to `result`.
+    /// to the pixel (nothing when samples are splatted: they go to `result`'s footprint).
+    /// Splats, rays and dropped samples go to `result`.
     fn pixel_pass(
         &self,
         (x, y): (u32, u32),
@@ -91,10 +143,10 @@ impl<'a> Samples<'a> {
     ) -> [f64; 3] {
         let mut sum = [0.0f64; 3];
         for i in samples {
-            let (mut sampler, ray) = camera_sample(
+            let (mut sampler, ray, at) = camera_sample(
                 &self.camera,
                 self.seed,
-                &self.filter,
+                &self.jitter,
                 self.moving,
                 (x, y),
                 i,
@@ -115,6 +167,13 @@ impl<'a> Samples<'a> {
                 // A numerical failure on one sample must not poison the pixel.
                 result.splats.truncate(before);
                 result.invalid += 1;
+                if let Some(s) = &self.splat {
+                    result.camera.add(&s.weights, at, None);
+                }
+                continue;
+            }
+            if let Some(s) = &self.splat {
+                result.camera.add(&s.weights, at, Some(l));
                 continue;
             }
             sum[0] += l.x as f64;
@@ -124,13 +183,16 @@ impl<'a> Samples<'a> {
         sum
     }
 
-    /// One pass of `samples` over a tile.
-    fn tile_pass(&self, tile: &Tile, samples: std::ops::Range<u32>) -> TileResult {
-        let mut result = TileResult::new(tile.pixels() as usize);
+    /// One pass of `samples` over a tile, whose splatted samples reach the pixels of
+    /// `bounds` only.
+    fn tile_pass(&self, tile: &Tile, samples: std::ops::Range<u32>, bounds: &Tile) -> TileResult {
+        let mut result = TileResult::new(tile, self.splat.as_ref(), bounds);
         for y in tile.y0..tile.y1 {
             for x in tile.x0..tile.x1 {
                 let sum = self.pixel_pass((x, y), samples.clone(), &mut result);
-                result.sums.push(sum);
+                if self.splat.is_none() {
+                    result.camera.sums.push(sum);
+                }
             }
         }
         result
@@ -142,7 +204,7 @@ impl<'a> Samples<'a> {
     fn tile_all_passes(&self, tile: &Tile, spp: u32, pixels_in_image: f64) -> TileResult {
         let per_sample = 1.0 / spp as f64;
         let per_path = per_sample / pixels_in_image;
-        let mut result = TileResult::new(tile.pixels() as usize);
+        let mut result = TileResult::new(tile, None, tile);
         for y in tile.y0..tile.y1 {
             for x in tile.x0..tile.x1 {
                 let mut total = [0.0f64; 3];
@@ -156,29 +218,38 @@ impl<'a> Samples<'a> {
                     done += n;
                 }
                 let v = pixel_value(total, [0.0; 3], per_sample, per_path);
-                result.sums.push([v.x as f64, v.y as f64, v.z as f64]);
+                result
+                    .camera
+                    .sums
+                    .push([v.x as f64, v.y as f64, v.z as f64]);
             }
         }
         result
     }
 }
 
-/// Camera sample `i` of pixel (x, y): its ray, through the pixel centre moved by an offset
-/// drawn from the filter, and its sampler with that offset's numbers drawn. Anything that
-/// must see exactly the render's camera rays (the irradiance cache's overture) calls this.
-/// The ray gets a shutter time only if the scene is `moving`: a still scene looks the same
-/// at any time, and drawing the time costs as much as a bounce's sample values.
+/// Camera sample `i` of pixel (x, y): its ray through the pixel, at a position drawn by
+/// `jitter`, its sampler with that position's numbers drawn, and the position. Anything
+/// that must see exactly the render's camera rays (the irradiance cache's overture) calls
+/// this. The ray gets a shutter time only if the scene is `moving`: a still scene looks the
+/// same at any time, and drawing the time costs as much as a bounce's sample values.
 pub(crate) fn camera_sample(
     camera: &CameraBasis,
     seed: u64,
-    filter: &FilterSampler,
+    jitter: &PixelJitter,
     moving: bool,
     (x, y): (u32, u32),
     i: u32,
-) -> (Sampler, Ray) {
+) -> (Sampler, Ray, (f32, f32)) {
     let mut sampler = Sampler::new(seed, &[x as u64, y as u64], i);
-    let offset = filter.sample(sampler.next_2d());
-    let (fx, fy) = (x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y);
+    let u = sampler.next_2d();
+    let (fx, fy) = match jitter {
+        PixelJitter::Filter(filter) => {
+            let offset = filter.sample(u);
+            (x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y)
+        }
+        PixelJitter::Uniform => (x as f32 + u.x, y as f32 + u.y),
+    };
     // Only a thin lens draws a lens sample, so pinhole images keep their sample streams.
     let ray = if camera.has_lens() {
         camera.ray_through_lens(fx, fy, sampler.next_2d())
@@ -191,7 +262,7 @@ pub(crate) fn camera_sample(
     } else {
         ray
     };
-    (sampler, ray)
+    (sampler, ray, (fx, fy))
 }
 
 /// The scene's camera at the render's size, with light-path splats accepted as far outside
@@ -207,13 +278,15 @@ pub(crate) fn view_basis(scene: &Scene, options: &ProgressiveOptions) -> CameraB
 
 /// The pixels of one tile (row-major) with all `options.spp` samples, exactly as
 /// [`render_passes`] (without a time limit) renders them, for an integrator that splats
-/// nothing (the path tracer): the pixels, the rays and the dropped samples.
+/// nothing (the path tracer) and samples that count in their own pixel alone
+/// ([`Reconstruction::Importance`]): the pixels, the rays and the dropped samples.
 pub(crate) fn render_tile(
     ctx: &Context,
     integrator: &dyn MonteCarlo,
     options: &ProgressiveOptions,
     tile: &Tile,
 ) -> (Vec<Rgb>, RayStats, u64) {
+    debug_assert_eq!(options.reconstruction, Reconstruction::Importance);
     let s = Samples::new(ctx, integrator, options);
     let r = s.tile_all_passes(
         tile,
@@ -221,6 +294,7 @@ pub(crate) fn render_tile(
         options.width as f64 * options.height as f64,
     );
     let pixels = r
+        .camera
         .sums
         .iter()
         .map(|v| Rgb::new(v[0] as f32, v[1] as f32, v[2] as f32))
@@ -244,6 +318,9 @@ pub(crate) fn render_region(
             "cannot be used for a part of an image: every part must take the same samples",
         ));
     }
+    if options.reconstruction == Reconstruction::Splat {
+        return render_region_splatted(ctx, integrator, options, region, control);
+    }
     let s = Samples::new(ctx, integrator, options);
     let pixels_in_image = options.width as f64 * options.height as f64;
     let tiles = tiles_in(region);
@@ -264,6 +341,7 @@ pub(crate) fn render_region(
         |i, r| {
             let t = &tiles[i];
             let pixels = r
+                .camera
                 .sums
                 .iter()
                 .map(|v| Rgb::new(v[0] as f32, v[1] as f32, v[2] as f32));
@@ -280,10 +358,116 @@ pub(crate) fn render_region(
     Ok((image, stats))
 }
 
+/// [`render_region`] with splatted samples: the image's own tiles that reach the region
+/// (cut to the pixels whose samples reach it), pass by pass in the order the whole render
+/// takes them, so that every pixel of the region adds the same numbers in the same order.
+fn render_region_splatted(
+    ctx: &Context,
+    integrator: &dyn MonteCarlo,
+    options: &ProgressiveOptions,
+    region: &Tile,
+    control: &Control,
+) -> Result<(Image, RenderStats)> {
+    let s = Samples::new(ctx, integrator, options);
+    let reach = s.splat.as_ref().map_or(0, |s| s.reach);
+    let reaching = Tile {
+        x0: region.x0.saturating_sub(reach),
+        y0: region.y0.saturating_sub(reach),
+        x1: (region.x1 + reach).min(options.width),
+        y1: (region.y1 + reach).min(options.height),
+    };
+    let tiles: Vec<Tile> = tiles(options.width, options.height)
+        .iter()
+        .filter_map(|t| intersection(t, &reaching))
+        .collect();
+    let passes = passes_between(0, options.spp);
+    let phase = control.phase(
+        "render",
+        Some(region.pixels() * options.spp as u64),
+        "samples",
+    );
+    let start = Instant::now();
+    // The region's own accumulators, as the whole film's would be over its pixels.
+    let what = || {
+        format!(
+            "the film of a {}x{} region",
+            region.width(),
+            region.height()
+        )
+    };
+    let mut sums = crate::error::try_vec(region.pixels() as usize, [0.0f64; 3], what)?;
+    let mut weights = crate::error::try_vec(region.pixels() as usize, 0.0f64, what)?;
+    let at = |x: u32, y: u32| ((y - region.y0) * region.width() + x - region.x0) as usize;
+    let mut stats = RenderStats::default();
+    let driven = drive_indexed(
+        passes.len() * tiles.len(),
+        options.threads,
+        MERGE_WINDOW,
+        &control.cancel,
+        |k| {
+            let (first, n) = passes[k / tiles.len()];
+            s.tile_pass(&tiles[k % tiles.len()], first..first + n, region)
+        },
+        |k, r| {
+            let (t, n) = (&tiles[k % tiles.len()], passes[k / tiles.len()].1);
+            let (rect, w) = (&r.camera.rect, r.camera.rect.width());
+            for (k, (v, weight)) in r.camera.sums.iter().zip(&r.camera.weights).enumerate() {
+                let i = at(rect.x0 + k as u32 % w, rect.y0 + k as u32 / w);
+                for c in 0..3 {
+                    sums[i][c] += v[c];
+                }
+                weights[i] += weight;
+            }
+            stats.rays.add(&r.rays);
+            stats.samples += n as u64 * t.pixels();
+            stats.invalid += r.invalid;
+            if let Some(inside) = intersection(t, region) {
+                phase.advance(n as u64 * inside.pixels());
+            }
+            Merge::Continue
+        },
+    );
+    let mut image = Image::try_new(region.width(), region.height())?;
+    for y in region.y0..region.y1 {
+        for x in region.x0..region.x1 {
+            let i = at(x, y);
+            let v = weighted_value(sums[i], weights[i], [0.0; 3], 0.0);
+            image.set(x - region.x0, y - region.y0, v);
+        }
+    }
+    stats.cancelled = driven.cancelled;
+    stats.seconds = start.elapsed().as_secs_f64();
+    phase.end(&stats.summary());
+    Ok((image, stats))
+}
+
+/// The pixels two rectangles share, if any.
+fn intersection(a: &Tile, b: &Tile) -> Option<Tile> {
+    let t = Tile {
+        x0: a.x0.max(b.x0),
+        y0: a.y0.max(b.y0),
+        x1: a.x1.min(b.x1),
+        y1: a.y1.min(b.y1),
+    };
+    (t.x0 < t.x1 && t.y0 < t.y1).then_some(t)
+}
+
 /// The sizes of successive passes: 1, 1, 2, 4, 8, 16, 16, ... (early images come quickly,
 /// later passes are long enough to keep every thread busy).
 pub(crate) fn next_pass(done: u32, target: u32) -> u32 {
     done.clamp(1, 16).min(target - done)
+}
+
+/// The passes, as (first sample, samples), that take a film from `done` samples per pixel
+/// (a count between passes) to `target`.
+fn passes_between(mut done: u32, target: u32) -> Vec<(u32, u32)> {
+    let mut passes = Vec::new();
+    while done < target {
+        let n = next_pass(done, target);
+        passes.push((done, n));
+        done += n;
+    }
+    passes
 }
 
 /// Whether a render of `target` samples per pixel passes through `spp` whole samples (the
@@ -315,8 +499,13 @@ pub(crate) fn render_passes(
     let tiles = tiles(options.width, options.height);
     let mut film = match resume {
         Some(film) => {
-            if (film.width, film.height, film.filter)
-                != (options.width, options.height, options.filter)
+            if (film.width, film.height, film.filter, film.reconstruction)
+                != (
+                    options.width,
+                    options.height,
+                    options.filter,
+                    options.reconstruction,
+                )
             {
                 return Err(Error::Invalid(
                     "the film to resume was rendered at another size or filter".into(),
@@ -324,7 +513,12 @@ pub(crate) fn render_passes(
             }
             film
         }
-        None => Film::new(options.width, options.height, options.filter)?,
+        None => Film::new(
+            options.width,
+            options.height,
+            options.filter,
+            options.reconstruction,
+        )?,
     };
     let mut stats = RenderStats::default();
     let pixels = options.width as u64 * options.height as u64;
@@ -348,11 +542,8 @@ pub(crate) fn render_passes(
         passes.push((done, film.pass));
         done += film.pass;
     }
-    while done < options.spp {
-        let n = next_pass(done, options.spp);
-        passes.push((done, n));
-        done += n;
-    }
+    passes.extend(passes_between(done, options.spp));
+    let whole = Tile::whole(options.width, options.height);
     let skipped = film.tiles_done as usize;
     let locate = |k: usize| ((k + skipped) / tiles.len(), (k + skipped) % tiles.len());
     let mut failure = None;
@@ -366,25 +557,18 @@ pub(crate) fn render_passes(
         |k| {
             let (p, t) = locate(k);
             let (first, n) = passes[p];
-            s.tile_pass(&tiles[t], first..first + n)
+            s.tile_pass(&tiles[t], first..first + n, &whole)
         },
         |k, r| {
             let (p, t) = locate(k);
             let (tile, n) = (&tiles[t], passes[p].1);
             film.pass = n;
-            let w = tile.width();
-            for (k, v) in r.sums.iter().enumerate() {
-                let (x, y) = (tile.x0 + k as u32 % w, tile.y0 + k as u32 / w);
-                let px = &mut film.sums[(y * options.width + x) as usize];
-                px[0] += v[0];
-                px[1] += v[1];
-                px[2] += v[2];
-            }
+            film.add_camera(&r.camera.rect, &r.camera.sums, &r.camera.weights);
             for splat in &r.splats {
                 film.add_splat(splat);
             }
             stats.rays.add(&r.rays);
-            stats.samples += n as u64 * r.sums.len() as u64;
+            stats.samples += n as u64 * tile.pixels();
             film.invalid += r.invalid;
             film.tiles_done += 1;
             phase.advance(n as u64 * tile.pixels());

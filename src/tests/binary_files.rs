@@ -3,7 +3,7 @@
 //! refused with a message naming the file and the reason, never used.
 
 use crate::binary_file::checksum;
-use crate::image::filter::Filter;
+use crate::image::filter::{Filter, Reconstruction};
 use crate::render::{checkpoint, Film};
 use crate::Error;
 use std::path::{Path, PathBuf};
@@ -23,7 +23,7 @@ const SETTINGS: &str = "a test render";
 /// A checkpoint of an empty 8x8 film, and where its counts start in the file.
 fn empty_checkpoint(dir: &Path) -> (PathBuf, usize) {
     let path = dir.join("x.exr.checkpoint");
-    let film = Film::new(8, 8, Filter::default()).unwrap();
+    let film = Film::new(8, 8, Filter::default(), Reconstruction::Splat).unwrap();
     checkpoint::save(&path, &film, SETTINGS, 0).unwrap();
     // Magic and version, the settings' length and text, then width and height.
     (path, 12 + 8 + SETTINGS.len() + 8)
@@ -33,7 +33,7 @@ fn load(path: &Path, target: u32) -> Result<(), String> {
     checkpoint::load(
         path,
         SETTINGS,
-        Film::new(8, 8, Filter::default()).unwrap(),
+        Film::new(8, 8, Filter::default(), Reconstruction::Splat).unwrap(),
         target,
     )
     .map(drop)
@@ -104,7 +104,7 @@ fn checkpoints_with_impossible_counts_or_sums_are_refused() {
 fn checkpoints_of_other_renders_are_kept_apart() {
     let dir = tempfile::tempdir().unwrap();
     let output = dir.path().join("x.exr");
-    let film = Film::new(8, 8, Filter::default()).unwrap();
+    let film = Film::new(8, 8, Filter::default(), Reconstruction::Splat).unwrap();
     // A first render leaves its checkpoint; a second, with another seed, must not replace it.
     let first = checkpoint::path_for(&output, "seed 1");
     checkpoint::save(&first, &film, "seed 1", 0).unwrap();

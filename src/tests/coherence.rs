@@ -231,6 +231,7 @@ fn sequence_job(
             spp: 4,
             time_limit: None,
             filter: Default::default(),
+            reconstruction: crate::image::filter::Reconstruction::Importance,
         }),
     };
     SequenceJob {

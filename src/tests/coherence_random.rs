@@ -217,6 +217,7 @@ fn case(n: u64) -> (String, SequenceJob) {
             spp: rng.int(1, 2) as u32,
             time_limit: None,
             filter: Default::default(),
+            reconstruction: crate::image::filter::Reconstruction::Importance,
         })
     };
     let job = SequenceJob {

@@ -38,6 +38,7 @@ fn options(w: u32, h: u32, spp: u32, threads: Option<usize>) -> ProgressiveOptio
         threads,
         seed: 3,
         filter: Filter::Box { radius: 0.5 },
+        reconstruction: crate::image::filter::Reconstruction::Splat,
     }
 }
 

@@ -69,6 +69,7 @@ fn coated_diffuse_sphere_in_a_furnace_renders_its_albedo() {
         spp: 256,
         time_limit: None,
         filter: Filter::Box { radius: 0.5 },
+        reconstruction: crate::image::filter::Reconstruction::Splat,
     };
     let job = Job {
         width: SIZE,

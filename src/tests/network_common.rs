@@ -57,6 +57,7 @@ pub(crate) fn monte_carlo_image(
         threads: None,
         seed,
         filter: Filter::Box { radius: 0.5 },
+        reconstruction: crate::image::filter::Reconstruction::Splat,
     };
     let watch = crate::render::Watch::nobody();
     let (film, _) =

@@ -17,6 +17,7 @@ pub fn boxed(max_depth: u32, spp: u32) -> MonteCarloSettings {
         spp,
         time_limit: None,
         filter: Filter::Box { radius: 0.5 },
+        reconstruction: raylink::image::filter::Reconstruction::Splat,
     }
 }
 

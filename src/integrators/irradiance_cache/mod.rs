@@ -48,13 +48,12 @@ use super::path::sample_direct;
 use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
 use crate::control::{CancelToken, Control};
-use crate::image::filter::FilterSampler;
 use crate::image::Image;
 use crate::math::sobol::Sampler;
 use crate::math::warp::power_heuristic;
 use crate::math::{offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
 use crate::render::driver::drive;
-use crate::render::progressive::{camera_sample, view_basis, ProgressiveOptions};
+use crate::render::progressive::{camera_sample, view_basis, PixelJitter, ProgressiveOptions};
 use crate::scene::camera::CameraBasis;
 use crate::scene::{Scene, SurfacePoint};
 use crate::{Error, Result};
@@ -385,7 +384,7 @@ impl IrradianceCache {
                 misses: AtomicU64::new(0),
             });
         }
-        let filter = FilterSampler::new(render.filter);
+        let jitter = PixelJitter::new(render.filter, render.reconstruction);
         let moving = ctx.scene.moves();
         let (mut primaries, mut rays) = (0, 0);
         let schedule = overture_schedule(render.width, render.height, render.spp);
@@ -420,8 +419,8 @@ impl IrradianceCache {
                         if control.cancel.is_cancelled() {
                             break;
                         }
-                        let (mut sampler, ray) =
-                            camera_sample(&camera, seed, &filter, moving, (x, y), i);
+                        let (mut sampler, ray, _) =
+                            camera_sample(&camera, seed, &jitter, moving, (x, y), i);
                         let mut rng = sample_rng(seed, &mut sampler);
                         walk.trace(&ray, 0, true, 0, &mut rng);
                     }
