@@ -129,17 +129,26 @@ fn collect_motion(shapes: &[Shape]) -> Vec<Vec3A> {
     }
     let mut vertices = Vec::new();
     for shape in shapes {
-        match shape.motion.as_ref().unwrap_or(&shape.geometry) {
-            Geometry::Sphere { center, radius } => {
-                vertices.extend([to_a(*center), Vec3A::new(*radius, 0.0, 0.0)]);
-            }
-            Geometry::Triangles(TriangleMesh { positions, .. })
-            | Geometry::Quads(QuadMesh { positions, .. }) => {
-                vertices.extend(positions.iter().map(|p| to_a(*p)))
-            }
-        }
+        push_vertices(
+            &mut vertices,
+            shape.motion.as_ref().unwrap_or(&shape.geometry),
+        );
     }
     vertices
+}
+
+/// Appends a shape's vertices as the primitives index them: a sphere's centre, then its
+/// radius in x.
+fn push_vertices(vertices: &mut Vec<Vec3A>, geometry: &Geometry) {
+    match geometry {
+        Geometry::Sphere { center, radius } => {
+            vertices.extend([to_a(*center), Vec3A::new(*radius, 0.0, 0.0)]);
+        }
+        Geometry::Triangles(TriangleMesh { positions, .. })
+        | Geometry::Quads(QuadMesh { positions, .. }) => {
+            vertices.extend(positions.iter().map(|p| to_a(*p)))
+        }
+    }
 }
 
 /// The shapes' vertices, and their primitives in shape order (the BVH reorders them).
@@ -158,24 +167,20 @@ fn collect_prims(shapes: &[Shape]) -> (Vec<Vec3A>, Vec<[u32; 3]>, Vec<Meta>) {
             });
         };
         match &shape.geometry {
-            Geometry::Sphere { center, radius } => {
-                push([0, 1, 1], 0, Kind::Sphere);
-                vertices.extend([to_a(*center), Vec3A::new(*radius, 0.0, 0.0)]);
-            }
+            Geometry::Sphere { .. } => push([0, 1, 1], 0, Kind::Sphere),
             Geometry::Triangles(m) => {
                 for (i, t) in m.indices.iter().enumerate() {
                     push(*t, i, Kind::Triangle);
                 }
-                vertices.extend(m.positions.iter().map(|p| to_a(*p)));
             }
             Geometry::Quads(q) => {
                 for (i, &[v0, v1, v2, v3]) in q.indices.iter().enumerate() {
                     push([v0, v1, v3], i, Kind::QuadFirst);
                     push([v2, v3, v1], i, Kind::QuadSecond);
                 }
-                vertices.extend(q.positions.iter().map(|p| to_a(*p)));
             }
         }
+        push_vertices(&mut vertices, &shape.geometry);
     }
     (vertices, prims, meta)
 }

@@ -205,17 +205,15 @@ impl<'a> Samples<'a> {
         let per_sample = 1.0 / spp as f64;
         let per_path = per_sample / pixels_in_image;
         let mut result = TileResult::new(tile, None, tile);
+        let passes = passes_between(0, spp);
         for y in tile.y0..tile.y1 {
             for x in tile.x0..tile.x1 {
                 let mut total = [0.0f64; 3];
-                let mut done = 0;
-                while done < spp {
-                    let n = next_pass(done, spp);
-                    let s = self.pixel_pass((x, y), done..done + n, &mut result);
+                for &(first, n) in &passes {
+                    let s = self.pixel_pass((x, y), first..first + n, &mut result);
                     for c in 0..3 {
                         total[c] += s[c];
                     }
-                    done += n;
                 }
                 let v = pixel_value(total, [0.0; 3], per_sample, per_path);
                 result

@@ -266,25 +266,9 @@ impl Scene {
             )));
         }
         let geometry = self.new_geometry(sys::RTC_GEOMETRY_TYPE_SPHERE_POINT)?;
-        // SAFETY: `geometry` is live; Embree allocates (and pads) a buffer of exactly
-        // `spheres.len()` FLOAT4 items, which we fill before committing.
-        unsafe {
-            let buf = sys::rtcSetNewGeometryBuffer(
-                geometry,
-                sys::RTC_BUFFER_TYPE_VERTEX,
-                0,
-                sys::RTC_FORMAT_FLOAT4,
-                16,
-                spheres.len(),
-            ) as *mut f32;
-            if !buf.is_null() {
-                std::ptr::copy_nonoverlapping(
-                    spheres.as_ptr() as *const f32,
-                    buf,
-                    spheres.len() * 4,
-                );
-            }
-        }
+        let vertex = (sys::RTC_BUFFER_TYPE_VERTEX, 0, sys::RTC_FORMAT_FLOAT4, 16);
+        // SAFETY: `geometry` is live; a Vec4 is one FLOAT4 item.
+        unsafe { fill_buffer(geometry, vertex, spheres) };
         self.finish_geometry(geometry)
     }
 
@@ -308,33 +292,15 @@ impl Scene {
             return Err(Error::Embree(format!("vertex {p} is not finite")));
         }
         let geometry = self.new_geometry(kind)?;
-        // SAFETY: `geometry` is live. Embree allocates both buffers with the sizes given
-        // (padding the vertex buffer for its 16-byte loads); we copy exactly that many items.
+        let vertex = (sys::RTC_BUFFER_TYPE_VERTEX, 0, sys::RTC_FORMAT_FLOAT3, 12);
+        // SAFETY: `geometry` is live.
         unsafe {
-            let vb = sys::rtcSetNewGeometryBuffer(
+            fill_buffer(geometry, vertex, positions);
+            fill_buffer(
                 geometry,
-                sys::RTC_BUFFER_TYPE_VERTEX,
-                0,
-                sys::RTC_FORMAT_FLOAT3,
-                12,
-                positions.len(),
-            ) as *mut f32;
-            let ib = sys::rtcSetNewGeometryBuffer(
-                geometry,
-                sys::RTC_BUFFER_TYPE_INDEX,
-                0,
-                index_format,
-                4 * per_prim,
-                indices.len() / per_prim,
-            ) as *mut u32;
-            if !vb.is_null() && !ib.is_null() {
-                std::ptr::copy_nonoverlapping(
-                    positions.as_ptr() as *const f32,
-                    vb,
-                    positions.len() * 3,
-                );
-                std::ptr::copy_nonoverlapping(indices.as_ptr(), ib, indices.len());
-            }
+                (sys::RTC_BUFFER_TYPE_INDEX, 0, index_format, 4 * per_prim),
+                indices,
+            );
         }
         self.finish_geometry(geometry)
     }
@@ -486,6 +452,35 @@ fn to_rtc_ray(ray: &Ray) -> sys::RTCRay {
         mask: u32::MAX,
         id: 0,
         flags: 0,
+    }
+}
+
+/// Gives `geometry` a new buffer (type, slot, format, bytes an item) holding `data`: Embree
+/// allocates as many items as `data` fills (padding vertex buffers for its 16-byte loads),
+/// and exactly those bytes are copied. A buffer Embree cannot allocate is left unfilled: the
+/// device reports it when the geometry is committed.
+///
+/// # Safety
+/// `geometry` must be live, and `data`'s bytes a whole number of items of the format.
+unsafe fn fill_buffer<T: Copy>(
+    geometry: sys::RTCGeometry,
+    (kind, slot, format, item_bytes): (sys::RTCBufferType, u32, sys::RTCFormat, usize),
+    data: &[T],
+) {
+    let bytes = std::mem::size_of_val(data);
+    // SAFETY: the caller's; the buffer has room for `bytes / item_bytes` items.
+    unsafe {
+        let buffer = sys::rtcSetNewGeometryBuffer(
+            geometry,
+            kind,
+            slot,
+            format,
+            item_bytes,
+            bytes / item_bytes,
+        );
+        if !buffer.is_null() {
+            std::ptr::copy_nonoverlapping(data.as_ptr() as *const u8, buffer as *mut u8, bytes);
+        }
     }
 }
 

@@ -2,7 +2,7 @@
 //! shutter open and at shutter close), which Embree interpolates linearly at each ray's time
 //! and bounds over the interval in its motion-blur BVH.
 
-use super::{check_indices, sys, GeometryId, Scene};
+use super::{check_indices, fill_buffer, sys, GeometryId, Scene};
 use crate::math::{Vec3, Vec4};
 use crate::scene::{Geometry, Shape};
 use crate::{Error, Result};
@@ -78,38 +78,23 @@ impl Scene {
                 "a moving shape's vertices are not finite".into(),
             ));
         }
-        let count = steps[0].len() / per_vertex;
         let geometry = self.new_geometry(kind)?;
-        // SAFETY: `geometry` is live. Embree allocates every buffer with the sizes given
-        // (padding vertex buffers for its 16-byte loads); we copy exactly that many items,
-        // and both steps hold `count` vertices (the shapes' topologies match).
+        // SAFETY: `geometry` is live; both steps hold the same number of vertices (the
+        // shapes' topologies match).
         unsafe {
             sys::rtcSetGeometryTimeStepCount(geometry, 2);
             for (slot, step) in steps.iter().enumerate() {
-                let vb = sys::rtcSetNewGeometryBuffer(
-                    geometry,
+                let vertex = (
                     sys::RTC_BUFFER_TYPE_VERTEX,
                     slot as u32,
                     format,
                     4 * per_vertex,
-                    count,
-                ) as *mut f32;
-                if !vb.is_null() {
-                    std::ptr::copy_nonoverlapping(step.as_ptr(), vb, count * per_vertex);
-                }
+                );
+                fill_buffer(geometry, vertex, step);
             }
             if let Some((indices, index_format, per_prim)) = indices {
-                let ib = sys::rtcSetNewGeometryBuffer(
-                    geometry,
-                    sys::RTC_BUFFER_TYPE_INDEX,
-                    0,
-                    index_format,
-                    4 * per_prim,
-                    indices.len() / per_prim,
-                ) as *mut u32;
-                if !ib.is_null() {
-                    std::ptr::copy_nonoverlapping(indices.as_ptr(), ib, indices.len());
-                }
+                let index = (sys::RTC_BUFFER_TYPE_INDEX, 0, index_format, 4 * per_prim);
+                fill_buffer(geometry, index, indices);
             }
         }
         self.finish_geometry(geometry)

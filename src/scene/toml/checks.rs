@@ -116,6 +116,15 @@ impl Xform {
         }
     }
 
+    /// A sphere's centre and radius moved by this transform, which must be a rotation (or
+    /// mirror) times a uniform scale; else why it cannot be.
+    pub(super) fn sphere(&self, center: Vec3, radius: f32) -> Result<(Vec3, f32), &'static str> {
+        let scale = self.uniform_scale().ok_or(
+            "a sphere cannot take a non-uniform scale or shear (it would be an ellipsoid)",
+        )?;
+        Ok((self.point(center), radius * scale))
+    }
+
     /// Some(s) when the linear part is a rotation (or mirror) times the uniform scale s.
     pub(super) fn uniform_scale(&self) -> Option<f32> {
         let l = Mat3::from_mat4(self.m);

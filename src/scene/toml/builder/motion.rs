@@ -42,16 +42,9 @@ impl Builder<'_> {
             let mut end = shape.geometry.clone();
             match &mut end {
                 Geometry::Sphere { center, radius } => {
-                    let scale = xf.uniform_scale().ok_or_else(|| {
-                        ctx.fail(
-                            site,
-                            "motion",
-                            "a sphere cannot take a non-uniform scale or shear (it would be an \
-                             ellipsoid)",
-                        )
-                    })?;
-                    *center = xf.point(*center);
-                    *radius *= scale;
+                    (*center, *radius) = xf
+                        .sphere(*center, *radius)
+                        .map_err(|m| ctx.fail(site, "motion", m))?;
                 }
                 Geometry::Triangles(m) => xf.place(&mut m.positions, &mut m.normals),
                 Geometry::Quads(q) => xf.place(&mut q.positions, &mut None),

@@ -81,18 +81,10 @@ impl Builder<'_> {
                 let center =
                     finite3(desc.center.map_or(Vec3::ZERO, |c| c.0)).map_err(fail("center"))?;
                 let radius = positive(desc.radius.unwrap_or(1.0)).map_err(fail("radius"))?;
-                let scale = xf.uniform_scale().ok_or_else(|| {
-                    ctx.fail(
-                        site,
-                        "transform",
-                        "a sphere cannot take a non-uniform scale or shear (it would be an \
-                         ellipsoid)",
-                    )
-                })?;
-                Geometry::Sphere {
-                    center: xf.point(center),
-                    radius: radius * scale,
-                }
+                let (center, radius) = xf
+                    .sphere(center, radius)
+                    .map_err(|m| ctx.fail(site, "transform", m))?;
+                Geometry::Sphere { center, radius }
             }
             ShapeKind::Quad => {
                 required(desc.vertices.is_some(), "vertices")?;
