@@ -18,8 +18,12 @@ The medians over the runs are compared (the minimum time to that error is printe
 --reps must be at least 3.
 
 Filters: --filter default keeps each renderer's own (Mitsuba's tent from the scene file,
-splatting each sample into the pixels it covers; raylink's from scenes/cornell-box.toml,
-sampled by importance); --filter box gives both a box, which compares the estimators alone.
+raylink's Gaussian from scenes/cornell-box.toml, both splatting each sample into the pixels
+they cover); --filter box gives both a box, which compares the estimators alone.
+
+--baseline BINARY adds another raylink build (an older commit's target/release/raylink) to
+the interleaved runs (Mitsuba, raylink, baseline, ...), for a before/after table measured in
+one run.
 
 Setup: python3 -m venv /tmp/mi && /tmp/mi/bin/pip install mitsuba
 Run:   cargo build --release --example compare && /tmp/mi/bin/python benches/mitsuba_compare.py
@@ -66,6 +70,7 @@ def main():
     ap.add_argument("--threads", type=int, default=None, help="default: every core")
     ap.add_argument("--reference", default=os.path.join(SCENE, "TungstenRender-256.exr"),
                     help="Tungsten's render; its size must be a multiple of --size")
+    ap.add_argument("--baseline", help="another raylink binary, run interleaved too")
     args = ap.parse_args()
     if args.reps < 3:
         ap.error(f"--reps must be at least 3 (a median of interleaved runs), got {args.reps}")
@@ -91,8 +96,8 @@ def main():
         mi.Bitmap(image).write(path)  # synchronous (write_bitmap may return before the file exists)
         return seconds, rmse(path, args.reference, args.size)
 
-    def raylink_run(rep):
-        path = os.path.join(tmp, f"raylink{rep}.exr")
+    def raylink_run(rep, binary=binary, name="raylink"):
+        path = os.path.join(tmp, f"{name}{rep}.exr")
         command = [binary, "render", os.path.join(ROOT, "scenes/cornell-box.toml"),
                    "--integrator", "path", "--width", str(args.size), "--height",
                    str(args.size), "--spp", str(args.spp), "--max-depth",
@@ -107,9 +112,13 @@ def main():
 
     load_before = os.getloadavg()
     runs = {"mitsuba": [], "raylink": []}
+    if args.baseline:
+        runs["baseline"] = []
     for rep in range(args.reps):
         runs["mitsuba"].append(mitsuba_run(rep))
         runs["raylink"].append(raylink_run(rep))
+        if args.baseline:
+            runs["baseline"].append(raylink_run(rep, args.baseline, "baseline"))
     load_after = os.getloadavg()
 
     print(f"{args.size}x{args.size}, {args.spp} spp, {args.max_depth - 1} bounces, "
@@ -118,8 +127,10 @@ def main():
           f"{load_after[0]:.2f} after, on {os.cpu_count()} cores")
     pixels = args.size * args.size * args.spp
     results = {}
-    for name, label in [("mitsuba", f"mitsuba {mi.__version__} scalar_rgb"),
-                        ("raylink", "raylink")]:
+    names = [("mitsuba", f"mitsuba {mi.__version__} scalar_rgb"), ("raylink", "raylink")]
+    if args.baseline:
+        names.append(("baseline", "baseline raylink"))
+    for name, label in names:
         times = [t for t, _ in runs[name]]
         errors = [e for _, e in runs[name]]
         results[name] = summary(label, times, errors, args.spp, args.target_rmse)
@@ -127,6 +138,12 @@ def main():
     (mt, mtt), (rt, rtt) = results["mitsuba"], results["raylink"]
     print(f"raylink/mitsuba: render time {rt / mt:.2f}, time to RMSE {args.target_rmse} "
           f"{rtt / mtt:.2f}")
+    if args.baseline:
+        bt, btt = results["baseline"]
+        print(f"baseline/mitsuba: render time {bt / mt:.2f}, time to RMSE {args.target_rmse} "
+              f"{btt / mtt:.2f}")
+        print(f"raylink/baseline: render time {rt / bt:.2f}, time to RMSE {args.target_rmse} "
+              f"{rtt / btt:.2f}")
     return 0
 
 
