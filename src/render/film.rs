@@ -173,21 +173,10 @@ impl Film {
             .sum()
     }
 
-    /// Adds a tile's camera samples: `sums` (and, splatted, `weights`) over `rect`,
-    /// row-major.
-    pub(crate) fn add_camera(&mut self, rect: &Tile, sums: &[[f64; 3]], weights: &[f64]) {
-        let w = rect.width();
-        for (k, v) in sums.iter().enumerate() {
-            let (x, y) = (rect.x0 + k as u32 % w, rect.y0 + k as u32 / w);
-            let i = (y * self.width + x) as usize;
-            let px = &mut self.sums[i];
-            px[0] += v[0];
-            px[1] += v[1];
-            px[2] += v[2];
-            if let Some(weight) = weights.get(k) {
-                self.weights[i] += weight;
-            }
-        }
+    /// Adds a tile's camera samples (see [`Footprint::absorb`]).
+    pub(crate) fn add_camera(&mut self, part: &Footprint) {
+        let whole = Tile::whole(self.width, self.height);
+        add_over(&whole, &mut self.sums, &mut self.weights, part);
     }
 
     pub(crate) fn add_splat(&mut self, s: &Splat) {
@@ -268,18 +257,31 @@ impl Footprint {
     /// The pixels of `bounds` that the samples of `tile` can reach through a filter of
     /// `reach` pixels.
     pub fn new(tile: &Tile, reach: u32, bounds: &Tile) -> Footprint {
-        let rect = Tile {
-            x0: tile.x0.saturating_sub(reach).max(bounds.x0),
-            y0: tile.y0.saturating_sub(reach).max(bounds.y0),
-            x1: (tile.x1 + reach).min(bounds.x1),
-            y1: (tile.y1 + reach).min(bounds.y1),
-        };
+        let rect = tile.grown(reach, bounds);
         let pixels = rect.pixels() as usize;
         Footprint {
             rect,
             sums: vec![[0.0; 3]; pixels],
             weights: vec![0.0; pixels],
         }
+    }
+
+    /// An empty footprint over exactly `rect`, or
+    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if it cannot be allocated.
+    pub fn try_over(rect: Tile) -> crate::Result<Footprint> {
+        let pixels = rect.pixels() as usize;
+        let what = || format!("the film of a {}x{} region", rect.width(), rect.height());
+        Ok(Footprint {
+            rect,
+            sums: crate::error::try_vec(pixels, [0.0; 3], what)?,
+            weights: crate::error::try_vec(pixels, 0.0, what)?,
+        })
+    }
+
+    /// Adds `part`'s sums (and its weights, if it has them: samples counted in their own
+    /// pixel have none) to the pixels they cover, which must lie within this footprint.
+    pub fn absorb(&mut self, part: &Footprint) {
+        add_over(&self.rect, &mut self.sums, &mut self.weights, part);
     }
 
     /// Adds a sample at raster position `at` with `value` to every pixel whose centre its
@@ -319,6 +321,22 @@ impl Footprint {
                     self.weights[i] += wt;
                 }
             }
+        }
+    }
+}
+
+/// Adds `part` to the sums and weights (row-major over `rect`) it lies within.
+fn add_over(rect: &Tile, sums: &mut [[f64; 3]], weights: &mut [f64], part: &Footprint) {
+    let w = part.rect.width();
+    for (k, v) in part.sums.iter().enumerate() {
+        let (x, y) = (part.rect.x0 + k as u32 % w, part.rect.y0 + k as u32 / w);
+        let i = ((y - rect.y0) * rect.width() + x - rect.x0) as usize;
+        let px = &mut sums[i];
+        px[0] += v[0];
+        px[1] += v[1];
+        px[2] += v[2];
+        if let Some(weight) = part.weights.get(k) {
+            weights[i] += weight;
         }
     }
 }

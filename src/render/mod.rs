@@ -97,6 +97,27 @@ impl Tile {
     pub fn pixels(&self) -> u64 {
         self.width() as u64 * self.height() as u64
     }
+
+    /// This rectangle grown by `by` pixels on every side, within `bounds`.
+    pub(crate) fn grown(&self, by: u32, bounds: &Tile) -> Tile {
+        Tile {
+            x0: self.x0.saturating_sub(by).max(bounds.x0),
+            y0: self.y0.saturating_sub(by).max(bounds.y0),
+            x1: (self.x1 + by).min(bounds.x1),
+            y1: (self.y1 + by).min(bounds.y1),
+        }
+    }
+
+    /// The pixels this rectangle shares with `other`, if any.
+    pub(crate) fn intersection(&self, other: &Tile) -> Option<Tile> {
+        let t = Tile {
+            x0: self.x0.max(other.x0),
+            y0: self.y0.max(other.y0),
+            x1: self.x1.min(other.x1),
+            y1: self.y1.min(other.y1),
+        };
+        (t.x0 < t.x1 && t.y0 < t.y1).then_some(t)
+    }
 }
 
 /// The image's tiles, row by row.

@@ -69,24 +69,32 @@ impl TileResult {
 }
 
 /// Where a pixel's camera samples fall: offsets drawn from the filter (each sample counts
-/// in its own pixel), or spread uniformly over the pixel (samples are splatted).
+/// in its own pixel), or spread uniformly over the pixel, to be splatted.
 pub(crate) enum PixelJitter {
     Filter(FilterSampler),
-    Uniform,
+    Uniform(Splatting),
 }
 
 impl PixelJitter {
     pub fn new(filter: Filter, reconstruction: Reconstruction) -> PixelJitter {
         match reconstruction {
             Reconstruction::Importance => PixelJitter::Filter(FilterSampler::new(filter)),
-            Reconstruction::Splat => PixelJitter::Uniform,
+            Reconstruction::Splat => PixelJitter::Uniform(Splatting::new(filter)),
+        }
+    }
+
+    /// How samples are splatted, if they are.
+    fn splatting(&self) -> Option<&Splatting> {
+        match self {
+            PixelJitter::Filter(_) => None,
+            PixelJitter::Uniform(s) => Some(s),
         }
     }
 }
 
 /// How splatted samples reach pixels: the filter's weights and how many pixels past its
 /// own a sample can reach.
-struct Splatting {
+pub(crate) struct Splatting {
     weights: FilterWeights,
     reach: u32,
 }
@@ -108,8 +116,6 @@ struct Samples<'a> {
     camera: CameraBasis,
     seed: u64,
     jitter: PixelJitter,
-    /// With splatting, the filter's weights.
-    splat: Option<Splatting>,
     /// Whether anything moves during the exposure (else rays need no shutter time).
     moving: bool,
 }
@@ -126,8 +132,6 @@ impl<'a> Samples<'a> {
             camera: view_basis(ctx.scene, options),
             seed: options.seed,
             jitter: PixelJitter::new(options.filter, options.reconstruction),
-            splat: (options.reconstruction == Reconstruction::Splat)
-                .then(|| Splatting::new(options.filter)),
             moving: ctx.scene.moves(),
         }
     }
@@ -167,12 +171,12 @@ impl<'a> Samples<'a> {
                 // A numerical failure on one sample must not poison the pixel.
                 result.splats.truncate(before);
                 result.invalid += 1;
-                if let Some(s) = &self.splat {
+                if let Some(s) = self.jitter.splatting() {
                     result.camera.add(&s.weights, at, None);
                 }
                 continue;
             }
-            if let Some(s) = &self.splat {
+            if let Some(s) = self.jitter.splatting() {
                 result.camera.add(&s.weights, at, Some(l));
                 continue;
             }
@@ -186,11 +190,12 @@ impl<'a> Samples<'a> {
     /// One pass of `samples` over a tile, whose splatted samples reach the pixels of
     /// `bounds` only.
     fn tile_pass(&self, tile: &Tile, samples: std::ops::Range<u32>, bounds: &Tile) -> TileResult {
-        let mut result = TileResult::new(tile, self.splat.as_ref(), bounds);
+        let splatting = self.jitter.splatting();
+        let mut result = TileResult::new(tile, splatting, bounds);
         for y in tile.y0..tile.y1 {
             for x in tile.x0..tile.x1 {
                 let sum = self.pixel_pass((x, y), samples.clone(), &mut result);
-                if self.splat.is_none() {
+                if splatting.is_none() {
                     result.camera.sums.push(sum);
                 }
             }
@@ -246,7 +251,7 @@ pub(crate) fn camera_sample(
             let offset = filter.sample(u);
             (x as f32 + 0.5 + offset.x, y as f32 + 0.5 + offset.y)
         }
-        PixelJitter::Uniform => (x as f32 + u.x, y as f32 + u.y),
+        PixelJitter::Uniform(_) => (x as f32 + u.x, y as f32 + u.y),
     };
     // Only a thin lens draws a lens sample, so pinhole images keep their sample streams.
     let ray = if camera.has_lens() {
@@ -367,16 +372,12 @@ fn render_region_splatted(
     control: &Control,
 ) -> Result<(Image, RenderStats)> {
     let s = Samples::new(ctx, integrator, options);
-    let reach = s.splat.as_ref().map_or(0, |s| s.reach);
-    let reaching = Tile {
-        x0: region.x0.saturating_sub(reach),
-        y0: region.y0.saturating_sub(reach),
-        x1: (region.x1 + reach).min(options.width),
-        y1: (region.y1 + reach).min(options.height),
-    };
+    let reach = s.jitter.splatting().map_or(0, |s| s.reach);
+    let whole = Tile::whole(options.width, options.height);
+    let reaching = region.grown(reach, &whole);
     let tiles: Vec<Tile> = tiles(options.width, options.height)
         .iter()
-        .filter_map(|t| intersection(t, &reaching))
+        .filter_map(|t| t.intersection(&reaching))
         .collect();
     let passes = passes_between(0, options.spp);
     let phase = control.phase(
@@ -386,16 +387,7 @@ fn render_region_splatted(
     );
     let start = Instant::now();
     // The region's own accumulators, as the whole film's would be over its pixels.
-    let what = || {
-        format!(
-            "the film of a {}x{} region",
-            region.width(),
-            region.height()
-        )
-    };
-    let mut sums = crate::error::try_vec(region.pixels() as usize, [0.0f64; 3], what)?;
-    let mut weights = crate::error::try_vec(region.pixels() as usize, 0.0f64, what)?;
-    let at = |x: u32, y: u32| ((y - region.y0) * region.width() + x - region.x0) as usize;
+    let mut film = Footprint::try_over(*region)?;
     let mut stats = RenderStats::default();
     let driven = drive_indexed(
         passes.len() * tiles.len(),
@@ -408,46 +400,29 @@ fn render_region_splatted(
         },
         |k, r| {
             let (t, n) = (&tiles[k % tiles.len()], passes[k / tiles.len()].1);
-            let (rect, w) = (&r.camera.rect, r.camera.rect.width());
-            for (k, (v, weight)) in r.camera.sums.iter().zip(&r.camera.weights).enumerate() {
-                let i = at(rect.x0 + k as u32 % w, rect.y0 + k as u32 / w);
-                for c in 0..3 {
-                    sums[i][c] += v[c];
-                }
-                weights[i] += weight;
-            }
+            film.absorb(&r.camera);
             stats.rays.add(&r.rays);
             stats.samples += n as u64 * t.pixels();
             stats.invalid += r.invalid;
-            if let Some(inside) = intersection(t, region) {
+            if let Some(inside) = t.intersection(region) {
                 phase.advance(n as u64 * inside.pixels());
             }
             Merge::Continue
         },
     );
+    // The film is row-major over the region, as the image is.
     let mut image = Image::try_new(region.width(), region.height())?;
-    for y in region.y0..region.y1 {
-        for x in region.x0..region.x1 {
-            let i = at(x, y);
-            let v = weighted_value(sums[i], weights[i], [0.0; 3], 0.0);
-            image.set(x - region.x0, y - region.y0, v);
-        }
+    for (px, (sum, weight)) in image
+        .pixels
+        .iter_mut()
+        .zip(film.sums.iter().zip(&film.weights))
+    {
+        *px = weighted_value(*sum, *weight, [0.0; 3], 0.0);
     }
     stats.cancelled = driven.cancelled;
     stats.seconds = start.elapsed().as_secs_f64();
     phase.end(&stats.summary());
     Ok((image, stats))
-}
-
-/// The pixels two rectangles share, if any.
-fn intersection(a: &Tile, b: &Tile) -> Option<Tile> {
-    let t = Tile {
-        x0: a.x0.max(b.x0),
-        y0: a.y0.max(b.y0),
-        x1: a.x1.min(b.x1),
-        y1: a.y1.min(b.y1),
-    };
-    (t.x0 < t.x1 && t.y0 < t.y1).then_some(t)
 }
 
 /// The sizes of successive passes: 1, 1, 2, 4, 8, 16, 16, ... (early images come quickly,
@@ -561,7 +536,7 @@ pub(crate) fn render_passes(
             let (p, t) = locate(k);
             let (tile, n) = (&tiles[t], passes[p].1);
             film.pass = n;
-            film.add_camera(&r.camera.rect, &r.camera.sums, &r.camera.weights);
+            film.add_camera(&r.camera);
             for splat in &r.splats {
                 film.add_splat(splat);
             }
