@@ -4,6 +4,7 @@
 //! towards a point being shaded (`sample_li`, next-event estimation, with `pdf_li` for
 //! multiple importance sampling), and emission of a light path (`sample_le`, with `pdf_le`).
 
+use crate::math::spawn::Spot;
 use crate::math::warp::{
     concentric_disk, cosine_hemisphere, uniform_cone, uniform_cone_pdf, uniform_sphere,
     UNIFORM_SPHERE_PDF,
@@ -168,16 +169,33 @@ pub struct LightSample {
     pub wi: Vec3,
     /// The point on the light (for area and point lights) or a point far away along `wi`.
     pub p: Vec3,
+    /// A bound of `p`'s rounding error along each axis (zero off surfaces).
+    pub error: Vec3,
+    /// The light's unit normal at `p` (zero where there is no surface).
+    pub n: Vec3,
     /// Density in solid angle at the shaded point, including the choice of emitter; for delta
     /// lights the choice probability.
     pub pdf: f32,
     pub delta: bool,
 }
 
+impl LightSample {
+    /// Where the shadow ray towards the light ends.
+    pub fn spot(&self) -> Spot {
+        Spot {
+            p: self.p,
+            error: self.error,
+            n: self.n,
+        }
+    }
+}
+
 /// The start of a light path.
 #[derive(Clone, Copy, Debug)]
 pub struct EmissionSample {
     pub p: Vec3,
+    /// A bound of `p`'s rounding error along each axis (zero off surfaces).
+    pub error: Vec3,
     /// Surface normal at `p` (zero for point lights and for infinite lights the direction).
     pub n: Vec3,
     pub dir: Vec3,
@@ -193,6 +211,18 @@ pub struct EmissionSample {
     pub delta_dir: bool,
     /// Index of the emitter.
     pub light: usize,
+}
+
+impl EmissionSample {
+    /// Where the light path leaves: the point, its error and its normal (for points off
+    /// every surface, the error is zero and the point is not moved).
+    pub fn spot(&self) -> Spot {
+        Spot {
+            p: self.p,
+            error: self.error,
+            n: self.n,
+        }
+    }
 }
 
 #[derive(Clone)]
@@ -402,14 +432,18 @@ impl LightSet {
                         let tc = to_c.dot(wi);
                         let disc = (r * r - (d2 - tc * tc)).max(0.0);
                         let q = p + wi * (tc - disc.sqrt());
-                        let radiance = a.radiance_at(&a.sphere_point(q, (q - c) / r));
+                        // Projected onto the sphere: the ray's own point is far less exact.
+                        let lp = a.sphere_point((q - c).normalize());
+                        let radiance = a.radiance_at(&lp);
                         if radiance == Rgb::ZERO {
                             return None;
                         }
                         return Some(LightSample {
                             radiance,
                             wi,
-                            p: q,
+                            p: lp.p,
+                            error: lp.error,
+                            n: lp.n,
                             pdf: sel * uniform_cone_pdf(cos_max),
                             delta: false,
                         });
@@ -431,6 +465,8 @@ impl LightSet {
                     radiance,
                     wi,
                     p: lp.p,
+                    error: lp.error,
+                    n: lp.n,
                     pdf: sel * dist2 / (cos_l * a.area),
                     delta: false,
                 })
@@ -445,6 +481,8 @@ impl LightSet {
                     radiance: *intensity / dist2,
                     wi: d / dist2.sqrt(),
                     p: *position,
+                    error: Vec3::ZERO,
+                    n: Vec3::ZERO,
                     pdf: sel,
                     delta: true,
                 })
@@ -461,6 +499,8 @@ impl LightSet {
                     radiance: intensity / dist2,
                     wi,
                     p: *position,
+                    error: Vec3::ZERO,
+                    n: Vec3::ZERO,
                     pdf: sel,
                     delta: true,
                 })
@@ -472,6 +512,8 @@ impl LightSet {
                 radiance: *irradiance,
                 wi: -*direction,
                 p: p - *direction * (4.0 * self.radius + (p - self.center).length()),
+                error: Vec3::ZERO,
+                n: Vec3::ZERO,
                 pdf: sel,
                 delta: true,
             }),
@@ -487,6 +529,8 @@ impl LightSet {
                     radiance,
                     wi,
                     p: p + wi * (4.0 * self.radius + (p - self.center).length()),
+                    error: Vec3::ZERO,
+                    n: Vec3::ZERO,
                     pdf: sel * pdf,
                     delta: false,
                 })
@@ -557,6 +601,7 @@ impl LightSet {
                 let l = cosine_hemisphere(u_dir);
                 EmissionSample {
                     p: lp.p,
+                    error: lp.error,
                     n,
                     dir: t * l.x + b * l.y + n * l.z,
                     radiance: a.radiance_at(&lp),
@@ -572,6 +617,7 @@ impl LightSet {
                 intensity,
             } => EmissionSample {
                 p: *position,
+                error: Vec3::ZERO,
                 n: Vec3::ZERO,
                 dir: uniform_sphere(u_dir),
                 radiance: *intensity,
@@ -585,6 +631,7 @@ impl LightSet {
                 let dir = uniform_sphere(u_dir);
                 EmissionSample {
                     p: *position,
+                    error: Vec3::ZERO,
                     n: Vec3::ZERO,
                     dir,
                     radiance: e.intensity_towards(dir),
@@ -607,6 +654,7 @@ impl LightSet {
                 let dir = (t * l.x + b * l.y + *direction * l.z).normalize();
                 EmissionSample {
                     p: *position,
+                    error: Vec3::ZERO,
                     n: Vec3::ZERO,
                     dir,
                     radiance: e.intensity_towards(dir),
@@ -622,6 +670,7 @@ impl LightSet {
                 irradiance,
             } => EmissionSample {
                 p: disk(*direction),
+                error: Vec3::ZERO,
                 n: *direction,
                 dir: *direction,
                 radiance: *irradiance,
@@ -642,6 +691,7 @@ impl LightSet {
                 let dir = -to_light;
                 EmissionSample {
                     p: disk(dir),
+                    error: Vec3::ZERO,
                     n: dir,
                     dir,
                     radiance,

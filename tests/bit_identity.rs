@@ -25,6 +25,8 @@
 //!   instead of comparing. Record only from code whose images are known to be right.
 //! - `RAYLINK_HASH_THREADS=N` renders with N worker threads instead of 2; the hashes must not
 //!   change (images do not depend on the thread count).
+//! - `RAYLINK_HASH_KEEP=DIR` copies every rendered image into DIR, a folder per case (to
+//!   measure how two versions' images differ where their hashes do).
 //! - The resumed render (SIGINT after the first checkpoint, then `--resume`) must hash as the
 //!   table's uninterrupted render of the same command, and as this run's.
 
@@ -823,6 +825,9 @@ fn every_technique_renders_the_recorded_pixels() {
     farm_cases(&mut run);
     animation_cases(&mut run);
     resume_case(&mut run);
+    if let Some(keep) = std::env::var_os("RAYLINK_HASH_KEEP") {
+        copy_tree(run.dir.path(), Path::new(&keep));
+    }
     let seconds = start.elapsed().as_secs_f64();
     let images = run.hashes.len();
 
@@ -900,5 +905,19 @@ fn every_technique_renders_the_recorded_pixels() {
              meant to alter images, record again with RAYLINK_RECORD_HASHES=1",
             failures.len()
         );
+    }
+}
+
+/// Copies the files of `from` into `to`, folders included (for `RAYLINK_HASH_KEEP`).
+fn copy_tree(from: &Path, to: &Path) {
+    std::fs::create_dir_all(to).unwrap();
+    for entry in std::fs::read_dir(from).unwrap() {
+        let entry = entry.unwrap();
+        let target = to.join(entry.file_name());
+        if entry.file_type().unwrap().is_dir() {
+            copy_tree(&entry.path(), &target);
+        } else {
+            std::fs::copy(entry.path(), &target).unwrap();
+        }
     }
 }

@@ -227,8 +227,7 @@ impl Prim {
             }
             _ => {
                 let h = triangle(&self.p, org, dir).expect("the triangle was hit");
-                let rcp = if h.uvw == 0.0 { 0.0 } else { 1.0 / h.uvw };
-                let (u, v) = ((h.u * rcp).min(1.0), (h.v * rcp).min(1.0));
+                let (u, v) = h.weights();
                 match kind {
                     Kind::QuadSecond => (1.0 - u, 1.0 - v, h.ng),
                     _ => (u, v, h.ng),
@@ -238,11 +237,12 @@ impl Prim {
     }
 }
 
-/// A triangle hit before normalisation: edge functions U, V (weights of v1, v2, unscaled),
-/// their sum with W, the distance, and Ng.
+/// A triangle hit before normalisation: edge functions U, V, W (weights of v1, v2, v0,
+/// unscaled), their sum, the distance, and Ng.
 struct TriangleHit {
     u: f32,
     v: f32,
+    w: f32,
     uvw: f32,
     t: f32,
     ng: Vec3A,
@@ -252,6 +252,33 @@ struct TriangleHit {
 /// returned unclipped; the caller checks it against the ray's interval.
 #[inline(always)]
 fn triangle(p: &[Vec3A; 3], org: Vec3A, dir: Vec3A) -> Option<TriangleHit> {
+    let h = plucker(p, org, dir);
+    let eps = f32::EPSILON * h.uvw.abs();
+    let inside = h.u.min(h.v).min(h.w) >= -eps || h.u.max(h.v).max(h.w) <= eps;
+    let den = h.ng.dot(dir);
+    (inside && den != 0.0 && h.t.is_finite()).then_some(h)
+}
+
+/// The edge functions, distance and normal of the triangle test, for any ray.
+#[inline(always)]
+fn plucker(p: &[Vec3A; 3], org: Vec3A, dir: Vec3A) -> TriangleHit {
+    let (u, v, w, [v0, _, _], ng) = edge_functions(p, org, dir);
+    let t = v0.dot(ng) / ng.dot(dir);
+    TriangleHit {
+        u,
+        v,
+        w,
+        uvw: u + v + w,
+        t,
+        ng,
+    }
+}
+
+/// The test's edge functions U, V, W, the vertices relative to the origin, and the
+/// normal: the hit point's recomputation calls it with the ray a backend reported a hit
+/// for, so that both backends' hits come out of this arithmetic.
+#[inline(always)]
+fn edge_functions(p: &[Vec3A; 3], org: Vec3A, dir: Vec3A) -> (f32, f32, f32, [Vec3A; 3], Vec3A) {
     let v0 = p[0] - org;
     let v1 = p[1] - org;
     let v2 = p[2] - org;
@@ -261,20 +288,37 @@ fn triangle(p: &[Vec3A; 3], org: Vec3A, dir: Vec3A) -> Option<TriangleHit> {
     let u = e0.cross(v2 + v0).dot(dir);
     let v = e1.cross(v0 + v1).dot(dir);
     let w = e2.cross(v1 + v2).dot(dir);
-    let uvw = u + v + w;
-    let eps = f32::EPSILON * uvw.abs();
-    let inside = u.min(v).min(w) >= -eps || u.max(v).max(w) <= eps;
-    if !inside {
-        return None;
+    // e0 × e1 = (v2 − v0) × (v0 − v1) = (v1 − v0) × (v2 − v0), each component taken from
+    // whichever of e0 × e1 and e1 × e2 cancels less, as Embree's robust mode does: the
+    // plane of a sliver stays accurate, so rays leaving it do not meet it again.
+    let ng = stable_normal(e0, e1, e2);
+    (u, v, w, [v0, v1, v2], ng)
+}
+
+impl TriangleHit {
+    /// The weights of vertices 1 and 2 (u, v normalised by their sum with w).
+    #[inline(always)]
+    fn weights(&self) -> (f32, f32) {
+        normalised(self.u, self.v, self.uvw)
     }
-    // e0 × e1 = (v2 − v0) × (v0 − v1) = (v1 − v0) × (v2 − v0).
-    let ng = e0.cross(e1);
-    let den = ng.dot(dir);
-    if den == 0.0 {
-        return None;
-    }
-    let t = v0.dot(ng) / den;
-    t.is_finite().then_some(TriangleHit { u, v, uvw, t, ng })
+}
+
+#[inline(always)]
+fn normalised(u: f32, v: f32, uvw: f32) -> (f32, f32) {
+    let rcp = if uvw == 0.0 { 0.0 } else { 1.0 / uvw };
+    ((u * rcp).min(1.0), (v * rcp).min(1.0))
+}
+
+/// The normal of a triangle with edges `a`, `b`, `c` (summing to zero): `a × b`, component
+/// by component from `a × b` or `b × c`, whichever subtracts the smaller product (Embree's
+/// `stable_triangle_normal`).
+#[inline(always)]
+fn stable_normal(a: Vec3A, b: Vec3A, c: Vec3A) -> Vec3A {
+    let ab = Vec3A::new(a.z * b.y, a.x * b.z, a.y * b.x);
+    let bc = Vec3A::new(b.z * c.y, b.x * c.z, b.y * c.x);
+    let cross_ab = Vec3A::new(a.y * b.z - ab.x, a.z * b.x - ab.y, a.x * b.y - ab.z);
+    let cross_bc = Vec3A::new(b.y * c.z - bc.x, b.z * c.x - bc.y, b.x * c.y - bc.z);
+    Vec3A::select(ab.abs().cmplt(bc.abs()), cross_ab, cross_bc)
 }
 
 /// Embree's ray-sphere test: the entry point if it lies in `[tmin, tmax]`, else the exit point;
@@ -288,6 +332,16 @@ fn sphere(
     tmin: f32,
     tmax: f32,
 ) -> Option<(f32, Vec3A)> {
+    let [entry, exit] = sphere_roots(center, radius, org, dir)?;
+    [entry, exit]
+        .into_iter()
+        .find(|(t, _)| *t >= tmin && *t <= tmax)
+}
+
+/// The entry and exit points of a ray through a sphere, as distance and outward normal, or
+/// None when the ray passes by.
+#[inline(always)]
+fn sphere_roots(center: Vec3A, radius: f32, org: Vec3A, dir: Vec3A) -> Option<[(f32, Vec3A); 2]> {
     let rd2 = 1.0 / dir.dot(dir);
     let c0 = center - org;
     let proj = c0.dot(dir) * rd2;
@@ -298,14 +352,35 @@ fn sphere(
         return None;
     }
     let td = ((r2 - l2) * rd2).sqrt();
-    let (t_in, t_out) = (proj - td, proj + td);
-    if t_in >= tmin && t_in <= tmax {
-        Some((t_in, -td * dir - perp))
-    } else if t_out >= tmin && t_out <= tmax {
-        Some((t_out, td * dir - perp))
+    Some([(proj - td, -td * dir - perp), (proj + td, td * dir - perp)])
+}
+
+/// A backend's triangle hit recomputed by this backend's test: the weights of vertices 1
+/// and 2 and the unnormalised normal, whether or not the test would count it as a hit.
+#[inline]
+pub(super) fn triangle_weights(p: [Vec3; 3], org: Vec3, dir: Vec3) -> (f32, f32, Vec3) {
+    let (u, v, w, _, ng) = edge_functions(&p.map(to_a), to_a(org), to_a(dir));
+    let (u, v) = normalised(u, v, u + v + w);
+    (u, v, to_vec3(ng))
+}
+
+/// A backend's sphere hit at distance `t` recomputed by this backend's test: the root
+/// nearer `t` and its outward normal (None if this test finds no roots).
+#[inline]
+pub(super) fn sphere_point(
+    center: Vec3,
+    radius: f32,
+    org: Vec3,
+    dir: Vec3,
+    t: f32,
+) -> Option<(f32, Vec3)> {
+    let [entry, exit] = sphere_roots(to_a(center), radius, to_a(org), to_a(dir))?;
+    let nearer = if (entry.0 - t).abs() <= (exit.0 - t).abs() {
+        entry
     } else {
-        None
-    }
+        exit
+    };
+    Some((nearer.0, to_vec3(nearer.1)))
 }
 
 /// The ray obvhs's node test traverses with (see [`TRAVERSAL_DIR_SCALE`]). The inverse

@@ -4,10 +4,12 @@
 pub mod bvh;
 mod cutout;
 pub mod embree;
+mod hit_point;
 
 use crate::control::Control;
+use crate::math::spawn::Spot;
 use crate::math::{Ray, Vec3};
-use crate::scene::{Geometry, Scene, SurfacePoint, TriangleMesh};
+use crate::scene::{Geometry, Instance, Scene, Shape, SurfacePoint, TriangleMesh};
 
 /// The closest hit along a ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -32,20 +34,11 @@ impl Hit {
     /// Completes the intersection: position, normals and uv of the hit primitive of
     /// `scene` (the one the structure was built from).
     pub fn surface_point(&self, scene: &Scene, ray: &Ray) -> SurfacePoint {
-        let hit = self;
-        let p = ray.at(hit.t);
+        let (shape, instance) = self.shape(scene);
+        let (hit, local, hit_point::Located { p, error }) = self.locate(shape, instance, ray);
         let ng = hit.ng.normalize();
-        let (shape, instance) = match hit.instance {
-            None => (&scene.shapes[hit.geom_id as usize], None),
-            Some(i) => {
-                let instance = &scene.instances[i as usize];
-                let prototype = &scene.prototypes[instance.prototype as usize];
-                (&prototype.shapes[hit.geom_id as usize], Some(instance))
-            }
-        };
         // Shading normals and uvs come from the shape in its own space, and a moving shape
         // is shaded as it is at the ray's time (instanced shapes do not move).
-        let local = instance.map_or(p, |i| i.point_to_object(p));
         let to_world = |n: Vec3| instance.map_or(n, |i| i.normal_to_world(n).normalize_or_zero());
         let sphere = shape.sphere_at(ray.time);
         let ns = match &shape.geometry {
@@ -77,6 +70,7 @@ impl Hit {
         };
         SurfacePoint {
             p,
+            error,
             ng,
             ns,
             uv,
@@ -85,6 +79,65 @@ impl Hit {
             instance: hit.instance,
             material: shape.material,
             time: ray.time,
+        }
+    }
+}
+
+impl Hit {
+    /// The hit shape, and the instance placing it (None for the scene's own shapes).
+    fn shape<'a>(&self, scene: &'a Scene) -> (&'a Shape, Option<&'a Instance>) {
+        match self.instance {
+            None => (&scene.shapes[self.geom_id as usize], None),
+            Some(i) => {
+                let instance = &scene.instances[i as usize];
+                let prototype = &scene.prototypes[instance.prototype as usize];
+                (&prototype.shapes[self.geom_id as usize], Some(instance))
+            }
+        }
+    }
+
+    /// The hit recomputed on its primitive by raylink's own tests (the same for either
+    /// backend's hit), its point in the shape's own space, and in world space with the
+    /// bound of its error that rays leaving it are offset by.
+    fn locate(
+        &self,
+        shape: &Shape,
+        instance: Option<&Instance>,
+        ray: &Ray,
+    ) -> (Hit, Vec3, hit_point::Located) {
+        let (org, dir) = match instance {
+            None => (ray.origin, ray.dir),
+            Some(i) => (
+                i.point_to_object(ray.origin),
+                i.to_object().transform_vector3(ray.dir),
+            ),
+        };
+        let refined = hit_point::locate(shape, self, org, dir, ray.time);
+        let local = refined.at.p;
+        let mut hit = Hit {
+            u: refined.u,
+            v: refined.v,
+            ..*self
+        };
+        if let Some(ng) = refined.ng {
+            hit.ng = instance.map_or(ng, |i| i.normal_to_world(ng));
+        }
+        let world = match instance {
+            None => refined.at,
+            Some(i) => hit_point::placed(i, refined.at),
+        };
+        (hit, local, world)
+    }
+
+    /// Where rays leave the hit point: the point, its error bound and the unit geometric
+    /// normal, without the shading a [`SurfacePoint`] carries.
+    pub fn spot(&self, scene: &Scene, ray: &Ray) -> Spot {
+        let (shape, instance) = self.shape(scene);
+        let (hit, _, at) = self.locate(shape, instance, ray);
+        Spot {
+            p: at.p,
+            error: at.error,
+            n: hit.ng.normalize(),
         }
     }
 }

@@ -3,7 +3,8 @@
 //! Generated once per scene, with Embree as the reference, and traced by every backend.
 
 use crate::accel::Accel;
-use crate::math::{frame, offset_origin, Ray, Rng, Vec2, Vec3};
+use crate::math::spawn::Spot;
+use crate::math::{frame, Ray, Rng, Vec2, Vec3};
 use crate::scene::light::AreaLight;
 use crate::scene::{Light, Scene};
 use std::fmt;
@@ -84,19 +85,15 @@ pub fn generate(
             let Some(hit) = reference.intersect(&ray) else {
                 continue;
             };
-            let p = ray.at(hit.t);
-            let mut n = hit.ng.normalize_or_zero();
-            if n == Vec3::ZERO {
+            if hit.ng.normalize_or_zero() == Vec3::ZERO {
                 continue;
             }
-            if n.dot(ray.dir) > 0.0 {
-                n = -n;
-            }
-            let target = light_point(scene, &area_lights, fallback, p, &mut rng);
-            sets.shadow
-                .push(Ray::segment(offset_origin(p, n, target - p), target));
+            let at = hit.surface_point(scene, &ray).spot();
+            let n = if at.n.dot(ray.dir) > 0.0 { -at.n } else { at.n };
+            let target = light_point(scene, &area_lights, fallback, at.p, &mut rng);
+            sets.shadow.push(at.spawn_to(&target));
             let dir = cosine_direction(n, Vec2::new(rng.uniform(), rng.uniform()));
-            sets.diffuse.push(Ray::new(offset_origin(p, n, dir), dir));
+            sets.diffuse.push(at.spawn(dir));
         }
     }
     sets
@@ -110,21 +107,21 @@ fn light_point(
     fallback: Vec3,
     p: Vec3,
     rng: &mut Rng,
-) -> Vec3 {
+) -> Spot {
     let count = area_lights.len() + scene.lights.len();
     if count == 0 {
-        return fallback;
+        return Spot::exact(fallback);
     }
     let i = ((rng.uniform() * count as f32) as usize).min(count - 1);
     let u = Vec2::new(rng.uniform(), rng.uniform());
     match area_lights.get(i) {
-        Some(light) => light.sample(u).p,
-        None => match &scene.lights[i - area_lights.len()] {
+        Some(light) => light.sample(u).spot(),
+        None => Spot::exact(match &scene.lights[i - area_lights.len()] {
             Light::Point { position, .. }
             | Light::Spot { position, .. }
             | Light::Goniometric { position, .. } => *position,
             Light::Directional { direction, .. } => p - direction.normalize() * 1e4,
-        },
+        }),
     }
 }
 

@@ -13,8 +13,9 @@ use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
 use crate::lights::Emitter;
 use crate::math::sobol::Sampler;
+use crate::math::spawn::Spot;
 use crate::math::warp::cosine_hemisphere;
-use crate::math::{frame, offset_origin, Ray, Rgb, Vec2, Vec3};
+use crate::math::{frame, Ray, Rgb, Vec2, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::Scene;
 use std::f32::consts::PI;
@@ -75,6 +76,8 @@ enum Kind {
 struct Vertex<'a> {
     kind: Kind,
     p: Vec3,
+    /// A bound of `p`'s rounding error (zero for the camera and point lights).
+    error: Vec3,
     /// Geometric normal (zero for the camera and point lights).
     n: Vec3,
     bsdf: Option<Bsdf<'a>>,
@@ -89,11 +92,12 @@ struct Vertex<'a> {
 }
 
 impl Vertex<'_> {
-    fn new(kind: Kind, p: Vec3, n: Vec3, beta: Rgb) -> Self {
+    fn new(kind: Kind, at: Spot, beta: Rgb) -> Self {
         Vertex {
             kind,
-            p,
-            n,
+            p: at.p,
+            error: at.error,
+            n: at.n,
             bsdf: None,
             emission: Rgb::ZERO,
             light: None,
@@ -101,6 +105,15 @@ impl Vertex<'_> {
             delta: false,
             pdf_fwd: 0.0,
             pdf_rev: 0.0,
+        }
+    }
+
+    /// Where connections to the vertex start and end.
+    fn spot(&self) -> Spot {
+        Spot {
+            p: self.p,
+            error: self.error,
+            n: self.n,
         }
     }
 
@@ -265,7 +278,7 @@ fn random_walk<'a>(
         let m = &ctx.scene.materials[sp.material];
         let wo = -ray.dir;
         let bsdf = Bsdf::new(m, &sp, wo);
-        let mut v = Vertex::new(Kind::Surface, sp.p, sp.ng, beta);
+        let mut v = Vertex::new(Kind::Surface, sp.spot(), beta);
         v.bsdf = Some(bsdf);
         if m.is_emissive() {
             v.emission = m.emission_at(sp.p, sp.uv, sp.ng);
@@ -293,7 +306,7 @@ fn random_walk<'a>(
         beta *= bs.weight;
         let (cur, prev) = (path[n - 1], path[n - 2]);
         path[n - 2].pdf_rev = cur.area_density(pdf_rev, &prev);
-        ray = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi).at_time(sp.time);
+        ray = sp.spawn(bs.wi);
         // Russian roulette keeps long subpaths rare; the MIS weights need not know about it
         // (they still sum to one over the strategies of a path).
         if beta == Rgb::ZERO || !russian_roulette(&mut beta, bounces, sampler) {
@@ -411,8 +424,7 @@ impl MonteCarlo for Bdpt {
         // The camera vertex is where the ray leaves: the pinhole or a point of the lens.
         cam_path.push(Vertex::new(
             Kind::Camera,
-            camera_ray.origin,
-            Vec3::ZERO,
+            Spot::exact(camera_ray.origin),
             Rgb::ONE,
         ));
         let pdf_cam = camera_pdf_dir(camera, camera_ray.origin, camera_ray.dir);
@@ -434,9 +446,9 @@ impl MonteCarlo for Bdpt {
         let u_choose = sampler.next_2d();
         let u_pos = sampler.next_2d();
         let u_dir = sampler.next_2d();
-        if let Some((light, p, n, pdf_pos, point, le)) = sample_light_point(ctx, u_choose.x, u_pos)
-        {
-            let mut v0 = Vertex::new(Kind::Light { light, point }, p, n, le / pdf_pos);
+        if let Some((light, at, pdf_pos, point, le)) = sample_light_point(ctx, u_choose.x, u_pos) {
+            let n = at.n;
+            let mut v0 = Vertex::new(Kind::Light { light, point }, at, le / pdf_pos);
             v0.pdf_fwd = pdf_pos;
             v0.emission = le;
             let (dir, pdf_dir, cos) = if point {
@@ -476,7 +488,6 @@ impl MonteCarlo for Bdpt {
             };
             light_path.push(v0);
             if pdf_dir > 0.0 {
-                let origin = if point { p } else { offset_origin(p, n, dir) };
                 // A spot light's intensity falls off towards the edge of its cone.
                 let le_dir = if point {
                     ctx.lights.emitters[light].intensity_towards(dir)
@@ -486,7 +497,7 @@ impl MonteCarlo for Bdpt {
                 random_walk(
                     ctx,
                     WalkStart {
-                        ray: Ray::new(origin, dir).at_time(camera_ray.time),
+                        ray: at.spawn(dir).at_time(camera_ray.time),
                         beta: le_dir * (cos / (pdf_pos * pdf_dir)),
                         pdf: pdf_dir,
                         max: max_depth,
@@ -545,7 +556,7 @@ impl MonteCarlo for Bdpt {
                             ctx,
                             camera,
                             lens,
-                            (qs.p, qs.n),
+                            &qs.spot(),
                             camera_ray.time,
                             stats,
                         ) else {
@@ -561,7 +572,7 @@ impl MonteCarlo for Bdpt {
                             }
                             qs.beta * (cos_l * c.importance)
                         } else {
-                            let cam_v = Vertex::new(Kind::Camera, lens, Vec3::ZERO, Rgb::ONE);
+                            let cam_v = Vertex::new(Kind::Camera, Spot::exact(lens), Rgb::ONE);
                             qs.beta
                                 * qs.f(Some(&light_path[s - 2]), &cam_v, Transport::Importance)
                                 * c.importance
@@ -621,13 +632,8 @@ impl MonteCarlo for Bdpt {
                         if l == Rgb::ZERO {
                             continue;
                         }
-                        let from = offset_origin(pt.p, pt.n, wdir);
-                        let to = if qs.n == Vec3::ZERO {
-                            qs.p
-                        } else {
-                            offset_origin(qs.p, qs.n, -wdir)
-                        };
-                        if ctx.occluded(&Ray::segment(from, to).at_time(camera_ray.time), stats) {
+                        let segment = pt.spot().spawn_to(&qs.spot());
+                        if ctx.occluded(&segment.at_time(camera_ray.time), stats) {
                             continue;
                         }
                         let w = Connection {
@@ -646,19 +652,19 @@ impl MonteCarlo for Bdpt {
     }
 }
 
-/// A point on a finite emitter chosen by power: (emitter, point, normal, area density with
-/// the choice, is a point light, emitted radiance or intensity).
+/// A point on a finite emitter chosen by power: (emitter, point with its error and normal,
+/// area density with the choice, is a point light, emitted radiance or intensity).
 fn sample_light_point(
     ctx: &Context,
     u_choose: f32,
     u: crate::math::Vec2,
-) -> Option<(usize, Vec3, Vec3, f32, bool, Rgb)> {
+) -> Option<(usize, Spot, f32, bool, Rgb)> {
     let (i, _) = ctx.lights.choose(u_choose)?;
     let sel = ctx.lights.pmf(i);
     match &ctx.lights.emitters[i] {
         Emitter::Area(a) => {
             let lp = a.sample(u);
-            Some((i, lp.p, lp.n, sel / a.area, false, a.radiance_at(&lp)))
+            Some((i, lp.spot(), sel / a.area, false, a.radiance_at(&lp)))
         }
         Emitter::Point {
             position,
@@ -673,7 +679,7 @@ fn sample_light_point(
             position,
             intensity,
             ..
-        } => Some((i, *position, Vec3::ZERO, sel, true, *intensity)),
+        } => Some((i, Spot::exact(*position), sel, true, *intensity)),
         _ => None,
     }
 }

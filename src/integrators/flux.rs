@@ -20,7 +20,7 @@ use crate::accel::{self, Backend};
 use crate::control::Control;
 use crate::math::sobol::Sampler;
 use crate::math::warp::{cosine_hemisphere, power_heuristic};
-use crate::math::{frame, offset_origin, Ray, Rgb, Vec3};
+use crate::math::{frame, Ray, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::light::AreaLight;
 use crate::scene::Scene;
@@ -245,8 +245,7 @@ impl Paths<'_> {
         if let Some(ls) = lights.sample_li(x.p, u_choice, u_light) {
             let cos = ls.wi.dot(x.n);
             if ls.pdf > 0.0 && ls.radiance != Rgb::ZERO && cos != 0.0 {
-                let side = if cos > 0.0 { x.n } else { -x.n };
-                let shadow = Ray::segment(offset_origin(x.p, side, ls.wi), ls.p);
+                let shadow = x.spot().spawn_to(&ls.spot());
                 if !self.ctx.occluded(&shadow, stats) {
                     let w = if ls.delta {
                         1.0
@@ -261,7 +260,7 @@ impl Paths<'_> {
         let (t, b) = frame(n);
         let d = cosine_hemisphere(sampler.next_2d());
         let dir = t * d.x + b * d.y + n * d.z;
-        let ray = Ray::new(offset_origin(x.p, n, dir), dir);
+        let ray = x.spot().spawn(dir);
         let arriving = self.tracer.sample(
             self.ctx,
             &self.camera,

@@ -9,7 +9,8 @@ use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
 use crate::lights::{EmissionSample, Emitter};
 use crate::math::sobol::Sampler;
-use crate::math::{offset_origin, Ray, Rgb, Vec3};
+use crate::math::spawn::Spot;
+use crate::math::{Ray, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::SurfacePoint;
 
@@ -42,7 +43,7 @@ pub(crate) struct CameraConnection {
     pub importance: f32,
 }
 
-/// Connects point `p` (geometric normal `ng`) to the camera at the lens point `lens` (the
+/// Connects point `at` (with its error and geometric normal) to the camera at the lens point `lens` (the
 /// pinhole, or a point of a thin lens drawn uniformly over it): `None` if it is outside the
 /// film (widened by the filter radius) or hidden. For a thin lens, the importance keeps the
 /// pinhole's form with θ and d measured from the lens point: pbrt-v4's
@@ -51,10 +52,11 @@ pub(crate) fn connect_to_camera(
     ctx: &Context,
     camera: &CameraBasis,
     lens: Vec3,
-    (p, ng): (Vec3, Vec3),
+    at: &Spot,
     time: f32,
     stats: &mut RayStats,
 ) -> Option<CameraConnection> {
+    let p = at.p;
     let (x, y, cos_c) = camera.raster_from(lens, p)?;
     let (w, h) = camera.film_size();
     let margin = camera.margin;
@@ -64,7 +66,7 @@ pub(crate) fn connect_to_camera(
     let to_cam = lens - p;
     let dist2 = to_cam.length_squared();
     let dir = to_cam / dist2.sqrt();
-    let shadow = Ray::segment(offset_origin(p, ng, dir), lens).at_time(time);
+    let shadow = at.spawn_to(&Spot::exact(lens)).at_time(time);
     if ctx.occluded(&shadow, stats) {
         return None;
     }
@@ -116,7 +118,7 @@ impl MonteCarlo for LightTracer {
         {
             let lens = lens_sample(camera, sampler);
             if let Some(c) =
-                connect_to_camera(ctx, camera, lens, (es.p, es.n), camera_ray.time, stats)
+                connect_to_camera(ctx, camera, lens, &es.spot(), camera_ray.time, stats)
             {
                 // A two-sided light is seen from either side, whichever side it emitted to.
                 let cos_l = match &ctx.lights.emitters[es.light] {
@@ -144,8 +146,7 @@ impl MonteCarlo for LightTracer {
                     return;
                 }
                 let lens = lens_sample(camera, sampler);
-                if let Some(c) = connect_to_camera(ctx, camera, lens, (sp.p, sp.ng), sp.time, stats)
-                {
+                if let Some(c) = connect_to_camera(ctx, camera, lens, &sp.spot(), sp.time, stats) {
                     let f = bsdf.eval(wo, c.dir, Transport::Importance);
                     if f != Rgb::ZERO {
                         splats.push(Splat {
@@ -182,12 +183,8 @@ pub(crate) fn walk(
         es.n.dot(es.dir).abs()
     };
     let mut beta = es.radiance * (cos0 / (es.pdf_pos * es.pdf_dir));
-    let mut ray = if es.delta_pos || at_infinity {
-        Ray::new(es.p, es.dir)
-    } else {
-        Ray::new(offset_origin(es.p, es.n, es.dir), es.dir)
-    }
-    .at_time(time);
+    // Points off every surface (point lights, the disk of a distant light) have no error.
+    let mut ray = es.spot().spawn(es.dir).at_time(time);
     let mut depth = 0;
     while depth < max_depth {
         let Some(sp) = ctx.intersect(&ray, stats) else {
@@ -203,7 +200,7 @@ pub(crate) fn walk(
             break;
         };
         beta *= bs.weight;
-        ray = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi).at_time(sp.time);
+        ray = sp.spawn(bs.wi);
         if !russian_roulette(&mut beta, depth, sampler) {
             break;
         }

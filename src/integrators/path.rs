@@ -8,7 +8,7 @@ use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
 use crate::math::sobol::Sampler;
 use crate::math::warp::power_heuristic;
-use crate::math::{offset_origin, Ray, Rgb, Vec2, Vec3};
+use crate::math::{Ray, Rgb, Vec2, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::SurfacePoint;
 
@@ -78,7 +78,7 @@ pub(crate) fn sample_direct(
     if f == Rgb::ZERO || ls.pdf <= 0.0 {
         return Rgb::ZERO;
     }
-    let shadow = Ray::segment(offset_origin(sp.p, sp.ng, ls.wi), ls.p).at_time(sp.time);
+    let shadow = sp.spawn_to(&ls.spot());
     if ctx.occluded(&shadow, stats) {
         return Rgb::ZERO;
     }
@@ -154,7 +154,7 @@ impl MonteCarlo for PathTracer {
             bsdf_pdf = bs.pdf;
             specular = bs.delta;
             prev_p = sp.p;
-            ray = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi).at_time(sp.time);
+            ray = sp.spawn(bs.wi);
             if !russian_roulette(&mut beta, depth, sampler) {
                 break;
             }

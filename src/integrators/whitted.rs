@@ -17,7 +17,8 @@
 use super::{Context, Integrator, RayStats, Sample};
 use crate::bsdf::{Bsdf, Transport};
 pub use crate::math::optics::{fresnel_dielectric, reflect, refract};
-use crate::math::{frame, offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
+use crate::math::spawn::Spot;
+use crate::math::{frame, Ray, Rgb, Rng, Vec2, Vec3};
 use crate::scene::light::{spot_cosines, spot_falloff};
 use crate::scene::{Light, Material, SurfacePoint};
 use std::f32::consts::{FRAC_1_PI, PI};
@@ -139,7 +140,7 @@ impl RayTree<'_> {
         let (ks_weight, kt_weight) = (weight * ks.max_element(), weight * kt.max_element());
         if ks_weight > self.options.cutoff {
             let dir = self.perturbed(n, ng, roughness, |n| reflect(d, n), 1.0);
-            let r = Ray::new(offset_origin(sp.p, ng, dir), dir).at_time(self.time);
+            let r = sp.spot().spawn(dir).at_time(self.time);
             color += ks * self.trace(&r, depth + 1, ks_weight).0;
         }
         // T is zero under total internal reflection (the paper's imaginary kf).
@@ -155,7 +156,7 @@ impl RayTree<'_> {
                     -1.0,
                 )
             };
-            let r = Ray::new(offset_origin(sp.p, ng, dir), dir).at_time(self.time);
+            let r = sp.spot().spawn(dir).at_time(self.time);
             color += kt * self.trace(&r, depth + 1, kt_weight).0;
         }
         color
@@ -174,6 +175,7 @@ impl RayTree<'_> {
     ) -> Rgb {
         let ctx = self.ctx;
         let p = sp.p;
+        let at = sp.spot();
         // A tabulated reflectance takes the diffuse term's place: f toward the view.
         let table = m.brdf.as_ref().map(|t| Bsdf::tabulated(t, n, ng));
         let reflect = |wi: Vec3| match &table {
@@ -241,7 +243,7 @@ impl RayTree<'_> {
             if !front && !behind {
                 continue;
             }
-            let transmittance = self.transmittance(p, ng, wi, target);
+            let transmittance = self.transmittance(&at, wi, target.map(Spot::exact));
             if transmittance == Rgb::ZERO {
                 continue;
             }
@@ -262,14 +264,14 @@ impl RayTree<'_> {
         if diffuse_on {
             for light in &ctx.area_lights {
                 color += match table {
-                    Some(_) => self.area_light(light, p, ng, n, Some(&reflect)),
-                    None => kd * FRAC_1_PI * self.area_light(light, p, ng, n, None),
+                    Some(_) => self.area_light(light, &at, ng, n, Some(&reflect)),
+                    None => kd * FRAC_1_PI * self.area_light(light, &at, ng, n, None),
                 };
             }
         }
         if translucent {
             for light in &ctx.area_lights {
-                color += kdt * FRAC_1_PI * self.area_light(light, p, -ng, -n, None);
+                color += kdt * FRAC_1_PI * self.area_light(light, &at, -ng, -n, None);
             }
         }
         color
@@ -281,13 +283,14 @@ impl RayTree<'_> {
     fn area_light(
         &mut self,
         light: &crate::scene::light::AreaLight,
-        p: Vec3,
+        at: &Spot,
         ng: Vec3,
         n: Vec3,
         reflect: Option<&dyn Fn(Vec3) -> Rgb>,
     ) -> Rgb {
         let side = (self.options.area_samples.max(1) as f32).sqrt().ceil() as u32;
         let count = side * side;
+        let p = at.p;
         let mut sum = Rgb::ZERO;
         for i in 0..count {
             let u = Vec2::new(
@@ -306,27 +309,27 @@ impl RayTree<'_> {
             if cos_s <= 0.0 || cos_l <= 0.0 || ng.dot(wi) <= 0.0 {
                 continue;
             }
-            let t = self.transmittance(p, ng, wi, Some(y.p));
+            let t = self.transmittance(at, wi, Some(y.spot()));
             let e = light.radiance_at(&y) * t * (cos_s * cos_l / d2);
             sum += reflect.map_or(e, |f| f(wi) * e);
         }
         sum * (light.area / count as f32)
     }
 
-    /// How much light gets from `p` to the light: 1 if nothing is in the way, the product of
-    /// the kt of transmissive occluders, 0 behind an opaque one. `target` None is a light at
-    /// infinity.
-    fn transmittance(&mut self, p: Vec3, ng: Vec3, wi: Vec3, target: Option<Vec3>) -> Rgb {
+    /// How much light gets from `from` to the light: 1 if nothing is in the way, the product
+    /// of the kt of transmissive occluders, 0 behind an opaque one. `target` None is a light
+    /// at infinity in direction `wi`.
+    fn transmittance(&mut self, from: &Spot, wi: Vec3, target: Option<Spot>) -> Rgb {
         let ctx = self.ctx;
         let time = self.time;
-        let towards_light = |from: Vec3| {
-            match target {
-                Some(end) => Ray::segment(from, end),
-                None => Ray::new(from, wi),
+        let towards_light = |from: Spot| {
+            match &target {
+                Some(end) => from.spawn_to(end),
+                None => from.spawn(wi),
             }
             .at_time(time)
         };
-        let mut ray = towards_light(offset_origin(p, ng, wi));
+        let mut ray = towards_light(*from);
         if !ctx.occluded(&ray, self.stats) {
             return Rgb::ONE;
         }
@@ -344,7 +347,7 @@ impl RayTree<'_> {
             if t.max_element() < self.options.cutoff {
                 return Rgb::ZERO;
             }
-            ray = towards_light(offset_origin(hit.p, hit.ng, ray.dir));
+            ray = towards_light(hit.spot());
         }
         Rgb::ZERO
     }

@@ -3,6 +3,7 @@
 pub mod optics;
 mod random;
 pub mod sobol;
+pub mod spawn;
 pub mod warp;
 
 pub use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
@@ -39,35 +40,14 @@ impl Ray {
         Ray { time, ..self }
     }
 
-    /// The segment from `from` to `to`, both ends excluded by a relative epsilon; for shadow rays.
+    /// The segment between two points off every surface (both exact); for a point on a
+    /// surface, spawn from its [`spawn::Spot`] instead.
     pub fn segment(from: Vec3, to: Vec3) -> Self {
-        Ray {
-            origin: from,
-            dir: to - from,
-            tmin: 0.0,
-            tmax: 1.0 - SHADOW_EPSILON,
-            time: 0.0,
-        }
+        spawn::Spot::exact(from).spawn_to(&spawn::Spot::exact(to))
     }
 
     pub fn at(&self, t: f32) -> Vec3 {
         self.origin + self.dir * t
-    }
-}
-
-/// Fraction of a shadow segment left out at the light's end, so the light's own surface
-/// does not occlude it.
-pub const SHADOW_EPSILON: f32 = 1e-4;
-
-/// Moves a point off a surface along the geometric normal, on the side `dir` points to, by an
-/// amount that scales with the point's magnitude (float spacing grows with it). Offsetting the
-/// origin rather than relying on `tmin` keeps both intersection backends in agreement.
-pub fn offset_origin(p: Vec3, ng: Vec3, dir: Vec3) -> Vec3 {
-    let scale = 1e-4 * (1.0 + p.abs().max_element());
-    if ng.dot(dir) >= 0.0 {
-        p + ng * scale
-    } else {
-        p - ng * scale
     }
 }
 

@@ -1,5 +1,6 @@
 use super::alpha::Alpha;
-use crate::math::{Vec2, Vec3};
+use crate::math::spawn::Spot;
+use crate::math::{Ray, Vec2, Vec3};
 
 /// A piece of geometry and the material it is made of.
 #[derive(Clone, Debug, PartialEq)]
@@ -180,7 +181,11 @@ pub fn sphere_uv(n: Vec3) -> Vec2 {
 /// Where a ray met a surface, with what shading needs.
 #[derive(Clone, Copy, Debug)]
 pub struct SurfacePoint {
+    /// The point, recomputed on the primitive.
     pub p: Vec3,
+    /// A conservative bound of `p`'s floating-point error along each axis: rays leave the
+    /// point from just outside it (see [`crate::math::spawn`]).
+    pub error: Vec3,
     /// Unit geometric normal, as the geometry is oriented (not flipped towards the ray).
     pub ng: Vec3,
     /// Unit shading normal (interpolated for meshes with normals), on the same side as `ng`.
@@ -198,6 +203,26 @@ pub struct SurfacePoint {
 }
 
 impl SurfacePoint {
+    /// Where rays leave the point: the point, its error and its geometric normal.
+    pub fn spot(&self) -> Spot {
+        Spot {
+            p: self.p,
+            error: self.error,
+            n: self.ng,
+        }
+    }
+
+    /// A ray leaving the surface along `dir`, at the point's shutter time.
+    pub fn spawn(&self, dir: Vec3) -> Ray {
+        self.spot().spawn(dir).at_time(self.time)
+    }
+
+    /// The segment from the surface to `to` (a shadow ray or a connection), at the point's
+    /// shutter time; neither end's surface occludes it.
+    pub fn spawn_to(&self, to: &Spot) -> Ray {
+        self.spot().spawn_to(to).at_time(self.time)
+    }
+
     /// The index of the shape in `Scene::shapes`, `None` for a point on an instance (whose
     /// shapes neither emit nor can be named in a set).
     pub fn world_shape(&self) -> Option<usize> {

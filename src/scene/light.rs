@@ -7,6 +7,7 @@ use super::geometry::sphere_uv;
 use super::texture::Texture;
 use super::{Geometry, Material, Scene, Shape};
 use crate::image::Image;
+use crate::math::spawn::{gamma, plane_test_error, Spot};
 use crate::math::{Mat3, Rgb, Vec2, Vec3};
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -232,6 +233,9 @@ struct LightTriangle {
     ab: Vec3,
     ac: Vec3,
     n: Vec3,
+    /// What the backends' test of a ray leaving the triangle rounds to (the longest edge
+    /// bounds the distance from any of its points to a vertex).
+    test_error: Vec3,
 }
 
 /// A point on a light with its unit normal (the side that emits) and, when the light's
@@ -239,8 +243,21 @@ struct LightTriangle {
 #[derive(Clone, Copy, Debug)]
 pub struct LightPoint {
     pub p: Vec3,
+    /// A conservative bound of `p`'s rounding error along each axis.
+    pub error: Vec3,
     pub n: Vec3,
     pub uv: Vec2,
+}
+
+impl LightPoint {
+    /// Where shadow rays end and light paths start: the point, its error, its normal.
+    pub fn spot(&self) -> Spot {
+        Spot {
+            p: self.p,
+            error: self.error,
+            n: self.n,
+        }
+    }
 }
 
 impl AreaLight {
@@ -271,11 +288,15 @@ impl AreaLight {
                 let tris: Vec<LightTriangle> = g
                     .triangles()
                     .into_iter()
-                    .map(|[a, b, c]| LightTriangle {
-                        a,
-                        ab: b - a,
-                        ac: c - a,
-                        n: (b - a).cross(c - a).normalize_or_zero(),
+                    .map(|[a, b, c]| {
+                        let longest = (b - a).abs().max((c - a).abs()).max((c - b).abs());
+                        LightTriangle {
+                            a,
+                            ab: b - a,
+                            ac: c - a,
+                            n: (b - a).cross(c - a).normalize_or_zero(),
+                            test_error: plane_test_error(longest.max_element()),
+                        }
                     })
                     .collect();
                 let mut total = 0.0;
@@ -336,15 +357,26 @@ impl AreaLight {
         }
     }
 
-    /// The point of a sphere light at `p` with outward normal `n` (for points found other
-    /// than by [`AreaLight::sample`]).
-    pub fn sphere_point(&self, p: Vec3, n: Vec3) -> LightPoint {
+    /// The point of a sphere light in direction `n` (unit) from its centre, projected onto
+    /// the sphere (also for points found other than by [`AreaLight::sample`]).
+    pub fn sphere_point(&self, n: Vec3) -> LightPoint {
+        let AreaKind::Sphere { center, radius } = self.kind else {
+            unreachable!("sphere points are asked of sphere lights");
+        };
         let uv = if self.varying.is_some() {
             sphere_uv(n)
         } else {
             Vec2::ZERO
         };
-        LightPoint { p, n, uv }
+        let q = n * radius;
+        LightPoint {
+            p: center + q,
+            // The rounding of a unit vector's length (γ8 of the radius in any direction),
+            // then of adding the centre.
+            error: Vec3::splat(radius.abs() * gamma(8)) + center.abs() * gamma(2),
+            n,
+            uv,
+        }
     }
 
     /// The mean over the light's area of the radiance it emits, from a grid of points
@@ -385,12 +417,11 @@ impl AreaLight {
     /// A point uniformly distributed over the light's area for `u` uniform in [0,1)².
     pub fn sample(&self, u: Vec2) -> LightPoint {
         match &self.kind {
-            AreaKind::Sphere { center, radius } => {
+            AreaKind::Sphere { .. } => {
                 let z = 1.0 - 2.0 * u.x;
                 let r = (1.0 - z * z).max(0.0).sqrt();
                 let phi = std::f32::consts::TAU * u.y;
-                let n = Vec3::new(r * phi.cos(), r * phi.sin(), z);
-                self.sphere_point(*center + n * *radius, n)
+                self.sphere_point(Vec3::new(r * phi.cos(), r * phi.sin(), z))
             }
             AreaKind::Triangles { tris, cdf } => {
                 let total = *cdf.last().expect("area lights have triangles");
@@ -410,12 +441,21 @@ impl AreaLight {
                 // Uniform over the triangle (Shirley's square-root warp).
                 let su = ux.sqrt();
                 let (b1, b2) = (su * (1.0 - u.y), su * u.y);
-                let p = t.a + t.ab * b1 + t.ac * b2;
+                let (along_b, along_c) = (t.ab * b1, t.ac * b2);
+                let p = t.a + along_b + along_c;
+                // Three roundings of the sum and one of each product, one of each edge; and
+                // the backends' test of rays leaving it.
+                let error = (t.a.abs() + along_b.abs() + along_c.abs()) * gamma(7) + t.test_error;
                 let uv = self
                     .varying
                     .as_ref()
                     .map_or(Vec2::ZERO, |v| v.uv_maps[i].uv(b1, b2, p));
-                LightPoint { p, n: t.n, uv }
+                LightPoint {
+                    p,
+                    error,
+                    n: t.n,
+                    uv,
+                }
             }
         }
     }

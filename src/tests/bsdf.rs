@@ -12,6 +12,7 @@ const PHI_BINS: usize = 40;
 pub(super) fn point() -> SurfacePoint {
     SurfacePoint {
         p: Vec3::ZERO,
+        error: Vec3::ZERO,
         ng: Vec3::Z,
         ns: Vec3::Z,
         uv: Vec2::ZERO,

@@ -20,6 +20,7 @@ mod normal_detail;
 mod oiio;
 mod robustness;
 mod rough_glass;
+mod spawn;
 mod tabulated_brdf;
 mod thin_sheet;
 mod whitted;

@@ -20,7 +20,7 @@ use super::ray_space::SlotGeometry;
 use super::{Network, ESCAPE, NONE};
 use crate::bsdf::{Ggx, Transport};
 use crate::integrators::{Context, Integrator, RayStats, Sample};
-use crate::math::{luminance, offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
+use crate::math::{luminance, Ray, Rgb, Rng, Vec2, Vec3};
 use std::f32::consts::FRAC_1_PI;
 
 /// A directional surface seen from one side (its geometric normal) and what its lobes reflect
@@ -421,7 +421,7 @@ fn direct_diffuse(
     if cos <= 0.0 || ls.pdf <= 0.0 {
         return Rgb::ZERO;
     }
-    let shadow = Ray::segment(offset_origin(sp.p, n, ls.wi), ls.p);
+    let shadow = sp.spot().spawn_to(&ls.spot());
     if ctx.occluded(&shadow, stats) {
         return Rgb::ZERO;
     }

@@ -50,8 +50,9 @@ use crate::bsdf::{Bsdf, Transport};
 use crate::control::{CancelToken, Control};
 use crate::image::Image;
 use crate::math::sobol::Sampler;
+use crate::math::spawn::Spot;
 use crate::math::warp::power_heuristic;
-use crate::math::{offset_origin, Ray, Rgb, Rng, Vec2, Vec3};
+use crate::math::{Ray, Rgb, Rng, Vec2, Vec3};
 use crate::render::driver::drive;
 use crate::render::progressive::{camera_sample, view_basis, PixelJitter, ProgressiveOptions};
 use crate::scene::camera::CameraBasis;
@@ -500,10 +501,14 @@ impl IrradianceCache {
             if !(x >= 0.0 && y >= 0.0 && x < image.width as f32 && y < image.height as f32) {
                 continue;
             }
-            // Lifted off its surface toward the eye, so that the surface does not hide it.
-            let to_eye = (self.camera.origin - rec.p).normalize();
-            let ray = Ray::segment(offset_origin(rec.p, rec.n, to_eye), self.camera.origin);
-            if ctx.occluded(&ray, &mut stats) {
+            // Seen if the first surface the eye meets towards it is the record's own: the hit
+            // lies on the record's tangent plane within twice the hit's error bound (records
+            // keep no bound of their own; the same surface nearby has one of the same size).
+            let eye = Spot::exact(self.camera.origin);
+            let Some(sp) = ctx.intersect(&eye.spawn(rec.p - eye.p), &mut stats) else {
+                continue;
+            };
+            if (sp.p - rec.p).dot(rec.n).abs() > 2.0 * rec.n.abs().dot(sp.error) {
                 continue;
             }
             image.set(x as u32, y as u32, colour);
@@ -534,19 +539,19 @@ impl IrradianceCache {
     /// A new primary value at a surface point with normal `n` (level 0), as the cache would
     /// store it; for tests.
     #[cfg(test)]
-    pub fn primary_value(&self, ctx: &Context, p: Vec3, n: Vec3) -> Record {
+    pub fn primary_value(&self, ctx: &Context, at: &Spot, n: Vec3) -> Record {
         let mut stats = RayStats::default();
         let mut walk = self.reader(ctx, &mut stats);
-        walk.primary(p, n, n, 0)
+        walk.primary(at, n, n, 0)
     }
 
     /// The indirect irradiance the cache gives at a surface point with normal `n` (level 0),
     /// computing a primary value if S is empty; for tests.
     #[cfg(test)]
-    pub fn irradiance(&self, ctx: &Context, p: Vec3, n: Vec3) -> Rgb {
+    pub fn irradiance(&self, ctx: &Context, at: &Spot, n: Vec3) -> Rgb {
         let mut stats = RayStats::default();
         let mut walk = self.reader(ctx, &mut stats);
-        walk.indirect(p, n, n, 0)
+        walk.indirect(at, n, n, 0)
     }
 }
 
@@ -634,12 +639,12 @@ impl Walk<'_> {
             let n = bsdf.shading_normal();
             let ng = if sp.ng.dot(n) >= 0.0 { sp.ng } else { -sp.ng };
             if kd.max_element() > 0.0 {
-                let e = self.indirect(sp.p, n, ng, level);
+                let e = self.indirect(&sp.spot(), n, ng, level);
                 l += kd * (FRAC_1_PI * bsdf.diffuse_coat(wo)) * e;
             }
             // Diffuse transmission: kdt/π · the irradiance arriving on the other side.
             if kdt.max_element() > 0.0 {
-                let e = self.indirect(sp.p, -n, -ng, level);
+                let e = self.indirect(&sp.spot(), -n, -ng, level);
                 l += kdt * FRAC_1_PI * e;
             }
         }
@@ -656,7 +661,7 @@ impl Walk<'_> {
         if bs.weight.max_element() <= 0.0 {
             return l;
         }
-        let next = Ray::new(offset_origin(sp.p, sp.ng, bs.wi), bs.wi);
+        let next = sp.spot().spawn(bs.wi);
         if bs.delta {
             if specular_depth < MAX_SPECULAR_DEPTH {
                 l += bs.weight * self.trace(&next, level, emission, specular_depth + 1, rng);
@@ -703,15 +708,16 @@ impl Walk<'_> {
     /// Indirect irradiance at level `level`: the cache (secondary method), else a new
     /// primary value (stored when the cache grows); the constant ambient value beyond the
     /// last level.
-    fn indirect(&mut self, p: Vec3, n: Vec3, ng: Vec3, level: u32) -> Rgb {
+    fn indirect(&mut self, at: &Spot, n: Vec3, ng: Vec3, level: u32) -> Rgb {
         let params = self.params;
+        let p = at.p;
         if level >= params.options.bounces {
             return params.options.ambient;
         }
         if let Some(e) = self.interpolate(level as usize, p, n) {
             return e;
         }
-        let rec = self.primary(p, n, ng, level);
+        let rec = self.primary(at, n, ng, level);
         self.primaries += 1;
         if let Store::Overlay { local, .. } = &mut self.store {
             local.levels[level as usize].insert(rec);
@@ -720,8 +726,9 @@ impl Walk<'_> {
     }
 
     /// The primary method (eq. 2): see the module documentation.
-    fn primary(&mut self, p: Vec3, n: Vec3, ng: Vec3, level: u32) -> Record {
+    fn primary(&mut self, at: &Spot, n: Vec3, ng: Vec3, level: u32) -> Record {
         let (ctx, params) = (self.ctx, self.params);
+        let p = at.p;
         let strata = params.options.strata_at(level);
         let mut rng = Rng::for_key(
             params.seed,
@@ -760,7 +767,7 @@ impl Walk<'_> {
                     distance: f32::INFINITY,
                 };
                 if dir.dot(ng) > 0.0 {
-                    let ray = Ray::new(offset_origin(p, ng, dir), dir);
+                    let ray = at.spawn(dir);
                     if let Some(sp) = ctx.intersect(&ray, self.stats) {
                         inv_d += 1.0 / (sp.t.max(1e-6) as f64);
                         sample.radiance = self.shade(&ray, &sp, level + 1, false, 0, &mut rng);

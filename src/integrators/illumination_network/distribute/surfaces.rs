@@ -138,6 +138,7 @@ impl Surface {
         };
         let sp = SurfacePoint {
             p: Vec3::ZERO,
+            error: Vec3::ZERO,
             ng,
             ns: ng,
             uv: Vec2::ZERO,

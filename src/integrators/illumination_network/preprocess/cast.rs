@@ -8,6 +8,7 @@ use super::LineHit;
 use crate::integrators::illumination_network::patches::{Patches, Polygon};
 use crate::integrators::illumination_network::ray_space::{axes, RaySpace};
 use crate::integrators::{Context, RayStats};
+use crate::math::spawn::Spot;
 use crate::math::{Ray, Vec3};
 
 /// The side key of a hit on polygon `pg` at unit-space point `p`, facing direction `d`.
@@ -58,8 +59,8 @@ pub fn cast_slot(
             ray.tmax = 3.0 * space.scale * d.length();
             let line = ju as u32 * space.intercepts + jv as u32;
             while let Some(hit) = ctx.intersect_hit(&ray, stats) {
-                let pw = ray.at(hit.t);
-                let p = space.to_unit(pw);
+                let at = hit.spot(ctx.scene, &ray);
+                let p = space.to_unit(at.p);
                 if let Some((poly, _)) = patches.locate(hit.geom_id, hit.prim_id, p) {
                     let pg = &patches.polygons[poly as usize];
                     if pg.n != Vec3::ZERO || pg.sphere.is_some() {
@@ -70,8 +71,16 @@ pub fn cast_slot(
                         });
                     }
                 }
-                // Continue just past this hit (a relative epsilon of the scene's size).
-                ray.tmin = hit.t + 1e-5 * space.scale;
+                // Continue from just past this surface (off its error box), along the same
+                // line for what is left of it. A line lying in the surface's plane gains no
+                // ground from the normal's side: it steps past the box along itself.
+                let left = ray.tmax - hit.t;
+                let step = if hit.t > 0.0 {
+                    at.spawn(dir)
+                } else {
+                    Spot { n: dir, ..at }.spawn(dir)
+                };
+                ray = Ray { tmax: left, ..step };
             }
         }
     }
