@@ -282,7 +282,7 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
         }
         None => Vec::new(),
     };
-    crate::render::refuse_aliases(outputs.iter().chain(&csv).chain(&maps), &scene0.inputs)?;
+    crate::aliases::refuse_aliases(outputs.iter().chain(&csv).chain(&maps), &scene0.inputs)?;
     raylink::image::oiio::load()?;
     let integrator = match (args.integrator, scene0.settings.integrator) {
         (Some(i), _) => i,

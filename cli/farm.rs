@@ -3,44 +3,13 @@
 
 use crate::options::RenderArgs;
 use crate::{Cli, Failure};
-use raylink::farm::{self, Part};
+use raylink::farm;
 use raylink::image::output::{check_output_path, write_image_window};
 use raylink::{
     write_image, Aov, Control, Error, Job, MetaValue, Metadata, OutputOptions, RenderStats,
     Rendered, Renderer, Scene, Tile,
 };
 use std::path::PathBuf;
-
-const FARM: &str = "Parts of an image (render farms)";
-
-/// Options of `raylink render` that select a part of the image.
-#[derive(clap::Args)]
-pub struct PartArgs {
-    /// Render only tile I of N (0 <= I < N): the image cut into N horizontal bands of equal
-    /// height (to a row). Written as EXR with the band as its data window, for `raylink
-    /// merge`. `{tile}` and `{tiles}` in -o names become I and N.
-    #[arg(long, value_name = "I/N", value_parser = parse_tile, conflicts_with = "crop",
-          help_heading = FARM)]
-    tile: Option<Part>,
-    /// Render only the pixels x0 <= x < x1, y0 <= y < y1 (0,0 is the top-left pixel; x1 and y1
-    /// are excluded). Written as EXR with those pixels as its data window.
-    #[arg(long, value_name = "x0,y0,x1,y1", value_parser = parse_crop, help_heading = FARM)]
-    crop: Option<Part>,
-}
-
-fn parse_tile(text: &str) -> Result<Part, String> {
-    farm::parse_tile(text)
-}
-
-fn parse_crop(text: &str) -> Result<Part, String> {
-    farm::parse_crop(text)
-}
-
-impl PartArgs {
-    pub fn part(&self) -> Option<&Part> {
-        self.tile.as_ref().or(self.crop.as_ref())
-    }
-}
 
 /// Arguments of `raylink merge`.
 #[derive(clap::Args)]
@@ -225,7 +194,7 @@ pub fn run_merge(args: MergeArgs) -> Result<(), Failure> {
     for out in &args.outputs {
         check_output_path(out).map_err(|e| Error::Invalid(e.to_string()))?;
     }
-    crate::render::refuse_aliases(&args.outputs, &args.parts)?;
+    crate::aliases::refuse_aliases(&args.outputs, &args.parts)?;
     let merged = farm::merge::merge(&args.parts)?;
     let options = OutputOptions {
         exposure: args.exposure,

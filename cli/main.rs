@@ -2,6 +2,7 @@
 //! owns what a front end owns: signals, progress bars, printing and exit codes (0 success,
 //! 1 a failure while working, 2 bad input or options, 128 + N stopped by signal N).
 
+mod aliases;
 mod animate;
 mod bench;
 mod bench_chart;
@@ -334,7 +335,7 @@ fn run_convert(cli: &Cli, args: ConvertArgs) -> Result<(), Failure> {
     let control = cli.control(args.quiet, None)?;
     let scene: Scene = render::load_scene(&args.scene, &control)?;
     let meshes = args.output.with_extension("meshes");
-    render::refuse_aliases([&args.output, &meshes], &scene.inputs)?;
+    aliases::refuse_aliases([&args.output, &meshes], &scene.inputs)?;
     raylink::scene::convert::write_toml(&scene, &args.output)?;
     Ok(())
 }

@@ -3,8 +3,8 @@
 //! gives are the defaults; options override them. An option that does not apply to the
 //! chosen integrator is an error naming it.
 
-use crate::farm::PartArgs;
 use clap::ValueEnum;
+use raylink::farm::{self, Part};
 use raylink::image::filter::Filter;
 use raylink::job::{AntiAliasing, NetworkBuilder, NetworkOrder};
 use raylink::{Backend, Error, Job, Scene, Settings, Technique, TechniqueKind};
@@ -16,6 +16,7 @@ const WHITTED: &str = "Whitted and network pixel sampling";
 const CACHE: &str = "Irradiance cache";
 const NETWORK: &str = "Illumination network";
 const OUTPUT: &str = "Output";
+const FARM: &str = "Parts of an image (render farms)";
 
 #[derive(Clone, Copy, PartialEq, ValueEnum)]
 pub enum IntegratorName {
@@ -526,5 +527,34 @@ mod tests {
             assert!(names.iter().any(|n| n == known), "{known} not in {names:?}");
         }
         assert!(names.len() > 80, "{} numeric options", names.len());
+    }
+}
+
+/// Options of `raylink render` that select a part of the image.
+#[derive(clap::Args)]
+pub struct PartArgs {
+    /// Render only tile I of N (0 <= I < N): the image cut into N horizontal bands of equal
+    /// height (to a row). Written as EXR with the band as its data window, for `raylink
+    /// merge`. `{tile}` and `{tiles}` in -o names become I and N.
+    #[arg(long, value_name = "I/N", value_parser = parse_tile, conflicts_with = "crop",
+          help_heading = FARM)]
+    tile: Option<Part>,
+    /// Render only the pixels x0 <= x < x1, y0 <= y < y1 (0,0 is the top-left pixel; x1 and y1
+    /// are excluded). Written as EXR with those pixels as its data window.
+    #[arg(long, value_name = "x0,y0,x1,y1", value_parser = parse_crop, help_heading = FARM)]
+    crop: Option<Part>,
+}
+
+fn parse_tile(text: &str) -> Result<Part, String> {
+    farm::parse_tile(text)
+}
+
+fn parse_crop(text: &str) -> Result<Part, String> {
+    farm::parse_crop(text)
+}
+
+impl PartArgs {
+    pub fn part(&self) -> Option<&Part> {
+        self.tile.as_ref().or(self.crop.as_ref())
     }
 }

@@ -32,12 +32,11 @@ mod dielectric;
 mod layer;
 mod layered;
 mod microfacet;
-mod tabulated;
 
-pub use microfacet::Ggx;
 #[cfg(test)]
-pub use tabulated::synthetic_merl;
-pub use tabulated::TabulatedBrdf;
+pub use crate::scene::tabulated::synthetic_merl;
+pub use crate::scene::tabulated::TabulatedBrdf;
+pub use microfacet::Ggx;
 
 use dielectric::RoughInterface;
 use layered::Layered;

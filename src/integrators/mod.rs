@@ -2,6 +2,7 @@
 //! the scene description, the intersection backend (never named) and the area lights.
 
 pub mod bdpt;
+pub(crate) mod create;
 pub mod flux;
 pub mod illumination_network;
 pub mod irradiance_cache;

@@ -9,7 +9,7 @@ use crate::image::filter::{Filter, Reconstruction};
 use crate::integrators::illumination_network as net;
 use crate::integrators::irradiance_cache::{self as ic, IcOptions};
 use crate::integrators::path::{DEFAULT_MAX_DEPTH, MAX_DEPTH_LIMIT};
-use crate::render::progressive::MAX_SPP;
+use crate::render::passes::MAX_SPP;
 use crate::render::{PixelSampling, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD};
 use crate::settings::{AntiAliasing, NetworkBuilder, Relight, Settings, TechniqueKind};
 use crate::{Error, Result};

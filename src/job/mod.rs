@@ -19,7 +19,8 @@ pub use crate::settings::{
 
 use crate::accel::{self, Accel, Backend};
 use crate::image::Image;
-use crate::integrators::lifecycle::{self as technique, Lifecycle, Tiles, View};
+use crate::integrators::create;
+use crate::integrators::lifecycle::{Lifecycle, Tiles, View};
 use crate::integrators::Context;
 use crate::render::aov::render_aovs;
 use crate::render::pixels::{render_pixels, PixelView};
@@ -295,7 +296,7 @@ impl Renderer {
             scene = Arc::new(still);
         }
         // Created for the scene as given: a relight keeps its emissions as the file's.
-        let technique = technique::create(&job.technique, &scene)?;
+        let technique = create::create(&job.technique, &scene)?;
         if let Technique::Network(n) = &job.technique {
             // The network's patches are world-space shapes.
             if scene.has_instances() {

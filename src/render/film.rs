@@ -3,12 +3,12 @@
 //! filter-weighted splats of light paths, with the count of passes taken. The image is their
 //! mean; a checkpoint stores them exactly.
 
+use super::passes::{next_pass, reachable, MAX_SPP};
 use super::{tiles, Tile, TILE_SIZE};
 use crate::image::filter::{Filter, FilterWeights, Reconstruction};
 use crate::image::Image;
 use crate::integrators::Splat;
 use crate::math::{Rgb, Vec2};
-use crate::render::progressive::{next_pass, reachable, MAX_SPP};
 
 /// The accumulated film.
 pub struct Film {

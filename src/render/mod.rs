@@ -7,6 +7,7 @@ pub(crate) mod aov;
 pub mod checkpoint;
 pub(crate) mod driver;
 mod film;
+pub(crate) mod passes;
 pub(crate) mod pixels;
 pub(crate) mod progressive;
 mod sampling;

@@ -8,6 +8,7 @@
 
 use super::driver::{drive, drive_indexed, Merge};
 use super::film::{pixel_value, weighted_value, Footprint};
+use super::passes::{next_pass, passes_between};
 use super::{place, tiles, tiles_in, Film, RenderStats, Shown, Tile, Watch, MERGE_WINDOW};
 use crate::control::Control;
 use crate::image::filter::{Filter, FilterSampler, FilterWeights, Reconstruction};
@@ -19,9 +20,6 @@ use crate::scene::camera::CameraBasis;
 use crate::scene::Scene;
 use crate::{Error, Result};
 use std::time::Instant;
-
-/// Upper bound on samples per pixel.
-pub const MAX_SPP: u32 = 1 << 20;
 
 /// The view a Monte Carlo render samples.
 #[derive(Clone, Debug, PartialEq)]
@@ -423,34 +421,6 @@ fn render_region_splatted(
     stats.seconds = start.elapsed().as_secs_f64();
     phase.end(&stats.summary());
     Ok((image, stats))
-}
-
-/// The sizes of successive passes: 1, 1, 2, 4, 8, 16, 16, ... (early images come quickly,
-/// later passes are long enough to keep every thread busy).
-pub(crate) fn next_pass(done: u32, target: u32) -> u32 {
-    done.clamp(1, 16).min(target - done)
-}
-
-/// The passes, as (first sample, samples), that take a film from `done` samples per pixel
-/// (a count between passes) to `target`.
-fn passes_between(mut done: u32, target: u32) -> Vec<(u32, u32)> {
-    let mut passes = Vec::new();
-    while done < target {
-        let n = next_pass(done, target);
-        passes.push((done, n));
-        done += n;
-    }
-    passes
-}
-
-/// Whether a render of `target` samples per pixel passes through `spp` whole samples (the
-/// passes' sizes are fixed, so a film between passes can only hold certain counts).
-pub(crate) fn reachable(spp: u32, target: u32) -> bool {
-    let mut done = 0;
-    while done < spp && done < target {
-        done += next_pass(done, target);
-    }
-    done == spp
 }
 
 /// Renders with a Monte Carlo integrator in passes, continuing from `resume` (a film saved by

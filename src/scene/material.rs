@@ -1,8 +1,8 @@
 use super::mix::Mix;
 use super::normal_detail::NormalDetail;
 use super::texture::Texture;
-use crate::bsdf::TabulatedBrdf;
 use crate::math::{Rgb, Vec2, Vec3};
+use crate::scene::tabulated::TabulatedBrdf;
 use std::sync::Arc;
 
 /// A surface in Whitted's model (eq. 2 of the paper): I = ka·Ia + kd Σ(N·Lj) + ks S + kt T,

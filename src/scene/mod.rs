@@ -19,6 +19,7 @@ pub mod obj;
 pub mod pbrt;
 pub mod ply;
 pub mod settings;
+pub mod tabulated;
 pub mod tangents;
 pub mod texture;
 pub mod toml;

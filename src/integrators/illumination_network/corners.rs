@@ -8,7 +8,6 @@
 //! directional node is left to the per-pixel gather (its corners depend on the eye).
 
 use super::distribute::Solution;
-use super::render::diffuse_radiance;
 use super::{Network, NONE};
 use crate::math::Rgb;
 
@@ -54,7 +53,7 @@ impl Corners {
                                 let cell = pg.first_cell + ci as u32 * pg.nt + cj as u32;
                                 let nd = node(cell);
                                 if nd != NONE {
-                                    sum += diffuse_radiance(solution, nd, hybrid);
+                                    sum += solution.diffuse_radiance(nd, hybrid);
                                     n += 1;
                                 }
                             }

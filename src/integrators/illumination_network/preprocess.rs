@@ -41,6 +41,7 @@ mod cast;
 mod counting_sort;
 mod link;
 mod link_batch;
+mod link_buffers;
 mod packing;
 mod row_buckets;
 mod scan;

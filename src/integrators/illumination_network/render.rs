@@ -81,7 +81,7 @@ impl NetworkRenderer<'_> {
     /// hit usually share theirs).
     fn node_radiance(&self, node: u32, wo: Vec3, cache: &mut AlbedoCache) -> Rgb {
         let sol = self.solution;
-        let mut r = diffuse_radiance(sol, node, self.hybrid);
+        let mut r = sol.diffuse_radiance(node, self.hybrid);
         let k = sol.dir_index[node as usize];
         if k == NONE {
             return r;
@@ -312,17 +312,6 @@ impl NetworkRenderer<'_> {
             fy,
         )
     }
-}
-
-/// A node's diffuse radiance (the same toward every direction): its out-buffer, without
-/// the direct light in hybrid mode (added per pixel there).
-#[inline]
-pub(super) fn diffuse_radiance(solution: &Solution, node: u32, hybrid: bool) -> Rgb {
-    let mut r = solution.diffuse[node as usize];
-    if hybrid {
-        r -= solution.direct[node as usize];
-    }
-    r
 }
 
 /// The bilinear interpolation of a patch's corners at (fx, fy), over the corners that have

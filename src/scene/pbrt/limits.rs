@@ -15,8 +15,10 @@ use super::shapes;
 use super::{Loader, Loc};
 use crate::scene::{Geometry, Shape};
 use crate::Error;
+use glam::DMat4;
 use std::io::Read;
 use std::path::Path;
+use std::sync::OnceLock;
 
 /// The most scene text read while reading one scene: the scene file and every file it
 /// includes, each counted every time it is included. A fixed limit (1 GiB).
@@ -88,6 +90,16 @@ impl Cost {
     }
 }
 
+/// What one sphere of an object costs in an instance that tessellates it.
+fn tessellated_sphere_cost() -> Cost {
+    static COST: OnceLock<Cost> = OnceLock::new();
+    *COST.get_or_init(|| {
+        shapes::unit_sphere(&DMat4::IDENTITY)
+            .iter()
+            .fold(Cost::default(), |c, g| c.add(Cost::of(g)))
+    })
+}
+
 /// An object defined by `ObjectBegin`/`ObjectEnd`: the shapes an instance shares (stored
 /// once, as a prototype, when first placed), the shapes each placement copies into world
 /// space, and what one placement's copies cost, with their spheres kept as spheres (a
@@ -121,7 +133,7 @@ impl Object {
             data: uniform.data - spheres * sphere.data,
             primitives: uniform.primitives - spheres * sphere.primitives,
         }
-        .add(shapes::tessellated_sphere_cost().times(spheres));
+        .add(tessellated_sphere_cost().times(spheres));
         Object {
             shapes,
             shared,
@@ -375,7 +387,7 @@ mod tests {
         };
         let object = Object::new(vec![ball.clone(), ball], |_| true);
         assert_eq!(object.instance_cost(true).primitives, 2);
-        let t = shapes::tessellated_sphere_cost();
+        let t = tessellated_sphere_cost();
         assert!(t.primitives > 1000, "{t:?}");
         assert_eq!(object.instance_cost(false), t.times(2));
     }

@@ -14,12 +14,10 @@
 //!
 //! Windings are chosen here so that raylink's normal falls on pbrt's side.
 
-use super::limits::Cost;
 use crate::math::{Vec2, Vec3};
 use crate::scene::ply::PlyMesh;
 use crate::scene::{Geometry, Shape};
 use glam::{DMat3, DMat4, DVec3};
-use std::sync::OnceLock;
 
 /// Whether the linear part of `m` mirrors.
 pub fn swaps_handedness(m: &DMat4) -> bool {
@@ -170,18 +168,8 @@ pub fn cylinder(r: f64, zmin: f64, zmax: f64, phimax: f64) -> PlyMesh {
 }
 
 /// The unit sphere an instance tessellates when its transform does not scale uniformly.
-fn unit_sphere(m: &DMat4) -> Vec<Geometry> {
+pub(super) fn unit_sphere(m: &DMat4) -> Vec<Geometry> {
     place(sphere(1.0, -1.0, 1.0, 360.0), m, 1.0, false)
-}
-
-/// What one sphere of an object costs in an instance that tessellates it.
-pub(super) fn tessellated_sphere_cost() -> Cost {
-    static COST: OnceLock<Cost> = OnceLock::new();
-    *COST.get_or_init(|| {
-        unit_sphere(&DMat4::IDENTITY)
-            .iter()
-            .fold(Cost::default(), |c, g| c.add(Cost::of(g)))
-    })
 }
 
 /// A world-space shape of an object definition, copied by an instance's transform `t`.

@@ -17,10 +17,10 @@ use super::schema::{
     CameraDesc, ConductorDesc, DiffuseDesc, EnvironmentDesc, FileDesc, LightDesc, LightKind,
     MaterialDesc, MixDesc, OneOrMany, RoughnessDesc, Splat3, TransformOp,
 };
-use crate::bsdf::TabulatedBrdf;
 use crate::math::{Mat3, Mat4, Rgb, Vec3};
 use crate::scene::environment::Environment;
 use crate::scene::light::GoniometricMap;
+use crate::scene::tabulated::TabulatedBrdf;
 use crate::scene::{
     Camera, Conductor, Light, Material, Projection, RenderSettings, RoughnessMap, Scene, Texture,
 };

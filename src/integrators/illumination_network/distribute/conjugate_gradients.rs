@@ -25,8 +25,7 @@
 //! result is independent of the thread count, and doubling the emission doubles every vector
 //! exactly (the same iterations, scaled by a power of two).
 
-use super::gather::Ends;
-use super::sweeps::direct_light;
+use super::gather::{direct_light, Ends};
 use super::{DistributeOptions, DistributeStats, Solution, Surface};
 use crate::integrators::illumination_network::{Network, SlotWeights, NONE};
 use crate::math::Rgb;

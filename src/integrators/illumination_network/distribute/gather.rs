@@ -1,7 +1,10 @@
 //! What a node gathers over its links from what the other ends shot: the loop over links
 //! that every sweep and every conjugate-gradient step runs.
 
-use crate::integrators::illumination_network::{interleaved_sum, LinkCode, SlotWeights, NONE};
+use super::Surface;
+use crate::integrators::illumination_network::{
+    interleaved_sum, LinkCode, Network, SlotWeights, ESCAPE, NONE,
+};
 use crate::math::Rgb;
 use glam::Vec3A;
 
@@ -68,4 +71,26 @@ impl<'a> Ends<'a> {
         };
         interleaved_sum(links, end).into()
     }
+}
+
+/// The diffuse light reflected from what comes straight from the emitters (what the first
+/// sweep from the emission finds), shot from the emitters alone: a warm start's first sweep
+/// gathers more than emission.
+pub(super) fn direct_light(net: &Network, surfaces: &[Surface], w: &[f32]) -> Vec<Rgb> {
+    let mut arrived = vec![Rgb::ZERO; net.nodes()];
+    for (i, s) in surfaces.iter().enumerate() {
+        if s.emission != Rgb::ZERO {
+            for (l, j) in net.slot_links(i as u32) {
+                if j < ESCAPE {
+                    arrived[j as usize] += s.emission * w[l];
+                }
+            }
+        }
+    }
+    arrived
+        .iter()
+        .zip(surfaces)
+        .zip(&net.etendue)
+        .map(|((a, s), &e)| s.kd * *a / e)
+        .collect()
 }

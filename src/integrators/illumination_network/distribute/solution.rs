@@ -47,6 +47,17 @@ pub struct DistributeStats {
 }
 
 impl Solution {
+    /// A node's diffuse radiance (the same toward every direction): its out-buffer, without
+    /// the direct light in hybrid mode (added per pixel there).
+    #[inline]
+    pub fn diffuse_radiance(&self, node: u32, hybrid: bool) -> Rgb {
+        let mut r = self.diffuse[node as usize];
+        if hybrid {
+            r -= self.direct[node as usize];
+        }
+        r
+    }
+
     /// Memory of the buffers (bytes).
     pub fn memory(&self) -> usize {
         std::mem::size_of::<Rgb>()

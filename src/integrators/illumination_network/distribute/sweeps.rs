@@ -1,7 +1,7 @@
 //! The Jacobi sweeps, started cold or from a guess, and the choice among the orders.
 
 use super::conjugate_gradients;
-use super::gather::Ends;
+use super::gather::{direct_light, Ends};
 use super::maps::Maps;
 use super::shoot::shoot;
 use super::{DistributeOptions, DistributeStats, Order, Solution, Surface};
@@ -303,28 +303,6 @@ pub fn distribute_from(
         stats,
         light_scale: options.light_scale,
     }
-}
-
-/// The diffuse light reflected from what comes straight from the emitters (what the first
-/// sweep from the emission finds), shot from the emitters alone: a warm start's first sweep
-/// gathers more than emission.
-pub(super) fn direct_light(net: &Network, surfaces: &[Surface], w: &[f32]) -> Vec<Rgb> {
-    let mut arrived = vec![Rgb::ZERO; net.nodes()];
-    for (i, s) in surfaces.iter().enumerate() {
-        if s.emission != Rgb::ZERO {
-            for (l, j) in net.slot_links(i as u32) {
-                if j < ESCAPE {
-                    arrived[j as usize] += s.emission * w[l];
-                }
-            }
-        }
-    }
-    arrived
-        .iter()
-        .zip(surfaces)
-        .zip(&net.etendue)
-        .map(|((a, s), &e)| s.kd * *a / e)
-        .collect()
 }
 
 /// The slots of a node's links with their number of links, in slot order.

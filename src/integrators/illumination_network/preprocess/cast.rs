@@ -2,7 +2,7 @@
 //! closest-hit queries, and its hits radix-sorted by line.
 
 use super::counting_sort::{scatter_stably, starts_from_counts};
-use super::link::LinkBuffers;
+use super::link_buffers::LinkBuffers;
 use super::scan::line_point;
 use super::LineHit;
 use crate::integrators::illumination_network::patches::{Patches, Polygon};

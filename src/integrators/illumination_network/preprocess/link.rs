@@ -3,10 +3,11 @@
 
 use super::cast::{cast_slot, radix_by_line};
 use super::link_batch::LinkBatch;
+use super::link_buffers::LinkBuffers;
 use super::packing::EndPacking;
-use super::row_buckets::{scan_slot_into, RowBuckets};
+use super::row_buckets::scan_slot_into;
 use super::sorted_hits::SortedHits;
-use super::{Builder, LineHit};
+use super::Builder;
 use crate::control::CancelToken;
 use crate::integrators::illumination_network::patches::Patches;
 use crate::integrators::illumination_network::ray_space::RaySpace;
@@ -19,27 +20,6 @@ pub const SLOT_BATCH: usize = 8;
 
 /// Hits closer than this along a line (unit-cube units of p_a) are on touching surfaces.
 pub const COINCIDENT: f32 = 1e-5;
-
-/// Reusable buffers of a batch's linking and the sorts before it.
-#[derive(Default)]
-pub struct LinkBuffers {
-    pub(super) counts: Vec<u32>,
-    pub(super) tmp: Vec<LineHit>,
-    pub(super) radix: Vec<LineHit>,
-    pub(super) sorted: SortedHits,
-    rows: RowBuckets,
-    /// The batch's packed link ends, one bucket per key block, each in the order the links
-    /// were found, slot after slot (so grouped by slot already); `bucket_at[b·slots + j]` is
-    /// block b's length before the batch's j-th slot.
-    pub(super) buckets: Vec<Vec<u32>>,
-    pub(super) bucket_at: Vec<u32>,
-    /// The batch's later escapes, slot after slot: slot j's are
-    /// `more[more_at[j]..more_at[j + 1]]` (past the last, room for the next slot's).
-    pub(super) more: Vec<u32>,
-    pub(super) more_at: Vec<usize>,
-    /// A slot's escapes, over all side keys (cleared after each slot).
-    escapes: Vec<u64>,
-}
 
 /// Sorts one slot's hits (sorted by line) by depth within each line's few hits and links
 /// consecutive ones, as the `j`-th slot of `out`: the packed link ends go to their key

@@ -2,7 +2,7 @@
 //! reads them in.
 
 use super::counting_sort::group_slots;
-use super::link::LinkBuffers;
+use super::link_buffers::LinkBuffers;
 use super::packing::EndPacking;
 
 /// The links of a batch of consecutive slots as packed link ends ([`EndPacking`]: a side key

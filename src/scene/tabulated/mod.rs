@@ -1,7 +1,7 @@
 //! A reflectance given as a table: samples of the BRDF f(θi, φi, θo, φo) on a grid of
 //! angles in the surface's shading frame, read from a text file and interpolated
 //! multilinearly. With a single φi the BRDF is isotropic: it depends on φo − φi only. A
-//! file named `*.binary` is instead a MERL measured BRDF ([`merl`]).
+//! file named `*.binary` is instead a MERL measured BRDF (the `merl` module).
 //!
 //! The file (`docs/scene-format.md`, "Tabulated BRDFs", documents it):
 //!
