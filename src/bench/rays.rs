@@ -88,7 +88,7 @@ pub fn generate(
             if hit.ng.normalize_or_zero() == Vec3::ZERO {
                 continue;
             }
-            let at = hit.surface_point(scene, &ray).spot();
+            let at = hit.spot(scene, &ray);
             let n = if at.n.dot(ray.dir) > 0.0 { -at.n } else { at.n };
             let target = light_point(scene, &area_lights, fallback, at.p, &mut rng);
             sets.shadow.push(at.spawn_to(&target));

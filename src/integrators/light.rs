@@ -43,10 +43,10 @@ pub(crate) struct CameraConnection {
     pub importance: f32,
 }
 
-/// Connects point `at` (with its error and geometric normal) to the camera at the lens point `lens` (the
-/// pinhole, or a point of a thin lens drawn uniformly over it): `None` if it is outside the
-/// film (widened by the filter radius) or hidden. For a thin lens, the importance keeps the
-/// pinhole's form with θ and d measured from the lens point: pbrt-v4's
+/// Connects point `at` (with its error and geometric normal) to the camera at the lens point
+/// `lens` (the pinhole, or a point of a thin lens drawn uniformly over it): `None` if it is
+/// outside the film (widened by the filter radius) or hidden. For a thin lens, the
+/// importance keeps the pinhole's form with θ and d measured from the lens point: pbrt-v4's
 /// We = 1/(A cos⁴θ · lens area) times cos θ over the lens-area density d²/(cos θ · lens area).
 pub(crate) fn connect_to_camera(
     ctx: &Context,
