@@ -152,7 +152,7 @@ fn gathering_shooting_and_bidirectional_agree_on_glossy_and_specular_spheres() {
 /// only the mirror sphere's pixels are left out of the comparisons with light tracing.
 #[test]
 fn gathering_shooting_and_bidirectional_agree_through_rough_glass() {
-    let scene = cornell_spheres_with_glass(|glass| glass.roughness = 0.3);
+    let scene = cornell_spheres_with_glass(|glass| classic_mut(glass).roughness = 0.3);
     check_adjoint(&scene, &[1]);
 }
 
@@ -161,12 +161,16 @@ fn gathering_shooting_and_bidirectional_agree_through_rough_glass() {
 #[test]
 fn gathering_shooting_and_bidirectional_agree_through_diffuse_transmission() {
     let scene = cornell_spheres_with_glass(|glass| {
-        *glass = raylink::scene::Material {
-            name: glass.name.clone(),
-            diffuse: raylink::scene::Texture::Constant(raylink::math::Rgb::splat(0.3)),
-            diffuse_transmission: raylink::scene::Texture::Constant(raylink::math::Rgb::splat(0.5)),
-            ..Default::default()
-        }
+        *glass = raylink::scene::Material::classic(
+            glass.name.clone(),
+            raylink::scene::Classic {
+                diffuse: raylink::scene::Texture::Constant(raylink::math::Rgb::splat(0.3)),
+                diffuse_transmission: raylink::scene::Texture::Constant(raylink::math::Rgb::splat(
+                    0.5,
+                )),
+                ..raylink::scene::Classic::default()
+            },
+        )
     });
     check_adjoint(&scene, &[1]);
 }
@@ -183,11 +187,13 @@ fn gathering_shooting_and_bidirectional_agree_on_a_mix() {
         .iter()
         .position(|m| m.name == "glass")
         .unwrap();
-    scene.materials.push(raylink::scene::Material {
-        name: "white".into(),
-        diffuse: raylink::scene::Texture::Constant(raylink::math::Rgb::splat(0.8)),
-        ..Default::default()
-    });
+    scene.materials.push(raylink::scene::Material::classic(
+        "white",
+        raylink::scene::Classic {
+            diffuse: raylink::scene::Texture::Constant(raylink::math::Rgb::splat(0.8)),
+            ..raylink::scene::Classic::default()
+        },
+    ));
     let white = scene.materials.len() - 1;
     let mix = raylink::scene::Material::mix_of(
         "mix".into(),
@@ -215,6 +221,15 @@ fn cornell_spheres_with_glass(edit: impl FnOnce(&mut raylink::scene::Material)) 
         .expect("the scene has a glass material");
     edit(glass);
     scene
+}
+
+/// The classic terms of `m`, a classic material (as the scene files' plain keys make), to
+/// change.
+fn classic_mut(m: &mut raylink::scene::Material) -> &mut raylink::scene::Classic {
+    match &mut m.surface {
+        raylink::scene::Surface::Classic(c) => c,
+        other => panic!("not a classic material: {other:?}"),
+    }
 }
 
 /// Whether each pixel of a 48x48 view sees any of `shapes` at its centre or corners.
@@ -405,7 +420,7 @@ fn images_do_not_depend_on_thread_count() {
 #[test]
 fn environment_map_lighting_matches_quadrature() {
     use raylink::math::{Mat3, Rgb, Vec3};
-    use raylink::scene::{Camera, Environment, Geometry, Material, Shape, Texture};
+    use raylink::scene::{Camera, Classic, Environment, Geometry, Material, Shape, Texture};
     let n = 16;
     let mut map = Image::new(n, n);
     for y in 0..n {
@@ -428,10 +443,13 @@ fn environment_map_lighting_matches_quadrature() {
             height: 4,
             projection: raylink::scene::Projection::Pinhole,
         },
-        materials: vec![Material {
-            diffuse: Texture::Constant(Rgb::splat(0.5)),
-            ..Material::default()
-        }],
+        materials: vec![Material::classic(
+            "",
+            Classic {
+                diffuse: Texture::Constant(Rgb::splat(0.5)),
+                ..Classic::default()
+            },
+        )],
         shapes: vec![Shape {
             geometry: Geometry::Sphere {
                 center: Vec3::ZERO,
@@ -749,7 +767,7 @@ fn lat_long_sun_is_importance_sampled_without_bias() {
 /// transmission 1 − R); light tracing cannot see through its delta lobes, as for glass.
 #[test]
 fn gathering_shooting_and_bidirectional_agree_through_a_thin_sheet() {
-    let scene = cornell_spheres_with_glass(|glass| glass.thin = true);
+    let scene = cornell_spheres_with_glass(|glass| classic_mut(glass).thin = true);
     check_adjoint(&scene, &[1, 2]);
 }
 

@@ -3,12 +3,17 @@
 
 use raylink::image::Image;
 use raylink::math::{Rgb, Vec3};
-use raylink::scene::{Light, Scene};
+use raylink::scene::{Classic, Light, Scene};
 use std::path::Path;
 
 #[path = "common/pbrt.rs"]
 mod pbrt_common;
 use pbrt_common::*;
+
+/// The scene's materials in Whitted's classic terms (the fields the reader sets).
+fn classics(s: &Scene) -> Vec<&Classic> {
+    s.materials.iter().map(|m| m.approximation()).collect()
+}
 
 #[test]
 fn materials_map_to_raylink_fields() {
@@ -21,7 +26,7 @@ fn materials_map_to_raylink_fields() {
          MakeNamedMaterial \"m\" \"string type\" \"diffuse\" \"rgb reflectance\" [0.1 0.2 0.3]\n\
          NamedMaterial \"m\" {TRI}"
     ));
-    let m = &s.materials;
+    let m = classics(&s);
     assert_eq!(m.len(), 6);
     // Copper (pbrt's default conductor) with its complex Fresnel: reddish at normal
     // incidence.
@@ -46,7 +51,7 @@ fn materials_map_to_raylink_fields() {
         m[4].diffuse,
         raylink::scene::Texture::Constant(Rgb::splat(0.5))
     );
-    assert_eq!(m[5].name, "m");
+    assert_eq!(s.materials[5].name, "m");
     // Anisotropic conductors keep α_x and α_y; `reflectance` gives the index with that
     // normal-incidence reflectance (pbrt-v4: η = 1, k = 2√r/√(1−r)).
     let s = world(&format!(
@@ -54,7 +59,7 @@ fn materials_map_to_raylink_fields() {
          Material \"conductor\" \"rgb reflectance\" [0.9 0.5 0.2] \"float roughness\" 0.3 \"bool remaproughness\" false {TRI}"
     ));
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
-    let m = &s.materials;
+    let m = classics(&s);
     assert!((m[0].roughness - 0.2).abs() < 1e-6);
     assert!((m[0].roughness_v.unwrap() - 0.4).abs() < 1e-6);
     let r = m[1].specular_at_normal();
@@ -72,8 +77,8 @@ fn materials_map_to_raylink_fields() {
          Material \"dielectric\" \"float roughness\" 0.2 \"bool remaproughness\" false {TRI}"
     ));
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
-    let m = &s.materials;
-    for g in m {
+    let m = classics(&s);
+    for g in &m {
         assert_eq!(
             (g.specular, g.transmission, g.ior, g.fresnel),
             (Rgb::ONE, Rgb::ONE, 1.5, true)
@@ -90,7 +95,7 @@ fn materials_map_to_raylink_fields() {
          Material \"diffusetransmission\" \"rgb reflectance\" [0.2 0.4 0.1] \"rgb transmittance\" [0.3 0.5 0.1] \"float scale\" 2 {TRI}"
     ));
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
-    let m = &s.materials;
+    let m = classics(&s);
     assert_eq!(
         m[0].diffuse,
         raylink::scene::Texture::Constant(Rgb::splat(0.25))
@@ -114,7 +119,7 @@ fn materials_map_to_raylink_fields() {
          Material \"diffusetransmission\" \"texture transmittance\" \"c\" {TRI}"
     ));
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
-    let t = &s.materials[0].diffuse_transmission;
+    let t = &s.materials[0].approximation().diffuse_transmission;
     assert!(
         matches!(t, raylink::scene::Texture::UvChecker { .. }),
         "{t:?}"
@@ -125,7 +130,7 @@ fn materials_map_to_raylink_fields() {
          Material \"thindielectric\" \"float eta\" 1.33 {TRI}"
     ));
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
-    let m = &s.materials;
+    let m = classics(&s);
     for (g, eta) in m.iter().zip([1.5, 1.33]) {
         assert_eq!(
             (g.specular, g.transmission, g.ior, g.fresnel, g.thin),
@@ -133,7 +138,11 @@ fn materials_map_to_raylink_fields() {
         );
         assert_eq!((g.roughness, g.roughness_v), (0.0, None));
     }
-    assert!(!world(&format!("Material \"dielectric\" {TRI}")).materials[0].thin);
+    assert!(
+        !world(&format!("Material \"dielectric\" {TRI}")).materials[0]
+            .approximation()
+            .thin
+    );
     // Unsupported material types: a warning and a substitute.
     let s = world(&format!("Material \"hair\" \"float eumelanin\" 1.3 {TRI}"));
     assert_eq!(s.warnings.len(), 1, "{:?}", s.warnings);
@@ -271,10 +280,10 @@ fn textures_checkerboard_and_imagemap() {
     )
     .unwrap();
     let uv = raylink::math::Vec2::new;
-    let checker = &s.materials[0].diffuse;
+    let checker = &s.materials[0].approximation().diffuse;
     assert_eq!(checker.eval(Vec3::ZERO, uv(0.1, 0.1), Vec3::Z), Rgb::X);
     assert_eq!(checker.eval(Vec3::ZERO, uv(0.3, 0.1), Vec3::Z), Rgb::Z);
-    let img = &s.materials[1].diffuse;
+    let img = &s.materials[1].approximation().diffuse;
     let left = img.eval(Vec3::ZERO, uv(0.25, 0.5), Vec3::Z);
     assert!(
         (left.x - raylink::image::output::srgb_decode(128.0 / 255.0)).abs() < 1e-3,
@@ -335,26 +344,30 @@ fn mix_materials_keep_both_materials() {
     let s = world(&format!("{named}NamedMaterial \"both\"\n{TRI}"));
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     let i = s.shapes[0].material;
-    let mix = s.materials[i].mix.clone().expect("a mix");
+    let mix = s.materials[i].mix().cloned().expect("a mix");
     assert!((mix.amount - 0.3).abs() < 1e-6);
     let [a, b] = mix.materials;
     assert!(a < i && b < i, "the mixed materials come before the mix");
     assert_eq!(
-        s.materials[a].diffuse,
+        s.materials[a].approximation().diffuse,
         raylink::scene::Texture::Constant(Rgb::ONE)
     );
-    assert!(s.materials[b].fresnel && s.materials[b].transmission == Rgb::ONE);
+    let glass = s.materials[b].approximation();
+    assert!(glass.fresnel && glass.transmission == Rgb::ONE);
     // The mix's own fields are those of the material with the larger weight.
-    assert_eq!(s.materials[i].diffuse, s.materials[a].diffuse);
+    assert_eq!(
+        s.materials[i].approximation().diffuse,
+        s.materials[a].approximation().diffuse
+    );
     // Under an area light both mixed materials emit, as the mix does.
     let s = world(&format!(
         "{named}AttributeBegin AreaLightSource \"diffuse\" \"rgb L\" [2 2 2]\nNamedMaterial \"both\"\n{TRI}AttributeEnd\n"
     ));
     let m = &s.materials[s.shapes[0].material];
     assert_eq!(m.emission, Rgb::splat(2.0));
-    for j in m.mix.as_ref().unwrap().materials {
+    for j in m.mix().unwrap().materials {
         assert_eq!(s.materials[j].emission, Rgb::splat(2.0));
-        assert!(s.materials[j].mix.is_none());
+        assert!(s.materials[j].mix().is_none());
     }
     // Two names are needed.
     let dir = tempfile::tempdir().unwrap();

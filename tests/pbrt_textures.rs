@@ -32,6 +32,7 @@ fn a_float_texture_varies_roughness() {
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     let at = |m: usize, u: f32, v: f32| {
         let map = s.materials[m]
+            .approximation()
             .roughness_map
             .as_ref()
             .expect("a roughness map");
@@ -44,7 +45,7 @@ fn a_float_texture_varies_roughness() {
     assert!(near(at(1, 0.6, 0.1), (0.5, 0.3)));
     assert!(near(at(2, 0.6, 0.1), (0.25, 0.25)));
     // The techniques that take one roughness see the largest.
-    assert!((s.materials[0].roughness - 0.5).abs() < 1e-6);
+    assert!((s.materials[0].approximation().roughness - 0.5).abs() < 1e-6);
 }
 
 /// `mix`, `directionmix` and `scale` as pbrt-v4 defines them: (1 − amount)·tex1 +
@@ -69,7 +70,12 @@ fn mix_direction_mix_and_scale_textures() {
     ));
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
     let (even, odd) = (Vec2::new(0.5, 0.5), Vec2::new(1.5, 0.5));
-    let eval = |m: usize, uv: Vec2, n: Vec3| s.materials[m].diffuse.eval(Vec3::ZERO, uv, n);
+    let eval = |m: usize, uv: Vec2, n: Vec3| {
+        s.materials[m]
+            .approximation()
+            .diffuse
+            .eval(Vec3::ZERO, uv, n)
+    };
     assert!(close(eval(0, even, Vec3::Z), RED * 0.75 + BLUE * 0.25));
     assert!(close(eval(0, odd, Vec3::Z), RED * 0.25 + BLUE * 0.75));
     // `dir` +y under a 90° turn about x is +z in the world.
@@ -81,7 +87,11 @@ fn mix_direction_mix_and_scale_textures() {
         eval(2, odd, Vec3::Z),
         (RED * 0.25 + BLUE * 0.75) * 0.75
     ));
-    let map = s.materials[3].roughness_map.as_ref().unwrap();
+    let map = s.materials[3]
+        .approximation()
+        .roughness_map
+        .as_ref()
+        .unwrap();
     let (ax, _) = map.alphas(Vec3::ZERO, odd, Vec3::Z);
     assert!((ax - (0.1 * 0.25 + 0.3 * 0.75)).abs() < 1e-6, "{ax}");
 }
@@ -136,6 +146,7 @@ fn normal_maps_and_bump_maps_read_and_convert() {
     let back = Scene::load(&out).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(back.materials.len(), s.materials.len());
     for (a, b) in back.materials.iter().zip(&s.materials) {
+        let (ac, bc) = (a.approximation(), b.approximation());
         // Image files are named from each scene file; compare what they hold and how the
         // textures evaluate.
         for uv in [
@@ -145,22 +156,25 @@ fn normal_maps_and_bump_maps_read_and_convert() {
         ] {
             for n in [Vec3::Z, Vec3::new(0.0, 0.6, 0.8)] {
                 let (x, y) = (
-                    a.diffuse.eval(Vec3::ZERO, uv, n),
-                    b.diffuse.eval(Vec3::ZERO, uv, n),
+                    ac.diffuse.eval(Vec3::ZERO, uv, n),
+                    bc.diffuse.eval(Vec3::ZERO, uv, n),
                 );
                 assert!(close(x, y), "{}: {x} vs {y}", a.name);
-                if let (Some(p), Some(q)) = (&a.roughness_map, &b.roughness_map) {
+                if let (Some(p), Some(q)) = (&ac.roughness_map, &bc.roughness_map) {
                     assert_eq!(p.alphas(Vec3::ZERO, uv, n), q.alphas(Vec3::ZERO, uv, n));
                 }
             }
         }
         assert_eq!(
-            a.roughness_map.is_some(),
-            b.roughness_map.is_some(),
+            ac.roughness_map.is_some(),
+            bc.roughness_map.is_some(),
             "{}",
             a.name
         );
-        assert_eq!((a.roughness, a.roughness_v), (b.roughness, b.roughness_v));
+        assert_eq!(
+            (ac.roughness, ac.roughness_v),
+            (bc.roughness, bc.roughness_v)
+        );
         match (&a.normal_detail, &b.normal_detail) {
             (Some(NormalDetail::Map(x)), Some(NormalDetail::Map(y))) => {
                 assert_eq!(x.file, Path::new("../n.exr"));

@@ -3,7 +3,7 @@
 //! are unit tests in src/tests/whitted.rs.)
 
 use raylink::math::{Rgb, Vec3};
-use raylink::scene::{Camera, Geometry, Light, Material, QuadMesh, Scene, Shape, Texture};
+use raylink::scene::{Camera, Classic, Geometry, Light, Material, QuadMesh, Scene, Shape, Texture};
 use raylink::{
     Backend, Control, Image, Job, RenderStats, Renderer, Settings, Technique, TechniqueKind,
 };
@@ -101,34 +101,43 @@ fn busy_scene() -> Scene {
     let mut scene = empty_scene();
     let checker = add_material(
         &mut scene,
-        Material {
-            diffuse: Texture::Checker {
-                even: Rgb::new(0.8, 0.1, 0.1),
-                odd: Rgb::new(0.9, 0.9, 0.2),
-                size: 0.5,
+        Material::classic(
+            "",
+            Classic {
+                diffuse: Texture::Checker {
+                    even: Rgb::new(0.8, 0.1, 0.1),
+                    odd: Rgb::new(0.9, 0.9, 0.2),
+                    size: 0.5,
+                },
+                ..Classic::default()
             },
-            ..Material::default()
-        },
+        ),
     );
     floor(&mut scene, 0.0, 10.0, checker);
     let glossy = add_material(
         &mut scene,
-        Material {
-            diffuse: Texture::Constant(Rgb::splat(0.1)),
-            specular: Rgb::splat(0.7),
-            roughness: 0.05,
-            ..Material::default()
-        },
+        Material::classic(
+            "",
+            Classic {
+                diffuse: Texture::Constant(Rgb::splat(0.1)),
+                specular: Rgb::splat(0.7),
+                roughness: 0.05,
+                ..Classic::default()
+            },
+        ),
     );
     let frosted = add_material(
         &mut scene,
-        Material {
-            diffuse: Texture::Constant(Rgb::ZERO),
-            specular: Rgb::splat(0.1),
-            transmission: Rgb::splat(0.9),
-            roughness: 0.03,
-            ..Material::default()
-        },
+        Material::classic(
+            "",
+            Classic {
+                diffuse: Texture::Constant(Rgb::ZERO),
+                specular: Rgb::splat(0.1),
+                transmission: Rgb::splat(0.9),
+                roughness: 0.03,
+                ..Classic::default()
+            },
+        ),
     );
     for (center, m) in [
         (Vec3::new(-0.8, 0.7, 0.0), glossy),
@@ -146,11 +155,14 @@ fn busy_scene() -> Scene {
     }
     let lamp = add_material(
         &mut scene,
-        Material {
-            diffuse: Texture::Constant(Rgb::ZERO),
-            emission: Rgb::splat(8.0),
-            ..Material::default()
-        },
+        Material::classic(
+            "",
+            Classic {
+                diffuse: Texture::Constant(Rgb::ZERO),
+                ..Classic::default()
+            },
+        )
+        .emitting(Rgb::splat(8.0)),
     );
     quad(
         &mut scene,

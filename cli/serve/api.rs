@@ -242,7 +242,9 @@ impl Api {
         // A diffuse colour must reflect less than all the light it gets.
         for (name, k) in &request.materials {
             let m = base.scene.materials.iter().find(|m| &m.name == name);
-            if let Some(raylink::scene::Texture::Constant(c)) = m.map(|m| &m.diffuse) {
+            if let Some(raylink::scene::Texture::Constant(c)) =
+                m.map(|m| &m.approximation().diffuse)
+            {
                 if (*c * *k).max_element() >= 1.0 {
                     let k = k.to_array();
                     return Err((
@@ -486,7 +488,7 @@ fn state_json(session: &Session, s: &State) -> Value {
             .materials
             .iter()
             .find(|m| m.name == name)
-            .and_then(|m| match m.diffuse {
+            .and_then(|m| match m.approximation().diffuse {
                 raylink::scene::Texture::Constant(c) => Some([c.x, c.y, c.z]),
                 _ => None,
             })

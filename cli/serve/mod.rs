@@ -155,7 +155,9 @@ pub fn run(cli: &Cli, args: ServeArgs) -> Result<(), Failure> {
         .collect();
     let materials: Vec<String> = (scene.materials.iter().filter(named))
         .filter(|m| m.emission.max_element() <= 0.0)
-        .filter(|m| matches!(m.diffuse, Texture::Constant(c) if c.max_element() > 0.0))
+        .filter(
+            |m| matches!(m.approximation().diffuse, Texture::Constant(c) if c.max_element() > 0.0),
+        )
         .map(|m| m.name.clone())
         .collect();
     let listener = http::bind(SocketAddr::new(ip, port)).map_err(Error::Invalid)?;

@@ -472,8 +472,8 @@ fn rebuild(
         let original = base.scene.materials.iter().find(|m| &m.name == name);
         let target = scene.materials.iter_mut().find(|m| &m.name == name);
         if let (Some(o), Some(m)) = (original, target) {
-            if let Texture::Constant(c) = o.diffuse {
-                m.diffuse = Texture::Constant(c * *k);
+            if let (Texture::Constant(c), Some(d)) = (&o.approximation().diffuse, m.diffuse_mut()) {
+                *d = Texture::Constant(*c * *k);
             }
         }
     }

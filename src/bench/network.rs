@@ -146,7 +146,13 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
         .iter_mut()
         .find(|m| m.name == "carpet")
         .ok_or_else(|| Error::input(&bench.scene, "the bench scene has no material \"carpet\""))?;
-    carpet.diffuse = crate::scene::Texture::Constant(Rgb::new(0.35, 0.3, 0.45));
+    let Some(colour) = carpet.diffuse_mut() else {
+        return Err(Error::input(
+            &bench.scene,
+            "the bench scene's \"carpet\" has no diffuse colour",
+        ));
+    };
+    *colour = crate::scene::Texture::Constant(Rgb::new(0.35, 0.3, 0.45));
     let recoloured_ctx = Context::new(&recoloured, accel.as_ref());
     std::fs::create_dir_all(&bench.dir).map_err(|e| Error::io(&bench.dir, e))?;
     let mut rows = Vec::new();

@@ -8,11 +8,11 @@
 //! the interface; `wo` may be on either side.
 
 use super::dielectric::RoughInterface;
+use super::Conductor;
 use super::{mirror, Ggx, Transport};
 use crate::math::optics::{fresnel_dielectric, refract};
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::math::{Rgb, Vec2, Vec3};
-use crate::scene::Conductor;
 use std::f32::consts::FRAC_1_PI;
 
 /// Which of an interface's lobes a sample or a density covers.

@@ -22,11 +22,11 @@
 //! below, both directions are mirrored), and opaque: nothing is transmitted.
 
 use super::layer::{Layer, LayerSample, Lobes};
+use super::Coating;
+use super::Conductor;
 use super::{Ggx, Transport};
 use crate::math::warp::power_heuristic;
 use crate::math::{frame, Rgb, Rng, Vec2, Vec3};
-use crate::scene::Coating;
-use crate::scene::Conductor;
 use std::f32::consts::{FRAC_1_PI, TAU};
 
 /// Keys of the random streams of evaluation, density and sampling.

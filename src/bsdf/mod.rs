@@ -1,27 +1,28 @@
-//! Scattering at surfaces for the physically based integrators. A [`Bsdf`] is made from a
-//! scene [`Material`] at a surface point and interprets its coefficients as lobes:
+//! Scattering at surfaces for the physically based integrators. A [`Bsdf`] is made by a
+//! material ([`crate::scene::materials`]) at a surface point from plain [`Lobes`]:
 //!
-//! - `diffuse` kd: Lambertian reflection kd/π;
-//! - `diffuse_transmission` kdt: Lambertian transmission kdt/π to the other side (pbrt-v4's
+//! - `kd`: Lambertian reflection kd/π;
+//! - `kdt`: Lambertian transmission kdt/π to the other side (pbrt-v4's
 //!   `DiffuseTransmissionBxDF` with kd), not weighted by Fresnel;
-//! - `specular` ks: reflection, a perfect mirror when `roughness` is 0, otherwise a GGX
-//!   microfacet lobe with α = `roughness`;
-//! - `transmission` kt with `ior`: smooth refraction when `roughness` is 0, otherwise GGX
-//!   microfacet refraction sharing the reflection's microfacets (a rough dielectric
-//!   interface, [`dielectric`]);
+//! - `ks`: reflection, a perfect mirror when `alphas` are 0, otherwise a GGX microfacet
+//!   lobe with those α;
+//! - `kt` with `ior`: smooth refraction when `alphas` are 0, otherwise GGX microfacet
+//!   refraction sharing the reflection's microfacets (a rough dielectric interface,
+//!   [`dielectric`]);
 //! - `fresnel`: ks is weighted by the dielectric Fresnel reflectance F, kt by 1 − F and kd by
 //!   (1 − F(θi))(1 − F(θo)) (a coated surface), which makes ks = kt = 1 a glass (rough when
-//!   `roughness` > 0, F then taken at each microfacet);
+//!   α > 0, F then taken at each microfacet);
 //! - `thin`: a thin dielectric sheet (pbrt-v4's `ThinDielectricBxDF`): kt passes light
 //!   straight through, F becomes the sheet's reflectance R (both faces, light bouncing between
-//!   them summed), seen alike from both sides, and the lobes are smooth whatever `roughness`;
+//!   them summed), seen alike from both sides, and the lobes are smooth whatever α;
 //! - `conductor` (η, k): ks is weighted by the complex Fresnel reflectance of the metal per
 //!   channel (pbrt-v4's `ConductorBxDF`), smooth or GGX, isotropic or anisotropic;
-//! - `coating`: a dielectric coat over the diffuse kd or the conductor, light bouncing
-//!   between the two included ([`layered`], pbrt-v4's `LayeredBxDF`), in place of the lobes
-//!   above for evaluation and sampling; f and the density are estimates;
-//! - `brdf`: a tabulated reflectance ([`TabulatedBrdf`]) in place of all the lobes above,
-//!   importance-sampled from the table mixed with the cosine.
+//!
+//! and two BSDFs in place of the lobes: a [`Coating`] over the diffuse kd or the conductor,
+//! light bouncing between the two included ([`Bsdf::coated`]; [`layered`], pbrt-v4's
+//! `LayeredBxDF`; f and the density are estimates), and a tabulated reflectance
+//! ([`Bsdf::tabulated`], [`TabulatedBrdf`]), importance-sampled from the table mixed with
+//! the cosine.
 //!
 //! Every BSDF can evaluate, sample, and give the density of its samples, for both transport
 //! directions (Veach's thesis, ch. 5): in [`Transport::Radiance`] refraction scales radiance
@@ -32,11 +33,14 @@ mod dielectric;
 mod layer;
 mod layered;
 mod microfacet;
+mod parameters;
+mod tabulated;
 
-#[cfg(test)]
-pub use crate::scene::tabulated::synthetic_merl;
-pub use crate::scene::tabulated::TabulatedBrdf;
 pub use microfacet::Ggx;
+pub use parameters::{Coating, Conductor, Lobes};
+#[cfg(test)]
+pub use tabulated::synthetic_merl;
+pub use tabulated::TabulatedBrdf;
 
 use dielectric::RoughInterface;
 use layered::Layered;
@@ -46,8 +50,6 @@ use crate::math::optics::{
 };
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::math::{frame, luminance, Rgb, Rng, Vec2, Vec3};
-use crate::scene::{Coating, Conductor};
-use crate::scene::{Material, SurfacePoint};
 use std::f32::consts::FRAC_1_PI;
 
 /// Which quantity a path carries: radiance (paths from the camera) or importance (paths from
@@ -109,7 +111,7 @@ fn mirror(lo: Vec3) -> Vec3 {
 }
 
 /// Lobe selection probabilities for a given outgoing direction.
-struct Lobes {
+struct LobeShares {
     diffuse: f32,
     diffuse_transmit: f32,
     specular: f32,
@@ -124,68 +126,61 @@ struct Lobes {
 }
 
 impl<'a> Bsdf<'a> {
-    /// The BSDF of `m` at `sp`. Opaque surfaces reflect on both sides: when `wo` (the
-    /// direction the path arrived from, pointing away) is behind the geometric normal, the
-    /// frame is flipped to face it. Transmissive surfaces keep their orientation, which tells
-    /// inside from outside.
-    pub fn new(m: &'a Material, sp: &SurfacePoint, wo: Vec3) -> Bsdf<'a> {
-        let transmissive = m.transmission.max_element() > 0.0;
-        let (mut n, mut ng) = (sp.ns, sp.ng);
+    /// The shading and geometric normals a BSDF faces for a path arriving from `wo`
+    /// (pointing away): opaque surfaces reflect on both sides, so when `wo` is behind the
+    /// geometric normal both normals are flipped to face it; transmissive surfaces keep
+    /// their orientation, which tells inside from outside.
+    pub fn facing(transmissive: bool, ns: Vec3, ng: Vec3, wo: Vec3) -> (Vec3, Vec3) {
         if !transmissive && wo.dot(ng) < 0.0 {
-            n = -n;
-            ng = -ng;
-        }
-        match &m.brdf {
-            Some(table) => Bsdf::tabulated(table, n, ng),
-            None => Bsdf {
-                coating: m.coating.as_ref(),
-                ..Bsdf::of_lobes(m, sp, n, ng)
-            },
+            (-ns, -ng)
+        } else {
+            (ns, ng)
         }
     }
 
-    /// The BSDF of `m`'s lobes (its table and coat, if any, aside) at `sp`, with shading normal `n`
-    /// and geometric normal `ng` as [`Bsdf::new`] orients them.
-    pub(crate) fn of_lobes(m: &Material, sp: &SurfacePoint, n: Vec3, ng: Vec3) -> Bsdf<'a> {
-        let transmissive = m.transmission.max_element() > 0.0;
+    /// The BSDF of lobes `l` with shading normal `n` and geometric normal `ng` as
+    /// [`Bsdf::facing`] orients them.
+    pub fn of_lobes(l: &Lobes, n: Vec3, ng: Vec3) -> Bsdf<'a> {
+        let transmissive = l.kt.max_element() > 0.0;
         let (t, b) = frame(n);
-        let (ax, ay) = match &m.roughness_map {
-            Some(map) => map.alphas(sp.p, sp.uv, sp.ng),
-            None => m.alphas(),
-        };
-        let (ax, ay) = (ax.clamp(0.0, 1.0), ay.clamp(0.0, 1.0));
-        let lambertian = !m.fresnel
-            && m.specular.max_element() <= 0.0
-            && m.transmission.max_element() <= 0.0
-            && m.diffuse_transmission.max_value().max_element() <= 0.0;
+        let (ax, ay) = (l.alphas.0.clamp(0.0, 1.0), l.alphas.1.clamp(0.0, 1.0));
         // Below this α the lobe is numerically a mirror; a thin sheet is smooth.
-        let ggx = (ax.max(ay) >= 1e-3 && !m.thin).then_some(Ggx {
+        let ggx = (ax.max(ay) >= 1e-3 && !l.thin).then_some(Ggx {
             alpha_x: ax,
             alpha_y: ay,
         });
         // An index-matched interface refracts every microfacet's light straight on: a delta
         // whatever the roughness.
         let rough_transmission =
-            transmissive && ggx.is_some() && m.conductor.is_none() && m.ior != 1.0;
-        let kd = m.diffuse.eval(sp.p, sp.uv, sp.ng);
+            transmissive && ggx.is_some() && l.conductor.is_none() && l.ior != 1.0;
         Bsdf {
             t,
             b,
             n,
             ng,
-            kd,
-            kdt: m.diffuse_transmission.eval(sp.p, sp.uv, sp.ng),
-            ks: m.specular_at(sp.p, sp.uv, sp.ng),
-            kt: m.transmission,
-            ior: m.ior,
+            kd: l.kd,
+            kdt: l.kdt,
+            ks: l.ks,
+            kt: l.kt,
+            ior: l.ior,
             ggx,
-            fresnel: m.fresnel,
-            conductor: m.conductor_at(sp.p, sp.uv, sp.ng),
+            fresnel: l.fresnel,
+            conductor: l.conductor,
             rough_transmission,
-            thin: m.thin,
-            lambertian,
+            thin: l.thin,
+            lambertian: l.lambertian,
             table: None,
             coating: None,
+        }
+    }
+
+    /// The BSDF of `coating` over the base lobes `l` (its diffuse kd, or its conductor with
+    /// its roughness): evaluated and sampled as the layers, while the lobes stay what the
+    /// approximating techniques read.
+    pub fn coated(l: &Lobes, coating: &'a Coating, n: Vec3, ng: Vec3) -> Bsdf<'a> {
+        Bsdf {
+            coating: Some(coating),
+            ..Bsdf::of_lobes(l, n, ng)
         }
     }
 
@@ -275,7 +270,7 @@ impl<'a> Bsdf<'a> {
         }
     }
 
-    fn lobes(&self, lo: Vec3) -> Lobes {
+    fn lobes(&self, lo: Vec3) -> LobeShares {
         let eta = self.eta_leaving(lo);
         let f = if self.fresnel && self.thin {
             fresnel_thin_dielectric(lo.z, self.ior)
@@ -304,7 +299,7 @@ impl<'a> Bsdf<'a> {
         let diffuse_transmit = luminance(self.kdt);
         let total = diffuse + diffuse_transmit + specular + transmit;
         let norm = if total > 0.0 { 1.0 / total } else { 0.0 };
-        Lobes {
+        LobeShares {
             diffuse: diffuse * norm,
             diffuse_transmit: diffuse_transmit * norm,
             specular: specular * norm,

@@ -142,7 +142,7 @@ fn triangle_boxes(p: [Vec3; 3], size: f32, depth: u32, out: &mut Vec<Aabb>) {
 fn material_text(scene: &Scene, i: usize, depth: usize) -> String {
     let m = &scene.materials[i];
     let mut text = format!("{m:?}");
-    if let Some(mix) = m.mix.as_ref().filter(|_| depth > 0) {
+    if let Some(mix) = m.mix().filter(|_| depth > 0) {
         for j in mix.materials {
             text += &material_text(scene, j, depth - 1);
         }

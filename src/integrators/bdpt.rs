@@ -277,7 +277,7 @@ fn random_walk<'a>(
         };
         let m = &ctx.scene.materials[sp.material];
         let wo = -ray.dir;
-        let bsdf = Bsdf::new(m, &sp, wo);
+        let bsdf = m.bsdf(&sp, wo);
         let mut v = Vertex::new(Kind::Surface, sp.spot(), beta);
         v.bsdf = Some(bsdf);
         if m.is_emissive() {

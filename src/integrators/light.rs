@@ -193,7 +193,7 @@ pub(crate) fn walk(
         depth += 1;
         let m = &ctx.scene.materials[sp.material];
         let wo = -ray.dir;
-        let bsdf = Bsdf::new(m, &sp, wo);
+        let bsdf = m.bsdf(&sp, wo);
         vertex(&sp, &bsdf, wo, beta, stats, sampler);
         let u = sampler.next_1d();
         let Some(bs) = bsdf.sample(wo, u, sampler.next_2d(), Transport::Importance) else {

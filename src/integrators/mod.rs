@@ -42,7 +42,7 @@ impl<'a> Context<'a> {
             accel,
             area_lights,
             lights,
-            mixes: scene.materials.iter().any(|m| m.mix.is_some()),
+            mixes: scene.materials.iter().any(|m| m.mix().is_some()),
             details: scene.materials.iter().any(|m| m.normal_detail.is_some()),
         }
     }

@@ -140,7 +140,7 @@ impl MonteCarlo for PathTracer {
                 break;
             }
             depth += 1;
-            let bsdf = Bsdf::new(m, &sp, wo);
+            let bsdf = m.bsdf(&sp, wo);
             let u_choice = sampler.next_2d();
             let u_light = sampler.next_2d();
             if bsdf.has_non_delta() {

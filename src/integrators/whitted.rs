@@ -89,7 +89,8 @@ impl RayTree<'_> {
 
     fn shade(&mut self, ray: &Ray, sp: &SurfacePoint, depth: u32, weight: f32) -> Rgb {
         let ctx = self.ctx;
-        let m = &ctx.scene.materials[sp.material];
+        let material = &ctx.scene.materials[sp.material];
+        let m = material.approximation();
         let d = ray.dir.normalize();
         // The paper's convention: N points to the side the ray comes from, and the index of
         // refraction is inverted when the ray leaves the medium.
@@ -103,13 +104,13 @@ impl RayTree<'_> {
         let view = -d;
 
         let mut color = Rgb::ZERO;
-        if entering || m.two_sided_emission {
+        if entering || material.two_sided_emission {
             // Emitters face their geometric normal unless two-sided.
-            color += m.emission_at(sp.p, sp.uv, sp.ng);
+            color += material.emission_at(sp.p, sp.uv, sp.ng);
         }
         let kd = m.diffuse.eval(sp.p, sp.uv, sp.ng);
         color += m.ambient.unwrap_or(kd) * ctx.scene.ambient;
-        color += self.direct(m, kd, sp, ng, n, view);
+        color += self.direct(material, kd, sp, ng, n, view);
 
         if depth + 1 >= self.options.max_depth {
             return color;
@@ -166,7 +167,7 @@ impl RayTree<'_> {
     /// kdt/π·|N·L|·E of the lights behind it, with shadow rays.
     fn direct(
         &mut self,
-        m: &Material,
+        material: &Material,
         kd: Rgb,
         sp: &SurfacePoint,
         ng: Vec3,
@@ -174,10 +175,11 @@ impl RayTree<'_> {
         view: Vec3,
     ) -> Rgb {
         let ctx = self.ctx;
+        let m = material.approximation();
         let p = sp.p;
         let at = sp.spot();
         // A tabulated reflectance takes the diffuse term's place: f toward the view.
-        let table = m.brdf.as_ref().map(|t| Bsdf::tabulated(t, n, ng));
+        let table = material.model().table().map(|t| Bsdf::tabulated(t, n, ng));
         let reflect = |wi: Vec3| match &table {
             Some(b) => b.eval(view, wi, Transport::Radiance) / n.dot(wi),
             None => kd * FRAC_1_PI,
@@ -343,7 +345,7 @@ impl RayTree<'_> {
             if !m.is_transmissive() {
                 return Rgb::ZERO;
             }
-            t *= m.transmission;
+            t *= m.approximation().transmission;
             if t.max_element() < self.options.cutoff {
                 return Rgb::ZERO;
             }

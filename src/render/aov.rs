@@ -5,7 +5,6 @@
 
 use super::driver::drive;
 use super::{place, Tile, MERGE_WINDOW};
-use crate::bsdf::Bsdf;
 use crate::control::Control;
 use crate::image::filter::Filter;
 use crate::image::Image;
@@ -80,7 +79,7 @@ pub(crate) fn render_aovs(
                         .at_time(s.shutter_time());
                         if let Some(sp) = ctx.intersect(&ray, &mut stats) {
                             let m = &ctx.scene.materials[sp.material];
-                            let bsdf = Bsdf::new(m, &sp, -ray.dir);
+                            let bsdf = m.bsdf(&sp, -ray.dir);
                             let mut n = sp.ns;
                             if n.dot(ray.dir) > 0.0 {
                                 n = -n;

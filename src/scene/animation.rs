@@ -601,6 +601,7 @@ radius = 1
         let s = a.scene_at(1).unwrap();
         let m = &s.materials[s.shapes[0].material];
         let kd = m
+            .approximation()
             .diffuse
             .eval(Vec3::ZERO, crate::math::Vec2::ZERO, Vec3::ZERO);
         assert!(

@@ -19,8 +19,8 @@ use super::toml::schema::{
     TextureTable, TransformOp, UvCheckerDesc, WhittedDesc, WorldDesc, V3,
 };
 use super::{
-    Alpha, Camera, Coating, Geometry, Light, Material, NormalDetail, Projection, RenderSettings,
-    Scene, Texture,
+    Alpha, Camera, Classic, Coating, Geometry, Light, Material, NormalDetail, Projection,
+    RenderSettings, Scene, Surface, Texture,
 };
 use crate::image::filter::Filter;
 use crate::settings::{AntiAliasing, NetworkBuilder, NetworkOrder};
@@ -330,7 +330,7 @@ fn render(s: &RenderSettings) -> Option<RenderDesc> {
 }
 
 fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
-    if let Some(mix) = &m.mix {
+    if let Some(mix) = m.mix() {
         // Its other fields follow from its two materials.
         let amount = match &mix.amount_map {
             Some(t) => diffuse(t, refs),
@@ -344,7 +344,7 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
             ..MaterialDesc::default()
         };
     }
-    if let Some(table) = &m.brdf {
+    if let Some(table) = m.model().table() {
         return MaterialDesc {
             brdf: Some(refs.to(&table.file)),
             emission: Some(varying(&m.emission_map, m.emission, refs)),
@@ -352,34 +352,38 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
             ..MaterialDesc::default()
         };
     }
-    if let Some(c) = &m.coating {
-        return coated(m, c, refs);
+    // Every other kind is written as its classic terms, which read back as the same lobes.
+    let c = m.approximation();
+    match &m.surface {
+        Surface::CoatedDiffuse(s) => return coated(m, c, s.coating(), refs),
+        Surface::CoatedConductor(s) => return coated(m, c, s.coating(), refs),
+        _ => {}
     }
     MaterialDesc {
-        diffuse: Some(diffuse(&m.diffuse, refs)),
-        ambient: m.ambient.map(Splat3),
-        specular: Some(varying(&m.specular_map, m.specular, refs)),
-        transmission: Some(Splat3(m.transmission)),
-        diffuse_transmission: (m.diffuse_transmission
+        diffuse: Some(diffuse(&c.diffuse, refs)),
+        ambient: c.ambient.map(Splat3),
+        specular: Some(varying(&c.specular_map, c.specular, refs)),
+        transmission: Some(Splat3(c.transmission)),
+        diffuse_transmission: (c.diffuse_transmission
             != Texture::Constant(crate::math::Vec3::ZERO))
-        .then(|| diffuse(&m.diffuse_transmission, refs)),
-        ior: Some(m.ior),
-        phong_exponent: Some(m.phong_exponent),
-        roughness: Some(match (&m.roughness_map, m.roughness_v) {
+        .then(|| diffuse(&c.diffuse_transmission, refs)),
+        ior: Some(c.ior),
+        phong_exponent: Some(c.phong_exponent),
+        roughness: Some(match (&c.roughness_map, c.roughness_v) {
             (Some(map), _) => match diffuse(&map.u, refs) {
                 DiffuseDesc::Texture(t) => RoughnessDesc::Texture(Box::new(t)),
                 DiffuseDesc::Colour(c) => RoughnessDesc::Isotropic(c.x),
             },
-            (None, Some(v)) => RoughnessDesc::Anisotropic(m.roughness, v),
-            (None, None) => RoughnessDesc::Isotropic(m.roughness),
+            (None, Some(v)) => RoughnessDesc::Anisotropic(c.roughness, v),
+            (None, None) => RoughnessDesc::Isotropic(c.roughness),
         }),
-        remap_roughness: m
+        remap_roughness: c
             .roughness_map
             .as_ref()
             .and_then(|r| r.remap.then_some(true)),
-        fresnel: Some(m.fresnel),
-        thin: m.thin.then_some(true),
-        conductor: conductor(m, refs),
+        fresnel: Some(c.fresnel),
+        thin: c.thin.then_some(true),
+        conductor: conductor(c, refs),
         emission: Some(varying(&m.emission_map, m.emission, refs)),
         two_sided_emission: m.two_sided_emission.then_some(true),
         mix: None,
@@ -392,18 +396,20 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
 
 /// A coated material: the base and the coat; the keys that follow from the coat (ior,
 /// fresnel, a diffuse base's roughness) are left out.
-fn coated(m: &Material, c: &Coating, refs: Refs) -> MaterialDesc {
+fn coated(m: &Material, base: &Classic, c: &Coating, refs: Refs) -> MaterialDesc {
     let roughness = |a: f32, v: Option<f32>| match v {
         Some(v) => RoughnessDesc::Anisotropic(a, v),
         None => RoughnessDesc::Isotropic(a),
     };
     MaterialDesc {
-        diffuse: Some(diffuse(&m.diffuse, refs)),
-        ambient: m.ambient.map(Splat3),
-        specular: Some(varying(&m.specular_map, m.specular, refs)),
-        phong_exponent: Some(m.phong_exponent),
-        roughness: m.conductor.map(|_| roughness(m.roughness, m.roughness_v)),
-        conductor: conductor(m, refs),
+        diffuse: Some(diffuse(&base.diffuse, refs)),
+        ambient: base.ambient.map(Splat3),
+        specular: Some(varying(&base.specular_map, base.specular, refs)),
+        phong_exponent: Some(base.phong_exponent),
+        roughness: base
+            .conductor
+            .map(|_| roughness(base.roughness, base.roughness_v)),
+        conductor: conductor(base, refs),
         emission: Some(varying(&m.emission_map, m.emission, refs)),
         two_sided_emission: m.two_sided_emission.then_some(true),
         normal_map: normal_map(m, refs),
@@ -438,7 +444,7 @@ fn bump(m: &Material, refs: Refs) -> Option<DiffuseDesc> {
 }
 
 /// A metal's index, or its varying reflectance.
-fn conductor(m: &Material, refs: Refs) -> Option<ConductorDesc> {
+fn conductor(m: &Classic, refs: Refs) -> Option<ConductorDesc> {
     if let Some(r) = &m.reflectance_map {
         return Some(ConductorDesc::Reflectance(diffuse(r, refs)));
     }

@@ -7,7 +7,7 @@
 //! tobj reports errors without positions, and panics on some malformed MTL colours, so the
 //! text is checked line by line here first; tobj then only sees input it handles.
 
-use super::{Material, Texture, TriangleMesh};
+use super::{Classic, Material, Texture, TriangleMesh};
 use crate::math::{Rgb, Vec2, Vec3};
 use crate::Error;
 use std::cell::RefCell;
@@ -340,7 +340,7 @@ fn convert(m: &tobj::Material, mtl: &Path) -> crate::Result<Material> {
             _ => Err(fail(key, format!("needs 3 numbers, got `{v}`"))),
         }
     };
-    let d = Material::default();
+    let d = Classic::default();
     let diffuse = colour("Kd", m.diffuse, d.diffuse.max_value())?;
     let ambient = match m.ambient {
         None => None,
@@ -383,31 +383,16 @@ fn convert(m: &tobj::Material, mtl: &Path) -> crate::Result<Material> {
         Some(_) if transmission.max_element() <= 0.0 => d.ior,
         Some(n) => return Err(fail("Ni", format!("must be positive, got {n}"))),
     };
-    Ok(Material {
-        name: m.name.clone(),
+    let classic = Classic {
         diffuse: Texture::Constant(diffuse),
         ambient,
         specular,
         transmission,
-        diffuse_transmission: Texture::Constant(Vec3::ZERO),
         ior,
         phong_exponent,
-        roughness_v: None,
-        conductor: None,
-        reflectance_map: None,
-        specular_map: None,
-        emission_map: None,
-        two_sided_emission: false,
-        roughness: 0.0,
-        fresnel: false,
-        thin: false,
-        brdf: None,
-        coating: None,
-        mix: None,
-        emission,
-        roughness_map: None,
-        normal_detail: None,
-    })
+        ..Classic::blank()
+    };
+    Ok(Material::classic(m.name.clone(), classic).emitting(emission))
 }
 
 /// A reader over text that knows which line tobj was reading when it failed.
@@ -499,16 +484,21 @@ mod tests {
             ),
         );
         let data = load(&obj, true).unwrap();
-        let [glass, veil, lamp] = &data.materials[..] else {
+        let [glass_m, veil_m, lamp_m] = &data.materials[..] else {
             panic!("{:?}", data.materials)
         };
+        let (glass, veil, lamp) = (
+            glass_m.approximation(),
+            veil_m.approximation(),
+            lamp_m.approximation(),
+        );
         assert_eq!(glass.diffuse, Texture::Constant(Vec3::splat(0.1)));
         assert_eq!(glass.specular, Vec3::splat(0.2));
         assert_eq!(glass.transmission, Vec3::new(0.9, 0.8, 0.7));
         assert_eq!((glass.ior, glass.phong_exponent), (1.33, 100.0));
         // Tf is ignored for a non-refracting illum; 1 - d is the transmission.
         assert_eq!(veil.transmission, Vec3::splat(0.75));
-        assert_eq!(lamp.emission, Vec3::new(5.0, 4.0, 3.0));
+        assert_eq!(lamp_m.emission, Vec3::new(5.0, 4.0, 3.0));
         // Exporters' `Ni 0` on an opaque material leaves the default.
         assert_eq!(lamp.ior, 1.5);
         assert_eq!(lamp.ambient, Some(Vec3::ZERO));

@@ -4,7 +4,7 @@
 
 use crate::bsdf::{Bsdf, Transport};
 use crate::math::{Rgb, Rng, Vec2, Vec3};
-use crate::scene::{Conductor, Material, SurfacePoint, Texture};
+use crate::scene::{Classic, Coating, Conductor, Material, Surface, SurfacePoint, Texture};
 
 const THETA_BINS: usize = 20;
 const PHI_BINS: usize = 40;
@@ -74,7 +74,7 @@ pub(super) fn check_at(name: &str, m: &Material, wo: Vec3, sub: usize) {
 /// [`check_at`] in transport `mode`.
 pub(super) fn check_in(name: &str, m: &Material, wo: Vec3, sub: usize, mode: Transport) {
     let wo = wo.normalize();
-    let bsdf = Bsdf::new(m, &point(), wo);
+    let bsdf = m.bsdf(&point(), wo);
     let n = 400_000;
     let mut counts = vec![0.0f64; THETA_BINS * PHI_BINS];
     let mut rng = Rng::for_key(17, &[name.len() as u64]);
@@ -150,13 +150,35 @@ pub(super) fn check_in(name: &str, m: &Material, wo: Vec3, sub: usize, mode: Tra
     );
 }
 
-pub(super) fn material(f: impl FnOnce(&mut Material)) -> Material {
-    let mut m = Material {
+pub(super) fn material(f: impl FnOnce(&mut Classic)) -> Material {
+    Material::classic("", classic(f))
+}
+
+/// The classic terms of `m`, a classic material (as [`material`] makes), to change.
+pub(super) fn classic_mut(m: &mut Material) -> &mut Classic {
+    match &mut m.surface {
+        Surface::Classic(c) => c,
+        other => panic!("not a classic material: {other:?}"),
+    }
+}
+
+/// The coat of `m`, if it is a coated material.
+pub(super) fn coating_of(m: &Material) -> Option<Coating> {
+    match &m.surface {
+        Surface::CoatedDiffuse(c) => Some(*c.coating()),
+        Surface::CoatedConductor(c) => Some(*c.coating()),
+        _ => None,
+    }
+}
+
+/// The classic terms [`material`] takes: black, then set by `f`.
+pub(super) fn classic(f: impl FnOnce(&mut Classic)) -> Classic {
+    let mut c = Classic {
         diffuse: Texture::Constant(Rgb::ZERO),
-        ..Material::default()
+        ..Classic::default()
     };
-    f(&mut m);
-    m
+    f(&mut c);
+    c
 }
 
 pub(super) fn directions() -> [Vec3; 3] {
@@ -220,7 +242,7 @@ fn smooth_conductor_weight_is_complex_fresnel() {
     let cu = Conductor::named("Cu").unwrap();
     for wo in directions() {
         let wo = wo.normalize();
-        let bsdf = Bsdf::new(&m, &point(), wo);
+        let bsdf = m.bsdf(&point(), wo);
         assert!(!bsdf.has_non_delta());
         for mode in [Transport::Radiance, Transport::Importance] {
             let s = bsdf.sample(wo, 0.5, Vec2::new(0.3, 0.7), mode).unwrap();
@@ -278,10 +300,10 @@ fn glossy_share_is_the_ggx_lobe() {
     for wo in directions() {
         let wo = wo.normalize();
         let mode = Transport::Radiance;
-        let b = Bsdf::new(&metal, &point(), wo);
+        let b = metal.bsdf(&point(), wo);
         assert!(b.has_glossy());
         assert_eq!(b.eval_glossy(wo, wi, mode), b.eval(wo, wi, mode));
-        let b = Bsdf::new(&plastic, &point(), wo);
+        let b = plastic.bsdf(&point(), wo);
         assert!(b.has_glossy());
         let diffuse = b.eval(wo, wi, mode) - b.eval_glossy(wo, wi, mode);
         let want = kd * (std::f32::consts::FRAC_1_PI * wi.z);
@@ -291,7 +313,7 @@ fn glossy_share_is_the_ggx_lobe() {
         );
         assert!(b.eval_glossy(wo, wi, mode).min_element() > 0.0);
         for m in [&mirror_mix, &lambert] {
-            let b = Bsdf::new(m, &point(), wo);
+            let b = m.bsdf(&point(), wo);
             assert!(!b.has_glossy());
             assert_eq!(b.eval_glossy(wo, wi, mode), Rgb::ZERO);
         }
@@ -311,7 +333,7 @@ fn glass_weights() {
     });
     for wo in [Vec3::new(0.3, 0.0, 0.95), Vec3::new(0.3, 0.0, -0.95)] {
         let wo = wo.normalize();
-        let bsdf = Bsdf::new(&glass, &point(), wo);
+        let bsdf = glass.bsdf(&point(), wo);
         let eta = if wo.z > 0.0 { 1.0 / 1.5 } else { 1.5 };
         let f = crate::math::optics::fresnel_dielectric(wo.z.abs(), eta);
         let mut rng = Rng::for_key(3, &[]);
@@ -369,7 +391,7 @@ fn brdfs_are_reciprocal() {
         for _ in 0..1000 {
             let a = crate::math::warp::cosine_hemisphere(Vec2::new(rng.uniform(), rng.uniform()));
             let b = crate::math::warp::cosine_hemisphere(Vec2::new(rng.uniform(), rng.uniform()));
-            let bsdf = Bsdf::new(&m, &point(), a);
+            let bsdf = m.bsdf(&point(), a);
             let fab = bsdf.eval(a, b, Transport::Radiance) / b.z;
             let fba = bsdf.eval(b, a, Transport::Radiance) / a.z;
             if fab.max_element() > 0.0 {
@@ -390,7 +412,7 @@ fn brdfs_are_reciprocal() {
 fn anisotropic_lobe_follows_the_larger_alpha() {
     let m = copper(0.1, 0.5);
     let wo = Vec3::Z;
-    let bsdf = Bsdf::new(&m, &point(), wo);
+    let bsdf = m.bsdf(&point(), wo);
     let tilt = |x: f32, y: f32| Vec3::new(x, y, 1.0).normalize();
     let along_x = bsdf.eval(wo, tilt(0.3, 0.0), Transport::Radiance).x;
     let along_y = bsdf.eval(wo, tilt(0.0, 0.3), Transport::Radiance).x;
@@ -435,7 +457,7 @@ fn diffuse_transmission_values_and_albedo() {
     let mut rng = Rng::for_key(4, &[]);
     for wo in directions() {
         for wo in [wo.normalize(), -wo.normalize()] {
-            let bsdf = Bsdf::new(&m, &point(), wo);
+            let bsdf = m.bsdf(&point(), wo);
             assert!(bsdf.has_non_delta() && !bsdf.has_glossy());
             for _ in 0..100 {
                 let wi =
@@ -445,7 +467,7 @@ fn diffuse_transmission_values_and_albedo() {
                         let f = bsdf.eval(wo, wi, mode);
                         let want = k * (wi.z.abs() / pi);
                         assert!((f - want).abs().max_element() < 1e-6, "{f} vs {want}");
-                        let back = Bsdf::new(&m, &point(), wi).eval(wi, wo, mode);
+                        let back = m.bsdf(&point(), wi).eval(wi, wo, mode);
                         assert!((back / wo.z.abs() - f / wi.z.abs()).abs().max_element() < 1e-5);
                     }
                 }

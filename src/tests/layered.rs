@@ -4,28 +4,73 @@
 //! smooth metal, reciprocity, and sampling that agrees with evaluation.
 
 use super::bsdf::point;
-use crate::bsdf::{Bsdf, Transport};
+use crate::bsdf::Transport;
 use crate::math::optics::{fresnel_dielectric, fresnel_dielectric_mean};
 use crate::math::{Rgb, Rng, Vec2, Vec3};
-use crate::scene::{Coating, Conductor, Material, Texture};
+use crate::scene::materials::{CoatedConductor, CoatedDiffuse, SurfaceModel};
+use crate::scene::{Classic, Coating, Conductor, Material, Surface, Texture};
 use std::f64::consts::{PI, TAU};
 
 /// A coat of index 1.5 and roughness `alpha` over a Lambertian base `kd`.
 fn coated_diffuse(kd: f32, alpha: f32, thickness: f32) -> Material {
-    Material {
+    let (base, coat) = coated_parts(kd, alpha, thickness);
+    Material::new("", Surface::CoatedDiffuse(CoatedDiffuse::new(base, coat)))
+}
+
+/// The base and the coat of [`coated_diffuse`].
+fn coated_parts(kd: f32, alpha: f32, thickness: f32) -> (Classic, Coating) {
+    let base = Classic {
         diffuse: Texture::Constant(Rgb::splat(kd)),
         specular: Rgb::ONE,
         fresnel: true,
         ior: 1.5,
         roughness: alpha,
-        coating: Some(Coating {
-            roughness: alpha,
-            thickness,
-            max_depth: 100,
-            ..Coating::default()
-        }),
-        ..Material::default()
+        ..Classic::default()
+    };
+    let coat = Coating {
+        roughness: alpha,
+        thickness,
+        max_depth: 100,
+        ..Coating::default()
+    };
+    (base, coat)
+}
+
+/// [`coated_diffuse`] with a black base (`kd` 0) over the metal `metal` of roughness
+/// `metal_alpha` instead.
+fn coated_metal(metal: &str, metal_alpha: f32, alpha: f32, thickness: f32) -> Material {
+    let (mut base, coat) = coated_parts(0.0, alpha, thickness);
+    base.conductor = Conductor::named(metal);
+    base.roughness = metal_alpha;
+    Material::new(
+        "",
+        Surface::CoatedConductor(CoatedConductor::new(base, coat)),
+    )
+}
+
+/// The coat of a coated material.
+fn coat_of(m: &Material) -> &Coating {
+    match &m.surface {
+        Surface::CoatedDiffuse(c) => c.coating(),
+        Surface::CoatedConductor(c) => c.coating(),
+        other => panic!("not a coated material: {other:?}"),
     }
+}
+
+/// The coated material `m` with its coat changed by `f`.
+fn recoat(m: Material, f: impl FnOnce(&mut Coating)) -> Material {
+    let mut coat = *coat_of(&m);
+    f(&mut coat);
+    let surface = match &m.surface {
+        Surface::CoatedDiffuse(c) => {
+            Surface::CoatedDiffuse(CoatedDiffuse::new(c.approximation().clone(), coat))
+        }
+        Surface::CoatedConductor(c) => {
+            Surface::CoatedConductor(CoatedConductor::new(c.approximation().clone(), coat))
+        }
+        _ => unreachable!(),
+    };
+    Material { surface, ..m }
 }
 
 fn direction(cos: f32) -> Vec3 {
@@ -41,7 +86,7 @@ fn sampled_mean(
     mode: Transport,
     g: &dyn Fn(Vec3) -> f32,
 ) -> (Rgb, Rgb) {
-    let bsdf = Bsdf::new(m, &point(), wo);
+    let bsdf = m.bsdf(&point(), wo);
     let mut rng = Rng::for_key(0x6c61, &[wo.z.to_bits() as u64]);
     // f64 sums: f32 ones drift by 1e-3 over 1e5 terms.
     let (mut sum, mut sum2) = ([0.0f64; 3], [0.0f64; 3]);
@@ -69,7 +114,7 @@ fn sampled_mean(
 /// ∫ eval(wo, wi)·g(wi) dωi over the upper hemisphere by the midpoint rule in (cos θ, φ),
 /// denser near the horizon-free pole: cos θ = 1 − t².
 fn integrated(m: &Material, wo: Vec3, n: usize, mode: Transport, g: &dyn Fn(Vec3) -> f32) -> Rgb {
-    let bsdf = Bsdf::new(m, &point(), wo);
+    let bsdf = m.bsdf(&point(), wo);
     let mut sum = [0.0f64; 3];
     for i in 0..n {
         let t = (i as f64 + 0.5) / n as f64;
@@ -180,8 +225,7 @@ fn plastic(rho: f64, wo: Vec3, wi: Vec3) -> f64 {
 #[test]
 fn smooth_coat_matches_the_plastic_closed_form() {
     for rho in [0.8f32, 0.3] {
-        let mut m = coated_diffuse(rho, 0.0, 0.0);
-        m.coating.as_mut().unwrap().samples = 65536;
+        let m = recoat(coated_diffuse(rho, 0.0, 0.0), |c| c.samples = 65536);
         for (co, ci, phi) in [
             (0.9f32, 0.8f32, 1.0f32),
             (0.5, 0.95, 2.5),
@@ -191,7 +235,7 @@ fn smooth_coat_matches_the_plastic_closed_form() {
             let wo = direction(co);
             let si = (1.0 - ci * ci).sqrt();
             let wi = Vec3::new(si * phi.cos(), si * phi.sin(), ci);
-            let bsdf = Bsdf::new(&m, &point(), wo);
+            let bsdf = m.bsdf(&point(), wo);
             let got = bsdf.eval(wo, wi, Transport::Radiance).x / ci;
             let want = plastic(rho as f64, wo, wi) as f32;
             eprintln!("ρ {rho} cos o {co} cos i {ci}: f {got:.5}, closed form {want:.5}");
@@ -207,20 +251,18 @@ fn smooth_coat_matches_the_plastic_closed_form() {
 /// a diffuse base and a rough coat over a rough metal.
 #[test]
 fn layered_brdf_is_reciprocal() {
-    let mut metal = coated_diffuse(0.0, 0.2, 0.01);
-    metal.conductor = Conductor::named("Au");
-    metal.roughness = 0.3;
-    for (name, mut m) in [
+    let metal = coated_metal("Au", 0.3, 0.2, 0.01);
+    for (name, m) in [
         ("smooth", coated_diffuse(0.6, 0.0, 0.01)),
         ("rough", coated_diffuse(0.6, 0.3, 0.01)),
         ("metal", metal),
     ] {
-        m.coating.as_mut().unwrap().samples = 65536;
+        let m = recoat(m, |c| c.samples = 65536);
         for (a, b) in [(0.9f32, 0.4f32), (0.6, 0.75), (0.3, 0.85)] {
             let wa = direction(a);
             let wb = Vec3::new(-(1.0 - b * b).sqrt() * 0.6, (1.0 - b * b).sqrt() * 0.8, b);
-            let fab = Bsdf::new(&m, &point(), wa).eval(wa, wb, Transport::Radiance) / wb.z;
-            let fba = Bsdf::new(&m, &point(), wb).eval(wb, wa, Transport::Radiance) / wa.z;
+            let fab = m.bsdf(&point(), wa).eval(wa, wb, Transport::Radiance) / wb.z;
+            let fba = m.bsdf(&point(), wb).eval(wb, wa, Transport::Radiance) / wa.z;
             eprintln!("{name} ({a}, {b}): {fab} vs {fba}");
             for c in 0..3 {
                 let (x, y) = (fab.to_array()[c], fba.to_array()[c]);
@@ -239,13 +281,11 @@ fn layered_brdf_is_reciprocal() {
 /// in both transport modes, with and without a scattering medium in the coat.
 #[test]
 fn sampling_agrees_with_evaluation() {
-    let mut metal = coated_diffuse(0.0, 0.25, 0.01);
-    metal.conductor = Conductor::named("Cu");
-    metal.roughness = 0.2;
+    let metal = coated_metal("Cu", 0.2, 0.25, 0.01);
     // A scattering medium in a thick rough coat.
-    let mut milky = coated_diffuse(0.5, 0.2, 0.5);
-    let c = milky.coating.as_mut().unwrap();
-    (c.albedo, c.g) = (Rgb::new(0.9, 0.6, 0.3), 0.4);
+    let milky = recoat(coated_diffuse(0.5, 0.2, 0.5), |c| {
+        (c.albedo, c.g) = (Rgb::new(0.9, 0.6, 0.3), 0.4);
+    });
     let tests: [(&str, &dyn Fn(Vec3) -> f32); 3] = [
         ("1", &|_| 1.0),
         ("z²", &|w: Vec3| w.z * w.z),
@@ -257,7 +297,7 @@ fn sampling_agrees_with_evaluation() {
         ("metal", metal),
         ("milky", milky),
     ] {
-        let smooth = m.coating.unwrap().roughness == 0.0;
+        let smooth = coat_of(&m).roughness == 0.0;
         for mode in [Transport::Radiance, Transport::Importance] {
             for cos in [0.85f32, 0.35] {
                 let wo = direction(cos);
@@ -289,14 +329,13 @@ fn sampling_agrees_with_evaluation() {
 #[test]
 fn smooth_coat_over_smooth_metal_is_a_geometric_series() {
     for t in [0.0f32, 0.01, 0.2] {
-        let mut m = coated_diffuse(0.0, 0.0, t);
-        m.conductor = Conductor::named("Au");
-        let gold = m.conductor.unwrap();
+        let m = coated_metal("Au", 0.0, 0.0, t);
+        let gold = m.approximation().conductor.unwrap();
         let under = Conductor {
             eta: gold.eta / 1.5,
             k: gold.k / 1.5,
         };
-        let bsdf = Bsdf::new(&m, &point(), Vec3::Z);
+        let bsdf = m.bsdf(&point(), Vec3::Z);
         assert!(!bsdf.has_non_delta());
         let f = fresnel_dielectric(1.0, 1.0 / 1.5);
         let rc = under.reflectance(1.0) * (-2.0 * t).exp();
@@ -322,8 +361,8 @@ fn estimates_are_deterministic() {
     let m = coated_diffuse(0.5, 0.3, 0.01);
     let wo = direction(0.7);
     let wi = Vec3::new(-0.3, 0.2, 0.93).normalize();
-    let a = Bsdf::new(&m, &point(), wo);
-    let b = Bsdf::new(&m, &point(), wo);
+    let a = m.bsdf(&point(), wo);
+    let b = m.bsdf(&point(), wo);
     assert_eq!(
         a.eval(wo, wi, Transport::Radiance),
         b.eval(wo, wi, Transport::Radiance)

@@ -1,8 +1,8 @@
 //! pbrt-v4's `coateddiffuse` read from a scene file and path traced in a white furnace: each
 //! pixel on the sphere shows the layered BSDF's directional albedo at its view angle.
 
-use super::bsdf::point;
-use crate::bsdf::{Bsdf, Transport};
+use super::bsdf::{coating_of, point};
+use crate::bsdf::Transport;
 use crate::image::filter::Filter;
 use crate::job::MonteCarloSettings;
 use crate::math::{Rng, Vec2, Vec3};
@@ -15,7 +15,7 @@ const SIZE: u32 = 40;
 /// channel), from 20000 samples of the BSDF.
 fn albedo(scene: &Scene, cos: f32) -> f64 {
     let wo = Vec3::new((1.0 - cos * cos).max(0.0).sqrt(), 0.0, cos);
-    let bsdf = Bsdf::new(&scene.materials[0], &point(), wo);
+    let bsdf = scene.materials[0].bsdf(&point(), wo);
     let mut rng = Rng::for_key(0x6675, &[cos.to_bits() as u64]);
     let n = 20_000;
     let mut sum = 0.0;
@@ -63,7 +63,7 @@ fn coated_diffuse_sphere_in_a_furnace_renders_its_albedo() {
     .unwrap();
     let scene = Scene::load(&file).unwrap();
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
-    assert!(scene.materials[0].coating.is_some());
+    assert!(coating_of(&scene.materials[0]).is_some());
     let mc = MonteCarloSettings {
         max_depth: 2,
         spp: 256,
@@ -142,25 +142,26 @@ fn coating_round_trips_through_a_scene_file() {
         [[shapes]]\ntype = \"sphere\"\ncenter = [2, 0, 0]\nmaterial = \"gold\"\n";
     let scene = crate::scene::toml::from_str(text, std::path::Path::new("coat.toml")).unwrap();
     let (lacquer, gold) = (&scene.materials[0], &scene.materials[1]);
-    let c = lacquer.coating.unwrap();
+    let c = coating_of(lacquer).unwrap();
     assert_eq!((c.ior, c.roughness, c.roughness_v), (1.4, 0.1, Some(0.2)));
     assert_eq!(
         (c.thickness, c.g, c.max_depth, c.samples),
         (0.05, 0.2, 20, 2)
     );
-    assert!(lacquer.fresnel && lacquer.ior == 1.4 && lacquer.roughness == 0.1);
-    assert_eq!(lacquer.specular, crate::math::Rgb::ONE);
-    let g = gold.coating.unwrap();
+    let (lc, gc) = (lacquer.approximation(), gold.approximation());
+    assert!(lc.fresnel && lc.ior == 1.4 && lc.roughness == 0.1);
+    assert_eq!(lc.specular, crate::math::Rgb::ONE);
+    let g = coating_of(gold).unwrap();
     assert_eq!((g.ior, g.roughness, g.thickness), (1.5, 0.05, 0.01));
-    assert!(!gold.fresnel && gold.roughness == 0.1 && gold.conductor.is_some());
+    assert!(!gc.fresnel && gc.roughness == 0.1 && gc.conductor.is_some());
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out.toml");
     crate::scene::convert::write_toml(&scene, &out).unwrap();
     let back = Scene::load(&out).unwrap();
-    assert_eq!(back.materials[0].coating, lacquer.coating);
-    assert_eq!(back.materials[1].coating, gold.coating);
-    assert_eq!(back.materials[0].fresnel, lacquer.fresnel);
-    assert_eq!(back.materials[1].roughness, gold.roughness);
+    assert_eq!(coating_of(&back.materials[0]), coating_of(lacquer));
+    assert_eq!(coating_of(&back.materials[1]), coating_of(gold));
+    assert_eq!(back.materials[0].approximation().fresnel, lc.fresnel);
+    assert_eq!(back.materials[1].approximation().roughness, gc.roughness);
 }
 
 /// pbrt-v4's `coatedconductor` reads as a coat over the metal without a warning: the
@@ -183,14 +184,14 @@ fn pbrt_coated_conductor_is_a_coat_over_the_metal() {
     .unwrap();
     let scene = Scene::load(&file).unwrap();
     assert!(scene.warnings.is_empty(), "{:?}", scene.warnings);
-    let m = &scene.materials[0];
-    let c = m.coating.unwrap();
+    let m = scene.materials[0].approximation();
+    let c = coating_of(&scene.materials[0]).unwrap();
     assert!((c.roughness - 0.2).abs() < 1e-6 && c.ior == 1.4 && c.thickness == 0.02);
     assert_eq!((c.max_depth, c.samples, c.g), (5, 3, 0.5));
     assert_eq!(c.albedo, crate::math::Rgb::new(0.1, 0.2, 0.3));
     assert!((m.roughness - 0.3).abs() < 1e-6 && !m.fresnel);
     assert_eq!(m.conductor, crate::scene::Conductor::named("Au"));
-    let r = scene.materials[1].specular_at_normal();
+    let r = scene.materials[1].approximation().specular_at_normal();
     assert!(
         (r - crate::math::Rgb::new(0.9, 0.5, 0.2))
             .abs()
@@ -199,7 +200,7 @@ fn pbrt_coated_conductor_is_a_coat_over_the_metal() {
         "{r}"
     );
     assert_eq!(
-        scene.materials[1].coating.unwrap(),
+        coating_of(&scene.materials[1]).unwrap(),
         crate::scene::Coating::default()
     );
 }

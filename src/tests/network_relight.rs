@@ -2,6 +2,7 @@
 //! emissive material, a distribution warm-started from it for other reflectances, and a
 //! reflectance series relighting one material with no distribution.
 
+use super::bsdf::classic_mut;
 use super::network_common::{build, params, scene};
 use super::network_scenes::{wall, CAMERA};
 use crate::integrators::illumination_network::distribute::{distribute, DistributeOptions};
@@ -104,7 +105,8 @@ fn light_basis_superposes_per_material() {
     );
     // Other reflectances: the basis refuses.
     let mut grey = s.clone();
-    grey.materials[index("m")].diffuse = crate::scene::Texture::Constant(Rgb::splat(0.2));
+    classic_mut(&mut grey.materials[index("m")]).diffuse =
+        crate::scene::Texture::Constant(Rgb::splat(0.2));
     assert!(basis
         .superpose(&net, &grey, &emission, &options)
         .unwrap_err()
@@ -132,7 +134,7 @@ fn warm_start_from_a_basis_for_other_reflectances_matches_a_cold_distribution() 
         .iter()
         .position(|m| m.name == "m")
         .unwrap();
-    recoloured.materials[m].diffuse = Texture::Constant(Rgb::new(0.3, 0.6, 0.5));
+    classic_mut(&mut recoloured.materials[m]).diffuse = Texture::Constant(Rgb::new(0.3, 0.6, 0.5));
     let glossy_box = box_with("diffuse = 0.4", "diffuse = 0\nspecular = 0.7");
     let changed_glossy = box_with(
         "diffuse = 0.2\nspecular = 0.5\nroughness = 0.3",
@@ -224,7 +226,7 @@ fn a_reflectance_series_relights_one_material_without_a_distribution() {
     let index = |name: &str| s.materials.iter().position(|m| m.name == name).unwrap();
     let with_floor = |kd: Rgb| {
         let mut t = s.clone();
-        t.materials[index("floor")].diffuse = Texture::Constant(kd);
+        classic_mut(&mut t.materials[index("floor")]).diffuse = Texture::Constant(kd);
         t
     };
     let recoloured = with_floor(Rgb::new(0.9, 0.1, 0.6));
@@ -255,13 +257,14 @@ fn a_reflectance_series_relights_one_material_without_a_distribution() {
     }
     // Changes the series does not cover.
     let mut two_changed = recoloured.clone();
-    two_changed.materials[index("m")].diffuse = Texture::Constant(Rgb::splat(0.2));
+    classic_mut(&mut two_changed.materials[index("m")]).diffuse =
+        Texture::Constant(Rgb::splat(0.2));
     let e = basis
         .relit_from_series(&net, &two_changed, &emission, &options)
         .unwrap_err();
     assert!(e.contains("no stored reflectance series"), "{e}");
     let mut glossy = recoloured.clone();
-    glossy.materials[index("floor")].specular = Rgb::splat(0.3);
+    classic_mut(&mut glossy.materials[index("floor")]).specular = Rgb::splat(0.3);
     let e = basis
         .relit_from_series(&net, &glossy, &emission, &options)
         .unwrap_err();

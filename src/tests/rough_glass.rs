@@ -2,8 +2,8 @@
 //! density, sample weights against eval/pdf in both transport directions, energy, the
 //! generalised reciprocity of refraction, and convergence to the smooth glass as α → 0.
 
-use super::bsdf::{check_at, directions, material, point};
-use crate::bsdf::{Bsdf, Transport};
+use super::bsdf::{check_at, classic_mut, directions, material, point};
+use crate::bsdf::Transport;
 use crate::math::optics::fresnel_dielectric;
 use crate::math::{Rgb, Rng, Vec2, Vec3};
 use crate::scene::Material;
@@ -76,7 +76,7 @@ fn transmission_is_a_glossy_lobe() {
     let mut transmitted = 0;
     for _ in 0..2000 {
         let wo = sphere(&mut rng);
-        let bsdf = Bsdf::new(&m, &point(), wo);
+        let bsdf = m.bsdf(&point(), wo);
         assert!(bsdf.has_non_delta() && bsdf.has_glossy());
         let (ul, u) = (rng.uniform(), Vec2::new(rng.uniform(), rng.uniform()));
         let Some(s) = bsdf.sample(wo, ul, u, Transport::Importance) else {
@@ -106,14 +106,14 @@ fn transmission_is_a_glossy_lobe() {
         m.ior = 1.0;
         m.roughness = 0.3;
     });
-    let bsdf = Bsdf::new(&matched, &point(), Vec3::Z);
+    let bsdf = matched.bsdf(&point(), Vec3::Z);
     assert!(!bsdf.has_non_delta());
 }
 
 /// Mean importance-transport sample weight (the albedo: the fraction of energy that leaves,
 /// on both sides) and the share of samples that were reflected, from `n` samples.
 fn albedo(m: &Material, wo: Vec3, n: usize, mode: Transport) -> (f64, f64, f64) {
-    let bsdf = Bsdf::new(m, &point(), wo);
+    let bsdf = m.bsdf(&point(), wo);
     let mut rng = Rng::for_key(23, &[]);
     let (mut sum, mut sum2, mut reflected) = (0.0f64, 0.0f64, 0usize);
     for _ in 0..n {
@@ -169,7 +169,7 @@ fn albedo_is_at_most_one() {
 /// The mean sample weights of the reflected and the refracted samples (same 200000
 /// samples as [`albedo`]).
 fn split(m: &Material, wo: Vec3, mode: Transport) -> (f64, f64) {
-    let bsdf = Bsdf::new(m, &point(), wo);
+    let bsdf = m.bsdf(&point(), wo);
     let mut rng = Rng::for_key(23, &[]);
     let n = 200_000;
     let (mut refl, mut refr) = (0.0f64, 0.0f64);
@@ -198,7 +198,7 @@ fn refraction_obeys_generalised_reciprocity() {
         let (mut transmitted, mut nonzero) = (0, 0);
         for _ in 0..4000 {
             let (a, b) = (sphere(&mut rng), sphere(&mut rng));
-            let bsdf = Bsdf::new(&m, &point(), a);
+            let bsdf = m.bsdf(&point(), a);
             let n_of = |w: Vec3| if w.z > 0.0 { 1.0 } else { IOR };
             // Near-grazing microfacets are left out: there F is steep (near the critical
             // angle on the dense side) and its f32 rounding differs by the side it is
@@ -262,7 +262,7 @@ fn small_alpha_converges_to_smooth_glass() {
             "radiance {rad} vs {expect_rad}"
         );
         assert!((imp - 1.0).abs() < 0.005, "importance {imp}");
-        let bsdf = Bsdf::new(&m, &point(), wo);
+        let bsdf = m.bsdf(&point(), wo);
         // GGX has long tails: 4% of the microfacets at α = 0.002 tilt by more than 0.01.
         let mut rng = Rng::for_key(2, &[]);
         let mut off = 0;
@@ -313,7 +313,7 @@ fn a_roughness_map_sets_the_roughness_at_each_point() {
         (&metal, "metal"),
     ] {
         let mut mapped = plain(0.5);
-        mapped.roughness_map = Some(Arc::new(RoughnessMap {
+        classic_mut(&mut mapped).roughness_map = Some(Arc::new(RoughnessMap {
             u: checker.clone(),
             v: None,
             remap: false,
@@ -322,7 +322,7 @@ fn a_roughness_map_sets_the_roughness_at_each_point() {
             let sp = crate::scene::SurfacePoint { uv, ..point() };
             let constant = plain(alpha);
             let wo = Vec3::new(0.3, 0.1, 0.9).normalize();
-            let (a, b) = (Bsdf::new(&mapped, &sp, wo), Bsdf::new(&constant, &sp, wo));
+            let (a, b) = (mapped.bsdf(&sp, wo), constant.bsdf(&sp, wo));
             for wi in [
                 Vec3::new(-0.25, -0.1, 0.95).normalize(),
                 Vec3::new(-0.5, 0.2, 0.8).normalize(),
@@ -341,7 +341,7 @@ fn a_roughness_map_sets_the_roughness_at_each_point() {
         let wi = Vec3::new(-0.25, -0.1, 0.95).normalize();
         let f = |alpha: f32| {
             let m = plain(alpha);
-            Bsdf::new(&m, &point(), wo).eval(wo, wi, Transport::Radiance)
+            m.bsdf(&point(), wo).eval(wo, wi, Transport::Radiance)
         };
         assert!((f(0.1) - f(0.5)).abs().max_element() > 0.1, "{alpha_of}");
     }

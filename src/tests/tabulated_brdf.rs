@@ -4,14 +4,15 @@
 
 use super::bsdf::{check, check_in, directions, material, point};
 use super::network_common::{monte_carlo_image, scene};
-use crate::bsdf::{Bsdf, TabulatedBrdf, Transport};
+use crate::bsdf::{TabulatedBrdf, Transport};
 use crate::image::Image;
 use crate::integrators::bdpt::{Bdpt, BdptOptions};
 use crate::integrators::path::{PathOptions, PathTracer};
 use crate::integrators::MonteCarlo;
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::math::{luminance, Rgb, Rng, Vec2, Vec3};
-use crate::scene::{Material, Scene};
+use crate::scene::materials::Measured;
+use crate::scene::{Material, Scene, Surface};
 use std::sync::Arc;
 
 /// The isotropic table of `m`'s BRDF (from [`Bsdf::eval`]) on a grid of `dt`° in θ and `dp`°
@@ -42,7 +43,7 @@ fn table_with(
             for &to in &thetas {
                 for &po in &phis {
                     let (wi, wo) = (dir(ti, pi), dir(to, po));
-                    let bsdf = Bsdf::new(m, &point(), wo);
+                    let bsdf = m.bsdf(&point(), wo);
                     values.push(bsdf.eval(wo, wi, Transport::Radiance) / wi.z * factor(ti));
                 }
             }
@@ -52,10 +53,7 @@ fn table_with(
 }
 
 fn tabulated(table: TabulatedBrdf) -> Material {
-    Material {
-        brdf: Some(Arc::new(table)),
-        ..material(|_| {})
-    }
+    Material::new("", Surface::Measured(Measured::new(Arc::new(table))))
 }
 
 /// A rough conductor's lobe (GGX α 0.4 with a gold tint, no Fresnel) tabulated every 2° in θ
@@ -73,8 +71,10 @@ fn a_tabulated_lobe_reproduces_the_analytic_one() {
     let mut worst_albedo = 0.0f32;
     for c in [0.1f32, 0.3, 0.5, 0.7, 0.95] {
         let wo = Vec3::new((1.0 - c * c).sqrt(), 0.0, c);
-        let want = Bsdf::new(&glossy, &point(), wo).albedo_by_side(wo, 64, Transport::Radiance);
-        let got = tab.brdf.as_ref().unwrap().albedo(wo);
+        let want = glossy
+            .bsdf(&point(), wo)
+            .albedo_by_side(wo, 64, Transport::Radiance);
+        let got = tab.model().table().unwrap().albedo(wo);
         let err = ((got - want.0).abs() / want.0).max_element();
         worst_albedo = worst_albedo.max(err);
     }
@@ -83,13 +83,13 @@ fn a_tabulated_lobe_reproduces_the_analytic_one() {
     for _ in 0..2000 {
         let mut d = || cosine_hemisphere(Vec2::new(rng.uniform(), rng.uniform()));
         let (wo, wi) = (d(), d());
-        let want = Bsdf::new(&glossy, &point(), wo).eval(wo, wi, Transport::Radiance);
-        let got = Bsdf::new(&tab, &point(), wo).eval(wo, wi, Transport::Radiance);
-        let peak = Bsdf::new(&glossy, &point(), wo).eval(
-            wo,
-            Vec3::new(-wo.x, -wo.y, wo.z),
-            Transport::Radiance,
-        ) / wo.z;
+        let want = glossy.bsdf(&point(), wo).eval(wo, wi, Transport::Radiance);
+        let got = tab.bsdf(&point(), wo).eval(wo, wi, Transport::Radiance);
+        let peak =
+            glossy
+                .bsdf(&point(), wo)
+                .eval(wo, Vec3::new(-wo.x, -wo.y, wo.z), Transport::Radiance)
+                / wo.z;
         worst_f = worst_f.max(((got - want) / wi.z / peak).abs().max_element());
     }
     eprintln!("albedo within {worst_albedo:.4}, f within {worst_f:.4} of the peak");
@@ -185,7 +185,7 @@ fn sampling_a_sharp_table_lowers_the_variance_of_its_albedo() {
     let n = 400_000;
     for (i, wo) in directions().into_iter().enumerate() {
         let wo = wo.normalize();
-        let bsdf = Bsdf::new(&m, &point(), wo);
+        let bsdf = m.bsdf(&point(), wo);
         let (mean, var) = moments(n, 3, |u_lobe, u| {
             bsdf.sample(wo, u_lobe, u, Transport::Radiance)
                 .map_or(0.0, |s| s.weight.y)
@@ -303,8 +303,7 @@ fn path_tracing_and_bdpt_agree_on_a_glossy_table() {
         .iter()
         .position(|m| m.name == "floor")
         .unwrap();
-    scene.materials[floor].diffuse = crate::scene::Texture::Constant(Rgb::ZERO);
-    scene.materials[floor].brdf = Some(Arc::new(table));
+    scene.materials[floor].surface = Surface::Measured(Measured::new(Arc::new(table)));
     let path = image_by(&scene, &PathTracer::new(PathOptions { max_depth: 8 }), 1024);
     let bdpt = image_by(&scene, &Bdpt::new(BdptOptions { max_depth: 8 }), 1024);
     let mean = |img: &Image, quarter: Option<usize>| {
@@ -348,7 +347,7 @@ fn scene_files_name_tables_and_their_errors() {
     };
     let load = |keys: &str| crate::scene::toml::from_str(&text(keys), &dir.path().join("s.toml"));
     let s = load("brdf = \"good.brdf\"").unwrap();
-    let t = s.materials[0].brdf.as_ref().expect("a table");
+    let t = s.materials[0].model().table().expect("a table");
     assert_eq!(t.file, std::path::Path::new("good.brdf"));
     let albedo = Rgb::new(0.1, 0.2, 0.3) * std::f32::consts::PI;
     assert!((t.most_reflected() - albedo).abs().max_element() < 1e-5);
@@ -409,7 +408,7 @@ fn merl_files_give_back_their_function() {
     let dir = tempfile::tempdir().unwrap();
     let rho = 0.7f32;
     let flat = merl_material(dir.path(), "flat.binary", |_, _| rho / std::f32::consts::PI);
-    let table = flat.brdf.as_ref().unwrap();
+    let table = flat.model().table().unwrap();
     assert_eq!(table.file, std::path::Path::new("flat.binary"));
     assert!(
         (table.most_reflected() - Rgb::splat(rho))
@@ -419,13 +418,13 @@ fn merl_files_give_back_their_function() {
     );
     let g = |th: f32, td: f32| 0.1 + 0.5 * th.cos() * (1.0 + 0.3 * td.cos());
     let shaped = merl_material(dir.path(), "shaped.binary", g);
-    let table = shaped.brdf.as_ref().unwrap();
+    let table = shaped.model().table().unwrap();
     let mut rng = Rng::for_key(23, &[]);
     let mut worst = 0.0f32;
     for _ in 0..2000 {
         let mut d = || cosine_hemisphere(Vec2::new(rng.uniform(), rng.uniform()));
         let (wi, wo) = (d(), d());
-        let flat_f = flat.brdf.as_ref().unwrap().eval(wi, wo);
+        let flat_f = flat.model().table().unwrap().eval(wi, wo);
         assert!(
             (flat_f - Rgb::splat(rho / std::f32::consts::PI))
                 .abs()
@@ -478,7 +477,7 @@ fn a_sharp_merl_brdf_is_importance_sampled() {
         }
     }
     let wo = directions()[1].normalize();
-    let bsdf = Bsdf::new(&m, &point(), wo);
+    let bsdf = m.bsdf(&point(), wo);
     let n = 200_000;
     let (mean, var) = moments(n, 7, |u_lobe, u| {
         bsdf.sample(wo, u_lobe, u, Transport::Radiance)

@@ -1,18 +1,18 @@
 //! The thin dielectric sheet (`thin = true`, pbrt-v4's `ThinDielectricBxDF`): its BSDF
 //! against the closed form, and Whitted's integrator along single rays through a pane.
 
-use super::bsdf::{material, point};
+use super::bsdf::{classic_mut, material, point};
 use super::network_common::{build, closed_box, params};
 use super::whitted::scenes::{add_material, empty_scene, floor, quad};
 use crate::accel::{self, Backend};
-use crate::bsdf::{Bsdf, Transport};
+use crate::bsdf::Transport;
 use crate::control::Control;
 use crate::integrators::illumination_network::distribute::surfaces;
 use crate::integrators::illumination_network::preprocess::Builder;
 use crate::integrators::whitted::{Whitted, WhittedOptions};
 use crate::integrators::{Context, Integrator, RayStats};
 use crate::math::{Ray, Rgb, Rng, Vec2, Vec3};
-use crate::scene::{Material, Texture};
+use crate::scene::{Classic, Material, Texture};
 
 /// The sheet's reflectance in closed form, in f64 and independent of the crate's Fresnel
 /// code: the unpolarised Fresnel reflectance F of one face, then the sum over the bounces
@@ -50,8 +50,8 @@ fn reflectance_and_transmittance_match_the_closed_form() {
                 let want_r = thin_reflectance(cos as f64, ior as f64);
                 for rough in [0.0, 0.5] {
                     let mut m = thin_glass(ior, Rgb::ONE);
-                    m.roughness = rough;
-                    let bsdf = Bsdf::new(&m, &point(), wo);
+                    classic_mut(&mut m).roughness = rough;
+                    let bsdf = m.bsdf(&point(), wo);
                     assert!(!bsdf.has_non_delta());
                     let other = Vec3::new(0.1, -0.2, -side).normalize();
                     assert_eq!(bsdf.pdf(wo, other), 0.0);
@@ -75,7 +75,7 @@ fn reflectance_and_transmittance_match_the_closed_form() {
                 }
                 // A tinted sheet: the lobes are picked by luminance, kt·T over its share.
                 let glass = thin_glass(ior, kt);
-                let bsdf = Bsdf::new(&glass, &point(), wo);
+                let bsdf = glass.bsdf(&point(), wo);
                 let t = bsdf
                     .sample(wo, 0.999_999, Vec2::ZERO, Transport::Radiance)
                     .unwrap();
@@ -98,7 +98,7 @@ fn a_clear_sheet_conserves_energy() {
     let mut rng = Rng::for_key(11, &[]);
     for cos in [0.95f32, 0.6, 0.1] {
         let wo = Vec3::new((1.0 - cos * cos).sqrt(), 0.0, cos);
-        let bsdf = Bsdf::new(&m, &point(), wo);
+        let bsdf = m.bsdf(&point(), wo);
         let n = 20_000;
         let mut reflected = 0usize;
         for _ in 0..n {
@@ -126,16 +126,16 @@ fn a_clear_sheet_conserves_energy() {
 #[test]
 fn normal_incidence_coefficients_and_a_smooth_network_lobe() {
     let mut m = thin_glass(1.5, Rgb::splat(0.8));
-    m.roughness = 0.4;
+    classic_mut(&mut m).roughness = 0.4;
     let f0 = (0.5f64 / 2.5).powi(2);
     let r0 = (2.0 * f0 / (1.0 + f0)) as f32;
     assert!(
-        (m.specular_at_normal() - Rgb::splat(r0))
+        (m.approximation().specular_at_normal() - Rgb::splat(r0))
             .abs()
             .max_element()
             < 1e-6
     );
-    let t = m.transmission_at_normal();
+    let t = m.approximation().transmission_at_normal();
     assert!(
         (t - Rgb::splat(0.8 * (1.0 - r0))).abs().max_element() < 1e-6,
         "{t}"
@@ -184,10 +184,15 @@ fn whitted_sees_straight_through_a_pane() {
     let pane = add_material(&mut scene, thin_glass(1.5, Rgb::ONE));
     let sky = Rgb::new(1.0, 2.0, 3.0);
     let glow = Rgb::new(0.5, 0.0, 0.0);
-    let emitter = |e: Rgb| Material {
-        diffuse: Texture::Constant(Rgb::ZERO),
-        emission: e,
-        ..Material::default()
+    let emitter = |e: Rgb| {
+        Material::classic(
+            "",
+            Classic {
+                diffuse: Texture::Constant(Rgb::ZERO),
+                ..Classic::default()
+            },
+        )
+        .emitting(e)
     };
     let sky_m = add_material(&mut scene, emitter(sky));
     let glow_m = add_material(&mut scene, emitter(glow));

@@ -7,12 +7,12 @@ use crate::control::Control;
 use crate::integrators::whitted::{Whitted, WhittedOptions};
 use crate::integrators::{Context, Integrator, RayStats};
 use crate::math::{Ray, Rgb, Rng, Vec3};
-use crate::scene::{Camera, Geometry, Light, Material, QuadMesh, Scene, Shape, Texture};
+use crate::scene::{Camera, Classic, Geometry, Light, Material, QuadMesh, Scene, Shape, Texture};
 use std::f32::consts::PI;
 
 #[path = "whitted_scenes.rs"]
 pub(super) mod scenes;
-use scenes::{add_material, diffuse, empty_scene, floor, quad};
+use scenes::{add_material, diffuse, diffuse_classic, empty_scene, floor, quad};
 
 fn radiance(scene: &Scene, ray: Ray, options: WhittedOptions) -> Rgb {
     let accel = accel::build(scene, Backend::Embree, &Control::default()).unwrap();
@@ -33,21 +33,27 @@ fn mirror_shows_the_colour_it_faces() {
     let mut scene = empty_scene();
     let mirror = add_material(
         &mut scene,
-        Material {
-            diffuse: Texture::Constant(Rgb::ZERO),
-            specular: Rgb::splat(0.8),
-            phong_exponent: 0.0,
-            ..Material::default()
-        },
+        Material::classic(
+            "",
+            Classic {
+                diffuse: Texture::Constant(Rgb::ZERO),
+                specular: Rgb::splat(0.8),
+                phong_exponent: 0.0,
+                ..Classic::default()
+            },
+        ),
     );
     let wall_emission = Rgb::new(0.2, 0.5, 0.9);
     let wall = add_material(
         &mut scene,
-        Material {
-            diffuse: Texture::Constant(Rgb::ZERO),
-            emission: wall_emission,
-            ..Material::default()
-        },
+        Material::classic(
+            "",
+            Classic {
+                diffuse: Texture::Constant(Rgb::ZERO),
+                ..Classic::default()
+            },
+        )
+        .emitting(wall_emission),
     );
     // Mirror through the origin, normal (0, 1, 1)/√2: a ray along -z reflects to +y.
     quad(
@@ -87,10 +93,13 @@ fn shadow_scene(blocker: Material) -> (Scene, Vec3) {
     let kd = Rgb::splat(0.6);
     let m = add_material(
         &mut scene,
-        Material {
-            ambient: Some(Rgb::new(0.3, 0.2, 0.1)),
-            ..diffuse(kd)
-        },
+        Material::classic(
+            "",
+            Classic {
+                ambient: Some(Rgb::new(0.3, 0.2, 0.1)),
+                ..diffuse_classic(kd)
+            },
+        ),
     );
     floor(&mut scene, 0.0, 20.0, m);
     let b = add_material(&mut scene, blocker);
@@ -125,12 +134,15 @@ fn shadowed_points_get_ambient_only_and_glass_attenuates() {
     assert!(close(got, ambient, 1e-6), "{got} vs {ambient}");
 
     let kt = Rgb::new(0.5, 0.8, 1.0);
-    let glass = Material {
-        diffuse: Texture::Constant(Rgb::ZERO),
-        transmission: kt,
-        ior: 1.0,
-        ..Material::default()
-    };
+    let glass = Material::classic(
+        "",
+        Classic {
+            diffuse: Texture::Constant(Rgb::ZERO),
+            transmission: kt,
+            ior: 1.0,
+            ..Classic::default()
+        },
+    );
     let (scene, light) = shadow_scene(glass);
     let got = radiance(&scene, view, WhittedOptions::default());
     let p = Vec3::new(0.3, 0.0, 0.2);
@@ -148,23 +160,29 @@ fn total_internal_reflection_inside_glass() {
     let mut scene = empty_scene();
     let glass = add_material(
         &mut scene,
-        Material {
-            diffuse: Texture::Constant(Rgb::ZERO),
-            specular: Rgb::splat(0.25),
-            transmission: Rgb::splat(1.0),
-            ior: 1.5,
-            phong_exponent: 0.0,
-            ..Material::default()
-        },
+        Material::classic(
+            "",
+            Classic {
+                diffuse: Texture::Constant(Rgb::ZERO),
+                specular: Rgb::splat(0.25),
+                transmission: Rgb::splat(1.0),
+                ior: 1.5,
+                phong_exponent: 0.0,
+                ..Classic::default()
+            },
+        ),
     );
     let sky = Rgb::new(1.0, 2.0, 3.0);
     let sky_m = add_material(
         &mut scene,
-        Material {
-            diffuse: Texture::Constant(Rgb::ZERO),
-            emission: sky,
-            ..Material::default()
-        },
+        Material::classic(
+            "",
+            Classic {
+                diffuse: Texture::Constant(Rgb::ZERO),
+                ..Classic::default()
+            },
+        )
+        .emitting(sky),
     );
     // Glass surface y = 1 facing up (the camera is inside, below it); the sky at y = 3
     // facing down; a dim floor far below sees the reflected rays.
@@ -183,11 +201,14 @@ fn total_internal_reflection_inside_glass() {
     let floor_glow = Rgb::new(0.5, 0.0, 0.0);
     let floor_m = add_material(
         &mut scene,
-        Material {
-            diffuse: Texture::Constant(Rgb::ZERO),
-            emission: floor_glow,
-            ..Material::default()
-        },
+        Material::classic(
+            "",
+            Classic {
+                diffuse: Texture::Constant(Rgb::ZERO),
+                ..Classic::default()
+            },
+        )
+        .emitting(floor_glow),
     );
     floor(&mut scene, -1.0, 50.0, floor_m);
     let options = WhittedOptions {
@@ -222,10 +243,13 @@ fn a_translucent_sheet_passes_the_light_behind_it() {
         let mut scene = empty_scene();
         let m = add_material(
             &mut scene,
-            Material {
-                diffuse_transmission: Texture::Constant(kdt),
-                ..diffuse(Rgb::ZERO)
-            },
+            Material::classic(
+                "",
+                Classic {
+                    diffuse_transmission: Texture::Constant(kdt),
+                    ..diffuse_classic(Rgb::ZERO)
+                },
+            ),
         );
         floor(&mut scene, 1.0, 4.0, m);
         scene.lights.push(Light::Point {

@@ -3,7 +3,7 @@
 //! (`tests/whitted.rs`, which includes this file, rendered images) use. The including module
 //! imports the scene types.
 
-use super::{Camera, Geometry, Material, QuadMesh, Rgb, Scene, Shape, Texture, Vec3};
+use super::{Camera, Classic, Geometry, Material, QuadMesh, Rgb, Scene, Shape, Texture, Vec3};
 
 pub(crate) fn camera() -> Camera {
     Camera {
@@ -69,9 +69,14 @@ pub(crate) fn floor(scene: &mut Scene, y: f32, s: f32, material: usize) {
 }
 
 pub(crate) fn diffuse(kd: Rgb) -> Material {
-    Material {
+    Material::classic("", diffuse_classic(kd))
+}
+
+/// The classic terms of [`diffuse`].
+pub(crate) fn diffuse_classic(kd: Rgb) -> Classic {
+    Classic {
         diffuse: Texture::Constant(kd),
         specular: Rgb::ZERO,
-        ..Material::default()
+        ..Classic::default()
     }
 }

@@ -397,9 +397,9 @@ fn relight_network(
 fn warn_one_value_per_patch(scene: &Scene, control: &Control) {
     if let Some(m) = scene.materials.iter().find(|m| {
         m.emission_map.is_some()
-            || m.specular_map.is_some()
-            || m.reflectance_map.is_some()
-            || m.mix.as_ref().is_some_and(|x| x.amount_map.is_some())
+            || m.approximation().specular_map.is_some()
+            || m.approximation().reflectance_map.is_some()
+            || m.mix().is_some_and(|x| x.amount_map.is_some())
     }) {
         control.warn(&format!(
             "material \"{}\" varies by texture: the network takes one value per patch (an \

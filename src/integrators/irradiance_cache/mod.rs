@@ -46,7 +46,7 @@ pub(crate) mod technique;
 
 use super::path::sample_direct;
 use super::{Context, MonteCarlo, RayStats, Splat};
-use crate::bsdf::{Bsdf, Transport};
+use crate::bsdf::Transport;
 use crate::control::{CancelToken, Control};
 use crate::image::Image;
 use crate::math::sobol::Sampler;
@@ -617,7 +617,7 @@ impl Walk<'_> {
         if emission && m.emits_towards(wo, sp.ng) {
             l += m.emission_at(sp.p, sp.uv, sp.ng);
         }
-        let bsdf = Bsdf::new(m, sp, wo);
+        let bsdf = m.bsdf(sp, wo);
         let non_delta = bsdf.has_non_delta();
         let lights = &ctx.lights;
         // The overture skips direct light where it is not cached (but draws the same
@@ -634,8 +634,9 @@ impl Walk<'_> {
                 l += sample_direct(ctx, &bsdf, sp, wo, u_choice, u_light, self.stats);
             }
             // Indirect diffuse: ρ/π · E, through a coat as for light arriving evenly.
-            let kd = m.diffuse.eval(sp.p, sp.uv, sp.ng);
-            let kdt = m.diffuse_transmission.eval(sp.p, sp.uv, sp.ng);
+            let diffuse = m.approximation();
+            let kd = diffuse.diffuse.eval(sp.p, sp.uv, sp.ng);
+            let kdt = diffuse.diffuse_transmission.eval(sp.p, sp.uv, sp.ng);
             let n = bsdf.shading_normal();
             let ng = if sp.ng.dot(n) >= 0.0 { sp.ng } else { -sp.ng };
             if kd.max_element() > 0.0 {

@@ -1,11 +1,14 @@
-//! Materials: pbrt's material types as raylink's diffuse, specular, transmission and
-//! conductor lobes, and its coated materials as a [`Coating`] over them (the closest
-//! substitute where raylink has no match).
+//! Materials: pbrt's material types as raylink's kinds of surface
+//! ([`crate::scene::materials`]), and the closest substitute where raylink has no match.
 
 use super::params::Params;
 use super::spectrum::{self, Kind};
 use super::{Loader, Loc};
 use crate::math::Rgb;
+use crate::scene::materials::{
+    Classic, CoatedConductor, CoatedDiffuse, Dielectric, Diffuse, DiffuseTransmission, Metal,
+    Surface, SurfaceModel, ThinDielectric,
+};
 use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
 use crate::scene::{Coating, Conductor, Material, NormalDetail, RoughnessMap, Texture};
 use std::path::PathBuf;
@@ -104,27 +107,12 @@ impl Loader {
         Ok(0.5 * (u + v))
     }
 
-    /// A conductor material's lobe: the metal's complex index from `eta`/`k` (copper by
-    /// default) or, given `reflectance`, the index with that normal-incidence reflectance.
-    fn conductor_material(
-        &mut self,
-        base: Material,
-        p: &Params,
-        prefix: &str,
-        st: &str,
-        loc: &Loc,
-    ) -> crate::Result<Material> {
-        let ((ax, ay), map) = self.roughness_map(p, prefix, st, loc)?;
+    /// A conductor material's metal: the complex index from `eta`/`k` (copper by default)
+    /// or, given `reflectance`, the index with that normal-incidence reflectance.
+    fn metal(&mut self, p: &Params, prefix: &str, st: &str, loc: &Loc) -> crate::Result<Metal> {
+        let (alphas, map) = self.roughness_map(p, prefix, st, loc)?;
         let (conductor, reflectance_map) = self.conductor(p, prefix, st, loc)?;
-        Ok(Material {
-            specular: Rgb::ONE,
-            conductor: Some(conductor),
-            reflectance_map,
-            roughness: ax,
-            roughness_v: (ay != ax).then_some(ay),
-            roughness_map: map.map(Arc::new),
-            ..base
-        })
+        Ok(Metal::new(conductor, reflectance_map, alphas, map))
     }
 
     /// An index of refraction ("float eta" or a spectrum).
@@ -203,64 +191,35 @@ impl Loader {
         } else {
             name.to_string()
         };
-        let base = Material {
-            name: name.clone(),
-            diffuse: Texture::Constant(Rgb::ZERO),
-            ambient: None,
-            specular: Rgb::ZERO,
-            transmission: Rgb::ZERO,
-            ior: 1.5,
-            roughness: 0.0,
-            fresnel: false,
-            ..Material::default()
-        };
         let diffuse_default = Rgb::splat(0.5);
         let substitute = |this: &mut Loader, what: &str| {
             this.warn(loc, format!("material \"{ty}\" is not supported; {what}"));
         };
-        let m = match ty {
-            "diffuse" => Material {
-                diffuse: self.texture_param(p, "reflectance", diffuse_default, st, loc)?,
-                ..base
-            },
+        let surface = match ty {
+            "diffuse" => Surface::Diffuse(Diffuse::new(self.texture_param(
+                p,
+                "reflectance",
+                diffuse_default,
+                st,
+                loc,
+            )?)),
             "coateddiffuse" => {
-                // The coat's mirror as Fresnel-weighted specular, for the techniques that
-                // approximate the layers.
-                let c = self.coating(p, "", "eta", st, loc)?;
-                Material {
+                let coating = self.coating(p, "", "eta", st, loc)?;
+                let base = Classic {
                     diffuse: self.texture_param(p, "reflectance", Rgb::splat(0.5), st, loc)?,
                     specular: Rgb::ONE,
-                    fresnel: true,
-                    ior: c.ior,
-                    roughness: c.roughness,
-                    roughness_v: c.roughness_v,
-                    coating: Some(c),
-                    ..base
-                }
+                    ..Classic::blank()
+                };
+                Surface::CoatedDiffuse(CoatedDiffuse::new(base, coating))
             }
-            "conductor" => self.conductor_material(base, p, "", st, loc)?,
-            "thindielectric" => Material {
-                // pbrt-v4's ThinDielectricBxDF: a smooth sheet, no roughness.
-                specular: Rgb::ONE,
-                transmission: Rgb::ONE,
-                fresnel: true,
-                thin: true,
-                ior: self.eta(p, "eta", 1.5, st, loc)?,
-                ..base
-            },
+            "conductor" => Surface::Conductor(self.metal(p, "", st, loc)?),
+            "thindielectric" => {
+                Surface::ThinDielectric(ThinDielectric::new(self.eta(p, "eta", 1.5, st, loc)?))
+            }
             "dielectric" => {
-                // GGX reflection and refraction, as pbrt's DielectricBxDF.
-                let ((ax, ay), map) = self.roughness_map(p, "", st, loc)?;
-                Material {
-                    specular: Rgb::ONE,
-                    transmission: Rgb::ONE,
-                    fresnel: true,
-                    ior: self.eta(p, "eta", 1.5, st, loc)?,
-                    roughness: ax,
-                    roughness_v: (ay != ax).then_some(ay),
-                    roughness_map: map.map(Arc::new),
-                    ..base
-                }
+                let (alphas, map) = self.roughness_map(p, "", st, loc)?;
+                let ior = self.eta(p, "eta", 1.5, st, loc)?;
+                Surface::Dielectric(Dielectric::new(ior, alphas, map))
             }
             "diffusetransmission" => {
                 // pbrt-v4's DiffuseTransmissionBxDF: R/π on wo's side, T/π through, both
@@ -270,11 +229,7 @@ impl Loader {
                 let t = self.scaled(t, scale, st, loc)?;
                 let r = self.texture_param(p, "reflectance", Rgb::splat(0.25), st, loc)?;
                 let r = self.scaled(r, scale, st, loc)?;
-                Material {
-                    diffuse: r,
-                    diffuse_transmission: t,
-                    ..base
-                }
+                Surface::DiffuseTransmission(DiffuseTransmission::new(r, t))
             }
             "coatedconductor" => {
                 let coating = self.coating(p, "interface.", "interface.eta", st, loc)?;
@@ -285,41 +240,32 @@ impl Loader {
                     .flatten()
                     .is_some()
                 {
-                    let (ax, ay) = self.roughness(p, "conductor.", st, loc)?;
+                    let alphas = self.roughness(p, "conductor.", st, loc)?;
                     p.ignore("conductor.eta");
                     p.ignore("conductor.k");
                     let r = self.texture_param(p, "reflectance", Rgb::ONE, st, loc)?;
                     let (conductor, reflectance_map) = reflectance_conductor(r);
-                    Material {
-                        specular: Rgb::ONE,
-                        conductor: Some(conductor),
-                        reflectance_map,
-                        roughness: ax,
-                        roughness_v: (ay != ax).then_some(ay),
-                        ..base
-                    }
+                    Metal::new(conductor, reflectance_map, alphas, None)
                 } else {
-                    self.conductor_material(base, p, "conductor.", st, loc)?
+                    self.metal(p, "conductor.", st, loc)?
                 };
-                Material {
-                    coating: Some(coating),
-                    ..metal
-                }
+                let metal = metal.approximation().clone();
+                Surface::CoatedConductor(CoatedConductor::new(metal, coating))
             }
             "subsurface" => {
                 substitute(self, "using a coated diffuse surface");
                 for q in ["mfp", "sigma_a", "sigma_s", "scale", "g", "name"] {
                     p.ignore(q);
                 }
-                self.coated_diffuse(base, p, 1.33, st, loc)?
+                Surface::Classic(self.coated_diffuse(p, 1.33, st, loc)?)
             }
             "interface" => {
                 substitute(self, "using an invisible (index-matched) surface");
-                Material {
+                Surface::Classic(Classic {
                     transmission: Rgb::ONE,
                     ior: 1.0,
-                    ..base
-                }
+                    ..Classic::blank()
+                })
             }
             "mix" => {
                 // pbrt-v4's MixMaterial: the second material with probability `amount`
@@ -336,7 +282,9 @@ impl Loader {
                     )));
                 };
                 let (ma, mb) = (&self.materials[a], &self.materials[b]);
-                Material::mix_of(name, (a, ma), (b, mb), amount)
+                let m = Material::mix_of(name, (a, ma), (b, mb), amount);
+                let normal_detail = self.normal_detail(p, st, loc)?;
+                return Ok(Material { normal_detail, ..m });
             }
             _ => {
                 // measured, hair and anything else.
@@ -344,12 +292,10 @@ impl Loader {
                     p.ignore(&q.name);
                 }
                 substitute(self, "using a grey diffuse surface");
-                Material {
-                    diffuse: Texture::Constant(diffuse_default),
-                    ..base
-                }
+                Surface::Diffuse(Diffuse::new(Texture::Constant(diffuse_default)))
             }
         };
+        let m = Material::new(name, surface);
         let normal_detail = self.normal_detail(p, st, loc)?;
         Ok(Material { normal_detail, ..m })
     }
@@ -464,22 +410,22 @@ impl Loader {
         Ok(coating)
     }
 
-    /// A diffuse base under a dielectric coat: Fresnel-weighted specular over diffuse.
+    /// A diffuse base under a dielectric coat as Fresnel-weighted specular over diffuse,
+    /// without the layers (the substitute for materials raylink does not have).
     fn coated_diffuse(
         &mut self,
-        base: Material,
         p: &Params,
         eta: f32,
         st: &str,
         loc: &Loc,
-    ) -> crate::Result<Material> {
-        Ok(Material {
+    ) -> crate::Result<Classic> {
+        Ok(Classic {
             diffuse: self.texture_param(p, "reflectance", Rgb::splat(0.5), st, loc)?,
             specular: Rgb::ONE,
             fresnel: true,
             ior: self.eta(p, "eta", eta, st, loc)?,
             roughness: self.isotropic_roughness(p, "", st, loc)?,
-            ..base
+            ..Classic::blank()
         })
     }
 }

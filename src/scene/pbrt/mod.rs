@@ -271,7 +271,7 @@ fn keep_material(
 ) -> usize {
     if map[i] == usize::MAX {
         let mut m = materials[i].clone();
-        if let Some(mix) = &mut m.mix {
+        if let crate::scene::Surface::Mix(mix) = &mut m.surface {
             // The readers build mixes of materials defined before them: no cycle.
             for j in &mut mix.materials {
                 *j = keep_material(materials, *j, map, kept);

@@ -7,6 +7,7 @@ use super::params::Params;
 use super::shapes;
 use super::{Loader, Loc};
 use crate::math::{Rgb, Vec2, Vec3};
+use crate::scene::materials::{Diffuse, Surface};
 use crate::scene::ply::{self, PlyMesh};
 use crate::scene::{Geometry, Material, Shape, Texture};
 use glam::DVec3;
@@ -18,12 +19,10 @@ impl Loader {
         let base = match self.state.material {
             Some(i) => i,
             None => *self.default_material.get_or_insert_with(|| {
-                self.materials.push(Material {
-                    name: "pbrt-default".into(),
-                    diffuse: Texture::Constant(Rgb::splat(0.5)),
-                    specular: Rgb::ZERO,
-                    ..Material::default()
-                });
+                self.materials.push(Material::new(
+                    "pbrt-default",
+                    Surface::Diffuse(Diffuse::new(Texture::Constant(Rgb::splat(0.5)))),
+                ));
                 self.materials.len() - 1
             }),
         };
@@ -45,7 +44,7 @@ impl Loader {
             return i;
         }
         let mut m = self.materials[base].clone();
-        if let Some(mix) = &mut m.mix {
+        if let Surface::Mix(mix) = &mut m.surface {
             for j in &mut mix.materials {
                 *j = self.emissive_copy(*j, radiance, two_sided);
             }

@@ -17,10 +17,11 @@ use super::schema::{
     CameraDesc, ConductorDesc, DiffuseDesc, EnvironmentDesc, FileDesc, LightDesc, LightKind,
     MaterialDesc, MixDesc, OneOrMany, RoughnessDesc, Splat3, TransformOp,
 };
+use crate::bsdf::TabulatedBrdf;
 use crate::math::{Mat3, Mat4, Rgb, Vec3};
 use crate::scene::environment::Environment;
 use crate::scene::light::GoniometricMap;
-use crate::scene::tabulated::TabulatedBrdf;
+use crate::scene::materials::{Classic, Measured, Surface};
 use crate::scene::{
     Camera, Conductor, Light, Material, Projection, RenderSettings, RoughnessMap, Scene, Texture,
 };
@@ -279,23 +280,19 @@ impl<'a> Builder<'a> {
             let path = self.dir.join(file);
             self.inputs.borrow_mut().push(path.clone());
             let table = TabulatedBrdf::read(&path, file.into()).map_err(fail("brdf"))?;
-            let d = Material::default();
             let (emission, emission_map) = self.emission(site, desc.emission)?;
+            let measured = Measured::new(std::sync::Arc::new(table));
             return Ok(Material {
-                name,
-                diffuse: Texture::Constant(Rgb::ZERO),
-                specular: Rgb::ZERO,
                 emission,
                 emission_map,
                 two_sided_emission: desc.two_sided_emission.unwrap_or(false),
-                brdf: Some(std::sync::Arc::new(table)),
-                ..d
+                ..Material::new(name, Surface::Measured(measured))
             });
         }
         if desc.coating.is_some() {
             self.check_coated_keys(site, &desc)?;
         }
-        let d = Material::default();
+        let d = Classic::default();
         let col = |v: Option<Splat3>, key: &'static str, default: Rgb| -> crate::Result<Rgb> {
             v.map_or(Ok(default), |c| colour(c.0).map_err(fail(key)))
         };
@@ -387,8 +384,7 @@ impl<'a> Builder<'a> {
             },
         };
         let (emission, emission_map) = self.emission(site, desc.emission)?;
-        let m = Material {
-            name,
+        let classic = Classic {
             diffuse,
             ambient,
             specular,
@@ -404,19 +400,19 @@ impl<'a> Builder<'a> {
             fresnel: desc.fresnel.unwrap_or(d.fresnel),
             thin,
             conductor,
+            roughness_map,
+        };
+        let surface = match desc.coating {
+            Some(c) => self.coated(site, c, classic)?,
+            None => Surface::Classic(classic),
+        };
+        Ok(Material {
             emission,
             emission_map,
             two_sided_emission: desc.two_sided_emission.unwrap_or(false),
-            mix: None,
-            brdf: None,
-            roughness_map,
             normal_detail,
-            coating: None,
-        };
-        match desc.coating {
-            Some(c) => self.coated(site, c, m),
-            None => Ok(m),
-        }
+            ..Material::new(name, surface)
+        })
     }
 
     /// A mix of two materials defined before it (by name): the second chosen with

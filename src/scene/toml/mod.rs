@@ -120,7 +120,10 @@ mod tests {
         .unwrap();
         assert_eq!(s.camera.width, 640);
         assert_eq!(s.camera.height, 480);
-        assert_eq!(s.materials[0].diffuse, Texture::Constant(Vec3::splat(0.8)));
+        assert_eq!(
+            s.materials[0].approximation().diffuse,
+            Texture::Constant(Vec3::splat(0.8))
+        );
         assert_eq!(
             s.shapes[0].geometry,
             Geometry::Sphere {

@@ -1,9 +1,9 @@
 //! The nodes' surfaces from the scene's materials, and the check that light can leave.
 
-use crate::bsdf::{Bsdf, TabulatedBrdf};
+use crate::bsdf::{Bsdf, Lobes, TabulatedBrdf};
 use crate::integrators::illumination_network::{Network, ESCAPE, NONE};
 use crate::math::{Rgb, Vec2, Vec3};
-use crate::scene::{Conductor, Material, Scene, SurfacePoint, Texture};
+use crate::scene::{Classic, Conductor, Material, Scene};
 use std::sync::Arc;
 
 /// The surface of one node.
@@ -124,37 +124,29 @@ impl Surface {
         if let Some(table) = &self.optics.brdf {
             return Bsdf::tabulated(table, n, n);
         }
-        let m = Material {
-            diffuse: Texture::Constant(Rgb::ZERO),
-            specular: self.optics.specular,
-            transmission: self.kt,
-            diffuse_transmission: Texture::Constant(self.kdt),
-            ior: self.optics.ior,
-            roughness: self.alpha,
-            fresnel: self.optics.fresnel,
-            thin: self.optics.thin,
-            conductor: self.optics.conductor,
-            ..Material::default()
+        let o = &self.optics;
+        let lobes = Lobes {
+            kd: Rgb::ZERO,
+            kdt: self.kdt,
+            ks: o.specular,
+            kt: self.kt,
+            ior: o.ior,
+            alphas: (self.alpha, self.alpha),
+            fresnel: o.fresnel,
+            thin: o.thin,
+            conductor: o.conductor,
+            lambertian: !o.fresnel
+                && o.specular.max_element() <= 0.0
+                && self.kt.max_element() <= 0.0
+                && self.kdt.max_element() <= 0.0,
         };
-        let sp = SurfacePoint {
-            p: Vec3::ZERO,
-            error: Vec3::ZERO,
-            ng,
-            ns: ng,
-            uv: Vec2::ZERO,
-            t: 0.0,
-            shape: 0,
-            instance: None,
-            material: 0,
-            time: 0.0,
-        };
-        // Oriented as Bsdf::new orients it toward n: an opaque surface faces n's side.
+        // Oriented as a material's BSDF is toward n: an opaque surface faces n's side.
         let face = if self.kt.max_element() <= 0.0 && n.dot(ng) < 0.0 {
             -ng
         } else {
             ng
         };
-        Bsdf::of_lobes(&m, &sp, face, face)
+        Bsdf::of_lobes(&lobes, face, face)
     }
 }
 
@@ -163,9 +155,9 @@ impl Surface {
 /// where ks takes F and kd and kt share 1 − F, the larger of ks and kd + kt (a glass is
 /// ks = kt = 1); plus kdt, which Fresnel does not weight. The network scales a material down
 /// to at most 1.
-fn most_scattered(m: &Material, kd: Rgb, kdt: Rgb) -> Rgb {
+fn most_scattered(m: &Classic, table: Option<&Arc<TabulatedBrdf>>, kd: Rgb, kdt: Rgb) -> Rgb {
     let (ks, kt) = (m.specular_at_normal(), m.transmission);
-    if let Some(table) = &m.brdf {
+    if let Some(table) = table {
         table.most_reflected()
     } else if m.fresnel {
         ks.max(kd + kt) + kdt
@@ -219,7 +211,7 @@ pub fn surfaces_with(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<Surf
 /// through [`Blend`]; a material of a nested mix is its material with the larger weight.
 fn surface_of(scene: &Scene, mi: usize, p: Vec3, uv: Vec2, n: Vec3) -> Surface {
     let m = &scene.materials[mi];
-    let Some(mix) = &m.mix else {
+    let Some(mix) = m.mix() else {
         return plain_surface(m, p, uv, n);
     };
     let [a, b] = mix
@@ -242,16 +234,19 @@ pub(crate) fn network_kd(scene: &Scene, mi: usize, p: Vec3, uv: Vec2, n: Vec3) -
     surface_of(scene, mi, p, uv, n).kd
 }
 
-/// The surface of a material that is not a mix (a mix's own fields otherwise).
-fn plain_surface(m: &Material, p: Vec3, uv: Vec2, n: Vec3) -> Surface {
+/// The surface of a material that is not a mix (as its material with the larger weight
+/// otherwise): its approximation in Whitted's terms, or its table.
+fn plain_surface(material: &Material, p: Vec3, uv: Vec2, n: Vec3) -> Surface {
+    let m = material.approximation();
+    let table = material.model().table();
     let kd = m.diffuse.eval(p, uv, n);
     let (mut kd, mut ks, mut kt) = (kd, m.specular_at_normal(), m.transmission);
     let mut kdt = m.diffuse_transmission.eval(p, uv, n);
     let mut specular = m.specular;
-    if let Some(table) = &m.brdf {
+    if let Some(table) = table {
         (kd, ks, specular) = (Rgb::ZERO, table.most_reflected(), Rgb::ZERO);
     }
-    let total = most_scattered(m, kd, kdt);
+    let total = most_scattered(m, table, kd, kdt);
     for c in 0..3 {
         if total[c] > 1.0 {
             kd[c] /= total[c];
@@ -271,7 +266,7 @@ fn plain_surface(m: &Material, p: Vec3, uv: Vec2, n: Vec3) -> Surface {
         alpha: match m.roughness_v {
             _ if m.thin => 0.0,
             // A table may reflect anywhere: the widest lobe.
-            _ if m.brdf.is_some() => 1.0,
+            _ if table.is_some() => 1.0,
             Some(v) => 0.5 * (m.roughness + v),
             None => m.roughness,
         },
@@ -281,7 +276,7 @@ fn plain_surface(m: &Material, p: Vec3, uv: Vec2, n: Vec3) -> Surface {
             fresnel: m.fresnel,
             thin: m.thin,
             conductor: m.conductor,
-            brdf: m.brdf.clone(),
+            brdf: table.cloned(),
         },
         emission: Rgb::ZERO,
         blend: None,

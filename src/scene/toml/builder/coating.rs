@@ -6,7 +6,8 @@ use super::super::checks::{colour, non_negative, positive};
 use super::super::diagnostics::Site;
 use super::super::schema::{CoatingDesc, MaterialDesc, RoughnessDesc};
 use super::Builder;
-use crate::scene::{Coating, Material};
+use crate::scene::materials::{Classic, CoatedConductor, CoatedDiffuse, Surface};
+use crate::scene::Coating;
 
 impl Builder<'_> {
     /// Rejects the keys a coated material cannot have, before it is built.
@@ -34,13 +35,14 @@ impl Builder<'_> {
         }
     }
 
-    /// The coating of `desc`, applied to `m` (built from the other keys).
+    /// The coating of `desc` over `m` (built from the other keys): a coated diffuse
+    /// surface, or a coated metal when `m` has a conductor.
     pub(super) fn coated(
         &self,
         site: &Site,
         desc: CoatingDesc,
-        m: Material,
-    ) -> crate::Result<Material> {
+        m: Classic,
+    ) -> crate::Result<Surface> {
         let fail = |key: &'static str| move |msg: String| self.ctx.fail(site, key, msg);
         let d = Coating::default();
         let (roughness, roughness_v) = match desc.roughness {
@@ -89,18 +91,17 @@ impl Builder<'_> {
             max_depth: count(desc.max_depth, d.max_depth, "coating.max_depth")?,
             samples: count(desc.samples, d.samples, "coating.samples")?,
         };
-        let diffuse_base = m.conductor.is_none();
-        Ok(Material {
-            ior: coating.ior,
-            fresnel: diffuse_base,
-            roughness: if diffuse_base { roughness } else { m.roughness },
-            roughness_v: if diffuse_base {
-                roughness_v
-            } else {
-                m.roughness_v
-            },
-            coating: Some(coating),
-            ..m
+        Ok(match m.conductor {
+            None => Surface::CoatedDiffuse(CoatedDiffuse::new(m, coating)),
+            // The metal's own roughness; its index is the coat's, as the reader always set.
+            Some(_) => Surface::CoatedConductor(CoatedConductor::new(
+                Classic {
+                    ior: coating.ior,
+                    fresnel: false,
+                    ..m
+                },
+                coating,
+            )),
         })
     }
 }

@@ -1,15 +1,23 @@
-use super::mix::Mix;
-use super::normal_detail::NormalDetail;
-use super::texture::Texture;
+//! Whitted's classic material (eq. 2 of the paper): I = ka·Ia + kd Σ(N·Lj) + ks S + kt T,
+//! with a Phong highlight for point lights, extended by the coefficients the other
+//! techniques share: Lambertian transmission, GGX roughness, Fresnel weighting, thin
+//! sheets and metals. It is what the native format's plain material keys describe, and the
+//! approximation every other material gives the techniques that are not Monte Carlo
+//! (Whitted's integrator, the irradiance cache's diffuse part, the illumination network's
+//! lobes): [`SurfaceModel::approximation`].
+//!
+//! Its BSDF for the Monte Carlo techniques interprets the coefficients as the lobes of
+//! [`crate::bsdf`]: kd/π, kdt/π, ks mirror or GGX reflection, kt smooth or GGX refraction.
+
+use super::SurfaceModel;
+use crate::bsdf::{Bsdf, Coating, Conductor, Lobes};
 use crate::math::{Rgb, Vec2, Vec3};
-use crate::scene::tabulated::TabulatedBrdf;
+use crate::scene::{SurfacePoint, Texture};
 use std::sync::Arc;
 
-/// A surface in Whitted's model (eq. 2 of the paper): I = ka·Ia + kd Σ(N·Lj) + ks S + kt T,
-/// with a Phong highlight for point lights, plus emission for area lights.
+/// Whitted's material with raylink's extensions (see the module documentation).
 #[derive(Clone, Debug, PartialEq)]
-pub struct Material {
-    pub name: String,
+pub struct Classic {
     /// kd: diffuse reflectance.
     pub diffuse: Texture,
     /// ka: ambient reflectance; `None` means "the diffuse colour", the usual choice.
@@ -53,30 +61,10 @@ pub struct Material {
     /// (pbrt's textured `reflectance`): at each hit, [`Conductor::from_reflectance`] of the
     /// map's value in place of `conductor` (which is that of the map's largest value).
     pub reflectance_map: Option<Texture>,
-    /// Emitted radiance; a shape with a non-zero emission is an area light. With
-    /// `emission_map` it is the map's mean (for the illumination network).
-    pub emission: Rgb,
-    /// Emitted radiance varying over the surface, in place of `emission` at each point.
-    pub emission_map: Option<Texture>,
-    /// Emit on both sides of the surface (pbrt's `twosided` area lights), not only on the
-    /// side the geometric normal faces.
-    pub two_sided_emission: bool,
-    /// A mix of two other materials, one chosen at each hit ([`Mix`]); the fields above are
-    /// then those of the one with the larger weight.
-    pub mix: Option<Mix>,
-    /// A tabulated reflectance in place of the diffuse, specular and transmission lobes (an
-    /// opaque surface reflecting on both sides).
-    pub brdf: Option<Arc<TabulatedBrdf>>,
     /// A roughness that varies over the surface, in place of `roughness` and `roughness_v`
     /// for the Monte Carlo integrators (the other techniques use those, set to the map's
     /// largest value).
     pub roughness_map: Option<Arc<RoughnessMap>>,
-    /// A normal map or bump map turning the shading normal.
-    pub normal_detail: Option<NormalDetail>,
-    /// A dielectric coat over the material's base: its diffuse kd, or its conductor (with
-    /// `roughness`) when it has one. The Monte Carlo integrators then use the layered BSDF
-    /// ([`Coating`]); the other fields stay what the approximating techniques read.
-    pub coating: Option<Coating>,
 }
 
 /// A roughness given by textures (pbrt's textured `roughness`, `uroughness`, `vroughness`).
@@ -119,10 +107,9 @@ impl RoughnessMap {
     }
 }
 
-impl Default for Material {
+impl Default for Classic {
     fn default() -> Self {
-        Material {
-            name: String::new(),
+        Classic {
             diffuse: Texture::Constant(Rgb::splat(0.5)),
             ambient: None,
             specular: Rgb::ZERO,
@@ -137,34 +124,17 @@ impl Default for Material {
             thin: false,
             conductor: None,
             reflectance_map: None,
-            emission: Rgb::ZERO,
-            emission_map: None,
-            two_sided_emission: false,
-            mix: None,
-            brdf: None,
             roughness_map: None,
-            normal_detail: None,
-            coating: None,
         }
     }
 }
 
-impl Material {
-    pub fn is_emissive(&self) -> bool {
-        self.emission.max_element() > 0.0
-    }
-
-    /// Whether the surface emits towards `wo` (pointing away from it), given its geometric
-    /// normal `ng`.
-    pub fn emits_towards(&self, wo: Vec3, ng: Vec3) -> bool {
-        self.is_emissive() && (self.two_sided_emission || wo.dot(ng) > 0.0)
-    }
-
-    /// Emitted radiance at position `p`, surface coordinates `uv`, geometric normal `n`.
-    pub fn emission_at(&self, p: Vec3, uv: Vec2, n: Vec3) -> Rgb {
-        match &self.emission_map {
-            Some(t) => t.eval(p, uv, n).max(Rgb::ZERO),
-            None => self.emission,
+impl Classic {
+    /// A surface with no lobe (black): the base the other kinds set their lobes on.
+    pub fn blank() -> Classic {
+        Classic {
+            diffuse: Texture::Constant(Rgb::ZERO),
+            ..Classic::default()
         }
     }
 
@@ -204,7 +174,7 @@ impl Material {
     }
 
     /// kt with a thin sheet's Fresnel transmittance at normal incidence folded in (as
-    /// [`Material::specular_at_normal`]).
+    /// [`Classic::specular_at_normal`]).
     pub fn transmission_at_normal(&self) -> Rgb {
         if self.thin_fresnel() {
             self.transmission * (1.0 - self.thin_reflectance(1.0))
@@ -221,124 +191,62 @@ impl Material {
     pub fn thin_reflectance(&self, cos: f32) -> f32 {
         crate::math::optics::fresnel_thin_dielectric(cos, self.ior)
     }
-}
 
-/// A dielectric coat over a base (pbrt-v4's `coateddiffuse` and `coatedconductor`): light
-/// refracts into a slab of index `ior` and `thickness`, bounces between the base and the coat
-/// (absorbed along the way, optionally scattered by a medium), and leaves through the coat.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Coating {
-    /// Index of refraction of the coat (outside is vacuum).
-    pub ior: f32,
-    /// GGX α of the coat's interface; 0 is smooth.
-    pub roughness: f32,
-    /// GGX α along the bitangent when it differs from `roughness`.
-    pub roughness_v: Option<f32>,
-    /// Thickness in units of the medium's mean free path: light crossing it at angle θ keeps
-    /// exp(−thickness/|cos θ|).
-    pub thickness: f32,
-    /// Single-scattering albedo of the medium in the coat; 0 is an absorbing, non-scattering
-    /// coat.
-    pub albedo: Rgb,
-    /// Henyey–Greenstein asymmetry of the medium's scattering.
-    pub g: f32,
-    /// Longest random walk through the layers.
-    pub max_depth: u32,
-    /// Random walks per evaluation.
-    pub samples: u32,
-}
-
-impl Default for Coating {
-    /// pbrt-v4's defaults: a smooth coat of index 1.5 and thickness 0.01.
-    fn default() -> Self {
-        Coating {
-            ior: 1.5,
-            roughness: 0.0,
-            roughness_v: None,
-            thickness: 0.01,
-            albedo: Rgb::ZERO,
-            g: 0.0,
-            max_depth: 10,
-            samples: 1,
-        }
-    }
-}
-
-impl Coating {
-    /// GGX (α_x, α_y) of the coat.
-    pub fn alphas(&self) -> (f32, f32) {
-        (self.roughness, self.roughness_v.unwrap_or(self.roughness))
-    }
-}
-
-/// A conductor's complex index of refraction η + ik, per colour channel.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Conductor {
-    pub eta: Rgb,
-    pub k: Rgb,
-}
-
-/// RGB (η, k) of the named metals: the widely used reductions of the measured spectra that
-/// pbrt-v4 ships as `metal-<name>-eta` / `metal-<name>-k` (the values of pbrt-v3's and
-/// Mitsuba's RGB builds).
-const METALS: &[(&str, [f32; 3], [f32; 3])] = &[
-    (
-        "Cu",
-        [0.200438, 0.924033, 1.10221],
-        [3.91295, 2.45285, 2.14219],
-    ),
-    (
-        "Au",
-        [0.143119, 0.374957, 1.44248],
-        [3.98316, 2.38572, 1.60322],
-    ),
-    (
-        "Ag",
-        [0.155265, 0.116723, 0.138342],
-        [4.82835, 3.12225, 2.14696],
-    ),
-    (
-        "Al",
-        [1.65746, 0.880369, 0.521229],
-        [9.22387, 6.26952, 4.837],
-    ),
-    ("CuZn", [0.444, 0.527, 1.094], [3.695, 2.765, 1.829]),
-    ("MgO", [1.732, 1.736, 1.745], [0.0, 0.0, 0.0]),
-    ("TiO2", [2.557, 2.651, 2.811], [0.0, 0.0, 0.0]),
-];
-
-impl Conductor {
-    /// A named metal ("Cu", "Au", "Ag", "Al", "CuZn", "MgO", "TiO2"), `None` if unknown.
-    pub fn named(name: &str) -> Option<Conductor> {
-        METALS
-            .iter()
-            .find(|m| m.0 == name)
-            .map(|&(_, eta, k)| Conductor {
-                eta: Rgb::from(eta),
-                k: Rgb::from(k),
-            })
+    /// Whether only the Lambertian lobe is anywhere on the surface.
+    pub fn is_lambertian(&self) -> bool {
+        !self.fresnel
+            && self.specular.max_element() <= 0.0
+            && self.transmission.max_element() <= 0.0
+            && self.diffuse_transmission.max_value().max_element() <= 0.0
     }
 
-    /// The names [`Conductor::named`] knows.
-    pub fn names() -> impl Iterator<Item = &'static str> {
-        METALS.iter().map(|m| m.0)
-    }
-
-    /// The conductor with normal-incidence reflectance `r` and no other parameter: η = 1,
-    /// k = 2√r / √(1 − r) (pbrt-v4's `ConductorMaterial` given a `reflectance`).
-    pub fn from_reflectance(r: Rgb) -> Conductor {
-        let k = |r: f32| {
-            let r = r.clamp(0.0, 0.9999);
-            2.0 * r.sqrt() / (1.0 - r).sqrt()
+    /// The BSDF's lobes at `sp`: the textures evaluated there.
+    pub fn lobes_at(&self, sp: &SurfacePoint) -> Lobes {
+        let alphas = match &self.roughness_map {
+            Some(map) => map.alphas(sp.p, sp.uv, sp.ng),
+            None => self.alphas(),
         };
-        Conductor {
-            eta: Rgb::ONE,
-            k: Rgb::new(k(r.x), k(r.y), k(r.z)),
+        Lobes {
+            kd: self.diffuse.eval(sp.p, sp.uv, sp.ng),
+            kdt: self.diffuse_transmission.eval(sp.p, sp.uv, sp.ng),
+            ks: self.specular_at(sp.p, sp.uv, sp.ng),
+            kt: self.transmission,
+            ior: self.ior,
+            alphas,
+            fresnel: self.fresnel,
+            thin: self.thin,
+            conductor: self.conductor_at(sp.p, sp.uv, sp.ng),
+            lambertian: self.is_lambertian(),
         }
     }
 
-    /// Fresnel reflectance per channel at incidence cosine `cos`.
-    pub fn reflectance(&self, cos: f32) -> Rgb {
-        crate::math::optics::fresnel_conductor(cos, self.eta, self.k)
+    /// The lobes' BSDF at `sp` for a path arriving from `wo`.
+    pub fn lobe_bsdf(&self, sp: &SurfacePoint, wo: Vec3) -> Bsdf<'static> {
+        let (n, ng) = Bsdf::facing(self.is_transmissive(), sp.ns, sp.ng, wo);
+        Bsdf::of_lobes(&self.lobes_at(sp), n, ng)
+    }
+
+    /// The BSDF of `coating` over these lobes at `sp` for a path arriving from `wo`.
+    pub fn coated_bsdf<'a>(&self, coating: &'a Coating, sp: &SurfacePoint, wo: Vec3) -> Bsdf<'a> {
+        let (n, ng) = Bsdf::facing(self.is_transmissive(), sp.ns, sp.ng, wo);
+        Bsdf::coated(&self.lobes_at(sp), coating, n, ng)
+    }
+}
+
+impl SurfaceModel for Classic {
+    fn kind(&self) -> &'static str {
+        "classic"
+    }
+
+    fn bsdf<'a>(&'a self, sp: &SurfacePoint, wo: Vec3) -> Bsdf<'a> {
+        self.lobe_bsdf(sp, wo)
+    }
+
+    fn approximation(&self) -> &Classic {
+        self
+    }
+
+    fn diffuse_mut(&mut self) -> Option<&mut Texture> {
+        Some(&mut self.diffuse)
     }
 }

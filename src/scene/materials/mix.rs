@@ -6,12 +6,14 @@
 //!
 //! The choice is made where a ray's hit becomes a surface point
 //! ([`crate::integrators::Context::intersect`]), so every integrator that follows rays
-//! sees one plain material. The mix's own fields are those of its material with the larger
+//! sees one plain material. Asked directly, a mix answers as its material with the larger
 //! weight; the illumination network, which reads a shape's material without a ray, blends
 //! the two materials' reflectance instead.
 
-use super::{Material, Scene, Texture};
+use super::{Classic, Material, Surface, SurfaceModel};
+use crate::bsdf::{Bsdf, TabulatedBrdf};
 use crate::math::{Vec2, Vec3};
+use crate::scene::{Scene, SurfacePoint, Texture};
 use std::sync::Arc;
 
 /// Nested mixes deeper than this resolve to the material reached (a guard against a cycle,
@@ -27,6 +29,31 @@ pub struct Mix {
     pub amount: f32,
     /// A probability varying over the surface (a float texture), in place of `amount`.
     pub amount_map: Option<Arc<Texture>>,
+    /// The surface of the material with the larger weight (the first when equal), which
+    /// the mix answers as when asked directly.
+    pub dominant: Box<Surface>,
+}
+
+impl SurfaceModel for Mix {
+    fn kind(&self) -> &'static str {
+        "mix"
+    }
+
+    fn bsdf<'a>(&'a self, sp: &SurfacePoint, wo: Vec3) -> Bsdf<'a> {
+        self.dominant.model().bsdf(sp, wo)
+    }
+
+    fn approximation(&self) -> &Classic {
+        self.dominant.model().approximation()
+    }
+
+    fn diffuse_mut(&mut self) -> Option<&mut Texture> {
+        None
+    }
+
+    fn table(&self) -> Option<&Arc<TabulatedBrdf>> {
+        self.dominant.model().table()
+    }
 }
 
 impl Mix {
@@ -84,12 +111,17 @@ impl Material {
         };
         let mean = mean.clamp(0.0, 1.0);
         let dominant = if mean > 0.5 { b.1 } else { a.1 };
+        let dominant_surface = match &dominant.surface {
+            Surface::Mix(m) => m.dominant.clone(),
+            other => Box::new(other.clone()),
+        };
         Material {
             name,
-            mix: Some(Mix {
+            surface: Surface::Mix(Mix {
                 materials: [a.0, b.0],
                 amount: mean,
                 amount_map,
+                dominant: dominant_surface,
             }),
             ..dominant.clone()
         }
@@ -102,7 +134,7 @@ impl Scene {
     /// itself unless it is a mix.
     pub fn material_at(&self, mut index: usize, p: Vec3, uv: Vec2, n: Vec3, wo: Vec3) -> usize {
         for _ in 0..MAX_NESTING {
-            match &self.materials[index].mix {
+            match self.materials[index].mix() {
                 Some(mix) => index = mix.choose(p, uv, n, wo),
                 None => break,
             }
@@ -118,7 +150,7 @@ impl Scene {
 
     fn may_transmit_nested(&self, index: usize, depth: usize) -> bool {
         let m = &self.materials[index];
-        match &m.mix {
+        match m.mix() {
             Some(mix) if depth > 0 => mix
                 .materials
                 .iter()
@@ -143,6 +175,7 @@ mod tests {
                 materials: [3, 7],
                 amount,
                 amount_map: None,
+                dominant: Box::new(Surface::Classic(Classic::default())),
             };
             let n = 100_000;
             let mut second = 0;
@@ -164,6 +197,7 @@ mod tests {
             materials: [3, 7],
             amount: 0.0,
             amount_map: None,
+            dominant: Box::new(Surface::Classic(Classic::default())),
         };
         assert_eq!(never.choose(Vec3::ONE, Vec2::ZERO, Vec3::Z, Vec3::Z), 3);
     }
