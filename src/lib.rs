@@ -48,7 +48,6 @@ pub mod fuzzing;
 pub mod image;
 pub(crate) mod integrators;
 pub mod job;
-pub(crate) mod lights;
 pub mod math;
 pub mod platform;
 pub(crate) mod render;

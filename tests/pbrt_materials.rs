@@ -158,18 +158,15 @@ fn lights_and_environment() {
     ));
     assert_eq!(
         s.lights[0],
-        raylink::scene::Light::Point {
+        raylink::scene::Light::Point(raylink::scene::lights::PointLight {
             position: Vec3::new(1.0, 1.0, 0.0),
             intensity: Rgb::new(2.0, 4.0, 6.0)
-        }
+        })
     );
-    let raylink::scene::Light::Directional {
-        direction,
-        irradiance,
-    } = s.lights[1]
-    else {
+    let raylink::scene::Light::Directional(ref l) = s.lights[1] else {
         panic!()
     };
+    let (direction, irradiance) = (l.direction, l.irradiance);
     assert!(close(direction, Vec3::NEG_Y));
     assert!((raylink::math::luminance(irradiance) - 1.0).abs() < 0.03);
     assert_eq!(s.background, Rgb::new(0.1, 0.2, 0.3));
@@ -303,16 +300,16 @@ fn spot_lights_and_two_sided_area_lights() {
          AttributeBegin AreaLightSource \"diffuse\" \"bool twosided\" true {TRI} AttributeEnd\n"
     ));
     assert!(s.warnings.is_empty(), "{:?}", s.warnings);
-    let Light::Spot {
-        position,
-        direction,
-        intensity,
-        cone_angle,
-        cone_delta,
-    } = s.lights[0]
-    else {
+    let Light::Spot(ref spot) = s.lights[0] else {
         panic!("{:?}", s.lights[0])
     };
+    let (position, direction, intensity, cone_angle, cone_delta) = (
+        spot.position,
+        spot.direction,
+        spot.intensity,
+        spot.cone_angle,
+        spot.cone_delta,
+    );
     // The header's `Scale -1 1 1` mirrors nothing on the y axis.
     assert!(close(position, Vec3::new(0.0, 2.0, 0.0)), "{position}");
     assert!(close(direction, Vec3::new(0.0, -1.0, 0.0)), "{direction}");
@@ -320,9 +317,10 @@ fn spot_lights_and_two_sided_area_lights() {
         (intensity, cone_angle, cone_delta),
         (Rgb::new(2.0, 4.0, 6.0), 30.0, 5.0)
     );
-    let Light::Spot { intensity, .. } = s.lights[1] else {
+    let Light::Spot(ref spot) = s.lights[1] else {
         panic!("{:?}", s.lights[1])
     };
+    let intensity = spot.intensity;
     let (cs, ce) = (30f64.to_radians().cos(), 40f64.to_radians().cos());
     let k_e = std::f64::consts::TAU * ((1.0 - cs) + (cs - ce) / 2.0);
     assert!(

@@ -166,7 +166,7 @@ fn whitted_scene_has_glass_over_a_mirror_and_a_checkered_floor() {
     assert!(s.ambient.max_element() > 0.0);
     assert!(s.background.z > s.background.x);
     assert!(!s.lights.is_empty());
-    assert!(s.lights.iter().all(|l| matches!(l, Light::Point { .. })));
+    assert!(s.lights.iter().all(|l| matches!(l, Light::Point(_))));
     let Geometry::Sphere { center: g, .. } = s.shapes[1].geometry else {
         panic!("shape 1 is the glass sphere")
     };

@@ -70,10 +70,12 @@ fn diffuse_plane_under_point_light_matches_lambert() {
     floor(&mut scene, 0.0, 20.0, m);
     let light_pos = Vec3::new(1.0, 3.0, -0.5);
     let intensity = Rgb::new(20.0, 15.0, 10.0);
-    scene.lights.push(Light::Point {
-        position: light_pos,
-        intensity,
-    });
+    scene
+        .lights
+        .push(Light::Point(raylink::scene::lights::PointLight {
+            position: light_pos,
+            intensity,
+        }));
     scene.ambient = Rgb::splat(0.1);
     let (image, _) = render(&scene, whitted(1, 16), (64, 48), 1, Some(2));
     let basis = scene.camera.basis();
@@ -174,10 +176,12 @@ fn busy_scene() -> Scene {
         ],
         lamp,
     );
-    scene.lights.push(Light::Point {
-        position: Vec3::new(3.0, 4.0, 3.0),
-        intensity: Rgb::splat(10.0),
-    });
+    scene
+        .lights
+        .push(Light::Point(raylink::scene::lights::PointLight {
+            position: Vec3::new(3.0, 4.0, 3.0),
+            intensity: Rgb::splat(10.0),
+        }));
     scene.ambient = Rgb::splat(0.05);
     scene.background = Rgb::new(0.1, 0.2, 0.4);
     scene

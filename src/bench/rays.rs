@@ -5,7 +5,7 @@
 use crate::accel::Accel;
 use crate::math::spawn::Spot;
 use crate::math::{frame, Ray, Rng, Vec2, Vec3};
-use crate::scene::light::AreaLight;
+use crate::scene::lights::AreaLight;
 use crate::scene::{Light, Scene};
 use std::fmt;
 
@@ -117,10 +117,8 @@ fn light_point(
     match area_lights.get(i) {
         Some(light) => light.sample(u).spot(),
         None => Spot::exact(match &scene.lights[i - area_lights.len()] {
-            Light::Point { position, .. }
-            | Light::Spot { position, .. }
-            | Light::Goniometric { position, .. } => *position,
-            Light::Directional { direction, .. } => p - direction.normalize() * 1e4,
+            Light::Directional(l) => p - l.direction.normalize() * 1e4,
+            l => l.position().unwrap_or(p),
         }),
     }
 }

@@ -103,10 +103,10 @@ fn base_scene(name: String, camera: Camera, light: Vec3) -> Scene {
         shapes: Vec::new(),
         prototypes: Vec::new(),
         instances: Vec::new(),
-        lights: vec![Light::Point {
+        lights: vec![Light::Point(crate::scene::lights::PointLight {
             position: light,
             intensity: Rgb::splat(100.0),
-        }],
+        })],
         ambient: Rgb::splat(0.05),
         background: Rgb::splat(0.2),
         settings: Default::default(),

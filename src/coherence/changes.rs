@@ -3,8 +3,8 @@
 //! shadow tables or, when they move, reach every block that found a surface; anything that
 //! every pixel depends on forces a full frame.
 
-use crate::lights::LightSet;
 use crate::math::Vec3;
+use crate::scene::lights::LightSet;
 use crate::scene::{Geometry, Light, Scene, Shape};
 use rustc_hash::FxHashMap;
 use std::hash::{Hash, Hasher};
@@ -213,7 +213,7 @@ impl FrameSummary {
             global += &format!("|{pmf:?}");
             if (0..ls.emitters.len()).any(|i| ls.is_infinite(i)) {
                 // Directional and environment light come from a disk around the scene.
-                global += &format!("|{:?}|{}", ls.center, ls.radius);
+                global += &format!("|{:?}|{}", ls.world.center, ls.world.radius);
             }
         }
         FrameSummary {
@@ -257,8 +257,8 @@ impl FrameSummary {
         if self.lights.len() != next.lights.len() {
             c.light_moved = true;
             for l in self.lights.iter().chain(&next.lights) {
-                if let Light::Point { position, .. } = l {
-                    c.shadows.push((*position, *position));
+                if let Light::Point(l) = l {
+                    c.shadows.push((l.position, l.position));
                 }
             }
             return c;
@@ -266,21 +266,13 @@ impl FrameSummary {
         for (i, (a, b)) in self.lights.iter().zip(&next.lights).enumerate() {
             match (a, b) {
                 _ if a == b => {}
-                (
-                    Light::Point {
-                        position: pa,
-                        intensity: ia,
-                    },
-                    Light::Point {
-                        position: pb,
-                        intensity: ib,
-                    },
-                ) => {
+                (Light::Point(la), Light::Point(lb)) => {
+                    let (pa, pb) = (la.position, lb.position);
                     if pa != pb {
                         c.light_moved = true;
-                        c.shadows.push((*pa, *pa));
-                        c.shadows.push((*pb, *pb));
-                    } else if ia != ib {
+                        c.shadows.push((pa, pa));
+                        c.shadows.push((pb, pb));
+                    } else if la.intensity != lb.intensity {
                         c.dimmed.push(i);
                     }
                 }

@@ -214,7 +214,7 @@ impl<'a> RecordingAccel<'a> {
             .iter()
             .enumerate()
             .filter_map(|(i, light)| match light {
-                Light::Point { position, .. } => Some((1u64 << i.min(63), (*position).into())),
+                Light::Point(l) => Some((1u64 << i.min(63), l.position.into())),
                 _ => None,
             })
             .collect();
@@ -576,7 +576,7 @@ mod tests {
             .unwrap();
         let accel = accel::build(&scene, Backend::Embree, &Control::default()).unwrap();
         let light = match scene.lights[0] {
-            Light::Point { position, .. } => position,
+            Light::Point(ref l) => l.position,
             _ => unreachable!("the scene's light is a point light"),
         };
         let (lo, hi) = scene.bounds().unwrap();

@@ -168,8 +168,8 @@ pub(crate) fn lookahead_grid(changes: &[Changes], voxels: u32) -> Grid {
 fn extent(scene: &Scene) -> Vec<Aabb> {
     let mut boxes: Vec<Aabb> = scene.bounds().into_iter().collect();
     for l in &scene.lights {
-        if let Light::Point { position, .. } = l {
-            boxes.push((*position, *position));
+        if let Light::Point(l) = l {
+            boxes.push((l.position, l.position));
         }
     }
     boxes

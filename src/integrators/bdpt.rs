@@ -11,12 +11,12 @@ use super::light::{connect_to_camera, lens_sample};
 use super::path::russian_roulette;
 use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
-use crate::lights::Emitter;
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
 use crate::math::warp::cosine_hemisphere;
 use crate::math::{frame, Ray, Rgb, Vec2, Vec3};
 use crate::scene::camera::CameraBasis;
+use crate::scene::lights::Emitter;
 use crate::scene::Scene;
 use std::f32::consts::PI;
 
@@ -37,14 +37,11 @@ impl Bdpt {
 
     /// Whether BDPT can render a scene: it needs every emitter to have a position.
     pub fn check_scene(scene: &Scene) -> Result<(), String> {
-        if !scene.lights.iter().all(|l| {
-            matches!(
-                l,
-                crate::scene::Light::Point { .. }
-                    | crate::scene::Light::Spot { .. }
-                    | crate::scene::Light::Goniometric { .. }
-            )
-        }) || scene.background.max_element() > 0.0
+        if !scene
+            .lights
+            .iter()
+            .all(|l| l.model().point_source().is_some())
+            || scene.background.max_element() > 0.0
             || scene.environment.is_some()
         {
             return Err(
@@ -167,7 +164,9 @@ impl Vertex<'_> {
     fn pdf_light(&self, ctx: &Context, next: &Vertex) -> f32 {
         let w = (next.p - self.p).normalize();
         let pdf_dir = match self.kind {
-            Kind::Light { light, point: true } => ctx.lights.emitters[light].pdf_dir_point(w),
+            Kind::Light { light, point: true } => {
+                ctx.lights.emitters[light].model().pdf_emission_direction(w)
+            }
             _ => match self.area_light(ctx) {
                 Some(a) if a.two_sided => 0.5 * w.dot(self.n).abs() / PI,
                 _ => w.dot(self.n).max(0.0) / PI,
@@ -177,7 +176,7 @@ impl Vertex<'_> {
     }
 
     /// The area light this vertex lies on (a light subpath's start or an emitter hit).
-    fn area_light<'c>(&self, ctx: &'c Context) -> Option<&'c crate::scene::light::AreaLight> {
+    fn area_light<'c>(&self, ctx: &'c Context) -> Option<&'c crate::scene::lights::AreaLight> {
         let light = match self.kind {
             Kind::Light { light, .. } => light,
             _ => self.light?,
@@ -209,9 +208,7 @@ impl Vertex<'_> {
         };
         match &ctx.lights.emitters[light] {
             Emitter::Area(a) => ctx.lights.pmf(light) / a.area,
-            Emitter::Point { .. } | Emitter::Spot { .. } | Emitter::Goniometric { .. } => {
-                ctx.lights.pmf(light)
-            }
+            e if e.model().point_source().is_some() => ctx.lights.pmf(light),
             _ => 0.0,
         }
     }
@@ -453,20 +450,8 @@ impl MonteCarlo for Bdpt {
             v0.emission = le;
             let (dir, pdf_dir, cos) = if point {
                 // Point lights emit over the sphere, spot lights over their cone.
-                match ctx.lights.emitters[light] {
-                    Emitter::Spot {
-                        direction, cos_end, ..
-                    } => {
-                        let (t, b) = frame(direction);
-                        let l = crate::math::warp::uniform_cone(u_dir, cos_end);
-                        let d = (t * l.x + b * l.y + direction * l.z).normalize();
-                        (d, crate::math::warp::uniform_cone_pdf(cos_end), 1.0)
-                    }
-                    _ => {
-                        let d = crate::math::warp::uniform_sphere(u_dir);
-                        (d, 1.0 / (4.0 * PI), 1.0)
-                    }
-                }
+                let (d, pdf) = ctx.lights.emitters[light].model().emission_direction(u_dir);
+                (d, pdf, 1.0)
             } else {
                 // A two-sided light picks a side with half of u_dir.x, as pbrt-v4 does.
                 let two_sided = v0.area_light(ctx).is_some_and(|a| a.two_sided);
@@ -490,7 +475,7 @@ impl MonteCarlo for Bdpt {
             if pdf_dir > 0.0 {
                 // A spot light's intensity falls off towards the edge of its cone.
                 let le_dir = if point {
-                    ctx.lights.emitters[light].intensity_towards(dir)
+                    ctx.lights.emitters[light].model().intensity_towards(dir)
                 } else {
                     le
                 };
@@ -612,7 +597,7 @@ impl MonteCarlo for Bdpt {
                         let fq = if s == 1 {
                             // Emission of the light vertex towards pt.
                             if let Kind::Light { light, point: true } = qs.kind {
-                                ctx.lights.emitters[light].intensity_towards(-wdir)
+                                ctx.lights.emitters[light].model().intensity_towards(-wdir)
                             } else {
                                 let cos_l = qs.emitting_cos(ctx, -wdir);
                                 if cos_l <= 0.0 {
@@ -666,20 +651,9 @@ fn sample_light_point(
             let lp = a.sample(u);
             Some((i, lp.spot(), sel / a.area, false, a.radiance_at(&lp)))
         }
-        Emitter::Point {
-            position,
-            intensity,
-        }
-        | Emitter::Spot {
-            position,
-            intensity,
-            ..
-        }
-        | Emitter::Goniometric {
-            position,
-            intensity,
-            ..
-        } => Some((i, Spot::exact(*position), sel, true, *intensity)),
-        _ => None,
+        e => e
+            .model()
+            .point_source()
+            .map(|(position, intensity)| (i, Spot::exact(position), sel, true, intensity)),
     }
 }

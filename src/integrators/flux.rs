@@ -22,7 +22,7 @@ use crate::math::sobol::Sampler;
 use crate::math::warp::{cosine_hemisphere, power_heuristic};
 use crate::math::{frame, Ray, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
-use crate::scene::light::AreaLight;
+use crate::scene::lights::AreaLight;
 use crate::scene::Scene;
 use crate::{Error, Result};
 use rayon::prelude::*;

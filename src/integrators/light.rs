@@ -7,11 +7,11 @@
 use super::path::russian_roulette;
 use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
-use crate::lights::{EmissionSample, Emitter};
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
 use crate::math::{Ray, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
+use crate::scene::lights::{EmissionSample, Emitter};
 use crate::scene::SurfacePoint;
 
 #[derive(Clone, Copy, Debug, PartialEq)]

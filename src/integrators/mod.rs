@@ -13,11 +13,11 @@ pub(crate) mod technique;
 pub mod whitted;
 
 use crate::accel::Accel;
-use crate::lights::LightSet;
 use crate::math::sobol::Sampler;
 use crate::math::{Ray, Rgb, Rng};
 use crate::scene::camera::CameraBasis;
-use crate::scene::light::AreaLight;
+use crate::scene::lights::AreaLight;
+use crate::scene::lights::LightSet;
 use crate::scene::{Scene, SurfacePoint};
 
 /// What integrators render with.

@@ -19,8 +19,8 @@ use crate::bsdf::{Bsdf, Transport};
 pub use crate::math::optics::{fresnel_dielectric, reflect, refract};
 use crate::math::spawn::Spot;
 use crate::math::{frame, Ray, Rgb, Rng, Vec2, Vec3};
-use crate::scene::light::{spot_cosines, spot_falloff};
-use crate::scene::{Light, Material, SurfacePoint};
+use crate::scene::lights::Illumination;
+use crate::scene::{Material, SurfacePoint};
 use std::f32::consts::{FRAC_1_PI, PI};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -194,50 +194,13 @@ impl RayTree<'_> {
         }
         let mut color = Rgb::ZERO;
         for light in &ctx.scene.lights {
-            let (wi, irradiance, target) = match *light {
-                Light::Point {
-                    position,
-                    intensity,
-                } => {
-                    let to = position - p;
-                    let d2 = to.length_squared();
-                    (to / d2.sqrt(), intensity / d2, Some(position))
-                }
-                Light::Directional {
-                    direction,
-                    irradiance,
-                } => (-direction.normalize(), irradiance, None),
-                Light::Spot {
-                    position,
-                    direction,
-                    intensity,
-                    cone_angle,
-                    cone_delta,
-                } => {
-                    let to = position - p;
-                    let d2 = to.length_squared();
-                    let wi = to / d2.sqrt();
-                    let (cos_start, cos_end) = spot_cosines(cone_angle, cone_delta);
-                    let falloff = spot_falloff(-wi.dot(direction.normalize()), cos_start, cos_end);
-                    if falloff == 0.0 {
-                        continue;
-                    }
-                    (wi, intensity * falloff / d2, Some(position))
-                }
-                Light::Goniometric {
-                    position,
-                    intensity,
-                    ref map,
-                } => {
-                    let to = position - p;
-                    let d2 = to.length_squared();
-                    let wi = to / d2.sqrt();
-                    let value = map.value(-wi);
-                    if value == 0.0 {
-                        continue;
-                    }
-                    (wi, intensity * value / d2, Some(position))
-                }
+            let Some(Illumination {
+                wi,
+                irradiance,
+                position: target,
+            }) = light.model().illuminate(p)
+            else {
+                continue;
             };
             let cos = n.dot(wi);
             let front = cos > 0.0 && ng.dot(wi) > 0.0;
@@ -284,7 +247,7 @@ impl RayTree<'_> {
     /// sample with its own shadow ray.
     fn area_light(
         &mut self,
-        light: &crate::scene::light::AreaLight,
+        light: &crate::scene::lights::AreaLight,
         at: &Spot,
         ng: Vec3,
         n: Vec3,

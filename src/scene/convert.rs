@@ -131,8 +131,8 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::Result<()> {
         lights: scene
             .lights
             .iter()
-            .map(|l| spanned(light(l, refs)))
-            .collect(),
+            .map(|l| light(l, refs).map(spanned))
+            .collect::<crate::Result<_>>()?,
         render: render(&scene.settings).map(spanned),
     };
     let mut meshes = MeshDir::new(&out_dir, format!("{stem}.meshes"));
@@ -522,7 +522,8 @@ fn diffuse(t: &Texture, refs: Refs) -> DiffuseDesc {
     DiffuseDesc::Texture(table)
 }
 
-fn light(l: &Light, refs: Refs) -> LightDesc {
+/// A light as a `[[lights]]` table; an error for a kind the native format cannot name.
+fn light(l: &Light, refs: Refs) -> crate::Result<LightDesc> {
     let mut d = LightDesc {
         kind: LightKind::Point,
         position: None,
@@ -534,49 +535,40 @@ fn light(l: &Light, refs: Refs) -> LightDesc {
         image: None,
         transform: None,
     };
-    match *l {
-        Light::Point {
-            position,
-            intensity,
-        } => {
-            d.position = Some(V3(position));
-            d.intensity = Some(Splat3(intensity));
+    match l {
+        Light::Point(l) => {
+            d.position = Some(V3(l.position));
+            d.intensity = Some(Splat3(l.intensity));
         }
-        Light::Directional {
-            direction,
-            irradiance,
-        } => {
+        Light::Directional(l) => {
             d.kind = LightKind::Directional;
-            d.direction = Some(V3(direction));
-            d.irradiance = Some(Splat3(irradiance));
+            d.direction = Some(V3(l.direction));
+            d.irradiance = Some(Splat3(l.irradiance));
         }
-        Light::Spot {
-            position,
-            direction,
-            intensity,
-            cone_angle,
-            cone_delta,
-        } => {
+        Light::Spot(l) => {
             d.kind = LightKind::Spot;
-            d.position = Some(V3(position));
-            d.direction = Some(V3(direction));
-            d.intensity = Some(Splat3(intensity));
-            d.cone_angle = Some(cone_angle);
-            d.cone_delta = Some(cone_delta);
+            d.position = Some(V3(l.position));
+            d.direction = Some(V3(l.direction));
+            d.intensity = Some(Splat3(l.intensity));
+            d.cone_angle = Some(l.cone_angle);
+            d.cone_delta = Some(l.cone_delta);
         }
-        Light::Goniometric {
-            position,
-            intensity,
-            ref map,
-        } => {
+        Light::Goniometric(l) => {
             d.kind = LightKind::Goniometric;
-            d.position = Some(V3(position));
-            d.intensity = Some(Splat3(intensity));
-            d.image = Some(refs.to(&map.file));
-            d.transform = Some(OneOrMany::One(matrix_step(map.transform)));
+            d.position = Some(V3(l.position));
+            d.intensity = Some(Splat3(l.intensity));
+            d.image = Some(refs.to(&l.map.file));
+            d.transform = Some(OneOrMany::One(matrix_step(l.map.transform)));
+        }
+        Light::Projection(l) => {
+            return Err(Error::Invalid(format!(
+                "the projection light of \"{}\" has no form in the native format; render \
+                 the pbrt scene as it is",
+                l.file.display()
+            )))
         }
     }
-    d
+    Ok(d)
 }
 
 /// One shape as a `[[shapes]]` table; a mesh goes to the mesh folder as file `i`.

@@ -112,10 +112,9 @@ fn scene(geometry: Geometry, detail: Option<NormalDetail>) -> Scene {
         motion: None,
     });
     let to_light = Vec3::new(0.5, 3f32.sqrt() / 2.0, 0.0);
-    scene.lights.push(Light::Directional {
-        direction: -to_light,
-        irradiance: Rgb::ONE,
-    });
+    scene.lights.push(Light::Directional(
+        crate::scene::lights::DirectionalLight::new(-to_light, Rgb::ONE),
+    ));
     scene
 }
 

@@ -114,10 +114,12 @@ fn shadow_scene(blocker: Material) -> (Scene, Vec3) {
     let bottom = top.map(|v| Vec3::new(v.x, 1.4, v.z));
     quad(&mut scene, [bottom[3], bottom[2], bottom[1], bottom[0]], b);
     let light = Vec3::new(0.0, 4.0, 0.0);
-    scene.lights.push(Light::Point {
-        position: light,
-        intensity: Rgb::splat(30.0),
-    });
+    scene
+        .lights
+        .push(Light::Point(crate::scene::lights::PointLight {
+            position: light,
+            intensity: Rgb::splat(30.0),
+        }));
     scene.ambient = Rgb::splat(0.5);
     (scene, light)
 }
@@ -252,10 +254,12 @@ fn a_translucent_sheet_passes_the_light_behind_it() {
             ),
         );
         floor(&mut scene, 1.0, 4.0, m);
-        scene.lights.push(Light::Point {
-            position: light,
-            intensity: Rgb::splat(20.0),
-        });
+        scene
+            .lights
+            .push(Light::Point(crate::scene::lights::PointLight {
+                position: light,
+                intensity: Rgb::splat(20.0),
+            }));
         scene
     };
     let view = Ray::new(Vec3::new(0.3, 3.0, 0.2), Vec3::NEG_Y);

@@ -7,7 +7,10 @@ use super::state::AreaEmission;
 use super::{Loader, Loc};
 use crate::math::{Mat3, Rgb};
 use crate::scene::environment::{Environment, Mapping};
-use crate::scene::light::{spot_cosines, spot_solid_angle, GoniometricMap};
+use crate::scene::lights::{
+    spot_cosines, spot_solid_angle, DirectionalLight, GoniometricLight, GoniometricMap, PointLight,
+    ProjectionLight, SpotLight,
+};
 use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
 use crate::scene::{Light, Texture};
 use glam::DVec3;
@@ -123,22 +126,42 @@ impl Loader {
                 } else {
                     1.0
                 };
-                self.lights.push(Light::Goniometric {
+                self.lights.push(Light::Goniometric(GoniometricLight {
                     position: m.transform_point3(DVec3::ZERO).as_vec3(),
                     intensity: i * scale * k,
                     map: Arc::new(map),
-                });
+                }));
             }
-            "point" | "projection" => {
-                if ty != "point" {
-                    self.warn(
-                        loc,
-                        format!("light \"{ty}\" is not supported; using a point light"),
-                    );
-                    for q in ["to", "filename", "fov"] {
-                        p.ignore(q);
-                    }
-                }
+            "projection" => {
+                // pbrt-v4's ProjectionLight: the image over `fov` degrees down the light's
+                // +z, at the origin of its transform, times `scale` (or rescaled to `power`).
+                let file = p
+                    .string("filename")
+                    .map_err(&pe)?
+                    .ok_or_else(|| loc.error(format!("{st} needs a \"string filename\"")))?;
+                let path = loc.dir().join(&file);
+                self.add_input(&path);
+                let (image, _) = crate::image::output::read_image(&path)
+                    .map_err(|e| loc.error(format!("{st}: {e}")))?;
+                let frame = Mat3::from_cols(
+                    m.x_axis.truncate().as_vec3(),
+                    m.y_axis.truncate().as_vec3(),
+                    m.z_axis.truncate().as_vec3(),
+                );
+                let fov = p.float_or("fov", 90.0).map_err(&pe)? as f32;
+                let position = m.transform_point3(DVec3::ZERO).as_vec3();
+                let light =
+                    ProjectionLight::new(position, frame, PathBuf::from(&file), &image, scale, fov)
+                        .map_err(|e| loc.error(format!("{st}: \"{file}\": {e}")))?;
+                let power = p.float_or("power", -1.0).map_err(&pe)? as f32;
+                let light = if power > 0.0 {
+                    light.with_power(power)
+                } else {
+                    light
+                };
+                self.lights.push(Light::Projection(light));
+            }
+            "point" => {
                 let from = point3("from", DVec3::ZERO)?;
                 let i = self
                     .spectrum(p, "I", Kind::Illuminant, st, loc)?
@@ -150,10 +173,10 @@ impl Loader {
                 } else {
                     1.0
                 };
-                self.lights.push(Light::Point {
+                self.lights.push(Light::Point(PointLight {
                     position: m.transform_point3(from).as_vec3(),
                     intensity: i * scale * k,
-                });
+                }));
             }
             "spot" => {
                 let from = point3("from", DVec3::ZERO)?;
@@ -184,13 +207,13 @@ impl Loader {
                 } else {
                     1.0
                 };
-                self.lights.push(Light::Spot {
-                    position: m.transform_point3(from).as_vec3(),
-                    direction: dir.as_vec3(),
-                    intensity: i * scale * k,
+                self.lights.push(Light::Spot(SpotLight::new(
+                    m.transform_point3(from).as_vec3(),
+                    dir.as_vec3(),
+                    i * scale * k,
                     cone_angle,
                     cone_delta,
-                });
+                )));
             }
             "distant" => {
                 let from = point3("from", DVec3::ZERO)?;
@@ -202,10 +225,10 @@ impl Loader {
                 let l = self
                     .spectrum(p, "L", Kind::Illuminant, st, loc)?
                     .unwrap_or(Rgb::ONE);
-                self.lights.push(Light::Directional {
-                    direction: dir.as_vec3(),
-                    irradiance: l * scale,
-                });
+                self.lights.push(Light::Directional(DirectionalLight::new(
+                    dir.as_vec3(),
+                    l * scale,
+                )));
             }
             "infinite" => {
                 let file = p.string("filename").map_err(&pe)?;

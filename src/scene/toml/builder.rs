@@ -20,7 +20,9 @@ use super::schema::{
 use crate::bsdf::TabulatedBrdf;
 use crate::math::{Mat3, Mat4, Rgb, Vec3};
 use crate::scene::environment::Environment;
-use crate::scene::light::GoniometricMap;
+use crate::scene::lights::{
+    DirectionalLight, GoniometricLight, GoniometricMap, PointLight, SpotLight,
+};
 use crate::scene::materials::{Classic, Measured, Surface};
 use crate::scene::{
     Camera, Conductor, Light, Material, Projection, RenderSettings, RoughnessMap, Scene, Texture,
@@ -617,18 +619,18 @@ impl<'a> Builder<'a> {
         let need = |key: &str| ctx.fail(site, "", format!("a {name} light needs `{key}`"));
         let fail = |key: &'static str| move |m: String| ctx.fail(site, key, m);
         Ok(match desc.kind {
-            LightKind::Point => Light::Point {
+            LightKind::Point => Light::Point(PointLight {
                 position: finite3(desc.position.ok_or_else(|| need("position"))?.0)
                     .map_err(fail("position"))?,
                 intensity: colour(desc.intensity.ok_or_else(|| need("intensity"))?.0)
                     .map_err(fail("intensity"))?,
-            },
-            LightKind::Directional => Light::Directional {
-                direction: direction(desc.direction.ok_or_else(|| need("direction"))?.0)
+            }),
+            LightKind::Directional => Light::Directional(DirectionalLight::new(
+                direction(desc.direction.ok_or_else(|| need("direction"))?.0)
                     .map_err(fail("direction"))?,
-                irradiance: colour(desc.irradiance.ok_or_else(|| need("irradiance"))?.0)
+                colour(desc.irradiance.ok_or_else(|| need("irradiance"))?.0)
                     .map_err(fail("irradiance"))?,
-            },
+            )),
             LightKind::Spot => {
                 // pbrt-v4's defaults: a 30° cone, the last 5° of it falling off.
                 let cone_angle = desc.cone_angle.unwrap_or(30.0);
@@ -643,16 +645,16 @@ impl<'a> Builder<'a> {
                         "must be in [0, cone_angle = {cone_angle}] degrees, got {cone_delta}"
                     )));
                 }
-                Light::Spot {
-                    position: finite3(desc.position.ok_or_else(|| need("position"))?.0)
+                Light::Spot(SpotLight::new(
+                    finite3(desc.position.ok_or_else(|| need("position"))?.0)
                         .map_err(fail("position"))?,
-                    direction: direction(desc.direction.ok_or_else(|| need("direction"))?.0)
+                    direction(desc.direction.ok_or_else(|| need("direction"))?.0)
                         .map_err(fail("direction"))?,
-                    intensity: colour(desc.intensity.ok_or_else(|| need("intensity"))?.0)
+                    colour(desc.intensity.ok_or_else(|| need("intensity"))?.0)
                         .map_err(fail("intensity"))?,
                     cone_angle,
                     cone_delta,
-                }
+                ))
             }
             LightKind::Goniometric => {
                 let file = desc.image.ok_or_else(|| need("image"))?;
@@ -663,13 +665,13 @@ impl<'a> Builder<'a> {
                     .map_err(|e| ctx.fail(site, "image", e))?;
                 let map = GoniometricMap::new(file.into(), &image, frame)
                     .map_err(|e| ctx.fail(site, "image", e))?;
-                Light::Goniometric {
+                Light::Goniometric(GoniometricLight {
                     position: finite3(desc.position.ok_or_else(|| need("position"))?.0)
                         .map_err(fail("position"))?,
                     intensity: colour(desc.intensity.ok_or_else(|| need("intensity"))?.0)
                         .map_err(fail("intensity"))?,
                     map: std::sync::Arc::new(map),
-                }
+                })
             }
         })
     }

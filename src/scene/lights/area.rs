@@ -1,133 +1,16 @@
-//! Lights: point, spot, goniometric and directional lights given in the scene, and area
-//! lights made from emissive shapes.
+//! Area lights: emissive shapes, sampled uniformly by area (spheres by the cone they
+//! subtend), their emission constant or varying by texture.
 
-use super::alpha::Alpha;
-use super::environment::equal_area_sphere_to_square;
-use super::geometry::sphere_uv;
-use super::texture::Texture;
-use super::{Geometry, Material, Scene, Shape};
-use crate::image::Image;
+use super::{EmissionSample, LightModel, LightSample, World};
 use crate::math::spawn::{gamma, plane_test_error, Spot};
-use crate::math::{Mat3, Rgb, Vec2, Vec3};
-use std::path::PathBuf;
+use crate::math::warp::{cosine_hemisphere, uniform_cone, uniform_cone_pdf};
+use crate::math::{frame, luminance, Rgb, Vec2, Vec3};
+use crate::scene::alpha::Alpha;
+use crate::scene::geometry::sphere_uv;
+use crate::scene::texture::Texture;
+use crate::scene::{Geometry, Material, Scene, Shape};
+use std::f32::consts::PI;
 use std::sync::Arc;
-
-#[derive(Clone, Debug, PartialEq)]
-pub enum Light {
-    /// Radiant intensity `intensity` (W/sr) from a point; irradiance falls off as 1/r².
-    Point { position: Vec3, intensity: Rgb },
-    /// Parallel light travelling along `direction`, with irradiance `irradiance` on a surface
-    /// facing it.
-    Directional { direction: Vec3, irradiance: Rgb },
-    /// pbrt-v4's spot light: intensity `intensity`·falloff(cos θ) (W/sr) from a point, with θ
-    /// the angle to `direction`; no light beyond `cone_angle` (degrees from the axis), full
-    /// intensity within `cone_angle` − `cone_delta`, a smooth step between (see
-    /// [`spot_falloff`]).
-    Spot {
-        position: Vec3,
-        direction: Vec3,
-        intensity: Rgb,
-        cone_angle: f32,
-        cone_delta: f32,
-    },
-    /// pbrt-v4's goniometric light: intensity `intensity` (W/sr) from a point, times the
-    /// value its image shows towards each direction ([`GoniometricMap`]).
-    Goniometric {
-        position: Vec3,
-        intensity: Rgb,
-        map: Arc<GoniometricMap>,
-    },
-}
-
-/// A goniometric light's distribution: a square image in the equal-area octahedral mapping
-/// (as pbrt-v4's), its channels averaged, looked up at the nearest texel. Its frame is
-/// pbrt-v4's: the light's +y is the map's pole (+z of the mapping).
-#[derive(Clone, Debug, PartialEq)]
-pub struct GoniometricMap {
-    /// The image file as the scene names it.
-    pub file: PathBuf,
-    /// The light's frame: its directions to the world's.
-    pub transform: Mat3,
-    world_to_map: Mat3,
-    size: u32,
-    values: Vec<f32>,
-    mean: f32,
-}
-
-impl GoniometricMap {
-    /// The map of `image` (square) in the frame `transform` (invertible).
-    pub fn new(file: PathBuf, image: &Image, transform: Mat3) -> Result<GoniometricMap, String> {
-        if image.width != image.height || image.width == 0 {
-            return Err(format!(
-                "a goniometric image must be square (the equal-area mapping), got {}x{}",
-                image.width, image.height
-            ));
-        }
-        if transform.determinant().abs() < 1e-12 || !transform.is_finite() {
-            return Err("the light's transform must be invertible".into());
-        }
-        let values: Vec<f32> = image
-            .pixels
-            .iter()
-            .map(|p| p.max(Rgb::ZERO).element_sum() / 3.0)
-            .collect();
-        let mean = values.iter().map(|&v| f64::from(v)).sum::<f64>() / values.len() as f64;
-        // pbrt-v4 swaps y and z: the light's y is the mapping's pole.
-        let swap = Mat3::from_cols(Vec3::X, Vec3::Z, Vec3::Y);
-        Ok(GoniometricMap {
-            file,
-            transform,
-            world_to_map: swap * transform.inverse(),
-            size: image.width,
-            values,
-            mean: mean as f32,
-        })
-    }
-
-    /// The image's value towards world direction `w`.
-    pub fn value(&self, w: Vec3) -> f32 {
-        let d = (self.world_to_map * w).normalize_or_zero();
-        if d == Vec3::ZERO {
-            return 0.0;
-        }
-        let uv = equal_area_sphere_to_square(d);
-        let n = self.size;
-        let x = ((uv.x * n as f32) as u32).min(n - 1);
-        let y = ((uv.y * n as f32) as u32).min(n - 1);
-        self.values[(y * n + x) as usize]
-    }
-
-    /// The mean value over all directions (texels cover equal solid angles): the light's
-    /// power is 4π · mean · intensity.
-    pub fn mean(&self) -> f32 {
-        self.mean
-    }
-}
-
-/// pbrt-v4's spot falloff: SmoothStep(cos_end, cos_start, cos θ), 0 outside the cone, 1
-/// inside the inner cone, a cubic Hermite step between.
-pub fn spot_falloff(cos: f32, cos_start: f32, cos_end: f32) -> f32 {
-    if cos_start == cos_end {
-        return if cos < cos_end { 0.0 } else { 1.0 };
-    }
-    let t = ((cos - cos_end) / (cos_start - cos_end)).clamp(0.0, 1.0);
-    t * t * (3.0 - 2.0 * t)
-}
-
-/// The spot light of pbrt-v4's `coneangle` and `conedelta` (degrees): (cos of the falloff's
-/// start, cos of the cone's edge).
-pub fn spot_cosines(cone_angle: f32, cone_delta: f32) -> (f32, f32) {
-    (
-        (cone_angle - cone_delta).to_radians().cos(),
-        cone_angle.to_radians().cos(),
-    )
-}
-
-/// The total power of a spot light per unit intensity: 2π((1 − cos_start) + (cos_start −
-/// cos_end)/2), pbrt-v4's k_e (what `power` divides by).
-pub fn spot_solid_angle(cos_start: f32, cos_end: f32) -> f32 {
-    std::f32::consts::TAU * ((1.0 - cos_start) + 0.5 * (cos_start - cos_end))
-}
 
 /// An emissive shape, ready for sampling points on it uniformly by area.
 #[derive(Clone, Debug)]
@@ -458,6 +341,136 @@ impl AreaLight {
                 }
             }
         }
+    }
+}
+
+/// The largest f32 below 1.
+const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
+
+impl LightModel for AreaLight {
+    fn power(&self, _world: &World) -> f32 {
+        let sides = if self.two_sided { 2.0 } else { 1.0 };
+        sides * PI * self.area * luminance(self.mean_radiance())
+    }
+
+    fn sample_li(&self, p: Vec3, u: Vec2, choice: f32, _world: &World) -> Option<LightSample> {
+        let a = self;
+        if let Some((c, r)) = a.sphere() {
+            let to_c = c - p;
+            let d2 = to_c.length_squared();
+            if d2 > r * r * 1.0001 {
+                // Outside: uniform over the cone the sphere subtends.
+                let sin2 = r * r / d2;
+                let cos_max = (1.0 - sin2).max(0.0).sqrt();
+                let w = to_c / d2.sqrt();
+                let (t, b) = frame(w);
+                let l = uniform_cone(u, cos_max);
+                let wi = (t * l.x + b * l.y + w * l.z).normalize();
+                // The nearer intersection of the ray with the sphere.
+                let tc = to_c.dot(wi);
+                let disc = (r * r - (d2 - tc * tc)).max(0.0);
+                let q = p + wi * (tc - disc.sqrt());
+                // Projected onto the sphere: the ray's own point is far less exact.
+                let lp = a.sphere_point((q - c).normalize());
+                let radiance = a.radiance_at(&lp);
+                if radiance == Rgb::ZERO {
+                    return None;
+                }
+                return Some(LightSample {
+                    radiance,
+                    wi,
+                    p: lp.p,
+                    error: lp.error,
+                    n: lp.n,
+                    pdf: choice * uniform_cone_pdf(cos_max),
+                    delta: false,
+                });
+            }
+        }
+        let lp = a.sample(u);
+        let d = lp.p - p;
+        let dist2 = d.length_squared();
+        if dist2 == 0.0 {
+            return None;
+        }
+        let wi = d / dist2.sqrt();
+        let cos_l = a.emitting_cos(-wi.dot(lp.n));
+        let radiance = a.radiance_at(&lp);
+        if cos_l <= 0.0 || radiance == Rgb::ZERO {
+            return None;
+        }
+        Some(LightSample {
+            radiance,
+            wi,
+            p: lp.p,
+            error: lp.error,
+            n: lp.n,
+            pdf: choice * dist2 / (cos_l * a.area),
+            delta: false,
+        })
+    }
+
+    fn pdf_li(&self, p: Vec3, q: Vec3, n: Vec3, choice: f32) -> f32 {
+        let a = self;
+        if let Some((c, r)) = a.sphere() {
+            let d2 = (c - p).length_squared();
+            if d2 > r * r * 1.0001 {
+                let cos_max = (1.0 - r * r / d2).max(0.0).sqrt();
+                return choice * uniform_cone_pdf(cos_max);
+            }
+        }
+        let d = q - p;
+        let dist2 = d.length_squared();
+        let cos_l = a.emitting_cos(-(d / dist2.sqrt()).dot(n));
+        if cos_l <= 0.0 {
+            0.0
+        } else {
+            choice * dist2 / (cos_l * a.area)
+        }
+    }
+
+    fn sample_le(
+        &self,
+        u_pos: Vec2,
+        u_dir: Vec2,
+        choice: f32,
+        _world: &World,
+        light: usize,
+    ) -> Option<EmissionSample> {
+        let a = self;
+        let lp = a.sample(u_pos);
+        // A two-sided light picks a side with half of u_dir.x (as pbrt-v4 does); `n` is
+        // then the normal of that side.
+        let (n, u_dir, side_pdf) = if !a.two_sided {
+            (lp.n, u_dir, 1.0)
+        } else if u_dir.x < 0.5 {
+            (
+                lp.n,
+                Vec2::new((2.0 * u_dir.x).min(ONE_MINUS_EPS), u_dir.y),
+                0.5,
+            )
+        } else {
+            let ux = (2.0 * (u_dir.x - 0.5)).min(ONE_MINUS_EPS);
+            (-lp.n, Vec2::new(ux, u_dir.y), 0.5)
+        };
+        let (t, b) = frame(n);
+        let l = cosine_hemisphere(u_dir);
+        Some(EmissionSample {
+            p: lp.p,
+            error: lp.error,
+            n,
+            dir: t * l.x + b * l.y + n * l.z,
+            radiance: a.radiance_at(&lp),
+            pdf_pos: choice / a.area,
+            pdf_dir: side_pdf * l.z / PI,
+            delta_pos: false,
+            delta_dir: false,
+            light,
+        })
+    }
+
+    fn is_infinite(&self) -> bool {
+        false
     }
 }
 

@@ -1,0 +1,163 @@
+//! pbrt-v4's spot light: intensity I·falloff(cos θ) (W/sr) from a point, with θ the angle
+//! to its axis; no light beyond `cone_angle` (degrees from the axis), full intensity within
+//! `cone_angle` − `cone_delta`, a smooth step between ([`spot_falloff`]).
+
+use super::{EmissionSample, Illumination, LightModel, LightSample, World};
+use crate::math::warp::{uniform_cone, uniform_cone_pdf};
+use crate::math::{frame, luminance, Rgb, Vec2, Vec3};
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct SpotLight {
+    pub position: Vec3,
+    /// The axis, as the scene gives it.
+    pub direction: Vec3,
+    pub intensity: Rgb,
+    /// Degrees from the axis to the cone's edge.
+    pub cone_angle: f32,
+    /// Degrees over which the falloff runs, inside the edge.
+    pub cone_delta: f32,
+    /// The axis, unit length.
+    axis: Vec3,
+    /// Cosines of the falloff's start and of the cone's edge.
+    cos_start: f32,
+    cos_end: f32,
+}
+
+impl SpotLight {
+    pub fn new(
+        position: Vec3,
+        direction: Vec3,
+        intensity: Rgb,
+        cone_angle: f32,
+        cone_delta: f32,
+    ) -> SpotLight {
+        let (cos_start, cos_end) = spot_cosines(cone_angle, cone_delta);
+        SpotLight {
+            position,
+            direction,
+            intensity,
+            cone_angle,
+            cone_delta,
+            axis: direction.normalize(),
+            cos_start,
+            cos_end,
+        }
+    }
+}
+
+impl LightModel for SpotLight {
+    fn power(&self, _world: &World) -> f32 {
+        spot_solid_angle(self.cos_start, self.cos_end) * luminance(self.intensity)
+    }
+
+    fn sample_li(&self, p: Vec3, _u: Vec2, choice: f32, _world: &World) -> Option<LightSample> {
+        let d = self.position - p;
+        let dist2 = d.length_squared();
+        let wi = d / dist2.sqrt();
+        let intensity = self.intensity_towards(-wi);
+        if intensity == Rgb::ZERO {
+            return None;
+        }
+        Some(LightSample::point_source(
+            self.position,
+            intensity / dist2,
+            wi,
+            choice,
+        ))
+    }
+
+    fn pdf_li(&self, _p: Vec3, _q: Vec3, _n: Vec3, _choice: f32) -> f32 {
+        0.0
+    }
+
+    fn sample_le(
+        &self,
+        _u_pos: Vec2,
+        u_dir: Vec2,
+        choice: f32,
+        _world: &World,
+        light: usize,
+    ) -> Option<EmissionSample> {
+        let (dir, pdf_dir) = self.emission_direction(u_dir);
+        Some(EmissionSample {
+            p: self.position,
+            error: Vec3::ZERO,
+            n: Vec3::ZERO,
+            dir,
+            radiance: self.intensity_towards(dir),
+            pdf_pos: choice,
+            pdf_dir,
+            delta_pos: true,
+            delta_dir: false,
+            light,
+        })
+    }
+
+    fn is_infinite(&self) -> bool {
+        false
+    }
+
+    fn point_source(&self) -> Option<(Vec3, Rgb)> {
+        Some((self.position, self.intensity))
+    }
+
+    fn intensity_towards(&self, w: Vec3) -> Rgb {
+        self.intensity * spot_falloff(w.dot(self.axis), self.cos_start, self.cos_end)
+    }
+
+    /// Uniform over the cone, as pbrt-v4 does.
+    fn emission_direction(&self, u: Vec2) -> (Vec3, f32) {
+        let (t, b) = frame(self.axis);
+        let l = uniform_cone(u, self.cos_end);
+        let dir = (t * l.x + b * l.y + self.axis * l.z).normalize();
+        (dir, uniform_cone_pdf(self.cos_end))
+    }
+
+    fn pdf_emission_direction(&self, w: Vec3) -> f32 {
+        if w.dot(self.axis) >= self.cos_end {
+            uniform_cone_pdf(self.cos_end)
+        } else {
+            0.0
+        }
+    }
+
+    fn illuminate(&self, p: Vec3) -> Option<Illumination> {
+        let to = self.position - p;
+        let d2 = to.length_squared();
+        let wi = to / d2.sqrt();
+        let falloff = spot_falloff(-wi.dot(self.axis), self.cos_start, self.cos_end);
+        if falloff == 0.0 {
+            return None;
+        }
+        Some(Illumination {
+            wi,
+            irradiance: self.intensity * falloff / d2,
+            position: Some(self.position),
+        })
+    }
+}
+
+/// pbrt-v4's spot falloff: SmoothStep(cos_end, cos_start, cos θ), 0 outside the cone, 1
+/// inside the inner cone, a cubic Hermite step between.
+pub fn spot_falloff(cos: f32, cos_start: f32, cos_end: f32) -> f32 {
+    if cos_start == cos_end {
+        return if cos < cos_end { 0.0 } else { 1.0 };
+    }
+    let t = ((cos - cos_end) / (cos_start - cos_end)).clamp(0.0, 1.0);
+    t * t * (3.0 - 2.0 * t)
+}
+
+/// The spot light of pbrt-v4's `coneangle` and `conedelta` (degrees): (cos of the falloff's
+/// start, cos of the cone's edge).
+pub fn spot_cosines(cone_angle: f32, cone_delta: f32) -> (f32, f32) {
+    (
+        (cone_angle - cone_delta).to_radians().cos(),
+        cone_angle.to_radians().cos(),
+    )
+}
+
+/// The total power of a spot light per unit intensity: 2π((1 − cos_start) + (cos_start −
+/// cos_end)/2), pbrt-v4's k_e (what `power` divides by).
+pub fn spot_solid_angle(cos_start: f32, cos_end: f32) -> f32 {
+    std::f32::consts::TAU * ((1.0 - cos_start) + 0.5 * (cos_start - cos_end))
+}
