@@ -378,3 +378,57 @@ fn a_watched_render_shows_its_film_mid_pass_and_ends_the_same() {
         "samples and rays grow from one showing to the next: {every_tile:?}"
     );
 }
+
+/// Records, for each phase begun, how many threads rayon's pool has where it begins.
+#[derive(Default)]
+struct PoolSizes(std::sync::Mutex<Vec<(String, usize)>>);
+
+impl raylink::control::Progress for PoolSizes {
+    fn begin(&self, phase: &str, _total: Option<u64>, _unit: &str) {
+        let mut seen = self.0.lock().unwrap();
+        seen.push((phase.to_string(), rayon::current_num_threads()));
+    }
+}
+
+/// Every phase of a job runs on the job's threads, not on every core: the intersection
+/// structure's build and the network's preprocess and distribution begin inside a pool of
+/// exactly `Job::threads` workers (3 and 1 here, neither of them this machine's count by
+/// chance alone), and with `None` on rayon's global pool.
+#[test]
+fn preparation_runs_on_the_jobs_threads() {
+    let office = scene("network-office.toml");
+    let settings = Settings {
+        integrator: Some(TechniqueKind::Network),
+        intercept_step: Some(1.0 / 16.0),
+        slopes: Some(4),
+        ..Settings::default()
+    };
+    for threads in [Some(3), Some(1), None] {
+        let sizes = Arc::new(PoolSizes::default());
+        let control = Control {
+            progress: sizes.clone(),
+            ..Control::default()
+        };
+        let job = Job {
+            threads,
+            ..job(&office, settings.clone(), (16, 12))
+        };
+        let mut renderer = Renderer::new(office.clone(), job, &control).unwrap();
+        renderer.prepare(&control).unwrap();
+        let seen = sizes.0.lock().unwrap().clone();
+        let phases: Vec<&str> = seen.iter().map(|(p, _)| p.as_str()).collect();
+        assert!(
+            phases.contains(&"building") && phases.len() >= 3,
+            "{phases:?}"
+        );
+        let want = threads.unwrap_or_else(|| {
+            rayon::ThreadPoolBuilder::new()
+                .build()
+                .unwrap()
+                .current_num_threads()
+        });
+        for (phase, n) in &seen {
+            assert_eq!(*n, want, "{threads:?}: phase {phase}");
+        }
+    }
+}

@@ -271,6 +271,31 @@ pub struct Renderer {
     accel: Box<dyn Accel>,
     technique: Box<dyn Lifecycle>,
     prepared: bool,
+    /// The job's worker threads for the parallel phases besides rendering (the
+    /// intersection structure's build, a technique's preparation); `None`: every core.
+    pool: Option<Arc<rayon::ThreadPool>>,
+}
+
+/// A pool of `threads` workers for the phases that run on rayon (`None`: rayon's global
+/// pool, every core). A pool the system refuses (no threads to be had) leaves the global
+/// pool, with a warning: the image does not depend on it.
+fn worker_pool(threads: Option<usize>, control: &Control) -> Option<Arc<rayon::ThreadPool>> {
+    let n = threads?;
+    match rayon::ThreadPoolBuilder::new().num_threads(n).build() {
+        Ok(pool) => Some(Arc::new(pool)),
+        Err(e) => {
+            control.warn(&format!("{n} worker threads: {e}; using every core"));
+            None
+        }
+    }
+}
+
+/// Runs `work` on `pool` (or where it is called, without one).
+fn on_pool<T: Send>(pool: &Option<Arc<rayon::ThreadPool>>, work: impl FnOnce() -> T + Send) -> T {
+    match pool {
+        Some(pool) => pool.install(work),
+        None => work(),
+    }
 }
 
 impl std::fmt::Debug for Renderer {
@@ -309,19 +334,24 @@ impl Renderer {
             }
         }
         control.cancel.check("loading")?;
-        let phase = control.phase("building", None, "");
-        let accel = accel::build(&scene, job.accel, control)?;
-        phase.end(&format!(
-            "{} intersection structure over {} primitives",
-            job.accel,
-            scene.primitive_count()
-        ));
+        let pool = worker_pool(job.threads, control);
+        let accel = on_pool(&pool, || {
+            let phase = control.phase("building", None, "");
+            let accel = accel::build(&scene, job.accel, control)?;
+            phase.end(&format!(
+                "{} intersection structure over {} primitives",
+                job.accel,
+                scene.primitive_count()
+            ));
+            Ok::<_, Error>(accel)
+        })?;
         Ok(Renderer {
             scene,
             job,
             accel,
             technique,
             prepared: false,
+            pool,
         })
     }
 
@@ -358,7 +388,8 @@ impl Renderer {
     pub fn prepare(&mut self, control: &Control) -> Result<()> {
         if !self.prepared {
             let ctx = Context::new(&self.scene, self.accel.as_ref());
-            self.technique.prepare(&ctx, &self.job.view(), control)?;
+            let (technique, view) = (&mut self.technique, self.job.view());
+            on_pool(&self.pool, || technique.prepare(&ctx, &view, control))?;
             self.prepared = true;
         }
         Ok(())
@@ -368,15 +399,14 @@ impl Renderer {
     /// irradiance cache's overture for this view, or a network's structure.
     pub fn precompute(&mut self, control: &Control) -> Result<()> {
         let ctx = Context::new(&self.scene, self.accel.as_ref());
-        self.technique
-            .precompute(&ctx, &self.job.view(), control)
-            .map_err(|e| match e {
-                Error::Invalid(why) => Error::Invalid(format!(
-                    "the {} integrator: {why}",
-                    self.job.technique.kind()
-                )),
-                e => e,
-            })
+        let (technique, view) = (&mut self.technique, self.job.view());
+        on_pool(&self.pool, || technique.precompute(&ctx, &view, control)).map_err(|e| match e {
+            Error::Invalid(why) => Error::Invalid(format!(
+                "the {} integrator: {why}",
+                self.job.technique.kind()
+            )),
+            e => e,
+        })
     }
 
     /// Statistics of the technique's preparation, one line each.

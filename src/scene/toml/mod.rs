@@ -22,6 +22,7 @@ mod schema_coating;
 mod schema_instance;
 mod schema_metal;
 mod schema_texture;
+mod schema_values;
 
 use super::Scene;
 use builder::Builder;

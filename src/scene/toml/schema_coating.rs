@@ -1,7 +1,8 @@
 //! The scene file's `coating` of a material: a dielectric coat over its diffuse or conductor
 //! base (pbrt-v4's coated materials).
 
-use super::schema::{opt_f32, RoughnessDesc, Splat3};
+use super::schema::{RoughnessDesc, Splat3};
+use super::schema_values::opt_f32;
 use serde::{Deserialize, Serialize};
 
 /// `coating = { ior = 1.5, roughness = 0.0, thickness = 0.01 }` (and `albedo`, `g`,

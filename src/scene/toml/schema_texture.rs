@@ -1,7 +1,7 @@
 //! The scene file's textures: a colour (or a number) or a texture table, wherever a material
 //! takes a texture.
 
-use super::schema::{numbers, opt_f32, Splat3, Splat3Visitor, V3};
+use super::schema_values::{numbers, opt_f32, Splat3, Splat3Visitor, V3};
 use crate::math::Vec3;
 use serde::de::{self, Deserializer, MapAccess, SeqAccess, Visitor};
 use serde::ser::Serializer;
