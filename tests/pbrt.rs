@@ -321,16 +321,27 @@ fn shapes_spheres_disks_bilinear_patches_and_instances() {
         s.shapes[1].geometry.triangles()[0][0],
         Vec3::new(0.0, 0.0, 1.0)
     ));
-    // loopsubdiv: the base mesh, with a warning naming the line.
-    let s = world("Shape \"loopsubdiv\" \"integer levels\" 3 \"point3 P\" [0 0 0 1 0 0 0 1 0]\n");
-    assert_eq!(s.shapes.len(), 1);
-    assert!(
-        s.warnings[0].ends_with(
-            ":5: Shape \"loopsubdiv\" is not supported; using its base mesh without subdivision"
-        ),
-        "{:?}",
-        s.warnings
-    );
+    // loopsubdiv: a tetrahedron subdivided 3 times, 4·4³ triangles on its limit surface
+    // (each corner at a fifth of the way from the centre), without a warning; bad levels
+    // are errors naming the line and the parameter.
+    let tetra = "\"point3 P\" [1 1 1  1 -1 -1  -1 1 -1  -1 -1 1] \
+                 \"integer indices\" [0 1 2  0 3 1  0 2 3  1 3 2]";
+    let s = world(&format!(
+        "Shape \"loopsubdiv\" \"integer levels\" 3 {tetra}\n"
+    ));
+    assert!(s.warnings.is_empty(), "{:?}", s.warnings);
+    let Geometry::Triangles(m) = &s.shapes[0].geometry else {
+        panic!("{:?}", s.shapes[0].geometry)
+    };
+    assert_eq!(m.indices.len(), 4 * 64);
+    let corner = m.positions[0].abs();
+    assert!(close(corner, Vec3::splat(0.2)), "{corner}");
+    for levels in ["-1", "13"] {
+        let dir = tempfile::tempdir().unwrap();
+        let text = format!("{HEADER}Shape \"loopsubdiv\" \"integer levels\" {levels} {tetra}\n");
+        let e = load_in(dir.path(), &text, &[]).unwrap_err().to_string();
+        assert!(e.contains("line 5") && e.contains("\"levels\""), "{e}");
+    }
 }
 
 #[test]

@@ -11,6 +11,7 @@ pub mod environment;
 mod geometry;
 pub mod instance;
 pub mod lights;
+pub mod loop_subdivision;
 pub mod materials;
 pub mod motion;
 pub mod normal_detail;

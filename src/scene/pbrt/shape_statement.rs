@@ -7,6 +7,7 @@ use super::params::Params;
 use super::shapes;
 use super::{Loader, Loc};
 use crate::math::{Rgb, Vec2, Vec3};
+use crate::scene::loop_subdivision;
 use crate::scene::materials::{Diffuse, Surface};
 use crate::scene::ply::{self, PlyMesh};
 use crate::scene::{Geometry, Material, Shape, Texture};
@@ -101,12 +102,48 @@ impl Loader {
         };
         let float = |name: &str, default: f64| p.float_or(name, default).map_err(&pe);
         let geometries: Vec<Geometry> = match ty {
-            "trianglemesh" | "loopsubdiv" => {
-                if ty == "loopsubdiv" {
-                    self.warn(loc, "Shape \"loopsubdiv\" is not supported; using its base mesh without subdivision");
-                    p.ignore("levels");
-                }
+            "trianglemesh" => {
                 let mesh = self.mesh_params(p, 3, st, loc)?;
+                shapes::place(mesh, &m, mesh_sign, mesh_flip)
+            }
+            "loopsubdiv" => {
+                // pbrt-v4's LoopSubdivide: `levels` (3) over the control mesh, on the limit
+                // surface, its normals the limit's; a uv or N given is not used (as pbrt-v4).
+                let levels = p.int("levels").map_err(&pe)?.unwrap_or(3);
+                let mut mesh = self.mesh_params(p, 3, st, loc)?;
+                let levels = u32::try_from(levels)
+                    .ok()
+                    .filter(|&l| l <= loop_subdivision::MAX_LEVELS)
+                    .ok_or_else(|| {
+                        loc.error(format!(
+                            "{st}: \"levels\" must be between 0 and {}, got {levels}",
+                            loop_subdivision::MAX_LEVELS
+                        ))
+                    })?;
+                let triangles = (mesh.triangles.len() as u128) << (2 * levels);
+                if triangles > loop_subdivision::MAX_TRIANGLES as u128 {
+                    return Err(loc.error(format!(
+                        "{st}: {levels} levels make {triangles} triangles, more than {}",
+                        loop_subdivision::MAX_TRIANGLES
+                    )));
+                }
+                // Its working set (positions and normals in f64 and f32, edge tables) against
+                // the memory budget before it is made; the mesh made is counted as every
+                // shape's is, below.
+                let working = Cost {
+                    data: 160u64.saturating_mul(triangles as u64),
+                    primitives: triangles as u64,
+                };
+                self.budget.check(
+                    &format!("line {}: {st}: {levels} levels of subdivision", loc.line),
+                    working.bytes(),
+                )?;
+                let s = loop_subdivision::subdivide(&mesh.positions, &mesh.triangles, levels)
+                    .map_err(|e| loc.error(format!("{st}: {e}")))?;
+                mesh.positions = s.positions;
+                mesh.triangles = s.triangles;
+                mesh.normals = Some(s.normals);
+                mesh.uvs = None;
                 shapes::place(mesh, &m, mesh_sign, mesh_flip)
             }
             "bilinearmesh" => {
