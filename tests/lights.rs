@@ -469,7 +469,7 @@ fn slide() -> Image {
 #[test]
 fn projection_light_follows_pbrts_frame() {
     use raylink::math::{Mat3, Vec3};
-    use raylink::scene::lights::{LightModel, ProjectionLight};
+    use raylink::scene::lights::{LightModel, PointSource, ProjectionLight};
     let light = ProjectionLight::new(
         Vec3::ZERO,
         Mat3::IDENTITY,
@@ -640,6 +640,7 @@ fn projection_light_lights_as_its_image_says() {
 /// an error naming it.
 #[test]
 fn pbrt_projection_lights_read() {
+    use raylink::scene::lights::PointSource;
     let dir = tempfile::tempdir().unwrap();
     raylink::image::output::write_image(
         &dir.path().join("p.exr"),

@@ -1,7 +1,7 @@
 //! pbrt-v4's goniometric light: intensity I (W/sr) from a point, times the value its image
 //! shows towards each direction ([`GoniometricMap`]).
 
-use super::{EmissionSample, Illumination, LightModel, LightSample, World};
+use super::PointSource;
 use crate::image::Image;
 use crate::math::warp::{uniform_sphere, UNIFORM_SPHERE_PDF};
 use crate::math::{luminance, Mat3, Rgb, Vec2, Vec3};
@@ -17,87 +17,29 @@ pub struct GoniometricLight {
     pub map: Arc<GoniometricMap>,
 }
 
-impl LightModel for GoniometricLight {
-    fn power(&self, _world: &World) -> f32 {
-        4.0 * PI * self.map.mean() * luminance(self.intensity)
+impl PointSource for GoniometricLight {
+    fn position(&self) -> Vec3 {
+        self.position
     }
 
-    fn sample_li(&self, p: Vec3, _u: Vec2, choice: f32, _world: &World) -> Option<LightSample> {
-        let d = self.position - p;
-        let dist2 = d.length_squared();
-        let wi = d / dist2.sqrt();
-        let intensity = self.intensity_towards(-wi);
-        if intensity == Rgb::ZERO {
-            return None;
-        }
-        Some(LightSample::point_source(
-            self.position,
-            intensity / dist2,
-            wi,
-            choice,
-        ))
-    }
-
-    fn pdf_li(&self, _p: Vec3, _q: Vec3, _n: Vec3, _choice: f32) -> f32 {
-        0.0
-    }
-
-    fn sample_le(
-        &self,
-        _u_pos: Vec2,
-        u_dir: Vec2,
-        choice: f32,
-        _world: &World,
-        light: usize,
-    ) -> Option<EmissionSample> {
-        let (dir, pdf_dir) = self.emission_direction(u_dir);
-        Some(EmissionSample {
-            p: self.position,
-            error: Vec3::ZERO,
-            n: Vec3::ZERO,
-            dir,
-            radiance: self.intensity_towards(dir),
-            pdf_pos: choice,
-            pdf_dir,
-            delta_pos: true,
-            delta_dir: false,
-            light,
-        })
-    }
-
-    fn is_infinite(&self) -> bool {
-        false
-    }
-
-    fn point_source(&self) -> Option<(Vec3, Rgb)> {
-        Some((self.position, self.intensity))
-    }
-
-    fn intensity_towards(&self, w: Vec3) -> Rgb {
+    fn intensity(&self, w: Vec3) -> Rgb {
         self.intensity * self.map.value(w)
     }
 
-    fn emission_direction(&self, u: Vec2) -> (Vec3, f32) {
+    fn base_intensity(&self) -> Rgb {
+        self.intensity
+    }
+
+    fn flux(&self) -> f32 {
+        4.0 * PI * self.map.mean() * luminance(self.intensity)
+    }
+
+    fn sample_direction(&self, u: Vec2) -> (Vec3, f32) {
         (uniform_sphere(u), UNIFORM_SPHERE_PDF)
     }
 
-    fn pdf_emission_direction(&self, _w: Vec3) -> f32 {
+    fn pdf_direction(&self, _w: Vec3) -> f32 {
         UNIFORM_SPHERE_PDF
-    }
-
-    fn illuminate(&self, p: Vec3) -> Option<Illumination> {
-        let to = self.position - p;
-        let d2 = to.length_squared();
-        let wi = to / d2.sqrt();
-        let value = self.map.value(-wi);
-        if value == 0.0 {
-            return None;
-        }
-        Some(Illumination {
-            wi,
-            irradiance: self.intensity * value / d2,
-            position: Some(self.position),
-        })
     }
 }
 

@@ -9,7 +9,8 @@
 //! (`sample_li`, with `pdf_li` for multiple importance sampling), the start of a light path
 //! (`sample_le`), and what Whitted's integrator takes of it (`illuminate`).
 //!
-//! Adding a kind of light: its own file here with a type implementing [`LightModel`], a
+//! Adding a kind of light: its own file here with a type implementing [`LightModel`] (or,
+//! for a light at one point, [`PointSource`], from which the interface follows), a
 //! variant of [`Light`] and its line in [`Light::model`], its readers and `convert`, its
 //! tests and docs.
 
@@ -18,6 +19,7 @@ mod background;
 mod directional;
 mod goniometric;
 mod point;
+mod point_source;
 mod projection;
 mod set;
 mod spot;
@@ -27,6 +29,7 @@ pub use background::{Background, EnvironmentSampler};
 pub use directional::DirectionalLight;
 pub use goniometric::{GoniometricLight, GoniometricMap};
 pub use point::PointLight;
+pub use point_source::PointSource;
 pub use projection::ProjectionLight;
 pub use set::{Emitter, LightSet};
 pub use spot::{spot_cosines, spot_falloff, spot_solid_angle, SpotLight};
@@ -163,20 +166,6 @@ impl LightSample {
             p: self.p,
             error: self.error,
             n: self.n,
-        }
-    }
-
-    /// The sample of a point source at `position` seen from `p` with intensity
-    /// `intensity` towards it, chosen with probability `choice`.
-    pub(crate) fn point_source(position: Vec3, radiance: Rgb, wi: Vec3, choice: f32) -> Self {
-        LightSample {
-            radiance,
-            wi,
-            p: position,
-            error: Vec3::ZERO,
-            n: Vec3::ZERO,
-            pdf: choice,
-            delta: true,
         }
     }
 }

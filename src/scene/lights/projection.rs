@@ -3,7 +3,7 @@
 //! `scale` × the image's colour where w meets the screen, a rectangle of the image's aspect
 //! ratio spanning `fov` degrees across its shorter side; no light outside it.
 
-use super::{EmissionSample, Illumination, LightModel, LightSample, World};
+use super::PointSource;
 use crate::image::Image;
 use crate::math::{luminance, Mat3, Rgb, Vec2, Vec3};
 use std::path::PathBuf;
@@ -130,11 +130,6 @@ impl ProjectionLight {
         self.pixels[(y * self.width + x) as usize]
     }
 
-    /// The flux the light emits (its luminance).
-    pub fn flux(&self) -> f32 {
-        self.scale * self.unit_flux
-    }
-
     /// The light rescaled by pbrt-v4's `power` parameter: it emits its scale × `power`
     /// (scale 1: `power`); unchanged when its image is black.
     pub fn with_power(self, power: f32) -> ProjectionLight {
@@ -156,96 +151,38 @@ fn rectangle_solid_angle(x0: f64, x1: f64, y0: f64, y1: f64) -> f64 {
     f(x1, y1) - f(x0, y1) - f(x1, y0) + f(x0, y0)
 }
 
-impl LightModel for ProjectionLight {
-    fn power(&self, _world: &World) -> f32 {
-        self.flux()
+impl PointSource for ProjectionLight {
+    fn position(&self) -> Vec3 {
+        self.position
     }
 
-    fn sample_li(&self, p: Vec3, _u: Vec2, choice: f32, _world: &World) -> Option<LightSample> {
-        let d = self.position - p;
-        let dist2 = d.length_squared();
-        let wi = d / dist2.sqrt();
-        let intensity = self.intensity_towards(-wi);
-        if intensity == Rgb::ZERO {
-            return None;
-        }
-        Some(LightSample::point_source(
-            self.position,
-            intensity / dist2,
-            wi,
-            choice,
-        ))
-    }
-
-    fn pdf_li(&self, _p: Vec3, _q: Vec3, _n: Vec3, _choice: f32) -> f32 {
-        0.0
-    }
-
-    fn sample_le(
-        &self,
-        _u_pos: Vec2,
-        u_dir: Vec2,
-        choice: f32,
-        _world: &World,
-        light: usize,
-    ) -> Option<EmissionSample> {
-        let (dir, pdf_dir) = self.emission_direction(u_dir);
-        Some(EmissionSample {
-            p: self.position,
-            error: Vec3::ZERO,
-            n: Vec3::ZERO,
-            dir,
-            radiance: self.intensity_towards(dir),
-            pdf_pos: choice,
-            pdf_dir,
-            delta_pos: true,
-            delta_dir: false,
-            light,
-        })
-    }
-
-    fn is_infinite(&self) -> bool {
-        false
-    }
-
-    fn point_source(&self) -> Option<(Vec3, Rgb)> {
-        Some((self.position, Rgb::splat(self.scale)))
-    }
-
-    fn intensity_towards(&self, w: Vec3) -> Rgb {
+    fn intensity(&self, w: Vec3) -> Rgb {
         match self.screen_point(self.light_from_world * w) {
             Some(s) => self.pixel(s) * self.scale,
             None => Rgb::ZERO,
         }
     }
 
+    fn base_intensity(&self) -> Rgb {
+        Rgb::splat(self.scale)
+    }
+
+    fn flux(&self) -> f32 {
+        self.scale * self.unit_flux
+    }
+
     /// Uniform over the screen: density 1 / (A cos³θ) in solid angle.
-    fn emission_direction(&self, u: Vec2) -> (Vec3, f32) {
+    fn sample_direction(&self, u: Vec2) -> (Vec3, f32) {
         let wl = self.screen_direction(u);
         let dir = (self.frame * wl).normalize();
         (dir, 1.0 / (self.area * wl.z * wl.z * wl.z))
     }
 
-    fn pdf_emission_direction(&self, w: Vec3) -> f32 {
+    fn pdf_direction(&self, w: Vec3) -> f32 {
         let wl = (self.light_from_world * w).normalize();
         match self.screen_point(wl) {
             Some(_) => 1.0 / (self.area * wl.z * wl.z * wl.z),
             None => 0.0,
         }
-    }
-
-    fn illuminate(&self, p: Vec3) -> Option<Illumination> {
-        let to = self.position - p;
-        let d2 = to.length_squared();
-        let wi = to / d2.sqrt();
-        let intensity = self.intensity_towards(-wi);
-        if intensity == Rgb::ZERO {
-            return None;
-        }
-        Some(Illumination {
-            wi,
-            irradiance: intensity / d2,
-            position: Some(self.position),
-        })
     }
 }

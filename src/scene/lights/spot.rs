@@ -2,7 +2,7 @@
 //! to its axis; no light beyond `cone_angle` (degrees from the axis), full intensity within
 //! `cone_angle` − `cone_delta`, a smooth step between ([`spot_falloff`]).
 
-use super::{EmissionSample, Illumination, LightModel, LightSample, World};
+use super::PointSource;
 use crate::math::warp::{uniform_cone, uniform_cone_pdf};
 use crate::math::{frame, luminance, Rgb, Vec2, Vec3};
 
@@ -45,95 +45,37 @@ impl SpotLight {
     }
 }
 
-impl LightModel for SpotLight {
-    fn power(&self, _world: &World) -> f32 {
-        spot_solid_angle(self.cos_start, self.cos_end) * luminance(self.intensity)
+impl PointSource for SpotLight {
+    fn position(&self) -> Vec3 {
+        self.position
     }
 
-    fn sample_li(&self, p: Vec3, _u: Vec2, choice: f32, _world: &World) -> Option<LightSample> {
-        let d = self.position - p;
-        let dist2 = d.length_squared();
-        let wi = d / dist2.sqrt();
-        let intensity = self.intensity_towards(-wi);
-        if intensity == Rgb::ZERO {
-            return None;
-        }
-        Some(LightSample::point_source(
-            self.position,
-            intensity / dist2,
-            wi,
-            choice,
-        ))
-    }
-
-    fn pdf_li(&self, _p: Vec3, _q: Vec3, _n: Vec3, _choice: f32) -> f32 {
-        0.0
-    }
-
-    fn sample_le(
-        &self,
-        _u_pos: Vec2,
-        u_dir: Vec2,
-        choice: f32,
-        _world: &World,
-        light: usize,
-    ) -> Option<EmissionSample> {
-        let (dir, pdf_dir) = self.emission_direction(u_dir);
-        Some(EmissionSample {
-            p: self.position,
-            error: Vec3::ZERO,
-            n: Vec3::ZERO,
-            dir,
-            radiance: self.intensity_towards(dir),
-            pdf_pos: choice,
-            pdf_dir,
-            delta_pos: true,
-            delta_dir: false,
-            light,
-        })
-    }
-
-    fn is_infinite(&self) -> bool {
-        false
-    }
-
-    fn point_source(&self) -> Option<(Vec3, Rgb)> {
-        Some((self.position, self.intensity))
-    }
-
-    fn intensity_towards(&self, w: Vec3) -> Rgb {
+    fn intensity(&self, w: Vec3) -> Rgb {
         self.intensity * spot_falloff(w.dot(self.axis), self.cos_start, self.cos_end)
     }
 
+    fn base_intensity(&self) -> Rgb {
+        self.intensity
+    }
+
+    fn flux(&self) -> f32 {
+        spot_solid_angle(self.cos_start, self.cos_end) * luminance(self.intensity)
+    }
+
     /// Uniform over the cone, as pbrt-v4 does.
-    fn emission_direction(&self, u: Vec2) -> (Vec3, f32) {
+    fn sample_direction(&self, u: Vec2) -> (Vec3, f32) {
         let (t, b) = frame(self.axis);
         let l = uniform_cone(u, self.cos_end);
         let dir = (t * l.x + b * l.y + self.axis * l.z).normalize();
         (dir, uniform_cone_pdf(self.cos_end))
     }
 
-    fn pdf_emission_direction(&self, w: Vec3) -> f32 {
+    fn pdf_direction(&self, w: Vec3) -> f32 {
         if w.dot(self.axis) >= self.cos_end {
             uniform_cone_pdf(self.cos_end)
         } else {
             0.0
         }
-    }
-
-    fn illuminate(&self, p: Vec3) -> Option<Illumination> {
-        let to = self.position - p;
-        let d2 = to.length_squared();
-        let wi = to / d2.sqrt();
-        let falloff = spot_falloff(-wi.dot(self.axis), self.cos_start, self.cos_end);
-        if falloff == 0.0 {
-            return None;
-        }
-        Some(Illumination {
-            wi,
-            irradiance: self.intensity * falloff / d2,
-            position: Some(self.position),
-        })
     }
 }
 
