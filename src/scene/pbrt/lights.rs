@@ -5,6 +5,7 @@ use super::params::Params;
 use super::spectrum::Kind;
 use super::state::AreaEmission;
 use super::{Loader, Loc};
+use crate::image::Image;
 use crate::math::{Mat3, Rgb};
 use crate::scene::environment::{Environment, Mapping};
 use crate::scene::lights::{
@@ -84,12 +85,32 @@ impl Loader {
         radiance
     }
 
+    /// The image a light's `filename` names (goniometric, projection), read and recorded
+    /// as an input; the name as the file gives it.
+    fn light_image(&mut self, p: &Params, st: &str, loc: &Loc) -> crate::Result<(String, Image)> {
+        let file = p
+            .string("filename")
+            .map_err(Self::pe(loc))?
+            .ok_or_else(|| loc.error(format!("{st} needs a \"string filename\"")))?;
+        let path = loc.dir().join(&file);
+        self.add_input(&path);
+        let (image, _) =
+            crate::image::output::read_image(&path).map_err(|e| loc.error(format!("{st}: {e}")))?;
+        Ok((file, image))
+    }
+
     pub(super) fn light(&mut self, ty: &str, p: &Params, loc: &Loc) -> crate::Result<()> {
         let st = format!("LightSource \"{ty}\"");
         let st = st.as_str();
         let pe = Self::pe(loc);
         let m = self.mirror * self.state.ctm;
         let scale = p.float_or("scale", 1.0).map_err(&pe)? as f32;
+        // The light's frame: its directions to the world's.
+        let frame = Mat3::from_cols(
+            m.x_axis.truncate().as_vec3(),
+            m.y_axis.truncate().as_vec3(),
+            m.z_axis.truncate().as_vec3(),
+        );
         let point3 = |name: &str, default: DVec3| -> crate::Result<DVec3> {
             match p.floats(name, "point3").map_err(&pe)? {
                 Some(v) if v.len() == 3 => Ok(DVec3::new(v[0], v[1], v[2])),
@@ -101,19 +122,7 @@ impl Loader {
             "goniometric" => {
                 // pbrt-v4's GoniometricLight: at the origin of the light's space, its
                 // intensity I × scale × the image's value, the image's pole the light's +y.
-                let file = p
-                    .string("filename")
-                    .map_err(&pe)?
-                    .ok_or_else(|| loc.error(format!("{st} needs a \"string filename\"")))?;
-                let path = loc.dir().join(&file);
-                self.add_input(&path);
-                let (image, _) = crate::image::output::read_image(&path)
-                    .map_err(|e| loc.error(format!("{st}: {e}")))?;
-                let frame = Mat3::from_cols(
-                    m.x_axis.truncate().as_vec3(),
-                    m.y_axis.truncate().as_vec3(),
-                    m.z_axis.truncate().as_vec3(),
-                );
+                let (file, image) = self.light_image(p, st, loc)?;
                 let map = GoniometricMap::new(PathBuf::from(&file), &image, frame)
                     .map_err(|e| loc.error(format!("{st}: \"{file}\": {e}")))?;
                 let i = self
@@ -135,19 +144,7 @@ impl Loader {
             "projection" => {
                 // pbrt-v4's ProjectionLight: the image over `fov` degrees down the light's
                 // +z, at the origin of its transform, times `scale` (or rescaled to `power`).
-                let file = p
-                    .string("filename")
-                    .map_err(&pe)?
-                    .ok_or_else(|| loc.error(format!("{st} needs a \"string filename\"")))?;
-                let path = loc.dir().join(&file);
-                self.add_input(&path);
-                let (image, _) = crate::image::output::read_image(&path)
-                    .map_err(|e| loc.error(format!("{st}: {e}")))?;
-                let frame = Mat3::from_cols(
-                    m.x_axis.truncate().as_vec3(),
-                    m.y_axis.truncate().as_vec3(),
-                    m.z_axis.truncate().as_vec3(),
-                );
+                let (file, image) = self.light_image(p, st, loc)?;
                 let fov = p.float_or("fov", 90.0).map_err(&pe)? as f32;
                 let position = m.transform_point3(DVec3::ZERO).as_vec3();
                 let light =
@@ -245,15 +242,10 @@ impl Loader {
                         }
                         let path = loc.dir().join(&file);
                         self.add_input(&path);
-                        let transform = Mat3::from_cols(
-                            m.x_axis.truncate().as_vec3(),
-                            m.y_axis.truncate().as_vec3(),
-                            m.z_axis.truncate().as_vec3(),
-                        );
                         let (env, mapping) = Environment::load_with_mapping(
                             &path,
                             PathBuf::from(&file),
-                            transform,
+                            frame,
                             Rgb::splat(scale),
                         )
                         .map_err(|e| loc.error(format!("{st}: {e}")))?;
