@@ -46,6 +46,9 @@ fn edge(a: u32, b: u32) -> (u32, u32) {
 /// neighbours along it).
 struct Topology {
     edges: FxHashMap<(u32, u32), Vec<u32>>,
+    /// The edges' keys in order, so that what is built from them does not depend on the
+    /// hash.
+    keys: Vec<(u32, u32)>,
     neighbours: Vec<Vec<u32>>,
     rim: Vec<Option<[u32; 2]>>,
 }
@@ -66,7 +69,6 @@ impl Topology {
         }
         let mut neighbours = vec![Vec::new(); vertices];
         let mut along_rim: Vec<Vec<u32>> = vec![Vec::new(); vertices];
-        // In a fixed order, so that sums (and so positions) do not depend on the hash.
         let mut keys: Vec<_> = edges.keys().copied().collect();
         keys.sort_unstable();
         for &(a, b) in &keys {
@@ -88,6 +90,7 @@ impl Topology {
             .collect();
         Ok(Topology {
             edges,
+            keys,
             neighbours,
             rim,
         })
@@ -120,9 +123,7 @@ fn refine(p: &[DVec3], triangles: &[[u32; 3]]) -> Result<(Vec<DVec3>, Vec<[u32; 
         .map(|v| topo.smoothed(p, v, beta, 1.0 / 8.0))
         .collect();
     let mut edge_vertex: FxHashMap<(u32, u32), u32> = FxHashMap::default();
-    let mut keys: Vec<_> = topo.edges.keys().copied().collect();
-    keys.sort_unstable();
-    for (a, b) in keys {
+    for &(a, b) in &topo.keys {
         let (pa, pb) = (p[a as usize], p[b as usize]);
         let q = match topo.edges[&(a, b)][..] {
             [c, d] => (pa + pb) * (3.0 / 8.0) + (p[c as usize] + p[d as usize]) * (1.0 / 8.0),
