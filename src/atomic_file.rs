@@ -6,7 +6,7 @@
 //! of the library), so that a program ended by a signal while writing can remove them first:
 //! [`remove_temporaries`].
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};

@@ -2,7 +2,7 @@
 //! u32 format version, the body, and a u64 checksum of everything before it, all
 //! little-endian. Files are written atomically ([`crate::atomic_file`]).
 
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use std::path::Path;
 
 /// One kind of file.
@@ -63,7 +63,7 @@ impl Format {
     /// be allocated (a huge film or network).
     pub fn try_start(&self, capacity: usize, path: &Path) -> Result<Vec<u8>> {
         let mut b = Vec::new();
-        crate::error::try_reserve(&mut b, capacity.saturating_add(20), || {
+        crate::platform::try_reserve(&mut b, capacity.saturating_add(20), || {
             format!("writing the {} {}", self.what, path.display())
         })?;
         b.extend_from_slice(self.magic);

@@ -2,7 +2,8 @@
 //! The library keeps no process-wide state: two jobs in one process each have their own, so
 //! one can be cancelled or refused memory while the other runs on untouched.
 
-use crate::{Error, Result};
+pub use crate::error::human_size;
+use crate::error::{Error, Result};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::Instant;
@@ -256,22 +257,6 @@ pub fn parse_size(text: &str) -> std::result::Result<u64, String> {
         return Err(format!("\"{text}\" is not a usable memory size"));
     }
     Ok(bytes as u64)
-}
-
-/// A size for people: "1.5 GiB".
-pub fn human_size(bytes: u64) -> String {
-    let units = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
-    let mut v = bytes as f64;
-    let mut u = 0;
-    while v >= 1024.0 && u + 1 < units.len() {
-        v /= 1024.0;
-        u += 1;
-    }
-    if u == 0 {
-        format!("{bytes} bytes")
-    } else {
-        format!("{v:.1} {}", units[u])
-    }
 }
 
 #[cfg(test)]

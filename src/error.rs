@@ -32,7 +32,7 @@ pub enum Error {
     Cancelled { stage: String },
     /// The work would need more memory than the job's budget allows.
     #[error("{what} would need {} of memory, more than the budget of {}{}",
-        crate::control::human_size(*needed), crate::control::human_size(*limit),
+        human_size(*needed), human_size(*limit),
         if *default_limit { " (3/4 of the physical memory)" } else { "" })]
     Memory {
         what: String,
@@ -43,7 +43,7 @@ pub enum Error {
     },
     /// Memory for `what` (`bytes` of it) could not be allocated: the system has none left to
     /// give (or a limit such as `ulimit -v` refused it).
-    #[error("cannot allocate {} for {what}: out of memory", crate::control::human_size(*bytes))]
+    #[error("cannot allocate {} for {what}: out of memory", human_size(*bytes))]
     OutOfMemory { what: String, bytes: u64 },
     /// Reading or writing a file failed.
     #[error("{}: {source}", path.display())]
@@ -88,26 +88,20 @@ impl Error {
 
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
-/// A vector of `len` copies of `value`, or [`Error::OutOfMemory`] naming `what` if it cannot
-/// be allocated (instead of aborting the process, as `vec!` would).
-pub fn try_vec<T: Clone>(len: usize, value: T, what: impl FnOnce() -> String) -> Result<Vec<T>> {
-    let mut v = Vec::new();
-    try_reserve(&mut v, len, what)?;
-    v.resize(len, value);
-    Ok(v)
-}
-
-/// Reserves room for exactly `additional` more elements in `v`, or [`Error::OutOfMemory`]
-/// naming `what`.
-pub fn try_reserve<T>(
-    v: &mut Vec<T>,
-    additional: usize,
-    what: impl FnOnce() -> String,
-) -> Result<()> {
-    crate::platform::fallible(|| v.try_reserve_exact(additional)).map_err(|_| Error::OutOfMemory {
-        what: what(),
-        bytes: (additional as u64).saturating_mul(std::mem::size_of::<T>() as u64),
-    })
+/// A size for people: "1.5 GiB".
+pub fn human_size(bytes: u64) -> String {
+    let units = ["bytes", "KiB", "MiB", "GiB", "TiB", "PiB", "EiB"];
+    let mut v = bytes as f64;
+    let mut u = 0;
+    while v >= 1024.0 && u + 1 < units.len() {
+        v /= 1024.0;
+        u += 1;
+    }
+    if u == 0 {
+        format!("{bytes} bytes")
+    } else {
+        format!("{v:.1} {}", units[u])
+    }
 }
 
 /// `text` on one line: control characters (a newline inside a quoted string of the input,

@@ -32,7 +32,7 @@ fn put(name: &str, bytes: &[u8]) -> PathBuf {
 }
 
 /// A rejection must be one line (the CLI prints it as `raylink: error: ...`).
-fn one_line<T>(result: crate::Result<T>) -> Option<T> {
+fn one_line<T>(result: crate::error::Result<T>) -> Option<T> {
     match result {
         Ok(v) => Some(v),
         Err(e) => {

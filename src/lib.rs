@@ -55,6 +55,7 @@ pub mod scene;
 pub mod settings;
 #[cfg(test)]
 mod tests;
+pub(crate) mod transport;
 
 pub use accel::Backend;
 pub use error::{Error, Result};

@@ -3,6 +3,7 @@
 //! shared machine, and a one-line exit instead of an abort when the system refuses memory.
 //! A thin wrapper over `ffi/platform.c` and `ffi/exceptions.cpp`.
 
+use crate::error::{Error, Result};
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::cell::Cell;
 
@@ -84,6 +85,28 @@ pub fn fallible<T>(f: impl FnOnce() -> T) -> T {
     let result = f();
     FALLIBLE.with(|c| c.set(before));
     result
+}
+
+/// A vector of `len` copies of `value`, or [`Error::OutOfMemory`] naming `what` if it cannot
+/// be allocated (instead of aborting the process, as `vec!` would).
+pub fn try_vec<T: Clone>(len: usize, value: T, what: impl FnOnce() -> String) -> Result<Vec<T>> {
+    let mut v = Vec::new();
+    try_reserve(&mut v, len, what)?;
+    v.resize(len, value);
+    Ok(v)
+}
+
+/// Reserves room for exactly `additional` more elements in `v`, or [`Error::OutOfMemory`]
+/// naming `what`.
+pub fn try_reserve<T>(
+    v: &mut Vec<T>,
+    additional: usize,
+    what: impl FnOnce() -> String,
+) -> Result<()> {
+    fallible(|| v.try_reserve_exact(additional)).map_err(|_| Error::OutOfMemory {
+        what: what(),
+        bytes: (additional as u64).saturating_mul(std::mem::size_of::<T>() as u64),
+    })
 }
 
 fn checked(ptr: *mut u8, bytes: usize) -> *mut u8 {

@@ -22,9 +22,9 @@
 
 use super::cutout::Cutout;
 use super::{Accel, Hit};
+use crate::error::Result;
 use crate::math::{Ray, Vec3};
 use crate::scene::{Geometry, Instance, QuadMesh, Scene, Shape, TriangleMesh};
-use crate::Result;
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::CwBvh;
@@ -471,7 +471,7 @@ impl BvhAccel {
         source: &std::path::Path,
     ) -> Result<()> {
         if let Some(i) = shapes.iter().position(|s| !s.motion_matches()) {
-            return Err(crate::Error::input(
+            return Err(crate::error::Error::input(
                 source,
                 format!("shape {i} moves into a shape of another kind or topology"),
             ));
@@ -518,7 +518,10 @@ impl BvhAccel {
                 Kind::Instance => format!("instance {}", meta[i].geom_id),
                 _ => format!("primitive {} of shape {}", meta[i].prim_id, meta[i].geom_id),
             };
-            return Err(crate::Error::input(source, format!("{what} is not finite")));
+            return Err(crate::error::Error::input(
+                source,
+                format!("{what} is not finite"),
+            ));
         }
         let mut bvh = build_cwbvh(
             &aabbs,

@@ -181,17 +181,17 @@ pub enum Update {
 /// An intersection structure that follows a scene from one animation frame to the next.
 pub trait DynamicAccel: Accel {
     /// Brings the structure to `scene`'s geometry (shape `i` is geometry `i`, as for [`build`]).
-    fn update(&mut self, scene: &Scene) -> crate::Result<Update>;
+    fn update(&mut self, scene: &Scene) -> crate::error::Result<Update>;
 }
 
 impl DynamicAccel for embree::EmbreeAccel {
-    fn update(&mut self, scene: &Scene) -> crate::Result<Update> {
+    fn update(&mut self, scene: &Scene) -> crate::error::Result<Update> {
         embree::EmbreeAccel::update(self, scene)
     }
 }
 
 impl DynamicAccel for bvh::BvhAccel {
-    fn update(&mut self, scene: &Scene) -> crate::Result<Update> {
+    fn update(&mut self, scene: &Scene) -> crate::error::Result<Update> {
         // A fresh PLOC build is fast, and keeps the tree as good as a new one.
         self.rebuild(scene)?;
         Ok(Update::Rebuilt)
@@ -204,7 +204,7 @@ pub fn build_dynamic(
     scene: &Scene,
     backend: Backend,
     control: &Control,
-) -> crate::Result<Box<dyn DynamicAccel>> {
+) -> crate::error::Result<Box<dyn DynamicAccel>> {
     check_memory(scene, control)?;
     match backend {
         Backend::Embree => Ok(Box::new(embree::EmbreeAccel::build_dynamic(
@@ -249,7 +249,11 @@ impl std::fmt::Display for Backend {
 
 /// Builds the acceleration structure for a scene's shapes; shape `i` gets geometry id `i`.
 /// The job's memory budget bounds it, and a cancel before the build stops it.
-pub fn build(scene: &Scene, backend: Backend, control: &Control) -> crate::Result<Box<dyn Accel>> {
+pub fn build(
+    scene: &Scene,
+    backend: Backend,
+    control: &Control,
+) -> crate::error::Result<Box<dyn Accel>> {
     check_memory(scene, control)?;
     match backend {
         Backend::Embree => Ok(Box::new(embree::EmbreeAccel::build_cancellable(
@@ -264,7 +268,7 @@ pub fn build(scene: &Scene, backend: Backend, control: &Control) -> crate::Resul
 /// build-time copies, or obvhs's CWBVH, plus the shading data kept beside them).
 const BYTES_PER_PRIMITIVE: u64 = 256;
 
-fn check_memory(scene: &Scene, control: &Control) -> crate::Result<()> {
+fn check_memory(scene: &Scene, control: &Control) -> crate::error::Result<()> {
     control.cancel.check("the intersection structure's build")?;
     control.budget.check(
         &format!(

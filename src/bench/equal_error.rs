@@ -5,13 +5,13 @@
 //! error falls as 1/√samples, so a render of t seconds with error e reaches the target error
 //! E in t·(e/E)², with spp·(e/E)² samples per pixel.
 
+use crate::error::{Error, Result};
 use crate::image::compare::{box_downsample, bright_mask, rmse};
 use crate::image::output::read_image;
 use crate::image::Image;
 use crate::job::Technique;
 use crate::scene::Scene;
 use crate::settings::TechniqueKind;
-use crate::{Error, Result};
 use std::path::{Path, PathBuf};
 
 /// Samples per pixel of each timed render.

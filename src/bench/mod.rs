@@ -17,10 +17,10 @@ pub use rays::{RayKind, RaySets};
 use crate::accel::bvh::BvhAccel;
 use crate::accel::embree::{Device, EmbreeAccel};
 use crate::accel::{Accel, Backend};
+use crate::error::{Error, Result};
 use crate::math::Ray;
 use crate::platform::set_flush_denormals;
 use crate::scene::Scene;
-use crate::{Error, Result};
 use rayon::prelude::*;
 use std::time::Instant;
 

@@ -20,18 +20,18 @@
 use super::Spread;
 use crate::accel::{self, Backend};
 use crate::control::Control;
+use crate::error::{Error, Result};
 use crate::integrators::illumination_network::distribute::{
     distribute, DistributeOptions, Solution,
 };
 use crate::integrators::illumination_network::relight::LightBasis;
 use crate::integrators::illumination_network::render::{NetworkRenderer, Tables};
 use crate::integrators::illumination_network::{file, Builder, Network, NetworkParams};
-use crate::integrators::Context;
 use crate::math::Rgb;
 use crate::render::pixels::{render_pixels, PixelView};
 use crate::render::{PixelSampling, RenderStats, Tile};
 use crate::scene::Scene;
-use crate::{Error, Result};
+use crate::transport::Context;
 use std::fmt::Write;
 use std::path::PathBuf;
 use std::time::Instant;

@@ -18,10 +18,10 @@ use super::scenes::resolve;
 use super::{BenchConfig, Spread};
 use crate::accel::Backend;
 use crate::control::Control;
+use crate::error::{Error, Result};
 use crate::image::filter::{Filter, Reconstruction};
 use crate::job::{Job, MonteCarloSettings, Renderer, Technique};
 use crate::platform::cores;
-use crate::{Error, Result};
 
 /// Samples per pixel of each timed throughput render.
 const SPP: u32 = 4;

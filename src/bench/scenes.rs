@@ -1,9 +1,9 @@
 //! The bench's scene ladder: scene files, and procedural scenes of any size generated in code
 //! (a field of tessellated spheres on a floor, and a displaced terrain grid).
 
+use crate::error::{Error, Result};
 use crate::math::{Rgb, Rng, Vec3};
 use crate::scene::{Camera, Geometry, Light, Material, QuadMesh, Scene, Shape, TriangleMesh};
-use crate::{Error, Result};
 use std::f32::consts::{PI, TAU};
 use std::path::{Path, PathBuf};
 

@@ -12,16 +12,16 @@ use super::segments::{Changed, Quantiser, SegmentRecords};
 use super::tables::{BlockLayout, BlockSet, Table, VoxelTables};
 use crate::accel::Accel;
 use crate::control::{Control, MemoryBudget};
+use crate::error::Result;
 use crate::image::Image;
-use crate::integrators::{Context, Integrator, MonteCarlo, RayStats};
 use crate::math::{Rgb, Vec3};
-use crate::render::driver::drive;
 use crate::render::pixels::PixelView;
-use crate::render::progressive::ProgressiveOptions;
 use crate::render::small_objects::SmallObjects;
 use crate::render::{Tile, MERGE_WINDOW};
 use crate::scene::Scene;
-use crate::Result;
+use crate::transport::driver::drive;
+use crate::transport::ProgressiveOptions;
+use crate::transport::{Context, Integrator, MonteCarlo, RayStats};
 use std::time::Instant;
 
 /// How pixels are computed: one of the two tile kernels, with its view.
@@ -420,7 +420,7 @@ impl CoherentRenderer {
         let start = Instant::now();
         let (width, height) = engine.size();
         if (width, height) != (self.layout.width, self.layout.height) {
-            return Err(crate::Error::Invalid(format!(
+            return Err(crate::error::Error::Invalid(format!(
                 "the frame is {width}x{height} but the block tables were made for {}x{}",
                 self.layout.width, self.layout.height
             )));
@@ -433,7 +433,7 @@ impl CoherentRenderer {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(engine.threads().unwrap_or(0))
             .build()
-            .map_err(|e| crate::Error::Invalid(format!("cannot start threads: {e}")))?;
+            .map_err(|e| crate::error::Error::Invalid(format!("cannot start threads: {e}")))?;
         let (blocks, mut image, changed) = match self.previous.take() {
             None => {
                 stats.full_reason = Some("first frame".into());
@@ -477,7 +477,7 @@ impl CoherentRenderer {
         // records each voxel once per block and traces fewer shared tile corners (a pixel's
         // value does not depend on the tiling).
         let split =
-            list.len() < 8 * crate::render::driver::worker_count(engine.threads(), usize::MAX);
+            list.len() < 8 * crate::transport::driver::worker_count(engine.threads(), usize::MAX);
         let tasks: Vec<(usize, Tile)> = list
             .iter()
             .flat_map(|&b| {

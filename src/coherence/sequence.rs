@@ -10,17 +10,17 @@ use super::renderer::{CoherentRenderer, Engine, FrameStats};
 use super::tables::BlockLayout;
 use crate::accel::{self, Backend, DynamicAccel, Update};
 use crate::control::Control;
+use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::integrators::path::{PathOptions, PathTracer};
 use crate::integrators::technique::{MonteCarloSettings, WhittedSettings};
 use crate::integrators::whitted::{Whitted, WhittedOptions};
-use crate::integrators::{Context, RayStats};
 use crate::math::Vec3;
 use crate::render::pixels::PixelView;
-use crate::render::progressive::ProgressiveOptions;
 use crate::scene::animation::Animation;
 use crate::scene::{Light, Scene};
-use crate::{Error, Result};
+use crate::transport::ProgressiveOptions;
+use crate::transport::{Context, RayStats};
 use std::time::Instant;
 
 /// The techniques a sequence renders with.

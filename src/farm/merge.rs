@@ -4,10 +4,10 @@
 //! one line naming the file.
 
 use super::{META_REGION, META_SCENE_HASH, META_SETTINGS, META_TILE};
+use crate::error::{Error, Result};
 use crate::image::oiio::{self, RawImage};
 use crate::image::{Image, MetaValue, Metadata};
 use crate::math::Rgb;
-use crate::{Error, Result};
 use std::path::{Path, PathBuf};
 
 /// The merged image and its metadata: the parts' common attributes (`Software` and the

@@ -7,10 +7,9 @@
 
 pub mod merge;
 
+use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::render::Tile;
-use crate::scene::Scene;
-use crate::{Error, Result};
 use std::path::{Path, PathBuf};
 
 /// Metadata attribute: the [`scene_hash`] of the scene rendered, as 16 hex digits.
@@ -141,43 +140,7 @@ pub fn output_path(pattern: &Path, part: Option<&Part>) -> Result<PathBuf> {
     }
 }
 
-/// A hash of everything in the scene that changes pixels (camera, shapes, materials,
-/// lights, background, ambient, environment map), for checking that tiles come from the
-/// same scene. The scene's debug text is hashed as it is formatted, so a scene of millions
-/// of triangles needs no string of hundreds of megabytes.
-pub fn scene_hash(scene: &Scene) -> u64 {
-    use std::fmt::Write;
-    let mut h = Fnv1a(0xcbf29ce484222325);
-    write!(
-        h,
-        "{:?}|{:?}|{:?}|{:?}|{:?}|{:?}|{:?}",
-        scene.camera,
-        scene.materials,
-        scene.shapes,
-        scene.lights,
-        scene.background,
-        scene.ambient,
-        scene.environment
-    )
-    .expect("hashing never fails");
-    if scene.has_instances() {
-        write!(h, "|{:?}|{:?}", scene.prototypes, scene.instances).expect("hashing never fails");
-    }
-    h.0
-}
-
-/// FNV-1a over the bytes written to it (crate::binary_file::fnv1a, streaming).
-struct Fnv1a(u64);
-
-impl std::fmt::Write for Fnv1a {
-    fn write_str(&mut self, s: &str) -> std::fmt::Result {
-        for &b in s.as_bytes() {
-            self.0 ^= b as u64;
-            self.0 = self.0.wrapping_mul(0x100000001b3);
-        }
-        Ok(())
-    }
-}
+pub use crate::scene::scene_hash;
 
 /// The pixels of `region` of `image`.
 pub fn crop(image: &Image, region: &Tile) -> Image {

@@ -305,7 +305,7 @@ const HDR_MAX: f32 = 1.0e38;
 /// The values to encode, three a pixel; [`Error::OutOfMemory`] if there is no room for them.
 fn channel_values(path: &Path, pixels: &[Rgb], f: impl Fn(f32) -> f32) -> Result<Vec<f32>> {
     let mut values = Vec::new();
-    crate::error::try_reserve(&mut values, pixels.len() * 3, || {
+    crate::platform::try_reserve(&mut values, pixels.len() * 3, || {
         format!("the pixels of {}", path.display())
     })?;
     values.extend(pixels.iter().flat_map(|p| [p.x, p.y, p.z]).map(f));

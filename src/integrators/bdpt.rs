@@ -9,7 +9,6 @@
 
 use super::light::{connect_to_camera, lens_sample};
 use super::path::russian_roulette;
-use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
@@ -18,6 +17,7 @@ use crate::math::{frame, Ray, Rgb, Vec2, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::lights::Emitter;
 use crate::scene::Scene;
+use crate::transport::{Context, MonteCarlo, RayStats, Splat};
 use std::f32::consts::PI;
 
 #[derive(Clone, Copy, Debug, PartialEq)]

@@ -1,18 +1,19 @@
 //! Techniques made from their settings: one dispatch from a [`Technique`] to the
 //! [`Lifecycle`] that prepares and renders it (pbrt-v4's `Integrator::Create`).
 
-use super::lifecycle::{Lifecycle, Tiles};
-use super::technique::{MonteCarloSettings, Technique};
+use super::technique::Technique;
+use crate::error::Result;
 use crate::integrators::bdpt::{Bdpt, BdptOptions};
 use crate::integrators::illumination_network::technique::NetworkTechnique;
 use crate::integrators::irradiance_cache::technique::CacheTechnique;
 use crate::integrators::light::{LightOptions, LightTracer};
 use crate::integrators::path::{PathOptions, PathTracer};
 use crate::integrators::whitted::{Whitted, WhittedOptions};
-use crate::integrators::MonteCarlo;
-use crate::render::PixelSampling;
 use crate::scene::Scene;
-use crate::Result;
+use crate::transport::technique::MonteCarloSettings;
+use crate::transport::technique::{Lifecycle, Tiles};
+use crate::transport::MonteCarlo;
+use crate::transport::PixelSampling;
 
 /// The technique `technique` describes, for `scene` (pbrt's `Integrator::Create`).
 pub(crate) fn create(technique: &Technique, scene: &Scene) -> Result<Box<dyn Lifecycle>> {
@@ -43,7 +44,7 @@ pub(crate) fn create(technique: &Technique, scene: &Scene) -> Result<Box<dyn Lif
         }
         Technique::Bdpt(mc) => {
             refuse_orthographic(scene, "bdpt")?;
-            Bdpt::check_scene(scene).map_err(|e| crate::Error::input(&scene.source, e))?;
+            Bdpt::check_scene(scene).map_err(|e| crate::error::Error::input(&scene.source, e))?;
             Box::new(MonteCarloTechnique {
                 integrator: Bdpt::new(BdptOptions {
                     max_depth: mc.max_depth,
@@ -82,12 +83,12 @@ impl<T: MonteCarlo + Send> Lifecycle for MonteCarloTechnique<T> {
 
 /// Light paths reach the camera by connecting to it, which an orthographic camera's
 /// importance (a delta in direction) does not allow; pbrt-v4 refuses it too.
-fn refuse_orthographic(scene: &Scene, integrator: &str) -> crate::Result<()> {
+fn refuse_orthographic(scene: &Scene, integrator: &str) -> crate::error::Result<()> {
     if matches!(
         scene.camera.projection,
         crate::scene::Projection::Orthographic { .. }
     ) {
-        return Err(crate::Error::input(
+        return Err(crate::error::Error::input(
             &scene.source,
             format!(
                 "the {integrator} integrator cannot connect light paths to an orthographic camera (projection = \"orthographic\"): use a perspective camera or the path integrator"

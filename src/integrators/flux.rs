@@ -15,16 +15,16 @@
 
 use super::light::walk;
 use super::path::{PathOptions, PathTracer, MAX_DEPTH_LIMIT};
-use super::{Context, MonteCarlo, RayStats};
 use crate::accel::{self, Backend};
 use crate::control::Control;
+use crate::error::{Error, Result};
 use crate::math::sobol::Sampler;
 use crate::math::warp::{cosine_hemisphere, power_heuristic};
 use crate::math::{frame, Ray, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::lights::AreaLight;
 use crate::scene::Scene;
-use crate::{Error, Result};
+use crate::transport::{Context, MonteCarlo, RayStats};
 use rayon::prelude::*;
 
 /// Independently scrambled batches the paths are split into; the spread of their means gives

@@ -5,7 +5,6 @@
 //! pixel sample, so a render with N samples per pixel traces N·width·height light paths.
 
 use super::path::russian_roulette;
-use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
@@ -13,6 +12,7 @@ use crate::math::{Ray, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::lights::{EmissionSample, Emitter};
 use crate::scene::SurfacePoint;
+use crate::transport::{Context, MonteCarlo, RayStats, Splat};
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LightOptions {

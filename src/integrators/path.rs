@@ -4,13 +4,13 @@
 //! strategies are combined by multiple importance sampling with the power heuristic.
 //! Russian roulette ends paths whose throughput has become small.
 
-use super::{Context, MonteCarlo, RayStats, Splat};
 use crate::bsdf::{Bsdf, Transport};
 use crate::math::sobol::Sampler;
 use crate::math::warp::power_heuristic;
 use crate::math::{Ray, Rgb, Vec2, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::SurfacePoint;
+use crate::transport::{Context, MonteCarlo, RayStats, Splat};
 
 /// Default number of bounces (pbrt's convention: 1 is direct lighting only).
 pub const DEFAULT_MAX_DEPTH: u32 = 8;

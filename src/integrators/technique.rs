@@ -5,14 +5,15 @@
 //! pbrt-v4's `Integrator::Create` reads a parameter dictionary). Errors name the setting
 //! ([`Error::Setting`]).
 
-use crate::image::filter::{Filter, Reconstruction};
+use crate::error::{Error, Result};
+use crate::image::filter::Reconstruction;
 use crate::integrators::illumination_network as net;
 use crate::integrators::irradiance_cache::{self as ic, IcOptions};
 use crate::integrators::path::{DEFAULT_MAX_DEPTH, MAX_DEPTH_LIMIT};
-use crate::render::passes::MAX_SPP;
-use crate::render::{PixelSampling, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD};
 use crate::settings::{AntiAliasing, NetworkBuilder, Relight, Settings, TechniqueKind};
-use crate::{Error, Result};
+use crate::transport::passes::MAX_SPP;
+pub use crate::transport::technique::MonteCarloSettings;
+use crate::transport::{PixelSampling, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD};
 use std::path::PathBuf;
 
 /// A technique with its settings, checked.
@@ -33,19 +34,6 @@ pub struct WhittedSettings {
     pub area_samples: u32,
     pub fresnel: bool,
     pub sampling: PixelSampling,
-}
-
-/// The progressive Monte Carlo integrators (and the irradiance cache's final render).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MonteCarloSettings {
-    pub max_depth: u32,
-    /// Samples per pixel; with a time limit, the most that will be taken.
-    pub spp: u32,
-    pub time_limit: Option<f64>,
-    pub filter: Filter,
-    /// How camera samples become pixels: splatted through the filter (the default), or
-    /// drawn from it so that each pixel depends on its own samples alone.
-    pub reconstruction: Reconstruction,
 }
 
 /// The irradiance cache's own settings.
@@ -303,6 +291,7 @@ fn network(s: &Settings, max_depth: u32) -> Result<NetworkSettings> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::image::filter::Filter;
 
     #[test]
     fn the_factory_gives_each_technique_its_defaults() {

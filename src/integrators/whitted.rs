@@ -14,13 +14,13 @@
 //! Deviation from the paper: no linear attenuation with distance along reflected rays
 //! (radiance is constant along rays in vacuum).
 
-use super::{Context, Integrator, RayStats, Sample};
 use crate::bsdf::{Bsdf, Transport};
 pub use crate::math::optics::{fresnel_dielectric, reflect, refract};
 use crate::math::spawn::Spot;
 use crate::math::{frame, Ray, Rgb, Rng, Vec2, Vec3};
 use crate::scene::lights::Illumination;
 use crate::scene::{Material, SurfacePoint};
+use crate::transport::{Context, Integrator, RayStats, Sample};
 use std::f32::consts::{FRAC_1_PI, PI};
 
 #[derive(Clone, Debug, PartialEq)]

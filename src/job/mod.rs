@@ -18,17 +18,18 @@ pub use crate::settings::{
 };
 
 use crate::accel::{self, Accel, Backend};
+use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::integrators::create;
-use crate::integrators::lifecycle::{Lifecycle, Tiles, View};
-use crate::integrators::Context;
 use crate::render::aov::render_aovs;
 use crate::render::pixels::{render_pixels, PixelView};
 use crate::render::progressive::{render_passes, render_region};
 use crate::render::PixelSampling;
 use crate::render::{Film, RenderStats, Tile, Watch};
 use crate::scene::{Scene, MAX_RESOLUTION};
-use crate::{Error, Result};
+use crate::transport::technique::{Lifecycle, Tiles};
+use crate::transport::Context;
+use crate::transport::View;
 use std::sync::Arc;
 use std::time::Instant;
 

@@ -3,14 +3,14 @@
 //! its shading normal (facing the camera) and depth (distance along the ray). Pixels that see
 //! the background get zero.
 
-use super::driver::drive;
 use super::{place, Tile, MERGE_WINDOW};
 use crate::control::Control;
 use crate::image::filter::Filter;
 use crate::image::Image;
-use crate::integrators::{Context, RayStats};
 use crate::math::sobol::Sampler;
 use crate::math::Rgb;
+use crate::transport::driver::drive;
+use crate::transport::{Context, RayStats};
 
 /// Samples per pixel for the auxiliary outputs.
 pub const AOV_SAMPLES: u32 = 16;
@@ -43,7 +43,7 @@ pub(crate) fn render_aovs(
     region: &Tile,
     (filter, seed, threads): (Filter, u64, Option<usize>),
     control: &Control,
-) -> crate::Result<Option<[Image; 3]>> {
+) -> crate::error::Result<Option<[Image; 3]>> {
     let mut camera = ctx.scene.camera.clone();
     camera.width = width;
     camera.height = height;

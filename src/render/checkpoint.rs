@@ -18,7 +18,7 @@
 
 use super::Film;
 use crate::binary_file::{Format, Reader};
-use crate::Result;
+use crate::error::Result;
 use std::path::{Path, PathBuf};
 
 pub(crate) const FORMAT: Format = Format {
@@ -127,7 +127,7 @@ pub struct Resumed {
 /// Reads a checkpoint written by [`save`] for the same `settings` and film size (`blank`, a
 /// new film of the render's size and filter, receives the values) of a render of `target`
 /// samples per pixel. Any other file, or one whose counts that render never passes through,
-/// is an [`Error::Input`](crate::Error::Input) naming it.
+/// is an [`Error::Input`](crate::error::Error::Input) naming it.
 pub fn load(path: &Path, settings: &str, blank: Film, target: u32) -> Result<Resumed> {
     let file = FORMAT.load(path)?;
     let bad = |problem: &str| FORMAT.error(path, problem);

@@ -3,12 +3,12 @@
 //! filter-weighted splats of light paths, with the count of passes taken. The image is their
 //! mean; a checkpoint stores them exactly.
 
-use super::passes::{next_pass, reachable, MAX_SPP};
 use super::{tiles, Tile, TILE_SIZE};
 use crate::image::filter::{Filter, FilterWeights, Reconstruction};
 use crate::image::Image;
-use crate::integrators::Splat;
 use crate::math::{Rgb, Vec2};
+use crate::transport::passes::{next_pass, reachable, MAX_SPP};
+use crate::transport::Splat;
 
 /// The accumulated film.
 pub struct Film {
@@ -38,13 +38,13 @@ pub struct Film {
 
 impl Film {
     /// An empty film (no samples) of this size, filter and reconstruction, or
-    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if it cannot be allocated.
+    /// [`Error::OutOfMemory`](crate::error::Error::OutOfMemory) if it cannot be allocated.
     pub fn new(
         width: u32,
         height: u32,
         filter: Filter,
         reconstruction: Reconstruction,
-    ) -> crate::Result<Film> {
+    ) -> crate::error::Result<Film> {
         // ∫ filter by the midpoint rule on a fine grid.
         let r = filter.radius();
         let n = 256;
@@ -65,9 +65,9 @@ impl Film {
             filter,
             reconstruction,
             filter_norm: 1.0 / integral,
-            sums: crate::error::try_vec(pixels, [0.0; 3], what)?,
-            weights: crate::error::try_vec(pixels, 0.0, what)?,
-            splats: crate::error::try_vec(pixels, [0.0; 3], what)?,
+            sums: crate::platform::try_vec(pixels, [0.0; 3], what)?,
+            weights: crate::platform::try_vec(pixels, 0.0, what)?,
+            splats: crate::platform::try_vec(pixels, [0.0; 3], what)?,
             spp: 0,
             pass: 0,
             tiles_done: 0,
@@ -200,8 +200,8 @@ impl Film {
     }
 
     /// The image after the samples taken so far, or
-    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if it cannot be allocated.
-    pub fn image(&self) -> crate::Result<Image> {
+    /// [`Error::OutOfMemory`](crate::error::Error::OutOfMemory) if it cannot be allocated.
+    pub fn image(&self) -> crate::error::Result<Image> {
         let mut image = Image::try_new(self.width, self.height)?;
         if self.reconstruction == Reconstruction::Splat {
             // Each pixel is its weighted mean, whatever its samples: a pass cut short needs
@@ -267,14 +267,14 @@ impl Footprint {
     }
 
     /// An empty footprint over exactly `rect`, or
-    /// [`Error::OutOfMemory`](crate::Error::OutOfMemory) if it cannot be allocated.
-    pub fn try_over(rect: Tile) -> crate::Result<Footprint> {
+    /// [`Error::OutOfMemory`](crate::error::Error::OutOfMemory) if it cannot be allocated.
+    pub fn try_over(rect: Tile) -> crate::error::Result<Footprint> {
         let pixels = rect.pixels() as usize;
         let what = || format!("the film of a {}x{} region", rect.width(), rect.height());
         Ok(Footprint {
             rect,
-            sums: crate::error::try_vec(pixels, [0.0; 3], what)?,
-            weights: crate::error::try_vec(pixels, 0.0, what)?,
+            sums: crate::platform::try_vec(pixels, [0.0; 3], what)?,
+            weights: crate::platform::try_vec(pixels, 0.0, what)?,
         })
     }
 

@@ -2,14 +2,14 @@
 //! subdivision or uniform supersampling), for the techniques that give radiance along a
 //! camera ray (Whitted, the illumination network).
 
-use super::driver::drive;
 use super::small_objects::SmallObjects;
 use super::{place, sampling, tiles_in, PixelSampling, RenderStats, Tile, MERGE_WINDOW};
 use crate::control::Control;
 use crate::image::Image;
-use crate::integrators::{Context, Integrator, RayStats};
 use crate::math::Rgb;
 use crate::scene::camera::CameraBasis;
+use crate::transport::driver::drive;
+use crate::transport::{Context, Integrator, RayStats};
 use std::time::Instant;
 
 /// The view a one-pass render samples.
@@ -25,14 +25,14 @@ pub(crate) struct PixelView {
 /// Renders the pixels of `region` of the image (the whole image or a part of it: a pixel's
 /// value does not depend on which others are rendered with it). Returns the region's image.
 /// A cancel leaves the tiles not merged black, and marks the statistics. The image that
-/// cannot be allocated is an [`Error::OutOfMemory`](crate::Error::OutOfMemory).
+/// cannot be allocated is an [`Error::OutOfMemory`](crate::error::Error::OutOfMemory).
 pub(crate) fn render_pixels(
     ctx: &Context,
     integrator: &dyn Integrator,
     view: &PixelView,
     region: &Tile,
     control: &Control,
-) -> crate::Result<(Image, RenderStats)> {
+) -> crate::error::Result<(Image, RenderStats)> {
     let tiles = tiles_in(region);
     let phase = control.phase("render", Some(region.pixels()), "pixels");
     let start = Instant::now();

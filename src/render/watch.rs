@@ -3,7 +3,7 @@
 //! as often as the caller asks. The render's result does not depend on either.
 
 use super::{Film, RenderStats};
-use crate::Result;
+use crate::error::Result;
 use std::time::Duration;
 
 /// When the film is shown.

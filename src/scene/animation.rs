@@ -9,7 +9,7 @@
 use super::toml::Document;
 use super::Scene;
 use crate::control::Control;
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use std::path::{Path, PathBuf};
 use toml::de::{DeTable, DeValue};
 use toml::{Table, Value};

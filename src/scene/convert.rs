@@ -22,15 +22,15 @@ use super::{
     Alpha, Camera, Classic, Coating, Geometry, Light, Material, NormalDetail, Projection,
     RenderSettings, Scene, Surface, Texture,
 };
+use crate::error::Error;
 use crate::image::filter::Filter;
 use crate::settings::{AntiAliasing, NetworkBuilder, NetworkOrder};
-use crate::Error;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
 
 /// Reads `input` (.pbrt or .toml) and writes it to `output` as a native TOML scene.
 /// Returns the scene read (with its warnings).
-pub fn convert(input: &Path, output: &Path) -> crate::Result<Scene> {
+pub fn convert(input: &Path, output: &Path) -> crate::error::Result<Scene> {
     let scene = Scene::load(input)?;
     write_toml(&scene, output)?;
     Ok(scene)
@@ -84,7 +84,7 @@ pub fn camera_toml(camera: &Camera) -> String {
 }
 
 /// Writes `scene` as TOML to `output`, its meshes as PLY files beside it.
-pub fn write_toml(scene: &Scene, output: &Path) -> crate::Result<()> {
+pub fn write_toml(scene: &Scene, output: &Path) -> crate::error::Result<()> {
     let out_dir = output
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
@@ -132,7 +132,7 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::Result<()> {
             .lights
             .iter()
             .map(|l| light(l, refs).map(spanned))
-            .collect::<crate::Result<_>>()?,
+            .collect::<crate::error::Result<_>>()?,
         render: render(&scene.settings).map(spanned),
     };
     let mut meshes = MeshDir::new(&out_dir, format!("{stem}.meshes"));
@@ -191,7 +191,7 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::Result<()> {
     })?;
     let text = format!(
         "# Written by raylink {} from {}.\n\n{body}",
-        crate::VERSION,
+        env!("CARGO_PKG_VERSION"),
         scene.source.display()
     );
     meshes.install()?;
@@ -523,7 +523,7 @@ fn diffuse(t: &Texture, refs: Refs) -> DiffuseDesc {
 }
 
 /// A light as a `[[lights]]` table; an error for a kind the native format cannot name.
-fn light(l: &Light, refs: Refs) -> crate::Result<LightDesc> {
+fn light(l: &Light, refs: Refs) -> crate::error::Result<LightDesc> {
     let mut d = LightDesc {
         kind: LightKind::Point,
         position: None,
@@ -578,7 +578,7 @@ fn shape_desc(
     i: usize,
     keys: &[String],
     refs: Refs,
-) -> crate::Result<ShapeDesc> {
+) -> crate::error::Result<ShapeDesc> {
     let mut desc = match &shape.geometry {
         Geometry::Sphere { center, radius } => {
             let mut d = ShapeDesc::new(ShapeKind::Sphere);
@@ -681,7 +681,7 @@ impl MeshDir {
     }
 
     /// Writes shape `i`'s mesh as PLY; returns the path the TOML gives it.
-    fn write(&mut self, i: usize, g: &Geometry) -> crate::Result<String> {
+    fn write(&mut self, i: usize, g: &Geometry) -> crate::error::Result<String> {
         if !self.created {
             std::fs::create_dir_all(&self.tmp).map_err(|e| Error::io(&self.tmp, e))?;
             self.created = true;
@@ -706,7 +706,7 @@ impl MeshDir {
     }
 
     /// Swaps the new meshes in: old folder aside, new one in place, old one removed.
-    fn install(self) -> crate::Result<()> {
+    fn install(self) -> crate::error::Result<()> {
         if !self.created {
             return Ok(());
         }

@@ -120,7 +120,7 @@ impl Environment {
         file: PathBuf,
         transform: Mat3,
         scale: Rgb,
-    ) -> crate::Result<Environment> {
+    ) -> crate::error::Result<Environment> {
         Ok(Self::load_with_mapping(path, file, transform, scale)?.0)
     }
 
@@ -130,10 +130,10 @@ impl Environment {
         file: PathBuf,
         transform: Mat3,
         scale: Rgb,
-    ) -> crate::Result<(Environment, Mapping)> {
+    ) -> crate::error::Result<(Environment, Mapping)> {
         let (image, _) = crate::image::output::read_image(path)?;
         Environment::with_mapping(image, file, transform, scale)
-            .map_err(|m| crate::Error::input(path, m))
+            .map_err(|m| crate::error::Error::input(path, m))
     }
 
     /// Radiance seen by a ray that leaves the scene travelling in direction `dir`.

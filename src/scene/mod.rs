@@ -9,6 +9,7 @@ pub mod camera;
 pub mod convert;
 pub mod environment;
 mod geometry;
+mod hash;
 pub mod instance;
 pub mod lights;
 pub mod loop_subdivision;
@@ -28,6 +29,7 @@ pub use alpha::Alpha;
 pub use camera::{Camera, Projection, MAX_RESOLUTION};
 pub use environment::Environment;
 pub use geometry::{lerp, sphere_uv, Geometry, QuadMesh, Shape, SurfacePoint, TriangleMesh};
+pub use hash::scene_hash;
 pub use instance::{Instance, Prototype};
 pub use lights::Light;
 pub use materials::{Classic, Material, Mix, RoughnessMap, Surface};
@@ -110,15 +112,15 @@ impl Scene {
 
     /// An error about a setting this scene's file gives, as one naming the file, line and
     /// key; any other error as it is.
-    pub fn locate(&self, error: crate::Error) -> crate::Error {
+    pub fn locate(&self, error: crate::error::Error) -> crate::error::Error {
         match error {
-            crate::Error::Setting { name, detail } => {
+            crate::error::Error::Setting { name, detail } => {
                 match self.setting_sources.iter().find(|s| s.setting == name) {
-                    Some(s) => crate::Error::input(
+                    Some(s) => crate::error::Error::input(
                         &self.source,
                         format!("line {}: {} {detail}", s.line, s.key),
                     ),
-                    None => crate::Error::Setting { name, detail },
+                    None => crate::error::Error::Setting { name, detail },
                 }
             }
             other => other,
@@ -126,18 +128,21 @@ impl Scene {
     }
 
     /// Reads a scene file, choosing the reader by extension.
-    pub fn load(path: &Path) -> crate::Result<Scene> {
+    pub fn load(path: &Path) -> crate::error::Result<Scene> {
         Scene::load_with(path, &crate::control::Control::default())
     }
 
     /// [`load`](Self::load) under a job's controls: a cancel stops the reading (between
     /// statements of a pbrt file, between shapes of a TOML one) with
-    /// [`Error::Cancelled`](crate::Error::Cancelled), and the memory budget bounds it while it
+    /// [`Error::Cancelled`](crate::error::Error::Cancelled), and the memory budget bounds it while it
     /// reads: the geometry read so far with its intersection structures (a pbrt object
     /// instance counted before it is copied), and a pbrt file's text and tokens, are checked
-    /// against it ([`Error::Memory`](crate::Error::Memory)). A pbrt scene's text has fixed
+    /// against it ([`Error::Memory`](crate::error::Error::Memory)). A pbrt scene's text has fixed
     /// limits besides ([`pbrt::MAX_SCENE_TEXT`], [`pbrt::MAX_INCLUDES`]).
-    pub fn load_with(path: &Path, control: &crate::control::Control) -> crate::Result<Scene> {
+    pub fn load_with(
+        path: &Path,
+        control: &crate::control::Control,
+    ) -> crate::error::Result<Scene> {
         Scene::load_with_animation(path, control).map(|(scene, _)| scene)
     }
 
@@ -146,12 +151,12 @@ impl Scene {
     pub fn load_with_animation(
         path: &Path,
         control: &crate::control::Control,
-    ) -> crate::Result<(Scene, Option<animation::Animation>)> {
+    ) -> crate::error::Result<(Scene, Option<animation::Animation>)> {
         let phase = control.phase("reading", None, "");
         let (scene, animation) = match path.extension().and_then(|e| e.to_str()) {
             Some("toml") => animation::read_with_animation(path, control),
             Some("pbrt") => pbrt::read(path, control).map(|s| (s, None)),
-            _ => Err(crate::Error::input(
+            _ => Err(crate::error::Error::input(
                 path,
                 "unknown scene format: expected a .toml or .pbrt scene file",
             )),

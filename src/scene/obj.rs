@@ -8,8 +8,8 @@
 //! text is checked line by line here first; tobj then only sees input it handles.
 
 use super::{Classic, Material, Texture, TriangleMesh};
+use crate::error::Error;
 use crate::math::{Rgb, Vec2, Vec3};
-use crate::Error;
 use std::cell::RefCell;
 use std::io::{BufRead, Read};
 use std::path::Path;
@@ -35,7 +35,7 @@ pub struct ObjGroup {
 
 /// Reads an OBJ file. With `with_materials` the MTL files it names are read too (a missing or
 /// broken one is an error, as is a `usemtl` naming no material); without, they are ignored.
-pub fn load(path: &Path, with_materials: bool) -> crate::Result<ObjData> {
+pub fn load(path: &Path, with_materials: bool) -> crate::error::Result<ObjData> {
     let text = read_text(path, "OBJ")?;
     prescan_obj(&text).map_err(|e| Error::input(path, e))?;
 
@@ -132,7 +132,7 @@ pub fn load(path: &Path, with_materials: bool) -> crate::Result<ObjData> {
     Ok(ObjData { groups, materials })
 }
 
-fn read_text(path: &Path, what: &str) -> crate::Result<String> {
+fn read_text(path: &Path, what: &str) -> crate::error::Result<String> {
     let bytes = std::fs::read(path)
         .map_err(|e| Error::input(path, format!("cannot read the {what} file: {e}")))?;
     String::from_utf8(bytes).map_err(|e| {
@@ -257,7 +257,7 @@ fn check_usemtl(text: &str, materials: &[Material]) -> Result<(), String> {
 }
 
 /// Reads one MTL file: tobj's materials (for its name map) and ours.
-fn load_mtl(path: &Path) -> crate::Result<(Vec<tobj::Material>, Vec<Material>)> {
+fn load_mtl(path: &Path) -> crate::error::Result<(Vec<tobj::Material>, Vec<Material>)> {
     let text = read_text(path, "MTL")?;
     let text = normalise_mtl(&text).map_err(|e| Error::input(path, e))?;
     let mut reader = LineReader::new(text.as_bytes());
@@ -266,7 +266,7 @@ fn load_mtl(path: &Path) -> crate::Result<(Vec<tobj::Material>, Vec<Material>)> 
     let ours = raw
         .iter()
         .map(|m| convert(m, path))
-        .collect::<crate::Result<Vec<_>>>()?;
+        .collect::<crate::error::Result<Vec<_>>>()?;
     Ok((raw, ours))
 }
 
@@ -307,10 +307,10 @@ fn normalise_mtl(text: &str) -> Result<String, String> {
 const REFRACTING_ILLUM: [u8; 4] = [4, 6, 7, 9];
 
 /// Translates an MTL material (see docs/scene-format.md for the mapping).
-fn convert(m: &tobj::Material, mtl: &Path) -> crate::Result<Material> {
+fn convert(m: &tobj::Material, mtl: &Path) -> crate::error::Result<Material> {
     let fail =
         |key: &str, msg: String| Error::input(mtl, format!("material `{}`: {key} {msg}", m.name));
-    let colour = |key: &str, c: Option<[f32; 3]>, default: Rgb| -> crate::Result<Rgb> {
+    let colour = |key: &str, c: Option<[f32; 3]>, default: Rgb| -> crate::error::Result<Rgb> {
         match c {
             None => Ok(default),
             Some(c) => {
@@ -326,7 +326,7 @@ fn convert(m: &tobj::Material, mtl: &Path) -> crate::Result<Material> {
             }
         }
     };
-    let param3 = |key: &str| -> crate::Result<Option<[f32; 3]>> {
+    let param3 = |key: &str| -> crate::error::Result<Option<[f32; 3]>> {
         let Some(v) = m.unknown_param.get(key) else {
             return Ok(None);
         };

@@ -4,8 +4,8 @@
 //! little-endian files for `raylink convert`.
 
 use super::{Geometry, QuadMesh, TriangleMesh};
+use crate::error::Error;
 use crate::math::{Vec2, Vec3};
-use crate::Error;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{DefaultElement, PropertyAccess, PropertyAccessResult};
 use std::io::BufReader;
@@ -121,7 +121,7 @@ impl PropertyAccess for Face {
 
 /// Reads a PLY mesh. Every problem is an [`Error::input`] naming the file (and the line,
 /// for ASCII files and headers).
-pub fn read(path: &Path) -> crate::Result<PlyMesh> {
+pub fn read(path: &Path) -> crate::error::Result<PlyMesh> {
     let file = std::fs::File::open(path)
         .map_err(|e| Error::input(path, format!("cannot read the PLY file: {e}")))?;
     let mut reader = Reader::new(BufReader::new(file));
@@ -307,7 +307,7 @@ pub fn write(
     uvs: Option<&[Vec2]>,
     triangles: &[[u32; 3]],
     quads: &[[u32; 4]],
-) -> crate::Result<()> {
+) -> crate::error::Result<()> {
     let mut header = format!(
         "ply\nformat binary_little_endian 1.0\ncomment written by raylink\n\
          element vertex {}\nproperty float x\nproperty float y\nproperty float z\n",

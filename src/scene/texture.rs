@@ -107,10 +107,10 @@ impl ImageTexture {
         scale: f32,
         invert: bool,
         mapping: UvMapping,
-    ) -> crate::Result<ImageTexture> {
+    ) -> crate::error::Result<ImageTexture> {
         let (image, _) = read_image(path)?;
         if image.pixels.is_empty() {
-            return Err(crate::Error::image(path, "the image has no pixels"));
+            return Err(crate::error::Error::image(path, "the image has no pixels"));
         }
         Ok(ImageTexture::from_image(
             image, file, encoding, scale, invert, mapping,

@@ -3,9 +3,9 @@
 //! refused with a message naming the file and the reason, never used.
 
 use crate::binary_file::checksum;
+use crate::error::Error;
 use crate::image::filter::{Filter, Reconstruction};
 use crate::render::{checkpoint, Film};
-use crate::Error;
 use std::path::{Path, PathBuf};
 
 /// Rewrites a file's bytes with `edit` applied to them and its checksum made right again.

@@ -16,11 +16,11 @@ use crate::control::Control;
 use crate::image::Image;
 use crate::integrators::technique::{MonteCarloSettings, WhittedSettings};
 use crate::integrators::whitted::WhittedOptions;
-use crate::integrators::Context;
 use crate::math::Vec3;
 use crate::render::PixelSampling;
 use crate::scene::animation::Animation;
 use crate::scene::{Geometry, QuadMesh, TriangleMesh};
+use crate::transport::Context;
 use std::collections::BTreeSet;
 use std::path::Path;
 

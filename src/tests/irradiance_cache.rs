@@ -9,10 +9,11 @@ use crate::image::compare::{mean, rmse};
 use crate::image::filter::Filter;
 use crate::image::Image;
 use crate::integrators::irradiance_cache::{file, Cache, IcOptions, IrradianceCache};
-use crate::integrators::Context;
 use crate::math::Vec3;
-use crate::render::progressive::{render_passes, ProgressiveOptions};
+use crate::render::progressive::render_passes;
 use crate::scene::Scene;
+use crate::transport::Context;
+use crate::transport::ProgressiveOptions;
 use std::path::Path;
 
 fn manifest(p: &str) -> std::path::PathBuf {

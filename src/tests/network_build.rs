@@ -13,8 +13,8 @@ use crate::integrators::illumination_network::preprocess::{
 };
 use crate::integrators::illumination_network::ray_space::{axes, RaySpace};
 use crate::integrators::illumination_network::{Network, NetworkParams, ESCAPE};
-use crate::integrators::Context;
 use crate::math::Vec3;
+use crate::transport::Context;
 
 /// The lines of every slot that meet a patch, weighted by their étendue, add up to π·area:
 /// the per-slope weight is the Jacobian of slope-intercept space (1.5%: the boundary of the

@@ -8,9 +8,10 @@ use crate::image::filter::Filter;
 use crate::image::Image;
 use crate::integrators::illumination_network::preprocess::Builder;
 use crate::integrators::illumination_network::{Network, NetworkParams};
-use crate::integrators::{Context, MonteCarlo};
-use crate::render::progressive::{render_passes, ProgressiveOptions};
+use crate::render::progressive::render_passes;
 use crate::scene::Scene;
+use crate::transport::ProgressiveOptions;
+use crate::transport::{Context, MonteCarlo};
 use std::path::Path;
 
 pub(crate) fn scene(text: &str) -> Scene {

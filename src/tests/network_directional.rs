@@ -14,11 +14,11 @@ use crate::integrators::bdpt::{Bdpt, BdptOptions};
 use crate::integrators::illumination_network::distribute::{distribute, DistributeOptions};
 use crate::integrators::illumination_network::preprocess::Builder;
 use crate::integrators::illumination_network::render::{NetworkRenderer, Tables};
-use crate::integrators::Context;
 use crate::math::Vec3;
 use crate::render::pixels::{render_pixels, PixelView};
 use crate::render::{PixelSampling, Tile};
 use crate::scene::Scene;
+use crate::transport::Context;
 
 const SIZE: u32 = 32;
 

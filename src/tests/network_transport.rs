@@ -16,11 +16,11 @@ use crate::integrators::illumination_network::preprocess::Builder;
 use crate::integrators::illumination_network::render::{NetworkRenderer, Tables};
 use crate::integrators::illumination_network::{Network, NetworkParams, NONE};
 use crate::integrators::path::{PathOptions, PathTracer};
-use crate::integrators::Context;
 use crate::math::Vec3;
 use crate::render::pixels::{render_pixels, PixelView};
 use crate::render::{PixelSampling, Tile};
 use crate::scene::Scene;
+use crate::transport::Context;
 
 /// Total radiance leaving each node: emission plus the reflected out-buffers.
 fn closed_box_radiance(net: &Network, sol: &Solution) -> (f64, f64, f64) {

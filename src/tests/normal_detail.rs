@@ -6,10 +6,10 @@ use crate::accel::{self, Backend};
 use crate::control::Control;
 use crate::image::Image;
 use crate::integrators::whitted::{Whitted, WhittedOptions};
-use crate::integrators::{Context, Integrator, RayStats};
 use crate::math::{Ray, Rgb, Rng, Vec2, Vec3};
 use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
 use crate::scene::{Geometry, Light, NormalDetail, Scene, Shape, Texture, TriangleMesh};
+use crate::transport::{Context, Integrator, RayStats};
 use std::f32::consts::TAU;
 use std::sync::Arc;
 

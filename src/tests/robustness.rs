@@ -3,21 +3,22 @@
 
 use crate::control::Control;
 use crate::image::filter::Reconstruction;
-use crate::render::progressive::{render_passes, ProgressiveOptions};
+use crate::render::progressive::render_passes;
+use crate::transport::ProgressiveOptions;
 use std::path::Path;
 
 /// A test integrator: 1 everywhere, except NaN or infinity on a fixed share of samples.
 struct Faulty;
 
-impl crate::integrators::MonteCarlo for Faulty {
+impl crate::transport::MonteCarlo for Faulty {
     fn sample(
         &self,
-        _: &crate::integrators::Context,
+        _: &crate::transport::Context,
         _: &crate::scene::camera::CameraBasis,
         _: &crate::math::Ray,
         sampler: &mut crate::math::sobol::Sampler,
-        _: &mut crate::integrators::RayStats,
-        _: &mut Vec<crate::integrators::Splat>,
+        _: &mut crate::transport::RayStats,
+        _: &mut Vec<crate::transport::Splat>,
     ) -> crate::math::Rgb {
         match sampler.next_1d() {
             u if u < 0.1 => crate::math::Rgb::splat(f32::NAN),
@@ -36,7 +37,7 @@ fn non_finite_samples_are_dropped_and_counted() {
     .unwrap();
     let control = Control::default();
     let accel = crate::accel::build(&scene, crate::accel::Backend::Embree, &control).unwrap();
-    let ctx = crate::integrators::Context::new(&scene, accel.as_ref());
+    let ctx = crate::transport::Context::new(&scene, accel.as_ref());
     // Counted in its own pixel, a dropped sample is one black sample of that pixel's count,
     // so the image's mean is the share of good samples exactly; splatted, it is a black
     // sample of its weight, and the mean of weighted means is that share within noise.

@@ -8,11 +8,11 @@ use crate::bsdf::{TabulatedBrdf, Transport};
 use crate::image::Image;
 use crate::integrators::bdpt::{Bdpt, BdptOptions};
 use crate::integrators::path::{PathOptions, PathTracer};
-use crate::integrators::MonteCarlo;
 use crate::math::warp::{cosine_hemisphere, cosine_hemisphere_pdf};
 use crate::math::{luminance, Rgb, Rng, Vec2, Vec3};
 use crate::scene::materials::Measured;
 use crate::scene::{Material, Scene, Surface};
+use crate::transport::MonteCarlo;
 use std::sync::Arc;
 
 /// The isotropic table of `m`'s BRDF (from [`Bsdf::eval`]) on a grid of `dt`° in θ and `dp`°

@@ -10,9 +10,9 @@ use crate::control::Control;
 use crate::integrators::illumination_network::distribute::surfaces;
 use crate::integrators::illumination_network::preprocess::Builder;
 use crate::integrators::whitted::{Whitted, WhittedOptions};
-use crate::integrators::{Context, Integrator, RayStats};
 use crate::math::{Ray, Rgb, Rng, Vec2, Vec3};
 use crate::scene::{Classic, Material, Texture};
+use crate::transport::{Context, Integrator, RayStats};
 
 /// The sheet's reflectance in closed form, in f64 and independent of the crate's Fresnel
 /// code: the unpolarised Fresnel reflectance F of one face, then the sum over the bounces

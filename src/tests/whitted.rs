@@ -5,9 +5,9 @@
 use crate::accel::{self, Backend};
 use crate::control::Control;
 use crate::integrators::whitted::{Whitted, WhittedOptions};
-use crate::integrators::{Context, Integrator, RayStats};
 use crate::math::{Ray, Rgb, Rng, Vec3};
 use crate::scene::{Camera, Classic, Geometry, Light, Material, QuadMesh, Scene, Shape, Texture};
+use crate::transport::{Context, Integrator, RayStats};
 use std::f32::consts::PI;
 
 #[path = "whitted_scenes.rs"]

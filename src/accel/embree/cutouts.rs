@@ -3,8 +3,8 @@
 
 use super::super::cutout::Cutout;
 use super::{sys, GeometryId, Scene};
+use crate::error::{Error, Result};
 use crate::math::Vec3;
-use crate::{Error, Result};
 use std::ffi::c_void;
 use std::sync::Arc;
 

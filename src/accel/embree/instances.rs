@@ -3,7 +3,7 @@
 //! stored once however often it is placed.
 
 use super::{sys, GeometryId, Scene};
-use crate::{Error, Result};
+use crate::error::{Error, Result};
 use glam::Affine3A;
 
 impl Scene {

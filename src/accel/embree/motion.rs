@@ -3,9 +3,9 @@
 //! and bounds over the interval in its motion-blur BVH.
 
 use super::{check_indices, fill_buffer, sys, GeometryId, Scene};
+use crate::error::{Error, Result};
 use crate::math::{Vec3, Vec4};
 use crate::scene::{Geometry, Shape};
-use crate::{Error, Result};
 
 impl Scene {
     /// Adds `shape`, whose `motion` has `geometry`'s kind and topology, as a geometry with

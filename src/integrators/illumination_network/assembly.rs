@@ -215,7 +215,7 @@ impl Network {
         let w = SlotWeights::new(&space);
         // Each block fills its own part. The link table is reserved fallibly: memory the
         // system refuses is an error, not an abort.
-        let mut links = crate::error::try_vec(total, 0u32, || {
+        let mut links = crate::platform::try_vec(total, 0u32, || {
             format!("the link table of the illumination network ({total} links)")
         })?;
         let mut link_start = vec![0u32; nodes + 1];

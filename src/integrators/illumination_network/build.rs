@@ -6,8 +6,8 @@ use super::preprocess::{self, Builder, EndPacking, LinkInputs};
 use super::ray_space::RaySpace;
 use super::{LinkCode, Network, NetworkParams};
 use crate::control::Control;
-use crate::integrators::Context;
 use crate::scene::Scene;
+use crate::transport::Context;
 use std::time::Instant;
 
 /// What a preprocess did.
@@ -37,7 +37,7 @@ pub struct BuildStats {
 #[derive(Debug)]
 pub(crate) enum BuildError {
     Scene(String),
-    Error(crate::Error),
+    Error(crate::error::Error),
 }
 
 impl From<String> for BuildError {
@@ -52,8 +52,8 @@ impl From<&str> for BuildError {
     }
 }
 
-impl From<crate::Error> for BuildError {
-    fn from(e: crate::Error) -> Self {
+impl From<crate::error::Error> for BuildError {
+    fn from(e: crate::error::Error) -> Self {
         BuildError::Error(e)
     }
 }
@@ -96,7 +96,7 @@ impl Network {
         params: NetworkParams,
         builder: Builder,
         control: &Control,
-    ) -> crate::Result<Network> {
+    ) -> crate::error::Result<Network> {
         let built = Self::build_packed(
             scene,
             ctx,
@@ -108,7 +108,7 @@ impl Network {
         );
         control.cancel.check("the network preprocess")?;
         built.map_err(|e| match e {
-            BuildError::Scene(e) => crate::Error::input(&scene.source, e),
+            BuildError::Scene(e) => crate::error::Error::input(&scene.source, e),
             BuildError::Error(e) => e,
         })
     }

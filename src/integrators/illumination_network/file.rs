@@ -31,8 +31,8 @@ use super::ray_space::RaySpace;
 use super::relight::LightBasis;
 use super::{BuildStats, LinkCode, Network, NetworkParams, NONE};
 use crate::binary_file::{checksum, fnv1a, Format, Reader};
+use crate::error::{Error, Result};
 use crate::scene::Scene;
-use crate::{Error, Result};
 use std::io::Read;
 use std::os::unix::fs::FileExt;
 use std::path::Path;
@@ -533,7 +533,7 @@ pub fn load_all(
     let mut link_start = vec![0u32; nodes + 1];
     read_at(&mut link_start, at, Some(&mut sum))?;
     let at = at + 4 * (nodes as u64 + 1);
-    let mut links = crate::error::try_vec(n_links, 0u32, || {
+    let mut links = crate::platform::try_vec(n_links, 0u32, || {
         format!("the link table of {} ({n_links} links)", path.display())
     })?;
     let (first, second) = links.split_at_mut(n_links / 2);

@@ -31,8 +31,8 @@ impl Default for NetworkParams {
 }
 
 impl NetworkParams {
-    pub fn validate(&self) -> crate::Result<()> {
-        let bad = |name: &str, detail: String| Err(crate::Error::setting(name, detail));
+    pub fn validate(&self) -> crate::error::Result<()> {
+        let bad = |name: &str, detail: String| Err(crate::error::Error::setting(name, detail));
         if !(1..=128).contains(&self.slopes) {
             return bad(
                 "slopes",

@@ -19,8 +19,8 @@ use super::lobe_albedo::{self, albedo_at, same_lobes, LobeAlbedo};
 use super::ray_space::SlotGeometry;
 use super::{Network, ESCAPE, NONE};
 use crate::bsdf::{Ggx, Transport};
-use crate::integrators::{Context, Integrator, RayStats, Sample};
 use crate::math::{luminance, Ray, Rgb, Rng, Vec2, Vec3};
+use crate::transport::{Context, Integrator, RayStats, Sample};
 use std::f32::consts::FRAC_1_PI;
 
 /// A directional surface seen from one side (its geometric normal) and what its lobes reflect

@@ -7,13 +7,14 @@ use super::distribute::{self, DistributeOptions, Solution};
 use super::render::{NetworkRenderer, Tables};
 use super::{file, relight, Network, NetworkParams};
 use crate::control::Control;
-use crate::integrators::lifecycle::{Lifecycle, Tiles, View};
+use crate::error::{Error, Result};
 use crate::integrators::technique::NetworkSettings;
-use crate::integrators::{Context, Integrator, RayStats, Sample};
 use crate::math::{Ray, Rgb, Rng};
 use crate::scene::Scene;
 use crate::settings::Relight;
-use crate::{Error, Result};
+use crate::transport::technique::{Lifecycle, Tiles};
+use crate::transport::View;
+use crate::transport::{Context, Integrator, RayStats, Sample};
 use std::path::Path;
 
 pub(crate) struct NetworkTechnique {

@@ -24,9 +24,9 @@ use super::octree::Octree;
 use super::record::Record;
 use super::{scene_cube, Cache, IcOptions};
 use crate::binary_file::{fnv1a, Format};
+use crate::error::Result;
 use crate::math::Vec3;
 use crate::scene::Scene;
-use crate::Result;
 use std::path::Path;
 
 pub const VERSION: u32 = 5;
@@ -110,7 +110,7 @@ pub fn save_for_view(
 }
 
 /// Reads a cache written by [`save_for_view`] for the same scene and options. Any other file
-/// is an [`Error::Input`](crate::Error::Input) naming it.
+/// is an [`Error::Input`](crate::error::Error::Input) naming it.
 pub fn load(path: &Path, scene: &Scene, options: &IcOptions) -> Result<Cache> {
     load_with_view(path, scene, options).map(|(cache, _)| cache)
 }

@@ -5,14 +5,15 @@
 
 use super::{file, IrradianceCache};
 use crate::control::Control;
+use crate::error::{Error, Result};
 use crate::image::Image;
-use crate::integrators::lifecycle::{Lifecycle, Tiles, View};
 use crate::integrators::technique::{CacheSettings, MonteCarloSettings};
-use crate::integrators::Context;
 use crate::math::Rgb;
-use crate::render::progressive::ProgressiveOptions;
 use crate::scene::Scene;
-use crate::{Error, Result};
+use crate::transport::technique::{Lifecycle, Tiles};
+use crate::transport::Context;
+use crate::transport::ProgressiveOptions;
+use crate::transport::View;
 
 pub(crate) struct CacheTechnique {
     render: MonteCarloSettings,
@@ -149,7 +150,7 @@ pub(crate) fn view_key(
     };
     let text = format!(
         "{:016x}|{}x{}|{}|{:?}|{}|{backend}",
-        crate::farm::scene_hash(scene),
+        crate::scene::scene_hash(scene),
         render.width,
         render.height,
         render.spp,

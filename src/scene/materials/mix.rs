@@ -5,7 +5,7 @@
 //! the surface scatters as the blend (1 − amount)·f₀ + amount·f₁.
 //!
 //! The choice is made where a ray's hit becomes a surface point
-//! ([`crate::integrators::Context::intersect`]), so every integrator that follows rays
+//! ([`crate::transport::Context::intersect`]), so every integrator that follows rays
 //! sees one plain material. Asked directly, a mix answers as its material with the larger
 //! weight; the illumination network, which reads a shape's material without a ray, blends
 //! the two materials' reflectance instead.

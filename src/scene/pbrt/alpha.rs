@@ -12,7 +12,7 @@ impl Loader {
         p: &Params,
         st: &str,
         loc: &Loc,
-    ) -> crate::Result<Option<Alpha>> {
+    ) -> crate::error::Result<Option<Alpha>> {
         let Some(q) = p
             .find("alpha", &["float", "texture"])
             .map_err(Self::pe(loc))?

@@ -36,7 +36,7 @@ impl Cursor<'_> {
         }
     }
 
-    fn next(&mut self, stmt: &Loc, what: &str) -> crate::Result<Token> {
+    fn next(&mut self, stmt: &Loc, what: &str) -> crate::error::Result<Token> {
         let t = self.tokens.get(self.i).cloned().ok_or_else(|| {
             self.end_loc(stmt)
                 .error(format!("the file ends inside {what} (truncated file?)"))
@@ -45,7 +45,7 @@ impl Cursor<'_> {
         Ok(t)
     }
 
-    pub(super) fn string(&mut self, stmt: &Loc, kw: &str) -> crate::Result<String> {
+    pub(super) fn string(&mut self, stmt: &Loc, kw: &str) -> crate::error::Result<String> {
         let t = self.next(stmt, kw)?;
         match &t.tok {
             Tok::Str(s) => Ok(s.clone()),
@@ -60,7 +60,12 @@ impl Cursor<'_> {
     }
 
     /// `n` numbers, bare or in brackets.
-    pub(super) fn numbers(&mut self, stmt: &Loc, kw: &str, n: usize) -> crate::Result<Vec<f64>> {
+    pub(super) fn numbers(
+        &mut self,
+        stmt: &Loc,
+        kw: &str,
+        n: usize,
+    ) -> crate::error::Result<Vec<f64>> {
         let bracket = matches!(self.peek().map(|t| &t.tok), Some(Tok::Open));
         if bracket {
             self.i += 1;
@@ -93,7 +98,7 @@ impl Cursor<'_> {
         Ok(v)
     }
 
-    pub(super) fn matrix(&mut self, stmt: &Loc, kw: &str) -> crate::Result<[f64; 16]> {
+    pub(super) fn matrix(&mut self, stmt: &Loc, kw: &str) -> crate::error::Result<[f64; 16]> {
         let v = self.numbers(stmt, kw, 16)?;
         let mut a = [0.0; 16];
         a.copy_from_slice(&v);
@@ -117,7 +122,7 @@ impl Cursor<'_> {
     }
 
     /// A parameter list: `"type name" value` or `"type name" [ values ]`, repeated.
-    pub(super) fn params(&mut self, stmt: &Loc) -> crate::Result<Params> {
+    pub(super) fn params(&mut self, stmt: &Loc) -> crate::error::Result<Params> {
         let mut out = Params::default();
         while let Some(t) = self.peek() {
             let Tok::Str(decl) = &t.tok else { break };
@@ -167,7 +172,7 @@ impl Cursor<'_> {
     }
 }
 
-fn values_of(items: &[Token], decl: &str, loc: &Loc) -> crate::Result<Values> {
+fn values_of(items: &[Token], decl: &str, loc: &Loc) -> crate::error::Result<Values> {
     let mut nums = Vec::new();
     let mut strs = Vec::new();
     let mut bools = Vec::new();

@@ -16,7 +16,12 @@ impl Loader {
     }
 
     /// Places object `name` (defined) by `t`, object to world.
-    pub(super) fn place_object(&mut self, name: &str, t: &DMat4, loc: &Loc) -> crate::Result<()> {
+    pub(super) fn place_object(
+        &mut self,
+        name: &str,
+        t: &DMat4,
+        loc: &Loc,
+    ) -> crate::error::Result<()> {
         let what = format!("ObjectInstance \"{name}\"");
         let def = &self.objects[name];
         // Counted before it is copied: what the copies and the placement will take.

@@ -19,7 +19,12 @@ use std::path::PathBuf;
 use std::sync::Arc;
 
 impl Loader {
-    pub(super) fn area_light(&mut self, ty: &str, p: &Params, loc: &Loc) -> crate::Result<()> {
+    pub(super) fn area_light(
+        &mut self,
+        ty: &str,
+        p: &Params,
+        loc: &Loc,
+    ) -> crate::error::Result<()> {
         let st = format!("AreaLightSource \"{ty}\"");
         if ty != "diffuse" {
             self.warn(
@@ -87,7 +92,12 @@ impl Loader {
 
     /// The image a light's `filename` names (goniometric, projection), read and recorded
     /// as an input; the name as the file gives it.
-    fn light_image(&mut self, p: &Params, st: &str, loc: &Loc) -> crate::Result<(String, Image)> {
+    fn light_image(
+        &mut self,
+        p: &Params,
+        st: &str,
+        loc: &Loc,
+    ) -> crate::error::Result<(String, Image)> {
         let file = p
             .string("filename")
             .map_err(Self::pe(loc))?
@@ -99,7 +109,7 @@ impl Loader {
         Ok((file, image))
     }
 
-    pub(super) fn light(&mut self, ty: &str, p: &Params, loc: &Loc) -> crate::Result<()> {
+    pub(super) fn light(&mut self, ty: &str, p: &Params, loc: &Loc) -> crate::error::Result<()> {
         let st = format!("LightSource \"{ty}\"");
         let st = st.as_str();
         let pe = Self::pe(loc);
@@ -111,7 +121,7 @@ impl Loader {
             m.y_axis.truncate().as_vec3(),
             m.z_axis.truncate().as_vec3(),
         );
-        let point3 = |name: &str, default: DVec3| -> crate::Result<DVec3> {
+        let point3 = |name: &str, default: DVec3| -> crate::error::Result<DVec3> {
             match p.floats(name, "point3").map_err(&pe)? {
                 Some(v) if v.len() == 3 => Ok(DVec3::new(v[0], v[1], v[2])),
                 Some(_) => Err(loc.error(format!("{st}: \"{name}\" takes one point"))),

@@ -13,8 +13,8 @@
 use super::lexer::{self, Token};
 use super::shapes;
 use super::{Loader, Loc};
+use crate::error::Error;
 use crate::scene::{Geometry, Shape};
-use crate::Error;
 use glam::DMat4;
 use std::io::Read;
 use std::path::Path;
@@ -200,7 +200,7 @@ fn place(at: Option<&Loc>, path: &Path) -> String {
 
 impl Loader {
     /// Counts an `Include` or `Import` at `loc` against the include limits.
-    pub(super) fn count_include(&mut self, loc: &Loc, kw: &str) -> crate::Result<()> {
+    pub(super) fn count_include(&mut self, loc: &Loc, kw: &str) -> crate::error::Result<()> {
         if self.include_stack.len() > MAX_INCLUDE_DEPTH {
             return Err(loc.error(format!(
                 "{kw}: includes nest more than {MAX_INCLUDE_DEPTH} deep (a fixed limit)"
@@ -224,7 +224,7 @@ impl Loader {
         &mut self,
         path: &Path,
         at: Option<(&Loc, &str)>,
-    ) -> crate::Result<String> {
+    ) -> crate::error::Result<String> {
         let fail = |msg: String| match at {
             Some((loc, statement)) => loc.error(format!("{statement}: {msg}")),
             None => Error::input(path, msg),
@@ -276,7 +276,7 @@ impl Loader {
         path: &Path,
         text: &str,
         at: Option<&Loc>,
-    ) -> crate::Result<(Vec<Token>, u64)> {
+    ) -> crate::error::Result<(Vec<Token>, u64)> {
         self.usage.text = self.usage.text.saturating_add(text.len() as u64);
         if self.usage.text > MAX_SCENE_TEXT {
             let msg = format!(
@@ -325,7 +325,7 @@ impl Loader {
         what: &str,
         cost: Cost,
         in_world: bool,
-    ) -> crate::Result<()> {
+    ) -> crate::error::Result<()> {
         let cost = if in_world {
             cost
         } else {

@@ -29,7 +29,7 @@ impl Loader {
         prefix: &str,
         st: &str,
         loc: &Loc,
-    ) -> crate::Result<((f32, f32), Option<RoughnessMap>)> {
+    ) -> crate::error::Result<((f32, f32), Option<RoughnessMap>)> {
         let remap = p
             .bool("remaproughness")
             .map_err(Self::pe(loc))?
@@ -52,7 +52,7 @@ impl Loader {
             return Ok(((alpha(u) as f32, alpha(v) as f32), None));
         }
         let r = self.float_texture_param(p, &format!("{prefix}roughness"), 0.0, st, loc)?;
-        let along = |this: &mut Loader, name: String| -> crate::Result<Texture> {
+        let along = |this: &mut Loader, name: String| -> crate::error::Result<Texture> {
             match p
                 .find(&name, &["float", "texture"])
                 .map_err(Self::pe(loc))?
@@ -80,7 +80,7 @@ impl Loader {
         prefix: &str,
         st: &str,
         loc: &Loc,
-    ) -> crate::Result<(f32, f32)> {
+    ) -> crate::error::Result<(f32, f32)> {
         let (alphas, map) = self.roughness_map(p, prefix, st, loc)?;
         if map.is_some() {
             self.warn(
@@ -99,7 +99,7 @@ impl Loader {
         prefix: &str,
         st: &str,
         loc: &Loc,
-    ) -> crate::Result<f32> {
+    ) -> crate::error::Result<f32> {
         let (u, v) = self.roughness(p, prefix, st, loc)?;
         if u != v {
             self.warn(loc, format!("{st}: anisotropic roughness is averaged"));
@@ -109,7 +109,13 @@ impl Loader {
 
     /// A conductor material's metal: the complex index from `eta`/`k` (copper by default)
     /// or, given `reflectance`, the index with that normal-incidence reflectance.
-    fn metal(&mut self, p: &Params, prefix: &str, st: &str, loc: &Loc) -> crate::Result<Metal> {
+    fn metal(
+        &mut self,
+        p: &Params,
+        prefix: &str,
+        st: &str,
+        loc: &Loc,
+    ) -> crate::error::Result<Metal> {
         let (alphas, map) = self.roughness_map(p, prefix, st, loc)?;
         let (conductor, reflectance_map) = self.conductor(p, prefix, st, loc)?;
         Ok(Metal::new(conductor, reflectance_map, alphas, map))
@@ -123,7 +129,7 @@ impl Loader {
         default: f32,
         st: &str,
         loc: &Loc,
-    ) -> crate::Result<f32> {
+    ) -> crate::error::Result<f32> {
         if let Some(q) = p.find(name, &["float"]).ok().flatten() {
             return Ok(q.nums()[0] as f32);
         }
@@ -147,7 +153,7 @@ impl Loader {
         prefix: &str,
         st: &str,
         loc: &Loc,
-    ) -> crate::Result<(Conductor, Option<Texture>)> {
+    ) -> crate::error::Result<(Conductor, Option<Texture>)> {
         let refl = format!("{prefix}reflectance");
         if p.find(&refl, &["rgb", "spectrum", "blackbody", "texture"])
             .ok()
@@ -178,7 +184,7 @@ impl Loader {
         name: &str,
         p: &Params,
         loc: &Loc,
-    ) -> crate::Result<Material> {
+    ) -> crate::error::Result<Material> {
         let st = if name.is_empty() {
             format!("Material \"{ty}\"")
         } else {
@@ -308,7 +314,7 @@ impl Loader {
         p: &Params,
         st: &str,
         loc: &Loc,
-    ) -> crate::Result<Option<NormalDetail>> {
+    ) -> crate::error::Result<Option<NormalDetail>> {
         let file = p.string("normalmap").map_err(Self::pe(loc))?;
         let bump = match p
             .find("displacement", &["texture", "float"])
@@ -353,7 +359,7 @@ impl Loader {
         eta_name: &str,
         st: &str,
         loc: &Loc,
-    ) -> crate::Result<Coating> {
+    ) -> crate::error::Result<Coating> {
         let d = Coating::default();
         let (ax, ay) = self.roughness(p, prefix, st, loc)?;
         let thickness = self.float_param(p, "thickness", d.thickness as f64, st, loc)? as f32;
@@ -369,7 +375,7 @@ impl Loader {
                 other.max_value()
             }
         };
-        let count = |name: &str, default: u32| -> crate::Result<u32> {
+        let count = |name: &str, default: u32| -> crate::error::Result<u32> {
             match p.int(name).map_err(Self::pe(loc))? {
                 None => Ok(default),
                 Some(n) if (1..=1_000_000).contains(&n) => Ok(n as u32),
@@ -418,7 +424,7 @@ impl Loader {
         eta: f32,
         st: &str,
         loc: &Loc,
-    ) -> crate::Result<Classic> {
+    ) -> crate::error::Result<Classic> {
         Ok(Classic {
             diffuse: self.texture_param(p, "reflectance", Rgb::splat(0.5), st, loc)?,
             specular: Rgb::ONE,

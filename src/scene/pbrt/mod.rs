@@ -39,9 +39,9 @@ mod textures;
 use super::environment::Environment;
 use super::{Camera, Instance, Light, Material, Prototype, Scene, Shape, Texture};
 use crate::control::{CancelToken, Control, MemoryBudget};
+use crate::error::Error;
 use crate::math::Rgb;
 use crate::scene::RenderSettings;
-use crate::Error;
 use glam::DMat4;
 use options::CameraDef;
 use params::ParamError;
@@ -55,7 +55,7 @@ pub use limits::{MAX_INCLUDES, MAX_INCLUDE_DEPTH, MAX_SCENE_TEXT};
 pub(crate) use shapes::instance as placed_copies;
 
 /// Reads a pbrt-v4 scene file (and the files it includes).
-pub fn read(path: &Path, control: &Control) -> crate::Result<Scene> {
+pub fn read(path: &Path, control: &Control) -> crate::error::Result<Scene> {
     let mut loader = Loader::new(path, control);
     let text = loader.read_text(path, None)?;
     loader.run_file(path, &text, None)?;
@@ -63,14 +63,14 @@ pub fn read(path: &Path, control: &Control) -> crate::Result<Scene> {
 }
 
 /// Reads pbrt-v4 scene text; `path` names it in messages and anchors relative paths.
-pub fn from_str(text: &str, path: &Path) -> crate::Result<Scene> {
+pub fn from_str(text: &str, path: &Path) -> crate::error::Result<Scene> {
     from_str_with(text, path, &Control::default())
 }
 
 /// [`from_str`] under a job's controls: stopped between statements once the control's token
 /// is cancelled, and refused (before the memory is taken) once the text being read and the
 /// geometry read so far would need more than its memory budget.
-pub fn from_str_with(text: &str, path: &Path, control: &Control) -> crate::Result<Scene> {
+pub fn from_str_with(text: &str, path: &Path, control: &Control) -> crate::error::Result<Scene> {
     let mut loader = Loader::new(path, control);
     loader.run_file(path, text, None)?;
     loader.finish()
@@ -222,15 +222,18 @@ impl Loader {
     }
 
     /// The scene read: the camera made at WorldBegin, the shapes and the materials they use.
-    fn finish(mut self) -> crate::Result<Scene> {
+    fn finish(mut self) -> crate::error::Result<Scene> {
         let Some(camera) = self.camera_value.take() else {
-            return Err(crate::Error::input(
+            return Err(crate::error::Error::input(
                 &self.source,
                 "the file has no WorldBegin (truncated file?)",
             ));
         };
         if self.shapes.is_empty() && self.instances.is_empty() {
-            return Err(crate::Error::input(&self.source, "the scene has no shapes"));
+            return Err(crate::error::Error::input(
+                &self.source,
+                "the scene has no shapes",
+            ));
         }
         // Keep only the materials shapes use (and those their mixes choose from, first), in
         // their order.

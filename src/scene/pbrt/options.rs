@@ -27,7 +27,7 @@ impl Loader {
         _value: Option<String>,
         p: &Params,
         loc: &Loc,
-    ) -> crate::Result<()> {
+    ) -> crate::error::Result<()> {
         let pe = |e| loc.param_error(e);
         match kw {
             "Camera" => {
@@ -128,7 +128,7 @@ impl Loader {
                         format!("Film \"{ty}\" is not supported; using an RGB film"),
                     );
                 }
-                let res = |name: &str, default: u32| -> crate::Result<u32> {
+                let res = |name: &str, default: u32| -> crate::error::Result<u32> {
                     let v = p.int(name).map_err(|e| loc.param_error(e))?;
                     match v {
                         None => Ok(default),
@@ -233,7 +233,7 @@ impl Loader {
     /// no rotation of raylink's camera shows the same image, so the whole world is mirrored
     /// across the plane through the eye spanned by forward and up instead: the camera then
     /// sees exactly pbrt's image.
-    pub(super) fn begin_world(&mut self, loc: &Loc) -> crate::Result<()> {
+    pub(super) fn begin_world(&mut self, loc: &Loc) -> crate::error::Result<()> {
         self.state.ctm = DMat4::IDENTITY;
         self.state.end_ctm = DMat4::IDENTITY;
         self.coordinate_systems

@@ -8,7 +8,7 @@ use crate::math::Rgb;
 use crate::scene::Texture;
 
 impl Loader {
-    pub(super) fn pe(loc: &Loc) -> impl Fn(ParamError) -> crate::Error + '_ {
+    pub(super) fn pe(loc: &Loc) -> impl Fn(ParamError) -> crate::error::Error + '_ {
         move |e| loc.param_error(e)
     }
 
@@ -20,7 +20,7 @@ impl Loader {
         kind: Kind,
         statement: &str,
         loc: &Loc,
-    ) -> crate::Result<Option<Rgb>> {
+    ) -> crate::error::Result<Option<Rgb>> {
         let Some(q) = p
             .find(name, &["rgb", "spectrum", "blackbody"])
             .map_err(Self::pe(loc))?
@@ -80,7 +80,7 @@ impl Loader {
         default: Rgb,
         statement: &str,
         loc: &Loc,
-    ) -> crate::Result<Texture> {
+    ) -> crate::error::Result<Texture> {
         if let Some(q) = p.find(name, &["texture"]).ok().flatten() {
             let tex = q.strs()[0].clone();
             return match self.textures.get(&tex) {
@@ -104,7 +104,7 @@ impl Loader {
         default: f64,
         statement: &str,
         loc: &Loc,
-    ) -> crate::Result<Result<f64, Texture>> {
+    ) -> crate::error::Result<Result<f64, Texture>> {
         let Some(q) = p.find(name, &["float", "texture"]).map_err(Self::pe(loc))? else {
             return Ok(Ok(default));
         };
@@ -139,7 +139,7 @@ impl Loader {
         default: f64,
         statement: &str,
         loc: &Loc,
-    ) -> crate::Result<f64> {
+    ) -> crate::error::Result<f64> {
         match self.float_value(p, name, default, statement, loc)? {
             Ok(v) => Ok(v),
             Err(t) => {
@@ -176,7 +176,7 @@ impl Loader {
         default: f64,
         statement: &str,
         loc: &Loc,
-    ) -> crate::Result<Texture> {
+    ) -> crate::error::Result<Texture> {
         Ok(match self.float_value(p, name, default, statement, loc)? {
             Ok(v) => Texture::Constant(Rgb::splat(v as f32)),
             Err(t) => t,

@@ -67,7 +67,7 @@ impl Loader {
         self.materials.len() - 1
     }
 
-    pub(super) fn shape(&mut self, ty: &str, p: &Params, loc: &Loc) -> crate::Result<()> {
+    pub(super) fn shape(&mut self, ty: &str, p: &Params, loc: &Loc) -> crate::error::Result<()> {
         let st = format!("Shape \"{ty}\"");
         let st = st.as_str();
         let pe = Self::pe(loc);
@@ -296,7 +296,7 @@ impl Loader {
         arity: usize,
         st: &str,
         loc: &Loc,
-    ) -> crate::Result<PlyMesh> {
+    ) -> crate::error::Result<PlyMesh> {
         let pe = Self::pe(loc);
         let positions: Vec<Vec3> = p
             .floats("P", "point3")

@@ -66,7 +66,7 @@ impl Loader {
         loc: &Loc,
         kw: &str,
         f: impl Fn(DMat4) -> DMat4,
-    ) -> crate::Result<()> {
+    ) -> crate::error::Result<()> {
         let ctm = match self.state.end_time_only {
             true => self.state.ctm,
             false => f(self.state.ctm),
@@ -89,7 +89,7 @@ impl Loader {
         self.stack.push((block, self.state.clone(), loc.clone()));
     }
 
-    pub(super) fn pop(&mut self, block: Block, loc: &Loc) -> crate::Result<()> {
+    pub(super) fn pop(&mut self, block: Block, loc: &Loc) -> crate::error::Result<()> {
         let end = match block {
             Block::Attribute => "AttributeEnd",
             Block::Transform => "TransformEnd",

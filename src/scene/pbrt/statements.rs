@@ -6,7 +6,7 @@ use super::limits;
 use super::params::Params;
 use super::state::{look_at, Block};
 use super::{Loader, Loc};
-use crate::Error;
+use crate::error::Error;
 use glam::{DMat4, DVec3};
 use std::path::Path;
 use std::sync::Arc;
@@ -17,7 +17,7 @@ impl Loader {
         path: &Path,
         text: &str,
         from: Option<&Loc>,
-    ) -> crate::Result<()> {
+    ) -> crate::error::Result<()> {
         let key = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
         if let Some(i) = self.include_stack.iter().position(|p| *p == key) {
             let chain: Vec<String> = self.include_stack[i..]
@@ -61,7 +61,7 @@ impl Loader {
         Ok(())
     }
 
-    fn statement(&mut self, c: &mut Cursor) -> crate::Result<()> {
+    fn statement(&mut self, c: &mut Cursor) -> crate::error::Result<()> {
         let t = &c.tokens[c.i];
         let loc = c.loc(t);
         let Tok::Word(keyword) = &t.tok else {
@@ -335,7 +335,7 @@ impl Loader {
         Ok(())
     }
 
-    fn require_world(&self, loc: &Loc, what: &str) -> crate::Result<()> {
+    fn require_world(&self, loc: &Loc, what: &str) -> crate::error::Result<()> {
         if self.world {
             Ok(())
         } else {

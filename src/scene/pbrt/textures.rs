@@ -18,7 +18,7 @@ impl Loader {
         class: &str,
         p: &Params,
         loc: &Loc,
-    ) -> crate::Result<()> {
+    ) -> crate::error::Result<()> {
         let st = format!("Texture \"{name}\" \"{class}\"");
         let st = st.as_str();
         let is_float = match ty {
@@ -102,7 +102,7 @@ impl Loader {
         s: f32,
         st: &str,
         loc: &Loc,
-    ) -> crate::Result<Texture> {
+    ) -> crate::error::Result<Texture> {
         Ok(match tex {
             Texture::Constant(c) => Texture::Constant(c * s),
             Texture::Image(img) if s != 1.0 => {
@@ -134,7 +134,7 @@ impl Loader {
         mapping: UvMapping,
         st: &str,
         loc: &Loc,
-    ) -> crate::Result<Texture> {
+    ) -> crate::error::Result<Texture> {
         let file = p
             .string("filename")
             .map_err(Self::pe(loc))?
@@ -176,7 +176,7 @@ impl Loader {
         p: &Params,
         st: &str,
         loc: &Loc,
-    ) -> crate::Result<FloatTexture> {
+    ) -> crate::error::Result<FloatTexture> {
         let tex = match class {
             "constant" => {
                 return Ok(FloatTexture::Constant(
@@ -235,7 +235,7 @@ impl Loader {
 
     /// A `directionmix` texture's `dir` (default +y), from the texture's space to the
     /// world's, as a unit vector.
-    fn mix_direction(&mut self, p: &Params, st: &str, loc: &Loc) -> crate::Result<Vec3> {
+    fn mix_direction(&mut self, p: &Params, st: &str, loc: &Loc) -> crate::error::Result<Vec3> {
         let dir = match p
             .find("dir", &["vector3", "vector"])
             .map_err(Self::pe(loc))?
@@ -257,7 +257,7 @@ impl Loader {
             .ok_or_else(|| loc.error(format!("{st}: \"dir\" must not be the zero vector")))
     }
 
-    fn mapping(&mut self, p: &Params, st: &str, loc: &Loc) -> crate::Result<UvMapping> {
+    fn mapping(&mut self, p: &Params, st: &str, loc: &Loc) -> crate::error::Result<UvMapping> {
         let pe = Self::pe(loc);
         if let Some(m) = p.string("mapping").map_err(&pe)? {
             if m != "uv" {

@@ -18,6 +18,7 @@ use super::schema::{
     MaterialDesc, MixDesc, OneOrMany, RoughnessDesc, Splat3, TransformOp,
 };
 use crate::bsdf::TabulatedBrdf;
+use crate::error::Error;
 use crate::math::{Mat3, Mat4, Rgb, Vec3};
 use crate::scene::environment::Environment;
 use crate::scene::lights::{
@@ -27,7 +28,6 @@ use crate::scene::materials::{Classic, Measured, Surface};
 use crate::scene::{
     Camera, Conductor, Light, Material, Projection, RenderSettings, RoughnessMap, Scene, Texture,
 };
-use crate::Error;
 use std::collections::HashMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -62,7 +62,7 @@ impl<'a> Builder<'a> {
         Site { name, span }
     }
 
-    pub(super) fn build(mut self, file: FileDesc) -> crate::Result<Scene> {
+    pub(super) fn build(mut self, file: FileDesc) -> crate::error::Result<Scene> {
         let ctx = self.ctx;
         let Some(camera) = file.camera else {
             return Err(Error::input(
@@ -84,7 +84,7 @@ impl<'a> Builder<'a> {
                 if let Some(env) = world.environment.take() {
                     environment = Some(std::sync::Arc::new(self.environment(&site, env)?));
                 }
-                let get = |v: Option<Splat3>, key: &str| -> crate::Result<Rgb> {
+                let get = |v: Option<Splat3>, key: &str| -> crate::error::Result<Rgb> {
                     v.map_or(Ok(Rgb::ZERO), |c| {
                         colour(c.0).map_err(|m| ctx.fail(&site, key, m))
                     })
@@ -132,7 +132,7 @@ impl<'a> Builder<'a> {
         })
     }
 
-    fn camera(&self, desc: Spanned<CameraDesc>) -> crate::Result<Camera> {
+    fn camera(&self, desc: Spanned<CameraDesc>) -> crate::error::Result<Camera> {
         let ctx = self.ctx;
         let site = self.site("camera".into(), desc.span());
         let desc = desc.into_inner();
@@ -181,7 +181,7 @@ impl<'a> Builder<'a> {
 
     /// `projection` ("perspective", the default, or "orthographic" with `size`), and a thin
     /// lens for a perspective camera with `lens_radius` > 0 (`focal_distance` required).
-    fn projection(&self, site: &Site, desc: &CameraDesc) -> crate::Result<Projection> {
+    fn projection(&self, site: &Site, desc: &CameraDesc) -> crate::error::Result<Projection> {
         let ctx = self.ctx;
         let fail = |key: &'static str| move |m: String| ctx.fail(site, key, m);
         let orthographic = match desc.projection.as_deref() {
@@ -233,7 +233,12 @@ impl<'a> Builder<'a> {
         })
     }
 
-    fn material(&self, site: &Site, name: String, desc: MaterialDesc) -> crate::Result<Material> {
+    fn material(
+        &self,
+        site: &Site,
+        name: String,
+        desc: MaterialDesc,
+    ) -> crate::error::Result<Material> {
         let ctx = self.ctx;
         let fail = |key: &'static str| move |m: String| ctx.fail(site, key, m);
         if let Some(mix) = desc.mix {
@@ -295,9 +300,10 @@ impl<'a> Builder<'a> {
             self.check_coated_keys(site, &desc)?;
         }
         let d = Classic::default();
-        let col = |v: Option<Splat3>, key: &'static str, default: Rgb| -> crate::Result<Rgb> {
-            v.map_or(Ok(default), |c| colour(c.0).map_err(fail(key)))
-        };
+        let col =
+            |v: Option<Splat3>, key: &'static str, default: Rgb| -> crate::error::Result<Rgb> {
+                v.map_or(Ok(default), |c| colour(c.0).map_err(fail(key)))
+            };
         let diffuse = match desc.diffuse {
             None => d.diffuse,
             Some(t) => self.texture(site, "diffuse", t)?,
@@ -426,7 +432,7 @@ impl<'a> Builder<'a> {
         name: String,
         mix: MixDesc,
         other_keys: bool,
-    ) -> crate::Result<Material> {
+    ) -> crate::error::Result<Material> {
         let ctx = self.ctx;
         let fail = |m: String| ctx.fail(site, "mix", m);
         if other_keys {
@@ -477,7 +483,7 @@ impl<'a> Builder<'a> {
         &self,
         site: &Site,
         desc: Option<DiffuseDesc>,
-    ) -> crate::Result<(Rgb, Option<Texture>)> {
+    ) -> crate::error::Result<(Rgb, Option<Texture>)> {
         Ok(match desc {
             None => (Rgb::ZERO, None),
             Some(t) => match self.texture(site, "emission", t)? {
@@ -487,7 +493,7 @@ impl<'a> Builder<'a> {
         })
     }
 
-    fn environment(&self, site: &Site, desc: EnvironmentDesc) -> crate::Result<Environment> {
+    fn environment(&self, site: &Site, desc: EnvironmentDesc) -> crate::error::Result<Environment> {
         let ctx = self.ctx;
         let xf = self.transform(site, desc.transform)?;
         let scale = colour(desc.scale.map_or(Vec3::ONE, |s| s.0))
@@ -498,7 +504,11 @@ impl<'a> Builder<'a> {
             .map_err(|e| ctx.fail(site, "environment.file", e))
     }
 
-    fn transform(&self, site: &Site, desc: Option<OneOrMany<TransformOp>>) -> crate::Result<Xform> {
+    fn transform(
+        &self,
+        site: &Site,
+        desc: Option<OneOrMany<TransformOp>>,
+    ) -> crate::error::Result<Xform> {
         self.transform_steps(site, desc, "transform")
     }
 
@@ -508,7 +518,7 @@ impl<'a> Builder<'a> {
         site: &Site,
         desc: Option<OneOrMany<TransformOp>>,
         key: &str,
-    ) -> crate::Result<Xform> {
+    ) -> crate::error::Result<Xform> {
         let ctx = self.ctx;
         let (ops, single) = match desc {
             None => (Vec::new(), true),
@@ -571,7 +581,7 @@ impl<'a> Builder<'a> {
         Xform::new(m).map_err(|e| ctx.fail(site, key, e))
     }
 
-    fn light(&self, site: &Site, desc: LightDesc) -> crate::Result<Light> {
+    fn light(&self, site: &Site, desc: LightDesc) -> crate::error::Result<Light> {
         let ctx = self.ctx;
         let (name, takes, allowed): (&str, &str, &[&str]) = match desc.kind {
             LightKind::Point => ("point", "position, intensity", &["position", "intensity"]),

@@ -1,7 +1,7 @@
 //! Messages: every problem becomes one line that names the file and the line (and, for
 //! toml's own errors, the column), e.g. `line 12: shapes[2].radius: must be positive, got -1`.
 
-use crate::Error;
+use crate::error::Error;
 use std::fmt;
 use std::ops::Range;
 use std::path::Path;

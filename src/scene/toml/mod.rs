@@ -3,7 +3,7 @@
 //! Reading happens in two steps: serde + toml turn the text into the `*Desc` structures of
 //! `schema` (syntax, unknown keys and wrong types are caught there, with toml's line and
 //! column), then the `builder` checks the values and bakes transforms into world-space
-//! geometry. Every problem becomes an [`Error::input`](crate::Error::input) whose detail is
+//! geometry. Every problem becomes an [`Error::input`](crate::error::Error::input) whose detail is
 //! one line that starts with the line number and names the field, e.g.
 //! `line 12: shapes[2].radius: must be positive, got -1`.
 //!
@@ -34,13 +34,13 @@ use toml::de::DeTable;
 use toml::Spanned;
 
 /// Reads a native TOML scene.
-pub fn read(path: &Path) -> crate::Result<Scene> {
-    let text = std::fs::read_to_string(path).map_err(|e| crate::Error::io(path, e))?;
+pub fn read(path: &Path) -> crate::error::Result<Scene> {
+    let text = std::fs::read_to_string(path).map_err(|e| crate::error::Error::io(path, e))?;
     from_str(&text, path)
 }
 
 /// Parses a native TOML scene; `path` names the file in messages and resolves relative paths.
-pub fn from_str(text: &str, path: &Path) -> crate::Result<Scene> {
+pub fn from_str(text: &str, path: &Path) -> crate::error::Result<Scene> {
     Document::parse(text, path)?.build()
 }
 
@@ -53,7 +53,7 @@ pub(crate) struct Document<'a> {
 
 impl<'a> Document<'a> {
     /// Parses `text`; `path` names the file in messages.
-    pub(crate) fn parse(text: &'a str, path: &'a Path) -> crate::Result<Document<'a>> {
+    pub(crate) fn parse(text: &'a str, path: &'a Path) -> crate::error::Result<Document<'a>> {
         Document::parse_with(text, path, None)
     }
 
@@ -64,7 +64,7 @@ impl<'a> Document<'a> {
         text: &'a str,
         path: &'a Path,
         control: Option<&'a crate::control::Control>,
-    ) -> crate::Result<Document<'a>> {
+    ) -> crate::error::Result<Document<'a>> {
         let ctx = Ctx {
             path,
             text,
@@ -85,7 +85,7 @@ impl<'a> Document<'a> {
     }
 
     /// Reads the document as a static scene.
-    pub(crate) fn build(self) -> crate::Result<Scene> {
+    pub(crate) fn build(self) -> crate::error::Result<Scene> {
         let ctx = self.ctx;
         let file = FileDesc::deserialize(toml::de::Deserializer::from(self.root))
             .map_err(|e| ctx.toml_error(&e))?;
@@ -93,7 +93,7 @@ impl<'a> Document<'a> {
     }
 
     /// The document as a plain TOML table (values without their positions).
-    pub(crate) fn into_table(self) -> crate::Result<toml::Table> {
+    pub(crate) fn into_table(self) -> crate::error::Result<toml::Table> {
         let ctx = self.ctx;
         toml::Table::deserialize(toml::de::Deserializer::from(self.root))
             .map_err(|e| ctx.toml_error(&e))
@@ -106,7 +106,7 @@ mod tests {
     use crate::math::Vec3;
     use crate::scene::{Geometry, Texture};
 
-    fn parse(text: &str) -> crate::Result<Scene> {
+    fn parse(text: &str) -> crate::error::Result<Scene> {
         from_str(text, Path::new("test.toml"))
     }
 

@@ -7,9 +7,9 @@ use super::scan::line_point;
 use super::LineHit;
 use crate::integrators::illumination_network::patches::{Patches, Polygon};
 use crate::integrators::illumination_network::ray_space::{axes, RaySpace};
-use crate::integrators::{Context, RayStats};
 use crate::math::spawn::Spot;
 use crate::math::{Ray, Vec3};
+use crate::transport::{Context, RayStats};
 
 /// The side key of a hit on polygon `pg` at unit-space point `p`, facing direction `d`.
 #[inline]

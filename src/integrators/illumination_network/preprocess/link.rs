@@ -11,7 +11,7 @@ use super::Builder;
 use crate::control::CancelToken;
 use crate::integrators::illumination_network::patches::Patches;
 use crate::integrators::illumination_network::ray_space::RaySpace;
-use crate::integrators::{Context, RayStats};
+use crate::transport::{Context, RayStats};
 use rayon::prelude::*;
 
 /// Slots linked by one task, one after the other: a few, so that the assembly reads each key

@@ -11,7 +11,11 @@ use crate::scene::Coating;
 
 impl Builder<'_> {
     /// Rejects the keys a coated material cannot have, before it is built.
-    pub(super) fn check_coated_keys(&self, site: &Site, desc: &MaterialDesc) -> crate::Result<()> {
+    pub(super) fn check_coated_keys(
+        &self,
+        site: &Site,
+        desc: &MaterialDesc,
+    ) -> crate::error::Result<()> {
         let conflicts = [
             ("transmission", desc.transmission.is_some()),
             ("diffuse_transmission", desc.diffuse_transmission.is_some()),
@@ -42,7 +46,7 @@ impl Builder<'_> {
         site: &Site,
         desc: CoatingDesc,
         m: Classic,
-    ) -> crate::Result<Surface> {
+    ) -> crate::error::Result<Surface> {
         let fail = |key: &'static str| move |msg: String| self.ctx.fail(site, key, msg);
         let d = Coating::default();
         let (roughness, roughness_v) = match desc.roughness {

@@ -6,9 +6,9 @@
 use super::super::diagnostics::Site;
 use super::super::schema::{InstanceDesc, ObjectDesc, ShapeDesc};
 use super::Builder;
+use crate::error::Error;
 use crate::scene::pbrt::GeometryCost;
 use crate::scene::{Instance, Prototype, Shape};
-use crate::Error;
 use std::collections::HashMap;
 use std::sync::Arc;
 use toml::Spanned;
@@ -30,7 +30,7 @@ impl Builder<'_> {
         shapes: Vec<Spanned<ShapeDesc>>,
         objects: Vec<Spanned<ObjectDesc>>,
         instances: Vec<Spanned<InstanceDesc>>,
-    ) -> crate::Result<Placed> {
+    ) -> crate::error::Result<Placed> {
         let ctx = self.ctx;
         if shapes.is_empty() && instances.is_empty() {
             return Err(Error::input(
@@ -116,7 +116,7 @@ impl Builder<'_> {
         list: Vec<Spanned<ShapeDesc>>,
         name: &str,
         cost: &mut GeometryCost,
-    ) -> crate::Result<Vec<Shape>> {
+    ) -> crate::error::Result<Vec<Shape>> {
         let mut shapes = Vec::new();
         for (i, desc) in list.into_iter().enumerate() {
             if let Some(control) = self.ctx.control {
@@ -141,7 +141,7 @@ impl Builder<'_> {
     }
 
     /// The geometry read so far and its intersection structures against the job's budget.
-    fn check_budget(&self, site: &Site, cost: GeometryCost) -> crate::Result<()> {
+    fn check_budget(&self, site: &Site, cost: GeometryCost) -> crate::error::Result<()> {
         let ctx = self.ctx;
         let Some(control) = ctx.control else {
             return Ok(());

@@ -14,7 +14,7 @@ impl Builder<'_> {
         site: &Site,
         desc: Option<OneOrMany<TransformOp>>,
         shapes: &mut [Shape],
-    ) -> crate::Result<()> {
+    ) -> crate::error::Result<()> {
         let Some(desc) = desc else {
             return Ok(());
         };

@@ -15,7 +15,7 @@ impl Builder<'_> {
     pub(super) fn render(
         &self,
         desc: Spanned<RenderDesc>,
-    ) -> crate::Result<(Settings, Vec<SettingSource>)> {
+    ) -> crate::error::Result<(Settings, Vec<SettingSource>)> {
         let ctx = self.ctx;
         let span = desc.span();
         let site = self.site("render".into(), span.clone());
@@ -146,7 +146,7 @@ impl Builder<'_> {
         &self,
         site: &Site,
         f: crate::scene::toml::schema::FilterDesc,
-    ) -> crate::Result<Filter> {
+    ) -> crate::error::Result<Filter> {
         let ctx = self.ctx;
         let radius = f.radius;
         let filter = match f.kind.as_str() {

@@ -15,7 +15,7 @@ impl Builder<'_> {
         &self,
         site: &Site,
         desc: Option<AlphaDesc>,
-    ) -> crate::Result<Option<Alpha>> {
+    ) -> crate::error::Result<Option<Alpha>> {
         let ctx = self.ctx;
         match desc {
             None => Ok(None),
@@ -39,7 +39,11 @@ impl Builder<'_> {
         }
     }
 
-    pub(super) fn shape(&mut self, site: &Site, mut desc: ShapeDesc) -> crate::Result<Vec<Shape>> {
+    pub(super) fn shape(
+        &mut self,
+        site: &Site,
+        mut desc: ShapeDesc,
+    ) -> crate::error::Result<Vec<Shape>> {
         let ctx = self.ctx;
         let kind = desc.kind;
         for p in desc.present() {
@@ -154,7 +158,7 @@ impl Builder<'_> {
     }
 
     /// Checks and transforms a vertex list; keeps the order unless the transform mirrors.
-    fn vertices(&self, site: &Site, vs: Vec<V3>, xf: &Xform) -> crate::Result<Vec<Vec3>> {
+    fn vertices(&self, site: &Site, vs: Vec<V3>, xf: &Xform) -> crate::error::Result<Vec<Vec3>> {
         let mut out = Vec::with_capacity(vs.len());
         for (i, v) in vs.into_iter().enumerate() {
             let v = finite3(v.0).map_err(|m| self.ctx.fail(site, &format!("vertices[{i}]"), m))?;
@@ -167,7 +171,7 @@ impl Builder<'_> {
         Ok(out)
     }
 
-    fn mesh(&self, site: &Site, desc: ShapeDesc, xf: &Xform) -> crate::Result<TriangleMesh> {
+    fn mesh(&self, site: &Site, desc: ShapeDesc, xf: &Xform) -> crate::error::Result<TriangleMesh> {
         let ctx = self.ctx;
         let field = |name: &str, i: usize| format!("{name}[{i}]");
         let positions = desc.positions.unwrap_or_default();
@@ -247,7 +251,7 @@ impl Builder<'_> {
         file: &str,
         material: Option<usize>,
         xf: &Xform,
-    ) -> crate::Result<Vec<Shape>> {
+    ) -> crate::error::Result<Vec<Shape>> {
         let ctx = self.ctx;
         let path = self.dir.join(file);
         self.inputs.borrow_mut().push(path.clone());
@@ -325,7 +329,7 @@ impl Builder<'_> {
         file: &str,
         material: usize,
         xf: &Xform,
-    ) -> crate::Result<Vec<Shape>> {
+    ) -> crate::error::Result<Vec<Shape>> {
         let ctx = self.ctx;
         let path = self.dir.join(file);
         self.inputs.borrow_mut().push(path.clone());
@@ -366,7 +370,7 @@ impl Builder<'_> {
         Ok(shapes)
     }
 
-    fn material_index(&self, site: &Site, name: &str) -> crate::Result<usize> {
+    fn material_index(&self, site: &Site, name: &str) -> crate::error::Result<usize> {
         self.names.get(name).copied().ok_or_else(|| {
             let mut known: Vec<&str> = self.materials.iter().map(|m| m.name.as_str()).collect();
             known.truncate(12);

@@ -12,7 +12,12 @@ use crate::scene::{NormalDetail, Texture};
 
 impl Builder<'_> {
     /// The texture under `key`: a colour (a number is a grey) or a texture table.
-    pub(super) fn texture(&self, site: &Site, key: &str, t: DiffuseDesc) -> crate::Result<Texture> {
+    pub(super) fn texture(
+        &self,
+        site: &Site,
+        key: &str,
+        t: DiffuseDesc,
+    ) -> crate::error::Result<Texture> {
         match t {
             DiffuseDesc::Colour(c) => Ok(Texture::Constant(
                 colour(c).map_err(|m| self.ctx.fail(site, key, m))?,
@@ -21,7 +26,12 @@ impl Builder<'_> {
         }
     }
 
-    fn texture_table(&self, site: &Site, key: &str, t: TextureTable) -> crate::Result<Texture> {
+    fn texture_table(
+        &self,
+        site: &Site,
+        key: &str,
+        t: TextureTable,
+    ) -> crate::error::Result<Texture> {
         let ctx = self.ctx;
         let fail = |field: &str| {
             let at = format!("{key}.{field}");
@@ -136,7 +146,7 @@ impl Builder<'_> {
         site: &Site,
         normal_map: Option<String>,
         bump: Option<DiffuseDesc>,
-    ) -> crate::Result<Option<NormalDetail>> {
+    ) -> crate::error::Result<Option<NormalDetail>> {
         match (normal_map, bump) {
             (None, None) => Ok(None),
             (Some(_), Some(_)) => Err(self.ctx.fail(

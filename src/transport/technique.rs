@@ -1,44 +1,26 @@
 //! The one technique lifecycle: a technique is created from its settings
-//! ([`super::create`]), prepares once (the irradiance cache's overture, the network's
+//! (`crate::integrators::create`), prepares once (the irradiance cache's overture, the network's
 //! preprocess and distribution; nothing for the others), and then renders tiles through one
 //! of the two tile kernels. The job's renderer (`crate::job::Renderer`) drives every
 //! technique the same way.
 
-use super::technique::MonteCarloSettings;
-use crate::accel::Backend;
 use crate::control::Control;
+use crate::error::Result;
+use crate::image::filter::{Filter, Reconstruction};
 use crate::image::Image;
-use crate::integrators::{Context, Integrator, MonteCarlo};
-use crate::render::progressive::ProgressiveOptions;
-use crate::render::{PixelSampling, Tile};
-use crate::Result;
+use crate::transport::{Context, Integrator, MonteCarlo, PixelSampling, View};
 
-/// What a technique's preparation needs of the view a job renders.
+/// The progressive Monte Carlo integrators (and the irradiance cache's final render).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(crate) struct View {
-    pub width: u32,
-    pub height: u32,
-    /// Only these pixels (a part of the image), if any.
-    pub region: Option<Tile>,
-    pub seed: u64,
-    pub threads: Option<usize>,
-    pub accel: Backend,
-}
-
-impl View {
-    /// The Monte Carlo render of this view with `mc`'s samples and filter.
-    pub(crate) fn progressive(&self, mc: &MonteCarloSettings) -> ProgressiveOptions {
-        ProgressiveOptions {
-            width: self.width,
-            height: self.height,
-            spp: mc.spp,
-            time_limit: mc.time_limit,
-            threads: self.threads,
-            seed: self.seed,
-            filter: mc.filter,
-            reconstruction: mc.reconstruction,
-        }
-    }
+pub struct MonteCarloSettings {
+    pub max_depth: u32,
+    /// Samples per pixel; with a time limit, the most that will be taken.
+    pub spp: u32,
+    pub time_limit: Option<f64>,
+    pub filter: Filter,
+    /// How camera samples become pixels: splatted through the filter (the default), or
+    /// drawn from it so that each pixel depends on its own samples alone.
+    pub reconstruction: Reconstruction,
 }
 
 /// What renders a prepared technique's tiles.
@@ -74,7 +56,7 @@ pub(crate) trait Lifecycle: Send + Sync {
     /// The preparation alone, saved for render jobs to read (`precompute`): the techniques
     /// without one refuse.
     fn precompute(&mut self, _ctx: &Context, _view: &View, _control: &Control) -> Result<()> {
-        Err(crate::Error::Invalid(
+        Err(crate::error::Error::Invalid(
             "only the irradiance cache and the network have something to precompute".into(),
         ))
     }

@@ -11,6 +11,10 @@ use std::collections::VecDeque;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
 use std::sync::{mpsc, Condvar, Mutex};
 
+/// Results merged per tile, at most this many tiles ahead of the slowest (bounds the memory
+/// finished tiles hold while they wait to be merged in order).
+pub(crate) const MERGE_WINDOW: usize = 64;
+
 /// How a drive ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub(crate) struct Driven {
