@@ -6,7 +6,7 @@
 use clap::ValueEnum;
 use raylink::farm::{self, Part};
 use raylink::image::filter::Filter;
-use raylink::job::{AntiAliasing, NetworkBuilder, NetworkOrder};
+use raylink::job::{technique_info, AntiAliasing, NetworkBuilder, NetworkOrder, TECHNIQUES};
 use raylink::{Backend, Error, Job, Scene, Settings, Technique, TechniqueKind};
 use std::path::PathBuf;
 
@@ -18,34 +18,27 @@ const NETWORK: &str = "Illumination network";
 const OUTPUT: &str = "Output";
 const FARM: &str = "Parts of an image (render farms)";
 
-#[derive(Clone, Copy, PartialEq, ValueEnum)]
-pub enum IntegratorName {
-    /// Whitted 1980: recursive reflection, refraction and shadows.
-    Whitted,
-    /// Path tracing with next-event estimation and multiple importance sampling.
-    Path,
-    /// Light (particle) tracing: paths from the lights, connected to the camera.
-    Light,
-    /// Bidirectional path tracing, all strategies combined by multiple importance sampling.
-    Bdpt,
-    /// Ward's irradiance caching: direct and specular as in the path tracer, indirect
-    /// diffuse light from cached irradiance values.
-    IrradianceCache,
-    /// Buckalew & Fussell's illumination networks: a view-independent network of patches and
-    /// links, built once (--network-file), lit by a distribution process.
-    Network,
-}
+/// A technique's name on the command line: the registered techniques' names, each with its
+/// summary as help (`raylink::job::TECHNIQUES`).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct IntegratorName(pub TechniqueKind);
 
 impl IntegratorName {
     pub fn kind(self) -> TechniqueKind {
-        match self {
-            IntegratorName::Whitted => TechniqueKind::Whitted,
-            IntegratorName::Path => TechniqueKind::Path,
-            IntegratorName::Light => TechniqueKind::Light,
-            IntegratorName::Bdpt => TechniqueKind::Bdpt,
-            IntegratorName::IrradianceCache => TechniqueKind::IrradianceCache,
-            IntegratorName::Network => TechniqueKind::Network,
-        }
+        self.0
+    }
+}
+
+impl ValueEnum for IntegratorName {
+    fn value_variants<'a>() -> &'a [Self] {
+        static ALL: std::sync::LazyLock<Vec<IntegratorName>> = std::sync::LazyLock::new(|| {
+            TECHNIQUES.iter().map(|t| IntegratorName(t.kind)).collect()
+        });
+        &ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.0.name()).help(technique_info(self.0).summary))
     }
 }
 
@@ -368,7 +361,7 @@ type OtherOption = (&'static str, bool, fn(TechniqueKind) -> bool);
 
 /// The options other than settings that apply only to some integrators.
 fn other_options(args: &RenderArgs) -> [OtherOption; 4] {
-    let progressive = |k: TechniqueKind| k.is_monte_carlo();
+    let progressive = |k: TechniqueKind| technique_info(k).progressive;
     [
         (
             "--write-interval",
@@ -400,7 +393,7 @@ pub fn job(args: &RenderArgs, scene: &Scene, extra: Settings) -> Result<Job, Err
     let settings = from_scene.overlaid(&flags);
     let kind = settings.integrator.unwrap_or(TechniqueKind::Whitted);
     for setting in flags.given() {
-        if !kind.reads(setting) {
+        if !technique_info(kind).reads(setting) {
             // The filter's radius alone is given as its own option.
             let option = match setting {
                 "filter" if args.filter.is_none() => "--filter-radius".to_string(),
@@ -464,6 +457,71 @@ pub fn check(args: &RenderArgs) -> Result<(), Error> {
 mod tests {
     use clap::error::ErrorKind;
     use clap::CommandFactory;
+
+    /// Every registered technique is a value of `--integrator`, and every setting a
+    /// registered technique reads has its option, which gives that setting: the command
+    /// line cannot miss a technique or a setting of one.
+    #[test]
+    fn the_options_cover_every_registered_technique() {
+        use clap::Parser;
+        use raylink::job::TECHNIQUES;
+        let command = crate::Args::command();
+        let render = command.find_subcommand("render").unwrap();
+        let integrator = render
+            .get_arguments()
+            .find(|a| a.get_long() == Some("integrator"))
+            .unwrap();
+        let values: Vec<String> = integrator
+            .get_possible_values()
+            .iter()
+            .map(|v| v.get_name().to_string())
+            .collect();
+        let names: Vec<String> = TECHNIQUES.iter().map(|t| t.kind.name().into()).collect();
+        assert_eq!(values, names);
+        let scene = raylink::Scene::load("scenes/cornell-box.toml".as_ref()).unwrap();
+        for technique in TECHNIQUES {
+            for setting in technique.all_settings() {
+                let option = super::flag(setting.name);
+                let long = option.trim_start_matches("--");
+                let has = |sub: &str| {
+                    command
+                        .find_subcommand(sub)
+                        .unwrap()
+                        .get_arguments()
+                        .any(|a| a.get_long() == Some(long))
+                };
+                if setting.name == "relight" {
+                    // Only the relight command relights.
+                    assert!(has("relight"), "relight has no {option}");
+                    continue;
+                }
+                assert!(
+                    has("render"),
+                    "render has no {option} for {}",
+                    technique.kind
+                );
+                // The option given alone sets its setting.
+                let value = match setting.example {
+                    "true" => None,
+                    e if e.starts_with('{') => Some("box".to_string()),
+                    e => Some(e.trim_matches('"').to_string()),
+                };
+                let mut argv = vec!["raylink", "render", "s.toml", "-o", "x.exr", long];
+                let flag = format!("--{long}");
+                argv[5] = &flag;
+                if let Some(v) = &value {
+                    argv.push(v);
+                }
+                let parsed =
+                    crate::Args::try_parse_from(&argv).unwrap_or_else(|e| panic!("{argv:?}: {e}"));
+                let crate::Command::Render(args) = parsed.command else {
+                    unreachable!()
+                };
+                let given = super::given_settings(&args, &scene);
+                assert_eq!(given.given(), vec![setting.name], "{argv:?}");
+            }
+        }
+    }
 
     /// Every option of every subcommand that takes a number (found from the command itself:
     /// the options whose value clap parses, refusing "abc", that are not a choice of names;

@@ -377,14 +377,14 @@ pub fn run_relight(cli: &Cli, args: RelightArgs) -> Result<(), Failure> {
     let mut render = args.render;
     if render
         .integrator
-        .is_some_and(|i| i != IntegratorName::Network)
+        .is_some_and(|i| i != IntegratorName(TechniqueKind::Network))
     {
         return Err(Error::Invalid(
             "relight renders with the network integrator; leave out --integrator".into(),
         )
         .into());
     }
-    render.integrator = Some(IntegratorName::Network);
+    render.integrator = Some(IntegratorName(TechniqueKind::Network));
     match &render.network.network_file {
         None => {
             return Err(Error::Invalid(
@@ -458,8 +458,8 @@ pub fn run_precompute(cli: &Cli, mut args: RenderArgs) -> Result<(), Failure> {
         .into());
     }
     let wanted = match (&args.cache_file, &args.network.network_file) {
-        (Some(_), None) => IntegratorName::IrradianceCache,
-        (None, Some(_)) => IntegratorName::Network,
+        (Some(_), None) => IntegratorName(TechniqueKind::IrradianceCache),
+        (None, Some(_)) => IntegratorName(TechniqueKind::Network),
         _ => {
             return Err(Error::Invalid(
                 "precompute needs one of --cache-file F (irradiance cache) and \

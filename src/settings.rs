@@ -1,5 +1,5 @@
 //! The parameter set of a render: every setting a front end or a scene file can give, each
-//! optional, named as scene files and messages name it. [`crate::Technique::create`] turns it
+//! optional, named as scene files and messages name it. `Technique::create` turns it
 //! into a technique with its defaults and checks.
 
 use crate::image::filter::Filter;
@@ -49,52 +49,6 @@ impl TechniqueKind {
         TechniqueKind::ALL
             .into_iter()
             .find(|k| k.name().eq_ignore_ascii_case(name))
-    }
-
-    /// Whether it renders progressive Monte Carlo sample passes (and so takes a time limit,
-    /// a pixel filter and checkpoints).
-    pub fn is_monte_carlo(self) -> bool {
-        !matches!(self, TechniqueKind::Whitted | TechniqueKind::Network)
-    }
-
-    /// The settings of [`Settings`] this technique reads; a front end may refuse the others.
-    pub fn reads(self, setting: &str) -> bool {
-        const COMMON: &[&str] = &["integrator", "max_depth", "spp"];
-        const MONTE_CARLO: &[&str] = &["time_limit", "filter"];
-        const PIXELS: &[&str] = &["aa", "aa_threshold", "aa_depth"];
-        const WHITTED: &[&str] = &["area_samples", "fresnel"];
-        const CACHE: &[&str] = &[
-            "ab",
-            "ic_accuracy",
-            "ic_samples",
-            "ic_gradients",
-            "ar",
-            "cache_file",
-            "show_cache_points",
-        ];
-        const NETWORK: &[&str] = &[
-            "slopes",
-            "intercept_step",
-            "patch_size",
-            "network_jitter",
-            "network_builder",
-            "tolerance",
-            "network_file",
-            "light_scale",
-            "network_order",
-            "network_hybrid",
-            "relight",
-        ];
-        let groups: &[&[&str]] = match self {
-            TechniqueKind::Whitted => &[COMMON, PIXELS, WHITTED],
-            TechniqueKind::Path | TechniqueKind::Light | TechniqueKind::Bdpt => {
-                &[COMMON, MONTE_CARLO]
-            }
-            // The cache's overture traces the final render's samples: no time limit.
-            TechniqueKind::IrradianceCache => &[COMMON, &["filter"], CACHE],
-            TechniqueKind::Network => &[COMMON, PIXELS, NETWORK],
-        };
-        groups.iter().any(|g| g.contains(&setting))
     }
 }
 
@@ -233,6 +187,14 @@ macro_rules! for_each_setting {
 }
 
 impl Settings {
+    /// The name of every setting.
+    pub const NAMES: &'static [&'static str] = {
+        macro_rules! names {
+            ($($f:ident),*) => { &[$(stringify!($f)),*] };
+        }
+        for_each_setting!(names)
+    };
+
     /// These settings with every setting `over` gives replacing its own.
     pub fn overlaid(self, over: &Settings) -> Settings {
         macro_rules! pick {

@@ -7,9 +7,10 @@
 //! pbrt. Finite emitters only (area and point lights): directional lights and the
 //! background have no position to start a subpath from, and are left to the path tracer.
 
-use super::light::{connect_to_camera, lens_sample};
+use super::light::{connect_to_camera, lens_sample, refuse_orthographic};
 use super::path::russian_roulette;
 use crate::bsdf::{Bsdf, Transport};
+use crate::error::Error;
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
 use crate::math::warp::cosine_hemisphere;
@@ -17,8 +18,37 @@ use crate::math::{frame, Ray, Rgb, Vec2, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::lights::Emitter;
 use crate::scene::Scene;
+use crate::settings::TechniqueKind;
+use crate::transport::settings::{MonteCarloSettings, TechniqueInfo, COMMON, MONTE_CARLO};
+use crate::transport::technique::{Lifecycle, SampledTechnique};
 use crate::transport::{Context, MonteCarlo, RayStats, Splat};
 use std::f32::consts::PI;
+
+/// Bidirectional path tracing, as the technique list shows it.
+pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
+    kind: TechniqueKind::Bdpt,
+    summary: "Bidirectional path tracing, all strategies combined by multiple importance \
+              sampling.",
+    settings: &[COMMON, MONTE_CARLO],
+    pbrt: &["bdpt"],
+    progressive: true,
+    renders_parts: false,
+};
+
+/// The technique for `scene` (finite emitters only): nothing to prepare, sample passes.
+pub(crate) fn lifecycle(
+    mc: &MonteCarloSettings,
+    scene: &Scene,
+) -> crate::error::Result<Box<dyn Lifecycle>> {
+    refuse_orthographic(scene, "bdpt")?;
+    Bdpt::check_scene(scene).map_err(|e| Error::input(&scene.source, e))?;
+    Ok(Box::new(SampledTechnique {
+        integrator: Bdpt::new(BdptOptions {
+            max_depth: mc.max_depth,
+        }),
+        settings: *mc,
+    }))
+}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct BdptOptions {

@@ -6,13 +6,56 @@
 
 use super::path::russian_roulette;
 use crate::bsdf::{Bsdf, Transport};
+use crate::error::{Error, Result};
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
 use crate::math::{Ray, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::lights::{EmissionSample, Emitter};
+use crate::scene::Scene;
 use crate::scene::SurfacePoint;
+use crate::settings::TechniqueKind;
+use crate::transport::settings::{MonteCarloSettings, TechniqueInfo, COMMON, MONTE_CARLO};
+use crate::transport::technique::{Lifecycle, SampledTechnique};
 use crate::transport::{Context, MonteCarlo, RayStats, Splat};
+
+/// The light tracer, as the technique list shows it.
+pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
+    kind: TechniqueKind::Light,
+    summary: "Light (particle) tracing: paths from the lights, connected to the camera.",
+    settings: &[COMMON, MONTE_CARLO],
+    pbrt: &["lighttracer"],
+    progressive: true,
+    renders_parts: false,
+};
+
+/// The technique for `scene`: nothing to prepare, sample passes.
+pub(crate) fn lifecycle(mc: &MonteCarloSettings, scene: &Scene) -> Result<Box<dyn Lifecycle>> {
+    refuse_orthographic(scene, "light")?;
+    Ok(Box::new(SampledTechnique {
+        integrator: LightTracer::new(LightOptions {
+            max_depth: mc.max_depth,
+        }),
+        settings: *mc,
+    }))
+}
+
+/// Light paths reach the camera by connecting to it, which an orthographic camera's
+/// importance (a delta in direction) does not allow; pbrt-v4 refuses it too.
+pub(crate) fn refuse_orthographic(scene: &Scene, integrator: &str) -> Result<()> {
+    if matches!(
+        scene.camera.projection,
+        crate::scene::Projection::Orthographic { .. }
+    ) {
+        return Err(Error::input(
+            &scene.source,
+            format!(
+                "the {integrator} integrator cannot connect light paths to an orthographic camera (projection = \"orthographic\"): use a perspective camera or the path integrator"
+            ),
+        ));
+    }
+    Ok(())
+}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LightOptions {

@@ -1,9 +1,8 @@
 //! Light-transport techniques, one module each, written against the transport layer
 //! ([`crate::transport`]): they see the scene through its `Context` and render through its
-//! `Integrator` or `MonteCarlo` interface; `technique` and `create` list them.
+//! `Integrator` or `MonteCarlo` interface; `technique` lists them.
 
 pub mod bdpt;
-pub(crate) mod create;
 pub mod flux;
 pub mod illumination_network;
 pub mod irradiance_cache;

@@ -10,12 +10,35 @@ use crate::math::warp::power_heuristic;
 use crate::math::{Ray, Rgb, Vec2, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::SurfacePoint;
+use crate::settings::TechniqueKind;
+use crate::transport::settings::{MonteCarloSettings, TechniqueInfo, COMMON, MONTE_CARLO};
+use crate::transport::technique::{Lifecycle, SampledTechnique};
 use crate::transport::{Context, MonteCarlo, RayStats, Splat};
 
 /// Default number of bounces (pbrt's convention: 1 is direct lighting only).
 pub const DEFAULT_MAX_DEPTH: u32 = 8;
 /// Largest accepted --max-depth.
 pub const MAX_DEPTH_LIMIT: u32 = 1024;
+
+/// The path tracer, as the technique list shows it.
+pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
+    kind: TechniqueKind::Path,
+    summary: "Path tracing with next-event estimation and multiple importance sampling.",
+    settings: &[COMMON, MONTE_CARLO],
+    pbrt: &["path", "volpath", "simplepath"],
+    progressive: true,
+    renders_parts: true,
+};
+
+/// The technique: nothing to prepare, sample passes.
+pub(crate) fn lifecycle(mc: &MonteCarloSettings) -> Box<dyn Lifecycle> {
+    Box::new(SampledTechnique {
+        integrator: PathTracer::new(PathOptions {
+            max_depth: mc.max_depth,
+        }),
+        settings: *mc,
+    })
+}
 
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct PathOptions {

@@ -1,20 +1,51 @@
-//! A technique with its settings: its name and typed settings. [`Settings`] is the parameter set a front
-//! end fills (from a scene file's render settings, then its own options on top), every
-//! entry optional; [`Technique::create`] picks the technique it names and builds that
-//! technique's settings from it, with the defaults and the checks of that technique (as
-//! pbrt-v4's `Integrator::Create` reads a parameter dictionary). Errors name the setting
-//! ([`Error::Setting`]).
+//! The techniques, registered in one list. Each technique's file says what it is and which
+//! settings it reads ([`TechniqueInfo`]), builds and checks its typed settings from the
+//! parameter set, gives their settings key, and makes its lifecycle; this file lists them
+//! ([`TECHNIQUES`]) and dispatches to them. [`Settings`] is the parameter set a front end
+//! fills (from a scene file's render settings, then its own options on top), every entry
+//! optional; [`Technique::create`] picks the technique it names and builds that technique's
+//! settings from it (as pbrt-v4's `Integrator::Create` reads a parameter dictionary). Errors
+//! name the setting ([`Error::Setting`]).
+//!
+//! Adding a technique: its file (with its `TECHNIQUE` info, settings, `key` and
+//! `lifecycle`), its name in `crate::settings::TechniqueKind`, and a variant here with its
+//! line in [`TECHNIQUES`] and in each match below (the compiler points at them). The command
+//! line's options, the scene format's keys and the pbrt reader's `Integrator` types are
+//! checked against [`TECHNIQUES`] by tests.
 
 use crate::error::{Error, Result};
-use crate::image::filter::Reconstruction;
-use crate::integrators::illumination_network as net;
-use crate::integrators::irradiance_cache::{self as ic, IcOptions};
 use crate::integrators::path::{DEFAULT_MAX_DEPTH, MAX_DEPTH_LIMIT};
-use crate::settings::{AntiAliasing, NetworkBuilder, Relight, Settings, TechniqueKind};
-use crate::transport::passes::MAX_SPP;
-pub use crate::transport::technique::MonteCarloSettings;
-use crate::transport::{PixelSampling, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD};
-use std::path::PathBuf;
+use crate::integrators::{bdpt, illumination_network, irradiance_cache, light, path, whitted};
+use crate::scene::Scene;
+use crate::settings::{Settings, TechniqueKind};
+use crate::transport::technique::Lifecycle;
+
+pub use crate::integrators::illumination_network::technique::NetworkSettings;
+pub use crate::integrators::irradiance_cache::technique::CacheSettings;
+pub use crate::integrators::whitted::WhittedSettings;
+pub use crate::transport::settings::{MonteCarloSettings, Setting, TechniqueInfo};
+
+/// Every technique, in the order of [`TechniqueKind::ALL`].
+pub const TECHNIQUES: [&TechniqueInfo; 6] = [
+    &whitted::TECHNIQUE,
+    &path::TECHNIQUE,
+    &light::TECHNIQUE,
+    &bdpt::TECHNIQUE,
+    &irradiance_cache::technique::TECHNIQUE,
+    &illumination_network::technique::TECHNIQUE,
+];
+
+/// What the technique `kind` says of itself.
+pub fn info(kind: TechniqueKind) -> &'static TechniqueInfo {
+    match kind {
+        TechniqueKind::Whitted => &whitted::TECHNIQUE,
+        TechniqueKind::Path => &path::TECHNIQUE,
+        TechniqueKind::Light => &light::TECHNIQUE,
+        TechniqueKind::Bdpt => &bdpt::TECHNIQUE,
+        TechniqueKind::IrradianceCache => &irradiance_cache::technique::TECHNIQUE,
+        TechniqueKind::Network => &illumination_network::technique::TECHNIQUE,
+    }
+}
 
 /// A technique with its settings, checked.
 #[derive(Clone, Debug, PartialEq)]
@@ -27,47 +58,10 @@ pub enum Technique {
     Network(NetworkSettings),
 }
 
-/// Whitted's integrator.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct WhittedSettings {
-    pub max_depth: u32,
-    pub area_samples: u32,
-    pub fresnel: bool,
-    pub sampling: PixelSampling,
-}
-
-/// The irradiance cache's own settings.
-#[derive(Clone, Debug, PartialEq)]
-pub struct CacheSettings {
-    pub options: IcOptions,
-    /// Values are loaded from it if it exists, and the cache written to it; a file holding
-    /// this view's whole overture is only read.
-    pub file: Option<PathBuf>,
-    /// Mark the first-level values the camera sees in the image (Ward's figure 5b).
-    pub show_points: bool,
-}
-
-/// The illumination network's settings.
-#[derive(Clone, Debug, PartialEq)]
-pub struct NetworkSettings {
-    /// Slopes, intercept step, patch size and jitter (the seed is the job's).
-    pub params: net::NetworkParams,
-    pub builder: NetworkBuilder,
-    pub distribute: net::distribute::DistributeOptions,
-    /// Loaded from it if it exists (no preprocess), else built and saved there.
-    pub file: Option<PathBuf>,
-    /// Direct light per pixel, only indirect light from the network.
-    pub hybrid: bool,
-    pub sampling: PixelSampling,
-    pub max_depth: u32,
-    /// Relighting the network in `file` (which must exist).
-    pub relight: Option<Relight>,
-}
-
 impl Technique {
     /// The technique `settings` name (Whitted if none), with its settings: defaults where
     /// unset, every value checked. A setting the technique does not read is ignored here
-    /// (see [`TechniqueKind::reads`]).
+    /// (see [`TechniqueInfo::reads`]).
     pub fn create(settings: &Settings) -> Result<Technique> {
         let kind = settings.integrator.unwrap_or(TechniqueKind::Whitted);
         let max_depth = settings.max_depth.unwrap_or(DEFAULT_MAX_DEPTH);
@@ -77,51 +71,22 @@ impl Technique {
                 format!("must be at most {MAX_DEPTH_LIMIT}, got {max_depth}"),
             ));
         }
+        let s = settings;
+        let monte_carlo = || MonteCarloSettings::from_settings(s, max_depth);
         Ok(match kind {
-            TechniqueKind::Whitted => Technique::Whitted(WhittedSettings {
-                max_depth: max_depth.max(1),
-                area_samples: at_most(
-                    "area_samples",
-                    settings.area_samples.unwrap_or(16),
-                    1 << 16,
-                )?,
-                fresnel: settings.fresnel.unwrap_or(false),
-                sampling: pixel_sampling(settings)?,
-            }),
-            TechniqueKind::Path => Technique::Path(monte_carlo(settings, max_depth)?),
-            TechniqueKind::Light => Technique::Light(monte_carlo(settings, max_depth)?),
-            TechniqueKind::Bdpt => Technique::Bdpt(monte_carlo(settings, max_depth)?),
-            TechniqueKind::IrradianceCache => {
-                if settings.time_limit.is_some() {
-                    return Err(Error::setting(
-                        "time_limit",
-                        "does not apply to the irradiance-cache integrator (its overture \
-                         traces every sample first): give spp",
-                    ));
-                }
-                let options = IcOptions {
-                    bounces: settings.ab.unwrap_or(ic::DEFAULT_BOUNCES),
-                    accuracy: settings.ic_accuracy.unwrap_or(ic::DEFAULT_ACCURACY),
-                    samples: at_most(
-                        "ic_samples",
-                        settings.ic_samples.unwrap_or(ic::DEFAULT_SAMPLES),
-                        1 << 20,
-                    )?,
-                    ar: settings.ar.unwrap_or(ic::DEFAULT_AR),
-                    gradients: settings.ic_gradients.unwrap_or(ic::DEFAULT_GRADIENTS),
-                    ..IcOptions::default()
-                };
-                options.validate()?;
-                Technique::IrradianceCache(
-                    monte_carlo(settings, max_depth)?,
-                    CacheSettings {
-                        options,
-                        file: settings.cache_file.clone(),
-                        show_points: settings.show_cache_points.unwrap_or(false),
-                    },
-                )
+            TechniqueKind::Whitted => {
+                Technique::Whitted(WhittedSettings::from_settings(s, max_depth)?)
             }
-            TechniqueKind::Network => Technique::Network(network(settings, max_depth)?),
+            TechniqueKind::Path => Technique::Path(monte_carlo()?),
+            TechniqueKind::Light => Technique::Light(monte_carlo()?),
+            TechniqueKind::Bdpt => Technique::Bdpt(monte_carlo()?),
+            TechniqueKind::IrradianceCache => {
+                let cache = CacheSettings::from_settings(s)?;
+                Technique::IrradianceCache(monte_carlo()?, cache)
+            }
+            TechniqueKind::Network => {
+                Technique::Network(NetworkSettings::from_settings(s, max_depth)?)
+            }
         })
     }
 
@@ -136,12 +101,17 @@ impl Technique {
         }
     }
 
+    /// What the technique says of itself.
+    pub fn info(&self) -> &'static TechniqueInfo {
+        info(self.kind())
+    }
+
     /// The Monte Carlo settings, for the progressive techniques.
     pub fn monte_carlo(&self) -> Option<&MonteCarloSettings> {
         match self {
             Technique::Path(s) | Technique::Light(s) | Technique::Bdpt(s) => Some(s),
             Technique::IrradianceCache(s, _) => Some(s),
-            _ => None,
+            Technique::Whitted(_) | Technique::Network(_) => None,
         }
     }
 
@@ -149,149 +119,60 @@ impl Technique {
         match self {
             Technique::Whitted(w) => w.max_depth,
             Technique::Network(n) => n.max_depth,
-            other => other.monte_carlo().map_or(0, |m| m.max_depth),
+            Technique::Path(m) | Technique::Light(m) | Technique::Bdpt(m) => m.max_depth,
+            Technique::IrradianceCache(m, _) => m.max_depth,
         }
     }
 
     /// Whether a part of the image can be rendered alone, to the same pixels as the whole
     /// render: not for light paths, which splat onto every pixel.
     pub fn renders_parts(&self) -> bool {
-        !matches!(self, Technique::Light(_) | Technique::Bdpt(_))
+        self.info().renders_parts
     }
-}
 
-/// `value` if it is at most `limit`: counts bound the work a job may ask for.
-fn at_most(name: &str, value: u32, limit: u32) -> Result<u32> {
-    if value > limit {
-        return Err(Error::setting(
-            name,
-            format!("must be at most {limit}, got {value}"),
-        ));
-    }
-    Ok(value)
-}
-
-/// The pixel sampling of Whitted and the network: uniform supersampling when `spp` is
-/// given (a square) or `aa` asks for it, else adaptive.
-fn pixel_sampling(s: &Settings) -> Result<PixelSampling> {
-    let aa = s.aa.unwrap_or(if s.spp.is_some() {
-        AntiAliasing::Uniform
-    } else {
-        AntiAliasing::Adaptive
-    });
-    let sampling = match aa {
-        AntiAliasing::Adaptive => {
-            if s.spp.is_some() {
-                return Err(Error::setting(
-                    "spp",
-                    "applies to uniform supersampling; adaptive anti-aliasing is set by \
-                     aa_threshold and aa_depth",
-                ));
-            }
-            PixelSampling::Adaptive {
-                threshold: s.aa_threshold.unwrap_or(DEFAULT_AA_THRESHOLD),
-                max_depth: s.aa_depth.unwrap_or(DEFAULT_AA_DEPTH),
-            }
-        }
-        AntiAliasing::Uniform => {
-            let spp = s.spp.unwrap_or(16);
-            let n = (spp as f64).sqrt().round() as u32;
-            if spp == 0 || n * n != spp {
-                return Err(Error::setting(
-                    "spp",
-                    format!("must be a square number of samples (1, 4, 9, 16, ...), got {spp}"),
-                ));
-            }
-            PixelSampling::Uniform { n }
-        }
-    };
-    sampling.validate()?;
-    Ok(sampling)
-}
-
-fn monte_carlo(s: &Settings, max_depth: u32) -> Result<MonteCarloSettings> {
-    // With a time limit only a given spp caps the samples.
-    let spp = s
-        .spp
-        .unwrap_or(if s.time_limit.is_some() { MAX_SPP } else { 16 });
-    if spp == 0 || spp > MAX_SPP {
-        return Err(Error::setting(
-            "spp",
-            format!("must be between 1 and {MAX_SPP}, got {spp}"),
-        ));
-    }
-    if let Some(t) = s.time_limit {
-        if !(t.is_finite() && t > 0.0) {
-            return Err(Error::setting(
-                "time_limit",
-                format!("must be a positive number of seconds, got {t}"),
-            ));
+    /// The technique's own settings that change pixels, for a job's settings key.
+    pub(crate) fn key(&self) -> String {
+        match self {
+            Technique::Whitted(w) => w.key(),
+            Technique::Path(m) | Technique::Light(m) | Technique::Bdpt(m) => m.key(),
+            Technique::IrradianceCache(m, c) => m.key() + &c.key(),
+            Technique::Network(n) => n.key(),
         }
     }
-    let filter = s.filter.unwrap_or_default();
-    filter
-        .validate()
-        .map_err(|e| Error::setting("filter", format!("is invalid: {e}")))?;
-    Ok(MonteCarloSettings {
-        max_depth,
-        spp,
-        time_limit: s.time_limit,
-        filter,
-        reconstruction: Reconstruction::Splat,
-    })
-}
 
-fn network(s: &Settings, max_depth: u32) -> Result<NetworkSettings> {
-    let step = s.intercept_step.unwrap_or(net::DEFAULT_STEP);
-    let params = net::NetworkParams {
-        slopes: s.slopes.unwrap_or(net::DEFAULT_SLOPES),
-        step,
-        patch_size: s.patch_size.unwrap_or(step),
-        jitter: s.network_jitter.unwrap_or(1.0),
-        seed: 0,
-    };
-    params.validate()?;
-    let tolerance = s.tolerance.unwrap_or(net::DEFAULT_TOLERANCE);
-    if !(tolerance > 0.0 && tolerance < 1.0) {
-        return Err(Error::setting(
-            "tolerance",
-            format!("must be between 0 and 1 (exclusive), got {tolerance}"),
-        ));
+    /// What a part of the image needs besides the technique's `renders_parts`: the
+    /// preparation it reads, made for the whole image first.
+    pub(crate) fn check_part(&self) -> Result<()> {
+        match self {
+            Technique::IrradianceCache(_, c) => c.check_part(),
+            Technique::Network(n) => n.check_part(),
+            Technique::Whitted(_) | Technique::Path(_) | Technique::Light(_) => Ok(()),
+            Technique::Bdpt(_) => Ok(()),
+        }
     }
-    let light_scale = s.light_scale.unwrap_or(1.0);
-    if !(light_scale.is_finite() && light_scale >= 0.0) {
-        return Err(Error::setting(
-            "light_scale",
-            format!("must be a non-negative number, got {light_scale}"),
-        ));
+
+    /// The technique for `scene`, ready to prepare and render (pbrt's `Integrator::Create`).
+    pub(crate) fn lifecycle(&self, scene: &Scene) -> Result<Box<dyn Lifecycle>> {
+        Ok(match self {
+            Technique::Whitted(w) => w.lifecycle(),
+            Technique::Path(mc) => path::lifecycle(mc),
+            Technique::Light(mc) => light::lifecycle(mc, scene)?,
+            Technique::Bdpt(mc) => bdpt::lifecycle(mc, scene)?,
+            Technique::IrradianceCache(mc, cache) => Box::new(
+                irradiance_cache::technique::CacheTechnique::new(*mc, cache.clone()),
+            ),
+            Technique::Network(n) => Box::new(
+                illumination_network::technique::NetworkTechnique::new(n.clone(), scene),
+            ),
+        })
     }
-    if s.relight.is_some() && s.network_file.is_none() {
-        return Err(Error::setting(
-            "network_file",
-            "is needed to relight: a network saved by an earlier render",
-        ));
-    }
-    Ok(NetworkSettings {
-        params,
-        builder: s.network_builder.unwrap_or(NetworkBuilder::Scan),
-        distribute: net::distribute::DistributeOptions {
-            tolerance,
-            light_scale,
-            order: s.network_order.unwrap_or_default(),
-            ..Default::default()
-        },
-        file: s.network_file.clone(),
-        hybrid: s.network_hybrid.unwrap_or(false),
-        sampling: pixel_sampling(s)?,
-        max_depth,
-        relight: s.relight.clone(),
-    })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::image::filter::Filter;
+    use crate::transport::PixelSampling;
 
     #[test]
     fn the_factory_gives_each_technique_its_defaults() {
@@ -386,13 +267,52 @@ mod tests {
 
     #[test]
     fn every_technique_reads_its_own_settings_only() {
-        assert!(TechniqueKind::Whitted.reads("area_samples"));
-        assert!(!TechniqueKind::Path.reads("area_samples"));
-        assert!(!TechniqueKind::IrradianceCache.reads("time_limit"));
-        assert!(TechniqueKind::Network.reads("network_file"));
-        assert!(!TechniqueKind::Bdpt.reads("cache_file"));
+        assert!(info(TechniqueKind::Whitted).reads("area_samples"));
+        assert!(!info(TechniqueKind::Path).reads("area_samples"));
+        assert!(!info(TechniqueKind::IrradianceCache).reads("time_limit"));
+        assert!(info(TechniqueKind::Network).reads("network_file"));
+        assert!(!info(TechniqueKind::Bdpt).reads("cache_file"));
         for k in TechniqueKind::ALL {
             assert_eq!(TechniqueKind::from_name(k.name()), Some(k));
+        }
+    }
+
+    /// The list holds every technique once, in the order of the names, and what each
+    /// declares is a setting of the parameter set, read by some technique, each once.
+    #[test]
+    fn the_list_covers_every_technique_and_setting() {
+        let kinds: Vec<TechniqueKind> = TECHNIQUES.iter().map(|t| t.kind).collect();
+        assert_eq!(kinds, TechniqueKind::ALL.to_vec());
+        for k in TechniqueKind::ALL {
+            assert_eq!(info(k).kind, k);
+            let names: Vec<&str> = info(k).all_settings().map(|s| s.name).collect();
+            let mut unique = names.clone();
+            unique.sort();
+            unique.dedup();
+            assert_eq!(unique.len(), names.len(), "{k}: {names:?}");
+            for n in &names {
+                assert!(Settings::NAMES.contains(n), "{k} declares {n}");
+            }
+            let progressive = Technique::create(&Settings {
+                integrator: Some(k),
+                spp: Some(if k.name() == "whitted" || k.name() == "network" {
+                    4
+                } else {
+                    2
+                }),
+                network_file: Some("n.bin".into()),
+                ..Settings::default()
+            })
+            .unwrap()
+            .monte_carlo()
+            .is_some();
+            assert_eq!(progressive, info(k).progressive, "{k}");
+        }
+        for n in Settings::NAMES {
+            assert!(
+                TECHNIQUES.iter().any(|t| t.reads(n)),
+                "no technique reads {n}"
+            );
         }
     }
 }

@@ -15,12 +15,16 @@
 //! (radiance is constant along rays in vacuum).
 
 use crate::bsdf::{Bsdf, Transport};
+use crate::error::Result;
 pub use crate::math::optics::{fresnel_dielectric, reflect, refract};
 use crate::math::spawn::Spot;
 use crate::math::{frame, Ray, Rgb, Rng, Vec2, Vec3};
 use crate::scene::lights::Illumination;
 use crate::scene::{Material, SurfacePoint};
-use crate::transport::{Context, Integrator, RayStats, Sample};
+use crate::settings::{Settings, TechniqueKind};
+use crate::transport::settings::{at_most, Setting, TechniqueInfo, COMMON};
+use crate::transport::technique::{Lifecycle, Tiles};
+use crate::transport::{Context, Integrator, PixelSampling, RayStats, Sample, PIXELS};
 use std::f32::consts::{FRAC_1_PI, PI};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -361,6 +365,88 @@ impl Integrator for Whitted {
         };
         let (radiance, object) = tree.trace(ray, 0, 1.0);
         Sample { radiance, object }
+    }
+}
+
+// The technique: what it says of itself, its settings and its lifecycle.
+
+/// Whitted's integrator, as the technique list shows it.
+pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
+    kind: TechniqueKind::Whitted,
+    summary: "Whitted 1980: recursive reflection, refraction and shadows.",
+    settings: &[
+        COMMON,
+        PIXELS,
+        &[
+            Setting {
+                name: "area_samples",
+                scene_key: Some(("render.whitted", "area_samples")),
+                example: "16",
+                doc: "Shadow rays per area light at each shading point (default 16).",
+            },
+            Setting {
+                name: "fresnel",
+                scene_key: Some(("render.whitted", "fresnel")),
+                example: "true",
+                doc: "Weight reflection and transmission by Fresnel's law on every material.",
+            },
+        ],
+    ],
+    pbrt: &[],
+    progressive: false,
+    renders_parts: true,
+};
+
+/// Whitted's integrator's settings, checked.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct WhittedSettings {
+    pub max_depth: u32,
+    pub area_samples: u32,
+    pub fresnel: bool,
+    pub sampling: PixelSampling,
+}
+
+impl WhittedSettings {
+    /// From the parameter set, with the defaults, every value checked.
+    pub(crate) fn from_settings(s: &Settings, max_depth: u32) -> Result<WhittedSettings> {
+        Ok(WhittedSettings {
+            max_depth: max_depth.max(1),
+            area_samples: at_most("area_samples", s.area_samples.unwrap_or(16), 1 << 16)?,
+            fresnel: s.fresnel.unwrap_or(false),
+            sampling: PixelSampling::from_settings(s)?,
+        })
+    }
+
+    /// What of them changes pixels, for a job's settings key.
+    pub(crate) fn key(&self) -> String {
+        format!(
+            " sampling={:?} area_samples={} fresnel={}",
+            self.sampling, self.area_samples, self.fresnel
+        )
+    }
+
+    /// The technique: nothing to prepare, one pass of pixels.
+    pub(crate) fn lifecycle(&self) -> Box<dyn Lifecycle> {
+        Box::new(WhittedTechnique {
+            integrator: Whitted::new(WhittedOptions {
+                max_depth: self.max_depth,
+                area_samples: self.area_samples,
+                fresnel: self.fresnel,
+                ..WhittedOptions::default()
+            }),
+            sampling: self.sampling,
+        })
+    }
+}
+
+struct WhittedTechnique {
+    integrator: Whitted,
+    sampling: PixelSampling,
+}
+
+impl Lifecycle for WhittedTechnique {
+    fn tiles(&self) -> Tiles<'_> {
+        Tiles::Pixels(&self.integrator, self.sampling)
     }
 }
 

@@ -11,7 +11,8 @@ pub use crate::control::{
     human_size, parse_size, CancelToken, Control, MemoryBudget, Phase, Progress, Silent,
 };
 pub use crate::integrators::technique::{
-    CacheSettings, MonteCarloSettings, NetworkSettings, Technique, WhittedSettings,
+    info as technique_info, CacheSettings, MonteCarloSettings, NetworkSettings, Setting, Technique,
+    TechniqueInfo, WhittedSettings, TECHNIQUES,
 };
 pub use crate::settings::{
     AntiAliasing, NetworkBuilder, NetworkOrder, Relight, Settings, TechniqueKind,
@@ -20,7 +21,6 @@ pub use crate::settings::{
 use crate::accel::{self, Accel, Backend};
 use crate::error::{Error, Result};
 use crate::image::Image;
-use crate::integrators::create;
 use crate::render::aov::render_aovs;
 use crate::render::pixels::{render_pixels, PixelView};
 use crate::render::progressive::{render_passes, render_region};
@@ -106,32 +106,7 @@ impl Job {
                 ),
             ));
         }
-        match &self.technique {
-            Technique::Network(n) => match &n.file {
-                Some(f) if f.exists() => {}
-                Some(f) => {
-                    return Err(Error::input(
-                        f,
-                        "no such network: precompute it with the render's settings first",
-                    ))
-                }
-                None => {
-                    return Err(Error::setting(
-                        "network_file",
-                        "is needed to render a part of the image with the network integrator \
-                         (an existing network, precomputed first)",
-                    ))
-                }
-            },
-            Technique::IrradianceCache(_, c) if c.file.is_none() => {
-                return Err(Error::setting(
-                    "cache_file",
-                    "is needed to render a part of the image with the irradiance cache (a \
-                     cache precomputed for this view first)",
-                ))
-            }
-            _ => {}
-        }
+        self.technique.check_part()?;
         if self
             .technique
             .monte_carlo()
@@ -163,42 +138,7 @@ impl Job {
             self.accel,
             self.seed
         );
-        match t {
-            Technique::Whitted(w) => {
-                s += &format!(
-                    " sampling={:?} area_samples={} fresnel={}",
-                    w.sampling, w.area_samples, w.fresnel
-                )
-            }
-            Technique::Network(n) => {
-                let p = &n.params;
-                s += &format!(
-                    " sampling={:?} slopes={} intercept_step={} patch_size={} jitter={} \
-                     builder={:?} tolerance={} light_scale={} order={:?} hybrid={}",
-                    n.sampling,
-                    p.slopes,
-                    p.step,
-                    p.patch_size,
-                    p.jitter,
-                    n.builder,
-                    n.distribute.tolerance,
-                    n.distribute.light_scale,
-                    n.distribute.order,
-                    n.hybrid
-                )
-            }
-            _ => {}
-        }
-        if let Some(mc) = t.monte_carlo() {
-            s += &format!(" spp={} filter={:?}", mc.spp, mc.filter);
-        }
-        if let Technique::IrradianceCache(_, c) = t {
-            let o = &c.options;
-            s += &format!(
-                " ab={} ic_accuracy={} ic_samples={} ar={} ic_gradients={}",
-                o.bounces, o.accuracy, o.samples, o.ar, o.gradients
-            );
-        }
+        s += &t.key();
         s
     }
 
@@ -322,7 +262,7 @@ impl Renderer {
             scene = Arc::new(still);
         }
         // Created for the scene as given: a relight keeps its emissions as the file's.
-        let technique = create::create(&job.technique, &scene)?;
+        let technique = job.technique.lifecycle(&scene)?;
         if let Technique::Network(n) = &job.technique {
             // The network's patches are world-space shapes.
             if scene.has_instances() {

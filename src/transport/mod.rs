@@ -12,10 +12,11 @@ pub(crate) mod camera_sample;
 pub(crate) mod driver;
 pub(crate) mod passes;
 mod pixel_sampling;
+pub(crate) mod settings;
 pub(crate) mod technique;
 mod view;
 
-pub use pixel_sampling::{PixelSampling, DEFAULT_AA_DEPTH, DEFAULT_AA_THRESHOLD};
+pub use pixel_sampling::{PixelSampling, PIXELS};
 pub use view::{tiles, tiles_in, Tile, TILE_SIZE};
 pub(crate) use view::{ProgressiveOptions, View};
 

@@ -2,6 +2,8 @@
 //! subdivision, or regular supersampling (the sampler itself is in the render loops).
 
 use crate::error::{Error, Result};
+use crate::settings::{AntiAliasing, Settings};
+use crate::transport::settings::Setting;
 
 /// Deepest subdivision the adaptive sampler allows (a 256x256 lattice per pixel).
 pub const MAX_ADAPTIVE_DEPTH: u32 = 8;
@@ -79,5 +81,69 @@ impl PixelSampling {
             }
         }
         Ok(())
+    }
+}
+
+/// The pixel-sampling settings of Whitted's integrator and the network.
+pub const PIXELS: &[Setting] = &[
+    Setting {
+        name: "aa",
+        scene_key: Some(("render", "aa")),
+        example: "\"uniform\"",
+        doc: "Anti-aliasing: adaptive corner subdivision (the default without spp) or a \
+              regular grid of spp samples.",
+    },
+    Setting {
+        name: "aa_threshold",
+        scene_key: Some(("render", "aa_threshold")),
+        example: "0.1",
+        doc: "Adaptive anti-aliasing: the largest corner difference accepted without \
+              subdividing (default 0.1).",
+    },
+    Setting {
+        name: "aa_depth",
+        scene_key: Some(("render", "aa_depth")),
+        example: "3",
+        doc: "Adaptive anti-aliasing: the deepest subdivision level (default 3, at most 8).",
+    },
+];
+
+impl PixelSampling {
+    /// Uniform supersampling when `spp` is given (a square) or `aa` asks for it, else
+    /// adaptive; every value checked.
+    pub(crate) fn from_settings(s: &Settings) -> Result<PixelSampling> {
+        let aa = s.aa.unwrap_or(if s.spp.is_some() {
+            AntiAliasing::Uniform
+        } else {
+            AntiAliasing::Adaptive
+        });
+        let sampling = match aa {
+            AntiAliasing::Adaptive => {
+                if s.spp.is_some() {
+                    return Err(Error::setting(
+                        "spp",
+                        "applies to uniform supersampling; adaptive anti-aliasing is set by \
+                         aa_threshold and aa_depth",
+                    ));
+                }
+                PixelSampling::Adaptive {
+                    threshold: s.aa_threshold.unwrap_or(DEFAULT_AA_THRESHOLD),
+                    max_depth: s.aa_depth.unwrap_or(DEFAULT_AA_DEPTH),
+                }
+            }
+            AntiAliasing::Uniform => {
+                let spp = s.spp.unwrap_or(16);
+                let n = (spp as f64).sqrt().round() as u32;
+                if spp == 0 || n * n != spp {
+                    return Err(Error::setting(
+                        "spp",
+                        format!("must be a square number of samples (1, 4, 9, 16, ...), got {spp}"),
+                    ));
+                }
+                PixelSampling::Uniform { n }
+            }
+        };
+        sampling.validate()?;
+        Ok(sampling)
     }
 }

@@ -1,27 +1,14 @@
-//! The one technique lifecycle: a technique is created from its settings
-//! (`crate::integrators::create`), prepares once (the irradiance cache's overture, the network's
+//! The one technique lifecycle: a technique is made from its settings
+//! (`crate::integrators::technique`), prepares once (the irradiance cache's overture, the network's
 //! preprocess and distribution; nothing for the others), and then renders tiles through one
 //! of the two tile kernels. The job's renderer (`crate::job::Renderer`) drives every
 //! technique the same way.
 
 use crate::control::Control;
 use crate::error::Result;
-use crate::image::filter::{Filter, Reconstruction};
 use crate::image::Image;
+pub use crate::transport::settings::MonteCarloSettings;
 use crate::transport::{Context, Integrator, MonteCarlo, PixelSampling, View};
-
-/// The progressive Monte Carlo integrators (and the irradiance cache's final render).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct MonteCarloSettings {
-    pub max_depth: u32,
-    /// Samples per pixel; with a time limit, the most that will be taken.
-    pub spp: u32,
-    pub time_limit: Option<f64>,
-    pub filter: Filter,
-    /// How camera samples become pixels: splatted through the filter (the default), or
-    /// drawn from it so that each pixel depends on its own samples alone.
-    pub reconstruction: Reconstruction,
-}
 
 /// What renders a prepared technique's tiles.
 pub(crate) enum Tiles<'a> {
@@ -67,5 +54,18 @@ pub(crate) trait Lifecycle: Send + Sync {
     /// Statistics of the preparation, one line each, for people.
     fn report(&self) -> Vec<String> {
         Vec::new()
+    }
+}
+
+/// A progressive Monte Carlo technique (path, light and bidirectional tracing): nothing to
+/// prepare, sample passes over the whole image.
+pub(crate) struct SampledTechnique<T> {
+    pub integrator: T,
+    pub settings: MonteCarloSettings,
+}
+
+impl<T: MonteCarlo + Send> Lifecycle for SampledTechnique<T> {
+    fn tiles(&self) -> Tiles<'_> {
+        Tiles::Samples(&self.integrator, self.settings)
     }
 }

@@ -6,16 +6,202 @@
 use super::distribute::{self, DistributeOptions, Solution};
 use super::render::{NetworkRenderer, Tables};
 use super::{file, relight, Network, NetworkParams};
+use super::{DEFAULT_SLOPES, DEFAULT_STEP, DEFAULT_TOLERANCE};
 use crate::control::Control;
 use crate::error::{Error, Result};
-use crate::integrators::technique::NetworkSettings;
 use crate::math::{Ray, Rgb, Rng};
 use crate::scene::Scene;
-use crate::settings::Relight;
+use crate::settings::{NetworkBuilder, Relight, Settings, TechniqueKind};
+use crate::transport::settings::{Setting, TechniqueInfo, COMMON};
 use crate::transport::technique::{Lifecycle, Tiles};
 use crate::transport::View;
 use crate::transport::{Context, Integrator, RayStats, Sample};
-use std::path::Path;
+use crate::transport::{PixelSampling, PIXELS};
+use std::path::{Path, PathBuf};
+
+/// The illumination network, as the technique list shows it.
+pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
+    kind: TechniqueKind::Network,
+    summary: "Buckalew & Fussell's illumination networks: a view-independent network of \
+              patches and links, built once, lit by a distribution process.",
+    settings: &[
+        COMMON,
+        PIXELS,
+        &[
+            Setting {
+                name: "slopes",
+                scene_key: Some(("render.network", "slopes")),
+                example: "8",
+                doc: "Slopes per axis S (3·S² links per patch; default 12).",
+            },
+            Setting {
+                name: "intercept_step",
+                scene_key: Some(("render.network", "intercept_step")),
+                example: "0.03125",
+                doc: "Intercept step h, as a fraction of the scene's largest extent (default 1/64).",
+            },
+            Setting {
+                name: "patch_size",
+                scene_key: Some(("render.network", "patch_size")),
+                example: "0.03125",
+                doc: "Patch edge, as a fraction of the scene's largest extent (default: the intercept step).",
+            },
+            Setting {
+                name: "network_jitter",
+                scene_key: Some(("render.network", "jitter")),
+                example: "0.5",
+                doc: "Intercept jitter, a fraction of the intercept step (0 to 1; default 1).",
+            },
+            Setting {
+                name: "network_builder",
+                scene_key: Some(("render.network", "builder")),
+                example: "\"embree\"",
+                doc: "How links are found: scan conversion (default) or closest-hit queries.",
+            },
+            Setting {
+                name: "tolerance",
+                scene_key: Some(("render.network", "tolerance")),
+                example: "0.01",
+                doc: "Stop distributing when the unshot flux is below this fraction of the emitted flux (default 0.001).",
+            },
+            Setting {
+                name: "network_file",
+                scene_key: Some(("render.network", "file")),
+                example: "\"net.bin\"",
+                doc: "Loaded from this file if it exists (no preprocess), else built and saved there.",
+            },
+            Setting {
+                name: "light_scale",
+                scene_key: None,
+                example: "2.0",
+                doc: "Multiply every emission by this factor (relighting a saved network; default 1).",
+            },
+            Setting {
+                name: "network_order",
+                scene_key: Some(("render.network", "order")),
+                example: "\"sweeps\"",
+                doc: "Order of the distribution: cg (default), sweeps or shoot.",
+            },
+            Setting {
+                name: "network_hybrid",
+                scene_key: Some(("render.network", "hybrid")),
+                example: "true",
+                doc: "Direct light per pixel; only indirect light from the network.",
+            },
+            Setting {
+                name: "relight",
+                scene_key: None,
+                example: "true",
+                doc: "What a relight changes in a saved network (the relight command's lights).",
+            },
+        ],
+    ],
+    pbrt: &[],
+    progressive: false,
+    renders_parts: true,
+};
+
+/// The illumination network's settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct NetworkSettings {
+    /// Slopes, intercept step, patch size and jitter (the seed is the job's).
+    pub params: NetworkParams,
+    pub builder: NetworkBuilder,
+    pub distribute: DistributeOptions,
+    /// Loaded from it if it exists (no preprocess), else built and saved there.
+    pub file: Option<PathBuf>,
+    /// Direct light per pixel, only indirect light from the network.
+    pub hybrid: bool,
+    pub sampling: PixelSampling,
+    pub max_depth: u32,
+    /// Relighting the network in `file` (which must exist).
+    pub relight: Option<Relight>,
+}
+
+impl NetworkSettings {
+    /// From the parameter set, with the defaults, every value checked.
+    pub(crate) fn from_settings(s: &Settings, max_depth: u32) -> Result<NetworkSettings> {
+        let step = s.intercept_step.unwrap_or(DEFAULT_STEP);
+        let params = NetworkParams {
+            slopes: s.slopes.unwrap_or(DEFAULT_SLOPES),
+            step,
+            patch_size: s.patch_size.unwrap_or(step),
+            jitter: s.network_jitter.unwrap_or(1.0),
+            seed: 0,
+        };
+        params.validate()?;
+        let tolerance = s.tolerance.unwrap_or(DEFAULT_TOLERANCE);
+        if !(tolerance > 0.0 && tolerance < 1.0) {
+            return Err(Error::setting(
+                "tolerance",
+                format!("must be between 0 and 1 (exclusive), got {tolerance}"),
+            ));
+        }
+        let light_scale = s.light_scale.unwrap_or(1.0);
+        if !(light_scale.is_finite() && light_scale >= 0.0) {
+            return Err(Error::setting(
+                "light_scale",
+                format!("must be a non-negative number, got {light_scale}"),
+            ));
+        }
+        if s.relight.is_some() && s.network_file.is_none() {
+            return Err(Error::setting(
+                "network_file",
+                "is needed to relight: a network saved by an earlier render",
+            ));
+        }
+        Ok(NetworkSettings {
+            params,
+            builder: s.network_builder.unwrap_or(NetworkBuilder::Scan),
+            distribute: DistributeOptions {
+                tolerance,
+                light_scale,
+                order: s.network_order.unwrap_or_default(),
+                ..Default::default()
+            },
+            file: s.network_file.clone(),
+            hybrid: s.network_hybrid.unwrap_or(false),
+            sampling: PixelSampling::from_settings(s)?,
+            max_depth,
+            relight: s.relight.clone(),
+        })
+    }
+
+    /// What of them changes pixels, for a job's settings key.
+    pub(crate) fn key(&self) -> String {
+        let p = &self.params;
+        format!(
+            " sampling={:?} slopes={} intercept_step={} patch_size={} jitter={} \
+             builder={:?} tolerance={} light_scale={} order={:?} hybrid={}",
+            self.sampling,
+            p.slopes,
+            p.step,
+            p.patch_size,
+            p.jitter,
+            self.builder,
+            self.distribute.tolerance,
+            self.distribute.light_scale,
+            self.distribute.order,
+            self.hybrid
+        )
+    }
+
+    /// A part of the image reads a network precomputed for the whole scene.
+    pub(crate) fn check_part(&self) -> Result<()> {
+        match &self.file {
+            Some(f) if f.exists() => Ok(()),
+            Some(f) => Err(Error::input(
+                f,
+                "no such network: precompute it with the render's settings first",
+            )),
+            None => Err(Error::setting(
+                "network_file",
+                "is needed to render a part of the image with the network integrator (an \
+                 existing network, precomputed first)",
+            )),
+        }
+    }
+}
 
 pub(crate) struct NetworkTechnique {
     settings: NetworkSettings,

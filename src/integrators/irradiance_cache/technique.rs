@@ -3,17 +3,146 @@
 //! this view's whole overture (precomputed for render jobs) is only read, so that every part
 //! of the image reads the values the whole render would.
 
-use super::{file, IrradianceCache};
+use super::{file, IcOptions, IrradianceCache};
 use crate::control::Control;
 use crate::error::{Error, Result};
 use crate::image::Image;
-use crate::integrators::technique::{CacheSettings, MonteCarloSettings};
 use crate::math::Rgb;
 use crate::scene::Scene;
+use crate::settings::{Settings, TechniqueKind};
+use crate::transport::settings::{
+    at_most, MonteCarloSettings, Setting, TechniqueInfo, COMMON, FILTER,
+};
 use crate::transport::technique::{Lifecycle, Tiles};
 use crate::transport::Context;
 use crate::transport::ProgressiveOptions;
 use crate::transport::View;
+use std::path::PathBuf;
+
+/// The irradiance cache, as the technique list shows it.
+pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
+    kind: TechniqueKind::IrradianceCache,
+    summary: "Ward's irradiance caching: direct and specular light as in the path tracer, \
+              indirect diffuse light from cached irradiance values.",
+    // The overture traces the final render's samples first: no time limit.
+    settings: &[
+        COMMON,
+        &[FILTER],
+        &[
+            Setting {
+                name: "ab",
+                scene_key: Some(("render.irradiance-cache", "ab")),
+                example: "2",
+                doc: "Diffuse bounces, each with its own value set (default 4).",
+            },
+            Setting {
+                name: "ic_accuracy",
+                scene_key: Some(("render.irradiance-cache", "accuracy")),
+                example: "0.2",
+                doc: "Accuracy a: values are used where the estimated error is below a \
+                      (default 0.15).",
+            },
+            Setting {
+                name: "ic_samples",
+                scene_key: Some(("render.irradiance-cache", "samples")),
+                example: "256",
+                doc: "Rays per primary value at the first bounce, halved per bounce \
+                      (default 512).",
+            },
+            Setting {
+                name: "ic_gradients",
+                scene_key: Some(("render.irradiance-cache", "gradients")),
+                example: "false",
+                doc: "Ward & Heckbert's irradiance gradients (default true).",
+            },
+            Setting {
+                name: "ar",
+                scene_key: Some(("render.irradiance-cache", "ar")),
+                example: "32.0",
+                doc: "A value's R is at least the scene's size / ar (default 64).",
+            },
+            Setting {
+                name: "cache_file",
+                scene_key: Some(("render.irradiance-cache", "cache_file")),
+                example: "\"cache.irr\"",
+                doc: "Values are loaded from this file if it exists, and the cache written \
+                      to it; a file holding this view's overture is only read.",
+            },
+            Setting {
+                name: "show_cache_points",
+                scene_key: None,
+                example: "true",
+                doc: "Mark the pixels of the first-bounce values the camera sees.",
+            },
+        ],
+    ],
+    pbrt: &[],
+    progressive: true,
+    renders_parts: true,
+};
+
+/// The irradiance cache's own settings.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CacheSettings {
+    pub options: IcOptions,
+    /// Values are loaded from it if it exists, and the cache written to it; a file holding
+    /// this view's whole overture is only read.
+    pub file: Option<PathBuf>,
+    /// Mark the first-level values the camera sees in the image (Ward's figure 5b).
+    pub show_points: bool,
+}
+
+impl CacheSettings {
+    /// From the parameter set, with the defaults, every value checked.
+    pub(crate) fn from_settings(s: &Settings) -> Result<CacheSettings> {
+        if s.time_limit.is_some() {
+            return Err(Error::setting(
+                "time_limit",
+                "does not apply to the irradiance-cache integrator (its overture traces \
+                 every sample first): give spp",
+            ));
+        }
+        let options = IcOptions {
+            bounces: s.ab.unwrap_or(super::DEFAULT_BOUNCES),
+            accuracy: s.ic_accuracy.unwrap_or(super::DEFAULT_ACCURACY),
+            samples: at_most(
+                "ic_samples",
+                s.ic_samples.unwrap_or(super::DEFAULT_SAMPLES),
+                1 << 20,
+            )?,
+            ar: s.ar.unwrap_or(super::DEFAULT_AR),
+            gradients: s.ic_gradients.unwrap_or(super::DEFAULT_GRADIENTS),
+            ..IcOptions::default()
+        };
+        options.validate()?;
+        Ok(CacheSettings {
+            options,
+            file: s.cache_file.clone(),
+            show_points: s.show_cache_points.unwrap_or(false),
+        })
+    }
+
+    /// What of them changes pixels, for a job's settings key.
+    pub(crate) fn key(&self) -> String {
+        let o = &self.options;
+        format!(
+            " ab={} ic_accuracy={} ic_samples={} ar={} ic_gradients={}",
+            o.bounces, o.accuracy, o.samples, o.ar, o.gradients
+        )
+    }
+
+    /// A part of the image reads a cache precomputed for the whole view.
+    pub(crate) fn check_part(&self) -> Result<()> {
+        if self.file.is_none() {
+            return Err(Error::setting(
+                "cache_file",
+                "is needed to render a part of the image with the irradiance cache (a \
+                 cache precomputed for this view first)",
+            ));
+        }
+        Ok(())
+    }
+}
 
 pub(crate) struct CacheTechnique {
     render: MonteCarloSettings,

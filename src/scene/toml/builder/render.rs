@@ -42,10 +42,7 @@ impl Builder<'_> {
                 ctx.fail(
                     &site,
                     "integrator",
-                    format!(
-                        "unknown integrator \"{name}\" (whitted, path, light, bdpt, \
-                         irradiance-cache or network)"
-                    ),
+                    format!("unknown integrator \"{name}\" ({})", technique_names()),
                 )
             })?;
             take!(integrator, Some(kind), "render", "integrator", &span);
@@ -174,4 +171,11 @@ impl Builder<'_> {
         filter.validate().map_err(|m| ctx.fail(site, "filter", m))?;
         Ok(filter)
     }
+}
+
+/// "whitted, path, ... or network": every technique's name.
+fn technique_names() -> String {
+    let names: Vec<&str> = TechniqueKind::ALL.iter().map(|k| k.name()).collect();
+    let (last, rest) = names.split_last().expect("there are techniques");
+    format!("{} or {last}", rest.join(", "))
 }
