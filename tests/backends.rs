@@ -11,7 +11,7 @@ use raylink::accel::{Accel, Backend, Hit};
 use raylink::bench::{rays, scenes};
 use raylink::image::Image;
 use raylink::math::{Ray, Rgb, Rng, Vec3};
-use raylink::scene::{Camera, Geometry, Material, QuadMesh, Scene, Shape};
+use raylink::scene::{Camera, Geometry, Material, QuadMesh, Scene, Shape, Sphere};
 use raylink::{Settings, Technique, TechniqueKind};
 use render_common::{image, View};
 use std::path::Path;
@@ -68,10 +68,10 @@ fn mixed_scene() -> Scene {
         (Vec3::new(0.0, -6.0, 0.0), 5.5),
     ] {
         shapes.push(Shape {
-            geometry: Geometry::Sphere {
+            geometry: Geometry::Sphere(Sphere {
                 center: c,
                 radius: r,
-            },
+            }),
             material: 0,
             alpha: None,
             motion: None,
@@ -382,10 +382,10 @@ fn empty_scene_and_single_primitive() {
     assert!(embree.intersect(&ray).is_none() && bvh.intersect(&ray).is_none());
     assert!(!embree.occluded(&ray) && !bvh.occluded(&ray));
     scene.shapes.push(Shape {
-        geometry: Geometry::Sphere {
+        geometry: Geometry::Sphere(Sphere {
             center: Vec3::new(3.0, 0.0, 0.0),
             radius: 1.0,
-        },
+        }),
         material: 0,
         alpha: None,
         motion: None,

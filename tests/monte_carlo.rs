@@ -420,7 +420,9 @@ fn images_do_not_depend_on_thread_count() {
 #[test]
 fn environment_map_lighting_matches_quadrature() {
     use raylink::math::{Mat3, Rgb, Vec3};
-    use raylink::scene::{Camera, Classic, Environment, Geometry, Material, Shape, Texture};
+    use raylink::scene::{
+        Camera, Classic, Environment, Geometry, Material, Shape, Sphere, Texture,
+    };
     let n = 16;
     let mut map = Image::new(n, n);
     for y in 0..n {
@@ -451,10 +453,10 @@ fn environment_map_lighting_matches_quadrature() {
             },
         )],
         shapes: vec![Shape {
-            geometry: Geometry::Sphere {
+            geometry: Geometry::Sphere(Sphere {
                 center: Vec3::ZERO,
                 radius: 1.0,
-            },
+            }),
             material: 0,
             alpha: None,
             motion: None,

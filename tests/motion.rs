@@ -6,7 +6,7 @@
 use raylink::accel::{self, Backend};
 use raylink::image::Image;
 use raylink::math::{Ray, Vec3};
-use raylink::scene::{Geometry, Scene};
+use raylink::scene::{Geometry, Scene, Sphere};
 use raylink::{Control, Technique};
 use std::path::Path;
 
@@ -242,11 +242,11 @@ fn pbrt_end_transforms_move_shapes_as_toml_motion_does() {
     assert_eq!(pbrt.shapes.len(), 1);
     let close = |a: &Geometry, b: &Geometry| match (a, b) {
         (
-            Geometry::Sphere { center, radius },
-            Geometry::Sphere {
+            Geometry::Sphere(Sphere { center, radius }),
+            Geometry::Sphere(Sphere {
                 center: c,
                 radius: r,
-            },
+            }),
         ) => (*center - *c).length() < 1e-5 && (radius - r).abs() < 1e-6,
         _ => false,
     };
@@ -279,7 +279,7 @@ fn pbrt_end_transforms_move_shapes_as_toml_motion_does() {
          WorldBegin\n{body}"
     ));
     match half.shapes[0].motion {
-        Some(Geometry::Sphere { center, .. }) => {
+        Some(Geometry::Sphere(Sphere { center, .. })) => {
             assert!(
                 (center.x as f64 - (START_X + DISPLACEMENT / 2.0)).abs() < 1e-5,
                 "{center}"

@@ -4,7 +4,7 @@
 
 use raylink::image::Image;
 use raylink::math::{Rgb, Vec3};
-use raylink::scene::{Geometry, Scene};
+use raylink::scene::{Geometry, Scene, Sphere};
 use std::path::{Path, PathBuf};
 
 #[path = "common/pbrt.rs"]
@@ -230,10 +230,10 @@ fn both_parameter_syntaxes_and_comments() {
     for s in [&a, &b] {
         assert_eq!(
             s.shapes[0].geometry,
-            Geometry::Sphere {
+            Geometry::Sphere(Sphere {
                 center: Vec3::ZERO,
                 radius: 2.0
-            }
+            })
         );
     }
     let s = world(
@@ -284,10 +284,10 @@ fn shapes_spheres_disks_bilinear_patches_and_instances() {
     let s = world("Translate 1 2 3 Scale 2 2 2 Shape \"sphere\" \"float radius\" 0.5\n");
     assert_eq!(
         s.shapes[0].geometry,
-        Geometry::Sphere {
+        Geometry::Sphere(Sphere {
             center: Vec3::new(1.0, 2.0, 3.0),
             radius: 1.0
-        }
+        })
     );
     // A non-uniform scale makes an ellipsoid: tessellated, with about its area.
     let s = world("Scale 1 1 2 Shape \"sphere\"\n");

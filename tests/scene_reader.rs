@@ -1,7 +1,7 @@
 //! The scene readers: the bad-input corpus in tests/bad_inputs/scenes and the scenes in scenes/.
 
 use raylink::math::{Vec2, Vec3};
-use raylink::scene::{Geometry, Light, Scene, Texture};
+use raylink::scene::{Geometry, Light, Scene, Sphere, Texture};
 use std::path::{Path, PathBuf};
 
 fn root() -> PathBuf {
@@ -167,10 +167,10 @@ fn whitted_scene_has_glass_over_a_mirror_and_a_checkered_floor() {
     assert!(s.background.z > s.background.x);
     assert!(!s.lights.is_empty());
     assert!(s.lights.iter().all(|l| matches!(l, Light::Point(_))));
-    let Geometry::Sphere { center: g, .. } = s.shapes[1].geometry else {
+    let Geometry::Sphere(Sphere { center: g, .. }) = s.shapes[1].geometry else {
         panic!("shape 1 is the glass sphere")
     };
-    let Geometry::Sphere { center: m, .. } = s.shapes[2].geometry else {
+    let Geometry::Sphere(Sphere { center: m, .. }) = s.shapes[2].geometry else {
         panic!("shape 2 is the mirror sphere")
     };
     // In front of (closer to the camera) and above the mirror sphere.
@@ -186,10 +186,10 @@ fn transforms_are_baked_into_spheres() {
     .unwrap();
     assert_eq!(
         s.shapes[0].geometry,
-        Geometry::Sphere {
+        Geometry::Sphere(Sphere {
             center: Vec3::new(2.0, 3.0, 0.0),
             radius: 1.0
-        }
+        })
     );
     // A rotation and a row-major matrix (translation in the last column).
     let s = parse(&format!(
@@ -198,7 +198,7 @@ fn transforms_are_baked_into_spheres() {
          {{ matrix = [[1, 0, 0, 5], [0, 1, 0, 0], [0, 0, 1, 0], [0, 0, 0, 1]] }}]\n"
     ))
     .unwrap();
-    let Geometry::Sphere { center, radius } = s.shapes[0].geometry else {
+    let Geometry::Sphere(Sphere { center, radius }) = s.shapes[0].geometry else {
         panic!()
     };
     assert!(
@@ -474,10 +474,10 @@ fn keyframes_without_an_animation_table_give_their_first_frame() {
     let s = Scene::load(&path).unwrap_or_else(|e| panic!("{e}"));
     assert_eq!(
         s.shapes[0].geometry,
-        Geometry::Sphere {
+        Geometry::Sphere(Sphere {
             center: Vec3::new(2.0, 0.0, 0.0),
             radius: 1.0
-        }
+        })
     );
 }
 

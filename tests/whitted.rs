@@ -3,7 +3,9 @@
 //! are unit tests in src/tests/whitted.rs.)
 
 use raylink::math::{Rgb, Vec3};
-use raylink::scene::{Camera, Classic, Geometry, Light, Material, QuadMesh, Scene, Shape, Texture};
+use raylink::scene::{
+    Camera, Classic, Geometry, Light, Material, QuadMesh, Scene, Shape, Sphere, Texture,
+};
 use raylink::{
     Backend, Control, Image, Job, RenderStats, Renderer, Settings, Technique, TechniqueKind,
 };
@@ -146,10 +148,10 @@ fn busy_scene() -> Scene {
         (Vec3::new(0.8, 0.7, 0.5), frosted),
     ] {
         scene.shapes.push(Shape {
-            geometry: Geometry::Sphere {
+            geometry: Geometry::Sphere(Sphere {
                 center,
                 radius: 0.7,
-            },
+            }),
             material: m,
             alpha: None,
             motion: None,

@@ -24,7 +24,7 @@ use super::cutout::Cutout;
 use super::{Accel, Hit};
 use crate::error::Result;
 use crate::math::{Ray, Vec3};
-use crate::scene::{Geometry, Instance, QuadMesh, Scene, Shape, TriangleMesh};
+use crate::scene::{Geometry, Instance, Primitives, Scene, Shape};
 use obvhs::aabb::Aabb;
 use obvhs::cwbvh::builder::build_cwbvh;
 use obvhs::cwbvh::CwBvh;
@@ -140,14 +140,12 @@ fn collect_motion(shapes: &[Shape]) -> Vec<Vec3A> {
 /// Appends a shape's vertices as the primitives index them: a sphere's centre, then its
 /// radius in x.
 fn push_vertices(vertices: &mut Vec<Vec3A>, geometry: &Geometry) {
-    match geometry {
-        Geometry::Sphere { center, radius } => {
-            vertices.extend([to_a(*center), Vec3A::new(*radius, 0.0, 0.0)]);
+    match geometry.primitives() {
+        Primitives::Sphere { center, radius } => {
+            vertices.extend([to_a(center), Vec3A::new(radius, 0.0, 0.0)]);
         }
-        Geometry::Triangles(TriangleMesh { positions, .. })
-        | Geometry::Quads(QuadMesh { positions, .. }) => {
-            vertices.extend(positions.iter().map(|p| to_a(*p)))
-        }
+        Primitives::Triangles(m) => vertices.extend(m.positions.iter().map(|p| to_a(*p))),
+        Primitives::Quads(q) => vertices.extend(q.positions.iter().map(|p| to_a(*p))),
     }
 }
 
@@ -166,14 +164,14 @@ fn collect_prims(shapes: &[Shape]) -> (Vec<Vec3A>, Vec<[u32; 3]>, Vec<Meta>) {
                 kind,
             });
         };
-        match &shape.geometry {
-            Geometry::Sphere { .. } => push([0, 1, 1], 0, Kind::Sphere),
-            Geometry::Triangles(m) => {
+        match shape.geometry.primitives() {
+            Primitives::Sphere { .. } => push([0, 1, 1], 0, Kind::Sphere),
+            Primitives::Triangles(m) => {
                 for (i, t) in m.indices.iter().enumerate() {
                     push(*t, i, Kind::Triangle);
                 }
             }
-            Geometry::Quads(q) => {
+            Primitives::Quads(q) => {
                 for (i, &[v0, v1, v2, v3]) in q.indices.iter().enumerate() {
                     push([v0, v1, v3], i, Kind::QuadFirst);
                     push([v2, v3, v1], i, Kind::QuadSecond);

@@ -8,7 +8,7 @@ use super::bvh::{sphere_point, triangle_weights};
 use super::Hit;
 use crate::math::spawn::{gamma, plane_test_error};
 use crate::math::Vec3;
-use crate::scene::{lerp, Geometry, Instance, Shape};
+use crate::scene::{lerp, Geometry, Instance, Primitives, Shape};
 use glam::Vec3A;
 
 const SPHERE_TEST_ROUNDINGS: u32 = 8;
@@ -50,9 +50,9 @@ pub(super) fn locate(shape: &Shape, hit: &Hit, org: Vec3, dir: Vec3, time: f32) 
     let (u, v) = (hit.u, hit.v);
     let prim = hit.prim_id as usize;
     // The vertices of the hit triangle (for quads, the half Embree splits it into).
-    let (corners, second_half) = match &shape.geometry {
-        Geometry::Triangles(m) => (m.indices[prim].map(|i| i as usize), false),
-        Geometry::Quads(q) => {
+    let (corners, second_half) = match shape.geometry.primitives() {
+        Primitives::Triangles(m) => (m.indices[prim].map(|i| i as usize), false),
+        Primitives::Quads(q) => {
             let [a, b, c, d] = q.indices[prim].map(|i| i as usize);
             if u + v <= 1.0 {
                 ([a, b, d], false)
@@ -60,12 +60,12 @@ pub(super) fn locate(shape: &Shape, hit: &Hit, org: Vec3, dir: Vec3, time: f32) 
                 ([c, d, b], true)
             }
         }
-        Geometry::Sphere { .. } => unreachable!("spheres are handled above"),
+        Primitives::Sphere { .. } => unreachable!("spheres are handled above"),
     };
-    let positions = |g: &Geometry| match g {
-        Geometry::Triangles(m) => corners.map(|i| m.positions[i]),
-        Geometry::Quads(q) => corners.map(|i| q.positions[i]),
-        Geometry::Sphere { .. } => unreachable!("motion has the shape's kind"),
+    let positions = |g: &Geometry| match g.primitives() {
+        Primitives::Triangles(m) => corners.map(|i| m.positions[i]),
+        Primitives::Quads(q) => corners.map(|i| q.positions[i]),
+        Primitives::Sphere { .. } => unreachable!("motion has the shape's kind"),
     };
     let start = positions(&shape.geometry);
     let (vertices, vertex_error) = match &shape.motion {
@@ -129,15 +129,18 @@ fn on_sphere(shape: &Shape, center: Vec3, radius: f32, guess: Vec3) -> Located {
     let mut error = q.abs() * gamma(6)
         + center.abs() * gamma(2)
         + Vec3::splat(radius.abs() * gamma(SPHERE_TEST_ROUNDINGS));
-    if let Some(Geometry::Sphere {
+    if let Some(Primitives::Sphere {
         center: c1,
         radius: r1,
-    }) = shape.motion
+    }) = shape.motion.as_ref().map(Geometry::primitives)
     {
         // A moving sphere's centre and radius are interpolated by each backend its own way.
-        let (c0, r0) = match shape.geometry {
-            Geometry::Sphere { center, radius } => (center, radius),
-            _ => unreachable!("a sphere's motion is a sphere"),
+        let Primitives::Sphere {
+            center: c0,
+            radius: r0,
+        } = shape.geometry.primitives()
+        else {
+            unreachable!("a sphere's motion is a sphere")
         };
         error += (c0.abs() + c1.abs() + Vec3::splat(r0.abs() + r1.abs())) * gamma(6);
     }

@@ -9,7 +9,7 @@ mod hit_point;
 use crate::control::Control;
 use crate::math::spawn::Spot;
 use crate::math::{Ray, Vec3};
-use crate::scene::{Geometry, Instance, Scene, Shape, SurfacePoint, TriangleMesh};
+use crate::scene::{Geometry, Instance, Primitives, Scene, Shape, SurfacePoint, TriangleMesh};
 
 /// The closest hit along a ray.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -41,19 +41,19 @@ impl Hit {
         // is shaded as it is at the ray's time (instanced shapes do not move).
         let to_world = |n: Vec3| instance.map_or(n, |i| i.normal_to_world(n).normalize_or_zero());
         let sphere = shape.sphere_at(ray.time);
-        let ns = match &shape.geometry {
-            Geometry::Sphere { .. } => match instance {
+        let ns = match shape.geometry.primitives() {
+            Primitives::Sphere { .. } => match instance {
                 None => (p - sphere.map_or(p, |s| s.0)).normalize(),
                 Some(_) => on_side(to_world(local - sphere.map_or(local, |s| s.0)), ng),
             },
-            Geometry::Triangles(mesh) => match &mesh.normals {
+            Primitives::Triangles(mesh) => match &mesh.normals {
                 Some(n) => {
                     let [a, b, c] = mesh.indices[hit.prim_id as usize].map(|i| i as usize);
                     let w = Vec3::new(1.0 - hit.u - hit.v, hit.u, hit.v);
                     let mut n = n[a] * w.x + n[b] * w.y + n[c] * w.z;
-                    if let Some(Geometry::Triangles(TriangleMesh {
+                    if let Some(Primitives::Triangles(TriangleMesh {
                         normals: Some(n1), ..
-                    })) = &shape.motion
+                    })) = shape.motion.as_ref().map(Geometry::primitives)
                     {
                         let m = n1[a] * w.x + n1[b] * w.y + n1[c] * w.z;
                         n = crate::scene::lerp(n, m, ray.time);
@@ -62,7 +62,7 @@ impl Hit {
                 }
                 None => ng,
             },
-            Geometry::Quads(_) => ng,
+            Primitives::Quads(_) => ng,
         };
         let uv = match sphere {
             Some((center, _)) => crate::scene::sphere_uv((local - center).normalize()),

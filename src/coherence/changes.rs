@@ -5,7 +5,7 @@
 
 use crate::math::Vec3;
 use crate::scene::lights::LightSet;
-use crate::scene::{Geometry, Light, Scene, Shape};
+use crate::scene::{Geometry, Light, Primitives, Scene, Shape};
 use rustc_hash::FxHashMap;
 use std::hash::{Hash, Hasher};
 use std::sync::Arc;
@@ -75,19 +75,19 @@ fn hash_f32s(h: &mut impl Hasher, v: impl IntoIterator<Item = f32>) {
 /// Boxes no larger than `size` covering the surface of `g` (appended to `out`).
 pub fn surface_boxes(g: &Geometry, size: f32, out: &mut Vec<Aabb>) {
     let size = size.max(1e-6);
-    match g {
-        Geometry::Sphere { center, radius } => {
+    match g.primitives() {
+        Primitives::Sphere { center, radius } => {
             // The cells of a lattice over its box that the sphere's surface passes through.
             let n = ((2.0 * radius / size).ceil() as u32).clamp(1, 256);
             let step = 2.0 * radius / n as f32;
-            let lo = *center - *radius;
+            let lo = center - radius;
             for z in 0..n {
                 for y in 0..n {
                     for x in 0..n {
                         let a = lo + Vec3::new(x as f32, y as f32, z as f32) * step;
                         let b = a + step;
-                        let nearest = center.clamp(a, b).distance(*center);
-                        let farthest = (*center - a).abs().max((*center - b).abs()).length();
+                        let nearest = center.clamp(a, b).distance(center);
+                        let farthest = (center - a).abs().max((center - b).abs()).length();
                         // A hair of slack for rounding (the boxes are grown again when used).
                         if nearest <= radius * (1.0 + 1e-5) && farthest >= radius * (1.0 - 1e-5) {
                             out.push((a, b));
@@ -96,13 +96,13 @@ pub fn surface_boxes(g: &Geometry, size: f32, out: &mut Vec<Aabb>) {
                 }
             }
         }
-        Geometry::Triangles(m) => {
+        Primitives::Triangles(m) => {
             for t in &m.indices {
                 let p = t.map(|i| m.positions[i as usize]);
                 triangle_boxes(p, size, 0, out);
             }
         }
-        Geometry::Quads(m) => {
+        Primitives::Quads(m) => {
             // Both ways of cutting each quad into triangles (the backends may differ).
             for q in &m.indices {
                 let p = q.map(|i| m.positions[i as usize]);
@@ -153,12 +153,12 @@ fn material_text(scene: &Scene, i: usize, depth: usize) -> String {
 fn shape_fingerprint(shape: &Shape, material: &str) -> u64 {
     let mut h = std::collections::hash_map::DefaultHasher::new();
     material.hash(&mut h);
-    match &shape.geometry {
-        Geometry::Sphere { center, radius } => {
+    match shape.geometry.primitives() {
+        Primitives::Sphere { center, radius } => {
             0u8.hash(&mut h);
-            hash_f32s(&mut h, center.to_array().into_iter().chain([*radius]));
+            hash_f32s(&mut h, center.to_array().into_iter().chain([radius]));
         }
-        Geometry::Triangles(m) => {
+        Primitives::Triangles(m) => {
             1u8.hash(&mut h);
             hash_f32s(&mut h, m.positions.iter().flat_map(|p| p.to_array()));
             m.indices.hash(&mut h);
@@ -169,7 +169,7 @@ fn shape_fingerprint(shape: &Shape, material: &str) -> u64 {
                 hash_f32s(&mut h, uv.iter().flat_map(|p| p.to_array()));
             }
         }
-        Geometry::Quads(m) => {
+        Primitives::Quads(m) => {
             2u8.hash(&mut h);
             hash_f32s(&mut h, m.positions.iter().flat_map(|p| p.to_array()));
             m.indices.hash(&mut h);

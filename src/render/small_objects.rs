@@ -8,7 +8,7 @@
 use super::Tile;
 use crate::scene::camera::CameraBasis;
 use crate::scene::instance::object_id;
-use crate::scene::{Geometry, Scene};
+use crate::scene::{Geometry, Primitives, Scene};
 use glam::Vec3;
 
 /// A disc of radius `r` of at least √2/2 pixel holds a point of the pixel-corner lattice
@@ -132,8 +132,8 @@ impl SmallObjects {
 
 /// A sphere around the shape: exact for a sphere, around the box of a mesh's vertices.
 fn bounding_sphere(geometry: &Geometry) -> Option<(Vec3, f32)> {
-    if let Geometry::Sphere { center, radius } = geometry {
-        return Some((*center, *radius));
+    if let Primitives::Sphere { center, radius } = geometry.primitives() {
+        return Some((center, radius));
     }
     let (lo, hi) = geometry.bounds();
     (lo.cmple(hi).all()).then(|| ((lo + hi) * 0.5, (hi - lo).length() * 0.5))

@@ -573,7 +573,7 @@ radius = 1
 
     fn center(scene: &Scene) -> Vec3 {
         match scene.shapes[0].geometry {
-            super::super::Geometry::Sphere { center, .. } => center,
+            super::super::Geometry::Sphere(super::super::Sphere { center, .. }) => center,
             _ => panic!("a sphere"),
         }
     }

@@ -20,7 +20,7 @@ use super::toml::schema::{
 };
 use super::{
     Alpha, Camera, Classic, Coating, Geometry, Light, Material, NormalDetail, Projection,
-    RenderSettings, Scene, Surface, Texture,
+    RenderSettings, Scene, Sphere, Surface, Texture,
 };
 use crate::error::Error;
 use crate::image::filter::Filter;
@@ -580,7 +580,7 @@ fn shape_desc(
     refs: Refs,
 ) -> crate::error::Result<ShapeDesc> {
     let mut desc = match &shape.geometry {
-        Geometry::Sphere { center, radius } => {
+        Geometry::Sphere(Sphere { center, radius }) => {
             let mut d = ShapeDesc::new(ShapeKind::Sphere);
             d.center = Some(V3(*center));
             d.radius = Some(*radius);
@@ -621,11 +621,11 @@ fn affine_step(m: &glam::DMat4) -> TransformOp {
 fn translation(start: &Geometry, end: &Geometry) -> Option<crate::math::Vec3> {
     let (a, b): (Vec<crate::math::Vec3>, Vec<crate::math::Vec3>) = match (start, end) {
         (
-            Geometry::Sphere { center, radius },
-            Geometry::Sphere {
+            Geometry::Sphere(Sphere { center, radius }),
+            Geometry::Sphere(Sphere {
                 center: c,
                 radius: r,
-            },
+            }),
         ) => (radius == r).then(|| (vec![*center], vec![*c]))?,
         (Geometry::Triangles(m), Geometry::Triangles(n)) => {
             (m.positions.clone(), n.positions.clone())
@@ -700,7 +700,7 @@ impl MeshDir {
             Geometry::Quads(q) => {
                 super::ply::write(&path, &q.positions, None, None, &[], &q.indices)?
             }
-            Geometry::Sphere { .. } => unreachable!("spheres are written inline"),
+            Geometry::Sphere(Sphere { .. }) => unreachable!("spheres are written inline"),
         }
         Ok(format!("{}/{file}", self.name))
     }

@@ -3,8 +3,8 @@
 //! object (an Embree instance, a second BVH level), so memory grows with the objects, not
 //! with their placements.
 
-use super::tangents::Tangents;
-use super::{Geometry, Scene, Shape, SurfacePoint};
+use super::shapes::Tangents;
+use super::{Scene, Shape, SurfacePoint};
 use crate::math::Vec3;
 use glam::{Affine3A, DMat4, Mat3A, Vec3A};
 use std::sync::Arc;
@@ -209,17 +209,6 @@ impl Instance {
         let m = self.to_world.matrix3;
         // The Frobenius norm bounds the largest singular value.
         (m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared()).sqrt()
-    }
-}
-
-impl Geometry {
-    /// Triangles (a quad counts as two) and spheres.
-    pub fn primitive_count(&self) -> usize {
-        match self {
-            Geometry::Sphere { .. } => 1,
-            Geometry::Triangles(m) => m.indices.len(),
-            Geometry::Quads(q) => 2 * q.indices.len(),
-        }
     }
 }
 

@@ -8,7 +8,6 @@ pub mod animation;
 pub mod camera;
 pub mod convert;
 pub mod environment;
-mod geometry;
 mod hash;
 pub mod instance;
 pub mod lights;
@@ -20,7 +19,7 @@ pub mod obj;
 pub mod pbrt;
 pub mod ply;
 pub mod settings;
-pub mod tangents;
+pub mod shapes;
 pub mod texture;
 pub mod toml;
 
@@ -28,13 +27,16 @@ pub use crate::bsdf::{Coating, Conductor};
 pub use alpha::Alpha;
 pub use camera::{Camera, Projection, MAX_RESOLUTION};
 pub use environment::Environment;
-pub use geometry::{lerp, sphere_uv, Geometry, QuadMesh, Shape, SurfacePoint, TriangleMesh};
 pub use hash::scene_hash;
 pub use instance::{Instance, Prototype};
 pub use lights::Light;
 pub use materials::{Classic, Material, Mix, RoughnessMap, Surface};
 pub use normal_detail::NormalDetail;
 pub use settings::{SettingSource, Settings as RenderSettings};
+pub use shapes::{
+    lerp, sphere_uv, Geometry, Primitives, QuadMesh, Shape, ShapeModel, Sphere, SurfacePoint,
+    Tangents, TriangleMesh, UvMap,
+};
 pub use texture::Texture;
 
 use crate::math::{Rgb, Vec3};

@@ -2,7 +2,7 @@
 //! surface, as pbrt-v4's `normalmap` and `displacement` do (`NormalMap` and `BumpMap` in
 //! its materials.h).
 
-use super::tangents::Tangents;
+use super::shapes::Tangents;
 use super::texture::{ImageTexture, Texture};
 use crate::math::{Vec2, Vec3};
 use std::sync::Arc;

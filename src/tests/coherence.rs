@@ -19,7 +19,7 @@ use crate::integrators::whitted::WhittedOptions;
 use crate::math::Vec3;
 use crate::render::PixelSampling;
 use crate::scene::animation::Animation;
-use crate::scene::{Geometry, QuadMesh, TriangleMesh};
+use crate::scene::{Geometry, QuadMesh, Sphere, TriangleMesh};
 use crate::transport::Context;
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -140,7 +140,7 @@ fn surface_boxes_cover_the_surface_and_nothing_far_from_it() {
     let size = 0.1;
     // A sphere: points on it are covered, its centre is not.
     let (center, radius) = (Vec3::new(0.3, -1.0, 2.0), 0.7);
-    let sphere = Geometry::Sphere { center, radius };
+    let sphere = Geometry::Sphere(Sphere { center, radius });
     let mut boxes = Vec::new();
     surface_boxes(&sphere, size, &mut boxes);
     for _ in 0..2000 {

@@ -8,7 +8,7 @@ use crate::image::Image;
 use crate::integrators::whitted::{Whitted, WhittedOptions};
 use crate::math::{Ray, Rgb, Rng, Vec2, Vec3};
 use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
-use crate::scene::{Geometry, Light, NormalDetail, Scene, Shape, Texture, TriangleMesh};
+use crate::scene::{Geometry, Light, NormalDetail, Scene, Shape, Sphere, Texture, TriangleMesh};
 use crate::transport::{Context, Integrator, RayStats};
 use std::f32::consts::TAU;
 use std::sync::Arc;
@@ -229,10 +229,10 @@ fn a_bump_map_on_a_sphere_gives_the_displaced_spheres_normals() {
         img.pixels[(j * 2 + 1) as usize] = value;
     }
     let mut scene = scene(
-        Geometry::Sphere {
+        Geometry::Sphere(Sphere {
             center: Vec3::ZERO,
             radius: 1.0,
-        },
+        }),
         Some(NormalDetail::Bump(Texture::Image(texture(img)))),
     );
     scene.lights.clear();

@@ -8,7 +8,7 @@ use crate::accel::{self, Accel, Backend, Hit};
 use crate::control::Control;
 use crate::math::{frame, Ray, Rgb, Rng, Vec3};
 use crate::scene::{
-    Geometry, Instance, Prototype, QuadMesh, Scene, Shape, SurfacePoint, TriangleMesh,
+    Geometry, Instance, Prototype, QuadMesh, Scene, Shape, Sphere, SurfacePoint, TriangleMesh,
 };
 use glam::{DMat4, DQuat, DVec3};
 
@@ -130,10 +130,10 @@ fn cells(kind: Kind, origin: Vec3, count: usize, seed: u64) -> Cells {
                 let small = s * 0.03;
                 scene.shapes.push(if kind == Kind::FarSphere {
                     Shape {
-                        geometry: Geometry::Sphere {
+                        geometry: Geometry::Sphere(Sphere {
                             center: c,
                             radius: small,
-                        },
+                        }),
                         material: m,
                         alpha: None,
                         motion: None,
@@ -186,12 +186,14 @@ fn cells(kind: Kind, origin: Vec3, count: usize, seed: u64) -> Cells {
                 for k in 0..2 {
                     let radius = s * (0.5 + rng.uniform());
                     let center = centre + Vec3::X * (k as f32 * 3.0 * s);
-                    let motion = (kind == Kind::MovingSphere).then(|| Geometry::Sphere {
-                        center: center + random_unit(&mut rng) * s * 0.5,
-                        radius: radius * (0.8 + 0.4 * rng.uniform()),
+                    let motion = (kind == Kind::MovingSphere).then(|| {
+                        Geometry::Sphere(Sphere {
+                            center: center + random_unit(&mut rng) * s * 0.5,
+                            radius: radius * (0.8 + 0.4 * rng.uniform()),
+                        })
                     });
                     scene.shapes.push(Shape {
-                        geometry: Geometry::Sphere { center, radius },
+                        geometry: Geometry::Sphere(Sphere { center, radius }),
                         material: m,
                         alpha: None,
                         motion,

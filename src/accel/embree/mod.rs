@@ -12,7 +12,7 @@ use super::{Accel, Hit, Update};
 use crate::control::CancelToken;
 use crate::error::{Error, Result};
 use crate::math::{Ray, Vec3, Vec4};
-use crate::scene::{Geometry, Instance, QuadMesh, Scene as SceneDesc, TriangleMesh};
+use crate::scene::{Geometry, Instance, Primitives, Scene as SceneDesc};
 use std::ffi::{c_char, c_void, CStr, CString};
 use std::sync::atomic::{AtomicI64, Ordering};
 use std::sync::{Arc, Mutex};
@@ -530,10 +530,10 @@ mod query {
 
 /// Adds one shape's geometry to `scene`.
 fn attach_geometry(scene: &mut Scene, geometry: &Geometry) -> Result<GeometryId> {
-    match geometry {
-        Geometry::Sphere { center, radius } => scene.attach_spheres(&[center.extend(*radius)]),
-        Geometry::Triangles(m) => scene.attach_triangles(&m.positions, &m.indices),
-        Geometry::Quads(q) => scene.attach_quads(&q.positions, &q.indices),
+    match geometry.primitives() {
+        Primitives::Sphere { center, radius } => scene.attach_spheres(&[center.extend(radius)]),
+        Primitives::Triangles(m) => scene.attach_triangles(&m.positions, &m.indices),
+        Primitives::Quads(q) => scene.attach_quads(&q.positions, &q.indices),
     }
 }
 
@@ -579,16 +579,16 @@ fn shape_key(geometry: &Geometry) -> ShapeKey {
                 .for_each(|p| p.to_array().map(f32::to_bits).hash(h))
         })
     };
-    match geometry {
-        Geometry::Sphere { center, radius } => ShapeKey {
+    match geometry.primitives() {
+        Primitives::Sphere { center, radius } => ShapeKey {
             topology: (0, 1, 0),
-            vertices: hash(&|h| center.extend(*radius).to_array().map(f32::to_bits).hash(h)),
+            vertices: hash(&|h| center.extend(radius).to_array().map(f32::to_bits).hash(h)),
         },
-        Geometry::Triangles(m) => ShapeKey {
+        Primitives::Triangles(m) => ShapeKey {
             topology: (1, m.positions.len(), hash(&|h| m.indices.hash(h))),
             vertices: floats(&m.positions),
         },
-        Geometry::Quads(q) => ShapeKey {
+        Primitives::Quads(q) => ShapeKey {
             topology: (2, q.positions.len(), hash(&|h| q.indices.hash(h))),
             vertices: floats(&q.positions),
         },
@@ -662,21 +662,17 @@ impl EmbreeAccel {
                 continue;
             }
             moved += 1;
-            match &shape.geometry {
-                Geometry::Sphere { center, radius } => {
+            let positions = match shape.geometry.primitives() {
+                Primitives::Sphere { center, radius } => {
                     self.scene
-                        .update_vertices(i as u32, &center.extend(*radius).to_array(), 4)?
+                        .update_vertices(i as u32, &center.extend(radius).to_array(), 4)?;
+                    continue;
                 }
-                Geometry::Triangles(TriangleMesh { positions, .. })
-                | Geometry::Quads(QuadMesh { positions, .. }) => self.scene.update_vertices(
-                    i as u32,
-                    &positions
-                        .iter()
-                        .flat_map(|p| p.to_array())
-                        .collect::<Vec<_>>(),
-                    3,
-                )?,
-            }
+                Primitives::Triangles(m) => &m.positions,
+                Primitives::Quads(q) => &q.positions,
+            };
+            let flat: Vec<f32> = positions.iter().flat_map(|p| p.to_array()).collect();
+            self.scene.update_vertices(i as u32, &flat, 3)?;
         }
         self.shapes = Some(keys);
         if moved == 0 {

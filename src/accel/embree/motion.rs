@@ -5,7 +5,7 @@
 use super::{check_indices, fill_buffer, sys, GeometryId, Scene};
 use crate::error::{Error, Result};
 use crate::math::{Vec3, Vec4};
-use crate::scene::{Geometry, Shape};
+use crate::scene::{Primitives, Shape};
 
 impl Scene {
     /// Adds `shape`, whose `motion` has `geometry`'s kind and topology, as a geometry with
@@ -20,15 +20,15 @@ impl Scene {
             ));
         }
         let floats3 = |p: &[Vec3]| p.iter().flat_map(|v| v.to_array()).collect::<Vec<f32>>();
-        match (&shape.geometry, end) {
+        match (shape.geometry.primitives(), end.primitives()) {
             (
-                Geometry::Sphere { center, radius },
-                Geometry::Sphere {
+                Primitives::Sphere { center, radius },
+                Primitives::Sphere {
                     center: c1,
                     radius: r1,
                 },
             ) => {
-                let steps = [center.extend(*radius), c1.extend(*r1)];
+                let steps = [center.extend(radius), c1.extend(r1)];
                 if let Some(s) = steps.iter().find(|s| !s.is_finite() || s.w <= 0.0) {
                     return Err(Error::Embree(format!(
                         "invalid sphere {s}: needs finite values and a positive radius"
@@ -42,7 +42,7 @@ impl Scene {
                     None,
                 )
             }
-            (Geometry::Triangles(a), Geometry::Triangles(b)) => {
+            (Primitives::Triangles(a), Primitives::Triangles(b)) => {
                 check_indices(a.positions.len(), a.indices.iter().flatten())?;
                 self.attach_steps(
                     sys::RTC_GEOMETRY_TYPE_TRIANGLE,
@@ -51,7 +51,7 @@ impl Scene {
                     Some((a.indices.as_flattened(), sys::RTC_FORMAT_UINT3, 3)),
                 )
             }
-            (Geometry::Quads(a), Geometry::Quads(b)) => {
+            (Primitives::Quads(a), Primitives::Quads(b)) => {
                 check_indices(a.positions.len(), a.indices.iter().flatten())?;
                 self.attach_steps(
                     sys::RTC_GEOMETRY_TYPE_QUAD,

@@ -11,7 +11,7 @@
 
 use super::ray_space::RaySpace;
 use crate::math::Vec3;
-use crate::scene::{Geometry, Scene};
+use crate::scene::{Primitives, Scene};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Polygon {
@@ -207,11 +207,11 @@ impl Patches {
         for (si, shape) in scene.shapes.iter().enumerate() {
             let si = si as u32;
             let mut map = Vec::new();
-            match &shape.geometry {
-                Geometry::Sphere { center, radius } => {
+            match shape.geometry.primitives() {
+                Primitives::Sphere { center, radius } => {
                     let p = Polygon::sphere(
                         si,
-                        space.to_unit(*center),
+                        space.to_unit(center),
                         radius / space.scale,
                         patch_size,
                         0,
@@ -219,7 +219,7 @@ impl Patches {
                     polygons.push(p);
                     map.push(polygons.len() as u32 - 1);
                 }
-                Geometry::Triangles(m) => {
+                Primitives::Triangles(m) => {
                     let pos = |i: u32| space.to_unit(m.positions[i as usize]);
                     let mut i = 0;
                     while i < m.indices.len() {
@@ -240,7 +240,7 @@ impl Patches {
                         }
                     }
                 }
-                Geometry::Quads(q) => {
+                Primitives::Quads(q) => {
                     for k in 0..q.indices.len() {
                         let c = q.quad(k).map(|p| space.to_unit(p));
                         // A planar quad that is not a parallelogram keeps its four corners

@@ -6,9 +6,9 @@ use crate::math::spawn::{gamma, plane_test_error, Spot};
 use crate::math::warp::{cosine_hemisphere, uniform_cone, uniform_cone_pdf};
 use crate::math::{frame, luminance, Rgb, Vec2, Vec3};
 use crate::scene::alpha::Alpha;
-use crate::scene::geometry::sphere_uv;
+use crate::scene::shapes::sphere_uv;
 use crate::scene::texture::Texture;
-use crate::scene::{Geometry, Material, Scene, Shape};
+use crate::scene::{Material, Primitives, Scene, Shape, UvMap};
 use std::f32::consts::PI;
 use std::sync::Arc;
 
@@ -33,67 +33,6 @@ struct Varying {
     alpha: Option<Alpha>,
     /// For each light triangle, how its points map to the shape's uv.
     uv_maps: Vec<UvMap>,
-}
-
-/// How the points of a light triangle map to surface (u, v), as the hits on the shape do.
-#[derive(Clone, Copy, Debug)]
-enum UvMap {
-    /// The uvs at the triangle's vertices, interpolated.
-    Linear([Vec2; 3]),
-    /// A quad (v0, v1, v2, v3) with Embree's parameterisation: barycentrics of (v0, v1, v3),
-    /// or mirrored ones of (v2, v3, v1) beyond its diagonal.
-    Quad([Vec3; 4]),
-}
-
-impl UvMap {
-    /// The uv of the point with barycentrics (`b1`, `b2`) on the triangle, at `p`.
-    fn uv(&self, b1: f32, b2: f32, p: Vec3) -> Vec2 {
-        match *self {
-            UvMap::Linear([a, b, c]) => a * (1.0 - b1 - b2) + b * b1 + c * b2,
-            UvMap::Quad([v0, v1, v2, v3]) => {
-                let (u, v) = barycentrics(p, v0, v1, v3);
-                if u + v <= 1.0 {
-                    Vec2::new(u, v)
-                } else {
-                    let (u, v) = barycentrics(p, v2, v3, v1);
-                    Vec2::new(1.0 - u, 1.0 - v)
-                }
-            }
-        }
-    }
-}
-
-/// Barycentrics (towards `b`, towards `c`) of `p` in the plane of triangle (`a`, `b`, `c`).
-fn barycentrics(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> (f32, f32) {
-    let (e1, e2, d) = (b - a, c - a, p - a);
-    let (d11, d12, d22) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-    let (d1, d2) = (d.dot(e1), d.dot(e2));
-    let det = d11 * d22 - d12 * d12;
-    if det == 0.0 {
-        return (0.0, 0.0);
-    }
-    ((d22 * d1 - d12 * d2) / det, (d11 * d2 - d12 * d1) / det)
-}
-
-impl Varying {
-    /// The uv map of each light triangle of `g` (in [`Geometry::triangles`]' order).
-    fn uv_maps(g: &Geometry) -> Vec<UvMap> {
-        match g {
-            Geometry::Sphere { .. } => Vec::new(),
-            Geometry::Triangles(m) => (0..m.indices.len())
-                .map(|i| {
-                    let corners = [Vec2::ZERO, Vec2::X, Vec2::Y];
-                    UvMap::Linear(match &m.uvs {
-                        Some(t) => m.indices[i].map(|k| t[k as usize]),
-                        None => corners,
-                    })
-                })
-                .collect(),
-            Geometry::Quads(q) => (0..q.indices.len())
-                .flat_map(|i| [UvMap::Quad(q.quad(i)); 2])
-                .collect(),
-        }
-    }
 }
 
 #[derive(Clone, Debug)]
@@ -163,12 +102,13 @@ impl AreaLight {
     }
 
     fn new(i: usize, s: &Shape, material: &Material) -> Option<AreaLight> {
-        let (kind, area) = match s.geometry {
-            Geometry::Sphere { center, radius } => {
+        let (kind, area) = match s.geometry.primitives() {
+            Primitives::Sphere { center, radius } => {
                 (AreaKind::Sphere { center, radius }, s.geometry.area())
             }
-            ref g => {
-                let tris: Vec<LightTriangle> = g
+            _ => {
+                let tris: Vec<LightTriangle> = s
+                    .geometry
                     .triangles()
                     .into_iter()
                     .map(|[a, b, c]| {
@@ -197,7 +137,7 @@ impl AreaLight {
             Arc::new(Varying {
                 texture: material.emission_map.clone(),
                 alpha: s.alpha.clone(),
-                uv_maps: Varying::uv_maps(&s.geometry),
+                uv_maps: s.geometry.model().uv_maps(),
             })
         });
         (area > 0.0).then_some(AreaLight {
@@ -477,7 +417,7 @@ impl LightModel for AreaLight {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::{Camera, Material, QuadMesh, Shape};
+    use crate::scene::{Camera, Geometry, Material, QuadMesh, Shape};
 
     /// Samples over an L-shaped emitter made of two quads of areas 2 and 1 land on it,
     /// uniformly: the sample mean is the area-weighted centroid.

@@ -14,7 +14,7 @@ use super::lexer::{self, Token};
 use super::shapes;
 use super::{Loader, Loc};
 use crate::error::Error;
-use crate::scene::{Geometry, Shape};
+use crate::scene::{Geometry, Shape, Sphere};
 use glam::DMat4;
 use std::io::Read;
 use std::path::Path;
@@ -50,7 +50,7 @@ impl Cost {
     pub(crate) fn of(g: &Geometry) -> Cost {
         let shape = std::mem::size_of::<Shape>() as u64;
         match g {
-            Geometry::Sphere { .. } => Cost {
+            Geometry::Sphere(Sphere { .. }) => Cost {
                 data: shape,
                 primitives: 1,
             },
@@ -120,15 +120,15 @@ impl Object {
         let (shapes, shared): (Vec<Shape>, Vec<Shape>) = shapes.into_iter().partition(copied);
         let spheres = shapes
             .iter()
-            .filter(|s| matches!(s.geometry, Geometry::Sphere { .. }))
+            .filter(|s| matches!(s.geometry, Geometry::Sphere(Sphere { .. })))
             .count() as u64;
         let uniform = shapes
             .iter()
             .fold(Cost::default(), |c, s| c.add(Cost::of(&s.geometry)));
-        let sphere = Cost::of(&Geometry::Sphere {
+        let sphere = Cost::of(&Geometry::Sphere(Sphere {
             center: Default::default(),
             radius: 1.0,
-        });
+        }));
         let tessellated = Cost {
             data: uniform.data - spheres * sphere.data,
             primitives: uniform.primitives - spheres * sphere.primitives,
@@ -377,10 +377,10 @@ mod tests {
         assert_eq!(c.primitives, 2);
         assert_eq!(c.bytes(), c.data + 512);
         let ball = Shape {
-            geometry: Geometry::Sphere {
+            geometry: Geometry::Sphere(Sphere {
                 center: Vec3::ZERO,
                 radius: 1.0,
-            },
+            }),
             material: 0,
             alpha: None,
             motion: None,

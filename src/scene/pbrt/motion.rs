@@ -7,7 +7,7 @@
 use super::shapes::{swaps_handedness, uniform_scale};
 use super::{Loader, Loc};
 use crate::math::Vec3;
-use crate::scene::{Geometry, QuadMesh, TriangleMesh};
+use crate::scene::{Geometry, QuadMesh, Sphere, TriangleMesh};
 use glam::{DMat3, DMat4};
 
 /// When the start and end transforms hold, and when the shutter opens and closes (scene
@@ -69,10 +69,10 @@ fn moved(geometry: &Geometry, rel: &DMat4) -> Option<Geometry> {
     let nm = DMat3::from_mat4(*rel).inverse().transpose();
     let normal = |n: &Vec3| (nm * n.as_dvec3()).normalize_or_zero().as_vec3();
     Some(match geometry {
-        Geometry::Sphere { center, radius } => Geometry::Sphere {
+        Geometry::Sphere(Sphere { center, radius }) => Geometry::Sphere(Sphere {
             center: point(center),
             radius: (*radius as f64 * uniform_scale(rel)?) as f32,
-        },
+        }),
         Geometry::Triangles(m) => Geometry::Triangles(TriangleMesh {
             positions: m.positions.iter().map(point).collect(),
             normals: m.normals.as_ref().map(|ns| ns.iter().map(normal).collect()),

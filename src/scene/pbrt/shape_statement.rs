@@ -10,7 +10,7 @@ use crate::math::{Rgb, Vec2, Vec3};
 use crate::scene::loop_subdivision;
 use crate::scene::materials::{Diffuse, Surface};
 use crate::scene::ply::{self, PlyMesh};
-use crate::scene::{Geometry, Material, Shape, Texture};
+use crate::scene::{Geometry, Material, Shape, Sphere, Texture};
 use glam::DVec3;
 
 impl Loader {
@@ -190,10 +190,10 @@ impl Loader {
                 );
                 let full = zmin <= -r && zmax >= r && phimax >= 360.0;
                 match shapes::uniform_scale(&m) {
-                    Some(s) if full && quadric_sign > 0.0 => vec![Geometry::Sphere {
+                    Some(s) if full && quadric_sign > 0.0 => vec![Geometry::Sphere(Sphere {
                         center: m.transform_point3(DVec3::ZERO).as_vec3(),
                         radius: (r * s) as f32,
-                    }],
+                    })],
                     _ => shapes::place(
                         shapes::sphere(r, zmin, zmax, phimax),
                         &m,
@@ -243,7 +243,9 @@ impl Loader {
         };
         for g in &geometries {
             let finite = match g {
-                Geometry::Sphere { center, radius } => center.is_finite() && radius.is_finite(),
+                Geometry::Sphere(Sphere { center, radius }) => {
+                    center.is_finite() && radius.is_finite()
+                }
                 Geometry::Triangles(t) => t.positions.iter().all(|p| p.is_finite()),
                 Geometry::Quads(q) => q.positions.iter().all(|p| p.is_finite()),
             };

@@ -16,7 +16,7 @@
 
 use crate::math::{Vec2, Vec3};
 use crate::scene::ply::PlyMesh;
-use crate::scene::{Geometry, Shape};
+use crate::scene::{Geometry, Shape, Sphere};
 use glam::{DMat3, DMat4, DVec3};
 
 /// Whether the linear part of `m` mirrors.
@@ -197,11 +197,11 @@ pub fn instance(shape: &Shape, t: &DMat4) -> Vec<Shape> {
 fn placed_geometry(geometry: &Geometry, t: &DMat4) -> Vec<Geometry> {
     let flip = swaps_handedness(t);
     match geometry {
-        Geometry::Sphere { center, radius } => match uniform_scale(t) {
-            Some(s) => vec![Geometry::Sphere {
+        Geometry::Sphere(Sphere { center, radius }) => match uniform_scale(t) {
+            Some(s) => vec![Geometry::Sphere(Sphere {
                 center: point(t, *center),
                 radius: (*radius as f64 * s) as f32,
-            }],
+            })],
             None => {
                 let m = *t
                     * DMat4::from_translation(center.as_dvec3())

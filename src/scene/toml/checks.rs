@@ -1,7 +1,7 @@
 //! Checks of values and shapes, and transforms. Each check returns the message for
 //! [`Ctx::fail`](super::diagnostics::Ctx::fail).
 
-use super::super::{Geometry, TriangleMesh, MAX_RESOLUTION};
+use super::super::{Geometry, Primitives, TriangleMesh, MAX_RESOLUTION};
 use crate::math::{Mat3, Mat4, Rgb, Vec3};
 
 pub(super) fn finite(v: f32) -> Result<f32, String> {
@@ -214,10 +214,10 @@ pub(super) fn planar_convex(vs: &[Vec3], what: &str) -> Result<Vec3, String> {
 }
 
 pub(super) fn geometry_is_finite(g: &Geometry) -> bool {
-    match g {
-        Geometry::Sphere { center, radius } => center.is_finite() && radius.is_finite(),
-        Geometry::Triangles(m) => m.positions.iter().all(|p| p.is_finite()),
-        Geometry::Quads(q) => q.positions.iter().all(|p| p.is_finite()),
+    match g.primitives() {
+        Primitives::Sphere { center, radius } => center.is_finite() && radius.is_finite(),
+        Primitives::Triangles(m) => m.positions.iter().all(|p| p.is_finite()),
+        Primitives::Quads(q) => q.positions.iter().all(|p| p.is_finite()),
     }
 }
 

@@ -104,7 +104,7 @@ impl<'a> Document<'a> {
 mod tests {
     use super::*;
     use crate::math::Vec3;
-    use crate::scene::{Geometry, Texture};
+    use crate::scene::{Geometry, Sphere, Texture};
 
     fn parse(text: &str) -> crate::error::Result<Scene> {
         from_str(text, Path::new("test.toml"))
@@ -127,10 +127,10 @@ mod tests {
         );
         assert_eq!(
             s.shapes[0].geometry,
-            Geometry::Sphere {
+            Geometry::Sphere(Sphere {
                 center: Vec3::ZERO,
                 radius: 2.0
-            }
+            })
         );
     }
 

@@ -5,7 +5,7 @@ use super::super::checks::geometry_is_finite;
 use super::super::diagnostics::Site;
 use super::super::schema::{OneOrMany, TransformOp};
 use super::Builder;
-use crate::scene::{Geometry, Shape};
+use crate::scene::{Geometry, Shape, Sphere};
 
 impl Builder<'_> {
     /// Gives `shapes` (built from one `[[shapes]]` table) their geometry at shutter close.
@@ -41,7 +41,7 @@ impl Builder<'_> {
             }
             let mut end = shape.geometry.clone();
             match &mut end {
-                Geometry::Sphere { center, radius } => {
+                Geometry::Sphere(Sphere { center, radius }) => {
                     (*center, *radius) = xf
                         .sphere(*center, *radius)
                         .map_err(|m| ctx.fail(site, "motion", m))?;

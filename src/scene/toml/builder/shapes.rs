@@ -7,7 +7,7 @@ use super::super::diagnostics::Site;
 use super::super::schema::{AlphaDesc, DiffuseDesc, Idx3, ShapeDesc, ShapeKind, V2, V3};
 use super::Builder;
 use crate::math::Vec3;
-use crate::scene::{obj, Alpha, Geometry, QuadMesh, Shape, Texture, TriangleMesh};
+use crate::scene::{obj, Alpha, Geometry, QuadMesh, Shape, Sphere, Texture, TriangleMesh};
 
 impl Builder<'_> {
     /// A shape's `alpha`: None when absent or 1 (opaque).
@@ -88,7 +88,7 @@ impl Builder<'_> {
                 let (center, radius) = xf
                     .sphere(center, radius)
                     .map_err(|m| ctx.fail(site, "transform", m))?;
-                Geometry::Sphere { center, radius }
+                Geometry::Sphere(Sphere { center, radius })
             }
             ShapeKind::Quad => {
                 required(desc.vertices.is_some(), "vertices")?;
