@@ -1,11 +1,12 @@
 //! Shape alpha: `"float alpha"` and `"texture alpha"` naming a float `constant` or
 //! `imagemap` texture.
 
+use super::builder::{Builder, FloatTexture};
 use super::params::Params;
-use super::{FloatTexture, Loader, Loc};
+use super::Loc;
 use crate::scene::{Alpha, Texture};
 
-impl Loader {
+impl Builder {
     /// The shape's `alpha` parameter: None for an opaque shape (no alpha, or alpha >= 1).
     pub(super) fn shape_alpha(
         &mut self,

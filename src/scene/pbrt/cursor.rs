@@ -1,10 +1,9 @@
-//! Reading a statement's arguments from the tokens: strings, numbers, matrices and parameter
-//! lists, with the position of each for messages.
+//! Reading a statement's arguments from the tokens: strings, numbers and parameter lists,
+//! with the position of each for messages.
 
 use super::lexer::{Tok, Token};
 use super::params::{self, Params, Values};
 use super::Loc;
-use glam::DMat4;
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -59,13 +58,7 @@ impl Cursor<'_> {
         }
     }
 
-    /// `n` numbers, bare or in brackets.
-    pub(super) fn numbers(
-        &mut self,
-        stmt: &Loc,
-        kw: &str,
-        n: usize,
-    ) -> crate::error::Result<Vec<f64>> {
+    fn numbers(&mut self, stmt: &Loc, kw: &str, n: usize) -> crate::error::Result<Vec<f64>> {
         let bracket = matches!(self.peek().map(|t| &t.tok), Some(Tok::Open));
         if bracket {
             self.i += 1;
@@ -98,15 +91,14 @@ impl Cursor<'_> {
         Ok(v)
     }
 
-    pub(super) fn matrix(&mut self, stmt: &Loc, kw: &str) -> crate::error::Result<[f64; 16]> {
-        let v = self.numbers(stmt, kw, 16)?;
-        let mut a = [0.0; 16];
-        a.copy_from_slice(&v);
-        let m = DMat4::from_cols_array(&a);
-        if m.determinant().abs() < 1e-300 {
-            return Err(stmt.error(format!("{kw}: the matrix is singular")));
-        }
-        Ok(a)
+    /// `N` numbers, bare or in brackets.
+    pub(super) fn array<const N: usize>(
+        &mut self,
+        stmt: &Loc,
+        kw: &str,
+    ) -> crate::error::Result<[f64; N]> {
+        let v = self.numbers(stmt, kw, N)?;
+        Ok(std::array::from_fn(|i| v[i]))
     }
 
     /// `Option "name" value`: the value token, kept as text.

@@ -4,12 +4,13 @@
 //! a prototype, and placed as an instance, so memory grows with the objects, not with their
 //! placements.
 
-use super::limits::Cost;
-use super::{shapes, Loader, Loc};
+use super::builder::Builder;
+use super::cost::Cost;
+use super::{shapes, Loc};
 use crate::scene::{Instance, Prototype, Shape};
 use glam::DMat4;
 
-impl Loader {
+impl Builder {
     /// Whether a shape of an object is copied at each placement rather than instanced.
     pub(super) fn copied_when_placed(&self, shape: &Shape) -> bool {
         shape.alpha.is_some() || shape.moves() || self.materials[shape.material].is_emissive()

@@ -1,10 +1,11 @@
 //! Lights: area lights attached to the shapes that follow, and point, spot, goniometric,
 //! distant and infinite lights (an environment map or a constant background).
 
+use super::builder::Builder;
 use super::params::Params;
 use super::spectrum::Kind;
 use super::state::AreaEmission;
-use super::{Loader, Loc};
+use super::Loc;
 use crate::image::Image;
 use crate::math::{Mat3, Rgb};
 use crate::scene::environment::{Environment, Mapping};
@@ -18,7 +19,7 @@ use glam::DVec3;
 use std::path::PathBuf;
 use std::sync::Arc;
 
-impl Loader {
+impl Builder {
     pub(super) fn area_light(
         &mut self,
         ty: &str,

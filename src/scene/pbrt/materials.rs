@@ -1,9 +1,10 @@
 //! Materials: pbrt's material types as raylink's kinds of surface
 //! ([`crate::scene::materials`]), and the closest substitute where raylink has no match.
 
+use super::builder::Builder;
 use super::params::Params;
 use super::spectrum::{self, Kind};
-use super::{Loader, Loc};
+use super::Loc;
 use crate::math::Rgb;
 use crate::scene::materials::{
     Classic, CoatedConductor, CoatedDiffuse, Dielectric, Diffuse, DiffuseTransmission, Metal,
@@ -19,7 +20,7 @@ fn roughness_to_alpha(r: f64) -> f64 {
     r.max(0.0).sqrt()
 }
 
-impl Loader {
+impl Builder {
     /// Roughness of a material as GGX (α_x, α_y): `uroughness`/`vroughness` (defaulting to
     /// `roughness`), remapped by √ unless `remaproughness` is false, as pbrt-v4 does. Where
     /// one of them varies by texture, the map, and its largest α for both.
@@ -52,7 +53,7 @@ impl Loader {
             return Ok(((alpha(u) as f32, alpha(v) as f32), None));
         }
         let r = self.float_texture_param(p, &format!("{prefix}roughness"), 0.0, st, loc)?;
-        let along = |this: &mut Loader, name: String| -> crate::error::Result<Texture> {
+        let along = |this: &mut Builder, name: String| -> crate::error::Result<Texture> {
             match p
                 .find(&name, &["float", "texture"])
                 .map_err(Self::pe(loc))?
@@ -72,7 +73,7 @@ impl Loader {
         Ok(((top, top), Some(map)))
     }
 
-    /// [`Loader::roughness_map`] for the materials that take one roughness: a textured one
+    /// [`Builder::roughness_map`] for the materials that take one roughness: a textured one
     /// is its largest value, with a warning.
     fn roughness(
         &mut self,
@@ -178,7 +179,7 @@ impl Loader {
         Ok((Conductor { eta, k }, None))
     }
 
-    pub(super) fn material(
+    pub(super) fn make_material(
         &mut self,
         ty: &str,
         name: &str,
@@ -198,7 +199,7 @@ impl Loader {
             name.to_string()
         };
         let diffuse_default = Rgb::splat(0.5);
-        let substitute = |this: &mut Loader, what: &str| {
+        let substitute = |this: &mut Builder, what: &str| {
             this.warn(loc, format!("material \"{ty}\" is not supported; {what}"));
         };
         let surface = match ty {

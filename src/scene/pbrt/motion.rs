@@ -4,8 +4,9 @@
 //! open and close differ gets its geometry at close as its `motion`; its vertices move in a
 //! straight line between the two (pbrt interpolates rotations along an arc).
 
+use super::builder::Builder;
 use super::shapes::{swaps_handedness, uniform_scale};
-use super::{Loader, Loc};
+use super::Loc;
 use crate::math::Vec3;
 use crate::scene::{Geometry, QuadMesh, Sphere, TriangleMesh};
 use glam::{DMat3, DMat4};
@@ -85,7 +86,7 @@ fn moved(geometry: &Geometry, rel: &DMat4) -> Option<Geometry> {
     })
 }
 
-impl Loader {
+impl Builder {
     /// The geometries a shape statement made with transform `start` (`end`: the shape's
     /// transform at the end time), each with its geometry at shutter close when it moves.
     /// Geometry at open is the given one unless the shutter opens after the start time.

@@ -1,8 +1,9 @@
 //! The rendering options before WorldBegin (camera, film, sampler, filter, integrator), and
 //! raylink's camera made from pbrt's at WorldBegin.
 
+use super::builder::Builder;
 use super::params::Params;
-use super::{Loader, Loc};
+use super::Loc;
 use crate::image::filter::Filter;
 use crate::scene::{Camera, Projection, MAX_RESOLUTION};
 use crate::settings::TechniqueKind;
@@ -19,8 +20,8 @@ pub(super) struct CameraDef {
     loc: Loc,
 }
 
-impl Loader {
-    pub(super) fn option(
+impl Builder {
+    pub(super) fn set_option(
         &mut self,
         kw: &str,
         ty: &str,

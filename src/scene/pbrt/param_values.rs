@@ -1,13 +1,14 @@
-//! Parameters whose values the loader resolves: spectra (rgb, named, sampled, blackbody) as
+//! Parameters whose values the builder resolves: spectra (rgb, named, sampled, blackbody) as
 //! RGB, and the names of spectrum and float textures.
 
+use super::builder::{Builder, FloatTexture};
 use super::params::{ParamError, Params};
 use super::spectrum::{self, Kind};
-use super::{FloatTexture, Loader, Loc};
+use super::Loc;
 use crate::math::Rgb;
 use crate::scene::Texture;
 
-impl Loader {
+impl Builder {
     pub(super) fn pe(loc: &Loc) -> impl Fn(ParamError) -> crate::error::Error + '_ {
         move |e| loc.param_error(e)
     }

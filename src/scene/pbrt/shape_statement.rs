@@ -2,10 +2,11 @@
 //! rules (made in `shapes.rs`), given the current material or its emissive copy, and kept in
 //! the world or in the object being defined.
 
-use super::limits::Cost;
+use super::builder::Builder;
+use super::cost::Cost;
 use super::params::Params;
 use super::shapes;
-use super::{Loader, Loc};
+use super::Loc;
 use crate::math::{Rgb, Vec2, Vec3};
 use crate::scene::loop_subdivision;
 use crate::scene::materials::{Diffuse, Surface};
@@ -13,7 +14,7 @@ use crate::scene::ply::{self, PlyMesh};
 use crate::scene::{Geometry, Material, Shape, Sphere, Texture};
 use glam::DVec3;
 
-impl Loader {
+impl Builder {
     /// The material index for the next shape: the current material, or its emissive copy
     /// under an area light.
     fn shape_material(&mut self, loc: &Loc) -> usize {
@@ -67,7 +68,12 @@ impl Loader {
         self.materials.len() - 1
     }
 
-    pub(super) fn shape(&mut self, ty: &str, p: &Params, loc: &Loc) -> crate::error::Result<()> {
+    pub(super) fn make_shape(
+        &mut self,
+        ty: &str,
+        p: &Params,
+        loc: &Loc,
+    ) -> crate::error::Result<()> {
         let st = format!("Shape \"{ty}\"");
         let st = st.as_str();
         let pe = Self::pe(loc);

@@ -1,7 +1,8 @@
 //! pbrt's graphics state (CTM, material, area light, orientation) and the attribute stack that
 //! saves and restores it.
 
-use super::{Loader, Loc};
+use super::builder::Builder;
+use super::Loc;
 use crate::math::Rgb;
 use glam::{DMat4, DVec3};
 
@@ -16,7 +17,7 @@ pub(super) struct AreaEmission {
 pub(super) struct GraphicsState {
     pub(super) ctm: DMat4,
     pub(super) reverse_orientation: bool,
-    /// Index into `Loader::materials`; `None` is pbrt's default (diffuse, reflectance 0.5).
+    /// Index into `Builder::materials`; `None` is pbrt's default (diffuse, reflectance 0.5).
     pub(super) material: Option<usize>,
     pub(super) area: Option<AreaEmission>,
     /// `ActiveTransform EndTime`: transform statements only change the end transform.
@@ -58,7 +59,7 @@ impl Block {
     }
 }
 
-impl Loader {
+impl Builder {
     /// Applies statement `kw`'s change to the current transform; one that overflows (no
     /// longer finite numbers, e.g. `Scale 1e200 ...` twice) is refused at its line.
     pub(super) fn set_ctm(

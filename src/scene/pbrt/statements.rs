@@ -1,337 +1,371 @@
-//! Running statements: each keyword against the loader, and included files read in place.
+//! The builder's side of each statement: the graphics state changed, the rendering options
+//! set, and the world's materials, textures, lights, shapes and objects made.
 
-use super::cursor::Cursor;
-use super::lexer::Tok;
-use super::limits;
+use super::builder::Builder;
+use super::cost;
 use super::params::Params;
 use super::state::{look_at, Block};
-use super::{Loader, Loc};
-use crate::error::Error;
+use super::target::{ActiveTransform, Target};
+use super::Loc;
 use glam::{DMat4, DVec3};
 use std::path::Path;
-use std::sync::Arc;
 
-impl Loader {
-    pub(super) fn run_file(
+impl Target for Builder {
+    fn identity(&mut self, loc: &Loc) -> crate::error::Result<()> {
+        self.set_ctm(loc, "Identity", |_| DMat4::IDENTITY)
+    }
+
+    fn translate(&mut self, v: [f64; 3], loc: &Loc) -> crate::error::Result<()> {
+        let t = DMat4::from_translation(DVec3::from_array(v));
+        self.set_ctm(loc, "Translate", |m| m * t)
+    }
+
+    fn scale(&mut self, v: [f64; 3], loc: &Loc) -> crate::error::Result<()> {
+        let s = DMat4::from_scale(DVec3::from_array(v));
+        self.set_ctm(loc, "Scale", |m| m * s)
+    }
+
+    fn rotate(&mut self, angle: f64, axis: [f64; 3], loc: &Loc) -> crate::error::Result<()> {
+        let axis = DVec3::from_array(axis);
+        if axis.length() == 0.0 {
+            return Err(loc.error("Rotate: the axis must not be zero"));
+        }
+        let r = DMat4::from_axis_angle(axis.normalize(), angle.to_radians());
+        self.set_ctm(loc, "Rotate", |m| m * r)
+    }
+
+    fn look_at(
         &mut self,
-        path: &Path,
-        text: &str,
-        from: Option<&Loc>,
+        eye: [f64; 3],
+        target: [f64; 3],
+        up: [f64; 3],
+        loc: &Loc,
     ) -> crate::error::Result<()> {
-        let key = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
-        if let Some(i) = self.include_stack.iter().position(|p| *p == key) {
-            let chain: Vec<String> = self.include_stack[i..]
-                .iter()
-                .chain([&key])
-                .map(|p| {
-                    p.file_name()
-                        .map_or(p.display().to_string(), |n| n.to_string_lossy().into())
-                })
-                .collect();
-            let msg = format!("include cycle: {}", chain.join(" includes "));
-            return Err(match from {
-                Some(loc) => loc.error(msg),
-                None => Error::input(path, msg),
-            });
-        }
-        let file = Arc::new(path.to_path_buf());
-        let (tokens, bytes) = self.open_file(path, text, from)?;
-        self.include_stack.push(key);
-        let depth = self.stack.len();
-        let mut cursor = Cursor {
-            file,
-            tokens: &tokens,
-            i: 0,
-        };
-        while cursor.i < tokens.len() {
-            self.cancel.check("reading the scene")?;
-            self.statement(&mut cursor)?;
-        }
-        self.include_stack.pop();
-        drop(tokens);
-        self.close_file(bytes);
-        if from.is_none() && self.stack.len() > depth {
-            let (block, _, loc) = self.stack.last().expect("non-empty");
-            return Err(loc.error(format!(
-                "{} is never closed: the file ends before its {}End (truncated file?)",
-                block.begin(),
-                &block.begin()[..block.begin().len() - 5]
-            )));
+        let look = look_at(
+            DVec3::from_array(eye),
+            DVec3::from_array(target),
+            DVec3::from_array(up),
+        )
+        .map_err(|m| loc.error(format!("LookAt: {m}")))?;
+        self.set_ctm(loc, "LookAt", |m| m * look)
+    }
+
+    fn transform(&mut self, m: [f64; 16], loc: &Loc) -> crate::error::Result<()> {
+        let m = matrix(m, loc, "Transform")?;
+        self.set_ctm(loc, "Transform", |_| m)
+    }
+
+    fn concat_transform(&mut self, m: [f64; 16], loc: &Loc) -> crate::error::Result<()> {
+        let m = matrix(m, loc, "ConcatTransform")?;
+        self.set_ctm(loc, "ConcatTransform", |ctm| ctm * m)
+    }
+
+    fn coordinate_system(&mut self, name: String, _loc: &Loc) -> crate::error::Result<()> {
+        self.coordinate_systems.insert(name, self.state.ctm);
+        Ok(())
+    }
+
+    fn coord_sys_transform(&mut self, name: String, loc: &Loc) -> crate::error::Result<()> {
+        match self.coordinate_systems.get(&name) {
+            Some(&m) => {
+                self.state.ctm = m;
+                self.state.end_ctm = m;
+            }
+            None => self.warn(
+                loc,
+                format!("CoordSysTransform: unknown coordinate system \"{name}\"; ignored"),
+            ),
         }
         Ok(())
     }
 
-    fn statement(&mut self, c: &mut Cursor) -> crate::error::Result<()> {
-        let t = &c.tokens[c.i];
-        let loc = c.loc(t);
-        let Tok::Word(keyword) = &t.tok else {
-            return Err(loc.error(format!(
-                "expected a statement keyword (such as Shape or WorldBegin), got {}",
-                t.tok.describe()
-            )));
+    fn active_transform(&mut self, which: ActiveTransform, _loc: &Loc) -> crate::error::Result<()> {
+        let (start_only, end_only) = match which {
+            ActiveTransform::All => (false, false),
+            ActiveTransform::StartTime => (true, false),
+            ActiveTransform::EndTime => (false, true),
         };
-        let keyword = keyword.clone();
-        c.i += 1;
-        let kw = keyword.as_str();
-        match kw {
-            "AttributeBegin" => self.push(Block::Attribute, &loc),
-            "AttributeEnd" => self.pop(Block::Attribute, &loc)?,
-            "TransformBegin" => self.push(Block::Transform, &loc),
-            "TransformEnd" => self.pop(Block::Transform, &loc)?,
-            "ObjectBegin" => {
-                let name = c.string(&loc, kw)?;
-                if let Some((outer, _)) = &self.object {
-                    return Err(loc.error(format!(
-                        "ObjectBegin \"{name}\" inside the definition of \"{outer}\": \
-                         object definitions cannot nest"
-                    )));
-                }
-                self.require_world(&loc, kw)?;
-                self.push(Block::Object, &loc);
-                self.object = Some((name, Vec::new()));
-            }
-            "ObjectEnd" => {
-                self.pop(Block::Object, &loc)?;
-                if let Some((name, shapes)) = self.object.take() {
-                    let object = limits::Object::new(shapes, |s| self.copied_when_placed(s));
-                    self.objects.insert(name, object);
-                }
-            }
-            "ObjectInstance" => {
-                let name = c.string(&loc, kw)?;
-                self.require_world(&loc, kw)?;
-                if self.object.is_some() {
-                    return Err(loc.error(
-                        "ObjectInstance inside an object definition (pbrt does not nest instances)",
-                    ));
-                }
-                let t = self.mirror * self.state.ctm;
-                if !self.objects.contains_key(&name) {
-                    return Err(loc.error(format!("ObjectInstance: no object named \"{name}\"")));
-                }
-                self.place_object(&name, &t, &loc)?;
-            }
-            "Identity" => self.set_ctm(&loc, kw, |_| DMat4::IDENTITY)?,
-            "Translate" => {
-                let v = c.numbers(&loc, kw, 3)?;
-                self.set_ctm(&loc, kw, |m| {
-                    m * DMat4::from_translation(DVec3::new(v[0], v[1], v[2]))
-                })?;
-            }
-            "Scale" => {
-                let v = c.numbers(&loc, kw, 3)?;
-                self.set_ctm(&loc, kw, |m| {
-                    m * DMat4::from_scale(DVec3::new(v[0], v[1], v[2]))
-                })?;
-            }
-            "Rotate" => {
-                let v = c.numbers(&loc, kw, 4)?;
-                let axis = DVec3::new(v[1], v[2], v[3]);
-                if axis.length() == 0.0 {
-                    return Err(loc.error("Rotate: the axis must not be zero"));
-                }
-                let r = DMat4::from_axis_angle(axis.normalize(), v[0].to_radians());
-                self.set_ctm(&loc, kw, |m| m * r)?;
-            }
-            "LookAt" => {
-                let v = c.numbers(&loc, kw, 9)?;
-                let look = look_at(
-                    DVec3::new(v[0], v[1], v[2]),
-                    DVec3::new(v[3], v[4], v[5]),
-                    DVec3::new(v[6], v[7], v[8]),
-                )
-                .map_err(|m| loc.error(format!("LookAt: {m}")))?;
-                self.set_ctm(&loc, kw, |m| m * look)?;
-            }
-            "Transform" | "ConcatTransform" => {
-                let v = c.matrix(&loc, kw)?;
-                // pbrt lists the matrix column by column.
-                let m = DMat4::from_cols_array(&v);
-                if kw == "Transform" {
-                    self.set_ctm(&loc, kw, |_| m)?;
-                } else {
-                    self.set_ctm(&loc, kw, |ctm| ctm * m)?;
-                }
-            }
-            "CoordinateSystem" => {
-                let name = c.string(&loc, kw)?;
-                self.coordinate_systems.insert(name, self.state.ctm);
-            }
-            "CoordSysTransform" => {
-                let name = c.string(&loc, kw)?;
-                match self.coordinate_systems.get(&name) {
-                    Some(&m) => {
-                        self.state.ctm = m;
-                        self.state.end_ctm = m;
-                    }
-                    None => self.warn(
-                        &loc,
-                        format!("CoordSysTransform: unknown coordinate system \"{name}\"; ignored"),
-                    ),
-                }
-            }
-            "ActiveTransform" => {
-                let Some(Tok::Word(which)) = c.peek().map(|t| t.tok.clone()) else {
-                    return Err(loc.error("ActiveTransform takes StartTime, EndTime or All"));
-                };
-                c.i += 1;
-                match which.as_str() {
-                    "All" => {
-                        self.state.end_time_only = false;
-                        self.state.start_time_only = false;
-                    }
-                    "StartTime" => {
-                        self.state.end_time_only = false;
-                        self.state.start_time_only = true;
-                    }
-                    "EndTime" => {
-                        self.state.end_time_only = true;
-                        self.state.start_time_only = false;
-                    }
-                    other => {
-                        return Err(loc.error(format!(
-                            "ActiveTransform takes StartTime, EndTime or All, got `{other}`"
-                        )))
-                    }
-                }
-            }
-            "TransformTimes" => {
-                let t = c.numbers(&loc, kw, 2)?;
-                if !(t[0].is_finite() && t[1].is_finite() && t[0] <= t[1]) {
-                    return Err(loc.error(format!(
-                        "TransformTimes takes a start and an end time, start <= end, got {} {}",
-                        t[0], t[1]
-                    )));
-                }
-                self.timing.transform = (t[0], t[1]);
-            }
-            "ReverseOrientation" => {
-                self.state.reverse_orientation = !self.state.reverse_orientation
-            }
-            "Camera" | "Film" | "Sampler" | "PixelFilter" | "Integrator" | "Accelerator"
-            | "ColorSpace" | "Option" => {
-                let ty = c.string(&loc, kw)?;
-                let value = if kw == "Option" {
-                    c.option_value()
-                } else {
-                    None
-                };
-                let p = c.params(&loc)?;
-                if self.world {
-                    return Err(loc.error(format!(
-                        "{kw} must come before WorldBegin (it sets a rendering option)"
-                    )));
-                }
-                self.option(kw, &ty, value, &p, &loc)?;
-                self.report_unused(kw, &ty, &p, &loc);
-            }
-            "MakeNamedMedium" => {
-                let name = c.string(&loc, kw)?;
-                let _ = c.params(&loc)?;
-                self.warn(
-                    &loc,
-                    format!("MakeNamedMedium \"{name}\": participating media are not supported; ignored"),
-                );
-            }
-            "MediumInterface" => {
-                c.string(&loc, kw)?;
-                if matches!(c.peek().map(|t| &t.tok), Some(Tok::Str(_))) {
-                    c.string(&loc, kw)?;
-                }
-                self.warn(
-                    &loc,
-                    "MediumInterface: participating media are not supported; ignored",
-                );
-            }
-            "Attribute" => {
-                let target = c.string(&loc, kw)?;
-                let _ = c.params(&loc)?;
-                self.warn(
-                    &loc,
-                    format!(
-                        "Attribute \"{target}\": default parameters are not supported; ignored"
-                    ),
-                );
-            }
-            "WorldBegin" => {
-                if self.world {
-                    return Err(loc.error("WorldBegin appears twice"));
-                }
-                self.world = true;
-                self.begin_world(&loc)?;
-            }
-            "WorldEnd" => {}
-            "MakeNamedMaterial" => {
-                let name = c.string(&loc, kw)?;
-                let p = c.params(&loc)?;
-                self.require_world(&loc, kw)?;
-                let ty = p
-                    .string("type")
-                    .map_err(|e| loc.param_error(e))?
-                    .ok_or_else(|| {
-                        loc.error(format!(
-                            "MakeNamedMaterial \"{name}\" needs a \"string type\" parameter"
-                        ))
-                    })?;
-                let m = self.material(&ty, &name, &p, &loc)?;
-                self.report_unused("MakeNamedMaterial", &ty, &p, &loc);
-                self.named_materials.insert(name, self.materials.len());
-                self.materials.push(m);
-            }
-            "Material" => {
-                let ty = c.string(&loc, kw)?;
-                let p = c.params(&loc)?;
-                self.require_world(&loc, kw)?;
-                let m = self.material(&ty, "", &p, &loc)?;
-                self.report_unused(kw, &ty, &p, &loc);
-                self.state.material = Some(self.materials.len());
-                self.materials.push(m);
-            }
-            "NamedMaterial" => {
-                let name = c.string(&loc, kw)?;
-                self.require_world(&loc, kw)?;
-                match self.named_materials.get(&name) {
-                    Some(&i) => self.state.material = Some(i),
-                    None => {
-                        return Err(loc.error(format!(
-                            "NamedMaterial: no material named \"{name}\" (define it with \
-                             MakeNamedMaterial first)"
-                        )))
-                    }
-                }
-            }
-            "Texture" => {
-                let name = c.string(&loc, kw)?;
-                let ty = c.string(&loc, kw)?;
-                let class = c.string(&loc, kw)?;
-                let p = c.params(&loc)?;
-                self.require_world(&loc, kw)?;
-                self.texture(&name, &ty, &class, &p, &loc)?;
-                self.report_unused(kw, &class, &p, &loc);
-            }
-            "Shape" | "LightSource" | "AreaLightSource" => {
-                let ty = c.string(&loc, kw)?;
-                let p = c.params(&loc)?;
-                self.require_world(&loc, kw)?;
-                match kw {
-                    "Shape" => self.shape(&ty, &p, &loc)?,
-                    "LightSource" => self.light(&ty, &p, &loc)?,
-                    _ => self.area_light(&ty, &p, &loc)?,
-                }
-                self.report_unused(kw, &ty, &p, &loc);
-            }
-            "Include" | "Import" => {
-                let name = c.string(&loc, kw)?;
-                let path = loc.dir().join(&name);
-                self.count_include(&loc, kw)?;
-                self.add_input(&path);
-                let text = self.read_text(&path, Some((&loc, &format!("{kw} \"{name}\""))))?;
-                self.run_file(&path, &text, Some(&loc))?;
-            }
-            other => {
-                return Err(loc.error(format!("unknown statement `{other}`")));
-            }
+        self.state.start_time_only = start_only;
+        self.state.end_time_only = end_only;
+        Ok(())
+    }
+
+    fn transform_times(&mut self, start: f64, end: f64, loc: &Loc) -> crate::error::Result<()> {
+        if !(start.is_finite() && end.is_finite() && start <= end) {
+            return Err(loc.error(format!(
+                "TransformTimes takes a start and an end time, start <= end, got {start} {end}"
+            )));
         }
+        self.timing.transform = (start, end);
+        Ok(())
+    }
+
+    fn reverse_orientation(&mut self, _loc: &Loc) -> crate::error::Result<()> {
+        self.state.reverse_orientation = !self.state.reverse_orientation;
+        Ok(())
+    }
+
+    fn attribute_begin(&mut self, loc: &Loc) -> crate::error::Result<()> {
+        self.push(Block::Attribute, loc);
+        Ok(())
+    }
+
+    fn attribute_end(&mut self, loc: &Loc) -> crate::error::Result<()> {
+        self.pop(Block::Attribute, loc)
+    }
+
+    fn transform_begin(&mut self, loc: &Loc) -> crate::error::Result<()> {
+        self.push(Block::Transform, loc);
+        Ok(())
+    }
+
+    fn transform_end(&mut self, loc: &Loc) -> crate::error::Result<()> {
+        self.pop(Block::Transform, loc)
+    }
+
+    fn object_begin(&mut self, name: String, loc: &Loc) -> crate::error::Result<()> {
+        if let Some((outer, _)) = &self.object {
+            return Err(loc.error(format!(
+                "ObjectBegin \"{name}\" inside the definition of \"{outer}\": \
+                 object definitions cannot nest"
+            )));
+        }
+        self.require_world(loc, "ObjectBegin")?;
+        self.push(Block::Object, loc);
+        self.object = Some((name, Vec::new()));
+        Ok(())
+    }
+
+    fn object_end(&mut self, loc: &Loc) -> crate::error::Result<()> {
+        self.pop(Block::Object, loc)?;
+        if let Some((name, shapes)) = self.object.take() {
+            let object = cost::Object::new(shapes, |s| self.copied_when_placed(s));
+            self.objects.insert(name, object);
+        }
+        Ok(())
+    }
+
+    fn object_instance(&mut self, name: String, loc: &Loc) -> crate::error::Result<()> {
+        self.require_world(loc, "ObjectInstance")?;
+        if self.object.is_some() {
+            return Err(loc.error(
+                "ObjectInstance inside an object definition (pbrt does not nest instances)",
+            ));
+        }
+        let t = self.mirror * self.state.ctm;
+        if !self.objects.contains_key(&name) {
+            return Err(loc.error(format!("ObjectInstance: no object named \"{name}\"")));
+        }
+        self.place_object(&name, &t, loc)
+    }
+
+    fn camera(&mut self, ty: String, p: Params, loc: &Loc) -> crate::error::Result<()> {
+        self.option_statement("Camera", &ty, None, &p, loc)
+    }
+
+    fn film(&mut self, ty: String, p: Params, loc: &Loc) -> crate::error::Result<()> {
+        self.option_statement("Film", &ty, None, &p, loc)
+    }
+
+    fn sampler(&mut self, ty: String, p: Params, loc: &Loc) -> crate::error::Result<()> {
+        self.option_statement("Sampler", &ty, None, &p, loc)
+    }
+
+    fn pixel_filter(&mut self, ty: String, p: Params, loc: &Loc) -> crate::error::Result<()> {
+        self.option_statement("PixelFilter", &ty, None, &p, loc)
+    }
+
+    fn integrator(&mut self, ty: String, p: Params, loc: &Loc) -> crate::error::Result<()> {
+        self.option_statement("Integrator", &ty, None, &p, loc)
+    }
+
+    fn accelerator(&mut self, ty: String, p: Params, loc: &Loc) -> crate::error::Result<()> {
+        self.option_statement("Accelerator", &ty, None, &p, loc)
+    }
+
+    fn color_space(&mut self, name: String, p: Params, loc: &Loc) -> crate::error::Result<()> {
+        self.option_statement("ColorSpace", &name, None, &p, loc)
+    }
+
+    fn option(
+        &mut self,
+        name: String,
+        value: Option<String>,
+        p: Params,
+        loc: &Loc,
+    ) -> crate::error::Result<()> {
+        self.option_statement("Option", &name, value, &p, loc)
+    }
+
+    fn world_begin(&mut self, loc: &Loc) -> crate::error::Result<()> {
+        if self.world {
+            return Err(loc.error("WorldBegin appears twice"));
+        }
+        self.world = true;
+        self.begin_world(loc)
+    }
+
+    fn world_end(&mut self, _loc: &Loc) -> crate::error::Result<()> {
+        Ok(())
+    }
+
+    fn attribute(&mut self, target: String, _p: Params, loc: &Loc) -> crate::error::Result<()> {
+        self.warn(
+            loc,
+            format!("Attribute \"{target}\": default parameters are not supported; ignored"),
+        );
+        Ok(())
+    }
+
+    fn make_named_medium(
+        &mut self,
+        name: String,
+        _p: Params,
+        loc: &Loc,
+    ) -> crate::error::Result<()> {
+        self.warn(
+            loc,
+            format!("MakeNamedMedium \"{name}\": participating media are not supported; ignored"),
+        );
+        Ok(())
+    }
+
+    fn medium_interface(
+        &mut self,
+        _inside: String,
+        _outside: Option<String>,
+        loc: &Loc,
+    ) -> crate::error::Result<()> {
+        self.warn(
+            loc,
+            "MediumInterface: participating media are not supported; ignored",
+        );
+        Ok(())
+    }
+
+    fn material(&mut self, ty: String, p: Params, loc: &Loc) -> crate::error::Result<()> {
+        self.require_world(loc, "Material")?;
+        let m = self.make_material(&ty, "", &p, loc)?;
+        self.report_unused("Material", &ty, &p, loc);
+        self.state.material = Some(self.materials.len());
+        self.materials.push(m);
+        Ok(())
+    }
+
+    fn make_named_material(
+        &mut self,
+        name: String,
+        p: Params,
+        loc: &Loc,
+    ) -> crate::error::Result<()> {
+        self.require_world(loc, "MakeNamedMaterial")?;
+        let ty = p
+            .string("type")
+            .map_err(|e| loc.param_error(e))?
+            .ok_or_else(|| {
+                loc.error(format!(
+                    "MakeNamedMaterial \"{name}\" needs a \"string type\" parameter"
+                ))
+            })?;
+        let m = self.make_material(&ty, &name, &p, loc)?;
+        self.report_unused("MakeNamedMaterial", &ty, &p, loc);
+        self.named_materials.insert(name, self.materials.len());
+        self.materials.push(m);
+        Ok(())
+    }
+
+    fn named_material(&mut self, name: String, loc: &Loc) -> crate::error::Result<()> {
+        self.require_world(loc, "NamedMaterial")?;
+        match self.named_materials.get(&name) {
+            Some(&i) => {
+                self.state.material = Some(i);
+                Ok(())
+            }
+            None => Err(loc.error(format!(
+                "NamedMaterial: no material named \"{name}\" (define it with \
+                 MakeNamedMaterial first)"
+            ))),
+        }
+    }
+
+    fn texture(
+        &mut self,
+        name: String,
+        ty: String,
+        class: String,
+        p: Params,
+        loc: &Loc,
+    ) -> crate::error::Result<()> {
+        self.require_world(loc, "Texture")?;
+        self.make_texture(&name, &ty, &class, &p, loc)?;
+        self.report_unused("Texture", &class, &p, loc);
+        Ok(())
+    }
+
+    fn shape(&mut self, ty: String, p: Params, loc: &Loc) -> crate::error::Result<()> {
+        self.require_world(loc, "Shape")?;
+        self.make_shape(&ty, &p, loc)?;
+        self.report_unused("Shape", &ty, &p, loc);
+        Ok(())
+    }
+
+    fn light_source(&mut self, ty: String, p: Params, loc: &Loc) -> crate::error::Result<()> {
+        self.require_world(loc, "LightSource")?;
+        self.light(&ty, &p, loc)?;
+        self.report_unused("LightSource", &ty, &p, loc);
+        Ok(())
+    }
+
+    fn area_light_source(&mut self, ty: String, p: Params, loc: &Loc) -> crate::error::Result<()> {
+        self.require_world(loc, "AreaLightSource")?;
+        self.area_light(&ty, &p, loc)?;
+        self.report_unused("AreaLightSource", &ty, &p, loc);
+        Ok(())
+    }
+
+    fn include(&mut self, path: &Path, _loc: &Loc) {
+        self.add_input(path);
+    }
+
+    fn end_of_files(&mut self) -> crate::error::Result<()> {
+        let Some((block, _, loc)) = self.stack.last() else {
+            return Ok(());
+        };
+        Err(loc.error(format!(
+            "{} is never closed: the file ends before its {}End (truncated file?)",
+            block.begin(),
+            &block.begin()[..block.begin().len() - 5]
+        )))
+    }
+}
+
+/// A `Transform` or `ConcatTransform` matrix, listed column by column; a singular one is
+/// refused.
+fn matrix(v: [f64; 16], loc: &Loc, kw: &str) -> crate::error::Result<DMat4> {
+    let m = DMat4::from_cols_array(&v);
+    if m.determinant().abs() < 1e-300 {
+        return Err(loc.error(format!("{kw}: the matrix is singular")));
+    }
+    Ok(m)
+}
+
+impl Builder {
+    /// A statement setting a rendering option (before WorldBegin only).
+    fn option_statement(
+        &mut self,
+        kw: &str,
+        ty: &str,
+        value: Option<String>,
+        p: &Params,
+        loc: &Loc,
+    ) -> crate::error::Result<()> {
+        if self.world {
+            return Err(loc.error(format!(
+                "{kw} must come before WorldBegin (it sets a rendering option)"
+            )));
+        }
+        self.set_option(kw, ty, value, p, loc)?;
+        self.report_unused(kw, ty, p, loc);
         Ok(())
     }
 

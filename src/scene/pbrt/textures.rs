@@ -1,8 +1,9 @@
 //! Textures: constant, checkerboard, image map, scale, mix and direction mix as raylink's,
 //! for spectrum and float textures alike (a float texture's value in the first channel).
 
+use super::builder::{Builder, FloatTexture};
 use super::params::Params;
-use super::{FloatTexture, Loader, Loc};
+use super::Loc;
 use crate::math::{Rgb, Vec2, Vec3};
 use crate::scene::texture::{Encoding, ImageTexture, TextureMix, UvMapping};
 use crate::scene::Texture;
@@ -10,8 +11,8 @@ use glam::{DMat4, DVec3};
 use std::path::PathBuf;
 use std::sync::Arc;
 
-impl Loader {
-    pub(super) fn texture(
+impl Builder {
+    pub(super) fn make_texture(
         &mut self,
         name: &str,
         ty: &str,
