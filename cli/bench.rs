@@ -1,8 +1,9 @@
 //! `raylink bench`: the options, and the reports the library's measurements are written to
 //! (the terminal, Markdown, CSV and an SVG chart).
 
+use crate::bench_report as report;
 use crate::options::AccelName;
-use raylink::bench::{equal_error, measure, network, path, report, scenes, BenchConfig};
+use raylink::bench::{equal_error, measure, network, path, scenes, BenchConfig};
 use raylink::{Error, Result};
 use std::path::PathBuf;
 

@@ -1,8 +1,8 @@
 //! `raylink bench`'s chart: an SVG of four panels (plotters' SVG backend, so that no font
 //! or image library is needed).
 
+use crate::bench_report::sig;
 use plotters::prelude::*;
-use raylink::bench::report::sig;
 use raylink::bench::{BenchConfig, RayKind, Row, Spread};
 use raylink::Backend;
 use std::path::Path;

@@ -3,13 +3,13 @@
 
 use crate::options::RenderArgs;
 use crate::{Cli, Failure};
-use raylink::farm;
+use raylink::farm::{self, Part};
 use raylink::image::output::{check_output_path, write_image_window};
 use raylink::{
     write_image, Aov, Control, Error, Job, MetaValue, Metadata, OutputOptions, RenderStats,
     Rendered, Renderer, Scene, Tile,
 };
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// Arguments of `raylink merge`.
 #[derive(clap::Args)]
@@ -37,7 +37,7 @@ pub struct MergeArgs {
 pub fn resolve_outputs(args: &mut RenderArgs) -> raylink::Result<()> {
     let part = args.part.part().copied();
     for out in &mut args.outputs {
-        *out = farm::output_path(out, part.as_ref())?;
+        *out = output_path(out, part.as_ref())?;
         let exr = out
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
@@ -215,4 +215,102 @@ pub fn run_merge(args: MergeArgs) -> Result<(), Failure> {
         );
     }
     Ok(())
+}
+
+/// Parses `I/N` (0 ≤ I < N).
+pub fn parse_tile(text: &str) -> std::result::Result<Part, String> {
+    let bad = || format!("takes I/N with 0 <= I < N (e.g. 0/4), got \"{text}\"");
+    let (i, n) = text.split_once('/').ok_or_else(bad)?;
+    let index: u32 = i.trim().parse().map_err(|_| bad())?;
+    let count: u32 = n.trim().parse().map_err(|_| bad())?;
+    if count == 0 || index >= count {
+        return Err(bad());
+    }
+    Ok(Part::Tile { index, count })
+}
+
+/// Parses `x0,y0,x1,y1` (half-open pixel bounds, x0 < x1, y0 < y1).
+pub fn parse_crop(text: &str) -> std::result::Result<Part, String> {
+    let bad = || {
+        format!(
+            "takes pixel bounds x0,y0,x1,y1 with x0 < x1 and y0 < y1 (x1 and y1 \
+             excluded), got \"{text}\""
+        )
+    };
+    let v: Vec<u32> = text
+        .split(',')
+        .map(|s| s.trim().parse::<u32>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| bad())?;
+    match v[..] {
+        [x0, y0, x1, y1] if x0 < x1 && y0 < y1 => Ok(Part::Crop(Tile { x0, y0, x1, y1 })),
+        _ => Err(bad()),
+    }
+}
+
+/// An output path with `{tile}` replaced by the tile index and `{tiles}` by the tile count.
+/// A pattern without them is used as it is; `{tile}` without `--tile` is an error.
+fn output_path(pattern: &Path, part: Option<&Part>) -> Result<PathBuf, Error> {
+    let text = pattern.to_string_lossy();
+    if !text.contains("{tile") {
+        return Ok(pattern.to_path_buf());
+    }
+    match part {
+        Some(Part::Tile { index, count }) => Ok(PathBuf::from(
+            text.replace("{tiles}", &count.to_string())
+                .replace("{tile}", &index.to_string()),
+        )),
+        _ => Err(Error::setting(
+            "tile",
+            format!(
+                "is needed for {{tile}} and {{tiles}} in an output name ({})",
+                pattern.display()
+            ),
+        )),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::PathBuf;
+
+    #[test]
+    fn parses_tiles_and_crops() {
+        assert_eq!(parse_tile("2/5"), Ok(Part::Tile { index: 2, count: 5 }));
+        for bad in ["5/5", "1", "a/2", "0/0", "-1/3"] {
+            assert!(parse_tile(bad).is_err(), "{bad}");
+        }
+        assert_eq!(
+            parse_crop("1,2,3,4"),
+            Ok(Part::Crop(Tile {
+                x0: 1,
+                y0: 2,
+                x1: 3,
+                y1: 4
+            }))
+        );
+        for bad in ["1,2,1,4", "1,2,3", "0,0,4,4,5", "a,0,1,1", "0,3,2,1"] {
+            assert!(parse_crop(bad).is_err(), "{bad}");
+        }
+        let crop = parse_crop("0,0,20,10").unwrap();
+        assert!(crop.region(16, 16).is_err());
+        assert!(parse_tile("0/17").unwrap().region(4, 16).is_err());
+    }
+
+    #[test]
+    fn output_patterns() {
+        let p = Part::Tile { index: 3, count: 8 };
+        assert_eq!(
+            output_path(Path::new("out/t_{tile}_of_{tiles}.exr"), Some(&p)).unwrap(),
+            PathBuf::from("out/t_3_of_8.exr")
+        );
+        assert_eq!(
+            output_path(Path::new("a.exr"), Some(&p)).unwrap(),
+            PathBuf::from("a.exr")
+        );
+        assert!(output_path(Path::new("t_{tile}.exr"), None).is_err());
+        let crop = parse_crop("0,0,1,1").unwrap();
+        assert!(output_path(Path::new("t_{tile}.exr"), Some(&crop)).is_err());
+    }
 }

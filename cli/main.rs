@@ -6,6 +6,7 @@ mod aliases;
 mod animate;
 mod bench;
 mod bench_chart;
+mod bench_report;
 mod farm;
 mod options;
 mod progress;

@@ -4,7 +4,7 @@
 //! chosen integrator is an error naming it.
 
 use clap::ValueEnum;
-use raylink::farm::{self, Part};
+use raylink::farm::Part;
 use raylink::image::filter::Filter;
 use raylink::job::{technique_info, AntiAliasing, NetworkBuilder, NetworkOrder, TECHNIQUES};
 use raylink::{Backend, Error, Job, Scene, Settings, Technique, TechniqueKind};
@@ -604,11 +604,11 @@ pub struct PartArgs {
 }
 
 fn parse_tile(text: &str) -> Result<Part, String> {
-    farm::parse_tile(text)
+    crate::farm::parse_tile(text)
 }
 
 fn parse_crop(text: &str) -> Result<Part, String> {
-    farm::parse_crop(text)
+    crate::farm::parse_crop(text)
 }
 
 impl PartArgs {

@@ -2,14 +2,13 @@
 //! backend and every thread count it measures the build time, the memory the structure holds
 //! and the throughput of three ray kinds (camera, shadow, diffuse bounce) on ray sets that are
 //! generated once per scene and traced by every backend. Each number is the median of
-//! repetitions after warm-up runs, with the minimum and maximum as its spread. Results go to
-//! the terminal (a Markdown table), a CSV file and an SVG chart.
+//! repetitions after warm-up runs, with the minimum and maximum as its spread. The command
+//! line writes the results as a Markdown table, a CSV file and an SVG chart.
 
 pub mod equal_error;
 pub mod network;
 pub mod path;
 pub mod rays;
-pub mod report;
 pub mod scenes;
 
 pub use rays::{RayKind, RaySets};

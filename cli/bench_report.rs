@@ -1,8 +1,8 @@
 //! The bench's outputs: a Markdown report (printed, and saved as bench.md), a CSV file with
 //! one row per (scene, backend, ray kind, threads), and an SVG chart.
 
-use super::{BenchConfig, RayKind, Row, Spread};
-use crate::accel::Backend;
+use raylink::bench::{BenchConfig, RayKind, Row, Spread};
+use raylink::Backend;
 use std::fmt::Write;
 
 pub const CSV_HEADER: &str = "scene,primitives,backend,threads,kind,rays,hits,reps,\
@@ -111,14 +111,14 @@ fn both_backends(config: &BenchConfig) -> bool {
 /// ratios when both backends ran.
 pub fn markdown(rows: &[Row], config: &BenchConfig) -> String {
     let mut out = String::new();
-    let embree = crate::accel::embree::version().unwrap_or_else(|_| "unavailable".into());
-    let cores = crate::platform::cores();
+    let embree = raylink::accel::embree::version().unwrap_or_else(|_| "unavailable".into());
+    let cores = raylink::platform::cores();
     let _ = writeln!(
         out,
         "raylink {} bench: Embree {embree} against obvhs 0.4 (CWBVH), on {} ({cores} hardware \
          threads). Camera grid {}×{}; throughput is the median of {} timed runs after {} \
          warm-up runs, [min–max] over the runs; build time the median of {} builds.\n",
-        crate::VERSION,
+        raylink::VERSION,
         cpu_model().unwrap_or_else(|| "an unknown CPU".into()),
         config.width,
         config.height,
