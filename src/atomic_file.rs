@@ -127,7 +127,7 @@ fn parent(path: &Path) -> &Path {
 
 /// Removes the temporary files a raylink process that no longer runs left in `dir` (killed
 /// while writing, by a second Ctrl-C say). Best effort: what cannot be read or removed stays.
-pub fn remove_stale_temps(dir: &Path) {
+pub(crate) fn remove_stale_temps(dir: &Path) {
     let Ok(entries) = std::fs::read_dir(dir) else {
         return;
     };

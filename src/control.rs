@@ -25,7 +25,7 @@ impl CancelToken {
         self.0.store(true, Ordering::Relaxed);
     }
 
-    pub fn is_cancelled(&self) -> bool {
+    pub(crate) fn is_cancelled(&self) -> bool {
         self.0.load(Ordering::Relaxed)
     }
 
@@ -170,7 +170,7 @@ impl Control {
 
     /// These controls with no progress: for work inside a phase whose progress the caller
     /// reports itself (the renders of an animation's frames, say).
-    pub fn silenced(&self) -> Control {
+    pub(crate) fn silenced(&self) -> Control {
         Control {
             progress: Arc::new(Silent),
             ..self.clone()

@@ -161,9 +161,9 @@ pub fn network_sealed(data: &[u8]) {
 
 /// The checkpoint target's render: its settings string, film size (two tiles) and samples per
 /// pixel (the fuzz inputs are checkpoint bodies after this settings string).
-pub const CHECKPOINT_SETTINGS: &str = "fuzz checkpoint";
-pub const CHECKPOINT_SIZE: (u32, u32) = (17, 2);
-pub const CHECKPOINT_SPP: u32 = 64;
+pub(crate) const CHECKPOINT_SETTINGS: &str = "fuzz checkpoint";
+pub(crate) const CHECKPOINT_SIZE: (u32, u32) = (17, 2);
+pub(crate) const CHECKPOINT_SPP: u32 = 64;
 
 /// A render checkpoint's counts and sums: the bytes follow a valid header and the settings of
 /// a fixed render, and the file gets a valid checksum, so that the fuzzer explores the

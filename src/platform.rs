@@ -89,7 +89,11 @@ pub fn fallible<T>(f: impl FnOnce() -> T) -> T {
 
 /// A vector of `len` copies of `value`, or [`Error::OutOfMemory`] naming `what` if it cannot
 /// be allocated (instead of aborting the process, as `vec!` would).
-pub fn try_vec<T: Clone>(len: usize, value: T, what: impl FnOnce() -> String) -> Result<Vec<T>> {
+pub(crate) fn try_vec<T: Clone>(
+    len: usize,
+    value: T,
+    what: impl FnOnce() -> String,
+) -> Result<Vec<T>> {
     let mut v = Vec::new();
     try_reserve(&mut v, len, what)?;
     v.resize(len, value);
@@ -98,7 +102,7 @@ pub fn try_vec<T: Clone>(len: usize, value: T, what: impl FnOnce() -> String) ->
 
 /// Reserves room for exactly `additional` more elements in `v`, or [`Error::OutOfMemory`]
 /// naming `what`.
-pub fn try_reserve<T>(
+pub(crate) fn try_reserve<T>(
     v: &mut Vec<T>,
     additional: usize,
     what: impl FnOnce() -> String,
@@ -163,12 +167,12 @@ pub(crate) unsafe fn load_library(path: &std::path::Path) -> Result<libloading::
 /// Declarations matching `ffi/platform.h`.
 mod sys {
     extern "C" {
-        pub fn raylink_flush_denormals();
-        pub fn raylink_flush_denormals_enabled() -> std::os::raw::c_int;
-        pub fn raylink_process_cpu_seconds() -> f64;
-        pub fn raylink_exit_out_of_memory(bytes: u64) -> !;
-        pub fn raylink_exit_on_terminate(before_exit: extern "C" fn());
-        pub fn raylink_dlopen(
+        pub(crate) fn raylink_flush_denormals();
+        pub(crate) fn raylink_flush_denormals_enabled() -> std::os::raw::c_int;
+        pub(crate) fn raylink_process_cpu_seconds() -> f64;
+        pub(crate) fn raylink_exit_out_of_memory(bytes: u64) -> !;
+        pub(crate) fn raylink_exit_on_terminate(before_exit: extern "C" fn());
+        pub(crate) fn raylink_dlopen(
             path: *const std::os::raw::c_char,
             err: *mut std::os::raw::c_char,
             err_len: usize,

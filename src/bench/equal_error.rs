@@ -26,18 +26,18 @@ pub const MAX_DEPTH: u32 = 7;
 pub const TARGET_RMSE: f64 = 0.0056;
 /// Reference pixels brighter than this in any channel, and their neighbours, are the
 /// light's and left out (as in `examples/compare.rs`).
-pub const LIGHT_THRESHOLD: f32 = 1.0;
+pub(crate) const LIGHT_THRESHOLD: f32 = 1.0;
 /// Tungsten's converged render, relative to the working directory or the source tree.
 pub const REFERENCE: &str = "scenes/cornell-box-bitterli/TungstenRender-256.exr";
 
 /// The reference file: relative to the working directory, else to the source tree; `None`
 /// if it is in neither.
-pub fn reference_path() -> Option<PathBuf> {
+pub(crate) fn reference_path() -> Option<PathBuf> {
     super::scenes::repository_file(REFERENCE)
 }
 
 /// The reference at [`SIZE`]×[`SIZE`] and the mask of its light's pixels.
-pub struct Reference {
+pub(crate) struct Reference {
     pub path: PathBuf,
     image: Image,
     mask: Vec<bool>,
@@ -85,7 +85,7 @@ pub fn technique(scene: &Scene, spp: u32) -> Result<Technique> {
 
 /// How much longer (in time or samples) a render with error `rmse` must run to reach
 /// `target`: (rmse/target)².
-pub fn scale_to(rmse: f64, target: f64) -> f64 {
+pub(crate) fn scale_to(rmse: f64, target: f64) -> f64 {
     (rmse / target).powi(2)
 }
 

@@ -161,7 +161,11 @@ pub struct Built {
 /// Builds a backend's structure with `threads` build threads (Embree: a device configured
 /// with that many threads; the BVH: obvhs's parallel builder on the pool), timing the build
 /// alone (Embree's device start-up excluded).
-pub fn build_timed(scene: &Scene, backend: Backend, pool: &rayon::ThreadPool) -> Result<Built> {
+pub(crate) fn build_timed(
+    scene: &Scene,
+    backend: Backend,
+    pool: &rayon::ThreadPool,
+) -> Result<Built> {
     match backend {
         Backend::Embree => {
             let device = Device::with_config(&format!("threads={}", pool.current_num_threads()))?;

@@ -87,7 +87,7 @@ pub fn schedule(warmup: usize, reps: usize, configs: usize) -> Vec<(usize, usize
 }
 
 /// The 1-minute load average from /proc/loadavg, `None` if it cannot be read.
-pub fn load_average() -> Option<f64> {
+pub(crate) fn load_average() -> Option<f64> {
     parse_load(&std::fs::read_to_string("/proc/loadavg").ok()?)
 }
 
@@ -97,7 +97,7 @@ fn parse_load(text: &str) -> Option<f64> {
 }
 
 /// A load average as printed: two decimals, or "unknown".
-pub fn load_text(load: Option<f64>) -> String {
+pub(crate) fn load_text(load: Option<f64>) -> String {
     load.map_or_else(|| "unknown".into(), |l| format!("{l:.2}"))
 }
 

@@ -32,7 +32,7 @@ impl RayKind {
     }
 
     /// Whether the kind is traced as an occlusion query (else as a closest-hit query).
-    pub fn is_occlusion(self) -> bool {
+    pub(crate) fn is_occlusion(self) -> bool {
         self == RayKind::Shadow
     }
 }
@@ -135,7 +135,7 @@ fn fallback_light(scene: &Scene) -> Vec3 {
 }
 
 /// A direction in the hemisphere around unit `n`, with density cos θ / π (Malley's method).
-pub fn cosine_direction(n: Vec3, u: Vec2) -> Vec3 {
+pub(crate) fn cosine_direction(n: Vec3, u: Vec2) -> Vec3 {
     let r = u.x.sqrt();
     let phi = std::f32::consts::TAU * u.y;
     let (t, b) = frame(n);

@@ -62,7 +62,7 @@ pub fn resolve(name: &str) -> Result<Scene> {
 
 /// A file of the repository, `relative` to the working directory where it is there, else
 /// to the source tree; `None` if it is in neither.
-pub fn repository_file(relative: &str) -> Option<PathBuf> {
+pub(crate) fn repository_file(relative: &str) -> Option<PathBuf> {
     [
         PathBuf::from(relative),
         Path::new(env!("CARGO_MANIFEST_DIR")).join(relative),

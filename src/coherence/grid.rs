@@ -31,7 +31,7 @@ impl Grid {
     }
 
     /// A grid over `[lo, hi]` with about `voxels` roughly cubic voxels.
-    pub fn with_voxels(lo: Vec3, hi: Vec3, voxels: u32) -> Grid {
+    pub(crate) fn with_voxels(lo: Vec3, hi: Vec3, voxels: u32) -> Grid {
         let size = (hi - lo).max(Vec3::splat(1e-6));
         let side = (size.x * size.y * size.z / voxels.max(1) as f32).cbrt();
         let res = (size / side)
@@ -42,7 +42,7 @@ impl Grid {
     }
 
     /// The size of a voxel.
-    pub fn cell_size(&self) -> Vec3 {
+    pub(crate) fn cell_size(&self) -> Vec3 {
         self.cell
     }
 
@@ -59,7 +59,7 @@ impl Grid {
             + c[0] as usize
     }
 
-    pub fn coords(&self, index: usize) -> [u32; 3] {
+    pub(crate) fn coords(&self, index: usize) -> [u32; 3] {
         let (rx, ry) = (self.res[0] as usize, self.res[1] as usize);
         [
             (index % rx) as u32,
@@ -69,7 +69,7 @@ impl Grid {
     }
 
     /// The box of voxel `index`.
-    pub fn voxel_box(&self, index: usize) -> (Vec3, Vec3) {
+    pub(crate) fn voxel_box(&self, index: usize) -> (Vec3, Vec3) {
         let c = self.coords(index);
         let lo = self.lo + Vec3::new(c[0] as f32, c[1] as f32, c[2] as f32) * self.cell;
         (lo, lo + self.cell)
@@ -88,7 +88,7 @@ impl Grid {
     }
 
     /// Every voxel overlapping the box `[lo, hi]` (none if it misses the grid).
-    pub fn voxels_in_box(&self, lo: Vec3, hi: Vec3, mut f: impl FnMut(usize)) {
+    pub(crate) fn voxels_in_box(&self, lo: Vec3, hi: Vec3, mut f: impl FnMut(usize)) {
         if lo.cmpgt(self.hi).any() || hi.cmplt(self.lo).any() {
             return;
         }
@@ -112,7 +112,7 @@ impl Grid {
     /// [`walk`](Self::walk), also giving the parameter span `[ta, tb]` the segment spends
     /// in each voxel.
     #[cfg(test)]
-    pub fn walk_spans(
+    pub(crate) fn walk_spans(
         &self,
         origin: Vec3,
         dir: Vec3,
@@ -308,7 +308,7 @@ impl ActiveVoxels {
     }
 
     /// The voxels `v` with `mask[v]`.
-    pub fn from_mask(fine: Grid, mask: &[bool]) -> ActiveVoxels {
+    pub(crate) fn from_mask(fine: Grid, mask: &[bool]) -> ActiveVoxels {
         let res = fine.res.map(|r| r.div_ceil(COARSE));
         let scale = Vec3::new(
             (res[0] * COARSE) as f32 / fine.res[0] as f32,
@@ -351,7 +351,7 @@ impl ActiveVoxels {
         self.bounds
     }
 
-    pub fn is_active(&self, v: usize) -> bool {
+    pub(crate) fn is_active(&self, v: usize) -> bool {
         self.active[v / 64] >> (v % 64) & 1 != 0
     }
 
@@ -443,7 +443,7 @@ impl ActiveVoxels {
 
     /// Whether the segment `origin + t·dir`, `t ∈ [t0, t1]`, crosses an active voxel.
     #[inline]
-    pub fn crossed_by(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32) -> bool {
+    pub(crate) fn crossed_by(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32) -> bool {
         let mut crossed = false;
         self.walk(origin, dir, t0, t1, |_| crossed = true);
         crossed

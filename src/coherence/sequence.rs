@@ -275,7 +275,7 @@ impl Sequence {
     /// The CPU seconds of the first frame `scene` rendered coherently (recording) and in
     /// full, `reps` times alternating which goes first: the frame-0 overhead. Before
     /// the first [`next`](Self::next).
-    pub fn first_frame_overhead(
+    pub(crate) fn first_frame_overhead(
         &mut self,
         scene: &Scene,
         reps: u32,

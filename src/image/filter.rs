@@ -135,7 +135,7 @@ impl Filter {
 /// The filter's weights through a table of its 1-D profile (every filter here is the
 /// product of one profile per axis), so that splatting a sample costs a few lookups.
 #[derive(Clone, Debug)]
-pub struct FilterWeights {
+pub(crate) struct FilterWeights {
     radius: f32,
     /// Profile at |d| = i · radius / (len − 1).
     table: Vec<f32>,
@@ -157,7 +157,7 @@ impl FilterWeights {
     }
 
     /// The weight along one axis at offset `d` from a pixel centre: zero beyond the radius.
-    pub fn weight_1d(&self, d: f32) -> f32 {
+    pub(crate) fn weight_1d(&self, d: f32) -> f32 {
         let x = d.abs() / self.radius * (Self::SIZE - 1) as f32;
         if x.is_nan() || x > (Self::SIZE - 1) as f32 {
             return 0.0;
@@ -172,7 +172,7 @@ impl FilterWeights {
 /// table lookup whatever the filter (the Gaussian's exact inverse takes several
 /// transcendental functions).
 #[derive(Clone, Debug)]
-pub struct FilterSampler {
+pub(crate) struct FilterSampler {
     radius: f32,
     /// Inverse CDF at u = i / (len − 1).
     table: Vec<f32>,

@@ -27,7 +27,7 @@ impl Image {
     }
 
     /// A black image, or [`crate::error::Error::OutOfMemory`] if its pixels cannot be allocated.
-    pub fn try_new(width: u32, height: u32) -> crate::error::Result<Self> {
+    pub(crate) fn try_new(width: u32, height: u32) -> crate::error::Result<Self> {
         let pixels = crate::platform::try_vec(width as usize * height as usize, Rgb::ZERO, || {
             format!("a {width}x{height} image")
         })?;

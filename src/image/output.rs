@@ -22,7 +22,7 @@ use crate::math::Rgb;
 
 /// The supported output formats.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Format {
+pub(crate) enum Format {
     Exr,
     Hdr,
     Tiff,
@@ -34,7 +34,7 @@ const SUPPORTED: &str = "use .exr, .hdr, .tif, .png or .jpg";
 
 impl Format {
     /// The format for `path`'s extension (case-insensitive), or an error naming the path.
-    pub fn from_path(path: &Path) -> Result<Format> {
+    pub(crate) fn from_path(path: &Path) -> Result<Format> {
         let Some(ext) = path.extension() else {
             return Err(Error::image(
                 path,
@@ -56,7 +56,7 @@ impl Format {
     }
 
     /// The OpenImageIO writer's name.
-    pub fn oiio_name(self) -> &'static str {
+    pub(crate) fn oiio_name(self) -> &'static str {
         match self {
             Format::Exr => "openexr",
             Format::Hdr => "hdr",
@@ -67,7 +67,7 @@ impl Format {
     }
 
     /// True for the 8-bit display formats (PNG, JPEG), which get exposure and sRGB encoding.
-    pub fn is_display(self) -> bool {
+    pub(crate) fn is_display(self) -> bool {
         matches!(self, Format::Png | Format::Jpeg)
     }
 }
@@ -282,7 +282,7 @@ pub fn srgb_decode(encoded: f32) -> f32 {
 
 /// One channel for an 8-bit display format: scaled, sRGB-encoded, clamped and quantised to
 /// a multiple of 1/255 (round to nearest), so the conversion to 8 bits is exact. NaN gives 0.
-pub fn display_value(linear: f32, scale: f32) -> f32 {
+pub(crate) fn display_value(linear: f32, scale: f32) -> f32 {
     let encoded = srgb_encode(linear * scale);
     if encoded.is_nan() {
         return 0.0;
@@ -291,7 +291,7 @@ pub fn display_value(linear: f32, scale: f32) -> f32 {
 }
 
 /// One channel for RGBE (`.hdr`): negatives and NaN become 0, large values clamp to 1e38.
-pub fn hdr_value(linear: f32) -> f32 {
+pub(crate) fn hdr_value(linear: f32) -> f32 {
     if linear.is_nan() {
         0.0
     } else {

@@ -306,7 +306,7 @@ impl Renderer {
 
     /// Renders with another seed from now on (for a Monte Carlo technique, an independent
     /// image); a technique prepares again, as its preparation may draw on the seed.
-    pub fn set_seed(&mut self, seed: u64) {
+    pub(crate) fn set_seed(&mut self, seed: u64) {
         if seed != self.job.seed {
             self.job.seed = seed;
             self.prepared = false;

@@ -68,7 +68,7 @@ pub fn frame(n: Vec3) -> (Vec3, Vec3) {
 }
 
 /// Complementary error function (Numerical Recipes' erfcc, |error| < 1.2e-7).
-pub fn erfc(x: f64) -> f64 {
+pub(crate) fn erfc(x: f64) -> f64 {
     let z = x.abs();
     let t = 1.0 / (1.0 + 0.5 * z);
     let r = t

@@ -39,7 +39,7 @@ pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> f32 {
 /// first interface reflects F, and of the light that enters, the share bouncing between the
 /// two parallel interfaces and leaving back is summed as a geometric series,
 /// R = F + (1 − F)²F / (1 − F²). The sheet transmits 1 − R, undeviated.
-pub fn fresnel_thin_dielectric(cos_i: f32, ior: f32) -> f32 {
+pub(crate) fn fresnel_thin_dielectric(cos_i: f32, ior: f32) -> f32 {
     let r = fresnel_dielectric(cos_i.abs(), 1.0 / ior);
     if r < 1.0 {
         let t = 1.0 - r;
@@ -54,7 +54,7 @@ pub fn fresnel_thin_dielectric(cos_i: f32, ior: f32) -> f32 {
 /// direction), for `eta` = n_incident / n_transmitted, by the midpoint rule at 1024 points
 /// (within 1e-4 of the integral). The last value of each thread is kept: a scene asks for
 /// few etas.
-pub fn fresnel_dielectric_mean(eta: f32) -> f32 {
+pub(crate) fn fresnel_dielectric_mean(eta: f32) -> f32 {
     thread_local! {
         static LAST: std::cell::Cell<(u32, f32)> = const { std::cell::Cell::new((u32::MAX, 0.0)) };
     }
@@ -77,7 +77,7 @@ pub fn fresnel_dielectric_mean(eta: f32) -> f32 {
 /// Unpolarised Fresnel reflectance of a conductor (pbrt-v4's `FrComplex`) for the cosine
 /// `cos_i` of the incident angle and the complex index η + ik of the metal relative to the
 /// outside medium.
-pub fn fresnel_complex(cos_i: f32, eta: f32, k: f32) -> f32 {
+pub(crate) fn fresnel_complex(cos_i: f32, eta: f32, k: f32) -> f32 {
     let cos_i = cos_i.clamp(0.0, 1.0);
     let sin2_i = 1.0 - cos_i * cos_i;
     let n = Complex(eta, k);
@@ -93,7 +93,7 @@ pub fn fresnel_complex(cos_i: f32, eta: f32, k: f32) -> f32 {
 }
 
 /// [`fresnel_complex`] per colour channel.
-pub fn fresnel_conductor(cos_i: f32, eta: Vec3, k: Vec3) -> Vec3 {
+pub(crate) fn fresnel_conductor(cos_i: f32, eta: Vec3, k: Vec3) -> Vec3 {
     Vec3::new(
         fresnel_complex(cos_i, eta.x, k.x),
         fresnel_complex(cos_i, eta.y, k.y),

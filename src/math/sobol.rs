@@ -82,11 +82,11 @@ fn sobol_dim1_reversed(index: u32) -> u32 {
 
 /// Dimension pairs drawn from the scrambled Sobol sequence (the pixel filter and the first
 /// three bounces of a path); later pairs are independent hashed values.
-pub const SOBOL_PAIRS: u32 = 10;
+pub(crate) const SOBOL_PAIRS: u32 = 10;
 
 const TO_UNIT: f32 = 1.0 / 4294967296.0;
 /// The largest f32 below one.
-pub const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
+pub(crate) const ONE_MINUS_EPSILON: f32 = 1.0 - f32::EPSILON / 2.0;
 
 impl Sampler {
     /// The sampler for sample `index` of a pixel identified by `pixel_key` (e.g. derived from
@@ -131,13 +131,13 @@ impl Sampler {
     }
 
     /// One more dimension (uses a whole pair: simple, and keeps dimensions aligned).
-    pub fn next_1d(&mut self) -> f32 {
+    pub(crate) fn next_1d(&mut self) -> f32 {
         self.next_2d().x
     }
 
     /// The shutter time of this sample, in \[0, 1): a stratified value from a stream of its
     /// own, so drawing it leaves the other dimensions (and still scenes' images) as they were.
-    pub fn shutter_time(&self) -> f32 {
+    pub(crate) fn shutter_time(&self) -> f32 {
         let mut own = Sampler {
             key: mix64(self.key ^ 0x7133_5a11_c0de_d1e5),
             dimension: 0,

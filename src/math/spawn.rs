@@ -27,7 +27,7 @@ const PLANE_TEST_ROUNDINGS: u32 = 4;
 /// The error a ray leaving a point of a triangle or quad must clear besides the point's own:
 /// the backends find the surface's distance from vertices up to `reach` away (the longest
 /// distance from the point to a vertex), rounding to a few ulps of that.
-pub fn plane_test_error(reach: f32) -> Vec3 {
+pub(crate) fn plane_test_error(reach: f32) -> Vec3 {
     Vec3::splat(reach * gamma(PLANE_TEST_ROUNDINGS))
 }
 
@@ -53,7 +53,7 @@ impl Spot {
 
     /// The point moved just outside its error box, along the normal on the side `w` points to.
     #[inline]
-    pub fn origin_towards(&self, w: Vec3) -> Vec3 {
+    pub(crate) fn origin_towards(&self, w: Vec3) -> Vec3 {
         offset_ray_origin(self.p, self.error, self.n, w)
     }
 
@@ -101,7 +101,7 @@ const LEAVING: f32 = f32::MIN_POSITIVE;
 /// around it, then rounded away from `p`, so the moved point is certainly off the surface
 /// whose computed point `p` is (pbrt-v4's `OffsetRayOrigin`).
 #[inline]
-pub fn offset_ray_origin(p: Vec3, error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
+pub(crate) fn offset_ray_origin(p: Vec3, error: Vec3, n: Vec3, w: Vec3) -> Vec3 {
     let d = n.abs().dot(error);
     let offset = if w.dot(n) < 0.0 { -n * d } else { n * d };
     let q = p + offset;

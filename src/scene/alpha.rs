@@ -29,7 +29,14 @@ impl Alpha {
     /// `origin` along `dir`. pbrt-v4 draws its stochastic test from a hash of the ray it
     /// traces again after every skipped hit; the primitive stands in for that new ray here,
     /// so that two overlapping half-transparent layers each let half through.
-    pub fn keeps_hit(&self, uv: Vec2, origin: Vec3, dir: Vec3, geom_id: u32, prim_id: u32) -> bool {
+    pub(crate) fn keeps_hit(
+        &self,
+        uv: Vec2,
+        origin: Vec3,
+        dir: Vec3,
+        geom_id: u32,
+        prim_id: u32,
+    ) -> bool {
         let a = self.value(uv);
         // NaN counts as opaque, as in pbrt (`a < 1` is false).
         if a >= 1.0 || a.is_nan() {

@@ -22,7 +22,10 @@ pub fn read_first_frame(path: &Path, control: &Control) -> Result<Scene> {
 
 /// Reads a native TOML scene once: the scene (an animated one's first frame) and, if the
 /// file has keyframes or an `[animation]` table, its [`Animation`].
-pub fn read_with_animation(path: &Path, control: &Control) -> Result<(Scene, Option<Animation>)> {
+pub(crate) fn read_with_animation(
+    path: &Path,
+    control: &Control,
+) -> Result<(Scene, Option<Animation>)> {
     let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
     control.cancel.check("reading the scene")?;
     let doc = Document::parse_with(&text, path, Some(control))?;
@@ -56,7 +59,7 @@ fn is_animation(root: &DeTable) -> bool {
 
 /// How a keyframe's values move on to the next keyframe's.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Interpolation {
+pub(crate) enum Interpolation {
     Linear,
     /// Eases out of this key and into the next (smoothstep): zero velocity at keyframes, so
     /// objects come to rest.

@@ -133,7 +133,7 @@ impl CameraBasis {
     /// [`raster`](Self::raster) for the ray from the lens point `lens` to `p`: the film
     /// position of the focal-plane point that ray passes through (pbrt-v4's
     /// `PerspectiveCamera::We`), and the cosine between the camera axis and the ray.
-    pub fn raster_from(&self, lens: Vec3, p: Vec3) -> Option<(f32, f32, f32)> {
+    pub(crate) fn raster_from(&self, lens: Vec3, p: Vec3) -> Option<(f32, f32, f32)> {
         if self.lens_radius == 0.0 {
             return self.raster(p);
         }
@@ -149,23 +149,23 @@ impl CameraBasis {
     }
 
     /// Width and height of the film in pixels.
-    pub fn film_size(&self) -> (f32, f32) {
+    pub(crate) fn film_size(&self) -> (f32, f32) {
         (2.0 * self.center.0, 2.0 * self.center.1)
     }
 
     /// Area of one pixel on the image plane at unit distance in front of the pinhole.
-    pub fn pixel_area(&self) -> f32 {
+    pub(crate) fn pixel_area(&self) -> f32 {
         self.right.length() * self.down.length()
     }
 
     /// Whether rays need a lens sample ([`ray_through_lens`](Self::ray_through_lens)).
-    pub fn has_lens(&self) -> bool {
+    pub(crate) fn has_lens(&self) -> bool {
         self.lens_radius > 0.0
     }
 
     /// The point of the lens for the sample `u` (uniform over the lens disk, by the
     /// concentric map as pbrt does); the origin for a pinhole.
-    pub fn lens_point(&self, u: Vec2) -> Vec3 {
+    pub(crate) fn lens_point(&self, u: Vec2) -> Vec3 {
         if self.lens_radius == 0.0 {
             return self.origin;
         }
@@ -184,7 +184,7 @@ impl CameraBasis {
 
     /// The ray through raster (x, y) leaving the lens at the sample `u`: aimed at the point
     /// the pinhole ray meets on the focal plane (pbrt-v4's `GenerateRay`).
-    pub fn ray_through_lens(&self, x: f32, y: f32, u: Vec2) -> Ray {
+    pub(crate) fn ray_through_lens(&self, x: f32, y: f32, u: Vec2) -> Ray {
         if self.lens_radius == 0.0 {
             return self.ray(x, y);
         }

@@ -29,7 +29,7 @@ pub struct Environment {
 
 /// The widest lat-long map accepted: its W×W conversion holds 12 bytes a texel (12.9 GB at
 /// this width), and texel indices stay within u32.
-pub const MAX_LAT_LONG_WIDTH: u32 = 32768;
+pub(crate) const MAX_LAT_LONG_WIDTH: u32 = 32768;
 
 /// How an environment image maps to directions; told by its shape.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -77,7 +77,7 @@ impl Environment {
     }
 
     /// [`new`](Self::new), also telling which mapping the image was in.
-    pub fn with_mapping(
+    pub(crate) fn with_mapping(
         image: Image,
         file: PathBuf,
         transform: Mat3,
@@ -125,7 +125,7 @@ impl Environment {
     }
 
     /// [`load`](Self::load), also telling which mapping the file was in.
-    pub fn load_with_mapping(
+    pub(crate) fn load_with_mapping(
         path: &Path,
         file: PathBuf,
         transform: Mat3,
@@ -186,7 +186,7 @@ pub fn direction_to_lat_long(d: DVec3) -> (f64, f64) {
 /// The lat-long coordinates (`u`, `v`) of the point (`x`, `y`) of the equal-area square:
 /// `direction_to_lat_long(equal_area_square_to_sphere(..))` in closed form (one arcsine
 /// instead of four trigonometric functions), in f64.
-pub fn equal_area_square_to_lat_long(x: f64, y: f64) -> (f64, f64) {
+pub(crate) fn equal_area_square_to_lat_long(x: f64, y: f64) -> (f64, f64) {
     let (u, v) = (2.0 * x - 1.0, 2.0 * y - 1.0);
     let (up, vp) = (u.abs(), v.abs());
     let signed = 1.0 - (up + vp);

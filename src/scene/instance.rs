@@ -59,25 +59,25 @@ impl Instance {
     }
 
     /// A direction or tangent from object to world space.
-    pub fn vector_to_world(&self, v: Vec3) -> Vec3 {
+    pub(crate) fn vector_to_world(&self, v: Vec3) -> Vec3 {
         Vec3::from(self.to_world.transform_vector3a(Vec3A::from(v)))
     }
 
     /// A normal from object to world space (by the inverse transpose, unnormalised). A
     /// mirroring placement keeps each face's side: the normal follows the transform, as
     /// the readers keep it when they copy a mirrored shape into world space.
-    pub fn normal_to_world(&self, n: Vec3) -> Vec3 {
+    pub(crate) fn normal_to_world(&self, n: Vec3) -> Vec3 {
         let m: Mat3A = self.to_object.matrix3.transpose();
         Vec3::from(m * Vec3A::from(n))
     }
 
     /// A point from world to object space.
-    pub fn point_to_object(&self, p: Vec3) -> Vec3 {
+    pub(crate) fn point_to_object(&self, p: Vec3) -> Vec3 {
         Vec3::from(self.to_object.transform_point3a(Vec3A::from(p)))
     }
 
     /// The world-space box around a box in object space (its eight corners placed).
-    pub fn world_bounds(&self, (lo, hi): (Vec3, Vec3)) -> (Vec3, Vec3) {
+    pub(crate) fn world_bounds(&self, (lo, hi): (Vec3, Vec3)) -> (Vec3, Vec3) {
         (0..8).fold(
             (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
             |(a, b), i| {
@@ -113,7 +113,7 @@ impl Prototype {
 
 /// A placed object's shape: what a hit on an instance refers to.
 #[derive(Clone, Copy, Debug)]
-pub struct PlacedShape<'a> {
+pub(crate) struct PlacedShape<'a> {
     pub shape: &'a Shape,
     /// The placement, `None` for a shape of the scene itself (in world space).
     pub instance: Option<&'a Instance>,
@@ -140,7 +140,7 @@ impl PlacedShape<'_> {
 
 impl Scene {
     /// The shape a surface point lies on, and its placement if it is an instance's.
-    pub fn placed_shape(&self, sp: &SurfacePoint) -> PlacedShape<'_> {
+    pub(crate) fn placed_shape(&self, sp: &SurfacePoint) -> PlacedShape<'_> {
         match sp.instance {
             None => PlacedShape {
                 shape: &self.shapes[sp.shape],
@@ -166,7 +166,7 @@ impl Scene {
     }
 
     /// [`flattened`](Self::flattened), in place.
-    pub fn flatten_instances(&mut self) {
+    pub(crate) fn flatten_instances(&mut self) {
         let instances = std::mem::take(&mut self.instances);
         let prototypes = std::mem::take(&mut self.prototypes);
         for instance in &instances {
@@ -178,7 +178,7 @@ impl Scene {
     }
 
     /// An id for the object `sp` lies on (Whitted's anti-aliasing compares them).
-    pub fn object_id(&self, sp: &SurfacePoint) -> u32 {
+    pub(crate) fn object_id(&self, sp: &SurfacePoint) -> u32 {
         object_id(sp.instance, sp.shape)
     }
 
@@ -191,7 +191,7 @@ impl Scene {
 /// An id for shape `shape` of the scene (`instance` None) or of instance `instance`'s
 /// prototype: a world shape's index, below 2³¹; an instance's shape gets a hash of the pair
 /// with the top bit set (two pairs rarely share one, and then only miss a subdivision).
-pub fn object_id(instance: Option<u32>, shape: usize) -> u32 {
+pub(crate) fn object_id(instance: Option<u32>, shape: usize) -> u32 {
     match instance {
         None => shape as u32,
         Some(k) => {
@@ -205,7 +205,7 @@ pub fn object_id(instance: Option<u32>, shape: usize) -> u32 {
 
 impl Instance {
     /// The largest factor by which the placement stretches a length.
-    pub fn max_stretch(&self) -> f32 {
+    pub(crate) fn max_stretch(&self) -> f32 {
         let m = self.to_world.matrix3;
         // The Frobenius norm bounds the largest singular value.
         (m.x_axis.length_squared() + m.y_axis.length_squared() + m.z_axis.length_squared()).sqrt()
@@ -214,4 +214,4 @@ impl Instance {
 
 /// Shared prototypes: a scene's `prototypes` are reference-counted so that copies of the
 /// scene (animation frames, relit scenes) do not copy the objects' geometry.
-pub type Prototypes = Vec<Arc<Prototype>>;
+pub(crate) type Prototypes = Vec<Arc<Prototype>>;

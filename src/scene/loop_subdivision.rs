@@ -8,15 +8,15 @@ use glam::DVec3;
 use rustc_hash::FxHashMap;
 
 /// The deepest subdivision asked for (each level has four times the triangles).
-pub const MAX_LEVELS: u32 = 12;
+pub(crate) const MAX_LEVELS: u32 = 12;
 
 /// The most triangles a subdivision may make (about 3 GiB of mesh).
-pub const MAX_TRIANGLES: u64 = 1 << 26;
+pub(crate) const MAX_TRIANGLES: u64 = 1 << 26;
 
 /// A subdivided mesh: positions on the limit surface, triangles in the input's winding,
 /// and a unit normal per vertex (the area-weighted mean of its triangles' normals).
 #[derive(Debug)]
-pub struct Subdivided {
+pub(crate) struct Subdivided {
     pub positions: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
     pub normals: Vec<Vec3>,
@@ -149,7 +149,7 @@ fn refine(p: &[DVec3], triangles: &[[u32; 3]]) -> Result<(Vec<DVec3>, Vec<[u32; 
 /// `triangles` over `positions` subdivided `levels` times (at most [`MAX_LEVELS`]) and
 /// pushed to the limit surface; an error for a mesh that is not a manifold (an edge of
 /// more than two triangles) or an index out of range.
-pub fn subdivide(
+pub(crate) fn subdivide(
     positions: &[Vec3],
     triangles: &[[u32; 3]],
     levels: u32,

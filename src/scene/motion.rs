@@ -19,7 +19,7 @@ impl Scene {
     }
 
     /// [`at_shutter_open`](Self::at_shutter_open), taking the scene.
-    pub fn into_shutter_open(mut self) -> Scene {
+    pub(crate) fn into_shutter_open(mut self) -> Scene {
         for shape in &mut self.shapes {
             shape.motion = None;
         }
@@ -28,7 +28,7 @@ impl Scene {
 }
 
 /// The warning for a technique that renders a moving scene at shutter open.
-pub fn still_warning(technique: &str) -> String {
+pub(crate) fn still_warning(technique: &str) -> String {
     format!(
         "the {technique} does not follow shutter time: moving shapes are rendered \
          as they are at shutter open (no motion blur)"

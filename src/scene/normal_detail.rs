@@ -24,7 +24,14 @@ pub enum NormalDetail {
 impl NormalDetail {
     /// The shading normal at a point with shading normal `ns` (unit), geometric normal `ng`,
     /// position `p`, texture coordinates `uv` and derivatives `d`; on `ng`'s side.
-    pub fn shading_normal(&self, ns: Vec3, ng: Vec3, p: Vec3, uv: Vec2, d: &Tangents) -> Vec3 {
+    pub(crate) fn shading_normal(
+        &self,
+        ns: Vec3,
+        ng: Vec3,
+        p: Vec3,
+        uv: Vec2,
+        d: &Tangents,
+    ) -> Vec3 {
         let n = match self {
             NormalDetail::Map(image) => {
                 let local = (image.eval(uv) * 2.0 - Vec3::ONE).normalize_or_zero();

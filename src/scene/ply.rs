@@ -282,7 +282,7 @@ impl PlyMesh {
 }
 
 /// Whether four points make a planar, convex quad with area (relative tolerances).
-pub fn planar_convex(q: &[Vec3; 4]) -> bool {
+pub(crate) fn planar_convex(q: &[Vec3; 4]) -> bool {
     let n = (q[2] - q[0]).cross(q[3] - q[1]);
     let size = (q[2] - q[0]).length().max((q[3] - q[1]).length());
     if n.length().is_nan() || n.length() <= 1e-8 * size * size {

@@ -40,7 +40,7 @@ pub enum Encoding {
 
 impl Encoding {
     /// pbrt-v4's default: sRGB for 8-bit formats, linear for the others.
-    pub fn default_for(path: &Path) -> Encoding {
+    pub(crate) fn default_for(path: &Path) -> Encoding {
         let ext = path
             .extension()
             .and_then(|e| e.to_str())
@@ -119,7 +119,7 @@ impl ImageTexture {
 
     /// The texture of an image in memory (its values as stored, decoded by `encoding`);
     /// `file` names it in messages and converted scenes. The image must have pixels.
-    pub fn from_image(
+    pub(crate) fn from_image(
         mut image: Image,
         file: PathBuf,
         encoding: Encoding,
@@ -170,12 +170,12 @@ impl ImageTexture {
         &self.image
     }
 
-    pub fn max_value(&self) -> Rgb {
+    pub(crate) fn max_value(&self) -> Rgb {
         self.max
     }
 
     /// The mean over the image's pixels.
-    pub fn mean_value(&self) -> Rgb {
+    pub(crate) fn mean_value(&self) -> Rgb {
         self.mean
     }
 
@@ -298,7 +298,7 @@ impl Texture {
     }
 
     /// The largest value the texture takes (for contribution bounds and validation).
-    pub fn max_value(&self) -> Rgb {
+    pub(crate) fn max_value(&self) -> Rgb {
         match self {
             Texture::Constant(c) => *c,
             Texture::Checker { even, odd, .. } | Texture::UvChecker { even, odd, .. } => {
@@ -315,7 +315,7 @@ impl Texture {
     /// checkerboard and an image; a product or mix of textures takes the product or mix of
     /// their means, and a direction mix weighs its two textures equally). The techniques
     /// that take one value per surface use it.
-    pub fn mean_value(&self) -> Rgb {
+    pub(crate) fn mean_value(&self) -> Rgb {
         match self {
             Texture::Constant(c) => *c,
             Texture::Checker { even, odd, .. } | Texture::UvChecker { even, odd, .. } => {
@@ -332,7 +332,7 @@ impl Texture {
     }
 
     /// Whether the texture is the same everywhere.
-    pub fn is_constant(&self) -> bool {
+    pub(crate) fn is_constant(&self) -> bool {
         matches!(self, Texture::Constant(_))
     }
 }

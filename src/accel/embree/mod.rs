@@ -165,7 +165,7 @@ impl Device {
 }
 
 /// A geometry id within a scene.
-pub type GeometryId = u32;
+pub(crate) type GeometryId = u32;
 
 /// An Embree scene. Changes take `&mut self`; queries take `&self` and may run from many
 /// threads at once. Queries on a scene changed since its last commit find nothing.
@@ -326,7 +326,12 @@ impl Scene {
     /// Replaces the vertices of geometry `id` (a triangle or quad mesh with as many vertices,
     /// or spheres given as (centre, radius) for a sphere geometry). Takes effect at the next
     /// [`commit`](Self::commit).
-    pub fn update_vertices(&mut self, id: GeometryId, data: &[f32], stride: usize) -> Result<()> {
+    pub(crate) fn update_vertices(
+        &mut self,
+        id: GeometryId,
+        data: &[f32],
+        stride: usize,
+    ) -> Result<()> {
         if id >= self.next_id {
             return Err(Error::Embree(format!("no geometry {id} to update")));
         }
@@ -364,7 +369,7 @@ impl Scene {
 
     /// [`commit`](Self::commit), stopped early (with [`Error::Cancelled`]) once `cancel` is
     /// set: Embree asks a progress monitor whether to go on as it builds.
-    pub fn commit_cancellable(&mut self, cancel: &CancelToken) -> Result<()> {
+    pub(crate) fn commit_cancellable(&mut self, cancel: &CancelToken) -> Result<()> {
         let token: *const CancelToken = cancel;
         // SAFETY: the scene is live and no query can run during `&mut self`. The monitor
         // only reads the token, which outlives the call: it is removed before returning.
@@ -601,7 +606,7 @@ impl EmbreeAccel {
     }
 
     /// [`build`](Self::build), stopped early once `cancel` is set.
-    pub fn build_cancellable(desc: &SceneDesc, cancel: &CancelToken) -> Result<EmbreeAccel> {
+    pub(crate) fn build_cancellable(desc: &SceneDesc, cancel: &CancelToken) -> Result<EmbreeAccel> {
         let device = Device::new()?;
         let scene = Scene::new(&device)?;
         EmbreeAccel::fill(desc, device, scene, None, cancel)
@@ -610,7 +615,7 @@ impl EmbreeAccel {
     /// Builds on a given device (for example one made with `threads=1` to build on one thread).
     /// The accel should own its device alone for [`memory_bytes`](Self::memory_bytes) to be
     /// its own.
-    pub fn build_on(desc: &SceneDesc, device: Device) -> Result<EmbreeAccel> {
+    pub(crate) fn build_on(desc: &SceneDesc, device: Device) -> Result<EmbreeAccel> {
         let scene = Scene::new(&device)?;
         EmbreeAccel::fill(desc, device, scene, None, &CancelToken::new())
     }

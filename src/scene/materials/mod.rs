@@ -206,12 +206,12 @@ impl Material {
 
     /// Whether the surface emits towards `wo` (pointing away from it), given its geometric
     /// normal `ng`.
-    pub fn emits_towards(&self, wo: Vec3, ng: Vec3) -> bool {
+    pub(crate) fn emits_towards(&self, wo: Vec3, ng: Vec3) -> bool {
         self.is_emissive() && (self.two_sided_emission || wo.dot(ng) > 0.0)
     }
 
     /// Emitted radiance at position `p`, surface coordinates `uv`, geometric normal `n`.
-    pub fn emission_at(&self, p: Vec3, uv: Vec2, n: Vec3) -> Rgb {
+    pub(crate) fn emission_at(&self, p: Vec3, uv: Vec2, n: Vec3) -> Rgb {
         match &self.emission_map {
             Some(t) => t.eval(p, uv, n).max(Rgb::ZERO),
             None => self.emission,

@@ -1,7 +1,7 @@
 //! The pbrt-v4 scene format (<https://pbrt.org/fileformat-v4>), read into a [`Scene`].
 //!
 //! As in pbrt-v4, reading is split in two: a parser that knows the statements and their
-//! syntax only, and calls a [`Target`](target::Target) method for each; and the builder, the
+//! syntax only, and calls a `Target` (`target.rs`) method for each; and the builder, the
 //! target that runs them against pbrt's graphics state (CTM, material, area light,
 //! orientation, the attribute stack), baking every shape into world space. Object instances
 //! are flattened into world-space copies, or placed as instances of a shared prototype.
@@ -76,7 +76,11 @@ pub fn from_str(text: &str, path: &Path) -> crate::error::Result<Scene> {
 /// [`from_str`] under a job's controls: stopped between statements once the control's token
 /// is cancelled, and refused (before the memory is taken) once the text being read and the
 /// geometry read so far would need more than its memory budget.
-pub fn from_str_with(text: &str, path: &Path, control: &Control) -> crate::error::Result<Scene> {
+pub(crate) fn from_str_with(
+    text: &str,
+    path: &Path,
+    control: &Control,
+) -> crate::error::Result<Scene> {
     let mut parser = Parser::new(path, control);
     let mut builder = Builder::new(path, control.budget, parser.held());
     parser.parse(path, text, &mut builder)?;

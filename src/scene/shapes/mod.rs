@@ -40,7 +40,7 @@ impl Shape {
     }
 
     /// A sphere's centre and radius at shutter time `time` (in \[0, 1\]).
-    pub fn sphere_at(&self, time: f32) -> Option<(Vec3, f32)> {
+    pub(crate) fn sphere_at(&self, time: f32) -> Option<(Vec3, f32)> {
         let Geometry::Sphere(Sphere { center, radius }) = self.geometry else {
             return None;
         };
@@ -54,7 +54,7 @@ impl Shape {
     }
 
     /// The box around the shape over the whole exposure.
-    pub fn bounds_over_shutter(&self) -> (Vec3, Vec3) {
+    pub(crate) fn bounds_over_shutter(&self) -> (Vec3, Vec3) {
         let (lo, hi) = self.geometry.bounds();
         match &self.motion {
             Some(end) => {
@@ -67,7 +67,7 @@ impl Shape {
 
     /// Whether `motion`, if any, has the kind and topology of `geometry` (what the
     /// intersection backends need to move one into the other).
-    pub fn motion_matches(&self) -> bool {
+    pub(crate) fn motion_matches(&self) -> bool {
         match &self.motion {
             None => true,
             Some(end) => self.geometry.model().same_topology(end),
@@ -89,58 +89,68 @@ pub enum Geometry {
     Quads(QuadMesh),
 }
 
+/// Calls `$call` on the kind's type, statically (hits ask for their shape's primitives and
+/// uv on the hot path).
+macro_rules! each_kind {
+    ($g:expr, $s:ident => $call:expr) => {
+        match $g {
+            Geometry::Sphere($s) => $call,
+            Geometry::Triangles($s) => $call,
+            Geometry::Quads($s) => $call,
+        }
+    };
+}
+
 impl Geometry {
     /// The kind's interface.
     pub fn model(&self) -> &dyn ShapeModel {
-        match self {
-            Geometry::Sphere(s) => s,
-            Geometry::Triangles(m) => m,
-            Geometry::Quads(q) => q,
-        }
+        each_kind!(self, s => s as &dyn ShapeModel)
     }
 
     /// The shape as the intersection backends hold it.
+    #[inline]
     pub fn primitives(&self) -> Primitives<'_> {
-        self.model().primitives()
+        each_kind!(self, s => s.primitives())
     }
 
     /// The axis-aligned box around the shape (inverted, lo > hi, for a mesh without
     /// vertices).
     pub fn bounds(&self) -> (Vec3, Vec3) {
-        self.model().bounds()
+        each_kind!(self, s => s.bounds())
     }
 
     /// Surface area.
     pub fn area(&self) -> f32 {
-        self.model().area()
+        each_kind!(self, s => s.area())
     }
 
     /// Primitives the backends hold for it (a quad counts as two triangles).
     pub fn primitive_count(&self) -> usize {
-        self.model().primitive_count()
+        each_kind!(self, s => s.primitive_count())
     }
 
     /// The shape as world-space triangles (none for a shape without a tessellation).
     pub fn triangles(&self) -> Vec<[Vec3; 3]> {
-        self.model().triangles()
+        each_kind!(self, s => s.triangles())
     }
 
     /// The surface (u, v) of a hit at `p` on primitive `prim_id`, whose barycentric (or,
     /// for quads, bilinear) coordinates are `u`, `v`.
+    #[inline]
     pub fn hit_uv(&self, prim_id: u32, u: f32, v: f32, p: Vec3) -> Vec2 {
-        self.model().hit_uv(prim_id, u, v, p)
+        each_kind!(self, s => s.hit_uv(prim_id, u, v, p))
     }
 
     /// The derivatives of position and normal in (u, v) at point `p` of primitive `prim`,
     /// hit at barycentric (`u`, `v`), with unit geometric normal `ng`.
     pub fn tangents(&self, prim: usize, u: f32, v: f32, p: Vec3, ng: Vec3) -> Tangents {
-        self.model().tangents(prim, u, v, p, ng)
+        each_kind!(self, s => s.tangents(prim, u, v, p, ng))
     }
 }
 
 /// What every kind of shape gives: its form for the intersection backends, and what the
 /// techniques and readers ask of a shape. A new kind is one file with a type implementing
-/// this, a variant of [`Geometry`] and its line in [`Geometry::model`], and its readers.
+/// this, a variant of [`Geometry`] and its line in `each_kind!`, and its readers.
 pub trait ShapeModel {
     /// The shape as the intersection backends hold it (the primitive forms both backends
     /// intersect natively; a kind that has none of its own gives a tessellation).
@@ -271,7 +281,7 @@ impl SurfacePoint {
 
     /// The index of the shape in `Scene::shapes`, `None` for a point on an instance (whose
     /// shapes neither emit nor can be named in a set).
-    pub fn world_shape(&self) -> Option<usize> {
+    pub(crate) fn world_shape(&self) -> Option<usize> {
         self.instance.is_none().then_some(self.shape)
     }
 }

@@ -18,6 +18,7 @@ impl QuadMesh {
 }
 
 impl ShapeModel for QuadMesh {
+    #[inline]
     fn primitives(&self) -> Primitives<'_> {
         Primitives::Quads(self)
     }
@@ -49,6 +50,7 @@ impl ShapeModel for QuadMesh {
             .collect()
     }
 
+    #[inline]
     fn hit_uv(&self, _prim_id: u32, u: f32, v: f32, _p: Vec3) -> Vec2 {
         Vec2::new(u, v)
     }

@@ -12,6 +12,7 @@ pub struct Sphere {
 }
 
 impl ShapeModel for Sphere {
+    #[inline]
     fn primitives(&self) -> Primitives<'_> {
         Primitives::Sphere {
             center: self.center,
@@ -39,6 +40,7 @@ impl ShapeModel for Sphere {
         Vec::new()
     }
 
+    #[inline]
     fn hit_uv(&self, _prim_id: u32, _u: f32, _v: f32, p: Vec3) -> Vec2 {
         sphere_uv((p - self.center).normalize())
     }

@@ -24,6 +24,7 @@ impl TriangleMesh {
 }
 
 impl ShapeModel for TriangleMesh {
+    #[inline]
     fn primitives(&self) -> Primitives<'_> {
         Primitives::Triangles(self)
     }
@@ -56,6 +57,7 @@ impl ShapeModel for TriangleMesh {
             .collect()
     }
 
+    #[inline]
     fn hit_uv(&self, prim_id: u32, u: f32, v: f32, _p: Vec3) -> Vec2 {
         match &self.uvs {
             Some(t) => {
