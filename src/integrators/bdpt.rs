@@ -33,6 +33,7 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     pbrt: &["bdpt"],
     progressive: true,
     renders_parts: false,
+    follows_time: true,
 };
 
 /// The technique for `scene` (finite emitters only): nothing to prepare, sample passes.

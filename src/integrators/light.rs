@@ -27,6 +27,7 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     pbrt: &["lighttracer"],
     progressive: true,
     renders_parts: false,
+    follows_time: true,
 };
 
 /// The technique for `scene`: nothing to prepare, sample passes.

@@ -28,6 +28,7 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     pbrt: &["path", "volpath", "simplepath"],
     progressive: true,
     renders_parts: true,
+    follows_time: true,
 };
 
 /// The technique: nothing to prepare, sample passes.

@@ -395,6 +395,7 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     pbrt: &[],
     progressive: false,
     renders_parts: true,
+    follows_time: true,
 };
 
 /// Whitted's integrator's settings, checked.

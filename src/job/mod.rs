@@ -190,14 +190,13 @@ impl Rendered {
 /// (the irradiance cache and the illumination network keep values per point or patch):
 /// warned once.
 fn still_scene(scene: &Scene, technique: &Technique, control: &Control) -> Option<Scene> {
-    let name = match technique {
-        Technique::IrradianceCache(..) => "irradiance-cache integrator",
-        Technique::Network(_) => "network integrator",
-        _ => return None,
-    };
+    if technique.info().follows_time {
+        return None;
+    }
     match scene.at_shutter_open() {
         std::borrow::Cow::Owned(still) => {
-            control.warn(&crate::scene::motion::still_warning(name));
+            let name = format!("{} integrator", technique.kind());
+            control.warn(&crate::scene::motion::still_warning(&name));
             Some(still)
         }
         std::borrow::Cow::Borrowed(_) => None,

@@ -26,6 +26,10 @@ pub struct TechniqueInfo {
     /// Whether a part of the image can be rendered alone, to the same pixels as the whole
     /// render (not for light paths, which splat onto every pixel).
     pub renders_parts: bool,
+    /// Whether it follows a moving scene through the shutter interval (motion blur); one
+    /// that keeps values per point or patch renders the scene at shutter open, with a
+    /// warning.
+    pub follows_time: bool,
 }
 
 impl TechniqueInfo {

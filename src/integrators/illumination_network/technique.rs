@@ -99,6 +99,7 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     pbrt: &[],
     progressive: false,
     renders_parts: true,
+    follows_time: false,
 };
 
 /// The illumination network's settings.

@@ -79,6 +79,7 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     pbrt: &[],
     progressive: true,
     renders_parts: true,
+    follows_time: false,
 };
 
 /// The irradiance cache's own settings.
