@@ -40,15 +40,8 @@ impl LightModel for DirectionalLight {
 
     fn sample_li(&self, p: Vec3, _u: Vec2, choice: f32, world: &World) -> Option<LightSample> {
         let direction = self.unit;
-        Some(LightSample {
-            radiance: self.irradiance,
-            wi: -direction,
-            p: p - direction * (4.0 * world.radius + (p - world.center).length()),
-            error: Vec3::ZERO,
-            n: Vec3::ZERO,
-            pdf: choice,
-            delta: true,
-        })
+        let far = p - direction * (4.0 * world.radius + (p - world.center).length());
+        Some(LightSample::delta(self.irradiance, -direction, far, choice))
     }
 
     fn pdf_li(&self, _p: Vec3, _q: Vec3, _n: Vec3, _choice: f32) -> f32 {

@@ -160,6 +160,20 @@ pub struct LightSample {
 }
 
 impl LightSample {
+    /// A sample of a delta light (a point or a direction): `radiance` arrives along `-wi`
+    /// from `p`, off any surface, with the emitter's `choice` probability as its density.
+    pub fn delta(radiance: Rgb, wi: Vec3, p: Vec3, choice: f32) -> LightSample {
+        LightSample {
+            radiance,
+            wi,
+            p,
+            error: Vec3::ZERO,
+            n: Vec3::ZERO,
+            pdf: choice,
+            delta: true,
+        }
+    }
+
     /// Where the shadow ray towards the light ends.
     pub fn spot(&self) -> Spot {
         Spot {

@@ -40,15 +40,7 @@ impl<T: PointSource> LightModel for T {
         if intensity == Rgb::ZERO {
             return None;
         }
-        Some(LightSample {
-            radiance: intensity / dist2,
-            wi,
-            p: position,
-            error: Vec3::ZERO,
-            n: Vec3::ZERO,
-            pdf: choice,
-            delta: true,
-        })
+        Some(LightSample::delta(intensity / dist2, wi, position, choice))
     }
 
     fn pdf_li(&self, _p: Vec3, _q: Vec3, _n: Vec3, _choice: f32) -> f32 {
