@@ -506,9 +506,7 @@ mod tests {
                     e if e.starts_with('{') => Some("box".to_string()),
                     e => Some(e.trim_matches('"').to_string()),
                 };
-                let mut argv = vec!["raylink", "render", "s.toml", "-o", "x.exr", long];
-                let flag = format!("--{long}");
-                argv[5] = &flag;
+                let mut argv = vec!["raylink", "render", "s.toml", "-o", "x.exr", &option];
                 if let Some(v) = &value {
                     argv.push(v);
                 }

@@ -146,8 +146,10 @@ impl Technique {
         match self {
             Technique::IrradianceCache(_, c) => c.check_part(),
             Technique::Network(n) => n.check_part(),
-            Technique::Whitted(_) | Technique::Path(_) | Technique::Light(_) => Ok(()),
-            Technique::Bdpt(_) => Ok(()),
+            Technique::Whitted(_)
+            | Technique::Path(_)
+            | Technique::Light(_)
+            | Technique::Bdpt(_) => Ok(()),
         }
     }
 
@@ -295,11 +297,8 @@ mod tests {
             }
             let progressive = Technique::create(&Settings {
                 integrator: Some(k),
-                spp: Some(if k.name() == "whitted" || k.name() == "network" {
-                    4
-                } else {
-                    2
-                }),
+                // A square: Whitted and the network take it as uniform supersampling.
+                spp: Some(4),
                 network_file: Some("n.bin".into()),
                 ..Settings::default()
             })
