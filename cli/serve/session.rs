@@ -14,7 +14,7 @@ use raylink::{
     CancelToken, Control, Error, Film, Image, Job, MemoryBudget, Progress, Relight, RenderStats,
     Renderer, Scene, Shown, Watch,
 };
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::time::{Duration, Instant};
 
@@ -37,7 +37,6 @@ pub struct Inbox {
     frame: Option<(i64, Instant)>,
     /// The page shows an auxiliary image: compute them for every view.
     aovs_wanted: bool,
-    quit: bool,
     cancel: CancelToken,
 }
 
@@ -99,6 +98,8 @@ pub struct Session {
     pub changed: Condvar,
     inbox: Mutex<Inbox>,
     wake: Condvar,
+    /// Set once, by [`Session::quit`].
+    quit: AtomicBool,
     pub progress: Arc<Counter>,
     /// What does not change while serving.
     pub base: Base,
@@ -214,6 +215,7 @@ impl Session {
             changed: Condvar::new(),
             inbox: Mutex::new(Inbox::default()),
             wake: Condvar::new(),
+            quit: AtomicBool::new(false),
             progress: Arc::new(Counter::default()),
             base,
         }
@@ -254,16 +256,20 @@ impl Session {
 
     /// Stops the worker (after the job in hand is cancelled) and every event stream.
     pub fn quit(&self) {
-        let mut inbox = lock(&self.inbox);
-        inbox.quit = true;
+        // Set before the inbox is locked and the worker woken, so that the worker (which
+        // reads it under the inbox's lock) either sees it or is waiting for that wake.
+        self.quit.store(true, Ordering::SeqCst);
+        let inbox = lock(&self.inbox);
         inbox.cancel.cancel();
         self.wake.notify_all();
         drop(inbox);
         self.publish(|_| {});
     }
 
+    /// Takes no lock: the event streams ask while holding the state's, and the worker takes
+    /// the inbox's then the state's; reading the inbox here would invert that order.
     pub fn quitting(&self) -> bool {
-        lock(&self.inbox).quit
+        self.quit.load(Ordering::SeqCst)
     }
 
     /// Changes the state and tells the event streams.
@@ -326,7 +332,7 @@ pub fn work(session: &Session, mut renderer: Renderer, mut frames: Option<Frames
             loop {
                 let view = lock(&session.state).view;
                 let aovs_missing = inbox.aovs_wanted && aovs_done_for != view;
-                if inbox.quit {
+                if session.quitting() {
                     return;
                 }
                 if pending_first
@@ -555,6 +561,9 @@ fn render(
             Err(e) => return fail(session, &e),
         }
     }
+    // The samples per pixel of the image last published if it was a whole pass's: the
+    // finished render's image is that film's, and is not published twice.
+    let mut shown_whole: Option<u32> = None;
     let result = if progressive {
         let mut last = Instant::now();
         let mut show = |film: &Film, shown: Shown, stats: &RenderStats| {
@@ -563,6 +572,7 @@ fn render(
                 return Ok(());
             }
             last = Instant::now();
+            shown_whole = (shown == Shown::AfterPass).then_some(film.spp);
             session.publish_image_with(film.image()?, film.mean_spp(), |s| {
                 s.rays = Some(stats.rays.total());
                 s.mrays = Some(stats.mrays_per_second());
@@ -583,8 +593,10 @@ fn render(
     match result {
         Ok(r) if r.is_partial() => {}
         Ok(r) => {
-            let spp = r.film.as_ref().map_or(1.0, |f| f.spp as f64);
-            session.publish_image(r.image, spp);
+            let film_spp = r.film.as_ref().map(|f| f.spp);
+            if film_spp.is_none() || film_spp != shown_whole {
+                session.publish_image(r.image, film_spp.map_or(1.0, f64::from));
+            }
             if first {
                 first_image(session);
             }
