@@ -6,12 +6,13 @@ use crate::options::AccelName;
 use crate::{Cli, Failure};
 
 use raylink::coherence::{
-    render_sequence, report, Placement, Records, SequenceJob, SequenceMode, SequenceTechnique,
+    animates, render_frames, report, Coherence, Placement, Records, Sequence, SequenceMode,
 };
 use raylink::image::output::check_output_path;
+use raylink::job::{technique_info, TECHNIQUES};
 use raylink::scene::animation::Animation;
 use raylink::{write_image, Error, MetaValue, Metadata, OutputOptions, Result};
-use raylink::{Settings, Technique, TechniqueKind};
+use raylink::{Job, Settings, Technique, TechniqueKind};
 use std::path::PathBuf;
 
 /// How the coherence records are kept.
@@ -24,13 +25,26 @@ pub enum RecordsName {
     Segments,
 }
 
-/// The integrators `animate` can render with.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum AnimIntegrator {
-    /// Whitted 1980 (adaptive or uniform supersampling).
-    Whitted,
-    /// Path tracing with next-event estimation.
-    Path,
+/// The integrators `animate` can render with: the registered techniques that the coherence
+/// engine renders ([`raylink::coherence::animates`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AnimIntegrator(pub TechniqueKind);
+
+impl clap::ValueEnum for AnimIntegrator {
+    fn value_variants<'a>() -> &'a [Self] {
+        static ALL: std::sync::LazyLock<Vec<AnimIntegrator>> = std::sync::LazyLock::new(|| {
+            TECHNIQUES
+                .iter()
+                .filter(|t| animates(t.kind))
+                .map(|t| AnimIntegrator(t.kind))
+                .collect()
+        });
+        &ALL
+    }
+
+    fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
+        Some(clap::builder::PossibleValue::new(self.0.name()).help(technique_info(self.0).summary))
+    }
 }
 
 /// Options of `raylink animate`.
@@ -284,44 +298,31 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
     };
     crate::aliases::refuse_aliases(outputs.iter().chain(&csv).chain(&maps), &scene0.inputs)?;
     raylink::image::oiio::load()?;
-    let integrator = match (args.integrator, scene0.settings.integrator) {
-        (Some(i), _) => i,
-        (None, None | Some(TechniqueKind::Whitted)) => AnimIntegrator::Whitted,
-        (None, Some(TechniqueKind::Path)) => AnimIntegrator::Path,
-        (None, Some(other)) => {
-            return Err(Error::input(
-                &args.scene,
-                format!("animate renders with the whitted or path integrator, not \"{other}\""),
-            )
-            .into())
-        }
+    // The scene's settings with the options over them, as for a still render; the job
+    // each frame is rendered with, as `render` makes it.
+    let given = Settings {
+        integrator: args.integrator.map(|i| i.0),
+        spp: args.spp,
+        aa_threshold: args.aa_threshold,
+        aa_depth: args.aa_depth,
+        max_depth: args.max_depth,
+        area_samples: args.area_samples,
+        ..Settings::default()
     };
-    // The scene's settings, the options over them; Whitted samples adaptively unless --spp
-    // asks for a grid (the scene's spp is the path tracer's).
-    let given = &scene0.settings;
-    let settings = match integrator {
-        AnimIntegrator::Whitted => Settings {
-            integrator: Some(TechniqueKind::Whitted),
-            spp: args.spp,
-            aa_threshold: args.aa_threshold.or(given.aa_threshold),
-            aa_depth: args.aa_depth.or(given.aa_depth),
-            area_samples: Some(args.area_samples.or(given.area_samples).unwrap_or(16)),
-            fresnel: given.fresnel,
-            max_depth: args.max_depth.or(given.max_depth),
-            ..Settings::default()
-        },
-        AnimIntegrator::Path => Settings {
-            integrator: Some(TechniqueKind::Path),
-            spp: args.spp.or(given.spp),
-            max_depth: args.max_depth.or(given.max_depth),
-            filter: given.filter,
-            ..Settings::default()
-        },
+    // A bad value the scene file gives is reported at its line there.
+    let locate = |e: Error| match &e {
+        Error::Setting { name, .. } if !given.given().contains(&name.as_str()) => scene0.locate(e),
+        _ => e,
     };
-    let technique = match Technique::create(&settings).map_err(|e| scene0.locate(e))? {
-        Technique::Whitted(w) => SequenceTechnique::Whitted(w),
-        Technique::Path(mc) => SequenceTechnique::Path(mc),
-        _ => unreachable!("the settings name whitted or path"),
+    let settings = scene0.settings.clone().overlaid(&given);
+    let technique = Technique::create(&settings).map_err(locate)?;
+    let job = Job {
+        width: args.width.unwrap_or(scene0.camera.width),
+        height: args.height.unwrap_or(scene0.camera.height),
+        seed: args.seed,
+        threads: args.threads,
+        accel: args.accel.backend(),
+        ..Job::new(&scene0, technique)
     };
     let records = match args.records {
         RecordsName::Tables => Records::Tables,
@@ -332,14 +333,7 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
     } else {
         Placement::Online
     };
-    let job = SequenceJob {
-        technique,
-        width: args.width.unwrap_or(scene0.camera.width),
-        height: args.height.unwrap_or(scene0.camera.height),
-        seed: args.seed,
-        threads: args.threads,
-        accel: args.accel.backend(),
-        frames: frames.clone(),
+    let coherence = Coherence {
         mode: if args.no_coherence {
             SequenceMode::Full
         } else if args.verify {
@@ -353,63 +347,65 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
         overhead_reps: args.overhead_reps,
         placement,
     };
-    raylink::Job {
-        width: job.width,
-        height: job.height,
-        threads: job.threads,
-        ..raylink::Job::new(&scene0, Technique::create(&Settings::default())?)
-    }
-    .validate()?;
+    // What the engine refuses (a technique it does not render), before any frame.
+    Sequence::new(&job, &coherence).map_err(locate)?;
     drop(scene0);
     let out_options = OutputOptions {
         exposure: args.exposure.unwrap_or(0.0),
         half: args.half,
     };
     let mut written: Option<i64> = None;
-    let result = render_sequence(&anim, &job, &control, &mut |f, image, row| {
-        let metadata: Metadata = vec![
-            (
-                "Software".into(),
-                MetaValue::Str(format!("raylink {}", raylink::VERSION)),
-            ),
-            (
-                "raylink:scene".into(),
-                MetaValue::Str(args.scene.display().to_string()),
-            ),
-            ("raylink:frame".into(), MetaValue::Int(f as i32)),
-            ("raylink:fps".into(), MetaValue::Float(anim.fps as f32)),
-            ("raylink:seed".into(), MetaValue::Str(args.seed.to_string())),
-        ];
-        write_image(
-            &frame_path(&args.output, f)?,
-            image,
-            &metadata,
-            &out_options,
-        )?;
-        if let Some(pattern) = &args.retrace_map {
-            let map = report::retrace_map(image, &row.coherent, blocks);
-            write_image(&frame_path(pattern, f)?, &map, &metadata, &out_options)?;
-        }
-        written = Some(f);
-        if row.identical == Some(false) {
-            eprintln!(
-                "raylink: error: frame {f}: the coherent render differs from the full render"
-            );
-        }
-        let r = &row.coherent;
-        control.note(&if args.no_coherence {
-            format!("frame {f}: rendered in full")
-        } else {
-            format!(
-                "frame {f}: {} of {} blocks retraced, {} rays, {:.3} s",
-                r.blocks_retraced,
-                r.blocks_total,
-                r.rays.total(),
-                row.time.wall
-            )
-        });
-        Ok(())
-    });
+    let result = render_frames(
+        &anim,
+        &job,
+        &frames,
+        &coherence,
+        &control,
+        &mut |f, image, row| {
+            let metadata: Metadata = vec![
+                (
+                    "Software".into(),
+                    MetaValue::Str(format!("raylink {}", raylink::VERSION)),
+                ),
+                (
+                    "raylink:scene".into(),
+                    MetaValue::Str(args.scene.display().to_string()),
+                ),
+                ("raylink:frame".into(), MetaValue::Int(f as i32)),
+                ("raylink:fps".into(), MetaValue::Float(anim.fps as f32)),
+                ("raylink:seed".into(), MetaValue::Str(args.seed.to_string())),
+            ];
+            write_image(
+                &frame_path(&args.output, f)?,
+                image,
+                &metadata,
+                &out_options,
+            )?;
+            if let Some(pattern) = &args.retrace_map {
+                let map = report::retrace_map(image, &row.coherent, blocks);
+                write_image(&frame_path(pattern, f)?, &map, &metadata, &out_options)?;
+            }
+            written = Some(f);
+            if row.identical == Some(false) {
+                eprintln!(
+                    "raylink: error: frame {f}: the coherent render differs from the full render"
+                );
+            }
+            let r = &row.coherent;
+            control.note(&if args.no_coherence {
+                format!("frame {f}: rendered in full")
+            } else {
+                format!(
+                    "frame {f}: {} of {} blocks retraced, {} rays, {:.3} s",
+                    r.blocks_retraced,
+                    r.blocks_total,
+                    r.rays.total(),
+                    row.time.wall
+                )
+            });
+            Ok(())
+        },
+    );
     let report = match result {
         Ok(report) => report,
         Err(Error::Cancelled { .. }) => {

@@ -169,6 +169,60 @@ fn cli_rejects_bad_input() {
     assert!(!dir.path().join("f_0.exr").exists());
 }
 
+/// An animation's job is made as a still render's: the scene file's `[render]` settings
+/// with the options over them; a technique the coherence engine does not render is refused
+/// at its line in the scene file.
+#[test]
+fn cli_takes_the_scene_files_settings_and_refuses_other_techniques() {
+    let dir = tempfile::tempdir().unwrap();
+    let frame0 = |name: &str, render: &str, args: &[&str]| {
+        let scene = dir.path().join(format!("{name}.toml"));
+        std::fs::write(&scene, animated("", MOVING) + render).unwrap();
+        let pattern = dir.path().join(format!("{name}_%d.exr"));
+        let mut all = vec![
+            "animate",
+            scene.to_str().unwrap(),
+            "-o",
+            pattern.to_str().unwrap(),
+            "--frames",
+            "0",
+            "--quiet",
+            "--aa-depth",
+            "1",
+        ];
+        all.extend_from_slice(args);
+        let out = common::raylink(&all);
+        let written = dir.path().join(format!("{name}_0.exr"));
+        (out, written)
+    };
+    let read = |path: &std::path::Path| bits(&raylink::read_image(path).unwrap().0);
+    let (out, default) = frame0("default", "", &[]);
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let (out, given) = frame0("given", "", &["--spp", "4", "--max-depth", "1"]);
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    let (out, scene) = frame0("scene", "\n[render]\nspp = 4\nmax_depth = 1\n", &[]);
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    // Adaptive anti-aliasing against a 2x2 grid, and the mirror sphere black at depth 1.
+    assert_ne!(read(&default), read(&given));
+    assert_eq!(
+        read(&scene),
+        read(&given),
+        "the scene's settings were not used"
+    );
+
+    let (out, written) = frame0("bdpt", "\n[render]\nintegrator = \"bdpt\"\n", &[]);
+    let err = common::stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("bdpt.toml") && err.contains("line") && err.contains("whitted or path"),
+        "{err}"
+    );
+    assert_eq!(err.lines().count(), 1, "{err}");
+    assert!(!written.exists());
+    let (out, _) = frame0("option", "", &["--integrator", "bdpt"]);
+    assert_eq!(out.status.code(), Some(2));
+}
+
 #[test]
 fn cli_frame_range_matches_the_whole_sequence() {
     // A sub-range starts with a full frame and continues coherently; its frames must equal

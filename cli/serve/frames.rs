@@ -5,12 +5,11 @@
 //! image; any other integrator renders each frame in full.
 
 use raylink::coherence::report::retrace_map;
-use raylink::coherence::SequenceTechnique;
-use raylink::coherence::{Placement, Records, Sequence, SequenceJob, SequenceMode};
+use raylink::coherence::{Coherence, Sequence};
 use raylink::image::Image;
 use raylink::scene::animation::Animation;
 use raylink::scene::Camera;
-use raylink::{Control, Job, Renderer, Result, Technique};
+use raylink::{Control, Job, Renderer, Result};
 
 /// Pixel blocks of the coherence engine's tables, as `raylink animate`'s default.
 const BLOCKS: (u32, u32) = (16, 16);
@@ -30,37 +29,22 @@ pub struct Frame {
 pub struct Frames {
     pub animation: Animation,
     job: Job,
-    coherent: Option<(SequenceJob, Option<Sequence>)>,
+    /// With a job the coherence engine renders: its settings and the sequence so far.
+    coherent: Option<(Coherence, Option<Sequence>)>,
 }
 
 impl Frames {
     /// The frames of `animation` rendered as `job` says (its camera and scene are replaced
     /// by each frame's).
     pub fn new(animation: Animation, job: &Job) -> Frames {
-        let technique = match &job.technique {
-            Technique::Whitted(w) => Some(SequenceTechnique::Whitted(*w)),
-            Technique::Path(mc) => Some(SequenceTechnique::Path(*mc)),
-            _ => None,
+        // A job the engine cannot follow (a time limit) renders its frames in full.
+        let coherence = Coherence {
+            blocks: BLOCKS,
+            ..Coherence::default()
         };
-        let coherent = technique.map(|technique| {
-            let records = Records::Segments;
-            let sequence = SequenceJob {
-                technique,
-                width: job.width,
-                height: job.height,
-                seed: job.seed,
-                threads: job.threads,
-                accel: job.accel,
-                frames: animation.frame_numbers().collect(),
-                mode: SequenceMode::Coherent,
-                records,
-                voxels: Placement::Online.default_voxels(records),
-                blocks: BLOCKS,
-                overhead_reps: 0,
-                placement: Placement::Online,
-            };
-            (sequence, None)
-        });
+        let coherent = Sequence::new(job, &coherence)
+            .ok()
+            .map(|sequence| (coherence, Some(sequence)));
         Frames {
             animation,
             job: job.clone(),
@@ -73,7 +57,7 @@ impl Frames {
     pub fn render(&mut self, frame: i64, camera: &Camera, control: &Control) -> Result<Frame> {
         let mut scene = self.animation.scene_at(frame)?;
         scene.camera = camera.clone();
-        let Some((job, sequence)) = &mut self.coherent else {
+        let Some((coherence, sequence)) = &mut self.coherent else {
             let clock = std::time::Instant::now();
             let mut renderer = Renderer::new(scene, self.job.clone(), control)?;
             let rendered = renderer.render(control)?;
@@ -88,12 +72,12 @@ impl Frames {
         // A frame cut short leaves the engine to start again (its first frame in full).
         let mut engine = match sequence.take() {
             Some(s) => s,
-            None => Sequence::new(job)?,
+            None => Sequence::new(&self.job, coherence)?,
         };
         let (image, row) = engine.next(frame, &scene, control, false)?;
         *sequence = Some(engine);
         let stats = &row.coherent;
-        let pixels = (job.width as u64 * job.height as u64).max(1);
+        let pixels = (self.job.width as u64 * self.job.height as u64).max(1);
         Ok(Frame {
             map: Some(retrace_map(&image, stats, BLOCKS)),
             retraced: stats.pixels_retraced as f64 / pixels as f64,

@@ -11,6 +11,10 @@
 //! - `renderer`: the incremental frame renderer.
 //! - [`sequence`]: a sequence's frames rendered coherently (or verified), with statistics;
 //!   [`report`] writes them for people.
+//!
+//! A sequence is rendered from the same [`Job`](crate::Job) as a still image (technique,
+//! size, seed, threads, backend) and [`Coherence`], the engine's own settings:
+//! [`render_frames`] for an animation's frames, [`Sequence`] for frames fed one at a time.
 
 pub(crate) mod changes;
 /// The voxel grid and its walk, public only for `benches/coherence.rs`: not an API.
@@ -26,6 +30,5 @@ pub(crate) mod tables;
 pub use record::Records;
 pub use renderer::FrameStats;
 pub use sequence::{
-    render_sequence, FrameRow, Placement, Report, Sequence, SequenceJob, SequenceMode,
-    SequenceTechnique, Time,
+    animates, render_frames, Coherence, FrameRow, Placement, Report, Sequence, SequenceMode, Time,
 };

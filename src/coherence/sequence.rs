@@ -8,27 +8,27 @@ use super::grid::Grid;
 use super::record::Records;
 use super::renderer::{CoherentRenderer, Engine, FrameStats};
 use super::tables::BlockLayout;
-use crate::accel::{self, Backend, DynamicAccel, Update};
+use crate::accel::{self, DynamicAccel, Update};
 use crate::control::Control;
 use crate::error::{Error, Result};
 use crate::image::Image;
 use crate::integrators::path::{PathOptions, PathTracer};
-use crate::integrators::technique::{MonteCarloSettings, WhittedSettings};
 use crate::integrators::whitted::{Whitted, WhittedOptions};
+use crate::job::{Job, MonteCarloSettings, Technique, TechniqueKind};
 use crate::math::Vec3;
 use crate::render::pixels::PixelView;
+use crate::render::PixelSampling;
 use crate::scene::animation::Animation;
 use crate::scene::{Light, Scene};
 use crate::transport::ProgressiveOptions;
 use crate::transport::{Context, RayStats};
 use std::time::Instant;
 
-/// The techniques a sequence renders with.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub enum SequenceTechnique {
-    Whitted(WhittedSettings),
-    /// The path tracer (whose samples splat nothing, so that blocks render alone).
-    Path(MonteCarloSettings),
+/// Whether the coherence engine renders a technique: Whitted's and the path tracer (whose
+/// samples splat nothing, so that a block of pixels renders alone). Others render a keyframed
+/// scene's frames one at a time through [`crate::Renderer`].
+pub fn animates(kind: TechniqueKind) -> bool {
+    matches!(kind, TechniqueKind::Whitted | TechniqueKind::Path)
 }
 
 /// How the frames are made.
@@ -42,17 +42,10 @@ pub enum SequenceMode {
     Verify,
 }
 
-/// A sequence to render.
+/// The coherence engine's own settings. What each frame is rendered with (technique, size,
+/// seed, threads, backend) is the [`Job`]'s, as for any render.
 #[derive(Clone, Debug, PartialEq)]
-pub struct SequenceJob {
-    pub technique: SequenceTechnique,
-    pub width: u32,
-    pub height: u32,
-    pub seed: u64,
-    pub threads: Option<usize>,
-    pub accel: Backend,
-    /// The frames, in the scene's numbers (consecutive); the first is traced in full.
-    pub frames: Vec<i64>,
+pub struct Coherence {
     pub mode: SequenceMode,
     pub records: Records,
     /// Approximate number of voxels of the grid.
@@ -65,54 +58,94 @@ pub struct SequenceJob {
     pub placement: Placement,
 }
 
-/// The integrator of a sequence.
-pub(crate) enum Integrators {
-    Whitted(Whitted),
-    Path(PathTracer),
+impl Default for Coherence {
+    /// Coherent, online, segment records with their default voxels, 16x16 blocks.
+    fn default() -> Coherence {
+        Coherence {
+            mode: SequenceMode::Coherent,
+            records: Records::Segments,
+            voxels: Placement::Online.default_voxels(Records::Segments),
+            blocks: (16, 16),
+            overhead_reps: 0,
+            placement: Placement::Online,
+        }
+    }
 }
 
-impl SequenceJob {
-    pub(crate) fn integrators(&self) -> Integrators {
-        match self.technique {
-            SequenceTechnique::Whitted(w) => Integrators::Whitted(Whitted::new(WhittedOptions {
-                max_depth: w.max_depth,
-                area_samples: w.area_samples,
-                fresnel: w.fresnel,
-                ..WhittedOptions::default()
-            })),
-            SequenceTechnique::Path(mc) => Integrators::Path(PathTracer::new(PathOptions {
-                max_depth: mc.max_depth,
-            })),
+/// The integrator of a sequence, with the settings of its pixels.
+pub(crate) enum Integrators {
+    Whitted(Whitted, PixelSampling),
+    Path(PathTracer, MonteCarloSettings),
+}
+
+impl Integrators {
+    /// What renders `job`'s frames; an error for a technique the engine does not render, or
+    /// a job it cannot follow (a part of the image, a time limit).
+    pub(crate) fn for_job(job: &Job) -> Result<Integrators> {
+        job.validate()?;
+        if job.region.is_some() {
+            return Err(Error::setting(
+                "region",
+                "does not apply to an animation: its frames are rendered whole",
+            ));
+        }
+        match &job.technique {
+            Technique::Whitted(w) => Ok(Integrators::Whitted(
+                Whitted::new(WhittedOptions {
+                    max_depth: w.max_depth,
+                    area_samples: w.area_samples,
+                    fresnel: w.fresnel,
+                    ..WhittedOptions::default()
+                }),
+                w.sampling,
+            )),
+            Technique::Path(mc) if mc.time_limit.is_some() => Err(Error::setting(
+                "time_limit",
+                "cannot be used for an animation: every frame takes the same samples",
+            )),
+            Technique::Path(mc) => Ok(Integrators::Path(
+                PathTracer::new(PathOptions {
+                    max_depth: mc.max_depth,
+                }),
+                *mc,
+            )),
+            other => Err(Error::setting(
+                "integrator",
+                format!(
+                    "must be whitted or path for an animation, not \"{}\"",
+                    other.kind()
+                ),
+            )),
         }
     }
 
-    pub(crate) fn engine<'a>(&self, integrators: &'a Integrators) -> Engine<'a> {
-        match (integrators, self.technique) {
-            (Integrators::Whitted(w), SequenceTechnique::Whitted(s)) => Engine::Whitted {
-                integrator: w,
+    /// The engine rendering `job`'s view with these integrators.
+    pub(crate) fn engine(&self, job: &Job) -> Engine<'_> {
+        match self {
+            Integrators::Whitted(integrator, sampling) => Engine::Whitted {
+                integrator,
                 view: PixelView {
-                    width: self.width,
-                    height: self.height,
-                    sampling: s.sampling,
-                    threads: self.threads,
-                    seed: self.seed,
+                    width: job.width,
+                    height: job.height,
+                    sampling: *sampling,
+                    threads: job.threads,
+                    seed: job.seed,
                 },
             },
-            (Integrators::Path(p), SequenceTechnique::Path(mc)) => Engine::MonteCarlo {
-                integrator: p,
+            Integrators::Path(integrator, mc) => Engine::MonteCarlo {
+                integrator,
                 options: ProgressiveOptions {
-                    width: self.width,
-                    height: self.height,
+                    width: job.width,
+                    height: job.height,
                     spp: mc.spp,
                     time_limit: None,
-                    threads: self.threads,
-                    seed: self.seed,
+                    threads: job.threads,
+                    seed: job.seed,
                     filter: mc.filter,
                     // Unchanged blocks are copied: a pixel must depend on its own samples.
                     reconstruction: crate::image::filter::Reconstruction::Importance,
                 },
             },
-            _ => unreachable!("the integrators are made from the same technique"),
         }
     }
 }
@@ -195,9 +228,10 @@ fn grown(grid: &Grid, boxes: &[Aabb], voxels: u32) -> Grid {
 /// A coherent sequence made one frame at a time: [`next`](Self::next) takes the next
 /// frame's scene and returns its image, traced only where something changed since the
 /// frame before. Frame k is made from frames up to k alone; an editor or a simulation can
-/// drive it with scenes as they come. [`render_sequence`] drives it from an animation.
+/// drive it with scenes as they come. [`render_frames`] drives it from an animation.
 pub struct Sequence {
-    job: SequenceJob,
+    job: Job,
+    coherence: Coherence,
     integrators: Integrators,
     layout: BlockLayout,
     coherent: Option<CoherentRenderer>,
@@ -212,19 +246,29 @@ pub struct Sequence {
 }
 
 impl Sequence {
-    /// A sequence of `job`'s settings (its `frames`, `mode` and `overhead_reps` are the
-    /// driver's: [`next`](Self::next) renders whatever it is given, coherently).
-    pub fn new(job: &SequenceJob) -> Result<Sequence> {
-        if job.voxels == 0 || job.voxels > 1 << 24 {
+    /// A sequence rendering frames as `job` says, with `coherence`'s records and grid (its
+    /// `mode` and `overhead_reps` are the driver's: [`next`](Self::next) renders whatever it
+    /// is given, coherently).
+    pub fn new(job: &Job, coherence: &Coherence) -> Result<Sequence> {
+        let voxels = coherence.voxels;
+        if voxels == 0 || voxels > 1 << 24 {
             return Err(Error::setting(
                 "voxels",
-                format!("must be between 1 and {}, got {}", 1 << 24, job.voxels),
+                format!("must be between 1 and {}, got {voxels}", 1 << 24),
+            ));
+        }
+        let (cols, rows) = coherence.blocks;
+        if !(1..=65536).contains(&cols) || !(1..=65536).contains(&rows) {
+            return Err(Error::setting(
+                "blocks",
+                format!("must be 1 to 65536 each way, got {cols}x{rows}"),
             ));
         }
         Ok(Sequence {
-            integrators: job.integrators(),
-            layout: BlockLayout::new(job.width, job.height, job.blocks.0, job.blocks.1),
+            integrators: Integrators::for_job(job)?,
+            layout: BlockLayout::new(job.width, job.height, cols, rows),
             job: job.clone(),
+            coherence: coherence.clone(),
             coherent: None,
             dynamic: None,
             foreseen: None,
@@ -238,8 +282,9 @@ impl Sequence {
     /// sequence) mark and keeps records only where a later frame changes something. Before
     /// the first frame.
     pub(crate) fn foresee(&mut self, changes: &[Changes]) {
-        let grid = lookahead_grid(changes, self.job.voxels);
-        let probe = CoherentRenderer::with_records(grid.clone(), self.layout, self.job.records);
+        let grid = lookahead_grid(changes, self.coherence.voxels);
+        let probe =
+            CoherentRenderer::with_records(grid.clone(), self.layout, self.coherence.records);
         let marked = changes.iter().map(|c| probe.surface_boxes(c)).collect();
         self.foreseen = Some((grid, marked));
     }
@@ -248,13 +293,13 @@ impl Sequence {
     fn start(&self, scene: &Scene, control: &Control) -> CoherentRenderer {
         let grid = match &self.foreseen {
             Some((grid, _)) => grid.clone(),
-            None => online_grid(scene, self.job.voxels),
+            None => online_grid(scene, self.coherence.voxels),
         };
         self.renderer(grid, control)
     }
 
     fn renderer(&self, grid: Grid, control: &Control) -> CoherentRenderer {
-        let mut r = CoherentRenderer::with_records(grid, self.layout, self.job.records);
+        let mut r = CoherentRenderer::with_records(grid, self.layout, self.coherence.records);
         r.set_segment_budget((control.budget.limit() / 4).min(usize::MAX as u64) as usize);
         if let Some((_, marked)) = &self.foreseen {
             r.restrict_to_sequence(marked);
@@ -267,7 +312,7 @@ impl Sequence {
     fn render_full(&self, scene: &Scene, control: &Control) -> Result<(Image, RayStats, Time)> {
         let clock = Clock::start();
         let accel = accel::build(scene, self.job.accel, control)?;
-        let engine = self.job.engine(&self.integrators);
+        let engine = self.integrators.engine(&self.job);
         let (image, rays) = engine.render_full(&Context::new(scene, accel.as_ref()), control)?;
         Ok((image, rays, clock.elapsed()))
     }
@@ -281,7 +326,7 @@ impl Sequence {
         reps: u32,
         control: &Control,
     ) -> Result<Vec<(f64, f64)>> {
-        let engine = self.job.engine(&self.integrators);
+        let engine = self.integrators.engine(&self.job);
         let mut coherent = self.start(scene, control);
         let mut overhead = Vec::new();
         for rep in 0..reps {
@@ -332,7 +377,7 @@ impl Sequence {
             Some(c) => {
                 // Something left the grid: records outside it cannot exist, so the grid grows
                 // and this frame is traced in full (section 3.3.2 re-subdivides in place).
-                let grid = grown(&c.grid, &extent(scene), self.job.voxels);
+                let grid = grown(&c.grid, &extent(scene), self.coherence.voxels);
                 self.regrids += 1;
                 outer.note(&format!(
                     "notice: frame {frame}: the scene left the voxel grid; the grid grows to \
@@ -347,7 +392,7 @@ impl Sequence {
             Some(d) => row.update = Some(d.update(scene)?),
         }
         let accel = self.dynamic.as_deref().expect("built above");
-        let engine = self.job.engine(&self.integrators);
+        let engine = self.integrators.engine(&self.job);
         let before = (coherent.records(), coherent.keeps_camera_hits());
         let rendered = coherent.render_frame(scene, accel, &engine, control);
         let (image, stats) = match rendered {
@@ -405,7 +450,7 @@ impl Sequence {
             records: self
                 .coherent
                 .as_ref()
-                .map_or(self.job.records, |c| c.records()),
+                .map_or(self.coherence.records, |c| c.records()),
             record_bytes: self.peaks.0,
             segments: self.peaks.1,
             camera_bytes: self.peaks.2,
@@ -425,21 +470,25 @@ impl Sequence {
     }
 }
 
-/// Renders `job`'s frames of `anim`, handing each finished frame to `on_frame` (to write or
-/// show it); returns the statistics. Online (the default placement), each frame is read
-/// only when it is rendered. A cancel stops after the frame in hand with
-/// [`Error::Cancelled`] naming the next frame; the frames handed over are whole.
-pub fn render_sequence(
+/// Renders frames `frames` of `anim` (consecutive numbers) as `job` says, with
+/// `coherence`'s engine, handing each finished frame to `on_frame` (to write or show it);
+/// returns the statistics. The job is the one a still render takes (its technique, size,
+/// seed, threads and backend); the technique must be one the engine [`animates`]. Online
+/// (the default placement), each frame is read only when it is rendered. A cancel stops
+/// after the frame in hand with [`Error::Cancelled`] naming the next frame; the frames
+/// handed over are whole.
+pub fn render_frames(
     anim: &Animation,
-    job: &SequenceJob,
+    job: &Job,
+    frames: &[i64],
+    coherence: &Coherence,
     control: &Control,
     on_frame: &mut dyn FnMut(i64, &Image, &FrameRow) -> Result<()>,
 ) -> Result<Report> {
-    let frames = &job.frames;
     if frames.is_empty() {
         return Err(Error::setting("frames", "is empty"));
     }
-    let mut sequence = Sequence::new(job)?;
+    let mut sequence = Sequence::new(job, coherence)?;
     let quiet = control.silenced();
     let scene0 = anim.scene_at(frames[0])?;
     // Records of what each ray met hold for one time: moving shapes stay at shutter open.
@@ -448,7 +497,7 @@ pub fn render_sequence(
     }
     let scene0 = scene0.into_shutter_open();
     let prepare = Instant::now();
-    if job.placement == Placement::Lookahead && job.mode != SequenceMode::Full {
+    if coherence.placement == Placement::Lookahead && coherence.mode != SequenceMode::Full {
         // Reads every frame once first, to place the grid where things will change.
         let mut changes = Vec::new();
         let mut previous = FrameSummary::new(&scene0, None);
@@ -461,10 +510,10 @@ pub fn render_sequence(
         sequence.foresee(&changes);
     }
     let prepare_seconds = prepare.elapsed().as_secs_f64();
-    let overhead = if job.mode == SequenceMode::Full {
+    let overhead = if coherence.mode == SequenceMode::Full {
         Vec::new()
     } else {
-        sequence.first_frame_overhead(&scene0, job.overhead_reps, &quiet)?
+        sequence.first_frame_overhead(&scene0, coherence.overhead_reps, &quiet)?
     };
     let mut rows = Vec::new();
     let progress = control.phase("frames", Some(frames.len() as u64), "frames");
@@ -475,7 +524,7 @@ pub fn render_sequence(
             Some(s) => s,
             None => anim.scene_at(f)?.into_shutter_open(),
         };
-        let (image, row) = if job.mode == SequenceMode::Full {
+        let (image, row) = if coherence.mode == SequenceMode::Full {
             let (img, rays, time) = sequence.render_full(&scene, &quiet)?;
             let row = FrameRow {
                 frame: f,
@@ -484,7 +533,7 @@ pub fn render_sequence(
             };
             (img, row)
         } else {
-            sequence.next(f, &scene, control, job.mode == SequenceMode::Verify)?
+            sequence.next(f, &scene, control, coherence.mode == SequenceMode::Verify)?
         };
         on_frame(f, &image, &row)?;
         progress.advance(1);

@@ -9,13 +9,14 @@ use crate::coherence::grid::Grid;
 use crate::coherence::record::Records;
 use crate::coherence::renderer::{CoherentRenderer, FrameStats};
 use crate::coherence::sequence::{
-    lookahead_grid, Placement, Sequence, SequenceJob, SequenceMode, SequenceTechnique,
+    lookahead_grid, Coherence, Integrators, Placement, Sequence, SequenceMode,
 };
 use crate::coherence::tables::BlockLayout;
 use crate::control::Control;
 use crate::image::Image;
 use crate::integrators::technique::{MonteCarloSettings, WhittedSettings};
 use crate::integrators::whitted::WhittedOptions;
+use crate::job::{Job, Technique};
 use crate::math::Vec3;
 use crate::render::PixelSampling;
 use crate::scene::animation::Animation;
@@ -207,17 +208,16 @@ fn bits(image: &Image) -> Vec<[u32; 3]> {
         .collect()
 }
 
-/// The sequence `raylink animate` would make of `frames` (`--verify`, segment records,
-/// 4096 voxels, one of the two placements), with the test's integrator settings.
+/// The job and the sequence settings `raylink animate` would use (`--verify`, segment
+/// records, 4096 voxels, one of the two placements), with the test's integrator settings.
 fn sequence_job(
     kind: Kind,
     (w, h): (u32, u32),
     blocks: (u32, u32),
-    frames: Vec<i64>,
     placement: Placement,
-) -> SequenceJob {
+) -> (Job, Coherence) {
     let technique = match kind {
-        Kind::Whitted => SequenceTechnique::Whitted(WhittedSettings {
+        Kind::Whitted => Technique::Whitted(WhittedSettings {
             max_depth: WhittedOptions::default().max_depth,
             area_samples: 4,
             fresnel: WhittedOptions::default().fresnel,
@@ -226,7 +226,7 @@ fn sequence_job(
                 max_depth: 1,
             },
         }),
-        Kind::Path => SequenceTechnique::Path(MonteCarloSettings {
+        Kind::Path => Technique::Path(MonteCarloSettings {
             max_depth: 4,
             spp: 4,
             time_limit: None,
@@ -234,21 +234,24 @@ fn sequence_job(
             reconstruction: crate::image::filter::Reconstruction::Importance,
         }),
     };
-    SequenceJob {
+    let job = Job {
         technique,
         width: w,
         height: h,
+        region: None,
         seed: 3,
         threads: Some(2),
         accel: Backend::Embree,
-        frames,
+    };
+    let coherence = Coherence {
         mode: SequenceMode::Verify,
         records: Records::Segments,
         voxels: 4096,
         blocks,
         overhead_reps: 0,
         placement,
-    }
+    };
+    (job, coherence)
 }
 
 /// Renders every frame incrementally and from scratch; asserts they are identical and
@@ -260,14 +263,14 @@ fn run(text: &str, kind: Kind, blocks: (u32, u32)) -> Vec<(FrameStats, Image)> {
     let frames: Vec<i64> = anim.frame_numbers().collect();
     let scenes: Vec<_> = frames.iter().map(|&f| anim.scene_at(f).unwrap()).collect();
     let size = (scenes[0].camera.width, scenes[0].camera.height);
-    let job = sequence_job(kind, size, blocks, frames.clone(), Placement::Lookahead);
-    let integrators = job.integrators();
-    let engine = job.engine(&integrators);
+    let (job, coherence) = sequence_job(kind, size, blocks, Placement::Lookahead);
+    let integrators = Integrators::for_job(&job).unwrap();
+    let engine = integrators.engine(&job);
     let changes: Vec<Changes> = scenes
         .windows(2)
         .map(|w| FrameSummary::new(&w[0], None).diff(&FrameSummary::new(&w[1], None)))
         .collect();
-    let grid = lookahead_grid(&changes, job.voxels);
+    let grid = lookahead_grid(&changes, coherence.voxels);
     let layout = BlockLayout::new(size.0, size.1, blocks.0, blocks.1);
     // The paper's voxel tables, recording everywhere.
     let mut r = CoherentRenderer::with_records(grid.clone(), layout, Records::Tables);
@@ -281,14 +284,8 @@ fn run(text: &str, kind: Kind, blocks: (u32, u32)) -> Vec<(FrameStats, Image)> {
     let marked: Vec<Vec<_>> = changes.iter().map(|c| sparse.surface_boxes(c)).collect();
     sparse.restrict_to_sequence(&marked);
     // Online, as `raylink animate` makes frames by default.
-    let mut online = Sequence::new(&sequence_job(
-        kind,
-        size,
-        blocks,
-        frames.clone(),
-        Placement::Online,
-    ))
-    .unwrap();
+    let (job, coherence) = sequence_job(kind, size, blocks, Placement::Online);
+    let mut online = Sequence::new(&job, &coherence).unwrap();
     let mut out = Vec::new();
     // The incremental renderer moves one dynamic structure (Embree refits what moved); each
     // full render builds its own static one.
@@ -750,9 +747,9 @@ fn camera_hits_count_in_the_records_budget() {
     let anim = Animation::from_str(&animated("", MOVING), Path::new("t.toml")).unwrap();
     let scenes = [0, 1].map(|f| anim.scene_at(f).unwrap());
     let size = (scenes[0].camera.width, scenes[0].camera.height);
-    let job = sequence_job(Kind::Whitted, size, (8, 8), vec![0, 1], Placement::Online);
-    let integrators = job.integrators();
-    let engine = job.engine(&integrators);
+    let (job, _) = sequence_job(Kind::Whitted, size, (8, 8), Placement::Online);
+    let integrators = Integrators::for_job(&job).unwrap();
+    let engine = integrators.engine(&job);
     let bounds = scenes.each_ref().map(|s| s.bounds().unwrap());
     let grid = CoherentRenderer::grid_around(&bounds, 4096);
     let layout = BlockLayout::new(size.0, size.1, 8, 8);

@@ -3,15 +3,14 @@
 //! dim or come and go; a camera keyframed to where it already is), random frame ranges and
 //! image sizes, both grid placements, both record forms and both integrators, each frame
 //! required to be identical bit for bit to its full render. The sequences go through
-//! [`render_sequence`], so the grids are placed exactly as `raylink animate` places them.
+//! [`render_frames`], so the grids are placed exactly as `raylink animate` places them.
 
 use crate::accel::Backend;
 use crate::coherence::record::Records;
-use crate::coherence::sequence::{
-    render_sequence, Placement, SequenceJob, SequenceMode, SequenceTechnique,
-};
+use crate::coherence::sequence::{render_frames, Coherence, Placement, SequenceMode};
 use crate::control::Control;
 use crate::integrators::technique::{MonteCarloSettings, WhittedSettings};
+use crate::job::{Job, Technique};
 use crate::render::PixelSampling;
 use crate::scene::animation::Animation;
 use std::fmt::Write as _;
@@ -190,7 +189,7 @@ fn scene(rng: &mut Rng, frames: i64) -> String {
 }
 
 /// One random case: its scene text and a sequence job over a random range of its frames.
-fn case(n: u64) -> (String, SequenceJob) {
+fn case(n: u64) -> (String, Job, Vec<i64>, Coherence) {
     let mut rng = Rng(0x5eed_0000 + n);
     let frames = rng.int(2, 6);
     let text = scene(&mut rng, frames);
@@ -198,7 +197,7 @@ fn case(n: u64) -> (String, SequenceJob) {
     let last = rng.int(first + 1, frames - 1);
     let (w, h) = (rng.int(4, 40) as u32, rng.int(3, 30) as u32);
     let technique = if rng.chance(0.7) {
-        SequenceTechnique::Whitted(WhittedSettings {
+        Technique::Whitted(WhittedSettings {
             max_depth: rng.int(1, 6) as u32,
             area_samples: 1,
             fresnel: rng.chance(0.5),
@@ -212,7 +211,7 @@ fn case(n: u64) -> (String, SequenceJob) {
             },
         })
     } else {
-        SequenceTechnique::Path(MonteCarloSettings {
+        Technique::Path(MonteCarloSettings {
             max_depth: rng.int(1, 4) as u32,
             spp: rng.int(1, 2) as u32,
             time_limit: None,
@@ -220,14 +219,16 @@ fn case(n: u64) -> (String, SequenceJob) {
             reconstruction: crate::image::filter::Reconstruction::Importance,
         })
     };
-    let job = SequenceJob {
+    let job = Job {
         technique,
         width: w,
         height: h,
+        region: None,
         seed: n,
         threads: Some(rng.int(1, 2) as usize),
         accel: Backend::Embree,
-        frames: (first..=last).collect(),
+    };
+    let coherence = Coherence {
         mode: SequenceMode::Verify,
         records: if rng.chance(0.7) {
             Records::Segments
@@ -242,7 +243,7 @@ fn case(n: u64) -> (String, SequenceJob) {
         overhead_reps: 0,
         placement: Placement::Online,
     };
-    (text, job)
+    (text, job, (first..=last).collect(), coherence)
 }
 
 /// Cases per run: a few hundred in the test suite's time; `RAYLINK_RANDOM_SEQUENCES` runs
@@ -259,16 +260,23 @@ fn random_sequences_match_their_full_renders_in_both_placements() {
     let control = Control::default();
     let (mut frames, mut regrown) = (0, 0);
     for n in 0..count() {
-        let (text, job) = case(n);
+        let (text, job, numbers, coherence) = case(n);
         let anim = Animation::from_str(&text, Path::new("random.toml"))
             .unwrap_or_else(|e| panic!("case {n}: the scene does not read: {e}\n{text}"));
         for placement in [Placement::Online, Placement::Lookahead] {
-            let job = SequenceJob {
+            let coherence = Coherence {
                 placement,
-                ..job.clone()
+                ..coherence.clone()
             };
-            let report = render_sequence(&anim, &job, &control, &mut |_, _, _| Ok(()))
-                .unwrap_or_else(|e| panic!("case {n} ({placement:?}): {e}\n{text}"));
+            let report = render_frames(
+                &anim,
+                &job,
+                &numbers,
+                &coherence,
+                &control,
+                &mut |_, _, _| Ok(()),
+            )
+            .unwrap_or_else(|e| panic!("case {n} ({placement:?}): {e}\n{text}"));
             for row in &report.rows {
                 assert_eq!(
                     row.identical,
@@ -276,7 +284,7 @@ fn random_sequences_match_their_full_renders_in_both_placements() {
                     "case {n} ({placement:?}, {:?}, frames {:?}): frame {} differs from its \
                      full render\n{text}",
                     job.technique,
-                    job.frames,
+                    numbers,
                     row.frame
                 );
             }
