@@ -52,14 +52,13 @@ pub fn resolve_outputs(args: &mut RenderArgs) -> raylink::Result<()> {
     Ok(())
 }
 
-/// The region a render job renders (`None`: the whole image), after checking the options
-/// that cannot go with a part.
+/// The region a render job renders (`None`: the whole image), after checking the command
+/// line's own options that cannot go with a part.
 pub fn region(args: &RenderArgs, job: &Job) -> raylink::Result<Option<Tile>> {
     let Some(part) = args.part.part() else {
         return Ok(None);
     };
     for (option, given) in [
-        ("--time-limit", args.time_limit.is_some()),
         ("--write-interval", args.write_interval.is_some()),
         ("--checkpoint-interval", args.checkpoint_interval.is_some()),
         ("--resume", args.resume),
@@ -70,29 +69,8 @@ pub fn region(args: &RenderArgs, job: &Job) -> raylink::Result<Option<Tile>> {
             )));
         }
     }
-    match &job.technique {
-        raylink::Technique::IrradianceCache(_, c) if c.show_points => {
-            return Err(Error::Invalid(
-                "--show-cache-points cannot be used with --tile or --crop".into(),
-            ));
-        }
-        raylink::Technique::IrradianceCache(_, c) if c.file.is_none() => {
-            return Err(Error::Invalid(
-                "--tile and --crop with the irradiance cache need --cache-file F precomputed \
-                 for this view (run `raylink precompute --cache-file F` with the same options \
-                 first)"
-                    .into(),
-            ));
-        }
-        raylink::Technique::Network(n) if !n.file.as_ref().is_some_and(|f| f.exists()) => {
-            return Err(Error::Invalid(
-                "--tile and --crop with the network integrator need an existing \
-                 --network-file (run `raylink precompute --network-file F` first)"
-                    .into(),
-            ));
-        }
-        _ => {}
-    }
+    // What the technique needs of a part (a cache or network precomputed for the view)
+    // is the library's to check: `Job::validate`, when the renderer is made.
     part.region(job.width, job.height).map(Some)
 }
 

@@ -6,6 +6,11 @@ use crate::image::filter::Filter;
 use crate::math::Rgb;
 use std::path::PathBuf;
 
+/// The most samples per pixel any technique takes (a square: 1024 x 1024 for uniform
+/// supersampling). The one bound: every reader and front end leaves the check to the
+/// technique, or checks against this.
+pub const MAX_SPP: u32 = 1 << 20;
+
 /// The light-transport techniques, by name.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum TechniqueKind {

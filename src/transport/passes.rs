@@ -1,8 +1,7 @@
 //! The passes a progressive render takes: their sizes, fixed by the target alone, so that a
 //! film saved between passes resumes to the same image.
 
-/// Upper bound on samples per pixel.
-pub const MAX_SPP: u32 = 1 << 20;
+pub use crate::settings::MAX_SPP;
 
 /// The sizes of successive passes: 1, 1, 2, 4, 8, 16, 16, ... (early images come quickly,
 /// later passes are long enough to keep every thread busy).

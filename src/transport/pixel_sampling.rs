@@ -2,7 +2,7 @@
 //! subdivision, or regular supersampling (the sampler itself is in the render loops).
 
 use crate::error::{Error, Result};
-use crate::settings::{AntiAliasing, Settings};
+use crate::settings::{AntiAliasing, Settings, MAX_SPP};
 use crate::transport::settings::Setting;
 
 /// Deepest subdivision the adaptive sampler allows (a 256x256 lattice per pixel).
@@ -134,10 +134,13 @@ impl PixelSampling {
             AntiAliasing::Uniform => {
                 let spp = s.spp.unwrap_or(16);
                 let n = (spp as f64).sqrt().round() as u32;
-                if spp == 0 || n * n != spp {
+                if spp == 0 || spp > MAX_SPP || n * n != spp {
                     return Err(Error::setting(
                         "spp",
-                        format!("must be a square number of samples (1, 4, 9, 16, ...), got {spp}"),
+                        format!(
+                            "must be a square number of samples (1, 4, 9, 16, ...) up to \
+                             {MAX_SPP}, got {spp}"
+                        ),
                     ));
                 }
                 PixelSampling::Uniform { n }

@@ -193,12 +193,14 @@ impl NetworkSettings {
             Some(f) if f.exists() => Ok(()),
             Some(f) => Err(Error::input(
                 f,
-                "no such network: precompute it with the render's settings first",
+                "no such network: precompute it with the render's settings first \
+                 (`raylink precompute`, `Renderer::precompute`)",
             )),
             None => Err(Error::setting(
                 "network_file",
-                "is needed to render a part of the image with the network integrator (an \
-                 existing network, precomputed first)",
+                "is needed to render a part of the image with the network integrator: \
+                 precompute the network first (`raylink precompute`, \
+                 `Renderer::precompute`)",
             )),
         }
     }

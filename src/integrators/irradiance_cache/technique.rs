@@ -134,11 +134,19 @@ impl CacheSettings {
 
     /// A part of the image reads a cache precomputed for the whole view.
     pub(crate) fn check_part(&self) -> Result<()> {
+        if self.show_points {
+            return Err(Error::setting(
+                "show_cache_points",
+                "cannot be used for a part of the image: the points are marked on the whole \
+                 view's cache",
+            ));
+        }
         if self.file.is_none() {
             return Err(Error::setting(
                 "cache_file",
-                "is needed to render a part of the image with the irradiance cache (a \
-                 cache precomputed for this view first)",
+                "is needed to render a part of the image with the irradiance cache: \
+                 precompute one for this view first (`raylink precompute`, \
+                 `Renderer::precompute`)",
             ));
         }
         Ok(())

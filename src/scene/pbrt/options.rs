@@ -6,7 +6,7 @@ use super::params::Params;
 use super::Loc;
 use crate::image::filter::Filter;
 use crate::scene::{Camera, Projection, MAX_RESOLUTION};
-use crate::settings::TechniqueKind;
+use crate::settings::{TechniqueKind, MAX_SPP};
 use glam::{DMat3, DMat4, DVec3};
 
 pub(super) struct CameraDef {
@@ -146,9 +146,9 @@ impl Builder {
             "Sampler" => {
                 // raylink has its own sample patterns; the sample count carries over.
                 if let Some(n) = p.int("pixelsamples").map_err(pe)? {
-                    if !(1..=1 << 24).contains(&n) {
+                    if !(1..=MAX_SPP as i64).contains(&n) {
                         return Err(loc.error(format!(
-                            "Sampler: pixelsamples must be between 1 and 16777216, got {n}"
+                            "Sampler: pixelsamples must be between 1 and {MAX_SPP}, got {n}"
                         )));
                     }
                     self.settings.spp = Some(n as u32);

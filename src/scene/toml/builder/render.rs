@@ -47,9 +47,6 @@ impl Builder<'_> {
             })?;
             take!(integrator, Some(kind), "render", "integrator", &span);
         }
-        if d.spp == Some(0) {
-            return Err(ctx.fail(&site, "spp", "must be at least 1"));
-        }
         take!(spp, d.spp, "render", "spp", &span);
         take!(max_depth, d.max_depth, "render", "max_depth", &span);
         take!(time_limit, d.time_limit, "render", "time_limit", &span);
