@@ -32,6 +32,7 @@ use crate::render::pixels::{render_pixels, PixelView};
 use crate::render::{PixelSampling, RenderStats, Tile};
 use crate::scene::Scene;
 use crate::transport::Context;
+use crate::transport::View;
 use std::fmt::Write;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -120,7 +121,7 @@ fn render_view(
         hybrid: false,
         tables: Some(&tables),
     };
-    let whole = Tile::whole(view.width, view.height);
+    let whole = Tile::whole(view.view.width, view.view.height);
     Ok(render_pixels(ctx, &renderer, view, &whole, &Control::default())?.1)
 }
 
@@ -131,11 +132,11 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
     let ctx = Context::new(&scene, accel.as_ref());
     let threads = rayon::current_num_threads();
     let view = PixelView {
-        width: bench.width,
-        height: bench.height,
+        view: View {
+            seed: bench.seed,
+            ..View::new(bench.width, bench.height)
+        },
         sampling: PixelSampling::Uniform { n: 1 },
-        threads: None,
-        seed: bench.seed,
     };
     let options = DistributeOptions::default();
     let emission: Vec<Rgb> = scene.materials.iter().map(|m| m.emission).collect();

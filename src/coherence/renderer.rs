@@ -41,15 +41,15 @@ pub(crate) enum Engine<'a> {
 impl Engine<'_> {
     pub fn size(&self) -> (u32, u32) {
         match self {
-            Engine::Whitted { view, .. } => (view.width, view.height),
-            Engine::MonteCarlo { options, .. } => (options.width, options.height),
+            Engine::Whitted { view, .. } => (view.view.width, view.view.height),
+            Engine::MonteCarlo { options, .. } => (options.view.width, options.view.height),
         }
     }
 
     fn threads(&self) -> Option<usize> {
         match self {
-            Engine::Whitted { view, .. } => view.threads,
-            Engine::MonteCarlo { options, .. } => options.threads,
+            Engine::Whitted { view, .. } => view.view.threads,
+            Engine::MonteCarlo { options, .. } => options.view.threads,
         }
     }
 
@@ -84,7 +84,7 @@ impl Engine<'_> {
     pub fn render_full(&self, ctx: &Context, control: &Control) -> Result<(Image, RayStats)> {
         let (image, stats) = match self {
             Engine::Whitted { integrator, view } => {
-                let whole = Tile::whole(view.width, view.height);
+                let whole = Tile::whole(view.view.width, view.view.height);
                 crate::render::pixels::render_pixels(ctx, *integrator, view, &whole, control)?
             }
             Engine::MonteCarlo {

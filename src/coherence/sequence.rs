@@ -20,7 +20,6 @@ use crate::render::pixels::PixelView;
 use crate::render::PixelSampling;
 use crate::scene::animation::Animation;
 use crate::scene::{Light, Scene};
-use crate::transport::ProgressiveOptions;
 use crate::transport::{Context, RayStats};
 use std::time::Instant;
 
@@ -125,26 +124,17 @@ impl Integrators {
             Integrators::Whitted(integrator, sampling) => Engine::Whitted {
                 integrator,
                 view: PixelView {
-                    width: job.width,
-                    height: job.height,
+                    view: job.view(),
                     sampling: *sampling,
-                    threads: job.threads,
-                    seed: job.seed,
                 },
             },
             Integrators::Path(integrator, mc) => Engine::MonteCarlo {
                 integrator,
-                options: ProgressiveOptions {
-                    width: job.width,
-                    height: job.height,
-                    spp: mc.spp,
-                    time_limit: None,
-                    threads: job.threads,
-                    seed: job.seed,
-                    filter: mc.filter,
+                options: job.view().progressive(&MonteCarloSettings {
                     // Unchanged blocks are copied: a pixel must depend on its own samples.
                     reconstruction: crate::image::filter::Reconstruction::Importance,
-                },
+                    ..*mc
+                }),
             },
         }
     }

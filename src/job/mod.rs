@@ -387,11 +387,8 @@ impl Renderer {
                     ));
                 }
                 let view = PixelView {
-                    width: job.width,
-                    height: job.height,
+                    view: job.view(),
                     sampling,
-                    threads: job.threads,
-                    seed: job.seed,
                 };
                 let (image, stats) = render_pixels(&ctx, integrator, &view, &region, control)?;
                 Rendered {
@@ -442,11 +439,8 @@ impl Renderer {
         };
         let job = &self.job;
         let view = PixelView {
-            width: job.width,
-            height: job.height,
+            view: job.view(),
             sampling: PixelSampling::Uniform { n: 1 },
-            threads: job.threads,
-            seed: job.seed,
         };
         let (image, stats) = render_pixels(&ctx, integrator, &view, &job.pixels(), control)?;
         Ok(Some(Rendered {

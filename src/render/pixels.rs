@@ -9,17 +9,14 @@ use crate::image::Image;
 use crate::math::Rgb;
 use crate::scene::camera::CameraBasis;
 use crate::transport::driver::drive;
-use crate::transport::{Context, Integrator, RayStats};
+use crate::transport::{Context, Integrator, RayStats, View};
 use std::time::Instant;
 
-/// The view a one-pass render samples.
+/// A one-pass render: the view and how each pixel is sampled.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct PixelView {
-    pub width: u32,
-    pub height: u32,
+    pub view: View,
     pub sampling: PixelSampling,
-    pub threads: Option<usize>,
-    pub seed: u64,
 }
 
 /// Renders the pixels of `region` of the image (the whole image or a part of it: a pixel's
@@ -41,7 +38,7 @@ pub(crate) fn render_pixels(
     let small = view.small_objects(ctx);
     let driven = drive(
         &tiles,
-        view.threads,
+        view.view.threads,
         MERGE_WINDOW,
         &control.cancel,
         |tile| render_tile(ctx, integrator, view, &small, tile),
@@ -63,8 +60,8 @@ impl PixelView {
     /// The camera of `ctx`'s scene at this view's size.
     fn camera(&self, ctx: &Context) -> CameraBasis {
         let mut camera = ctx.scene.camera.clone();
-        camera.width = self.width;
-        camera.height = self.height;
+        camera.width = self.view.width;
+        camera.height = self.view.height;
         camera.basis()
     }
 
@@ -94,7 +91,7 @@ pub(crate) fn render_tile(
         integrator,
         &view.camera(ctx),
         &view.sampling,
-        view.seed,
+        view.view.seed,
         small,
         tile,
     );

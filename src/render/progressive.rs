@@ -72,7 +72,7 @@ impl<'a> Samples<'a> {
             ctx,
             integrator,
             camera: view_basis(ctx.scene, options),
-            seed: options.seed,
+            seed: options.view.seed,
             jitter: PixelJitter::new(options.filter, options.reconstruction),
             moving: ctx.scene.moves(),
         }
@@ -188,7 +188,7 @@ pub(crate) fn render_tile(
     let r = s.tile_all_passes(
         tile,
         options.spp,
-        options.width as f64 * options.height as f64,
+        options.view.width as f64 * options.view.height as f64,
     );
     let pixels = r
         .camera
@@ -219,7 +219,7 @@ pub(crate) fn render_region(
         return render_region_splatted(ctx, integrator, options, region, control);
     }
     let s = Samples::new(ctx, integrator, options);
-    let pixels_in_image = options.width as f64 * options.height as f64;
+    let pixels_in_image = options.view.width as f64 * options.view.height as f64;
     let tiles = tiles_in(region);
     let phase = control.phase(
         "render",
@@ -231,7 +231,7 @@ pub(crate) fn render_region(
     let mut stats = RenderStats::default();
     let driven = drive(
         &tiles,
-        options.threads,
+        options.view.threads,
         MERGE_WINDOW,
         &control.cancel,
         |t| s.tile_all_passes(t, options.spp, pixels_in_image),
@@ -267,9 +267,9 @@ fn render_region_splatted(
 ) -> Result<(Image, RenderStats)> {
     let s = Samples::new(ctx, integrator, options);
     let reach = s.jitter.splatting().map_or(0, |s| s.reach);
-    let whole = Tile::whole(options.width, options.height);
+    let whole = Tile::whole(options.view.width, options.view.height);
     let reaching = region.grown(reach, &whole);
-    let tiles: Vec<Tile> = tiles(options.width, options.height)
+    let tiles: Vec<Tile> = tiles(options.view.width, options.view.height)
         .iter()
         .filter_map(|t| t.intersection(&reaching))
         .collect();
@@ -285,7 +285,7 @@ fn render_region_splatted(
     let mut stats = RenderStats::default();
     let driven = drive_indexed(
         passes.len() * tiles.len(),
-        options.threads,
+        options.view.threads,
         MERGE_WINDOW,
         &control.cancel,
         |k| {
@@ -335,13 +335,13 @@ pub(crate) fn render_passes(
     control: &Control,
 ) -> Result<(Film, RenderStats)> {
     let s = Samples::new(ctx, integrator, options);
-    let tiles = tiles(options.width, options.height);
+    let tiles = tiles(options.view.width, options.view.height);
     let mut film = match resume {
         Some(film) => {
             if (film.width, film.height, film.filter, film.reconstruction)
                 != (
-                    options.width,
-                    options.height,
+                    options.view.width,
+                    options.view.height,
                     options.filter,
                     options.reconstruction,
                 )
@@ -353,14 +353,14 @@ pub(crate) fn render_passes(
             film
         }
         None => Film::new(
-            options.width,
-            options.height,
+            options.view.width,
+            options.view.height,
             options.filter,
             options.reconstruction,
         )?,
     };
     let mut stats = RenderStats::default();
-    let pixels = options.width as u64 * options.height as u64;
+    let pixels = options.view.width as u64 * options.view.height as u64;
     let phase = control.phase(
         "render",
         options
@@ -382,7 +382,7 @@ pub(crate) fn render_passes(
         done += film.pass;
     }
     passes.extend(passes_between(done, options.spp));
-    let whole = Tile::whole(options.width, options.height);
+    let whole = Tile::whole(options.view.width, options.view.height);
     let skipped = film.tiles_done as usize;
     let locate = |k: usize| ((k + skipped) / tiles.len(), (k + skipped) % tiles.len());
     let mut failure = None;
@@ -390,7 +390,7 @@ pub(crate) fn render_passes(
     let mut shown = Instant::now();
     let driven = drive_indexed(
         (passes.len() * tiles.len()).saturating_sub(skipped),
-        options.threads,
+        options.view.threads,
         MERGE_WINDOW,
         &control.cancel,
         |k| {

@@ -14,6 +14,7 @@ use crate::render::progressive::render_passes;
 use crate::scene::Scene;
 use crate::transport::Context;
 use crate::transport::ProgressiveOptions;
+use crate::transport::View;
 use std::path::Path;
 
 fn manifest(p: &str) -> std::path::PathBuf {
@@ -32,12 +33,13 @@ struct Run {
 
 fn options(w: u32, h: u32, spp: u32, threads: Option<usize>) -> ProgressiveOptions {
     ProgressiveOptions {
-        width: w,
-        height: h,
+        view: View {
+            seed: 3,
+            threads,
+            ..View::new(w, h)
+        },
         spp,
         time_limit: None,
-        threads,
-        seed: 3,
         filter: Filter::Box { radius: 0.5 },
         reconstruction: crate::image::filter::Reconstruction::Splat,
     }

@@ -11,6 +11,7 @@ use crate::integrators::illumination_network::{Network, NetworkParams};
 use crate::render::progressive::render_passes;
 use crate::scene::Scene;
 use crate::transport::ProgressiveOptions;
+use crate::transport::View;
 use crate::transport::{Context, MonteCarlo};
 use std::path::Path;
 
@@ -51,12 +52,12 @@ pub(crate) fn monte_carlo_image(
     let accel = accel::build(scene, Backend::Embree, &Control::default()).unwrap();
     let ctx = Context::new(scene, accel.as_ref());
     let options = ProgressiveOptions {
-        width: size,
-        height: size,
+        view: View {
+            seed,
+            ..View::new(size, size)
+        },
         spp,
         time_limit: None,
-        threads: None,
-        seed,
         filter: Filter::Box { radius: 0.5 },
         reconstruction: crate::image::filter::Reconstruction::Splat,
     };

@@ -19,6 +19,7 @@ use crate::render::pixels::{render_pixels, PixelView};
 use crate::render::{PixelSampling, Tile};
 use crate::scene::Scene;
 use crate::transport::Context;
+use crate::transport::View;
 
 const SIZE: u32 = 32;
 
@@ -92,11 +93,11 @@ fn network_image(scene: &Scene, slopes: u32) -> Image {
         tables: Some(&tables),
     };
     let view = PixelView {
-        width: SIZE,
-        height: SIZE,
+        view: View {
+            seed: 1,
+            ..View::new(SIZE, SIZE)
+        },
         sampling: PixelSampling::Uniform { n: 2 },
-        threads: None,
-        seed: 1,
     };
     render_pixels(
         &ctx,

@@ -21,6 +21,7 @@ use crate::render::pixels::{render_pixels, PixelView};
 use crate::render::{PixelSampling, Tile};
 use crate::scene::Scene;
 use crate::transport::Context;
+use crate::transport::View;
 
 /// Total radiance leaving each node: emission plus the reflected out-buffers.
 fn closed_box_radiance(net: &Network, sol: &Solution) -> (f64, f64, f64) {
@@ -308,14 +309,14 @@ fn network_image(scene: &Scene, p: NetworkParams, size: u32, hybrid: bool) -> Im
     let sol = distribute(&net, scene, &DistributeOptions::default());
     let tables = Tables::new(&net, &sol, hybrid);
     let view = PixelView {
-        width: size,
-        height: size,
+        view: View {
+            seed: 1,
+            ..View::new(size, size)
+        },
         // The hybrid mode samples the lights: more samples per pixel.
         sampling: PixelSampling::Uniform {
             n: if hybrid { 4 } else { 2 },
         },
-        threads: None,
-        seed: 1,
     };
     let whole = Tile::whole(size, size);
     let [fast, patches] = [Some(&tables), None].map(|tables| {

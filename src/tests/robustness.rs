@@ -5,6 +5,7 @@ use crate::control::Control;
 use crate::image::filter::Reconstruction;
 use crate::render::progressive::render_passes;
 use crate::transport::ProgressiveOptions;
+use crate::transport::View;
 use std::path::Path;
 
 /// A test integrator: 1 everywhere, except NaN or infinity on a fixed share of samples.
@@ -46,12 +47,13 @@ fn non_finite_samples_are_dropped_and_counted() {
         (Reconstruction::Splat, 0.01),
     ] {
         let options = ProgressiveOptions {
-            width: 16,
-            height: 16,
+            view: View {
+                seed: 3,
+                threads: Some(2),
+                ..View::new(16, 16)
+            },
             spp: 64,
             time_limit: None,
-            threads: Some(2),
-            seed: 3,
             filter: Default::default(),
             reconstruction,
         };

@@ -91,8 +91,8 @@ pub(crate) fn camera_sample(
 /// the film as the filter reaches.
 pub(crate) fn view_basis(scene: &Scene, options: &ProgressiveOptions) -> CameraBasis {
     let mut camera = scene.camera.clone();
-    camera.width = options.width;
-    camera.height = options.height;
+    camera.width = options.view.width;
+    camera.height = options.view.height;
     let mut basis = camera.basis();
     basis.margin = options.filter.radius();
     basis

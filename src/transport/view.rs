@@ -89,7 +89,12 @@ pub fn tiles_in(region: &Tile) -> Vec<Tile> {
         .collect()
 }
 
-/// What a technique's preparation needs of the view a job renders.
+/// The view a job renders: its size, its part of the image, its random streams, its
+/// threads and its intersection backend. The one declaration of it below the job: what a
+/// technique's preparation reads, and the first half of a one-pass ([`PixelView`]) or Monte
+/// Carlo ([`ProgressiveOptions`]) render's options.
+///
+/// [`PixelView`]: crate::render::pixels::PixelView
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(crate) struct View {
     pub width: u32,
@@ -102,32 +107,38 @@ pub(crate) struct View {
 }
 
 impl View {
+    /// The whole `width` x `height` image, seed 0, every core, the default backend.
+    pub(crate) fn new(width: u32, height: u32) -> View {
+        View {
+            width,
+            height,
+            region: None,
+            seed: 0,
+            threads: None,
+            accel: Backend::default(),
+        }
+    }
+
     /// The Monte Carlo render of this view with `mc`'s samples and filter.
     pub(crate) fn progressive(&self, mc: &MonteCarloSettings) -> ProgressiveOptions {
         ProgressiveOptions {
-            width: self.width,
-            height: self.height,
+            view: *self,
             spp: mc.spp,
             time_limit: mc.time_limit,
-            threads: self.threads,
-            seed: self.seed,
             filter: mc.filter,
             reconstruction: mc.reconstruction,
         }
     }
 }
 
-/// The view a Monte Carlo render samples.
+/// A Monte Carlo render: the view and how it is sampled.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct ProgressiveOptions {
-    pub width: u32,
-    pub height: u32,
+    pub view: View,
     /// Samples per pixel; with a time limit, the most that will be taken.
     pub spp: u32,
     /// Stop after the last whole pass that fits in this many seconds.
     pub time_limit: Option<f64>,
-    pub threads: Option<usize>,
-    pub seed: u64,
     pub filter: Filter,
     pub reconstruction: Reconstruction,
 }

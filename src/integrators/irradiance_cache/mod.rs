@@ -362,7 +362,7 @@ impl IrradianceCache {
         cache: Option<Cache>,
         control: &Control,
     ) -> Result<IrradianceCache> {
-        let seed = render.seed;
+        let seed = render.view.seed;
         let camera = view_basis(ctx.scene, render);
         let (_, side) = scene_cube(ctx.scene);
         let params = Params {
@@ -389,7 +389,7 @@ impl IrradianceCache {
         let jitter = PixelJitter::new(render.filter, render.reconstruction);
         let moving = ctx.scene.moves();
         let (mut primaries, mut rays) = (0, 0);
-        let schedule = overture_schedule(render.width, render.height, render.spp);
+        let schedule = overture_schedule(render.view.width, render.view.height, render.spp);
         let parts = schedule.iter().map(|p| p.len() as u64).sum();
         let progress = control.phase("overture", Some(parts), "parts");
         for phase in schedule {
@@ -399,7 +399,7 @@ impl IrradianceCache {
             let mut chunks: Vec<(Cache, u64, RayStats)> = Vec::with_capacity(phase.len());
             drive(
                 &phase,
-                render.threads,
+                render.view.threads,
                 phase.len(),
                 &control.cancel,
                 |chunk| {

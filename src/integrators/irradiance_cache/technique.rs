@@ -289,11 +289,11 @@ pub(crate) fn view_key(
     let text = format!(
         "{:016x}|{}x{}|{}|{:?}|{}|{backend}",
         crate::scene::scene_hash(scene),
-        render.width,
-        render.height,
+        render.view.width,
+        render.view.height,
         render.spp,
         render.filter,
-        render.seed,
+        render.view.seed,
     );
     // Never 0, which marks a cache without a view.
     crate::binary_file::fnv1a(text.as_bytes()).max(1)
