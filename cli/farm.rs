@@ -195,37 +195,6 @@ pub fn run_merge(args: MergeArgs) -> Result<(), Failure> {
     Ok(())
 }
 
-/// Parses `I/N` (0 ≤ I < N).
-pub fn parse_tile(text: &str) -> std::result::Result<Part, String> {
-    let bad = || format!("takes I/N with 0 <= I < N (e.g. 0/4), got \"{text}\"");
-    let (i, n) = text.split_once('/').ok_or_else(bad)?;
-    let index: u32 = i.trim().parse().map_err(|_| bad())?;
-    let count: u32 = n.trim().parse().map_err(|_| bad())?;
-    if count == 0 || index >= count {
-        return Err(bad());
-    }
-    Ok(Part::Tile { index, count })
-}
-
-/// Parses `x0,y0,x1,y1` (half-open pixel bounds, x0 < x1, y0 < y1).
-pub fn parse_crop(text: &str) -> std::result::Result<Part, String> {
-    let bad = || {
-        format!(
-            "takes pixel bounds x0,y0,x1,y1 with x0 < x1 and y0 < y1 (x1 and y1 \
-             excluded), got \"{text}\""
-        )
-    };
-    let v: Vec<u32> = text
-        .split(',')
-        .map(|s| s.trim().parse::<u32>())
-        .collect::<std::result::Result<_, _>>()
-        .map_err(|_| bad())?;
-    match v[..] {
-        [x0, y0, x1, y1] if x0 < x1 && y0 < y1 => Ok(Part::Crop(Tile { x0, y0, x1, y1 })),
-        _ => Err(bad()),
-    }
-}
-
 /// An output path with `{tile}` replaced by the tile index and `{tiles}` by the tile count.
 /// A pattern without them is used as it is; `{tile}` without `--tile` is an error.
 fn output_path(pattern: &Path, part: Option<&Part>) -> Result<PathBuf, Error> {
@@ -251,6 +220,7 @@ fn output_path(pattern: &Path, part: Option<&Part>) -> Result<PathBuf, Error> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::options::{parse_crop, parse_tile};
     use std::path::PathBuf;
 
     #[test]

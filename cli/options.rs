@@ -7,7 +7,7 @@ use clap::ValueEnum;
 use raylink::farm::Part;
 use raylink::image::filter::Filter;
 use raylink::job::{technique_info, AntiAliasing, NetworkBuilder, NetworkOrder, TECHNIQUES};
-use raylink::{Backend, Error, Job, Scene, Settings, Technique, TechniqueKind};
+use raylink::{Backend, Error, Job, Scene, Settings, Technique, TechniqueKind, Tile};
 use std::path::PathBuf;
 
 const COMMON: &str = "Common options";
@@ -601,12 +601,35 @@ pub struct PartArgs {
     crop: Option<Part>,
 }
 
-fn parse_tile(text: &str) -> Result<Part, String> {
-    crate::farm::parse_tile(text)
+/// Parses `I/N` (0 ≤ I < N).
+pub(crate) fn parse_tile(text: &str) -> std::result::Result<Part, String> {
+    let bad = || format!("takes I/N with 0 <= I < N (e.g. 0/4), got \"{text}\"");
+    let (i, n) = text.split_once('/').ok_or_else(bad)?;
+    let index: u32 = i.trim().parse().map_err(|_| bad())?;
+    let count: u32 = n.trim().parse().map_err(|_| bad())?;
+    if count == 0 || index >= count {
+        return Err(bad());
+    }
+    Ok(Part::Tile { index, count })
 }
 
-fn parse_crop(text: &str) -> Result<Part, String> {
-    crate::farm::parse_crop(text)
+/// Parses `x0,y0,x1,y1` (half-open pixel bounds, x0 < x1, y0 < y1).
+pub(crate) fn parse_crop(text: &str) -> std::result::Result<Part, String> {
+    let bad = || {
+        format!(
+            "takes pixel bounds x0,y0,x1,y1 with x0 < x1 and y0 < y1 (x1 and y1 \
+             excluded), got \"{text}\""
+        )
+    };
+    let v: Vec<u32> = text
+        .split(',')
+        .map(|s| s.trim().parse::<u32>())
+        .collect::<std::result::Result<_, _>>()
+        .map_err(|_| bad())?;
+    match v[..] {
+        [x0, y0, x1, y1] if x0 < x1 && y0 < y1 => Ok(Part::Crop(Tile { x0, y0, x1, y1 })),
+        _ => Err(bad()),
+    }
 }
 
 impl PartArgs {
