@@ -47,7 +47,7 @@ fn main() -> Result<(), raylink::Error> {
     let mut side = scene.camera.clone();
     side.position = raylink::math::Vec3::new(3.6, 2.2, 4.0);
     side.look_at = raylink::math::Vec3::new(1.0, 1.0, 0.5);
-    renderer.set_camera(side);
+    renderer.set_camera(side)?;
     let start = Instant::now();
     let side_view = renderer.render(&control)?;
     println!(

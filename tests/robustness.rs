@@ -233,22 +233,38 @@ fn memory_limits_are_errors_that_say_how_much() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
 }
 
-/// Finite but huge coordinates (near f32::MAX) render with every integrator, to finite pixels.
+/// Huge coordinates up to the traced range (10^18 units) render with every integrator, to
+/// finite pixels; past it (up to f32::MAX) the scene is refused before any ray, with one line
+/// naming the file, where rays leaving such points would abort Embree.
 #[test]
 fn huge_coordinates_render_finite_images() {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("huge.toml");
-    std::fs::write(
-        &scene,
-        "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
+    let text = "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
          [materials.m]\ndiffuse = 0.5\n\
          [materials.lamp]\nemission = [4, 4, 4]\n\
          [[shapes]]\ntype = \"mesh\"\nmaterial = \"m\"\n\
-         positions = [[0, 0, 0], [3e38, 0, 0], [0, 3e38, 0]]\nindices = [[0, 1, 2]]\n\
+         positions = [[0, 0, 0], [1e18, 0, 0], [0, 1e18, 0]]\nindices = [[0, 1, 2]]\n\
          [[shapes]]\ntype = \"quad\"\nmaterial = \"lamp\"\nvertices = [[-1, -1, 1], [-0.5, -1, 1], [-0.5, -0.5, 1], [-1, -0.5, 1]]\n\
-         [[lights]]\ntype = \"point\"\nposition = [0, 0, 4]\nintensity = [1, 1, 1]\n",
-    )
-    .unwrap();
+         [[lights]]\ntype = \"point\"\nposition = [0, 0, 4]\nintensity = [1, 1, 1]\n";
+    let past = dir.path().join("past.toml");
+    std::fs::write(&past, text.replace("1e18", "3e38")).unwrap();
+    let out = dir.path().join("past.exr");
+    let run = raylink(&[
+        "render",
+        past.to_str().unwrap(),
+        "--quiet",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&run);
+    assert_eq!(run.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("past.toml") && err.contains("1e18") && err.lines().count() == 1,
+        "{err}"
+    );
+    assert!(!out.exists());
+    std::fs::write(&scene, text).unwrap();
     for integrator in ["whitted", "path", "bdpt", "irradiance-cache", "network"] {
         let out = dir.path().join(format!("{integrator}.exr"));
         let run = raylink(&[

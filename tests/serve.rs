@@ -147,10 +147,30 @@ fn malformed_commands_are_refused_and_the_server_goes_on() {
             "{\"position\":[0,1,9],\"look_at\":[0,1,0],\"up\":[0,0,1]}",
             400,
         ),
+        // Values that are finite but whose differences, lengths or rays overflow, or lie
+        // past what the backends trace (Embree aborts on such rays).
+        ("{\"position\":[-3e38,0,0],\"look_at\":[3e38,0,0]}", 400),
+        ("{\"position\":[0,1,9],\"look_at\":[3e38,3e38,0]}", 400),
+        ("{\"position\":[1e30,1,9],\"look_at\":[0,1,0]}", 400),
+        (
+            "{\"position\":[0,1,9],\"look_at\":[0,1,0],\"up\":[3e38,3e38,0]}",
+            400,
+        ),
     ] {
         let r = server.request("POST", "/api/camera", json, body.as_bytes());
         assert_eq!(r.status, status, "{body}: {}", r.text());
     }
+    let r = server.request(
+        "POST",
+        "/api/camera",
+        json,
+        b"{\"position\":[0,1,9],\"look_at\":[3e38,3e38,0]}",
+    );
+    assert!(
+        r.text().contains("look_at") && r.text().contains("overflows"),
+        "{}",
+        r.text()
+    );
     for (path, body) in [
         ("/api/relight", "{\"lights\":{\"nothing\":2}}"),
         ("/api/relight", "{\"lights\":{\"light\":-1}}"),

@@ -177,23 +177,9 @@ impl Api {
         if let Some(fov) = b.fov {
             camera.fov_deg = fov;
         }
-        let forward = camera.look_at - camera.position;
-        let finite = [camera.position, camera.look_at, camera.up]
-            .iter()
-            .all(|v| v.is_finite())
-            && camera.fov_deg.is_finite();
-        if !finite
-            || forward.length() < 1e-6
-            || camera.up.length() < 1e-6
-            || forward.normalize().cross(camera.up.normalize()).length() < 1e-4
-            || !(0.1..=179.0).contains(&camera.fov_deg)
-        {
-            return Err((
-                400,
-                "a camera needs finite vectors, look_at apart from position, an up not along \
-                 the view, and a fov between 0.1 and 179 degrees"
-                    .into(),
-            ));
+        // Every quantity the rays are made of, as a scene file's camera is checked.
+        if let Err(p) = camera.check() {
+            return Err((400, format!("camera {} {}", p.field, p.message)));
         }
         self.session.set_camera(camera);
         Ok(json!({"ok": true}))

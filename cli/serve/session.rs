@@ -373,7 +373,11 @@ pub fn work(session: &Session, mut renderer: Renderer, mut frames: Option<Frames
             session.publish(|s| s.frame = Some(frame));
         }
         if let Some((camera, _)) = next.camera {
-            renderer.set_camera(camera.clone());
+            // The page's commands are checked when they arrive; this cannot fail.
+            if let Err(e) = renderer.set_camera(camera.clone()) {
+                fail(session, &e);
+                continue;
+            }
             session.publish(|s| {
                 s.camera = camera;
                 s.view += 1;

@@ -379,7 +379,10 @@ impl Sequence {
         };
         match self.dynamic.as_mut() {
             None => self.dynamic = Some(accel::build_dynamic(scene, self.job.accel, control)?),
-            Some(d) => row.update = Some(d.update(scene)?),
+            Some(d) => {
+                accel::check_extent(scene)?;
+                row.update = Some(d.update(scene)?)
+            }
         }
         let accel = self.dynamic.as_deref().expect("built above");
         let engine = self.integrators.engine(&self.job);

@@ -253,6 +253,10 @@ impl Renderer {
     pub fn new(scene: impl Into<Arc<Scene>>, job: Job, control: &Control) -> Result<Renderer> {
         let mut scene = scene.into();
         job.validate()?;
+        // The readers check their cameras; a scene made by a program is checked here.
+        scene.camera.check().map_err(|p| {
+            Error::input(&scene.source, format!("camera.{} {}", p.field, p.message))
+        })?;
         control.budget.check(
             &format!("a {}x{} image", job.width, job.height),
             job.width as u64 * job.height as u64 * job.bytes_per_pixel(),
@@ -315,12 +319,19 @@ impl Renderer {
     /// Looks through another camera (its size is the job's). A view-independent technique
     /// (the network, and those with nothing to prepare) renders the new view from what it
     /// prepared; the irradiance cache runs its overture for the new view on the next render,
-    /// starting from the values it has.
-    pub fn set_camera(&mut self, camera: crate::scene::Camera) {
+    /// starting from the values it has. A camera that [`Camera::check`] refuses is an
+    /// [`Error::Invalid`] naming the field, and the view stays as it was.
+    ///
+    /// [`Camera::check`]: crate::scene::Camera::check
+    pub fn set_camera(&mut self, camera: crate::scene::Camera) -> Result<()> {
+        camera
+            .check()
+            .map_err(|p| Error::Invalid(format!("camera {} {}", p.field, p.message)))?;
         Arc::make_mut(&mut self.scene).camera = camera;
         if self.technique.view_dependent() {
             self.prepared = false;
         }
+        Ok(())
     }
 
     /// The technique's preparation (the irradiance cache's overture, the network's

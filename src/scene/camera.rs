@@ -4,6 +4,33 @@ use crate::math::{Ray, Vec2, Vec3};
 /// Largest image width or height accepted, from a scene file or the command line.
 pub const MAX_RESOLUTION: u32 = 65536;
 
+/// The farthest from the origin any ray may start or any shape may reach, in scene units:
+/// Embree refuses (it aborts on) ray origins and directions past 1.844e18 (its
+/// `FLT_LARGE`), so raylink refuses cameras and scenes that reach past this, with a message,
+/// before any ray is traced.
+pub const MAX_COORDINATE: f32 = 1e18;
+
+/// `v` for a message: plain numbers, or in exponent form past ten million.
+pub(crate) fn show(v: Vec3) -> String {
+    let n = |x: f32| {
+        if x.abs() >= 1e7 {
+            format!("{x:e}")
+        } else {
+            format!("{x}")
+        }
+    };
+    format!("[{}, {}, {}]", n(v.x), n(v.y), n(v.z))
+}
+
+/// Why a camera cannot be rendered: the field to blame and the reason.
+#[derive(Clone, Debug, PartialEq)]
+pub struct CameraProblem {
+    /// The field as the native format names it (`position`, `look_at`, `up`, `fov`,
+    /// `lens_radius`, `focal_distance`, `size`, `width`, `height`).
+    pub field: &'static str,
+    pub message: String,
+}
+
 /// How the camera maps the film to rays.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
 pub enum Projection {
@@ -37,6 +64,147 @@ impl Camera {
     pub fn ray(&self, x: f32, y: f32) -> Ray {
         let basis = self.basis();
         basis.ray(x, y)
+    }
+
+    /// Checks every quantity the camera's rays are made of, not only the values given: the
+    /// direction `look_at - position` and the lengths that normalise it, the frame, the film
+    /// and lens corners' rays (finite, and within [`MAX_COORDINATE`]). Every reader and front
+    /// end that makes a camera calls it, so no ray can abort a backend.
+    pub fn check(&self) -> Result<(), CameraProblem> {
+        let bad = |field: &'static str, message: String| Err(CameraProblem { field, message });
+        for (field, v) in [
+            ("position", self.position),
+            ("look_at", self.look_at),
+            ("up", self.up),
+        ] {
+            if !v.is_finite() {
+                return bad(field, format!("must be finite, got {}", show(v)));
+            }
+        }
+        let far = |v: Vec3| v.abs().max_element() > MAX_COORDINATE;
+        if far(self.position) {
+            return bad(
+                "position",
+                format!(
+                    "must lie within {MAX_COORDINATE:e} units of the origin (what the \
+                     intersection backends trace), got {}",
+                    show(self.position)
+                ),
+            );
+        }
+        for (field, v) in [("width", self.width), ("height", self.height)] {
+            if !(1..=MAX_RESOLUTION).contains(&v) {
+                return bad(
+                    field,
+                    format!("must be between 1 and {MAX_RESOLUTION}, got {v}"),
+                );
+            }
+        }
+        let forward = self.look_at - self.position;
+        let distance = forward.length();
+        if !distance.is_finite() {
+            return bad(
+                "look_at",
+                format!(
+                    "is too far from the position {}: the distance between them overflows",
+                    show(self.position)
+                ),
+            );
+        }
+        if distance <= 1e-6 * (1.0 + self.position.abs().max_element()) {
+            return bad(
+                "look_at",
+                format!(
+                    "must differ from the camera position {}",
+                    show(self.position)
+                ),
+            );
+        }
+        let up = self.up.length();
+        if !(up.is_finite() && up > 0.0) {
+            return bad(
+                "up",
+                format!(
+                    "must be a direction of finite, non-zero length, got {}",
+                    show(self.up)
+                ),
+            );
+        }
+        if (forward / distance).cross(self.up / up).length() < 1e-4 {
+            return bad(
+                "up",
+                format!(
+                    "must not be parallel to the viewing direction, got {}",
+                    show(self.up)
+                ),
+            );
+        }
+        match self.projection {
+            Projection::Orthographic { size } => {
+                if !(size.is_finite() && size > 0.0 && size <= MAX_COORDINATE) {
+                    return bad(
+                        "size",
+                        format!("must be positive and at most {MAX_COORDINATE:e}, got {size}"),
+                    );
+                }
+            }
+            Projection::Pinhole | Projection::ThinLens { .. } => {
+                if !(self.fov_deg > 0.0 && self.fov_deg < 180.0) {
+                    return bad(
+                        "fov",
+                        format!("must be in (0, 180) degrees, got {}", self.fov_deg),
+                    );
+                }
+            }
+        }
+        if let Projection::ThinLens {
+            radius,
+            focal_distance,
+        } = self.projection
+        {
+            if !(0.0..=MAX_COORDINATE).contains(&radius) {
+                return bad(
+                    "lens_radius",
+                    format!("must be at least 0 and at most {MAX_COORDINATE:e}, got {radius}"),
+                );
+            }
+            if !(focal_distance.is_finite() && focal_distance > 0.0) {
+                return bad(
+                    "focal_distance",
+                    format!("must be positive and finite, got {focal_distance}"),
+                );
+            }
+        }
+        // The rays through the film's corners, through the lens's edge: what the backends get.
+        let basis = self.basis();
+        let (w, h) = (self.width as f32, self.height as f32);
+        let lens = [
+            Vec2::new(0.5, 0.5),
+            Vec2::new(0.0, 0.5),
+            Vec2::new(1.0, 0.5),
+            Vec2::new(0.5, 0.0),
+            Vec2::new(0.5, 1.0),
+        ];
+        for (x, y) in [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)] {
+            for u in lens {
+                let ray = basis.ray_through_lens(x, y, u);
+                if !(ray.origin.is_finite() && ray.dir.is_finite()) || far(ray.origin) {
+                    let field = match self.projection {
+                        Projection::Pinhole => "fov",
+                        Projection::ThinLens { .. } => "lens_radius",
+                        Projection::Orthographic { .. } => "size",
+                    };
+                    return bad(
+                        field,
+                        format!(
+                            "gives rays that leave the range the intersection backends trace \
+                             (the values overflow, or reach past {MAX_COORDINATE:e})"
+                        ),
+                    );
+                }
+            }
+        }
+        Ok(())
     }
 
     /// Precomputes the camera frame; use it when generating many rays.
@@ -218,5 +386,139 @@ mod tests {
         assert!(top.dir.y > 0.0);
         // Raster x grows to the right (+x when looking down -z with y up).
         assert!(cam.ray(150.0, 50.0).dir.x > 0.0);
+    }
+
+    /// Each value that overflows, or reaches past what the backends trace, is refused with
+    /// the field to blame; a camera that passes gives finite rays within the range at every
+    /// film corner and lens edge.
+    #[test]
+    fn the_check_names_what_overflows_and_what_it_passes_traces() {
+        let good = Camera {
+            position: Vec3::new(0.0, 1.0, 5.0),
+            look_at: Vec3::new(0.0, 1.0, 0.0),
+            up: Vec3::Y,
+            fov_deg: 40.0,
+            width: 64,
+            height: 48,
+            projection: Projection::Pinhole,
+        };
+        assert_eq!(good.check(), Ok(()));
+        let big = 3e38;
+        let cases = [
+            (
+                "position",
+                Camera {
+                    position: Vec3::new(-big, 0.0, 0.0),
+                    look_at: Vec3::new(big, 0.0, 0.0),
+                    ..good.clone()
+                },
+            ),
+            (
+                "position",
+                Camera {
+                    position: Vec3::new(2e18, 1.0, 5.0),
+                    ..good.clone()
+                },
+            ),
+            (
+                "look_at",
+                Camera {
+                    look_at: Vec3::new(big, big, 0.0),
+                    ..good.clone()
+                },
+            ),
+            (
+                "look_at",
+                Camera {
+                    look_at: good.position,
+                    ..good.clone()
+                },
+            ),
+            (
+                "up",
+                Camera {
+                    up: Vec3::new(big, big, 0.0),
+                    ..good.clone()
+                },
+            ),
+            (
+                "up",
+                Camera {
+                    up: Vec3::Z,
+                    ..good.clone()
+                },
+            ),
+            (
+                "up",
+                Camera {
+                    up: Vec3::new(f32::NAN, 1.0, 0.0),
+                    ..good.clone()
+                },
+            ),
+            (
+                "fov",
+                Camera {
+                    fov_deg: 180.0,
+                    ..good.clone()
+                },
+            ),
+            (
+                "lens_radius",
+                Camera {
+                    projection: Projection::ThinLens {
+                        radius: big,
+                        focal_distance: 5.0,
+                    },
+                    ..good.clone()
+                },
+            ),
+            (
+                "focal_distance",
+                Camera {
+                    projection: Projection::ThinLens {
+                        radius: 0.1,
+                        focal_distance: big * 10.0,
+                    },
+                    ..good.clone()
+                },
+            ),
+            (
+                "size",
+                Camera {
+                    projection: Projection::Orthographic { size: big },
+                    ..good.clone()
+                },
+            ),
+            // Each value in range, the lens edge past it.
+            (
+                "lens_radius",
+                Camera {
+                    position: Vec3::new(9e17, 1.0, 5.0),
+                    look_at: Vec3::new(9e17, 1.0, -1e13),
+                    projection: Projection::ThinLens {
+                        radius: 5e17,
+                        focal_distance: 5.0,
+                    },
+                    ..good.clone()
+                },
+            ),
+        ];
+        for (field, camera) in cases {
+            let problem = camera.check().expect_err(field);
+            assert_eq!(problem.field, field, "{}", problem.message);
+        }
+        let lens = Camera {
+            projection: Projection::ThinLens {
+                radius: 1e3,
+                focal_distance: 1e3,
+            },
+            ..good.clone()
+        };
+        assert_eq!(lens.check(), Ok(()));
+        let basis = lens.basis();
+        for (x, y) in [(0.0, 0.0), (64.0, 48.0)] {
+            let ray = basis.ray_through_lens(x, y, Vec2::new(1.0, 1.0));
+            assert!(ray.origin.is_finite() && ray.dir.is_finite());
+        }
     }
 }

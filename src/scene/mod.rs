@@ -25,7 +25,7 @@ pub mod toml;
 
 pub use crate::bsdf::{Coating, Conductor};
 pub use alpha::Alpha;
-pub use camera::{Camera, Projection, MAX_RESOLUTION};
+pub use camera::{Camera, CameraProblem, Projection, MAX_COORDINATE, MAX_RESOLUTION};
 pub use environment::Environment;
 pub use hash::scene_hash;
 pub use instance::{Instance, Prototype};
@@ -40,6 +40,7 @@ pub use shapes::{
 pub use texture::Texture;
 
 use crate::math::{Rgb, Vec3};
+use camera::show;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -129,6 +130,41 @@ impl Scene {
         }
     }
 
+    /// Refuses a scene whose shapes or lights reach past [`MAX_COORDINATE`]: rays would start
+    /// (or their lengths overflow) where the backends cannot trace them (Embree aborts).
+    pub fn check_extent(&self) -> crate::error::Result<()> {
+        let far = |v: Vec3| !v.is_finite() || v.abs().max_element() > MAX_COORDINATE;
+        if let Some((lo, hi)) = self.bounds() {
+            if far(lo) || far(hi) {
+                return Err(crate::error::Error::input(
+                    &self.source,
+                    format!(
+                        "the shapes reach from {} to {}: raylink traces scenes within \
+                         {MAX_COORDINATE:e} units of the origin",
+                        show(lo),
+                        show(hi)
+                    ),
+                ));
+            }
+        }
+        if let Some(p) = self
+            .lights
+            .iter()
+            .filter_map(|l| l.position())
+            .find(|&p| far(p))
+        {
+            return Err(crate::error::Error::input(
+                &self.source,
+                format!(
+                    "a light at {}: raylink traces scenes within {MAX_COORDINATE:e} units of the \
+                     origin",
+                    show(p)
+                ),
+            ));
+        }
+        Ok(())
+    }
+
     /// Reads a scene file, choosing the reader by extension.
     pub fn load(path: &Path) -> crate::error::Result<Scene> {
         Scene::load_with(path, &crate::control::Control::default())
@@ -163,6 +199,7 @@ impl Scene {
                 "unknown scene format: expected a .toml or .pbrt scene file",
             )),
         }?;
+        scene.check_extent()?;
         let placed = if scene.has_instances() {
             format!(
                 ", {} instances of {} objects",

@@ -267,6 +267,12 @@ impl Builder {
             height: self.resolution.1,
             projection,
         });
+        if let Some(Err(p)) = self.camera_value.as_ref().map(Camera::check) {
+            return Err(cam_loc.error(format!(
+                "Camera: the camera's {} (from its transform and parameters) {}",
+                p.field, p.message
+            )));
+        }
         Ok(())
     }
 

@@ -140,35 +140,14 @@ impl<'a> Builder<'a> {
         let position = at("position", finite3(desc.position.0))?;
         let look_at = at("look_at", finite3(desc.look_at.0))?;
         let up = at("up", direction(desc.up.map_or(Vec3::Y, |v| v.0)))?;
-        let forward = look_at - position;
-        if forward.length() <= 1e-6 * (1.0 + position.abs().max_element()) {
-            return Err(ctx.fail(
-                &site,
-                "look_at",
-                format!("must differ from the camera position {position}"),
-            ));
-        }
-        if forward.normalize().cross(up).length() < 1e-4 {
-            return Err(ctx.fail(
-                &site,
-                "up",
-                format!("must not be parallel to the viewing direction, got {up}"),
-            ));
-        }
+        // Directions, lengths and the frame are checked with the rest, by `Camera::check`.
         let fov = desc.fov.unwrap_or(45.0);
-        if !(fov > 0.0 && fov < 180.0) {
-            return Err(ctx.fail(
-                &site,
-                "fov",
-                format!("must be in (0, 180) degrees, got {fov}"),
-            ));
-        }
         let width =
             resolution(desc.width.unwrap_or(640)).map_err(|m| ctx.fail(&site, "width", m))?;
         let height =
             resolution(desc.height.unwrap_or(480)).map_err(|m| ctx.fail(&site, "height", m))?;
         let projection = self.projection(&site, &desc)?;
-        Ok(Camera {
+        let camera = Camera {
             position,
             look_at,
             up,
@@ -176,7 +155,11 @@ impl<'a> Builder<'a> {
             width,
             height,
             projection,
-        })
+        };
+        camera
+            .check()
+            .map_err(|p| ctx.fail(&site, p.field, p.message))?;
+        Ok(camera)
     }
 
     /// `projection` ("perspective", the default, or "orthographic" with `size`), and a thin
