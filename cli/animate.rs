@@ -2,14 +2,13 @@
 //! optionally checking every frame against a full render (`--verify`) and reporting what was
 //! saved per frame (`--stats`, `--csv`), like Table 2 of the paper.
 
-use crate::options::AccelName;
+use crate::options::{AccelName, IntegratorName};
 use crate::{Cli, Failure};
 
 use raylink::coherence::{
     animates, render_frames, report, Coherence, Placement, Records, Sequence, SequenceMode,
 };
 use raylink::image::output::check_output_path;
-use raylink::job::{technique_info, TECHNIQUES};
 use raylink::scene::animation::Animation;
 use raylink::{write_image, Error, MetaValue, Metadata, OutputOptions, Result};
 use raylink::{Job, Settings, Technique, TechniqueKind};
@@ -33,17 +32,18 @@ pub struct AnimIntegrator(pub TechniqueKind);
 impl clap::ValueEnum for AnimIntegrator {
     fn value_variants<'a>() -> &'a [Self] {
         static ALL: std::sync::LazyLock<Vec<AnimIntegrator>> = std::sync::LazyLock::new(|| {
-            TECHNIQUES
+            IntegratorName::value_variants()
                 .iter()
-                .filter(|t| animates(t.kind))
-                .map(|t| AnimIntegrator(t.kind))
+                .filter(|i| animates(i.kind()))
+                .map(|i| AnimIntegrator(i.kind()))
                 .collect()
         });
         &ALL
     }
 
+    /// As `render --integrator` names and describes it.
     fn to_possible_value(&self) -> Option<clap::builder::PossibleValue> {
-        Some(clap::builder::PossibleValue::new(self.0.name()).help(technique_info(self.0).summary))
+        IntegratorName(self.0).to_possible_value()
     }
 }
 
@@ -310,10 +310,7 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
         ..Settings::default()
     };
     // A bad value the scene file gives is reported at its line there.
-    let locate = |e: Error| match &e {
-        Error::Setting { name, .. } if !given.given().contains(&name.as_str()) => scene0.locate(e),
-        _ => e,
-    };
+    let locate = |e: Error| crate::options::locate(e, &scene0, &given);
     let settings = scene0.settings.clone().overlaid(&given);
     let technique = Technique::create(&settings).map_err(locate)?;
     let job = Job {

@@ -292,6 +292,15 @@ pub fn flag(setting: &str) -> String {
     }
 }
 
+/// `e` as the user should read it: a bad value the scene file gives (not one of the
+/// options' settings `given`) is reported at its line there.
+pub fn locate(e: Error, scene: &Scene, given: &Settings) -> Error {
+    match &e {
+        Error::Setting { name, .. } if !given.given().contains(&name.as_str()) => scene.locate(e),
+        _ => e,
+    }
+}
+
 /// The settings the options give (only those given).
 pub fn given_settings(args: &RenderArgs, scene: &Scene) -> Settings {
     let n = &args.network;
@@ -411,11 +420,7 @@ pub fn job(args: &RenderArgs, scene: &Scene, extra: Settings) -> Result<Job, Err
             )));
         }
     }
-    // A bad value the scene file gives is reported at its line there.
-    let technique = Technique::create(&settings).map_err(|e| match &e {
-        Error::Setting { name, .. } if !flags.given().contains(&name.as_str()) => scene.locate(e),
-        _ => e,
-    })?;
+    let technique = Technique::create(&settings).map_err(|e| locate(e, scene, &flags))?;
     Ok(Job {
         width: args.width.unwrap_or(scene.camera.width),
         height: args.height.unwrap_or(scene.camera.height),

@@ -206,7 +206,7 @@ pub fn build_dynamic(
     control: &Control,
 ) -> crate::error::Result<Box<dyn DynamicAccel>> {
     check_memory(scene, control)?;
-    check_extent(scene)?;
+    scene.check_extent()?;
     match backend {
         Backend::Embree => Ok(Box::new(embree::EmbreeAccel::build_dynamic(
             scene,
@@ -256,7 +256,7 @@ pub fn build(
     control: &Control,
 ) -> crate::error::Result<Box<dyn Accel>> {
     check_memory(scene, control)?;
-    check_extent(scene)?;
+    scene.check_extent()?;
     match backend {
         Backend::Embree => Ok(Box::new(embree::EmbreeAccel::build_cancellable(
             scene,
@@ -269,11 +269,6 @@ pub fn build(
 /// Bytes per primitive the intersection structures take at most (Embree's BVH with its
 /// build-time copies, or obvhs's CWBVH, plus the shading data kept beside them).
 const BYTES_PER_PRIMITIVE: u64 = 256;
-
-/// Refuses a scene that reaches past what the backends trace ([`Scene::check_extent`]).
-pub(crate) fn check_extent(scene: &Scene) -> crate::error::Result<()> {
-    scene.check_extent()
-}
 
 fn check_memory(scene: &Scene, control: &Control) -> crate::error::Result<()> {
     control.cancel.check("the intersection structure's build")?;

@@ -380,7 +380,7 @@ impl Sequence {
         match self.dynamic.as_mut() {
             None => self.dynamic = Some(accel::build_dynamic(scene, self.job.accel, control)?),
             Some(d) => {
-                accel::check_extent(scene)?;
+                scene.check_extent()?;
                 row.update = Some(d.update(scene)?)
             }
         }

@@ -139,22 +139,20 @@ impl Camera {
                 ),
             );
         }
-        match self.projection {
-            Projection::Orthographic { size } => {
-                if !(size.is_finite() && size > 0.0 && size <= MAX_COORDINATE) {
-                    return bad(
-                        "size",
-                        format!("must be positive and at most {MAX_COORDINATE:e}, got {size}"),
-                    );
-                }
-            }
-            Projection::Pinhole | Projection::ThinLens { .. } => {
-                if !(self.fov_deg > 0.0 && self.fov_deg < 180.0) {
-                    return bad(
-                        "fov",
-                        format!("must be in (0, 180) degrees, got {}", self.fov_deg),
-                    );
-                }
+        // Checked for every projection, as the scene format always has: an orthographic
+        // camera does not use it, but a value out of range is still a mistake.
+        if !(self.fov_deg > 0.0 && self.fov_deg < 180.0) {
+            return bad(
+                "fov",
+                format!("must be in (0, 180) degrees, got {}", self.fov_deg),
+            );
+        }
+        if let Projection::Orthographic { size } = self.projection {
+            if !(size.is_finite() && size > 0.0 && size <= MAX_COORDINATE) {
+                return bad(
+                    "size",
+                    format!("must be positive and at most {MAX_COORDINATE:e}, got {size}"),
+                );
             }
         }
         if let Projection::ThinLens {
@@ -459,6 +457,14 @@ mod tests {
                 "fov",
                 Camera {
                     fov_deg: 180.0,
+                    ..good.clone()
+                },
+            ),
+            (
+                "fov",
+                Camera {
+                    fov_deg: 500.0,
+                    projection: Projection::Orthographic { size: 2.0 },
                     ..good.clone()
                 },
             ),
