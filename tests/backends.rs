@@ -44,6 +44,7 @@ fn mixed_scene() -> Scene {
         indices: vec![[0, 1, 2, 3], [4, 5, 6, 7], [8, 9, 10, 11]],
     };
     shapes.push(Shape {
+        media: None,
         geometry: Geometry::Quads(quads),
         material: 0,
         alpha: None,
@@ -68,6 +69,7 @@ fn mixed_scene() -> Scene {
         (Vec3::new(0.0, -6.0, 0.0), 5.5),
     ] {
         shapes.push(Shape {
+            media: None,
             geometry: Geometry::Sphere(Sphere {
                 center: c,
                 radius: r,
@@ -78,6 +80,8 @@ fn mixed_scene() -> Scene {
         });
     }
     Scene {
+        media: Vec::new(),
+        camera_medium: None,
         source: "mixed".into(),
         camera: Camera {
             position: Vec3::new(0.0, 2.0, 6.0),
@@ -382,6 +386,7 @@ fn empty_scene_and_single_primitive() {
     assert!(embree.intersect(&ray).is_none() && bvh.intersect(&ray).is_none());
     assert!(!embree.occluded(&ray) && !bvh.occluded(&ray));
     scene.shapes.push(Shape {
+        media: None,
         geometry: Geometry::Sphere(Sphere {
             center: Vec3::new(3.0, 0.0, 0.0),
             radius: 1.0,

@@ -435,6 +435,8 @@ fn environment_map_lighting_matches_quadrature() {
     }
     let env = Environment::new(map, "gradient".into(), Mat3::IDENTITY, Rgb::ONE).unwrap();
     let scene = Scene {
+        media: Vec::new(),
+        camera_medium: None,
         source: "environment test".into(),
         camera: Camera {
             position: Vec3::new(0.0, 0.0, 5.0),
@@ -453,6 +455,7 @@ fn environment_map_lighting_matches_quadrature() {
             },
         )],
         shapes: vec![Shape {
+            media: None,
             geometry: Geometry::Sphere(Sphere {
                 center: Vec3::ZERO,
                 radius: 1.0,

@@ -148,6 +148,7 @@ fn busy_scene() -> Scene {
         (Vec3::new(0.8, 0.7, 0.5), frosted),
     ] {
         scene.shapes.push(Shape {
+            media: None,
             geometry: Geometry::Sphere(Sphere {
                 center,
                 radius: 0.7,

@@ -97,6 +97,8 @@ pub fn primitive_count(scene: &Scene) -> usize {
 
 fn base_scene(name: String, camera: Camera, light: Vec3) -> Scene {
     Scene {
+        media: Vec::new(),
+        camera_medium: None,
         source: name.into(),
         camera,
         materials: vec![Material::default()],
@@ -150,6 +152,7 @@ pub fn sphere_field(triangles: usize) -> Scene {
     );
     let s = half + 1.0;
     scene.shapes.push(Shape {
+        media: None,
         geometry: Geometry::Quads(QuadMesh {
             positions: vec![
                 Vec3::new(-s, 0.0, -s),
@@ -173,6 +176,7 @@ pub fn sphere_field(triangles: usize) -> Scene {
             gz - half + 0.5 + 0.3 * (rng.uniform() - 0.5),
         );
         scene.shapes.push(Shape {
+            media: None,
             geometry: Geometry::Triangles(uv_sphere(center, radius)),
             material: 0,
             alpha: None,
@@ -264,6 +268,7 @@ pub fn terrain(triangles: usize) -> Scene {
 /// A triangle mesh without normals or uvs, in material 0.
 pub fn mesh_shape(positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Shape {
     Shape {
+        media: None,
         geometry: Geometry::Triangles(TriangleMesh {
             positions,
             normals: None,

@@ -22,12 +22,13 @@
 //! below, both directions are mirrored), and opaque: nothing is transmitted.
 
 use super::layer::{Layer, LayerSample, Lobes};
+use super::phase::{hg, sample_hg};
 use super::Coating;
 use super::Conductor;
 use super::{Ggx, Transport};
 use crate::math::warp::power_heuristic;
-use crate::math::{frame, Rgb, Rng, Vec2, Vec3};
-use std::f32::consts::{FRAC_1_PI, TAU};
+use crate::math::{Rgb, Rng, Vec2, Vec3};
+use std::f32::consts::FRAC_1_PI;
 
 /// Keys of the random streams of evaluation, density and sampling.
 const EVAL_KEY: u64 = 0x6c61_7965_7266;
@@ -71,29 +72,6 @@ fn key(v: Vec3) -> [u64; 2] {
         (v.x.to_bits() as u64) << 32 | v.y.to_bits() as u64,
         v.z.to_bits() as u64,
     ]
-}
-
-/// The Henyey–Greenstein phase function for the angle between `wo` and `wi`, both pointing
-/// away from the scattering point (pbrt-v4's convention: g > 0 scatters forward, wi ≈ −wo).
-fn hg(wo: Vec3, wi: Vec3, g: f32) -> f32 {
-    let denom = 1.0 + g * g + 2.0 * g * wo.dot(wi);
-    0.25 * FRAC_1_PI * (1.0 - g * g) / (denom * denom.max(0.0).sqrt())
-}
-
-/// A direction from the Henyey–Greenstein phase function around `wo` and its density.
-fn sample_hg(wo: Vec3, g: f32, u: Vec2) -> (Vec3, f32) {
-    let cos = if g.abs() < 1e-3 {
-        1.0 - 2.0 * u.x
-    } else {
-        let s = (1.0 - g * g) / (1.0 + g - 2.0 * g * u.x);
-        -(1.0 + g * g - s * s) / (2.0 * g)
-    };
-    let cos = cos.clamp(-1.0, 1.0);
-    let sin = (1.0 - cos * cos).max(0.0).sqrt();
-    let phi = TAU * u.y;
-    let (t, b) = frame(wo);
-    let wi = t * (sin * phi.cos()) + b * (sin * phi.sin()) + wo * cos;
-    (wi, hg(wo, wi, g))
 }
 
 /// The next uniform number of `rng` (in [0, 1)).

@@ -351,6 +351,13 @@ impl Sequence {
         control: &Control,
         verify: bool,
     ) -> Result<(Image, FrameRow)> {
+        if !scene.media.is_empty() {
+            return Err(Error::input(
+                &scene.source,
+                "the scene has participating media, which animations do not render: render \
+                 its frames one at a time with `raylink render`",
+            ));
+        }
         let outer = control;
         let control = &outer.silenced();
         let (width, height) = (self.job.width, self.job.height);

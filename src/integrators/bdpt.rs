@@ -34,6 +34,7 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     progressive: true,
     renders_parts: false,
     follows_time: true,
+    media: false,
 };
 
 /// The technique for `scene` (finite emitters only): nothing to prepare, sample passes.

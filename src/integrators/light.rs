@@ -28,6 +28,7 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     progressive: true,
     renders_parts: false,
     follows_time: true,
+    media: false,
 };
 
 /// The technique for `scene`: nothing to prepare, sample passes.

@@ -9,4 +9,5 @@ pub mod irradiance_cache;
 pub mod light;
 pub mod path;
 pub(crate) mod technique;
+mod volumetric;
 pub mod whitted;

@@ -29,6 +29,7 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     progressive: true,
     renders_parts: true,
     follows_time: true,
+    media: true,
 };
 
 /// The technique: nothing to prepare, sample passes.
@@ -124,6 +125,15 @@ impl MonteCarlo for PathTracer {
         stats: &mut RayStats,
         _splats: &mut Vec<Splat>,
     ) -> Rgb {
+        if ctx.has_media() {
+            return super::volumetric::radiance(
+                ctx,
+                camera_ray,
+                self.options.max_depth,
+                sampler,
+                stats,
+            );
+        }
         let lights = &ctx.lights;
         let mut radiance = Rgb::ZERO;
         let mut beta = Rgb::ONE;

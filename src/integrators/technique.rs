@@ -155,6 +155,7 @@ impl Technique {
 
     /// The technique for `scene`, ready to prepare and render (pbrt's `Integrator::Create`).
     pub(crate) fn lifecycle(&self, scene: &Scene) -> Result<Box<dyn Lifecycle>> {
+        refuse_media(scene, self.info())?;
         Ok(match self {
             Technique::Whitted(w) => w.lifecycle(),
             Technique::Path(mc) => path::lifecycle(mc),
@@ -168,6 +169,28 @@ impl Technique {
             ),
         })
     }
+}
+
+/// Refuses a scene with participating media for a technique that does not render them.
+pub(crate) fn refuse_media(scene: &Scene, info: &TechniqueInfo) -> Result<()> {
+    if scene.media.is_empty() || info.media {
+        return Ok(());
+    }
+    let renders: Vec<&str> = TECHNIQUES
+        .iter()
+        .filter(|t| t.media)
+        .map(|t| t.kind.name())
+        .collect();
+    Err(Error::input(
+        &scene.source,
+        format!(
+            "the scene has participating media ({}), which the {} integrator does not \
+             render: render it with {}",
+            scene.media.len(),
+            info.kind.name(),
+            renders.join(" or ")
+        ),
+    ))
 }
 
 #[cfg(test)]

@@ -396,6 +396,7 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     progressive: false,
     renders_parts: true,
     follows_time: true,
+    media: false,
 };
 
 /// Whitted's integrator's settings, checked.

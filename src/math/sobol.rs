@@ -104,6 +104,14 @@ impl Sampler {
         }
     }
 
+    /// An independent stream for a step of a path that draws a varying number of values
+    /// (free flights through a medium), keyed by this sample and the dimension it uses up.
+    pub fn stream(&mut self) -> super::Rng {
+        let rng = super::Rng::for_key(self.key, &[self.index as u64, self.dimension as u64]);
+        self.dimension += 1;
+        rng
+    }
+
     /// The next pair of dimensions.
     pub fn next_2d(&mut self) -> Vec2 {
         let h = mix64(self.key ^ (self.dimension as u64).wrapping_mul(0xd1b5_4a32_d192_ed03));

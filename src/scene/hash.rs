@@ -4,7 +4,7 @@
 use super::Scene;
 
 /// A hash of everything in the scene that changes pixels (camera, shapes, materials,
-/// lights, background, ambient, environment map), for checking that tiles come from the
+/// lights, background, ambient, environment map, media), for checking that tiles come from the
 /// same scene. The scene's debug text is hashed as it is formatted, so a scene of millions
 /// of triangles needs no string of hundreds of megabytes.
 pub fn scene_hash(scene: &Scene) -> u64 {
@@ -24,6 +24,9 @@ pub fn scene_hash(scene: &Scene) -> u64 {
     .expect("hashing never fails");
     if scene.has_instances() {
         write!(h, "|{:?}|{:?}", scene.prototypes, scene.instances).expect("hashing never fails");
+    }
+    if !scene.media.is_empty() {
+        write!(h, "|{:?}|{:?}", scene.media, scene.camera_medium).expect("hashing never fails");
     }
     h.0
 }

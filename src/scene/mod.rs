@@ -13,6 +13,7 @@ pub mod instance;
 pub mod lights;
 pub mod loop_subdivision;
 pub mod materials;
+pub mod media;
 pub mod motion;
 pub mod normal_detail;
 pub mod obj;
@@ -58,6 +59,11 @@ pub struct Scene {
     pub instances: Vec<Instance>,
     /// Point and directional lights. Shapes whose material emits are area lights as well.
     pub lights: Vec<Light>,
+    /// Participating media; shapes' [`media::MediumInterface`]s and `camera_medium` refer
+    /// to them by index.
+    pub media: Vec<media::Medium>,
+    /// The medium the camera sits in (`None`: vacuum).
+    pub camera_medium: Option<u32>,
     /// Whitted's ambient intensity Ia; a material's ambient coefficient scales it.
     pub ambient: Rgb,
     /// Radiance of rays that leave the scene, where `environment` is `None`.

@@ -106,6 +106,7 @@ fn scene(geometry: Geometry, detail: Option<NormalDetail>) -> Scene {
         },
     );
     scene.shapes.push(Shape {
+        media: None,
         geometry,
         material: m,
         alpha: None,

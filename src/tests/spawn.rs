@@ -83,6 +83,7 @@ fn cells(kind: Kind, origin: Vec3, count: usize, seed: u64) -> Cells {
         for c in [Vec3::ZERO, Vec3::new(1.0, 0.5, 0.0)] {
             let tri = triangle(&mut rng, c, 1.0, false);
             prototype.push(Shape {
+                media: None,
                 geometry: Geometry::Triangles(TriangleMesh {
                     positions: tri.to_vec(),
                     indices: vec![[0, 1, 2]],
@@ -130,6 +131,7 @@ fn cells(kind: Kind, origin: Vec3, count: usize, seed: u64) -> Cells {
                 let small = s * 0.03;
                 scene.shapes.push(if kind == Kind::FarSphere {
                     Shape {
+                        media: None,
                         geometry: Geometry::Sphere(Sphere {
                             center: c,
                             radius: small,
@@ -193,6 +195,7 @@ fn cells(kind: Kind, origin: Vec3, count: usize, seed: u64) -> Cells {
                         })
                     });
                     scene.shapes.push(Shape {
+                        media: None,
                         geometry: Geometry::Sphere(Sphere { center, radius }),
                         material: m,
                         alpha: None,
@@ -226,6 +229,7 @@ fn cells(kind: Kind, origin: Vec3, count: usize, seed: u64) -> Cells {
 
 fn quad(positions: Vec<Vec3>, material: usize) -> Shape {
     Shape {
+        media: None,
         geometry: Geometry::Quads(QuadMesh {
             positions,
             indices: vec![[0, 1, 2, 3]],
@@ -238,6 +242,7 @@ fn quad(positions: Vec<Vec3>, material: usize) -> Shape {
 
 fn mesh(positions: Vec<Vec3>, indices: Vec<[u32; 3]>, material: usize) -> Shape {
     Shape {
+        media: None,
         geometry: Geometry::Triangles(TriangleMesh {
             positions,
             indices,

@@ -19,6 +19,8 @@ pub(crate) fn camera() -> Camera {
 
 pub(crate) fn empty_scene() -> Scene {
     Scene {
+        media: Vec::new(),
+        camera_medium: None,
         source: "test".into(),
         camera: camera(),
         materials: Vec::new(),
@@ -44,6 +46,7 @@ pub(crate) fn add_material(scene: &mut Scene, m: Material) -> usize {
 /// A quad from four corners (normal (b-a) x (c-a)).
 pub(crate) fn quad(scene: &mut Scene, corners: [Vec3; 4], material: usize) {
     scene.shapes.push(Shape {
+        media: None,
         geometry: Geometry::Quads(QuadMesh {
             positions: corners.to_vec(),
             indices: vec![[0, 1, 2, 3]],

@@ -68,6 +68,12 @@ impl<'a> Context<'a> {
         }
     }
 
+    /// Whether the scene has participating media (techniques that render them take their
+    /// volumetric paths then).
+    pub fn has_media(&self) -> bool {
+        !self.scene.media.is_empty()
+    }
+
     /// The closest surface along the ray.
     pub fn intersect(&self, ray: &Ray, stats: &mut RayStats) -> Option<SurfacePoint> {
         stats.closest += 1;

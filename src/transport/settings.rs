@@ -30,6 +30,9 @@ pub struct TechniqueInfo {
     /// that keeps values per point or patch renders the scene at shutter open, with a
     /// warning.
     pub follows_time: bool,
+    /// Whether it renders participating media; one that does not refuses a scene with a
+    /// medium.
+    pub media: bool,
 }
 
 impl TechniqueInfo {

@@ -100,6 +100,7 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     progressive: false,
     renders_parts: true,
     follows_time: false,
+    media: false,
 };
 
 /// The illumination network's settings.

@@ -80,6 +80,7 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     progressive: true,
     renders_parts: true,
     follows_time: false,
+    media: false,
 };
 
 /// The irradiance cache's own settings.

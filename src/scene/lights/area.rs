@@ -433,6 +433,8 @@ mod tests {
         };
         let positions: Vec<Vec3> = quad(0.0, 2.0).into_iter().chain(quad(2.0, 3.0)).collect();
         let scene = Scene {
+            media: Vec::new(),
+            camera_medium: None,
             source: "t".into(),
             camera: Camera {
                 position: Vec3::Z,
@@ -448,6 +450,7 @@ mod tests {
                 ..Material::default()
             }],
             shapes: vec![Shape {
+                media: None,
                 geometry: Geometry::Quads(QuadMesh {
                     positions,
                     indices: vec![[0, 1, 2, 3], [4, 5, 6, 7]],
@@ -505,6 +508,7 @@ mod tests {
             Vec3::new(0.0, 2.0, 0.0),
         ];
         let mesh = Shape {
+            media: None,
             geometry: Geometry::Triangles(crate::scene::TriangleMesh {
                 uvs: Some(
                     positions
@@ -528,6 +532,7 @@ mod tests {
             Vec3::new(0.0, 2.0, 0.0),
         ];
         let quad = Shape {
+            media: None,
             geometry: Geometry::Quads(QuadMesh {
                 positions: vec![v0, v1, v2, v3],
                 indices: vec![[0, 1, 2, 3]],

@@ -23,6 +23,7 @@ mod conductor;
 mod dielectric;
 mod diffuse;
 mod diffuse_transmission;
+mod interface;
 mod measured;
 mod mix;
 mod thin_dielectric;
@@ -34,6 +35,7 @@ pub use conductor::Metal;
 pub use dielectric::Dielectric;
 pub use diffuse::Diffuse;
 pub use diffuse_transmission::DiffuseTransmission;
+pub use interface::Interface;
 pub use measured::Measured;
 pub use mix::Mix;
 pub use thin_dielectric::ThinDielectric;
@@ -84,6 +86,8 @@ pub enum Surface {
     CoatedConductor(CoatedConductor),
     Measured(Measured),
     Mix(Mix),
+    /// The boundary of a medium, and nothing else.
+    Interface(Interface),
 }
 
 impl Surface {
@@ -100,6 +104,7 @@ impl Surface {
             Surface::CoatedConductor(s) => s,
             Surface::Measured(s) => s,
             Surface::Mix(s) => s,
+            Surface::Interface(s) => s,
         }
     }
 
@@ -116,6 +121,7 @@ impl Surface {
             Surface::CoatedConductor(s) => s,
             Surface::Measured(s) => s,
             Surface::Mix(s) => s,
+            Surface::Interface(s) => s,
         }
     }
 }
@@ -193,6 +199,11 @@ impl Material {
             Surface::Mix(m) => Some(m),
             _ => None,
         }
+    }
+
+    /// Whether the surface only bounds a medium (rays pass through it unchanged).
+    pub fn is_interface(&self) -> bool {
+        matches!(self.surface, Surface::Interface(_))
     }
 
     /// Whether light passes through the surface (orientation then tells inside from out).

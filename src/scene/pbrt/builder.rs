@@ -51,6 +51,11 @@ pub(super) struct Builder {
     pub(super) area_textures: HashMap<([u32; 3], bool), Option<Texture>>,
     pub(super) shapes: Vec<Shape>,
     pub(super) lights: Vec<Light>,
+    /// The media made (`MakeNamedMedium`), and each name's medium (`None`: left out).
+    pub(super) media: Vec<crate::scene::media::Medium>,
+    pub(super) medium_names: HashMap<String, Option<u32>>,
+    /// The outside medium's name when `Camera` was given: the camera's medium.
+    pub(super) camera_medium: String,
     pub(super) background: Rgb,
     pub(super) environment: Option<Arc<Environment>>,
     pub(super) camera: Option<CameraDef>,
@@ -100,6 +105,9 @@ impl Builder {
             area_textures: HashMap::new(),
             shapes: Vec::new(),
             lights: Vec::new(),
+            media: Vec::new(),
+            medium_names: HashMap::new(),
+            camera_medium: String::new(),
             background: Rgb::ZERO,
             environment: None,
             camera: None,
@@ -157,7 +165,22 @@ impl Builder {
         for s in self.shapes.iter_mut().chain(placed) {
             s.material = keep_material(&self.materials, s.material, &mut map, &mut materials);
         }
+        let camera_medium = match self.medium_names.get(&self.camera_medium) {
+            _ if self.camera_medium.is_empty() => None,
+            Some(m) => *m,
+            None => {
+                return Err(crate::error::Error::input(
+                    &self.source,
+                    format!(
+                        "Camera: its MediumInterface names \"{}\", but no MakeNamedMedium made it",
+                        self.camera_medium
+                    ),
+                ))
+            }
+        };
         Ok(Scene {
+            media: std::mem::take(&mut self.media),
+            camera_medium,
             source: self.source.clone(),
             camera,
             materials,

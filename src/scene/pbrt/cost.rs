@@ -198,6 +198,7 @@ mod tests {
         assert_eq!(c.primitives, 2);
         assert_eq!(c.bytes(), c.data + 512);
         let ball = Shape {
+            media: None,
             geometry: Geometry::Sphere(Sphere {
                 center: Vec3::ZERO,
                 radius: 1.0,

@@ -7,8 +7,8 @@ use super::spectrum::{self, Kind};
 use super::Loc;
 use crate::math::Rgb;
 use crate::scene::materials::{
-    Classic, CoatedConductor, CoatedDiffuse, Dielectric, Diffuse, DiffuseTransmission, Metal,
-    Surface, SurfaceModel, ThinDielectric,
+    Classic, CoatedConductor, CoatedDiffuse, Dielectric, Diffuse, DiffuseTransmission, Interface,
+    Metal, Surface, SurfaceModel, ThinDielectric,
 };
 use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
 use crate::scene::{Coating, Conductor, Material, NormalDetail, RoughnessMap, Texture};
@@ -266,14 +266,7 @@ impl Builder {
                 }
                 Surface::Classic(self.coated_diffuse(p, 1.33, st, loc)?)
             }
-            "interface" => {
-                substitute(self, "using an invisible (index-matched) surface");
-                Surface::Classic(Classic {
-                    transmission: Rgb::ONE,
-                    ior: 1.0,
-                    ..Classic::blank()
-                })
-            }
+            "interface" => Surface::Interface(Interface::default()),
             "mix" => {
                 // pbrt-v4's MixMaterial: the second material with probability `amount`
                 // (a float texture, evaluated at the hit), chosen at each hit.

@@ -21,7 +21,7 @@
 //! the rendering options and the camera, `motion.rs` the animated transforms, and
 //! `cost.rs` counts the geometry against the memory budget (object instances before they
 //! are copied, `instances.rs` places them). The world block: `materials.rs`,
-//! `textures.rs`, `lights.rs` and `shape_statement.rs` (the geometry itself from
+//! `textures.rs`, `lights.rs`, `media.rs` and `shape_statement.rs` (the geometry itself from
 //! `shapes.rs`, cut-outs from `alpha.rs`), their spectrum and texture parameters from
 //! `param_values.rs` and `spectrum.rs`.
 
@@ -34,6 +34,7 @@ mod lexer;
 mod lights;
 mod limits;
 mod materials;
+mod media;
 mod motion;
 mod options;
 mod param_values;

@@ -53,6 +53,7 @@ impl Builder {
                     )));
                 }
                 self.timing.shutter = (open, close);
+                self.camera_medium = self.state.media.1.clone();
                 if self.state.end_ctm != self.state.ctm {
                     self.warn(
                         loc,

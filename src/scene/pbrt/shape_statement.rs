@@ -284,7 +284,9 @@ impl Builder {
             );
             geometries.iter_mut().for_each(|g| g.1 = None);
         }
+        let media = self.shape_media(loc)?;
         let new = geometries.into_iter().map(|(geometry, motion)| Shape {
+            media,
             geometry,
             material,
             alpha: alpha.clone(),

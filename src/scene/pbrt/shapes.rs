@@ -185,6 +185,7 @@ pub fn instance(shape: &Shape, t: &DMat4) -> Vec<Shape> {
     geometries
         .into_iter()
         .map(|geometry| Shape {
+            media: shape.media,
             geometry,
             material: shape.material,
             alpha: shape.alpha.clone(),
@@ -270,6 +271,7 @@ mod tests {
     #[test]
     fn mirrored_instances_keep_their_side() {
         let tri = Shape {
+            media: None,
             geometry: Geometry::Triangles(crate::scene::TriangleMesh {
                 positions: vec![Vec3::ZERO, Vec3::X, Vec3::Y],
                 indices: vec![[0, 1, 2]],

@@ -26,6 +26,8 @@ pub(super) struct GraphicsState {
     pub(super) end_ctm: DMat4,
     /// `ActiveTransform StartTime`: transform statements only change the start transform.
     pub(super) start_time_only: bool,
+    /// `MediumInterface`: the inside and outside media's names ("" is vacuum).
+    pub(super) media: (String, String),
 }
 
 impl Default for GraphicsState {
@@ -38,6 +40,7 @@ impl Default for GraphicsState {
             end_time_only: false,
             end_ctm: DMat4::IDENTITY,
             start_time_only: false,
+            media: (String::new(), String::new()),
         }
     }
 }

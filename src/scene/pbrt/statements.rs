@@ -220,27 +220,19 @@ impl Target for Builder {
     fn make_named_medium(
         &mut self,
         name: String,
-        _p: Params,
+        p: Params,
         loc: &Loc,
     ) -> crate::error::Result<()> {
-        self.warn(
-            loc,
-            format!("MakeNamedMedium \"{name}\": participating media are not supported; ignored"),
-        );
-        Ok(())
+        self.named_medium(name, &p, loc)
     }
 
     fn medium_interface(
         &mut self,
-        _inside: String,
-        _outside: Option<String>,
+        inside: String,
+        outside: Option<String>,
         loc: &Loc,
     ) -> crate::error::Result<()> {
-        self.warn(
-            loc,
-            "MediumInterface: participating media are not supported; ignored",
-        );
-        Ok(())
+        self.set_medium_interface(inside, outside, loc)
     }
 
     fn material(&mut self, ty: String, p: Params, loc: &Loc) -> crate::error::Result<()> {
@@ -377,7 +369,7 @@ impl Builder {
         }
     }
 
-    fn report_unused(&mut self, statement: &str, ty: &str, p: &Params, loc: &Loc) {
+    pub(super) fn report_unused(&mut self, statement: &str, ty: &str, p: &Params, loc: &Loc) {
         let unused: Vec<(String, u32)> = p.unused().map(|q| (q.name.clone(), q.line)).collect();
         for (name, line) in unused {
             self.warn(

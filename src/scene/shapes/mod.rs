@@ -30,6 +30,9 @@ pub struct Shape {
     /// stays still). Same kind and topology as `geometry`; between the two, vertices (a
     /// sphere's centre and radius) move linearly with the ray's time.
     pub motion: Option<Geometry>,
+    /// The media on either side of the surface, for a shape that bounds a medium (None:
+    /// rays crossing it stay in the medium they travel in).
+    pub media: Option<crate::scene::media::MediumInterface>,
 }
 
 impl Shape {

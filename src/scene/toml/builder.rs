@@ -4,6 +4,7 @@
 
 mod coating;
 mod instances;
+mod media;
 mod motion;
 mod render;
 mod shapes;
@@ -39,6 +40,8 @@ pub(super) struct Builder<'a> {
     dir: PathBuf,
     materials: Vec<Material>,
     names: HashMap<String, usize>,
+    media: Vec<crate::scene::media::Medium>,
+    medium_names: HashMap<String, u32>,
     /// Scene material index of each MTL material already loaded, by OBJ file.
     obj_materials: HashMap<PathBuf, Vec<usize>>,
     /// Every file read besides the scene file (meshes, textures, environment maps).
@@ -53,6 +56,8 @@ impl<'a> Builder<'a> {
             dir,
             materials: Vec::new(),
             names: HashMap::new(),
+            media: Vec::new(),
+            medium_names: HashMap::new(),
             obj_materials: HashMap::new(),
             inputs: Default::default(),
         }
@@ -70,6 +75,8 @@ impl<'a> Builder<'a> {
                 "missing [camera] table: the scene needs a camera (position, look_at, fov)",
             ));
         };
+        let camera_site = self.site("camera".into(), camera.span());
+        let camera_medium = camera.get_ref().medium.clone();
         let camera = self.camera(camera)?;
 
         let (settings, setting_sources) = match file.render {
@@ -97,6 +104,17 @@ impl<'a> Builder<'a> {
             None => (Rgb::ZERO, Rgb::ZERO),
         };
 
+        for (name, desc) in file.media.0 {
+            let site = self.site(format!("media.{name}"), desc.span());
+            let medium = self.medium(&site, name.clone(), desc.into_inner())?;
+            self.medium_names.insert(name, self.media.len() as u32);
+            self.media.push(medium);
+        }
+        let camera_medium = match camera_medium {
+            Some(name) => self.medium_index(&camera_site, "medium", &name)?,
+            None => None,
+        };
+
         for (name, desc) in file.materials.0 {
             let site = self.site(format!("materials.{name}"), desc.span());
             let material = self.material(&site, name.clone(), desc.into_inner())?;
@@ -113,6 +131,8 @@ impl<'a> Builder<'a> {
         }
 
         Ok(Scene {
+            media: self.media,
+            camera_medium,
             source: ctx.path.to_path_buf(),
             camera,
             materials: self.materials,
@@ -224,6 +244,24 @@ impl<'a> Builder<'a> {
     ) -> crate::error::Result<Material> {
         let ctx = self.ctx;
         let fail = |key: &'static str| move |m: String| ctx.fail(site, key, m);
+        if let Some(interface) = desc.interface {
+            // Every key the table gives, `interface` among them.
+            let keys = toml::Value::try_from(&desc)
+                .ok()
+                .and_then(|v| v.as_table().map(|t| t.len()))
+                .unwrap_or(0);
+            if !interface || keys > 1 {
+                return Err(fail("interface")(
+                    "an interface (`interface = true`) is only the boundary of a medium: it \
+                     takes no other key"
+                        .into(),
+                ));
+            }
+            return Ok(Material::new(
+                name,
+                Surface::Interface(crate::scene::materials::Interface::default()),
+            ));
+        }
         if let Some(mix) = desc.mix {
             let others = [
                 desc.diffuse.is_some(),

@@ -20,6 +20,7 @@ pub(crate) mod schema;
 mod schema_alpha;
 mod schema_coating;
 mod schema_instance;
+mod schema_medium;
 mod schema_metal;
 mod schema_texture;
 mod schema_values;

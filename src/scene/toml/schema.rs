@@ -6,6 +6,7 @@
 pub(crate) use super::schema_alpha::AlphaDesc;
 pub(crate) use super::schema_coating::CoatingDesc;
 pub(crate) use super::schema_instance::{InstanceDesc, ObjectDesc};
+pub(crate) use super::schema_medium::{MediumDesc, ShapeMediaDesc};
 pub(crate) use super::schema_metal::{ConductorDesc, ConductorIndex, RoughnessDesc};
 pub(crate) use super::schema_texture::{
     CheckerDesc, DiffuseDesc, DirectionMixDesc, ImageDesc, ScaleDesc, TextureMixDesc, TextureTable,
@@ -24,6 +25,8 @@ pub(crate) struct FileDesc {
     pub(crate) camera: Option<Spanned<CameraDesc>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) world: Option<Spanned<WorldDesc>>,
+    #[serde(default, skip_serializing_if = "Ordered::is_empty")]
+    pub(crate) media: Ordered<Spanned<MediumDesc>>,
     #[serde(default, skip_serializing_if = "Ordered::is_empty")]
     pub(crate) materials: Ordered<Spanned<MaterialDesc>>,
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
@@ -167,6 +170,9 @@ pub(crate) struct CameraDesc {
     pub(crate) lens_radius: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) focal_distance: Option<f32>,
+    /// The medium the camera sits in (a name from `[media]`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) medium: Option<String>,
 }
 
 #[derive(Deserialize, Serialize)]
@@ -220,6 +226,9 @@ pub(crate) struct MaterialDesc {
     /// A bump map: displacement along the normal in scene units (a float texture).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) bump: Option<DiffuseDesc>,
+    /// Only the boundary of a medium: no other key.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) interface: Option<bool>,
     /// A tabulated BRDF file, in place of the lobes.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) brdf: Option<String>,
@@ -312,6 +321,9 @@ pub(crate) struct ShapeDesc {
     /// Steps that move the shape, after `transform`, by shutter close (motion blur).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) motion: Option<OneOrMany<TransformOp>>,
+    /// The media inside and outside the surface.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) media: Option<ShapeMediaDesc>,
 }
 
 impl ShapeDesc {
@@ -331,6 +343,7 @@ impl ShapeDesc {
             file: None,
             alpha: None,
             motion: None,
+            media: None,
         }
     }
 

@@ -125,12 +125,14 @@ impl Builder<'_> {
             let site = self.site(format!("{name}[{i}]"), desc.span());
             let mut desc = desc.into_inner();
             let alpha = self.alpha(&site, desc.alpha.take())?;
+            let media = self.shape_media(&site, desc.media.take())?;
             let motion = desc.motion.take();
             let mut new = self.shape(&site, desc)?;
             self.motion(&site, motion, &mut new)?;
             if alpha.is_some() {
                 new.iter_mut().for_each(|s| s.alpha = alpha.clone());
             }
+            new.iter_mut().for_each(|s| s.media = media);
             *cost = new
                 .iter()
                 .fold(*cost, |c, s| c.add(GeometryCost::of(&s.geometry)));

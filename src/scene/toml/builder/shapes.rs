@@ -150,6 +150,7 @@ impl Builder<'_> {
             ));
         }
         Ok(vec![Shape {
+            media: None,
             geometry,
             material: material.unwrap_or_default(),
             alpha: None,
@@ -307,6 +308,7 @@ impl Builder<'_> {
                 ));
             }
             shapes.push(Shape {
+                media: None,
                 geometry,
                 material: index,
                 alpha: None,
@@ -347,6 +349,7 @@ impl Builder<'_> {
             .into_geometry()
             .into_iter()
             .map(|geometry| Shape {
+                media: None,
                 geometry,
                 material,
                 alpha: None,

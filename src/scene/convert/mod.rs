@@ -28,6 +28,8 @@ use crate::settings::{AntiAliasing, NetworkBuilder, NetworkOrder};
 use std::path::{Path, PathBuf};
 use toml::Spanned;
 
+mod media;
+
 /// Reads `input` (.pbrt or .toml) and writes it to `output` as a native TOML scene.
 /// Returns the scene read (with its warnings).
 pub fn convert(input: &Path, output: &Path) -> crate::error::Result<Scene> {
@@ -114,8 +116,12 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::error::Result<()> {
         };
         keys.push(key);
     }
+    let medium_keys = media::keys(&scene.media);
+    let mut camera_desc = camera(&scene.camera);
+    camera_desc.medium = media::name(scene.camera_medium, &medium_keys);
     let mut file = FileDesc {
-        camera: Some(spanned(camera(&scene.camera))),
+        camera: Some(spanned(camera_desc)),
+        media: media::tables(&scene.media, &medium_keys),
         world: Some(spanned(world(scene, refs))),
         materials: Ordered(
             scene
@@ -138,6 +144,7 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::error::Result<()> {
     let mut meshes = MeshDir::new(&out_dir, format!("{stem}.meshes"));
     for (i, shape) in scene.shapes.iter().enumerate() {
         let mut desc = shape_desc(shape, &mut meshes, i, &keys, refs)?;
+        desc.media = media::shape(&shape.media, &medium_keys);
         desc.motion = match &shape.motion {
             None => None,
             Some(end) => Some(OneOrMany::One(TransformOp {
@@ -168,7 +175,9 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::error::Result<()> {
         };
         let mut shapes = Vec::new();
         for shape in &prototype.shapes {
-            shapes.push(spanned(shape_desc(shape, &mut meshes, next, &keys, refs)?));
+            let mut desc = shape_desc(shape, &mut meshes, next, &keys, refs)?;
+            desc.media = media::shape(&shape.media, &medium_keys);
+            shapes.push(spanned(desc));
             next += 1;
         }
         file.objects.push(spanned(ObjectDesc {
@@ -238,6 +247,7 @@ fn camera(c: &Camera) -> CameraDesc {
             Projection::ThinLens { focal_distance, .. } => Some(focal_distance),
             _ => None,
         },
+        medium: None,
     }
 }
 
@@ -352,6 +362,12 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
             ..MaterialDesc::default()
         };
     }
+    if m.is_interface() {
+        return MaterialDesc {
+            interface: Some(true),
+            ..MaterialDesc::default()
+        };
+    }
     // Every other kind is written as its classic terms, which read back as the same lobes.
     let c = m.approximation();
     match &m.surface {
@@ -391,6 +407,7 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
         normal_map: normal_map(m, refs),
         bump: bump(m, refs),
         coating: None,
+        interface: None,
     }
 }
 

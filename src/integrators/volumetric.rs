@@ -1,0 +1,378 @@
+//! The path tracer through participating media (pbrt-v4's `VolPathIntegrator`): free
+//! flights by delta tracking against each medium's majorant, next-event estimation through
+//! media and medium boundaries with ratio tracking, and emission inside media.
+//!
+//! Chromatic media (coefficients that differ by channel) are handled without bias by
+//! spectral multiple importance sampling in RGB: each path draws its distances by one
+//! channel, its hero, chosen at random, and every estimate is divided by the average over
+//! the three channels of the densities with which they would have drawn the same path. The
+//! ratios `r_u` (the path's densities, each channel's over the hero's) and `r_l` (the same
+//! path's densities had its last vertex been a light sample) carry those averages, as in
+//! pbrt-v4, and also give the balance heuristic between light and BSDF sampling.
+
+use crate::bsdf::{phase, Bsdf, Transport};
+use crate::math::sobol::Sampler;
+use crate::math::spawn::Spot;
+use crate::math::{Ray, Rgb, Rng, Vec3};
+use crate::scene::media::tracking::sample_majorant;
+use crate::scene::SurfacePoint;
+use crate::transport::{Context, RayStats};
+
+use super::path::RR_START_DEPTH;
+
+/// Surfaces a ray may cross without scattering (medium boundaries) before it is given up:
+/// a bound that only a malformed scene reaches.
+const MAX_CROSSINGS: u32 = 256;
+
+/// Whether `x` is a number above 0 (not NaN).
+fn positive(x: f32) -> bool {
+    x > 0.0
+}
+
+fn average(v: Rgb) -> f32 {
+    (v.x + v.y + v.z) / 3.0
+}
+
+/// Where a path scatters: a surface's BSDF or a medium's phase function.
+enum Scatterer<'a> {
+    Surface(&'a Bsdf<'a>),
+    Medium { g: f32 },
+}
+
+impl Scatterer<'_> {
+    /// f·|cos| (a phase function has no cosine) and the density of sampling `wi`.
+    fn eval(&self, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+        match self {
+            Scatterer::Surface(bsdf) => bsdf.eval_and_pdf(wo, wi, Transport::Radiance),
+            Scatterer::Medium { g } => {
+                let p = phase::hg(wo, wi, *g);
+                (Rgb::splat(p), p)
+            }
+        }
+    }
+}
+
+/// The medium a ray leaving surface point `sp` along `w` travels in, coming from `current`.
+fn medium_after(ctx: &Context, sp: &SurfacePoint, w: Vec3, current: Option<u32>) -> Option<u32> {
+    match ctx.scene.placed_shape(sp).shape.media {
+        Some(interface) => interface.towards(w, sp.ng),
+        None => current,
+    }
+}
+
+/// One path's estimate of the radiance along `camera_ray`.
+pub(crate) fn radiance(
+    ctx: &Context,
+    camera_ray: &Ray,
+    max_depth: u32,
+    sampler: &mut Sampler,
+    stats: &mut RayStats,
+) -> Rgb {
+    let scene = ctx.scene;
+    let lights = &ctx.lights;
+    let hero = ((sampler.next_1d() * 3.0) as usize).min(2);
+    let mut radiance = Rgb::ZERO;
+    let mut beta = Rgb::ONE;
+    let mut r_u = Rgb::ONE;
+    let mut r_l = Rgb::ONE;
+    let mut specular = true;
+    let mut ray = *camera_ray;
+    let mut medium = scene.camera_medium;
+    let mut prev_p = ray.origin;
+    let mut depth = 0;
+    let mut crossings = 0;
+    let mut first = true;
+    loop {
+        let hit = if first {
+            ctx.intersect_at_depth(&ray, 0, stats)
+        } else {
+            ctx.intersect(&ray, stats)
+        };
+        first = false;
+        if let Some(m) = medium {
+            let model = scene.media[m as usize].model();
+            let emits = model.emits();
+            let t_max = hit.as_ref().map_or(f32::INFINITY, |sp| sp.t);
+            let mut rng = sampler.stream();
+            let mut scatter = None;
+            let mut absorbed = false;
+            let t_maj = sample_majorant(model, &ray, t_max, hero, &mut rng, &mut |c| {
+                let pdf_hero = c.sigma_maj[hero] * c.t_maj[hero];
+                if emits && depth < max_depth {
+                    let r_e = r_u * c.sigma_maj * c.t_maj / pdf_hero;
+                    let le = c.point.sigma_a * c.point.le;
+                    if average(r_e) > 0.0 && le != Rgb::ZERO {
+                        radiance += beta * c.t_maj / pdf_hero * le / average(r_e);
+                    }
+                }
+                let p_absorb = c.point.sigma_a[hero] / c.sigma_maj[hero];
+                let p_scatter = c.point.sigma_s[hero] / c.sigma_maj[hero];
+                if c.u < p_absorb {
+                    absorbed = true;
+                    false
+                } else if c.u < p_absorb + p_scatter {
+                    let pdf = c.t_maj[hero] * c.point.sigma_s[hero];
+                    beta *= c.t_maj * c.point.sigma_s / pdf;
+                    r_u *= c.t_maj * c.point.sigma_s / pdf;
+                    scatter = Some((c.p, c.point.g));
+                    false
+                } else {
+                    let sigma_n = (c.sigma_maj - c.point.sigma_a - c.point.sigma_s).max(Rgb::ZERO);
+                    let pdf = c.t_maj[hero] * sigma_n[hero];
+                    if pdf <= 0.0 {
+                        beta = Rgb::ZERO;
+                    } else {
+                        beta *= c.t_maj * sigma_n / pdf;
+                        r_u *= c.t_maj * sigma_n / pdf;
+                        r_l *= c.t_maj * c.sigma_maj / pdf;
+                    }
+                    beta != Rgb::ZERO && r_u != Rgb::ZERO
+                }
+            });
+            if absorbed || beta == Rgb::ZERO || r_u == Rgb::ZERO || !beta.is_finite() {
+                break;
+            }
+            if let Some((p, g)) = scatter {
+                if depth >= max_depth {
+                    break;
+                }
+                depth += 1;
+                let wo = -ray.dir.normalize();
+                let at = Spot::exact(p);
+                let scatterer = Scatterer::Medium { g };
+                radiance += sample_light(
+                    ctx,
+                    &scatterer,
+                    wo,
+                    &at,
+                    &|_| medium,
+                    ray.time,
+                    (beta, r_u, hero),
+                    sampler,
+                    stats,
+                );
+                let (wi, pdf) = phase::sample_hg(wo, g, sampler.next_2d());
+                if !positive(pdf) {
+                    break;
+                }
+                // The phase function's value is its density: beta keeps its value.
+                r_l = r_u / pdf;
+                specular = false;
+                prev_p = p;
+                ray = at.spawn(wi).at_time(ray.time);
+                if !russian_roulette(&mut beta, r_u, depth, sampler) {
+                    break;
+                }
+                continue;
+            }
+            let t = t_maj[hero];
+            if !positive(t) {
+                break;
+            }
+            beta *= t_maj / t;
+            r_u *= t_maj / t;
+            r_l *= t_maj / t;
+        }
+
+        let Some(sp) = hit else {
+            if let Some(bg) = lights.background_light() {
+                let le = lights.background_radiance(ray.dir);
+                radiance += if specular {
+                    beta * le / average(r_u)
+                } else {
+                    let p_l = lights.pdf_li(bg, prev_p, prev_p + ray.dir, Vec3::ZERO);
+                    beta * le / average(r_u + r_l * p_l)
+                };
+            }
+            break;
+        };
+        let m = &scene.materials[sp.material];
+        let wo = -ray.dir;
+        if m.emits_towards(wo, sp.ng) {
+            let le = m.emission_at(sp.p, sp.uv, sp.ng);
+            radiance += match sp.world_shape().and_then(|s| lights.light_of_shape(s)) {
+                Some(l) if !specular => {
+                    let p_l = lights.pdf_li(l, prev_p, sp.p, sp.ng);
+                    beta * le / average(r_u + r_l * p_l)
+                }
+                _ => beta * le / average(r_u),
+            };
+        }
+        if m.is_interface() {
+            // A medium's boundary: the ray goes on, into the medium on the far side.
+            crossings += 1;
+            if crossings > MAX_CROSSINGS {
+                break;
+            }
+            medium = medium_after(ctx, &sp, ray.dir, medium);
+            ray = sp.spawn(ray.dir);
+            continue;
+        }
+        if depth >= max_depth {
+            break;
+        }
+        depth += 1;
+        let bsdf = m.bsdf(&sp, wo);
+        let wo = wo.normalize();
+        if bsdf.has_non_delta() {
+            let current = medium;
+            radiance += sample_light(
+                ctx,
+                &Scatterer::Surface(&bsdf),
+                wo,
+                &sp.spot(),
+                &|w| medium_after(ctx, &sp, w, current),
+                sp.time,
+                (beta, r_u, hero),
+                sampler,
+                stats,
+            );
+        } else {
+            // The same dimensions whether or not a light is sampled.
+            sampler.next_1d();
+            sampler.next_2d();
+            sampler.next_1d();
+        }
+        let u_lobe = sampler.next_1d();
+        let Some(bs) = bsdf.sample(wo, u_lobe, sampler.next_2d(), Transport::Radiance) else {
+            break;
+        };
+        beta *= bs.weight;
+        r_l = r_u / bs.pdf;
+        specular = bs.delta;
+        prev_p = sp.p;
+        medium = medium_after(ctx, &sp, bs.wi, medium);
+        ray = sp.spawn(bs.wi);
+        if !russian_roulette(&mut beta, r_u, depth, sampler) {
+            break;
+        }
+    }
+    radiance
+}
+
+/// Russian roulette from [`RR_START_DEPTH`] bounces on, by the throughput over the path's
+/// average density ratio: the path survives with that (at most 1) and is reweighted.
+fn russian_roulette(beta: &mut Rgb, r_u: Rgb, depth: u32, sampler: &mut Sampler) -> bool {
+    if depth < RR_START_DEPTH {
+        return true;
+    }
+    let u = sampler.next_1d();
+    let q = (*beta / average(r_u)).max_element().min(1.0);
+    if !positive(q - u) {
+        return false;
+    }
+    *beta /= q;
+    true
+}
+
+/// Next-event estimation from a scattering point `at` (a surface's, or one in a medium):
+/// one light sample, its transmittance through media and medium boundaries by ratio
+/// tracking, weighted against sampling the scatterer by the balance heuristic over the
+/// path's channel densities. `start` gives the medium the shadow ray starts in, by its
+/// direction; `path` is the throughput, its density ratios and its hero channel.
+#[allow(clippy::too_many_arguments)]
+fn sample_light(
+    ctx: &Context,
+    scatterer: &Scatterer,
+    wo: Vec3,
+    at: &Spot,
+    start: &dyn Fn(Vec3) -> Option<u32>,
+    time: f32,
+    (beta, r_path, hero): (Rgb, Rgb, usize),
+    sampler: &mut Sampler,
+    stats: &mut RayStats,
+) -> Rgb {
+    let u_choice = sampler.next_1d();
+    let u_light = sampler.next_2d();
+    let mut rng = sampler.stream();
+    let Some(ls) = ctx.lights.sample_li(at.p, u_choice, u_light) else {
+        return Rgb::ZERO;
+    };
+    if !positive(ls.pdf) {
+        return Rgb::ZERO;
+    }
+    let (f, scatter_pdf) = scatterer.eval(wo, ls.wi);
+    if f == Rgb::ZERO {
+        return Rgb::ZERO;
+    }
+    let Some((t_ray, r_u, r_l)) = transmittance(
+        ctx,
+        (*at, time),
+        start(ls.wi),
+        &ls.spot(),
+        hero,
+        &mut rng,
+        stats,
+    ) else {
+        return Rgb::ZERO;
+    };
+    let r_l = r_path * r_l * ls.pdf;
+    let r_u = r_path * r_u * scatter_pdf;
+    let denominator = if ls.delta {
+        average(r_l)
+    } else {
+        average(r_l + r_u)
+    };
+    if !positive(denominator) {
+        return Rgb::ZERO;
+    }
+    beta * f * t_ray * ls.radiance / denominator
+}
+
+/// The transmittance from `from` (in `medium`) to `to`, through medium boundaries, by
+/// ratio tracking with Russian roulette where it becomes small, and the segment's density
+/// ratios (`T`, `r_u`, `r_l`), at shutter time `time`; `None` when a surface blocks it or the roulette ends it.
+fn transmittance(
+    ctx: &Context,
+    (mut from, time): (Spot, f32),
+    mut medium: Option<u32>,
+    to: &Spot,
+    hero: usize,
+    rng: &mut Rng,
+    stats: &mut RayStats,
+) -> Option<(Rgb, Rgb, Rgb)> {
+    let (mut t_ray, mut r_u, mut r_l) = (Rgb::ONE, Rgb::ONE, Rgb::ONE);
+    for _ in 0..MAX_CROSSINGS {
+        let ray = from.spawn_to(to).at_time(time);
+        stats.shadow += 1;
+        let hit = ctx.intersect(&ray, &mut RayStats::default());
+        if let Some(sp) = &hit {
+            if !ctx.scene.materials[sp.material].is_interface() {
+                return None;
+            }
+        }
+        if let Some(m) = medium {
+            let model = ctx.scene.media[m as usize].model();
+            let t_end = hit.as_ref().map_or(1.0, |sp| sp.t);
+            let t_maj = sample_majorant(model, &ray, t_end, hero, rng, &mut |c| {
+                let sigma_n = (c.sigma_maj - c.point.sigma_a - c.point.sigma_s).max(Rgb::ZERO);
+                let pdf = c.t_maj[hero] * c.sigma_maj[hero];
+                t_ray *= c.t_maj * sigma_n / pdf;
+                r_l *= c.t_maj * c.sigma_maj / pdf;
+                r_u *= c.t_maj * sigma_n / pdf;
+                let estimate = t_ray / average(r_l + r_u);
+                if estimate.max_element() < 0.05 {
+                    if c.u < 0.75 {
+                        t_ray = Rgb::ZERO;
+                    } else {
+                        t_ray /= 0.25;
+                    }
+                }
+                t_ray != Rgb::ZERO
+            });
+            let t = t_maj[hero];
+            if t_ray == Rgb::ZERO || !positive(t) {
+                return None;
+            }
+            t_ray *= t_maj / t;
+            r_l *= t_maj / t;
+            r_u *= t_maj / t;
+        }
+        let Some(sp) = hit else {
+            return t_ray.is_finite().then_some((t_ray, r_u, r_l));
+        };
+        medium = medium_after(ctx, &sp, ray.dir, medium);
+        from = sp.spot();
+    }
+    None
+}
