@@ -1,6 +1,6 @@
-//! `raylink serve` through its HTTP API: what it refuses (tokens, paths, malformed
-//! commands, floods, bad options) and that what it renders and saves is what `raylink
-//! render` writes, bit for bit.
+//! `raylink serve` through its HTTP API: what it refuses (tokens, paths, other sites,
+//! malformed commands, floods, bad options) and that what it renders and saves is what
+//! `raylink render` writes, bit for bit.
 
 mod common;
 mod studio;
@@ -9,7 +9,7 @@ use common::{assert_clean_failure_of, raylink, stderr};
 use std::io::Read;
 use std::net::TcpStream;
 use std::time::{Duration, Instant};
-use studio::{mean, Server};
+use studio::{assert_no_framing, mean, Reply, Server, CROSS_SITE};
 
 const PATH: [&str; 11] = [
     "scenes/cornell-box.toml",
@@ -51,6 +51,15 @@ fn rendered(args: &[&str]) -> Vec<f32> {
 
 fn bits(v: &[f32]) -> Vec<u32> {
     v.iter().map(|x| x.to_bits()).collect()
+}
+
+/// A refusal's body is one line saying why.
+fn assert_one_line(what: &str, r: &Reply) {
+    let text = r.text();
+    assert!(
+        text.ends_with('\n') && text.trim().lines().count() == 1,
+        "{what}: {text:?}"
+    );
 }
 
 #[test]
@@ -224,6 +233,7 @@ fn a_flood_of_connections_is_bounded_and_the_server_recovers() {
         std::thread::sleep(Duration::from_millis(10));
     };
     assert_eq!(probe.status, 503, "{}", probe.text());
+    assert_no_framing("the busy answer", &probe);
     let mut busy = 0;
     for mut s in flood.iter() {
         s.set_read_timeout(Some(Duration::from_millis(1))).unwrap();
@@ -462,6 +472,8 @@ fn the_served_aovs_are_the_render_commands() {
     let server = Server::start(&PATH);
     let first = server.get("/api/image?kind=albedo");
     assert_eq!(first.status, 409, "computed only once asked for");
+    let asked = server.post("/api/aovs", "{\"wanted\":true}");
+    assert_eq!(asked.status, 200, "{}", asked.text());
     server.wait("the auxiliary images", |s| s["aovs"] == true);
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("x.exr");
@@ -579,4 +591,153 @@ fn the_frame_slider_renders_frames_coherently_as_animate_does() {
     let r = still.request("POST", "/api/frame", json, b"{\"frame\":0}");
     assert_eq!(r.status, 409, "{}", r.text());
     assert_eq!(still.stop().code(), Some(130));
+}
+
+/// Another site's page reads no state, image, camera or event stream (403, one line saying
+/// why); the studio's own page, a typed URL and a client without a browser's headers do.
+/// The page itself stays reachable from a link elsewhere.
+#[test]
+fn cross_site_reads_are_refused_and_own_ones_served() {
+    let server = Server::start(&PATH);
+    server.wait_done(1);
+    for path in [
+        "/api/state",
+        "/api/image",
+        "/api/camera.toml",
+        "/api/events",
+    ] {
+        let ask = |headers: &str| match path {
+            "/api/events" => server.open_events(headers).0,
+            _ => server.request("GET", path, headers, b""),
+        };
+        for headers in CROSS_SITE {
+            let r = ask(headers);
+            assert_eq!(r.status, 403, "{path} with {headers:?}: {}", r.text());
+            assert_one_line(path, &r);
+        }
+        for headers in server.own_headers() {
+            let r = ask(&headers);
+            assert_eq!(r.status, 200, "{path} with {headers:?}: {}", r.text());
+        }
+    }
+    let page = server.request("GET", "/", CROSS_SITE[1], b"");
+    assert_eq!(page.status, 200);
+    assert_eq!(server.stop().code(), Some(130));
+}
+
+/// Event streams asked for by another site's pages are refused without taking one of the
+/// 8 slots: the studio's own page still gets its stream and its events, and all 8 slots.
+#[test]
+fn cross_site_event_streams_do_not_lock_the_page_out() {
+    let server = Server::start(&[PATH[0], "--width", "8"]);
+    let held: Vec<TcpStream> = (0..8)
+        .map(|i| {
+            let (r, s) = server.open_events(CROSS_SITE[i % 2]);
+            assert_eq!(r.status, 403, "cross-site stream {i}");
+            s
+        })
+        .collect();
+    let own = &server.own_headers()[0];
+    let (r, mut stream) = server.open_events(own);
+    assert_eq!(r.status, 200, "{}", r.text());
+    let mut event = Vec::new();
+    let mut byte = [0u8; 1];
+    while !event.ends_with(b"\n\n") {
+        assert_eq!(stream.read(&mut byte).unwrap(), 1);
+        event.push(byte[0]);
+    }
+    assert!(event.starts_with(b"data: {"), "{event:?}");
+    let mut streams: Vec<TcpStream> = (1..8)
+        .map(|i| {
+            let (r, s) = server.open_events(own);
+            assert_eq!(r.status, 200, "own stream {i}: {}", r.text());
+            s
+        })
+        .collect();
+    assert_eq!(server.open_events(own).0.status, 503, "a ninth stream");
+    streams.push(stream);
+    drop((held, streams));
+    assert_eq!(server.stop().code(), Some(130));
+}
+
+/// Reading an auxiliary image changes nothing: not from another site (403), nor from the
+/// page (409 until asked for by POST); a later view computes none until then.
+#[test]
+fn reading_an_aov_does_not_change_what_later_views_compute() {
+    let server = Server::start(&PATH);
+    server.wait_done(1);
+    for headers in CROSS_SITE {
+        let r = server.request("GET", "/api/image?kind=albedo", headers, b"");
+        assert_eq!(r.status, 403, "{headers:?}");
+    }
+    let r = server.get("/api/image?kind=normal");
+    assert_eq!(r.status, 409, "{}", r.text());
+    assert!(r.text().contains("POST /api/aovs"), "{}", r.text());
+    assert_eq!(server.state()["aovs_wanted"], false);
+    let moved = server.post(
+        "/api/camera",
+        "{\"position\":[0.5,1,7],\"look_at\":[0,1,0]}",
+    );
+    assert_eq!(moved.status, 200, "{}", moved.text());
+    let s = server.wait_done(2);
+    assert!(s["aovs"] == false && s["aovs_wanted"] == false, "{s}");
+    assert_eq!(server.get("/api/image?kind=depth").status, 409);
+    assert_eq!(server.post("/api/aovs", "{\"wanted\":true}").status, 200);
+    let s = server.wait("the auxiliary images", |s| s["aovs"] == true);
+    assert_eq!(s["aovs_wanted"], true);
+    assert_eq!(server.get("/api/image?kind=depth").status, 200);
+    assert_eq!(server.stop().code(), Some(130));
+}
+
+/// Every answer forbids framing: the page (whose own policy still lets its inline script
+/// and style run), the API, the event stream, errors, refusals and malformed requests.
+#[test]
+fn every_response_forbids_framing() {
+    let server = Server::start(&[PATH[0], "--width", "8"]);
+    let page = server.get("/");
+    assert_no_framing("the page", &page);
+    let policy = page.header("content-security-policy").unwrap();
+    for needed in ["script-src 'unsafe-inline'", "style-src 'unsafe-inline'"] {
+        assert!(policy.contains(needed), "{policy}");
+    }
+    let json = "Content-Type: application/json\r\n";
+    let chunked = format!(
+        "POST /api/camera HTTP/1.1\r\nHost: {}\r\nTransfer-Encoding: chunked\r\n\r\n",
+        server.addr
+    );
+    for (what, r) in [
+        ("state", server.get("/api/state")),
+        ("image", server.get("/api/image")),
+        ("camera.toml", server.get("/api/camera.toml")),
+        ("events", server.open_events("").0),
+        (
+            "a command",
+            server.request("POST", "/api/aovs", json, b"{\"wanted\":false}"),
+        ),
+        (
+            "a bad command",
+            server.request("POST", "/api/camera", json, b"{"),
+        ),
+        ("not JSON", server.request("POST", "/api/camera", "", b"{}")),
+        ("unknown path", server.get("/nothing")),
+        ("wrong method", server.request("DELETE", "/", "", b"")),
+        (
+            "cross-site",
+            server.request("GET", "/api/state", CROSS_SITE[0], b""),
+        ),
+        (
+            "another host",
+            server.raw(b"GET / HTTP/1.1\r\nHost: attacker.example\r\n\r\n"),
+        ),
+        ("malformed", server.raw(b"NONSENSE\r\n\r\n")),
+        ("chunked", server.raw(chunked.as_bytes())),
+    ] {
+        assert_no_framing(what, &r);
+    }
+    assert_eq!(server.stop().code(), Some(130));
+    let server = Server::start(&["--token", "t0ken", PATH[0], "--width", "8"]);
+    let r = server.raw(format!("GET / HTTP/1.1\r\nHost: {}\r\n\r\n", server.addr).as_bytes());
+    assert_eq!(r.status, 401);
+    assert_no_framing("no token", &r);
+    assert_eq!(server.stop().code(), Some(130));
 }

@@ -1,8 +1,9 @@
 //! raylink studio in a real browser: headless Chromium driven by chromedriver over the
 //! WebDriver protocol (plain HTTP and JSON here). The page must show the progressive image
-//! as it converges, orbit on a mouse drag, and relight the network from a slider with the
-//! image scaling as the light. Chromium and chromedriver are Debian packages that
-//! scripts/install-deps.sh --tests installs; without them this test fails (it is not skipped).
+//! as it converges, orbit on a mouse drag, show the albedo, and relight the network from a
+//! slider with the image scaling as the light. Chromium and chromedriver are Debian packages
+//! that scripts/install-deps.sh --tests installs; without them this test fails (it is not
+//! skipped).
 
 mod studio;
 
@@ -302,6 +303,15 @@ fn the_page_converges_orbits_and_relights_in_chromium() {
         "{spp:?}"
     );
     assert_ne!(passes[0]["canvas"], passes[passes.len() - 1]["canvas"]);
+    // The albedo: the page asks the server to compute it (reading it asks for nothing).
+    browser.js(
+        "const k = document.getElementById('kind'); k.value = 'albedo';
+         k.dispatchEvent(new Event('change')); return true;",
+    );
+    browser.wait(
+        "the albedo",
+        "return studio.image && studio.image.kind === 'albedo' && studio.state.aovs_wanted",
+    );
     drop(path);
 
     // The network: relight the lamp by its slider.

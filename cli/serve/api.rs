@@ -1,11 +1,12 @@
 //! The studio's routes: the page, the state as JSON, the events stream, the images as raw
-//! floats, and the commands (camera, relight, save). Every request is checked first: the
-//! token when one is set, else that it names this machine as its host (a page elsewhere
-//! cannot reach the server through a name that resolves here); commands must be JSON
-//! (which a page of another origin cannot send without the server's consent) from no other
-//! origin. The paths are matched as whole strings: none reaches the file system.
+//! floats, and the commands (camera, relight, frame, auxiliary images, save). Every
+//! request is checked first: the token when one is set, else that it names this machine as
+//! its host (a page elsewhere cannot reach the server through a name that resolves here).
+//! The API answers no other site's page ([`cross_site`]), reads change nothing, and
+//! commands must be JSON (which a page of another origin cannot send without the server's
+//! consent). The paths are matched as whole strings: none reaches the file system.
 
-use super::http::{Reply, Request, Response};
+use super::http::{self, Reply, Request, Response};
 use super::session::{lock, RelightRequest, Session, State, Status};
 use raylink::math::{Rgb, Vec3};
 use raylink::{write_image, Image, MetaValue, OutputOptions};
@@ -61,14 +62,19 @@ impl Api {
         if let Err(refused) = self.admit(r) {
             return Reply::Full(refused);
         }
+        // Before any route: a refused event stream takes none of the slots.
+        if r.path.starts_with("/api/") {
+            if let Some(why) = cross_site(r) {
+                return Reply::Full(Response::text(403, why));
+            }
+        }
         let get = r.method == "GET";
         let response = match (r.path.as_str(), get) {
+            // The page's script and style are inline, in the page.
             ("/", true) => Response::new(200, "text/html; charset=utf-8", self.page.clone())
-                .with_header(
-                    "Content-Security-Policy",
+                .with_policy(
                     "default-src 'none'; script-src 'unsafe-inline'; style-src \
-                     'unsafe-inline'; connect-src 'self'; img-src 'self' blob: data:"
-                        .into(),
+                     'unsafe-inline'; connect-src 'self'; img-src 'self' blob: data:",
                 ),
             ("/api/state", true) => Response::json(&self.state()),
             ("/api/events", true) => return self.events(),
@@ -82,12 +88,13 @@ impl Api {
                 )
             }
             ("/api/camera", false) => self.command(r, |api, body| api.camera(body)),
+            ("/api/aovs", false) => self.command(r, |api, body| api.aovs(body)),
             ("/api/relight", false) => self.command(r, |api, body| api.relight(body)),
             ("/api/frame", false) => self.command(r, |api, body| api.frame(body)),
             ("/api/save", false) => self.command(r, |api, body| api.save(body)),
             (
                 "/" | "/api/state" | "/api/events" | "/api/image" | "/api/camera.toml"
-                | "/api/camera" | "/api/relight" | "/api/frame" | "/api/save",
+                | "/api/camera" | "/api/aovs" | "/api/relight" | "/api/frame" | "/api/save",
                 _,
             ) => Response::text(405, "method not allowed"),
             _ => Response::text(404, "not found"),
@@ -134,8 +141,8 @@ impl Api {
         }
     }
 
-    /// A JSON command: refused unless JSON from this origin; a body that is not what
-    /// `run` expects is a 400.
+    /// A JSON command: refused unless JSON (the origin was checked with every API
+    /// request's); a body that is not what `run` expects is a 400.
     fn command(
         &self,
         r: &Request,
@@ -146,11 +153,6 @@ impl Api {
             .is_some_and(|t| t.to_ascii_lowercase().starts_with("application/json"));
         if !json {
             return Response::text(415, "commands are JSON: Content-Type: application/json");
-        }
-        if let (Some(origin), Some(host)) = (r.header("origin"), r.header("host")) {
-            if origin != format!("http://{host}") {
-                return Response::text(403, "a command from another origin");
-            }
         }
         match run(self, &r.body) {
             Ok(v) => Response::json(&v),
@@ -182,6 +184,19 @@ impl Api {
             return Err((400, format!("camera {} {}", p.field, p.message)));
         }
         self.session.set_camera(camera);
+        Ok(json!({"ok": true}))
+    }
+
+    /// Whether the auxiliary images are computed for every view: asked for here, never as
+    /// a side effect of reading one.
+    fn aovs(&self, body: &[u8]) -> Result<Value, (u16, String)> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Body {
+            wanted: bool,
+        }
+        let b: Body = parse(body)?;
+        self.session.want_aovs(b.wanted);
         Ok(json!({"ok": true}))
     }
 
@@ -359,10 +374,14 @@ impl Api {
                         .unwrap_or(0);
                     match aov() {
                         Some(a) => (Arc::new(a[i].clone()), s.view, 1.0, s.view),
+                        None if s.aovs_wanted => {
+                            return Response::text(409, "computing the auxiliary images")
+                        }
                         None => {
-                            drop(s);
-                            self.session.want_aovs();
-                            return Response::text(409, "computing the auxiliary images");
+                            return Response::text(
+                                409,
+                                "auxiliary images are not computed: POST /api/aovs first",
+                            )
                         }
                     }
                 }
@@ -417,10 +436,7 @@ impl Api {
 }
 
 fn stream_events(session: &Session, stream: &mut std::net::TcpStream) -> std::io::Result<()> {
-    stream.write_all(
-        b"HTTP/1.1 200 OK\r\nContent-Type: text/event-stream\r\nCache-Control: no-store\r\n\
-          Connection: close\r\nX-Content-Type-Options: nosniff\r\n\r\n",
-    )?;
+    stream.write_all(format!("{}\r\n", http::head(200, "text/event-stream", None)).as_bytes())?;
     let mut seen = 0;
     loop {
         let text = {
@@ -511,10 +527,32 @@ fn state_json(session: &Session, s: &State) -> Value {
             .map(|(n, k)| json!({"name": n, "factor": k.to_array(), "colour": colour(n)}))
             .collect::<Vec<_>>(),
         "aovs": s.aovs.as_ref().is_some_and(|a| a.0 == s.view),
+        "aovs_wanted": s.aovs_wanted,
         "reference": base.reference.is_some(),
         "rmse": s.rmse,
         "notes": s.notes,
     })
+}
+
+/// Why an API request is refused as another site's, if it is. A browser names the page
+/// that made a request in `Origin` (for all but plain reads and navigations) and in
+/// `Sec-Fetch-Site`; a page elsewhere may not read the images or take an event stream's
+/// slot. A request with neither header (curl, a script) comes from no page.
+fn cross_site(r: &Request) -> Option<&'static str> {
+    if let Some(origin) = r.header("origin") {
+        let own = r.header("host").map(|h| format!("http://{h}"));
+        if !own.is_some_and(|o| o.eq_ignore_ascii_case(origin)) {
+            return Some("refused: a request from a page of another origin");
+        }
+    }
+    match r.header("sec-fetch-site") {
+        Some(site)
+            if !(site.eq_ignore_ascii_case("same-origin") || site.eq_ignore_ascii_case("none")) =>
+        {
+            Some("refused: a request made by another site's page (Sec-Fetch-Site)")
+        }
+        _ => None,
+    }
 }
 
 /// A JSON body as `T`; a 400 naming what is wrong.
@@ -525,4 +563,50 @@ fn parse<T: for<'de> Deserialize<'de>>(body: &[u8]) -> Result<T, (u16, String)> 
 /// Equality in a time that does not depend on where the strings differ.
 fn same(a: &[u8], b: &[u8]) -> bool {
     a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn request(headers: &[(&str, &str)]) -> Request {
+        Request {
+            method: "GET".into(),
+            path: "/api/state".into(),
+            query: Vec::new(),
+            headers: (headers.iter())
+                .map(|(n, v)| (n.to_string(), v.to_string()))
+                .collect(),
+            body: Vec::new(),
+        }
+    }
+
+    #[test]
+    fn cross_site_requests_are_told_apart() {
+        let host = ("host", "127.0.0.1:8765");
+        for ok in [
+            vec![host],
+            vec![host, ("origin", "http://127.0.0.1:8765")],
+            vec![host, ("sec-fetch-site", "same-origin")],
+            vec![host, ("sec-fetch-site", "none")],
+        ] {
+            assert_eq!(cross_site(&request(&ok)), None, "{ok:?}");
+        }
+        for refused in [
+            vec![host, ("origin", "http://attacker.example")],
+            vec![host, ("origin", "null")],
+            vec![host, ("origin", "https://127.0.0.1:8765")],
+            vec![host, ("origin", "http://127.0.0.1:9999")],
+            vec![("origin", "http://127.0.0.1:8765")],
+            vec![host, ("sec-fetch-site", "cross-site")],
+            vec![host, ("sec-fetch-site", "same-site")],
+            vec![
+                host,
+                ("origin", "http://127.0.0.1:8765"),
+                ("sec-fetch-site", "cross-site"),
+            ],
+        ] {
+            assert!(cross_site(&request(&refused)).is_some(), "{refused:?}");
+        }
+    }
 }

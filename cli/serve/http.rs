@@ -3,7 +3,8 @@
 //! here rather than taken from a crate because what matters is what it refuses: at most
 //! [`MAX_CONNECTIONS`] connections are handled at once (more get a 503 from the accepting
 //! thread, which spawns nothing for them), request heads and bodies are bounded, and reads
-//! and writes time out. Nothing in a request is ever used as a file name.
+//! and writes time out. Nothing in a request is ever used as a file name, and no answer may
+//! be shown in another page's frame.
 
 use std::io::{Read, Write};
 use std::net::{SocketAddr, TcpListener, TcpStream};
@@ -53,7 +54,25 @@ pub struct Response {
     pub status: u16,
     pub content_type: &'static str,
     pub headers: Vec<(&'static str, String)>,
+    /// A Content-Security-Policy beyond `frame-ancestors 'none'`.
+    pub policy: Option<&'static str>,
     pub body: Vec<u8>,
+}
+
+/// The status line and the headers every response carries, the event stream's too: no
+/// caching, no sniffing, and no framing by any page (a page that framed the studio could
+/// overlay it and have its user click or drag in it unawares).
+pub fn head(status: u16, content_type: &str, policy: Option<&str>) -> String {
+    let policy = match policy {
+        Some(p) => format!("{p}; frame-ancestors 'none'"),
+        None => "frame-ancestors 'none'".into(),
+    };
+    format!(
+        "HTTP/1.1 {status} {}\r\nContent-Type: {content_type}\r\nConnection: close\r\n\
+         Cache-Control: no-store\r\nX-Content-Type-Options: nosniff\r\nX-Frame-Options: DENY\r\n\
+         Content-Security-Policy: {policy}\r\n",
+        reason(status)
+    )
 }
 
 impl Response {
@@ -62,6 +81,7 @@ impl Response {
             status,
             content_type,
             headers: Vec::new(),
+            policy: None,
             body: body.into(),
         }
     }
@@ -80,16 +100,16 @@ impl Response {
         self
     }
 
+    /// The page's own Content-Security-Policy (the one refusing framing is added to it).
+    pub fn with_policy(mut self, policy: &'static str) -> Response {
+        self.policy = Some(policy);
+        self
+    }
+
     /// Writes the response and its body.
     pub fn write_to(&self, stream: &mut impl Write) -> std::io::Result<()> {
-        let mut head = format!(
-            "HTTP/1.1 {} {}\r\nContent-Type: {}\r\nContent-Length: {}\r\nConnection: close\r\n\
-             Cache-Control: no-store\r\nX-Content-Type-Options: nosniff\r\n",
-            self.status,
-            reason(self.status),
-            self.content_type,
-            self.body.len()
-        );
+        let mut head = head(self.status, self.content_type, self.policy);
+        head += &format!("Content-Length: {}\r\n", self.body.len());
         for (name, value) in &self.headers {
             head += &format!("{name}: {value}\r\n");
         }

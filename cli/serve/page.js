@@ -1,6 +1,7 @@
 'use strict';
 // raylink studio's page: follows the server's state (server-sent events), fetches each new
 // image as linear floats and tone-maps it here, and sends camera moves, relights and saves.
+// Reads change nothing on the server: whatever the page wants computed, it asks for by POST.
 // `window.studio` holds what the page received, for tests and the console.
 
 const token = new URLSearchParams(location.search).get('token');
@@ -33,6 +34,11 @@ async function post(path, body) {
   return JSON.parse(text);
 }
 
+function showError(e) {
+  $('error').hidden = false;
+  $('error').textContent = e.message;
+}
+
 // ---- images -------------------------------------------------------------------------
 
 async function fetchImage(kind) {
@@ -56,7 +62,7 @@ function mean(data) {
   return sum / data.length;
 }
 
-let fetching = false, again = false;
+let fetching = false, again = false, askingAovs = false;
 // Fetches the image the controls ask for if it is not the one shown; one fetch at a time.
 async function refresh() {
   if (fetching) { again = true; return; }
@@ -69,7 +75,14 @@ async function refresh() {
   const have = studio.image;
   if (withImage && s.image_version === 0) return;
   if (kind === 'retrace' && s.retraced == null) return;
-  if (!withImage && !s.aovs && have && have.kind === kind) return;
+  if (!withImage && !s.aovs) {
+    // The auxiliary images, once asked for, are computed for every view after.
+    if (!s.aovs_wanted && !askingAovs) {
+      askingAovs = true;
+      post('/api/aovs', { wanted: true }).catch(showError).finally(() => { askingAovs = false; });
+    }
+    return;
+  }
   if (have && have.kind === kind && have.version === wanted) return;
   fetching = true;
   try {
@@ -301,7 +314,7 @@ function queue(kind, body) {
   latest[kind] = null;
   inFlight[kind] = true;
   post(`/api/${kind}`, next())
-    .catch((e) => { $('error').hidden = false; $('error').textContent = e.message; })
+    .catch(showError)
     .finally(() => { inFlight[kind] = false; if (latest[kind]) queue(kind, latest[kind]); });
 }
 

@@ -82,6 +82,8 @@ pub struct State {
     pub relight: RelightRequest,
     /// Albedo, normal and depth of `aov_view`.
     pub aovs: Option<(u64, Arc<[Image; 3]>)>,
+    /// Whether they are computed for every view (the page asked for them).
+    pub aovs_wanted: bool,
     /// RMSE of `image` against the reference.
     pub rmse: Option<f64>,
     /// The frame of a keyframed scene shown (`None`: the scene as loaded), the map of the
@@ -206,6 +208,7 @@ impl Session {
                         .collect(),
                 },
                 aovs: None,
+                aovs_wanted: false,
                 rmse: None,
                 frame: None,
                 retrace_map: None,
@@ -245,12 +248,13 @@ impl Session {
         self.wake.notify_all();
     }
 
-    /// The page shows auxiliary images: compute them (now, and for every view).
-    pub fn want_aovs(&self) {
+    /// Whether to compute the auxiliary images (now, and for every view).
+    pub fn want_aovs(&self, wanted: bool) {
         let mut inbox = lock(&self.inbox);
-        if !inbox.aovs_wanted {
-            inbox.aovs_wanted = true;
+        if inbox.aovs_wanted != wanted {
+            inbox.aovs_wanted = wanted;
             self.wake.notify_all();
+            self.publish(|s| s.aovs_wanted = wanted);
         }
     }
 

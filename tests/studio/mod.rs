@@ -9,6 +9,16 @@ use std::net::TcpStream;
 use std::process::{Child, Command, ExitStatus, Stdio};
 use std::time::{Duration, Instant};
 
+/// What a browser sends for another site's page: a fetch or an event stream (Origin), an
+/// image or a frame (Sec-Fetch-Site only), a sandboxed frame, another port of this host.
+pub const CROSS_SITE: [&str; 5] = [
+    "Origin: http://attacker.example\r\nSec-Fetch-Site: cross-site\r\n",
+    "Sec-Fetch-Site: cross-site\r\nSec-Fetch-Mode: no-cors\r\n",
+    "Origin: null\r\n",
+    "Origin: http://attacker.example\r\n",
+    "Sec-Fetch-Site: same-site\r\n",
+];
+
 pub struct Server {
     child: Option<Child>,
     /// "127.0.0.1:PORT"
@@ -129,6 +139,43 @@ impl Server {
         )
     }
 
+    /// What the studio's own page sends, what a typed URL sends, and what curl sends.
+    pub fn own_headers(&self) -> [String; 3] {
+        [
+            format!(
+                "Origin: http://{}\r\nSec-Fetch-Site: same-origin\r\n",
+                self.addr
+            ),
+            "Sec-Fetch-Site: none\r\n".into(),
+            String::new(),
+        ]
+    }
+
+    /// Opens an event stream with `headers`: the response (its head only if it is a
+    /// stream), and the connection (a stream stays open while it is held).
+    pub fn open_events(&self, headers: &str) -> (Reply, TcpStream) {
+        let mut s = TcpStream::connect(&self.addr).unwrap();
+        s.set_read_timeout(Some(Duration::from_secs(30))).unwrap();
+        let query = self.token.as_ref().map(|t| format!("?token={t}"));
+        let head = format!(
+            "GET /api/events{} HTTP/1.1\r\nHost: {}\r\n{headers}\r\n",
+            query.unwrap_or_default(),
+            self.addr
+        );
+        s.write_all(head.as_bytes()).unwrap();
+        let mut bytes = Vec::new();
+        let mut byte = [0u8; 1];
+        while !bytes.ends_with(b"\r\n\r\n") {
+            assert_eq!(s.read(&mut byte).unwrap(), 1, "{bytes:?}");
+            bytes.push(byte[0]);
+        }
+        let mut reply = parse_reply(&bytes);
+        if reply.status != 200 {
+            s.read_to_end(&mut reply.body).unwrap();
+        }
+        (reply, s)
+    }
+
     pub fn state(&self) -> Value {
         let r = self.get("/api/state");
         assert_eq!(r.status, 200, "{}", r.text());
@@ -213,6 +260,19 @@ pub fn parse_reply(bytes: &[u8]) -> Reply {
         headers,
         body: bytes[end + 4..].to_vec(),
     }
+}
+
+/// Both headers that forbid framing, on `r`, in one policy.
+pub fn assert_no_framing(what: &str, r: &Reply) {
+    assert_eq!(r.header("x-frame-options"), Some("DENY"), "{what}");
+    let policies: Vec<&str> = (r.headers.iter())
+        .filter(|(n, _)| n == "content-security-policy")
+        .map(|(_, v)| v.as_str())
+        .collect();
+    assert!(
+        policies.len() == 1 && policies[0].contains("frame-ancestors 'none'"),
+        "{what}: {policies:?}"
+    );
 }
 
 /// Mean of the values.
