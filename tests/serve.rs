@@ -741,3 +741,46 @@ fn every_response_forbids_framing() {
     assert_no_framing("no token", &r);
     assert_eq!(server.stop().code(), Some(130));
 }
+
+/// A way back from any view: "previous" undoes the last move (a drag's continued moves
+/// with it), "scene" returns to the scene file's camera and image, and is undone in turn.
+#[test]
+fn reset_view_and_undo_go_back() {
+    let server = Server::start(&PATH);
+    let first = server.wait_done(1);
+    let scene_image = server.get("/api/image").floats();
+    assert_eq!(first["back_steps"], 0);
+    let back = r#"{"to":"previous"}"#;
+    let r = server.post("/api/view", back);
+    assert_eq!(r.status, 409, "nothing to undo: {}", r.text());
+    assert_one_line("nothing to undo", &r);
+    let mut view = 1;
+    let mut go = |path: &str, body: String| {
+        let r = server.post(path, &body);
+        assert_eq!(r.status, 200, "{body}: {}", r.text());
+        view += 1;
+        server.wait_done(view)
+    };
+    let at = |x: f32, continues: bool| {
+        format!(r#"{{"position":[{x},1,9],"look_at":[0,1,0],"continues":{continues}}}"#)
+    };
+    // Out of the scene and back: a view behind the far wall.
+    let left = go("/api/camera", at(0.5, false));
+    go("/api/camera", at(40.0, false));
+    let s = go("/api/camera", at(80.0, true));
+    assert_eq!(s["back_steps"], 2, "{s}");
+    let s = go("/api/view", back.into());
+    assert_eq!(s["camera"], left["camera"], "{s}");
+    let s = go("/api/view", r#"{"to":"scene"}"#.into());
+    assert_eq!(s["camera"], first["camera"], "{s}");
+    assert!(bits(&server.get("/api/image").floats()) == bits(&scene_image));
+    // A second reset changes nothing: "previous" returns to the view before the first.
+    let steps = s["back_steps"].clone();
+    assert_eq!(server.post("/api/view", r#"{"to":"scene"}"#).status, 200);
+    assert_eq!(server.state()["back_steps"], steps);
+    let s = go("/api/view", back.into());
+    assert_eq!(s["camera"], left["camera"], "{s}");
+    let r = server.post("/api/view", r#"{"to":"elsewhere"}"#);
+    assert_eq!(r.status, 400, "{}", r.text());
+    assert_eq!(server.stop().code(), Some(130));
+}

@@ -1,9 +1,9 @@
 //! raylink studio in a real browser: headless Chromium driven by chromedriver over the
 //! WebDriver protocol (plain HTTP and JSON here). The page must show the progressive image
-//! as it converges, orbit on a mouse drag, show the albedo, and relight the network from a
-//! slider with the image scaling as the light. Chromium and chromedriver are Debian packages
-//! that scripts/install-deps.sh --tests installs; without them this test fails (it is not
-//! skipped).
+//! as it converges, orbit on a mouse drag and undo the orbit, show the albedo, and relight
+//! the network from a slider with the image scaling as the light. Chromium and chromedriver
+//! are Debian packages that scripts/install-deps.sh --tests installs; without them this
+//! test fails (it is not skipped).
 
 mod studio;
 
@@ -272,6 +272,7 @@ fn the_page_converges_orbits_and_relights_in_chromium() {
     browser.open(&path.url);
     let first = browser.wait("the first view, finished", SETTLED);
     assert_eq!(first["spp"].as_f64(), Some(256.0), "{first}");
+    let scene_camera = path.state()["camera"].clone();
     browser.drag_canvas(60, 10);
     let moved = browser.wait(
         "the orbited view, finished",
@@ -303,6 +304,20 @@ fn the_page_converges_orbits_and_relights_in_chromium() {
         "{spp:?}"
     );
     assert_ne!(passes[0]["canvas"], passes[passes.len() - 1]["canvas"]);
+    // "Undo move" takes the whole drag back: the scene's camera, and the image drawn first.
+    browser.js("document.getElementById('undo-view').click(); return true;");
+    let back = browser.wait(
+        "the view before the orbit",
+        &SETTLED.replace(
+            "&& h[h.length - 1];",
+            &format!(
+                "&& h[h.length - 1].view > {} && h[h.length - 1];",
+                moved["view"]
+            ),
+        ),
+    );
+    assert_eq!(back["canvas"], first["canvas"], "{back}");
+    assert_eq!(path.state()["camera"], scene_camera);
     // The albedo: the page asks the server to compute it (reading it asks for nothing).
     browser.js(
         "const k = document.getElementById('kind'); k.value = 'albedo';

@@ -1,5 +1,5 @@
 //! The studio's routes: the page, the state as JSON, the events stream, the images as raw
-//! floats, and the commands (camera, relight, frame, auxiliary images, save). Every
+//! floats, and the commands (camera, view, relight, frame, auxiliary images, save). Every
 //! request is checked first: the token when one is set, else that it names this machine as
 //! its host (a page elsewhere cannot reach the server through a name that resolves here).
 //! The API answers no other site's page ([`cross_site`]), reads change nothing, and
@@ -7,7 +7,7 @@
 //! consent). The paths are matched as whole strings: none reaches the file system.
 
 use super::http::{self, Reply, Request, Response};
-use super::session::{lock, RelightRequest, Session, State, Status};
+use super::session::{lock, Move, RelightRequest, Session, State, Status};
 use raylink::math::{Rgb, Vec3};
 use raylink::{write_image, Image, MetaValue, OutputOptions};
 use serde::Deserialize;
@@ -88,13 +88,15 @@ impl Api {
                 )
             }
             ("/api/camera", false) => self.command(r, |api, body| api.camera(body)),
+            ("/api/view", false) => self.command(r, |api, body| api.view(body)),
             ("/api/aovs", false) => self.command(r, |api, body| api.aovs(body)),
             ("/api/relight", false) => self.command(r, |api, body| api.relight(body)),
             ("/api/frame", false) => self.command(r, |api, body| api.frame(body)),
             ("/api/save", false) => self.command(r, |api, body| api.save(body)),
             (
                 "/" | "/api/state" | "/api/events" | "/api/image" | "/api/camera.toml"
-                | "/api/camera" | "/api/aovs" | "/api/relight" | "/api/frame" | "/api/save",
+                | "/api/camera" | "/api/view" | "/api/aovs" | "/api/relight" | "/api/frame"
+                | "/api/save",
                 _,
             ) => Response::text(405, "method not allowed"),
             _ => Response::text(404, "not found"),
@@ -168,6 +170,9 @@ impl Api {
             look_at: [f32; 3],
             up: Option<[f32; 3]>,
             fov: Option<f32>,
+            /// The move continues the one before it (a drag's): one step back undoes both.
+            #[serde(default)]
+            continues: bool,
         }
         let b: Body = parse(body)?;
         let mut camera = lock(&self.session.state).camera.clone();
@@ -183,7 +188,27 @@ impl Api {
         if let Err(p) = camera.check() {
             return Err((400, format!("camera {} {}", p.field, p.message)));
         }
-        self.session.set_camera(camera);
+        self.session.move_camera(Move::To(camera, b.continues));
+        Ok(json!({"ok": true}))
+    }
+
+    /// Back to the camera before the last move, or to the scene file's: a way back from
+    /// a view that left the scene.
+    fn view(&self, body: &[u8]) -> Result<Value, (u16, String)> {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct Body {
+            to: String,
+        }
+        let b: Body = parse(body)?;
+        let to = match b.to.as_str() {
+            "previous" => Move::Back,
+            "scene" => Move::Reset,
+            _ => return Err((400, "to: previous or scene".into())),
+        };
+        if !self.session.move_camera(to) {
+            return Err((409, "no earlier view to go back to".into()));
+        }
         Ok(json!({"ok": true}))
     }
 
@@ -528,6 +553,7 @@ fn state_json(session: &Session, s: &State) -> Value {
             .collect::<Vec<_>>(),
         "aovs": s.aovs.as_ref().is_some_and(|a| a.0 == s.view),
         "aovs_wanted": s.aovs_wanted,
+        "back_steps": s.back_steps,
         "reference": base.reference.is_some(),
         "rmse": s.rmse,
         "notes": s.notes,

@@ -204,6 +204,7 @@ function onState(s) {
   $('error').hidden = !s.error;
   $('error').textContent = s.error || '';
   figures(s);
+  $('undo-view').disabled = !s.back_steps;
   if (!dragging) camera = s.camera;
   refresh();
 }
@@ -362,9 +363,18 @@ function zoom(start, factor) {
   return { ...start, position: add(start.look_at, mul(offset, factor)) };
 }
 
-function sendCamera(c) {
+// The first command of a drag or of a burst of wheel turns starts a step of the server's
+// view history; the rest continue it, so that one "Undo move" undoes the whole gesture.
+let stepStarts = false, lastWheel = -Infinity;
+function sendCamera(c, startsStep) {
   camera = c;
-  queue('camera', () => ({ position: c.position, look_at: c.look_at, up: c.up, fov: c.fov }));
+  if (startsStep) stepStarts = true;
+  queue('camera', () => {
+    const body = { position: c.position, look_at: c.look_at, up: c.up, fov: c.fov,
+                   continues: !stepStarts };
+    stepStarts = false;
+    return body;
+  });
 }
 
 const canvas = $('canvas');
@@ -379,15 +389,24 @@ canvas.addEventListener('pointermove', (e) => {
   const dx = e.clientX - dragging.x, dy = e.clientY - dragging.y;
   if (dx === 0 && dy === 0) return;
   const start = dragging.camera;
-  sendCamera(dragging.pan ? pan(start, dx, dy) : orbit(start, dx, dy));
+  sendCamera(dragging.pan ? pan(start, dx, dy) : orbit(start, dx, dy), !dragging.moved);
+  dragging.moved = true;
 });
 const release = () => { dragging = null; };
 canvas.addEventListener('pointerup', release);
 canvas.addEventListener('pointercancel', release);
 canvas.addEventListener('wheel', (e) => {
   e.preventDefault();
-  if (camera) sendCamera(zoom(camera, Math.exp(Math.max(-200, Math.min(200, e.deltaY)) * 0.002)));
+  if (!camera) return;
+  sendCamera(zoom(camera, Math.exp(Math.max(-200, Math.min(200, e.deltaY)) * 0.002)),
+             e.timeStamp - lastWheel > 500);
+  lastWheel = e.timeStamp;
 }, { passive: false });
+// A way back from a view that left the scene: the camera before the last move, or the
+// scene file's.
+for (const [id, to] of [['undo-view', 'previous'], ['reset-view', 'scene']]) {
+  $(id).addEventListener('click', () => post('/api/view', { to }).catch(showError));
+}
 
 // ---- controls -----------------------------------------------------------------------
 

@@ -29,15 +29,32 @@ pub struct RelightRequest {
 
 /// Commands from the page to the worker, and the cancel token of the job in hand (kept
 /// here so that a command and the cancel of the job it replaces are one step).
-#[derive(Default)]
 pub struct Inbox {
     camera: Option<(Camera, Instant)>,
+    /// The camera last asked for, and the one each step of the view's history left (the
+    /// latest last): what "back" returns to.
+    asked: Camera,
+    back: Vec<Camera>,
     relight: Option<(RelightRequest, Instant)>,
     /// A frame of a keyframed scene to show.
     frame: Option<(i64, Instant)>,
     /// The page shows an auxiliary image: compute them for every view.
     aovs_wanted: bool,
     cancel: CancelToken,
+}
+
+/// Steps of the view's history kept for "back".
+const MAX_BACK: usize = 64;
+
+/// Where a camera command takes the view.
+pub enum Move {
+    /// To this camera: a step of the history of its own, or (`true`) part of the step
+    /// before it, as the later moves of one drag are, so that one "back" undoes the drag.
+    To(Camera, bool),
+    /// Back to the camera the last step left.
+    Back,
+    /// To the scene file's camera: a step of its own, which "back" undoes.
+    Reset,
 }
 
 /// Where the worker stands.
@@ -84,6 +101,8 @@ pub struct State {
     pub aovs: Option<(u64, Arc<[Image; 3]>)>,
     /// Whether they are computed for every view (the page asked for them).
     pub aovs_wanted: bool,
+    /// Steps of the view's history that "back" can undo.
+    pub back_steps: usize,
     /// RMSE of `image` against the reference.
     pub rmse: Option<f64>,
     /// The frame of a keyframed scene shown (`None`: the scene as loaded), the map of the
@@ -119,6 +138,16 @@ pub struct Base {
     pub materials: Vec<String>,
     /// A keyframed scene's first and last frame numbers.
     pub frames: Option<(i64, i64)>,
+}
+
+impl Base {
+    /// The scene file's camera, at the render's size: the first view, and "reset"'s.
+    pub fn scene_camera(&self) -> Camera {
+        let mut camera = self.scene.camera.clone();
+        camera.width = self.job.width;
+        camera.height = self.job.height;
+        camera
+    }
 }
 
 /// The progress sink of the jobs: the phase and its units done, for the ETA.
@@ -179,9 +208,7 @@ pub fn lock<T>(m: &Mutex<T>) -> MutexGuard<'_, T> {
 
 impl Session {
     pub fn new(base: Base) -> Session {
-        let mut camera = base.scene.camera.clone();
-        camera.width = base.job.width;
-        camera.height = base.job.height;
+        let camera = base.scene_camera();
         Session {
             state: Mutex::new(State {
                 version: 1,
@@ -189,7 +216,7 @@ impl Session {
                 image_version: 0,
                 image_view: 0,
                 spp: 0.0,
-                camera,
+                camera: camera.clone(),
                 view: 1,
                 status: Status::Preparing,
                 started: Instant::now(),
@@ -209,6 +236,7 @@ impl Session {
                 },
                 aovs: None,
                 aovs_wanted: false,
+                back_steps: 0,
                 rmse: None,
                 frame: None,
                 retrace_map: None,
@@ -216,7 +244,15 @@ impl Session {
                 notes: Vec::new(),
             }),
             changed: Condvar::new(),
-            inbox: Mutex::new(Inbox::default()),
+            inbox: Mutex::new(Inbox {
+                camera: None,
+                asked: camera,
+                back: Vec::new(),
+                relight: None,
+                frame: None,
+                aovs_wanted: false,
+                cancel: CancelToken::new(),
+            }),
             wake: Condvar::new(),
             quit: AtomicBool::new(false),
             progress: Arc::new(Counter::default()),
@@ -224,12 +260,43 @@ impl Session {
         }
     }
 
-    /// Looks through `camera` next, cancelling the job in hand.
-    pub fn set_camera(&self, camera: Camera) {
+    /// Moves the view as `to` says, cancelling the job in hand; `false` (and nothing done)
+    /// if there is no step to go back to.
+    pub fn move_camera(&self, to: Move) -> bool {
         let mut inbox = lock(&self.inbox);
+        let left = inbox.asked.clone();
+        let camera = match to {
+            Move::To(camera, true) => camera,
+            Move::To(camera, false) => {
+                if camera != left {
+                    inbox.back.push(left);
+                }
+                camera
+            }
+            Move::Reset => {
+                let camera = self.base.scene_camera();
+                if camera == left {
+                    return true;
+                }
+                inbox.back.push(left);
+                camera
+            }
+            Move::Back => match inbox.back.pop() {
+                Some(camera) => camera,
+                None => return false,
+            },
+        };
+        let excess = inbox.back.len().saturating_sub(MAX_BACK);
+        inbox.back.drain(..excess);
+        inbox.asked = camera.clone();
         inbox.camera = Some((camera, Instant::now()));
         inbox.cancel.cancel();
         self.wake.notify_all();
+        // Published under the inbox's lock (the worker's order too), so that the counts
+        // the page sees follow the commands' order.
+        let steps = inbox.back.len();
+        self.publish(|s| s.back_steps = steps);
+        true
     }
 
     /// Relights next, cancelling the job in hand.
