@@ -1,5 +1,5 @@
 //! Participating media: Beer–Lambert attenuation through a slab, an absorbing ball and a
-//! density grid against their closed forms, a white furnace filled with a scattering
+//! density grid, and an emitting slab's glow, against their closed forms, a white furnace filled with a scattering
 //! medium, a scene of haze, ink and tinted glass against Mitsuba 3's volumetric path tracer,
 //! the same pixels for any thread count, and media read from pbrt-v4 files and written back
 //! by `convert`.
@@ -126,6 +126,47 @@ indices = [[4, 5, 6], [4, 6, 7], [0, 2, 1], [0, 3, 2], [0, 1, 5], [0, 5, 4],
         let got = mean(&render(&scene, 1024, 1, accel));
         assert_close(&format!("slab, {accel:?}"), got, want, 0.005);
     }
+}
+
+/// An emitting slab in the dark, absorbing and not scattering: absorption σa and emitted
+/// radiance Le over a thickness d give Le·(1 − e^(−σa·d)) per channel (emission σa·Le per
+/// unit length, itself absorbed on its way out).
+#[test]
+fn an_emitting_slab_glows_by_its_absorption() {
+    let sigma_a = Rgb::new(0.3, 1.0, 3.0);
+    let le = Rgb::new(2.0, 1.0, 0.5);
+    let scene = toml(
+        r#"
+[camera]
+position = [0, 0, 2]
+look_at = [0, 0, 0]
+projection = "orthographic"
+size = 2
+width = 32
+height = 32
+
+[media.glow]
+type = "homogeneous"
+sigma_a = [0.3, 1.0, 3.0]
+sigma_s = 0
+emission = [2, 1, 0.5]
+
+[materials.boundary]
+interface = true
+
+[[shapes]]
+type = "mesh"
+material = "boundary"
+media = { inside = "glow" }
+positions = [[-2, -2, -0.5], [2, -2, -0.5], [2, 2, -0.5], [-2, 2, -0.5],
+             [-2, -2, 0.5], [2, -2, 0.5], [2, 2, 0.5], [-2, 2, 0.5]]
+indices = [[4, 5, 6], [4, 6, 7], [0, 2, 1], [0, 3, 2], [0, 1, 5], [0, 5, 4],
+           [1, 2, 6], [1, 6, 5], [2, 3, 7], [2, 7, 6], [3, 0, 4], [3, 4, 7]]
+"#,
+    );
+    let want = le * (Rgb::ONE - exp(-sigma_a));
+    let got = mean(&render(&scene, 1024, 7, Backend::Embree));
+    assert_close("emitting slab", got, want, 0.005);
 }
 
 /// A ball of radius r and absorption σ seen by an orthographic camera against a white
@@ -354,4 +395,62 @@ transform = { rotate = { axis = [0, 1, 0], degrees = 30 } }
     };
     assert_eq!(kinds(&back), kinds(&scene));
     assert!(kinds(&scene).contains(&true));
+}
+
+/// Farm tiles of a scene with media merge into the whole render, bit for bit: free flights
+/// are drawn from the pixel's own sample streams.
+#[test]
+fn farm_tiles_of_media_merge_into_the_whole_render() {
+    let dir = tempfile::tempdir().unwrap();
+    let at = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
+    let run = |args: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_raylink"))
+            .args(args)
+            .current_dir(root())
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+    };
+    let options = [
+        "-q",
+        "--width",
+        "24",
+        "--height",
+        "20",
+        "--spp",
+        "4",
+        "--filter",
+        "gaussian",
+        "--filter-radius",
+        "1.5",
+        "--seed",
+        "9",
+    ];
+    let scene = "tests/scenes/media-box.toml";
+    let whole = at("whole.exr");
+    run(&[&["render", scene, "-o", &whole][..], &options].concat());
+    let pattern = at("tile_{tile}.exr");
+    for tile in ["0/3", "1/3", "2/3"] {
+        run(&[
+            &["render", scene, "--tile", tile, "-o", &pattern][..],
+            &options,
+        ]
+        .concat());
+    }
+    let merged = at("merged.exr");
+    let parts: Vec<String> = (0..3).map(|i| at(&format!("tile_{i}.exr"))).collect();
+    let mut args = vec!["merge", "-o", &merged];
+    args.extend(parts.iter().map(String::as_str));
+    run(&args);
+    let (a, _) = raylink::read_image(Path::new(&whole)).unwrap();
+    let (b, _) = raylink::read_image(Path::new(&merged)).unwrap();
+    assert!(mean(&a).min_element() > 0.0, "the render is black");
+    assert!(
+        a.pixels == b.pixels,
+        "the merged tiles differ from the whole render"
+    );
 }
