@@ -126,13 +126,11 @@ impl MonteCarlo for PathTracer {
         _splats: &mut Vec<Splat>,
     ) -> Rgb {
         if ctx.has_media() {
-            return super::volumetric::radiance(
-                ctx,
-                camera_ray,
-                self.options.max_depth,
-                sampler,
-                stats,
-            );
+            let lengths = super::volumetric::Lengths {
+                max_depth: self.options.max_depth,
+                rr_start: RR_START_DEPTH,
+            };
+            return super::volumetric::radiance(ctx, camera_ray, lengths, sampler, stats);
         }
         let lights = &ctx.lights;
         let mut radiance = Rgb::ZERO;

@@ -18,8 +18,6 @@ use crate::scene::media::tracking::sample_majorant;
 use crate::scene::SurfacePoint;
 use crate::transport::{Context, RayStats};
 
-use super::path::RR_START_DEPTH;
-
 /// Surfaces a ray may cross without scattering (medium boundaries) before it is given up:
 /// a bound that only a malformed scene reaches.
 const MAX_CROSSINGS: u32 = 256;
@@ -60,11 +58,21 @@ fn medium_after(ctx: &Context, sp: &SurfacePoint, w: Vec3, current: Option<u32>)
     }
 }
 
+/// How long paths are: at most `max_depth` bounces, Russian roulette from `rr_start` on.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Lengths {
+    pub max_depth: u32,
+    pub rr_start: u32,
+}
+
 /// One path's estimate of the radiance along `camera_ray`.
 pub(crate) fn radiance(
     ctx: &Context,
     camera_ray: &Ray,
-    max_depth: u32,
+    Lengths {
+        max_depth,
+        rr_start,
+    }: Lengths,
     sampler: &mut Sampler,
     stats: &mut RayStats,
 ) -> Rgb {
@@ -160,7 +168,7 @@ pub(crate) fn radiance(
                 specular = false;
                 prev_p = p;
                 ray = at.spawn(wi).at_time(ray.time);
-                if !russian_roulette(&mut beta, r_u, depth, sampler) {
+                if !russian_roulette(&mut beta, r_u, depth >= rr_start, sampler) {
                     break;
                 }
                 continue;
@@ -243,17 +251,17 @@ pub(crate) fn radiance(
         prev_p = sp.p;
         medium = medium_after(ctx, &sp, bs.wi, medium);
         ray = sp.spawn(bs.wi);
-        if !russian_roulette(&mut beta, r_u, depth, sampler) {
+        if !russian_roulette(&mut beta, r_u, depth >= rr_start, sampler) {
             break;
         }
     }
     radiance
 }
 
-/// Russian roulette from [`RR_START_DEPTH`] bounces on, by the throughput over the path's
-/// average density ratio: the path survives with that (at most 1) and is reweighted.
-fn russian_roulette(beta: &mut Rgb, r_u: Rgb, depth: u32, sampler: &mut Sampler) -> bool {
-    if depth < RR_START_DEPTH {
+/// Russian roulette once `on`, by the throughput over the path's average density ratio: the
+/// path survives with that (at most 1) and is reweighted.
+fn russian_roulette(beta: &mut Rgb, r_u: Rgb, on: bool, sampler: &mut Sampler) -> bool {
+    if !on {
         return true;
     }
     let u = sampler.next_1d();

@@ -1,12 +1,9 @@
 //! The scene's media as `[media.NAME]` tables, and the names shapes and the camera give.
 
-use super::super::media::{Medium, MediumInterface, MediumKind};
-use super::super::toml::schema::{
-    MediumDesc, OneOrMany, Ordered, ShapeMediaDesc, Splat3, TransformOp, V3,
+use crate::scene::media::{Medium, MediumInterface, MediumKind, MediumPoint};
+use crate::scene::toml::schema::{
+    Idx3, MediumDesc, OneOrMany, ShapeMediaDesc, Splat3, TransformOp, V3,
 };
-use super::spanned;
-use crate::scene::toml::schema::Idx3;
-use toml::Spanned;
 
 /// Each medium's key: its own name where unique and not empty, else `medium<index>`.
 pub(super) fn keys(media: &[Medium]) -> Vec<String> {
@@ -22,19 +19,17 @@ pub(super) fn keys(media: &[Medium]) -> Vec<String> {
     keys
 }
 
-/// The `[media]` tables.
-pub(super) fn tables(media: &[Medium], keys: &[String]) -> Ordered<Spanned<MediumDesc>> {
-    Ordered(
-        media
-            .iter()
-            .zip(keys)
-            .map(|(m, key)| (key.clone(), spanned(table(m))))
-            .collect(),
-    )
+/// The `[media]` tables, by key.
+pub(super) fn tables(media: &[Medium], keys: &[String]) -> Vec<(String, MediumDesc)> {
+    media
+        .iter()
+        .zip(keys)
+        .map(|(m, key)| (key.clone(), table(m)))
+        .collect()
 }
 
 fn table(m: &Medium) -> MediumDesc {
-    let plain = |kind: &str, p: &super::super::media::MediumPoint| MediumDesc {
+    let plain = |kind: &str, p: &MediumPoint| MediumDesc {
         kind: kind.into(),
         sigma_a: Some(Splat3(p.sigma_a)),
         sigma_s: Some(Splat3(p.sigma_s)),

@@ -121,7 +121,12 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::error::Result<()> {
     camera_desc.medium = media::name(scene.camera_medium, &medium_keys);
     let mut file = FileDesc {
         camera: Some(spanned(camera_desc)),
-        media: media::tables(&scene.media, &medium_keys),
+        media: Ordered(
+            media::tables(&scene.media, &medium_keys)
+                .into_iter()
+                .map(|(key, desc)| (key, spanned(desc)))
+                .collect(),
+        ),
         world: Some(spanned(world(scene, refs))),
         materials: Ordered(
             scene
