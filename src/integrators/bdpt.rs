@@ -7,7 +7,8 @@
 //! pbrt. Finite emitters only (area and point lights): directional lights and the
 //! background have no position to start a subpath from, and are left to the path tracer.
 
-use super::light::{connect_to_camera, lens_sample, refuse_orthographic};
+use super::camera_connection::{connect_to_camera, lens_sample};
+use super::light::refuse_orthographic;
 use super::path::russian_roulette;
 use crate::bsdf::{Bsdf, Transport};
 use crate::error::Error;

@@ -4,11 +4,11 @@
 //! the camera's importance W_e; each connection is splatted onto the film where it lands. One light path is traced per
 //! pixel sample, so a render with N samples per pixel traces N·width·height light paths.
 
+use super::camera_connection::{connect_to_camera, lens_sample};
 use super::path::russian_roulette;
 use crate::bsdf::{Bsdf, Transport};
 use crate::error::{Error, Result};
 use crate::math::sobol::Sampler;
-use crate::math::spawn::Spot;
 use crate::math::{Ray, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::lights::{EmissionSample, Emitter};
@@ -28,12 +28,13 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     progressive: true,
     renders_parts: false,
     follows_time: true,
-    media: false,
+    media: true,
 };
 
 /// The technique for `scene`: nothing to prepare, sample passes.
 pub(crate) fn lifecycle(mc: &MonteCarloSettings, scene: &Scene) -> Result<Box<dyn Lifecycle>> {
     refuse_orthographic(scene, "light")?;
+    super::volumetric_light::check_scene(scene).map_err(|e| Error::input(&scene.source, e))?;
     Ok(Box::new(SampledTechnique {
         integrator: LightTracer::new(LightOptions {
             max_depth: mc.max_depth,
@@ -76,64 +77,6 @@ impl LightTracer {
     }
 }
 
-/// A point seen by the camera: where it lands on the film and the factor that turns
-/// "radiance leaving the point towards the camera, times |cos| at the point" into a splat:
-/// W_e·cos θ_c / d² = 1 / (A_pixel cos³θ_c d²) for a pinhole with an image plane at unit
-/// distance (pbrt's We = 1/(A cos⁴θ) times the camera-side cosine).
-pub(crate) struct CameraConnection {
-    pub x: f32,
-    pub y: f32,
-    /// Unit direction from the point to the camera.
-    pub dir: Vec3,
-    pub importance: f32,
-}
-
-/// Connects point `at` (with its error and geometric normal) to the camera at the lens point
-/// `lens` (the pinhole, or a point of a thin lens drawn uniformly over it): `None` if it is
-/// outside the film (widened by the filter radius) or hidden. For a thin lens, the
-/// importance keeps the pinhole's form with θ and d measured from the lens point: pbrt-v4's
-/// We = 1/(A cos⁴θ · lens area) times cos θ over the lens-area density d²/(cos θ · lens area).
-pub(crate) fn connect_to_camera(
-    ctx: &Context,
-    camera: &CameraBasis,
-    lens: Vec3,
-    at: &Spot,
-    time: f32,
-    stats: &mut RayStats,
-) -> Option<CameraConnection> {
-    let p = at.p;
-    let (x, y, cos_c) = camera.raster_from(lens, p)?;
-    let (w, h) = camera.film_size();
-    let margin = camera.margin;
-    if x < -margin || y < -margin || x >= w + margin || y >= h + margin {
-        return None;
-    }
-    let to_cam = lens - p;
-    let dist2 = to_cam.length_squared();
-    let dir = to_cam / dist2.sqrt();
-    let shadow = at.spawn_to(&Spot::exact(lens)).at_time(time);
-    if ctx.occluded(&shadow, stats) {
-        return None;
-    }
-    let importance = 1.0 / (camera.pixel_area() * cos_c * cos_c * cos_c * dist2);
-    Some(CameraConnection {
-        x,
-        y,
-        dir,
-        importance,
-    })
-}
-
-/// The lens point of a connection to the camera: a uniform point of a thin lens (drawing
-/// two numbers), the pinhole otherwise (drawing none, so pinhole images keep their samples).
-pub(crate) fn lens_sample(camera: &CameraBasis, sampler: &mut Sampler) -> Vec3 {
-    if camera.has_lens() {
-        camera.lens_point(sampler.next_2d())
-    } else {
-        camera.origin
-    }
-}
-
 impl MonteCarlo for LightTracer {
     fn sample(
         &self,
@@ -144,6 +87,16 @@ impl MonteCarlo for LightTracer {
         stats: &mut RayStats,
         splats: &mut Vec<Splat>,
     ) -> Rgb {
+        if ctx.has_media() {
+            let lengths = super::volumetric::Lengths {
+                max_depth: self.options.max_depth,
+                rr_start: super::path::RR_START_DEPTH,
+            };
+            super::volumetric_light::trace(
+                ctx, camera, camera_ray, lengths, sampler, stats, splats,
+            );
+            return Rgb::ZERO;
+        }
         let lights = &ctx.lights;
         // The background seen directly cannot be reached from the lights' side: the camera
         // ray supplies it.

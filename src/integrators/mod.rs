@@ -3,6 +3,7 @@
 //! `Integrator` or `MonteCarlo` interface; `technique` lists them.
 
 pub mod bdpt;
+mod camera_connection;
 pub mod flux;
 pub mod illumination_network;
 pub mod irradiance_cache;
@@ -10,4 +11,5 @@ pub mod light;
 pub mod path;
 pub(crate) mod technique;
 mod volumetric;
+mod volumetric_light;
 pub mod whitted;

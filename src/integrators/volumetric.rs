@@ -14,32 +14,33 @@ use crate::bsdf::{phase, Bsdf, Transport};
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
 use crate::math::{Ray, Rgb, Rng, Vec3};
-use crate::scene::media::tracking::sample_majorant;
+use crate::scene::media::tracking::{sample_majorant, Collision};
+use crate::scene::media::MediumModel;
 use crate::scene::SurfacePoint;
 use crate::transport::{Context, RayStats};
 
 /// Surfaces a ray may cross without scattering (medium boundaries) before it is given up:
 /// a bound that only a malformed scene reaches.
-const MAX_CROSSINGS: u32 = 256;
+pub(super) const MAX_CROSSINGS: u32 = 256;
 
 /// Whether `x` is a number above 0 (not NaN).
-fn positive(x: f32) -> bool {
+pub(super) fn positive(x: f32) -> bool {
     x > 0.0
 }
 
-fn average(v: Rgb) -> f32 {
+pub(super) fn average(v: Rgb) -> f32 {
     (v.x + v.y + v.z) / 3.0
 }
 
 /// Where a path scatters: a surface's BSDF or a medium's phase function.
-enum Scatterer<'a> {
+pub(super) enum Scatterer<'a> {
     Surface(&'a Bsdf<'a>),
     Medium { g: f32 },
 }
 
 impl Scatterer<'_> {
     /// f·|cos| (a phase function has no cosine) and the density of sampling `wi`.
-    fn eval(&self, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
+    pub(super) fn eval(&self, wo: Vec3, wi: Vec3) -> (Rgb, f32) {
         match self {
             Scatterer::Surface(bsdf) => bsdf.eval_and_pdf(wo, wi, Transport::Radiance),
             Scatterer::Medium { g } => {
@@ -51,7 +52,12 @@ impl Scatterer<'_> {
 }
 
 /// The medium a ray leaving surface point `sp` along `w` travels in, coming from `current`.
-fn medium_after(ctx: &Context, sp: &SurfacePoint, w: Vec3, current: Option<u32>) -> Option<u32> {
+pub(super) fn medium_after(
+    ctx: &Context,
+    sp: &SurfacePoint,
+    w: Vec3,
+    current: Option<u32>,
+) -> Option<u32> {
     match ctx.scene.placed_shape(sp).shape.media {
         Some(interface) => interface.towards(w, sp.ng),
         None => current,
@@ -99,47 +105,34 @@ pub(crate) fn radiance(
         first = false;
         if let Some(m) = medium {
             let model = scene.media[m as usize].model();
-            let emits = model.emits();
+            let emits = model.emits() && depth < max_depth;
             let t_max = hit.as_ref().map_or(f32::INFINITY, |sp| sp.t);
             let mut rng = sampler.stream();
-            let mut scatter = None;
-            let mut absorbed = false;
-            let t_maj = sample_majorant(model, &ray, t_max, hero, &mut rng, &mut |c| {
-                let pdf_hero = c.sigma_maj[hero] * c.t_maj[hero];
-                if emits && depth < max_depth {
-                    let r_e = r_u * c.sigma_maj * c.t_maj / pdf_hero;
-                    let le = c.point.sigma_a * c.point.le;
-                    if average(r_e) > 0.0 && le != Rgb::ZERO {
-                        radiance += beta * c.t_maj / pdf_hero * le / average(r_e);
+            let mut path = Throughput { beta, r_u, r_l };
+            let flight = fly(
+                model,
+                &ray,
+                t_max,
+                (hero, &mut rng),
+                &mut path,
+                &mut |c, path| {
+                    if emits {
+                        // The emission the path meets at the collision, over its channels' densities.
+                        let pdf_hero = c.sigma_maj[hero] * c.t_maj[hero];
+                        let r_e = path.r_u * c.sigma_maj * c.t_maj / pdf_hero;
+                        let le = c.point.sigma_a * c.point.le;
+                        if average(r_e) > 0.0 && le != Rgb::ZERO {
+                            radiance += path.beta * c.t_maj / pdf_hero * le / average(r_e);
+                        }
                     }
-                }
-                let p_absorb = c.point.sigma_a[hero] / c.sigma_maj[hero];
-                let p_scatter = c.point.sigma_s[hero] / c.sigma_maj[hero];
-                if c.u < p_absorb {
-                    absorbed = true;
-                    false
-                } else if c.u < p_absorb + p_scatter {
-                    let pdf = c.t_maj[hero] * c.point.sigma_s[hero];
-                    beta *= c.t_maj * c.point.sigma_s / pdf;
-                    r_u *= c.t_maj * c.point.sigma_s / pdf;
-                    scatter = Some((c.p, c.point.g));
-                    false
-                } else {
-                    let sigma_n = (c.sigma_maj - c.point.sigma_a - c.point.sigma_s).max(Rgb::ZERO);
-                    let pdf = c.t_maj[hero] * sigma_n[hero];
-                    if pdf <= 0.0 {
-                        beta = Rgb::ZERO;
-                    } else {
-                        beta *= c.t_maj * sigma_n / pdf;
-                        r_u *= c.t_maj * sigma_n / pdf;
-                        r_l *= c.t_maj * c.sigma_maj / pdf;
-                    }
-                    beta != Rgb::ZERO && r_u != Rgb::ZERO
-                }
-            });
-            if absorbed || beta == Rgb::ZERO || r_u == Rgb::ZERO || !beta.is_finite() {
-                break;
-            }
+                },
+            );
+            Throughput { beta, r_u, r_l } = path;
+            let scatter = match flight {
+                Flight::Ended => break,
+                Flight::Scattered { p, g } => Some((p, g)),
+                Flight::Crossed => None,
+            };
             if let Some((p, g)) = scatter {
                 if depth >= max_depth {
                     break;
@@ -173,13 +166,6 @@ pub(crate) fn radiance(
                 }
                 continue;
             }
-            let t = t_maj[hero];
-            if !positive(t) {
-                break;
-            }
-            beta *= t_maj / t;
-            r_u *= t_maj / t;
-            r_l *= t_maj / t;
         }
 
         let Some(sp) = hit else {
@@ -258,9 +244,87 @@ pub(crate) fn radiance(
     radiance
 }
 
+/// A path's throughput and its density ratios (pbrt-v4's β, r_u, r_l): each channel's
+/// density of the path over the hero's, by unidirectional sampling (`r_u`) and had its last
+/// vertex been a light sample (`r_l`).
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Throughput {
+    pub beta: Rgb,
+    pub r_u: Rgb,
+    pub r_l: Rgb,
+}
+
+/// How a free flight through a medium ended.
+pub(super) enum Flight {
+    /// Absorbed, or its throughput became zero: the path ends.
+    Ended,
+    /// Scattered at `p` by a phase function of asymmetry `g`.
+    Scattered { p: Vec3, g: f32 },
+    /// It reached the end of the ray (the surface hit, or nothing).
+    Crossed,
+}
+
+/// One free flight along `ray` up to `t_max` in `medium` by delta tracking, sampled by the
+/// `hero` channel: at each tentative collision, absorption, scattering or a null collision
+/// by the hero's coefficients; `path` takes the weights, and `at` sees each collision first
+/// (with the path as it arrives there), for the emission of the medium.
+pub(super) fn fly(
+    medium: &dyn MediumModel,
+    ray: &Ray,
+    t_max: f32,
+    (hero, rng): (usize, &mut Rng),
+    path: &mut Throughput,
+    at: &mut dyn FnMut(&Collision, &Throughput),
+) -> Flight {
+    let mut flight = Flight::Crossed;
+    let t_maj = sample_majorant(medium, ray, t_max, hero, rng, &mut |c| {
+        at(c, path);
+        let p_absorb = c.point.sigma_a[hero] / c.sigma_maj[hero];
+        let p_scatter = c.point.sigma_s[hero] / c.sigma_maj[hero];
+        if c.u < p_absorb {
+            flight = Flight::Ended;
+            false
+        } else if c.u < p_absorb + p_scatter {
+            let pdf = c.t_maj[hero] * c.point.sigma_s[hero];
+            path.beta *= c.t_maj * c.point.sigma_s / pdf;
+            path.r_u *= c.t_maj * c.point.sigma_s / pdf;
+            flight = Flight::Scattered {
+                p: c.p,
+                g: c.point.g,
+            };
+            false
+        } else {
+            let sigma_n = (c.sigma_maj - c.point.sigma_a - c.point.sigma_s).max(Rgb::ZERO);
+            let pdf = c.t_maj[hero] * sigma_n[hero];
+            if pdf <= 0.0 {
+                path.beta = Rgb::ZERO;
+            } else {
+                path.beta *= c.t_maj * sigma_n / pdf;
+                path.r_u *= c.t_maj * sigma_n / pdf;
+                path.r_l *= c.t_maj * c.sigma_maj / pdf;
+            }
+            path.beta != Rgb::ZERO && path.r_u != Rgb::ZERO
+        }
+    });
+    if matches!(flight, Flight::Crossed) {
+        let t = t_maj[hero];
+        if positive(t) {
+            path.beta *= t_maj / t;
+            path.r_u *= t_maj / t;
+            path.r_l *= t_maj / t;
+        } else {
+            flight = Flight::Ended;
+        }
+    }
+    if path.beta == Rgb::ZERO || path.r_u == Rgb::ZERO || !path.beta.is_finite() {
+        return Flight::Ended;
+    }
+    flight
+}
+
 /// Russian roulette once `on`, by the throughput over the path's average density ratio: the
 /// path survives with that (at most 1) and is reweighted.
-fn russian_roulette(beta: &mut Rgb, r_u: Rgb, on: bool, sampler: &mut Sampler) -> bool {
+pub(super) fn russian_roulette(beta: &mut Rgb, r_u: Rgb, on: bool, sampler: &mut Sampler) -> bool {
     if !on {
         return true;
     }
@@ -330,7 +394,7 @@ fn sample_light(
 /// The transmittance from `from` (in `medium`) to `to`, through medium boundaries, by
 /// ratio tracking with Russian roulette where it becomes small, and the segment's density
 /// ratios (`T`, `r_u`, `r_l`), at shutter time `time`; `None` when a surface blocks it or the roulette ends it.
-fn transmittance(
+pub(super) fn transmittance(
     ctx: &Context,
     (mut from, time): (Spot, f32),
     mut medium: Option<u32>,
