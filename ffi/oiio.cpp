@@ -344,27 +344,73 @@ extern "C" size_t raylink_oiio_encoded_size(const RaylinkOiioEncoded *encoded) {
 
 extern "C" void raylink_oiio_encoded_free(RaylinkOiioEncoded *encoded) { delete encoded; }
 
-extern "C" RaylinkOiioImage *raylink_oiio_read(const char *path, char *err, size_t err_len) {
+// Opens `path` and checks its header: an input whose spec() raylink_oiio_read can read, or
+// null with the message in `err`.
+static OIIO::ImageInput::unique_ptr open_input(const char *path, char *err, size_t err_len) {
+    if (path == nullptr) {
+        set_error(err, err_len, "internal error: null path passed to raylink_oiio_read");
+        return nullptr;
+    }
+    auto in = OIIO::ImageInput::open(path);
+    if (!in) {
+        set_error(err, err_len, with_detail("cannot open for reading", OIIO::geterror()));
+        return nullptr;
+    }
+    const OIIO::ImageSpec &spec = in->spec();
+    if (spec.deep) {
+        set_error(err, err_len, "deep images are not supported");
+        return nullptr;
+    }
+    if (spec.width <= 0 || spec.height <= 0 || spec.depth != 1 || spec.nchannels <= 0) {
+        set_error(err, err_len,
+                  "unsupported image size " + std::to_string(spec.width) + "x" +
+                      std::to_string(spec.height) + "x" + std::to_string(spec.depth) + " with " +
+                      std::to_string(spec.nchannels) + " channels");
+        return nullptr;
+    }
+    return in;
+}
+
+extern "C" int raylink_oiio_read_size(const char *path, int *width, int *height, int *nchannels,
+                                      char *err, size_t err_len) {
     try {
-        if (path == nullptr) {
-            set_error(err, err_len, "internal error: null path passed to raylink_oiio_read");
-            return nullptr;
-        }
-        auto in = OIIO::ImageInput::open(path);
+        auto in = open_input(path, err, err_len);
         if (!in) {
-            set_error(err, err_len, with_detail("cannot open for reading", OIIO::geterror()));
+            return 1;
+        }
+        const OIIO::ImageSpec &spec = in->spec();
+        *width = spec.width;
+        *height = spec.height;
+        *nchannels = spec.nchannels;
+        in->close();
+        return 0;
+    } catch (const std::exception &e) {
+        set_error(err, err_len, std::string("OpenImageIO raised an exception: ") + e.what());
+        return 1;
+    } catch (...) {
+        set_error(err, err_len, "OpenImageIO raised an unknown exception");
+        return 1;
+    }
+}
+
+extern "C" RaylinkOiioImage *raylink_oiio_read(const char *path, size_t max_values, char *err,
+                                               size_t err_len) {
+    try {
+        auto in = open_input(path, err, err_len);
+        if (!in) {
             return nullptr;
         }
         const OIIO::ImageSpec &spec = in->spec();
-        if (spec.deep) {
-            set_error(err, err_len, "deep images are not supported");
-            return nullptr;
-        }
-        if (spec.width <= 0 || spec.height <= 0 || spec.depth != 1 || spec.nchannels <= 0) {
+        // Positive ints: width * height fits in 64 bits; the channels are compared by division,
+        // so nothing overflows.
+        const unsigned long long pixels =
+            (unsigned long long)spec.width * (unsigned long long)spec.height;
+        if (pixels > max_values || (unsigned long long)spec.nchannels > max_values / pixels) {
             set_error(err, err_len,
-                      "unsupported image size " + std::to_string(spec.width) + "x" +
-                          std::to_string(spec.height) + "x" + std::to_string(spec.depth) +
-                          " with " + std::to_string(spec.nchannels) + " channels");
+                      "the image declares " + std::to_string(spec.width) + "x" +
+                          std::to_string(spec.height) + " pixels of " +
+                          std::to_string(spec.nchannels) + " channels, more than " +
+                          std::to_string(max_values) + " values");
             return nullptr;
         }
 

@@ -81,9 +81,19 @@ void raylink_oiio_encoded_free(RaylinkOiioEncoded *encoded);
 /* An image read from a file; free it with raylink_oiio_image_free. */
 typedef struct RaylinkOiioImage RaylinkOiioImage;
 
+/* Reads the header of the file at `path`, none of its pixels: the size of its first subimage
+ * (top mip level) in *width, *height and *nchannels, for the caller to decide whether to read
+ * it. Returns 0, or nonzero on failure (message in `err`), as raylink_oiio_read would fail
+ * before its pixels. */
+int raylink_oiio_read_size(const char *path, int *width, int *height, int *nchannels, char *err,
+                           size_t err_len);
+
 /* Reads the first subimage (top mip level) of the file at `path`, all channels, converted to
- * float. Returns NULL on failure (message in `err`). */
-RaylinkOiioImage *raylink_oiio_read(const char *path, char *err, size_t err_len);
+ * float. An image whose header declares more than `max_values` values (width * height *
+ * nchannels) is refused before any pixel is read or memory is taken for them. Returns NULL on
+ * failure (message in `err`). */
+RaylinkOiioImage *raylink_oiio_read(const char *path, size_t max_values, char *err,
+                                    size_t err_len);
 
 void raylink_oiio_image_free(RaylinkOiioImage *image);
 
@@ -127,7 +137,7 @@ const char *raylink_oiio_version(void);
 
 /* The version of this interface, RAYLINK_OIIO_ABI: the program loads this library at run
  * time and checks it was built from the same header. Raise it with every change here. */
-#define RAYLINK_OIIO_ABI 1
+#define RAYLINK_OIIO_ABI 2
 int raylink_oiio_abi(void);
 
 #ifdef __cplusplus

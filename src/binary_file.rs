@@ -3,6 +3,7 @@
 //! little-endian. Files are written atomically ([`crate::atomic_file`]).
 
 use crate::error::{Error, Result};
+use crate::input_file;
 use std::path::Path;
 
 /// One kind of file.
@@ -83,9 +84,10 @@ impl Format {
         Error::input(path, format!("not a usable {}: {problem}", self.what))
     }
 
-    /// Reads `path` and checks its magic, version and checksum.
-    pub fn load(&self, path: &Path) -> Result<Loaded> {
-        let bytes = std::fs::read(path).map_err(|e| Error::io(path, e))?;
+    /// Reads `path`, a regular file within `kind`'s limit and the machine's memory budget,
+    /// and checks its magic, version and checksum.
+    pub fn load(&self, path: &Path, kind: &input_file::Kind) -> Result<Loaded> {
+        let bytes = input_file::read(path, kind, Some(&input_file::Allowance::machine()))?;
         if bytes.len() < 12 || &bytes[..8] != self.magic {
             return Err(self.error(path, &format!("no raylink {} header", self.what)));
         }
@@ -155,20 +157,21 @@ mod tests {
         let mut b = format.start(5);
         b.extend_from_slice(b"hello");
         format.save(&path, b).unwrap();
-        assert_eq!(format.load(&path).unwrap().body(), b"hello");
+        let kind = input_file::CHECKPOINT;
+        assert_eq!(format.load(&path, &kind).unwrap().body(), b"hello");
         let other = Format {
             version: 4,
             ..format
         };
-        let e = other.load(&path).err().unwrap().to_string();
+        let e = other.load(&path, &kind).err().unwrap().to_string();
         assert!(e.contains("x.bin") && e.contains("format version 3"), "{e}");
         let mut bytes = std::fs::read(&path).unwrap();
         bytes[13] ^= 1;
         std::fs::write(&path, &bytes).unwrap();
-        let e = format.load(&path).err().unwrap().to_string();
+        let e = format.load(&path, &kind).err().unwrap().to_string();
         assert!(e.contains("checksum"), "{e}");
         std::fs::write(&path, b"RLTEST").unwrap();
-        assert!(format.load(&path).is_err());
+        assert!(format.load(&path, &kind).is_err());
         // Nothing but the file itself is left in the directory.
         let names: Vec<_> = std::fs::read_dir(&dir).unwrap().collect();
         assert_eq!(names.len(), 1);

@@ -46,6 +46,7 @@ pub mod farm;
 #[doc(hidden)]
 pub mod fuzzing;
 pub mod image;
+pub mod input_file;
 pub(crate) mod integrators;
 pub mod job;
 pub mod math;

@@ -9,6 +9,8 @@ use std::path::Path;
 use super::oiio_sys::{self as sys, Api};
 use super::{MetaValue, Metadata};
 use crate::error::{Error, Result};
+use crate::input_file::{self, Allowance};
+use crate::scene::camera::MAX_RESOLUTION;
 
 /// How pixels are stored in a file. Data in memory is always `f32`; OpenImageIO converts
 /// (floats are mapped to integers by scaling `[0, 1]` to the full range and clamping).
@@ -283,15 +285,84 @@ pub fn encode(
         .ok_or_else(|| fail(err.message()))
 }
 
-/// Reads the first subimage of the file at `path`, all channels converted to float.
+/// The most values (width × height × channels) raylink reads from one image, 4 GiB as
+/// floats: a fixed limit, checked against the file's header before its pixels are read.
+pub const MAX_IMAGE_VALUES: u64 = 1 << 30;
+
+/// The memory reading a `width` x `height` image of `channels` channels takes at its peak:
+/// the library's float values, their copy here, and an RGB image made of them.
+pub fn read_bytes(width: u32, height: u32, channels: u32) -> u64 {
+    (width as u64 * height as u64).saturating_mul(8 * channels as u64 + 12)
+}
+
+/// Reads the first subimage of the file at `path`, all channels converted to float, within
+/// the machine's default memory budget ([`read_within`]).
 pub fn read(path: &Path) -> Result<RawImage> {
+    read_within(path, &Allowance::machine())
+}
+
+/// Reads the first subimage of the file at `path`, all channels converted to float. The
+/// path must name a regular file within the limit on images (checked before the library
+/// opens it), and the size its header declares must be within [`MAX_IMAGE_VALUES`], the
+/// largest image size ([`MAX_RESOLUTION`] a side) and what `allowance` leaves of the
+/// budget ([`read_bytes`]): all checked before any pixel is read.
+pub fn read_within(path: &Path, allowance: &Allowance) -> Result<RawImage> {
+    input_file::check(path, &input_file::IMAGE).map_err(|e| match e {
+        Error::Io { source, .. } => {
+            Error::image(path, format!("cannot open for reading: {source}"))
+        }
+        e => e,
+    })?;
     let api = sys::api().map_err(|e| Error::image(path, e))?;
     let c_path = path_to_cstring(path)?;
     let mut err = ErrorBuffer::new();
+    let (mut width, mut height, mut channels) = (0, 0, 0);
+    // SAFETY: `c_path` is a NUL-terminated string alive for the call; the three size
+    // pointers are to distinct live locals; `err` is a writable buffer of `err.len()` bytes.
+    // The C side catches every C++ exception.
+    let failed = unsafe {
+        (api.raylink_oiio_read_size)(
+            c_path.as_ptr(),
+            &mut width,
+            &mut height,
+            &mut channels,
+            err.as_mut_ptr(),
+            err.len(),
+        )
+    };
+    if failed != 0 {
+        return Err(Error::image(path, err.message()));
+    }
+    let to_u32 = |v: c_int| u32::try_from(v).unwrap_or(u32::MAX);
+    let (width, height, channels) = (to_u32(width), to_u32(height), to_u32(channels));
+    let values = (width as u64 * height as u64).saturating_mul(channels as u64);
+    if width > MAX_RESOLUTION || height > MAX_RESOLUTION || values > MAX_IMAGE_VALUES {
+        return Err(Error::input(
+            path,
+            format!(
+                "declares a {width}x{height} image of {channels} channels, more than raylink \
+                 reads: at most {MAX_RESOLUTION} pixels a side and {MAX_IMAGE_VALUES} values \
+                 (width × height × channels), fixed limits"
+            ),
+        ));
+    }
+    allowance.check(
+        &format!("reading the {width}x{height} image {}", path.display()),
+        read_bytes(width, height, channels),
+    )?;
+    let mut err = ErrorBuffer::new();
     // SAFETY: `c_path` is a NUL-terminated string alive for the call; `err` is a writable
     // buffer of `err.len()` bytes. The C side catches every C++ exception and returns either
-    // null or an image that we own and free exactly once (by `Handle`'s Drop).
-    let ptr = unsafe { (api.raylink_oiio_read)(c_path.as_ptr(), err.as_mut_ptr(), err.len()) };
+    // null or an image that we own and free exactly once (by `Handle`'s Drop). `values`
+    // re-checks the header in case the file changed since it was read above.
+    let ptr = unsafe {
+        (api.raylink_oiio_read)(
+            c_path.as_ptr(),
+            values as usize,
+            err.as_mut_ptr(),
+            err.len(),
+        )
+    };
     if ptr.is_null() {
         return Err(Error::image(path, err.message()));
     }

@@ -115,7 +115,15 @@ api! {
         *mut c_int,
         *mut c_int
     );
-    fn raylink_oiio_read(*const c_char, *mut c_char, usize) -> *mut RaylinkOiioImage;
+    fn raylink_oiio_read_size(
+        *const c_char,
+        *mut c_int,
+        *mut c_int,
+        *mut c_int,
+        *mut c_char,
+        usize
+    ) -> c_int;
+    fn raylink_oiio_read(*const c_char, usize, *mut c_char, usize) -> *mut RaylinkOiioImage;
     fn raylink_oiio_image_free(*mut RaylinkOiioImage);
     fn raylink_oiio_image_width(*const RaylinkOiioImage) -> c_int;
     fn raylink_oiio_image_height(*const RaylinkOiioImage) -> c_int;
@@ -130,7 +138,7 @@ api! {
 }
 
 /// The version of the C API this program was built with: `RAYLINK_OIIO_ABI` in `ffi/oiio.h`.
-const ABI: c_int = 1;
+const ABI: c_int = 2;
 
 /// The loaded API, or why it could not be loaded (one line).
 pub fn api() -> Result<&'static Api, String> {

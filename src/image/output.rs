@@ -18,6 +18,7 @@ use std::path::Path;
 use super::oiio::{self, PixelType};
 use super::{Image, MetaValue, Metadata};
 use crate::error::{Error, Result};
+use crate::input_file::Allowance;
 use crate::math::Rgb;
 
 /// The supported output formats.
@@ -238,9 +239,16 @@ fn write_image_impl(
 /// Reads an image as RGB: `R`, `G`, `B` channels if present, otherwise one channel is
 /// replicated, two (grey and alpha) use the first, and more use the first three (dropping
 /// alpha). Values are returned as stored: PNG and JPEG values are sRGB-encoded (apply
-/// [`srgb_decode`] for linear values). Also returns the file's metadata.
+/// [`srgb_decode`] for linear values). Also returns the file's metadata. The machine's
+/// default memory budget bounds the reading ([`read_image_within`]).
 pub fn read_image(path: &Path) -> Result<(Image, Metadata)> {
-    let raw = oiio::read(path)?;
+    read_image_within(path, &Allowance::machine())
+}
+
+/// [`read_image`] within `allowance`: the file and the size its header declares are checked
+/// ([`oiio::read_within`]) before any pixel is read.
+pub fn read_image_within(path: &Path, allowance: &Allowance) -> Result<(Image, Metadata)> {
+    let raw = oiio::read_within(path, allowance)?;
     let n = raw.channels.len();
     let find = |name: &str| raw.channels.iter().position(|c| c == name);
     let picks = match (find("R"), find("G"), find("B")) {

@@ -19,6 +19,7 @@
 use super::Film;
 use crate::binary_file::{Format, Reader};
 use crate::error::Result;
+use crate::input_file;
 use std::path::{Path, PathBuf};
 
 pub(crate) const FORMAT: Format = Format {
@@ -82,7 +83,7 @@ pub fn find(output: &Path, settings: &str) -> Result<Option<PathBuf>> {
 
 /// The settings a checkpoint was written with (its checksum checked first).
 fn settings_of(path: &Path) -> Result<String> {
-    let file = FORMAT.load(path)?;
+    let file = FORMAT.load(path, &input_file::CHECKPOINT)?;
     let mut r = Reader { rest: file.body() };
     let bad = |problem: &str| FORMAT.error(path, problem);
     let len = r.u64().ok_or_else(|| bad("truncated"))?;
@@ -129,8 +130,20 @@ pub struct Resumed {
 /// samples per pixel. Any other file, or one whose counts that render never passes through,
 /// is an [`Error::Input`](crate::error::Error::Input) naming it.
 pub fn load(path: &Path, settings: &str, blank: Film, target: u32) -> Result<Resumed> {
-    let file = FORMAT.load(path)?;
     let bad = |problem: &str| FORMAT.error(path, problem);
+    // A checkpoint of this film is its 56 bytes a pixel and a settings string (another run's
+    // may be longer): a file much larger is refused before it is read.
+    let (w, h) = blank.size();
+    let most = (56 * w as u64 * h as u64)
+        .saturating_add(settings.len() as u64)
+        .saturating_add(1 << 20);
+    let size = input_file::check(path, &input_file::CHECKPOINT)?;
+    if size > most {
+        return Err(bad(&format!(
+            "{size} bytes, more than a checkpoint of a {w}x{h} image holds"
+        )));
+    }
+    let file = FORMAT.load(path, &input_file::CHECKPOINT)?;
     let mut r = Reader { rest: file.body() };
     let len = r.u64().ok_or_else(|| bad("truncated"))?;
     if len > r.rest.len() as u64 {

@@ -26,7 +26,9 @@ pub(crate) fn read_with_animation(
     path: &Path,
     control: &Control,
 ) -> Result<(Scene, Option<Animation>)> {
-    let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+    let allowance = crate::input_file::Allowance::new(control.budget, 0);
+    let text =
+        crate::input_file::read_to_string(path, &crate::input_file::TOML_SCENE, Some(&allowance))?;
     control.cancel.check("reading the scene")?;
     let doc = Document::parse_with(&text, path, Some(control))?;
     // Static files go straight to the reader, so its messages keep their line numbers.
@@ -109,7 +111,7 @@ pub struct Animation {
 
 impl Animation {
     pub fn read(path: &Path) -> Result<Animation> {
-        let text = std::fs::read_to_string(path).map_err(|e| Error::io(path, e))?;
+        let text = crate::input_file::read_to_string(path, &crate::input_file::TOML_SCENE, None)?;
         Animation::from_str(&text, path)
     }
 

@@ -121,17 +121,20 @@ impl Environment {
         transform: Mat3,
         scale: Rgb,
     ) -> crate::error::Result<Environment> {
-        Ok(Self::load_with_mapping(path, file, transform, scale)?.0)
+        let allowance = crate::input_file::Allowance::machine();
+        Ok(Self::load_with_mapping(path, file, transform, scale, &allowance)?.0)
     }
 
-    /// [`load`](Self::load), also telling which mapping the file was in.
+    /// [`load`](Self::load) within what `allowance` leaves of the job's memory budget, also
+    /// telling which mapping the file was in.
     pub(crate) fn load_with_mapping(
         path: &Path,
         file: PathBuf,
         transform: Mat3,
         scale: Rgb,
+        allowance: &crate::input_file::Allowance,
     ) -> crate::error::Result<(Environment, Mapping)> {
-        let (image, _) = crate::image::output::read_image(path)?;
+        let (image, _) = crate::image::output::read_image_within(path, allowance)?;
         Environment::with_mapping(image, file, transform, scale)
             .map_err(|m| crate::error::Error::input(path, m))
     }

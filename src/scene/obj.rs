@@ -9,6 +9,7 @@
 
 use super::{Classic, Material, Texture, TriangleMesh};
 use crate::error::Error;
+use crate::input_file::{self, Allowance};
 use crate::math::{Rgb, Vec2, Vec3};
 use std::cell::RefCell;
 use std::io::{BufRead, Read};
@@ -36,7 +37,16 @@ pub struct ObjGroup {
 /// Reads an OBJ file. With `with_materials` the MTL files it names are read too (a missing or
 /// broken one is an error, as is a `usemtl` naming no material); without, they are ignored.
 pub fn load(path: &Path, with_materials: bool) -> crate::error::Result<ObjData> {
-    let text = read_text(path, "OBJ")?;
+    load_within(path, with_materials, None)
+}
+
+/// [`load`], the OBJ file's text counted against the job's memory budget.
+pub fn load_within(
+    path: &Path,
+    with_materials: bool,
+    allowance: Option<&Allowance>,
+) -> crate::error::Result<ObjData> {
+    let text = read_text(path, "OBJ", &input_file::OBJ, allowance)?;
     prescan_obj(&text).map_err(|e| Error::input(path, e))?;
 
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
@@ -132,9 +142,18 @@ pub fn load(path: &Path, with_materials: bool) -> crate::error::Result<ObjData> 
     Ok(ObjData { groups, materials })
 }
 
-fn read_text(path: &Path, what: &str) -> crate::error::Result<String> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| Error::input(path, format!("cannot read the {what} file: {e}")))?;
+fn read_text(
+    path: &Path,
+    what: &str,
+    kind: &input_file::Kind,
+    allowance: Option<&Allowance>,
+) -> crate::error::Result<String> {
+    let bytes = input_file::read(path, kind, allowance).map_err(|e| match e {
+        Error::Io { source, .. } => {
+            Error::input(path, format!("cannot read the {what} file: {source}"))
+        }
+        e => e,
+    })?;
     String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();
         let line = 1 + e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count();
@@ -258,7 +277,7 @@ fn check_usemtl(text: &str, materials: &[Material]) -> Result<(), String> {
 
 /// Reads one MTL file: tobj's materials (for its name map) and ours.
 fn load_mtl(path: &Path) -> crate::error::Result<(Vec<tobj::Material>, Vec<Material>)> {
-    let text = read_text(path, "MTL")?;
+    let text = read_text(path, "MTL", &input_file::MTL, None)?;
     let text = normalise_mtl(&text).map_err(|e| Error::input(path, e))?;
     let mut reader = LineReader::new(text.as_bytes());
     let (raw, _) =

@@ -122,8 +122,13 @@ impl PropertyAccess for Face {
 /// Reads a PLY mesh. Every problem is an [`Error::input`] naming the file (and the line,
 /// for ASCII files and headers).
 pub fn read(path: &Path) -> crate::error::Result<PlyMesh> {
-    let file = std::fs::File::open(path)
-        .map_err(|e| Error::input(path, format!("cannot read the PLY file: {e}")))?;
+    let (file, _) =
+        crate::input_file::open(path, &crate::input_file::PLY).map_err(|e| match e {
+            Error::Io { source, .. } => {
+                Error::input(path, format!("cannot read the PLY file: {source}"))
+            }
+            e => e,
+        })?;
     let mut reader = Reader::new(BufReader::new(file));
     let fail = |e: ply_rs_bw::parser::ParseError| {
         // ply-rs appends tab-separated internals (the parser's expected-token sets): keep

@@ -1,8 +1,9 @@
 //! Textures: values that vary over a surface. Image textures are looked up by surface
 //! (u, v), bilinearly, repeating; as in pbrt-v4, v = 0 is the bottom row of the image file.
 
-use crate::image::output::{read_image, srgb_decode};
+use crate::image::output::{read_image_within, srgb_decode};
 use crate::image::Image;
+use crate::input_file::Allowance;
 use crate::math::{Rgb, Vec2, Vec3};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -108,7 +109,22 @@ impl ImageTexture {
         invert: bool,
         mapping: UvMapping,
     ) -> crate::error::Result<ImageTexture> {
-        let (image, _) = read_image(path)?;
+        let allowance = Allowance::machine();
+        Self::load_within(path, file, encoding, scale, invert, mapping, &allowance)
+    }
+
+    /// [`load`](Self::load) within what `allowance` leaves of the job's memory budget,
+    /// checked before the pixels are read.
+    pub fn load_within(
+        path: &Path,
+        file: PathBuf,
+        encoding: Encoding,
+        scale: f32,
+        invert: bool,
+        mapping: UvMapping,
+        allowance: &Allowance,
+    ) -> crate::error::Result<ImageTexture> {
+        let (image, _) = read_image_within(path, allowance)?;
         if image.pixels.is_empty() {
             return Err(crate::error::Error::image(path, "the image has no pixels"));
         }

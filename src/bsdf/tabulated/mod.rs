@@ -162,11 +162,13 @@ impl TabulatedBrdf {
     /// names `file`; errors name the file and line.
     pub fn read(path: &Path, file: PathBuf) -> Result<TabulatedBrdf, String> {
         if path.extension().is_some_and(|e| e == "binary") {
-            let bytes = std::fs::read(path).map_err(|e| format!("{}: {e}", path.display()))?;
+            let bytes = crate::input_file::read(path, &crate::input_file::MERL, None)
+                .map_err(|e| e.to_string())?;
             let table = Self::from_merl(&bytes).map_err(|e| format!("{}: {e}", path.display()))?;
             return Ok(TabulatedBrdf { file, ..table });
         }
-        let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+        let text = crate::input_file::read_to_string(path, &crate::input_file::BRDF_TABLE, None)
+            .map_err(|e| e.to_string())?;
         let table = Self::parse(&text).map_err(|e| format!("{}:{e}", path.display()))?;
         Ok(TabulatedBrdf { file, ..table })
     }

@@ -250,8 +250,7 @@ struct Opened {
 /// checksum), after checking its size against the header.
 fn open_prefix(path: &Path, scene: &Scene, expected: Option<&NetworkParams>) -> Result<Opened> {
     let bad = |problem: &str| FORMAT.error(path, problem);
-    let mut file = std::fs::File::open(path).map_err(|e| Error::io(path, e))?;
-    let len = file.metadata().map_err(|e| Error::io(path, e))?.len();
+    let (mut file, len) = crate::input_file::open(path, &crate::input_file::NETWORK)?;
     // As much of the header as there is: a short file still gets the right message (not a
     // network, another version, or truncated).
     let mut head = Vec::with_capacity(12 + HEADER);

@@ -121,7 +121,7 @@ pub fn load_with_view(
     scene: &Scene,
     options: &IcOptions,
 ) -> Result<(Cache, Option<u64>)> {
-    let file = FORMAT.load(path)?;
+    let file = FORMAT.load(path, &crate::input_file::IRRADIANCE_CACHE)?;
     let body = file.body();
     let bad = |problem: &str| FORMAT.error(path, problem);
     let expected = header(scene, options);

@@ -45,15 +45,17 @@ impl Builder {
             (Some(file), None) => {
                 let path = loc.dir().join(&file);
                 self.add_input(&path);
-                let image = ImageTexture::load(
+                let image = ImageTexture::load_within(
                     &path,
                     PathBuf::from(&file),
                     Encoding::default_for(&path),
                     scale,
                     false,
                     UvMapping::default(),
+                    &self.allowance(),
                 )
                 .map_err(|e| loc.error(format!("{st}: {e}")))?;
+                self.held.add_image(image.image());
                 Some(Texture::Image(Arc::new(image)))
             }
             (None, _) => None,
@@ -105,8 +107,9 @@ impl Builder {
             .ok_or_else(|| loc.error(format!("{st} needs a \"string filename\"")))?;
         let path = loc.dir().join(&file);
         self.add_input(&path);
-        let (image, _) =
-            crate::image::output::read_image(&path).map_err(|e| loc.error(format!("{st}: {e}")))?;
+        let (image, _) = crate::image::output::read_image_within(&path, &self.allowance())
+            .map_err(|e| loc.error(format!("{st}: {e}")))?;
+        self.held.add_image(&image);
         Ok((file, image))
     }
 
@@ -258,8 +261,10 @@ impl Builder {
                             PathBuf::from(&file),
                             frame,
                             Rgb::splat(scale),
+                            &self.allowance(),
                         )
                         .map_err(|e| loc.error(format!("{st}: {e}")))?;
+                        self.held.add_image(&env.image);
                         if mapping == Mapping::LatLong {
                             self.warn(loc, format!("{st}: \"{file}\" is a lat-long image, converted to the equal-area mapping (pbrt-v4 itself needs `imgtool makeequiarea`)"));
                         }

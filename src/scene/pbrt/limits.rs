@@ -44,6 +44,7 @@ pub(super) struct Held(Rc<HeldBytes>);
 struct HeldBytes {
     open_files: Cell<u64>,
     geometry: Cell<u64>,
+    images: Cell<u64>,
 }
 
 impl Held {
@@ -53,6 +54,7 @@ impl Held {
             .geometry
             .get()
             .saturating_add(self.0.open_files.get())
+            .saturating_add(self.0.images.get())
     }
 
     /// The text and tokens of the files being read now.
@@ -73,6 +75,19 @@ impl Held {
     /// the intersection structures.
     pub(super) fn set_geometry(&self, bytes: u64) {
         self.0.geometry.set(bytes);
+    }
+
+    /// Counts an image kept (a texture, an environment or goniometric map).
+    pub(super) fn add_image(&self, image: &crate::image::Image) {
+        let bytes = std::mem::size_of_val(image.pixels.as_slice()) as u64;
+        self.0.images.set(self.0.images.get().saturating_add(bytes));
+    }
+}
+
+impl super::builder::Builder {
+    /// What reading an image may take of the budget, beside what the reading holds.
+    pub(super) fn allowance(&self) -> crate::input_file::Allowance {
+        crate::input_file::Allowance::new(self.budget, self.held.total())
     }
 }
 
@@ -124,8 +139,17 @@ impl Parser {
             Some(_) => fail(format!("cannot read {}: {e}", path.display())),
             None => Error::io(path, e),
         };
-        let file = std::fs::File::open(path).map_err(io)?;
-        let size = file.metadata().map_err(io)?.len();
+        // A FIFO, a device or a file past the fixed limit is refused before it is read.
+        let (file, size) =
+            crate::input_file::open(path, &crate::input_file::PBRT_SCENE).map_err(|e| {
+                match (e, at) {
+                    (Error::Io { source, .. }, _) => io(source),
+                    (Error::Input { detail, .. }, Some(_)) => {
+                        fail(format!("{}: {detail}", path.display()))
+                    }
+                    (e, _) => e,
+                }
+            })?;
         let room = MAX_SCENE_TEXT.saturating_sub(self.text);
         let too_much = || {
             fail(format!(
@@ -146,7 +170,7 @@ impl Parser {
             ),
             self.held.total().saturating_add(size),
         )?;
-        // Not trusting the size: a file may grow, or be a pipe or a device.
+        // Not trusting the size: a file may grow while it is read.
         let mut bytes = Vec::new();
         file.take(room + 1).read_to_end(&mut bytes).map_err(io)?;
         if bytes.len() as u64 > room {

@@ -326,15 +326,17 @@ impl Builder {
             }
             let path = loc.dir().join(&file);
             self.add_input(&path);
-            let image = ImageTexture::load(
+            let image = ImageTexture::load_within(
                 &path,
                 PathBuf::from(&file),
                 Encoding::Linear,
                 1.0,
                 false,
                 UvMapping::default(),
+                &self.allowance(),
             )
             .map_err(|e| loc.error(format!("{st}: normal map: {e}")))?;
+            self.held.add_image(image.image());
             return Ok(Some(NormalDetail::Map(Arc::new(image))));
         }
         Ok(match bump {

@@ -112,15 +112,17 @@ impl Builder {
                 let path = loc.dir().join(&img.file);
                 self.add_input(&path);
                 // Reload to keep the cached maximum right.
-                let img = ImageTexture::load(
+                let img = ImageTexture::load_within(
                     &path,
                     img.file.clone(),
                     img.encoding,
                     img.scale,
                     img.invert,
                     img.mapping,
+                    &self.allowance(),
                 )
                 .map_err(|e| loc.error(format!("{st}: {e}")))?;
+                self.held.add_image(img.image());
                 Texture::Image(Arc::new(img))
             }
             other if s == 1.0 => other,
@@ -158,15 +160,17 @@ impl Builder {
         p.ignore("filter");
         p.ignore("maxanisotropy");
         self.add_input(&path);
-        let image = ImageTexture::load(
+        let image = ImageTexture::load_within(
             &path,
             PathBuf::from(&file),
             encoding,
             scale,
             invert,
             mapping,
+            &self.allowance(),
         )
         .map_err(|e| loc.error(format!("{st}: {e}")))?;
+        self.held.add_image(image.image());
         Ok(Texture::Image(Arc::new(image)))
     }
 

@@ -20,6 +20,7 @@ use super::schema::{
 };
 use crate::bsdf::TabulatedBrdf;
 use crate::error::Error;
+use crate::input_file::Allowance;
 use crate::math::{Mat3, Mat4, Rgb, Vec3};
 use crate::scene::environment::Environment;
 use crate::scene::lights::{
@@ -46,6 +47,8 @@ pub(super) struct Builder<'a> {
     obj_materials: HashMap<PathBuf, Vec<usize>>,
     /// Every file read besides the scene file (meshes, textures, environment maps).
     pub(super) inputs: std::cell::RefCell<Vec<PathBuf>>,
+    /// The bytes of the images kept so far, held against the job's memory budget.
+    images: std::cell::Cell<u64>,
 }
 
 impl<'a> Builder<'a> {
@@ -60,7 +63,26 @@ impl<'a> Builder<'a> {
             medium_names: HashMap::new(),
             obj_materials: HashMap::new(),
             inputs: Default::default(),
+            images: Default::default(),
         }
+    }
+
+    /// What reading a file may take of the job's memory budget, the scene's text and the
+    /// images kept so far being held (the machine's default budget without a job).
+    fn allowance(&self) -> Allowance {
+        match self.ctx.control {
+            Some(c) => Allowance::new(
+                c.budget,
+                (self.ctx.text.len() as u64).saturating_add(self.images.get()),
+            ),
+            None => Allowance::machine(),
+        }
+    }
+
+    /// Counts an image the scene keeps against the budget.
+    fn hold_image(&self, image: &crate::image::Image) {
+        let bytes = std::mem::size_of_val(image.pixels.as_slice()) as u64;
+        self.images.set(self.images.get().saturating_add(bytes));
     }
 
     fn site(&self, name: String, span: Range<usize>) -> Site {
@@ -521,8 +543,16 @@ impl<'a> Builder<'a> {
             .map_err(|m| ctx.fail(site, "environment.scale", m))?;
         let path = self.dir.join(&desc.file);
         self.inputs.borrow_mut().push(path.clone());
-        Environment::load(&path, desc.file.into(), Mat3::from_mat4(xf.m), scale)
-            .map_err(|e| ctx.fail(site, "environment.file", e))
+        let (env, _) = Environment::load_with_mapping(
+            &path,
+            desc.file.into(),
+            Mat3::from_mat4(xf.m),
+            scale,
+            &self.allowance(),
+        )
+        .map_err(|e| ctx.fail(site, "environment.file", e))?;
+        self.hold_image(&env.image);
+        Ok(env)
     }
 
     fn transform(
@@ -692,8 +722,9 @@ impl<'a> Builder<'a> {
                 let frame = Mat3::from_mat4(self.transform(site, desc.transform)?.m);
                 let path = self.dir.join(&file);
                 self.inputs.borrow_mut().push(path.clone());
-                let (image, _) = crate::image::output::read_image(&path)
+                let (image, _) = crate::image::output::read_image_within(&path, &self.allowance())
                     .map_err(|e| ctx.fail(site, "image", e))?;
+                self.hold_image(&image);
                 let map = GoniometricMap::new(file.into(), &image, frame)
                     .map_err(|e| ctx.fail(site, "image", e))?;
                 Light::Goniometric(GoniometricLight {

@@ -36,7 +36,7 @@ use toml::Spanned;
 
 /// Reads a native TOML scene.
 pub fn read(path: &Path) -> crate::error::Result<Scene> {
-    let text = std::fs::read_to_string(path).map_err(|e| crate::error::Error::io(path, e))?;
+    let text = crate::input_file::read_to_string(path, &crate::input_file::TOML_SCENE, None)?;
     from_str(&text, path)
 }
 

@@ -157,7 +157,9 @@ impl Builder<'_> {
                 site.name,
                 cost.primitives
             ),
-            cost.bytes().saturating_add(ctx.text.len() as u64),
+            cost.bytes()
+                .saturating_add(ctx.text.len() as u64)
+                .saturating_add(self.images.get()),
         )
     }
 }

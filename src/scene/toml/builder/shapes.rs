@@ -256,7 +256,8 @@ impl Builder<'_> {
         let ctx = self.ctx;
         let path = self.dir.join(file);
         self.inputs.borrow_mut().push(path.clone());
-        let data = obj::load(&path, material.is_none()).map_err(|e| ctx.fail(site, "file", e))?;
+        let data = obj::load_within(&path, material.is_none(), Some(&self.allowance()))
+            .map_err(|e| ctx.fail(site, "file", e))?;
         let mapping = match material {
             Some(_) => Vec::new(),
             None => match self.obj_materials.get(&path) {

@@ -128,15 +128,17 @@ impl Builder<'_> {
         let scale = non_negative(i.scale.unwrap_or(1.0)).map_err(fail("image.scale"))?;
         let mapping = mapping(i.uscale, i.vscale, i.udelta, i.vdelta).map_err(fail("image"))?;
         self.inputs.borrow_mut().push(path.clone());
-        let image = ImageTexture::load(
+        let image = ImageTexture::load_within(
             &path,
             i.file.into(),
             encoding,
             scale,
             i.invert.unwrap_or(false),
             mapping,
+            &self.allowance(),
         )
         .map_err(|e| fail("image.file")(e.to_string()))?;
+        self.hold_image(image.image());
         Ok(Texture::Image(std::sync::Arc::new(image)))
     }
 
@@ -158,15 +160,17 @@ impl Builder<'_> {
             (Some(file), None) => {
                 let path = self.dir.join(&file);
                 self.inputs.borrow_mut().push(path.clone());
-                let image = ImageTexture::load(
+                let image = ImageTexture::load_within(
                     &path,
                     file.into(),
                     Encoding::Linear,
                     1.0,
                     false,
                     UvMapping::default(),
+                    &self.allowance(),
                 )
                 .map_err(|e| self.ctx.fail(site, "normal_map", e))?;
+                self.hold_image(image.image());
                 Ok(Some(NormalDetail::Map(std::sync::Arc::new(image))))
             }
         }
