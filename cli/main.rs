@@ -257,6 +257,10 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    if let Err(e) = check_thread_environment() {
+        eprintln!("raylink: error: {e}");
+        return ExitCode::from(2);
+    }
     // The handlers before any work. The commands that keep what they finished cancel their
     // job on a first signal; the others stop at once.
     let graceful = matches!(
@@ -294,6 +298,22 @@ fn main() -> ExitCode {
             ExitCode::from(exit_code(&failure, cli.signals.received()))
         }
     }
+}
+
+/// Rayon's pools take their size from `RAYON_NUM_THREADS` (or the older `RAYON_RS_NUM_CPUS`)
+/// where no thread count is given: a count past the limit of `--threads` is refused, as a
+/// huge one would start threads until the system has none left, or hang.
+fn check_thread_environment() -> Result<(), Error> {
+    for name in ["RAYON_NUM_THREADS", "RAYON_RS_NUM_CPUS"] {
+        // Rayon ignores what is not a count, and takes 0 for every core.
+        let count = std::env::var(name)
+            .ok()
+            .and_then(|v| v.parse::<usize>().ok());
+        if let Some(n) = count.filter(|&n| n > 0) {
+            raylink::platform::check_threads(name, n)?;
+        }
+    }
+    Ok(())
 }
 
 /// The command line's definition. Every option that takes a value takes a negative number

@@ -28,6 +28,25 @@ pub fn cores() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 
+/// The most worker threads a job, the bench or the command line's thread pool may start: 16
+/// per core, at least 64. Threads past a few per core only cost memory and start-up, and a
+/// huge count would exhaust the system before any work.
+pub fn max_threads() -> usize {
+    (16 * cores()).max(64)
+}
+
+/// [`Error::Setting`] for a thread count outside 1 to [`max_threads`]; `name` is the setting.
+pub fn check_threads(name: &str, threads: usize) -> Result<()> {
+    let limit = max_threads();
+    if threads == 0 || threads > limit {
+        return Err(Error::setting(
+            name,
+            format!("must be between 1 and {limit} (16 per core), got {threads}"),
+        ));
+    }
+    Ok(())
+}
+
 /// CPU time of the process so far (user + system, every thread, also threads that have
 /// ended), to the nanosecond; 0 where the clock cannot be read.
 pub fn cpu_seconds() -> f64 {

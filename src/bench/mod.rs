@@ -16,10 +16,10 @@ pub use rays::{RayKind, RaySets};
 use crate::accel::bvh::BvhAccel;
 use crate::accel::embree::{Device, EmbreeAccel};
 use crate::accel::{Accel, Backend};
-use crate::error::{Error, Result};
+use crate::error::{human_size, Error, Result};
 use crate::math::Ray;
 use crate::platform::set_flush_denormals;
-use crate::scene::Scene;
+use crate::scene::{Scene, MAX_RESOLUTION};
 use rayon::prelude::*;
 use std::time::Instant;
 
@@ -50,17 +50,39 @@ impl BenchConfig {
                 "the bench needs at least one scene and one backend".into(),
             ));
         }
-        if self.threads.is_empty() || self.threads.contains(&0) {
+        if self.threads.is_empty() {
             return Err(Error::setting(
                 "threads",
                 "needs thread counts of at least 1",
             ));
         }
+        for &t in &self.threads {
+            crate::platform::check_threads("threads", t)?;
+        }
         if self.reps == 0 || (self.build_reps == 0 && !network) {
             return Err(Error::setting("reps", "and build_reps must be at least 1"));
         }
-        if self.width == 0 || self.height == 0 {
-            return Err(Error::setting("width", "and height must be at least 1"));
+        // The bounds of a render's image, and its ray sets within the machine's budget.
+        for (name, v) in [("width", self.width), ("height", self.height)] {
+            if !(1..=MAX_RESOLUTION).contains(&v) {
+                return Err(Error::setting(
+                    name,
+                    format!("must be between 1 and {MAX_RESOLUTION}, got {v}"),
+                ));
+            }
+        }
+        let rays = self.width as u64 * self.height as u64 * RayKind::ALL.len() as u64;
+        let bytes = rays * std::mem::size_of::<Ray>() as u64;
+        let limit = crate::control::MemoryBudget::default().limit();
+        if bytes > limit {
+            return Err(Error::Invalid(format!(
+                "the bench's ray sets for a {}x{} grid would need {} of memory, more than 3/4 \
+                 of the physical memory ({})",
+                self.width,
+                self.height,
+                human_size(bytes),
+                human_size(limit)
+            )));
         }
         Ok(())
     }

@@ -75,14 +75,7 @@ impl Job {
             }
         }
         if let Some(threads) = self.threads {
-            // Threads past a few per core only cost memory and start-up.
-            let limit = (16 * crate::platform::cores()).max(64);
-            if threads == 0 || threads > limit {
-                return Err(Error::setting(
-                    "threads",
-                    format!("must be between 1 and {limit} (16 per core), got {threads}"),
-                ));
-            }
+            crate::platform::check_threads("threads", threads)?;
         }
         let Some(r) = self.region else {
             return Ok(());
