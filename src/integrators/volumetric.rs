@@ -51,6 +51,22 @@ impl Scatterer<'_> {
     }
 }
 
+/// The channel whose coefficients draw a path's free flights, chosen uniformly: the spectral
+/// MIS over channels counts on each being the hero a third of the time.
+pub(super) fn hero_channel(sampler: &mut Sampler) -> usize {
+    ((sampler.next_1d() * 3.0) as usize).min(2)
+}
+
+/// The ray going on through a medium boundary at `sp` unchanged, and the medium it enters.
+pub(super) fn cross(
+    ctx: &Context,
+    sp: &SurfacePoint,
+    ray: &Ray,
+    medium: Option<u32>,
+) -> (Ray, Option<u32>) {
+    (sp.spawn(ray.dir), medium_after(ctx, sp, ray.dir, medium))
+}
+
 /// The medium a ray leaving surface point `sp` along `w` travels in, coming from `current`.
 pub(super) fn medium_after(
     ctx: &Context,
@@ -84,7 +100,7 @@ pub(crate) fn radiance(
 ) -> Rgb {
     let scene = ctx.scene;
     let lights = &ctx.lights;
-    let hero = ((sampler.next_1d() * 3.0) as usize).min(2);
+    let hero = hero_channel(sampler);
     let mut radiance = Rgb::ZERO;
     let mut beta = Rgb::ONE;
     let mut r_u = Rgb::ONE;
@@ -198,8 +214,7 @@ pub(crate) fn radiance(
             if crossings > MAX_CROSSINGS {
                 break;
             }
-            medium = medium_after(ctx, &sp, ray.dir, medium);
-            ray = sp.spawn(ray.dir);
+            (ray, medium) = cross(ctx, &sp, &ray, medium);
             continue;
         }
         if depth >= max_depth {

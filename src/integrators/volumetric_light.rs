@@ -6,8 +6,8 @@
 
 use super::camera_connection::{lens_sample, project_to_camera};
 use super::volumetric::{
-    average, fly, medium_after, positive, russian_roulette, transmittance, Flight, Lengths,
-    Throughput, MAX_CROSSINGS,
+    average, cross, fly, hero_channel, medium_after, positive, russian_roulette, transmittance,
+    Flight, Lengths, Throughput, MAX_CROSSINGS,
 };
 use crate::bsdf::{phase, Transport};
 use crate::math::sobol::Sampler;
@@ -124,7 +124,7 @@ pub(crate) fn trace(
     let scene = ctx.scene;
     let lights = &ctx.lights;
     let time = camera_ray.time;
-    let hero = ((sampler.next_1d() * 3.0) as usize).min(2);
+    let hero = hero_channel(sampler);
     let u_choose = sampler.next_2d();
     let u_pos = sampler.next_2d();
     let u_dir = sampler.next_2d();
@@ -223,8 +223,7 @@ pub(crate) fn trace(
             if crossings > MAX_CROSSINGS {
                 return;
             }
-            medium = medium_after(ctx, &sp, ray.dir, medium);
-            ray = sp.spawn(ray.dir);
+            (ray, medium) = cross(ctx, &sp, &ray, medium);
             continue;
         }
         if depth >= max_depth {
