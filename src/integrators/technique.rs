@@ -188,9 +188,18 @@ pub(crate) fn refuse_media(scene: &Scene, info: &TechniqueInfo) -> Result<()> {
              render: render it with {}",
             scene.media.len(),
             info.kind.name(),
-            renders.join(" or ")
+            one_of(&renders)
         ),
     ))
+}
+
+/// "a", "a or b", "a, b or c".
+fn one_of(names: &[&str]) -> String {
+    match names.split_last() {
+        Some((last, [])) => last.to_string(),
+        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+        None => String::new(),
+    }
 }
 
 #[cfg(test)]

@@ -52,7 +52,7 @@ pub(crate) fn check_scene(scene: &Scene) -> Result<(), String> {
 
 /// The medium at point `p` (off every medium boundary): the camera's, carried along the
 /// segment from the camera to `p` through the boundaries it crosses.
-fn medium_at(ctx: &Context, p: Vec3, time: f32, stats: &mut RayStats) -> Option<u32> {
+pub(super) fn medium_at(ctx: &Context, p: Vec3, time: f32, stats: &mut RayStats) -> Option<u32> {
     let mut medium = ctx.scene.camera_medium;
     let mut from = Spot::exact(ctx.scene.camera.position);
     let to = Spot::exact(p);

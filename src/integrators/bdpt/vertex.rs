@@ -1,0 +1,223 @@
+//! The vertices of bidirectional paths and the densities with which each strategy samples
+//! them: surfaces, points in media, emitters and the camera.
+
+use crate::bsdf::{phase, Bsdf, Transport};
+use crate::math::spawn::Spot;
+use crate::math::{Rgb, Vec3};
+use crate::scene::camera::CameraBasis;
+use crate::scene::lights::Emitter;
+use crate::scene::media::MediumInterface;
+use crate::transport::Context;
+use std::f32::consts::PI;
+
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Kind {
+    Camera,
+    /// A light subpath's first vertex: emitter index, and whether it is a point light.
+    Light {
+        light: usize,
+        point: bool,
+    },
+    Surface,
+    /// A scattering point in a medium, with its Henyey–Greenstein asymmetry.
+    Medium {
+        g: f32,
+    },
+}
+
+#[derive(Clone, Copy, Debug)]
+pub(super) struct Vertex<'a> {
+    pub kind: Kind,
+    pub p: Vec3,
+    /// A bound of `p`'s rounding error (zero for the camera, point lights and media).
+    pub error: Vec3,
+    /// Geometric normal (zero for the camera, point lights and media).
+    pub n: Vec3,
+    pub bsdf: Option<Bsdf<'a>>,
+    /// Emitted radiance of the surface (for s = 0), with its emitter index.
+    pub emission: Rgb,
+    pub light: Option<usize>,
+    pub beta: Rgb,
+    /// Each channel's density of the subpath so far over its hero channel's (all ones
+    /// without media): the spectral MIS of chromatic media divides by their average.
+    pub r_u: Rgb,
+    /// The medium the subpath reached the vertex in.
+    pub medium: Option<u32>,
+    /// The media on the two sides of the vertex's surface, if it bounds any.
+    pub interface: Option<MediumInterface>,
+    /// Scattered by a delta lobe.
+    pub delta: bool,
+    pub pdf_fwd: f32,
+    pub pdf_rev: f32,
+}
+
+impl Vertex<'_> {
+    pub fn new(kind: Kind, at: Spot, beta: Rgb) -> Self {
+        Vertex {
+            kind,
+            p: at.p,
+            error: at.error,
+            n: at.n,
+            bsdf: None,
+            emission: Rgb::ZERO,
+            light: None,
+            beta,
+            r_u: Rgb::ONE,
+            medium: None,
+            interface: None,
+            delta: false,
+            pdf_fwd: 0.0,
+            pdf_rev: 0.0,
+        }
+    }
+
+    /// Where connections to the vertex start and end.
+    pub fn spot(&self) -> Spot {
+        Spot {
+            p: self.p,
+            error: self.error,
+            n: self.n,
+        }
+    }
+
+    /// The medium a segment leaving the vertex along `w` travels in.
+    pub fn medium_towards(&self, w: Vec3) -> Option<u32> {
+        match self.interface {
+            Some(interface) => interface.towards(w, self.n),
+            None => self.medium,
+        }
+    }
+
+    pub fn connectible(&self) -> bool {
+        match self.kind {
+            Kind::Surface => self.bsdf.is_some_and(|b| b.has_non_delta()),
+            _ => true,
+        }
+    }
+
+    pub fn is_delta_light(&self) -> bool {
+        matches!(self.kind, Kind::Light { point: true, .. })
+    }
+
+    /// Converts a solid-angle density at this vertex towards `next` into an area density at
+    /// `next` (a volume density for a point in a medium, which has no cosine). The
+    /// transmittance between them is left out of every strategy's density alike.
+    pub fn area_density(&self, pdf: f32, next: &Vertex) -> f32 {
+        let d = next.p - self.p;
+        let dist2 = d.length_squared();
+        if dist2 == 0.0 {
+            return 0.0;
+        }
+        let mut pdf = pdf / dist2;
+        if next.n != Vec3::ZERO {
+            pdf *= next.n.dot(d / dist2.sqrt()).abs();
+        }
+        pdf
+    }
+
+    /// Area density at `next` of sampling it from this vertex (reached from `prev`).
+    pub fn pdf(
+        &self,
+        ctx: &Context,
+        camera: &CameraBasis,
+        prev: Option<&Vertex>,
+        next: &Vertex,
+    ) -> f32 {
+        let w = (next.p - self.p).normalize();
+        let pdf = match (self.kind, prev) {
+            (Kind::Camera, _) => camera_pdf_dir(camera, self.p, w),
+            (Kind::Light { .. }, _) => return self.pdf_light(ctx, next),
+            (Kind::Surface, Some(prev)) => match self.bsdf {
+                Some(b) => b.pdf((prev.p - self.p).normalize(), w),
+                None => 0.0,
+            },
+            (Kind::Medium { g }, Some(prev)) => phase::hg((prev.p - self.p).normalize(), w, g),
+            (_, None) => 0.0,
+        };
+        self.area_density(pdf, next)
+    }
+
+    /// Area density at `next` of a light path leaving this emitter vertex towards it.
+    pub fn pdf_light(&self, ctx: &Context, next: &Vertex) -> f32 {
+        let w = (next.p - self.p).normalize();
+        let pdf_dir = match self.kind {
+            Kind::Light { light, point: true } => {
+                ctx.lights.emitters[light].model().pdf_emission_direction(w)
+            }
+            _ => match self.area_light(ctx) {
+                Some(a) if a.two_sided => 0.5 * w.dot(self.n).abs() / PI,
+                _ => w.dot(self.n).max(0.0) / PI,
+            },
+        };
+        self.area_density(pdf_dir, next)
+    }
+
+    /// The area light this vertex lies on (a light subpath's start or an emitter hit).
+    pub fn area_light<'c>(&self, ctx: &'c Context) -> Option<&'c crate::scene::lights::AreaLight> {
+        let light = match self.kind {
+            Kind::Light { light, .. } => light,
+            _ => self.light?,
+        };
+        match &ctx.lights.emitters[light] {
+            Emitter::Area(a) => Some(a),
+            _ => None,
+        }
+    }
+
+    /// The emission cosine towards unit `w` from an area-light vertex: 0 behind a one-sided
+    /// light, |cos| for a two-sided one.
+    pub fn emitting_cos(&self, ctx: &Context, w: Vec3) -> f32 {
+        let cos = w.dot(self.n);
+        match self.area_light(ctx) {
+            Some(a) => a.emitting_cos(cos),
+            None => cos.max(0.0),
+        }
+    }
+
+    /// Area density of choosing this emitter point when starting a light path.
+    pub fn pdf_light_origin(&self, ctx: &Context) -> f32 {
+        let light = match self.kind {
+            Kind::Light { light, .. } => light,
+            _ => match self.light {
+                Some(l) => l,
+                None => return 0.0,
+            },
+        };
+        match &ctx.lights.emitters[light] {
+            Emitter::Area(a) => ctx.lights.pmf(light) / a.area,
+            e if e.model().point_source().is_some() => ctx.lights.pmf(light),
+            _ => 0.0,
+        }
+    }
+
+    /// f·|cos| towards `next` (the connection step) for a surface vertex, the phase
+    /// function's value for a point in a medium.
+    pub fn f(&self, prev: Option<&Vertex>, next: &Vertex, mode: Transport) -> Rgb {
+        let w = (next.p - self.p).normalize();
+        match (self.kind, self.bsdf, prev) {
+            (Kind::Surface, Some(b), Some(prev)) => b.eval((prev.p - self.p).normalize(), w, mode),
+            (Kind::Medium { g }, _, Some(prev)) => {
+                Rgb::splat(phase::hg((prev.p - self.p).normalize(), w, g))
+            }
+            _ => Rgb::ZERO,
+        }
+    }
+}
+
+/// Density in solid angle of the camera generating a ray along `w` from the lens point
+/// `lens`: uniform over the film at unit distance, 1 / (A_film cos³θ) (pbrt-v4's `PDF_We`;
+/// the lens point's own density is the same for every strategy and cancels). Zero outside
+/// the film.
+pub(super) fn camera_pdf_dir(camera: &CameraBasis, lens: Vec3, w: Vec3) -> f32 {
+    match camera.raster_from(lens, lens + w) {
+        Some((x, y, cos)) => {
+            let (fw, fh) = camera.film_size();
+            let m = camera.margin;
+            if x < -m || y < -m || x >= fw + m || y >= fh + m {
+                return 0.0;
+            }
+            1.0 / (camera.pixel_area() * fw * fh * cos * cos * cos)
+        }
+        None => 0.0,
+    }
+}
