@@ -9,6 +9,7 @@ use raylink::coherence::{
     animates, render_frames, report, Coherence, Placement, Records, Sequence, SequenceMode,
 };
 use raylink::image::output::check_output_path;
+use raylink::output_paths::FilePlan;
 use raylink::scene::animation::Animation;
 use raylink::{write_image, Error, MetaValue, Metadata, OutputOptions, Result};
 use raylink::{Job, Settings, Technique, TechniqueKind};
@@ -275,19 +276,12 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
         .iter()
         .map(|&f| frame_path(&args.output, f))
         .collect::<Result<Vec<_>>>()?;
-    let csv: Vec<PathBuf> = args.csv.iter().cloned().collect();
     let maps = match &args.retrace_map {
         Some(pattern) => {
             let maps = frames
                 .iter()
                 .map(|&f| frame_path(pattern, f).map_err(|e| retrace_map_error(pattern, e)))
                 .collect::<Result<Vec<_>>>()?;
-            if maps.iter().any(|m| outputs.contains(m) || csv.contains(m)) {
-                return Err(Error::Invalid(format!(
-                    "--retrace-map {pattern}: names the same files as the frames or the CSV"
-                ))
-                .into());
-            }
             if let Some(dir) = maps[0].parent().filter(|d| !d.as_os_str().is_empty()) {
                 std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
             }
@@ -296,7 +290,18 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
         }
         None => Vec::new(),
     };
-    crate::aliases::refuse_aliases(outputs.iter().chain(&csv).chain(&maps), &scene0.inputs)?;
+    let mut plan = FilePlan::new();
+    plan.reads("an input of the scene", &scene0.inputs);
+    for (f, path) in frames.iter().zip(&outputs) {
+        plan.write(format!("frame {f} of -o"), path);
+    }
+    for (f, path) in frames.iter().zip(&maps) {
+        plan.write(format!("frame {f} of --retrace-map"), path);
+    }
+    if let Some(csv) = &args.csv {
+        plan.write("--csv", csv);
+    }
+    plan.check()?;
     raylink::image::oiio::load()?;
     // The scene's settings with the options over them, as for a still render; the job
     // each frame is rendered with, as `render` makes it.

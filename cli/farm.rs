@@ -5,6 +5,7 @@ use crate::options::RenderArgs;
 use crate::{Cli, Failure};
 use raylink::farm::{self, Part};
 use raylink::image::output::{check_output_path, write_image_window};
+use raylink::output_paths::FilePlan;
 use raylink::{
     write_image, Aov, Control, Error, Job, MetaValue, Metadata, OutputOptions, RenderStats,
     Rendered, Renderer, Scene, Tile,
@@ -172,7 +173,10 @@ pub fn run_merge(args: MergeArgs) -> Result<(), Failure> {
     for out in &args.outputs {
         check_output_path(out).map_err(|e| Error::Invalid(e.to_string()))?;
     }
-    crate::aliases::refuse_aliases(&args.outputs, &args.parts)?;
+    FilePlan::new()
+        .reads("a part to merge", &args.parts)
+        .writes("-o", &args.outputs)
+        .check()?;
     let merged = farm::merge::merge(&args.parts)?;
     let options = OutputOptions {
         exposure: args.exposure,

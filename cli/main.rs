@@ -2,7 +2,6 @@
 //! owns what a front end owns: signals, progress bars, printing and exit codes (0 success,
 //! 1 a failure while working, 2 bad input or options, 128 + N stopped by signal N).
 
-mod aliases;
 mod animate;
 mod bench;
 mod bench_chart;
@@ -355,8 +354,7 @@ fn run_convert(cli: &Cli, args: ConvertArgs) -> Result<(), Failure> {
     }
     let control = cli.control(args.quiet, None)?;
     let scene: Scene = render::load_scene(&args.scene, &control)?;
-    let meshes = args.output.with_extension("meshes");
-    aliases::refuse_aliases([&args.output, &meshes], &scene.inputs)?;
+    // Checks every file it writes against the scene's inputs first.
     raylink::scene::convert::write_toml(&scene, &args.output)?;
     Ok(())
 }

@@ -5,8 +5,9 @@
 use crate::farm;
 use crate::options::{self, IntegratorName, RenderArgs};
 use crate::{Cli, Failure};
-use raylink::checkpoint;
 use raylink::image::output::check_output_path;
+use raylink::output_paths::FilePlan;
+use raylink::{checkpoint, input_file};
 use raylink::{
     write_image, Aov, Control, Error, Job, MetaValue, Metadata, OutputOptions, Relight, Rendered,
     Renderer, Scene, Settings, Technique, TechniqueKind,
@@ -156,24 +157,53 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     let out_options = output_options(&args)?;
     let scene = load_scene(&args.scene, &control)?;
     let mut job = options::job(&args, &scene, extra)?;
-    let files: Vec<PathBuf> = [&args.cache_file, &args.network.network_file]
-        .into_iter()
-        .flatten()
-        .cloned()
-        .collect();
     let aovs = if args.aov {
         aov_paths(&args.outputs[0])
     } else {
         Vec::new()
     };
-    crate::aliases::refuse_aliases(
-        args.outputs.iter().chain(&aovs),
-        scene.inputs.iter().chain(&files),
-    )?;
-    // What writes the image, before the work (it is not loaded at start-up).
-    raylink::image::oiio::load()?;
     job.region = farm::region(&args, &job)?;
     let settings = job.settings_key() + &format!(" half={}", args.half);
+    // What a resume must match: the settings parts record for merging, with the version and
+    // the scene.
+    let resume_key = format!(
+        "raylink {} scene {:016x} {settings}",
+        raylink::VERSION,
+        raylink::farm::scene_hash(&scene)
+    );
+    let progressive = job.technique.monte_carlo().is_some() && job.region.is_none();
+    // The inputs first (a cache or network file that is there is read), then the outputs.
+    for (file, kind) in [
+        (&args.cache_file, &input_file::IRRADIANCE_CACHE),
+        (&args.network.network_file, &input_file::NETWORK),
+    ] {
+        if let Some(f) = file.as_ref().filter(|f| f.exists()) {
+            input_file::check(f, kind)?;
+        }
+    }
+    let mut plan = FilePlan::new();
+    plan.reads("an input of the scene", &scene.inputs);
+    if let Some(f) = &args.cache_file {
+        plan.read_write("--cache-file", f);
+    }
+    if let Some(f) = &args.network.network_file {
+        plan.read_write("--network-file", f);
+    }
+    plan.writes("-o", &args.outputs).writes("--aov", &aovs);
+    if progressive {
+        plan.writes(
+            "the checkpoint",
+            &checkpoint::names(&args.outputs[0], &resume_key),
+        );
+    }
+    plan.check()?;
+    let checkpoint = if progressive {
+        Some(checkpoint::path_for(&args.outputs[0], &resume_key)?)
+    } else {
+        None
+    };
+    // What writes the image, before the work (it is not loaded at start-up).
+    raylink::image::oiio::load()?;
     let mut metadata = metadata(&args, &job);
     farm::part_metadata(&mut metadata, settings.clone(), &scene, &args, &job);
     let scene = Arc::new(scene);
@@ -195,11 +225,11 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     }
     let mut partial_note = String::new();
     let mut unsaved = None;
-    let rendered = if job.technique.monte_carlo().is_some() {
+    let rendered = if let Some(checkpoint) = &checkpoint {
         let (rendered, note, checkpoint_error) = render_with_checkpoints(
             &args,
             &mut renderer,
-            &settings,
+            (checkpoint, &resume_key),
             &metadata,
             &out_options,
             &control,
@@ -281,7 +311,7 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
 fn render_with_checkpoints(
     args: &RenderArgs,
     renderer: &mut Renderer,
-    settings: &str,
+    (checkpoint, settings): (&std::path::Path, &str),
     metadata: &Metadata,
     out_options: &OutputOptions,
     control: &Control,
@@ -292,17 +322,9 @@ fn render_with_checkpoints(
         .technique
         .monte_carlo()
         .expect("a progressive technique");
-    // What a resume must match: the settings parts record for merging, with the version and
-    // the scene.
-    let settings = format!(
-        "raylink {} scene {:016x} {settings}",
-        raylink::VERSION,
-        raylink::farm::scene_hash(renderer.scene())
-    );
-    let checkpoint = checkpoint::path_for(&args.outputs[0], &settings);
     let mut resumed_samples = 0;
     let resume = if args.resume {
-        let Some(found) = checkpoint::find(&args.outputs[0], &settings)? else {
+        let Some(found) = checkpoint::find(&args.outputs[0], settings)? else {
             return Err(Error::Invalid(format!(
                 "--resume: there is no checkpoint {} (an interrupted render or \
                  --checkpoint-interval writes one)",
@@ -311,7 +333,7 @@ fn render_with_checkpoints(
             .into());
         };
         let blank = raylink::Film::new(width, height, mc.filter, mc.reconstruction)?;
-        let resumed = checkpoint::load(&found, &settings, blank, mc.spp)?;
+        let resumed = checkpoint::load(&found, settings, blank, mc.spp)?;
         resumed_samples = resumed.samples;
         Some(resumed.film)
     } else {
@@ -327,7 +349,7 @@ fn render_with_checkpoints(
         {
             // Samples so far are only an estimate here; the image does not use them.
             let samples = (film.mean_spp() * width as f64 * height as f64) as u64;
-            checkpoint::save(&checkpoint, film, &settings, samples)?;
+            checkpoint::save(checkpoint, film, settings, samples)?;
             last_checkpoint = std::time::Instant::now();
         }
         let due = args
@@ -356,7 +378,7 @@ fn render_with_checkpoints(
         .expect("a whole progressive render has a film");
     let mut note = String::new();
     if rendered.stats.cancelled && rendered.stats.samples > 0 {
-        if let Err(e) = checkpoint::save(&checkpoint, film, &settings, rendered.stats.samples) {
+        if let Err(e) = checkpoint::save(checkpoint, film, settings, rendered.stats.samples) {
             return Ok((rendered, note, Some(e)));
         }
         note = format!(
@@ -367,7 +389,7 @@ fn render_with_checkpoints(
         );
     } else if !rendered.stats.cancelled && checkpoint.exists() {
         // The render is complete: its checkpoint is stale.
-        let _ = std::fs::remove_file(&checkpoint);
+        let _ = std::fs::remove_file(checkpoint);
     }
     Ok((rendered, note, None))
 }
@@ -481,6 +503,15 @@ pub fn run_precompute(cli: &Cli, mut args: RenderArgs) -> Result<(), Failure> {
     options::check(&args)?;
     let scene = load_scene(&args.scene, &control)?;
     let job = options::job(&args, &scene, Settings::default())?;
+    let mut plan = FilePlan::new();
+    plan.reads("an input of the scene", &scene.inputs);
+    if let Some(f) = &args.cache_file {
+        plan.read_write("--cache-file", f);
+    }
+    if let Some(f) = &args.network.network_file {
+        plan.read_write("--network-file", f);
+    }
+    plan.check()?;
     debug_assert!(matches!(
         job.technique.kind(),
         TechniqueKind::IrradianceCache | TechniqueKind::Network

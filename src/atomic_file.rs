@@ -1,10 +1,12 @@
 //! Writing a file so that it is either untouched or complete: the bytes go to a temporary
 //! file in the same directory, are synced, and the temporary file is renamed over the
 //! target. A failed run never leaves a half-written file or damages the one it replaces.
+//! A temporary file or folder is always a new one (created exclusively), so it never
+//! replaces a file that was there.
 //!
-//! The temporary files being written are listed process-wide (the one piece of global state
-//! of the library), so that a program ended by a signal while writing can remove them first:
-//! [`remove_temporaries`].
+//! The temporary files and folders being written are listed process-wide (the one piece of
+//! global state of the library), so that a program ended by a signal while writing can
+//! remove them first: [`remove_temporaries`].
 
 use crate::error::{Error, Result};
 use std::io::Write;
@@ -12,10 +14,16 @@ use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Mutex, MutexGuard};
 
-/// The temporary files this process is writing.
-static IN_FLIGHT: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+/// A temporary file or folder this process is writing.
+struct InFlight {
+    path: PathBuf,
+    folder: bool,
+}
 
-fn in_flight() -> MutexGuard<'static, Vec<PathBuf>> {
+/// The temporary files and folders this process is writing.
+static IN_FLIGHT: Mutex<Vec<InFlight>> = Mutex::new(Vec::new());
+
+fn in_flight() -> MutexGuard<'static, Vec<InFlight>> {
     // A panic elsewhere while holding the lock leaves the list as valid as before.
     IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner())
 }
@@ -42,9 +50,43 @@ pub(crate) fn remove_temporaries_if_free() {
     remove_all(&list);
 }
 
-fn remove_all(paths: &[PathBuf]) {
-    for path in paths {
-        let _ = std::fs::remove_file(path);
+fn remove_all(list: &[InFlight]) {
+    // Files first: a writer renaming one into a listed folder then fails instead of adding
+    // to the folder while it is removed.
+    for t in list.iter().filter(|t| !t.folder) {
+        let _ = std::fs::remove_file(&t.path);
+    }
+    for t in list.iter().filter(|t| t.folder) {
+        let _ = std::fs::remove_dir_all(&t.path);
+    }
+}
+
+/// Creates a new temporary file or folder beside `target` by `make` (which must fail if
+/// the name exists), listed from its creation; a name taken by another file is skipped.
+fn create_new<T>(
+    target: &Path,
+    folder: bool,
+    make: impl Fn(&Path) -> std::io::Result<T>,
+) -> std::io::Result<(PathBuf, T)> {
+    let mut attempts = 0;
+    loop {
+        let path = temp_path(target);
+        // Listed before it exists, and created under the lock: a removal by
+        // `remove_temporaries` either comes before (then waits for the list) or sees it.
+        let mut list = in_flight();
+        match make(&path) {
+            Ok(made) => {
+                list.push(InFlight {
+                    path: path.clone(),
+                    folder,
+                });
+                return Ok((path, made));
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists && attempts < 100 => {
+                attempts += 1;
+            }
+            Err(e) => return Err(e),
+        }
     }
 }
 
@@ -58,15 +100,12 @@ pub(crate) struct Temporary {
 impl Temporary {
     /// Creates a new temporary file for writing `target`.
     pub(crate) fn create(target: &Path) -> std::io::Result<Temporary> {
-        let path = temp_path(target);
-        // Listed before it exists, and created under the lock: a removal by
-        // `remove_temporaries` either comes before (then waits for the list) or sees it.
-        let mut list = in_flight();
-        let file = std::fs::OpenOptions::new()
-            .write(true)
-            .create_new(true)
-            .open(&path)?;
-        list.push(path.clone());
+        let (path, file) = create_new(target, false, |p| {
+            std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(p)
+        })?;
         Ok(Temporary { path, file })
     }
 
@@ -95,10 +134,73 @@ impl Drop for Temporary {
 }
 
 fn unlist(path: &Path) {
-    let mut list = in_flight();
-    if let Some(i) = list.iter().position(|p| p == path) {
+    unlist_in(&mut in_flight(), path);
+}
+
+fn unlist_in(list: &mut Vec<InFlight>, path: &Path) {
+    if let Some(i) = list.iter().position(|t| t.path == path) {
         list.swap_remove(i);
     }
+}
+
+/// A new temporary folder beside `target`, listed while it exists (a program quitting at
+/// once removes it); removed on drop unless [`TempFolder::install`]ed.
+pub(crate) struct TempFolder {
+    path: PathBuf,
+}
+
+impl TempFolder {
+    pub(crate) fn create(target: &Path) -> std::io::Result<TempFolder> {
+        let (path, ()) = create_new(target, true, |p| std::fs::create_dir(p))?;
+        Ok(TempFolder { path })
+    }
+
+    pub(crate) fn path(&self) -> &Path {
+        &self.path
+    }
+
+    /// Renames the folder to `target`. An existing `target` (a folder) is first renamed
+    /// aside, under the list's lock so that a program quitting at once finds either the old
+    /// folder or the new one in place; returns where the old one went, still listed as a
+    /// temporary: the caller removes what it knows to be there, then [`unlist_folder`]s it.
+    pub(crate) fn install(mut self, target: &Path) -> std::io::Result<Option<PathBuf>> {
+        let mut list = in_flight();
+        let old = if target.symlink_metadata().is_ok() {
+            let old = temp_path(target);
+            std::fs::rename(target, &old)?;
+            list.push(InFlight {
+                path: old.clone(),
+                folder: true,
+            });
+            Some(old)
+        } else {
+            None
+        };
+        if let Err(e) = std::fs::rename(&self.path, target) {
+            if let Some(old) = &old {
+                let _ = std::fs::rename(old, target);
+                unlist_in(&mut list, old);
+            }
+            return Err(e);
+        }
+        unlist_in(&mut list, &self.path);
+        self.path = PathBuf::new();
+        Ok(old)
+    }
+}
+
+impl Drop for TempFolder {
+    fn drop(&mut self) {
+        if !self.path.as_os_str().is_empty() {
+            let _ = std::fs::remove_dir_all(&self.path);
+            unlist(&self.path);
+        }
+    }
+}
+
+/// Takes a folder off the list of temporaries (it has been removed, or is kept).
+pub(crate) fn unlist_folder(path: &Path) {
+    unlist(path);
 }
 
 /// What every temporary file's name starts with, then the writing process's id.
@@ -141,7 +243,13 @@ pub(crate) fn remove_stale_temps(dir: &Path) {
         };
         let alive = Path::new("/proc").join(pid.to_string()).exists();
         if !alive && pid != std::process::id() {
-            let _ = std::fs::remove_file(entry.path());
+            // A folder of meshes being converted, or a file.
+            let is_dir = entry.file_type().is_ok_and(|t| t.is_dir());
+            let _ = if is_dir {
+                std::fs::remove_dir_all(entry.path())
+            } else {
+                std::fs::remove_file(entry.path())
+            };
         }
     }
 }

@@ -50,6 +50,7 @@ pub mod input_file;
 pub(crate) mod integrators;
 pub mod job;
 pub mod math;
+pub mod output_paths;
 pub mod platform;
 pub(crate) mod render;
 pub mod scene;

@@ -383,7 +383,7 @@ fn outputs_that_alias_inputs_are_refused() {
         let run = common::raylink(&args);
         common::assert_clean_failure_of(&args.join(" "), &run, &["is one of the inputs"]);
     }
-    let run = common::raylink(&["convert", s, "-o", s]);
+    let run = common::raylink(&["convert", s, "-o", s, "-q"]);
     common::assert_clean_failure_of("convert onto itself", &run, &["is one of the inputs"]);
     let after: Vec<Vec<u8>> = [&scene, &texture]
         .map(|p| std::fs::read(p).unwrap())

@@ -131,6 +131,17 @@ pub fn run(cli: &Cli, args: ServeArgs) -> Result<(), Failure> {
         temporary = Some(path);
         job = options::job(&args, &scene, Settings::default())?;
     }
+    // The images the page saves take names that are free (`studio-NNNN`).
+    let mut plan = raylink::output_paths::FilePlan::new();
+    plan.reads("an input of the scene", &scene.inputs)
+        .reads("--reference", &reference);
+    if let Some(f) = &args.cache_file {
+        plan.read_write("--cache-file", f);
+    }
+    if let Some(f) = &args.network.network_file {
+        plan.read_write("--network-file", f);
+    }
+    plan.check()?;
     let reference = match &reference {
         None => None,
         Some(path) => {

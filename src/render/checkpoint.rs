@@ -46,16 +46,46 @@ fn key(settings: &str) -> String {
     )
 }
 
+/// The two names [`path_for`] chooses from, for checking them against the run's other
+/// files before it looks at them.
+pub fn names(output: &Path, settings: &str) -> [PathBuf; 2] {
+    [named(output, None), named(output, Some(&key(settings)))]
+}
+
 /// Where a render writing `output` with `settings` keeps its checkpoint: beside the output,
 /// `OUTPUT.checkpoint`, unless a checkpoint of another render (other settings or seed) is
 /// there: then `OUTPUT.KEY.checkpoint` with a key of the settings, so that no render
-/// overwrites another's.
-pub fn path_for(output: &Path, settings: &str) -> PathBuf {
+/// overwrites another's. A file at that name that is not a checkpoint (which the render
+/// would overwrite, then remove) is an error naming it.
+pub fn path_for(output: &Path, settings: &str) -> Result<PathBuf> {
     let plain = named(output, None);
-    match settings_of(&plain) {
-        Ok(s) if s != settings => named(output, Some(&key(settings))),
-        _ => plain,
+    let ours = |path: &Path| -> Result<bool> {
+        if path.symlink_metadata().is_err() {
+            return Ok(true);
+        }
+        let found = settings_of(path).map_err(|e| match e {
+            crate::error::Error::Input { path, detail } => crate::error::Error::input(
+                path,
+                format!(
+                    "{detail}; the render keeps its checkpoint at this name (move the file or \
+                     choose another output)"
+                ),
+            ),
+            other => other,
+        })?;
+        Ok(found == settings)
+    };
+    if ours(&plain)? {
+        return Ok(plain);
     }
+    let keyed = named(output, Some(&key(settings)));
+    if ours(&keyed)? {
+        return Ok(keyed);
+    }
+    Err(FORMAT.error(
+        &keyed,
+        "written by a render with other settings whose key is the same (move it)",
+    ))
 }
 
 /// The checkpoint a resume of the render writing `output` with `settings` reads, if any:

@@ -106,12 +106,12 @@ fn checkpoints_of_other_renders_are_kept_apart() {
     let output = dir.path().join("x.exr");
     let film = Film::new(8, 8, Filter::default(), Reconstruction::Splat).unwrap();
     // A first render leaves its checkpoint; a second, with another seed, must not replace it.
-    let first = checkpoint::path_for(&output, "seed 1");
+    let first = checkpoint::path_for(&output, "seed 1").unwrap();
     checkpoint::save(&first, &film, "seed 1", 0).unwrap();
-    let second = checkpoint::path_for(&output, "seed 2");
+    let second = checkpoint::path_for(&output, "seed 2").unwrap();
     assert_ne!(first, second);
     checkpoint::save(&second, &film, "seed 2", 0).unwrap();
-    assert_eq!(checkpoint::path_for(&output, "seed 1"), first);
+    assert_eq!(checkpoint::path_for(&output, "seed 1").unwrap(), first);
     // Each resume finds its own.
     assert_eq!(checkpoint::find(&output, "seed 1").unwrap(), Some(first));
     assert_eq!(checkpoint::find(&output, "seed 2").unwrap(), Some(second));

@@ -29,6 +29,9 @@ use std::path::{Path, PathBuf};
 use toml::Spanned;
 
 mod media;
+mod mesh_dir;
+
+use mesh_dir::MeshDir;
 
 /// Reads `input` (.pbrt or .toml) and writes it to `output` as a native TOML scene.
 /// Returns the scene read (with its warnings).
@@ -146,7 +149,7 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::error::Result<()> {
             .collect::<crate::error::Result<_>>()?,
         render: render(&scene.settings).map(spanned),
     };
-    let mut meshes = MeshDir::new(&out_dir, format!("{stem}.meshes"));
+    let mut meshes = MeshDir::new(scene, output, &out_dir, format!("{stem}.meshes"))?;
     for (i, shape) in scene.shapes.iter().enumerate() {
         let mut desc = shape_desc(shape, &mut meshes, i, &keys, refs)?;
         desc.media = media::shape(&shape.media, &medium_keys);
@@ -677,85 +680,6 @@ fn matrix_step(m: crate::math::Mat3) -> TransformOp {
         rotate: None,
         scale: None,
         matrix: Some(rows),
-    }
-}
-
-/// The `NAME.meshes` folder: meshes go to a temporary folder that replaces it only once all
-/// is written (and is removed on drop, after a failure or once renamed away).
-struct MeshDir {
-    out_dir: PathBuf,
-    /// `NAME.meshes`, as the TOML refers to it.
-    name: String,
-    tmp: PathBuf,
-    created: bool,
-}
-
-impl MeshDir {
-    fn new(out_dir: &Path, name: String) -> MeshDir {
-        let tmp = out_dir.join(format!(".{name}.tmp-{}", std::process::id()));
-        let _ = std::fs::remove_dir_all(&tmp);
-        MeshDir {
-            out_dir: out_dir.to_path_buf(),
-            name,
-            tmp,
-            created: false,
-        }
-    }
-
-    /// Writes shape `i`'s mesh as PLY; returns the path the TOML gives it.
-    fn write(&mut self, i: usize, g: &Geometry) -> crate::error::Result<String> {
-        if !self.created {
-            std::fs::create_dir_all(&self.tmp).map_err(|e| Error::io(&self.tmp, e))?;
-            self.created = true;
-        }
-        let file = format!("mesh_{i:04}.ply");
-        let path = self.tmp.join(&file);
-        match g {
-            Geometry::Triangles(m) => super::ply::write(
-                &path,
-                &m.positions,
-                m.normals.as_deref(),
-                m.uvs.as_deref(),
-                &m.indices,
-                &[],
-            )?,
-            Geometry::Quads(q) => {
-                super::ply::write(&path, &q.positions, None, None, &[], &q.indices)?
-            }
-            Geometry::Sphere(Sphere { .. }) => unreachable!("spheres are written inline"),
-        }
-        Ok(format!("{}/{file}", self.name))
-    }
-
-    /// Swaps the new meshes in: old folder aside, new one in place, old one removed.
-    fn install(self) -> crate::error::Result<()> {
-        if !self.created {
-            return Ok(());
-        }
-        let final_dir = self.out_dir.join(&self.name);
-        let old = self
-            .out_dir
-            .join(format!(".{}.old-{}", self.name, std::process::id()));
-        let had_old = final_dir.exists();
-        if had_old {
-            std::fs::rename(&final_dir, &old).map_err(|e| Error::io(&final_dir, e))?;
-        }
-        if let Err(e) = std::fs::rename(&self.tmp, &final_dir) {
-            if had_old {
-                let _ = std::fs::rename(&old, &final_dir);
-            }
-            return Err(Error::io(&final_dir, e));
-        }
-        if had_old {
-            let _ = std::fs::remove_dir_all(&old);
-        }
-        Ok(())
-    }
-}
-
-impl Drop for MeshDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.tmp);
     }
 }
 
