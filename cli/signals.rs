@@ -2,12 +2,22 @@
 //! render keeps what it finished (written marked partial) and the process exits with
 //! 128 + the signal's number. A second signal ends the process at once, with the signal's
 //! default action, after removing the temporary files being written (so that an image being
-//! written is neither half-written nor left as a temporary file).
+//! written is neither half-written nor left as a temporary file), but not before a checkpoint
+//! being saved is complete. Signals that arrive together (`timeout` signals the process and
+//! then its group, so the process gets two at once) count as one.
+//!
+//! SIGXFSZ (a file past the size limit of `ulimit -f`) is caught and does nothing, so that the
+//! write fails with `File too large` instead, reported as any failed write.
 
 use raylink::CancelToken;
-use signal_hook::consts::{SIGINT, SIGTERM};
-use std::sync::atomic::{AtomicI32, Ordering};
+use signal_hook::consts::{SIGINT, SIGTERM, SIGXFSZ};
+use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
 use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// A signal this soon after the first is the same request (no one presses Ctrl-C twice
+/// within it; programs that signal a process and its group do).
+const SAME_REQUEST: Duration = Duration::from_millis(500);
 
 /// The signals the process listens for, and the first one received.
 #[derive(Clone)]
@@ -23,15 +33,22 @@ impl Signals {
     pub fn install(cancel: CancelToken, graceful: bool) -> Result<Signals, String> {
         let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM])
             .map_err(|e| format!("cannot install the signal handlers: {e}"))?;
+        signal_hook::flag::register(SIGXFSZ, Arc::new(AtomicBool::new(false)))
+            .map_err(|e| format!("cannot install the signal handlers: {e}"))?;
         let first = Arc::new(AtomicI32::new(0));
         let (seen, token) = (first.clone(), cancel.clone());
         std::thread::Builder::new()
             .name("raylink-signals".into())
             .spawn(move || {
+                let mut since: Option<Instant> = None;
                 for signal in signals.forever() {
                     let first = seen
                         .compare_exchange(0, signal, Ordering::SeqCst, Ordering::SeqCst)
                         .is_ok();
+                    if !first && since.is_some_and(|t| t.elapsed() < SAME_REQUEST) {
+                        continue;
+                    }
+                    since.get_or_insert_with(Instant::now);
                     if !first || !graceful {
                         // The second one: the user does not want to wait. No file is created
                         // or renamed while `_writes` is held.

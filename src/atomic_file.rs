@@ -23,19 +23,44 @@ struct InFlight {
 /// The temporary files and folders this process is writing.
 static IN_FLIGHT: Mutex<Vec<InFlight>> = Mutex::new(Vec::new());
 
+/// Held while a write that must not be lost (a checkpoint) is made: a program quitting at
+/// once waits for it before removing the temporaries.
+static FINISHING: Mutex<()> = Mutex::new(());
+
 fn in_flight() -> MutexGuard<'static, Vec<InFlight>> {
     // A panic elsewhere while holding the lock leaves the list as valid as before.
     IN_FLIGHT.lock().unwrap_or_else(|e| e.into_inner())
 }
 
+/// A guard to hold while writing a file that a program quitting at once must not discard
+/// (a checkpoint of the work so far): [`remove_temporaries`] waits for it.
+pub fn finish_first() -> impl Drop {
+    FINISHING.lock().unwrap_or_else(|e| e.into_inner())
+}
+
 /// Removes the temporary files this process is writing and returns holding the lock of
 /// their list, so that no new one is created until the guard is dropped: for a program about
-/// to end at once (on a second Ctrl-C), which keeps the guard until it exits. Called from an
-/// ordinary thread (a signal-handling thread), not from inside a signal handler.
+/// to end at once (on a second Ctrl-C), which keeps the guard until it exits. A write under
+/// [`finish_first`] is waited for. Called from an ordinary thread (a signal-handling thread),
+/// not from inside a signal handler.
 pub fn remove_temporaries() -> impl Drop {
+    let finishing = FINISHING.lock().unwrap_or_else(|e| e.into_inner());
     let list = in_flight();
     remove_all(&list);
-    list
+    Held {
+        _finishing: finishing,
+        _list: list,
+    }
+}
+
+/// The locks [`remove_temporaries`] returns holding.
+struct Held {
+    _finishing: MutexGuard<'static, ()>,
+    _list: MutexGuard<'static, Vec<InFlight>>,
+}
+
+impl Drop for Held {
+    fn drop(&mut self) {}
 }
 
 /// Removes the temporary files this process is writing, unless their list is being changed
@@ -282,6 +307,40 @@ mod tests {
         assert!(name.len() < 64, "{name}");
         assert_eq!(t.parent(), Some(Path::new("out")));
         assert_ne!(temp_path(Path::new("a.exr")), temp_path(Path::new("a.exr")));
+    }
+
+    /// A program quitting at once waits for a checkpoint being written, then removes the
+    /// other temporaries; a temporary never takes the name of a file that is there.
+    #[test]
+    fn quitting_at_once_waits_for_a_write_that_must_finish() {
+        let dir = tempfile::tempdir().unwrap();
+        let target = dir.path().join("x.checkpoint");
+        let (tx, rx) = std::sync::mpsc::channel();
+        let t = target.clone();
+        let writer = std::thread::spawn(move || {
+            let _keep = finish_first();
+            let mut temp = Temporary::create(&t).unwrap();
+            tx.send(()).unwrap();
+            std::thread::sleep(std::time::Duration::from_millis(300));
+            temp.file().write_all(b"film").unwrap();
+            temp.persist(&t).unwrap();
+        });
+        rx.recv().unwrap();
+        let other = Temporary::create(&dir.path().join("y.exr")).unwrap();
+        let other_path = other.path.clone();
+        std::mem::forget(other);
+        drop(remove_temporaries());
+        writer.join().unwrap();
+        assert_eq!(std::fs::read(&target).unwrap(), b"film");
+        assert!(!other_path.exists());
+        unlist(&other_path);
+
+        let folder = TempFolder::create(&dir.path().join("m.meshes")).unwrap();
+        let kept = folder.path().to_path_buf();
+        std::mem::forget(folder);
+        drop(remove_temporaries());
+        assert!(!kept.exists());
+        unlist(&kept);
     }
 
     #[test]

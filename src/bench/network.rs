@@ -22,7 +22,7 @@ use crate::accel::{self, Backend};
 use crate::control::Control;
 use crate::error::{Error, Result};
 use crate::integrators::illumination_network::distribute::{
-    distribute, DistributeOptions, Solution,
+    distribute, DistributeOptions, Run, Solution,
 };
 use crate::integrators::illumination_network::relight::LightBasis;
 use crate::integrators::illumination_network::render::{NetworkRenderer, Tables};
@@ -206,7 +206,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
                 row.file_bytes = std::fs::metadata(&path).map_or(0, |m| m.len());
                 progress(&format!("step {step}: light basis"));
                 let (basis, s) = timed(|| {
-                    let b = LightBasis::compute(&net, &scene, &emission, &options);
+                    let b = LightBasis::compute(&net, &scene, &emission, &options, Run::now());
                     file::save(&path, &net, &scene, Some(&b))?;
                     Ok(b)
                 })?;
@@ -216,7 +216,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
                 progress(&format!("step {step}: reflectance series of the carpet"));
                 let (basis, s) = timed(|| {
                     let mut b = basis;
-                    b.add_series(&net, &scene, &options, "carpet")
+                    b.add_series(&net, &scene, (&options, Run::now()), "carpet")
                         .map_err(bad)?;
                     file::save(&series_path, &net, &scene, Some(&b))?;
                     Ok(b)
@@ -254,7 +254,7 @@ pub fn measure(bench: &NetworkBench, progress: &mut dyn FnMut(&str)) -> Result<V
             let start = Instant::now();
             let ((net, basis), load) = timed(|| file::load_all(&path, &recoloured, Some(&params)))?;
             let basis = basis.ok_or_else(|| bad("the light basis was not stored".into()))?;
-            let sol = basis.redistribute(&net, &recoloured, &emission, &relit);
+            let sol = basis.redistribute(&net, &recoloured, &emission, &relit, Run::now());
             render_view(&recoloured_ctx, &net, &sol, &view)?;
             t[9].push(start.elapsed().as_secs_f64());
             t[10].push(load);

@@ -126,6 +126,8 @@ fn settings_of(path: &Path) -> Result<String> {
 /// Writes `film` atomically, with `settings` (a description of everything the pixels depend
 /// on) to check a resume against.
 pub fn save(path: &Path, film: &Film, settings: &str, samples: u64) -> Result<()> {
+    // A program quitting at once (a second signal) waits for the checkpoint.
+    let _keep = crate::atomic_file::finish_first();
     let (sums, weights, splats) = film.accumulators();
     let mut b = FORMAT.try_start(settings.len() + 56 * sums.len() + 64, path)?;
     b.extend_from_slice(&(settings.len() as u64).to_le_bytes());

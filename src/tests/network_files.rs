@@ -6,7 +6,7 @@
 use super::network_common::{build, params, scene};
 use super::network_scenes::{wall, CAMERA};
 use crate::binary_file::checksum;
-use crate::integrators::illumination_network::distribute::DistributeOptions;
+use crate::integrators::illumination_network::distribute::{DistributeOptions, Run};
 use crate::integrators::illumination_network::file;
 use crate::integrators::illumination_network::preprocess::Builder;
 use crate::integrators::illumination_network::relight::LightBasis;
@@ -41,9 +41,11 @@ fn saved(scene: &Scene, dir: &Path, series: bool) -> (Network, LightBasis, PathB
     let net = build(scene, P(), Builder::Scan);
     let options = DistributeOptions::default();
     let emission: Vec<_> = scene.materials.iter().map(|m| m.emission).collect();
-    let mut basis = LightBasis::compute(&net, scene, &emission, &options);
+    let mut basis = LightBasis::compute(&net, scene, &emission, &options, Run::now());
     if series {
-        basis.add_series(&net, scene, &options, "floor").unwrap();
+        basis
+            .add_series(&net, scene, (&options, Run::now()), "floor")
+            .unwrap();
     }
     let path = dir.join("box.net");
     file::save(&path, &net, scene, Some(&basis)).unwrap();

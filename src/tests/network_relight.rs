@@ -5,7 +5,7 @@
 use super::bsdf::classic_mut;
 use super::network_common::{build, params, scene};
 use super::network_scenes::{wall, CAMERA};
-use crate::integrators::illumination_network::distribute::{distribute, DistributeOptions};
+use crate::integrators::illumination_network::distribute::{distribute, DistributeOptions, Run};
 use crate::integrators::illumination_network::preprocess::Builder;
 use crate::scene::Scene;
 
@@ -66,7 +66,7 @@ fn light_basis_superposes_per_material() {
         ..Default::default()
     };
     let emission: Vec<Rgb> = s.materials.iter().map(|m| m.emission).collect();
-    let basis = LightBasis::compute(&net, &s, &emission, &options);
+    let basis = LightBasis::compute(&net, &s, &emission, &options, Run::now());
     assert_eq!(basis.lights.len(), 2);
     let index = |name: &str| s.materials.iter().position(|m| m.name == name).unwrap();
     let (warm, cold) = (index("warm"), index("cold"));
@@ -153,8 +153,8 @@ fn warm_start_from_a_basis_for_other_reflectances_matches_a_cold_distribution() 
         ] {
             let net = build(old, params(5, step), Builder::Scan);
             let emission: Vec<Rgb> = old.materials.iter().map(|m| m.emission).collect();
-            let basis = LightBasis::compute(&net, old, &emission, &options);
-            let warm = basis.redistribute(&net, new, &emission, &options);
+            let basis = LightBasis::compute(&net, old, &emission, &options, Run::now());
+            let warm = basis.redistribute(&net, new, &emission, &options, Run::now());
             let cold = distribute(&net, new, &options);
             assert!(warm.stats.warm_start && !cold.stats.warm_start);
             let close = |what: &str, got: &[Rgb], want: &[Rgb], bound: f64| {
@@ -219,8 +219,10 @@ fn a_reflectance_series_relights_one_material_without_a_distribution() {
         ..Default::default()
     };
     let emission: Vec<Rgb> = s.materials.iter().map(|m| m.emission).collect();
-    let mut basis = LightBasis::compute(&net, &s, &emission, &options);
-    basis.add_series(&net, &s, &options, "floor").unwrap();
+    let mut basis = LightBasis::compute(&net, &s, &emission, &options, Run::now());
+    basis
+        .add_series(&net, &s, (&options, Run::now()), "floor")
+        .unwrap();
     let terms = basis.series[0].terms.len();
     assert!((3..MAX_SERIES_TERMS).contains(&terms), "{terms} terms");
     let index = |name: &str| s.materials.iter().position(|m| m.name == name).unwrap();
@@ -279,9 +281,9 @@ fn a_reflectance_series_relights_one_material_without_a_distribution() {
     let mirrored = two_light_box(Some("diffuse = 0.4"), Some("diffuse = 0\nspecular = 0.7"));
     let mnet = build(&mirrored, params(5, 1.0 / 6.0), Builder::Scan);
     let memission: Vec<Rgb> = mirrored.materials.iter().map(|m| m.emission).collect();
-    let mut mbasis = LightBasis::compute(&mnet, &mirrored, &memission, &options);
+    let mut mbasis = LightBasis::compute(&mnet, &mirrored, &memission, &options, Run::now());
     let e = mbasis
-        .add_series(&mnet, &mirrored, &options, "floor")
+        .add_series(&mnet, &mirrored, (&options, Run::now()), "floor")
         .unwrap_err();
     assert!(
         e.contains("diffuse surfaces") && e.contains("mirror"),

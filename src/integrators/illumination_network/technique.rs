@@ -539,12 +539,20 @@ fn relight_network(
         scene,
         &distribute::surfaces_with(&network, scene, &lit),
     )?;
+    // Stopped between sweeps by a signal; then nothing is stored.
+    let run = distribute::Run {
+        start: std::time::Instant::now(),
+        cancel: Some(&control.cancel),
+        report: None,
+    };
     let solution = match basis.as_ref().filter(|_| !store_basis) {
         None => {
-            let mut b = relight::LightBasis::compute(&network, scene, file_emission, options);
+            let mut b = relight::LightBasis::compute(&network, scene, file_emission, options, run);
+            control.cancel.check("the network's light basis")?;
             for name in &spec.reflectance_series {
-                b.add_series(&network, scene, options, name)
+                b.add_series(&network, scene, (options, run), name)
                     .map_err(|e| Error::input(&scene.source, format!("reflectance series: {e}")))?;
+                control.cancel.check("the network's reflectance series")?;
                 let s = b.series.last().expect("a series was added");
                 control.note(&format!(
                     "network: reflectance series of '{name}': {} terms ({} sweeps)",
@@ -566,7 +574,8 @@ fn relight_network(
         }
         // The stored basis, for the old reflectances, is where the distribution starts.
         Some(b) => {
-            let solution = b.redistribute(&network, scene, &emission, options);
+            let solution = b.redistribute(&network, scene, &emission, options, run);
+            control.cancel.check("the network's light distribution")?;
             control.note(&format!(
                 "network: distribution in {:.2} s ({} sweeps or shots{})",
                 solution.stats.seconds,

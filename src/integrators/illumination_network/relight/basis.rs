@@ -154,12 +154,14 @@ fn emitting_materials(net: &Network, scene: &Scene, emission: &[Rgb]) -> Vec<u32
 
 impl LightBasis {
     /// One distribution per emissive material, each lit by that material alone at
-    /// `emission` (indexed as the scene's materials).
+    /// `emission` (indexed as the scene's materials). A cancelled `run` stops it early (the
+    /// basis is then incomplete: the caller checks the token).
     pub fn compute(
         net: &Network,
         scene: &Scene,
         emission: &[Rgb],
         options: &DistributeOptions,
+        run: distribute::Run,
     ) -> LightBasis {
         let start = Instant::now();
         let unlit: Vec<Rgb> = vec![Rgb::ZERO; emission.len()];
@@ -172,11 +174,13 @@ impl LightBasis {
             ..LightBasis::default()
         };
         for m in emitting_materials(net, scene, emission) {
+            if run.cancel.is_some_and(|c| c.is_cancelled()) {
+                break;
+            }
             let mut only = unlit.clone();
             only[m as usize] = emission[m as usize];
             let surfaces = distribute::surfaces_with(net, scene, &only);
-            let sol =
-                distribute::distribute_surfaces(net, surfaces, options, distribute::Run::now());
+            let sol = distribute::distribute_surfaces(net, surfaces, options, run);
             let st = &sol.stats;
             basis.dir_index = sol.dir_index;
             basis.dir_rows = sol.dir_rows;
@@ -217,7 +221,7 @@ impl LightBasis {
         &mut self,
         net: &Network,
         scene: &Scene,
-        options: &DistributeOptions,
+        (options, run): (&DistributeOptions, distribute::Run),
         name: &str,
     ) -> Result<(), String> {
         let m = scene
@@ -230,7 +234,7 @@ impl LightBasis {
             emission[light.material as usize] = light.emission;
         }
         let start = Instant::now();
-        let series = ReflectanceSeries::compute(net, scene, &emission, options, m)?;
+        let series = ReflectanceSeries::compute(net, scene, &emission, (options, run), m)?;
         self.seconds += start.elapsed().as_secs_f64();
         self.series.retain(|s| s.material != m as u32);
         self.series.push(series);
@@ -312,8 +316,8 @@ impl LightBasis {
         scene: &Scene,
         emission: &[Rgb],
         options: &DistributeOptions,
+        run: distribute::Run,
     ) -> Solution {
-        let run = distribute::Run::now();
         match self.guess(net, scene, emission, options) {
             // The guess's surfaces are the scene's, lit by `emission`.
             Some(mut guess) => {

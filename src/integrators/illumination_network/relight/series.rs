@@ -128,7 +128,7 @@ impl ReflectanceSeries {
         net: &Network,
         scene: &Scene,
         emission: &[Rgb],
-        options: &DistributeOptions,
+        (options, run): (&DistributeOptions, distribute::Run),
         m: usize,
     ) -> Result<ReflectanceSeries, String> {
         let name = &scene.materials[m].name;
@@ -154,8 +154,7 @@ impl ReflectanceSeries {
             ..ReflectanceSeries::default()
         };
         // T₀: the network with m black; y is each term's total radiance.
-        let sol =
-            distribute::distribute_surfaces(net, blank.clone(), options, distribute::Run::now());
+        let sol = distribute::distribute_surfaces(net, blank.clone(), options, run);
         let mut y: Vec<Rgb> = (emitted_light.iter().zip(&sol.diffuse))
             .map(|(e, d)| *e + *d)
             .collect();
@@ -167,7 +166,9 @@ impl ReflectanceSeries {
             direct: sol.direct,
         });
         let limit = SERIES_REST * options.tolerance as f64;
+        let cancelled = || run.cancel.is_some_and(|c| c.is_cancelled());
         while series.terms.len() < MAX_SERIES_TERMS
+            && !cancelled()
             && !series
                 .rest(Rgb::ONE)
                 .is_some_and(|rest| (0..3).all(|c| rest[c] <= limit * emitted[c]))
@@ -180,8 +181,7 @@ impl ReflectanceSeries {
                     ..s.clone()
                 })
                 .collect();
-            let sol =
-                distribute::distribute_surfaces(net, surfaces, options, distribute::Run::now());
+            let sol = distribute::distribute_surfaces(net, surfaces, options, run);
             series.sweeps += sol.stats.sweeps;
             y = sent
                 .iter()
