@@ -75,6 +75,9 @@ impl Builder<'_> {
         }
         let mut placed = Vec::new();
         for (i, desc) in instances.into_iter().enumerate() {
+            if let Some(control) = ctx.control {
+                control.cancel.check("reading the scene")?;
+            }
             let site = self.site(format!("instances[{i}]"), desc.span());
             let desc = desc.into_inner();
             let Some((prototype, copied)) = defined.get(&desc.object) else {
@@ -148,6 +151,15 @@ impl Builder<'_> {
         let Some(control) = ctx.control else {
             return Ok(());
         };
+        let needed = cost
+            .bytes()
+            .saturating_add(ctx.text.len() as u64)
+            .saturating_add(self.images.get());
+        // The message only for a refusal: its line number counts the file's lines up to the
+        // table, which for every shape or instance made reading quadratic.
+        if control.budget.check("", needed).is_ok() {
+            return Ok(());
+        }
         control.budget.check(
             &format!(
                 "{}: line {}: {}: the scene's geometry ({} primitives so far) and its \
@@ -157,9 +169,7 @@ impl Builder<'_> {
                 site.name,
                 cost.primitives
             ),
-            cost.bytes()
-                .saturating_add(ctx.text.len() as u64)
-                .saturating_add(self.images.get()),
+            needed,
         )
     }
 }
