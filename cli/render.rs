@@ -77,6 +77,17 @@ fn output_options(args: &RenderArgs) -> Result<OutputOptions, Error> {
     })
 }
 
+/// The cache or network file a technique reads if it is there and writes otherwise (or
+/// rewrites, relighting), in the run's plan of files.
+pub fn technique_files(plan: &mut FilePlan, args: &RenderArgs) {
+    if let Some(f) = &args.cache_file {
+        plan.read_write("--cache-file", f);
+    }
+    if let Some(f) = &args.network.network_file {
+        plan.read_write("--network-file", f);
+    }
+}
+
 /// The auxiliary images' files beside the first output.
 fn aov_paths(first: &std::path::Path) -> Vec<PathBuf> {
     let stem = first.file_stem().unwrap_or_default().to_string_lossy();
@@ -183,12 +194,7 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     }
     let mut plan = FilePlan::new();
     plan.reads("an input of the scene", &scene.inputs);
-    if let Some(f) = &args.cache_file {
-        plan.read_write("--cache-file", f);
-    }
-    if let Some(f) = &args.network.network_file {
-        plan.read_write("--network-file", f);
-    }
+    technique_files(&mut plan, &args);
     plan.writes("-o", &args.outputs).writes("--aov", &aovs);
     if progressive {
         plan.writes(
@@ -505,12 +511,7 @@ pub fn run_precompute(cli: &Cli, mut args: RenderArgs) -> Result<(), Failure> {
     let job = options::job(&args, &scene, Settings::default())?;
     let mut plan = FilePlan::new();
     plan.reads("an input of the scene", &scene.inputs);
-    if let Some(f) = &args.cache_file {
-        plan.read_write("--cache-file", f);
-    }
-    if let Some(f) = &args.network.network_file {
-        plan.read_write("--network-file", f);
-    }
+    technique_files(&mut plan, &args);
     plan.check()?;
     debug_assert!(matches!(
         job.technique.kind(),

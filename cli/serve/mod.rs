@@ -135,12 +135,7 @@ pub fn run(cli: &Cli, args: ServeArgs) -> Result<(), Failure> {
     let mut plan = raylink::output_paths::FilePlan::new();
     plan.reads("an input of the scene", &scene.inputs)
         .reads("--reference", &reference);
-    if let Some(f) = &args.cache_file {
-        plan.read_write("--cache-file", f);
-    }
-    if let Some(f) = &args.network.network_file {
-        plan.read_write("--network-file", f);
-    }
+    render::technique_files(&mut plan, &args);
     plan.check()?;
     let reference = match &reference {
         None => None,
