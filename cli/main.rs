@@ -355,7 +355,7 @@ fn run_convert(cli: &Cli, args: ConvertArgs) -> Result<(), Failure> {
     let control = cli.control(args.quiet, None)?;
     let scene: Scene = render::load_scene(&args.scene, &control)?;
     // Checks every file it writes against the scene's inputs first.
-    raylink::scene::convert::write_toml(&scene, &args.output)?;
+    raylink::scene::convert::write_toml_with(&scene, &args.output, &control.cancel)?;
     Ok(())
 }
 

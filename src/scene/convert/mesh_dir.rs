@@ -16,6 +16,8 @@ pub(super) struct MeshDir {
     target: PathBuf,
     /// The folder being written, once the first mesh is.
     tmp: Option<TempFolder>,
+    /// What stops the writing between meshes (a signal).
+    pub(super) cancel: Option<crate::control::CancelToken>,
 }
 
 /// Whether convert writes `name` into a mesh folder: `mesh_` and digits, `.ply`.
@@ -83,11 +85,15 @@ impl MeshDir {
             name,
             target,
             tmp: None,
+            cancel: None,
         })
     }
 
     /// Writes shape `i`'s mesh as PLY; returns the path the TOML gives it.
     pub(super) fn write(&mut self, i: usize, g: &Geometry) -> Result<String> {
+        if let Some(cancel) = &self.cancel {
+            cancel.check("writing the converted scene")?;
+        }
         if self.tmp.is_none() {
             let folder =
                 TempFolder::create(&self.target).map_err(|e| Error::io(&self.target, e))?;

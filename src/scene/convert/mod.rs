@@ -90,6 +90,16 @@ pub fn camera_toml(camera: &Camera) -> String {
 
 /// Writes `scene` as TOML to `output`, its meshes as PLY files beside it.
 pub fn write_toml(scene: &Scene, output: &Path) -> crate::error::Result<()> {
+    write_toml_with(scene, output, &crate::control::CancelToken::new())
+}
+
+/// [`write_toml`], stopped between meshes by `cancel` ([`Error::Cancelled`]; nothing is
+/// written then).
+pub fn write_toml_with(
+    scene: &Scene,
+    output: &Path,
+    cancel: &crate::control::CancelToken,
+) -> crate::error::Result<()> {
     let out_dir = output
         .parent()
         .filter(|d| !d.as_os_str().is_empty())
@@ -150,6 +160,7 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::error::Result<()> {
         render: render(&scene.settings).map(spanned),
     };
     let mut meshes = MeshDir::new(scene, output, &out_dir, format!("{stem}.meshes"))?;
+    meshes.cancel = Some(cancel.clone());
     for (i, shape) in scene.shapes.iter().enumerate() {
         let mut desc = shape_desc(shape, &mut meshes, i, &keys, refs)?;
         desc.media = media::shape(&shape.media, &medium_keys);
@@ -211,6 +222,7 @@ pub fn write_toml(scene: &Scene, output: &Path) -> crate::error::Result<()> {
         env!("CARGO_PKG_VERSION"),
         scene.source.display()
     );
+    cancel.check("writing the converted scene")?;
     meshes.install()?;
     crate::atomic_file::write(output, text.as_bytes())
 }
