@@ -263,11 +263,6 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
         Some(spec) => select_frames(spec, anim.frame_numbers())?,
         None => anim.frame_numbers().collect(),
     };
-    let first_path = frame_path(&args.output, frames[0])?;
-    if let Some(dir) = first_path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-    }
-    check_output_path(&first_path).map_err(|e| Error::Invalid(e.to_string()))?;
     let scene0 = anim.scene_at(frames[0])?;
     for w in &scene0.warnings {
         eprintln!("warning: {w}");
@@ -277,17 +272,10 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
         .map(|&f| frame_path(&args.output, f))
         .collect::<Result<Vec<_>>>()?;
     let maps = match &args.retrace_map {
-        Some(pattern) => {
-            let maps = frames
-                .iter()
-                .map(|&f| frame_path(pattern, f).map_err(|e| retrace_map_error(pattern, e)))
-                .collect::<Result<Vec<_>>>()?;
-            if let Some(dir) = maps[0].parent().filter(|d| !d.as_os_str().is_empty()) {
-                std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
-            }
-            check_output_path(&maps[0]).map_err(|e| Error::Invalid(e.to_string()))?;
-            maps
-        }
+        Some(pattern) => frames
+            .iter()
+            .map(|&f| frame_path(pattern, f).map_err(|e| retrace_map_error(pattern, e)))
+            .collect::<Result<Vec<_>>>()?,
         None => Vec::new(),
     };
     let mut plan = FilePlan::new();
@@ -302,6 +290,13 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
         plan.write("--csv", csv);
     }
     plan.check()?;
+    // The folders after the check, so that a refused run leaves none behind.
+    for first in [outputs.first(), maps.first()].into_iter().flatten() {
+        if let Some(dir) = first.parent().filter(|d| !d.as_os_str().is_empty()) {
+            std::fs::create_dir_all(dir).map_err(|e| Error::io(dir, e))?;
+        }
+        check_output_path(first).map_err(|e| Error::Invalid(e.to_string()))?;
+    }
     raylink::image::oiio::load()?;
     // The scene's settings with the options over them, as for a still render; the job
     // each frame is rendered with, as `render` makes it.

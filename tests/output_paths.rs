@@ -276,6 +276,11 @@ fn animation_files_spelled_differently_are_one_file() {
             vec!["--retrace-map is the same file as frame 1 of -o", "f_1.png"],
         ),
         (
+            "csv in a folder still to make",
+            vec!["-o", "new/f_%d.png", "--csv", "new/./f_1.png"],
+            vec!["--csv is the same file as frame 1 of -o", "new/./f_1.png"],
+        ),
+        (
             "csv over a map",
             vec![
                 "-o",
