@@ -66,6 +66,19 @@ pub fn ply(data: &[u8]) {
     one_line(ply::read(&put("m.ply", data)));
 }
 
+/// A NanoVDB volume, its grids "density" and "temperature" read as a `nanovdb` medium reads
+/// them, within a budget of 64 MiB (a small file may describe a grid of 512³ samples).
+pub fn nanovdb(data: &[u8]) {
+    use crate::input_file::Allowance;
+    let budget = Allowance::new(crate::control::MemoryBudget::bytes(64 << 20), 0);
+    let path = put("volume.nvdb", data);
+    one_line(crate::scene::media::nanovdb::read(
+        &path,
+        &["density", "temperature"],
+        &budget,
+    ));
+}
+
 /// The scene the cache-file target loads caches for.
 fn cache_scene() -> &'static Scene {
     static SCENE: OnceLock<Scene> = OnceLock::new();

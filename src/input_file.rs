@@ -59,6 +59,11 @@ pub const MERL: Kind = Kind {
     files: "MERL BRDF files",
     max_bytes: 34_992_012,
 };
+/// NanoVDB volumes (their dense grids are bounded by `media::MAX_GRID_SAMPLES` as well).
+pub const NANOVDB: Kind = Kind {
+    files: "NanoVDB files",
+    max_bytes: 4 * GIB,
+};
 /// Images: textures, environment maps, goniometric maps, render parts to merge, references.
 /// What their header declares is checked as well (`image::output::MAX_IMAGE_VALUES`).
 pub const IMAGE: Kind = Kind {

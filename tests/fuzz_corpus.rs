@@ -43,6 +43,11 @@ fn ply_corpus() {
 }
 
 #[test]
+fn nanovdb_corpus() {
+    replay("nanovdb", raylink::fuzzing::nanovdb);
+}
+
+#[test]
 fn irradiance_cache_corpus() {
     replay("irradiance_cache", raylink::fuzzing::irradiance_cache);
 }

@@ -10,6 +10,7 @@
 
 mod grid;
 mod homogeneous;
+pub mod nanovdb;
 pub mod tracking;
 
 pub use grid::{UniformGrid, MAX_GRID_SAMPLES};

@@ -45,6 +45,7 @@ struct HeldBytes {
     open_files: Cell<u64>,
     geometry: Cell<u64>,
     images: Cell<u64>,
+    media: Cell<u64>,
 }
 
 impl Held {
@@ -55,6 +56,7 @@ impl Held {
             .get()
             .saturating_add(self.0.open_files.get())
             .saturating_add(self.0.images.get())
+            .saturating_add(self.0.media.get())
     }
 
     /// The text and tokens of the files being read now.
@@ -81,6 +83,13 @@ impl Held {
     pub(super) fn add_image(&self, image: &crate::image::Image) {
         let bytes = std::mem::size_of_val(image.pixels.as_slice()) as u64;
         self.0.images.set(self.0.images.get().saturating_add(bytes));
+    }
+}
+
+impl Held {
+    /// Counts the samples of a medium's grid kept.
+    pub(super) fn add_medium(&self, bytes: u64) {
+        self.0.media.set(self.0.media.get().saturating_add(bytes));
     }
 }
 

@@ -1,0 +1,331 @@
+//! NanoVDB volumes: files made by the test writer (`common/nanovdb.rs`, written from the
+//! format's layout) read back with their values at known voxels, directly and through
+//! pbrt-v4's `nanovdb` medium placed by the grid's map and the current transform; damaged
+//! files refused with one line naming the file and the problem; and the committed files of
+//! the bad-input cases and the fuzz corpus as the writer makes them.
+
+#[path = "common/nanovdb.rs"]
+mod writer;
+
+use raylink::control::MemoryBudget;
+use raylink::input_file::Allowance;
+use raylink::math::{Mat4, Vec3};
+use raylink::scene::media::nanovdb;
+use raylink::scene::Scene;
+use std::path::PathBuf;
+use writer::Grid;
+
+fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// A grid over two upper nodes, three lower nodes and four leaves, with a rotating, scaling
+/// map and an offset.
+fn smoke() -> Grid {
+    let mut g = Grid::new("density")
+        .voxel([0, 0, 0], 1.0)
+        .voxel([1, 2, 3], 2.5)
+        .voxel([10, 0, 0], 0.5)
+        .voxel([130, 5, -3], 3.0);
+    // x ← -0.2 j, y ← 0.1 i, z ← 0.3 k, then (0.5, -1, 2).
+    g.matrix = [0.0, -0.2, 0.0, 0.1, 0.0, 0.0, 0.0, 0.0, 0.3];
+    g.translation = [0.5, -1.0, 2.0];
+    g
+}
+
+fn read(bytes: &[u8], names: &[&str]) -> raylink::Result<Vec<Option<nanovdb::FloatGrid>>> {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("v.nvdb");
+    std::fs::write(&path, bytes).unwrap();
+    nanovdb::read(&path, names, &Allowance::machine())
+}
+
+#[test]
+fn a_grid_reads_back_at_its_voxels() {
+    let grids = read(
+        &writer::file(&[smoke(), Grid::new("other").voxel([5, 5, 5], 9.0)], 0),
+        &["density", "temperature", "other"],
+    )
+    .unwrap();
+    let g = grids[0].as_ref().expect("the density grid");
+    assert!(grids[1].is_none());
+    assert_eq!(grids[2].as_ref().unwrap().value([5, 5, 5]), 9.0);
+    // The active box (0..130, 0..5, -3..3) and one voxel of background around it.
+    assert_eq!(g.res, [133, 8, 9]);
+    assert_eq!(g.origin, [-1, -1, -4]);
+    for (ijk, v) in &smoke().voxels {
+        assert_eq!(g.value(*ijk), *v, "voxel {ijk:?}");
+    }
+    let nonzero = g.values.iter().filter(|v| **v != 0.0).count();
+    assert_eq!(nonzero, 4);
+    let p = g.index_to_world.transform_point3(Vec3::new(1.0, 2.0, 3.0));
+    assert!((p - Vec3::new(0.1, -0.9, 2.9)).length() < 1e-6, "{p}");
+}
+
+/// The medium pbrt-v4's `nanovdb` makes: σa times the density at world points, the grid's
+/// map composed with the transform current at the statement; trilinear between voxels.
+#[test]
+fn a_nanovdb_medium_has_the_density_of_its_voxels_in_the_world() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("smoke.nvdb"), writer::file(&[smoke()], 0)).unwrap();
+    let scene_path = dir.path().join("s.pbrt");
+    std::fs::write(
+        &scene_path,
+        r#"LookAt 0 0 5  0 0 0  0 1 0
+Camera "perspective"
+WorldBegin
+AttributeBegin
+  Translate 1 2 3
+  Rotate 30 0 1 0
+  MakeNamedMedium "smoke" "string type" "nanovdb" "string filename" "smoke.nvdb"
+    "rgb sigma_a" [2 2 2] "rgb sigma_s" [0 0 0]
+AttributeEnd
+Shape "sphere"
+"#,
+    )
+    .unwrap();
+    let scene = Scene::load(&scene_path).unwrap_or_else(|e| panic!("{e}"));
+    let medium = scene.media[0].model();
+    assert_eq!(medium.kind(), "uniformgrid");
+    let s = smoke();
+    let map = Mat4::from_cols_array(&[
+        s.matrix[0] as f32,
+        s.matrix[3] as f32,
+        s.matrix[6] as f32,
+        0.0,
+        s.matrix[1] as f32,
+        s.matrix[4] as f32,
+        s.matrix[7] as f32,
+        0.0,
+        s.matrix[2] as f32,
+        s.matrix[5] as f32,
+        s.matrix[8] as f32,
+        0.0,
+        s.translation[0] as f32,
+        s.translation[1] as f32,
+        s.translation[2] as f32,
+        1.0,
+    ]);
+    let ctm = Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0))
+        * Mat4::from_axis_angle(Vec3::Y, 30f32.to_radians());
+    let world = |i: f32, j: f32, k: f32| (ctm * map).transform_point3(Vec3::new(i, j, k));
+    let density = |p: Vec3| medium.at(p).sigma_a.x / 2.0;
+    let cases = [
+        ((0.0, 0.0, 0.0), 1.0),
+        ((1.0, 2.0, 3.0), 2.5),
+        ((10.0, 0.0, 0.0), 0.5),
+        ((130.0, 5.0, -3.0), 3.0),
+        // Halfway to a background voxel, and between two voxels.
+        ((0.5, 0.0, 0.0), 0.5),
+        ((131.0, 5.0, -3.0), 0.0),
+        ((130.25, 5.0, -3.0), 2.25),
+        ((5.0, 1.0, 1.0), 0.0),
+    ];
+    for ((i, j, k), want) in cases {
+        let got = density(world(i, j, k));
+        assert!(
+            (got - want).abs() < 1e-3,
+            "({i}, {j}, {k}): {got} against {want}"
+        );
+    }
+    // Far outside the grid: nothing.
+    assert_eq!(density(Vec3::new(-50.0, 0.0, 0.0)), 0.0);
+}
+
+/// Damaged and foreign files: one line naming the file and the problem, never a panic.
+#[test]
+fn damaged_files_are_refused_with_one_line() {
+    let valid = writer::file(&[smoke()], 0);
+    let mut cases: Vec<(String, Vec<u8>, &str)> = Vec::new();
+    let mut case = |name: &str, bytes: Vec<u8>, expect: &'static str| {
+        cases.push((name.into(), bytes, expect));
+    };
+    case(
+        "text",
+        b"LookAt 0 0 0  0 0 -1  0 1 0\n".to_vec(),
+        "is not a NanoVDB file",
+    );
+    let mut big = valid.clone();
+    big[..8].reverse();
+    case("big-endian", big, "is a big-endian NanoVDB file");
+    let mut old = smoke();
+    old.version = (31 << 21) | (2 << 10);
+    case(
+        "version",
+        writer::file(&[old], 0),
+        "of version 31.2.0; raylink reads version 32",
+    );
+    case("zip", writer::file(&[smoke()], 1), "is compressed with ZIP");
+    case(
+        "blosc",
+        writer::file(&[smoke()], 2),
+        "is compressed with Blosc",
+    );
+    let mut double = smoke();
+    double.value_type = 2;
+    case(
+        "double",
+        writer::file(&[double], 0),
+        "holds double values; raylink reads float",
+    );
+    let mut level_set = smoke();
+    level_set.class = 1;
+    case(
+        "level set",
+        writer::file(&[level_set], 0),
+        "is a level set, not a fog volume",
+    );
+    case(
+        "empty",
+        writer::file(&[Grid::new("density")], 0),
+        "holds no active voxels",
+    );
+    case(
+        "negative",
+        writer::file(&[smoke().voxel([2, 2, 2], -1.0)], 0),
+        "has -1 at voxel (2, 2, 2): densities must be finite",
+    );
+    case(
+        "huge",
+        writer::file(&[smoke().voxel([1000, 1000, 200], 1.0)], 0),
+        "spans 1001x1001x204 voxels, more than raylink holds",
+    );
+    // The first root tile's child pointing past the end.
+    let mut wild = valid.clone();
+    let tile = valid.len() - smoke().bytes().len() + 672 + 64 + 64 + 8;
+    wild[tile..tile + 8].copy_from_slice(&(1i64 << 40).to_le_bytes());
+    case(
+        "wild child",
+        wild,
+        "is corrupt: an upper node lies outside the grid's bytes",
+    );
+    // Truncations: inside the header, a record, the name, the grid.
+    for cut in [3, 15, 16, 100, 192, 200, 1000, 100_000, valid.len() - 1] {
+        case(
+            &format!("cut at {cut}"),
+            valid[..cut].to_vec(),
+            "is truncated",
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bytes, expect) in cases {
+        let path = dir.path().join("v.nvdb");
+        std::fs::write(&path, &bytes).unwrap();
+        let e = nanovdb::read(&path, &["density"], &Allowance::machine())
+            .err()
+            .unwrap_or_else(|| panic!("{name}: read"))
+            .to_string();
+        assert!(!e.contains('\n'), "{name}: {e}");
+        assert!(e.starts_with(&path.display().to_string()), "{name}: {e}");
+        assert!(e.contains(expect), "{name}: {e}");
+    }
+    // Every cut of a small file is refused (or reads what is whole), never a panic.
+    let small = writer::file(&[Grid::new("density"), Grid::new("x")], 0);
+    for cut in 0..small.len() {
+        let path = dir.path().join("cut.nvdb");
+        std::fs::write(&path, &small[..cut]).unwrap();
+        if let Err(e) = nanovdb::read(&path, &["x"], &Allowance::machine()) {
+            assert!(!e.to_string().contains('\n'));
+        }
+    }
+}
+
+/// The dense grid counts against the memory budget, beside the file's bytes.
+#[test]
+fn the_dense_grid_counts_against_the_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("v.nvdb");
+    let bytes = writer::file(&[smoke()], 0);
+    std::fs::write(&path, &bytes).unwrap();
+    let dense = 133 * 8 * 9 * 4;
+    let tight = Allowance::new(MemoryBudget::bytes(bytes.len() as u64 + dense - 1), 0);
+    let e = nanovdb::read(&path, &["density"], &tight).unwrap_err();
+    assert!(matches!(e, raylink::Error::Memory { .. }), "{e}");
+    assert!(
+        e.to_string().contains("the NanoVDB grid \"density\""),
+        "{e}"
+    );
+    let enough = Allowance::new(MemoryBudget::bytes(bytes.len() as u64 + dense), 0);
+    assert!(nanovdb::read(&path, &["density"], &enough).is_ok());
+}
+
+/// The committed files (the bad-input cases' volumes and the fuzz seeds) are the writer's:
+/// `RAYLINK_WRITE_NANOVDB=1 cargo test --release --test nanovdb committed` writes them.
+#[test]
+fn committed_files_are_the_writers() {
+    let mut old = Grid::new("density");
+    old.version = (31 << 21) | (2 << 10);
+    let mut double = Grid::new("density");
+    double.value_type = 2;
+    let empty = writer::file(&[Grid::new("density")], 0);
+    let mut big_endian = empty.clone();
+    big_endian[..8].reverse();
+    let mut level_set = Grid::new("density");
+    level_set.class = 1;
+    let one_voxel = Grid::new("density").voxel([3, -2, 7], 0.75);
+    let files: Vec<(&str, Vec<u8>)> = vec![
+        (
+            "tests/bad_inputs/pbrt/volumes/other-grid.nvdb",
+            writer::file(&[Grid::new("smoke")], 0),
+        ),
+        (
+            "tests/bad_inputs/pbrt/volumes/zip.nvdb",
+            writer::file(&[Grid::new("density")], 1),
+        ),
+        (
+            "tests/bad_inputs/pbrt/volumes/version-31.nvdb",
+            writer::file(&[old.clone()], 0),
+        ),
+        (
+            "tests/bad_inputs/pbrt/volumes/double.nvdb",
+            writer::file(&[double.clone()], 0),
+        ),
+        (
+            "tests/bad_inputs/pbrt/volumes/truncated.nvdb",
+            empty[..empty.len() / 2].to_vec(),
+        ),
+        (
+            "tests/bad_inputs/pbrt/volumes/not-nanovdb.nvdb",
+            b"#!nvdb\n".repeat(4),
+        ),
+        (
+            "fuzz/corpus/nanovdb/valid_one_voxel",
+            writer::file(&[one_voxel, Grid::new("temperature")], 0),
+        ),
+        ("fuzz/corpus/nanovdb/empty", empty.clone()),
+        (
+            "fuzz/corpus/nanovdb/other_grid",
+            writer::file(&[Grid::new("smoke")], 0),
+        ),
+        (
+            "fuzz/corpus/nanovdb/zip",
+            writer::file(&[Grid::new("density")], 1),
+        ),
+        ("fuzz/corpus/nanovdb/version_31", writer::file(&[old], 0)),
+        ("fuzz/corpus/nanovdb/double", writer::file(&[double], 0)),
+        (
+            "fuzz/corpus/nanovdb/truncated",
+            empty[..empty.len() / 2].to_vec(),
+        ),
+        ("fuzz/corpus/nanovdb/header_only", empty[..16].to_vec()),
+        (
+            "fuzz/corpus/nanovdb/two_segments",
+            [empty.clone(), empty.clone()].concat(),
+        ),
+        ("fuzz/corpus/nanovdb/big_endian", big_endian),
+        (
+            "fuzz/corpus/nanovdb/level_set",
+            writer::file(&[level_set], 0),
+        ),
+    ];
+    let write = std::env::var_os("RAYLINK_WRITE_NANOVDB").is_some();
+    for (name, bytes) in files {
+        let path = root().join(name);
+        if write {
+            std::fs::create_dir_all(path.parent().unwrap()).unwrap();
+            std::fs::write(&path, &bytes).unwrap();
+        }
+        let committed = std::fs::read(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        assert!(committed == bytes, "{name} is not the writer's");
+    }
+}
