@@ -1,7 +1,7 @@
 //! A homogeneous medium: the same absorption, scattering and emission everywhere it fills
 //! (pbrt-v4's `homogeneous`, Mitsuba 3's `homogeneous`).
 
-use super::{check_coefficients, check_g, MediumModel, MediumPoint, Segment};
+use super::{check_coefficients, check_g, MediumModel, MediumPoint, MediumProblem, Segment};
 use crate::math::{Ray, Rgb, Vec3};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -12,9 +12,13 @@ pub struct Homogeneous {
 impl Homogeneous {
     /// A medium of absorption `sigma_a` and scattering `sigma_s` per unit length, emitting
     /// `le` (radiance; the medium emits σa·Le per unit length) and scattering by the
-    /// Henyey–Greenstein asymmetry `g`. The message names the value out of range.
-    pub fn new(sigma_a: Rgb, sigma_s: Rgb, le: Rgb, g: f32) -> Result<Homogeneous, String> {
-        check_coefficients(&[("sigma_a", sigma_a), ("sigma_s", sigma_s), ("Le", le)])?;
+    /// Henyey–Greenstein asymmetry `g`. The problem names the field out of range.
+    pub fn new(sigma_a: Rgb, sigma_s: Rgb, le: Rgb, g: f32) -> Result<Homogeneous, MediumProblem> {
+        check_coefficients(&[
+            ("sigma_a", "sigma_a", sigma_a),
+            ("sigma_s", "sigma_s", sigma_s),
+            ("emission", "Le", le),
+        ])?;
         check_g(g)?;
         Ok(Homogeneous {
             point: MediumPoint {

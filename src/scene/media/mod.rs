@@ -9,12 +9,16 @@
 //! TOML, pbrt) and writer (`convert`), its tests and docs.
 
 mod grid;
+mod grid_space;
 mod homogeneous;
 pub mod nanovdb;
+mod rgbgrid;
 pub mod tracking;
 
-pub use grid::{UniformGrid, MAX_GRID_SAMPLES};
+pub use grid::UniformGrid;
+pub use grid_space::MAX_GRID_SAMPLES;
 pub use homogeneous::Homogeneous;
+pub use rgbgrid::{RgbGrid, RgbGrids};
 
 use crate::math::{Ray, Rgb, Vec3};
 
@@ -61,6 +65,7 @@ pub enum MediumKind {
     Homogeneous(Homogeneous),
     /// Boxed: its samples and transforms are much larger than a homogeneous medium.
     UniformGrid(Box<UniformGrid>),
+    RgbGrid(Box<RgbGrid>),
 }
 
 impl MediumKind {
@@ -69,6 +74,7 @@ impl MediumKind {
         match self {
             MediumKind::Homogeneous(m) => m,
             MediumKind::UniformGrid(m) => m.as_ref(),
+            MediumKind::RgbGrid(m) => m.as_ref(),
         }
     }
 }
@@ -112,25 +118,46 @@ impl MediumInterface {
     }
 }
 
-/// Checks that a medium's coefficients are finite and not negative; the message names the
-/// first that is not.
-pub(crate) fn check_coefficients(named: &[(&str, Rgb)]) -> Result<(), String> {
-    for (name, v) in named {
+/// Why a medium cannot be made: the field to blame, as the native format names it
+/// (`sigma_a`, `emission`, `density`, `resolution`, `bounds`, ...), and the reason, in
+/// pbrt-v4's words where they differ (`Le`, `Lescale`, `nx*ny*nz`).
+#[derive(Clone, Debug, PartialEq)]
+pub struct MediumProblem {
+    pub field: &'static str,
+    pub message: String,
+}
+
+impl std::fmt::Display for MediumProblem {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+/// Checks that a medium's coefficients (field, name in messages, value) are finite and not
+/// negative; the problem names the first that is not.
+pub(crate) fn check_coefficients(named: &[(&'static str, &str, Rgb)]) -> Result<(), MediumProblem> {
+    for (field, name, v) in named {
         if !v.is_finite() || v.min_element() < 0.0 {
-            return Err(format!(
-                "{name} must be finite and not negative, got ({}, {}, {})",
-                v.x, v.y, v.z
-            ));
+            return Err(MediumProblem {
+                field,
+                message: format!(
+                    "{name} must be finite and not negative, got ({}, {}, {})",
+                    v.x, v.y, v.z
+                ),
+            });
         }
     }
     Ok(())
 }
 
 /// Checks a Henyey–Greenstein asymmetry: strictly between −1 and 1.
-pub(crate) fn check_g(g: f32) -> Result<(), String> {
+pub(crate) fn check_g(g: f32) -> Result<(), MediumProblem> {
     if g.is_finite() && g.abs() < 1.0 {
         Ok(())
     } else {
-        Err(format!("g must lie strictly between -1 and 1, got {g}"))
+        Err(MediumProblem {
+            field: "g",
+            message: format!("g must lie strictly between -1 and 1, got {g}"),
+        })
     }
 }

@@ -1,4 +1,5 @@
-//! Participating media: `MakeNamedMedium` (homogeneous and uniform-grid media), the
+//! Participating media: `MakeNamedMedium` (homogeneous, uniform-grid, RGB-grid and NanoVDB
+//! media), the
 //! `MediumInterface` that the shapes and the camera after it take, and the camera's medium
 //! (the outside medium when `Camera` is given, as pbrt-v4 has it).
 
@@ -9,7 +10,8 @@ use super::Loc;
 use crate::math::{Mat4, Rgb, Vec3};
 use crate::scene::media::nanovdb;
 use crate::scene::media::{
-    Homogeneous, Medium, MediumInterface, MediumKind, MediumPoint, UniformGrid, MAX_GRID_SAMPLES,
+    Homogeneous, Medium, MediumInterface, MediumKind, MediumPoint, RgbGrid, RgbGrids, UniformGrid,
+    MAX_GRID_SAMPLES,
 };
 
 impl Builder {
@@ -36,6 +38,7 @@ impl Builder {
             }
             "uniformgrid" => MediumKind::UniformGrid(Box::new(self.uniform_grid(p, &st, loc)?)),
             "nanovdb" => MediumKind::UniformGrid(Box::new(self.nanovdb(p, &st, loc)?)),
+            "rgbgrid" => MediumKind::RgbGrid(Box::new(self.rgb_grid(p, &st, loc)?)),
             _ => {
                 for q in p.list.iter() {
                     p.ignore(&q.name);
@@ -108,16 +111,7 @@ impl Builder {
         loc: &Loc,
     ) -> crate::error::Result<UniformGrid> {
         let pe = Self::pe(loc);
-        let mut res = [0usize; 3];
-        for (r, name) in res.iter_mut().zip(["nx", "ny", "nz"]) {
-            let n = p.int(name).map_err(&pe)?.unwrap_or(1);
-            if !(1..=MAX_GRID_SAMPLES as i64).contains(&n) {
-                return Err(loc.error(format!(
-                    "{st}: {name} must be between 1 and {MAX_GRID_SAMPLES}, got {n}"
-                )));
-            }
-            *r = n as usize;
-        }
+        let res = Self::grid_resolution(p, st, loc)?;
         let floats = |name: &str| -> crate::error::Result<Option<Vec<f32>>> {
             Ok(p.floats(name, "float")
                 .map_err(&pe)?
@@ -147,25 +141,83 @@ impl Builder {
             _ => 1.0,
         };
         let unit = self.medium_point(p, one_scale, st, loc)?;
-        let point3 = |name: &str, default: Vec3| -> crate::error::Result<Vec3> {
-            match p.floats(name, "point3").map_err(&pe)? {
-                Some(v) if v.len() == 3 => Ok(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32)),
-                Some(_) => Err(loc.error(format!("{st}: \"{name}\" takes one point"))),
-                None => Ok(default),
-            }
-        };
-        let lo = point3("p0", Vec3::ZERO)?;
-        let hi = point3("p1", Vec3::ONE)?;
+        let bounds = Self::grid_box(p, st, loc)?;
         let to_world: Mat4 = self.state.ctm.as_mat4();
         UniformGrid::new(
             unit,
             res,
             density,
             le_scale.filter(|_| le_grid),
-            (lo, hi),
+            bounds,
             to_world,
         )
         .map_err(|e| loc.error(format!("{st}: {e}")))
+    }
+
+    /// A grid's `nx`, `ny`, `nz` (default 1).
+    fn grid_resolution(p: &Params, st: &str, loc: &Loc) -> crate::error::Result<[usize; 3]> {
+        let mut res = [0usize; 3];
+        for (r, name) in res.iter_mut().zip(["nx", "ny", "nz"]) {
+            let n = p.int(name).map_err(Self::pe(loc))?.unwrap_or(1);
+            if !(1..=MAX_GRID_SAMPLES as i64).contains(&n) {
+                return Err(loc.error(format!(
+                    "{st}: {name} must be between 1 and {MAX_GRID_SAMPLES}, got {n}"
+                )));
+            }
+            *r = n as usize;
+        }
+        Ok(res)
+    }
+
+    /// A grid's box `p0`–`p1` in its own space (default the unit cube).
+    fn grid_box(p: &Params, st: &str, loc: &Loc) -> crate::error::Result<(Vec3, Vec3)> {
+        let point3 = |name: &str, default: Vec3| -> crate::error::Result<Vec3> {
+            match p.floats(name, "point3").map_err(Self::pe(loc))? {
+                Some(v) if v.len() == 3 => Ok(Vec3::new(v[0] as f32, v[1] as f32, v[2] as f32)),
+                Some(_) => Err(loc.error(format!("{st}: \"{name}\" takes one point"))),
+                None => Ok(default),
+            }
+        };
+        Ok((point3("p0", Vec3::ZERO)?, point3("p1", Vec3::ONE)?))
+    }
+
+    /// pbrt-v4's `rgbgrid`: `sigma_a`, `sigma_s` and `Le` as RGB values, one a sample (nx·ny·nz,
+    /// x fastest) over the box `p0`–`p1`, σa and σs times `scale`, Le times `Lescale`.
+    fn rgb_grid(&mut self, p: &Params, st: &str, loc: &Loc) -> crate::error::Result<RgbGrid> {
+        let pe = Self::pe(loc);
+        let res = Self::grid_resolution(p, st, loc)?;
+        let le_scale = p.float_or("Lescale", 1.0).map_err(&pe)? as f32;
+        if !(le_scale.is_finite() && le_scale >= 0.0) {
+            return Err(loc.error(format!(
+                "{st}: Lescale must be finite and not negative, got {le_scale}"
+            )));
+        }
+        let colours = |name: &str, times: f32| -> crate::error::Result<Option<Vec<Rgb>>> {
+            let Some(v) = p.floats(name, "rgb").map_err(&pe)? else {
+                return Ok(None);
+            };
+            if v.len() % 3 != 0 {
+                return Err(loc.error(format!(
+                    "{st}: \"{name}\" takes three numbers an rgb value, got {}",
+                    v.len()
+                )));
+            }
+            Ok(Some(
+                v.chunks_exact(3)
+                    .map(|c| Rgb::new(c[0] as f32, c[1] as f32, c[2] as f32) * times)
+                    .collect(),
+            ))
+        };
+        let grids = RgbGrids {
+            sigma_a: colours("sigma_a", 1.0)?,
+            sigma_s: colours("sigma_s", 1.0)?,
+            le: colours("Le", le_scale)?,
+        };
+        let scale = p.float_or("scale", 1.0).map_err(&pe)? as f32;
+        let g = p.float_or("g", 0.0).map_err(&pe)? as f32;
+        let bounds = Self::grid_box(p, st, loc)?;
+        RgbGrid::new(grids, scale, g, res, bounds, self.state.ctm.as_mat4())
+            .map_err(|e| loc.error(format!("{st}: {e}")))
     }
 
     /// pbrt-v4's `nanovdb`: the float grid `gridname` ("density") of the NanoVDB file

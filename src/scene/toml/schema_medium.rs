@@ -4,8 +4,8 @@ use super::schema::{OneOrMany, Splat3, TransformOp, V3};
 use super::schema_values::{opt_f32, Idx3};
 use serde::{Deserialize, Serialize};
 
-/// A medium: `type = "homogeneous"` or `"uniformgrid"`, its coefficients and, for a grid,
-/// its samples.
+/// A medium: `type = "homogeneous"`, `"uniformgrid"` or `"rgbgrid"`, its coefficients and,
+/// for a grid, its samples.
 #[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct MediumDesc {
@@ -35,6 +35,15 @@ pub(crate) struct MediumDesc {
     /// A grid's emission scale per sample, x fastest (default 1).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) emission_scale: Option<Vec<f32>>,
+    /// An rgbgrid's absorption per sample: three numbers a sample, x fastest (default 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) sigma_a_grid: Option<Vec<f32>>,
+    /// An rgbgrid's scattering per sample, the same layout (default 1).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) sigma_s_grid: Option<Vec<f32>>,
+    /// An rgbgrid's emitted radiance per sample, the same layout (default 0).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) emission_grid: Option<Vec<f32>>,
     /// The box a grid spans in its own space: two corners (default [0, 0, 0] to [1, 1, 1]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) bounds: Option<[V3; 2]>,

@@ -5,8 +5,16 @@ use super::super::schema::{MediumDesc, ShapeMediaDesc};
 use super::Builder;
 use crate::math::{Rgb, Vec3};
 use crate::scene::media::{
-    Homogeneous, Medium, MediumInterface, MediumKind, MediumPoint, UniformGrid,
+    Homogeneous, Medium, MediumInterface, MediumKind, MediumPoint, MediumProblem, RgbGrid,
+    RgbGrids, UniformGrid,
 };
+
+/// The kinds of medium, and those that take each kind-specific key.
+const KINDS: &[&str] = &["homogeneous", "uniformgrid", "rgbgrid"];
+const GRIDS: &[&str] = &["uniformgrid", "rgbgrid"];
+const UNIFORM: &[&str] = &["uniformgrid"];
+const RGB: &[&str] = &["rgbgrid"];
+const PLAIN: &[&str] = &["homogeneous", "uniformgrid"];
 
 impl Builder<'_> {
     /// A `[media.NAME]` table.
@@ -14,10 +22,12 @@ impl Builder<'_> {
         &self,
         site: &Site,
         name: String,
-        desc: MediumDesc,
+        mut desc: MediumDesc,
     ) -> crate::error::Result<Medium> {
         let ctx = self.ctx;
         let fail = |key: &'static str| move |m: String| ctx.fail(site, key, m);
+        // The constructors name the field their problem is about.
+        let blame = |p: MediumProblem| ctx.fail(site, p.field, p.message);
         let scale = desc.scale.unwrap_or(1.0);
         if !(scale.is_finite() && scale >= 0.0) {
             return Err(fail("scale")(format!(
@@ -30,68 +40,91 @@ impl Builder<'_> {
             le: desc.emission.map_or(Rgb::ZERO, |c| c.0),
             g: desc.g.unwrap_or(0.0),
         };
-        // The message names the key it is about.
-        let key_of = |m: &str| match m.split_whitespace().next() {
-            Some("sigma_a") => "sigma_a",
-            Some("sigma_s") => "sigma_s",
-            Some("Le") => "emission",
-            Some("g") => "g",
-            Some("density") => "density",
-            Some("Lescale") => "emission_scale",
-            _ => "",
-        };
-        let grid_keys = [
-            ("resolution", desc.resolution.is_some()),
-            ("density", desc.density.is_some()),
-            ("emission_scale", desc.emission_scale.is_some()),
-            ("bounds", desc.bounds.is_some()),
-            ("transform", desc.transform.is_some()),
+        let transform = desc.transform.take();
+        // Keys that only some kinds take.
+        let present = [
+            ("resolution", desc.resolution.is_some(), GRIDS),
+            ("density", desc.density.is_some(), UNIFORM),
+            ("emission_scale", desc.emission_scale.is_some(), UNIFORM),
+            ("bounds", desc.bounds.is_some(), GRIDS),
+            ("transform", transform.is_some(), GRIDS),
+            ("sigma_a_grid", desc.sigma_a_grid.is_some(), RGB),
+            ("sigma_s_grid", desc.sigma_s_grid.is_some(), RGB),
+            ("emission_grid", desc.emission_grid.is_some(), RGB),
+            ("sigma_a", desc.sigma_a.is_some(), PLAIN),
+            ("sigma_s", desc.sigma_s.is_some(), PLAIN),
+            ("emission", desc.emission.is_some(), PLAIN),
         ];
-        let kind = match desc.kind.as_str() {
-            "homogeneous" => {
-                if let Some((key, _)) = grid_keys.iter().find(|(_, present)| *present) {
-                    return Err(ctx.fail(
-                        site,
-                        key,
-                        "a homogeneous medium does not take it (only a uniformgrid does)",
-                    ));
-                }
-                MediumKind::Homogeneous(
-                    Homogeneous::new(unit.sigma_a, unit.sigma_s, unit.le, unit.g)
-                        .map_err(|m| ctx.fail(site, key_of(&m), m))?,
-                )
-            }
+        let kind = desc.kind.as_str();
+        if let Some((key, _, takers)) = present
+            .iter()
+            .find(|(_, given, takers)| *given && KINDS.contains(&kind) && !takers.contains(&kind))
+        {
+            let a = |k: &str| if k == "rgbgrid" { "an" } else { "a" };
+            return Err(ctx.fail(
+                site,
+                key,
+                format!(
+                    "{} {kind} medium does not take it (only {} {} does)",
+                    a(kind),
+                    a(takers[0]),
+                    takers.join(" or ")
+                ),
+            ));
+        }
+        let grid_place = |desc: &MediumDesc| -> crate::error::Result<_> {
+            let Some(res) = desc.resolution else {
+                return Err(fail("resolution")(format!(
+                    "a {kind} needs `resolution = [nx, ny, nz]`"
+                )));
+            };
+            let [lo, hi] = desc
+                .bounds
+                .map_or([Vec3::ZERO, Vec3::ONE], |[a, b]| [a.0, b.0]);
+            let xf = self.transform(site, transform)?;
+            Ok((res.0.map(|n| n as usize), (lo, hi), xf.m))
+        };
+        let kind = match kind {
+            "homogeneous" => MediumKind::Homogeneous(
+                Homogeneous::new(unit.sigma_a, unit.sigma_s, unit.le, unit.g).map_err(blame)?,
+            ),
             "uniformgrid" => {
-                let Some(res) = desc.resolution else {
-                    return Err(fail("resolution")(
-                        "a uniformgrid needs `resolution = [nx, ny, nz]`".into(),
-                    ));
-                };
-                let res = res.0.map(|n| n as usize);
+                let (res, bounds, to_world) = grid_place(&desc)?;
                 let Some(density) = desc.density else {
                     return Err(fail("density")("a uniformgrid needs `density`".into()));
                 };
-                let [lo, hi] = desc
-                    .bounds
-                    .map_or([Vec3::ZERO, Vec3::ONE], |[a, b]| [a.0, b.0]);
-                let xf = self.transform(site, desc.transform)?;
                 MediumKind::UniformGrid(Box::new(
-                    UniformGrid::new(unit, res, density, desc.emission_scale, (lo, hi), xf.m)
-                        .map_err(|m| {
-                            let key = match key_of(&m) {
-                                "" if m.contains("box") => "bounds",
-                                "" if m.contains("transform") => "transform",
-                                "" if m.starts_with("a grid of") => "resolution",
-                                "" => "resolution",
-                                k => k,
-                            };
-                            ctx.fail(site, key, m)
-                        })?,
+                    UniformGrid::new(unit, res, density, desc.emission_scale, bounds, to_world)
+                        .map_err(blame)?,
+                ))
+            }
+            "rgbgrid" => {
+                let (res, bounds, to_world) = grid_place(&desc)?;
+                let colours = |key: &'static str, v: Option<Vec<f32>>| match v {
+                    Some(v) if v.len() % 3 != 0 => Err(fail(key)(format!(
+                        "takes three numbers a sample, got {} numbers",
+                        v.len()
+                    ))),
+                    Some(v) => Ok(Some(
+                        v.chunks_exact(3)
+                            .map(|c| Rgb::new(c[0], c[1], c[2]))
+                            .collect(),
+                    )),
+                    None => Ok(None),
+                };
+                let grids = RgbGrids {
+                    sigma_a: colours("sigma_a_grid", desc.sigma_a_grid)?,
+                    sigma_s: colours("sigma_s_grid", desc.sigma_s_grid)?,
+                    le: colours("emission_grid", desc.emission_grid)?,
+                };
+                MediumKind::RgbGrid(Box::new(
+                    RgbGrid::new(grids, scale, unit.g, res, bounds, to_world).map_err(blame)?,
                 ))
             }
             other => {
                 return Err(fail("type")(format!(
-                    "unknown medium type \"{other}\" (expected homogeneous or uniformgrid)"
+                    "unknown medium type \"{other}\" (expected homogeneous, uniformgrid or \
+                     rgbgrid)"
                 )))
             }
         };
