@@ -756,3 +756,63 @@ fn rgbgrids_convert_and_read_back_the_same() {
         want
     });
 }
+
+/// pbrt-v4's `preset` gives a homogeneous medium the measured coefficients it names (times
+/// `scale`), replacing `sigma_a` and `sigma_s`; an unknown name keeps them.
+#[test]
+fn a_preset_medium_has_the_measured_coefficients() {
+    let medium = |params: &str| {
+        let scene = pbrt(&format!(
+            "MakeNamedMedium \"m\" \"string type\" \"homogeneous\" {params}\n\
+             LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\nShape \"sphere\"\n"
+        ));
+        scene.media[0].model().at(Vec3::ZERO)
+    };
+    let milk = medium(r#""string preset" "Skimmilk" "float scale" 10"#);
+    let near = |a: Rgb, b: Rgb| (a - b).abs().max_element() < 1e-6;
+    assert!(
+        near(milk.sigma_a, Rgb::new(0.014, 0.025, 0.142)),
+        "{milk:?}"
+    );
+    assert!(near(milk.sigma_s, Rgb::new(7.0, 12.2, 19.0)), "{milk:?}");
+    let coffee = medium(r#""string preset" "Espresso""#);
+    assert!(
+        near(coffee.sigma_a, Rgb::new(4.7984, 6.5751, 8.8493)),
+        "{coffee:?}"
+    );
+    assert!(
+        near(coffee.sigma_s, Rgb::new(0.72378, 0.84557, 1.0247)),
+        "{coffee:?}"
+    );
+    let unknown = medium(r#""string preset" "Quicksilver" "rgb sigma_a" [1 2 3]"#);
+    assert_eq!(unknown.sigma_a, Rgb::new(1.0, 2.0, 3.0));
+    assert_eq!(unknown.sigma_s, Rgb::ONE);
+}
+
+/// A medium's `Le "blackbody" T` is normalised as pbrt-v4 normalises emitters (luminance 1,
+/// times `Lescale`) and has the chromaticity of the Planckian locus at T.
+#[test]
+fn blackbody_emission_has_the_planckian_chromaticity() {
+    for (kelvin, x, y) in [(3000.0, 0.4369, 0.4041), (6500.0, 0.3135, 0.3237)] {
+        let scene = pbrt(&format!(
+            "MakeNamedMedium \"m\" \"string type\" \"homogeneous\" \"blackbody Le\" {kelvin}
+             \"float Lescale\" 2\n\
+             LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\nShape \"sphere\"\n"
+        ));
+        let le = scene.media[0].model().at(Vec3::ZERO).le;
+        // Linear sRGB to XYZ.
+        let xyz = [
+            0.4124 * le.x + 0.3576 * le.y + 0.1805 * le.z,
+            0.2126 * le.x + 0.7152 * le.y + 0.0722 * le.z,
+            0.0193 * le.x + 0.1192 * le.y + 0.9505 * le.z,
+        ];
+        let sum = xyz[0] + xyz[1] + xyz[2];
+        let (cx, cy) = (xyz[0] / sum, xyz[1] / sum);
+        eprintln!("{kelvin} K: Le {le}, Y {}, xy ({cx:.4}, {cy:.4})", xyz[1]);
+        assert!((xyz[1] - 2.0).abs() < 0.06, "{kelvin} K: Y {}", xyz[1]);
+        assert!(
+            (cx - x).abs() < 0.01 && (cy - y).abs() < 0.01,
+            "{kelvin} K: xy ({cx}, {cy}) against ({x}, {y})"
+        );
+    }
+}

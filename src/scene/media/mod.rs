@@ -12,6 +12,7 @@ mod grid;
 mod grid_space;
 mod homogeneous;
 pub mod nanovdb;
+pub mod presets;
 mod rgbgrid;
 pub mod tracking;
 

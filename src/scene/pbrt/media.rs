@@ -8,7 +8,7 @@ use super::params::Params;
 use super::spectrum::Kind;
 use super::Loc;
 use crate::math::{Mat4, Rgb, Vec3};
-use crate::scene::media::nanovdb;
+use crate::scene::media::{nanovdb, presets};
 use crate::scene::media::{
     Homogeneous, Medium, MediumInterface, MediumKind, MediumPoint, RgbGrid, RgbGrids, UniformGrid,
     MAX_GRID_SAMPLES,
@@ -30,7 +30,7 @@ impl Builder {
         let kind = match ty.as_str() {
             "homogeneous" => {
                 let le_scale = p.float_or("Lescale", 1.0).map_err(Self::pe(loc))? as f32;
-                let unit = self.medium_point(p, le_scale, &st, loc)?;
+                let unit = self.medium_point(p, le_scale, true, &st, loc)?;
                 MediumKind::Homogeneous(
                     Homogeneous::new(unit.sigma_a, unit.sigma_s, unit.le, unit.g)
                         .map_err(|e| loc.error(format!("{st}: {e}")))?,
@@ -62,29 +62,47 @@ impl Builder {
     }
 
     /// The coefficients every pbrt-v4 medium takes: `sigma_a`, `sigma_s` (default 1) and
-    /// `scale`, `Le` (times `le_scale`), `g`. A `preset` (measured media) is not read.
+    /// `scale`, `Le` (times `le_scale`), `g`; with `preset` (a homogeneous medium's), the
+    /// measured medium it names replaces `sigma_a` and `sigma_s`.
     fn medium_point(
         &mut self,
         p: &Params,
         le_scale: f32,
+        preset: bool,
         st: &str,
         loc: &Loc,
     ) -> crate::error::Result<MediumPoint> {
-        if p.string("preset").map_err(Self::pe(loc))?.is_some() {
-            self.warn(
-                loc,
-                format!(
-                    "{st}: \"preset\" (measured media) is not supported; using sigma_a and sigma_s"
-                ),
-            );
-        }
+        let name = match preset {
+            true => p.string("preset").map_err(Self::pe(loc))?,
+            false => None,
+        };
+        let measured = match name {
+            Some(name) => {
+                let found = presets::measured(&name);
+                if found.is_none() {
+                    // pbrt-v4 warns the same way and goes on.
+                    self.warn(
+                        loc,
+                        format!(
+                            "{st}: no measured medium is called \"{name}\"; using sigma_a and \
+                             sigma_s"
+                        ),
+                    );
+                }
+                found
+            }
+            None => None,
+        };
         let scale = p.float_or("scale", 1.0).map_err(Self::pe(loc))? as f32;
-        let sigma_a = self
-            .spectrum(p, "sigma_a", Kind::Unbounded, st, loc)?
-            .unwrap_or(Rgb::ONE);
-        let sigma_s = self
-            .spectrum(p, "sigma_s", Kind::Unbounded, st, loc)?
-            .unwrap_or(Rgb::ONE);
+        let (sigma_a, sigma_s) = match measured {
+            Some(m) => m,
+            None => (
+                self.spectrum(p, "sigma_a", Kind::Unbounded, st, loc)?
+                    .unwrap_or(Rgb::ONE),
+                self.spectrum(p, "sigma_s", Kind::Unbounded, st, loc)?
+                    .unwrap_or(Rgb::ONE),
+            ),
+        };
         let le = self
             .spectrum(p, "Le", Kind::Illuminant, st, loc)?
             .unwrap_or(Rgb::ZERO);
@@ -140,7 +158,7 @@ impl Builder {
             Some(v) if v.len() == 1 => v[0],
             _ => 1.0,
         };
-        let unit = self.medium_point(p, one_scale, st, loc)?;
+        let unit = self.medium_point(p, one_scale, false, st, loc)?;
         let bounds = Self::grid_box(p, st, loc)?;
         let to_world: Mat4 = self.state.ctm.as_mat4();
         UniformGrid::new(
@@ -259,7 +277,7 @@ impl Builder {
             );
         }
         let le_scale = p.float_or("Lescale", 1.0).map_err(&pe)? as f32;
-        let unit = self.medium_point(p, le_scale, st, loc)?;
+        let unit = self.medium_point(p, le_scale, false, st, loc)?;
         self.held.add_medium((grid.values.len() * 4) as u64);
         let to_world = self.state.ctm.as_mat4() * grid.index_to_world;
         let bounds = grid.bounds();
