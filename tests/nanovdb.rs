@@ -132,6 +132,71 @@ Shape "sphere"
     assert_eq!(density(Vec3::new(-50.0, 0.0, 0.0)), 0.0);
 }
 
+/// A native `[media]` table of type nanovdb reads the file as pbrt-v4's statement does, and
+/// names the key at fault when it cannot.
+#[test]
+fn a_native_nanovdb_medium_is_pbrts() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("smoke.nvdb"), writer::file(&[smoke()], 0)).unwrap();
+    let pbrt_path = dir.path().join("s.pbrt");
+    std::fs::write(
+        &pbrt_path,
+        r#"LookAt 0 0 5  0 0 0  0 1 0
+Camera "perspective"
+WorldBegin
+AttributeBegin
+  Translate 1 2 3
+  MakeNamedMedium "smoke" "string type" "nanovdb" "string filename" "smoke.nvdb"
+    "rgb sigma_a" [2 1 0.5] "float g" 0.5
+AttributeEnd
+Shape "sphere"
+"#,
+    )
+    .unwrap();
+    let toml = |medium: &str| {
+        format!(
+            "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
+             [materials.white]\ndiffuse = 0.5\n\
+             [[shapes]]\ntype = \"sphere\"\ncenter = [0, 0, 0]\nradius = 1\nmaterial = \"white\"\n\
+             [media.smoke]\n{medium}\n"
+        )
+    };
+    let toml_path = dir.path().join("s.toml");
+    std::fs::write(
+        &toml_path,
+        toml(
+            "type = \"nanovdb\"\nfile = \"smoke.nvdb\"\nsigma_a = [2, 1, 0.5]\ng = 0.5\n\
+             transform = { translate = [1, 2, 3] }",
+        ),
+    )
+    .unwrap();
+    let a = Scene::load(&pbrt_path).unwrap_or_else(|e| panic!("{e}"));
+    let b = Scene::load(&toml_path).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(a.media, b.media);
+    for (medium, expect) in [
+        (
+            "type = \"nanovdb\"",
+            "media.smoke.file: a nanovdb medium needs `file`",
+        ),
+        (
+            "type = \"nanovdb\"\nfile = \"smoke.nvdb\"\ngrid = \"heat\"",
+            "media.smoke.grid: ",
+        ),
+        (
+            "type = \"nanovdb\"\nfile = \"none.nvdb\"",
+            "media.smoke.file: ",
+        ),
+        (
+            "type = \"nanovdb\"\nfile = \"smoke.nvdb\"\nresolution = [1, 1, 1]",
+            "media.smoke.resolution: a nanovdb medium does not take it",
+        ),
+    ] {
+        std::fs::write(&toml_path, toml(medium)).unwrap();
+        let e = Scene::load(&toml_path).unwrap_err().to_string();
+        assert!(e.contains(expect) && !e.contains('\n'), "{medium}: {e}");
+    }
+}
+
 /// Damaged and foreign files: one line naming the file and the problem, never a panic.
 #[test]
 fn damaged_files_are_refused_with_one_line() {

@@ -43,6 +43,8 @@ fn table(m: &Medium) -> MediumDesc {
         sigma_a_grid: None,
         sigma_s_grid: None,
         emission_grid: None,
+        file: None,
+        grid: None,
         bounds: None,
         transform: None,
     };

@@ -81,7 +81,11 @@ impl<'a> Builder<'a> {
 
     /// Counts an image the scene keeps against the budget.
     fn hold_image(&self, image: &crate::image::Image) {
-        let bytes = std::mem::size_of_val(image.pixels.as_slice()) as u64;
+        self.hold_bytes(std::mem::size_of_val(image.pixels.as_slice()) as u64);
+    }
+
+    /// Counts `bytes` the scene keeps (images, a medium's grid) against the budget.
+    fn hold_bytes(&self, bytes: u64) {
         self.images.set(self.images.get().saturating_add(bytes));
     }
 

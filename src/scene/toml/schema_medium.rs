@@ -4,8 +4,8 @@ use super::schema::{OneOrMany, Splat3, TransformOp, V3};
 use super::schema_values::{opt_f32, Idx3};
 use serde::{Deserialize, Serialize};
 
-/// A medium: `type = "homogeneous"`, `"uniformgrid"` or `"rgbgrid"`, its coefficients and,
-/// for a grid, its samples.
+/// A medium: `type = "homogeneous"`, `"uniformgrid"`, `"rgbgrid"` or `"nanovdb"`, its
+/// coefficients and, for a grid, its samples (or file).
 #[derive(Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub(crate) struct MediumDesc {
@@ -44,6 +44,12 @@ pub(crate) struct MediumDesc {
     /// An rgbgrid's emitted radiance per sample, the same layout (default 0).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) emission_grid: Option<Vec<f32>>,
+    /// A nanovdb medium's NanoVDB file, relative to the scene file.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) file: Option<String>,
+    /// The float grid of the file to read (default "density").
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) grid: Option<String>,
     /// The box a grid spans in its own space: two corners (default [0, 0, 0] to [1, 1, 1]).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) bounds: Option<[V3; 2]>,

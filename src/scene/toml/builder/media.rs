@@ -4,17 +4,20 @@ use super::super::diagnostics::Site;
 use super::super::schema::{MediumDesc, ShapeMediaDesc};
 use super::Builder;
 use crate::math::{Rgb, Vec3};
+use crate::scene::media::nanovdb;
 use crate::scene::media::{
     Homogeneous, Medium, MediumInterface, MediumKind, MediumPoint, MediumProblem, RgbGrid,
     RgbGrids, UniformGrid,
 };
 
 /// The kinds of medium, and those that take each kind-specific key.
-const KINDS: &[&str] = &["homogeneous", "uniformgrid", "rgbgrid"];
+const KINDS: &[&str] = &["homogeneous", "uniformgrid", "rgbgrid", "nanovdb"];
 const GRIDS: &[&str] = &["uniformgrid", "rgbgrid"];
+const PLACED: &[&str] = &["uniformgrid", "rgbgrid", "nanovdb"];
 const UNIFORM: &[&str] = &["uniformgrid"];
 const RGB: &[&str] = &["rgbgrid"];
-const PLAIN: &[&str] = &["homogeneous", "uniformgrid"];
+const NANO: &[&str] = &["nanovdb"];
+const PLAIN: &[&str] = &["homogeneous", "uniformgrid", "nanovdb"];
 
 impl Builder<'_> {
     /// A `[media.NAME]` table.
@@ -47,7 +50,9 @@ impl Builder<'_> {
             ("density", desc.density.is_some(), UNIFORM),
             ("emission_scale", desc.emission_scale.is_some(), UNIFORM),
             ("bounds", desc.bounds.is_some(), GRIDS),
-            ("transform", transform.is_some(), GRIDS),
+            ("transform", transform.is_some(), PLACED),
+            ("file", desc.file.is_some(), NANO),
+            ("grid", desc.grid.is_some(), NANO),
             ("sigma_a_grid", desc.sigma_a_grid.is_some(), RGB),
             ("sigma_s_grid", desc.sigma_s_grid.is_some(), RGB),
             ("emission_grid", desc.emission_grid.is_some(), RGB),
@@ -72,7 +77,7 @@ impl Builder<'_> {
                 ),
             ));
         }
-        let grid_place = |desc: &MediumDesc| -> crate::error::Result<_> {
+        let grid_place = |desc: &MediumDesc, transform| -> crate::error::Result<_> {
             let Some(res) = desc.resolution else {
                 return Err(fail("resolution")(format!(
                     "a {kind} needs `resolution = [nx, ny, nz]`"
@@ -89,7 +94,7 @@ impl Builder<'_> {
                 Homogeneous::new(unit.sigma_a, unit.sigma_s, unit.le, unit.g).map_err(blame)?,
             ),
             "uniformgrid" => {
-                let (res, bounds, to_world) = grid_place(&desc)?;
+                let (res, bounds, to_world) = grid_place(&desc, transform)?;
                 let Some(density) = desc.density else {
                     return Err(fail("density")("a uniformgrid needs `density`".into()));
                 };
@@ -99,7 +104,7 @@ impl Builder<'_> {
                 ))
             }
             "rgbgrid" => {
-                let (res, bounds, to_world) = grid_place(&desc)?;
+                let (res, bounds, to_world) = grid_place(&desc, transform)?;
                 let colours = |key: &'static str, v: Option<Vec<f32>>| match v {
                     Some(v) if v.len() % 3 != 0 => Err(fail(key)(format!(
                         "takes three numbers a sample, got {} numbers",
@@ -121,10 +126,33 @@ impl Builder<'_> {
                     RgbGrid::new(grids, scale, unit.g, res, bounds, to_world).map_err(blame)?,
                 ))
             }
+            "nanovdb" => {
+                let Some(file) = &desc.file else {
+                    return Err(fail("file")("a nanovdb medium needs `file`".into()));
+                };
+                let grid = desc.grid.as_deref().unwrap_or("density");
+                let path = self.dir.join(file);
+                self.inputs.borrow_mut().push(path.clone());
+                let read = nanovdb::read(&path, &[grid], &self.allowance())
+                    .map_err(|e| fail("file")(e.to_string()))?;
+                let Some(g) = read.into_iter().next().flatten() else {
+                    return Err(fail("grid")(format!(
+                        "{}: has no grid named \"{grid}\"",
+                        path.display()
+                    )));
+                };
+                self.hold_bytes((g.values.len() * 4) as u64);
+                let xf = self.transform(site, transform)?;
+                let bounds = g.bounds();
+                MediumKind::UniformGrid(Box::new(
+                    UniformGrid::new(unit, g.res, g.values, None, bounds, xf.m * g.index_to_world)
+                        .map_err(blame)?,
+                ))
+            }
             other => {
                 return Err(fail("type")(format!(
-                    "unknown medium type \"{other}\" (expected homogeneous, uniformgrid or \
-                     rgbgrid)"
+                    "unknown medium type \"{other}\" (expected homogeneous, uniformgrid, \
+                     rgbgrid or nanovdb)"
                 )))
             }
         };
