@@ -377,33 +377,13 @@ fn a_density_grid_attenuates_by_its_interpolated_integral() {
     let column = [0.5f32, 1.0, 2.0, 4.0];
     let density: Vec<String> = (0..4 * 4 * 4).map(|i| column[i / 16].to_string()).collect();
     // The unit box of the grid's own space, placed over [-1, 1]² × [-0.5, 0.5].
-    let scene = pbrt(&format!(
-        r#"
-LookAt 0 0 2  0 0 0  0 1 0
-Camera "orthographic" "float screenwindow" [-0.7 0.7 -0.7 0.7]
-Film "rgb" "integer xresolution" [32] "integer yresolution" [32]
-WorldBegin
-AttributeBegin
-  Translate -1 -1 -0.5
-  Scale 2 2 1
-  MakeNamedMedium "smoke" "string type" "uniformgrid" "integer nx" 4 "integer ny" 4
-      "integer nz" 4 "float density" [{}] "rgb sigma_a" [0.2 0.5 1.0] "rgb sigma_s" [0 0 0]
-AttributeEnd
-AttributeBegin
-  MediumInterface "smoke" ""
-  Material "interface"
-  Shape "trianglemesh" "point3 P" [-2 -2 -0.5  2 -2 -0.5  2 2 -0.5  -2 2 -0.5
-      -2 -2 0.5  2 -2 0.5  2 2 0.5  -2 2 0.5]
-    "integer indices" [4 5 6 4 6 7  0 2 1 0 3 2  0 1 5 0 5 4  1 2 6 1 6 5  2 3 7 2 7 6
-      3 0 4 3 4 7]
-AttributeEnd
-AttributeBegin
-  AreaLightSource "diffuse" "rgb L" [1 1 1]
-  Shape "trianglemesh" "point3 P" [-3 -3 -2  3 -3 -2  3 3 -2  -3 3 -2]
-    "integer indices" [0 1 2 0 2 3]
-AttributeEnd
-"#,
-        density.join(" ")
+    let scene = pbrt(&grid_scene(
+        &format!(
+            r#""string type" "uniformgrid" "integer nx" 4 "integer ny" 4 "integer nz" 4
+               "float density" [{}] "rgb sigma_a" [0.2 0.5 1.0] "rgb sigma_s" [0 0 0]"#,
+            density.join(" ")
+        ),
+        32,
     ));
     // The grid as the scene holds it: density at world points against the lookup.
     let grid = scene.media[0].model();
@@ -625,14 +605,15 @@ fn path_and_bidirectional_tracing_agree_through_tinted_glass() {
     agreement::assert_agree(&results, |_, _, _| true);
 }
 
-/// A scene of a grid medium lit from behind and scattering, with `medium` as its
-/// `MakeNamedMedium` parameters.
-fn grid_scene(medium: &str) -> String {
+/// A box of a grid medium over [-1, 1]² × [-0.5, 0.5] (its unit box placed by a transform)
+/// in front of an emitter, seen by an orthographic camera on a film of `size`² pixels, with
+/// `medium` as its `MakeNamedMedium` parameters.
+fn grid_scene(medium: &str, size: u32) -> String {
     format!(
         r#"
 LookAt 0 0 2  0 0 0  0 1 0
 Camera "orthographic" "float screenwindow" [-0.7 0.7 -0.7 0.7]
-Film "rgb" "integer xresolution" [16] "integer yresolution" [16]
+Film "rgb" "integer xresolution" [{size}] "integer yresolution" [{size}]
 WorldBegin
 AttributeBegin
   Translate -1 -1 -0.5
@@ -676,17 +657,23 @@ fn a_grey_rgbgrid_renders_like_its_uniformgrid() {
         v.join(" ")
     };
     let res = r#""integer nx" 3 "integer ny" 4 "integer nz" 2 "float g" 0.3"#;
-    let uniform = pbrt(&grid_scene(&format!(
-        r#""string type" "uniformgrid" {res} "float density" [{}]
+    let uniform = pbrt(&grid_scene(
+        &format!(
+            r#""string type" "uniformgrid" {res} "float density" [{}]
            "rgb sigma_a" [0.6 0.6 0.6] "rgb sigma_s" [0.3 0.3 0.3] "float scale" 2"#,
-        list(1.0, false)
-    )));
-    let rgb = pbrt(&grid_scene(&format!(
-        r#""string type" "rgbgrid" {res} "rgb sigma_a" [{}] "rgb sigma_s" [{}]
+            list(1.0, false)
+        ),
+        16,
+    ));
+    let rgb = pbrt(&grid_scene(
+        &format!(
+            r#""string type" "rgbgrid" {res} "rgb sigma_a" [{}] "rgb sigma_s" [{}]
            "float scale" 2"#,
-        list(0.6, true),
-        list(0.3, true)
-    )));
+            list(0.6, true),
+            list(0.3, true)
+        ),
+        16,
+    ));
     let (a, b) = (uniform.media[0].model(), rgb.media[0].model());
     assert_eq!(b.kind(), "rgbgrid");
     let mut rng = raylink::math::Rng::for_key(3, &[]);
@@ -715,6 +702,7 @@ fn rgbgrids_convert_and_read_back_the_same() {
         r#""string type" "rgbgrid" "integer nx" 2 "rgb sigma_a" [0.1 0.2 0.3  1 2 3]
            "rgb Le" [0 0 0  4 2 1] "float Lescale" 0.5 "float g" -0.2
            "point3 p0" [-1 -1 -1] "point3 p1" [1 1 1]"#,
+        16,
     ));
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out.toml");

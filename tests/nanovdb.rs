@@ -62,28 +62,30 @@ fn a_grid_reads_back_at_its_voxels() {
     assert!((p - Vec3::new(0.1, -0.9, 2.9)).length() < 1e-6, "{p}");
 }
 
+/// A pbrt scene in `dir` with [`smoke`] in `smoke.nvdb` as its medium "smoke", made under
+/// `transform` with `params`.
+fn smoke_scene(dir: &std::path::Path, transform: &str, params: &str) -> PathBuf {
+    std::fs::write(dir.join("smoke.nvdb"), writer::file(&[smoke()], 0)).unwrap();
+    let path = dir.join("s.pbrt");
+    let text = format!(
+        "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\nAttributeBegin\n\
+         {transform}\nMakeNamedMedium \"smoke\" \"string type\" \"nanovdb\" \
+         \"string filename\" \"smoke.nvdb\" {params}\nAttributeEnd\nShape \"sphere\"\n"
+    );
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
 /// The medium pbrt-v4's `nanovdb` makes: σa times the density at world points, the grid's
 /// map composed with the transform current at the statement; trilinear between voxels.
 #[test]
 fn a_nanovdb_medium_has_the_density_of_its_voxels_in_the_world() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("smoke.nvdb"), writer::file(&[smoke()], 0)).unwrap();
-    let scene_path = dir.path().join("s.pbrt");
-    std::fs::write(
-        &scene_path,
-        r#"LookAt 0 0 5  0 0 0  0 1 0
-Camera "perspective"
-WorldBegin
-AttributeBegin
-  Translate 1 2 3
-  Rotate 30 0 1 0
-  MakeNamedMedium "smoke" "string type" "nanovdb" "string filename" "smoke.nvdb"
-    "rgb sigma_a" [2 2 2] "rgb sigma_s" [0 0 0]
-AttributeEnd
-Shape "sphere"
-"#,
-    )
-    .unwrap();
+    let scene_path = smoke_scene(
+        dir.path(),
+        "Translate 1 2 3\nRotate 30 0 1 0",
+        r#""rgb sigma_a" [2 2 2] "rgb sigma_s" [0 0 0]"#,
+    );
     let scene = Scene::load(&scene_path).unwrap_or_else(|e| panic!("{e}"));
     let medium = scene.media[0].model();
     assert_eq!(medium.kind(), "uniformgrid");
@@ -137,22 +139,11 @@ Shape "sphere"
 #[test]
 fn a_native_nanovdb_medium_is_pbrts() {
     let dir = tempfile::tempdir().unwrap();
-    std::fs::write(dir.path().join("smoke.nvdb"), writer::file(&[smoke()], 0)).unwrap();
-    let pbrt_path = dir.path().join("s.pbrt");
-    std::fs::write(
-        &pbrt_path,
-        r#"LookAt 0 0 5  0 0 0  0 1 0
-Camera "perspective"
-WorldBegin
-AttributeBegin
-  Translate 1 2 3
-  MakeNamedMedium "smoke" "string type" "nanovdb" "string filename" "smoke.nvdb"
-    "rgb sigma_a" [2 1 0.5] "float g" 0.5
-AttributeEnd
-Shape "sphere"
-"#,
-    )
-    .unwrap();
+    let pbrt_path = smoke_scene(
+        dir.path(),
+        "Translate 1 2 3",
+        r#""rgb sigma_a" [2 1 0.5] "float g" 0.5"#,
+    );
     let toml = |medium: &str| {
         format!(
             "[camera]\nposition = [0, 0, 5]\nlook_at = [0, 0, 0]\n\
