@@ -133,13 +133,7 @@ pub(crate) fn radiance(
                 &mut path,
                 &mut |c, path| {
                     if emits {
-                        // The emission the path meets at the collision, over its channels' densities.
-                        let pdf_hero = c.sigma_maj[hero] * c.t_maj[hero];
-                        let r_e = path.r_u * c.sigma_maj * c.t_maj / pdf_hero;
-                        let le = c.point.sigma_a * c.point.le;
-                        if average(r_e) > 0.0 && le != Rgb::ZERO {
-                            radiance += path.beta * c.t_maj / pdf_hero * le / average(r_e);
-                        }
+                        radiance += emission_at(c, path, hero);
                     }
                 },
             );
@@ -267,6 +261,19 @@ pub(super) struct Throughput {
     pub beta: Rgb,
     pub r_u: Rgb,
     pub r_l: Rgb,
+}
+
+/// The emission a path meets at a tentative collision `c` of its free flight, over its
+/// channels' densities of reaching it (`path` as it arrives there, sampled by `hero`).
+pub(super) fn emission_at(c: &Collision, path: &Throughput, hero: usize) -> Rgb {
+    let pdf_hero = c.sigma_maj[hero] * c.t_maj[hero];
+    let r_e = path.r_u * c.sigma_maj * c.t_maj / pdf_hero;
+    let le = c.point.sigma_a * c.point.le;
+    if average(r_e) > 0.0 && le != Rgb::ZERO {
+        path.beta * c.t_maj / pdf_hero * le / average(r_e)
+    } else {
+        Rgb::ZERO
+    }
 }
 
 /// How a free flight through a medium ended.

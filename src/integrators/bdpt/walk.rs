@@ -7,7 +7,7 @@ use super::vertex::{Kind, Vertex};
 use crate::bsdf::{phase, Transport};
 use crate::integrators::path::RR_START_DEPTH;
 use crate::integrators::volumetric::{
-    self, average, cross, fly, medium_after, positive, Flight, Throughput, MAX_CROSSINGS,
+    self, cross, emission_at, fly, medium_after, positive, Flight, Throughput, MAX_CROSSINGS,
 };
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
@@ -78,13 +78,7 @@ pub(super) fn random_walk<'a>(
                 &mut tp,
                 &mut |c, path| {
                     if emits {
-                        // As the volumetric path tracer gathers it, over the channels' densities.
-                        let pdf_hero = c.sigma_maj[hero] * c.t_maj[hero];
-                        let r_e = path.r_u * c.sigma_maj * c.t_maj / pdf_hero;
-                        let le = c.point.sigma_a * c.point.le;
-                        if average(r_e) > 0.0 && le != Rgb::ZERO {
-                            emitted += path.beta * c.t_maj / pdf_hero * le / average(r_e);
-                        }
+                        emitted += emission_at(c, path, hero);
                     }
                 },
             );
