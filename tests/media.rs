@@ -575,6 +575,93 @@ fn path_light_and_bidirectional_tracing_agree_through_media() {
     assert_techniques_agree("path, light and bdpt through media", &scene, &runs);
 }
 
+/// An open scene lit from infinity (a blue sky and a sun) and by a small lamp that bounds a
+/// medium: a ball of fog around the lamp (the lamp's outside is the fog) and a box of ink
+/// of varying density (a grid) on a floor.
+const SKY_FOG_AND_INK: &str = r#"
+[camera]
+position = [0, 1.3, 4]
+look_at = [0, 0.5, 0]
+fov = 45
+width = 20
+height = 20
+
+[world]
+background = [0.3, 0.45, 0.7]
+
+[[lights]]
+type = "directional"
+direction = [0.5, -1, -0.4]
+irradiance = [2, 1.8, 1.4]
+
+[media.fog]
+type = "homogeneous"
+sigma_a = [0.1, 0.2, 0.3]
+sigma_s = [1.0, 1.4, 1.8]
+g = 0.3
+
+[media.ink]
+type = "uniformgrid"
+sigma_a = 0.3
+sigma_s = [2, 1.5, 1]
+resolution = [2, 2, 2]
+density = [0.2, 1.5, 0.5, 1.0, 1.2, 0.3, 0.8, 2.0]
+bounds = [[0.2, 0, -0.5], [1.2, 1, 0.5]]
+
+[materials.ground]
+diffuse = 0.5
+
+[materials.boundary]
+interface = true
+
+[materials.lamp]
+diffuse = 0
+emission = [6, 4, 2]
+
+[[shapes]]
+type = "mesh"
+material = "ground"
+positions = [[-3, 0, -3], [3, 0, -3], [3, 0, 3], [-3, 0, 3]]
+indices = [[0, 2, 1], [0, 3, 2]]
+
+[[shapes]]
+type = "sphere"
+material = "boundary"
+center = [-0.6, 0.6, 0]
+radius = 0.6
+media = { inside = "fog" }
+
+[[shapes]]
+type = "sphere"
+material = "lamp"
+center = [-0.6, 0.6, 0]
+radius = 0.15
+media = { outside = "fog" }
+
+[[shapes]]
+type = "mesh"
+material = "boundary"
+positions = [[0.2, 0, -0.5], [1.2, 0, -0.5], [1.2, 1, -0.5], [0.2, 1, -0.5],
+             [0.2, 0, 0.5], [1.2, 0, 0.5], [1.2, 1, 0.5], [0.2, 1, 0.5]]
+indices = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
+           [3, 7, 6], [3, 6, 2], [0, 4, 7], [0, 7, 3], [1, 2, 6], [1, 6, 5]]
+media = { inside = "ink" }
+"#;
+
+/// Path tracing and light tracing agree, pixel by pixel and over the image, on media lit
+/// from infinity (sky and sun reach the fog and the ink through their boundaries; the sky
+/// is seen through them) and by an emitter that bounds a medium (light paths leave the
+/// lamp in the fog around it).
+#[test]
+fn path_and_light_tracing_agree_on_media_under_the_sky_and_around_a_lamp() {
+    let scene = toml(SKY_FOG_AND_INK);
+    let runs = [
+        ("path", Technique::Path(boxed(64, 64))),
+        ("light", Technique::Light(boxed(64, 64))),
+    ];
+    assert_techniques_agree("sky, fog and ink", &scene, &runs);
+}
+
 /// Path tracing and bidirectional path tracing agree on the box with its ink grid, the
 /// tint inside a glass ball (a medium seen and lit through a smooth dielectric) and haze
 /// that scatters blue fifteen times as much as red: pixel by pixel, and channel by channel

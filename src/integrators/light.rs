@@ -92,10 +92,9 @@ impl MonteCarlo for LightTracer {
                 max_depth: self.options.max_depth,
                 rr_start: super::path::RR_START_DEPTH,
             };
-            super::volumetric_light::trace(
+            return super::volumetric_light::trace(
                 ctx, camera, camera_ray, lengths, sampler, stats, splats,
             );
-            return Rgb::ZERO;
         }
         let lights = &ctx.lights;
         // The background seen directly cannot be reached from the lights' side: the camera

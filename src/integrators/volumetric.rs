@@ -415,19 +415,63 @@ fn sample_light(
 
 /// The transmittance from `from` (in `medium`) to `to`, through medium boundaries, by
 /// ratio tracking with Russian roulette where it becomes small, and the segment's density
-/// ratios (`T`, `r_u`, `r_l`), at shutter time `time`; `None` when a surface blocks it or the roulette ends it.
+/// ratios (`T`, `r_u`, `r_l`), at shutter time `time`; `None` when a surface blocks it or
+/// the roulette ends it.
 pub(super) fn transmittance(
     ctx: &Context,
-    (mut from, time): (Spot, f32),
-    mut medium: Option<u32>,
+    from: (Spot, f32),
+    medium: Option<u32>,
     to: &Spot,
     hero: usize,
     rng: &mut Rng,
     stats: &mut RayStats,
 ) -> Option<(Rgb, Rgb, Rgb)> {
+    track(ctx, from, medium, Towards::Spot(to), (hero, rng), stats)
+}
+
+/// As [`transmittance`], from `from` along `dir` to infinity (what reaches a point of light
+/// from infinity, such as the background, through the media on the way).
+pub(super) fn transmittance_to_infinity(
+    ctx: &Context,
+    from: (Spot, f32),
+    medium: Option<u32>,
+    dir: Vec3,
+    hero: usize,
+    rng: &mut Rng,
+    stats: &mut RayStats,
+) -> Option<(Rgb, Rgb, Rgb)> {
+    track(
+        ctx,
+        from,
+        medium,
+        Towards::Infinity(dir),
+        (hero, rng),
+        stats,
+    )
+}
+
+/// Where a transmittance is tracked to.
+#[derive(Clone, Copy)]
+enum Towards<'a> {
+    Spot(&'a Spot),
+    Infinity(Vec3),
+}
+
+fn track(
+    ctx: &Context,
+    (mut from, time): (Spot, f32),
+    mut medium: Option<u32>,
+    to: Towards,
+    (hero, rng): (usize, &mut Rng),
+    stats: &mut RayStats,
+) -> Option<(Rgb, Rgb, Rgb)> {
     let (mut t_ray, mut r_u, mut r_l) = (Rgb::ONE, Rgb::ONE, Rgb::ONE);
     for _ in 0..MAX_CROSSINGS {
-        let ray = from.spawn_to(to).at_time(time);
+        let (ray, t_far) = match to {
+            Towards::Spot(to) => (from.spawn_to(to), 1.0),
+            Towards::Infinity(dir) => (from.spawn(dir), f32::INFINITY),
+        };
+        let ray = ray.at_time(time);
         stats.shadow += 1;
         let hit = ctx.intersect(&ray, &mut RayStats::default());
         if let Some(sp) = &hit {
@@ -437,7 +481,7 @@ pub(super) fn transmittance(
         }
         if let Some(m) = medium {
             let model = ctx.scene.media[m as usize].model();
-            let t_end = hit.as_ref().map_or(1.0, |sp| sp.t);
+            let t_end = hit.as_ref().map_or(t_far, |sp| sp.t);
             let t_maj = sample_majorant(model, &ray, t_end, hero, rng, &mut |c| {
                 let sigma_n = (c.sigma_maj - c.point.sigma_a - c.point.sigma_s).max(Rgb::ZERO);
                 let pdf = c.t_maj[hero] * c.sigma_maj[hero];

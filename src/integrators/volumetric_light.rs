@@ -7,7 +7,7 @@
 use super::camera_connection::{lens_sample, project_to_camera};
 use super::volumetric::{
     average, cross, fly, hero_channel, medium_after, positive, russian_roulette, transmittance,
-    Flight, Lengths, Throughput, MAX_CROSSINGS,
+    transmittance_to_infinity, Flight, Lengths, Throughput, MAX_CROSSINGS,
 };
 use crate::bsdf::{phase, Transport};
 use crate::math::sobol::Sampler;
@@ -15,39 +15,60 @@ use crate::math::spawn::Spot;
 use crate::math::{Ray, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::lights::Emitter;
+use crate::scene::media::MediumModel;
 use crate::scene::Scene;
 use crate::transport::{Context, RayStats, Splat};
 
-/// Whether light tracing renders `scene`'s media: not media that emit (light paths cannot
-/// start in a volume), lights at infinity (their light would have to cross a medium without
-/// end), nor emitters that bound a medium.
+/// Whether light tracing renders `scene`'s media: not media that emit (light paths do not
+/// start in a volume).
 pub(crate) fn check_scene(scene: &Scene) -> Result<(), String> {
-    if scene.media.is_empty() {
-        return Ok(());
+    match scene.media.iter().find(|m| m.model().emits()) {
+        Some(m) => Err(format!(
+            "the light integrator does not render media that emit, and the medium \"{}\" \
+             does: render it with the path or bdpt integrator",
+            m.name
+        )),
+        None => Ok(()),
     }
-    let emitting_medium = scene.media.iter().find(|m| m.model().emits());
-    let at_infinity = scene
-        .lights
-        .iter()
-        .any(|l| l.model().point_source().is_none())
-        || scene.background.max_element() > 0.0
-        || scene.environment.is_some();
-    let bounding_emitter = scene
-        .shapes
-        .iter()
-        .any(|s| s.media.is_some() && scene.materials[s.material].is_emissive());
-    let why = match (emitting_medium, at_infinity, bounding_emitter) {
-        (Some(m), _, _) => format!("the medium \"{}\" emits", m.name),
-        (None, true, _) => "it has a light at infinity (a background, an environment map or a \
-                            directional light)"
-            .to_string(),
-        (None, false, true) => "an emitting shape bounds a medium".to_string(),
-        (None, false, false) => return Ok(()),
-    };
-    Err(format!(
-        "the light integrator renders media lit by area, point, spot, goniometric and \
-         projection lights; in this scene {why}: render it with the path integrator"
-    ))
+}
+
+/// Light from infinity that starts a light path at `start` (outside every shape) in
+/// `medium` first crosses whatever of the medium lies beyond `start`: a grid beyond it moves
+/// the start back past the grid; a medium without end lets through only the channels it
+/// does not attenuate (weighted as a free flight that met no collision). `None` when no
+/// light arrives in the hero channel.
+fn arrive_from_infinity(
+    medium: &dyn MediumModel,
+    start: Vec3,
+    dir: Vec3,
+    (hero, path): (usize, &mut Throughput),
+) -> Option<Vec3> {
+    let back = Ray::new(start, -dir);
+    let (mut far, mut endless) = (0.0f32, Rgb::ZERO);
+    medium.segments(&back, f32::INFINITY, &mut |s| {
+        if s.sigma_maj.max_element() > 0.0 {
+            if s.t1.is_finite() {
+                far = far.max(s.t1);
+            } else {
+                endless += s.sigma_maj;
+            }
+        }
+        true
+    });
+    if endless != Rgb::ZERO {
+        let through = Rgb::new(
+            f32::from(endless.x == 0.0),
+            f32::from(endless.y == 0.0),
+            f32::from(endless.z == 0.0),
+        );
+        if through[hero] == 0.0 {
+            return None;
+        }
+        path.beta *= through;
+        path.r_u *= through;
+        path.r_l *= through;
+    }
+    Some(start - dir * far)
 }
 
 /// The medium at point `p` (off every medium boundary): the camera's, carried along the
@@ -108,11 +129,48 @@ fn splat_to_camera(
     }
 }
 
-/// One light path through a scene with media, splatted where its vertices land on the film.
+/// One light path through a scene with media, splatted where its vertices land on the film;
+/// returns what the camera ray itself gives its pixel (the background it sees through the
+/// media on its way, which light paths cannot reach).
 pub(crate) fn trace(
     ctx: &Context,
     camera: &CameraBasis,
     camera_ray: &Ray,
+    lengths: Lengths,
+    sampler: &mut Sampler,
+    stats: &mut RayStats,
+    splats: &mut Vec<Splat>,
+) -> Rgb {
+    let scene = ctx.scene;
+    let lights = &ctx.lights;
+    let time = camera_ray.time;
+    let hero = hero_channel(sampler);
+    let mut direct = Rgb::ZERO;
+    if lights.background_light().is_some() {
+        let mut rng = sampler.stream();
+        let from = (Spot::exact(camera_ray.origin), time);
+        let medium = scene.camera_medium;
+        let (dir, stats) = (camera_ray.dir, &mut *stats);
+        if let Some((t, _, r_l)) =
+            transmittance_to_infinity(ctx, from, medium, dir, hero, &mut rng, stats)
+        {
+            // One strategy: the camera ray, its collisions drawn by the majorant.
+            if positive(average(r_l)) {
+                direct = lights.background_radiance(dir) * t / average(r_l);
+            }
+        }
+    }
+    light_path(ctx, camera, time, hero, lengths, sampler, stats, splats);
+    direct
+}
+
+/// One light path, splatted where its vertices land on the film.
+#[allow(clippy::too_many_arguments)]
+fn light_path(
+    ctx: &Context,
+    camera: &CameraBasis,
+    time: f32,
+    hero: usize,
     Lengths {
         max_depth,
         rr_start,
@@ -123,49 +181,62 @@ pub(crate) fn trace(
 ) {
     let scene = ctx.scene;
     let lights = &ctx.lights;
-    let time = camera_ray.time;
-    let hero = hero_channel(sampler);
     let u_choose = sampler.next_2d();
     let u_pos = sampler.next_2d();
     let u_dir = sampler.next_2d();
     let Some(es) = lights.sample_le(u_choose.x, u_pos, u_dir) else {
         return;
     };
-    // No emitter bounds a medium (`check_scene`): the medium around the light is the one at
-    // its point.
-    let mut medium = medium_at(ctx, es.p, time, stats);
-    let start = Throughput {
+    let at_infinity = lights.is_infinite(es.light);
+    // The medium around the light: on each side of an emitter that bounds media, its
+    // shape's interface (found with the surface's own normal: a two-sided light's sample
+    // gives the normal of the side it emits to); elsewhere the camera's medium carried to it.
+    let interface = match &lights.emitters[es.light] {
+        Emitter::Area(a) => scene.shapes[a.shape].media.map(|i| (i, a.sample(u_pos).n)),
+        _ => None,
+    };
+    let around = match interface {
+        Some(_) => None,
+        None => medium_at(ctx, es.p, time, stats),
+    };
+    let medium_towards = |w: Vec3| interface.map_or(around, |(i, n)| i.towards(w, n));
+    let mut path = Throughput {
         beta: Rgb::ONE,
         r_u: Rgb::ONE,
         r_l: Rgb::ONE,
     };
+    let mut from = es.spot();
+    if let (Some(m), true) = (around, at_infinity) {
+        let model = scene.media[m as usize].model();
+        let Some(start) = arrive_from_infinity(model, es.p, es.dir, (hero, &mut path)) else {
+            return;
+        };
+        from = Spot::exact(start);
+    }
     // The light's own point seen by the camera (area lights: points cannot be hit by camera
     // rays).
     if let (Emitter::Area(a), false) = (&lights.emitters[es.light], es.delta_pos) {
         let emission = |dir: Vec3| es.radiance * (a.emitting_cos(dir.dot(es.n)) / es.pdf_pos);
-        let around = medium;
         splat_to_camera(
             ctx,
             camera,
             (&es.spot(), time),
-            &|_| around,
+            &medium_towards,
             &emission,
-            (&start, hero),
+            (&path, hero),
             sampler,
             stats,
             splats,
         );
     }
-    let cos0 = if es.delta_dir || es.delta_pos {
+    let cos0 = if es.delta_dir || es.delta_pos || at_infinity {
         1.0
     } else {
         es.n.dot(es.dir).abs()
     };
-    let mut path = Throughput {
-        beta: es.radiance * (cos0 / (es.pdf_pos * es.pdf_dir)),
-        ..start
-    };
-    let mut ray = es.spot().spawn(es.dir).at_time(time);
+    path.beta *= es.radiance * (cos0 / (es.pdf_pos * es.pdf_dir));
+    let mut medium = medium_towards(es.dir);
+    let mut ray = from.spawn(es.dir).at_time(time);
     let mut depth = 0;
     let mut crossings = 0;
     loop {
