@@ -211,11 +211,15 @@ fn damaged_files_are_refused_with_one_line() {
         writer::file(&[old], 0),
         "of version 31.2.0; raylink reads version 32",
     );
-    case("zip", writer::file(&[smoke()], 1), "is compressed with ZIP");
     case(
         "blosc",
         writer::file(&[smoke()], 2),
-        "is compressed with Blosc",
+        "is compressed with Blosc, which raylink does not read; re-save it with nanovdb_convert",
+    );
+    case(
+        "unknown codec",
+        writer::file(&[smoke()], 7),
+        "is compressed with an unknown codec (7)",
     );
     let mut double = smoke();
     double.value_type = 2;
@@ -286,6 +290,114 @@ fn damaged_files_are_refused_with_one_line() {
     }
 }
 
+/// The byte where the one grid of a one-grid file `bytes` starts, and its record.
+fn grid_start(bytes: &[u8]) -> (usize, usize) {
+    let name = u32::from_le_bytes(bytes[16 + 136..16 + 140].try_into().unwrap()) as usize;
+    (16 + 176 + name, 16)
+}
+
+/// A ZIP-compressed file reads bit for bit as the uncompressed one, grids it skips and all.
+#[test]
+fn a_zip_file_reads_as_the_uncompressed_one() {
+    let grids = [smoke(), Grid::new("other").voxel([5, 5, 5], 9.0)];
+    let names = ["density", "temperature", "other"];
+    let plain = read(&writer::file(&grids, 0), &names).unwrap();
+    let zipped = writer::file(&grids, 1);
+    assert!(
+        zipped.len() * 10 < writer::file(&grids, 0).len(),
+        "ZIP did not compress"
+    );
+    let zip = read(&zipped, &names).unwrap();
+    assert!(zip[1].is_none());
+    for (a, b) in plain.iter().zip(&zip) {
+        let (Some(a), Some(b)) = (a, b) else { continue };
+        assert_eq!(
+            (a.res, a.origin, a.index_to_world),
+            (b.res, b.origin, b.index_to_world)
+        );
+        let bits =
+            |g: &nanovdb::FloatGrid| g.values.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        assert!(bits(a) == bits(b), "the values differ");
+    }
+    let g = zip[0].as_ref().unwrap();
+    for (ijk, v) in &smoke().voxels {
+        assert_eq!(g.value(*ijk).to_bits(), v.to_bits(), "voxel {ijk:?}");
+    }
+}
+
+/// Damaged ZIP data, and records or sizes that lie about it: one line, never a panic, and
+/// never an allocation of what a lying record claims beyond the budget.
+#[test]
+fn damaged_zip_data_is_refused_with_one_line() {
+    let valid = writer::file(&[smoke()], 1);
+    let (start, record) = grid_start(&valid);
+    let packed = valid.len() - start - 8;
+    let raw = smoke().bytes().len() as u64;
+    let mut cases: Vec<(String, Vec<u8>, &str)> = Vec::new();
+    let mut case = |name: &str, bytes: Vec<u8>, expect: &'static str| {
+        cases.push((name.into(), bytes, expect));
+    };
+    // The file and the record both cut: the stream ends early.
+    let mut cut = valid[..valid.len() - 20].to_vec();
+    cut[record + 8..record + 16].copy_from_slice(&(packed as u64 - 12).to_le_bytes());
+    cut[start..start + 8].copy_from_slice(&(packed as u64 - 20).to_le_bytes());
+    case("cut stream", cut, "its ZIP data is cut short");
+    case(
+        "cut file",
+        valid[..valid.len() - 1].to_vec(),
+        "is truncated: grid \"density\" needs",
+    );
+    let mut flipped = valid.clone();
+    flipped[start + 8 + packed / 2] ^= 0x55;
+    case("flipped byte", flipped, "grid \"density\" is corrupt: ");
+    let mut sum = valid.clone();
+    let last = sum.len() - 1;
+    sum[last] ^= 1;
+    case("checksum", sum, "its ZIP data fails its checksum");
+    let mut more = valid.clone();
+    more[record..record + 8].copy_from_slice(&(raw + 1).to_le_bytes());
+    case("record says more", more, "it inflates to");
+    let mut less = valid.clone();
+    less[record..record + 8].copy_from_slice(&(raw - 1).to_le_bytes());
+    case("record says less", less, "it inflates to more than the");
+    let mut prefix = valid.clone();
+    prefix[start..start + 8].copy_from_slice(&(1u64 << 40).to_le_bytes());
+    case(
+        "compressed size lies",
+        prefix,
+        "its ZIP data says 1099511627776 compressed bytes",
+    );
+    let mut empty = valid.clone();
+    empty[record + 8..record + 16].copy_from_slice(&4u64.to_le_bytes());
+    case("no size", empty, "too few for its compressed size");
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bytes, expect) in cases {
+        let path = dir.path().join("v.nvdb");
+        std::fs::write(&path, &bytes).unwrap();
+        let e = nanovdb::read(&path, &["density"], &Allowance::machine())
+            .err()
+            .unwrap_or_else(|| panic!("{name}: read"))
+            .to_string();
+        assert!(!e.contains('\n'), "{name}: {e}");
+        assert!(e.starts_with(&path.display().to_string()), "{name}: {e}");
+        assert!(e.contains(expect), "{name}: {e}");
+    }
+    // A record claiming an exabyte is refused by the budget before any allocation.
+    let mut huge = valid.clone();
+    huge[record..record + 8].copy_from_slice(&(1u64 << 60).to_le_bytes());
+    let path = dir.path().join("huge.nvdb");
+    std::fs::write(&path, &huge).unwrap();
+    let e = nanovdb::read(&path, &["density"], &Allowance::machine()).unwrap_err();
+    assert!(matches!(e, raylink::Error::Memory { .. }), "{e}");
+    // Every cut of a ZIP file is refused (or reads what is whole), never a panic.
+    for cut in 0..valid.len() {
+        std::fs::write(&path, &valid[..cut]).unwrap();
+        if let Err(e) = nanovdb::read(&path, &["density"], &Allowance::machine()) {
+            assert!(!e.to_string().contains('\n'));
+        }
+    }
+}
+
 /// The dense grid counts against the memory budget, beside the file's bytes.
 #[test]
 fn the_dense_grid_counts_against_the_budget() {
@@ -303,6 +415,16 @@ fn the_dense_grid_counts_against_the_budget() {
     );
     let enough = Allowance::new(MemoryBudget::bytes(bytes.len() as u64 + dense), 0);
     assert!(nanovdb::read(&path, &["density"], &enough).is_ok());
+    // A ZIP grid's inflated bytes count too, while the dense grid is made from them.
+    let zip = writer::file(&[smoke()], 1);
+    std::fs::write(&path, &zip).unwrap();
+    let inflated = smoke().bytes().len() as u64;
+    let need = zip.len() as u64 + inflated + dense;
+    let tight = Allowance::new(MemoryBudget::bytes(need - 1), 0);
+    let e = nanovdb::read(&path, &["density"], &tight).unwrap_err();
+    assert!(matches!(e, raylink::Error::Memory { .. }), "{e}");
+    let enough = Allowance::new(MemoryBudget::bytes(need), 0);
+    assert!(nanovdb::read(&path, &["density"], &enough).is_ok());
 }
 
 /// The committed files (the bad-input cases' volumes and the fuzz seeds) are the writer's:
@@ -319,14 +441,18 @@ fn committed_files_are_the_writers() {
     let mut level_set = Grid::new("density");
     level_set.class = 1;
     let one_voxel = Grid::new("density").voxel([3, -2, 7], 0.75);
+    // A ZIP grid whose checksum fails (its last byte flipped).
+    let mut bad_zip = writer::file(std::slice::from_ref(&one_voxel), 1);
+    *bad_zip.last_mut().unwrap() ^= 1;
     let files: Vec<(&str, Vec<u8>)> = vec![
         (
             "tests/bad_inputs/pbrt/volumes/other-grid.nvdb",
             writer::file(&[Grid::new("smoke")], 0),
         ),
+        ("tests/bad_inputs/pbrt/volumes/zip.nvdb", bad_zip.clone()),
         (
-            "tests/bad_inputs/pbrt/volumes/zip.nvdb",
-            writer::file(&[Grid::new("density")], 1),
+            "tests/bad_inputs/pbrt/volumes/blosc.nvdb",
+            writer::file(std::slice::from_ref(&one_voxel), 2),
         ),
         (
             "tests/bad_inputs/pbrt/volumes/version-31.nvdb",
@@ -346,7 +472,7 @@ fn committed_files_are_the_writers() {
         ),
         (
             "fuzz/corpus/nanovdb/valid_one_voxel",
-            writer::file(&[one_voxel, Grid::new("temperature")], 0),
+            writer::file(&[one_voxel.clone(), Grid::new("temperature")], 0),
         ),
         ("fuzz/corpus/nanovdb/empty", empty.clone()),
         (
@@ -355,8 +481,9 @@ fn committed_files_are_the_writers() {
         ),
         (
             "fuzz/corpus/nanovdb/zip",
-            writer::file(&[Grid::new("density")], 1),
+            writer::file(&[one_voxel.clone(), Grid::new("temperature")], 1),
         ),
+        ("fuzz/corpus/nanovdb/zip_checksum", bad_zip),
         ("fuzz/corpus/nanovdb/version_31", writer::file(&[old], 0)),
         ("fuzz/corpus/nanovdb/double", writer::file(&[double], 0)),
         (

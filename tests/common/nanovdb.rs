@@ -224,18 +224,32 @@ fn name_key(name: &str) -> u64 {
     hash
 }
 
-/// A file of one segment holding `grids`, uncompressed unless `codec` says otherwise.
+/// A grid's bytes as a file stores them with `codec`: as they are but for ZIP (1), which
+/// stores the compressed size (u64) and a zlib stream (zlib's `compress`).
+pub fn stored(raw: &[u8], codec: u16) -> Vec<u8> {
+    if codec != 1 {
+        return raw.to_vec();
+    }
+    let packed = miniz_oxide::deflate::compress_to_vec_zlib(raw, 6);
+    let mut out = (packed.len() as u64).to_le_bytes().to_vec();
+    out.extend_from_slice(&packed);
+    out
+}
+
+/// A file of one segment holding `grids`, uncompressed unless `codec` says otherwise (ZIP is
+/// written as NanoVDB writes it; other codecs only name themselves in the header).
 pub fn file(grids: &[Grid], codec: u16) -> Vec<u8> {
     let mut out = Vec::new();
     out.extend_from_slice(&MAGIC.to_le_bytes());
     out.extend_from_slice(&grids.first().map_or(VERSION, |g| g.version).to_le_bytes());
     out.extend_from_slice(&(grids.len() as u16).to_le_bytes());
     out.extend_from_slice(&codec.to_le_bytes());
-    let bodies: Vec<Vec<u8>> = grids.iter().map(Grid::bytes).collect();
-    for (g, body) in grids.iter().zip(&bodies) {
+    let raw: Vec<Vec<u8>> = grids.iter().map(Grid::bytes).collect();
+    let bodies: Vec<Vec<u8>> = raw.iter().map(|r| stored(r, codec)).collect();
+    for ((g, body), raw) in grids.iter().zip(&bodies).zip(&raw) {
         let mut record = vec![0u8; 176];
         let mut put = |at: usize, bytes: &[u8]| record[at..at + bytes.len()].copy_from_slice(bytes);
-        put(0, &(body.len() as u64).to_le_bytes());
+        put(0, &(raw.len() as u64).to_le_bytes());
         put(8, &(body.len() as u64).to_le_bytes());
         put(16, &name_key(&g.name).to_le_bytes());
         put(24, &(g.voxels.len() as u64).to_le_bytes());

@@ -9,8 +9,11 @@
 //! offset from its parent. Values sit at integer index coordinates; between them NanoVDB (and
 //! pbrt-v4) interpolate trilinearly, as the dense grid does between its samples.
 //!
-//! Only uncompressed files (codec NONE) of little-endian float grids are read; everything the
-//! file says is checked before it is used, so a damaged file is refused with one line.
+//! Uncompressed (codec NONE) and ZIP-compressed files of little-endian float grids are read;
+//! Blosc is refused (no decoder of it is at hand without a C library). Everything the file
+//! says is checked before it is used, so a damaged file is refused with one line.
+
+mod zip;
 
 use super::MAX_GRID_SAMPLES;
 use crate::error::{Error, Result};
@@ -25,6 +28,10 @@ const MAGIC_GRID: u64 = 0x3142_4456_6f6e_614e;
 const MAGIC_FILE: u64 = 0x3242_4456_6f6e_614e;
 /// The only major version whose layout is read here.
 const MAJOR: u32 = 32;
+
+/// The codecs read: none, and zlib streams (NanoVDB's ZIP).
+const CODEC_NONE: u16 = 0;
+const CODEC_ZIP: u16 = 1;
 
 const SEGMENT_HEADER: usize = 16;
 const GRID_RECORD: usize = 176;
@@ -222,19 +229,22 @@ pub fn read(path: &Path, names: &[&str], allowance: &Allowance) -> Result<Vec<Op
         }
         let count = u16::from_le_bytes([header[12], header[13]]) as usize;
         let codec = u16::from_le_bytes([header[14], header[15]]);
-        if codec != 0 {
-            let name = match codec {
-                1 => "ZIP".to_string(),
-                2 => "Blosc".to_string(),
-                c => format!("an unknown codec ({c})"),
-            };
-            return Err(Error::input(
-                path,
-                format!(
-                    "is compressed with {name}; raylink reads uncompressed NanoVDB files \
-                     (codec NONE) only"
-                ),
-            ));
+        match codec {
+            CODEC_NONE | CODEC_ZIP => {}
+            // Blosc has no decoder in pure Rust; every NanoVDB tool reads the other two.
+            2 => {
+                return Err(Error::input(
+                    path,
+                    "is compressed with Blosc, which raylink does not read; re-save it with \
+                     nanovdb_convert uncompressed or with ZIP",
+                ))
+            }
+            c => {
+                return Err(Error::input(
+                    path,
+                    format!("is compressed with an unknown codec ({c})"),
+                ))
+            }
         }
         at += SEGMENT_HEADER;
         // The grids' records, then their bytes in the same order.
@@ -254,7 +264,7 @@ pub fn read(path: &Path, names: &[&str], allowance: &Allowance) -> Result<Vec<Op
             let name =
                 String::from_utf8_lossy(name.split(|&b| b == 0).next().unwrap_or(&[])).into_owned();
             at += name_size as usize;
-            if grid_size != file_size {
+            if codec == CODEC_NONE && grid_size != file_size {
                 return Err(Error::input(
                     path,
                     format!(
@@ -263,9 +273,9 @@ pub fn read(path: &Path, names: &[&str], allowance: &Allowance) -> Result<Vec<Op
                     ),
                 ));
             }
-            grids.push((name, file_size));
+            grids.push((name, file_size, grid_size));
         }
-        for (name, size) in grids {
+        for (name, size, grid_size) in grids {
             let end = usize::try_from(size)
                 .ok()
                 .and_then(|s| at.checked_add(s))
@@ -275,18 +285,35 @@ pub fn read(path: &Path, names: &[&str], allowance: &Allowance) -> Result<Vec<Op
                         "grid \"{name}\" needs {size} bytes from byte {at}, beyond its end"
                     ))
                 })?;
-            for (i, wanted) in names.iter().enumerate() {
-                if found[i].is_none() && *wanted == name {
-                    let bytes = Bytes {
-                        data: &data[at..end],
-                        path,
-                        grid: &name,
-                    };
-                    let grid = dense(&bytes, allowance, held)?;
-                    held += (grid.values.len() * 4) as u64;
-                    found[i] = Some(grid);
-                }
+            if !names
+                .iter()
+                .enumerate()
+                .any(|(i, w)| found[i].is_none() && *w == name)
+            {
+                at = end;
+                continue;
             }
+            let inflated;
+            let (bytes, unpacked) = if codec == CODEC_ZIP {
+                inflated = zip::inflate(&data[at..end], grid_size, path, &name, allowance, held)?;
+                (&inflated[..], inflated.len() as u64)
+            } else {
+                (&data[at..end], 0)
+            };
+            let bytes = Bytes {
+                data: bytes,
+                path,
+                grid: &name,
+            };
+            let grid = dense(&bytes, allowance, held + unpacked)?;
+            held += (grid.values.len() * 4) as u64;
+            let wanted: Vec<usize> = (0..names.len())
+                .filter(|&i| found[i].is_none() && names[i] == name)
+                .collect();
+            for &i in &wanted[1..] {
+                found[i] = Some(grid.clone());
+            }
+            found[wanted[0]] = Some(grid);
             at = end;
         }
     }
