@@ -9,8 +9,11 @@ mod writer;
 
 use raylink::control::MemoryBudget;
 use raylink::input_file::Allowance;
-use raylink::math::{Mat4, Vec3};
-use raylink::scene::media::nanovdb;
+use raylink::math::{Mat4, Ray, Rng, Vec3};
+use raylink::scene::media::nanovdb::{self, Layout};
+use raylink::scene::media::{
+    tracking, MediumKind, MediumModel, MediumPoint, SparseSource, SparseValues,
+};
 use raylink::scene::Scene;
 use std::path::PathBuf;
 use writer::Grid;
@@ -56,7 +59,7 @@ fn a_grid_reads_back_at_its_voxels() {
     for (ijk, v) in &smoke().voxels {
         assert_eq!(g.value(*ijk), *v, "voxel {ijk:?}");
     }
-    let nonzero = g.values.iter().filter(|v| **v != 0.0).count();
+    let nonzero = g.dense().unwrap().iter().filter(|v| **v != 0.0).count();
     assert_eq!(nonzero, 4);
     let p = g.index_to_world.transform_point3(Vec3::new(1.0, 2.0, 3.0));
     assert!((p - Vec3::new(0.1, -0.9, 2.9)).length() < 1e-6, "{p}");
@@ -246,9 +249,9 @@ fn damaged_files_are_refused_with_one_line() {
         "has -1 at voxel (2, 2, 2): densities must be finite",
     );
     case(
-        "huge",
-        writer::file(&[smoke().voxel([1000, 1000, 200], 1.0)], 0),
-        "spans 1001x1001x204 voxels, more than raylink holds",
+        "negative in a sparse grid",
+        writer::file(&[smoke().voxel([1000, 1000, 200], -2.0)], 0),
+        "has -2 at voxel (1000, 1000, 200): densities must be finite",
     );
     // The first root tile's child pointing past the end.
     let mut wild = valid.clone();
@@ -258,6 +261,15 @@ fn damaged_files_are_refused_with_one_line() {
         "wild child",
         wild,
         "is corrupt: an upper node lies outside the grid's bytes",
+    );
+    // The second root tile's child made the first's: a node with two parents.
+    let mut shared = valid.clone();
+    let first: [u8; 8] = valid[tile..tile + 8].try_into().unwrap();
+    shared[tile + 32..tile + 40].copy_from_slice(&first);
+    case(
+        "shared child",
+        shared,
+        "is corrupt: an upper node is the child of two parents",
     );
     // Truncations: inside the header, a record, the name, the grid.
     for cut in [3, 15, 16, 100, 192, 200, 1000, 100_000, valid.len() - 1] {
@@ -315,8 +327,13 @@ fn a_zip_file_reads_as_the_uncompressed_one() {
             (a.res, a.origin, a.index_to_world),
             (b.res, b.origin, b.index_to_world)
         );
-        let bits =
-            |g: &nanovdb::FloatGrid| g.values.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+        let bits = |g: &nanovdb::FloatGrid| {
+            g.dense()
+                .unwrap()
+                .iter()
+                .map(|v| v.to_bits())
+                .collect::<Vec<_>>()
+        };
         assert!(bits(a) == bits(b), "the values differ");
     }
     let g = zip[0].as_ref().unwrap();
@@ -511,4 +528,201 @@ fn committed_files_are_the_writers() {
         let committed = std::fs::read(&path).unwrap_or_else(|e| panic!("{name}: {e}"));
         assert!(committed == bytes, "{name} is not the writer's");
     }
+}
+
+/// Coefficients of one unit of absorption at density 1.
+fn absorbing(sigma_a: f32) -> MediumPoint {
+    MediumPoint {
+        sigma_a: Vec3::splat(sigma_a),
+        sigma_s: Vec3::ZERO,
+        le: Vec3::ZERO,
+        g: 0.0,
+    }
+}
+
+/// The medium of the grid "density" of `bytes`, kept as `layout` says, under `transform`.
+fn medium_of(bytes: &[u8], layout: Layout, transform: Mat4, sigma_a: f32) -> MediumKind {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("v.nvdb");
+    std::fs::write(&path, bytes).unwrap();
+    let grid = nanovdb::read_as(&path, &["density"], &Allowance::machine(), layout)
+        .unwrap()
+        .remove(0)
+        .unwrap();
+    let source = SparseSource {
+        file: path,
+        grid: "density".into(),
+        transform,
+    };
+    nanovdb::medium(grid, absorbing(sigma_a), source).unwrap()
+}
+
+/// A grid kept sparse reads bit for bit as the same grid kept dense, at random points in and
+/// around its box, and its majorants bound it along random rays.
+#[test]
+fn a_sparse_grid_reads_as_the_dense_one() {
+    let mut g = smoke();
+    for i in 0..40 {
+        g = g.voxel([i * 3 % 17, i % 7, -(i % 5)], 0.25 * i as f32);
+    }
+    g.background = 0.125;
+    let bytes = writer::file(&[g], 0);
+    let xf = Mat4::from_translation(Vec3::new(1.0, 2.0, 3.0)) * Mat4::from_rotation_y(0.5);
+    let dense = medium_of(&bytes, Layout::Fitting, xf, 2.0);
+    let sparse = medium_of(&bytes, Layout::Sparse, xf, 2.0);
+    assert!(matches!(dense, MediumKind::UniformGrid(_)));
+    assert!(matches!(sparse, MediumKind::SparseGrid(_)));
+    let (dense, sparse) = (dense.model(), sparse.model());
+    let s = smoke();
+    let map = Mat4::from_cols_array(&[
+        s.matrix[0] as f32,
+        s.matrix[3] as f32,
+        s.matrix[6] as f32,
+        0.0,
+        s.matrix[1] as f32,
+        s.matrix[4] as f32,
+        s.matrix[7] as f32,
+        0.0,
+        s.matrix[2] as f32,
+        s.matrix[5] as f32,
+        s.matrix[8] as f32,
+        0.0,
+        s.translation[0] as f32,
+        s.translation[1] as f32,
+        s.translation[2] as f32,
+        1.0,
+    ]);
+    let mut rng = Rng::for_key(7, &[]);
+    let mut u = || rng.uniform();
+    let mut nonzero = 0;
+    for _ in 0..200_000 {
+        let ijk = Vec3::new(u() * 136.0 - 3.0, u() * 10.0 - 2.0, u() * 11.0 - 5.0);
+        let p = (xf * map).transform_point3(ijk);
+        let (a, b) = (dense.at(p).sigma_a.x, sparse.at(p).sigma_a.x);
+        assert_eq!(a.to_bits(), b.to_bits(), "at index {ijk}: {a} against {b}");
+        nonzero += usize::from(a > 0.25);
+    }
+    assert!(nonzero > 1000, "only {nonzero} points in the voxels");
+    let lo = (xf * map).transform_point3(Vec3::new(-3.0, -2.0, -5.0));
+    let hi = (xf * map).transform_point3(Vec3::new(133.0, 8.0, 6.0));
+    for _ in 0..2000 {
+        let mut v = || lo + (hi - lo) * Vec3::new(u(), u(), u());
+        let ray = Ray::new(v(), v() - v());
+        let mut stretches = Vec::new();
+        sparse.segments(&ray, 1.0, &mut |s| {
+            stretches.push(s);
+            true
+        });
+        for k in 0..64 {
+            let t = (k as f32 + 0.5) / 64.0;
+            let d = sparse.at(ray.origin + ray.dir * t).sigma_a.x * ray.dir.length();
+            let bound = stretches
+                .iter()
+                .find(|s| s.t0 <= t && t <= s.t1)
+                .map_or(0.0, |s| s.sigma_maj.x);
+            assert!(
+                d <= bound * 1.0001 + 1e-6,
+                "density {d} over the bound {bound}"
+            );
+        }
+    }
+}
+
+/// Ratio tracking's transmittance along `ray` to `t_max` (the integrators' walk through the
+/// majorants), averaged over `n` walks.
+fn transmittance(medium: &dyn MediumModel, ray: &Ray, t_max: f32, n: usize) -> f64 {
+    let mut rng = Rng::for_key(11, &[]);
+    let mut sum = 0.0;
+    for _ in 0..n {
+        let mut t = 1.0f64;
+        tracking::sample_majorant(medium, ray, t_max, 0, &mut rng, &mut |c| {
+            t *= 1.0 - f64::from(c.point.sigma_a.x / c.sigma_maj.x);
+            true
+        });
+        sum += t;
+    }
+    sum / n as f64
+}
+
+/// Blobs 200000 voxels apart: a box far beyond a dense grid, read sparse, and light
+/// through each blob (and both) is attenuated as exp(-σa ∫density), the integral known from
+/// the voxels (linear interpolation between samples 1 along a row of three: 3 voxels).
+#[test]
+fn far_apart_blobs_load_sparse_and_attenuate_as_their_density() {
+    let mut g = Grid::new("density");
+    for far in [[0, 0, 0], [200_000, 0, 0], [0, 200_000, 200_000]] {
+        for x in 0..3 {
+            for y in 0..3 {
+                for z in 0..3 {
+                    g = g.voxel([far[0] + x, far[1] + y, far[2] + z], 1.0);
+                }
+            }
+        }
+    }
+    // Voxels 0.01 apart: the blobs are 2000 units apart.
+    let voxel = 0.01f32;
+    g.matrix = [0.01, 0.0, 0.0, 0.0, 0.01, 0.0, 0.0, 0.0, 0.01];
+    let bytes = writer::file(&[g], 0);
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("blobs.nvdb");
+    std::fs::write(&path, &bytes).unwrap();
+    let grid = nanovdb::read(&path, &["density"], &Allowance::machine()).unwrap()[0]
+        .take()
+        .unwrap();
+    assert_eq!(grid.res, [200_005; 3]);
+    let nanovdb::Values::Sparse(values) = &grid.values else {
+        panic!("the grid is dense");
+    };
+    assert_eq!(values.leaf_count(), 3);
+    assert!(grid.bytes() < 10_000, "{} bytes", grid.bytes());
+    // Its leaves count against the budget, beside the file's bytes.
+    let leaf = SparseValues::LEAF_BYTES;
+    let tight = Allowance::new(MemoryBudget::bytes(bytes.len() as u64 + 3 * leaf - 1), 0);
+    let e = nanovdb::read(&path, &["density"], &tight).unwrap_err();
+    assert!(matches!(e, raylink::Error::Memory { .. }), "{e}");
+    let enough = Allowance::new(MemoryBudget::bytes(bytes.len() as u64 + 3 * leaf), 0);
+    assert!(nanovdb::read(&path, &["density"], &enough).is_ok());
+    let sigma_a = 20.0;
+    let medium = medium_of(&bytes, Layout::Fitting, Mat4::IDENTITY, sigma_a);
+    let medium = medium.model();
+    assert_eq!(medium.kind(), "nanovdb");
+    // Along x through the blobs' middle row, from 5 voxels before to 5 voxels after.
+    let row = |from: f32, to: f32| {
+        let o = Vec3::new(from, 1.0, 1.0) * voxel;
+        Ray::new(o, Vec3::new(to - from, 0.0, 0.0) * voxel)
+    };
+    let depth = f64::from(sigma_a * 3.0 * voxel);
+    for (name, ray, n, want) in [
+        ("near", row(-5.0, 8.0), 40_000, (-depth).exp()),
+        ("far", row(199_995.0, 200_008.0), 40_000, (-depth).exp()),
+        ("both", row(-5.0, 200_008.0), 2000, (-2.0 * depth).exp()),
+    ] {
+        let got = transmittance(medium, &ray, 1.0, n);
+        // Each walk gives a number in [0, 1] (spread at most 1/2): five standard errors.
+        let tolerance = 2.5 / (n as f64).sqrt() + 1e-3;
+        assert!(
+            (got - want).abs() < tolerance,
+            "{name}: {got} against {want} (within {tolerance})"
+        );
+    }
+    // Beside the blobs and between them: nothing.
+    assert_eq!(transmittance(medium, &row(10.0, 199_990.0), 1.0, 100), 1.0);
+    let beside = Ray::new(Vec3::new(-5.0, 4.0, 1.0) * voxel, Vec3::X * 15.0 * voxel);
+    assert_eq!(transmittance(medium, &beside, 1.0, 100), 1.0);
+    // The same file in a pbrt scene: a nanovdb medium kept sparse.
+    std::fs::write(
+        dir.path().join("s.pbrt"),
+        "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\"\nWorldBegin\n\
+         MakeNamedMedium \"blobs\" \"string type\" \"nanovdb\" \"string filename\" \
+         \"blobs.nvdb\" \"rgb sigma_a\" [20 20 20]\nShape \"sphere\"\n",
+    )
+    .unwrap();
+    let scene = Scene::load(&dir.path().join("s.pbrt")).unwrap_or_else(|e| panic!("{e}"));
+    assert!(matches!(scene.media[0].kind, MediumKind::SparseGrid(_)));
+    // `convert` names the file again, and the scene reads back the same.
+    let out = tempfile::tempdir().unwrap();
+    let toml = out.path().join("s.toml");
+    raylink::scene::convert::write_toml(&scene, &toml).unwrap();
+    let back = Scene::load(&toml).unwrap_or_else(|e| panic!("{e}"));
+    assert_eq!(back.media, scene.media);
 }

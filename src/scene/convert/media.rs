@@ -77,6 +77,18 @@ fn table(m: &Medium) -> MediumDesc {
                 ..plain("uniformgrid", grid.unit())
             }
         }
+        // Too large to write out sample by sample: the file it came from, named again.
+        MediumKind::SparseGrid(grid) => {
+            let source = grid.source();
+            let file = std::path::absolute(&source.file).unwrap_or(source.file.clone());
+            let (_, transform) = place((Vec3::ZERO, Vec3::ONE), source.transform);
+            MediumDesc {
+                file: Some(file.to_string_lossy().into_owned()),
+                grid: (source.grid != "density").then(|| source.grid.clone()),
+                transform,
+                ..plain("nanovdb", grid.unit())
+            }
+        }
         MediumKind::RgbGrid(grid) => {
             let (bounds, transform) = place(grid.bounds(), grid.to_world());
             MediumDesc {

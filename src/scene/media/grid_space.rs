@@ -11,7 +11,16 @@ use std::ops::{Add, Mul, Sub};
 pub const MAX_GRID_SAMPLES: usize = 512 * 512 * 512;
 
 /// Cells of the majorant grid along each axis (pbrt-v4's choice).
-const MAJORANT_CELLS: usize = 16;
+pub(super) const MAJORANT_CELLS: usize = 16;
+
+/// The samples whose interpolation reaches into majorant cell `c` along an axis of `n`
+/// samples (one beyond its edges).
+pub(super) fn cell_samples(c: usize, n: usize) -> std::ops::RangeInclusive<i64> {
+    let (m, n) = (MAJORANT_CELLS as f32, n as f32);
+    let a = ((c as f32 / m) * n - 0.5).floor() as i64;
+    let b = (((c + 1) as f32 / m) * n - 0.5).floor() as i64 + 1;
+    a..=b
+}
 
 /// A grid's samples placed in the world.
 #[derive(Clone, Debug, PartialEq)]
@@ -51,6 +60,16 @@ impl GridSpace {
                 ),
             ));
         }
+        GridSpace::spanning(res, (lo, hi), to_world)
+    }
+
+    /// As [`GridSpace::new`], for a grid that does not hold its samples one by one (a sparse
+    /// one): any number of them.
+    pub(super) fn spanning(
+        res: [usize; 3],
+        (lo, hi): (Vec3, Vec3),
+        to_world: Mat4,
+    ) -> Result<GridSpace, MediumProblem> {
         if !(lo.is_finite() && hi.is_finite() && lo.cmplt(hi).all()) {
             return Err(problem(
                 "bounds",
@@ -94,12 +113,21 @@ impl GridSpace {
     where
         T: Copy + Add<Output = T> + Sub<Output = T> + Mul<f32, Output = T>,
     {
+        self.lookup_with(u, |x, y, z| self.sample(values, zero, x, y, z))
+    }
+
+    /// The samples `sample` gives (by integer coordinates) interpolated trilinearly at `u`,
+    /// as [`GridSpace::lookup`].
+    pub(super) fn lookup_with<T>(&self, u: Vec3, sample: impl Fn(i64, i64, i64) -> T) -> T
+    where
+        T: Copy + Add<Output = T> + Sub<Output = T> + Mul<f32, Output = T>,
+    {
         let s = u * Vec3::new(self.res[0] as f32, self.res[1] as f32, self.res[2] as f32)
             - Vec3::splat(0.5);
         let f = s.floor();
         let d = s - f;
         let (x, y, z) = (f.x as i64, f.y as i64, f.z as i64);
-        let at = |i, j, k| self.sample(values, zero, x + i, y + j, z + k);
+        let at = |i, j, k| sample(x + i, y + j, z + k);
         let lerp = |a: T, b: T, t: f32| a + (b - a) * t;
         let y0 = lerp(
             lerp(at(0, 0, 0), at(1, 0, 0), d.x),
@@ -130,12 +158,7 @@ impl GridSpace {
     pub(super) fn majorants(&self, at: impl Fn(i64, i64, i64) -> Rgb) -> Vec<Rgb> {
         let m = MAJORANT_CELLS;
         let mut out = vec![Rgb::ZERO; m * m * m];
-        let range = |c: usize, axis: usize| {
-            let n = self.res[axis] as f32;
-            let a = ((c as f32 / m as f32) * n - 0.5).floor() as i64;
-            let b = (((c + 1) as f32 / m as f32) * n - 0.5).floor() as i64 + 1;
-            a..=b
-        };
+        let range = |c: usize, axis: usize| cell_samples(c, self.res[axis]);
         for cz in 0..m {
             for cy in 0..m {
                 for cx in 0..m {

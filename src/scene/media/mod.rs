@@ -14,12 +14,14 @@ mod homogeneous;
 pub mod nanovdb;
 pub mod presets;
 mod rgbgrid;
+mod sparse;
 pub mod tracking;
 
 pub use grid::UniformGrid;
 pub use grid_space::MAX_GRID_SAMPLES;
 pub use homogeneous::Homogeneous;
 pub use rgbgrid::{RgbGrid, RgbGrids};
+pub use sparse::{SparseGrid, SparseSource, SparseValues};
 
 use crate::math::{Ray, Rgb, Vec3};
 
@@ -67,6 +69,8 @@ pub enum MediumKind {
     /// Boxed: its samples and transforms are much larger than a homogeneous medium.
     UniformGrid(Box<UniformGrid>),
     RgbGrid(Box<RgbGrid>),
+    /// A NanoVDB grid too large to hold dense.
+    SparseGrid(Box<SparseGrid>),
 }
 
 impl MediumKind {
@@ -76,6 +80,7 @@ impl MediumKind {
             MediumKind::Homogeneous(m) => m,
             MediumKind::UniformGrid(m) => m.as_ref(),
             MediumKind::RgbGrid(m) => m.as_ref(),
+            MediumKind::SparseGrid(m) => m.as_ref(),
         }
     }
 }

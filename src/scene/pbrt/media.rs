@@ -8,7 +8,7 @@ use super::params::Params;
 use super::spectrum::Kind;
 use super::Loc;
 use crate::math::{Mat4, Rgb, Vec3};
-use crate::scene::media::{nanovdb, presets};
+use crate::scene::media::{nanovdb, presets, SparseSource};
 use crate::scene::media::{
     Homogeneous, Medium, MediumInterface, MediumKind, MediumPoint, RgbGrid, RgbGrids, UniformGrid,
     MAX_GRID_SAMPLES,
@@ -37,7 +37,7 @@ impl Builder {
                 )
             }
             "uniformgrid" => MediumKind::UniformGrid(Box::new(self.uniform_grid(p, &st, loc)?)),
-            "nanovdb" => MediumKind::UniformGrid(Box::new(self.nanovdb(p, &st, loc)?)),
+            "nanovdb" => self.nanovdb(p, &st, loc)?,
             "rgbgrid" => MediumKind::RgbGrid(Box::new(self.rgb_grid(p, &st, loc)?)),
             _ => {
                 for q in p.list.iter() {
@@ -239,9 +239,9 @@ impl Builder {
     }
 
     /// pbrt-v4's `nanovdb`: the float grid `gridname` ("density") of the NanoVDB file
-    /// `filename`, made dense, placed by its index-to-world map and the transform current at
-    /// the statement.
-    fn nanovdb(&mut self, p: &Params, st: &str, loc: &Loc) -> crate::error::Result<UniformGrid> {
+    /// `filename`, dense (a `uniformgrid`) or, when too large for that, sparse, placed by its
+    /// index-to-world map and the transform current at the statement.
+    fn nanovdb(&mut self, p: &Params, st: &str, loc: &Loc) -> crate::error::Result<MediumKind> {
         let pe = Self::pe(loc);
         let file = p.string("filename").map_err(&pe)?.ok_or_else(|| {
             loc.error(format!("{st}: a nanovdb medium needs \"string filename\""))
@@ -278,10 +278,13 @@ impl Builder {
         }
         let le_scale = p.float_or("Lescale", 1.0).map_err(&pe)? as f32;
         let unit = self.medium_point(p, le_scale, false, st, loc)?;
-        self.held.add_medium((grid.values.len() * 4) as u64);
-        let to_world = self.state.ctm.as_mat4() * grid.index_to_world;
-        let bounds = grid.bounds();
-        UniformGrid::new(unit, grid.res, grid.values, None, bounds, to_world)
+        self.held.add_medium(grid.bytes());
+        let source = SparseSource {
+            file: path.clone(),
+            grid: density,
+            transform: self.state.ctm.as_mat4(),
+        };
+        nanovdb::medium(grid, unit, source)
             .map_err(|e| loc.error(format!("{st}: {}: {e}", path.display())))
     }
 

@@ -1,5 +1,6 @@
 //! NanoVDB files (`.nvdb`, version 32): the float grids pbrt-v4's `nanovdb` medium reads
-//! ("density", "temperature"), made dense for [`super::UniformGrid`].
+//! ("density", "temperature"), made dense for [`super::UniformGrid`], or kept sparse for
+//! [`super::SparseGrid`] when the box of their active voxels is too large to hold dense.
 //!
 //! A file is one or more segments: a 16-byte header (magic, version, grid count, codec), a
 //! 176-byte record and a name for each grid, then each grid's bytes as it lies in memory: the
@@ -13,9 +14,13 @@
 //! Blosc is refused (no decoder of it is at hand without a C library). Everything the file
 //! says is checked before it is used, so a damaged file is refused with one line.
 
+mod tree;
 mod zip;
 
 use super::MAX_GRID_SAMPLES;
+use super::{
+    MediumKind, MediumPoint, MediumProblem, SparseGrid, SparseSource, SparseValues, UniformGrid,
+};
 use crate::error::{Error, Result};
 use crate::input_file::{self, Allowance};
 use crate::math::{Mat4, Vec3, Vec4};
@@ -41,25 +46,38 @@ const TREE_DATA: usize = 64;
 const ROOT_SIZE: usize = 64;
 const ROOT_TILE: usize = 32;
 const UPPER_SIZE: usize = 270_400;
-const UPPER_TABLE: usize = 8256;
-const UPPER_CHILD_MASK: usize = 4128;
 const LOWER_SIZE: usize = 33_856;
-const LOWER_TABLE: usize = 1088;
-const LOWER_CHILD_MASK: usize = 544;
 const LEAF_SIZE: usize = 2144;
 const LEAF_VALUES: usize = 96;
 
-/// A float grid made dense: the box of its active voxels with one voxel of background around
-/// it (so that interpolation towards the background is kept), x fastest.
+/// A float grid over the box of its active voxels with one voxel of background around it
+/// (so that interpolation towards the background is kept).
 #[derive(Clone, Debug, PartialEq)]
 pub struct FloatGrid {
     /// Samples along x, y and z.
     pub res: [usize; 3],
-    pub values: Vec<f32>,
+    pub values: Values,
     /// The index coordinates of the first sample.
     pub origin: [i32; 3],
     /// The grid's index space to its world space (NanoVDB's map).
     pub index_to_world: Mat4,
+}
+
+/// A grid's values: dense (x fastest) when the box fits [`MAX_GRID_SAMPLES`], else its
+/// leaves and tiles as the file has them.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Values {
+    Dense(Vec<f32>),
+    Sparse(SparseValues),
+}
+
+/// How [`read_as`] keeps a grid.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layout {
+    /// Dense when the box fits [`MAX_GRID_SAMPLES`], sparse otherwise.
+    Fitting,
+    /// Sparse always (to compare the two).
+    Sparse,
 }
 
 impl FloatGrid {
@@ -75,17 +93,34 @@ impl FloatGrid {
         (o - Vec3::splat(0.5), o + n - Vec3::splat(0.5))
     }
 
-    /// The value at integer index coordinates (the background beyond the box: 0 here).
-    pub fn value(&self, ijk: [i32; 3]) -> f32 {
-        let mut at = 0usize;
-        for a in (0..3).rev() {
-            let d = ijk[a] as i64 - self.origin[a] as i64;
-            if d < 0 || d >= self.res[a] as i64 {
-                return 0.0;
-            }
-            at = at * self.res[a] + d as usize;
+    /// The dense values, if the grid is held dense.
+    pub fn dense(&self) -> Option<&[f32]> {
+        match &self.values {
+            Values::Dense(v) => Some(v),
+            Values::Sparse(_) => None,
         }
-        self.values[at]
+    }
+
+    /// Bytes the values take.
+    pub fn bytes(&self) -> u64 {
+        match &self.values {
+            Values::Dense(v) => v.len() as u64 * 4,
+            Values::Sparse(s) => s.bytes(),
+        }
+    }
+
+    /// The value at integer index coordinates (beyond the box: 0).
+    pub fn value(&self, ijk: [i32; 3]) -> f32 {
+        let d = [0, 1, 2].map(|a| ijk[a] as i64 - self.origin[a] as i64);
+        if (0..3).any(|a| d[a] < 0 || d[a] >= self.res[a] as i64) {
+            return 0.0;
+        }
+        match &self.values {
+            Values::Dense(v) => {
+                v[(d[2] as usize * self.res[1] + d[1] as usize) * self.res[0] + d[0] as usize]
+            }
+            Values::Sparse(s) => s.value(ijk.map(i64::from)),
+        }
     }
 }
 
@@ -194,8 +229,18 @@ fn type_name(t: u32) -> String {
 }
 
 /// Reads the float grids named `names` from the NanoVDB file at `path` (`None` for a name the
-/// file does not hold), within `allowance`: the file's bytes and the dense grids count.
+/// file does not hold), within `allowance`: the file's bytes and the grids' values count.
 pub fn read(path: &Path, names: &[&str], allowance: &Allowance) -> Result<Vec<Option<FloatGrid>>> {
+    read_as(path, names, allowance, Layout::Fitting)
+}
+
+/// [`read`], keeping the grids as `layout` says.
+pub fn read_as(
+    path: &Path,
+    names: &[&str],
+    allowance: &Allowance,
+    layout: Layout,
+) -> Result<Vec<Option<FloatGrid>>> {
     let data = input_file::read(path, &input_file::NANOVDB, Some(allowance))?;
     let mut held = data.len() as u64;
     let mut found: Vec<Option<FloatGrid>> = names.iter().map(|_| None).collect();
@@ -305,8 +350,8 @@ pub fn read(path: &Path, names: &[&str], allowance: &Allowance) -> Result<Vec<Op
                 path,
                 grid: &name,
             };
-            let grid = dense(&bytes, allowance, held + unpacked)?;
-            held += (grid.values.len() * 4) as u64;
+            let grid = grid(&bytes, allowance, held + unpacked, layout)?;
+            held += grid.bytes();
             let wanted: Vec<usize> = (0..names.len())
                 .filter(|&i| found[i].is_none() && names[i] == name)
                 .collect();
@@ -320,8 +365,8 @@ pub fn read(path: &Path, names: &[&str], allowance: &Allowance) -> Result<Vec<Op
     Ok(found)
 }
 
-/// One float grid's bytes made dense.
-fn dense(b: &Bytes, allowance: &Allowance, held: u64) -> Result<FloatGrid> {
+/// One float grid's bytes, dense or sparse as `layout` says.
+fn grid(b: &Bytes, allowance: &Allowance, held: u64, layout: Layout) -> Result<FloatGrid> {
     if b.data.len() < GRID_DATA + TREE_DATA {
         return Err(b.corrupt(format!("{} bytes cannot hold a grid", b.data.len())));
     }
@@ -386,22 +431,12 @@ fn dense(b: &Bytes, allowance: &Allowance, held: u64) -> Result<FloatGrid> {
             i32::try_from(l).map_err(|_| b.corrupt("its box lies at the edge of index space"))?;
         res[a] = (h - l + 1) as usize;
     }
-    let n = res.iter().try_fold(1usize, |acc, &r| acc.checked_mul(r));
-    let Some(n) = n.filter(|&n| n <= MAX_GRID_SAMPLES) else {
-        return Err(Error::input(
-            b.path,
-            format!(
-                "grid \"{}\" spans {}x{}x{} voxels, more than raylink holds in a dense grid \
-                 ({MAX_GRID_SAMPLES} samples)",
-                b.grid,
-                res[0] - 2,
-                res[1] - 2,
-                res[2] - 2
-            ),
-        ));
-    };
     let what = || format!("the NanoVDB grid \"{}\" of {}", b.grid, b.path.display());
-    allowance.check(&what(), held.saturating_add(n as u64 * 4))?;
+    let n = res.iter().try_fold(1usize, |acc, &r| acc.checked_mul(r));
+    let dense = n.filter(|&n| n <= MAX_GRID_SAMPLES && layout == Layout::Fitting);
+    if let Some(n) = dense {
+        allowance.check(&what(), held.saturating_add(n as u64 * 4))?;
+    }
     let background = b.f32(root + 28)?;
     if !(background.is_finite() && background >= 0.0) {
         return Err(Error::input(
@@ -413,48 +448,36 @@ fn dense(b: &Bytes, allowance: &Allowance, held: u64) -> Result<FloatGrid> {
             ),
         ));
     }
-    let mut values = Vec::new();
-    crate::platform::try_reserve(&mut values, n, what)?;
-    values.resize(n, background);
-    let mut grid = Dense {
+    let walk = tree::Walk {
         b,
         res,
         origin: origin.map(i64::from),
-        values,
+        seen: Default::default(),
     };
-    let tiles = b.u32(root + 24)? as usize;
-    let table = root + ROOT_SIZE;
-    if tiles
-        .checked_mul(ROOT_TILE)
-        .and_then(|s| s.checked_add(table))
-        .is_none_or(|end| end > b.data.len())
-    {
-        return Err(b.corrupt(format!("its root's {tiles} tiles lie beyond its bytes")));
-    }
-    let mut keys = rustc_hash::FxHashSet::default();
-    for t in 0..tiles {
-        let tile = table + t * ROOT_TILE;
-        let key = b.u64(tile)?;
-        if !keys.insert(key) {
-            return Err(b.corrupt("two root tiles have the same place"));
-        }
-        // Each field holds a coordinate's top 20 bits.
-        let coord = |shift: u32| (((key >> shift) & 0xf_ffff) as u32) << 12;
-        let at = [coord(42), coord(21), coord(0)].map(|c| c as i32 as i64);
-        if !grid.touches(at, 4096) {
-            continue;
-        }
-        let child = b.u64(tile + 8)?;
-        if child == 0 {
-            grid.fill(at, 4096, b.f32(tile + 20)?)?;
-        } else {
-            let upper = b.child(root, child, UPPER_SIZE, "an upper node")?;
-            grid.internal(upper, at, Level::UPPER)?;
-        }
-    }
+    let values = if let Some(n) = dense {
+        let mut values = Vec::new();
+        crate::platform::try_reserve(&mut values, n, what)?;
+        values.resize(n, background);
+        let mut sink = tree::Dense {
+            res,
+            origin: walk.origin,
+            values,
+        };
+        walk.run(root, &mut sink)?;
+        Values::Dense(sink.values)
+    } else {
+        // Too large to hold dense: the leaves and tiles, counted as they are kept.
+        let budget = |bytes: u64| allowance.check(&what(), held.saturating_add(bytes));
+        let mut sink = tree::Sparse {
+            values: SparseValues::new(background),
+            budget: &budget,
+        };
+        walk.run(root, &mut sink)?;
+        Values::Sparse(sink.values)
+    };
     Ok(FloatGrid {
         res,
-        values: grid.values,
+        values,
         origin,
         index_to_world,
     })
@@ -485,132 +508,26 @@ fn map(b: &Bytes) -> Result<Mat4> {
     Ok(to_world)
 }
 
-/// An internal node's shape: children per axis (log2), the span of a child, its size in
-/// bytes and where its child mask and table lie.
-#[derive(Clone, Copy)]
-struct Level {
-    log: u32,
-    child_span: i64,
-    child_mask: usize,
-    table: usize,
-}
-
-impl Level {
-    const UPPER: Level = Level {
-        log: 5,
-        child_span: 128,
-        child_mask: UPPER_CHILD_MASK,
-        table: UPPER_TABLE,
-    };
-    const LOWER: Level = Level {
-        log: 4,
-        child_span: 8,
-        child_mask: LOWER_CHILD_MASK,
-        table: LOWER_TABLE,
-    };
-}
-
-/// The dense grid being filled from the tree.
-struct Dense<'a, 'b> {
-    b: &'a Bytes<'b>,
-    res: [usize; 3],
-    origin: [i64; 3],
-    values: Vec<f32>,
-}
-
-impl Dense<'_, '_> {
-    /// Whether the cube of `span` voxels at `at` meets the grid's box.
-    fn touches(&self, at: [i64; 3], span: i64) -> bool {
-        (0..3).all(|a| at[a] + span > self.origin[a] && at[a] < self.origin[a] + self.res[a] as i64)
-    }
-
-    /// A value checked as a density.
-    fn check(&self, v: f32, at: [i64; 3]) -> Result<f32> {
-        if v.is_finite() && v >= 0.0 {
-            Ok(v)
-        } else {
-            Err(Error::input(
-                self.b.path,
-                format!(
-                    "grid \"{}\" has {v} at voxel ({}, {}, {}): densities must be finite and \
-                     not negative",
-                    self.b.grid, at[0], at[1], at[2]
-                ),
-            ))
-        }
-    }
-
-    /// Sets the cube of `span` voxels at `at` (where it meets the box) to `v`.
-    fn fill(&mut self, at: [i64; 3], span: i64, v: f32) -> Result<()> {
-        let v = self.check(v, at)?;
-        let range = |a: usize| {
-            let lo = (at[a] - self.origin[a]).max(0);
-            let hi = (at[a].saturating_add(span) - self.origin[a]).min(self.res[a] as i64);
-            lo as usize..hi.max(lo) as usize
-        };
-        let (xs, ys, zs) = (range(0), range(1), range(2));
-        for z in zs {
-            for y in ys.clone() {
-                let row = (z * self.res[1] + y) * self.res[0];
-                self.values[row + xs.start..row + xs.end].fill(v);
-            }
-        }
-        Ok(())
-    }
-
-    /// An upper or lower node at byte `node` whose region starts at `at`.
-    fn internal(&mut self, node: usize, at: [i64; 3], level: Level) -> Result<()> {
-        let b = self.b;
-        let dim = 1usize << level.log;
-        for n in 0..dim * dim * dim {
-            let x = (n >> (2 * level.log)) & (dim - 1);
-            let y = (n >> level.log) & (dim - 1);
-            let z = n & (dim - 1);
-            let child_at = [
-                at[0] + x as i64 * level.child_span,
-                at[1] + y as i64 * level.child_span,
-                at[2] + z as i64 * level.child_span,
-            ];
-            if !self.touches(child_at, level.child_span) {
-                continue;
-            }
-            let entry = node + level.table + 8 * n;
-            let is_child = (b.u32(node + level.child_mask + 4 * (n >> 5))? >> (n & 31)) & 1 == 1;
-            if !is_child {
-                self.fill(child_at, level.child_span, b.f32(entry)?)?;
-            } else if level.log == Level::UPPER.log {
-                let lower = b.child(node, b.u64(entry)?, LOWER_SIZE, "a lower node")?;
-                self.internal(lower, child_at, Level::LOWER)?;
-            } else {
-                let leaf = b.child(node, b.u64(entry)?, LEAF_SIZE, "a leaf")?;
-                self.leaf(leaf, child_at)?;
-            }
-        }
-        Ok(())
-    }
-
-    /// A leaf at byte `leaf` whose 8³ voxels start at `at`.
-    fn leaf(&mut self, leaf: usize, at: [i64; 3]) -> Result<()> {
-        let values = self
-            .b
-            .data
-            .get(leaf + LEAF_VALUES..leaf + LEAF_VALUES + 2048)
-            .ok_or_else(|| self.b.corrupt("a leaf lies outside the grid's bytes"))?;
-        for n in 0..512 {
-            let p = [
-                at[0] + (n >> 6) as i64,
-                at[1] + ((n >> 3) & 7) as i64,
-                at[2] + (n & 7) as i64,
-            ];
-            let d = [0, 1, 2].map(|a| p[a] - self.origin[a]);
-            if (0..3).any(|a| d[a] < 0 || d[a] >= self.res[a] as i64) {
-                continue;
-            }
-            let v = f32::from_le_bytes(values[4 * n..4 * n + 4].try_into().expect("4 bytes"));
-            let v = self.check(v, p)?;
-            let i = (d[2] as usize * self.res[1] + d[1] as usize) * self.res[0] + d[0] as usize;
-            self.values[i] = v;
-        }
-        Ok(())
-    }
+/// The medium a grid makes with the coefficients of `unit` at density 1, placed by the
+/// grid's map and then `source`'s transform: a `uniformgrid` when dense.
+pub fn medium(
+    grid: FloatGrid,
+    unit: MediumPoint,
+    source: SparseSource,
+) -> std::result::Result<MediumKind, MediumProblem> {
+    let to_world = source.transform * grid.index_to_world;
+    let bounds = grid.bounds();
+    Ok(match grid.values {
+        Values::Dense(values) => MediumKind::UniformGrid(Box::new(UniformGrid::new(
+            unit, grid.res, values, None, bounds, to_world,
+        )?)),
+        Values::Sparse(values) => MediumKind::SparseGrid(Box::new(SparseGrid::new(
+            unit,
+            grid.res,
+            grid.origin,
+            values,
+            to_world,
+            source,
+        )?)),
+    })
 }

@@ -4,7 +4,7 @@ use super::super::diagnostics::Site;
 use super::super::schema::{MediumDesc, ShapeMediaDesc};
 use super::Builder;
 use crate::math::{Rgb, Vec3};
-use crate::scene::media::nanovdb;
+use crate::scene::media::{nanovdb, SparseSource};
 use crate::scene::media::{
     Homogeneous, Medium, MediumInterface, MediumKind, MediumPoint, MediumProblem, RgbGrid,
     RgbGrids, UniformGrid,
@@ -141,13 +141,14 @@ impl Builder<'_> {
                         path.display()
                     )));
                 };
-                self.hold_bytes((g.values.len() * 4) as u64);
+                self.hold_bytes(g.bytes());
                 let xf = self.transform(site, transform)?;
-                let bounds = g.bounds();
-                MediumKind::UniformGrid(Box::new(
-                    UniformGrid::new(unit, g.res, g.values, None, bounds, xf.m * g.index_to_world)
-                        .map_err(blame)?,
-                ))
+                let source = SparseSource {
+                    file: path.clone(),
+                    grid: grid.to_string(),
+                    transform: xf.m,
+                };
+                nanovdb::medium(g, unit, source).map_err(blame)?
             }
             other => {
                 return Err(fail("type")(format!(
