@@ -501,6 +501,16 @@ fn committed_files_are_the_writers() {
             writer::file(&[one_voxel.clone(), Grid::new("temperature")], 1),
         ),
         ("fuzz/corpus/nanovdb/zip_checksum", bad_zip),
+        // Two voxels 600 apart: a box beyond a dense grid, kept sparse.
+        (
+            "fuzz/corpus/nanovdb/zip_sparse",
+            writer::file(
+                &[Grid::new("density")
+                    .voxel([0, 0, 0], 1.0)
+                    .voxel([600, 600, 600], 2.0)],
+                1,
+            ),
+        ),
         ("fuzz/corpus/nanovdb/version_31", writer::file(&[old], 0)),
         ("fuzz/corpus/nanovdb/double", writer::file(&[double], 0)),
         (
