@@ -14,7 +14,7 @@ use crate::bsdf::{phase, Bsdf, Transport};
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
 use crate::math::{Ray, Rgb, Rng, Vec3};
-use crate::scene::media::tracking::{sample_majorant, Collision};
+use crate::scene::media::tracking::{sample_majorant, sample_majorant_from, Collision, Uniforms};
 use crate::scene::media::MediumModel;
 use crate::scene::SurfacePoint;
 use crate::transport::{Context, RayStats};
@@ -123,13 +123,21 @@ pub(crate) fn radiance(
             let model = scene.media[m as usize].model();
             let emits = model.emits() && depth < max_depth;
             let t_max = hit.as_ref().map_or(f32::INFINITY, |sp| sp.t);
+            // The flight's first collision stratified over the pixel's samples.
+            let u = sampler.next_2d();
             let mut rng = sampler.stream();
             let mut path = Throughput { beta, r_u, r_l };
             let flight = fly(
                 model,
                 &ray,
                 t_max,
-                (hero, &mut rng),
+                (
+                    hero,
+                    &mut Uniforms {
+                        given: &[u.x, u.y],
+                        rng: &mut rng,
+                    },
+                ),
                 &mut path,
                 &mut |c, path| {
                     if emits {
@@ -294,12 +302,12 @@ pub(super) fn fly(
     medium: &dyn MediumModel,
     ray: &Ray,
     t_max: f32,
-    (hero, rng): (usize, &mut Rng),
+    (hero, rng): (usize, &mut Uniforms),
     path: &mut Throughput,
     at: &mut dyn FnMut(&Collision, &Throughput),
 ) -> Flight {
     let mut flight = Flight::Crossed;
-    let t_maj = sample_majorant(medium, ray, t_max, hero, rng, &mut |c| {
+    let t_maj = sample_majorant_from(medium, ray, t_max, hero, rng, &mut |c| {
         at(c, path);
         let p_absorb = c.point.sigma_a[hero] / c.sigma_maj[hero];
         let p_scatter = c.point.sigma_s[hero] / c.sigma_maj[hero];

@@ -15,6 +15,7 @@ use crate::math::spawn::Spot;
 use crate::math::{Ray, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::lights::Emitter;
+use crate::scene::media::tracking::Uniforms;
 use crate::scene::media::MediumModel;
 use crate::scene::Scene;
 use crate::transport::{Context, RayStats, Splat};
@@ -244,12 +245,20 @@ fn light_path(
         if let Some(m) = medium {
             let model = scene.media[m as usize].model();
             let t_max = hit.as_ref().map_or(f32::INFINITY, |sp| sp.t);
+            // The flight's first collision stratified over the pixel's samples.
+            let u = sampler.next_2d();
             let mut rng = sampler.stream();
             match fly(
                 model,
                 &ray,
                 t_max,
-                (hero, &mut rng),
+                (
+                    hero,
+                    &mut Uniforms {
+                        given: &[u.x, u.y],
+                        rng: &mut rng,
+                    },
+                ),
                 &mut path,
                 &mut |_, _| {},
             ) {

@@ -12,6 +12,7 @@ use crate::integrators::volumetric::{
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
 use crate::math::{Ray, Rgb};
+use crate::scene::media::tracking::Uniforms;
 use crate::transport::{Context, RayStats};
 
 /// Where a random walk starts: the ray leaving a subpath's last vertex, with throughput
@@ -68,13 +69,21 @@ pub(super) fn random_walk<'a>(
             let model = ctx.scene.media[m as usize].model();
             let emits = media.gather_emission && model.emits() && bounces < media.max_depth;
             let t_max = hit.as_ref().map_or(f32::INFINITY, |sp| sp.t);
+            // The flight's first collision stratified over the pixel's samples.
+            let u = sampler.next_2d();
             let mut rng = sampler.stream();
             let mut emitted = Rgb::ZERO;
             let flight = fly(
                 model,
                 &ray,
                 t_max,
-                (hero, &mut rng),
+                (
+                    hero,
+                    &mut Uniforms {
+                        given: &[u.x, u.y],
+                        rng: &mut rng,
+                    },
+                ),
                 &mut tp,
                 &mut |c, path| {
                     if emits {

@@ -20,16 +20,50 @@ pub struct Collision {
     pub u: f32,
 }
 
-/// Draws collisions along `ray` up to `t_max` (in units of the ray's length) in `medium`,
-/// with free flights sampled by channel `hero`'s majorant, and calls `at` for each; stops
-/// when `at` returns false (the transmittance returned is then 1). Returns the majorant
-/// transmittance from the last collision to `t_max`.
+/// The uniform numbers a walk draws: the first ones `given` (from the pixel's sampler, so
+/// that the first collision of a flight is stratified over the pixel's samples), the rest
+/// from a stream.
+pub struct Uniforms<'a> {
+    pub given: &'a [f32],
+    pub rng: &'a mut Rng,
+}
+
+impl Uniforms<'_> {
+    fn next(&mut self) -> f32 {
+        match self.given.split_first() {
+            Some((&u, rest)) => {
+                self.given = rest;
+                u
+            }
+            None => self.rng.uniform(),
+        }
+    }
+}
+
+/// Draws collisions along `ray` (see [`sample_majorant_from`]), every uniform number from
+/// `rng`.
 pub fn sample_majorant(
     medium: &dyn MediumModel,
     ray: &Ray,
     t_max: f32,
     hero: usize,
     rng: &mut Rng,
+    at: &mut dyn FnMut(&Collision) -> bool,
+) -> Rgb {
+    let u = &mut Uniforms { given: &[], rng };
+    sample_majorant_from(medium, ray, t_max, hero, u, at)
+}
+
+/// Draws collisions along `ray` up to `t_max` (in units of the ray's length) in `medium`,
+/// with free flights sampled by channel `hero`'s majorant, and calls `at` for each; stops
+/// when `at` returns false (the transmittance returned is then 1). Returns the majorant
+/// transmittance from the last collision to `t_max`.
+pub fn sample_majorant_from(
+    medium: &dyn MediumModel,
+    ray: &Ray,
+    t_max: f32,
+    hero: usize,
+    rng: &mut Uniforms,
     at: &mut dyn FnMut(&Collision) -> bool,
 ) -> Rgb {
     let mut t_maj = Rgb::ONE;
@@ -53,7 +87,7 @@ pub fn sample_majorant(
         }
         let mut t0 = seg.t0;
         loop {
-            let t = t0 - (1.0 - rng.uniform()).ln() / sigma;
+            let t = t0 - (1.0 - rng.next()).ln() / sigma;
             if t < seg.t1 {
                 t_maj *= exp(seg.sigma_maj * (t - t0));
                 let p = ray.origin + ray.dir * t;
@@ -63,7 +97,7 @@ pub fn sample_majorant(
                     point: per_parameter(medium.at(p), length),
                     sigma_maj: seg.sigma_maj,
                     t_maj,
-                    u: rng.uniform(),
+                    u: rng.next(),
                 };
                 if !at(&c) {
                     stopped = true;
