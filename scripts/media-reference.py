@@ -4,10 +4,10 @@ scalar_rgb), as the reference tests/media.rs holds raylink's media to.
 
 The scene is read from the TOML file itself, so both renderers are given one description. It
 takes the subset of the format the media tests use: a camera (with its medium), homogeneous
-media, inline triangle meshes and spheres, and materials that are diffuse, emitting,
-interfaces (`interface = true`) or smooth glass (`transmission = 1`, `ior`). A shape's
-`media` become Mitsuba's interior and exterior media; raylink's max_depth bounces are
-Mitsuba's max_depth + 1 path vertices. Pixels are box-filtered, as tests/media.rs renders.
+media and uniform grids (as Mitsuba grid volumes), inline triangle meshes and spheres, and
+materials that are diffuse, emitting, interfaces (`interface = true`) or smooth glass
+(`transmission = 1`, `ior`). A shape's `media` become Mitsuba's interior and exterior media;
+raylink's max_depth bounces are Mitsuba's max_depth + 1 path vertices. Pixels are box-filtered, as tests/media.rs renders.
 
 Mitsuba is not one of raylink's dependencies: install it in a virtual environment outside
 the repository:
@@ -19,6 +19,7 @@ the repository:
 
 import argparse
 import os
+import struct
 import sys
 import tempfile
 import time
@@ -27,6 +28,9 @@ import tomllib
 import mitsuba as mi
 
 mi.set_variant("scalar_rgb")
+
+# Extra parameters of a heterogeneous medium (the benchmark sets Mitsuba's majorant grid here).
+MAJORANT = {}
 
 
 def rgb(value, default):
@@ -51,12 +55,25 @@ def write_ply(path, positions, indices):
             f.write(f"3 {t[0]} {t[1]} {t[2]}\n")
 
 
-def medium(desc):
+def write_vol(path, resolution, bounds, density, sigma_t):
+    """A Mitsuba grid volume (.vol, float32): the density times each channel of sigma_t."""
+    nx, ny, nz = resolution
+    (x0, y0, z0), (x1, y1, z1) = bounds
+    header = b"VOL" + struct.pack("<B5i6f", 3, 1, nx, ny, nz, 3, x0, y0, z0, x1, y1, z1)
+    values = [d * t for d in density for t in sigma_t]
+    with open(path, "wb") as f:
+        f.write(header)
+        f.write(struct.pack(f"<{len(values)}f", *values))
+
+
+def medium(name, desc, grid_dir):
     sigma_a = rgb(desc.get("sigma_a"), 1.0)
     sigma_s = rgb(desc.get("sigma_s"), 1.0)
     scale = float(desc.get("scale", 1.0))
-    if desc.get("type") != "homogeneous" or "emission" in desc:
-        sys.exit("media-reference.py: only homogeneous media without emission are written")
+    kind = desc.get("type")
+    if kind not in ("homogeneous", "uniformgrid") or "emission" in desc or "transform" in desc:
+        sys.exit("media-reference.py: only homogeneous media and uniform grids, without "
+                 "emission or transforms, are written")
     sigma_t = sigma_a + sigma_s
     albedo = mi.ScalarColor3f(
         *[s / t if t > 0 else 0.0 for s, t in zip(sigma_s, sigma_t)]
@@ -64,12 +81,30 @@ def medium(desc):
     # Mitsuba reads an RGB sigma_t as a reflectance (at most 1): its largest channel goes
     # into the scale.
     peak = max(max(sigma_t), 1e-30)
+    phase = {"type": "hg", "g": float(desc.get("g", 0.0))}
+    if kind == "homogeneous":
+        return {
+            "type": "homogeneous",
+            "sigma_t": {"type": "rgb", "value": sigma_t / peak},
+            "albedo": {"type": "rgb", "value": albedo},
+            "scale": scale * peak,
+            "phase": phase,
+        }
+    # A uniform grid: samples at the cells' centres over `bounds`, interpolated trilinearly
+    # (Mitsuba's grid volume places its samples so too); the grid's outer samples should be 0,
+    # where Mitsuba clamps and raylink (as pbrt-v4) falls to zero.
+    bounds = desc.get("bounds", [[0, 0, 0], [1, 1, 1]])
+    lo, hi = [float(v) for v in bounds[0]], [float(v) for v in bounds[1]]
+    path = os.path.join(grid_dir, f"{name}.vol")
+    write_vol(path, desc["resolution"], (lo, hi), desc["density"], [t / peak for t in sigma_t])
+    to_world = mi.ScalarTransform4f().translate(lo).scale([b - a for a, b in zip(lo, hi)])
     return {
-        "type": "homogeneous",
-        "sigma_t": {"type": "rgb", "value": sigma_t / peak},
+        "type": "heterogeneous",
+        "sigma_t": {"type": "gridvolume", "filename": path, "raw": True, "to_world": to_world},
         "albedo": {"type": "rgb", "value": albedo},
         "scale": scale * peak,
-        "phase": {"type": "hg", "g": float(desc.get("g", 0.0))},
+        "phase": phase,
+        **MAJORANT,
     }
 
 
@@ -83,7 +118,7 @@ def bsdf(desc):
 
 def scene_dict(scene, spp, mesh_dir):
     cam = scene["camera"]
-    media = {name: medium(d) for name, d in scene.get("media", {}).items()}
+    media = {name: medium(name, d, mesh_dir) for name, d in scene.get("media", {}).items()}
     materials = scene["materials"]
     integrator_depth = int(scene.get("render", {}).get("max_depth", 8)) + 1
     sensor = {
