@@ -32,7 +32,7 @@ pub use point::PointLight;
 pub use point_source::PointSource;
 pub use projection::ProjectionLight;
 pub use set::{Emitter, LightSet};
-pub use spot::{spot_cosines, spot_falloff, spot_solid_angle, SpotLight};
+pub use spot::{check_cone_width, spot_cosines, spot_falloff, spot_solid_angle, SpotLight};
 
 use crate::math::spawn::Spot;
 use crate::math::{Rgb, Vec2, Vec3};

@@ -98,6 +98,21 @@ pub fn spot_cosines(cone_angle: f32, cone_delta: f32) -> (f32, f32) {
     )
 }
 
+/// Whether a cone of `cone_angle` degrees is wide enough to sample in single precision: the
+/// cosine of a narrower one rounds to 1, its solid angle to 0 and its sampling density to
+/// infinity. Else why not (to follow the field's name).
+pub fn check_cone_width(cone_angle: f32) -> Result<(), String> {
+    let (_, cos_end) = spot_cosines(cone_angle, 0.0);
+    if crate::math::warp::uniform_cone_pdf(cos_end).is_finite() {
+        Ok(())
+    } else {
+        Err(format!(
+            "is too narrow to sample, got {cone_angle:?} degrees (a cone's solid angle must not \
+             round to zero)"
+        ))
+    }
+}
+
 /// The total power of a spot light per unit intensity: 2π((1 − cos_start) + (cos_start −
 /// cos_end)/2), pbrt-v4's k_e (what `power` divides by).
 pub fn spot_solid_angle(cos_start: f32, cos_end: f32) -> f32 {

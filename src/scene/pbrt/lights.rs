@@ -8,13 +8,14 @@ use super::state::AreaEmission;
 use super::Loc;
 use crate::image::Image;
 use crate::math::{Mat3, Rgb};
+use crate::scene::camera::show;
 use crate::scene::environment::{Environment, Mapping};
 use crate::scene::lights::{
-    spot_cosines, spot_solid_angle, DirectionalLight, GoniometricLight, GoniometricMap, PointLight,
-    ProjectionLight, SpotLight,
+    check_cone_width, spot_cosines, spot_solid_angle, DirectionalLight, GoniometricLight,
+    GoniometricMap, PointLight, ProjectionLight, SpotLight,
 };
 use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
-use crate::scene::{Light, Texture};
+use crate::scene::{Light, Texture, MAX_COORDINATE};
 use glam::DVec3;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -132,6 +133,42 @@ impl Builder {
                 None => Ok(default),
             }
         };
+        // Every quantity the light is made of, checked where it is made, naming the field.
+        let place = |field: &str, local: DVec3| -> crate::error::Result<crate::math::Vec3> {
+            let p = m.transform_point3(local).as_vec3();
+            if p.is_finite() && p.abs().max_element() <= MAX_COORDINATE {
+                return Ok(p);
+            }
+            Err(loc.error(format!(
+                "{st}: {field} puts the light at {}, outside the range raylink traces \
+                 ({MAX_COORDINATE:e} units of the origin)",
+                show(p)
+            )))
+        };
+        let aim = |from: DVec3, to: DVec3| -> crate::error::Result<crate::math::Vec3> {
+            let d = m.transform_vector3(to - from);
+            let length = d.length();
+            if !length.is_finite() {
+                return Err(loc.error(format!(
+                    "{st}: \"from\" and \"to\" are too far apart: the direction between \
+                     them overflows"
+                )));
+            }
+            let dir = (d / length).as_vec3();
+            if length == 0.0 || !dir.is_finite() {
+                return Err(loc.error(format!("{st}: \"from\" and \"to\" must differ")));
+            }
+            Ok(dir)
+        };
+        let emitted = |fields: &str, v: Rgb| -> crate::error::Result<Rgb> {
+            if v.is_finite() {
+                Ok(v)
+            } else {
+                Err(loc.error(format!(
+                    "{st}: the emitted power ({fields}) overflows single precision"
+                )))
+            }
+        };
         match ty {
             "goniometric" => {
                 // pbrt-v4's GoniometricLight: at the origin of the light's space, its
@@ -150,8 +187,8 @@ impl Builder {
                     1.0
                 };
                 self.lights.push(Light::Goniometric(GoniometricLight {
-                    position: m.transform_point3(DVec3::ZERO).as_vec3(),
-                    intensity: i * scale * k,
+                    position: place("the transform", DVec3::ZERO)?,
+                    intensity: emitted("\"I\" × \"scale\" × \"power\"", i * scale * k)?,
                     map: Arc::new(map),
                 }));
             }
@@ -160,7 +197,8 @@ impl Builder {
                 // +z, at the origin of its transform, times `scale` (or rescaled to `power`).
                 let (file, image) = self.light_image(p, st, loc)?;
                 let fov = p.float_or("fov", 90.0).map_err(&pe)? as f32;
-                let position = m.transform_point3(DVec3::ZERO).as_vec3();
+                let position = place("the transform", DVec3::ZERO)?;
+                emitted("\"scale\"", Rgb::splat(scale))?;
                 let light =
                     ProjectionLight::new(position, frame, PathBuf::from(&file), &image, scale, fov)
                         .map_err(|e| loc.error(format!("{st}: \"{file}\": {e}")))?;
@@ -170,6 +208,7 @@ impl Builder {
                 } else {
                     light
                 };
+                emitted("\"scale\" × \"power\"", Rgb::splat(light.scale))?;
                 self.lights.push(Light::Projection(light));
             }
             "point" => {
@@ -185,17 +224,15 @@ impl Builder {
                     1.0
                 };
                 self.lights.push(Light::Point(PointLight {
-                    position: m.transform_point3(from).as_vec3(),
-                    intensity: i * scale * k,
+                    position: place("\"from\"", from)?,
+                    intensity: emitted("\"I\" × \"scale\" × \"power\"", i * scale * k)?,
                 }));
             }
             "spot" => {
                 let from = point3("from", DVec3::ZERO)?;
                 let to = point3("to", DVec3::Z)?;
-                let dir = m.transform_vector3(to - from).normalize_or_zero();
-                if dir == DVec3::ZERO {
-                    return Err(loc.error(format!("{st}: \"from\" and \"to\" must differ")));
-                }
+                let dir = aim(from, to)?;
+                let position = place("\"from\"", from)?;
                 let cone_angle = p.float_or("coneangle", 30.0).map_err(&pe)? as f32;
                 let cone_delta = p.float_or("conedelta", 5.0).map_err(&pe)? as f32;
                 let valid = cone_angle > 0.0
@@ -206,6 +243,8 @@ impl Builder {
                         "{st}: coneangle must be in (0, 180] and conedelta in [0, coneangle], got {cone_angle} and {cone_delta}"
                     )));
                 }
+                check_cone_width(cone_angle)
+                    .map_err(|e| loc.error(format!("{st}: coneangle {e}")))?;
                 let i = self
                     .spectrum(p, "I", Kind::Illuminant, st, loc)?
                     .unwrap_or(Rgb::ONE);
@@ -219,9 +258,9 @@ impl Builder {
                     1.0
                 };
                 self.lights.push(Light::Spot(SpotLight::new(
-                    m.transform_point3(from).as_vec3(),
-                    dir.as_vec3(),
-                    i * scale * k,
+                    position,
+                    dir,
+                    emitted("\"I\" × \"scale\" × \"power\"", i * scale * k)?,
                     cone_angle,
                     cone_delta,
                 )));
@@ -229,16 +268,13 @@ impl Builder {
             "distant" => {
                 let from = point3("from", DVec3::ZERO)?;
                 let to = point3("to", DVec3::Z)?;
-                let dir = m.transform_vector3(to - from).normalize_or_zero();
-                if dir == DVec3::ZERO {
-                    return Err(loc.error(format!("{st}: \"from\" and \"to\" must differ")));
-                }
+                let dir = aim(from, to)?;
                 let l = self
                     .spectrum(p, "L", Kind::Illuminant, st, loc)?
                     .unwrap_or(Rgb::ONE);
                 self.lights.push(Light::Directional(DirectionalLight::new(
-                    dir.as_vec3(),
-                    l * scale,
+                    dir,
+                    emitted("\"L\" × \"scale\"", l * scale)?,
                 )));
             }
             "infinite" => {
@@ -270,7 +306,11 @@ impl Builder {
                         }
                         self.environment = Some(Arc::new(env));
                     }
-                    (None, l) => self.background += l.unwrap_or(Rgb::ONE) * scale,
+                    (None, l) => {
+                        let l = emitted("\"L\" × \"scale\"", l.unwrap_or(Rgb::ONE) * scale)?;
+                        self.background =
+                            emitted("the sum of the infinite lights", self.background + l)?;
+                    }
                 }
             }
             _ => {

@@ -121,9 +121,20 @@ impl Builder {
 
 /// pbrt's `LookAt`: the world-to-camera transform of an eye at `eye` looking at `target`.
 pub(crate) fn look_at(eye: DVec3, target: DVec3, up: DVec3) -> Result<DMat4, String> {
-    let dir = (target - eye).normalize_or_zero();
-    if dir == DVec3::ZERO {
+    let forward = target - eye;
+    let distance = forward.length();
+    if !distance.is_finite() {
+        return Err(
+            "the eye and the target are too far apart: the distance between them overflows".into(),
+        );
+    }
+    if distance == 0.0 {
         return Err("the eye and the target are the same point".into());
+    }
+    let dir = forward / distance;
+    let up_length = up.length();
+    if !up_length.is_finite() {
+        return Err("the up vector's length overflows".into());
     }
     let right = up.normalize_or_zero().cross(dir);
     if right.length() < 1e-9 {

@@ -24,7 +24,7 @@ use crate::input_file::Allowance;
 use crate::math::{Mat3, Mat4, Rgb, Vec3};
 use crate::scene::environment::Environment;
 use crate::scene::lights::{
-    DirectionalLight, GoniometricLight, GoniometricMap, PointLight, SpotLight,
+    check_cone_width, DirectionalLight, GoniometricLight, GoniometricMap, PointLight, SpotLight,
 };
 use crate::scene::materials::{Classic, Measured, Surface};
 use crate::scene::{
@@ -704,6 +704,7 @@ impl<'a> Builder<'a> {
                         "must be in (0, 180] degrees, got {cone_angle}"
                     )));
                 }
+                check_cone_width(cone_angle).map_err(fail("cone_angle"))?;
                 let cone_delta = desc.cone_delta.unwrap_or(5.0);
                 if !(0.0..=cone_angle).contains(&cone_delta) {
                     return Err(fail("cone_delta")(format!(

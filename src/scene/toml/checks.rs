@@ -49,6 +49,12 @@ pub(super) fn colour(v: Vec3) -> Result<Rgb, String> {
 
 pub(super) fn direction(v: Vec3) -> Result<Vec3, String> {
     finite3(v)?;
+    if !v.length().is_finite() {
+        return Err(format!(
+            "its length overflows single precision, got {}",
+            crate::scene::camera::show(v)
+        ));
+    }
     let n = v.normalize_or_zero();
     if n == Vec3::ZERO {
         Err(format!("must be a non-zero vector, got {v}"))
