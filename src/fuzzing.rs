@@ -216,3 +216,198 @@ pub fn checkpoint(data: &[u8]) -> bool {
     }
     false
 }
+
+/// The numbers a camera-and-transform input is made of: little-endian f64s, eight bytes
+/// each (zeros past the end), so that every value from 1e-300 to 1e300, NaN and infinity
+/// can reach the readers.
+struct Numbers<'a>(&'a [u8]);
+
+impl Numbers<'_> {
+    fn next(&mut self) -> f64 {
+        let mut word = [0u8; 8];
+        let n = self.0.len().min(8);
+        word[..n].copy_from_slice(&self.0[..n]);
+        self.0 = &self.0[n..];
+        f64::from_le_bytes(word)
+    }
+
+    fn three(&mut self) -> [f64; 3] {
+        [self.next(), self.next(), self.next()]
+    }
+
+    /// A small choice (0..n) from the next number's low bits.
+    fn pick(&mut self, n: u64) -> u64 {
+        self.next().to_bits() % n
+    }
+}
+
+/// Formats a number as the scene files write it (`inf` and `NaN` stay as Rust prints them:
+/// the readers must refuse them too).
+fn text(v: f64) -> String {
+    format!("{v:e}")
+}
+
+fn text3(v: [f64; 3]) -> String {
+    v.map(text).join(" ")
+}
+
+/// Camera and transform paths: the bytes are numbers (see [`Numbers`]) for a camera (eye,
+/// target, up, field of view, lens, orthographic size), two transform steps and a light's
+/// `from` and `to`, put into a camera checked directly, a pbrt scene and a TOML scene. Each
+/// may be refused with one line; what is accepted must give finite rays within the range the
+/// backends trace, and lights inside it.
+pub fn camera(data: &[u8]) {
+    use crate::scene::{Camera, Projection, MAX_COORDINATE};
+    let mut n = Numbers(data);
+    let (eye, target, up) = (n.three(), n.three(), n.three());
+    let (fov, lens, focal, size) = (n.next(), n.next(), n.next(), n.next());
+    let projection = n.pick(3);
+    let steps: Vec<(u64, [f64; 3], f64)> =
+        (0..2).map(|_| (n.pick(4), n.three(), n.next())).collect();
+    let (from, to, light) = (n.three(), n.three(), n.pick(3));
+    let (scale, cone) = (n.next(), n.next());
+    let v3 = |v: [f64; 3]| crate::math::Vec3::from_array(v.map(|x| x as f32));
+    let camera = Camera {
+        position: v3(eye),
+        look_at: v3(target),
+        up: v3(up),
+        fov_deg: fov as f32,
+        width: 16,
+        height: 9,
+        projection: match projection {
+            0 => Projection::Pinhole,
+            1 => Projection::ThinLens {
+                radius: lens as f32,
+                focal_distance: focal as f32,
+            },
+            _ => Projection::Orthographic { size: size as f32 },
+        },
+    };
+    let traceable = |camera: &Camera| {
+        for (x, y) in [(0.0, 0.0), (16.0, 0.0), (0.0, 9.0), (16.0, 9.0), (8.0, 4.5)] {
+            let ray = camera.ray(x, y);
+            assert!(
+                ray.origin.is_finite()
+                    && ray.dir.is_finite()
+                    && ray.origin.abs().max_element() <= MAX_COORDINATE,
+                "an accepted camera gives the ray {ray:?}: {camera:?}"
+            );
+        }
+    };
+    if camera.check().is_ok() {
+        traceable(&camera);
+    }
+    let in_range = |scene: &Scene| {
+        for (p, intensity) in scene.lights.iter().filter_map(|l| l.model().point_source()) {
+            assert!(
+                p.is_finite() && p.abs().max_element() <= MAX_COORDINATE && intensity.is_finite(),
+                "an accepted light at {p:?} of {intensity:?}"
+            );
+        }
+    };
+
+    // pbrt: the steps before LookAt and around the light.
+    let pbrt_step = |&(kind, v, angle): &(u64, [f64; 3], f64)| match kind {
+        0 => format!("Translate {}\n", text3(v)),
+        1 => format!("Scale {}\n", text3(v)),
+        2 => format!("Rotate {} {}\n", text(angle), text3(v)),
+        _ => format!("LookAt 0 0 0 {} {}\n", text3(v), text3([angle, 1.0, 0.0])),
+    };
+    let camera_type = match projection {
+        0 => format!("\"perspective\" \"float fov\" {}", text(fov)),
+        1 => format!(
+            "\"perspective\" \"float fov\" {} \"float lensradius\" {} \"float focaldistance\" {}",
+            text(fov),
+            text(lens),
+            text(focal)
+        ),
+        _ => format!(
+            "\"orthographic\" \"float screenwindow\" [-{0} {0} -{0} {0}]",
+            text(size)
+        ),
+    };
+    let light_type = ["point", "spot", "distant"][light as usize];
+    let pbrt = format!(
+        "{}LookAt {} {} {}\nCamera {camera_type}\nWorldBegin\nAttributeBegin\n{}\
+         LightSource \"{light_type}\" \"point3 from\" [{}] \"point3 to\" [{}] \"float scale\" {} \
+         \"float coneangle\" {}\nAttributeEnd\n\
+         Shape \"trianglemesh\" \"point3 P\" [0 0 0 1 0 0 0 1 0] \"integer indices\" [0 1 2]\n",
+        pbrt_step(&steps[0]),
+        text3(eye),
+        text3(target),
+        text3(up),
+        pbrt_step(&steps[1]),
+        text3(from),
+        text3(to),
+        text(scale),
+        text(cone),
+    );
+    if let Some(scene) = one_line(Scene::load(&put("camera.pbrt", pbrt.as_bytes()))) {
+        assert!(
+            scene.camera.check().is_ok(),
+            "pbrt accepted {:?}",
+            scene.camera
+        );
+        traceable(&scene.camera);
+        in_range(&scene);
+    }
+
+    // TOML: the camera's fields, the steps as a shape's transform, the light's aim.
+    let array = |v: [f64; 3]| format!("[{}]", v.map(text).join(", "));
+    let toml_step = |&(kind, v, angle): &(u64, [f64; 3], f64)| match kind {
+        0 | 3 => format!("{{ translate = {} }}", array(v)),
+        1 => format!("{{ scale = {} }}", array(v)),
+        _ => format!(
+            "{{ rotate = {{ axis = {}, degrees = {} }} }}",
+            array(v),
+            text(angle)
+        ),
+    };
+    let lens_lines = match projection {
+        0 => String::new(),
+        1 => format!(
+            "lens_radius = {}\nfocal_distance = {}\n",
+            text(lens),
+            text(focal)
+        ),
+        _ => format!("projection = \"orthographic\"\nsize = {}\n", text(size)),
+    };
+    let light_lines = match light {
+        0 => format!(
+            "type = \"point\"\nposition = {}\nintensity = {}",
+            array(from),
+            text(scale)
+        ),
+        1 => format!(
+            "type = \"spot\"\nposition = {}\ndirection = {}\nintensity = 1\ncone_angle = {}",
+            array(from),
+            array(to),
+            text(cone)
+        ),
+        _ => format!(
+            "type = \"directional\"\ndirection = {}\nirradiance = 1",
+            array(to)
+        ),
+    };
+    let toml = format!(
+        "[camera]\nposition = {}\nlook_at = {}\nup = {}\nfov = {}\n{lens_lines}\
+         [materials.white]\ndiffuse = 0.5\n\
+         [[shapes]]\ntype = \"sphere\"\nmaterial = \"white\"\ntransform = [{}, {}]\n\
+         [[lights]]\n{light_lines}\n",
+        array(eye),
+        array(target),
+        array(up),
+        text(fov),
+        toml_step(&steps[0]),
+        toml_step(&steps[1]),
+    );
+    if let Some(scene) = one_line(Scene::load(&put("camera.toml", toml.as_bytes()))) {
+        assert!(
+            scene.camera.check().is_ok(),
+            "TOML accepted {:?}",
+            scene.camera
+        );
+        traceable(&scene.camera);
+        in_range(&scene);
+    }
+}

@@ -28,6 +28,11 @@ fn scene_toml_corpus() {
 }
 
 #[test]
+fn camera_corpus() {
+    replay("camera", raylink::fuzzing::camera);
+}
+
+#[test]
 fn pbrt_corpus() {
     replay("pbrt", raylink::fuzzing::pbrt);
 }
