@@ -126,7 +126,7 @@ impl Scene {
             crate::error::Error::Setting { name, detail } => {
                 match self.setting_sources.iter().find(|s| s.setting == name) {
                     Some(s) => crate::error::Error::input(
-                        &self.source,
+                        s.file.as_ref().unwrap_or(&self.source),
                         format!("line {}: {} {detail}", s.line, s.key),
                     ),
                     None => crate::error::Error::Setting { name, detail },

@@ -13,4 +13,6 @@ pub struct SettingSource {
     pub key: String,
     /// Its line in the file.
     pub line: usize,
+    /// The file that gives it, when not the scene file itself (a pbrt `Include`).
+    pub file: Option<std::path::PathBuf>,
 }

@@ -12,7 +12,8 @@ use crate::control::MemoryBudget;
 use crate::math::Rgb;
 use crate::scene::environment::Environment;
 use crate::scene::{
-    Camera, Instance, Light, Material, Prototype, RenderSettings, Scene, Shape, Texture,
+    Camera, Instance, Light, Material, Prototype, RenderSettings, Scene, SettingSource, Shape,
+    Texture,
 };
 use glam::DMat4;
 use std::collections::{HashMap, HashSet};
@@ -63,6 +64,8 @@ pub(super) struct Builder {
     pub(super) camera_value: Option<Camera>,
     pub(super) resolution: (u32, u32),
     pub(super) settings: RenderSettings,
+    /// Where the file gives each of `settings`, to report a bad value at its line.
+    pub(super) setting_sources: Vec<SettingSource>,
     /// The reflection applied to the whole world when pbrt's camera mirrors the image (see
     /// [`Builder::begin_world`]); identity otherwise.
     pub(super) mirror: DMat4,
@@ -114,6 +117,7 @@ impl Builder {
             camera_value: None,
             resolution: (1280, 720),
             settings: RenderSettings::default(),
+            setting_sources: Vec::new(),
             mirror: DMat4::IDENTITY,
             warnings: Vec::new(),
             warned: HashSet::new(),
@@ -192,7 +196,7 @@ impl Builder {
             background: self.background,
             environment: self.environment,
             settings: self.settings,
-            setting_sources: Vec::new(),
+            setting_sources: self.setting_sources,
             inputs: std::iter::once(self.source.clone())
                 .chain(self.inputs)
                 .collect(),

@@ -5,7 +5,7 @@ use super::builder::Builder;
 use super::params::Params;
 use super::Loc;
 use crate::image::filter::Filter;
-use crate::scene::{Camera, Projection, MAX_RESOLUTION};
+use crate::scene::{Camera, Projection, SettingSource, MAX_RESOLUTION};
 use crate::settings::{TechniqueKind, MAX_SPP};
 use glam::{DMat3, DMat4, DVec3};
 
@@ -21,6 +21,18 @@ pub(super) struct CameraDef {
 }
 
 impl Builder {
+    /// Records that the statement at `loc` (`key`, as the file writes it) gives `setting`.
+    fn given(&mut self, setting: &'static str, key: &str, loc: &Loc) {
+        let file = (*loc.file != self.source).then(|| loc.file.to_path_buf());
+        self.setting_sources.retain(|s| s.setting != setting);
+        self.setting_sources.push(SettingSource {
+            setting,
+            key: key.to_string(),
+            line: loc.line as usize,
+            file,
+        });
+    }
+
     pub(super) fn set_option(
         &mut self,
         kw: &str,
@@ -153,6 +165,7 @@ impl Builder {
                         )));
                     }
                     self.settings.spp = Some(n as u32);
+                    self.given("spp", "Sampler \"pixelsamples\"", loc);
                 }
             }
             "PixelFilter" => {
@@ -184,6 +197,7 @@ impl Builder {
                     .validate()
                     .map_err(|m| loc.error(format!("PixelFilter: {m}")))?;
                 self.settings.filter = Some(filter);
+                self.given("filter", "PixelFilter", loc);
             }
             "Integrator" => {
                 let name = match ty {
@@ -199,6 +213,7 @@ impl Builder {
                     }
                 };
                 self.settings.integrator = Some(name);
+                self.given("integrator", "Integrator", loc);
                 if let Some(d) = p.int("maxdepth").map_err(pe)? {
                     if d < 0 {
                         return Err(loc.error(format!(
@@ -206,6 +221,7 @@ impl Builder {
                         )));
                     }
                     self.settings.max_depth = Some(d.min(u32::MAX as i64) as u32);
+                    self.given("max_depth", "Integrator \"maxdepth\"", loc);
                 } else {
                     self.settings.max_depth = Some(5);
                 }

@@ -26,6 +26,7 @@ impl Builder<'_> {
                 setting,
                 key: format!("[{table}] {key}"),
                 line: ctx.key_line(span, key),
+                file: None,
             })
         };
         let mut s = Settings::default();
