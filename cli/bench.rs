@@ -111,7 +111,6 @@ fn config(args: &BenchArgs) -> Result<BenchConfig> {
 /// bench.md to the output directory.
 pub fn run(args: &BenchArgs) -> Result<()> {
     let mut config = config(args)?;
-    std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))?;
     let quiet = args.quiet;
     if args.network {
         let q = args.quick;
@@ -134,18 +133,24 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             seed: args.seed,
             dir: args.out.clone(),
         };
+        let mut names = vec!["network.md".to_string()];
+        for step in &bench.steps {
+            names.push(format!("network-{step}.net"));
+            names.push(format!("network-{step}-series.net"));
+        }
+        plan_outputs(args, std::slice::from_ref(&bench.scene), &names)?;
         let rows = network::measure(&bench, &mut |line| {
             if !quiet {
                 eprintln!("bench: {line}");
             }
         })?;
         let md = network::markdown(&rows, &bench);
-        let file = args.out.join("network.md");
-        std::fs::write(&file, &md).map_err(|e| Error::io(&file, e))?;
+        raylink::atomic_file::write(&args.out.join("network.md"), md.as_bytes())?;
         println!("{md}");
         return Ok(());
     }
     if args.path_tracer {
+        plan_outputs(args, &[], &["path.md".to_string()])?;
         config.width = args.width.unwrap_or(512);
         config.height = args.height.unwrap_or(512);
         let spp = if args.quick {
@@ -159,21 +164,24 @@ pub fn run(args: &BenchArgs) -> Result<()> {
             }
         })?;
         let markdown = path::markdown(&report, &config);
-        let file = args.out.join("path.md");
-        std::fs::write(&file, &markdown).map_err(|e| Error::io(&file, e))?;
+        raylink::atomic_file::write(&args.out.join("path.md"), markdown.as_bytes())?;
         println!("{markdown}");
         return Ok(());
     }
+    let scene_files: Vec<PathBuf> = (args.scenes.iter().flatten())
+        .filter(|s| s.ends_with(".toml"))
+        .map(PathBuf::from)
+        .collect();
+    let names = ["bench.csv", "bench.md", "bench.svg"].map(String::from);
+    plan_outputs(args, &scene_files, &names)?;
     let rows = measure(&config, &mut |line| {
         if !quiet {
             eprintln!("bench: {line}");
         }
     })?;
     let markdown = report::markdown(&rows, &config);
-    let write = |name: &str, text: &str| {
-        let path = args.out.join(name);
-        std::fs::write(&path, text).map_err(|e| Error::io(&path, e))
-    };
+    let write =
+        |name: &str, text: &str| raylink::atomic_file::write(&args.out.join(name), text.as_bytes());
     write("bench.csv", &report::csv(&rows, config.reps))?;
     write("bench.md", &markdown)?;
     let svg = args.out.join("bench.svg");
@@ -188,4 +196,24 @@ pub fn run(args: &BenchArgs) -> Result<()> {
         );
     }
     Ok(())
+}
+
+/// Checks the files a bench run writes in `--out` (`names`) against the scene files it reads
+/// and each other, as every command's files are, and makes the folder: before any
+/// measuring, so that a bad `--out` costs nothing and leaves nothing.
+fn plan_outputs(args: &BenchArgs, scenes: &[PathBuf], names: &[String]) -> Result<()> {
+    if args.out.exists() && !args.out.is_dir() {
+        return Err(Error::Invalid(format!(
+            "{}: --out must name a folder (bench writes several files into it), and this is \
+             a file",
+            args.out.display()
+        )));
+    }
+    let mut plan = raylink::output_paths::FilePlan::new();
+    plan.reads("a scene", scenes);
+    for name in names {
+        plan.write("--out", &args.out.join(name));
+    }
+    plan.check()?;
+    std::fs::create_dir_all(&args.out).map_err(|e| Error::io(&args.out, e))
 }

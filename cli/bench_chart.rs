@@ -32,17 +32,20 @@ struct Panel {
 
 /// Four panels: Mrays/s of each ray kind (linear, from zero) and build time (logarithmic), per
 /// scene of the ladder, one line per (backend, threads) with min–max bars.
+/// Draws the chart and writes it to `path` whole (through a temporary file), or not at all.
 pub fn svg(rows: &[Row], config: &BenchConfig, path: &Path) -> raylink::Result<()> {
-    draw(rows, config, path)
-        .map_err(|e| raylink::Error::io(path, std::io::Error::other(e.to_string())))
+    let mut text = String::new();
+    draw(rows, config, &mut text)
+        .map_err(|e| raylink::Error::io(path, std::io::Error::other(e.to_string())))?;
+    raylink::atomic_file::write(path, text.as_bytes())
 }
 
 fn draw(
     rows: &[Row],
     config: &BenchConfig,
-    path: &Path,
+    text: &mut String,
 ) -> std::result::Result<(), Box<dyn std::error::Error>> {
-    let root = SVGBackend::new(path, (1400, 1000)).into_drawing_area();
+    let root = SVGBackend::with_string(text, (1400, 1000)).into_drawing_area();
     root.fill(&WHITE)?;
     let (title, body) = root.split_vertically(40);
     title.titled(

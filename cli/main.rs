@@ -163,11 +163,17 @@ impl Cli {
     }
 }
 
+/// "Too many levels of symbolic links" (a link loop), whose kind std does not name yet.
+#[cfg(target_os = "linux")]
+const ELOOP: i32 = 40;
+#[cfg(not(target_os = "linux"))]
+const ELOOP: i32 = 62;
+
 /// The exit code of a failed run: 2 for bad input or options, 1 for a failure while working
 /// (a full disk, an I/O error), 128 + N when signal N (`signal`, the one received) stopped it.
 fn exit_code(failure: &Failure, signal: Option<i32>) -> u8 {
     use std::io::ErrorKind::{
-        InvalidData, IsADirectory, NotADirectory, NotFound, PermissionDenied,
+        InvalidData, InvalidFilename, IsADirectory, NotADirectory, NotFound, PermissionDenied,
     };
     match failure {
         Failure::Error(
@@ -178,8 +184,13 @@ fn exit_code(failure: &Failure, signal: Option<i32>) -> u8 {
         Failure::Error(Error::Io { source, .. })
             if matches!(
                 source.kind(),
-                NotFound | PermissionDenied | IsADirectory | NotADirectory | InvalidData
-            ) =>
+                NotFound
+                    | PermissionDenied
+                    | IsADirectory
+                    | NotADirectory
+                    | InvalidData
+                    | InvalidFilename
+            ) || source.raw_os_error() == Some(ELOOP) =>
         {
             2
         }

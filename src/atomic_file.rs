@@ -123,9 +123,10 @@ pub(crate) struct Temporary {
 }
 
 impl Temporary {
-    /// Creates a new temporary file for writing `target`.
+    /// Creates a new temporary file for writing `target` (beside the file it names through
+    /// any symbolic links: see [`through_links`]).
     pub(crate) fn create(target: &Path) -> std::io::Result<Temporary> {
-        let (path, file) = create_new(target, false, |p| {
+        let (path, file) = create_new(&through_links(target), false, |p| {
             std::fs::OpenOptions::new()
                 .write(true)
                 .create_new(true)
@@ -138,10 +139,11 @@ impl Temporary {
         &mut self.file
     }
 
-    /// Syncs the file and renames it over `target`; on failure it is removed (on drop).
+    /// Syncs the file and renames it over `target` (the file a symbolic link `target` leads
+    /// to, the link kept); on failure it is removed (on drop).
     pub(crate) fn persist(mut self, target: &Path) -> std::io::Result<()> {
         self.file.sync_all()?;
-        std::fs::rename(&self.path, target)?;
+        std::fs::rename(&self.path, through_links(target))?;
         unlist(&self.path);
         self.path = PathBuf::new();
         Ok(())
@@ -156,6 +158,27 @@ impl Drop for Temporary {
             unlist(&self.path);
         }
     }
+}
+
+/// The file `path` leads to through symbolic links (each link's target taken relative to its
+/// folder), which need not exist yet: an output that is a link is written through it, so
+/// that the link stays and the file it names is replaced. A chain longer than the system's
+/// limit (a loop) is left as it is, for the write to report.
+pub(crate) fn through_links(path: &Path) -> PathBuf {
+    let mut p = path.to_path_buf();
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&p) {
+            Ok(m) if m.file_type().is_symlink() => match std::fs::read_link(&p) {
+                Ok(next) => {
+                    let dir = p.parent().unwrap_or(Path::new(""));
+                    p = dir.join(next);
+                }
+                Err(_) => return p,
+            },
+            _ => return p,
+        }
+    }
+    path.to_path_buf()
 }
 
 fn unlist(path: &Path) {

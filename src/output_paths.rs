@@ -134,6 +134,9 @@ impl FilePlan {
     /// [`Error::Invalid`] naming the first written path that is a file read, another
     /// written path, or a folder holding a file read.
     pub fn check(&self) -> Result<()> {
+        for w in &self.writes {
+            check_name_lengths(w)?;
+        }
         // By every path and id a file is known by, its first entry: reads first, so that a
         // write meeting a read says what it would overwrite.
         let mut seen: HashMap<Key, (bool, usize)> = HashMap::new();
@@ -178,6 +181,24 @@ impl FilePlan {
             }
         }
         Ok(())
+    }
+}
+
+/// The longest name a file system takes for one file or folder (`NAME_MAX` on Linux).
+pub const MAX_NAME_BYTES: usize = 255;
+
+/// Refuses a written path with a file or folder name longer than [`MAX_NAME_BYTES`], which
+/// no file system would take once the work was done.
+fn check_name_lengths(w: &Entry) -> Result<()> {
+    use std::os::unix::ffi::OsStrExt;
+    match w.path.iter().find(|c| c.as_bytes().len() > MAX_NAME_BYTES) {
+        Some(long) => Err(Error::Invalid(format!(
+            "{}: {} has a name of {} bytes; file systems take at most {MAX_NAME_BYTES}",
+            w.path.display(),
+            w.what,
+            long.as_bytes().len()
+        ))),
+        None => Ok(()),
     }
 }
 

@@ -321,3 +321,116 @@ fn merge_onto_a_part_is_refused() {
         &["whole.exr: -o is one of the inputs (a part to merge p0.exr)"],
     );
 }
+
+/// An output that is a symbolic link is written through it: the file it names gets the
+/// image and the link stays (it used to be replaced by a file).
+#[test]
+fn an_output_that_is_a_link_is_written_through() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    scene_with_mesh(d, "m.ply");
+    std::fs::create_dir(d.join("renders")).unwrap();
+    std::fs::write(d.join("renders/take-1.exr"), b"the previous take").unwrap();
+    std::os::unix::fs::symlink("renders/take-1.exr", d.join("latest.exr")).unwrap();
+    let mut args = vec!["render", "s.toml", "-o", "latest.exr"];
+    args.extend(PATH);
+    let out = raylink_in(d, &args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let link = d.join("latest.exr").symlink_metadata().unwrap();
+    assert!(link.is_symlink(), "the link was replaced");
+    let written = std::fs::read(d.join("renders/take-1.exr")).unwrap();
+    assert!(written.starts_with(&[0x76, 0x2f, 0x31, 0x01]), "not an EXR");
+    // Nothing else appeared beside the link or the file.
+    let names: Vec<_> = snapshot(d).into_keys().collect();
+    let expected = [
+        "latest.exr",
+        "m.ply",
+        "renders",
+        "renders/take-1.exr",
+        "s.toml",
+    ];
+    assert_eq!(names, expected.map(PathBuf::from));
+}
+
+/// Inputs and outputs that the file system refuses by their names are bad input (exit 2),
+/// and an output name too long for any file system is refused before the render.
+#[test]
+fn link_loops_and_overlong_names_are_bad_input() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    scene_with_mesh(d, "m.ply");
+    std::os::unix::fs::symlink("loop-b.toml", d.join("loop-a.toml")).unwrap();
+    std::os::unix::fs::symlink("loop-a.toml", d.join("loop-b.toml")).unwrap();
+    let mut args = vec!["render", "loop-a.toml", "-o", "out.exr"];
+    args.extend(PATH);
+    refused("a link loop", d, &args, &["loop-a.toml", "symbolic links"]);
+    let long = format!("{}.exr", "a".repeat(300));
+    let mut args = vec!["render", "s.toml", "-o", &long];
+    args.extend(PATH);
+    // Large enough that rendering first would take seconds.
+    args.extend(["--width", "2000", "--height", "2000"]);
+    let start = std::time::Instant::now();
+    refused(
+        "a 304-byte name",
+        d,
+        &args,
+        &["has a name of 304 bytes", "at most 255"],
+    );
+    assert!(
+        start.elapsed().as_secs() < 5,
+        "refused only after rendering"
+    );
+    // The checkpoint's name (OUT.checkpoint) is checked too.
+    let long = format!("{}.exr", "b".repeat(248));
+    let mut args = vec!["render", "s.toml", "-o", &long];
+    args.extend(PATH);
+    refused(
+        "a 263-byte checkpoint",
+        d,
+        &args,
+        &["has a name of 263 bytes"],
+    );
+}
+
+/// `bench --out` names a folder: a file there is refused before measuring, and the files
+/// bench writes are checked against the scenes it reads.
+#[test]
+fn bench_out_is_checked_before_measuring() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    std::fs::write(d.join("notes.txt"), b"my notes").unwrap();
+    let quick = [
+        "--quick",
+        "--scenes",
+        "cornell",
+        "--backends",
+        "bvh",
+        "--threads",
+        "1",
+    ];
+    let mut args = vec!["bench", "--out", "notes.txt"];
+    args.extend(quick);
+    refused(
+        "--out a file",
+        d,
+        &args,
+        &["notes.txt", "--out must name a folder"],
+    );
+    // One of bench's outputs is a link to the scene it reads: written through, it would
+    // overwrite the scene.
+    scene_with_mesh(d, "m.ply");
+    std::fs::create_dir(d.join("out")).unwrap();
+    std::os::unix::fs::symlink("../s.toml", d.join("out/bench.md")).unwrap();
+    let mut args = vec!["bench", "--out", "out", "--scenes", "s.toml"];
+    args.extend(["--quick", "--backends", "bvh", "--threads", "1"]);
+    refused(
+        "an output over a scene",
+        d,
+        &args,
+        &["bench.md", "one of the inputs"],
+    );
+}
