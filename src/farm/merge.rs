@@ -43,11 +43,8 @@ struct Part {
 }
 
 fn read_part(path: &Path) -> Result<Part> {
-    // An unreadable part is bad input (exit 2), like a bad scene.
-    let raw = oiio::read(path).map_err(|e| match e {
-        Error::Image { path, detail } => Error::Input { path, detail },
-        e => e,
-    })?;
+    // An unreadable part is bad input (exit 2), as every unreadable image is.
+    let raw = oiio::read(path)?;
     let bad = |detail: String| Error::input(path, detail);
     if raw.meta(META_SETTINGS).is_none() || raw.meta(META_SCENE_HASH).is_none() {
         return Err(bad(format!(

@@ -1,7 +1,8 @@
 //! Safe wrapper over the C API in `ffi/oiio.h` (compiled from `ffi/oiio.cpp` by `build.rs`).
 //! This is the only module with unsafe OpenImageIO code. Every function validates its input
-//! (sizes, NUL bytes) before crossing into C++, and reports failures as [`Error::Image`]
-//! naming the file, never by panicking.
+//! (sizes, NUL bytes) before crossing into C++, and reports failures naming the file, never
+//! by panicking: a file that cannot be read as an image as [`Error::Input`] (bad input), a
+//! failure to write as [`Error::Image`] or [`Error::Io`].
 
 use std::ffi::{c_char, c_int, CStr, CString};
 use std::path::Path;
@@ -307,12 +308,16 @@ pub fn read(path: &Path) -> Result<RawImage> {
 /// largest image size ([`MAX_RESOLUTION`] a side) and what `allowance` leaves of the
 /// budget ([`read_bytes`]): all checked before any pixel is read.
 pub fn read_within(path: &Path, allowance: &Allowance) -> Result<RawImage> {
-    input_file::check(path, &input_file::IMAGE).map_err(|e| match e {
+    // A file that cannot be read as an image is bad input, as a malformed scene is.
+    let size = input_file::check(path, &input_file::IMAGE).map_err(|e| match e {
         Error::Io { source, .. } => {
-            Error::image(path, format!("cannot open for reading: {source}"))
+            Error::input(path, format!("cannot open for reading: {source}"))
         }
         e => e,
     })?;
+    if size == 0 {
+        return Err(Error::input(path, "empty file (0 bytes), not an image"));
+    }
     let api = sys::api().map_err(|e| Error::image(path, e))?;
     let c_path = path_to_cstring(path)?;
     let mut err = ErrorBuffer::new();
@@ -331,7 +336,7 @@ pub fn read_within(path: &Path, allowance: &Allowance) -> Result<RawImage> {
         )
     };
     if failed != 0 {
-        return Err(Error::image(path, err.message()));
+        return Err(Error::input(path, err.message()));
     }
     let to_u32 = |v: c_int| u32::try_from(v).unwrap_or(u32::MAX);
     let (width, height, channels) = (to_u32(width), to_u32(height), to_u32(channels));
@@ -364,7 +369,7 @@ pub fn read_within(path: &Path, allowance: &Allowance) -> Result<RawImage> {
         )
     };
     if ptr.is_null() {
-        return Err(Error::image(path, err.message()));
+        return Err(Error::input(path, err.message()));
     }
     Ok(Handle { image: ptr, api }.to_raw())
 }

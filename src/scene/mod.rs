@@ -224,3 +224,17 @@ impl Scene {
         Ok((scene, animation))
     }
 }
+
+/// Why a mesh file's normal cannot be used (not finite, zero, or of a length that overflows),
+/// as the native format refuses an inline mesh's: the rest of "the normal ... ".
+pub(crate) fn check_normal(n: Vec3) -> Result<(), String> {
+    if !n.is_finite() {
+        Err(format!("must be finite, got {}", show(n)))
+    } else if !n.length().is_finite() {
+        Err(format!("has a length that overflows, got {}", show(n)))
+    } else if n.length_squared() == 0.0 || n.normalize_or_zero() == Vec3::ZERO {
+        Err(format!("must not be zero, got {}", show(n)))
+    } else {
+        Ok(())
+    }
+}

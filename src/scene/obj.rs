@@ -200,6 +200,10 @@ fn prescan_obj(text: &str) -> Result<(), String> {
                 if xyz.len() < 3 || xyz.iter().any(|x| !x.is_some_and(f32::is_finite)) {
                     return Err(format!("line {at}: `vn` needs 3 finite numbers"));
                 }
+                let n = Vec3::from_array([0, 1, 2].map(|k| xyz[k].unwrap_or(0.0)));
+                if let Err(e) = super::check_normal(n) {
+                    return Err(format!("line {at}: the normal {e}"));
+                }
             }
             Some("f") => {
                 let corners: Vec<&str> = words.collect();

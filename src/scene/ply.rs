@@ -211,12 +211,14 @@ pub fn read(path: &Path) -> crate::error::Result<PlyMesh> {
         mesh.positions.push(p);
     }
     if has_normals {
-        mesh.normals = Some(
-            vertices
-                .iter()
-                .map(|v| Vec3::new(v.n[0] as f32, v.n[1] as f32, v.n[2] as f32))
-                .collect(),
-        );
+        let mut normals = Vec::with_capacity(n);
+        for (i, v) in vertices.iter().enumerate() {
+            let normal = Vec3::new(v.n[0] as f32, v.n[1] as f32, v.n[2] as f32);
+            super::check_normal(normal)
+                .map_err(|e| Error::input(path, format!("vertex {i}: the normal {e}")))?;
+            normals.push(normal);
+        }
+        mesh.normals = Some(normals);
     }
     if has_uvs {
         mesh.uvs = Some(
