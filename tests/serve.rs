@@ -82,9 +82,20 @@ fn with_a_token_every_request_must_carry_it() {
         assert_eq!(ask(path, "Authorization: Bearer wrong\r\n"), 403, "{path}");
     }
     assert_eq!(ask("/api/state?token=s3cret-token", ""), 200);
+    // The scheme's name is case-insensitive; a token given as another scheme is not one.
+    for header in ["Bearer", "bearer", "BEARER", "bEaReR"] {
+        assert_eq!(
+            ask(
+                "/api/state",
+                &format!("Authorization: {header} s3cret-token\r\n")
+            ),
+            200,
+            "{header}"
+        );
+    }
     assert_eq!(
-        ask("/api/state", "Authorization: Bearer s3cret-token\r\n"),
-        200
+        ask("/api/state", "Authorization: Basic s3cret-token\r\n"),
+        401
     );
     let page = server.get("/");
     assert_eq!(page.status, 200);
@@ -192,6 +203,18 @@ fn malformed_commands_are_refused_and_the_server_goes_on() {
     }
     let good = b"{\"position\":[0,1,9],\"look_at\":[0,1,0]}";
     assert_eq!(server.request("POST", "/api/camera", "", good).status, 415);
+    // Only the media type application/json itself (any case, with parameters) is JSON: a
+    // malformed body is then read as JSON and refused as such (400), not for its type.
+    for (content_type, status) in [
+        ("application/jsonfoo", 415),
+        ("application/json-seq", 415),
+        ("text/plain", 415),
+        ("Application/JSON; charset=utf-8", 400),
+    ] {
+        let header = format!("Content-Type: {content_type}\r\n");
+        let r = server.request("POST", "/api/camera", &header, b"{bad");
+        assert_eq!(r.status, status, "{content_type}");
+    }
     let other = "Content-Type: application/json\r\nOrigin: http://attacker.example\r\n";
     assert_eq!(
         server.request("POST", "/api/camera", other, good).status,

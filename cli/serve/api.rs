@@ -108,10 +108,9 @@ impl Api {
     fn admit(&self, r: &Request) -> Result<(), Response> {
         match &self.token {
             Some(token) => {
-                let given = r.param("token").or_else(|| {
-                    r.header("authorization")
-                        .and_then(|a| a.strip_prefix("Bearer "))
-                });
+                let given = r
+                    .param("token")
+                    .or_else(|| r.header("authorization").and_then(bearer_token));
                 match given {
                     None => Err(Response::text(401, "a token is needed: ?token=T")
                         .with_header("WWW-Authenticate", "Bearer".into())),
@@ -150,9 +149,7 @@ impl Api {
         r: &Request,
         run: impl FnOnce(&Api, &[u8]) -> Result<Value, (u16, String)>,
     ) -> Response {
-        let json = r
-            .header("content-type")
-            .is_some_and(|t| t.to_ascii_lowercase().starts_with("application/json"));
+        let json = r.header("content-type").is_some_and(is_json);
         if !json {
             return Response::text(415, "commands are JSON: Content-Type: application/json");
         }
@@ -589,6 +586,22 @@ fn parse<T: for<'de> Deserialize<'de>>(body: &[u8]) -> Result<T, (u16, String)> 
 /// Equality in a time that does not depend on where the strings differ.
 fn same(a: &[u8], b: &[u8]) -> bool {
     a.len() == b.len() && a.iter().zip(b).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
+}
+
+/// The token of an `Authorization` header's Bearer credentials: the scheme's name is
+/// case-insensitive (RFC 7235), and any spaces may follow it.
+fn bearer_token(value: &str) -> Option<&str> {
+    let (scheme, token) = value.trim_start().split_once(' ')?;
+    scheme
+        .eq_ignore_ascii_case("bearer")
+        .then(|| token.trim_start())
+}
+
+/// Whether a `Content-Type` is JSON: the media type `application/json` exactly (any case),
+/// with or without parameters (`; charset=utf-8`), not one that only starts with it.
+fn is_json(value: &str) -> bool {
+    let media = value.split(';').next().unwrap_or_default().trim();
+    media.eq_ignore_ascii_case("application/json")
 }
 
 #[cfg(test)]
