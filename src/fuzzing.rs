@@ -251,11 +251,11 @@ fn text3(v: [f64; 3]) -> String {
     v.map(text).join(" ")
 }
 
-/// Camera and transform paths: the bytes are numbers (see [`Numbers`]) for a camera (eye,
-/// target, up, field of view, lens, orthographic size), two transform steps and a light's
-/// `from` and `to`, put into a camera checked directly, a pbrt scene and a TOML scene. Each
-/// may be refused with one line; what is accepted must give finite rays within the range the
-/// backends trace, and lights inside it.
+/// Camera and transform paths: the bytes are numbers (little-endian f64s, eight bytes
+/// each) for a camera (eye, target, up, field of view, lens, orthographic size), two
+/// transform steps and a light's `from` and `to`, put into a camera checked directly, a
+/// pbrt scene and a TOML scene. Each may be refused with one line; what is accepted must
+/// give finite rays within the range the backends trace, and lights inside it.
 pub fn camera(data: &[u8]) {
     use crate::scene::{Camera, Projection, MAX_COORDINATE};
     let mut n = Numbers(data);
