@@ -44,7 +44,7 @@ fn arrive_from_infinity(
     dir: Vec3,
     (hero, path): (usize, &mut Throughput),
 ) -> Option<Vec3> {
-    let back = Ray::new(start, -dir);
+    let back = Spot::exact(start).spawn(-dir);
     let (mut far, mut endless) = (0.0f32, Rgb::ZERO);
     medium.segments(&back, f32::INFINITY, &mut |s| {
         if s.sigma_maj.max_element() > 0.0 {
