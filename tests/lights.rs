@@ -683,3 +683,102 @@ fn pbrt_projection_lights_read() {
     let e = Scene::load(&main).unwrap_err().to_string();
     assert!(e.contains("main.pbrt") && e.contains("missing.exr"), "{e}");
 }
+
+/// A room lit only through a window in its left wall, by a sky (a constant background) and
+/// a sun (a directional light), with a glossy ball inside: path tracing, light tracing and
+/// BDPT (whose subpaths start at and end on lights at infinity) agree, 8 seeds each.
+#[test]
+fn path_light_and_bidirectional_agree_in_a_room_lit_by_sky_and_sun() {
+    let quad = |v: [[f32; 3]; 4], m: &str| {
+        format!("[[shapes]]\ntype = \"quad\"\nvertices = {v:?}\nmaterial = \"{m}\"\n")
+    };
+    let mut text = String::from(
+        "[camera]\nposition = [0.3, 1.0, 0.95]\nlook_at = [-0.2, 0.8, -1]\nfov = 75\nwidth = 24\nheight = 24\n\
+         [world]\nbackground = [0.4, 0.5, 0.7]\n\
+         [[lights]]\ntype = \"directional\"\ndirection = [1, -0.6, -0.25]\nirradiance = [3, 2.8, 2.5]\n\
+         [materials.wall]\ndiffuse = 0.7\n\
+         [materials.floor]\ndiffuse = [0.6, 0.45, 0.3]\n\
+         [materials.ball]\ndiffuse = 0.2\nspecular = 0.6\nroughness = 0.3\n\
+         [[shapes]]\ntype = \"sphere\"\ncenter = [0.3, 0.35, -0.4]\nradius = 0.35\nmaterial = \"ball\"\n",
+    );
+    let (lo, hi) = (-1.0f32, 1.0f32);
+    // Floor, ceiling, back, right and front walls.
+    text += &quad(
+        [[lo, 0.0, lo], [lo, 0.0, hi], [hi, 0.0, hi], [hi, 0.0, lo]],
+        "floor",
+    );
+    text += &quad(
+        [[lo, 2.0, lo], [hi, 2.0, lo], [hi, 2.0, hi], [lo, 2.0, hi]],
+        "wall",
+    );
+    text += &quad(
+        [[lo, 0.0, lo], [hi, 0.0, lo], [hi, 2.0, lo], [lo, 2.0, lo]],
+        "wall",
+    );
+    text += &quad(
+        [[hi, 0.0, lo], [hi, 0.0, hi], [hi, 2.0, hi], [hi, 2.0, lo]],
+        "wall",
+    );
+    text += &quad(
+        [[lo, 0.0, hi], [lo, 2.0, hi], [hi, 2.0, hi], [hi, 0.0, hi]],
+        "wall",
+    );
+    // The left wall around a window over y in [0.8, 1.6] and z in [-0.6, 0.2].
+    for (y0, y1, z0, z1) in [
+        (0.0, 0.8, lo, hi),
+        (1.6, 2.0, lo, hi),
+        (0.8, 1.6, lo, -0.6),
+        (0.8, 1.6, 0.2, hi),
+    ] {
+        text += &quad(
+            [[lo, y0, z0], [lo, y1, z0], [lo, y1, z1], [lo, y0, z1]],
+            "wall",
+        );
+    }
+    let scene = parse(&text);
+    assert!(scene.background.max_element() > 0.0 && !scene.lights.is_empty());
+    agree(
+        &scene,
+        [
+            ("path", Technique::Path, 32),
+            ("light", Technique::Light, 32),
+            ("bdpt", Technique::Bdpt, 16),
+        ],
+    );
+}
+
+/// Balls on a floor under an environment map with a bright "sun" texel and no other light:
+/// path tracing, light tracing and BDPT agree, 8 seeds each.
+#[test]
+fn path_light_and_bidirectional_agree_under_an_environment_map() {
+    use raylink::math::{Mat3, Rgb};
+    let mut scene = parse(
+        "[camera]\nposition = [0, 1.2, 3]\nlook_at = [0, 0.3, 0]\nfov = 50\nwidth = 24\nheight = 24\n\
+         [materials.ground]\ndiffuse = 0.5\n\
+         [materials.red]\ndiffuse = [0.7, 0.2, 0.1]\n\
+         [materials.gloss]\ndiffuse = 0.1\nspecular = 0.7\nroughness = 0.2\n\
+         [[shapes]]\ntype = \"quad\"\nvertices = [[-3, 0, -3], [-3, 0, 3], [3, 0, 3], [3, 0, -3]]\nmaterial = \"ground\"\n\
+         [[shapes]]\ntype = \"sphere\"\ncenter = [-0.5, 0.4, 0]\nradius = 0.4\nmaterial = \"red\"\n\
+         [[shapes]]\ntype = \"sphere\"\ncenter = [0.5, 0.4, -0.2]\nradius = 0.4\nmaterial = \"gloss\"\n",
+    );
+    let n = 16;
+    let mut map = Image::new(n, n);
+    for y in 0..n {
+        for x in 0..n {
+            let v = 0.2 + (x as f32 / n as f32) + 0.5 * (y as f32 / n as f32);
+            let sun = if (x, y) == (5, 6) { 60.0 } else { 0.0 };
+            map.set(x, y, Rgb::new(0.5 * v + sun, 0.7 * v + sun, v + sun));
+        }
+    }
+    let env = raylink::scene::Environment::new(map, "sky".into(), Mat3::IDENTITY, Rgb::ONE)
+        .unwrap_or_else(|e| panic!("{e}"));
+    scene.environment = Some(std::sync::Arc::new(env));
+    agree(
+        &scene,
+        [
+            ("path", Technique::Path, 32),
+            ("light", Technique::Light, 128),
+            ("bdpt", Technique::Bdpt, 16),
+        ],
+    );
+}

@@ -662,16 +662,17 @@ indices = [[0, 2, 1], [0, 3, 2], [4, 5, 6], [4, 6, 7], [0, 1, 5], [0, 5, 4],
 media = { inside = "ink" }
 "#;
 
-/// Path tracing and light tracing agree, pixel by pixel and over the image, on media lit
-/// from infinity (sky and sun reach the fog and the ink through their boundaries; the sky
-/// is seen through them) and by an emitter that bounds a medium (light paths leave the
-/// lamp in the fog around it).
+/// Path, light and bidirectional tracing agree, pixel by pixel and over the image, on
+/// media lit from infinity (sky and sun reach the fog and the ink through their
+/// boundaries; the sky is seen through them) and by an emitter that bounds a medium (light
+/// paths leave the lamp in the fog around it).
 #[test]
-fn path_and_light_tracing_agree_on_media_under_the_sky_and_around_a_lamp() {
+fn path_light_and_bidirectional_tracing_agree_on_media_under_the_sky_and_around_a_lamp() {
     let scene = toml(SKY_FOG_AND_INK);
     let runs = [
         ("path", Technique::Path(boxed(64, 64))),
         ("light", Technique::Light(boxed(64, 64))),
+        ("bdpt", Technique::Bdpt(boxed(32, 64))),
     ];
     assert_techniques_agree("sky, fog and ink", &scene, &runs);
 }

@@ -38,7 +38,7 @@ pub(crate) fn check_scene(scene: &Scene) -> Result<(), String> {
 /// the start back past the grid; a medium without end lets through only the channels it
 /// does not attenuate (weighted as a free flight that met no collision). `None` when no
 /// light arrives in the hero channel.
-fn arrive_from_infinity(
+pub(super) fn arrive_from_infinity(
     medium: &dyn MediumModel,
     start: Vec3,
     dir: Vec3,

@@ -4,8 +4,10 @@
 //! an emitter) and t = 1 (a light vertex connected to the camera and splatted, as in light
 //! tracing). The strategies are combined by multiple importance sampling with the power
 //! heuristic, computed from the forward and reverse area densities of every vertex as in
-//! pbrt. Finite emitters only (area and point lights): directional lights and the
-//! background have no position to start a subpath from, and are left to the path tracer.
+//! pbrt. Lights at infinity (the background and directional lights) are vertices known by
+//! their direction, as in pbrt-v4: a light subpath starts on the disk of the scene's
+//! bounding sphere facing its direction, a camera subpath that leaves the scene ends at the
+//! background, and the densities towards such a vertex stay in solid angle.
 //!
 //! In a scene with media the subpaths fly through them as the volumetric path tracer's
 //! paths do (delta tracking by a hero channel, medium boundaries crossed without a vertex),
@@ -19,14 +21,15 @@ mod walk;
 
 use super::camera_connection::{lens_sample, project_to_camera};
 use super::light::refuse_orthographic;
-use super::volumetric::{average, hero_channel, positive, transmittance};
-use super::volumetric_light::medium_at;
+use super::volumetric::{
+    average, hero_channel, positive, transmittance, transmittance_to_infinity, Throughput,
+};
+use super::volumetric_light::{arrive_from_infinity, medium_at};
 use crate::bsdf::Transport;
-use crate::error::Error;
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
 use crate::math::warp::cosine_hemisphere;
-use crate::math::{frame, Ray, Rgb, Rng, Vec2};
+use crate::math::{frame, Ray, Rgb, Rng, Vec2, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::lights::Emitter;
 use crate::scene::Scene;
@@ -52,13 +55,12 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     media: true,
 };
 
-/// The technique for `scene` (finite emitters only): nothing to prepare, sample passes.
+/// The technique for `scene`: nothing to prepare, sample passes.
 pub(crate) fn lifecycle(
     mc: &MonteCarloSettings,
     scene: &Scene,
 ) -> crate::error::Result<Box<dyn Lifecycle>> {
     refuse_orthographic(scene, "bdpt")?;
-    Bdpt::check_scene(scene).map_err(|e| Error::input(&scene.source, e))?;
     Ok(Box::new(SampledTechnique {
         integrator: Bdpt::new(BdptOptions {
             max_depth: mc.max_depth,
@@ -81,25 +83,6 @@ impl Bdpt {
     pub fn new(options: BdptOptions) -> Self {
         Bdpt { options }
     }
-
-    /// Whether BDPT can render a scene: it needs every emitter to have a position.
-    pub fn check_scene(scene: &Scene) -> Result<(), String> {
-        if !scene
-            .lights
-            .iter()
-            .all(|l| l.model().point_source().is_some())
-            || scene.background.max_element() > 0.0
-            || scene.environment.is_some()
-        {
-            return Err(
-                "the bdpt integrator supports area, point, spot and goniometric lights only; this \
-                 scene has a directional light or a background: render it with the path \
-                 integrator"
-                    .into(),
-            );
-        }
-        Ok(())
-    }
 }
 
 /// The largest f32 below 1.
@@ -112,6 +95,13 @@ struct Spectral {
     rng: Rng,
 }
 
+/// Where a connection ends: a point, or infinitely far along a direction.
+#[derive(Clone, Copy)]
+enum End<'s> {
+    At(&'s Spot),
+    Towards(Vec3),
+}
+
 /// What reaches `to` of the light leaving `from` (in `medium`) for a strategy whose
 /// subpaths have the density ratios `r_path`: 1 for an unoccluded segment in a scene
 /// without media; through media the ratio-tracked transmittance over the average of the
@@ -120,16 +110,28 @@ struct Spectral {
 fn link(
     ctx: &Context,
     (from, medium): (&Spot, Option<u32>),
-    to: &Spot,
+    to: End,
     r_path: Rgb,
     time: f32,
     spectral: &mut Option<Spectral>,
     stats: &mut RayStats,
 ) -> Option<Rgb> {
-    match spectral {
-        None => (!ctx.occluded(&from.spawn_to(to).at_time(time), stats)).then_some(Rgb::ONE),
-        Some(Spectral { hero, rng }) => {
-            let (t, _, r_l) = transmittance(ctx, (*from, time), medium, to, *hero, rng, stats)?;
+    match (spectral, to) {
+        (None, End::At(to)) => {
+            (!ctx.occluded(&from.spawn_to(to).at_time(time), stats)).then_some(Rgb::ONE)
+        }
+        (None, End::Towards(dir)) => ctx
+            .intersect(&from.spawn(dir).at_time(time), stats)
+            .is_none()
+            .then_some(Rgb::ONE),
+        (Some(Spectral { hero, rng }), to) => {
+            let from = (*from, time);
+            let (t, _, r_l) = match to {
+                End::At(to) => transmittance(ctx, from, medium, to, *hero, rng, stats),
+                End::Towards(dir) => {
+                    transmittance_to_infinity(ctx, from, medium, dir, *hero, rng, stats)
+                }
+            }?;
             let density = average(r_path * r_l);
             positive(density).then(|| t / density)
         }
@@ -168,6 +170,7 @@ impl MonteCarlo for Bdpt {
             WalkStart {
                 ray: *camera_ray,
                 beta: Rgb::ONE,
+                r_u: Rgb::ONE,
                 pdf: pdf_cam,
                 max: max_depth + 1,
                 mode: Transport::Radiance,
@@ -202,14 +205,16 @@ impl MonteCarlo for Bdpt {
                 };
                 match (s, t) {
                     (0, _) => {
-                        // The camera path found an emitter.
+                        // The camera path found an emitter, or left the scene.
                         let pt = &cam_path[t - 1];
-                        if pt.kind != Kind::Surface || pt.light.is_none() {
-                            continue;
-                        }
-                        let to_prev = cam_path[t - 2].p - pt.p;
-                        if pt.emitting_cos(ctx, to_prev) <= 0.0 {
-                            continue;
+                        if !pt.is_infinite() {
+                            if pt.kind != Kind::Surface || pt.light.is_none() {
+                                continue;
+                            }
+                            let to_prev = cam_path[t - 2].p - pt.p;
+                            if pt.emitting_cos(ctx, to_prev) <= 0.0 {
+                                continue;
+                            }
                         }
                         let mut l = pt.beta * pt.emission;
                         if l == Rgb::ZERO {
@@ -234,7 +239,7 @@ impl MonteCarlo for Bdpt {
                         let Some(through) = link(
                             ctx,
                             (&qs.spot(), qs.medium_towards(c.dir)),
-                            &Spot::exact(lens),
+                            End::At(&Spot::exact(lens)),
                             qs.r_u,
                             time,
                             &mut spectral,
@@ -273,6 +278,30 @@ impl MonteCarlo for Bdpt {
                             y: c.y,
                             value: value * through * w,
                         });
+                    }
+                    (1, _) if light_path[0].is_infinite() => {
+                        // Light from infinity along the light subpath's direction.
+                        let (qs, pt) = (&light_path[0], &cam_path[t - 1]);
+                        if !pt.connectible() {
+                            continue;
+                        }
+                        let l = qs.beta * pt.f(Some(&cam_path[t - 2]), qs, Transport::Radiance);
+                        if l == Rgb::ZERO {
+                            continue;
+                        }
+                        let wdir = pt.dir_to(qs);
+                        let Some(through) = link(
+                            ctx,
+                            (&pt.spot(), pt.medium_towards(wdir)),
+                            End::Towards(wdir),
+                            qs.r_u * pt.r_u,
+                            time,
+                            &mut spectral,
+                            stats,
+                        ) else {
+                            continue;
+                        };
+                        radiance += l * pt.beta * through * connection.mis_weight(ctx, camera);
                     }
                     _ => {
                         let (qs, pt) = (&light_path[s - 1], &cam_path[t - 1]);
@@ -313,7 +342,7 @@ impl MonteCarlo for Bdpt {
                         let Some(through) = link(
                             ctx,
                             (&pt.spot(), pt.medium_towards(wdir)),
-                            &qs.spot(),
+                            End::At(&qs.spot()),
                             qs.r_u * pt.r_u,
                             time,
                             &mut spectral,
@@ -344,6 +373,22 @@ fn light_subpath<'a>(
     let u_choose = sampler.next_2d();
     let u_pos = sampler.next_2d();
     let u_dir = sampler.next_2d();
+    let lights = &ctx.lights;
+    if let Some((i, _)) = lights
+        .choose(u_choose.x)
+        .filter(|&(i, _)| lights.is_infinite(i))
+    {
+        let start = InfiniteStart {
+            light: i,
+            u_pos,
+            u_dir,
+            time,
+            max_depth,
+            hero,
+        };
+        infinite_light_subpath(ctx, start, &mut light_path, sampler, stats);
+        return light_path;
+    }
     let Some((light, at, pdf_pos, point, le)) = sample_light_point(ctx, u_choose.x, u_pos) else {
         return light_path;
     };
@@ -404,6 +449,7 @@ fn light_subpath<'a>(
             WalkStart {
                 ray: at.spawn(dir).at_time(time),
                 beta: le_dir * (cos / (pdf_pos * pdf_dir)),
+                r_u: Rgb::ONE,
                 pdf: pdf_dir,
                 max: max_depth,
                 mode: Transport::Importance,
@@ -415,6 +461,103 @@ fn light_subpath<'a>(
         );
     }
     light_path
+}
+
+/// The start of a light subpath at an emitter at infinity (`light`, already chosen).
+struct InfiniteStart {
+    light: usize,
+    u_pos: Vec2,
+    u_dir: Vec2,
+    time: f32,
+    max_depth: u32,
+    hero: Option<usize>,
+}
+
+/// A light subpath from the background or a directional light (pbrt-v4's infinite-light
+/// vertices): a direction by the light's own sampling, and a start on the disk of the
+/// scene's bounding sphere facing it. The first vertex keeps what the s = 1 strategy
+/// needs, the light along its direction over the density of choosing it; the walk carries
+/// the radiance over the densities of the direction and of the point on the disk.
+fn infinite_light_subpath<'a>(
+    ctx: &Context<'a>,
+    start: InfiniteStart,
+    light_path: &mut Vec<Vertex<'a>>,
+    sampler: &mut Sampler,
+    stats: &mut RayStats,
+) {
+    let lights = &ctx.lights;
+    let InfiniteStart {
+        light,
+        u_pos,
+        u_dir,
+        time,
+        max_depth,
+        hero,
+    } = start;
+    let model = lights.emitters[light].model();
+    let pmf = lights.pmf(light);
+    let Some(es) = model.sample_le(u_pos, u_dir, pmf, &lights.world, light) else {
+        return;
+    };
+    if !(es.pdf_dir > 0.0 && es.pdf_pos > 0.0) {
+        return;
+    }
+    let kind = Kind::Infinite {
+        light: Some(light),
+        delta: es.delta_dir,
+    };
+    let at = Spot {
+        p: es.p,
+        error: Vec3::ZERO,
+        n: es.dir,
+    };
+    let mut v0 = Vertex::new(kind, at, es.radiance / (pmf * es.pdf_dir));
+    v0.emission = es.radiance;
+    v0.pdf_fwd = v0.pdf_light_origin(ctx);
+    let mut from = at;
+    let mut r_u = Rgb::ONE;
+    let mut beta = es.radiance / (es.pdf_pos * es.pdf_dir);
+    if let Some(hero) = hero {
+        v0.medium = medium_at(ctx, es.p, time, stats);
+        if let Some(m) = v0.medium {
+            // Light from infinity first crosses what of the medium lies beyond the disk.
+            let model = ctx.scene.media[m as usize].model();
+            let mut tp = Throughput {
+                beta,
+                r_u,
+                r_l: Rgb::ONE,
+            };
+            let Some(p) = arrive_from_infinity(model, es.p, es.dir, (hero, &mut tp)) else {
+                light_path.push(v0);
+                return;
+            };
+            (beta, r_u, from) = (tp.beta, tp.r_u, Spot::exact(p));
+        }
+    }
+    light_path.push(v0);
+    let mut media = hero.map(|hero| Media {
+        hero,
+        medium: v0.medium,
+        gather_emission: false,
+        max_depth,
+        emitted: Rgb::ZERO,
+    });
+    let r = lights.world.radius;
+    random_walk(
+        ctx,
+        WalkStart {
+            ray: from.spawn(es.dir).at_time(time),
+            beta,
+            r_u,
+            pdf: 1.0 / (PI * r * r),
+            max: max_depth,
+            mode: Transport::Importance,
+        },
+        light_path,
+        sampler,
+        stats,
+        media.as_mut(),
+    );
 }
 
 /// A point on a finite emitter chosen by power: (emitter, point with its error and normal,

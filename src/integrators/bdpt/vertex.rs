@@ -1,5 +1,5 @@
 //! The vertices of bidirectional paths and the densities with which each strategy samples
-//! them: surfaces, points in media, emitters and the camera.
+//! them: surfaces, points in media, emitters (at infinity too) and the camera.
 
 use crate::bsdf::{phase, Bsdf, Transport};
 use crate::math::spawn::Spot;
@@ -23,6 +23,13 @@ pub(super) enum Kind {
     Medium {
         g: f32,
     },
+    /// A point at infinity, known by its direction only (the vertex's `n`, the way the
+    /// light travels): a light subpath's start at the background or a directional light
+    /// (`delta`), or a camera subpath that left the scene (`light` the background, if any).
+    Infinite {
+        light: Option<usize>,
+        delta: bool,
+    },
 }
 
 #[derive(Clone, Copy, Debug)]
@@ -31,7 +38,8 @@ pub(super) struct Vertex<'a> {
     pub p: Vec3,
     /// A bound of `p`'s rounding error (zero for the camera, point lights and media).
     pub error: Vec3,
-    /// Geometric normal (zero for the camera, point lights and media).
+    /// Geometric normal (zero for the camera, point lights and media); at infinity the
+    /// unit direction the light travels.
     pub n: Vec3,
     pub bsdf: Option<Bsdf<'a>>,
     /// Emitted radiance of the surface (for s = 0), with its emitter index.
@@ -88,29 +96,61 @@ impl Vertex<'_> {
         }
     }
 
+    /// Whether a connection can end at the vertex (a light's start at infinity is reached
+    /// only along its own direction, by the s = 1 strategy).
     pub fn connectible(&self) -> bool {
         match self.kind {
             Kind::Surface => self.bsdf.is_some_and(|b| b.has_non_delta()),
+            Kind::Infinite { .. } => false,
             _ => true,
         }
     }
 
+    pub fn is_infinite(&self) -> bool {
+        matches!(self.kind, Kind::Infinite { .. })
+    }
+
+    /// A point light, or a directional light's start at infinity.
     pub fn is_delta_light(&self) -> bool {
-        matches!(self.kind, Kind::Light { point: true, .. })
+        matches!(
+            self.kind,
+            Kind::Light { point: true, .. } | Kind::Infinite { delta: true, .. }
+        )
+    }
+
+    /// The unit direction from this vertex to `to` (to or from a point at infinity, along
+    /// the light's direction).
+    pub fn dir_to(&self, to: &Vertex) -> Vec3 {
+        if to.is_infinite() {
+            -to.n
+        } else if self.is_infinite() {
+            self.n
+        } else {
+            (to.p - self.p).normalize()
+        }
     }
 
     /// Converts a solid-angle density at this vertex towards `next` into an area density at
     /// `next` (a volume density for a point in a medium, which has no cosine). The
-    /// transmittance between them is left out of every strategy's density alike.
+    /// transmittance between them is left out of every strategy's density alike. Towards a
+    /// point at infinity the density stays in solid angle; from one, `pdf` is already a
+    /// density over the plane the light crosses and only the cosine at `next` is applied.
     pub fn area_density(&self, pdf: f32, next: &Vertex) -> f32 {
-        let d = next.p - self.p;
-        let dist2 = d.length_squared();
-        if dist2 == 0.0 {
-            return 0.0;
+        if next.is_infinite() {
+            return pdf;
         }
-        let mut pdf = pdf / dist2;
+        let (mut pdf, w) = if self.is_infinite() {
+            (pdf, self.n)
+        } else {
+            let d = next.p - self.p;
+            let dist2 = d.length_squared();
+            if dist2 == 0.0 {
+                return 0.0;
+            }
+            (pdf / dist2, d / dist2.sqrt())
+        };
         if next.n != Vec3::ZERO {
-            pdf *= next.n.dot(d / dist2.sqrt()).abs();
+            pdf *= next.n.dot(w).abs();
         }
         pdf
     }
@@ -123,23 +163,28 @@ impl Vertex<'_> {
         prev: Option<&Vertex>,
         next: &Vertex,
     ) -> f32 {
-        let w = (next.p - self.p).normalize();
+        let w = self.dir_to(next);
         let pdf = match (self.kind, prev) {
             (Kind::Camera, _) => camera_pdf_dir(camera, self.p, w),
-            (Kind::Light { .. }, _) => return self.pdf_light(ctx, next),
+            (Kind::Light { .. } | Kind::Infinite { .. }, _) => return self.pdf_light(ctx, next),
             (Kind::Surface, Some(prev)) => match self.bsdf {
-                Some(b) => b.pdf((prev.p - self.p).normalize(), w),
+                Some(b) => b.pdf(self.dir_to(prev), w),
                 None => 0.0,
             },
-            (Kind::Medium { g }, Some(prev)) => phase::hg((prev.p - self.p).normalize(), w, g),
+            (Kind::Medium { g }, Some(prev)) => phase::hg(self.dir_to(prev), w, g),
             (_, None) => 0.0,
         };
         self.area_density(pdf, next)
     }
 
-    /// Area density at `next` of a light path leaving this emitter vertex towards it.
+    /// Area density at `next` of a light path leaving this emitter vertex towards it (from
+    /// infinity: uniform over the disk of the scene's bounding sphere the light crosses).
     pub fn pdf_light(&self, ctx: &Context, next: &Vertex) -> f32 {
-        let w = (next.p - self.p).normalize();
+        if self.is_infinite() {
+            let r = ctx.lights.world.radius;
+            return self.area_density(1.0 / (PI * r * r), next);
+        }
+        let w = self.dir_to(next);
         let pdf_dir = match self.kind {
             Kind::Light { light, point: true } => {
                 ctx.lights.emitters[light].model().pdf_emission_direction(w)
@@ -174,8 +219,16 @@ impl Vertex<'_> {
         }
     }
 
-    /// Area density of choosing this emitter point when starting a light path.
+    /// Area density of choosing this emitter point when starting a light path; at infinity
+    /// the solid-angle density of the background sending light along the vertex's direction
+    /// (zero for a directional light, a delta).
     pub fn pdf_light_origin(&self, ctx: &Context) -> f32 {
+        if let Kind::Infinite { light, delta } = self.kind {
+            return match light {
+                Some(i) if !delta => ctx.lights.pdf_li(i, Vec3::ZERO, -self.n, Vec3::ZERO),
+                _ => 0.0,
+            };
+        }
         let light = match self.kind {
             Kind::Light { light, .. } => light,
             _ => match self.light {
@@ -193,12 +246,10 @@ impl Vertex<'_> {
     /// f·|cos| towards `next` (the connection step) for a surface vertex, the phase
     /// function's value for a point in a medium.
     pub fn f(&self, prev: Option<&Vertex>, next: &Vertex, mode: Transport) -> Rgb {
-        let w = (next.p - self.p).normalize();
+        let w = self.dir_to(next);
         match (self.kind, self.bsdf, prev) {
-            (Kind::Surface, Some(b), Some(prev)) => b.eval((prev.p - self.p).normalize(), w, mode),
-            (Kind::Medium { g }, _, Some(prev)) => {
-                Rgb::splat(phase::hg((prev.p - self.p).normalize(), w, g))
-            }
+            (Kind::Surface, Some(b), Some(prev)) => b.eval(self.dir_to(prev), w, mode),
+            (Kind::Medium { g }, _, Some(prev)) => Rgb::splat(phase::hg(self.dir_to(prev), w, g)),
             _ => Rgb::ZERO,
         }
     }

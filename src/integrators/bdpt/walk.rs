@@ -11,16 +11,18 @@ use crate::integrators::volumetric::{
 };
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
-use crate::math::{Ray, Rgb};
+use crate::math::{Ray, Rgb, Vec3};
 use crate::scene::media::tracking::Uniforms;
 use crate::transport::{Context, RayStats};
 
 /// Where a random walk starts: the ray leaving a subpath's last vertex, with throughput
-/// `beta` and solid-angle density `pdf` for its direction; the walk adds at most `max` more
-/// vertices, carrying `mode`.
+/// `beta` (and channel density ratios `r_u`) and solid-angle density `pdf` for its direction
+/// (from a point at infinity, the density over the plane it crosses); the walk adds at most
+/// `max` more vertices, carrying `mode`.
 pub(super) struct WalkStart {
     pub ray: Ray,
     pub beta: Rgb,
+    pub r_u: Rgb,
     pub pdf: f32,
     pub max: u32,
     pub mode: Transport,
@@ -50,6 +52,7 @@ pub(super) fn random_walk<'a>(
     let WalkStart {
         mut ray,
         beta,
+        r_u,
         mut pdf,
         max,
         mode,
@@ -57,7 +60,7 @@ pub(super) fn random_walk<'a>(
     let mut medium = media.as_ref().and_then(|m| m.medium);
     let mut tp = Throughput {
         beta,
-        r_u: Rgb::ONE,
+        r_u,
         r_l: Rgb::ONE,
     };
     let mut bounces = 0;
@@ -127,6 +130,26 @@ pub(super) fn random_walk<'a>(
             }
         }
         let Some(sp) = hit else {
+            if let (Transport::Radiance, Some(light)) = (mode, ctx.lights.background_light()) {
+                // A camera subpath that leaves the scene ends at the background, at infinity.
+                let dir = ray.dir.normalize();
+                let at = Spot {
+                    p: ray.origin + dir,
+                    error: Vec3::ZERO,
+                    n: -dir,
+                };
+                let kind = Kind::Infinite {
+                    light: Some(light),
+                    delta: false,
+                };
+                let mut v = Vertex::new(kind, at, tp.beta);
+                v.emission = ctx.lights.background_radiance(dir);
+                v.r_u = tp.r_u;
+                v.medium = medium;
+                let prev = path.last().expect("a walk starts from a vertex");
+                v.pdf_fwd = prev.area_density(pdf, &v);
+                path.push(v);
+            }
             break;
         };
         let m = &ctx.scene.materials[sp.material];
