@@ -27,6 +27,12 @@ pub(crate) mod segments;
 pub mod sequence;
 pub(crate) mod tables;
 
+/// How animations choose lights for next-event estimation: by power, which a moving
+/// light leaves unchanged elsewhere (a light hierarchy's choice at every point follows every
+/// light's place, so one moving light would make every pixel change).
+pub(crate) const LIGHT_SELECTION: crate::scene::lights::SelectionKind =
+    crate::scene::lights::SelectionKind::Power;
+
 pub use record::Records;
 pub use renderer::FrameStats;
 pub use sequence::{

@@ -10,6 +10,7 @@ use super::grid::{ActiveVoxels, Grid};
 use super::record::{CameraHit, CameraReuse, Recorded, RecordingAccel, Records};
 use super::segments::{Changed, Quantiser, SegmentRecords};
 use super::tables::{BlockLayout, BlockSet, Table, VoxelTables};
+use super::LIGHT_SELECTION;
 use crate::accel::Accel;
 use crate::control::{Control, MemoryBudget};
 use crate::error::Result;
@@ -425,7 +426,7 @@ impl CoherentRenderer {
                 self.layout.width, self.layout.height
             )));
         }
-        let ctx = Context::new(scene, accel);
+        let ctx = Context::with_light_selection(scene, accel, LIGHT_SELECTION);
         let light_choice = matches!(engine, Engine::MonteCarlo { .. }).then_some(&ctx.lights);
         let summary = FrameSummary::new(scene, light_choice);
         let small = engine.small_objects(&ctx);

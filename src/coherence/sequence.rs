@@ -303,7 +303,10 @@ impl Sequence {
         let clock = Clock::start();
         let accel = accel::build(scene, self.job.accel, control)?;
         let engine = self.integrators.engine(&self.job);
-        let (image, rays) = engine.render_full(&Context::new(scene, accel.as_ref()), control)?;
+        let (image, rays) = engine.render_full(
+            &Context::with_light_selection(scene, accel.as_ref(), super::LIGHT_SELECTION),
+            control,
+        )?;
         Ok((image, rays, clock.elapsed()))
     }
 

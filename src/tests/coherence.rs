@@ -310,7 +310,14 @@ fn run(text: &str, kind: Kind, blocks: (u32, u32)) -> Vec<(FrameStats, Image)> {
         }
         let accel = accel::build(scene, Backend::Embree, &control).unwrap();
         let (full, _) = engine
-            .render_full(&Context::new(scene, accel.as_ref()), &control)
+            .render_full(
+                &Context::with_light_selection(
+                    scene,
+                    accel.as_ref(),
+                    crate::coherence::LIGHT_SELECTION,
+                ),
+                &control,
+            )
             .unwrap();
         assert!(
             bits(&image) == bits(&full),

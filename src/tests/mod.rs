@@ -9,6 +9,7 @@ pub(crate) mod coherence_scenes;
 mod irradiance_cache;
 mod layered;
 mod layered_furnace;
+mod light_selection;
 mod materials;
 mod network_build;
 pub(crate) mod network_common;

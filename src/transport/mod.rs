@@ -25,7 +25,7 @@ use crate::math::sobol::Sampler;
 use crate::math::{Ray, Rgb, Rng};
 use crate::scene::camera::CameraBasis;
 use crate::scene::lights::AreaLight;
-use crate::scene::lights::LightSet;
+use crate::scene::lights::{LightSet, SelectionKind};
 use crate::scene::{Scene, SurfacePoint};
 
 /// What integrators render with.
@@ -43,8 +43,17 @@ pub struct Context<'a> {
 
 impl<'a> Context<'a> {
     pub fn new(scene: &'a Scene, accel: &'a dyn Accel) -> Self {
+        Context::with_light_selection(scene, accel, SelectionKind::Tree)
+    }
+
+    /// As [`Context::new`], next-event estimation choosing its lights by `selection`.
+    pub fn with_light_selection(
+        scene: &'a Scene,
+        accel: &'a dyn Accel,
+        selection: SelectionKind,
+    ) -> Self {
         let area_lights = AreaLight::collect(scene);
-        let lights = LightSet::new(scene, &area_lights);
+        let lights = LightSet::with_selection(scene, &area_lights, selection);
         Context {
             scene,
             accel,

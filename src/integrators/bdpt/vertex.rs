@@ -225,7 +225,11 @@ impl Vertex<'_> {
     pub fn pdf_light_origin(&self, ctx: &Context) -> f32 {
         if let Kind::Infinite { light, delta } = self.kind {
             return match light {
-                Some(i) if !delta => ctx.lights.pdf_li(i, Vec3::ZERO, -self.n, Vec3::ZERO),
+                Some(i) if !delta => {
+                    // Light subpaths choose their light by power.
+                    let model = ctx.lights.emitters[i].model();
+                    model.pdf_li(Vec3::ZERO, -self.n, Vec3::ZERO, ctx.lights.pmf(i))
+                }
                 _ => 0.0,
             };
         }

@@ -1,7 +1,7 @@
 //! Area lights: emissive shapes, sampled uniformly by area (spheres by the cone they
 //! subtend), their emission constant or varying by texture.
 
-use super::{EmissionSample, LightModel, LightSample, World};
+use super::{DirectionCone, EmissionSample, LightBounds, LightModel, LightSample, World};
 use crate::math::spawn::{gamma, plane_test_error, Spot};
 use crate::math::warp::{cosine_hemisphere, uniform_cone, uniform_cone_pdf};
 use crate::math::{frame, luminance, Rgb, Vec2, Vec3};
@@ -411,6 +411,42 @@ impl LightModel for AreaLight {
 
     fn is_infinite(&self) -> bool {
         false
+    }
+
+    /// The shape's box, the cone of its triangles' normals (every direction for a sphere)
+    /// and its power; light leaves up to 90° from the normals.
+    fn bounds(&self, world: &World) -> Option<LightBounds> {
+        let (lo, hi, normals) = match &self.kind {
+            AreaKind::Sphere { center, radius } => (
+                *center - Vec3::splat(radius.abs()),
+                *center + Vec3::splat(radius.abs()),
+                DirectionCone::SPHERE,
+            ),
+            AreaKind::Triangles { tris, .. } => {
+                let first = tris.first()?;
+                let mut lo = Vec3::splat(f32::INFINITY);
+                let mut hi = Vec3::splat(f32::NEG_INFINITY);
+                let mut normals = DirectionCone::of(first.n);
+                for t in tris {
+                    for v in [t.a, t.a + t.ab, t.a + t.ac] {
+                        lo = lo.min(v);
+                        hi = hi.max(v);
+                    }
+                    if normals.cos_theta > -1.0 && t.n != Vec3::ZERO {
+                        normals = normals.union(DirectionCone::of(t.n));
+                    }
+                }
+                (lo, hi, normals)
+            }
+        };
+        Some(LightBounds {
+            lo,
+            hi,
+            phi: self.power(world),
+            normals,
+            cos_theta_e: 0.0,
+            two_sided: self.two_sided,
+        })
     }
 }
 

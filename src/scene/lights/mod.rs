@@ -16,6 +16,7 @@
 
 mod area;
 mod background;
+mod bounds;
 mod directional;
 mod goniometric;
 mod point;
@@ -23,16 +24,19 @@ mod point_source;
 mod projection;
 mod set;
 mod spot;
+mod tree;
 
 pub use area::{AreaLight, LightPoint};
 pub use background::{Background, EnvironmentSampler};
+pub use bounds::{DirectionCone, LightBounds};
 pub use directional::DirectionalLight;
 pub use goniometric::{GoniometricLight, GoniometricMap};
 pub use point::PointLight;
 pub use point_source::PointSource;
 pub use projection::ProjectionLight;
-pub use set::{Emitter, LightSet};
+pub use set::{Emitter, LightSet, Selection, SelectionKind};
 pub use spot::{check_cone_width, spot_cosines, spot_falloff, spot_solid_angle, SpotLight};
+pub use tree::LightTree;
 
 use crate::math::spawn::Spot;
 use crate::math::{Rgb, Vec2, Vec3};
@@ -72,6 +76,12 @@ pub trait LightModel {
 
     /// Whether the light is infinitely far away (directional, background).
     fn is_infinite(&self) -> bool;
+
+    /// Where the light is, how it faces and its power, for the light hierarchy; `None` for
+    /// lights at infinity.
+    fn bounds(&self, _world: &World) -> Option<LightBounds> {
+        None
+    }
 
     /// A point source's position and its intensity for bidirectional light vertices;
     /// `None` for lights with area or at infinity.

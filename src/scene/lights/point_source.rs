@@ -2,7 +2,9 @@
 //! projection): each says where it is, its intensity towards a direction, its power and how
 //! it emits light paths ([`PointSource`]); the light interface follows from that alone.
 
-use super::{EmissionSample, Illumination, LightModel, LightSample, World};
+use super::{
+    DirectionCone, EmissionSample, Illumination, LightBounds, LightModel, LightSample, World,
+};
 use crate::math::{Rgb, Vec2, Vec3};
 
 /// What a point source is made of.
@@ -24,6 +26,13 @@ pub trait PointSource {
 
     /// The solid-angle density with which [`PointSource::sample_direction`] picks `w`.
     fn pdf_direction(&self, w: Vec3) -> f32;
+
+    /// The cone the source emits in (axis, cosine of its full-intensity half-angle, cosine
+    /// of the falloff beyond) and the power the light hierarchy weighs it by: every
+    /// direction and its flux, unless the kind says otherwise.
+    fn emission_cone(&self) -> (DirectionCone, f32, f32) {
+        (DirectionCone::SPHERE, 0.0, self.flux())
+    }
 }
 
 impl<T: PointSource> LightModel for T {
@@ -72,6 +81,19 @@ impl<T: PointSource> LightModel for T {
 
     fn is_infinite(&self) -> bool {
         false
+    }
+
+    fn bounds(&self, _world: &World) -> Option<LightBounds> {
+        let p = self.position();
+        let (normals, cos_theta_e, phi) = self.emission_cone();
+        Some(LightBounds {
+            lo: p,
+            hi: p,
+            phi,
+            normals,
+            cos_theta_e,
+            two_sided: false,
+        })
     }
 
     fn point_source(&self) -> Option<(Vec3, Rgb)> {

@@ -1,10 +1,12 @@
 //! The set of every emitter of a scene for the Monte Carlo integrators (area lights, the
-//! scene's lights, the background as an infinite light), chosen in proportion to their
-//! power. Two kinds of sampling: towards a point being shaded (`sample_li`, next-event
-//! estimation, with `pdf_li` for multiple importance sampling), and emission of a light
-//! path (`sample_le`).
+//! scene's lights, the background as an infinite light). Two kinds of sampling: towards a
+//! point being shaded (`sample_li`, next-event estimation, with `pdf_li` for multiple
+//! importance sampling), where a light hierarchy chooses by the light each emitter may send
+//! to the point; and emission of a light path (`sample_le`), chosen in proportion to power.
 
-use super::{AreaLight, Background, EmissionSample, Light, LightModel, LightSample, World};
+use super::{
+    AreaLight, Background, EmissionSample, Light, LightModel, LightSample, LightTree, World,
+};
 use crate::math::{Rgb, Vec2, Vec3};
 use crate::scene::Scene;
 
@@ -38,10 +40,38 @@ pub struct LightSet {
     background: Option<usize>,
     /// A sphere bounding the scene: infinite and directional lights emit from its disk.
     pub world: World,
+    /// How next-event estimation chooses a light at a point.
+    selection: Selection,
+}
+
+/// How next-event estimation chooses among the lights.
+#[derive(Clone, Debug)]
+pub enum Selection {
+    /// In proportion to power, wherever the point is.
+    Power,
+    /// By a light hierarchy, in proportion to what each light may send to the point.
+    Tree(Box<LightTree>),
+}
+
+/// Which [`Selection`] a light set is made with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SelectionKind {
+    Power,
+    Tree,
 }
 
 impl LightSet {
+    /// The lights of `scene`, next-event estimation choosing by a light hierarchy.
     pub fn new(scene: &Scene, area_lights: &[AreaLight]) -> LightSet {
+        LightSet::with_selection(scene, area_lights, SelectionKind::Tree)
+    }
+
+    /// The lights of `scene`, next-event estimation choosing by `kind`.
+    pub fn with_selection(
+        scene: &Scene,
+        area_lights: &[AreaLight],
+        kind: SelectionKind,
+    ) -> LightSet {
         let (center, radius) = bounding_sphere(scene);
         let world = World { center, radius };
         let mut emitters: Vec<Emitter> = area_lights.iter().cloned().map(Emitter::Area).collect();
@@ -81,6 +111,24 @@ impl LightSet {
                 shape_light[a.shape] = Some(i as u32);
             }
         }
+        let selection = match kind {
+            SelectionKind::Power => Selection::Power,
+            SelectionKind::Tree => {
+                let mut bounded = Vec::new();
+                let mut infinite = Vec::new();
+                for (i, e) in emitters.iter().enumerate() {
+                    if pmf[i] <= 0.0 {
+                        continue;
+                    }
+                    match e.model().bounds(&world) {
+                        Some(b) if b.phi > 0.0 && b.phi.is_finite() => bounded.push((i, b)),
+                        Some(_) => {}
+                        None => infinite.push(i),
+                    }
+                }
+                Selection::Tree(Box::new(LightTree::new(bounded, infinite, emitters.len())))
+            }
+        };
         LightSet {
             emitters,
             pmf,
@@ -88,6 +136,23 @@ impl LightSet {
             shape_light,
             background,
             world,
+            selection,
+        }
+    }
+
+    /// Chooses a light for next-event estimation at `p`: its index and probability there.
+    pub fn choose_at(&self, p: Vec3, u: f32) -> Option<(usize, f32)> {
+        match &self.selection {
+            Selection::Power => self.choose(u).map(|(i, _)| (i, self.pmf[i])),
+            Selection::Tree(tree) => tree.choose(p, u),
+        }
+    }
+
+    /// The probability with which [`LightSet::choose_at`] picks emitter `i` at `p`.
+    pub fn pmf_at(&self, p: Vec3, i: usize) -> f32 {
+        match &self.selection {
+            Selection::Power => self.pmf[i],
+            Selection::Tree(tree) => tree.pmf(p, i),
         }
     }
 
@@ -140,17 +205,17 @@ impl LightSet {
 
     /// Samples light arriving at `p` (next-event estimation).
     pub fn sample_li(&self, p: Vec3, u_choose: f32, u: Vec2) -> Option<LightSample> {
-        let (i, _) = self.choose(u_choose)?;
+        let (i, choice) = self.choose_at(p, u_choose)?;
         self.emitters[i]
             .model()
-            .sample_li(p, u, self.pmf[i], &self.world)
+            .sample_li(p, u, choice, &self.world)
     }
 
     /// Density (solid angle at `p`, with the choice of emitter) with which `sample_li` picks
     /// the point `q` with normal `n` on emitter `i` (for the background, the direction
     /// `q − p`).
     pub fn pdf_li(&self, i: usize, p: Vec3, q: Vec3, n: Vec3) -> f32 {
-        self.emitters[i].model().pdf_li(p, q, n, self.pmf[i])
+        self.emitters[i].model().pdf_li(p, q, n, self.pmf_at(p, i))
     }
 
     /// Starts a light path.

@@ -2,7 +2,7 @@
 //! to its axis; no light beyond `cone_angle` (degrees from the axis), full intensity within
 //! `cone_angle` − `cone_delta`, a smooth step between ([`spot_falloff`]).
 
-use super::PointSource;
+use super::{DirectionCone, PointSource};
 use crate::math::warp::{uniform_cone, uniform_cone_pdf};
 use crate::math::{frame, luminance, Rgb, Vec2, Vec3};
 
@@ -76,6 +76,21 @@ impl PointSource for SpotLight {
         } else {
             0.0
         }
+    }
+
+    /// pbrt-v4's bounds: full intensity within the falloff's start, the falloff beyond,
+    /// weighed by the intensity over the whole sphere.
+    fn emission_cone(&self) -> (DirectionCone, f32, f32) {
+        let theta_e = self.cos_end.clamp(-1.0, 1.0).acos() - self.cos_start.clamp(-1.0, 1.0).acos();
+        let cone = DirectionCone {
+            w: self.axis,
+            cos_theta: self.cos_start,
+        };
+        (
+            cone,
+            theta_e.cos(),
+            4.0 * std::f32::consts::PI * luminance(self.intensity),
+        )
     }
 }
 
