@@ -19,6 +19,21 @@ pub const CROSS_SITE: [&str; 5] = [
     "Sec-Fetch-Site: same-site\r\n",
 ];
 
+/// The path tracer's options of the served renders: a small Cornell box.
+pub const PATH: [&str; 11] = [
+    "scenes/cornell-box.toml",
+    "--integrator",
+    "path",
+    "--width",
+    "32",
+    "--height",
+    "24",
+    "--spp",
+    "16",
+    "--seed",
+    "5",
+];
+
 pub struct Server {
     child: Option<Child>,
     /// "127.0.0.1:PORT"
@@ -278,4 +293,13 @@ pub fn assert_no_framing(what: &str, r: &Reply) {
 /// Mean of the values.
 pub fn mean(v: &[f32]) -> f64 {
     v.iter().map(|&x| x as f64).sum::<f64>() / v.len() as f64
+}
+
+/// A refusal's body is one line saying why.
+pub fn assert_one_line(what: &str, r: &Reply) {
+    let text = r.text();
+    assert!(
+        text.ends_with('\n') && text.trim().lines().count() == 1,
+        "{what}: {text:?}"
+    );
 }
