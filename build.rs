@@ -159,6 +159,16 @@ fn build_oiio() {
                  `apt-get install libopenimageio-dev pkg-config`."
             ))
         });
+    // The PNG check in ffi/oiio.cpp calls libpng itself (the one OpenImageIO reads PNGs with).
+    let png = pkg_config::Config::new()
+        .cargo_metadata(false)
+        .probe("libpng")
+        .unwrap_or_else(|e| {
+            fail(&format!(
+                "libpng was not found by pkg-config ({e}). Install it with \
+                 `apt-get install libpng-dev pkg-config`."
+            ))
+        });
     // pkg-config may add Debian's fourth component (2.4.7.1): the library's own is three.
     let version: Vec<&str> = oiio.version.split('.').take(3).collect();
     println!(
@@ -179,7 +189,7 @@ fn build_oiio() {
         "-Wl,-soname,libraylink_oiio.so",
         "-Wl,--no-undefined",
     ]);
-    for dir in &oiio.include_paths {
+    for dir in oiio.include_paths.iter().chain(&png.include_paths) {
         cmd.arg(format!("-I{}", dir.display()));
     }
     for (name, value) in &oiio.defines {
@@ -190,14 +200,14 @@ fn build_oiio() {
     }
     cmd.arg("ffi/oiio.cpp").arg("-o").arg(&object);
     let system = ["/lib", "/usr/lib", "/lib64", "/usr/lib64"];
-    for dir in &oiio.link_paths {
+    for dir in oiio.link_paths.iter().chain(&png.link_paths) {
         cmd.arg(format!("-L{}", dir.display()));
         // Found at run time without help only in the system's own directories.
         if !system.iter().any(|s| dir.starts_with(s)) {
             cmd.arg(format!("-Wl,-rpath,{}", dir.display()));
         }
     }
-    for lib in &oiio.libs {
+    for lib in oiio.libs.iter().chain(&png.libs) {
         cmd.arg(format!("-l{lib}"));
     }
     let status = cmd

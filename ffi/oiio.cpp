@@ -7,8 +7,13 @@
 #include <OpenImageIO/paramlist.h>
 #include <OpenImageIO/typedesc.h>
 
+#include <png.h>
+
 #include <algorithm>
 #include <climits>
+#include <csetjmp>
+#include <cstdio>
+#include <cstdlib>
 #include <cstdint>
 #include <cstring>
 #include <exception>
@@ -344,11 +349,113 @@ extern "C" size_t raylink_oiio_encoded_size(const RaylinkOiioEncoded *encoded) {
 
 extern "C" void raylink_oiio_encoded_free(RaylinkOiioEncoded *encoded) { delete encoded; }
 
+namespace {
+
+// libpng reports an error by calling the handler it was given and, if that returns, printing
+// `libpng error: ...` on stderr itself before unwinding. OpenImageIO's PNG reader (2.4 and
+// later alike) installs a handler that records the message and returns, so every damaged PNG
+// it reads prints that line, and no attribute of OpenImageIO turns it off. So a PNG is first
+// read here, by libpng with a handler that keeps the message and unwinds at once: a file
+// libpng refuses is refused with its reason and OpenImageIO never sees it. Nothing is printed,
+// and nothing global is touched, so it is safe on any thread.
+struct PngCheck {
+    char message[256];
+};
+
+void png_check_error(png_structp png, png_const_charp message) {
+    PngCheck *check = static_cast<PngCheck *>(png_get_error_ptr(png));
+    if (check != nullptr && check->message[0] == '\0') {
+        std::snprintf(check->message, sizeof check->message, "%s",
+                      message != nullptr ? message : "unknown libpng error");
+    }
+    png_longjmp(png, 1);
+}
+
+void png_check_warning(png_structp, png_const_charp) {}
+
+// Reads `file` (positioned after the 8-byte signature) through libpng: its header, and with
+// `whole` every row and the chunks after them. Returns false with libpng's reason in `check`.
+// Only plain C data lives across the setjmp.
+bool png_check_stream(FILE *file, bool whole, PngCheck *check) {
+    png_structp png =
+        png_create_read_struct(PNG_LIBPNG_VER_STRING, check, png_check_error, png_check_warning);
+    if (png == nullptr) {
+        std::snprintf(check->message, sizeof check->message, "libpng could not start");
+        return false;
+    }
+    png_infop info = png_create_info_struct(png);
+    unsigned char *volatile row = nullptr;
+    volatile bool ok = false;
+    if (info != nullptr && setjmp(png_jmpbuf(png)) == 0) {
+        png_init_io(png, file);
+        png_set_sig_bytes(png, 8);
+        png_read_info(png, info);
+        if (whole) {
+            const int passes = png_set_interlace_handling(png);
+            png_read_update_info(png, info);
+            const png_uint_32 height = png_get_image_height(png, info);
+            const size_t row_bytes = png_get_rowbytes(png, info);
+            row = static_cast<unsigned char *>(std::malloc(row_bytes > 0 ? row_bytes : 1));
+            if (row == nullptr) {
+                std::snprintf(check->message, sizeof check->message,
+                              "out of memory for a row of %zu bytes", row_bytes);
+            } else {
+                for (int pass = 0; pass < passes; ++pass) {
+                    for (png_uint_32 y = 0; y < height; ++y) {
+                        png_read_row(png, row, nullptr);
+                    }
+                }
+                png_read_end(png, nullptr);
+                ok = true;
+            }
+        } else {
+            ok = true;
+        }
+    } else if (info == nullptr) {
+        std::snprintf(check->message, sizeof check->message, "libpng could not start");
+    }
+    std::free(row);
+    png_destroy_read_struct(&png, info != nullptr ? &info : nullptr, nullptr);
+    return ok;
+}
+
+// If `path` is a PNG file (by its signature), reads it through libpng as above: returns false
+// with the reason in `err` for a file libpng refuses. Any other file, or one that cannot be
+// opened, is left to OpenImageIO.
+bool png_check(const char *path, bool whole, char *err, size_t err_len) {
+    FILE *file = std::fopen(path, "rb");
+    if (file == nullptr) {
+        return true;
+    }
+    unsigned char signature[8];
+    bool ok = true;
+    if (std::fread(signature, 1, 8, file) == 8 && png_sig_cmp(signature, 0, 8) == 0) {
+        PngCheck check;
+        check.message[0] = '\0';
+        if (!png_check_stream(file, whole, &check)) {
+            // libpng's reader says "Read Error" when the file ends before what it reads.
+            const std::string reason = std::strcmp(check.message, "Read Error") == 0
+                                           ? std::string("the file ends before its image does")
+                                           : std::string(check.message);
+            set_error(err, err_len, "damaged PNG file: " + reason);
+            ok = false;
+        }
+    }
+    std::fclose(file);
+    return ok;
+}
+
+} // namespace
+
 // Opens `path` and checks its header: an input whose spec() raylink_oiio_read can read, or
-// null with the message in `err`.
+// null with the message in `err`. A PNG file's header is read through libpng first
+// (png_check).
 static OIIO::ImageInput::unique_ptr open_input(const char *path, char *err, size_t err_len) {
     if (path == nullptr) {
         set_error(err, err_len, "internal error: null path passed to raylink_oiio_read");
+        return nullptr;
+    }
+    if (!png_check(path, false, err, err_len)) {
         return nullptr;
     }
     auto in = OIIO::ImageInput::open(path);
@@ -411,6 +518,11 @@ extern "C" RaylinkOiioImage *raylink_oiio_read(const char *path, size_t max_valu
                           std::to_string(spec.height) + " pixels of " +
                           std::to_string(spec.nchannels) + " channels, more than " +
                           std::to_string(max_values) + " values");
+            return nullptr;
+        }
+        // Every row of a PNG through libpng before OpenImageIO decodes it (png_check), once
+        // its size is known to be one raylink reads.
+        if (!png_check(path, true, err, err_len)) {
             return nullptr;
         }
 

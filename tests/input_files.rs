@@ -330,8 +330,9 @@ fn files_past_their_limits_are_refused_before_they_are_read() {
     }
 }
 
-/// A tiny PNG whose header declares `width` x `height` RGB pixels (its pixels cut short).
-fn declared_png(width: u32, height: u32) -> Vec<u8> {
+/// A PNG of `width` x `height` 8-bit RGB pixels: its header, one IDAT chunk holding `zlib`
+/// (a zlib stream of the filtered rows) and the end chunk, each with its CRC.
+fn png_file(width: u32, height: u32, zlib: &[u8]) -> Vec<u8> {
     fn crc(bytes: &[u8]) -> u32 {
         let mut c = !0u32;
         for &b in bytes {
@@ -356,15 +357,106 @@ fn declared_png(width: u32, height: u32) -> Vec<u8> {
     let mut ihdr = width.to_be_bytes().to_vec();
     ihdr.extend_from_slice(&height.to_be_bytes());
     ihdr.extend_from_slice(&[8, 2, 0, 0, 0]);
-    // A stored (uncompressed) deflate block of four zero bytes: far fewer than declared.
-    let idat = [
-        0x78, 0x01, 0x01, 0x04, 0x00, 0xfb, 0xff, 0, 0, 0, 0, 0, 0, 0, 0,
-    ];
     let mut png = b"\x89PNG\r\n\x1a\n".to_vec();
     png.extend(chunk(b"IHDR", &ihdr));
-    png.extend(chunk(b"IDAT", &idat));
+    png.extend(chunk(b"IDAT", zlib));
     png.extend(chunk(b"IEND", &[]));
     png
+}
+
+/// `data` as a zlib stream of one stored (uncompressed) deflate block.
+fn stored_zlib(data: &[u8]) -> Vec<u8> {
+    let len = data.len() as u16;
+    let mut z = vec![0x78, 0x01, 0x01];
+    z.extend_from_slice(&len.to_le_bytes());
+    z.extend_from_slice(&(!len).to_le_bytes());
+    z.extend_from_slice(data);
+    let (mut a, mut b) = (1u32, 0u32);
+    for &x in data {
+        a = (a + x as u32) % 65521;
+        b = (b + a) % 65521;
+    }
+    z.extend_from_slice(&((b << 16) | a).to_be_bytes());
+    z
+}
+
+/// A tiny PNG whose header declares `width` x `height` RGB pixels (its pixels cut short).
+fn declared_png(width: u32, height: u32) -> Vec<u8> {
+    // Four zero bytes: far fewer than declared.
+    png_file(width, height, &stored_zlib(&[0; 4]))
+}
+
+/// Damaged PNG textures (cut short, a chunk's CRC wrong in the header or the pixels, a row
+/// with an unknown filter) are refused with exactly one line on stderr, raylink's, naming
+/// the file: nothing of libpng's own printing comes before it. The same PNG undamaged
+/// renders.
+#[test]
+fn a_damaged_png_gives_one_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.exr").to_string_lossy().into_owned();
+    let (w, h) = (8u32, 8u32);
+    let rows = |filter: u8| -> Vec<u8> {
+        (0..h)
+            .flat_map(|y| {
+                std::iter::once(filter).chain((0..w * 3).map(move |i| (i * 7 + y * 31) as u8))
+            })
+            .collect()
+    };
+    let good = png_file(w, h, &stored_zlib(&rows(0)));
+    // Offsets: the signature (8), IHDR (8 + 13 + 4), then IDAT's length, type and data.
+    let ihdr_crc = 8 + 8 + 13;
+    let idat_end = good.len() - 12;
+    let flip = |at: usize| {
+        let mut b = good.clone();
+        b[at] ^= 0x5a;
+        b
+    };
+    let cases: [(&str, Vec<u8>, &str); 5] = [
+        (
+            "cut-short.png",
+            good[..good.len() - 40].to_vec(),
+            "damaged PNG file",
+        ),
+        ("idat-crc.png", flip(idat_end - 1), "CRC error"),
+        ("ihdr-crc.png", flip(ihdr_crc), "CRC error"),
+        (
+            "bad-filter.png",
+            png_file(w, h, &stored_zlib(&rows(9))),
+            "filter",
+        ),
+        (
+            "no-end.png",
+            good[..good.len() - 12].to_vec(),
+            "damaged PNG file",
+        ),
+    ];
+    let render = |scene: &Path| {
+        let argv = [
+            "render",
+            scene.to_str().unwrap(),
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "-q",
+            "-o",
+            &out,
+        ];
+        run(&argv).out
+    };
+    std::fs::write(dir.path().join("good.png"), &good).unwrap();
+    let r = render(&textured_scene(dir.path(), "good.toml", "good.png"));
+    assert!(r.status.success(), "the undamaged PNG: {}", stderr(&r));
+    std::fs::remove_file(&out).unwrap();
+    for (name, bytes, needle) in cases {
+        std::fs::write(dir.path().join(name), &bytes).unwrap();
+        let scene = textured_scene(dir.path(), &format!("{name}.toml"), name);
+        let before = names(dir.path());
+        let r = render(&scene);
+        assert_clean_failure_of(name, &r, &[name, needle]);
+        assert!(!stderr(&r).contains("libpng"), "{name}: {}", stderr(&r));
+        assert_eq!(names(dir.path()), before, "{name}: files changed");
+    }
 }
 
 /// A PNG of a few dozen bytes whose header declares 20000x20000 (or 6000x6000) pixels, as a
