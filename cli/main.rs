@@ -376,21 +376,65 @@ fn run_convert(cli: &Cli, args: ConvertArgs) -> Result<(), Failure> {
 /// OpenImageIO the program carries, to install as /usr/lib/raylink/libraylink_oiio.so (the
 /// program loads it from there, and the package's dependencies are computed from it).
 fn generate_assets(dir: &std::path::Path) -> raylink::Result<()> {
-    use clap_complete::{generate_to, Shell};
+    use clap_complete::{generate, Generator, Shell};
     let mut cmd = command().version(raylink::VERSION);
-    let man = dir.join("man");
-    std::fs::create_dir_all(&man).map_err(|e| Error::io(&man, e))?;
-    clap_mangen::generate_to(cmd.clone(), &man).map_err(|e| Error::io(&man, e))?;
-    let completions = dir.join("completions");
-    std::fs::create_dir_all(&completions).map_err(|e| Error::io(&completions, e))?;
-    for shell in [Shell::Bash, Shell::Zsh, Shell::Fish] {
-        generate_to(shell, &mut cmd, "raylink", &completions)
-            .map_err(|e| Error::io(&completions, e))?;
+    // Everything is made in memory first, then checked against the program's own files as
+    // every run's outputs are (raylink::output_paths), then written atomically.
+    let mut files: Vec<(&str, PathBuf, Vec<u8>)> = Vec::new();
+    fn man_pages(
+        cmd: clap::Command,
+        dir: &std::path::Path,
+        files: &mut Vec<(&str, PathBuf, Vec<u8>)>,
+    ) {
+        for sub in cmd.get_subcommands().filter(|s| !s.is_hide_set()).cloned() {
+            man_pages(sub, dir, files);
+        }
+        let man = clap_mangen::Man::new(cmd);
+        let mut page = Vec::new();
+        man.render(&mut page)
+            .expect("writing to memory does not fail");
+        files.push(("a man page", dir.join(man.get_filename()), page));
     }
-    let lib = dir.join("lib");
-    std::fs::create_dir_all(&lib).map_err(|e| Error::io(&lib, e))?;
-    let object = lib.join(raylink::image::oiio::OBJECT_NAME);
-    std::fs::write(&object, raylink::image::oiio::object()).map_err(|e| Error::io(&object, e))?;
+    let mut root = cmd.clone().disable_help_subcommand(true);
+    root.build();
+    man_pages(root, &dir.join("man"), &mut files);
+    for shell in [Shell::Bash, Shell::Zsh, Shell::Fish] {
+        let mut script = Vec::new();
+        generate(shell, &mut cmd, "raylink", &mut script);
+        let path = dir.join("completions").join(shell.file_name("raylink"));
+        files.push(("a completion script", path, script));
+    }
+    let object = dir.join("lib").join(raylink::image::oiio::OBJECT_NAME);
+    files.push((
+        "the OpenImageIO interface",
+        object,
+        raylink::image::oiio::object().to_vec(),
+    ));
+
+    let mut plan = raylink::output_paths::FilePlan::new();
+    // The program and the interface installed beside it, which may be what DIR's files are
+    // (or link to), as in a package's staging tree.
+    if let Ok(exe) = std::env::current_exe() {
+        plan.read("the program", &exe);
+        if let Some(prefix) = exe.parent().and_then(|bin| bin.parent()) {
+            let installed = prefix
+                .join("lib/raylink")
+                .join(raylink::image::oiio::OBJECT_NAME);
+            if installed.is_file() {
+                plan.read("the installed OpenImageIO interface", &installed);
+            }
+        }
+    }
+    for (what, path, _) in &files {
+        plan.write(*what, path);
+    }
+    plan.check()?;
+    for (_, path, bytes) in &files {
+        if let Some(folder) = path.parent() {
+            std::fs::create_dir_all(folder).map_err(|e| Error::io(folder, e))?;
+        }
+        raylink::atomic_file::write(path, bytes)?;
+    }
     Ok(())
 }
 

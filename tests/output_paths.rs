@@ -434,3 +434,62 @@ fn bench_out_is_checked_before_measuring() {
         &["bench.md", "one of the inputs"],
     );
 }
+
+/// `generate-assets` writes through the same check: a man page or completion script that is
+/// (or links to) the program itself is refused before anything is written; otherwise every
+/// file is replaced whole, an existing one by a new file (a new inode), no temporary left.
+#[test]
+fn generate_assets_never_overwrites_the_program() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let program = Path::new(env!("CARGO_BIN_EXE_raylink"));
+    let before = std::fs::metadata(program).unwrap();
+    std::fs::create_dir(d.join("completions")).unwrap();
+    std::os::unix::fs::symlink(program, d.join("completions/raylink.bash")).unwrap();
+    refused(
+        "a completion script linking to the program",
+        d,
+        &["generate-assets", "."],
+        &["raylink.bash", "is one of the inputs (the program"],
+    );
+    let after = std::fs::metadata(program).unwrap();
+    assert_eq!(
+        (before.len(), before.modified().unwrap()),
+        (after.len(), after.modified().unwrap()),
+        "the program was changed"
+    );
+
+    std::fs::remove_file(d.join("completions/raylink.bash")).unwrap();
+    std::fs::create_dir(d.join("man")).unwrap();
+    std::fs::write(d.join("man/raylink.1"), b"an old page").unwrap();
+    let kept = d.join("kept-link.1");
+    std::fs::hard_link(d.join("man/raylink.1"), &kept).unwrap();
+    let out = raylink_in(d, &["generate-assets", "."]);
+    assert!(out.status.success(), "{}", common::stderr(&out));
+    // The old page's other name still holds the old bytes: the page was replaced, not
+    // written over.
+    assert_eq!(std::fs::read(&kept).unwrap(), b"an old page");
+    let page = std::fs::read_to_string(d.join("man/raylink.1")).unwrap();
+    assert!(
+        page.starts_with(".ie") || page.contains(".TH"),
+        "{page:.80}"
+    );
+    for file in [
+        "man/raylink-render.1",
+        "completions/raylink.bash",
+        "completions/_raylink",
+        "completions/raylink.fish",
+        "lib/libraylink_oiio.so",
+    ] {
+        let len = std::fs::metadata(d.join(file))
+            .map(|m| m.len())
+            .unwrap_or(0);
+        assert!(len > 0, "{file} was not written");
+    }
+    for sub in ["man", "completions", "lib"] {
+        assert!(
+            common::process::temporaries(&d.join(sub)).is_empty(),
+            "temporary files left in {sub}"
+        );
+    }
+}
