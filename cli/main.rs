@@ -177,7 +177,11 @@ fn exit_code(failure: &Failure, signal: Option<i32>) -> u8 {
     };
     match failure {
         Failure::Error(
-            Error::Input { .. } | Error::Setting { .. } | Error::Invalid(_) | Error::Memory { .. },
+            Error::Input { .. }
+            | Error::Inputs(_)
+            | Error::Setting { .. }
+            | Error::Invalid(_)
+            | Error::Memory { .. },
         ) => 2,
         // A file the user named that cannot be read as given is bad input; anything else
         // that goes wrong reading or writing is a failure while working.
@@ -304,7 +308,18 @@ fn main() -> ExitCode {
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(failure) => {
-            eprintln!("raylink: error: {}", message(&cli, &failure));
+            match &failure {
+                // Several bad inputs (the files a scene names that are missing): one line each.
+                Failure::Error(Error::Inputs(all)) => {
+                    for e in all {
+                        eprintln!(
+                            "raylink: error: {}",
+                            raylink::error::one_line(&e.to_string())
+                        );
+                    }
+                }
+                _ => eprintln!("raylink: error: {}", message(&cli, &failure)),
+            }
             ExitCode::from(exit_code(&failure, cli.signals.received()))
         }
     }

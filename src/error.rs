@@ -11,6 +11,10 @@ pub enum Error {
     /// A scene, mesh or other input file is malformed; `detail` names the line or field.
     #[error("{}: {detail}", path.display())]
     Input { path: PathBuf, detail: String },
+    /// Several inputs at once, one [`Error::Input`] each (the files a scene names that are
+    /// missing); shown as one line joined by "; ", and by the command line one line each.
+    #[error("{}", .0.iter().map(ToString::to_string).collect::<Vec<_>>().join("; "))]
+    Inputs(Vec<Error>),
     /// An image could not be written or read.
     #[error("{}: {detail}", path.display())]
     Image { path: PathBuf, detail: String },

@@ -522,3 +522,53 @@ fn monte_carlo_integrators_from_the_cli() {
         &["whitted.toml", "bdpt"],
     );
 }
+
+/// A scene naming several files that are not there (a texture, an OBJ mesh, a PLY mesh and
+/// a normal map) is refused with one line for each, naming the scene's line, the field and
+/// the file, in the file's order: exit code 2, nothing written.
+#[test]
+fn every_missing_file_of_a_scene_is_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.toml");
+    std::fs::write(
+        &scene,
+        "[camera]\nposition = [0, 1, 5]\nlook_at = [0, 1, 0]\n\
+         [materials.a]\ndiffuse = { image = { file = \"no-such-wood.png\" } }\n\
+         [materials.b]\ndiffuse = 0.5\nnormal_map = \"no-such-bumps.png\"\n\
+         [[shapes]]\ntype = \"obj\"\nfile = \"meshes/no-such-chair.obj\"\nmaterial = \"a\"\n\
+         [[shapes]]\ntype = \"sphere\"\ncenter = [0, 1, 0]\nradius = 1\nmaterial = \"b\"\n\
+         [[shapes]]\ntype = \"ply\"\nfile = \"no-such-table.ply\"\nmaterial = \"b\"\n",
+    )
+    .unwrap();
+    let out = dir.path().join("x.exr");
+    let run = raylink(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&run);
+    assert_eq!(run.status.code(), Some(2), "{err}");
+    let lines: Vec<&str> = err.lines().collect();
+    let expected = [
+        ("line 5: materials.a.diffuse.image.file", "no-such-wood.png"),
+        ("line 8: materials.b.normal_map", "no-such-bumps.png"),
+        ("line 11: shapes[0].file", "meshes/no-such-chair.obj"),
+        ("line 20: shapes[2].file", "no-such-table.ply"),
+    ];
+    assert_eq!(lines.len(), expected.len(), "{err}");
+    for (line, (field, file)) in lines.iter().zip(expected) {
+        assert!(line.starts_with("raylink: error: "), "{err}");
+        assert!(
+            line.contains("s.toml: ") && line.contains(field),
+            "{field}: {err}"
+        );
+        assert!(
+            line.contains(&format!("{file}: no such file")),
+            "{file}: {err}"
+        );
+    }
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(files_in(dir.path()), vec![scene]);
+}

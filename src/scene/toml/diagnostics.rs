@@ -22,7 +22,7 @@ pub(super) struct Site {
 }
 
 impl Ctx<'_> {
-    fn line_at(&self, offset: usize) -> usize {
+    pub(super) fn line_at(&self, offset: usize) -> usize {
         let end = offset.min(self.text.len());
         1 + self.text.as_bytes()[..end]
             .iter()

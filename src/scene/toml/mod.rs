@@ -12,10 +12,12 @@
 //! - `builder.rs` (and `builder/shapes.rs`): the schema turned into a [`Scene`].
 //! - `checks.rs`: value checks, transforms and the geometry checks of polygons and meshes.
 //! - `diagnostics.rs`: one-line messages with the file, line and field.
+//! - `missing.rs`: the files the scene names that are not there, all found before building.
 
 mod builder;
 mod checks;
 mod diagnostics;
+mod missing;
 pub(crate) mod schema;
 mod schema_alpha;
 mod schema_coating;
@@ -88,6 +90,13 @@ impl<'a> Document<'a> {
     /// Reads the document as a static scene.
     pub(crate) fn build(self) -> crate::error::Result<Scene> {
         let ctx = self.ctx;
+        // Several files missing are all reported; one is left to the builder, which says
+        // what reading it found.
+        let dir = ctx.path.parent().unwrap_or(Path::new(""));
+        let missing = missing::missing_files(&ctx, self.root.get_ref(), dir);
+        if missing.len() > 1 {
+            return Err(crate::error::Error::Inputs(missing));
+        }
         let file = FileDesc::deserialize(toml::de::Deserializer::from(self.root))
             .map_err(|e| ctx.toml_error(&e))?;
         Builder::new(ctx).build(file)
