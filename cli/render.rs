@@ -167,6 +167,8 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     }
     let out_options = output_options(&args)?;
     let scene = load_scene(&args.scene, &control)?;
+    // A relight may read only a network file's prefix; a render reads all of it.
+    let whole_network = extra.relight.is_none();
     let mut job = options::job(&args, &scene, extra)?;
     let aovs = if args.aov {
         aov_paths(&args.outputs[0])
@@ -184,12 +186,22 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     );
     let progressive = job.technique.monte_carlo().is_some() && job.region.is_none();
     // The inputs first (a cache or network file that is there is read), then the outputs.
-    for (file, kind) in [
-        (&args.cache_file, &input_file::IRRADIANCE_CACHE),
-        (&args.network.network_file, &input_file::NETWORK),
+    // A cache or network file is read whole into memory, where it counts against the
+    // budget as the scene's files do.
+    for (file, kind, whole) in [
+        (&args.cache_file, &input_file::IRRADIANCE_CACHE, true),
+        (
+            &args.network.network_file,
+            &input_file::NETWORK,
+            whole_network,
+        ),
     ] {
         if let Some(f) = file.as_ref().filter(|f| f.exists()) {
-            input_file::check(f, kind)?;
+            let size = input_file::check(f, kind)?;
+            if whole {
+                input_file::Allowance::new(control.budget, 0)
+                    .check(&format!("reading {}", f.display()), size)?;
+            }
         }
     }
     let mut plan = FilePlan::new();
@@ -204,7 +216,13 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     }
     plan.check()?;
     let checkpoint = if progressive {
-        Some(checkpoint::path_for(&args.outputs[0], &resume_key)?)
+        // A checkpoint found there is read beside the film and image the job will hold.
+        let allowance = input_file::Allowance::new(control.budget, job.image_bytes());
+        Some(checkpoint::path_for_within(
+            &args.outputs[0],
+            &resume_key,
+            &allowance,
+        )?)
     } else {
         None
     };
@@ -330,7 +348,9 @@ fn render_with_checkpoints(
         .expect("a progressive technique");
     let mut resumed_samples = 0;
     let resume = if args.resume {
-        let Some(found) = checkpoint::find(&args.outputs[0], settings)? else {
+        // A checkpoint's bytes beside the film and image the job holds already.
+        let allowance = input_file::Allowance::new(control.budget, job.image_bytes());
+        let Some(found) = checkpoint::find_within(&args.outputs[0], settings, &allowance)? else {
             return Err(Error::Invalid(format!(
                 "--resume: there is no checkpoint {} (an interrupted render or \
                  --checkpoint-interval writes one)",
@@ -339,7 +359,7 @@ fn render_with_checkpoints(
             .into());
         };
         let blank = raylink::Film::new(width, height, mc.filter, mc.reconstruction)?;
-        let resumed = checkpoint::load(&found, settings, blank, mc.spp)?;
+        let resumed = checkpoint::load_within(&found, settings, blank, mc.spp, &allowance)?;
         resumed_samples = resumed.samples;
         Some(resumed.film)
     } else {

@@ -87,7 +87,18 @@ impl Format {
     /// Reads `path`, a regular file within `kind`'s limit and the machine's memory budget,
     /// and checks its magic, version and checksum.
     pub fn load(&self, path: &Path, kind: &input_file::Kind) -> Result<Loaded> {
-        let bytes = input_file::read(path, kind, Some(&input_file::Allowance::machine()))?;
+        self.load_within(path, kind, &input_file::Allowance::machine())
+    }
+
+    /// [`Format::load`] within a job's memory: the file's bytes, all held while it is
+    /// checked, count against `allowance`.
+    pub fn load_within(
+        &self,
+        path: &Path,
+        kind: &input_file::Kind,
+        allowance: &input_file::Allowance,
+    ) -> Result<Loaded> {
+        let bytes = input_file::read(path, kind, Some(allowance))?;
         if bytes.len() < 12 || &bytes[..8] != self.magic {
             return Err(self.error(path, &format!("no raylink {} header", self.what)));
         }

@@ -459,6 +459,92 @@ fn a_damaged_png_gives_one_line() {
     }
 }
 
+/// Cache, network and checkpoint files within their fixed limits but past what
+/// `--max-memory` leaves are refused from their size, before they are read, naming the
+/// file (sparse files: no disk is taken); the file is left as it was.
+#[test]
+fn cache_network_and_checkpoint_files_count_against_the_memory_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let sparse = |name: &str, bytes: u64| {
+        let path = dir.path().join(name);
+        std::fs::File::create(&path)
+            .unwrap()
+            .set_len(bytes)
+            .unwrap();
+        path.to_string_lossy().into_owned()
+    };
+    let cache = sparse("big.rlic", 100 << 20);
+    let network = sparse("big.rlnet", 100 << 20);
+    // Within what a checkpoint of a 1200x1200 film holds (56 bytes a pixel and 1 MiB), past
+    // what 256 MiB leaves beside the film and image (132 bytes a pixel).
+    sparse("x.exr.checkpoint", 80_000_000);
+    let out = dir.path().join("x.exr").to_string_lossy().into_owned();
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec![
+                "scenes/cornell-box.toml",
+                "--integrator",
+                "irradiance-cache",
+                "--cache-file",
+                &cache,
+                "--max-memory",
+                "64M",
+                "--width",
+                "8",
+                "--height",
+                "8",
+            ],
+            "big.rlic would need 100.0 MiB",
+        ),
+        (
+            vec![
+                "scenes/network-room.toml",
+                "--integrator",
+                "network",
+                "--network-file",
+                &network,
+                "--max-memory",
+                "64M",
+                "--width",
+                "8",
+                "--height",
+                "8",
+            ],
+            "big.rlnet would need 100.0 MiB",
+        ),
+        (
+            vec![
+                "scenes/cornell-box.toml",
+                "--integrator",
+                "path",
+                "--resume",
+                "--max-memory",
+                "256M",
+                "--width",
+                "1200",
+                "--height",
+                "1200",
+            ],
+            "x.exr.checkpoint would need",
+        ),
+    ];
+    let before = names(dir.path());
+    for (args, needle) in cases {
+        let mut argv = vec!["render", "-q", "-o", &out];
+        argv.extend(args);
+        let r = run(&argv);
+        assert_clean_failure_of(&argv.join(" "), &r.out, &[needle, "set by --max-memory"]);
+        assert_eq!(names(dir.path()), before, "{argv:?}: files changed");
+    }
+    for (name, len) in [
+        ("big.rlic", 100 << 20),
+        ("big.rlnet", 100 << 20),
+        ("x.exr.checkpoint", 80_000_000),
+    ] {
+        assert_eq!(std::fs::metadata(dir.path().join(name)).unwrap().len(), len);
+    }
+}
+
 /// A PNG of a few dozen bytes whose header declares 20000x20000 (or 6000x6000) pixels, as a
 /// texture under `--max-memory 64M`: refused from its header with one line, the process's
 /// peak memory far below what its pixels would take (4.8 GB, 432 MB as floats).

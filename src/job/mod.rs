@@ -147,6 +147,12 @@ impl Job {
         }
     }
 
+    /// What the film and image of the job take: what [`Renderer::new`] checks against the
+    /// memory budget.
+    pub fn image_bytes(&self) -> u64 {
+        self.width as u64 * self.height as u64 * self.bytes_per_pixel()
+    }
+
     /// Bytes per pixel of the film, the finished tiles, the image, an output's conversion
     /// buffer and its encoded file (held in memory before it is written; at most about the
     /// float pixels).
@@ -252,7 +258,7 @@ impl Renderer {
         })?;
         control.budget.check(
             &format!("a {}x{} image", job.width, job.height),
-            job.width as u64 * job.height as u64 * job.bytes_per_pixel(),
+            job.image_bytes(),
         )?;
         if let Some(still) = still_scene(&scene, &job.technique, control) {
             scene = Arc::new(still);

@@ -19,7 +19,7 @@
 use super::Film;
 use crate::binary_file::{Format, Reader};
 use crate::error::Result;
-use crate::input_file;
+use crate::input_file::{self, Allowance};
 use std::path::{Path, PathBuf};
 
 pub(crate) const FORMAT: Format = Format {
@@ -58,12 +58,18 @@ pub fn names(output: &Path, settings: &str) -> [PathBuf; 2] {
 /// overwrites another's. A file at that name that is not a checkpoint (which the render
 /// would overwrite, then remove) is an error naming it.
 pub fn path_for(output: &Path, settings: &str) -> Result<PathBuf> {
+    path_for_within(output, settings, &Allowance::machine())
+}
+
+/// [`path_for`] within a job's memory: a checkpoint found at the name is read whole, its
+/// bytes counted against `allowance`.
+pub fn path_for_within(output: &Path, settings: &str, allowance: &Allowance) -> Result<PathBuf> {
     let plain = named(output, None);
     let ours = |path: &Path| -> Result<bool> {
         if path.symlink_metadata().is_err() {
             return Ok(true);
         }
-        let found = settings_of(path).map_err(|e| match e {
+        let found = settings_of(path, allowance).map_err(|e| match e {
             crate::error::Error::Input { path, detail } => crate::error::Error::input(
                 path,
                 format!(
@@ -93,12 +99,22 @@ pub fn path_for(output: &Path, settings: &str) -> Result<PathBuf> {
 /// another render with no keyed one beside it is an error saying so; a damaged one, an
 /// error naming it.
 pub fn find(output: &Path, settings: &str) -> Result<Option<PathBuf>> {
+    find_within(output, settings, &Allowance::machine())
+}
+
+/// [`find`] within a job's memory: each checkpoint looked at is read whole, its bytes
+/// counted against `allowance`.
+pub fn find_within(
+    output: &Path,
+    settings: &str,
+    allowance: &Allowance,
+) -> Result<Option<PathBuf>> {
     let plain = named(output, None);
     let keyed = named(output, Some(&key(settings)));
     if !plain.exists() {
         return Ok(keyed.exists().then_some(keyed));
     }
-    if settings_of(&plain)? == settings {
+    if settings_of(&plain, allowance)? == settings {
         return Ok(Some(plain));
     }
     if keyed.exists() {
@@ -112,8 +128,8 @@ pub fn find(output: &Path, settings: &str) -> Result<Option<PathBuf>> {
 }
 
 /// The settings a checkpoint was written with (its checksum checked first).
-fn settings_of(path: &Path) -> Result<String> {
-    let file = FORMAT.load(path, &input_file::CHECKPOINT)?;
+fn settings_of(path: &Path, allowance: &Allowance) -> Result<String> {
+    let file = FORMAT.load_within(path, &input_file::CHECKPOINT, allowance)?;
     let mut r = Reader { rest: file.body() };
     let bad = |problem: &str| FORMAT.error(path, problem);
     let len = r.u64().ok_or_else(|| bad("truncated"))?;
@@ -162,6 +178,18 @@ pub struct Resumed {
 /// samples per pixel. Any other file, or one whose counts that render never passes through,
 /// is an [`Error::Input`](crate::error::Error::Input) naming it.
 pub fn load(path: &Path, settings: &str, blank: Film, target: u32) -> Result<Resumed> {
+    load_within(path, settings, blank, target, &Allowance::machine())
+}
+
+/// [`load`] within a job's memory: the file's bytes, read whole, count against
+/// `allowance` (which holds the film they are restored into).
+pub fn load_within(
+    path: &Path,
+    settings: &str,
+    blank: Film,
+    target: u32,
+    allowance: &Allowance,
+) -> Result<Resumed> {
     let bad = |problem: &str| FORMAT.error(path, problem);
     // A checkpoint of this film is its 56 bytes a pixel and a settings string (another run's
     // may be longer): a file much larger is refused before it is read.
@@ -175,7 +203,7 @@ pub fn load(path: &Path, settings: &str, blank: Film, target: u32) -> Result<Res
             "{size} bytes, more than a checkpoint of a {w}x{h} image holds"
         )));
     }
-    let file = FORMAT.load(path, &input_file::CHECKPOINT)?;
+    let file = FORMAT.load_within(path, &input_file::CHECKPOINT, allowance)?;
     let mut r = Reader { rest: file.body() };
     let len = r.u64().ok_or_else(|| bad("truncated"))?;
     if len > r.rest.len() as u64 {
