@@ -617,3 +617,83 @@ fn thread_counts_from_the_environment_are_bounded() {
     assert!(r.out.status.success(), "{}", stderr(&r.out));
     assert!(Path::new(&out).exists());
 }
+
+/// A TOML scene of many instances: parsing it holds toml's tree of the text, many times the
+/// text (3.7 KB an instance for 75 bytes of text), and that is what `--max-memory` is
+/// checked against before it is parsed. The estimate is honest: no lower than the memory
+/// the parse takes, and less than twice it. (The scenes end with an instance of no object,
+/// so that each run ends once its file is parsed: the peak is the parse's.)
+#[test]
+fn a_scene_of_many_instances_counts_its_parse_against_the_budget() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.exr").to_string_lossy().into_owned();
+    let scene = |name: &str, n: usize| {
+        let mut text = String::from(
+            "[camera]\nposition = [0, 0, 50]\nlook_at = [0, 0, 0]\n[materials.white]\n\
+             diffuse = 0.8\n[[objects]]\nname = \"tri\"\n[[objects.shapes]]\ntype = \"mesh\"\n\
+             material = \"white\"\nindices = [[0, 1, 2]]\npositions = [[0, 0, 0], [0, 1, 0], \
+             [0, 0, 1]]\n",
+        );
+        for i in 0..n {
+            let x = i as f32 * 1e-3;
+            text += &format!(
+                "\n[[instances]]\nobject = \"tri\"\ntransform = [{{ translate = [{x}, 0, 0] }}]\n"
+            );
+        }
+        text += "\n[[instances]]\nobject = \"nothing\"\n";
+        let path = dir.path().join(name);
+        std::fs::write(&path, &text).unwrap();
+        path.to_string_lossy().into_owned()
+    };
+    let many = scene("many.toml", 60_000);
+    let few = scene("few.toml", 1);
+    let small = [
+        "--width", "8", "--height", "8", "--spp", "1", "-q", "-o", &out,
+    ];
+    let argv = |scene: &str, budget: &[&'static str]| {
+        let mut v = vec!["render".to_string(), scene.to_string()];
+        v.extend(budget.iter().chain(&small).map(|s| s.to_string()));
+        v
+    };
+    let run_args = |v: Vec<String>| run(&v.iter().map(String::as_str).collect::<Vec<_>>());
+    let refused = run_args(argv(&many, &["--max-memory", "128M"]));
+    assert_clean_failure_of(
+        "many.toml",
+        &refused.out,
+        &["reading ", "many.toml would need"],
+    );
+    let err = stderr(&refused.out);
+    let needed: f64 = err
+        .split("would need ")
+        .nth(1)
+        .and_then(mib_at_start)
+        .unwrap_or_else(|| panic!("no size in: {err}"));
+
+    let no_object = "no [[objects]] table is named \"nothing\"";
+    let base = run_args(argv(&few, &[]));
+    assert_clean_failure_of("few.toml", &base.out, &[no_object]);
+    let parsed = run_args(argv(&many, &[]));
+    assert_clean_failure_of("many.toml", &parsed.out, &[no_object]);
+    assert!(
+        names(dir.path()) == ["few.toml", "many.toml"],
+        "something was written"
+    );
+    let taken = parsed.peak_mib - base.peak_mib;
+    eprintln!("60000 instances: parsing took {taken:.0} MiB, estimated {needed:.0} MiB");
+    assert!(
+        needed >= taken && needed < 2.0 * taken,
+        "estimated {needed:.0} MiB, took {taken:.0} MiB"
+    );
+}
+
+/// The MiB of a size printed as `12.3 MiB` (or KiB, GiB) at the start of `text`.
+fn mib_at_start(text: &str) -> Option<f64> {
+    let (number, rest) = text.split_once(' ')?;
+    let scale = match rest.get(..3)? {
+        "KiB" => 1.0 / 1024.0,
+        "MiB" => 1.0,
+        "GiB" => 1024.0,
+        _ => return None,
+    };
+    Some(number.parse::<f64>().ok()? * scale)
+}

@@ -30,6 +30,11 @@ pub(crate) fn read_with_animation(
     let text =
         crate::input_file::read_to_string(path, &crate::input_file::TOML_SCENE, Some(&allowance))?;
     control.cancel.check("reading the scene")?;
+    // Parsing holds the text and toml's tree of it at once: far more than the text.
+    allowance.check(
+        &format!("reading {}", path.display()),
+        (text.len() as u64).saturating_add(super::toml::parse_tree_bytes(&text)),
+    )?;
     let doc = Document::parse_with(&text, path, Some(control))?;
     // Static files go straight to the reader, so its messages keep their line numbers.
     if !is_animation(doc.root()) {
