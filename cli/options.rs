@@ -209,7 +209,9 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub part: PartArgs,
     /// Also write auxiliary images of the first surface seen (albedo, normal, depth) as
-    /// STEM.albedo.exr, STEM.normal.exr and STEM.depth.exr beside the first output.
+    /// STEM.albedo.exr, STEM.normal.exr and STEM.depth.exr beside the first output, and
+    /// store them, with position (P) and object and material indices (IndexOB, IndexMA),
+    /// as layers of each EXR output.
     #[arg(long, help_heading = OUTPUT)]
     pub aov: bool,
     /// Exposure in stops applied to 8-bit outputs (PNG, JPEG).

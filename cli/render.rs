@@ -5,7 +5,7 @@
 use crate::farm;
 use crate::options::{self, IntegratorName, RenderArgs};
 use crate::{Cli, Failure};
-use raylink::image::output::check_output_path;
+use raylink::image::output::{check_output_path, write_image_layers, Layer};
 use raylink::output_paths::FilePlan;
 use raylink::{checkpoint, input_file};
 use raylink::{
@@ -86,6 +86,12 @@ pub fn technique_files(plan: &mut FilePlan, args: &RenderArgs) {
     if let Some(f) = &args.network.network_file {
         plan.read_write("--network-file", f);
     }
+}
+
+/// True for an OpenEXR output (`.exr`, any case), the one format that holds layers.
+fn is_exr(path: &std::path::Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
 }
 
 /// The auxiliary images' files beside the first output.
@@ -316,10 +322,23 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     }
     if args.aov {
         let images = renderer
-            .render_aovs(&control)?
+            .render_aov_layers(&control)?
             .ok_or_else(|| cli.interrupted("the auxiliary images", "the image was written"))?;
         for (path, img) in aovs.iter().zip(&images) {
             write_image(path, img, &metadata, &out_options)?;
+        }
+        // The EXR outputs again, now with every auxiliary image as a layer.
+        let layers: Vec<Layer> = Aov::LAYERS
+            .iter()
+            .zip(&images)
+            .map(|(aov, image)| Layer {
+                name: aov.name(),
+                channels: aov.channels(),
+                image,
+            })
+            .collect();
+        for out in args.outputs.iter().filter(|o| is_exr(o)) {
+            write_image_layers(out, &image, &layers, &metadata, &out_options)?;
         }
     }
     if !args.quiet {

@@ -5,7 +5,7 @@
 //!
 //! | extension | stored as |
 //! |---|---|
-//! | `.exr` | linear RGB, half or float ([`OutputOptions::half`]), metadata as header attributes |
+//! | `.exr` | linear RGB, half or float ([`OutputOptions::half`]), metadata as header attributes; optionally further [`Layer`]s (`albedo.R`, ...) |
 //! | `.hdr` | linear RGB (RGBE: 8-bit mantissas, shared exponent; negatives and NaN become 0, values clamp at 1e38) |
 //! | `.tif`, `.tiff` | linear RGB, 32-bit float |
 //! | `.png` | `2^exposure`, sRGB-encoded, clamped to `[0, 1]`, 8 bits |
@@ -149,7 +149,35 @@ pub fn write_image(
     metadata: &[(String, MetaValue)],
     options: &OutputOptions,
 ) -> Result<()> {
-    write_image_impl(path, image, None, metadata, options)
+    write_image_impl(path, image, None, &[], metadata, options)
+}
+
+/// An image stored as a layer of an EXR file beside the main image: channels
+/// `NAME.CHANNEL`, one for each of `channels`, taken in order from the image's R, G and B.
+#[derive(Clone, Copy, Debug)]
+pub struct Layer<'a> {
+    /// The layer's name, e.g. `albedo`.
+    pub name: &'a str,
+    /// Its channels' names, one to three, e.g. `["R", "G", "B"]` or `["Z"]`.
+    pub channels: &'a [&'a str],
+    pub image: &'a Image,
+}
+
+/// As [`write_image`], with `layers` as further channels of the same file (`albedo.R`,
+/// `albedo.G`, ..., after the main image's `R`, `G`, `B`), the layout of a multilayer
+/// OpenEXR file that compositors read as passes. Only `.exr` holds layers: other formats
+/// get the main image alone. Every layer must be the size of `image`.
+pub fn write_image_layers(
+    path: &Path,
+    image: &Image,
+    layers: &[Layer],
+    metadata: &[(String, MetaValue)],
+    options: &OutputOptions,
+) -> Result<()> {
+    if Format::from_path(path)? != Format::Exr {
+        return write_image_impl(path, image, None, &[], metadata, options);
+    }
+    write_image_impl(path, image, None, layers, metadata, options)
 }
 
 /// As [`write_image`], for `image` as the region at (`window.x`, `window.y`) of a
@@ -168,20 +196,26 @@ pub fn write_image_window(
             "a part of an image (tile or crop) is written only as .exr, which keeps where it lies",
         ));
     }
-    write_image_impl(path, image, Some(window), metadata, options)
+    write_image_impl(path, image, Some(window), &[], metadata, options)
 }
 
 fn write_image_impl(
     path: &Path,
     image: &Image,
     window: Option<oiio::Window>,
+    layers: &[Layer],
     metadata: &[(String, MetaValue)],
     options: &OutputOptions,
 ) -> Result<()> {
     check_output_path(path)?;
     let format = Format::from_path(path)?;
     let expected = image.width as usize * image.height as usize;
-    if image.width == 0 || image.height == 0 || image.pixels.len() != expected {
+    let bad_layer = layers.iter().any(|l| {
+        (l.image.width, l.image.height) != (image.width, image.height)
+            || l.image.pixels.len() != expected
+            || !(1..=3).contains(&l.channels.len())
+    });
+    if image.width == 0 || image.height == 0 || image.pixels.len() != expected || bad_layer {
         return Err(Error::image(
             path,
             format!(
@@ -207,7 +241,11 @@ fn write_image_impl(
         } else {
             PixelType::Float
         };
-        let mut values = linear_values(path, &image.pixels)?;
+        let mut values = if layers.is_empty() {
+            linear_values(path, &image.pixels)?
+        } else {
+            layered_values(path, image, layers)?
+        };
         if format == Format::Hdr {
             // OpenImageIO's RGBE encoder mangles what RGBE cannot hold: a negative channel
             // comes back as garbage (-0.5 as 0.5), a channel above ~1.7e38 zeroes the pixel.
@@ -218,13 +256,21 @@ fn write_image_impl(
         (values, pixel)
     };
 
+    let names: Vec<String> = layers
+        .iter()
+        .flat_map(|l| l.channels.iter().map(move |c| format!("{}.{c}", l.name)))
+        .collect();
+    let channels: Vec<&str> = ["R", "G", "B"]
+        .into_iter()
+        .chain(names.iter().map(String::as_str))
+        .collect();
     let encoded = oiio::encode(
         path,
         format.oiio_name(),
         oiio::ImageToWrite {
             width: image.width,
             height: image.height,
-            channels: &["R", "G", "B"],
+            channels: &channels,
             data: &data,
             pixel_type: pixel,
             window,
@@ -317,6 +363,23 @@ fn channel_values(path: &Path, pixels: &[Rgb], f: impl Fn(f32) -> f32) -> Result
         format!("the pixels of {}", path.display())
     })?;
     values.extend(pixels.iter().flat_map(|p| [p.x, p.y, p.z]).map(f));
+    Ok(values)
+}
+
+/// The main image's R, G, B and then each layer's channels, pixel by pixel.
+fn layered_values(path: &Path, image: &Image, layers: &[Layer]) -> Result<Vec<f32>> {
+    let per_pixel = 3 + layers.iter().map(|l| l.channels.len()).sum::<usize>();
+    let mut values = Vec::new();
+    crate::platform::try_reserve(&mut values, image.pixels.len() * per_pixel, || {
+        format!("the pixels of {}", path.display())
+    })?;
+    for (i, p) in image.pixels.iter().enumerate() {
+        values.extend([p.x, p.y, p.z]);
+        for l in layers {
+            let q = l.image.pixels[i];
+            values.extend(&[q.x, q.y, q.z][..l.channels.len()]);
+        }
+    }
     Ok(values)
 }
 

@@ -464,6 +464,16 @@ impl Renderer {
     /// sees first, filtered as the image is), or `None` if cancelled;
     /// [`Error::OutOfMemory`] if they cannot be allocated.
     pub fn render_aovs(&self, control: &Control) -> Result<Option<[Image; 3]>> {
+        Ok(self
+            .render_aov_layers(control)?
+            .map(|[albedo, normal, depth, ..]| [albedo, normal, depth]))
+    }
+
+    /// Every auxiliary image of the job's pixels, in the order of [`Aov::LAYERS`]: albedo,
+    /// normal, depth and position filtered as the image is, and the object and material
+    /// indices seen through each pixel's centre. `None` if cancelled; [`Error::OutOfMemory`]
+    /// if they cannot be allocated.
+    pub fn render_aov_layers(&self, control: &Control) -> Result<Option<[Image; 6]>> {
         let ctx = Context::new(&self.scene, self.accel.as_ref());
         // The image's filter; the scene's for the techniques that have none.
         let filter = match self.job.technique.monte_carlo() {

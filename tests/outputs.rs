@@ -1,0 +1,161 @@
+//! What the render command writes: multilayer EXR outputs with the auxiliary images.
+
+use raylink::image::oiio;
+use raylink::image::output::read_image;
+use std::path::Path;
+
+mod common;
+use common::{raylink, stderr};
+
+/// Two quads side by side at z = -4 facing a camera at the origin: the left one (the first
+/// shape) of material `blue`, the right one of material `red`, listed in the other order.
+const TWO_QUADS: &str = r#"
+[camera]
+position = [0, 0, 0]
+look_at = [0, 0, -1]
+fov = 40
+width = 16
+height = 16
+
+[materials.red]
+diffuse = [0.8, 0.1, 0.1]
+
+[materials.blue]
+diffuse = [0.1, 0.2, 0.7]
+
+[[shapes]]
+type = "quad"
+material = "blue"
+vertices = [[-10, -10, -4], [0, -10, -4], [0, 10, -4], [-10, 10, -4]]
+
+[[shapes]]
+type = "quad"
+material = "red"
+vertices = [[0, -10, -4], [10, -10, -4], [10, 10, -4], [0, 10, -4]]
+
+[[lights]]
+type = "point"
+position = [0, 3, 0]
+intensity = 20
+"#;
+
+/// The channel `name` of `raw`, one value a pixel.
+fn channel(raw: &oiio::RawImage, name: &str) -> Vec<f32> {
+    let n = raw.channels.len();
+    let c = raw
+        .channels
+        .iter()
+        .position(|c| c == name)
+        .unwrap_or_else(|| panic!("no channel {name} in {:?}", raw.channels));
+    raw.data.chunks_exact(n).map(|p| p[c]).collect()
+}
+
+#[test]
+fn aov_exr_holds_every_auxiliary_image_as_a_layer() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("quads.toml");
+    std::fs::write(&scene, TWO_QUADS).unwrap();
+    let exr = dir.path().join("out.exr");
+    let tif = dir.path().join("out.tif");
+    let out = raylink(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--aov",
+        "-o",
+        exr.to_str().unwrap(),
+        "-o",
+        tif.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+
+    let raw = oiio::read(&exr).unwrap();
+    let mut names = raw.channels.clone();
+    names.sort();
+    let mut expected = [
+        "R",
+        "G",
+        "B",
+        "albedo.R",
+        "albedo.G",
+        "albedo.B",
+        "normal.X",
+        "normal.Y",
+        "normal.Z",
+        "depth.Z",
+        "P.X",
+        "P.Y",
+        "P.Z",
+        "IndexOB.X",
+        "IndexMA.X",
+    ]
+    .map(String::from)
+    .to_vec();
+    expected.sort();
+    assert_eq!(names, expected);
+
+    // The main image is the one the TIFF (which has no layers) holds.
+    let plain = oiio::read(&tif).unwrap();
+    assert_eq!(plain.channels, ["R", "G", "B"]);
+    for c in ["R", "G", "B"] {
+        assert_eq!(channel(&raw, c), channel(&plain, c), "{c}");
+    }
+    // Each layer is the separate auxiliary image, value for value.
+    for (file, layer) in [
+        ("albedo", ["albedo.R", "albedo.G", "albedo.B"]),
+        ("normal", ["normal.X", "normal.Y", "normal.Z"]),
+        ("depth", ["depth.Z", "depth.Z", "depth.Z"]),
+    ] {
+        let own = oiio::read(&dir.path().join(format!("out.{file}.exr"))).unwrap();
+        for (c, name) in ["R", "G", "B"].iter().zip(layer) {
+            assert_eq!(channel(&raw, name), channel(&own, c), "{name}");
+        }
+    }
+    // The quads lie at z = -4 and the camera at the origin: every point seen has P.Z = -4,
+    // and its distance is the depth.
+    let (px, py, pz) = (
+        channel(&raw, "P.X"),
+        channel(&raw, "P.Y"),
+        channel(&raw, "P.Z"),
+    );
+    let depth = channel(&raw, "depth.Z");
+    for i in 0..px.len() {
+        assert!((pz[i] + 4.0).abs() < 1e-4, "P.Z {} at {i}", pz[i]);
+        let d = (px[i] * px[i] + py[i] * py[i] + pz[i] * pz[i]).sqrt();
+        assert!(
+            (d - depth[i]).abs() < 2e-3 * depth[i],
+            "|P| {d} depth {}",
+            depth[i]
+        );
+    }
+    // The left half sees the first shape, the right half the second; their materials are
+    // 1 + their indices in the scene.
+    let loaded = raylink::Scene::load(&scene).unwrap();
+    let material = |name: &str| {
+        1.0 + loaded
+            .materials
+            .iter()
+            .position(|m| m.name == name)
+            .unwrap() as f32
+    };
+    let (objects, materials) = (channel(&raw, "IndexOB.X"), channel(&raw, "IndexMA.X"));
+    assert_ne!(material("blue"), material("red"));
+    for y in 0..16 {
+        for x in 0..16 {
+            let i = y * 16 + x;
+            let (object, mat) = if x < 8 {
+                (1.0, material("blue"))
+            } else {
+                (2.0, material("red"))
+            };
+            assert_eq!((objects[i], materials[i]), (object, mat), "pixel {x},{y}");
+        }
+    }
+    // Readers that want RGB still get the main image.
+    let (rgb, _) = read_image(&exr).unwrap();
+    assert_eq!(
+        rgb.pixels.iter().map(|p| p.x).collect::<Vec<_>>(),
+        channel(&raw, "R")
+    );
+    assert!(Path::new(&dir.path().join("out.albedo.exr")).exists());
+}
