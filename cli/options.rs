@@ -98,8 +98,9 @@ pub struct RenderArgs {
     /// The scene file (.toml or .pbrt).
     pub scene: PathBuf,
     /// Output image; the extension picks the format (.exr .hdr .tif .png .jpg). Repeat for
-    /// several formats of the same render.
-    #[arg(short, long = "output", required = true, value_name = "FILE", help_heading = OUTPUT)]
+    /// several formats of the same render. Default: a pbrt scene's Film "filename",
+    /// relative to the current directory as in pbrt-v4.
+    #[arg(short, long = "output", value_name = "FILE", help_heading = OUTPUT)]
     pub outputs: Vec<PathBuf>,
     /// Light-transport technique (default: the scene's, else whitted).
     #[arg(long, value_enum, help_heading = COMMON)]

@@ -166,13 +166,38 @@ fn metadata(args: &RenderArgs, job: &Job) -> Metadata {
 pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<(), Failure> {
     let control = cli.control(args.quiet, args.max_memory.as_deref())?;
     options::check(&args)?;
+    // Without -o, the output the scene names: the scene is read first to find it.
+    let mut early_scene = None;
+    let mut output_label = "-o";
+    if args.outputs.is_empty() {
+        let scene = load_scene(&args.scene, &control)?;
+        let Some(output) = scene.output.clone() else {
+            return Err(Error::Invalid(format!(
+                "-o FILE is needed: {} names no output (pbrt's Film \"filename\")",
+                args.scene.display()
+            ))
+            .into());
+        };
+        args.outputs.push(output);
+        output_label = "Film \"filename\"";
+        early_scene = Some(scene);
+    }
     farm::resolve_outputs(&mut args)?;
     for out in &args.outputs {
         // A bad output path is a bad option: report it before any work is done.
-        check_output_path(out).map_err(|e| Error::Invalid(e.to_string()))?;
+        check_output_path(out).map_err(|e| {
+            if early_scene.is_some() {
+                Error::Invalid(format!("{}: Film \"filename\": {e}", args.scene.display()))
+            } else {
+                Error::Invalid(e.to_string())
+            }
+        })?;
     }
     let out_options = output_options(&args)?;
-    let scene = load_scene(&args.scene, &control)?;
+    let scene = match early_scene {
+        Some(scene) => scene,
+        None => load_scene(&args.scene, &control)?,
+    };
     // A relight may read only a network file's prefix; a render reads all of it.
     let whole_network = extra.relight.is_none();
     let mut job = options::job(&args, &scene, extra)?;
@@ -213,7 +238,8 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     let mut plan = FilePlan::new();
     plan.reads("an input of the scene", &scene.inputs);
     technique_files(&mut plan, &args);
-    plan.writes("-o", &args.outputs).writes("--aov", &aovs);
+    plan.writes(output_label, &args.outputs)
+        .writes("--aov", &aovs);
     if progressive {
         plan.writes(
             "the checkpoint",

@@ -101,6 +101,7 @@ fn mixed_scene() -> Scene {
         background: Rgb::ZERO,
         settings: Default::default(),
         setting_sources: Vec::new(),
+        output: None,
         inputs: Vec::new(),
         environment: None,
         warnings: Vec::new(),

@@ -471,6 +471,7 @@ fn environment_map_lighting_matches_quadrature() {
         background: Rgb::ZERO,
         settings: Default::default(),
         setting_sources: Vec::new(),
+        output: None,
         inputs: Vec::new(),
         environment: Some(std::sync::Arc::new(env.clone())),
         warnings: vec![],

@@ -159,3 +159,92 @@ fn aov_exr_holds_every_auxiliary_image_as_a_layer() {
     );
     assert!(Path::new(&dir.path().join("out.albedo.exr")).exists());
 }
+
+/// A small pbrt scene whose film names `film` (none if empty).
+fn pbrt_scene(film: &str) -> String {
+    let filename = if film.is_empty() {
+        String::new()
+    } else {
+        format!(" \"string filename\" \"{film}\"")
+    };
+    format!(
+        "LookAt 0 0 5  0 0 0  0 1 0\nCamera \"perspective\" \"float fov\" 40\n\
+         Film \"rgb\" \"integer xresolution\" 8 \"integer yresolution\" 6{filename}\n\
+         WorldBegin\nLightSource \"point\" \"point3 from\" [0 0 5] \"rgb I\" [5 5 5]\n\
+         Shape \"sphere\" \"float radius\" 1\n"
+    )
+}
+
+/// Runs raylink in `dir`.
+fn raylink_in(dir: &Path, args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_raylink"))
+        .args(args)
+        .current_dir(dir)
+        .output()
+        .unwrap()
+}
+
+fn files_under(dir: &Path) -> Vec<String> {
+    fn walk(root: &Path, dir: &Path, names: &mut Vec<String>) {
+        for e in std::fs::read_dir(dir).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                walk(root, &p, names);
+            } else {
+                names.push(p.strip_prefix(root).unwrap().display().to_string());
+            }
+        }
+    }
+    let mut names = Vec::new();
+    walk(dir, dir, &mut names);
+    names.sort();
+    names
+}
+
+#[test]
+fn pbrt_film_filename_is_the_output_without_o() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("scene")).unwrap();
+    let scene = dir.path().join("scene/a.pbrt");
+    std::fs::write(&scene, pbrt_scene("film.png")).unwrap();
+    // Relative to the current directory, as pbrt-v4 takes it, not to the scene's folder.
+    let out = raylink_in(dir.path(), &["render", "scene/a.pbrt", "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (image, _) = read_image(&dir.path().join("film.png")).unwrap();
+    assert_eq!((image.width, image.height), (8, 6));
+    assert!(image.pixels.iter().any(|p| p.x > 0.0), "the sphere is lit");
+    assert!(!dir.path().join("scene/film.png").exists());
+
+    // -o wins over the film's name.
+    let out = raylink_in(
+        dir.path(),
+        &["render", "scene/a.pbrt", "-o", "o.exr", "--quiet"],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert_eq!(
+        files_under(dir.path()),
+        ["film.png", "o.exr", "scene/a.pbrt"]
+    );
+
+    // Bad input: one line naming what is wrong, exit 2, nothing written.
+    for (film, needles) in [
+        ("", vec!["-o FILE is needed", "a.pbrt names no output"]),
+        (
+            "film.bmp",
+            vec!["Film \"filename\"", "unsupported output format .bmp"],
+        ),
+        (
+            "missing/film.exr",
+            vec!["Film \"filename\"", "does not exist"],
+        ),
+        ("scene/a.pbrt", vec!["a.pbrt"]),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::create_dir(dir.path().join("scene")).unwrap();
+        std::fs::write(dir.path().join("scene/a.pbrt"), pbrt_scene(film)).unwrap();
+        let out = raylink_in(dir.path(), &["render", "scene/a.pbrt", "--quiet"]);
+        common::assert_clean_failure_of(film, &out, &needles);
+        assert_eq!(files_under(dir.path()), ["scene/a.pbrt"], "{film}");
+    }
+}
+

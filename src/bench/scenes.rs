@@ -113,6 +113,7 @@ fn base_scene(name: String, camera: Camera, light: Vec3) -> Scene {
         background: Rgb::splat(0.2),
         settings: Default::default(),
         setting_sources: Vec::new(),
+        output: None,
         inputs: Vec::new(),
         environment: None,
         warnings: Vec::new(),

@@ -75,6 +75,10 @@ pub struct Scene {
     pub settings: RenderSettings,
     /// Where the file gives each of its settings (for messages).
     pub setting_sources: Vec<SettingSource>,
+    /// The image file the scene names (pbrt's `Film "filename"`), as written in the file:
+    /// like pbrt-v4, the command line takes it relative to the current directory. `raylink
+    /// render` writes it when no `-o` is given.
+    pub output: Option<PathBuf>,
     /// Every file the scene was read from: the scene file, what it includes, its meshes,
     /// textures and environment map (so that no output overwrites one of them).
     pub inputs: Vec<PathBuf>,

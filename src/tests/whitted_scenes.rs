@@ -32,6 +32,7 @@ pub(crate) fn empty_scene() -> Scene {
         background: Rgb::ZERO,
         settings: Default::default(),
         setting_sources: Vec::new(),
+        output: None,
         inputs: Vec::new(),
         environment: None,
         warnings: Vec::new(),

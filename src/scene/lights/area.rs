@@ -502,6 +502,7 @@ mod tests {
             background: Rgb::ZERO,
             settings: Default::default(),
             setting_sources: Vec::new(),
+            output: None,
             inputs: Vec::new(),
             environment: None,
             warnings: Vec::new(),

@@ -66,6 +66,8 @@ pub(super) struct Builder {
     pub(super) settings: RenderSettings,
     /// Where the file gives each of `settings`, to report a bad value at its line.
     pub(super) setting_sources: Vec<SettingSource>,
+    /// `Film "filename"`, if given.
+    pub(super) output: Option<std::path::PathBuf>,
     /// The reflection applied to the whole world when pbrt's camera mirrors the image (see
     /// [`Builder::begin_world`]); identity otherwise.
     pub(super) mirror: DMat4,
@@ -118,6 +120,7 @@ impl Builder {
             resolution: (1280, 720),
             settings: RenderSettings::default(),
             setting_sources: Vec::new(),
+            output: None,
             mirror: DMat4::IDENTITY,
             warnings: Vec::new(),
             warned: HashSet::new(),
@@ -197,6 +200,7 @@ impl Builder {
             environment: self.environment,
             settings: self.settings,
             setting_sources: self.setting_sources,
+            output: self.output,
             inputs: std::iter::once(self.source.clone())
                 .chain(self.inputs)
                 .collect(),

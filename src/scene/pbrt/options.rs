@@ -153,8 +153,13 @@ impl Builder {
                     }
                 };
                 self.resolution = (res("xresolution", 1280)?, res("yresolution", 720)?);
-                // The output file is named on the command line.
-                p.ignore("filename");
+                // The output when the command line names none.
+                if let Some(f) = p.string("filename").map_err(pe)? {
+                    if f.is_empty() {
+                        return Err(loc.error("Film: filename is empty"));
+                    }
+                    self.output = Some(std::path::PathBuf::from(f));
+                }
             }
             "Sampler" => {
                 // raylink has its own sample patterns; the sample count carries over.

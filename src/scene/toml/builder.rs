@@ -171,6 +171,7 @@ impl<'a> Builder<'a> {
             environment,
             settings,
             setting_sources,
+            output: None,
             inputs: std::iter::once(ctx.path.to_path_buf())
                 .chain(self.inputs.take())
                 .collect(),
