@@ -34,23 +34,27 @@ pub struct MergeArgs {
 }
 
 /// Expands `{tile}` patterns in the outputs and checks what a part needs before anything is
-/// loaded: EXR outputs only.
+/// loaded: a tile is written only as EXR (a crop in any format: only its EXR keeps where it
+/// lies, for merging).
 pub fn resolve_outputs(args: &mut RenderArgs) -> raylink::Result<()> {
     let part = args.part.part().copied();
     for out in &mut args.outputs {
         *out = output_path(out, part.as_ref())?;
-        let exr = out
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-        if part.is_some() && !exr {
+        if matches!(part, Some(Part::Tile { .. })) && !is_exr(out) {
             return Err(Error::Invalid(format!(
-                "{}: a tile or crop is written only as .exr, which keeps where it lies in the \
-                 image",
+                "{}: a tile is written only as .exr, which keeps where it lies in the image \
+                 for raylink merge",
                 out.display()
             )));
         }
     }
     Ok(())
+}
+
+/// True for an OpenEXR file name (`.exr`, any case).
+fn is_exr(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
 }
 
 /// The region a render job renders (`None`: the whole image), after checking the command
@@ -119,8 +123,8 @@ pub fn stats_metadata(stats: &RenderStats, pixels: f32) -> Metadata {
     ]
 }
 
-/// Writes a rendered part (and its AOVs) to the outputs, as EXR with the region as data
-/// window, then prints the summary.
+/// Writes a rendered part (and its AOVs) to the outputs, EXR with the region as data window
+/// (other formats, for a crop, as an image of the region's size), then prints the summary.
 pub fn write_part(
     cli: &Cli,
     args: &RenderArgs,
@@ -149,7 +153,12 @@ pub fn write_part(
     metadata.extend(stats_metadata(&stats, region.pixels() as f32));
     let window = farm::window(&region, job.width, job.height);
     for out in &args.outputs {
-        write_image_window(out, &image, window, &metadata, out_options)?;
+        if is_exr(out) {
+            write_image_window(out, &image, window, &metadata, out_options)?;
+        } else {
+            // A crop's other formats hold its pixels alone.
+            write_image(out, &image, &metadata, out_options)?;
+        }
     }
     if args.aov {
         let aovs = renderer

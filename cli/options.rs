@@ -604,7 +604,8 @@ pub struct PartArgs {
           help_heading = FARM)]
     tile: Option<Part>,
     /// Render only the pixels x0 <= x < x1, y0 <= y < y1 (0,0 is the top-left pixel; x1 and y1
-    /// are excluded). Written as EXR with those pixels as its data window.
+    /// are excluded). Written as EXR with those pixels as its data window; other formats hold
+    /// the crop alone.
     #[arg(long, value_name = "x0,y0,x1,y1", value_parser = parse_crop, help_heading = FARM)]
     crop: Option<Part>,
 }

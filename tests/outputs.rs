@@ -248,3 +248,52 @@ fn pbrt_film_filename_is_the_output_without_o() {
     }
 }
 
+#[test]
+fn crop_writes_png_and_jpeg_of_the_crop_alone() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("quads.toml");
+    std::fs::write(&scene, TWO_QUADS).unwrap();
+    let file = |name: &str| dir.path().join(name).to_str().unwrap().to_string();
+    let whole = raylink(&[
+        "render",
+        &file("quads.toml"),
+        "-o",
+        &file("whole.png"),
+        "--quiet",
+    ]);
+    assert!(whole.status.success(), "{}", stderr(&whole));
+    let crop = raylink(&[
+        "render",
+        &file("quads.toml"),
+        "--crop",
+        "3,5,11,12",
+        "-o",
+        &file("crop.png"),
+        "-o",
+        &file("crop.jpg"),
+        "-o",
+        &file("crop.exr"),
+        "--quiet",
+    ]);
+    assert!(crop.status.success(), "{}", stderr(&crop));
+    let (whole, _) = read_image(&dir.path().join("whole.png")).unwrap();
+    let (png, _) = read_image(&dir.path().join("crop.png")).unwrap();
+    let (jpg, _) = read_image(&dir.path().join("crop.jpg")).unwrap();
+    assert_eq!((png.width, png.height), (8, 7));
+    assert_eq!((jpg.width, jpg.height), (8, 7));
+    let mut jpeg_error = 0.0f32;
+    for y in 0..7 {
+        for x in 0..8 {
+            // A part is exact: the crop's pixels are the whole render's.
+            let expected = whole.get(x + 3, y + 5);
+            assert_eq!(png.get(x, y), expected, "pixel {x},{y}");
+            jpeg_error += (jpg.get(x, y) - expected).abs().element_sum() / (3.0 * 56.0);
+        }
+    }
+    // JPEG is lossy (and subsamples colour): close on average.
+    assert!(jpeg_error < 0.03, "JPEG off by {jpeg_error} on average");
+    // The EXR keeps where the crop lies.
+    let exr = oiio::read(&dir.path().join("crop.exr")).unwrap();
+    assert_eq!((exr.window.x, exr.window.y), (3, 5));
+    assert_eq!((exr.window.full_width, exr.window.full_height), (16, 16));
+}
