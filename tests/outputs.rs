@@ -297,3 +297,41 @@ fn crop_writes_png_and_jpeg_of_the_crop_alone() {
     assert_eq!((exr.window.x, exr.window.y), (3, 5));
     assert_eq!((exr.window.full_width, exr.window.full_height), (16, 16));
 }
+
+#[test]
+fn exr_metadata_names_the_filter_as_the_options_do() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("m.exr");
+    let out = raylink(&[
+        "render",
+        "scenes/cornell-box.toml",
+        "--integrator",
+        "path",
+        "--spp",
+        "1",
+        "--width",
+        "8",
+        "--height",
+        "8",
+        "--filter",
+        "triangle",
+        "--filter-radius",
+        "1",
+        "-o",
+        exr.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let raw = oiio::read(&exr).unwrap();
+    let text = |name: &str| match raw.meta(name) {
+        Some(raylink::MetaValue::Str(s)) => s.clone(),
+        other => panic!("{name}: {other:?}"),
+    };
+    assert_eq!(text("raylink:filter"), "triangle radius=1");
+    let settings = text("raylink:settings");
+    assert!(
+        settings.contains(" spp=1 filter=triangle radius=1 "),
+        "{settings}"
+    );
+    assert!(!settings.contains(['{', '}', ':']), "{settings}");
+}

@@ -156,7 +156,7 @@ impl MonteCarloSettings {
 
     /// What of them changes pixels, for a job's settings key.
     pub(crate) fn key(&self) -> String {
-        format!(" spp={} filter={:?}", self.spp, self.filter)
+        format!(" spp={} filter={}", self.spp, self.filter)
     }
 }
 
