@@ -265,7 +265,9 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
     };
     let scene0 = anim.scene_at(frames[0])?;
     for w in &scene0.warnings {
-        eprintln!("warning: {w}");
+        if crate::log::enabled(crate::log::Level::Warn) {
+            eprintln!("warning: {w}");
+        }
     }
     let outputs = frames
         .iter()

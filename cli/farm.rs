@@ -144,7 +144,7 @@ pub fn write_part(
             "a part is written whole or not at all, so nothing was written",
         ));
     }
-    if stats.invalid > 0 {
+    if stats.invalid > 0 && crate::log::enabled(crate::log::Level::Warn) {
         eprintln!(
             "raylink: warning: {} samples were not finite and were dropped",
             stats.invalid
@@ -171,7 +171,7 @@ pub fn write_part(
             write_image_window(&path, img, window, &metadata, out_options)?;
         }
     }
-    if !args.quiet {
+    if crate::log::info(args.quiet) {
         eprintln!("tile {}: {}", farm::region_label(&region), stats.summary());
     }
     Ok(())
@@ -194,7 +194,7 @@ pub fn run_merge(args: MergeArgs) -> Result<(), Failure> {
     for out in &args.outputs {
         write_image(out, &merged.image, &merged.metadata, &options)?;
     }
-    if !args.quiet {
+    if crate::log::info(args.quiet) {
         eprintln!(
             "merged {} parts into {}",
             args.parts.len(),

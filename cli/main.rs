@@ -7,6 +7,7 @@ mod bench;
 mod bench_chart;
 mod bench_report;
 mod farm;
+mod log;
 mod options;
 mod progress;
 mod render;
@@ -38,6 +39,20 @@ use std::sync::Arc;
 struct Args {
     #[command(subcommand)]
     command: Command,
+    /// What to print on stderr besides errors: warn (warnings), info (also progress bars,
+    /// notes and summary lines; the default) or debug (also what is read and written);
+    /// error prints errors only. --quiet lowers info to warn.
+    #[arg(
+        long,
+        value_enum,
+        value_name = "LEVEL",
+        global = true,
+        default_value = "info"
+    )]
+    log_level: log::Level,
+    /// Print everything, as --log-level debug.
+    #[arg(long, global = true, conflicts_with = "log_level")]
+    verbose: bool,
 }
 
 #[derive(Subcommand)]
@@ -135,7 +150,7 @@ impl Cli {
         Ok(Control {
             cancel: self.signals.cancel().clone(),
             budget,
-            progress: Arc::new(progress::Terminal::new(quiet)),
+            progress: Arc::new(progress::Terminal::new(!log::info(quiet))),
         })
     }
 
@@ -271,6 +286,11 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    log::set(if args.verbose {
+        log::Level::Debug
+    } else {
+        args.log_level
+    });
     if let Err(e) = check_thread_environment() {
         eprintln!("raylink: error: {e}");
         return ExitCode::from(2);

@@ -1,6 +1,6 @@
 //! What the command line shows while a job runs: a progress bar per phase on a terminal
 //! (nothing on a pipe), a summary line when a phase ends, the job's notes and warnings.
-//! `--quiet` keeps only the warnings.
+//! `--quiet` (or `--log-level warn`) keeps only the warnings, `--log-level error` none.
 
 use indicatif::{ProgressBar, ProgressStyle};
 use raylink::Progress;
@@ -107,6 +107,8 @@ impl Progress for Terminal {
     }
 
     fn warn(&self, line: &str) {
-        self.line(&format!("raylink: warning: {line}"));
+        if crate::log::enabled(crate::log::Level::Warn) {
+            self.line(&format!("raylink: warning: {line}"));
+        }
     }
 }

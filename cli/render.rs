@@ -115,7 +115,9 @@ pub fn load_scene_and_animation(
 ) -> Result<(Scene, Option<raylink::scene::animation::Animation>), Error> {
     let (scene, animation) = Scene::load_with_animation(path, control)?;
     for w in &scene.warnings {
-        eprintln!("warning: {w}");
+        if crate::log::enabled(crate::log::Level::Warn) {
+            eprintln!("warning: {w}");
+        }
     }
     Ok((scene, animation))
 }
@@ -200,6 +202,16 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     };
     // A relight may read only a network file's prefix; a render reads all of it.
     let whole_network = extra.relight.is_none();
+    crate::log::debug(|| {
+        format!(
+            "{}: {} shapes, {} instances, {} materials, {} lights",
+            args.scene.display(),
+            scene.shapes.len(),
+            scene.instances.len(),
+            scene.materials.len(),
+            scene.lights.len()
+        )
+    });
     let mut job = options::job(&args, &scene, extra)?;
     let aovs = if args.aov {
         aov_paths(&args.outputs[0])
@@ -298,7 +310,7 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     };
     cli.print_report(&args, &renderer);
     let Rendered { image, stats, .. } = rendered;
-    if stats.invalid > 0 {
+    if stats.invalid > 0 && crate::log::enabled(crate::log::Level::Warn) {
         eprintln!(
             "raylink: warning: {} samples were not finite and were dropped",
             stats.invalid
@@ -315,6 +327,7 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     metadata.extend(farm::stats_metadata(&stats, pixels));
     for out in &args.outputs {
         write_image(out, &image, &metadata, &out_options)?;
+        crate::log::debug(|| format!("wrote {}", out.display()));
     }
     if stats.cancelled {
         let outputs: Vec<String> = args
@@ -352,6 +365,7 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
             .ok_or_else(|| cli.interrupted("the auxiliary images", "the image was written"))?;
         for (path, img) in aovs.iter().zip(&images) {
             write_image(path, img, &metadata, &out_options)?;
+            crate::log::debug(|| format!("wrote {}", path.display()));
         }
         // The EXR outputs again, now with every auxiliary image as a layer.
         let layers: Vec<Layer> = Aov::LAYERS
@@ -365,9 +379,12 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
             .collect();
         for out in args.outputs.iter().filter(|o| is_exr(o)) {
             write_image_layers(out, &image, &layers, &metadata, &out_options)?;
+            crate::log::debug(|| {
+                format!("wrote {} again with the auxiliary layers", out.display())
+            });
         }
     }
-    if !args.quiet {
+    if crate::log::info(args.quiet) {
         eprintln!("{}", stats.summary());
     }
     Ok(())
@@ -585,7 +602,7 @@ pub fn run_precompute(cli: &Cli, mut args: RenderArgs) -> Result<(), Failure> {
     let start = std::time::Instant::now();
     let mut renderer = Renderer::new(scene, job, &control)?;
     renderer.precompute(&control)?;
-    if !args.quiet {
+    if crate::log::info(args.quiet) {
         eprintln!("precomputed in {:.2} s", start.elapsed().as_secs_f64());
     }
     Ok(())

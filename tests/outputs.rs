@@ -335,3 +335,60 @@ fn exr_metadata_names_the_filter_as_the_options_do() {
     );
     assert!(!settings.contains(['{', '}', ':']), "{settings}");
 }
+
+#[test]
+fn log_level_chooses_what_is_printed() {
+    let dir = tempfile::tempdir().unwrap();
+    // Film "foo" is replaced by an RGB film, with a warning.
+    std::fs::write(
+        dir.path().join("a.pbrt"),
+        pbrt_scene("").replace("Film \"rgb\"", "Film \"foo\""),
+    )
+    .unwrap();
+    let run = |extra: &[&str]| {
+        let mut args = vec!["render", "a.pbrt", "-o", "x.png"];
+        args.extend(extra);
+        let out = raylink_in(dir.path(), &args);
+        assert!(out.status.success(), "{extra:?}: {}", stderr(&out));
+        stderr(&out)
+    };
+    let warning = "warning: a.pbrt:3: Film \"foo\" is not supported";
+    let summary = "rendered in ";
+    let debug = "raylink: debug: wrote x.png";
+    for (extra, expected) in [
+        (&[][..], [true, true, false]),
+        (&["--log-level", "error"][..], [false, false, false]),
+        (&["--log-level", "warn"][..], [true, false, false]),
+        (&["--log-level", "info"][..], [true, true, false]),
+        (&["--log-level", "debug"][..], [true, true, true]),
+        (&["--verbose"][..], [true, true, true]),
+        (&["--quiet"][..], [true, false, false]),
+        (
+            &["--quiet", "--log-level", "error"][..],
+            [false, false, false],
+        ),
+    ] {
+        let err = run(extra);
+        let found = [warning, summary, debug].map(|n| err.contains(n));
+        assert_eq!(found, expected, "{extra:?}: {err}");
+        if extra == ["--log-level", "error"] {
+            assert_eq!(err, "", "{extra:?}");
+        }
+    }
+    // The level goes before the command too.
+    let out = raylink_in(
+        dir.path(),
+        &["--log-level", "error", "render", "a.pbrt", "-o", "x.png"],
+    );
+    assert!(
+        out.status.success() && out.stderr.is_empty(),
+        "{}",
+        stderr(&out)
+    );
+    // A bad level is a bad option.
+    let out = raylink_in(
+        dir.path(),
+        &["render", "a.pbrt", "-o", "x.png", "--log-level", "loud"],
+    );
+    common::assert_clean_failure_of("loud", &out, &["--log-level"]);
+}
