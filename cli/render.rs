@@ -172,8 +172,17 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     let mut early_scene = None;
     let mut output_label = "-o";
     if args.outputs.is_empty() {
-        let scene = load_scene(&args.scene, &control)?;
-        let Some(output) = scene.output.clone() else {
+        let pbrt = args
+            .scene
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("pbrt"));
+        // Only a pbrt scene can name its output: don't read another one to find none.
+        let scene = if pbrt {
+            Some(load_scene(&args.scene, &control)?)
+        } else {
+            None
+        };
+        let Some(output) = scene.as_ref().and_then(|s| s.output.clone()) else {
             return Err(Error::Invalid(format!(
                 "-o FILE is needed: {} names no output (pbrt's Film \"filename\")",
                 args.scene.display()
@@ -182,7 +191,7 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
         };
         args.outputs.push(output);
         output_label = "Film \"filename\"";
-        early_scene = Some(scene);
+        early_scene = scene;
     }
     farm::resolve_outputs(&mut args)?;
     for out in &args.outputs {
