@@ -1,12 +1,13 @@
 #!/usr/bin/env bash
 # Installs the Debian packages raylink builds against: Embree (libembree-dev: Embree 3 on
-# Debian 12, Embree 4 on Debian 13), OpenImageIO, libclang for bindgen, and a C++ compiler.
+# Debian 12, Embree 4 on Debian 13), OpenImageIO and libpng (read first to report damaged
+# PNGs in one line), libclang for bindgen, and a C++ compiler.
 # With --tests, also what the test suite runs: bsdextrautils, whose `script` the progress
 # tests run (Debian 13 moved it there from the essential bsdutils), and chromium with
 # chromium-driver, the headless browser that tests/studio_browser.rs drives through
 # WebDriver to test `raylink serve`'s page (a large download a render does not need).
 set -euo pipefail
-packages=(build-essential pkg-config libclang-dev libembree-dev libopenimageio-dev)
+packages=(build-essential pkg-config libclang-dev libembree-dev libopenimageio-dev libpng-dev)
 case "${1:-}" in
   "") ;;
   --tests) packages+=(bsdextrautils chromium chromium-driver) ;;
