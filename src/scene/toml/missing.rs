@@ -16,24 +16,51 @@ fn names_a_file(key: &str) -> bool {
 /// One [`Error::Input`] per file named in `root` that does not exist (relative names are
 /// relative to `dir`), each naming the line and the field, in the file's order. The
 /// `[render]` table is left out: the cache and network files it names are written when
-/// they are not there.
+/// they are not there; so are `[[instances]]`, which name no file (and may be hundreds of
+/// thousands).
 pub(super) fn missing_files(ctx: &Ctx, root: &DeTable, dir: &Path) -> Vec<Error> {
     let mut found = Vec::new();
+    let mut at = Vec::new();
     for (key, value) in root {
         let key: &str = key.get_ref();
-        if key != "render" {
-            walk(ctx, key, key, value, dir, &mut found);
+        if key != "render" && key != "instances" {
+            at.push(Step::Key(key));
+            walk(ctx, key, value, dir, &mut at, &mut found);
+            at.pop();
         }
     }
     found
 }
 
-fn walk(
+/// A step from the root to a value: a key of a table or an index of an array.
+enum Step<'t> {
+    Key(&'t str),
+    Index(usize),
+}
+
+/// The dotted name of the value at `at` (`shapes[3].file`), made only for a file that is
+/// missing: a scene of many instances walks many values and names few.
+fn name_of(at: &[Step]) -> String {
+    let mut name = String::new();
+    for step in at {
+        match step {
+            Step::Key(k) if name.is_empty() => name.push_str(k),
+            Step::Key(k) => {
+                name.push('.');
+                name.push_str(k);
+            }
+            Step::Index(i) => name.push_str(&format!("[{i}]")),
+        }
+    }
+    name
+}
+
+fn walk<'t>(
     ctx: &Ctx,
-    name: &str,
     key: &str,
-    value: &Spanned<DeValue>,
+    value: &'t Spanned<DeValue>,
     dir: &Path,
+    at: &mut Vec<Step<'t>>,
     found: &mut Vec<Error>,
 ) {
     match value.get_ref() {
@@ -44,7 +71,7 @@ fn walk(
                     let line = ctx.line_at(value.span().start);
                     found.push(Error::input(
                         ctx.path,
-                        format!("line {line}: {name}: {file}: no such file"),
+                        format!("line {line}: {}: {file}: no such file", name_of(at)),
                     ));
                 }
             }
@@ -52,12 +79,16 @@ fn walk(
         DeValue::Table(table) => {
             for (k, v) in table {
                 let k: &str = k.get_ref();
-                walk(ctx, &format!("{name}.{k}"), k, v, dir, found);
+                at.push(Step::Key(k));
+                walk(ctx, k, v, dir, at, found);
+                at.pop();
             }
         }
         DeValue::Array(items) => {
             for (i, v) in items.iter().enumerate() {
-                walk(ctx, &format!("{name}[{i}]"), key, v, dir, found);
+                at.push(Step::Index(i));
+                walk(ctx, key, v, dir, at, found);
+                at.pop();
             }
         }
         _ => {}
