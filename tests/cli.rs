@@ -509,18 +509,28 @@ fn monte_carlo_integrators_from_the_cli() {
         assert_clean_failure(&raylink(&all), &[needle]);
         assert!(!missing.exists());
     }
-    // BDPT needs lights with a position.
-    assert_clean_failure(
-        &raylink(&[
-            "render",
-            "scenes/whitted.toml",
-            "--integrator",
-            "bdpt",
-            "-o",
-            missing_s,
-        ]),
-        &["whitted.toml", "bdpt"],
-    );
+    // BDPT renders a scene with a background (a light at infinity).
+    let whitted = std::fs::read_to_string("scenes/whitted.toml").unwrap();
+    assert!(whitted.contains("background = [0.3"));
+    let out = raylink(&[
+        "render",
+        "scenes/whitted.toml",
+        "--integrator",
+        "bdpt",
+        "--spp",
+        "2",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "-o",
+        exr_s,
+        "--quiet",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (image, _) = read_image(&exr).unwrap();
+    assert!(image.pixels.iter().all(|p| p.is_finite()));
+    assert!(image.pixels.iter().any(|p| p.max_element() > 0.0));
 }
 
 /// A scene naming several files that are not there (a texture, an OBJ mesh, a PLY mesh and
