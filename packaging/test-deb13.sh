@@ -19,7 +19,7 @@ cargo_home=${CARGO_HOME:-$HOME/.cargo}
 rustup_home=${RUSTUP_HOME:-$HOME/.rustup}
 toolchain=$(rustup show active-toolchain | cut -d' ' -f1)
 # chromium and chromium-driver: the studio's browser test (as scripts/install-deps.sh --tests).
-build_deps=(build-essential pkg-config libclang-dev libembree-dev libopenimageio-dev ca-certificates bsdextrautils
+build_deps=(build-essential pkg-config libclang-dev libembree-dev libopenimageio-dev libpng-dev ca-certificates bsdextrautils
   chromium chromium-driver)
 t0=$(date +%s)
 step() { echo "== $(( $(date +%s) - t0 ))s: $*"; }
