@@ -141,6 +141,21 @@ pub struct RenderArgs {
     #[arg(long, value_parser = finite_f64, value_name = "SECONDS", allow_negative_numbers = true,
         help_heading = MONTE_CARLO)]
     pub time_limit: Option<f64>,
+    /// Adaptive sampling (path tracing): stop sampling a pixel once its estimated error is
+    /// below this (Cycles' noise threshold: 0.01 for a final image, 0.1 for a preview). The
+    /// render ends when every pixel has, or at --spp (default 4096 with a threshold).
+    #[arg(long, value_parser = finite_f32, value_name = "ERROR", allow_negative_numbers = true,
+        help_heading = MONTE_CARLO)]
+    pub adaptive_threshold: Option<f32>,
+    /// Samples every pixel takes before adaptive sampling may stop it (default: 16 /
+    /// threshold^0.3, as Cycles).
+    #[arg(long, value_name = "N", help_heading = MONTE_CARLO)]
+    pub adaptive_min_samples: Option<u32>,
+    /// Scale every sample down so that no channel exceeds this value (pbrt-v4's
+    /// maxcomponentvalue): fewer fireflies, but biased; the outputs' metadata says so.
+    #[arg(long, value_parser = finite_f32, value_name = "VALUE", allow_negative_numbers = true,
+        help_heading = MONTE_CARLO)]
+    pub max_component_value: Option<f32>,
     /// Write the outputs after a pass when this many seconds have passed since the last
     /// write, so a long render can be watched.
     #[arg(long, value_parser = finite_f64, value_name = "SECONDS",
@@ -330,6 +345,9 @@ pub fn given_settings(args: &RenderArgs, scene: &Scene) -> Settings {
         spp: args.spp,
         max_depth: args.max_depth,
         time_limit: args.time_limit,
+        adaptive_threshold: args.adaptive_threshold,
+        adaptive_min_samples: args.adaptive_min_samples,
+        max_component_value: args.max_component_value,
         filter,
         aa: args.aa.map(|a| match a {
             AntiAliasingName::Adaptive => AntiAliasing::Adaptive,
@@ -397,9 +415,12 @@ fn other_options(args: &RenderArgs) -> [OtherOption; 4] {
 pub fn job(args: &RenderArgs, scene: &Scene, extra: Settings) -> Result<Job, Error> {
     let flags = given_settings(args, scene).overlaid(&extra);
     let mut from_scene = scene.settings.clone();
-    // With a time limit only an explicit --spp caps the samples; adaptive anti-aliasing
-    // asked for on the command line ignores the scene's sample count.
-    if flags.time_limit.is_some() || flags.aa == Some(AntiAliasing::Adaptive) {
+    // With a time limit or an adaptive threshold only an explicit --spp caps the samples;
+    // adaptive anti-aliasing asked for on the command line ignores the scene's sample count.
+    if flags.time_limit.is_some()
+        || flags.adaptive_threshold.is_some()
+        || flags.aa == Some(AntiAliasing::Adaptive)
+    {
         from_scene.spp = None;
     }
     let settings = from_scene.overlaid(&flags);

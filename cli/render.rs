@@ -160,6 +160,22 @@ fn metadata(args: &RenderArgs, job: &Job) -> Metadata {
             "raylink:filter".into(),
             MetaValue::Str(mc.filter.to_string()),
         ));
+        if let Some(a) = mc.adaptive {
+            m.push((
+                "raylink:adaptive_threshold".into(),
+                MetaValue::Float(a.threshold),
+            ));
+            m.push((
+                "raylink:adaptive_min_samples".into(),
+                MetaValue::Int(a.min_samples as i32),
+            ));
+        }
+        if let Some(v) = mc.max_component_value {
+            m.push((
+                "raylink:max_component_value".into(),
+                MetaValue::Str(format!("{v} (samples clamped: the image is biased)")),
+            ));
+        }
     }
     m
 }
@@ -318,7 +334,7 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
         renderer.render(&control)?
     };
     cli.print_report(&args, &renderer);
-    let Rendered { image, stats, .. } = rendered;
+    let Rendered { image, stats, film } = rendered;
     if stats.invalid > 0 && crate::log::enabled(crate::log::Level::Warn) {
         eprintln!(
             "raylink: warning: {} samples were not finite and were dropped",
@@ -377,7 +393,7 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
             crate::log::debug(|| format!("wrote {}", path.display()));
         }
         // The EXR outputs again, now with every auxiliary image as a layer.
-        let layers: Vec<Layer> = Aov::LAYERS
+        let mut layers: Vec<Layer> = Aov::LAYERS
             .iter()
             .zip(&images)
             .map(|(aov, image)| Layer {
@@ -386,6 +402,29 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
                 image,
             })
             .collect();
+        // Adaptive sampling's own images: each pixel's error estimate, its samples'
+        // variance and its sample count.
+        let adaptive = match &film {
+            Some(film) => film.adaptive_images()?,
+            None => None,
+        };
+        if let Some([error, variance, samples]) = &adaptive {
+            layers.push(Layer {
+                name: "error",
+                channels: &["X"],
+                image: error,
+            });
+            layers.push(Layer {
+                name: "variance",
+                channels: &["R", "G", "B"],
+                image: variance,
+            });
+            layers.push(Layer {
+                name: "samples",
+                channels: &["X"],
+                image: samples,
+            });
+        }
         for out in args.outputs.iter().filter(|o| is_exr(o)) {
             write_image_layers(out, &image, &layers, &metadata, &out_options)?;
             crate::log::debug(|| {
@@ -429,7 +468,8 @@ fn render_with_checkpoints(
             ))
             .into());
         };
-        let blank = raylink::Film::new(width, height, mc.filter, mc.reconstruction)?;
+        let blank = raylink::Film::new(width, height, mc.filter, mc.reconstruction)?
+            .with_adaptive(mc.adaptive)?;
         let resumed = checkpoint::load_within(&found, settings, blank, mc.spp, &allowance)?;
         resumed_samples = resumed.samples;
         Some(resumed.film)

@@ -120,6 +120,12 @@ pub struct Settings {
     pub max_depth: Option<u32>,
     /// Monte Carlo: render whole passes until this many seconds have passed.
     pub time_limit: Option<f64>,
+    /// Path tracing: stop sampling a pixel once its error estimate is below this.
+    pub adaptive_threshold: Option<f32>,
+    /// Path tracing: samples every pixel takes before adaptive sampling may stop it.
+    pub adaptive_min_samples: Option<u32>,
+    /// Monte Carlo: scale samples down so that no channel exceeds this (biased).
+    pub max_component_value: Option<f32>,
     /// Monte Carlo: the pixel filter (default pbrt's Gaussian).
     pub filter: Option<Filter>,
     pub aa: Option<AntiAliasing>,
@@ -163,6 +169,9 @@ macro_rules! for_each_setting {
             spp,
             max_depth,
             time_limit,
+            adaptive_threshold,
+            adaptive_min_samples,
+            max_component_value,
             filter,
             aa,
             aa_threshold,

@@ -83,6 +83,8 @@ fn cornell_box_against_tungsten_and_path_tracer() {
         time_limit: None,
         filter: BOX,
         reconstruction: raylink::image::filter::Reconstruction::Splat,
+        adaptive: None,
+        max_component_value: None,
     });
     let (pt_image, _) = render(&scene, pt);
     let pt_seconds = start.elapsed().as_secs_f64();
@@ -145,6 +147,8 @@ fn assert_sphere_means_within(file: &str, names: [&str; 2], tolerance: f32) {
         time_limit: None,
         filter: BOX,
         reconstruction: raylink::image::filter::Reconstruction::Splat,
+        adaptive: None,
+        max_component_value: None,
     });
     let (pt_image, _) = render(&scene, pt);
     eprintln!("{file}: {}", report.join("; "));

@@ -39,6 +39,8 @@ fn mc(technique: fn(MonteCarloSettings) -> Technique, spp: u32, max_depth: u32) 
         time_limit: None,
         filter: Filter::Box { radius: 0.5 },
         reconstruction: raylink::image::filter::Reconstruction::Splat,
+        adaptive: None,
+        max_component_value: None,
     })
 }
 

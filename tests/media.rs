@@ -42,6 +42,8 @@ fn boxed(spp: u32, max_depth: u32) -> MonteCarloSettings {
         time_limit: None,
         filter: Filter::Box { radius: 0.5 },
         reconstruction: raylink::image::filter::Reconstruction::Splat,
+        adaptive: None,
+        max_component_value: None,
     }
 }
 

@@ -62,6 +62,8 @@ fn render_with(scene: &Scene, kind: Kind, s: &Setup, reconstruction: Reconstruct
         time_limit: None,
         filter: s.filter,
         reconstruction,
+        adaptive: None,
+        max_component_value: None,
     };
     let job = Job {
         width: s.width,

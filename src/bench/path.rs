@@ -128,6 +128,8 @@ pub fn measure(
         time_limit: None,
         filter: Filter::default(),
         reconstruction: Reconstruction::Splat,
+        adaptive: None,
+        max_component_value: None,
     });
     let missing = format!(
         "no {} in the working directory or the source tree",

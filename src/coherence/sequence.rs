@@ -102,6 +102,10 @@ impl Integrators {
                 "time_limit",
                 "cannot be used for an animation: every frame takes the same samples",
             )),
+            Technique::Path(mc) if mc.adaptive.is_some() => Err(Error::setting(
+                "adaptive_threshold",
+                "cannot be used for an animation: every frame takes the same samples",
+            )),
             Technique::Path(mc) => Ok(Integrators::Path(
                 PathTracer::new(PathOptions {
                     max_depth: mc.max_depth,
@@ -133,6 +137,8 @@ impl Integrators {
                 options: job.view().progressive(&MonteCarloSettings {
                     // Unchanged blocks are copied: a pixel must depend on its own samples.
                     reconstruction: crate::image::filter::Reconstruction::Importance,
+                    adaptive: None,
+                    max_component_value: None,
                     ..*mc
                 }),
             },

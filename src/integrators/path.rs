@@ -11,7 +11,9 @@ use crate::math::{Ray, Rgb, Vec2, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::SurfacePoint;
 use crate::settings::TechniqueKind;
-use crate::transport::settings::{MonteCarloSettings, TechniqueInfo, COMMON, MONTE_CARLO};
+use crate::transport::settings::{
+    MonteCarloSettings, TechniqueInfo, ADAPTIVE, COMMON, MONTE_CARLO,
+};
 use crate::transport::technique::{Lifecycle, SampledTechnique};
 use crate::transport::{Context, MonteCarlo, RayStats, Splat};
 
@@ -24,7 +26,7 @@ pub const MAX_DEPTH_LIMIT: u32 = 1024;
 pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     kind: TechniqueKind::Path,
     summary: "Path tracing with next-event estimation and multiple importance sampling.",
-    settings: &[COMMON, MONTE_CARLO],
+    settings: &[COMMON, MONTE_CARLO, ADAPTIVE],
     pbrt: &["path", "volpath", "simplepath"],
     progressive: true,
     renders_parts: true,

@@ -110,6 +110,17 @@ impl Job {
                 "cannot be used for a part of an image: every part must take the same samples",
             ));
         }
+        if self
+            .technique
+            .monte_carlo()
+            .is_some_and(|m| m.adaptive.is_some())
+        {
+            return Err(Error::setting(
+                "adaptive_threshold",
+                "cannot be used for a part of an image: where a pixel stops depends on its \
+                 neighbours",
+            ));
+        }
         Ok(())
     }
 

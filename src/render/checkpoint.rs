@@ -11,6 +11,10 @@
 //! sums   width·height × 3 f64        per pixel: sum of its sample estimates (weighted)
 //! weights width·height × f64         per pixel: sum of its splatted samples' weights
 //! splats width·height × 3 f64        per pixel: filter-weighted light-path splats
+//! with adaptive sampling only:
+//!   counts  width·height × u32       per pixel: samples taken
+//!   squares width·height × 3 f64     per pixel: sum of its samples' squares
+//!   active  width·height × u8        per pixel: 1 if it takes the next pass's samples
 //! checksum u64
 //! ```
 //!
@@ -21,6 +25,10 @@ use crate::binary_file::{Format, Reader};
 use crate::error::Result;
 use crate::input_file::{self, Allowance};
 use std::path::{Path, PathBuf};
+
+/// Bytes a pixel's film values take, and its adaptive sampling statistics.
+const FILM_BYTES: usize = 56;
+const STATS_BYTES: usize = 4 + 24 + 1;
 
 pub(crate) const FORMAT: Format = Format {
     magic: b"RLCHKPT\0",
@@ -145,7 +153,8 @@ pub fn save(path: &Path, film: &Film, settings: &str, samples: u64) -> Result<()
     // A program quitting at once (a second signal) waits for the checkpoint.
     let _keep = crate::atomic_file::finish_first();
     let (sums, weights, splats) = film.accumulators();
-    let mut b = FORMAT.try_start(settings.len() + 56 * sums.len() + 64, path)?;
+    let per_pixel = FILM_BYTES + film.statistics().map_or(0, |_| STATS_BYTES);
+    let mut b = FORMAT.try_start(settings.len() + per_pixel * sums.len() + 64, path)?;
     b.extend_from_slice(&(settings.len() as u64).to_le_bytes());
     b.extend_from_slice(settings.as_bytes());
     let (width, height) = film.size();
@@ -163,6 +172,15 @@ pub fn save(path: &Path, film: &Film, settings: &str, samples: u64) -> Result<()
     }
     for c in splats.iter().flatten() {
         b.extend_from_slice(&c.to_le_bytes());
+    }
+    if let Some(stats) = film.statistics() {
+        for n in &stats.counts {
+            b.extend_from_slice(&n.to_le_bytes());
+        }
+        for c in stats.squares.iter().flatten() {
+            b.extend_from_slice(&c.to_le_bytes());
+        }
+        b.extend(stats.active.iter().map(|&a| a as u8));
     }
     FORMAT.save(path, b)
 }
@@ -191,10 +209,16 @@ pub fn load_within(
     allowance: &Allowance,
 ) -> Result<Resumed> {
     let bad = |problem: &str| FORMAT.error(path, problem);
-    // A checkpoint of this film is its 56 bytes a pixel and a settings string (another run's
+    // A checkpoint of this film is its bytes a pixel and a settings string (another run's
     // may be longer): a file much larger is refused before it is read.
     let (w, h) = blank.size();
-    let most = (56 * w as u64 * h as u64)
+    let per_pixel = FILM_BYTES
+        + if blank.statistics().is_some() {
+            STATS_BYTES
+        } else {
+            0
+        };
+    let most = (per_pixel as u64 * w as u64 * h as u64)
         .saturating_add(settings.len() as u64)
         .saturating_add(1 << 20);
     let size = input_file::check(path, &input_file::CHECKPOINT)?;
@@ -228,11 +252,41 @@ pub fn load_within(
     let invalid = r.u64().ok_or_else(|| bad("truncated"))?;
     let samples = r.u64().ok_or_else(|| bad("truncated"))?;
     let pixels = width as usize * height as usize;
-    if r.rest.len() != 56 * pixels {
-        return Err(bad("truncated or trailing data"));
+    // The statistics follow the film when the render samples adaptively.
+    let stats_bytes = if blank.statistics().is_some() {
+        STATS_BYTES * pixels
+    } else {
+        0
+    };
+    if r.rest.len() != FILM_BYTES * pixels + stats_bytes {
+        return Err(bad(if r.rest.len() == FILM_BYTES * pixels {
+            "holds no adaptive sampling statistics, and this render needs them"
+        } else if r.rest.len() == (FILM_BYTES + STATS_BYTES) * pixels {
+            "holds adaptive sampling statistics, and this render has none"
+        } else {
+            "truncated or trailing data"
+        }));
     }
-    let mut values = r
-        .rest
+    let (film_bytes, rest) = r.rest.split_at(FILM_BYTES * pixels);
+    let stats = (stats_bytes > 0).then(|| {
+        let (counts, rest) = rest.split_at(4 * pixels);
+        let (squares, active) = rest.split_at(24 * pixels);
+        let counts: Vec<u32> = counts
+            .chunks_exact(4)
+            .map(|c| u32::from_le_bytes(c.try_into().unwrap_or([0; 4])))
+            .collect();
+        let squares: Vec<f64> = squares
+            .chunks_exact(8)
+            .map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
+            .collect();
+        let squares: Vec<[f64; 3]> = squares
+            .chunks_exact(3)
+            .map(|c| [c[0], c[1], c[2]])
+            .collect();
+        let active: Vec<bool> = active.iter().map(|&a| a != 0).collect();
+        (counts, squares, active)
+    });
+    let mut values = film_bytes
         .chunks_exact(8)
         .map(|c| f64::from_le_bytes(c.try_into().unwrap()));
     let mut next = || values.next().unwrap_or(f64::NAN);
@@ -255,6 +309,7 @@ pub fn load_within(
         .restored(
             (sums, weights, splats),
             (spp, pass, tiles_done, invalid),
+            stats,
             target,
         )
         .map_err(|e| bad(&e))?;

@@ -3,6 +3,7 @@
 //! filter-weighted splats of light paths, with the count of passes taken. The image is their
 //! mean; a checkpoint stores them exactly.
 
+use super::adaptive::PixelStats;
 use super::{tiles, Tile, TILE_SIZE};
 use crate::image::filter::{Filter, FilterWeights, Reconstruction};
 use crate::image::Image;
@@ -34,6 +35,9 @@ pub struct Film {
     pub(crate) tiles_done: u32,
     /// Samples that returned NaN or infinity and were dropped.
     pub invalid: u64,
+    /// With adaptive sampling: each pixel's sample count, sums of squares and whether it
+    /// goes on.
+    pub(crate) stats: Option<PixelStats>,
 }
 
 impl Film {
@@ -72,7 +76,75 @@ impl Film {
             pass: 0,
             tiles_done: 0,
             invalid: 0,
+            stats: None,
         })
+    }
+
+    /// This film, sampled adaptively by `rule` (if any): it then keeps each pixel's
+    /// statistics, and its pixels must take their samples from the filter.
+    pub fn with_adaptive(
+        mut self,
+        rule: Option<crate::transport::settings::AdaptiveSampling>,
+    ) -> crate::error::Result<Film> {
+        if let Some(rule) = rule {
+            if self.reconstruction != Reconstruction::Importance {
+                return Err(crate::error::Error::Invalid(
+                    "adaptive sampling needs pixels that take their samples from the filter".into(),
+                ));
+            }
+            self.stats = Some(PixelStats::new(rule, self.width, self.height)?);
+        }
+        Ok(self)
+    }
+
+    /// The per-pixel statistics of adaptive sampling, for checkpoints: sample counts, sums
+    /// of squares and which pixels go on.
+    pub(crate) fn statistics(&self) -> Option<&PixelStats> {
+        self.stats.as_ref()
+    }
+
+    /// Adds a tile's pass of `n` samples a pixel to the statistics (nothing without
+    /// adaptive sampling); `squares` row-major over the tile.
+    pub(crate) fn add_statistics(&mut self, tile: &Tile, n: u32, squares: &[[f64; 3]]) {
+        if let Some(stats) = &mut self.stats {
+            stats.add(tile, self.width, n, squares);
+        }
+    }
+
+    /// After a whole pass: stops the pixels adaptive sampling finds converged. Returns
+    /// whether any pixel goes on (always, without adaptive sampling).
+    pub(crate) fn end_adaptive_pass(&mut self) -> bool {
+        let (w, h, spp) = (self.width, self.height, self.spp);
+        match &mut self.stats {
+            Some(stats) => stats.end_pass(&self.sums, w, h, spp) > 0,
+            None => true,
+        }
+    }
+
+    /// Which pixels take the next pass's samples (all, without adaptive sampling).
+    pub(crate) fn active(&self) -> Option<&[bool]> {
+        self.stats.as_ref().map(|s| s.active.as_slice())
+    }
+
+    /// With adaptive sampling, per pixel: the error estimate, the samples' variance per
+    /// channel and the sample count, as images; `None` without.
+    pub fn adaptive_images(&self) -> crate::error::Result<Option<[Image; 3]>> {
+        let Some(stats) = &self.stats else {
+            return Ok(None);
+        };
+        let mut error = Image::try_new(self.width, self.height)?;
+        let mut variance = Image::try_new(self.width, self.height)?;
+        let mut samples = Image::try_new(self.width, self.height)?;
+        for (px, e) in error.pixels.iter_mut().zip(stats.errors(&self.sums)) {
+            *px = Rgb::splat(e as f32);
+        }
+        for (px, v) in variance.pixels.iter_mut().zip(stats.variances(&self.sums)) {
+            *px = v;
+        }
+        for (px, n) in samples.pixels.iter_mut().zip(&stats.counts) {
+            *px = Rgb::splat(*n as f32);
+        }
+        Ok(Some([error, variance, samples]))
     }
 
     pub fn size(&self) -> (u32, u32) {
@@ -97,6 +169,7 @@ impl Film {
         mut self,
         (sums, weights, splats): (Vec<[f64; 3]>, Vec<f64>, Vec<[f64; 3]>),
         (spp, pass, tiles_done, invalid): (u32, u32, u32, u64),
+        stats: Option<super::adaptive::SavedStats>,
         target: u32,
     ) -> std::result::Result<Film, String> {
         let tile_count = tiles(self.width, self.height).len() as u32;
@@ -137,6 +210,30 @@ impl Film {
         {
             return Err("wrong number of pixels".into());
         }
+        match (&mut self.stats, stats) {
+            (None, None) => {}
+            (Some(mine), Some((counts, squares, active))) => {
+                let n = mine.active.len();
+                if counts.len() != n || squares.len() != n || active.len() != n {
+                    return Err("wrong number of pixels".into());
+                }
+                if counts.iter().any(|&c| c > spp + pass) {
+                    return Err("a pixel counts more samples than its passes hold".into());
+                }
+                if squares.iter().flatten().any(|v| v.is_nan() || *v < 0.0) {
+                    return Err("a pixel's sum of squares is negative or not a number".into());
+                }
+                (mine.counts, mine.squares, mine.active) = (counts, squares, active);
+            }
+            (None, Some(_)) => {
+                return Err("holds adaptive sampling statistics, and this render has none".into())
+            }
+            (Some(_), None) => {
+                return Err(
+                    "holds no adaptive sampling statistics, and this render needs them".into(),
+                )
+            }
+        }
         self.sums = sums;
         self.weights = weights;
         self.splats = splats;
@@ -163,6 +260,9 @@ impl Film {
     /// Mean samples per pixel so far.
     pub fn mean_spp(&self) -> f64 {
         let pixels = self.width as f64 * self.height as f64;
+        if let Some(stats) = &self.stats {
+            return stats.samples() as f64 / pixels;
+        }
         self.spp as f64 + self.pass as f64 * self.tiles_done_pixels() as f64 / pixels
     }
 
@@ -210,6 +310,14 @@ impl Film {
             let per_path = if paths > 0.0 { 1.0 / paths } else { 0.0 };
             for (i, px) in image.pixels.iter_mut().enumerate() {
                 *px = weighted_value(self.sums[i], self.weights[i], self.splats[i], per_path);
+            }
+            return Ok(image);
+        }
+        if let Some(stats) = &self.stats {
+            // Adaptive sampling: each pixel by its own count (no light paths).
+            for ((px, sum), n) in image.pixels.iter_mut().zip(&self.sums).zip(&stats.counts) {
+                let per_sample = if *n == 0 { 0.0 } else { 1.0 / *n as f64 };
+                *px = pixel_value(*sum, [0.0; 3], per_sample, 0.0);
             }
             return Ok(image);
         }
@@ -360,6 +468,7 @@ impl std::fmt::Debug for Film {
             .field("pass", &self.pass)
             .field("tiles_done", &self.tiles_done)
             .field("invalid", &self.invalid)
+            .field("adaptive", &self.stats.as_ref().map(|s| s.rule))
             .finish_non_exhaustive()
     }
 }

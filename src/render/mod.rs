@@ -3,6 +3,7 @@
 //! (seed, sample position), never by thread or tile, and results are merged in tile order, so
 //! an image is the same bit for bit for any thread count and schedule.
 
+mod adaptive;
 pub(crate) mod aov;
 pub mod checkpoint;
 mod film;

@@ -27,6 +27,9 @@ struct TileResult {
     /// they reach.
     camera: Footprint,
     splats: Vec<Splat>,
+    /// With adaptive sampling: per pixel of the tile (row-major), the sums of its samples'
+    /// squares.
+    squares: Vec<[f64; 3]>,
     rays: RayStats,
     invalid: u64,
 }
@@ -45,6 +48,7 @@ impl TileResult {
         TileResult {
             camera,
             splats: Vec::new(),
+            squares: Vec::new(),
             rays: RayStats::default(),
             invalid: 0,
         }
@@ -60,6 +64,8 @@ struct Samples<'a> {
     jitter: PixelJitter,
     /// Whether anything moves during the exposure (else rays need no shutter time).
     moving: bool,
+    /// Samples and splats are scaled down so that no channel exceeds this.
+    max_component_value: Option<f32>,
 }
 
 impl<'a> Samples<'a> {
@@ -75,17 +81,28 @@ impl<'a> Samples<'a> {
             seed: options.view.seed,
             jitter: PixelJitter::new(options.filter, options.reconstruction),
             moving: ctx.scene.moves(),
+            max_component_value: options.max_component_value,
+        }
+    }
+
+    /// `l` scaled down so that no channel exceeds the clamp, as pbrt-v4 clamps.
+    fn clamped(&self, l: Rgb) -> Rgb {
+        match self.max_component_value {
+            Some(m) if l.max_element() > m => l * (m / l.max_element()),
+            _ => l,
         }
     }
 
     /// The sum of the estimates of samples `samples` of pixel `(x, y)`: what one pass adds
     /// to the pixel (nothing when samples are splatted: they go to `result`'s footprint).
-    /// Splats, rays and dropped samples go to `result`.
+    /// Splats, rays and dropped samples go to `result`; the sum of the estimates' squares
+    /// to `squares`.
     fn pixel_pass(
         &self,
         (x, y): (u32, u32),
         samples: std::ops::Range<u32>,
         result: &mut TileResult,
+        squares: &mut [f64; 3],
     ) -> [f64; 3] {
         let mut sum = [0.0f64; 3];
         for i in samples {
@@ -106,6 +123,10 @@ impl<'a> Samples<'a> {
                 &mut result.rays,
                 &mut result.splats,
             );
+            let l = self.clamped(l);
+            for s in &mut result.splats[before..] {
+                s.value = self.clamped(s.value);
+            }
             let splats_ok = result.splats[before..]
                 .iter()
                 .all(|s| s.value.is_finite() && s.x.is_finite() && s.y.is_finite());
@@ -122,23 +143,39 @@ impl<'a> Samples<'a> {
                 result.camera.add(&s.weights, at, Some(l));
                 continue;
             }
-            sum[0] += l.x as f64;
-            sum[1] += l.y as f64;
-            sum[2] += l.z as f64;
+            let l = [l.x as f64, l.y as f64, l.z as f64];
+            for c in 0..3 {
+                sum[c] += l[c];
+                squares[c] += l[c] * l[c];
+            }
         }
         sum
     }
 
     /// One pass of `samples` over a tile, whose splatted samples reach the pixels of
-    /// `bounds` only.
-    fn tile_pass(&self, tile: &Tile, samples: std::ops::Range<u32>, bounds: &Tile) -> TileResult {
+    /// `bounds` only. With adaptive sampling, only the pixels `active` (row-major over an
+    /// image `width` wide) take samples, and their sums of squares are kept.
+    fn tile_pass(
+        &self,
+        tile: &Tile,
+        samples: std::ops::Range<u32>,
+        bounds: &Tile,
+        active: Option<(&[bool], u32)>,
+    ) -> TileResult {
         let splatting = self.jitter.splatting();
         let mut result = TileResult::new(tile, splatting, bounds);
         for y in tile.y0..tile.y1 {
             for x in tile.x0..tile.x1 {
-                let sum = self.pixel_pass((x, y), samples.clone(), &mut result);
+                let mut squares = [0.0; 3];
+                let sum = match active {
+                    Some((a, width)) if !a[(y * width + x) as usize] => [0.0; 3],
+                    _ => self.pixel_pass((x, y), samples.clone(), &mut result, &mut squares),
+                };
                 if splatting.is_none() {
                     result.camera.sums.push(sum);
+                }
+                if active.is_some() {
+                    result.squares.push(squares);
                 }
             }
         }
@@ -157,7 +194,7 @@ impl<'a> Samples<'a> {
             for x in tile.x0..tile.x1 {
                 let mut total = [0.0f64; 3];
                 for &(first, n) in &passes {
-                    let s = self.pixel_pass((x, y), first..first + n, &mut result);
+                    let s = self.pixel_pass((x, y), first..first + n, &mut result, &mut [0.0; 3]);
                     for c in 0..3 {
                         total[c] += s[c];
                     }
@@ -213,6 +250,13 @@ pub(crate) fn render_region(
         return Err(Error::setting(
             "time_limit",
             "cannot be used for a part of an image: every part must take the same samples",
+        ));
+    }
+    if options.adaptive.is_some() {
+        return Err(Error::setting(
+            "adaptive_threshold",
+            "cannot be used for a part of an image: where a pixel stops depends on its \
+             neighbours",
         ));
     }
     if options.reconstruction == Reconstruction::Splat {
@@ -290,7 +334,7 @@ fn render_region_splatted(
         &control.cancel,
         |k| {
             let (first, n) = passes[k / tiles.len()];
-            s.tile_pass(&tiles[k % tiles.len()], first..first + n, region)
+            s.tile_pass(&tiles[k % tiles.len()], first..first + n, region, None)
         },
         |k, r| {
             let (t, n) = (&tiles[k % tiles.len()], passes[k / tiles.len()].1);
@@ -357,15 +401,19 @@ pub(crate) fn render_passes(
             options.view.height,
             options.filter,
             options.reconstruction,
-        )?,
+        )?
+        .with_adaptive(options.adaptive)?,
     };
+    if film.statistics().map(|s| s.rule) != options.adaptive {
+        return Err(Error::Invalid(
+            "the film to resume was rendered with other adaptive sampling".into(),
+        ));
+    }
     let mut stats = RenderStats::default();
     let pixels = options.view.width as u64 * options.view.height as u64;
     let phase = control.phase(
         "render",
-        options
-            .time_limit
-            .is_none()
+        (options.time_limit.is_none() && options.adaptive.is_none())
             .then_some(pixels * options.spp as u64),
         "samples",
     );
@@ -374,7 +422,8 @@ pub(crate) fn render_passes(
     // Every pass still to take, as (first sample, samples); a resumed film may be in the
     // middle of one. The passes run as one stream of tiles with no pause between them, and
     // tiles are merged in pass and image order, so a pass finished after a resume adds the
-    // same numbers in the same order as an uninterrupted one.
+    // same numbers in the same order as an uninterrupted one. With adaptive sampling each
+    // pass waits for the one before, which decides the pixels it samples.
     let mut passes = Vec::new();
     let mut done = film.spp;
     if film.is_partial_pass() {
@@ -382,72 +431,114 @@ pub(crate) fn render_passes(
         done += film.pass;
     }
     passes.extend(passes_between(done, options.spp));
+    // As (first pass, passes).
+    let groups: Vec<(usize, usize)> = if film.statistics().is_some() {
+        (0..passes.len()).map(|p| (p, 1)).collect()
+    } else {
+        vec![(0, passes.len())]
+    };
     let whole = Tile::whole(options.view.width, options.view.height);
-    let skipped = film.tiles_done as usize;
-    let locate = |k: usize| ((k + skipped) / tiles.len(), (k + skipped) % tiles.len());
+    let width = options.view.width;
     let mut failure = None;
+    let mut ended = false;
+    let mut cancelled = false;
     let mut pass_start = Instant::now();
     let mut shown = Instant::now();
-    let driven = drive_indexed(
-        (passes.len() * tiles.len()).saturating_sub(skipped),
-        options.view.threads,
-        MERGE_WINDOW,
-        &control.cancel,
-        |k| {
-            let (p, t) = locate(k);
-            let (first, n) = passes[p];
-            s.tile_pass(&tiles[t], first..first + n, &whole)
-        },
-        |k, r| {
-            let (p, t) = locate(k);
-            let (tile, n) = (&tiles[t], passes[p].1);
-            film.pass = n;
-            film.add_camera(&r.camera);
-            for splat in &r.splats {
-                film.add_splat(splat);
-            }
-            stats.rays.add(&r.rays);
-            stats.samples += n as u64 * tile.pixels();
-            film.invalid += r.invalid;
-            film.tiles_done += 1;
-            phase.advance(n as u64 * tile.pixels());
-            if (film.tiles_done as usize) < tiles.len() {
-                if watch.mid_pass.is_some_and(|d| shown.elapsed() >= d) {
-                    stats.seconds = start.elapsed().as_secs_f64();
-                    if let Err(e) = (watch.film)(&film, Shown::MidPass, &stats) {
-                        failure = Some(e);
-                        return Merge::Stop;
-                    }
-                    shown = Instant::now();
+    for (group_start, group_len) in groups {
+        // Only the first pass may have tiles done already.
+        let skipped = if group_start == 0 {
+            film.tiles_done as usize
+        } else {
+            0
+        };
+        let locate = |k: usize| {
+            (
+                group_start + (k + skipped) / tiles.len(),
+                (k + skipped) % tiles.len(),
+            )
+        };
+        let active = film.active().map(<[bool]>::to_vec);
+        let driven = drive_indexed(
+            (group_len * tiles.len()).saturating_sub(skipped),
+            options.view.threads,
+            MERGE_WINDOW,
+            &control.cancel,
+            |k| {
+                let (p, t) = locate(k);
+                let (first, n) = passes[p];
+                let active = active.as_deref().map(|a| (a, width));
+                s.tile_pass(&tiles[t], first..first + n, &whole, active)
+            },
+            |k, r| {
+                let (p, t) = locate(k);
+                let (tile, n) = (&tiles[t], passes[p].1);
+                film.pass = n;
+                film.add_camera(&r.camera);
+                film.add_statistics(tile, n, &r.squares);
+                for splat in &r.splats {
+                    film.add_splat(splat);
                 }
-                return Merge::Continue;
-            }
-            film.spp += n;
-            film.pass = 0;
-            film.tiles_done = 0;
-            stats.seconds = start.elapsed().as_secs_f64();
-            if let Err(e) = (watch.film)(&film, Shown::AfterPass, &stats) {
-                failure = Some(e);
-                return Merge::Stop;
-            }
-            shown = Instant::now();
-            if let Some(limit) = options.time_limit {
-                // Stop when another pass like the last one would overrun the limit.
-                let elapsed = start.elapsed().as_secs_f64();
-                let pass = pass_start.elapsed().as_secs_f64();
-                let next = next_pass(film.spp, options.spp.max(film.spp + 1)) as f64 / n as f64;
-                if elapsed + pass * next > limit {
+                stats.rays.add(&r.rays);
+                let sampled = match &active {
+                    Some(a) => n as u64 * count_active(a, width, tile),
+                    None => n as u64 * tile.pixels(),
+                };
+                stats.samples += sampled;
+                film.invalid += r.invalid;
+                film.tiles_done += 1;
+                phase.advance(sampled);
+                if (film.tiles_done as usize) < tiles.len() {
+                    if watch.mid_pass.is_some_and(|d| shown.elapsed() >= d) {
+                        stats.seconds = start.elapsed().as_secs_f64();
+                        if let Err(e) = (watch.film)(&film, Shown::MidPass, &stats) {
+                            failure = Some(e);
+                            return Merge::Stop;
+                        }
+                        shown = Instant::now();
+                    }
+                    return Merge::Continue;
+                }
+                film.spp += n;
+                film.pass = 0;
+                film.tiles_done = 0;
+                // Adaptive sampling stops the pixels that have converged; when none is left
+                // the render is done.
+                let going_on = film.end_adaptive_pass();
+                stats.seconds = start.elapsed().as_secs_f64();
+                if let Err(e) = (watch.film)(&film, Shown::AfterPass, &stats) {
+                    failure = Some(e);
                     return Merge::Stop;
                 }
-            }
-            pass_start = Instant::now();
-            Merge::Continue
-        },
-    );
+                shown = Instant::now();
+                if !going_on {
+                    ended = true;
+                    return Merge::Stop;
+                }
+                if let Some(limit) = options.time_limit {
+                    // Stop when another pass like the last one would overrun the limit.
+                    let elapsed = start.elapsed().as_secs_f64();
+                    let pass = pass_start.elapsed().as_secs_f64();
+                    let next = next_pass(film.spp, options.spp.max(film.spp + 1)) as f64 / n as f64;
+                    if elapsed + pass * next > limit {
+                        ended = true;
+                        return Merge::Stop;
+                    }
+                }
+                pass_start = Instant::now();
+                Merge::Continue
+            },
+        );
+        if driven.cancelled {
+            cancelled = true;
+        }
+        if cancelled || ended || failure.is_some() {
+            break;
+        }
+    }
     if let Some(e) = failure {
         return Err(e);
     }
-    if driven.cancelled {
+    if cancelled {
         stats.cancelled = true;
         if film.tiles_done == 0 {
             film.pass = 0;
@@ -456,4 +547,17 @@ pub(crate) fn render_passes(
     stats.seconds = start.elapsed().as_secs_f64();
     phase.end(&stats.summary());
     Ok((film, stats))
+}
+
+/// How many of `tile`'s pixels are `active` (row-major over an image `width` wide).
+fn count_active(active: &[bool], width: u32, tile: &Tile) -> u64 {
+    (tile.y0..tile.y1)
+        .map(|y| {
+            let row = (y * width) as usize;
+            active[row + tile.x0 as usize..row + tile.x1 as usize]
+                .iter()
+                .filter(|a| **a)
+                .count() as u64
+        })
+        .sum()
 }

@@ -232,6 +232,8 @@ fn sequence_job(
             time_limit: None,
             filter: Default::default(),
             reconstruction: crate::image::filter::Reconstruction::Importance,
+            adaptive: None,
+            max_component_value: None,
         }),
     };
     let job = Job {

@@ -217,6 +217,8 @@ fn case(n: u64) -> (String, Job, Vec<i64>, Coherence) {
             time_limit: None,
             filter: Default::default(),
             reconstruction: crate::image::filter::Reconstruction::Importance,
+            adaptive: None,
+            max_component_value: None,
         })
     };
     let job = Job {

@@ -42,6 +42,8 @@ fn options(w: u32, h: u32, spp: u32, threads: Option<usize>) -> ProgressiveOptio
         time_limit: None,
         filter: Filter::Box { radius: 0.5 },
         reconstruction: crate::image::filter::Reconstruction::Splat,
+        adaptive: None,
+        max_component_value: None,
     }
 }
 

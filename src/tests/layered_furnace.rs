@@ -70,6 +70,8 @@ fn coated_diffuse_sphere_in_a_furnace_renders_its_albedo() {
         time_limit: None,
         filter: Filter::Box { radius: 0.5 },
         reconstruction: crate::image::filter::Reconstruction::Splat,
+        adaptive: None,
+        max_component_value: None,
     };
     let job = Job {
         width: SIZE,

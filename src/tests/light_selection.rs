@@ -26,6 +26,8 @@ fn render(scene: &Scene, kind: SelectionKind, seed: u64) -> Image {
         time_limit: None,
         filter: Filter::Box { radius: 0.5 },
         reconstruction: crate::image::filter::Reconstruction::Splat,
+        adaptive: None,
+        max_component_value: None,
     };
     let tracer = PathTracer::new(PathOptions { max_depth: 1 });
     let watch = crate::render::Watch::nobody();

@@ -1,6 +1,7 @@
 //! Tests that need the crate's internals (integrators called directly, caches, networks and
 //! coherence records looked into, test integrators), one file per theme.
 
+mod adaptive_sampling;
 mod binary_files;
 mod bsdf;
 mod coherence;

@@ -60,6 +60,8 @@ pub(crate) fn monte_carlo_image(
         time_limit: None,
         filter: Filter::Box { radius: 0.5 },
         reconstruction: crate::image::filter::Reconstruction::Splat,
+        adaptive: None,
+        max_component_value: None,
     };
     let watch = crate::render::Watch::nobody();
     let (film, _) =

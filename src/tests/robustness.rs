@@ -56,6 +56,8 @@ fn non_finite_samples_are_dropped_and_counted() {
             time_limit: None,
             filter: Default::default(),
             reconstruction,
+            adaptive: None,
+            max_component_value: None,
         };
         let (film, _) = render_passes(
             &ctx,

@@ -103,8 +103,58 @@ pub const MONTE_CARLO: &[Setting] = &[
         doc: "Render whole passes until this many seconds have passed (spp, if given, still \
               caps the samples).",
     },
+    Setting {
+        name: "max_component_value",
+        scene_key: Some(("render", "max_component_value")),
+        example: "10.0",
+        doc: "Scale every sample down so that no channel exceeds this value (pbrt-v4's \
+              maxcomponentvalue): fewer fireflies in previews, at the cost of bias (default: \
+              no clamping; the outputs' metadata records it).",
+    },
     FILTER,
 ];
+
+/// Adaptive sampling: read by the techniques whose pixels are estimated from their own
+/// samples alone (the path tracer).
+pub const ADAPTIVE: &[Setting] = &[
+    Setting {
+        name: "adaptive_threshold",
+        scene_key: Some(("render", "adaptive_threshold")),
+        example: "0.01",
+        doc: "Stop sampling a pixel once its estimated error is below this (Cycles' noise \
+              threshold; 0.01 is a good final image, 0.1 a preview). The render ends when \
+              every pixel has, or at spp (default 4096 with a threshold). Off by default.",
+    },
+    Setting {
+        name: "adaptive_min_samples",
+        scene_key: Some(("render", "adaptive_min_samples")),
+        example: "32",
+        doc: "Samples every pixel takes before adaptive sampling may stop it (default: \
+              16 / threshold^0.3, as Cycles, at most spp).",
+    },
+];
+
+/// Samples per pixel with an adaptive threshold and no sample count or time limit: the
+/// most a pixel that never converges takes (Cycles' default).
+pub const ADAPTIVE_DEFAULT_SPP: u32 = 4096;
+
+/// Adaptive sampling: which pixels go on taking samples.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct AdaptiveSampling {
+    /// A pixel stops when its error estimate falls below this.
+    pub threshold: f32,
+    /// Samples every pixel takes first.
+    pub min_samples: u32,
+}
+
+impl AdaptiveSampling {
+    /// Cycles' automatic minimum for a threshold: 16 / threshold^0.3, rounded up.
+    pub fn default_min_samples(threshold: f32) -> u32 {
+        (16.0 / threshold.powf(0.3))
+            .ceil()
+            .clamp(1.0, MAX_SPP as f32) as u32
+    }
+}
 
 /// The settings of the progressive Monte Carlo techniques (and the irradiance cache's final
 /// render).
@@ -118,15 +168,23 @@ pub struct MonteCarloSettings {
     /// How camera samples become pixels: splatted through the filter (the default), or
     /// drawn from it so that each pixel depends on its own samples alone.
     pub reconstruction: Reconstruction,
+    /// Adaptive sampling, if on (its pixels then take their samples from the filter).
+    pub adaptive: Option<AdaptiveSampling>,
+    /// Samples (and splats) scaled down so that no channel exceeds this.
+    pub max_component_value: Option<f32>,
 }
 
 impl MonteCarloSettings {
     /// From the parameter set, with the defaults, every value checked.
     pub(crate) fn from_settings(s: &Settings, max_depth: u32) -> Result<MonteCarloSettings> {
         // With a time limit only a given spp caps the samples.
-        let spp = s
-            .spp
-            .unwrap_or(if s.time_limit.is_some() { MAX_SPP } else { 16 });
+        let spp = s.spp.unwrap_or(if s.time_limit.is_some() {
+            MAX_SPP
+        } else if s.adaptive_threshold.is_some() {
+            ADAPTIVE_DEFAULT_SPP
+        } else {
+            16
+        });
         if spp == 0 || spp > MAX_SPP {
             return Err(Error::setting(
                 "spp",
@@ -145,18 +203,80 @@ impl MonteCarloSettings {
         filter
             .validate()
             .map_err(|e| Error::setting("filter", format!("is invalid: {e}")))?;
+        if let Some(m) = s.max_component_value {
+            if !(m.is_finite() && m > 0.0) {
+                return Err(Error::setting(
+                    "max_component_value",
+                    format!("must be a positive number, got {m}"),
+                ));
+            }
+        }
+        let adaptive = match (s.adaptive_threshold, s.adaptive_min_samples) {
+            (None, None) => None,
+            (None, Some(_)) => {
+                return Err(Error::setting(
+                    "adaptive_min_samples",
+                    "needs an adaptive threshold (adaptive sampling is off without one)",
+                ))
+            }
+            (Some(threshold), min) => {
+                if !(threshold.is_finite() && threshold > 0.0 && threshold < 1.0) {
+                    return Err(Error::setting(
+                        "adaptive_threshold",
+                        format!("must be between 0 and 1 (exclusive), got {threshold}"),
+                    ));
+                }
+                let min_samples = match min {
+                    Some(0) => {
+                        return Err(Error::setting(
+                            "adaptive_min_samples",
+                            "must be at least 1, got 0",
+                        ))
+                    }
+                    Some(m) if m > spp => {
+                        return Err(Error::setting(
+                            "adaptive_min_samples",
+                            format!("must be at most spp ({spp}), got {m}"),
+                        ))
+                    }
+                    Some(m) => m,
+                    None => AdaptiveSampling::default_min_samples(threshold).min(spp),
+                };
+                Some(AdaptiveSampling {
+                    threshold,
+                    min_samples,
+                })
+            }
+        };
         Ok(MonteCarloSettings {
             max_depth,
             spp,
             time_limit: s.time_limit,
             filter,
-            reconstruction: Reconstruction::Splat,
+            // A pixel that stops on its own error must depend on its own samples alone.
+            reconstruction: if adaptive.is_some() {
+                Reconstruction::Importance
+            } else {
+                Reconstruction::Splat
+            },
+            adaptive,
+            max_component_value: s.max_component_value,
         })
     }
 
     /// What of them changes pixels, for a job's settings key.
     pub(crate) fn key(&self) -> String {
-        format!(" spp={} filter={}", self.spp, self.filter)
+        let mut key = format!(" spp={} filter={}", self.spp, self.filter);
+        if let Some(a) = self.adaptive {
+            key += &format!(
+                " adaptive_threshold={} adaptive_min_samples={}",
+                a.threshold, a.min_samples
+            );
+        }
+        if let Some(m) = self.max_component_value {
+            key += &format!(" max_component_value={m}");
+        }
+        key
     }
 }
 

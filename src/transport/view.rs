@@ -127,6 +127,8 @@ impl View {
             time_limit: mc.time_limit,
             filter: mc.filter,
             reconstruction: mc.reconstruction,
+            adaptive: mc.adaptive,
+            max_component_value: mc.max_component_value,
         }
     }
 }
@@ -141,4 +143,8 @@ pub(crate) struct ProgressiveOptions {
     pub time_limit: Option<f64>,
     pub filter: Filter,
     pub reconstruction: Reconstruction,
+    /// Adaptive sampling, if on.
+    pub adaptive: Option<crate::transport::settings::AdaptiveSampling>,
+    /// Samples scaled down so that no channel exceeds this.
+    pub max_component_value: Option<f32>,
 }

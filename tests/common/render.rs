@@ -18,6 +18,8 @@ pub fn boxed(max_depth: u32, spp: u32) -> MonteCarloSettings {
         time_limit: None,
         filter: Filter::Box { radius: 0.5 },
         reconstruction: raylink::image::filter::Reconstruction::Splat,
+        adaptive: None,
+        max_component_value: None,
     }
 }
 

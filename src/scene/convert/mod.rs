@@ -343,6 +343,9 @@ fn render(s: &RenderSettings) -> Option<RenderDesc> {
         spp: s.spp,
         max_depth: s.max_depth,
         time_limit: s.time_limit,
+        adaptive_threshold: s.adaptive_threshold,
+        adaptive_min_samples: s.adaptive_min_samples,
+        max_component_value: s.max_component_value,
         filter,
         aa: s.aa.map(|a| {
             match a {

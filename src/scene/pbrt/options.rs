@@ -153,6 +153,18 @@ impl Builder {
                     }
                 };
                 self.resolution = (res("xresolution", 1280)?, res("yresolution", 720)?);
+                // pbrt-v4 clamps every sample to this (infinite: no clamping).
+                if let Some(m) = p.float("maxcomponentvalue").map_err(pe)? {
+                    if m.is_nan() || m <= 0.0 {
+                        return Err(
+                            loc.error(format!("Film: maxcomponentvalue must be positive, got {m}"))
+                        );
+                    }
+                    if m < f32::MAX as f64 {
+                        self.settings.max_component_value = Some(m as f32);
+                        self.given("max_component_value", "Film \"maxcomponentvalue\"", loc);
+                    }
+                }
                 // The output when the command line names none.
                 if let Some(f) = p.string("filename").map_err(pe)? {
                     if f.is_empty() {

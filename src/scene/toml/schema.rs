@@ -54,6 +54,12 @@ pub(crate) struct RenderDesc {
     pub(crate) max_depth: Option<u32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) time_limit: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) adaptive_threshold: Option<f32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) adaptive_min_samples: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) max_component_value: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) filter: Option<FilterDesc>,
     /// Whitted's and the network's anti-aliasing: "adaptive" or "uniform".

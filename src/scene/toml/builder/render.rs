@@ -51,6 +51,27 @@ impl Builder<'_> {
         take!(spp, d.spp, "render", "spp", &span);
         take!(max_depth, d.max_depth, "render", "max_depth", &span);
         take!(time_limit, d.time_limit, "render", "time_limit", &span);
+        take!(
+            adaptive_threshold,
+            d.adaptive_threshold,
+            "render",
+            "adaptive_threshold",
+            &span
+        );
+        take!(
+            adaptive_min_samples,
+            d.adaptive_min_samples,
+            "render",
+            "adaptive_min_samples",
+            &span
+        );
+        take!(
+            max_component_value,
+            d.max_component_value,
+            "render",
+            "max_component_value",
+            &span
+        );
         let filter = d.filter.map(|f| self.filter(&site, f)).transpose()?;
         take!(filter, filter, "render", "filter", &span);
         let aa = match d.aa.as_deref() {
