@@ -582,3 +582,81 @@ fn every_missing_file_of_a_scene_is_reported() {
     assert!(!err.contains("panicked"), "{err}");
     assert_eq!(files_in(dir.path()), vec![scene]);
 }
+
+/// A pbrt scene missing several files (an environment map, an image texture, a PLY mesh, a
+/// normal map), or an OBJ missing two MTL files, is refused with every one of them, each
+/// naming its line and statement; nothing is written.
+#[test]
+fn every_missing_file_of_a_pbrt_scene_or_obj_is_reported() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("s.pbrt");
+    std::fs::write(
+        &scene,
+        "LookAt 0 1 5  0 1 0  0 1 0\nCamera \"perspective\" \"float fov\" 45\n\
+         Film \"rgb\" \"integer xresolution\" 32 \"integer yresolution\" 32\nWorldBegin\n\
+         LightSource \"infinite\" \"string filename\" \"no-sky.exr\"\n\
+         Texture \"wood\" \"spectrum\" \"imagemap\" \"string filename\" \"no-wood.png\"\n\
+         Material \"diffuse\" \"texture reflectance\" \"wood\"\n\
+         Shape \"plymesh\" \"string filename\" \"no-chair.ply\"\n\
+         Shape \"sphere\" \"float radius\" 1\n\
+         Material \"diffuse\" \"string normalmap\" \"no-bumps.png\"\n\
+         Shape \"sphere\" \"float radius\" 0.5\n",
+    )
+    .unwrap();
+    let out = dir.path().join("x.exr");
+    let run = raylink(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&run);
+    assert_eq!(run.status.code(), Some(2), "{err}");
+    let expected = [
+        ("line 5,", "LightSource \"infinite\": no-sky.exr"),
+        ("line 6,", "\"imagemap\": no-wood.png"),
+        ("line 8,", "Shape \"plymesh\": no-chair.ply"),
+        ("line 10,", "Material \"diffuse\": no-bumps.png"),
+    ];
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), expected.len(), "{err}");
+    for (line, (at, what)) in lines.iter().zip(expected) {
+        assert!(
+            line.starts_with("raylink: error: ") && line.contains("s.pbrt: "),
+            "{err}"
+        );
+        assert!(line.contains(at), "{at}: {err}");
+        assert!(
+            line.contains(&format!("{what}: no such file")),
+            "{what}: {err}"
+        );
+    }
+
+    std::fs::write(
+        dir.path().join("m.obj"),
+        "mtllib first.mtl\nmtllib second.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n",
+    )
+    .unwrap();
+    let toml = dir.path().join("t.toml");
+    std::fs::write(
+        &toml,
+        "[camera]\nposition = [0, 1, 5]\nlook_at = [0, 0, 0]\n\
+         [[shapes]]\ntype = \"obj\"\nfile = \"m.obj\"\n",
+    )
+    .unwrap();
+    let run = raylink(&[
+        "render",
+        toml.to_str().unwrap(),
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&run);
+    assert_eq!(run.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("first.mtl") && err.contains("second.mtl"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}

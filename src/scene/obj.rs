@@ -51,7 +51,8 @@ pub fn load_within(
 
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let materials: RefCell<Vec<Material>> = RefCell::new(Vec::new());
-    let mtl_error: RefCell<Option<Error>> = RefCell::new(None);
+    // Every MTL file that fails, so that several missing ones are reported at once.
+    let mtl_errors: RefCell<Vec<Error>> = RefCell::new(Vec::new());
     let loader = |name: &Path| -> tobj::MTLLoadResult {
         if !with_materials {
             return Ok((Vec::new(), Default::default()));
@@ -67,7 +68,7 @@ pub fn load_within(
                 Ok((raw, map))
             }
             Err(e) => {
-                mtl_error.borrow_mut().get_or_insert(e);
+                mtl_errors.borrow_mut().push(e);
                 Err(tobj::LoadError::GenericFailure)
             }
         }
@@ -80,8 +81,11 @@ pub fn load_within(
     };
     let mut reader = LineReader::new(text.as_bytes());
     let result = tobj::load_obj_buf(&mut reader, &options, loader);
-    if let Some(e) = mtl_error.into_inner() {
-        return Err(e);
+    let mut errors = mtl_errors.into_inner();
+    match errors.len() {
+        0 => {}
+        1 => return Err(errors.remove(0)),
+        _ => return Err(Error::Inputs(errors)),
     }
     let (models, _) = result.map_err(|e| Error::input(path, reader.describe(&e)))?;
     let materials = materials.into_inner();

@@ -78,6 +78,9 @@ pub(super) struct Builder {
     pub(super) inputs: Vec<PathBuf>,
     /// `inputs`, to record each file once.
     pub(super) input_set: HashSet<PathBuf>,
+    /// The files named that are not there, each an error naming its statement: reading
+    /// goes on past them so that a scene missing several reports every one.
+    pub(super) missing: Vec<crate::error::Error>,
     /// The memory the reading may take (see `limits.rs`).
     pub(super) budget: MemoryBudget,
     /// What the reading holds against it, shared with the parser that holds the text.
@@ -124,6 +127,7 @@ impl Builder {
             mirror: DMat4::IDENTITY,
             warnings: Vec::new(),
             warned: HashSet::new(),
+            missing: Vec::new(),
             source: source.to_path_buf(),
             inputs: Vec::new(),
             input_set: HashSet::new(),
@@ -150,8 +154,35 @@ impl Builder {
         }
     }
 
+    /// Records `path` (named `file` by statement `st`) as an input, and whether it is there:
+    /// one that is not is noted (see [`Builder::missing`]) for the caller to go on without.
+    pub(super) fn find_input(&mut self, path: &Path, st: &str, file: &str, loc: &Loc) -> bool {
+        self.add_input(path);
+        let there = path.symlink_metadata().is_ok();
+        if !there {
+            self.missing
+                .push(loc.error(format!("{st}: {file}: no such file")));
+        }
+        there
+    }
+
+    /// The reading's error: the missing files noted before `error`, then `error`.
+    pub(super) fn failed(&mut self, error: crate::error::Error) -> crate::error::Error {
+        if self.missing.is_empty() {
+            return error;
+        }
+        let mut all = std::mem::take(&mut self.missing);
+        all.push(error);
+        crate::error::Error::Inputs(all)
+    }
+
     /// The scene read: the camera made at WorldBegin, the shapes and the materials they use.
     pub(super) fn finish(mut self) -> crate::error::Result<Scene> {
+        match self.missing.len() {
+            0 => {}
+            1 => return Err(self.missing.remove(0)),
+            _ => return Err(crate::error::Error::Inputs(self.missing)),
+        }
         let Some(camera) = self.camera_value.take() else {
             return Err(crate::error::Error::input(
                 &self.source,

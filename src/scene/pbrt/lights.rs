@@ -43,9 +43,9 @@ impl Builder {
             (Some(_), Some(_)) => {
                 return Err(loc.error(format!("{st}: give either \"L\" or \"filename\", not both")))
             }
+            (Some(file), None) if !self.find_input(&loc.dir().join(&file), &st, &file, loc) => None,
             (Some(file), None) => {
                 let path = loc.dir().join(&file);
-                self.add_input(&path);
                 let image = ImageTexture::load_within(
                     &path,
                     PathBuf::from(&file),
@@ -107,7 +107,10 @@ impl Builder {
             .map_err(Self::pe(loc))?
             .ok_or_else(|| loc.error(format!("{st} needs a \"string filename\"")))?;
         let path = loc.dir().join(&file);
-        self.add_input(&path);
+        if !self.find_input(&path, st, &file, loc) {
+            // Reading goes on to find the other missing files; the scene is refused.
+            return Ok((file, Image::new(1, 1)));
+        }
         let (image, _) = crate::image::output::read_image_within(&path, &self.allowance())
             .map_err(|e| loc.error(format!("{st}: {e}")))?;
         self.held.add_image(&image);
@@ -291,7 +294,9 @@ impl Builder {
                             self.warn(loc, format!("{st}: only one environment map is supported; the last one is used"));
                         }
                         let path = loc.dir().join(&file);
-                        self.add_input(&path);
+                        if !self.find_input(&path, st, &file, loc) {
+                            return Ok(());
+                        }
                         let (env, mapping) = Environment::load_with_mapping(
                             &path,
                             PathBuf::from(&file),

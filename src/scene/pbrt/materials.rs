@@ -325,7 +325,9 @@ impl Builder {
                 );
             }
             let path = loc.dir().join(&file);
-            self.add_input(&path);
+            if !self.find_input(&path, st, &file, loc) {
+                return Ok(None);
+            }
             let image = ImageTexture::load_within(
                 &path,
                 PathBuf::from(&file),

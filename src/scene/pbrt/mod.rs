@@ -65,7 +65,9 @@ pub(crate) use shapes::instance as placed_copies;
 pub fn read(path: &Path, control: &Control) -> crate::error::Result<Scene> {
     let mut parser = Parser::new(path, control);
     let mut builder = Builder::new(path, control.budget, parser.held());
-    parser.read(path, &mut builder)?;
+    if let Err(e) = parser.read(path, &mut builder) {
+        return Err(builder.failed(e));
+    }
     builder.finish()
 }
 
@@ -84,7 +86,9 @@ pub(crate) fn from_str_with(
 ) -> crate::error::Result<Scene> {
     let mut parser = Parser::new(path, control);
     let mut builder = Builder::new(path, control.budget, parser.held());
-    parser.parse(path, text, &mut builder)?;
+    if let Err(e) = parser.parse(path, text, &mut builder) {
+        return Err(builder.failed(e));
+    }
     builder.finish()
 }
 

@@ -174,7 +174,10 @@ impl Builder {
                 }
                 p.ignore("edgelength");
                 let path = loc.dir().join(&file);
-                self.add_input(&path);
+                if !self.find_input(&path, st, &file, loc) {
+                    // Reading goes on to find the other missing files.
+                    return Ok(());
+                }
                 let mesh = ply::read(&path).map_err(|e| loc.error(format!("{st}: {e}")))?;
                 if mesh.skipped_faces > 0 {
                     self.warn(

@@ -159,7 +159,10 @@ impl Builder {
         }
         p.ignore("filter");
         p.ignore("maxanisotropy");
-        self.add_input(&path);
+        if !self.find_input(&path, st, &file, loc) {
+            // Reading goes on to find the other missing files; the scene is refused.
+            return Ok(Texture::Constant(Rgb::ZERO));
+        }
         let image = ImageTexture::load_within(
             &path,
             PathBuf::from(&file),
