@@ -1,10 +1,19 @@
 #!/usr/bin/env python3
 """Writes scenes/lamp-room.toml: a long hall split by a wall with a doorway, lit only by
 288 small ceiling lamps of four colours and strengths (a few hundred emitters, most of
-them far from any one point or behind the wall), for light selection. Deterministic: the
-same file every run. Usage: scripts/lamp-room-scene.py > scenes/lamp-room.toml"""
+them far from any one point or behind the wall), for light selection. Also writes the
+scene's Mitsuba 3 twin, benches/interiors/lamp-room.xml (scripts/mitsuba_twin.py).
+Deterministic: the same files every run. Usage: scripts/lamp-room-scene.py"""
 
+import os
 import random
+import sys
+import tomllib
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from mitsuba_twin import mitsuba_xml  # noqa: E402
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 rng = random.Random(7)
 W, H, D = 12.0, 3.0, 8.0  # x in [-6, 6], y in [0, 3], z in [-8, 0]
@@ -69,4 +78,10 @@ for i in range(24):
         name = rng.choice(lamps)[0]
         y = H - 0.01
         out.append(quad((x - s, y, z - s), (x + s, y, z - s), (x + s, y, z + s), (x - s, y, z + s), "lamp_" + name))
-print("\n".join(out))
+text = "\n".join(out) + "\n"
+os.makedirs(os.path.join(ROOT, "benches/interiors"), exist_ok=True)
+with open(os.path.join(ROOT, "scenes/lamp-room.toml"), "w") as f:
+    f.write(text)
+with open(os.path.join(ROOT, "benches/interiors/lamp-room.xml"), "w") as f:
+    f.write(mitsuba_xml(tomllib.loads(text), title="The Mitsuba 3 twin of scenes/lamp-room.toml, "
+                        "written by scripts/lamp-room-scene.py"))
