@@ -80,6 +80,16 @@ pub enum NetworkBuilder {
     Embree,
 }
 
+impl NetworkBuilder {
+    /// Its name in scene files and settings (`scan`, `embree`).
+    pub fn name(self) -> &'static str {
+        match self {
+            NetworkBuilder::Scan => "scan",
+            NetworkBuilder::Embree => "embree",
+        }
+    }
+}
+
 /// The order in which the network's nodes process their light.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub enum NetworkOrder {
@@ -92,6 +102,17 @@ pub enum NetworkOrder {
     /// for the same tolerance. Networks with directional nodes use sweeps.
     #[default]
     ConjugateGradients,
+}
+
+impl NetworkOrder {
+    /// Its name in scene files and settings (`cg`, `sweeps`, `shoot`).
+    pub fn name(self) -> &'static str {
+        match self {
+            NetworkOrder::ConjugateGradients => "cg",
+            NetworkOrder::Sweeps => "sweeps",
+            NetworkOrder::Shoot => "shoot",
+        }
+    }
 }
 
 /// What `relight` changes in a saved network (see `NetworkSettings::relight`).

@@ -76,6 +76,22 @@ fn renders_both_example_scenes_to_exr_and_png_with_metadata() {
         assert_eq!(get("raylink:seed"), Some(MetaValue::Str("9".into())));
         assert_eq!(get("raylink:scene"), Some(MetaValue::Str(scene.into())));
         assert!(matches!(get("raylink:render_seconds"), Some(MetaValue::Float(s)) if s >= 0.0));
+        // The settings in the settings' own words (`aa=adaptive aa_threshold=0.1`), not
+        // the program's debugging text.
+        let Some(MetaValue::Str(settings)) = get("raylink:settings") else {
+            panic!("{scene}: no raylink:settings");
+        };
+        assert!(
+            settings
+                .split(' ')
+                .all(|w| w.split_once('=').is_some_and(|(k, v)| {
+                    !k.is_empty()
+                        && !v.is_empty()
+                        && k.chars().all(|c| c.is_ascii_lowercase() || c == '_')
+                }))
+                && !settings.contains(['{', '}', ':']),
+            "{scene}: {settings}"
+        );
         let (png_image, _) = read_image(&png).unwrap();
         assert_eq!((png_image.width, png_image.height), (64, 48));
         // Nothing but the two outputs is left behind.

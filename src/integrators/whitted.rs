@@ -422,8 +422,10 @@ impl WhittedSettings {
     /// What of them changes pixels, for a job's settings key.
     pub(crate) fn key(&self) -> String {
         format!(
-            " sampling={:?} area_samples={} fresnel={}",
-            self.sampling, self.area_samples, self.fresnel
+            " {} area_samples={} fresnel={}",
+            self.sampling.key(),
+            self.area_samples,
+            self.fresnel
         )
     }
 

@@ -48,6 +48,18 @@ impl std::fmt::Display for PixelSampling {
 }
 
 impl PixelSampling {
+    /// As a job's settings key names it, in the settings' own words: `aa=adaptive
+    /// aa_threshold=0.1 aa_depth=3`, `aa=uniform spp=16`.
+    pub(crate) fn key(&self) -> String {
+        match *self {
+            PixelSampling::Adaptive {
+                threshold,
+                max_depth,
+            } => format!("aa=adaptive aa_threshold={threshold} aa_depth={max_depth}"),
+            PixelSampling::Uniform { n } => format!("aa=uniform spp={}", n * n),
+        }
+    }
+
     pub fn validate(&self) -> Result<()> {
         match *self {
             PixelSampling::Adaptive {

@@ -173,17 +173,17 @@ impl NetworkSettings {
     pub(crate) fn key(&self) -> String {
         let p = &self.params;
         format!(
-            " sampling={:?} slopes={} intercept_step={} patch_size={} jitter={} \
-             builder={:?} tolerance={} light_scale={} order={:?} hybrid={}",
-            self.sampling,
+            " {} slopes={} intercept_step={} patch_size={} jitter={} \
+             builder={} tolerance={} light_scale={} order={} hybrid={}",
+            self.sampling.key(),
             p.slopes,
             p.step,
             p.patch_size,
             p.jitter,
-            self.builder,
+            self.builder.name(),
             self.distribute.tolerance,
             self.distribute.light_scale,
-            self.distribute.order,
+            self.distribute.order.name(),
             self.hybrid
         )
     }
@@ -307,11 +307,11 @@ impl NetworkTechnique {
                 let phase = control.phase("preprocess", None, "");
                 let n = Network::build_with(scene, ctx, params, builder, control)?;
                 phase.end(&format!(
-                    "{} nodes, {} links, {} intersections ({:?} builder)",
+                    "{} nodes, {} links, {} intersections ({} builder)",
                     n.nodes(),
                     n.stats.link_ends / 2,
                     n.stats.intersections,
-                    builder
+                    builder.name()
                 ));
                 if let Some(f) = &self.settings.file {
                     file::save(f, &n, scene, None)?;

@@ -24,7 +24,7 @@ use super::{
 };
 use crate::error::Error;
 use crate::image::filter::Filter;
-use crate::settings::{AntiAliasing, NetworkBuilder, NetworkOrder};
+use crate::settings::AntiAliasing;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
 
@@ -319,22 +319,9 @@ fn render(s: &RenderSettings) -> Option<RenderDesc> {
         intercept_step: s.intercept_step,
         patch_size: s.patch_size,
         jitter: s.network_jitter,
-        builder: s.network_builder.map(|b| {
-            match b {
-                NetworkBuilder::Scan => "scan",
-                NetworkBuilder::Embree => "embree",
-            }
-            .into()
-        }),
+        builder: s.network_builder.map(|b| b.name().into()),
         tolerance: s.tolerance,
-        order: s.network_order.map(|o| {
-            match o {
-                NetworkOrder::ConjugateGradients => "cg",
-                NetworkOrder::Sweeps => "sweeps",
-                NetworkOrder::Shoot => "shoot",
-            }
-            .into()
-        }),
+        order: s.network_order.map(|o| o.name().into()),
         hybrid: s.network_hybrid,
         file: path(&s.network_file),
     };
