@@ -74,8 +74,19 @@ fn network_files_are_reused_for_views_and_lighting() {
     .replace("position = [0, 1, 6.8]", "position = [0.5, 1.2, 3.5]");
     let moved = tmp_path(&dir, "moved.toml");
     std::fs::write(&moved, text).unwrap();
-    let loaded = network_render(&moved, &tmp_path(&dir, "b.exr"), &["--network-file", &file]);
+    let loaded = network_render(
+        &moved,
+        &tmp_path(&dir, "b.exr"),
+        &["--network-file", &file, "--network-stats"],
+    );
     assert!(loaded.status.success(), "{}", stderr(&loaded));
+    // Its statistics say it was read, not built (the build's times are the saved ones).
+    assert!(
+        stderr(&loaded).contains("network stats: read from its file in")
+            && !stderr(&loaded).contains("network stats: preprocess"),
+        "{}",
+        stderr(&loaded)
+    );
     assert!(
         stderr(&loaded).contains("no preprocess"),
         "{}",

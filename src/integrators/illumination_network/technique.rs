@@ -220,6 +220,9 @@ struct Prepared {
     solution: Solution,
     hybrid: bool,
     tables: Tables,
+    /// Seconds taken to read the network from its file (and relight it), if it was read
+    /// rather than built: its statistics' preprocess times are then the build's that saved it.
+    loaded: Option<f64>,
 }
 
 impl Integrator for Prepared {
@@ -285,22 +288,27 @@ impl NetworkTechnique {
         }
     }
 
-    /// The network itself, without light: loaded from the file if it exists, else built
-    /// (and saved there).
-    fn structure(&self, ctx: &Context, view: &View, control: &Control) -> Result<Network> {
+    /// The network itself, without light: loaded from the file if it exists (with the
+    /// seconds that took), else built (and saved there).
+    fn structure(
+        &self,
+        ctx: &Context,
+        view: &View,
+        control: &Control,
+    ) -> Result<(Network, Option<f64>)> {
         let params = self.params(view);
         let scene = ctx.scene;
         match &self.settings.file {
             Some(f) if f.exists() => {
                 let start = std::time::Instant::now();
                 let n = file::load(f, scene, Some(&params))?;
+                let seconds = start.elapsed().as_secs_f64();
                 control.note(&format!(
-                    "network: loaded {} in {:.2} s (no preprocess): {} nodes",
+                    "network: loaded {} in {seconds:.2} s (no preprocess): {} nodes",
                     f.display(),
-                    start.elapsed().as_secs_f64(),
                     n.nodes()
                 ));
-                Ok(n)
+                Ok((n, Some(seconds)))
             }
             _ => {
                 let builder = self.settings.builder;
@@ -316,7 +324,7 @@ impl NetworkTechnique {
                 if let Some(f) = &self.settings.file {
                     file::save(f, &n, scene, None)?;
                 }
-                Ok(n)
+                Ok((n, None))
             }
         }
     }
@@ -337,14 +345,17 @@ impl Lifecycle for NetworkTechnique {
             );
         }
         warn_one_value_per_patch(scene, control);
-        let (net, solution) = match (&self.settings.relight, &self.settings.file) {
+        let (net, solution, loaded) = match (&self.settings.relight, &self.settings.file) {
             (Some(relight), Some(f)) => {
                 let params = self.params(view);
                 let from = (f.as_path(), &params, options);
-                relight_network(from, relight, scene, &self.file_emission, control)?
+                let start = std::time::Instant::now();
+                let (net, solution) =
+                    relight_network(from, relight, scene, &self.file_emission, control)?;
+                (net, solution, Some(start.elapsed().as_secs_f64()))
             }
             _ => {
-                let net = self.structure(ctx, view, control)?;
+                let (net, loaded) = self.structure(ctx, view, control)?;
                 let surfaces = distribute::surfaces(&net, scene, options.light_scale);
                 check_bounded(&net, scene, &surfaces)?;
                 let phase = control.phase("distribution", None, "sweeps");
@@ -371,7 +382,7 @@ impl Lifecycle for NetworkTechnique {
                     st.sweeps,
                     st.unshot.iter().sum::<f64>() / st.emitted.iter().sum::<f64>().max(1e-300)
                 ));
-                (net, solution)
+                (net, solution, loaded)
             }
         };
         let hybrid = self.settings.hybrid;
@@ -380,6 +391,7 @@ impl Lifecycle for NetworkTechnique {
             net,
             solution,
             hybrid,
+            loaded,
         });
         Ok(())
     }
@@ -436,11 +448,18 @@ impl Lifecycle for NetworkTechnique {
                 st.map_entries,
             ),
             format!(
-                "network stats: preprocess {:.3} s (lines {:.3} s, assembly {:.3} s), \
-                 distribution {:.3} s, {} sweeps, unshot {:.2e} of emitted",
-                bs.seconds,
-                bs.link_seconds,
-                bs.assemble_seconds,
+                "network stats: {}, distribution {:.3} s, {} sweeps, unshot {:.2e} of emitted",
+                match p.loaded {
+                    None => format!(
+                        "preprocess {:.3} s (lines {:.3} s, assembly {:.3} s)",
+                        bs.seconds, bs.link_seconds, bs.assemble_seconds
+                    ),
+                    Some(s) => format!(
+                        "read from its file in {s:.3} s (no preprocess; the build that saved \
+                         it took {:.3} s)",
+                        bs.seconds
+                    ),
+                },
                 st.seconds,
                 st.sweeps,
                 st.unshot.iter().sum::<f64>() / st.emitted.iter().sum::<f64>().max(1e-300),
