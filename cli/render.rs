@@ -518,10 +518,18 @@ fn render_with_checkpoints(
         if let Err(e) = checkpoint::save(checkpoint, film, settings, rendered.stats.samples) {
             return Ok((rendered, note, Some(e)));
         }
+        let taken = if mc.adaptive.is_some() {
+            // Adaptive sampling: pixels take different counts, up to spp.
+            format!(
+                "{:.2} samples per pixel on average, at most {}",
+                film.mean_spp(),
+                mc.spp
+            )
+        } else {
+            format!("{:.2} of {} samples per pixel", film.mean_spp(), mc.spp)
+        };
         note = format!(
-            "{:.2} of {} samples per pixel; the film is in {} for --resume",
-            film.mean_spp(),
-            mc.spp,
+            "{taken}; the film is in {} for --resume",
             checkpoint.display()
         );
     } else if !rendered.stats.cancelled && checkpoint.exists() {
