@@ -566,35 +566,13 @@ fn every_missing_file_of_a_scene_is_reported() {
          [[shapes]]\ntype = \"ply\"\nfile = \"no-such-table.ply\"\nmaterial = \"b\"\n",
     )
     .unwrap();
-    let out = dir.path().join("x.exr");
-    let run = raylink(&[
-        "render",
-        scene.to_str().unwrap(),
-        "-q",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    let err = stderr(&run);
-    assert_eq!(run.status.code(), Some(2), "{err}");
-    let lines: Vec<&str> = err.lines().collect();
     let expected = [
         ("line 5: materials.a.diffuse.image.file", "no-such-wood.png"),
         ("line 8: materials.b.normal_map", "no-such-bumps.png"),
         ("line 11: shapes[0].file", "meshes/no-such-chair.obj"),
         ("line 20: shapes[2].file", "no-such-table.ply"),
     ];
-    assert_eq!(lines.len(), expected.len(), "{err}");
-    for (line, (field, file)) in lines.iter().zip(expected) {
-        assert!(line.starts_with("raylink: error: "), "{err}");
-        assert!(
-            line.contains("s.toml: ") && line.contains(field),
-            "{field}: {err}"
-        );
-        assert!(
-            line.contains(&format!("{file}: no such file")),
-            "{file}: {err}"
-        );
-    }
+    let err = refused_for_missing_files(&scene, &expected);
     assert!(!err.contains("panicked"), "{err}");
     assert_eq!(files_in(dir.path()), vec![scene]);
 }
@@ -619,35 +597,14 @@ fn every_missing_file_of_a_pbrt_scene_or_obj_is_reported() {
          Shape \"sphere\" \"float radius\" 0.5\n",
     )
     .unwrap();
-    let out = dir.path().join("x.exr");
-    let run = raylink(&[
-        "render",
-        scene.to_str().unwrap(),
-        "-q",
-        "-o",
-        out.to_str().unwrap(),
-    ]);
-    let err = stderr(&run);
-    assert_eq!(run.status.code(), Some(2), "{err}");
     let expected = [
         ("line 5,", "LightSource \"infinite\": no-sky.exr"),
         ("line 6,", "\"imagemap\": no-wood.png"),
         ("line 8,", "Shape \"plymesh\": no-chair.ply"),
         ("line 10,", "Material \"diffuse\": no-bumps.png"),
     ];
-    let lines: Vec<&str> = err.lines().collect();
-    assert_eq!(lines.len(), expected.len(), "{err}");
-    for (line, (at, what)) in lines.iter().zip(expected) {
-        assert!(
-            line.starts_with("raylink: error: ") && line.contains("s.pbrt: "),
-            "{err}"
-        );
-        assert!(line.contains(at), "{at}: {err}");
-        assert!(
-            line.contains(&format!("{what}: no such file")),
-            "{what}: {err}"
-        );
-    }
+    refused_for_missing_files(&scene, &expected);
+    let out = dir.path().join("x.exr");
 
     std::fs::write(
         dir.path().join("m.obj"),
@@ -675,4 +632,36 @@ fn every_missing_file_of_a_pbrt_scene_or_obj_is_reported() {
         "{err}"
     );
     assert!(!out.exists());
+}
+
+/// Renders `scene` and checks that it is refused (exit 2) with exactly one line for each of
+/// `expected`, in order: `(place, file)`, the line naming the scene file, the place and
+/// `FILE: no such file`; nothing is written beside the scene. Returns the error text.
+fn refused_for_missing_files(scene: &Path, expected: &[(&str, &str)]) -> String {
+    let out = scene.with_file_name("x.exr");
+    let run = raylink(&[
+        "render",
+        scene.to_str().unwrap(),
+        "-q",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&run);
+    assert_eq!(run.status.code(), Some(2), "{err}");
+    let lines: Vec<&str> = err.lines().collect();
+    assert_eq!(lines.len(), expected.len(), "{err}");
+    let name = scene.file_name().unwrap().to_string_lossy();
+    for (line, (place, file)) in lines.iter().zip(expected) {
+        assert!(line.starts_with("raylink: error: "), "{err}");
+        assert!(
+            line.contains(&format!("{name}: ")) && line.contains(place),
+            "{place}: {err}"
+        );
+        assert!(
+            line.contains(&format!("{file}: no such file")),
+            "{file}: {err}"
+        );
+    }
+    assert!(!out.exists(), "{err}");
+    err
 }
