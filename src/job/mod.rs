@@ -100,26 +100,25 @@ impl Job {
             ));
         }
         self.technique.check_part()?;
-        if self
-            .technique
-            .monte_carlo()
-            .is_some_and(|m| m.time_limit.is_some())
-        {
-            return Err(Error::setting(
-                "time_limit",
-                "cannot be used for a part of an image: every part must take the same samples",
-            ));
-        }
-        if self
-            .technique
-            .monte_carlo()
-            .is_some_and(|m| m.adaptive.is_some())
-        {
-            return Err(Error::setting(
-                "adaptive_threshold",
-                "cannot be used for a part of an image: where a pixel stops depends on its \
-                 neighbours",
-            ));
+        if let Some(m) = self.technique.monte_carlo() {
+            let refused = [
+                (
+                    m.time_limit.is_some(),
+                    "time_limit",
+                    "every part must take the same samples",
+                ),
+                (
+                    m.adaptive.is_some(),
+                    "adaptive_threshold",
+                    "where a pixel stops depends on its neighbours",
+                ),
+            ];
+            if let Some((_, name, why)) = refused.into_iter().find(|r| r.0) {
+                return Err(Error::setting(
+                    name,
+                    format!("cannot be used for a part of an image: {why}"),
+                ));
+            }
         }
         Ok(())
     }
