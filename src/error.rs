@@ -59,6 +59,15 @@ pub enum Error {
 }
 
 impl Error {
+    /// `errors` as one: none is `None`, one is itself, more are [`Error::Inputs`].
+    pub fn joined(mut errors: Vec<Error>) -> Option<Error> {
+        match errors.len() {
+            0 => None,
+            1 => Some(errors.remove(0)),
+            _ => Some(Error::Inputs(errors)),
+        }
+    }
+
     pub fn input(path: impl Into<PathBuf>, detail: impl Into<String>) -> Self {
         Error::Input {
             path: path.into(),

@@ -101,24 +101,7 @@ impl Job {
         }
         self.technique.check_part()?;
         if let Some(m) = self.technique.monte_carlo() {
-            let refused = [
-                (
-                    m.time_limit.is_some(),
-                    "time_limit",
-                    "every part must take the same samples",
-                ),
-                (
-                    m.adaptive.is_some(),
-                    "adaptive_threshold",
-                    "where a pixel stops depends on its neighbours",
-                ),
-            ];
-            if let Some((_, name, why)) = refused.into_iter().find(|r| r.0) {
-                return Err(Error::setting(
-                    name,
-                    format!("cannot be used for a part of an image: {why}"),
-                ));
-            }
+            crate::transport::settings::refuse_for_parts(m.time_limit, m.adaptive)?;
         }
         Ok(())
     }

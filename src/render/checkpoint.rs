@@ -30,6 +30,12 @@ use std::path::{Path, PathBuf};
 const FILM_BYTES: usize = 56;
 const STATS_BYTES: usize = 4 + 24 + 1;
 
+/// Bytes a pixel of `film` takes in a checkpoint: its values, and its statistics if the
+/// film is sampled adaptively.
+fn bytes_per_pixel(film: &Film) -> usize {
+    FILM_BYTES + film.statistics().map_or(0, |_| STATS_BYTES)
+}
+
 pub(crate) const FORMAT: Format = Format {
     magic: b"RLCHKPT\0",
     version: 2,
@@ -153,7 +159,7 @@ pub fn save(path: &Path, film: &Film, settings: &str, samples: u64) -> Result<()
     // A program quitting at once (a second signal) waits for the checkpoint.
     let _keep = crate::atomic_file::finish_first();
     let (sums, weights, splats) = film.accumulators();
-    let per_pixel = FILM_BYTES + film.statistics().map_or(0, |_| STATS_BYTES);
+    let per_pixel = bytes_per_pixel(film);
     let mut b = FORMAT.try_start(settings.len() + per_pixel * sums.len() + 64, path)?;
     b.extend_from_slice(&(settings.len() as u64).to_le_bytes());
     b.extend_from_slice(settings.as_bytes());
@@ -212,12 +218,7 @@ pub fn load_within(
     // A checkpoint of this film is its bytes a pixel and a settings string (another run's
     // may be longer): a file much larger is refused before it is read.
     let (w, h) = blank.size();
-    let per_pixel = FILM_BYTES
-        + if blank.statistics().is_some() {
-            STATS_BYTES
-        } else {
-            0
-        };
+    let per_pixel = bytes_per_pixel(&blank);
     let most = (per_pixel as u64 * w as u64 * h as u64)
         .saturating_add(settings.len() as u64)
         .saturating_add(1 << 20);
@@ -253,12 +254,7 @@ pub fn load_within(
     let samples = r.u64().ok_or_else(|| bad("truncated"))?;
     let pixels = width as usize * height as usize;
     // The statistics follow the film when the render samples adaptively.
-    let stats_bytes = if blank.statistics().is_some() {
-        STATS_BYTES * pixels
-    } else {
-        0
-    };
-    if r.rest.len() != FILM_BYTES * pixels + stats_bytes {
+    if r.rest.len() != per_pixel * pixels {
         return Err(bad(if r.rest.len() == FILM_BYTES * pixels {
             "holds no adaptive sampling statistics, and this render needs them"
         } else if r.rest.len() == (FILM_BYTES + STATS_BYTES) * pixels {
@@ -268,20 +264,17 @@ pub fn load_within(
         }));
     }
     let (film_bytes, rest) = r.rest.split_at(FILM_BYTES * pixels);
-    let stats = (stats_bytes > 0).then(|| {
+    let stats = blank.statistics().is_some().then(|| {
         let (counts, rest) = rest.split_at(4 * pixels);
         let (squares, active) = rest.split_at(24 * pixels);
         let counts: Vec<u32> = counts
             .chunks_exact(4)
             .map(|c| u32::from_le_bytes(c.try_into().unwrap_or([0; 4])))
             .collect();
-        let squares: Vec<f64> = squares
-            .chunks_exact(8)
-            .map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
-            .collect();
+        let f64_at = |c: &[u8]| f64::from_le_bytes(c.try_into().unwrap_or([0; 8]));
         let squares: Vec<[f64; 3]> = squares
-            .chunks_exact(3)
-            .map(|c| [c[0], c[1], c[2]])
+            .chunks_exact(24)
+            .map(|c| [f64_at(&c[..8]), f64_at(&c[8..16]), f64_at(&c[16..])])
             .collect();
         let active: Vec<bool> = active.iter().map(|&a| a != 0).collect();
         (counts, squares, active)

@@ -246,19 +246,7 @@ pub(crate) fn render_region(
     region: &Tile,
     control: &Control,
 ) -> Result<(Image, RenderStats)> {
-    if options.time_limit.is_some() {
-        return Err(Error::setting(
-            "time_limit",
-            "cannot be used for a part of an image: every part must take the same samples",
-        ));
-    }
-    if options.adaptive.is_some() {
-        return Err(Error::setting(
-            "adaptive_threshold",
-            "cannot be used for a part of an image: where a pixel stops depends on its \
-             neighbours",
-        ));
-    }
+    crate::transport::settings::refuse_for_parts(options.time_limit, options.adaptive)?;
     if options.reconstruction == Reconstruction::Splat {
         return render_region_splatted(ctx, integrator, options, region, control);
     }

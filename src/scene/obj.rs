@@ -81,11 +81,8 @@ pub fn load_within(
     };
     let mut reader = LineReader::new(text.as_bytes());
     let result = tobj::load_obj_buf(&mut reader, &options, loader);
-    let mut errors = mtl_errors.into_inner();
-    match errors.len() {
-        0 => {}
-        1 => return Err(errors.remove(0)),
-        _ => return Err(Error::Inputs(errors)),
+    if let Some(e) = Error::joined(mtl_errors.into_inner()) {
+        return Err(e);
     }
     let (models, _) = result.map_err(|e| Error::input(path, reader.describe(&e)))?;
     let materials = materials.into_inner();

@@ -280,6 +280,34 @@ impl MonteCarloSettings {
     }
 }
 
+/// An error for the setting that lets pixels take different numbers of samples (a time
+/// limit, adaptive sampling), if one is on: a part of an image must take exactly the
+/// samples the whole render gives its pixels.
+pub(crate) fn refuse_for_parts(
+    time_limit: Option<f64>,
+    adaptive: Option<AdaptiveSampling>,
+) -> Result<()> {
+    let refused = [
+        (
+            time_limit.is_some(),
+            "time_limit",
+            "every part must take the same samples",
+        ),
+        (
+            adaptive.is_some(),
+            "adaptive_threshold",
+            "where a pixel stops depends on its neighbours",
+        ),
+    ];
+    match refused.into_iter().find(|r| r.0) {
+        Some((_, name, why)) => Err(Error::setting(
+            name,
+            format!("cannot be used for a part of an image: {why}"),
+        )),
+        None => Ok(()),
+    }
+}
+
 /// `value` if it is at most `limit`: counts bound the work a job may ask for.
 pub(crate) fn at_most(name: &str, value: u32, limit: u32) -> Result<u32> {
     if value > limit {

@@ -178,10 +178,8 @@ impl Builder {
 
     /// The scene read: the camera made at WorldBegin, the shapes and the materials they use.
     pub(super) fn finish(mut self) -> crate::error::Result<Scene> {
-        match self.missing.len() {
-            0 => {}
-            1 => return Err(self.missing.remove(0)),
-            _ => return Err(crate::error::Error::Inputs(self.missing)),
+        if let Some(e) = crate::error::Error::joined(std::mem::take(&mut self.missing)) {
+            return Err(e);
         }
         let Some(camera) = self.camera_value.take() else {
             return Err(crate::error::Error::input(
