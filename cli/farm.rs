@@ -67,6 +67,7 @@ pub fn region(args: &RenderArgs, job: &Job) -> raylink::Result<Option<Tile>> {
         ("--write-interval", args.write_interval.is_some()),
         ("--checkpoint-interval", args.checkpoint_interval.is_some()),
         ("--resume", args.resume),
+        ("--display-server", args.display_server.is_some()),
     ] {
         if given {
             return Err(Error::Invalid(format!(

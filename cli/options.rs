@@ -5,6 +5,7 @@
 
 use clap::ValueEnum;
 use raylink::farm::Part;
+use raylink::image::display::DisplayAddress;
 use raylink::image::filter::Filter;
 use raylink::job::{technique_info, AntiAliasing, NetworkBuilder, NetworkOrder, TECHNIQUES};
 use raylink::{Backend, Error, Job, Scene, Settings, Technique, TechniqueKind, Tile};
@@ -238,6 +239,11 @@ pub struct RenderArgs {
     /// Store EXR pixels as half floats instead of 32-bit floats.
     #[arg(long, help_heading = OUTPUT)]
     pub half: bool,
+    /// Show the image in the tev viewer as it renders (tev listens on 127.0.0.1:14158), as
+    /// pbrt-v4's --display-server: progressive techniques update it a few times a second,
+    /// the others show the final image. The render does not wait for the viewer.
+    #[arg(long, value_name = "HOST:PORT", help_heading = OUTPUT)]
+    pub display_server: Option<String>,
 }
 
 /// Options of the illumination-network integrator.
@@ -458,6 +464,9 @@ pub fn job(args: &RenderArgs, scene: &Scene, extra: Settings) -> Result<Job, Err
 
 /// Checks of the options alone, before the scene is read.
 pub fn check(args: &RenderArgs) -> Result<(), Error> {
+    if let Some(address) = &args.display_server {
+        address.parse::<DisplayAddress>()?;
+    }
     for (name, v) in [
         ("--checkpoint-interval", args.checkpoint_interval),
         ("--write-interval", args.write_interval),

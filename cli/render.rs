@@ -5,6 +5,7 @@
 use crate::farm;
 use crate::options::{self, IntegratorName, RenderArgs};
 use crate::{Cli, Failure};
+use raylink::image::display::DisplayServer;
 use raylink::image::output::{check_output_path, write_image_layers, Layer};
 use raylink::output_paths::FilePlan;
 use raylink::{checkpoint, input_file};
@@ -316,6 +317,13 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
             &control,
         );
     }
+    let display = match &args.display_server {
+        Some(address) => Some(DisplayServer::start(
+            address.parse()?,
+            &display_title(&args),
+        )),
+        None => None,
+    };
     let mut partial_note = String::new();
     let mut unsaved = None;
     let rendered = if let Some(checkpoint) = &checkpoint {
@@ -323,8 +331,8 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
             &args,
             &mut renderer,
             (checkpoint, &resume_key),
-            &metadata,
-            &out_options,
+            (&metadata, &out_options),
+            display.as_ref(),
             &control,
         )?;
         partial_note = note;
@@ -353,6 +361,12 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     for out in &args.outputs {
         write_image(out, &image, &metadata, &out_options)?;
         crate::log::debug(|| format!("wrote {}", out.display()));
+    }
+    if let Some(why) = display.and_then(|d| d.finish(&image)) {
+        if crate::log::enabled(crate::log::Level::Warn) {
+            let address = args.display_server.as_deref().unwrap_or_default();
+            eprintln!("raylink: warning: --display-server {address}: {why}");
+        }
     }
     if stats.cancelled {
         let outputs: Vec<String> = args
@@ -438,6 +452,15 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     Ok(())
 }
 
+/// The viewer's name for the image: the first output's file name, with the process id so
+/// that two renders of one name stay apart (as pbrt-v4 names them).
+fn display_title(args: &RenderArgs) -> String {
+    let name = args.outputs[0]
+        .file_name()
+        .map_or_else(|| "raylink".into(), |n| n.to_string_lossy());
+    format!("{name} ({})", std::process::id())
+}
+
 /// A progressive render with --resume, --checkpoint-interval and --write-interval; the
 /// checkpoint of an interrupted render is saved. Returns the render and, if interrupted,
 /// what the checkpoint keeps, or why it could not be saved (the partial image is still to
@@ -446,8 +469,8 @@ fn render_with_checkpoints(
     args: &RenderArgs,
     renderer: &mut Renderer,
     (checkpoint, settings): (&std::path::Path, &str),
-    metadata: &Metadata,
-    out_options: &OutputOptions,
+    (metadata, out_options): (&Metadata, &OutputOptions),
+    display: Option<&DisplayServer>,
     control: &Control,
 ) -> Result<(Rendered, String, Option<Error>), Failure> {
     let job = renderer.job().clone();
@@ -478,7 +501,14 @@ fn render_with_checkpoints(
     };
     let mut last_write = std::time::Instant::now();
     let mut last_checkpoint = std::time::Instant::now();
-    let mut after_pass = |film: &raylink::Film, _: raylink::Shown, _: &raylink::RenderStats| {
+    let mut after_pass = |film: &raylink::Film, shown: raylink::Shown, _: &raylink::RenderStats| {
+        if let Some(display) = display {
+            display.show(&film.image()?);
+        }
+        if shown == raylink::Shown::MidPass {
+            // Checkpoints and intermediate images hold whole passes only.
+            return Ok(());
+        }
         if args
             .checkpoint_interval
             .is_some_and(|t| last_checkpoint.elapsed().as_secs_f64() >= t)
@@ -506,7 +536,11 @@ fn render_with_checkpoints(
         }
         Ok(())
     };
-    let watch = raylink::Watch::after_passes(&mut after_pass);
+    let watch = raylink::Watch {
+        film: &mut after_pass,
+        // A viewer is shown the film a few times a second, as pbrt-v4 updates it.
+        mid_pass: display.map(|_| std::time::Duration::from_millis(250)),
+    };
     let mut rendered = renderer.render_progressive(control, resume, watch)?;
     rendered.stats.samples += resumed_samples;
     let film = rendered

@@ -2,6 +2,7 @@
 //! OpenImageIO code); `output` chooses encoding by extension and writes atomically.
 
 pub mod compare;
+pub mod display;
 pub mod filter;
 pub mod oiio;
 mod oiio_sys;
