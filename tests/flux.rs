@@ -25,6 +25,11 @@ fn scene(text: &str) -> Scene {
 
 /// A closed cube of grey walls from -1 to 1, and `inside`.
 fn closed_cube(inside: &str) -> Scene {
+    closed_box(0.5, inside)
+}
+
+/// A closed cube of walls of reflectance `wall` from -1 to 1, and `inside`.
+fn closed_box(wall: f32, inside: &str) -> Scene {
     let quad = |v: [[i32; 3]; 4]| {
         format!("[[shapes]]\ntype = \"quad\"\nmaterial = \"wall\"\nvertices = {v:?}\n")
     };
@@ -39,7 +44,7 @@ fn closed_cube(inside: &str) -> Scene {
     .concat();
     scene(&format!(
         "[camera]\nposition = [0, 0, 0.5]\nlook_at = [0, 0, 0]\nwidth = 8\nheight = 8\n\
-         [materials.wall]\ndiffuse = 0.5\n[materials.glow]\ndiffuse = 0\nemission = [2, 3, 4]\n\
+         [materials.wall]\ndiffuse = {wall}\n[materials.glow]\ndiffuse = 0\nemission = [2, 3, 4]\n\
          {walls}{inside}"
     ))
 }
@@ -64,7 +69,7 @@ fn assert_agree(what: &str, a: &Flux, b: &Flux, k: f32, relative: f32) {
         let se = (a.standard_error[c].powi(2) + b.standard_error[c].powi(2)).sqrt();
         let d = a.flux[c] - b.flux[c];
         eprintln!(
-            "{what}: channel {c}: gathering {} ± {}, shooting {} ± {} ({:.2} se)",
+            "{what}: channel {c}: {} ± {} against {} ± {} ({:.2} se)",
             a.flux[c],
             a.standard_error[c],
             b.flux[c],
@@ -227,5 +232,98 @@ fn bad_sets_and_counts_are_errors() {
             .unwrap_err()
             .to_string();
         assert!(e.contains(needle), "{e}");
+    }
+}
+
+/// Two patches of the cube's floor and ceiling with a ball between them that hides each from
+/// the other: `ball` is its material. Patch `source` glows (radiance 1 on both sides), the
+/// other does not; neither reflects. Shapes: 0-5 walls, 6 the ball, 7 and 8 the patches.
+fn two_patches(ball: &str, source: usize) -> Scene {
+    let patch = |i: usize, y: f32, x: [f32; 2]| {
+        let m = if i == source { "on" } else { "off" };
+        format!(
+            "[[shapes]]\ntype = \"quad\"\nmaterial = \"{m}\"\nvertices = [[{a}, {y}, -0.3], \
+             [{b}, {y}, -0.3], [{b}, {y}, 0.3], [{a}, {y}, 0.3]]\n",
+            a = x[0],
+            b = x[1]
+        )
+    };
+    closed_box(
+        0.1,
+        &format!(
+            "[materials.ball]\n{ball}\n[materials.on]\ndiffuse = 0\nemission = 1\n\
+             two_sided_emission = true\n[materials.off]\ndiffuse = 0\n\
+             [[shapes]]\ntype = \"sphere\"\nmaterial = \"ball\"\ncenter = [0, 0, 0]\n\
+             radius = 0.6\n{}{}",
+            patch(7, -0.8, [-0.9, -0.3]),
+            patch(8, 0.8, [0.3, 0.9])
+        ),
+    )
+}
+
+/// The GRDF is symmetric (Dutré, Lafortune & Willems; reciprocity of every BSDF in the
+/// path): the flux patch 8 receives when patch 7 glows equals the flux patch 7 receives when
+/// 8 glows, each estimated by both adjoint estimators (gathering at the receiver, shooting
+/// from the source). The light between them goes around or through a rough metal ball
+/// (glossy) or a glass ball (specular, refraction both ways), and off dim walls. A black ball
+/// changes the flux by more than a fifth: the ball's transport is a large part of what is
+/// compared.
+#[test]
+fn the_grdf_between_two_patches_is_symmetric() {
+    for (what, ball) in [
+        ("glossy", "diffuse = 0\nspecular = 0.9\nroughness = 0.25"),
+        (
+            "glass",
+            "diffuse = 0\nspecular = 1\ntransmission = 1\nfresnel = true\nior = 1.5",
+        ),
+    ] {
+        // Shooting finds the small receiver less often: it takes more paths.
+        let flux = |source: usize, receiver: usize, estimator| {
+            let paths = match estimator {
+                Estimator::Gathering => 400_000,
+                Estimator::Shooting => 1_600_000,
+            };
+            run(&two_patches(ball, source), &[receiver], estimator, 8, paths)
+        };
+        let there = flux(7, 8, Estimator::Gathering);
+        let back = flux(8, 7, Estimator::Gathering);
+        assert_agree(
+            &format!("{what}: 7 to 8, 8 to 7, gathered"),
+            &there,
+            &back,
+            4.0,
+            0.02,
+        );
+        let there_shot = flux(7, 8, Estimator::Shooting);
+        let back_shot = flux(8, 7, Estimator::Shooting);
+        assert_agree(
+            &format!("{what}: 7 to 8, 8 to 7, shot"),
+            &there_shot,
+            &back_shot,
+            4.0,
+            0.03,
+        );
+        assert_agree(
+            &format!("{what}: 7 to 8 gathered, shot"),
+            &there,
+            &there_shot,
+            4.0,
+            0.03,
+        );
+        let black = run(
+            &two_patches("diffuse = 0", 7),
+            &[8],
+            Estimator::Gathering,
+            8,
+            400_000,
+        );
+        for c in 0..3 {
+            assert!(
+                (there.flux[c] - black.flux[c]).abs() > 0.2 * there.flux[c],
+                "{what}: channel {c}: {} with the ball, {} with a black one",
+                there.flux[c],
+                black.flux[c]
+            );
+        }
     }
 }
