@@ -193,29 +193,33 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
             .scene
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("pbrt"));
-        // Only a pbrt scene can name its output: don't read another one to find none.
-        let scene = if pbrt {
-            Some(load_scene(&args.scene, &control)?)
-        } else {
-            None
-        };
-        let Some(output) = scene.as_ref().and_then(|s| s.output.clone()) else {
+        let scene = load_scene(&args.scene, &control)?;
+        let Some(output) = scene.output.clone() else {
             return Err(Error::Invalid(format!(
-                "-o FILE is needed: {} names no output (pbrt's Film \"filename\")",
-                args.scene.display()
+                "-o FILE is needed: {} names no output ({})",
+                args.scene.display(),
+                if pbrt {
+                    "pbrt's Film \"filename\""
+                } else {
+                    "[render] output"
+                }
             ))
             .into());
         };
         args.outputs.push(output);
-        output_label = "Film \"filename\"";
-        early_scene = scene;
+        output_label = if pbrt {
+            "Film \"filename\""
+        } else {
+            "[render] output"
+        };
+        early_scene = Some(scene);
     }
     farm::resolve_outputs(&mut args)?;
     for out in &args.outputs {
         // A bad output path is a bad option: report it before any work is done.
         check_output_path(out).map_err(|e| {
             if early_scene.is_some() {
-                Error::Invalid(format!("{}: Film \"filename\": {e}", args.scene.display()))
+                Error::Invalid(format!("{}: {output_label}: {e}", args.scene.display()))
             } else {
                 Error::Invalid(e.to_string())
             }

@@ -248,6 +248,52 @@ fn pbrt_film_filename_is_the_output_without_o() {
     }
 }
 
+/// A native scene names its output as `[render] output`; `convert` keeps a pbrt scene's
+/// Film "filename" there, so the converted scene writes the same file.
+#[test]
+fn converted_scenes_keep_the_film_filename() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir(dir.path().join("scene")).unwrap();
+    std::fs::write(dir.path().join("scene/a.pbrt"), pbrt_scene("film.png")).unwrap();
+    let out = raylink_in(
+        dir.path(),
+        &["convert", "scene/a.pbrt", "-o", "scene/a.toml", "--quiet"],
+    );
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(dir.path().join("scene/a.toml")).unwrap();
+    assert!(text.contains("output = \"film.png\""), "{text}");
+    let out = raylink_in(dir.path(), &["render", "scene/a.pbrt", "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (from_pbrt, _) = read_image(&dir.path().join("film.png")).unwrap();
+    std::fs::remove_file(dir.path().join("film.png")).unwrap();
+    let out = raylink_in(dir.path(), &["render", "scene/a.toml", "--quiet"]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let (from_toml, _) = read_image(&dir.path().join("film.png")).unwrap();
+    assert_eq!(from_pbrt, from_toml);
+
+    // Bad input: one line, exit 2, nothing written.
+    let without = text.replace("output = \"film.png\"", "");
+    let empty = text.replace("output = \"film.png\"", "output = \"\"");
+    for (name, scene, needles) in [
+        (
+            "none",
+            without,
+            vec!["-o FILE is needed", "[render] output"],
+        ),
+        (
+            "empty",
+            empty,
+            vec!["b.toml", "line", "render.output", "must name a file"],
+        ),
+    ] {
+        std::fs::write(dir.path().join("scene/b.toml"), scene).unwrap();
+        let before = files_under(dir.path());
+        let out = raylink_in(dir.path(), &["render", "scene/b.toml", "--quiet"]);
+        common::assert_clean_failure_of(name, &out, &needles);
+        assert_eq!(files_under(dir.path()), before, "{name}");
+    }
+}
+
 #[test]
 fn crop_writes_png_and_jpeg_of_the_crop_alone() {
     let dir = tempfile::tempdir().unwrap();

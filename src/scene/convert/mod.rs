@@ -157,7 +157,7 @@ pub fn write_toml_with(
             .iter()
             .map(|l| light(l, refs).map(spanned))
             .collect::<crate::error::Result<_>>()?,
-        render: render(&scene.settings).map(spanned),
+        render: render(&scene.settings, scene.output.as_deref()).map(spanned),
     };
     let mut meshes = MeshDir::new(scene, output, &out_dir, format!("{stem}.meshes"))?;
     meshes.cancel = Some(cancel.clone());
@@ -284,9 +284,10 @@ fn world(scene: &Scene, refs: Refs) -> WorldDesc {
     }
 }
 
-/// The `[render]` table; none for the default settings. Files are written as given.
-fn render(s: &RenderSettings) -> Option<RenderDesc> {
-    if s == &RenderSettings::default() {
+/// The `[render]` table; none for the default settings and no output. Files are written as
+/// given.
+fn render(s: &RenderSettings, output: Option<&std::path::Path>) -> Option<RenderDesc> {
+    if s == &RenderSettings::default() && output.is_none() {
         return None;
     }
     let filter = s.filter.map(|f| {
@@ -346,6 +347,7 @@ fn render(s: &RenderSettings) -> Option<RenderDesc> {
         whitted: (whitted != WhittedDesc::default()).then(|| spanned(whitted)),
         irradiance_cache: (cache != CacheDesc::default()).then(|| spanned(cache)),
         network: (network != NetworkDesc::default()).then(|| spanned(network)),
+        output: output.map(|p| spanned(p.display().to_string())),
     })
 }
 

@@ -105,9 +105,13 @@ impl<'a> Builder<'a> {
         let camera_medium = camera.get_ref().medium.clone();
         let camera = self.camera(camera)?;
 
-        let (settings, setting_sources) = match file.render {
-            Some(r) => self.render(r)?,
-            None => (RenderSettings::default(), Vec::new()),
+        let (settings, setting_sources, output) = match file.render {
+            Some(mut r) => {
+                let output = self.output(r.get_mut().output.take())?;
+                let (settings, sources) = self.render(r)?;
+                (settings, sources, output)
+            }
+            None => (RenderSettings::default(), Vec::new(), None),
         };
         let mut environment = None;
         let (ambient, background) = match file.world {
@@ -171,7 +175,7 @@ impl<'a> Builder<'a> {
             environment,
             settings,
             setting_sources,
-            output: None,
+            output,
             inputs: std::iter::once(ctx.path.to_path_buf())
                 .chain(self.inputs.take())
                 .collect(),

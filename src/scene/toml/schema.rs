@@ -75,6 +75,10 @@ pub(crate) struct RenderDesc {
     pub(crate) irradiance_cache: Option<Spanned<CacheDesc>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) network: Option<Spanned<NetworkDesc>>,
+    /// The image `raylink render` writes when no `-o` is given (pbrt's `Film "filename"`),
+    /// relative to the current directory.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) output: Option<Spanned<String>>,
 }
 
 /// `[render.whitted]`.

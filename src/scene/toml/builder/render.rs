@@ -12,6 +12,28 @@ use std::ops::Range;
 use toml::Spanned;
 
 impl Builder<'_> {
+    /// `[render] output`: a file name, kept as written (the command line takes it relative
+    /// to the current directory, as pbrt-v4 does its `Film "filename"`).
+    pub(super) fn output(
+        &self,
+        output: Option<Spanned<String>>,
+    ) -> crate::error::Result<Option<std::path::PathBuf>> {
+        let Some(output) = output else {
+            return Ok(None);
+        };
+        let span = output.span();
+        let name = output.into_inner();
+        if name.is_empty() || name.contains('\0') {
+            let site = self.site("render".into(), span.clone());
+            return Err(self.ctx.fail(
+                &site,
+                "output",
+                "must name a file (an image path such as \"room.exr\")",
+            ));
+        }
+        Ok(Some(name.into()))
+    }
+
     pub(super) fn render(
         &self,
         desc: Spanned<RenderDesc>,
