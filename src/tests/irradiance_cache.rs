@@ -17,21 +17,21 @@ use crate::transport::ProgressiveOptions;
 use crate::transport::View;
 use std::path::Path;
 
-fn manifest(p: &str) -> std::path::PathBuf {
+pub(super) fn manifest(p: &str) -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(p)
 }
 
-struct Run {
-    image: Image,
+pub(super) struct Run {
+    pub image: Image,
     /// Values in the cache after the render.
-    records: usize,
+    pub records: usize,
     /// Primary values computed by the overture and by the final render.
     overture: u64,
     misses: u64,
     cache: Cache,
 }
 
-fn options(w: u32, h: u32, spp: u32, threads: Option<usize>) -> ProgressiveOptions {
+pub(super) fn options(w: u32, h: u32, spp: u32, threads: Option<usize>) -> ProgressiveOptions {
     ProgressiveOptions {
         view: View {
             seed: 3,
@@ -47,7 +47,7 @@ fn options(w: u32, h: u32, spp: u32, threads: Option<usize>) -> ProgressiveOptio
     }
 }
 
-fn render_ic(
+pub(super) fn render_ic(
     scene: &Scene,
     ic: IcOptions,
     o: &ProgressiveOptions,
@@ -195,133 +195,65 @@ fn cache_files_are_reused_and_checked() {
     std::fs::remove_dir_all(&dir).unwrap();
 }
 
-/// First-bounce irradiance on the sphere of the sphere-on-plane scene by quadrature: midpoints
-/// of an n × 2n grid in (sin²θ, φ) about the normal, a cosine-weighted grid, so that
-/// E = π/(2n²) Σ L. A direction that leaves P below its tangent plane never meets the
-/// sphere (it is convex), so L is the plane's radiance where the direction meets it:
-/// ρ/π · E_sun · cos θ_sun, zero where the sphere shadows the plane or beyond its edges.
-fn sphere_on_plane_first_bounce(p: Vec3, n: Vec3, grid: u32) -> f64 {
-    let (rho, half, center) = (0.5f64, 50.0f32, Vec3::new(0.0, 1.0, 0.0));
-    let sun = Vec3::new(-0.6, -1.0, -0.5).normalize();
-    let radiance = rho / std::f64::consts::PI * (-sun.y) as f64;
-    let (t, b) = crate::math::frame(n);
-    let mut sum = 0.0f64;
-    for j in 0..grid {
-        let sin2 = (j as f32 + 0.5) / grid as f32;
-        let (sin_t, cos_t) = (sin2.sqrt(), (1.0 - sin2).sqrt());
-        for k in 0..2 * grid {
-            let phi = std::f32::consts::PI * (k as f32 + 0.5) / grid as f32;
-            let d = t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + n * cos_t;
-            if d.y >= 0.0 {
-                continue;
-            }
-            let q = p + d * (-p.y / d.y);
-            if q.x.abs() > half || q.z.abs() > half {
-                continue;
-            }
-            // Shadowed if the ray from q toward the sun meets the sphere.
-            let (o, l) = (q - center, -sun);
-            let bq = o.dot(l);
-            let disc = bq * bq - (o.length_squared() - 1.0);
-            if disc > 0.0 && -bq - disc.sqrt() > 0.0 {
-                continue;
-            }
-            sum += radiance;
-        }
-    }
-    sum * std::f64::consts::PI / (2 * grid * grid) as f64
+/// A sphere of radius 1 centred at (0, 1, 0) resting on a square plane of half-width 50 at
+/// y = 0 of reflectance `rho`, under a parallel light of unit irradiance along `sun`.
+#[derive(Clone, Copy)]
+pub(super) struct SphereOnPlane {
+    pub scene: &'static str,
+    pub rho: f64,
+    pub sun: Vec3,
 }
 
-/// Section 4 of the paper: the first bounce on a sphere resting on a plane, against the
-/// quadrature above at the sphere points the camera sees (one per pixel). Direct light (a
-/// directional light) is exact in every integrator, so only the indirect irradiance is
-/// compared. Returns the mean relative error and the number of values cached, and prints
-/// them with the largest error on a line that `reproduce/ward.py` reads.
-fn sphere_on_plane_error(accuracy: f32, gradients: bool) -> (f64, usize) {
-    let scene = Scene::load(&manifest("tests/scenes/sphere-on-plane.toml")).unwrap();
-    let ic = IcOptions {
-        bounces: 1,
-        samples: 2048,
-        accuracy,
-        gradients,
-        ..IcOptions::default()
-    };
-    let mut err = (0.0f64, 0usize);
-    let mut largest = 0.0f64;
-    let run = render_ic(&scene, ic, &options(48, 48, 1, None), None, |ctx, integ| {
-        let basis = scene.camera.basis();
-        let mut stats = Default::default();
-        for y in (0..48).step_by(2) {
-            for x in (0..48).step_by(2) {
-                let ray = basis.ray(x as f32 + 0.5, y as f32 + 0.5);
-                let Some(sp) = ctx.intersect(&ray, &mut stats) else {
+/// The tests' scene: a 50% plane, the light oblique.
+pub(super) const OBLIQUE: SphereOnPlane = SphereOnPlane {
+    scene: "tests/scenes/sphere-on-plane.toml",
+    rho: 0.5,
+    sun: Vec3::new(-0.6, -1.0, -0.5),
+};
+
+impl SphereOnPlane {
+    /// First-bounce irradiance on the sphere by quadrature: midpoints of an n × 2n grid in
+    /// (sin²θ, φ) about the normal, a cosine-weighted grid, so that E = π/(2n²) Σ L. A
+    /// direction that leaves P below its tangent plane never meets the sphere (it is
+    /// convex), so L is the plane's radiance where the direction meets it: ρ/π · E_sun ·
+    /// cos θ_sun, zero where the sphere shadows the plane or beyond its edges.
+    pub(super) fn first_bounce(&self, p: Vec3, n: Vec3, grid: u32) -> f64 {
+        let (half, center) = (50.0f32, Vec3::new(0.0, 1.0, 0.0));
+        let sun = self.sun.normalize();
+        let radiance = self.rho / std::f64::consts::PI * (-sun.y) as f64;
+        let (t, b) = crate::math::frame(n);
+        let mut sum = 0.0f64;
+        for j in 0..grid {
+            let sin2 = (j as f32 + 0.5) / grid as f32;
+            let (sin_t, cos_t) = (sin2.sqrt(), (1.0 - sin2).sqrt());
+            for k in 0..2 * grid {
+                let phi = std::f32::consts::PI * (k as f32 + 0.5) / grid as f32;
+                let d = t * (sin_t * phi.cos()) + b * (sin_t * phi.sin()) + n * cos_t;
+                if d.y >= 0.0 {
                     continue;
-                };
-                if sp.shape != 1 || sp.ns.y > -0.2 {
-                    continue; // the plane, or the sphere's upper half (little bounce light)
                 }
-                let want = sphere_on_plane_first_bounce(sp.p, sp.ns, 256);
-                let got = integ.irradiance(ctx, &sp.spot(), sp.ns)[0] as f64;
-                let e = ((got - want) / want).abs();
-                largest = largest.max(e);
-                err.0 += e;
-                err.1 += 1;
+                let q = p + d * (-p.y / d.y);
+                if q.x.abs() > half || q.z.abs() > half {
+                    continue;
+                }
+                // Shadowed if the ray from q toward the sun meets the sphere.
+                let (o, l) = (q - center, -sun);
+                let bq = o.dot(l);
+                let disc = bq * bq - (o.length_squared() - 1.0);
+                if disc > 0.0 && -bq - disc.sqrt() > 0.0 {
+                    continue;
+                }
+                sum += radiance;
             }
         }
-    });
-    assert!(
-        err.1 > 20,
-        "only {} points on the sphere's underside",
-        err.1
-    );
-    let mean = err.0 / err.1 as f64;
-    eprintln!(
-        "sphere on plane: a = {accuracy}, gradients {gradients}: mean error {mean:.5}, \
-         largest {largest:.5}, {} values, {} points",
-        run.records, err.1
-    );
-    (mean, run.records)
-}
-
-/// Without gradients (the 1988 method) the mean relative error grows with a (measured:
-/// 0.5%, 2.8% and 7.0% at a = 0.05, 0.1 and 0.4, with 2048 rays per value; the quadrature
-/// itself agrees with a four times finer grid to 1e-4).
-#[test]
-fn sphere_on_plane_matches_quadrature() {
-    let accuracies = [0.05, 0.1, 0.4];
-    let errors: Vec<f64> = accuracies
-        .iter()
-        .map(|&a| sphere_on_plane_error(a, false).0)
-        .collect();
-    eprintln!("sphere on plane: mean relative error {errors:?} at a = {accuracies:?}");
-    assert!(
-        errors[0] < 0.015 && errors[1] < 0.045 && errors[2] < 0.12,
-        "{errors:?}"
-    );
-    assert!(errors[0] < errors[1] && errors[1] < errors[2], "{errors:?}");
-}
-
-/// With Ward & Heckbert's gradients the same scene reaches a lower error with fewer values:
-/// at every accuracy the error is lower than without them, and the gradients' error at
-/// a = 0.2 is below the 1988 method's at a = 0.1 with fewer values.
-#[test]
-fn gradients_lower_the_error_for_the_values_cached() {
-    let mut table = Vec::new();
-    for a in [0.1, 0.2, 0.4] {
-        let plain = sphere_on_plane_error(a, false);
-        let with = sphere_on_plane_error(a, true);
-        eprintln!(
-            "a = {a}: without gradients {:.4} with {} values, with gradients {:.4} with {} values",
-            plain.0, plain.1, with.0, with.1
-        );
-        assert!(with.0 < plain.0, "a = {a}: {with:?} against {plain:?}");
-        table.push((plain, with));
+        sum * std::f64::consts::PI / (2 * grid * grid) as f64
     }
-    let (plain_fine, with_coarse) = (table[0].0, table[1].1);
-    assert!(
-        with_coarse.0 < plain_fine.0 && with_coarse.1 < plain_fine.1,
-        "gradients at a = 0.2 {with_coarse:?}, none at a = 0.1 {plain_fine:?}"
-    );
+
+    /// The direct irradiance at a point of the sphere with normal `n` (the plane never
+    /// shadows the sphere, nor does the sphere itself beyond its terminator).
+    pub(super) fn direct(&self, n: Vec3) -> f64 {
+        n.dot(-self.sun.normalize()).max(0.0) as f64
+    }
 }
 
 /// Two views sharing a cache file: the second view, started from the first view's file,
@@ -382,7 +314,7 @@ fn second_view_reuses_the_first_views_values() {
 /// that matter here, about 1.)
 #[test]
 fn gradients_predict_the_change_of_irradiance() {
-    let scene = Scene::load(&manifest("tests/scenes/sphere-on-plane.toml")).unwrap();
+    let scene = Scene::load(&manifest(OBLIQUE.scene)).unwrap();
     let ic = IcOptions {
         bounces: 1,
         samples: 4096,
@@ -418,7 +350,7 @@ fn gradients_predict_the_change_of_irradiance() {
                 (p, turn(-b)),
             ];
             for (i, (q, m)) in cases.into_iter().enumerate() {
-                let want = sphere_on_plane_first_bounce(q, m, 256);
+                let want = OBLIQUE.first_bounce(q, m, 256);
                 let got = rec.extrapolated(q, m)[0] as f64;
                 let kind = usize::from(i >= 4);
                 constant[kind] += (rec.e[0] as f64 - want).abs();
