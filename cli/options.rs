@@ -8,7 +8,7 @@ use raylink::farm::Part;
 use raylink::image::display::DisplayAddress;
 use raylink::image::filter::Filter;
 use raylink::job::{technique_info, AntiAliasing, NetworkBuilder, NetworkOrder, TECHNIQUES};
-use raylink::{Backend, Error, Job, Scene, Settings, Technique, TechniqueKind, Tile};
+use raylink::{Backend, Error, Job, Scene, Settings, TechniqueKind, Tile};
 use std::path::PathBuf;
 
 const COMMON: &str = "Common options";
@@ -421,29 +421,16 @@ fn other_options(args: &RenderArgs) -> [OtherOption; 4] {
 /// options, each option checked to apply to the integrator chosen.
 pub fn job(args: &RenderArgs, scene: &Scene, extra: Settings) -> Result<Job, Error> {
     let flags = given_settings(args, scene).overlaid(&extra);
-    let mut from_scene = scene.settings.clone();
-    // With a time limit or an adaptive threshold only an explicit --spp caps the samples;
-    // adaptive anti-aliasing asked for on the command line ignores the scene's sample count.
-    if flags.time_limit.is_some()
-        || flags.adaptive_threshold.is_some()
-        || flags.aa == Some(AntiAliasing::Adaptive)
-    {
-        from_scene.spp = None;
-    }
-    let settings = from_scene.overlaid(&flags);
-    let kind = settings.integrator.unwrap_or(TechniqueKind::Whitted);
-    for setting in flags.given() {
-        if !technique_info(kind).reads(setting) {
-            // The filter's radius alone is given as its own option.
-            let option = match setting {
-                "filter" if args.filter.is_none() => "--filter-radius".to_string(),
-                s => flag(s),
-            };
-            return Err(Error::Invalid(format!(
-                "{option} does not apply to the {kind} integrator"
-            )));
+    let technique = raylink::job::technique_for(scene, &flags).map_err(|e| match e {
+        // The filter's radius alone is given as its own option.
+        Error::Setting { name, detail }
+            if name == "filter" && args.filter.is_none() && detail.starts_with("does not") =>
+        {
+            Error::Invalid(format!("--filter-radius {detail}"))
         }
-    }
+        e => e,
+    })?;
+    let kind = technique.kind();
     for (option, given, applies) in other_options(args) {
         if given && !applies(kind) {
             return Err(Error::Invalid(format!(
@@ -451,7 +438,6 @@ pub fn job(args: &RenderArgs, scene: &Scene, extra: Settings) -> Result<Job, Err
             )));
         }
     }
-    let technique = Technique::create(&settings).map_err(|e| locate(e, scene, &flags))?;
     Ok(Job {
         width: args.width.unwrap_or(scene.camera.width),
         height: args.height.unwrap_or(scene.camera.height),

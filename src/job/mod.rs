@@ -161,6 +161,36 @@ impl Job {
     }
 }
 
+/// The technique a front end's settings (`given`: only those the user gave) and the scene
+/// file's own (its `[render]` table, pbrt's `Integrator`) describe, the front end's winning.
+/// With a time limit, an adaptive threshold or adaptive anti-aliasing given, only a given
+/// `spp` caps the samples. A given setting the chosen technique does not read is an
+/// [`Error::Setting`] "does not apply to the ... integrator"; a bad value the scene file
+/// gives is reported at its line there. The command line and the Python package both make
+/// their jobs' techniques here, so a scene renders the same through either.
+pub fn technique_for(scene: &Scene, given: &Settings) -> Result<Technique> {
+    let mut from_scene = scene.settings.clone();
+    if given.time_limit.is_some()
+        || given.adaptive_threshold.is_some()
+        || given.aa == Some(AntiAliasing::Adaptive)
+    {
+        from_scene.spp = None;
+    }
+    let settings = from_scene.overlaid(given);
+    let kind = settings.integrator.unwrap_or(TechniqueKind::Whitted);
+    let names = given.given();
+    if let Some(setting) = names.iter().find(|s| !technique_info(kind).reads(s)) {
+        return Err(Error::setting(
+            setting,
+            format!("does not apply to the {kind} integrator"),
+        ));
+    }
+    Technique::create(&settings).map_err(|e| match &e {
+        Error::Setting { name, .. } if !names.contains(&name.as_str()) => scene.locate(e),
+        _ => e,
+    })
+}
+
 /// What a render gives back.
 #[derive(Debug)]
 pub struct Rendered {
