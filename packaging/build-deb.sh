@@ -16,7 +16,7 @@ gzip -9n "$target_dir"/release/assets/man/*.1
 # The binary is built; cargo-deb packs it without building again, stripped (the release
 # profile keeps line tables for backtraces; the package does not need them).
 cargo deb --no-build --strip >&2
-version=$(cargo metadata --format-version 1 --no-deps | python3 -c 'import json,sys; print(json.load(sys.stdin)["packages"][0]["version"])')
+version=$(cargo metadata --format-version 1 --no-deps | python3 -c 'import json,sys; print(next(p["version"] for p in json.load(sys.stdin)["packages"] if p["name"] == "raylink"))')
 arch=$(dpkg --print-architecture)
 deb="$target_dir/debian/raylink_${version}-1_${arch}.deb"
 test -s "$deb" || { echo "cargo deb did not write $deb" >&2; exit 1; }

@@ -5,12 +5,13 @@
 # With --tests, also what the test suite runs: bsdextrautils, whose `script` the progress
 # tests run (Debian 13 moved it there from the essential bsdutils), and chromium with
 # chromium-driver, the headless browser that tests/studio_browser.rs drives through
-# WebDriver to test `raylink serve`'s page (a large download a render does not need).
+# WebDriver to test `raylink serve`'s page (a large download a render does not need), and
+# python3-venv for the Python package's tests (python/test.sh).
 set -euo pipefail
 packages=(build-essential pkg-config libclang-dev libembree-dev libopenimageio-dev libpng-dev)
 case "${1:-}" in
   "") ;;
-  --tests) packages+=(bsdextrautils chromium chromium-driver) ;;
+  --tests) packages+=(bsdextrautils chromium chromium-driver python3-venv) ;;
   *) echo "usage: scripts/install-deps.sh [--tests]" >&2; exit 2 ;;
 esac
 sudo=""
