@@ -24,7 +24,7 @@ class ProgressEvent:
     """What a progress callback is given."""
 
     phase: str
-    """The phase: "building", "preprocess", "rendering", ..."""
+    """The phase: "building", "overture", "preprocess", "distribution", "render", ..."""
     done: int
     """Units of the phase done (the library's own units: tiles, passes, nodes)."""
     total: Optional[int]

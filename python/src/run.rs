@@ -85,7 +85,7 @@ pub struct Pass {
 /// What a progress callback is given.
 #[pyclass(frozen, get_all, module = "raylink")]
 pub struct ProgressEvent {
-    /// The phase: "reading", "building", "preprocess", "rendering", ...
+    /// The phase: "building", "overture", "preprocess", "distribution", "render", ...
     phase: String,
     /// Units of the phase done (tiles, passes, nodes: the library's own units).
     done: u64,
@@ -147,7 +147,7 @@ pub fn drive<T: Send>(
             while let Ok(pass) = passes.try_recv() {
                 if let (Some(cb), true) = (callback, listening) {
                     let event = ProgressEvent {
-                        phase: "rendering".into(),
+                        phase: "render".into(),
                         done: pass.spp as u64,
                         total: None,
                         spp: Some(pass.spp),

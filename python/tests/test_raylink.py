@@ -113,6 +113,20 @@ def test_progress_shows_every_pass_and_the_last_is_the_image():
     assert np.array_equal(passes[-1][1], rendered.image)
 
 
+def test_a_pixel_technique_reports_its_progress_in_tiles():
+    events = []
+    renderer = raylink.Renderer(CORNELL, integrator="whitted", spp=16, width=96, height=96)
+    rendered = renderer.render(progress=events.append)
+    rendering = [(e.done, e.total) for e in events if e.phase == "render"]
+    assert rendering, [repr(e) for e in events]
+    assert all(e.image is None for e in events), "Whitted has no passes to show"
+    done = [d for d, _ in rendering]
+    assert done == sorted(done)
+    assert all(t is not None and d <= t for d, t in rendering)
+    assert rendering[-1][0] == rendering[-1][1], "the last report is the whole image"
+    assert not rendered.partial
+
+
 def test_a_callback_returning_false_stops_the_render_within_a_second(deadline):
     # A million samples a pixel: hours, were it not stopped.
     renderer = raylink.Renderer(CORNELL, integrator="path", spp=1 << 20, width=64, height=64)
@@ -145,8 +159,9 @@ def test_ctrl_c_stops_a_render_and_raises_keyboard_interrupt(deadline):
     with pytest.raises(KeyboardInterrupt):
         renderer.render(progress=progress)
     assert time.monotonic() - interrupted_at[0] < 1.0
-    # The renderer is still usable.
-    assert raylink.Renderer(CORNELL, spp=1, width=8, height=8).render().image.any()
+    # The renderer is still usable: it renders again (stopped after its first pass).
+    again = renderer.render(progress=lambda event: False if event.spp else None)
+    assert again.partial and again.image.any()
 
 
 def test_an_exception_in_the_callback_stops_the_render_and_is_raised(deadline):
