@@ -331,21 +331,21 @@ pub fn given_settings(args: &RenderArgs, scene: &Scene) -> Settings {
     let n = &args.network;
     let filter = match (args.filter, args.filter_radius) {
         (None, None) => None,
-        (None, Some(radius)) => Some(match scene.settings.filter.unwrap_or_default() {
-            Filter::Box { .. } => Filter::Box { radius },
-            Filter::Triangle { .. } => Filter::Triangle { radius },
-            Filter::Gaussian { sigma, .. } => Filter::Gaussian { radius, sigma },
-        }),
-        (Some(FilterName::Box), r) => Some(Filter::Box {
-            radius: r.unwrap_or(0.5),
-        }),
-        (Some(FilterName::Triangle), r) => Some(Filter::Triangle {
-            radius: r.unwrap_or(2.0),
-        }),
-        (Some(FilterName::Gaussian), r) => Some(Filter::Gaussian {
-            radius: r.unwrap_or(1.5),
-            sigma: 0.5,
-        }),
+        (None, Some(radius)) => Some(
+            scene
+                .settings
+                .filter
+                .unwrap_or_default()
+                .with_radius(radius),
+        ),
+        (Some(name), r) => Filter::named(
+            match name {
+                FilterName::Box => "box",
+                FilterName::Triangle => "triangle",
+                FilterName::Gaussian => "gaussian",
+            },
+            r,
+        ),
     };
     Settings {
         integrator: args.integrator.map(IntegratorName::kind),

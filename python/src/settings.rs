@@ -211,28 +211,18 @@ pub fn from_kwargs(scene: &Scene, kwargs: Option<&Bound<'_, PyDict>>) -> PyResul
 fn filter(scene: &Scene, name: Option<&str>, radius: Option<f32>) -> PyResult<Option<Filter>> {
     Ok(match (name, radius) {
         (None, None) => None,
-        (None, Some(radius)) => Some(match scene.settings.filter.unwrap_or_default() {
-            Filter::Box { .. } => Filter::Box { radius },
-            Filter::Triangle { .. } => Filter::Triangle { radius },
-            Filter::Gaussian { sigma, .. } => Filter::Gaussian { radius, sigma },
-        }),
-        (Some(name), r) => Some(match name.to_ascii_lowercase().as_str() {
-            "box" => Filter::Box {
-                radius: r.unwrap_or(0.5),
-            },
-            "triangle" => Filter::Triangle {
-                radius: r.unwrap_or(2.0),
-            },
-            "gaussian" => Filter::Gaussian {
-                radius: r.unwrap_or(1.5),
-                sigma: 0.5,
-            },
-            _ => {
-                return Err(bad(
-                    "filter",
-                    format!("must be one of \"box\", \"triangle\", \"gaussian\", got \"{name}\""),
-                ))
-            }
-        }),
+        (None, Some(radius)) => Some(
+            scene
+                .settings
+                .filter
+                .unwrap_or_default()
+                .with_radius(radius),
+        ),
+        (Some(name), r) => Some(Filter::named(&name.to_ascii_lowercase(), r).ok_or_else(|| {
+            bad(
+                "filter",
+                format!("must be one of \"box\", \"triangle\", \"gaussian\", got \"{name}\""),
+            )
+        })?),
     })
 }

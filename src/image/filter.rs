@@ -53,6 +53,34 @@ impl std::fmt::Display for Filter {
 }
 
 impl Filter {
+    /// The filter `name`d as scene files name it ("box", "triangle", "gaussian") with
+    /// `radius`, or its default one (0.5, 2 and 1.5 pixels; a Gaussian's sigma is 0.5): what
+    /// a scene file, the command line and the Python package give for a name alone.
+    pub fn named(name: &str, radius: Option<f32>) -> Option<Filter> {
+        Some(match name {
+            "box" => Filter::Box {
+                radius: radius.unwrap_or(0.5),
+            },
+            "triangle" => Filter::Triangle {
+                radius: radius.unwrap_or(2.0),
+            },
+            "gaussian" => Filter::Gaussian {
+                radius: radius.unwrap_or(1.5),
+                sigma: 0.5,
+            },
+            _ => return None,
+        })
+    }
+
+    /// The same filter with another radius (a Gaussian keeps its sigma).
+    pub fn with_radius(self, radius: f32) -> Filter {
+        match self {
+            Filter::Box { .. } => Filter::Box { radius },
+            Filter::Triangle { .. } => Filter::Triangle { radius },
+            Filter::Gaussian { sigma, .. } => Filter::Gaussian { radius, sigma },
+        }
+    }
+
     pub fn radius(&self) -> f32 {
         match *self {
             Filter::Box { radius }

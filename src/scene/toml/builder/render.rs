@@ -186,26 +186,19 @@ impl Builder<'_> {
         f: crate::scene::toml::schema::FilterDesc,
     ) -> crate::error::Result<Filter> {
         let ctx = self.ctx;
-        let radius = f.radius;
-        let filter = match f.kind.as_str() {
-            "box" => Filter::Box {
-                radius: radius.unwrap_or(0.5),
-            },
-            "triangle" => Filter::Triangle {
-                radius: radius.unwrap_or(2.0),
-            },
-            "gaussian" => Filter::Gaussian {
-                radius: radius.unwrap_or(1.5),
-                sigma: f.sigma.unwrap_or(0.5),
-            },
-            other => {
-                return Err(ctx.fail(
-                    site,
-                    "filter.type",
-                    format!("must be \"box\", \"triangle\" or \"gaussian\", got \"{other}\""),
-                ))
-            }
+        let Some(mut filter) = Filter::named(&f.kind, f.radius) else {
+            return Err(ctx.fail(
+                site,
+                "filter.type",
+                format!(
+                    "must be \"box\", \"triangle\" or \"gaussian\", got \"{}\"",
+                    f.kind
+                ),
+            ));
         };
+        if let (Filter::Gaussian { sigma, .. }, Some(s)) = (&mut filter, f.sigma) {
+            *sigma = s;
+        }
         if f.sigma.is_some() && !matches!(filter, Filter::Gaussian { .. }) {
             return Err(ctx.fail(site, "filter.sigma", "only a gaussian filter takes sigma"));
         }
