@@ -153,6 +153,10 @@ pub struct RenderArgs {
     /// threshold^0.3, as Cycles).
     #[arg(long, value_name = "N", help_heading = MONTE_CARLO)]
     pub adaptive_min_samples: Option<u32>,
+    /// Path guiding (path tracing): learn where light arrives from during the first half of
+    /// the samples and draw directions from it as well as from the BSDF (off by default).
+    #[arg(long, value_name = "BOOL", help_heading = MONTE_CARLO)]
+    pub guiding: Option<bool>,
     /// Scale every sample down so that no channel exceeds this value (pbrt-v4's
     /// maxcomponentvalue): fewer fireflies, but biased; the outputs' metadata says so.
     #[arg(long, value_parser = finite_f32, value_name = "VALUE", allow_negative_numbers = true,
@@ -354,6 +358,7 @@ pub fn given_settings(args: &RenderArgs, scene: &Scene) -> Settings {
         time_limit: args.time_limit,
         adaptive_threshold: args.adaptive_threshold,
         adaptive_min_samples: args.adaptive_min_samples,
+        guiding: args.guiding,
         max_component_value: args.max_component_value,
         filter,
         aa: args.aa.map(|a| match a {

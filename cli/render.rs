@@ -171,6 +171,9 @@ fn metadata(args: &RenderArgs, job: &Job) -> Metadata {
                 MetaValue::Int(a.min_samples as i32),
             ));
         }
+        if mc.guiding {
+            m.push(("raylink:guiding".into(), MetaValue::Str("true".into())));
+        }
         if let Some(v) = mc.max_component_value {
             m.push((
                 "raylink:max_component_value".into(),
@@ -484,6 +487,13 @@ fn render_with_checkpoints(
         .monte_carlo()
         .expect("a progressive technique");
     let mut resumed_samples = 0;
+    if args.resume && mc.guiding {
+        return Err(Error::setting(
+            "guiding",
+            "cannot be used with --resume: a checkpoint does not keep the guide",
+        )
+        .into());
+    }
     let resume = if args.resume {
         // A checkpoint's bytes beside the film and image the job holds already.
         let allowance = input_file::Allowance::new(control.budget, job.image_bytes());

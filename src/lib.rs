@@ -45,6 +45,7 @@ pub mod error;
 pub mod farm;
 #[doc(hidden)]
 pub mod fuzzing;
+pub(crate) mod guiding;
 pub mod image;
 pub mod input_file;
 pub(crate) mod integrators;

@@ -145,6 +145,8 @@ pub struct Settings {
     pub adaptive_threshold: Option<f32>,
     /// Path tracing: samples every pixel takes before adaptive sampling may stop it.
     pub adaptive_min_samples: Option<u32>,
+    /// Path tracing: learn where light comes from and sample from it (path guiding).
+    pub guiding: Option<bool>,
     /// Monte Carlo: scale samples down so that no channel exceeds this (biased).
     pub max_component_value: Option<f32>,
     /// Monte Carlo: the pixel filter (default pbrt's Gaussian).
@@ -192,6 +194,7 @@ macro_rules! for_each_setting {
             time_limit,
             adaptive_threshold,
             adaptive_min_samples,
+            guiding,
             max_component_value,
             filter,
             aa,

@@ -85,6 +85,7 @@ fn cornell_box_against_tungsten_and_path_tracer() {
         reconstruction: raylink::image::filter::Reconstruction::Splat,
         adaptive: None,
         max_component_value: None,
+        guiding: false,
     });
     let (pt_image, _) = render(&scene, pt);
     let pt_seconds = start.elapsed().as_secs_f64();
@@ -149,6 +150,7 @@ fn assert_sphere_means_within(file: &str, names: [&str; 2], tolerance: f32) {
         reconstruction: raylink::image::filter::Reconstruction::Splat,
         adaptive: None,
         max_component_value: None,
+        guiding: false,
     });
     let (pt_image, _) = render(&scene, pt);
     eprintln!("{file}: {}", report.join("; "));

@@ -41,6 +41,7 @@ fn mc(technique: fn(MonteCarloSettings) -> Technique, spp: u32, max_depth: u32) 
         reconstruction: raylink::image::filter::Reconstruction::Splat,
         adaptive: None,
         max_component_value: None,
+        guiding: false,
     })
 }
 

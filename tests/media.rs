@@ -44,6 +44,7 @@ fn boxed(spp: u32, max_depth: u32) -> MonteCarloSettings {
         reconstruction: raylink::image::filter::Reconstruction::Splat,
         adaptive: None,
         max_component_value: None,
+        guiding: false,
     }
 }
 

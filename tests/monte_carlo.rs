@@ -64,6 +64,7 @@ fn render_with(scene: &Scene, kind: Kind, s: &Setup, reconstruction: Reconstruct
         reconstruction,
         adaptive: None,
         max_component_value: None,
+        guiding: false,
     };
     let job = Job {
         width: s.width,

@@ -130,6 +130,7 @@ pub fn measure(
         reconstruction: Reconstruction::Splat,
         adaptive: None,
         max_component_value: None,
+        guiding: false,
     });
     let missing = format!(
         "no {} in the working directory or the source tree",

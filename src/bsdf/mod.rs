@@ -232,6 +232,23 @@ impl<'a> Bsdf<'a> {
         self.kd.max_element() > 0.0 || self.kdt.max_element() > 0.0 || self.has_glossy()
     }
 
+    /// Whether a direction from anywhere (a path guide's) can be weighed by
+    /// [`eval_and_pdf`](Self::eval_and_pdf) alone: no delta lobe, and no coat (whose value
+    /// is itself an estimate).
+    pub fn guidable(&self) -> bool {
+        if self.coating.is_some() {
+            return false;
+        }
+        if self.table.is_some() || self.lambertian {
+            return true;
+        }
+        let smooth = self.ggx.is_none();
+        let mirror = smooth && (self.ks.max_element() > 0.0 || self.conductor.is_some());
+        let transmits = self.kt.max_element() > 0.0;
+        let refraction = transmits && (smooth || !self.rough_transmission || self.thin);
+        !mirror && !refraction && self.has_non_delta()
+    }
+
     /// The diffuse reflectance (for albedo outputs).
     pub fn albedo(&self) -> Rgb {
         if let Some(table) = self.table {

@@ -106,6 +106,11 @@ impl Integrators {
                 "adaptive_threshold",
                 "cannot be used for an animation: every frame takes the same samples",
             )),
+            Technique::Path(mc) if mc.guiding => Err(Error::setting(
+                "guiding",
+                "cannot be used for an animation: frames reuse unchanged pixels, which \
+                 must not depend on a guide learned from the others",
+            )),
             Technique::Path(mc) => Ok(Integrators::Path(
                 PathTracer::new(PathOptions {
                     max_depth: mc.max_depth,

@@ -5,6 +5,7 @@
 pub mod bdpt;
 mod camera_connection;
 pub mod flux;
+mod guided_path;
 pub mod illumination_network;
 pub mod irradiance_cache;
 pub mod light;

@@ -12,7 +12,7 @@ use crate::scene::camera::CameraBasis;
 use crate::scene::SurfacePoint;
 use crate::settings::TechniqueKind;
 use crate::transport::settings::{
-    MonteCarloSettings, TechniqueInfo, ADAPTIVE, COMMON, MONTE_CARLO,
+    MonteCarloSettings, TechniqueInfo, ADAPTIVE, COMMON, GUIDING, MONTE_CARLO,
 };
 use crate::transport::technique::{Lifecycle, SampledTechnique};
 use crate::transport::{Context, MonteCarlo, RayStats, Splat};
@@ -26,7 +26,7 @@ pub const MAX_DEPTH_LIMIT: u32 = 1024;
 pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     kind: TechniqueKind::Path,
     summary: "Path tracing with next-event estimation and multiple importance sampling.",
-    settings: &[COMMON, MONTE_CARLO, ADAPTIVE],
+    settings: &[COMMON, MONTE_CARLO, ADAPTIVE, GUIDING],
     pbrt: &["path", "volpath", "simplepath"],
     progressive: true,
     renders_parts: true,
@@ -39,7 +39,8 @@ pub(crate) fn lifecycle(mc: &MonteCarloSettings) -> Box<dyn Lifecycle> {
     Box::new(SampledTechnique {
         integrator: PathTracer::new(PathOptions {
             max_depth: mc.max_depth,
-        }),
+        })
+        .with_guiding(mc.guiding),
         settings: *mc,
     })
 }
@@ -60,11 +61,25 @@ impl Default for PathOptions {
 
 pub struct PathTracer {
     options: PathOptions,
+    /// Path guiding (surfaces only).
+    guiding: bool,
 }
 
 impl PathTracer {
     pub fn new(options: PathOptions) -> Self {
-        PathTracer { options }
+        PathTracer {
+            options,
+            guiding: false,
+        }
+    }
+
+    /// The same tracer, with path guiding on or off.
+    pub fn with_guiding(self, guiding: bool) -> Self {
+        PathTracer { guiding, ..self }
+    }
+
+    pub(crate) fn max_depth(&self) -> u32 {
+        self.options.max_depth
     }
 }
 
@@ -118,6 +133,27 @@ pub(crate) fn sample_direct(
 }
 
 impl MonteCarlo for PathTracer {
+    fn guided(&self) -> bool {
+        self.guiding
+    }
+
+    fn sample_guided(
+        &self,
+        ctx: &Context,
+        camera: &CameraBasis,
+        ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+        splats: &mut Vec<Splat>,
+        guidance: &mut crate::guiding::Guidance,
+    ) -> Rgb {
+        // The guide covers surfaces: in media the volumetric tracer goes unguided.
+        if ctx.has_media() {
+            return self.sample(ctx, camera, ray, sampler, stats, splats);
+        }
+        self.radiance_guided(ctx, ray, sampler, stats, guidance)
+    }
+
     fn sample(
         &self,
         ctx: &Context,

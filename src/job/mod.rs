@@ -101,7 +101,7 @@ impl Job {
         }
         self.technique.check_part()?;
         if let Some(m) = self.technique.monte_carlo() {
-            crate::transport::settings::refuse_for_parts(m.time_limit, m.adaptive)?;
+            crate::transport::settings::refuse_for_parts(m.time_limit, m.adaptive, m.guiding)?;
         }
         Ok(())
     }

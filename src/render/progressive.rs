@@ -10,9 +10,10 @@ use super::film::{pixel_value, weighted_value, Footprint};
 use super::{place, tiles, tiles_in, Film, RenderStats, Shown, Tile, Watch, MERGE_WINDOW};
 use crate::control::Control;
 use crate::error::{Error, Result};
+use crate::guiding::{Deposit, Guidance, Guide, Learning};
 use crate::image::filter::Reconstruction;
 use crate::image::Image;
-use crate::math::Rgb;
+use crate::math::{Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::transport::camera_sample::{camera_sample, view_basis, PixelJitter, Splatting};
 use crate::transport::driver::{drive, drive_indexed, Merge};
@@ -30,6 +31,8 @@ struct TileResult {
     /// With adaptive sampling: per pixel of the tile (row-major), the sums of its samples'
     /// squares.
     squares: Vec<[f64; 3]>,
+    /// With path guiding, in a pass that learns: what its samples deposited, in order.
+    deposits: Vec<Deposit>,
     rays: RayStats,
     invalid: u64,
 }
@@ -49,6 +52,7 @@ impl TileResult {
             camera,
             splats: Vec::new(),
             squares: Vec::new(),
+            deposits: Vec::new(),
             rays: RayStats::default(),
             invalid: 0,
         }
@@ -96,13 +100,14 @@ impl<'a> Samples<'a> {
     /// The sum of the estimates of samples `samples` of pixel `(x, y)`: what one pass adds
     /// to the pixel (nothing when samples are splatted: they go to `result`'s footprint).
     /// Splats, rays and dropped samples go to `result`; the sum of the estimates' squares
-    /// to `squares`.
+    /// to `squares`. With `guidance`, samples are guided.
     fn pixel_pass(
         &self,
         (x, y): (u32, u32),
         samples: std::ops::Range<u32>,
         result: &mut TileResult,
         squares: &mut [f64; 3],
+        mut guidance: Option<&mut Guidance>,
     ) -> [f64; 3] {
         let mut sum = [0.0f64; 3];
         for i in samples {
@@ -115,14 +120,25 @@ impl<'a> Samples<'a> {
                 i,
             );
             let before = result.splats.len();
-            let l = self.integrator.sample(
-                self.ctx,
-                &self.camera,
-                &ray,
-                &mut sampler,
-                &mut result.rays,
-                &mut result.splats,
-            );
+            let l = match guidance.as_deref_mut() {
+                Some(g) => self.integrator.sample_guided(
+                    self.ctx,
+                    &self.camera,
+                    &ray,
+                    &mut sampler,
+                    &mut result.rays,
+                    &mut result.splats,
+                    g,
+                ),
+                None => self.integrator.sample(
+                    self.ctx,
+                    &self.camera,
+                    &ray,
+                    &mut sampler,
+                    &mut result.rays,
+                    &mut result.splats,
+                ),
+            };
             let l = self.clamped(l);
             for s in &mut result.splats[before..] {
                 s.value = self.clamped(s.value);
@@ -154,22 +170,34 @@ impl<'a> Samples<'a> {
 
     /// One pass of `samples` over a tile, whose splatted samples reach the pixels of
     /// `bounds` only. With adaptive sampling, only the pixels `active` (row-major over an
-    /// image `width` wide) take samples, and their sums of squares are kept.
+    /// image `width` wide) take samples, and their sums of squares are kept. With a guide
+    /// the samples are guided, and deposit into it if the pass learns.
     fn tile_pass(
         &self,
         tile: &Tile,
         samples: std::ops::Range<u32>,
         bounds: &Tile,
         active: Option<(&[bool], u32)>,
+        guide: Option<(&Guide, bool)>,
     ) -> TileResult {
         let splatting = self.jitter.splatting();
         let mut result = TileResult::new(tile, splatting, bounds);
+        let mut guidance = guide.map(|(guide, learns)| Guidance {
+            guide,
+            deposits: learns.then(Vec::new),
+        });
         for y in tile.y0..tile.y1 {
             for x in tile.x0..tile.x1 {
                 let mut squares = [0.0; 3];
                 let sum = match active {
                     Some((a, width)) if !a[(y * width + x) as usize] => [0.0; 3],
-                    _ => self.pixel_pass((x, y), samples.clone(), &mut result, &mut squares),
+                    _ => self.pixel_pass(
+                        (x, y),
+                        samples.clone(),
+                        &mut result,
+                        &mut squares,
+                        guidance.as_mut(),
+                    ),
                 };
                 if splatting.is_none() {
                     result.camera.sums.push(sum);
@@ -178,6 +206,9 @@ impl<'a> Samples<'a> {
                     result.squares.push(squares);
                 }
             }
+        }
+        if let Some(deposits) = guidance.and_then(|g| g.deposits) {
+            result.deposits = deposits;
         }
         result
     }
@@ -194,7 +225,8 @@ impl<'a> Samples<'a> {
             for x in tile.x0..tile.x1 {
                 let mut total = [0.0f64; 3];
                 for &(first, n) in &passes {
-                    let s = self.pixel_pass((x, y), first..first + n, &mut result, &mut [0.0; 3]);
+                    let s =
+                        self.pixel_pass((x, y), first..first + n, &mut result, &mut [0.0; 3], None);
                     for c in 0..3 {
                         total[c] += s[c];
                     }
@@ -246,7 +278,11 @@ pub(crate) fn render_region(
     region: &Tile,
     control: &Control,
 ) -> Result<(Image, RenderStats)> {
-    crate::transport::settings::refuse_for_parts(options.time_limit, options.adaptive)?;
+    crate::transport::settings::refuse_for_parts(
+        options.time_limit,
+        options.adaptive,
+        integrator.guided(),
+    )?;
     if options.reconstruction == Reconstruction::Splat {
         return render_region_splatted(ctx, integrator, options, region, control);
     }
@@ -322,7 +358,13 @@ fn render_region_splatted(
         &control.cancel,
         |k| {
             let (first, n) = passes[k / tiles.len()];
-            s.tile_pass(&tiles[k % tiles.len()], first..first + n, region, None)
+            s.tile_pass(
+                &tiles[k % tiles.len()],
+                first..first + n,
+                region,
+                None,
+                None,
+            )
         },
         |k, r| {
             let (t, n) = (&tiles[k % tiles.len()], passes[k / tiles.len()].1);
@@ -366,6 +408,12 @@ pub(crate) fn render_passes(
     watch: Watch,
     control: &Control,
 ) -> Result<(Film, RenderStats)> {
+    if integrator.guided() && resume.is_some() {
+        return Err(Error::setting(
+            "guiding",
+            "cannot resume a render: a checkpoint does not keep the guide",
+        ));
+    }
     let s = Samples::new(ctx, integrator, options);
     let tiles = tiles(options.view.width, options.view.height);
     let mut film = match resume {
@@ -419,12 +467,16 @@ pub(crate) fn render_passes(
         done += film.pass;
     }
     passes.extend(passes_between(done, options.spp));
-    // As (first pass, passes).
-    let groups: Vec<(usize, usize)> = if film.statistics().is_some() {
-        (0..passes.len()).map(|p| (p, 1)).collect()
-    } else {
-        vec![(0, passes.len())]
-    };
+    // With path guiding, the guide is learned from the samples up to each of its builds
+    // and sampled from by the next ones.
+    let mut learning = integrator.guided().then(|| {
+        let bounds = ctx.scene.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
+        Learning::new(bounds, options.spp)
+    });
+    // As (first pass, passes): a pass ends its group when the next depends on it.
+    let groups = group_passes(&passes, |end| {
+        film.statistics().is_some() || learning.as_ref().is_some_and(|l| l.builds_at(end))
+    });
     let whole = Tile::whole(options.view.width, options.view.height);
     let width = options.view.width;
     let mut failure = None;
@@ -446,6 +498,10 @@ pub(crate) fn render_passes(
             )
         };
         let active = film.active().map(<[bool]>::to_vec);
+        // The guide stays the same through the group.
+        let guide = learning
+            .as_ref()
+            .map(|l| (l.guide(), l.learns_at(passes[group_start].0)));
         let driven = drive_indexed(
             (group_len * tiles.len()).saturating_sub(skipped),
             options.view.threads,
@@ -455,7 +511,8 @@ pub(crate) fn render_passes(
                 let (p, t) = locate(k);
                 let (first, n) = passes[p];
                 let active = active.as_deref().map(|a| (a, width));
-                s.tile_pass(&tiles[t], first..first + n, &whole, active)
+                let guide = guide.as_ref().map(|(g, learns)| (&**g, *learns));
+                s.tile_pass(&tiles[t], first..first + n, &whole, active, guide)
             },
             |k, r| {
                 let (p, t) = locate(k);
@@ -474,6 +531,9 @@ pub(crate) fn render_passes(
                 stats.samples += sampled;
                 film.invalid += r.invalid;
                 film.tiles_done += 1;
+                if let Some(l) = learning.as_mut() {
+                    l.absorb(&r.deposits);
+                }
                 phase.advance(sampled);
                 if (film.tiles_done as usize) < tiles.len() {
                     if watch.mid_pass.is_some_and(|d| shown.elapsed() >= d) {
@@ -522,6 +582,9 @@ pub(crate) fn render_passes(
         if cancelled || ended || failure.is_some() {
             break;
         }
+        if let Some(l) = learning.as_mut().filter(|l| l.builds_at(film.spp)) {
+            l.build(film.spp);
+        }
     }
     if let Some(e) = failure {
         return Err(e);
@@ -535,6 +598,20 @@ pub(crate) fn render_passes(
     stats.seconds = start.elapsed().as_secs_f64();
     phase.end(&stats.summary());
     Ok((film, stats))
+}
+
+/// `passes` (as (first sample, samples)) in groups, as (first pass, passes): a pass after
+/// which `ends_group(samples per pixel then)` is true ends its group.
+fn group_passes(passes: &[(u32, u32)], ends_group: impl Fn(u32) -> bool) -> Vec<(usize, usize)> {
+    let mut groups = Vec::new();
+    let mut start = 0;
+    for (p, &(first, n)) in passes.iter().enumerate() {
+        if ends_group(first + n) || p + 1 == passes.len() {
+            groups.push((start, p + 1 - start));
+            start = p + 1;
+        }
+    }
+    groups
 }
 
 /// How many of `tile`'s pixels are `active` (row-major over an image `width` wide).

@@ -234,6 +234,7 @@ fn sequence_job(
             reconstruction: crate::image::filter::Reconstruction::Importance,
             adaptive: None,
             max_component_value: None,
+            guiding: false,
         }),
     };
     let job = Job {

@@ -219,6 +219,7 @@ fn case(n: u64) -> (String, Job, Vec<i64>, Coherence) {
             reconstruction: crate::image::filter::Reconstruction::Importance,
             adaptive: None,
             max_component_value: None,
+            guiding: false,
         })
     };
     let job = Job {

@@ -72,6 +72,7 @@ fn coated_diffuse_sphere_in_a_furnace_renders_its_albedo() {
         reconstruction: crate::image::filter::Reconstruction::Splat,
         adaptive: None,
         max_component_value: None,
+        guiding: false,
     };
     let job = Job {
         width: SIZE,

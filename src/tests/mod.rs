@@ -21,6 +21,7 @@ mod network_scenes;
 mod network_transport;
 mod normal_detail;
 mod oiio;
+mod path_guiding;
 mod reproductions;
 mod robustness;
 mod rough_glass;

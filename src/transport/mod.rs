@@ -201,4 +201,26 @@ pub trait MonteCarlo: Sync {
         stats: &mut RayStats,
         splats: &mut Vec<Splat>,
     ) -> Rgb;
+
+    /// Whether its samples are guided (path guiding): the render then learns a guide and
+    /// calls [`sample_guided`](Self::sample_guided).
+    fn guided(&self) -> bool {
+        false
+    }
+
+    /// [`sample`](Self::sample) sampling directions from `guidance`'s guide too, and
+    /// depositing what it finds there when the pass learns.
+    #[allow(clippy::too_many_arguments)]
+    fn sample_guided(
+        &self,
+        ctx: &Context,
+        camera: &CameraBasis,
+        ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+        splats: &mut Vec<Splat>,
+        _guidance: &mut crate::guiding::Guidance,
+    ) -> Rgb {
+        self.sample(ctx, camera, ray, sampler, stats, splats)
+    }
 }

@@ -134,6 +134,16 @@ pub const ADAPTIVE: &[Setting] = &[
     },
 ];
 
+/// Path guiding: read by the path tracer.
+pub const GUIDING: &[Setting] = &[Setting {
+    name: "guiding",
+    scene_key: Some(("render", "guiding")),
+    example: "true",
+    doc: "Path guiding: learn where light arrives from during the first half of the samples \
+          and draw directions from it as well as from the BSDF (surfaces only; off by \
+          default).",
+}];
+
 /// Samples per pixel with an adaptive threshold and no sample count or time limit: the
 /// most a pixel that never converges takes (Cycles' default).
 pub const ADAPTIVE_DEFAULT_SPP: u32 = 4096;
@@ -172,6 +182,8 @@ pub struct MonteCarloSettings {
     pub adaptive: Option<AdaptiveSampling>,
     /// Samples (and splats) scaled down so that no channel exceeds this.
     pub max_component_value: Option<f32>,
+    /// Path guiding (the path tracer).
+    pub guiding: bool,
 }
 
 impl MonteCarloSettings {
@@ -261,6 +273,7 @@ impl MonteCarloSettings {
             },
             adaptive,
             max_component_value: s.max_component_value,
+            guiding: s.guiding.unwrap_or(false),
         })
     }
 
@@ -276,16 +289,21 @@ impl MonteCarloSettings {
         if let Some(m) = self.max_component_value {
             key += &format!(" max_component_value={m}");
         }
+        if self.guiding {
+            key += " guiding=true";
+        }
         key
     }
 }
 
 /// An error for the setting that lets pixels take different numbers of samples (a time
-/// limit, adaptive sampling), if one is on: a part of an image must take exactly the
-/// samples the whole render gives its pixels.
+/// limit, adaptive sampling) or depend on the whole image (a guide learned from every
+/// pixel), if one is on: a part of an image must take exactly the samples the whole
+/// render gives its pixels.
 pub(crate) fn refuse_for_parts(
     time_limit: Option<f64>,
     adaptive: Option<AdaptiveSampling>,
+    guiding: bool,
 ) -> Result<()> {
     let refused = [
         (
@@ -297,6 +315,11 @@ pub(crate) fn refuse_for_parts(
             adaptive.is_some(),
             "adaptive_threshold",
             "where a pixel stops depends on its neighbours",
+        ),
+        (
+            guiding,
+            "guiding",
+            "the guide is learned from the whole image",
         ),
     ];
     match refused.into_iter().find(|r| r.0) {

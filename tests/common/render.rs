@@ -20,6 +20,7 @@ pub fn boxed(max_depth: u32, spp: u32) -> MonteCarloSettings {
         reconstruction: raylink::image::filter::Reconstruction::Splat,
         adaptive: None,
         max_component_value: None,
+        guiding: false,
     }
 }
 

@@ -333,6 +333,7 @@ fn render(s: &RenderSettings, output: Option<&std::path::Path>) -> Option<Render
         time_limit: s.time_limit,
         adaptive_threshold: s.adaptive_threshold,
         adaptive_min_samples: s.adaptive_min_samples,
+        guiding: s.guiding,
         max_component_value: s.max_component_value,
         filter,
         aa: s.aa.map(|a| {

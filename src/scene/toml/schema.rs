@@ -58,6 +58,8 @@ pub(crate) struct RenderDesc {
     pub(crate) adaptive_threshold: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) adaptive_min_samples: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) guiding: Option<bool>,
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) max_component_value: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none")]

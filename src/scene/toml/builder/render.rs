@@ -87,6 +87,7 @@ impl Builder<'_> {
             "adaptive_min_samples",
             &span
         );
+        take!(guiding, d.guiding, "render", "guiding", &span);
         take!(
             max_component_value,
             d.max_component_value,
