@@ -7,8 +7,9 @@
 use crate::math::{Vec2, Vec3};
 use std::f32::consts::PI;
 
-/// Deepest quadtree level.
-pub const MAX_DEPTH: u32 = 20;
+/// Deepest quadtree level (cells of 4π/4¹² sr). Müller et al.'s 20 gave the same images
+/// on the rooms measured, in more time: the deeper levels only split cells evenly.
+pub const MAX_DEPTH: u32 = 12;
 
 /// One node: its children's node indices (0: the quadrant is a leaf) and the energy of
 /// each quadrant, ordered (x low, y low), (x high, y low), (x low, y high), (x high, y high).
