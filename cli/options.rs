@@ -333,24 +333,13 @@ pub fn locate(e: Error, scene: &Scene, given: &Settings) -> Error {
 /// The settings the options give (only those given).
 pub fn given_settings(args: &RenderArgs, scene: &Scene) -> Settings {
     let n = &args.network;
-    let filter = match (args.filter, args.filter_radius) {
-        (None, None) => None,
-        (None, Some(radius)) => Some(
-            scene
-                .settings
-                .filter
-                .unwrap_or_default()
-                .with_radius(radius),
-        ),
-        (Some(name), r) => Filter::named(
-            match name {
-                FilterName::Box => "box",
-                FilterName::Triangle => "triangle",
-                FilterName::Gaussian => "gaussian",
-            },
-            r,
-        ),
-    };
+    let name = args.filter.map(|name| match name {
+        FilterName::Box => "box",
+        FilterName::Triangle => "triangle",
+        FilterName::Gaussian => "gaussian",
+    });
+    // The names are clap's choices: every one is known.
+    let filter = Filter::given(scene.settings.filter, name, args.filter_radius).unwrap_or_default();
     Settings {
         integrator: args.integrator.map(IntegratorName::kind),
         spp: args.spp,

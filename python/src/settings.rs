@@ -211,20 +211,5 @@ pub fn from_kwargs(scene: &Scene, kwargs: Option<&Bound<'_, PyDict>>) -> PyResul
 /// The filter `filter` and `filter_radius` give: a name with its default radius, or a radius
 /// alone for the scene's filter (the command line's `--filter` and `--filter-radius`).
 fn filter(scene: &Scene, name: Option<&str>, radius: Option<f32>) -> PyResult<Option<Filter>> {
-    Ok(match (name, radius) {
-        (None, None) => None,
-        (None, Some(radius)) => Some(
-            scene
-                .settings
-                .filter
-                .unwrap_or_default()
-                .with_radius(radius),
-        ),
-        (Some(name), r) => Some(Filter::named(&name.to_ascii_lowercase(), r).ok_or_else(|| {
-            bad(
-                "filter",
-                format!("must be one of \"box\", \"triangle\", \"gaussian\", got \"{name}\""),
-            )
-        })?),
-    })
+    Filter::given(scene.settings.filter, name, radius).map_err(|e| bad("filter", e))
 }

@@ -73,6 +73,25 @@ impl Filter {
     }
 
     /// The same filter with another radius (a Gaussian keeps its sigma).
+    /// The filter a front end's options give over the scene's (`scene`, default Gaussian):
+    /// a named filter with `radius` or its default radius, or `radius` alone for the
+    /// scene's filter; `None` if neither is given, `Err` naming an unknown name.
+    pub fn given(
+        scene: Option<Filter>,
+        name: Option<&str>,
+        radius: Option<f32>,
+    ) -> Result<Option<Filter>, String> {
+        match (name, radius) {
+            (None, None) => Ok(None),
+            (None, Some(r)) => Ok(Some(scene.unwrap_or_default().with_radius(r))),
+            (Some(name), r) => Filter::named(&name.to_ascii_lowercase(), r)
+                .map(Some)
+                .ok_or_else(|| {
+                    format!("must be one of \"box\", \"triangle\", \"gaussian\", got \"{name}\"")
+                }),
+        }
+    }
+
     pub fn with_radius(self, radius: f32) -> Filter {
         match self {
             Filter::Box { .. } => Filter::Box { radius },
