@@ -519,9 +519,16 @@ mod tests {
                     "render has no {option} for {}",
                     technique.kind
                 );
-                // The option given alone sets its setting.
+                // The option given alone sets its setting (a boolean that takes no value
+                // is a flag).
+                let takes_value = command
+                    .find_subcommand("render")
+                    .unwrap()
+                    .get_arguments()
+                    .find(|a| a.get_long() == Some(long))
+                    .is_some_and(|a| a.get_action().takes_values());
                 let value = match setting.example {
-                    "true" => None,
+                    "true" if !takes_value => None,
                     e if e.starts_with('{') => Some("box".to_string()),
                     e => Some(e.trim_matches('"').to_string()),
                 };
