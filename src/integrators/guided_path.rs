@@ -6,7 +6,7 @@
 //! after it, divided by the throughput up to it) over the density the direction was drawn
 //! with, and each light sample deposits the light it saw over its own density.
 
-use super::path::{russian_roulette, PathTracer};
+use super::path::{emitted, escaped, russian_roulette, PathTracer};
 use crate::bsdf::{Bsdf, Transport};
 use crate::guiding::directional::DirTree;
 use crate::guiding::{Guidance, GUIDE_FRACTION};
@@ -102,7 +102,6 @@ impl PathTracer {
         let guide = guidance.guide;
         let learns = guidance.deposits.is_some();
         let mut vertices: Vec<Vertex> = Vec::new();
-        let lights = &ctx.lights;
         let mut radiance = Rgb::ZERO;
         let mut beta = Rgb::ONE;
         let mut ray = *camera_ray;
@@ -112,31 +111,16 @@ impl PathTracer {
         let mut depth = 0;
         loop {
             let Some(sp) = ctx.intersect_at_depth(&ray, depth, stats) else {
-                if let Some(bg) = lights.background_light() {
-                    let le = lights.background_radiance(ray.dir);
-                    let w = if specular {
-                        1.0
-                    } else {
-                        power_heuristic(
-                            scatter_pdf,
-                            lights.pdf_li(bg, prev_p, prev_p + ray.dir, Vec3::ZERO),
-                        )
-                    };
-                    radiance += beta * le * w;
-                    credit(&mut vertices, beta * le * w);
-                }
+                // Without a background this is zero, and crediting zero changes nothing.
+                let c = escaped(ctx, &ray, prev_p, beta, (scatter_pdf, specular));
+                radiance += c;
+                credit(&mut vertices, c);
                 break;
             };
             let m = &ctx.scene.materials[sp.material];
             let wo = -ray.dir;
             if m.emits_towards(wo, sp.ng) {
-                let w = match sp.world_shape().and_then(|s| lights.light_of_shape(s)) {
-                    Some(l) if !specular => {
-                        power_heuristic(scatter_pdf, lights.pdf_li(l, prev_p, sp.p, sp.ng))
-                    }
-                    _ => 1.0,
-                };
-                let c = beta * m.emission_at(sp.p, sp.uv, sp.ng) * w;
+                let c = emitted(ctx, &sp, prev_p, beta, (scatter_pdf, specular));
                 radiance += c;
                 credit(&mut vertices, c);
             }

@@ -132,6 +132,46 @@ pub(crate) fn sample_direct(
     f * ls.radiance * (w / ls.pdf)
 }
 
+/// What a path that left the scene along `ray` (from `prev_p`) brings back from the
+/// background with throughput `beta`, weighted against light sampling by the density the
+/// direction was drawn with (`pdf`, and `specular`: a delta lobe, no MIS).
+pub(crate) fn escaped(
+    ctx: &Context,
+    ray: &Ray,
+    prev_p: Vec3,
+    beta: Rgb,
+    (pdf, specular): (f32, bool),
+) -> Rgb {
+    let lights = &ctx.lights;
+    let Some(bg) = lights.background_light() else {
+        return Rgb::ZERO;
+    };
+    let le = lights.background_radiance(ray.dir);
+    let w = if specular {
+        1.0
+    } else {
+        power_heuristic(pdf, lights.pdf_li(bg, prev_p, prev_p + ray.dir, Vec3::ZERO))
+    };
+    beta * le * w
+}
+
+/// The emission of the emitting surface `sp` reached from `prev_p` with throughput `beta`,
+/// weighted against light sampling as [`escaped`] weighs the background.
+pub(crate) fn emitted(
+    ctx: &Context,
+    sp: &SurfacePoint,
+    prev_p: Vec3,
+    beta: Rgb,
+    (pdf, specular): (f32, bool),
+) -> Rgb {
+    let lights = &ctx.lights;
+    let w = match sp.world_shape().and_then(|s| lights.light_of_shape(s)) {
+        Some(l) if !specular => power_heuristic(pdf, lights.pdf_li(l, prev_p, sp.p, sp.ng)),
+        _ => 1.0,
+    };
+    beta * ctx.scene.materials[sp.material].emission_at(sp.p, sp.uv, sp.ng) * w
+}
+
 impl MonteCarlo for PathTracer {
     fn guided(&self) -> bool {
         self.guiding
@@ -170,7 +210,6 @@ impl MonteCarlo for PathTracer {
             };
             return super::volumetric::radiance(ctx, camera_ray, lengths, sampler, stats);
         }
-        let lights = &ctx.lights;
         let mut radiance = Rgb::ZERO;
         let mut beta = Rgb::ONE;
         let mut ray = *camera_ray;
@@ -181,30 +220,13 @@ impl MonteCarlo for PathTracer {
         let mut depth = 0;
         loop {
             let Some(sp) = ctx.intersect_at_depth(&ray, depth, stats) else {
-                if let Some(bg) = lights.background_light() {
-                    let le = lights.background_radiance(ray.dir);
-                    let w = if specular {
-                        1.0
-                    } else {
-                        power_heuristic(
-                            bsdf_pdf,
-                            lights.pdf_li(bg, prev_p, prev_p + ray.dir, Vec3::ZERO),
-                        )
-                    };
-                    radiance += beta * le * w;
-                }
+                radiance += escaped(ctx, &ray, prev_p, beta, (bsdf_pdf, specular));
                 break;
             };
             let m = &ctx.scene.materials[sp.material];
             let wo = -ray.dir;
             if m.emits_towards(wo, sp.ng) {
-                let w = match sp.world_shape().and_then(|s| lights.light_of_shape(s)) {
-                    Some(l) if !specular => {
-                        power_heuristic(bsdf_pdf, lights.pdf_li(l, prev_p, sp.p, sp.ng))
-                    }
-                    _ => 1.0,
-                };
-                radiance += beta * m.emission_at(sp.p, sp.uv, sp.ng) * w;
+                radiance += emitted(ctx, &sp, prev_p, beta, (bsdf_pdf, specular));
             }
             if depth == self.options.max_depth {
                 break;
