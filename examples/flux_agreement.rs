@@ -3,8 +3,8 @@
 //! `cargo run --release --example flux_agreement -- [SCENE [PATHS]]` (default
 //! scenes/cornell-spheres.toml, 200000 paths). Each set is a list of shape indices; by
 //! default the sets of cornell-spheres.toml's rough gold sphere, its mirror and glass
-//! spheres, and its floor (lit through the glass). `reproduce/dutre_lafortune_willems.py`
-//! runs it.
+//! spheres, and its floor (lit through the glass). docs/reproductions.md's table of the
+//! same sets is made by the test `dutre_lafortune_willems_fluxes_are_the_pages`.
 
 use raylink::flux::{estimate, Estimator, Flux, FluxJob};
 use raylink::{Backend, Control, Scene};

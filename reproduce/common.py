@@ -2,6 +2,7 @@
 blocks of the pages they write their tables into."""
 import argparse
 import os
+import subprocess
 import sys
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -50,3 +51,16 @@ def write_block(name, table, page=PAGE):
     text = text[:start + len(begin)] + '\n' + table.strip() + '\n' + text[stop:]
     with open(page, 'w') as f:
         f.write(text)
+
+
+def block_from_test(target, test, name):
+    """The block `name` that the test `test` of the cargo target `target` (such as
+    ['--test', 'reproductions']) prints, run in release without comparing with the page."""
+    cmd = ['cargo', 'test', '--quiet', '--release'] + target + ['--', test, '--exact',
+                                                                 '--nocapture']
+    run = subprocess.run(cmd, cwd=ROOT, capture_output=True, text=True,
+                         env={**os.environ, PRINT_ONLY: '1'})
+    table = block_of(run.stderr, name)
+    if run.returncode != 0 or not table:
+        sys.exit(f"{' '.join(cmd)} failed:\n{run.stdout}\n{run.stderr}")
+    return table
