@@ -106,9 +106,9 @@ pub struct RenderArgs {
     /// Light-transport technique (default: the scene's, else whitted).
     #[arg(long, value_enum, help_heading = COMMON)]
     pub integrator: Option<IntegratorName>,
-    /// Intersection backend: Embree, or the pure-Rust BVH (obvhs). Whitted images match up
-    /// to floating-point ties; Monte Carlo paths part after their first bounce, so those
-    /// images agree in the mean, not pixel for pixel.
+    /// Intersection backend: Embree, or the pure-Rust BVH (obvhs). Images match but where a
+    /// ray meets a floating-point tie; past one a Monte Carlo path continues another way,
+    /// so those images agree in the mean.
     #[arg(long, value_enum, default_value = "embree", help_heading = COMMON)]
     pub accel: AccelName,
     /// Image width in pixels (default: the scene's).
