@@ -60,10 +60,15 @@ fn network_files_are_reused_for_views_and_lighting() {
     let first = network_render(
         "scenes/cornell-box.toml",
         &tmp_path(&dir, "a.exr"),
-        &["--network-file", &file],
+        &["--network-file", &file, "--network-stats"],
     );
     assert!(first.status.success(), "{}", stderr(&first));
     assert!(stderr(&first).contains("preprocess"), "{}", stderr(&first));
+    assert!(
+        stderr(&first).contains(" M/s)") && !stderr(&first).contains("when it was built"),
+        "{}",
+        stderr(&first)
+    );
     assert!(Path::new(&file).exists());
 
     // Another view of the same geometry (the camera moved).
@@ -89,6 +94,12 @@ fn network_files_are_reused_for_views_and_lighting() {
     );
     assert!(
         stderr(&loaded).contains("no preprocess"),
+        "{}",
+        stderr(&loaded)
+    );
+    // The intersection speed is the saved build's, and says so.
+    assert!(
+        stderr(&loaded).contains(" M/s when it was built)"),
         "{}",
         stderr(&loaded)
     );

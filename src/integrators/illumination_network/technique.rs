@@ -422,6 +422,12 @@ impl Lifecycle for NetworkTechnique {
         let st = &solution.stats;
         let bs = &network.stats;
         let links = bs.link_ends / 2;
+        // A network read from its file reports its build's counts and speed, not this run's.
+        let built = if p.loaded.is_some() {
+            " when it was built"
+        } else {
+            ""
+        };
         vec![
             format!(
                 "network stats: {} polygons, {} patches, {} nodes, {} slots per node",
@@ -432,7 +438,7 @@ impl Lifecycle for NetworkTechnique {
             ),
             format!(
                 "network stats: {} links ({:.1} per node), {} escapes, {} beyond a slot's \
-                 first, {} line-patch intersections ({:.1} M/s), {} closest-hit queries",
+                 first, {} line-patch intersections ({:.1} M/s{built}), {} closest-hit queries",
                 links,
                 bs.link_ends as f64 / network.nodes().max(1) as f64,
                 bs.escapes,
