@@ -1,10 +1,14 @@
-//! Locates the system Embree (4, else 3) and OpenImageIO, generates Embree bindings with
-//! bindgen and compiles the small C API over OpenImageIO in `ffi/oiio.cpp` and the processor
-//! and clock functions in `ffi/platform.c` and the exception guards in `ffi/exceptions.cpp`.
+//! With the `embree` feature, locates the system Embree (4, else 3) and generates its
+//! bindings with bindgen; with `oiio`, locates OpenImageIO and compiles the small C API over
+//! it in `ffi/oiio.cpp`; with either, compiles the exception guards in `ffi/exceptions.cpp`.
+//! Without both (the portable build) it does nothing: no C compiler, libclang or pkg-config.
 
-use std::env;
-use std::path::{Path, PathBuf};
+#[cfg(feature = "embree")]
+use std::path::Path;
+#[cfg(any(feature = "embree", feature = "oiio"))]
+use std::{env, path::PathBuf};
 
+#[cfg(feature = "embree")]
 /// An Embree installation: its major version, the directory holding `embreeN/rtcore.h`,
 /// and where to find the library (None: leave it to the linker's default path).
 struct Embree {
@@ -19,32 +23,34 @@ fn main() {
     println!("cargo:rerun-if-changed=ffi/oiio.h");
     println!("cargo:rerun-if-changed=ffi/oiio.cpp");
     println!("cargo:rerun-if-changed=ffi/platform.h");
-    println!("cargo:rerun-if-changed=ffi/platform.c");
     println!("cargo:rerun-if-changed=ffi/exceptions.cpp");
     println!("cargo:rerun-if-env-changed=EMBREE_DIR");
     println!("cargo::rustc-check-cfg=cfg(embree4)");
     println!("cargo::rustc-check-cfg=cfg(embree3)");
 
-    let embree = find_embree().unwrap_or_else(|| {
-        fail(
-            "Embree was not found (looked in $EMBREE_DIR, /usr/local, /usr and pkg-config for \
-             embree4 and embree3). Install it with `apt-get install libembree-dev` \
-             (Debian 12 ships Embree 3, Debian 13 Embree 4), or set EMBREE_DIR to its prefix.",
-        )
-    });
-    bind_embree(&embree);
+    #[cfg(feature = "embree")]
+    {
+        let embree = find_embree().unwrap_or_else(|| {
+            fail(
+                "Embree was not found (looked in $EMBREE_DIR, /usr/local, /usr and pkg-config \
+                 for embree4 and embree3). Install it with `apt-get install libembree-dev` \
+                 (Debian 12 ships Embree 3, Debian 13 Embree 4), or set EMBREE_DIR to its \
+                 prefix; or build without Embree: \
+                 `cargo build --release --no-default-features --features portable`.",
+            )
+        });
+        bind_embree(&embree);
+    }
+    #[cfg(feature = "oiio")]
     build_oiio();
-    build_platform();
+    #[cfg(any(feature = "embree", feature = "oiio"))]
+    build_exception_guards();
 }
 
-/// The processor and clock functions of `ffi/platform.c`.
-fn build_platform() {
-    cc::Build::new()
-        .file("ffi/platform.c")
-        .warnings(true)
-        .compile("raylink_platform");
-    // The exception guards are C++ (std::set_terminate, try around dlopen); libstdc++ is
-    // Embree's already.
+/// The exception guards of `ffi/exceptions.cpp`: C++ (std::set_terminate, try around
+/// dlopen), for the C++ libraries; libstdc++ is Embree's and OpenImageIO's already.
+#[cfg(any(feature = "embree", feature = "oiio"))]
+fn build_exception_guards() {
     cc::Build::new()
         .cpp(true)
         .file("ffi/exceptions.cpp")
@@ -52,11 +58,13 @@ fn build_platform() {
         .compile("raylink_exceptions");
 }
 
+#[cfg(any(feature = "embree", feature = "oiio"))]
 fn fail(message: &str) -> ! {
     eprintln!("error: {message}");
     panic!("{message}");
 }
 
+#[cfg(feature = "embree")]
 /// Embree 4 first, then Embree 3; within each, `EMBREE_DIR`, then pkg-config, then the usual prefixes.
 fn find_embree() -> Option<Embree> {
     let override_dir = env::var_os("EMBREE_DIR").map(PathBuf::from);
@@ -91,6 +99,7 @@ fn find_embree() -> Option<Embree> {
     None
 }
 
+#[cfg(feature = "embree")]
 fn embree_in_prefix(prefix: &Path, major: u32) -> Option<Embree> {
     let include_dir = prefix.join("include");
     if !include_dir.join(format!("embree{major}/rtcore.h")).exists() {
@@ -114,6 +123,7 @@ fn embree_in_prefix(prefix: &Path, major: u32) -> Option<Embree> {
     })
 }
 
+#[cfg(feature = "embree")]
 fn bind_embree(embree: &Embree) {
     let major = embree.major;
     println!("cargo:rustc-cfg=embree{major}");
@@ -144,6 +154,7 @@ fn bind_embree(embree: &Embree) {
         .expect("writing the Embree bindings to OUT_DIR");
 }
 
+#[cfg(feature = "oiio")]
 /// The C API over OpenImageIO as a shared object, `libraylink_oiio.so` in OUT_DIR, linked
 /// against OpenImageIO. The binary does not link OpenImageIO itself: it loads this object
 /// when it first reads or writes an image (see `src/image/oiio_sys.rs`), so that starting
@@ -156,7 +167,8 @@ fn build_oiio() {
         .unwrap_or_else(|e| {
             fail(&format!(
                 "OpenImageIO was not found by pkg-config ({e}). Install it with \
-                 `apt-get install libopenimageio-dev pkg-config`."
+                 `apt-get install libopenimageio-dev pkg-config`, or build without it: \
+                 `cargo build --release --no-default-features --features portable`."
             ))
         });
     // The PNG check in ffi/oiio.cpp calls libpng itself (the one OpenImageIO reads PNGs with).

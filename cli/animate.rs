@@ -61,7 +61,7 @@ pub struct AnimateArgs {
     #[arg(long, value_enum)]
     pub integrator: Option<AnimIntegrator>,
     /// Intersection backend.
-    #[arg(long, value_enum, default_value = "embree")]
+    #[arg(long, value_enum, default_value = crate::options::DEFAULT_ACCEL)]
     pub accel: AccelName,
     /// Image width in pixels (default: the scene's).
     #[arg(long)]
@@ -299,7 +299,7 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
         }
         check_output_path(first).map_err(|e| Error::Invalid(e.to_string()))?;
     }
-    raylink::image::oiio::load()?;
+    raylink::image::io::load()?;
     // The scene's settings with the options over them, as for a still render; the job
     // each frame is rendered with, as `render` makes it.
     let given = Settings {

@@ -7,6 +7,13 @@ use raylink::bench::{equal_error, measure, network, path, scenes, BenchConfig};
 use raylink::{Error, Result};
 use std::path::PathBuf;
 
+/// `--backends`' default: every backend this build has.
+const BACKENDS: &str = if cfg!(feature = "embree") {
+    "embree,bvh"
+} else {
+    "bvh"
+};
+
 /// Options of `raylink bench`.
 #[derive(Clone, Debug, clap::Args)]
 pub struct BenchArgs {
@@ -15,8 +22,9 @@ pub struct BenchArgs {
     /// one with --quick].
     #[arg(long, value_delimiter = ',')]
     pub scenes: Option<Vec<String>>,
-    /// Comma-separated backends to measure.
-    #[arg(long, value_enum, value_delimiter = ',', default_value = "embree,bvh")]
+    /// Comma-separated backends to measure (default: both, or the BVH alone in a build
+    /// without Embree).
+    #[arg(long, value_enum, value_delimiter = ',', default_value = BACKENDS)]
     pub backends: Vec<AccelName>,
     /// Comma-separated thread counts [default: 1 and all cores].
     #[arg(long, value_delimiter = ',')]

@@ -111,7 +111,7 @@ fn both_backends(config: &BenchConfig) -> bool {
 /// ratios when both backends ran.
 pub fn markdown(rows: &[Row], config: &BenchConfig) -> String {
     let mut out = String::new();
-    let embree = raylink::accel::embree::version().unwrap_or_else(|_| "unavailable".into());
+    let embree = raylink::accel::embree_version().unwrap_or_else(|_| "unavailable".into());
     let cores = raylink::platform::cores();
     let _ = writeln!(
         out,

@@ -439,10 +439,10 @@ fn generate_assets(dir: &std::path::Path) -> raylink::Result<()> {
         let path = dir.join("completions").join(shell.file_name("raylink"));
         files.push(("a completion script", path, script));
     }
-    let object = dir.join("lib").join(raylink::image::oiio::OBJECT_NAME);
+    #[cfg(feature = "oiio")]
     files.push((
         "the OpenImageIO interface",
-        object,
+        dir.join("lib").join(raylink::image::oiio::OBJECT_NAME),
         raylink::image::oiio::object().to_vec(),
     ));
 
@@ -451,6 +451,7 @@ fn generate_assets(dir: &std::path::Path) -> raylink::Result<()> {
     // (or link to), as in a package's staging tree.
     if let Ok(exe) = std::env::current_exe() {
         plan.read("the program", &exe);
+        #[cfg(feature = "oiio")]
         if let Some(prefix) = exe.parent().and_then(|bin| bin.parent()) {
             let installed = prefix
                 .join("lib/raylink")
@@ -474,10 +475,18 @@ fn generate_assets(dir: &std::path::Path) -> raylink::Result<()> {
 }
 
 fn version_string() -> String {
-    let embree = raylink::accel::embree::version().unwrap_or_else(|e| format!("unavailable: {e}"));
+    let accel = if cfg!(feature = "embree") {
+        let version = raylink::accel::embree_version();
+        format!(
+            "Embree {}",
+            version.unwrap_or_else(|e| format!("unavailable: {e}"))
+        )
+    } else {
+        "no Embree: the BVH only".into()
+    };
     format!(
-        "{} (Embree {embree}, OpenImageIO {})",
+        "{} ({accel}, {})",
         raylink::VERSION,
-        raylink::image::oiio::built_with()
+        raylink::image::io::library()
     )
 }

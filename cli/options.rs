@@ -43,6 +43,13 @@ impl ValueEnum for IntegratorName {
     }
 }
 
+/// `--accel`'s default: Embree where this build has it, else the BVH.
+pub const DEFAULT_ACCEL: &str = if cfg!(feature = "embree") {
+    "embree"
+} else {
+    "bvh"
+};
+
 #[derive(Clone, Copy, Debug, PartialEq, ValueEnum)]
 pub enum AccelName {
     /// The system Embree.
@@ -106,10 +113,10 @@ pub struct RenderArgs {
     /// Light-transport technique (default: the scene's, else whitted).
     #[arg(long, value_enum, help_heading = COMMON)]
     pub integrator: Option<IntegratorName>,
-    /// Intersection backend: Embree, or the pure-Rust BVH (obvhs). Images match but where a
-    /// ray meets a floating-point tie; past one a Monte Carlo path continues another way,
-    /// so those images agree in the mean.
-    #[arg(long, value_enum, default_value = "embree", help_heading = COMMON)]
+    /// Intersection backend: Embree (the default where raylink is built with it), or the
+    /// pure-Rust BVH (obvhs). Images match but where a ray meets a floating-point tie; past
+    /// one a Monte Carlo path continues another way, so those images agree in the mean.
+    #[arg(long, value_enum, default_value = DEFAULT_ACCEL, help_heading = COMMON)]
     pub accel: AccelName,
     /// Image width in pixels (default: the scene's).
     #[arg(long, help_heading = COMMON)]

@@ -304,7 +304,7 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
         None
     };
     // What writes the image, before the work (it is not loaded at start-up).
-    raylink::image::oiio::load()?;
+    raylink::image::io::load()?;
     let mut metadata = metadata(&args, &job);
     farm::part_metadata(&mut metadata, settings.clone(), &scene, &args, &job);
     let scene = Arc::new(scene);

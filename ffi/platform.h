@@ -1,7 +1,5 @@
-/* What the renderer needs of the processor and the operating system that Rust's standard
- * library does not give without unsafe code: the floating-point control word of the calling
- * thread, the process's CPU time, and a one-line exit instead of an abort when memory runs
- * out. */
+/* Guards against C++ exceptions from the C++ libraries (Embree, OpenImageIO): a one-line exit
+ * instead of an abort, and a dlopen that catches what a library's initialiser throws. */
 #ifndef RAYLINK_PLATFORM_H
 #define RAYLINK_PLATFORM_H
 
@@ -10,22 +8,6 @@
 #ifdef __cplusplus
 extern "C" {
 #endif
-
-/* Turns flush-to-zero and denormals-are-zero on for the calling thread (x86-64; nothing
- * elsewhere). Embree asks for both on every thread that traces rays. */
-void raylink_flush_denormals(void);
-
-/* 1 when both are on for the calling thread (always 1 off x86-64). */
-int raylink_flush_denormals_enabled(void);
-
-/* CPU seconds of the whole process (user + system, every thread, also threads that have
- * ended), to the nanosecond; a negative number when the clock cannot be read. */
-double raylink_process_cpu_seconds(void);
-
-/* Writes "raylink: error: cannot allocate BYTES bytes: out of memory ..." to stderr and ends
- * the process with status 1 at once (no allocation, no unwinding): for memory the system
- * refuses where the program cannot go on. */
-void raylink_exit_out_of_memory(unsigned long long bytes);
 
 /* From now on, a C++ exception that nothing catches (in Embree or its task scheduler, which
  * end the process with abort otherwise) calls `before_exit`, writes one line naming it to

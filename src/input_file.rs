@@ -159,11 +159,11 @@ pub fn open(path: &Path, kind: &Kind) -> Result<(File, u64)> {
     check(path, kind)?;
     // O_NONBLOCK: opening a FIFO waits for a writer without it. It changes nothing for the
     // regular file that is read (checked below).
-    let file = std::fs::OpenOptions::new()
-        .read(true)
-        .custom_flags(rustix::fs::OFlags::NONBLOCK.bits() as i32)
-        .open(path)
-        .map_err(|e| Error::io(path, e))?;
+    let mut options = std::fs::OpenOptions::new();
+    options.read(true);
+    #[cfg(unix)]
+    options.custom_flags(rustix::fs::OFlags::NONBLOCK.bits() as i32);
+    let file = options.open(path).map_err(|e| Error::io(path, e))?;
     let meta = file.metadata().map_err(|e| Error::io(path, e))?;
     let size = checked_size(path, kind, &meta)?;
     Ok((file, size))

@@ -1,7 +1,8 @@
 //! The processor and operating-system settings the renderer needs: flush-to-zero for the
 //! threads that trace rays, and the process's CPU time for figures that must hold on a
 //! shared machine, and a one-line exit instead of an abort when the system refuses memory.
-//! A thin wrapper over `ffi/platform.c` and `ffi/exceptions.cpp`.
+//! Pure Rust, but for the guards against C++ exceptions in `ffi/exceptions.cpp`, built with
+//! the C++ libraries (Embree, OpenImageIO) that throw them.
 
 use crate::error::{Error, Result};
 use std::alloc::{GlobalAlloc, Layout, System};
@@ -11,16 +12,31 @@ use std::cell::Cell;
 /// both on every thread that traces rays (denormal arithmetic is many times slower); the
 /// tile driver sets them on its workers.
 pub fn set_flush_denormals() {
-    // SAFETY: the C function only sets two bits of this thread's floating-point control
-    // register; it takes no arguments and touches no memory.
-    unsafe { sys::raylink_flush_denormals() }
+    #[cfg(target_arch = "x86_64")]
+    // SAFETY: sets two bits of this thread's floating-point control register (MXCSR, present
+    // on every x86-64), which only changes how denormal floats are computed.
+    #[allow(deprecated)]
+    unsafe {
+        use std::arch::x86_64::{_mm_getcsr, _mm_setcsr};
+        _mm_setcsr(_mm_getcsr() | FTZ_DAZ)
+    }
 }
 
-/// Whether flush-to-zero and denormals-are-zero are on for the calling thread.
+/// Whether flush-to-zero and denormals-are-zero are on for the calling thread (always true
+/// off x86-64, where nothing is set).
 pub fn flush_denormals_enabled() -> bool {
+    #[cfg(target_arch = "x86_64")]
     // SAFETY: reads this thread's floating-point control register only.
-    unsafe { sys::raylink_flush_denormals_enabled() != 0 }
+    #[allow(deprecated)]
+    let enabled = unsafe { std::arch::x86_64::_mm_getcsr() } & FTZ_DAZ == FTZ_DAZ;
+    #[cfg(not(target_arch = "x86_64"))]
+    let enabled = true;
+    enabled
 }
+
+/// MXCSR bits: flush-to-zero (bit 15) and denormals-are-zero (bit 6).
+#[cfg(target_arch = "x86_64")]
+const FTZ_DAZ: u32 = 0x8040;
 
 /// The hardware threads this process may run on (1 where the system cannot say): what
 /// "every core" means for thread counts.
@@ -50,8 +66,20 @@ pub fn check_threads(name: &str, threads: usize) -> Result<()> {
 /// CPU time of the process so far (user + system, every thread, also threads that have
 /// ended), to the nanosecond; 0 where the clock cannot be read.
 pub fn cpu_seconds() -> f64 {
-    // SAFETY: clock_gettime writes only into a local struct of the C function.
-    unsafe { sys::raylink_process_cpu_seconds() }.max(0.0)
+    #[cfg(unix)]
+    {
+        let mut t = libc::timespec {
+            tv_sec: 0,
+            tv_nsec: 0,
+        };
+        // SAFETY: clock_gettime writes only into `t`, a live local.
+        if unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut t) } != 0 {
+            return 0.0;
+        }
+        t.tv_sec as f64 + t.tv_nsec as f64 * 1e-9
+    }
+    #[cfg(not(unix))]
+    0.0
 }
 
 /// The system allocator for a program (the command line) that would rather end with one line
@@ -135,20 +163,44 @@ pub(crate) fn try_reserve<T>(
 fn checked(ptr: *mut u8, bytes: usize) -> *mut u8 {
     if ptr.is_null() && !FALLIBLE.with(Cell::get) {
         remove_temporaries_before_exit();
-        // SAFETY: writes one line with a stack buffer and ends the process.
-        unsafe { sys::raylink_exit_out_of_memory(bytes as u64) }
+        exit_out_of_memory(bytes);
     }
     ptr
+}
+
+/// Writes one line to stderr and ends the process with status 1 at once: no allocation (the
+/// line is formatted on the stack), no unwinding, no exit handlers (the C++ libraries' static
+/// destructors would run without memory).
+fn exit_out_of_memory(bytes: usize) -> ! {
+    use std::io::Write;
+    let mut line = [0u8; 256];
+    let len = {
+        let mut cursor = std::io::Cursor::new(&mut line[..]);
+        let _ = writeln!(
+            cursor,
+            "raylink: error: cannot allocate {bytes} bytes: out of memory (a process limit \
+             such as ulimit -v, or other programs using the memory)"
+        );
+        cursor.position() as usize
+    };
+    // Standard error is unbuffered: this is one write of the stack buffer.
+    let _ = std::io::stderr().write_all(&line[..len]);
+    // SAFETY: ends the process; nothing runs after it.
+    unsafe { libc::_exit(1) }
 }
 
 /// From now on an uncaught C++ exception (Embree's task scheduler throws one when the system
 /// refuses it memory in the middle of a build) removes the temporary files being written,
 /// writes one line naming it and ends the process with status 1, instead of aborting. For
 /// programs, as [`ExitOnOutOfMemory`].
+/// A build without the C++ libraries has no C++ exception to guard against: nothing to do.
 pub fn exit_on_uncaught_exceptions() {
+    #[cfg(any(feature = "embree", feature = "oiio"))]
     // SAFETY: stores a function pointer and sets the C++ terminate handler; the handler
     // calls `remove_temporaries_before_exit`, which neither unwinds nor returns an error.
-    unsafe { sys::raylink_exit_on_terminate(remove_temporaries_before_exit) }
+    unsafe {
+        sys::raylink_exit_on_terminate(remove_temporaries_before_exit)
+    }
 }
 
 /// Removes the temporary files being written, once per thread however the exit comes.
@@ -158,6 +210,7 @@ extern "C" fn remove_temporaries_before_exit() {
     }
 }
 
+#[cfg(feature = "oiio")]
 /// Loads the shared object at `path` (as `dlopen` with `RTLD_NOW | RTLD_LOCAL`), with a C++
 /// exception from its libraries' initialisers (memory the system refuses while they start)
 /// returned as an error: one unwinding into Rust would abort the process.
@@ -184,13 +237,11 @@ pub(crate) unsafe fn load_library(path: &std::path::Path) -> Result<libloading::
 }
 
 /// Declarations matching `ffi/platform.h`.
+#[cfg(any(feature = "embree", feature = "oiio"))]
 mod sys {
     extern "C" {
-        pub(crate) fn raylink_flush_denormals();
-        pub(crate) fn raylink_flush_denormals_enabled() -> std::os::raw::c_int;
-        pub(crate) fn raylink_process_cpu_seconds() -> f64;
-        pub(crate) fn raylink_exit_out_of_memory(bytes: u64) -> !;
         pub(crate) fn raylink_exit_on_terminate(before_exit: extern "C" fn());
+        #[cfg(feature = "oiio")]
         pub(crate) fn raylink_dlopen(
             path: *const std::os::raw::c_char,
             err: *mut std::os::raw::c_char,

@@ -2,6 +2,7 @@
 //! mask (the floor's radiance where light passes is the analytic ρ/π · I cos θ / r², zero
 //! where it is blocked) and camera rays see through its holes, on both backends; fractional
 //! alpha blocks that fraction of rays, the same rays on both backends, deterministically.
+#![cfg(feature = "embree")]
 
 #[path = "common/render.rs"]
 mod render_common;

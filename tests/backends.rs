@@ -2,6 +2,7 @@
 //! normal orientation on random rays and the same occlusion answers, up to floating-point
 //! ties (which are counted and bounded); Whitted images that match; Monte Carlo images that
 //! agree in the mean (a path that meets a tie continues another way).
+#![cfg(feature = "embree")]
 
 #[path = "common/render.rs"]
 mod render_common;

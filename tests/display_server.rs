@@ -96,7 +96,7 @@ fn viewer() -> (String, std::thread::JoinHandle<Received>) {
 }
 
 fn assert_shows_written_image(got: &Received, out: &Path) {
-    let written = raylink::image::oiio::read(out).unwrap();
+    let written = raylink::image::io::read(out).unwrap();
     let (title, w, h, names) = &got.created[0];
     assert!(title.starts_with("out.exr ("), "{title}");
     assert_eq!((*w, *h), (written.width, written.height));

@@ -1,4 +1,5 @@
 //! The Embree wrapper on geometry whose answers are known in closed form.
+#![cfg(feature = "embree")]
 
 use raylink::accel::embree::{Device, Scene};
 use raylink::math::{Ray, Vec3, Vec4};

@@ -108,7 +108,7 @@ fn path_traced_tiles_with_a_wide_filter_equal_the_whole_render() {
     ];
     let (parts, whole) = tiles_equal_whole("scenes/cornell-box.toml", &options, 5, &dir);
     // A tile is a band of rows with its place in the image as data window.
-    let tile = raylink::image::oiio::read(Path::new(&parts[1])).unwrap();
+    let tile = raylink::image::io::read(Path::new(&parts[1])).unwrap();
     assert_eq!((tile.window.x, tile.window.y), (0, 6));
     assert_eq!((tile.window.full_width, tile.window.full_height), (40, 30));
     assert_eq!((tile.width, tile.height), (40, 6));
@@ -432,7 +432,7 @@ fn merge_refuses_parts_that_do_not_fit() {
 /// written as PNG (which has no data window), is an error and leaves no file.
 #[test]
 fn data_windows_round_trip_and_are_checked() {
-    use raylink::image::oiio::Window;
+    use raylink::image::io::Window;
     use raylink::image::output::{write_image_window, OutputOptions};
     use raylink::math::Rgb;
     let dir = tempfile::tempdir().unwrap();
@@ -451,7 +451,7 @@ fn data_windows_round_trip_and_are_checked() {
     let meta = vec![("raylink:test".to_string(), MetaValue::Int(4))];
     let file = dir.path().join("part.exr");
     write_image_window(&file, &image, window, &meta, &OutputOptions::default()).unwrap();
-    let raw = raylink::image::oiio::read(&file).unwrap();
+    let raw = raylink::image::io::read(&file).unwrap();
     assert_eq!(raw.window, window);
     assert_eq!((raw.width, raw.height), (3, 2));
     let (back, _) = read_image(&file).unwrap();

@@ -1,5 +1,6 @@
 //! Image files through OpenImageIO: round trips per format, metadata, error handling and the
 //! atomic-write guarantees of `raylink::image::output`.
+#![cfg(feature = "oiio")]
 
 use std::fs;
 use std::path::{Path, PathBuf};

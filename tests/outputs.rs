@@ -1,6 +1,6 @@
 //! What the render command writes: multilayer EXR outputs with the auxiliary images.
 
-use raylink::image::oiio;
+use raylink::image::io;
 use raylink::image::output::read_image;
 use std::path::Path;
 
@@ -40,7 +40,7 @@ intensity = 20
 "#;
 
 /// The channel `name` of `raw`, one value a pixel.
-fn channel(raw: &oiio::RawImage, name: &str) -> Vec<f32> {
+fn channel(raw: &io::RawImage, name: &str) -> Vec<f32> {
     let n = raw.channels.len();
     let c = raw
         .channels
@@ -69,7 +69,7 @@ fn aov_exr_holds_every_auxiliary_image_as_a_layer() {
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
 
-    let raw = oiio::read(&exr).unwrap();
+    let raw = io::read(&exr).unwrap();
     let mut names = raw.channels.clone();
     names.sort();
     let mut expected = [
@@ -95,7 +95,7 @@ fn aov_exr_holds_every_auxiliary_image_as_a_layer() {
     assert_eq!(names, expected);
 
     // The main image is the one the TIFF (which has no layers) holds.
-    let plain = oiio::read(&tif).unwrap();
+    let plain = io::read(&tif).unwrap();
     assert_eq!(plain.channels, ["R", "G", "B"]);
     for c in ["R", "G", "B"] {
         assert_eq!(channel(&raw, c), channel(&plain, c), "{c}");
@@ -106,7 +106,7 @@ fn aov_exr_holds_every_auxiliary_image_as_a_layer() {
         ("normal", ["normal.X", "normal.Y", "normal.Z"]),
         ("depth", ["depth.Z", "depth.Z", "depth.Z"]),
     ] {
-        let own = oiio::read(&dir.path().join(format!("out.{file}.exr"))).unwrap();
+        let own = io::read(&dir.path().join(format!("out.{file}.exr"))).unwrap();
         for (c, name) in ["R", "G", "B"].iter().zip(layer) {
             assert_eq!(channel(&raw, name), channel(&own, c), "{name}");
         }
@@ -339,7 +339,7 @@ fn crop_writes_png_and_jpeg_of_the_crop_alone() {
     // JPEG is lossy (and subsamples colour): close on average.
     assert!(jpeg_error < 0.03, "JPEG off by {jpeg_error} on average");
     // The EXR keeps where the crop lies.
-    let exr = oiio::read(&dir.path().join("crop.exr")).unwrap();
+    let exr = io::read(&dir.path().join("crop.exr")).unwrap();
     assert_eq!((exr.window.x, exr.window.y), (3, 5));
     assert_eq!((exr.window.full_width, exr.window.full_height), (16, 16));
 }
@@ -368,7 +368,7 @@ fn exr_metadata_names_the_filter_as_the_options_do() {
         "--quiet",
     ]);
     assert!(out.status.success(), "{}", stderr(&out));
-    let raw = oiio::read(&exr).unwrap();
+    let raw = io::read(&exr).unwrap();
     let text = |name: &str| match raw.meta(name) {
         Some(raylink::MetaValue::Str(s)) => s.clone(),
         other => panic!("{name}: {other:?}"),

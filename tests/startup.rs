@@ -75,7 +75,7 @@ fn writing_an_image_loads_openimageio_from_the_copy_the_program_carries() {
         loads.contains("file=/proc/self/fd/"),
         "not the carried copy"
     );
-    let image = raylink::image::oiio::read(&png).unwrap();
+    let image = raylink::image::io::read(&png).unwrap();
     assert_eq!((image.width, image.height), (16, 16));
 }
 

@@ -3,7 +3,9 @@
 //! occlusion queries both pass through the cut-out parts and go on to what lies behind.
 
 use crate::math::{Ray, Vec3};
-use crate::scene::{Alpha, Geometry, Scene, Shape};
+#[cfg(feature = "embree")]
+use crate::scene::Scene;
+use crate::scene::{Alpha, Geometry, Shape};
 
 /// What the alpha test of one shape needs: its alpha, and its geometry for the hit's uv.
 #[derive(Debug)]
@@ -16,6 +18,7 @@ pub struct Cutout {
 
 impl Cutout {
     /// The cut-outs of a scene's shapes, indexed by shape (None for opaque shapes).
+    #[cfg(feature = "embree")]
     pub fn of_scene(scene: &Scene) -> Vec<Option<Cutout>> {
         Cutout::of_shapes(&scene.shapes)
     }

@@ -3,6 +3,7 @@
 
 pub mod bvh;
 mod cutout;
+#[cfg(feature = "embree")]
 pub mod embree;
 mod hit_point;
 
@@ -184,6 +185,7 @@ pub trait DynamicAccel: Accel {
     fn update(&mut self, scene: &Scene) -> crate::error::Result<Update>;
 }
 
+#[cfg(feature = "embree")]
 impl DynamicAccel for embree::EmbreeAccel {
     fn update(&mut self, scene: &Scene) -> crate::error::Result<Update> {
         embree::EmbreeAccel::update(self, scene)
@@ -208,21 +210,36 @@ pub fn build_dynamic(
     check_memory(scene, control)?;
     scene.check_extent()?;
     match backend {
+        #[cfg(feature = "embree")]
         Backend::Embree => Ok(Box::new(embree::EmbreeAccel::build_dynamic(
             scene,
             &control.cancel,
         )?)),
+        #[cfg(not(feature = "embree"))]
+        Backend::Embree => Err(Backend::missing_embree()),
         Backend::Bvh => Ok(Box::new(bvh::BvhAccel::build(scene)?)),
     }
 }
 
-/// Which intersection backend to build (`--accel` on the command line).
+/// The version of the Embree library in use, e.g. `"4.3.3"`; an error if it cannot be
+/// loaded or this build of raylink has no Embree.
+pub fn embree_version() -> crate::error::Result<String> {
+    #[cfg(feature = "embree")]
+    return embree::version();
+    #[cfg(not(feature = "embree"))]
+    Err(Backend::missing_embree())
+}
+
+/// Which intersection backend to build (`--accel` on the command line). The default is
+/// Embree where raylink is built with it (the `embree` feature, on by default), else the BVH.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Backend {
-    /// The system Embree.
-    #[default]
+    /// The system Embree. Without the `embree` feature, building it is an
+    /// [`Error::Setting`](crate::error::Error::Setting) naming `accel`.
+    #[cfg_attr(feature = "embree", default)]
     Embree,
     /// obvhs's compressed wide BVH, pure Rust.
+    #[cfg_attr(not(feature = "embree"), default)]
     Bvh,
 }
 
@@ -239,6 +256,20 @@ impl Backend {
 
     pub fn from_name(name: &str) -> Option<Backend> {
         Backend::ALL.into_iter().find(|b| b.name() == name)
+    }
+
+    /// Whether this build of raylink has the backend.
+    pub fn available(self) -> bool {
+        self == Backend::Bvh || cfg!(feature = "embree")
+    }
+
+    /// The error for the Embree backend in a build without it.
+    #[cfg(not(feature = "embree"))]
+    pub(crate) fn missing_embree() -> crate::error::Error {
+        crate::error::Error::setting(
+            "accel",
+            "embree: this raylink was built without Embree (as the portable build is); use bvh",
+        )
     }
 }
 
@@ -258,10 +289,13 @@ pub fn build(
     check_memory(scene, control)?;
     scene.check_extent()?;
     match backend {
+        #[cfg(feature = "embree")]
         Backend::Embree => Ok(Box::new(embree::EmbreeAccel::build_cancellable(
             scene,
             &control.cancel,
         )?)),
+        #[cfg(not(feature = "embree"))]
+        Backend::Embree => Err(Backend::missing_embree()),
         Backend::Bvh => Ok(Box::new(bvh::BvhAccel::build(scene)?)),
     }
 }

@@ -14,6 +14,7 @@ pub mod scenes;
 pub use rays::{RayKind, RaySets};
 
 use crate::accel::bvh::BvhAccel;
+#[cfg(feature = "embree")]
 use crate::accel::embree::{Device, EmbreeAccel};
 use crate::accel::{Accel, Backend};
 use crate::error::{human_size, Error, Result};
@@ -189,6 +190,9 @@ pub(crate) fn build_timed(
     pool: &rayon::ThreadPool,
 ) -> Result<Built> {
     match backend {
+        #[cfg(not(feature = "embree"))]
+        Backend::Embree => Err(Backend::missing_embree()),
+        #[cfg(feature = "embree")]
         Backend::Embree => {
             let device = Device::with_config(&format!("threads={}", pool.current_num_threads()))?;
             let start = Instant::now();
@@ -228,7 +232,7 @@ pub fn measure(config: &BenchConfig, progress: &mut dyn FnMut(&str)) -> Result<V
         let primitives = scenes::primitive_count(&scene);
         progress(&format!("{name}: {primitives} primitives; generating rays"));
         let sets = {
-            let reference = crate::accel::build(&scene, Backend::Embree, &Default::default())?;
+            let reference = crate::accel::build(&scene, Backend::default(), &Default::default())?;
             rays::generate(
                 &scene,
                 reference.as_ref(),

@@ -5,7 +5,7 @@
 
 use super::{META_REGION, META_SCENE_HASH, META_SETTINGS, META_TILE};
 use crate::error::{Error, Result};
-use crate::image::oiio::{self, RawImage};
+use crate::image::io::{self, RawImage};
 use crate::image::{Image, MetaValue, Metadata};
 use crate::math::Rgb;
 use std::path::{Path, PathBuf};
@@ -44,7 +44,7 @@ struct Part {
 
 fn read_part(path: &Path) -> Result<Part> {
     // An unreadable part is bad input (exit 2), as every unreadable image is.
-    let raw = oiio::read(path)?;
+    let raw = io::read(path)?;
     let bad = |detail: String| Error::input(path, detail);
     if raw.meta(META_SETTINGS).is_none() || raw.meta(META_SCENE_HASH).is_none() {
         return Err(bad(format!(

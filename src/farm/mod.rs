@@ -100,8 +100,8 @@ pub fn crop(image: &Image, region: &Tile) -> Image {
 }
 
 /// The window of `region` in a `width` × `height` image.
-pub fn window(region: &Tile, width: u32, height: u32) -> crate::image::oiio::Window {
-    crate::image::oiio::Window {
+pub fn window(region: &Tile, width: u32, height: u32) -> crate::image::io::Window {
+    crate::image::io::Window {
         x: region.x0 as i32,
         y: region.y0 as i32,
         full_x: 0,

@@ -1,10 +1,15 @@
-//! Images in memory and on disk. Files go through OpenImageIO (`oiio`, the only unsafe
-//! OpenImageIO code); `output` chooses encoding by extension and writes atomically.
+//! Images in memory and on disk. Files are read and written through `io`: OpenImageIO
+//! (`oiio`, the only unsafe OpenImageIO code) where raylink is built with it, else the
+//! pure-Rust `codecs`; `output` chooses encoding by extension and writes atomically.
 
+pub mod codecs;
 pub mod compare;
 pub mod display;
 pub mod filter;
+pub mod io;
+#[cfg(feature = "oiio")]
 pub mod oiio;
+#[cfg(feature = "oiio")]
 mod oiio_sys;
 pub mod output;
 

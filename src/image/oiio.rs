@@ -11,99 +11,26 @@ use super::oiio_sys::{self as sys, Api};
 use super::{MetaValue, Metadata};
 use crate::error::{Error, Result};
 use crate::input_file::{self, Allowance};
-use crate::scene::camera::MAX_RESOLUTION;
 
-/// How pixels are stored in a file. Data in memory is always `f32`; OpenImageIO converts
-/// (floats are mapped to integers by scaling `[0, 1]` to the full range and clamping).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum PixelType {
-    Float,
-    Half,
-    U8,
-    U16,
-}
+pub use super::io::{read_bytes, ImageToWrite, PixelType, RawImage, Window, MAX_IMAGE_VALUES};
 
-impl PixelType {
-    fn code(self) -> c_int {
-        match self {
-            PixelType::Float => sys::RAYLINK_OIIO_FLOAT,
-            PixelType::Half => sys::RAYLINK_OIIO_HALF,
-            PixelType::U8 => sys::RAYLINK_OIIO_UINT8,
-            PixelType::U16 => sys::RAYLINK_OIIO_UINT16,
-        }
-    }
-
-    fn from_code(code: c_int) -> Option<PixelType> {
-        match code {
-            sys::RAYLINK_OIIO_FLOAT => Some(PixelType::Float),
-            sys::RAYLINK_OIIO_HALF => Some(PixelType::Half),
-            sys::RAYLINK_OIIO_UINT8 => Some(PixelType::U8),
-            sys::RAYLINK_OIIO_UINT16 => Some(PixelType::U16),
-            _ => None,
-        }
+fn pixel_code(pixel: PixelType) -> c_int {
+    match pixel {
+        PixelType::Float => sys::RAYLINK_OIIO_FLOAT,
+        PixelType::Half => sys::RAYLINK_OIIO_HALF,
+        PixelType::U8 => sys::RAYLINK_OIIO_UINT8,
+        PixelType::U16 => sys::RAYLINK_OIIO_UINT16,
     }
 }
 
-/// An image as read from a file: all channels, converted to float.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RawImage {
-    pub width: u32,
-    pub height: u32,
-    /// Channel names, e.g. `["R", "G", "B"]`.
-    pub channels: Vec<String>,
-    /// `width * height * channels.len()` values, interleaved, row-major, top row first.
-    pub data: Vec<f32>,
-    /// Scalar string, integer (fitting `i32`) and floating-point attributes of the file,
-    /// including OpenImageIO's own (`"compression"`, `"oiio:ColorSpace"`, ...). Arrays and
-    /// other types are left out.
-    pub metadata: Metadata,
-    /// The OpenImageIO reader that read the file: `"openexr"`, `"png"`, `"jpeg"`, ...
-    pub format: String,
-    /// How the pixels are stored in the file, if it is one of the [`PixelType`]s.
-    pub pixel_type: Option<PixelType>,
-    /// Where the pixels lie in the full image (OpenEXR's data and display windows).
-    pub window: Window,
-}
-
-/// Where the `width` x `height` pixels of a file lie in the full image: their top-left pixel
-/// is (`x`, `y`) and the full image (OpenEXR's display window) is `full_width` x
-/// `full_height` pixels from (`full_x`, `full_y`). A whole image is at (0, 0) in itself.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Window {
-    pub x: i32,
-    pub y: i32,
-    pub full_x: i32,
-    pub full_y: i32,
-    pub full_width: u32,
-    pub full_height: u32,
-}
-
-impl RawImage {
-    /// The value of metadata attribute `name`, if present.
-    pub fn meta(&self, name: &str) -> Option<&MetaValue> {
-        self.metadata
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, value)| value)
+fn pixel_from_code(code: c_int) -> Option<PixelType> {
+    match code {
+        sys::RAYLINK_OIIO_FLOAT => Some(PixelType::Float),
+        sys::RAYLINK_OIIO_HALF => Some(PixelType::Half),
+        sys::RAYLINK_OIIO_UINT8 => Some(PixelType::U8),
+        sys::RAYLINK_OIIO_UINT16 => Some(PixelType::U16),
+        _ => None,
     }
-}
-
-/// An image to write: `width` x `height` pixels of `channels.len()` interleaved float
-/// channels, stored in the file as `pixel_type`.
-#[derive(Clone, Copy, Debug)]
-pub struct ImageToWrite<'a> {
-    pub width: u32,
-    pub height: u32,
-    /// Channel names, e.g. `["R", "G", "B"]`.
-    pub channels: &'a [&'a str],
-    /// `width * height * channels.len()` values, interleaved, row-major, top row first.
-    pub data: &'a [f32],
-    pub pixel_type: PixelType,
-    /// `None` for a whole image. `Some` for a region of a larger image: the region's top-left
-    /// pixel is (`window.x`, `window.y`) in a `window.full_width` x `window.full_height` image
-    /// (`full_x` and `full_y` must be 0). OpenEXR keeps both windows; a region that does not
-    /// fit in the full image is an error.
-    pub window: Option<Window>,
 }
 
 /// Writes `image` to `path`, encoded by the OpenImageIO writer for `format` (`"openexr"`,
@@ -275,7 +202,7 @@ pub fn encode(
             channel_ptrs.as_ptr(),
             attrs.as_ptr(),
             attrs.len(),
-            pixel.code(),
+            pixel_code(pixel),
             window_ptr,
             err.as_mut_ptr(),
             err.len(),
@@ -284,16 +211,6 @@ pub fn encode(
     std::ptr::NonNull::new(encoded)
         .map(|buffer| Encoded { buffer, api })
         .ok_or_else(|| fail(err.message()))
-}
-
-/// The most values (width × height × channels) raylink reads from one image, 4 GiB as
-/// floats: a fixed limit, checked against the file's header before its pixels are read.
-pub const MAX_IMAGE_VALUES: u64 = 1 << 30;
-
-/// The memory reading a `width` x `height` image of `channels` channels takes at its peak:
-/// the library's float values, their copy here, and an RGB image made of them.
-pub fn read_bytes(width: u32, height: u32, channels: u32) -> u64 {
-    (width as u64 * height as u64).saturating_mul(8 * channels as u64 + 12)
 }
 
 /// Reads the first subimage of the file at `path`, all channels converted to float, within
@@ -305,7 +222,7 @@ pub fn read(path: &Path) -> Result<RawImage> {
 /// Reads the first subimage of the file at `path`, all channels converted to float. The
 /// path must name a regular file within the limit on images (checked before the library
 /// opens it), and the size its header declares must be within [`MAX_IMAGE_VALUES`], the
-/// largest image size ([`MAX_RESOLUTION`] a side) and what `allowance` leaves of the
+/// largest image size ([`MAX_RESOLUTION`](crate::scene::camera::MAX_RESOLUTION) a side) and what `allowance` leaves of the
 /// budget ([`read_bytes`]): all checked before any pixel is read.
 pub fn read_within(path: &Path, allowance: &Allowance) -> Result<RawImage> {
     // A file that cannot be read as an image is bad input, as a malformed scene is.
@@ -340,21 +257,7 @@ pub fn read_within(path: &Path, allowance: &Allowance) -> Result<RawImage> {
     }
     let to_u32 = |v: c_int| u32::try_from(v).unwrap_or(u32::MAX);
     let (width, height, channels) = (to_u32(width), to_u32(height), to_u32(channels));
-    let values = (width as u64 * height as u64).saturating_mul(channels as u64);
-    if width > MAX_RESOLUTION || height > MAX_RESOLUTION || values > MAX_IMAGE_VALUES {
-        return Err(Error::input(
-            path,
-            format!(
-                "declares a {width}x{height} image of {channels} channels, more than raylink \
-                 reads: at most {MAX_RESOLUTION} pixels a side and {MAX_IMAGE_VALUES} values \
-                 (width × height × channels), fixed limits"
-            ),
-        ));
-    }
-    allowance.check(
-        &format!("reading the {width}x{height} image {}", path.display()),
-        read_bytes(width, height, channels),
-    )?;
+    let values = super::io::check_declared(path, width, height, channels, allowance)?;
     let mut err = ErrorBuffer::new();
     // SAFETY: `c_path` is a NUL-terminated string alive for the call; `err` is a writable
     // buffer of `err.len()` bytes. The C side catches every C++ exception and returns either
@@ -511,7 +414,7 @@ impl Handle {
             data,
             metadata,
             format,
-            pixel_type: PixelType::from_code(pixel_type),
+            pixel_type: pixel_from_code(pixel_type),
             window,
         }
     }

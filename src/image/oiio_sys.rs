@@ -156,6 +156,9 @@ fn load() -> Result<Api, String> {
     // The carried copy, through an anonymous in-memory file; without one (no /proc), a
     // private temporary file removed once loaded.
     // The same reason twice (a library OpenImageIO needs that cannot be mapped) is said once.
+    #[cfg(not(target_os = "linux"))]
+    return from_temporary_file();
+    #[cfg(target_os = "linux")]
     from_memory().or_else(|memory| {
         from_temporary_file().map_err(|file| match file == memory {
             true => file,
@@ -164,6 +167,7 @@ fn load() -> Result<Api, String> {
     })
 }
 
+#[cfg(target_os = "linux")]
 fn from_memory() -> Result<Api, String> {
     use std::os::fd::AsRawFd;
     let fd = rustix::fs::memfd_create("raylink-oiio", rustix::fs::MemfdFlags::CLOEXEC)

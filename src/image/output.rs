@@ -10,12 +10,14 @@
 //! | `.tif`, `.tiff` | linear RGB, 32-bit float |
 //! | `.png` | `2^exposure`, sRGB-encoded, clamped to `[0, 1]`, 8 bits |
 //! | `.jpg`, `.jpeg` | as PNG, JPEG quality 95 |
+//!
+//! A build without OpenImageIO (the portable build) writes only `.exr` and `.png`.
 
 use std::fs;
 use std::io;
 use std::path::Path;
 
-use super::oiio::{self, PixelType};
+use super::io::{self as image_io, PixelType};
 use super::{Image, MetaValue, Metadata};
 use crate::error::{Error, Result};
 use crate::input_file::Allowance;
@@ -43,17 +45,29 @@ impl Format {
             ));
         };
         let ext = ext.to_string_lossy();
-        match ext.to_ascii_lowercase().as_str() {
-            "exr" => Ok(Format::Exr),
-            "hdr" => Ok(Format::Hdr),
-            "tif" | "tiff" => Ok(Format::Tiff),
-            "png" => Ok(Format::Png),
-            "jpg" | "jpeg" => Ok(Format::Jpeg),
-            _ => Err(Error::image(
+        let format = match ext.to_ascii_lowercase().as_str() {
+            "exr" => Format::Exr,
+            "hdr" => Format::Hdr,
+            "tif" | "tiff" => Format::Tiff,
+            "png" => Format::Png,
+            "jpg" | "jpeg" => Format::Jpeg,
+            _ => {
+                return Err(Error::image(
+                    path,
+                    format!("unsupported output format .{ext} ({SUPPORTED})"),
+                ))
+            }
+        };
+        if !cfg!(feature = "oiio") && !matches!(format, Format::Exr | Format::Png) {
+            return Err(Error::image(
                 path,
-                format!("unsupported output format .{ext} ({SUPPORTED})"),
-            )),
+                format!(
+                    "output format .{ext} needs OpenImageIO, and this raylink was built \
+                     without it (as the portable build is): use .exr or .png"
+                ),
+            ));
         }
+        Ok(format)
     }
 
     /// The OpenImageIO writer's name.
@@ -186,7 +200,7 @@ pub fn write_image_layers(
 pub fn write_image_window(
     path: &Path,
     image: &Image,
-    window: oiio::Window,
+    window: image_io::Window,
     metadata: &[(String, MetaValue)],
     options: &OutputOptions,
 ) -> Result<()> {
@@ -202,7 +216,7 @@ pub fn write_image_window(
 fn write_image_impl(
     path: &Path,
     image: &Image,
-    window: Option<oiio::Window>,
+    window: Option<image_io::Window>,
     layers: &[Layer],
     metadata: &[(String, MetaValue)],
     options: &OutputOptions,
@@ -264,10 +278,10 @@ fn write_image_impl(
         .into_iter()
         .chain(names.iter().map(String::as_str))
         .collect();
-    let encoded = oiio::encode(
+    let encoded = image_io::encode(
         path,
         format.oiio_name(),
-        oiio::ImageToWrite {
+        image_io::ImageToWrite {
             width: image.width,
             height: image.height,
             channels: &channels,
@@ -292,9 +306,9 @@ pub fn read_image(path: &Path) -> Result<(Image, Metadata)> {
 }
 
 /// [`read_image`] within `allowance`: the file and the size its header declares are checked
-/// ([`oiio::read_within`]) before any pixel is read.
+/// ([`image_io::read_within`]) before any pixel is read.
 pub fn read_image_within(path: &Path, allowance: &Allowance) -> Result<(Image, Metadata)> {
-    let raw = oiio::read_within(path, allowance)?;
+    let raw = image_io::read_within(path, allowance)?;
     let n = raw.channels.len();
     let find = |name: &str| raw.channels.iter().position(|c| c == name);
     let picks = match (find("R"), find("G"), find("B")) {

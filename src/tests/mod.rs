@@ -20,6 +20,7 @@ mod network_relight;
 mod network_scenes;
 mod network_transport;
 mod normal_detail;
+#[cfg(feature = "oiio")]
 mod oiio;
 mod path_guiding;
 mod reproductions;
