@@ -450,3 +450,86 @@ fn dutre_lafortune_willems_fluxes_are_the_pages() {
         }
     }
 }
+
+/// The cells of the row of `block`'s table whose first two cells are `mode` and `frame`.
+fn row_cells(block: &str, mode: &str, frame: &str) -> Vec<String> {
+    let row = block
+        .lines()
+        .find(|l| l.starts_with(&format!("| {mode} | {frame} |")))
+        .unwrap_or_else(|| panic!("{PAGE}: no row {mode:?} {frame:?} in:\n{block}"));
+    row.trim_matches('|')
+        .split('|')
+        .map(|c| c.trim().to_string())
+        .collect()
+}
+
+/// Jevans's Table 2 (`python3 reproduce/jevans.py`): the pixels retraced in the frames the
+/// page shows and in the whole sequence, and the rays the coherent frames traced, online and
+/// with look-ahead, are the page's. (The full renders' rays are not compared: they would
+/// take 351 more frames a mode.)
+#[test]
+fn jevans_retraced_pixels_are_the_pages() {
+    let block = page_block("jevans:table");
+    let hint = "(`python3 reproduce/jevans.py` rewrites the page)";
+    for (mode, flags) in [("online", &[][..]), ("look-ahead", &["--lookahead"][..])] {
+        let dir = std::env::temp_dir().join(format!(
+            "raylink-repro-jevans-{}-{mode}",
+            std::process::id()
+        ));
+        std::fs::create_dir_all(&dir).unwrap();
+        let (frames, csv) = (dir.join("f_%03d.jpg"), dir.join("frames.csv"));
+        let mut args = vec![
+            "animate",
+            "scenes/anim-audition.toml",
+            "--spp",
+            "1",
+            "--width",
+            "640",
+            "--height",
+            "480",
+            "--quiet",
+            "-o",
+            frames.to_str().unwrap(),
+            "--csv",
+            csv.to_str().unwrap(),
+        ];
+        args.extend_from_slice(flags);
+        let out = raylink(&args);
+        let text = std::fs::read_to_string(&csv).unwrap_or_default();
+        std::fs::remove_dir_all(&dir).unwrap();
+        assert!(out.status.success(), "{}", stderr(&out));
+        let mut lines = text.lines();
+        let head: Vec<&str> = lines.next().expect("a CSV header").split(',').collect();
+        let col = |name: &str| head.iter().position(|h| *h == name).unwrap();
+        let (frame, pixels, rays) = (col("frame"), col("pixels_retraced"), col("rays"));
+        let rows: Vec<Vec<u64>> = lines
+            .map(|l| l.split(',').map(|c| c.parse().unwrap_or(0)).collect())
+            .collect();
+        assert_eq!(rows.len(), 351);
+        for r in &rows {
+            let f = r[frame].to_string();
+            if [0, 1, 75, 150, 200, 350].contains(&r[frame]) {
+                let cells = row_cells(&block, mode, &f);
+                assert_eq!(
+                    integers(&cells[2]),
+                    [r[pixels]],
+                    "{mode} frame {f}: pixels retraced {hint}"
+                );
+            }
+        }
+        let total: u64 = rows.iter().map(|r| r[pixels]).sum();
+        let cells = row_cells(&block, mode, "**entire sequence**");
+        assert_eq!(
+            integers(&cells[2]),
+            [total],
+            "{mode}: pixels retraced {hint}"
+        );
+        let traced: u64 = rows.iter().map(|r| r[rays]).sum();
+        let note = format!("{mode}: all rays (with reflection, refraction and shadow rays) ");
+        let line = block
+            .lines()
+            .find_map(|l| l.strip_prefix("- ")?.strip_prefix(note.as_str()))
+            .unwrap_or_else(|| panic!("{PAGE}: no line {note:?}"));
+        assert_eq!(integers(line)[0], traced, "{mode}: rays {hint}");
+    }
+}

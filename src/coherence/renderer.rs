@@ -248,15 +248,29 @@ impl CoherentRenderer {
     /// only ever read when its voxel changes, so a voxel keeps records until the last
     /// frame that changes it and none after: a sequence whose motion ends costs nothing to
     /// record from then on. A change the list did not foresee retraces the whole frame.
+    #[cfg(test)]
     pub fn restrict_to_sequence(&mut self, changes: &[Vec<(Vec3, Vec3)>]) {
-        let margin = 2.0 * MARGIN * (self.grid.hi - self.grid.lo).length();
-        let mut last = vec![0u32; self.grid.len()];
+        let last = Self::last_changes(&self.grid, changes);
+        self.restrict_to_last_changes(last);
+    }
+
+    /// Per voxel of `grid`, the last position in the sequence at which `changes` (as
+    /// [`restrict_to_sequence`](Self::restrict_to_sequence) takes them) change it (0: never).
+    pub fn last_changes(grid: &Grid, changes: &[Vec<(Vec3, Vec3)>]) -> Vec<u32> {
+        let margin = 2.0 * MARGIN * (grid.hi - grid.lo).length();
+        let mut last = vec![0u32; grid.len()];
         for (k, boxes) in changes.iter().enumerate() {
             for (lo, hi) in boxes {
-                self.grid
-                    .voxels_in_box(*lo - margin, *hi + margin, |v| last[v] = k as u32 + 1);
+                grid.voxels_in_box(*lo - margin, *hi + margin, |v| last[v] = k as u32 + 1);
             }
         }
+        last
+    }
+
+    /// [`restrict_to_sequence`](Self::restrict_to_sequence) with its voxels worked out
+    /// ([`last_changes`](Self::last_changes) over this renderer's grid).
+    pub fn restrict_to_last_changes(&mut self, last: Vec<u32>) {
+        assert_eq!(last.len(), self.grid.len(), "one entry per voxel");
         self.last_change = Some(last);
         self.update_active();
     }
@@ -474,12 +488,22 @@ impl CoherentRenderer {
 
         let list: Vec<usize> = blocks.iter().collect();
         // A frame that retraces a few blocks cuts them into tiles no larger than the full
-        // renderer's, to keep every thread busy; with many blocks, one task per block
-        // records each voxel once per block and traces fewer shared tile corners (a pixel's
-        // value does not depend on the tiling).
-        let split =
-            list.len() < 8 * crate::transport::driver::worker_count(engine.threads(), usize::MAX);
-        let tasks: Vec<(usize, Tile)> = list
+        // renderer's, to keep every thread busy; with many blocks, each block is traced
+        // whole (one recorder records each voxel once per block and traces fewer shared
+        // tile corners; a pixel's value does not depend on the tiling), and small blocks
+        // are traced several to a task, which spares the driver a hand-over per block.
+        let workers = crate::transport::driver::worker_count(engine.threads(), usize::MAX);
+        let split = list.len() < 8 * workers;
+        let per_task = if split {
+            1
+        } else {
+            let area = (self.layout.width as usize * self.layout.height as usize)
+                .div_ceil(self.layout.len())
+                .max(1);
+            let tile = crate::render::TILE_SIZE as usize;
+            (4 * tile * tile / area).clamp(1, (list.len() / (8 * workers)).max(1))
+        };
+        let pieces: Vec<(usize, Tile)> = list
             .iter()
             .flat_map(|&b| {
                 let r = self.layout.rect(b);
@@ -507,6 +531,7 @@ impl CoherentRenderer {
                 })
             })
             .collect();
+        let tasks: Vec<&[(usize, Tile)]> = pieces.chunks(per_task).collect();
         let (voxels, store) = (&self.voxels, &self.store);
         let records = store.records();
         let nearest_blocker = matches!(engine, Engine::Whitted { .. });
@@ -514,29 +539,29 @@ impl CoherentRenderer {
         // full: most blocks of such a frame are never retraced, and keeping theirs cost frame
         // 0 more time (the memory's first touch) than reusing them saved later.
         let camera_on = self.camera_on && stats.full_reason.is_none();
-        let mut results: Vec<(Vec<Rgb>, RayStats, Recorded)> = Vec::with_capacity(tasks.len());
+        let mut results: Vec<(Vec<Rgb>, RayStats, Recorded)> = Vec::with_capacity(pieces.len());
+        let trace = |(b, tile): &(usize, Tile)| {
+            let mut recorder = RecordingAccel::new(accel, scene, voxels, nearest_blocker, records);
+            if camera_on {
+                let reuse = changed.as_ref().map(|changed| CameraReuse {
+                    previous: &previous_camera[*b],
+                    changed,
+                });
+                recorder = recorder.with_camera(&summary.keys, reuse);
+            }
+            let (pixels, rays) = engine.region(&ctx.with_accel(&recorder), &small, tile);
+            if let Store::Tables(tables) = store {
+                recorder.flush(tables, *b);
+            }
+            (pixels, rays, recorder.finish())
+        };
         let driven = drive(
             &tasks,
             engine.threads(),
             MERGE_WINDOW,
             &control.cancel,
-            |(b, tile)| {
-                let mut recorder =
-                    RecordingAccel::new(accel, scene, voxels, nearest_blocker, records);
-                if camera_on {
-                    let reuse = changed.as_ref().map(|changed| CameraReuse {
-                        previous: &previous_camera[*b],
-                        changed,
-                    });
-                    recorder = recorder.with_camera(&summary.keys, reuse);
-                }
-                let (pixels, rays) = engine.region(&ctx.with_accel(&recorder), &small, tile);
-                if let Store::Tables(tables) = store {
-                    recorder.flush(tables, *b);
-                }
-                (pixels, rays, recorder.finish())
-            },
-            |_, r| results.push(r),
+            |task| task.iter().map(trace).collect::<Vec<_>>(),
+            |_, r| results.extend(r),
         );
         drop(previous_camera);
         if driven.cancelled {
@@ -548,7 +573,7 @@ impl CoherentRenderer {
         for b in blocks.iter() {
             self.lights[b] = 0;
         }
-        for ((b, t), (pixels, rays, recorded)) in tasks.iter().zip(results) {
+        for ((b, t), (pixels, rays, recorded)) in pieces.iter().zip(results) {
             self.lights[*b] |= recorded.lights;
             if let Store::Segments(store) = &mut self.store {
                 store.add(*b, recorded.segments, recorded.hit);

@@ -237,8 +237,9 @@ pub struct Sequence {
     layout: BlockLayout,
     coherent: Option<CoherentRenderer>,
     dynamic: Option<Box<dyn DynamicAccel>>,
-    /// With [`Placement::Lookahead`]: the grid and the records' restriction, foreseen.
-    foreseen: Option<(Grid, Vec<Vec<Aabb>>)>,
+    /// With [`Placement::Lookahead`]: the grid and, per voxel, the last position in the
+    /// sequence that changes it, foreseen.
+    foreseen: Option<(Grid, Vec<u32>)>,
     full_notice: bool,
     /// The most the records held after a frame: bytes, segments, bytes of camera hits.
     peaks: (usize, usize, usize),
@@ -286,8 +287,10 @@ impl Sequence {
         let grid = lookahead_grid(changes, self.coherence.voxels);
         let probe =
             CoherentRenderer::with_records(grid.clone(), self.layout, self.coherence.records);
-        let marked = changes.iter().map(|c| probe.surface_boxes(c)).collect();
-        self.foreseen = Some((grid, marked));
+        let marked: Vec<Vec<Aabb>> = changes.iter().map(|c| probe.surface_boxes(c)).collect();
+        // Worked out here, with the reading, not in the first frame's time.
+        let last = CoherentRenderer::last_changes(&grid, &marked);
+        self.foreseen = Some((grid, last));
     }
 
     /// The renderer of a sequence starting at `scene`.
@@ -302,8 +305,8 @@ impl Sequence {
     fn renderer(&self, grid: Grid, control: &Control) -> CoherentRenderer {
         let mut r = CoherentRenderer::with_records(grid, self.layout, self.coherence.records);
         r.set_segment_budget((control.budget.limit() / 4).min(usize::MAX as u64) as usize);
-        if let Some((_, marked)) = &self.foreseen {
-            r.restrict_to_sequence(marked);
+        if let Some((_, last)) = &self.foreseen {
+            r.restrict_to_last_changes(last.clone());
         }
         r
     }
@@ -456,7 +459,7 @@ impl Sequence {
     }
 
     /// The statistics of the sequence so far, around its `rows`.
-    pub fn report(&self, rows: Vec<FrameRow>, prepare_seconds: f64) -> Report {
+    pub fn report(&self, rows: Vec<FrameRow>, prepare: Time) -> Report {
         let grid = self.coherent.as_ref().map(|c| &c.grid);
         Report {
             rows,
@@ -471,7 +474,7 @@ impl Sequence {
             voxels: grid.map_or(0, |g| g.len()),
             active_voxels: self.coherent.as_ref().map_or(0, |c| c.active_voxels()),
             blocks: (self.layout.cols, self.layout.rows),
-            prepare_seconds,
+            prepare,
             grid: grid.map_or((Vec3::ZERO, Vec3::ZERO), |g| (g.lo, g.hi)),
             overhead: Vec::new(),
             placement: if self.foreseen.is_some() {
@@ -510,7 +513,7 @@ pub fn render_frames(
         control.warn(&crate::scene::motion::still_warning("animation renderer"));
     }
     let scene0 = scene0.into_shutter_open();
-    let prepare = Instant::now();
+    let prepare = Clock::start();
     if coherence.placement == Placement::Lookahead && coherence.mode != SequenceMode::Full {
         // Reads every frame once first, to place the grid where things will change.
         let mut changes = Vec::new();
@@ -523,7 +526,7 @@ pub fn render_frames(
         }
         sequence.foresee(&changes);
     }
-    let prepare_seconds = prepare.elapsed().as_secs_f64();
+    let prepare = prepare.elapsed();
     let overhead = if coherence.mode == SequenceMode::Full {
         Vec::new()
     } else {
@@ -554,7 +557,7 @@ pub fn render_frames(
         rows.push(row);
     }
     progress.end(&format!("{} frames", rows.len()));
-    let mut report = sequence.report(rows, prepare_seconds);
+    let mut report = sequence.report(rows, prepare);
     report.overhead = overhead;
     Ok(report)
 }
@@ -616,8 +619,9 @@ pub struct Report {
     /// Voxels where a change can happen (the only ones recorded).
     pub active_voxels: usize,
     pub blocks: (u32, u32),
-    /// Seconds spent reading every frame to place the grid before frame 0.
-    pub prepare_seconds: f64,
+    /// The time spent reading every frame to place the grid before frame 0 (look-ahead):
+    /// part of the sequence's cost.
+    pub prepare: Time,
     /// The grid's box.
     pub grid: (crate::math::Vec3, crate::math::Vec3),
     /// `--overhead-reps`: CPU seconds of the first frame rendered coherently and in full,
