@@ -11,9 +11,11 @@ written with the scene by its script, see scripts/mitsuba_twin.py):
 
 Each is rendered at --width x --height with box filters and the scene's path length by:
 
-- raylink plain: `--integrator path` (--raylink-plain-args);
-- raylink best: `--integrator path` followed by --raylink-best-args, its best settings
-  (today the path tracer's defaults, with the light hierarchy; add new options here, e.g.
+- raylink plain: `--integrator path` (--raylink-plain-args) on the scene without its
+  environment's portal (a copy of the file with the `portal` key taken out);
+- raylink best: `--integrator path` followed by --raylink-best-args, its best settings,
+  on the scene as it is (today the path tracer's defaults: the light hierarchy, and the
+  sky sampled through the window room's portal; add new options here, e.g.
   --raylink-best-args="--adaptive-threshold 0.01");
 - Mitsuba 3 (scalar_rgb, `path`) with each of --mitsuba-samplers; the fastest to equal
   error is the one compared.
@@ -70,10 +72,21 @@ class Room:
         self.label, toml, xml = ROOMS[key]
         self.toml, self.xml = os.path.join(ROOT, toml), os.path.join(ROOT, xml)
         self.loaded = {}
+        # The plain run's scene: the file without its portal, its files named absolutely.
+        with open(self.toml) as f:
+            text = f.read()
+        text = re.sub(r", portal = \[\[[^]]*\](, \[[^]]*\])*\]", "", text)
+        text = re.sub(r'file = "', 'file = "' + os.path.dirname(self.toml) + "/", text)
+        self.plain_dir = tempfile.mkdtemp(prefix="raylink-interiors-")
+        self.plain_toml = os.path.join(self.plain_dir, os.path.basename(self.toml))
+        with open(self.plain_toml, "w") as f:
+            f.write(text)
+        self.plain_toml_differs = "portal" not in text and "portal" in open(self.toml).read()
 
-    def raylink(self, extra, spp, seed, out):
+    def raylink(self, extra, spp, seed, out, plain=False):
         a = self.args
-        command = [a.raylink, "render", self.toml, "--width", str(a.width), "--height",
+        toml = self.plain_toml if plain else self.toml
+        command = [a.raylink, "render", toml, "--width", str(a.width), "--height",
                    str(a.height), "--spp", str(spp), "--filter", "box", "--filter-radius",
                    "0.5", "--seed", str(seed), "-o", out] + extra
         err = subprocess.run(command, check=True, capture_output=True, text=True).stderr
@@ -143,6 +156,7 @@ def main():
         room = Room(args, key)
         references = {r: room.reference(r) for r in ("raylink", "mitsuba")}
         configs = [("raylink plain", "raylink", plain), ("raylink best", "raylink", best)]
+        plain_scene = {"raylink plain": True}
         configs += [(f"mitsuba {s}", "mitsuba", s) for s in samplers]
         runs = {name: [] for name, _, _ in configs}
         load_before = os.getloadavg()
@@ -151,7 +165,8 @@ def main():
                 for name, renderer, what in configs:
                     out = os.path.join(tmp, "run.exr")
                     if renderer == "raylink":
-                        seconds = room.raylink(what, args.spp, rep, out)
+                        seconds = room.raylink(what, args.spp, rep, out,
+                                               plain=plain_scene.get(name, False))
                     else:
                         seconds = room.mitsuba(what, args.spp, rep, out)
                     ref, ref_var = references[renderer]
@@ -171,6 +186,8 @@ def main():
             needed = [t * (e / args.target) ** 2 for t, e in zip(times, errors)]
             to_target[name] = med(needed)
             shown = f"{name} ({' '.join(what)})" if renderer == "raylink" else name
+            if plain_scene.get(name) and room.plain_toml_differs:
+                shown += " no portal"
             print(f"  {shown:<44} time {med(times):6.2f} s, rel. RMSE {med(errors):.4f}, "
                   f"to {args.target:g}: {med(needed):7.2f} s (min {min(needed):.2f})")
         fastest = min(samplers, key=lambda s: to_target[f"mitsuba {s}"])

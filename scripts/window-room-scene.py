@@ -21,6 +21,10 @@ W, H, D = 5.0, 2.6, 4.0  # x in [-2.5, 2.5], y in [0, 2.6], z in [-4, 0]
 x0, x1, z0, z1 = -W / 2, W / 2, -D, 0.0
 # The window in the left wall (x = -2.5): y in [0.9, 2.1], z in [-2.9, -1.3].
 WY0, WY1, WZ0, WZ1 = 0.9, 2.1, -2.9, -1.3
+# The sky enters only through the window: its outer face is the environment's portal
+# (corners in order, (c3 - c0) x (c1 - c0) pointing out of the room).
+PORTAL = "[[%g, %g, %g], [%g, %g, %g], [%g, %g, %g], [%g, %g, %g]]" % (
+    -2.7, WY0, WZ0, -2.7, WY1, WZ0, -2.7, WY1, WZ1, -2.7, WY0, WZ1)
 
 
 def quad(a, b, c, d, material):
@@ -85,7 +89,7 @@ out = [
     "",
     "[world]",
     'environment = { file = "textures/window-sky.exr", transform = { rotate = '
-    "{ axis = [1, 0, 0], degrees = -90 } } }",
+    "{ axis = [1, 0, 0], degrees = -90 } }, portal = %s }" % PORTAL,
     "",
     "[[lights]]",
     'type = "directional"',

@@ -5,6 +5,7 @@ mod random;
 pub mod sobol;
 pub mod spawn;
 pub mod warp;
+pub mod windowed;
 
 pub use glam::{Mat3, Mat4, Vec2, Vec3, Vec4};
 pub use random::Rng;

@@ -8,6 +8,7 @@
 
 use crate::image::Image;
 use crate::math::{Mat3, Rgb, Vec2, Vec3};
+use crate::scene::portal::Portal;
 use glam::DVec3;
 use rayon::prelude::*;
 use std::f64::consts::{PI, TAU};
@@ -24,6 +25,9 @@ pub struct Environment {
     pub transform: Mat3,
     /// Multiplies every value.
     pub scale: Rgb,
+    /// The opening through which the map lights an interior, if the scene names one:
+    /// next-event estimation from behind it samples only directions through it.
+    pub portal: Option<Portal>,
     world_to_light: Mat3,
 }
 
@@ -109,6 +113,7 @@ impl Environment {
             file,
             transform,
             scale,
+            portal: None,
             world_to_light: transform.inverse(),
         };
         Ok((env, mapping))

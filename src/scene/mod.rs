@@ -19,6 +19,7 @@ pub mod normal_detail;
 pub mod obj;
 pub mod pbrt;
 pub mod ply;
+pub mod portal;
 pub mod settings;
 pub mod shapes;
 pub mod texture;
@@ -33,6 +34,7 @@ pub use instance::{Instance, Prototype};
 pub use lights::Light;
 pub use materials::{Classic, Material, Mix, RoughnessMap, Surface};
 pub use normal_detail::NormalDetail;
+pub use portal::Portal;
 pub use settings::{SettingSource, Settings as RenderSettings};
 pub use shapes::{
     lerp, sphere_uv, Geometry, Primitives, QuadMesh, Shape, ShapeModel, Sphere, SurfacePoint,

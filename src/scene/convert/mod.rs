@@ -276,6 +276,7 @@ fn world(scene: &Scene, refs: Refs) -> WorldDesc {
         file: refs.to(&env.file),
         scale: Some(Splat3(env.scale)),
         transform: Some(OneOrMany::One(matrix_step(env.transform))),
+        portal: env.portal.as_ref().map(|p| p.corners.map(V3)),
     });
     WorldDesc {
         ambient: Some(Splat3(scene.ambient)),

@@ -1,7 +1,9 @@
 //! The background: radiance arriving from every direction the scene does not block, a
-//! constant or an environment map (importance-sampled by luminance).
+//! constant or an environment map (importance-sampled by luminance, and through its portal
+//! when it has one).
 
 use super::directional::world_disk;
+use super::portal_sampling::PortalSampler;
 use super::{EmissionSample, LightModel, LightSample, World};
 use crate::math::warp::{uniform_sphere, UNIFORM_SPHERE_PDF};
 use crate::math::{luminance, Rgb, Vec2, Vec3};
@@ -44,6 +46,18 @@ impl Background {
             None => (uniform_sphere(u), UNIFORM_SPHERE_PDF, self.radiance),
         }
     }
+
+    /// [`sample`](Self::sample) for next-event estimation at `p`: through the portal when
+    /// `p` is behind one.
+    fn sample_from(&self, p: Vec3, u: Vec2) -> Option<(Vec3, f32, Rgb)> {
+        if let Some(m) = &self.map {
+            if let Some((portal, window)) = m.portal_window(p) {
+                let (wi, pdf) = portal.sample(window, u)?;
+                return Some((wi, pdf, m.env.eval(wi)));
+            }
+        }
+        Some(self.sample(u))
+    }
 }
 
 impl LightModel for Background {
@@ -53,7 +67,7 @@ impl LightModel for Background {
     }
 
     fn sample_li(&self, p: Vec3, u: Vec2, choice: f32, world: &World) -> Option<LightSample> {
-        let (wi, pdf, radiance) = self.sample(u);
+        let (wi, pdf, radiance) = self.sample_from(p, u)?;
         Some(LightSample {
             radiance,
             wi,
@@ -71,7 +85,7 @@ impl LightModel for Background {
             * self
                 .map
                 .as_ref()
-                .map_or(UNIFORM_SPHERE_PDF, |m| m.pdf((q - p).normalize()))
+                .map_or(UNIFORM_SPHERE_PDF, |m| m.pdf_from(p, (q - p).normalize()))
     }
 
     fn sample_le(
@@ -113,6 +127,8 @@ pub struct EnvironmentSampler {
     total: f32,
     /// Mean radiance over directions.
     pub mean: Rgb,
+    /// Directions through the map's portal, for points behind it.
+    portal: Option<PortalSampler>,
 }
 
 impl EnvironmentSampler {
@@ -136,7 +152,26 @@ impl EnvironmentSampler {
             cdf,
             total: total as f32,
             mean: sum / n,
+            portal: env
+                .portal
+                .clone()
+                .map(|portal| PortalSampler::new(&env, portal)),
             env,
+        }
+    }
+
+    /// The portal sampler and the window through which `p` sees the portal, when the map
+    /// has a portal and `p` is behind it.
+    fn portal_window(&self, p: Vec3) -> Option<(&PortalSampler, (Vec2, Vec2))> {
+        let portal = self.portal.as_ref()?;
+        Some((portal, portal.window(p)?))
+    }
+
+    /// The density with which next-event estimation at `p` picks `dir`.
+    fn pdf_from(&self, p: Vec3, dir: Vec3) -> f32 {
+        match self.portal_window(p) {
+            Some((portal, window)) => portal.pdf(window, dir),
+            None => self.pdf(dir),
         }
     }
 

@@ -21,6 +21,7 @@ mod directional;
 mod goniometric;
 mod point;
 mod point_source;
+mod portal_sampling;
 mod projection;
 mod set;
 mod spot;

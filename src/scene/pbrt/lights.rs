@@ -15,7 +15,7 @@ use crate::scene::lights::{
     GoniometricMap, PointLight, ProjectionLight, SpotLight,
 };
 use crate::scene::texture::{Encoding, ImageTexture, UvMapping};
-use crate::scene::{Light, Texture, MAX_COORDINATE};
+use crate::scene::{Light, Portal, Texture, MAX_COORDINATE};
 use glam::DVec3;
 use std::path::PathBuf;
 use std::sync::Arc;
@@ -115,6 +115,32 @@ impl Builder {
             .map_err(|e| loc.error(format!("{st}: {e}")))?;
         self.held.add_image(&image);
         Ok((file, image))
+    }
+
+    /// An infinite light's `"point3 portal"`: four corners in world space (pbrt-v4 does not
+    /// apply the light's transform to them).
+    fn portal(&self, p: &Params, st: &str, loc: &Loc) -> crate::error::Result<Option<Portal>> {
+        let Some(v) = p.floats("portal", "point3").map_err(Self::pe(loc))? else {
+            return Ok(None);
+        };
+        if v.len() != 12 {
+            return Err(loc.error(format!(
+                "{st}: \"portal\" takes four points, got {} numbers",
+                v.len()
+            )));
+        }
+        let mut corners = [0, 1, 2, 3].map(|k| {
+            self.mirror
+                .transform_point3(DVec3::from_slice(&v[3 * k..]))
+                .as_vec3()
+        });
+        // A mirrored world turns the corners' order around; keep the portal facing out.
+        if self.mirror.determinant() < 0.0 {
+            corners.swap(1, 3);
+        }
+        Portal::new(corners)
+            .map(Some)
+            .map_err(|m| loc.error(format!("{st}: \"portal\": {m}")))
     }
 
     pub(super) fn light(&mut self, ty: &str, p: &Params, loc: &Loc) -> crate::error::Result<()> {
@@ -297,7 +323,7 @@ impl Builder {
                         if !self.find_input(&path, st, &file, loc) {
                             return Ok(());
                         }
-                        let (env, mapping) = Environment::load_with_mapping(
+                        let (mut env, mapping) = Environment::load_with_mapping(
                             &path,
                             PathBuf::from(&file),
                             frame,
@@ -305,6 +331,7 @@ impl Builder {
                             &self.allowance(),
                         )
                         .map_err(|e| loc.error(format!("{st}: {e}")))?;
+                        env.portal = self.portal(p, st, loc)?;
                         self.held.add_image(&env.image);
                         if mapping == Mapping::LatLong {
                             self.warn(loc, format!("{st}: \"{file}\" is a lat-long image, converted to the equal-area mapping (pbrt-v4 itself needs `imgtool makeequiarea`)"));
@@ -312,6 +339,11 @@ impl Builder {
                         self.environment = Some(Arc::new(env));
                     }
                     (None, l) => {
+                        if p.floats("portal", "point3").map_err(&pe)?.is_some() {
+                            return Err(loc.error(format!(
+                                "{st}: a \"portal\" needs an environment map (\"filename\")"
+                            )));
+                        }
                         let l = emitted("\"L\" × \"scale\"", l.unwrap_or(Rgb::ONE) * scale)?;
                         self.background =
                             emitted("the sum of the infinite lights", self.background + l)?;

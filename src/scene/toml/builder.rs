@@ -27,6 +27,7 @@ use crate::scene::lights::{
     check_cone_width, DirectionalLight, GoniometricLight, GoniometricMap, PointLight, SpotLight,
 };
 use crate::scene::materials::{Classic, Measured, Surface};
+use crate::scene::Portal;
 use crate::scene::{
     Camera, Conductor, Light, Material, Projection, RenderSettings, RoughnessMap, Scene, Texture,
 };
@@ -552,7 +553,7 @@ impl<'a> Builder<'a> {
             .map_err(|m| ctx.fail(site, "environment.scale", m))?;
         let path = self.dir.join(&desc.file);
         self.inputs.borrow_mut().push(path.clone());
-        let (env, _) = Environment::load_with_mapping(
+        let (mut env, _) = Environment::load_with_mapping(
             &path,
             desc.file.into(),
             Mat3::from_mat4(xf.m),
@@ -560,6 +561,12 @@ impl<'a> Builder<'a> {
             &self.allowance(),
         )
         .map_err(|e| ctx.fail(site, "environment.file", e))?;
+        if let Some(corners) = desc.portal {
+            env.portal = Some(
+                Portal::new(corners.map(|c| c.0))
+                    .map_err(|m| ctx.fail(site, "environment.portal", m))?,
+            );
+        }
         self.hold_image(&env.image);
         Ok(env)
     }

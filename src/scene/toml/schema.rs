@@ -159,6 +159,9 @@ pub(crate) struct EnvironmentDesc {
     pub(crate) scale: Option<Splat3>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) transform: Option<OneOrMany<TransformOp>>,
+    /// The window through which the map lights an interior: four corners in world space.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) portal: Option<[V3; 4]>,
 }
 
 #[derive(Deserialize, Serialize)]
