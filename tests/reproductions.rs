@@ -366,7 +366,7 @@ fn without_seconds(block: &str) -> String {
 #[test]
 fn dutre_lafortune_willems_fluxes_are_the_pages() {
     let scene = Scene::load(&manifest("scenes/cornell-spheres.toml")).unwrap();
-    let embree = raylink::accel::embree::version().unwrap();
+    let embree = raylink::accel::embree_version().unwrap();
     let sets: [(&str, &[usize]); 3] = [
         ("rough gold sphere", &[0]),
         ("mirror and glass spheres", &[1, 2]),
