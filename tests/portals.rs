@@ -8,13 +8,11 @@ mod render_common;
 mod common;
 
 use common::{assert_clean_failure_of, raylink};
-use raylink::image::filter::Filter;
 use raylink::image::Image;
-use raylink::job::MonteCarloSettings;
 use raylink::math::Vec3;
 use raylink::scene::Scene;
 use raylink::{Backend, Technique};
-use render_common::{image, View};
+use render_common::{boxed, image, View};
 use std::path::Path;
 use std::sync::Arc;
 
@@ -24,23 +22,10 @@ fn manifest(p: &str) -> std::path::PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(p)
 }
 
-fn path_tracing(spp: u32) -> Technique {
-    Technique::Path(MonteCarloSettings {
-        max_depth: 5,
-        spp,
-        time_limit: None,
-        filter: Filter::Box { radius: 0.5 },
-        reconstruction: raylink::image::filter::Reconstruction::Splat,
-        adaptive: None,
-        max_component_value: None,
-        guiding: false,
-    })
-}
-
 fn render(scene: &Scene, seed: u64) -> Image {
     image(
         scene,
-        path_tracing(16),
+        Technique::Path(boxed(5, 16)),
         View::of(scene, seed, None, Backend::Embree),
     )
 }
