@@ -226,9 +226,10 @@ impl Vertex<'_> {
         if let Kind::Infinite { light, delta } = self.kind {
             return match light {
                 Some(i) if !delta => {
-                    // Light subpaths choose their light by power.
+                    // Light subpaths choose their light by power; the vertex's normal is
+                    // the direction the light travels.
                     let model = ctx.lights.emitters[i].model();
-                    model.pdf_li(Vec3::ZERO, -self.n, Vec3::ZERO, ctx.lights.pmf(i))
+                    ctx.lights.pmf(i) * model.pdf_emission_direction(self.n)
                 }
                 _ => 0.0,
             };

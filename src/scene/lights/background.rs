@@ -112,6 +112,14 @@ impl LightModel for Background {
         })
     }
 
+    fn pdf_emission_direction(&self, w: Vec3) -> f32 {
+        // `sample_le` sends light along the opposite of the direction it samples, over the
+        // whole sphere (never through the portal: light paths must reach every direction).
+        self.map
+            .as_ref()
+            .map_or(UNIFORM_SPHERE_PDF, |m| m.pdf((-w).normalize()))
+    }
+
     fn is_infinite(&self) -> bool {
         true
     }

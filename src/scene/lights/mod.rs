@@ -100,7 +100,8 @@ pub trait LightModel {
         (Vec3::ZERO, 0.0)
     }
 
-    /// The solid-angle density with which a point source emits along `w`.
+    /// The solid-angle density with which a light path from a point source, or from the
+    /// background, leaves along `w` (0 for other lights).
     fn pdf_emission_direction(&self, _w: Vec3) -> f32 {
         0.0
     }
