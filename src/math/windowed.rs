@@ -42,74 +42,37 @@ impl WindowedTable {
         }
     }
 
-    /// The sum along the grid line of row boundary `j` up to `x` (in cells): the integral
-    /// over \[0, x\]×\[0, j\], exact because the density is constant within a cell.
-    fn line(&self, j: usize, x: f64) -> f64 {
-        // x is not negative: truncation is the floor.
-        let i = (x as usize).min(self.nx - 1);
-        let f = x - i as f64;
-        let row = &self.sums[j * (self.nx + 1)..(j + 1) * (self.nx + 1)];
-        row[i] + f * (row[i + 1] - row[i])
-    }
-
-    /// The integral over \[x0, x1\] of row `j` (cells).
-    fn row_mass(&self, j: usize, x0: f64, x1: f64) -> f64 {
-        (self.line(j + 1, x1) - self.line(j, x1)) - (self.line(j + 1, x0) - self.line(j, x0))
-    }
-
-    /// The integral over \[x0, x1\]×\[0, y\] (cells).
-    fn below(&self, y: f64, x0: f64, x1: f64) -> f64 {
-        let j = (y as usize).min(self.ny - 1);
-        let f = y - j as f64;
-        let whole = self.line(j, x1) - self.line(j, x0);
-        if f == 0.0 {
-            whole
-        } else {
-            whole + f * self.row_mass(j, x0, x1)
-        }
-    }
-
-    /// The window in cells, clamped to the grid.
-    fn cells(&self, lo: Vec2, hi: Vec2) -> (f64, f64, f64, f64) {
+    /// The window \[`lo`, `hi`\] in cells, clamped to the grid.
+    fn window(&self, lo: Vec2, hi: Vec2) -> Window<'_> {
         let (nx, ny) = (self.nx as f64, self.ny as f64);
-        (
+        let (x0, x1) = (
             (lo.x as f64 * nx).clamp(0.0, nx),
             (hi.x as f64 * nx).clamp(0.0, nx),
-            (lo.y as f64 * ny).clamp(0.0, ny),
-            (hi.y as f64 * ny).clamp(0.0, ny),
-        )
+        );
+        // x is not negative: truncation is the floor.
+        let (i0, i1) = (
+            (x0 as usize).min(self.nx - 1),
+            (x1 as usize).min(self.nx - 1),
+        );
+        Window {
+            table: self,
+            x0,
+            x1,
+            y0: (lo.y as f64 * ny).clamp(0.0, ny),
+            y1: (hi.y as f64 * ny).clamp(0.0, ny),
+            i0,
+            i1,
+            f0: x0 - i0 as f64,
+            f1: x1 - i1 as f64,
+        }
     }
 
     /// A point of the window \[`lo`, `hi`\] chosen in proportion to the values, and its density
     /// over the unit square; `None` when the window holds no mass.
     pub fn sample(&self, u: Vec2, lo: Vec2, hi: Vec2) -> Option<(Vec2, f32)> {
-        let (x0, x1, y0, y1) = self.cells(lo, hi);
-        // The mass below row boundary k within [x0, x1], the columns' interpolation
-        // worked out once, and below any y (linear within a row).
-        let stride = self.nx + 1;
-        let (i0, i1) = (
-            (x0 as usize).min(self.nx - 1),
-            (x1 as usize).min(self.nx - 1),
-        );
-        let (f0, f1) = (x0 - i0 as f64, x1 - i1 as f64);
-        let at_boundary = |k: usize| {
-            let s = &self.sums[k * stride..(k + 1) * stride];
-            (s[i1] + f1 * (s[i1 + 1] - s[i1])) - (s[i0] + f0 * (s[i0 + 1] - s[i0]))
-        };
-        let below = |y: f64| {
-            let j = (y as usize).min(self.ny - 1);
-            let (f, a) = (y - j as f64, at_boundary(j));
-            if f == 0.0 {
-                a
-            } else {
-                a + f * (at_boundary(j + 1) - a)
-            }
-        };
-        let base = below(y0);
-        let total = below(y1) - base;
-        if !total.is_finite() || total <= 0.0 {
-            return None;
-        }
+        let w = self.window(lo, hi);
+        let (x0, x1, y0, y1) = (w.x0, w.x1, w.y0, w.y1);
+        let (base, total) = w.mass()?;
         // The row: the last boundary whose mass below stays under the target.
         let target = u.y as f64 * total;
         let (j0, j1) = (y0 as usize, (y1.ceil() as usize).max(1) - 1);
@@ -118,7 +81,7 @@ impl WindowedTable {
         let mut hi_row = j1;
         while lo_row < hi_row {
             let mid = (lo_row + hi_row).div_ceil(2);
-            if at_boundary(mid) - base <= target {
+            if w.at_boundary(mid) - base <= target {
                 lo_row = mid;
             } else {
                 hi_row = mid - 1;
@@ -126,9 +89,9 @@ impl WindowedTable {
         }
         let j = lo_row;
         let row_start = (j as f64).max(y0);
-        let per_y = at_boundary(j + 1) - at_boundary(j);
+        let per_y = w.at_boundary(j + 1) - w.at_boundary(j);
         let y = if per_y > 0.0 {
-            row_start + (target - (below(row_start) - base)) / per_y
+            row_start + (target - (w.below(row_start) - base)) / per_y
         } else {
             row_start
         }
@@ -171,14 +134,55 @@ impl WindowedTable {
         if p.x < lo.x || p.x > hi.x || p.y < lo.y || p.y > hi.y {
             return 0.0;
         }
-        let (x0, x1, y0, y1) = self.cells(lo, hi);
-        let total = self.below(y1, x0, x1) - self.below(y0, x0, x1);
-        if !total.is_finite() || total <= 0.0 {
+        let Some((_, total)) = self.window(lo, hi).mass() else {
             return 0.0;
-        }
+        };
         let i = ((p.x as f64 * self.nx as f64) as usize).min(self.nx - 1);
         let j = ((p.y as f64 * self.ny as f64) as usize).min(self.ny - 1);
         (self.values[j * self.nx + i] / total * (self.nx * self.ny) as f64) as f32
+    }
+}
+
+/// A window of a [`WindowedTable`] in cells, with the interpolation of its two edge columns
+/// worked out once.
+struct Window<'a> {
+    table: &'a WindowedTable,
+    x0: f64,
+    x1: f64,
+    y0: f64,
+    y1: f64,
+    i0: usize,
+    i1: usize,
+    f0: f64,
+    f1: f64,
+}
+
+impl Window<'_> {
+    /// The integral over \[x0, x1\]×\[0, k\] for a row boundary `k`: exact, as the
+    /// density is constant within a cell.
+    fn at_boundary(&self, k: usize) -> f64 {
+        let stride = self.table.nx + 1;
+        let s = &self.table.sums[k * stride..(k + 1) * stride];
+        let (i0, i1) = (self.i0, self.i1);
+        (s[i1] + self.f1 * (s[i1 + 1] - s[i1])) - (s[i0] + self.f0 * (s[i0 + 1] - s[i0]))
+    }
+
+    /// The integral over \[x0, x1\]×\[0, y\] (linear within a row).
+    fn below(&self, y: f64) -> f64 {
+        let j = (y as usize).min(self.table.ny - 1);
+        let (f, a) = (y - j as f64, self.at_boundary(j));
+        if f == 0.0 {
+            a
+        } else {
+            a + f * (self.at_boundary(j + 1) - a)
+        }
+    }
+
+    /// The mass below the window's bottom and the window's own; `None` when it has none.
+    fn mass(&self) -> Option<(f64, f64)> {
+        let base = self.below(self.y0);
+        let total = self.below(self.y1) - base;
+        (total.is_finite() && total > 0.0).then_some((base, total))
     }
 }
 
