@@ -8,10 +8,13 @@
 //!
 //! SIGXFSZ (a file past the size limit of `ulimit -f`) is caught and does nothing, so that the
 //! write fails with `File too large` instead, reported as any failed write.
+//!
+//! Off Unix (Windows: Ctrl-C and Ctrl-Break arrive as SIGINT) the handler sets a flag that the
+//! listening thread looks at every 20 ms, and a second signal exits with 128 + its number.
 
 use raylink::CancelToken;
-use signal_hook::consts::{SIGINT, SIGTERM, SIGXFSZ};
-use std::sync::atomic::{AtomicBool, AtomicI32, Ordering};
+use signal_hook::consts::{SIGINT, SIGTERM};
+use std::sync::atomic::{AtomicI32, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -31,17 +34,15 @@ impl Signals {
     /// the signal). A first signal cancels `cancel` if `graceful`, else ends the process as
     /// the signal's default action would.
     pub fn install(cancel: CancelToken, graceful: bool) -> Result<Signals, String> {
-        let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM])
-            .map_err(|e| format!("cannot install the signal handlers: {e}"))?;
-        signal_hook::flag::register(SIGXFSZ, Arc::new(AtomicBool::new(false)))
-            .map_err(|e| format!("cannot install the signal handlers: {e}"))?;
+        let mut signals =
+            listen().map_err(|e| format!("cannot install the signal handlers: {e}"))?;
         let first = Arc::new(AtomicI32::new(0));
         let (seen, token) = (first.clone(), cancel.clone());
         std::thread::Builder::new()
             .name("raylink-signals".into())
             .spawn(move || {
                 let mut since: Option<Instant> = None;
-                for signal in signals.forever() {
+                for signal in std::iter::from_fn(&mut signals) {
                     let first = seen
                         .compare_exchange(0, signal, Ordering::SeqCst, Ordering::SeqCst)
                         .is_ok();
@@ -53,6 +54,7 @@ impl Signals {
                         // The second one: the user does not want to wait. No file is created
                         // or renamed while `_writes` is held.
                         let _writes = raylink::atomic_file::remove_temporaries();
+                        #[cfg(unix)]
                         let _ = signal_hook::low_level::emulate_default_handler(signal);
                         std::process::exit(128 + signal);
                     }
@@ -78,6 +80,32 @@ impl Signals {
     pub fn cancel(&self) -> &CancelToken {
         &self.cancel
     }
+}
+
+/// The signals SIGINT and SIGTERM as they arrive, one at a time (blocking); SIGXFSZ ignored.
+#[cfg(unix)]
+fn listen() -> std::io::Result<impl FnMut() -> Option<i32> + Send> {
+    let mut signals = signal_hook::iterator::Signals::new([SIGINT, SIGTERM])?;
+    let ignored = Arc::new(std::sync::atomic::AtomicBool::new(false));
+    signal_hook::flag::register(signal_hook::consts::SIGXFSZ, ignored)?;
+    Ok(move || signals.forever().next())
+}
+
+/// The signals SIGINT and SIGTERM as they arrive, one at a time (blocking): the handler
+/// records the last one and this looks every 20 ms.
+#[cfg(not(unix))]
+fn listen() -> std::io::Result<impl FnMut() -> Option<i32> + Send> {
+    use std::sync::atomic::AtomicUsize;
+    let last = Arc::new(AtomicUsize::new(0));
+    for signal in [SIGINT, SIGTERM] {
+        signal_hook::flag::register_usize(signal, last.clone(), signal as usize)?;
+    }
+    Ok(move || loop {
+        match last.swap(0, Ordering::SeqCst) {
+            0 => std::thread::sleep(Duration::from_millis(20)),
+            signal => return Some(signal as i32),
+        }
+    })
 }
 
 /// The signal's usual name.

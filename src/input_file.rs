@@ -11,6 +11,7 @@ use crate::control::MemoryBudget;
 use crate::error::{human_size, Error, Result};
 use std::fs::{File, FileType};
 use std::io::Read;
+#[cfg(unix)]
 use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
 use std::path::Path;
 
@@ -111,17 +112,30 @@ impl Allowance {
 fn not_regular(t: FileType) -> &'static str {
     if t.is_dir() {
         "is a directory, not a regular file"
-    } else if t.is_fifo() {
-        "is a FIFO (named pipe), not a regular file"
-    } else if t.is_char_device() {
-        "is a character device, not a regular file"
-    } else if t.is_block_device() {
-        "is a block device, not a regular file"
-    } else if t.is_socket() {
-        "is a socket, not a regular file"
     } else {
-        "is not a regular file"
+        special_kind(t).unwrap_or("is not a regular file")
     }
+}
+
+/// The Unix special files by name (FIFOs, devices, sockets).
+#[cfg(unix)]
+fn special_kind(t: FileType) -> Option<&'static str> {
+    if t.is_fifo() {
+        Some("is a FIFO (named pipe), not a regular file")
+    } else if t.is_char_device() {
+        Some("is a character device, not a regular file")
+    } else if t.is_block_device() {
+        Some("is a block device, not a regular file")
+    } else if t.is_socket() {
+        Some("is a socket, not a regular file")
+    } else {
+        None
+    }
+}
+
+#[cfg(not(unix))]
+fn special_kind(_: FileType) -> Option<&'static str> {
+    None
 }
 
 /// The size of a regular file of at most `kind.max_bytes`, or the refusal naming `path`.

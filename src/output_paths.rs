@@ -10,7 +10,6 @@
 
 use crate::error::{Error, Result};
 use std::collections::HashMap;
-use std::os::unix::fs::MetadataExt;
 use std::path::{Path, PathBuf};
 
 /// A path as the file system resolves it, for comparing.
@@ -35,13 +34,28 @@ impl Resolved {
         Resolved {
             name,
             target: path.canonicalize().ok(),
-            id: std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino())),
+            id: file_id(path),
         }
     }
 
     /// The paths this file is known by.
     fn paths(&self) -> impl Iterator<Item = &PathBuf> {
         std::iter::once(&self.name).chain(&self.target)
+    }
+}
+
+/// The device and inode of an existing file, which name it whatever path reaches it; `None`
+/// off Unix, where the canonical paths alone tell files apart.
+fn file_id(path: &Path) -> Option<(u64, u64)> {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        std::fs::metadata(path).ok().map(|m| (m.dev(), m.ino()))
+    }
+    #[cfg(not(unix))]
+    {
+        let _ = path;
+        None
     }
 }
 
@@ -190,13 +204,16 @@ pub const MAX_NAME_BYTES: usize = 255;
 /// Refuses a written path with a file or folder name longer than [`MAX_NAME_BYTES`], which
 /// no file system would take once the work was done.
 fn check_name_lengths(w: &Entry) -> Result<()> {
-    use std::os::unix::ffi::OsStrExt;
-    match w.path.iter().find(|c| c.as_bytes().len() > MAX_NAME_BYTES) {
+    match w
+        .path
+        .iter()
+        .find(|c| c.as_encoded_bytes().len() > MAX_NAME_BYTES)
+    {
         Some(long) => Err(Error::Invalid(format!(
             "{}: {} has a name of {} bytes; file systems take at most {MAX_NAME_BYTES}",
             w.path.display(),
             w.what,
-            long.as_bytes().len()
+            long.as_encoded_bytes().len()
         ))),
         None => Ok(()),
     }

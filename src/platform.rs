@@ -168,6 +168,35 @@ fn checked(ptr: *mut u8, bytes: usize) -> *mut u8 {
     ptr
 }
 
+/// Reads exactly `buf.len()` bytes of `file` from `offset`, without moving a shared file
+/// position: several threads read one file at once.
+pub(crate) fn read_exact_at(
+    file: &std::fs::File,
+    buf: &mut [u8],
+    offset: u64,
+) -> std::io::Result<()> {
+    #[cfg(unix)]
+    {
+        std::os::unix::fs::FileExt::read_exact_at(file, buf, offset)
+    }
+    #[cfg(windows)]
+    {
+        let (mut buf, mut offset) = (buf, offset);
+        while !buf.is_empty() {
+            match std::os::windows::fs::FileExt::seek_read(file, buf, offset) {
+                Ok(0) => return Err(std::io::ErrorKind::UnexpectedEof.into()),
+                Ok(n) => {
+                    buf = &mut buf[n..];
+                    offset += n as u64;
+                }
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => {}
+                Err(e) => return Err(e),
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Writes one line to stderr and ends the process with status 1 at once: no allocation (the
 /// line is formatted on the stack), no unwinding, no exit handlers (the C++ libraries' static
 /// destructors would run without memory).

@@ -34,7 +34,6 @@ use crate::binary_file::{checksum, fnv1a, Format, Reader};
 use crate::error::{Error, Result};
 use crate::scene::Scene;
 use std::io::Read;
-use std::os::unix::fs::FileExt;
 use std::path::Path;
 
 pub const VERSION: u32 = 3;
@@ -519,8 +518,7 @@ pub fn load_all(
     sum.update(&head);
     let read_at = |out: &mut [u32], mut at: u64, mut sum: Option<&mut StreamSum>| {
         for slice in wide::bytemuck::cast_slice_mut::<u32, u8>(out).chunks_mut(1 << 20) {
-            file.read_exact_at(slice, at)
-                .map_err(|_| bad("truncated"))?;
+            crate::platform::read_exact_at(&file, slice, at).map_err(|_| bad("truncated"))?;
             if let Some(sum) = sum.as_deref_mut() {
                 sum.update(slice);
             }
@@ -544,7 +542,7 @@ pub fn load_all(
     a?;
     b?;
     let mut stored = [0u8; 8];
-    file.read_exact_at(&mut stored, at + 4 * n_links as u64)
+    crate::platform::read_exact_at(&file, &mut stored, at + 4 * n_links as u64)
         .map_err(|_| bad("truncated"))?;
     let body = &head[12 + HEADER..head.len() - 8];
     let (a, basis) = body.split_at(4 * nodes);
