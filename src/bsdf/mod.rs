@@ -224,6 +224,19 @@ impl<'a> Bsdf<'a> {
         self.t * v.x + self.b * v.y + self.n * v.z
     }
 
+    /// Whether a non-delta lobe scatters through the surface (to the other side of `ng`).
+    fn transmits(&self) -> bool {
+        self.rough_transmission || self.kdt.max_element() > 0.0
+    }
+
+    /// The side of the geometric normal `wo` lies on, when [`eval`](Self::eval) can only be
+    /// non-zero for directions on that side (no non-delta transmission): light from below
+    /// that horizon cannot reach `wo`, so next-event estimation need not look there.
+    pub fn reflecting_side(&self, wo: Vec3) -> Option<Vec3> {
+        let go = wo.dot(self.ng);
+        (go != 0.0 && !self.transmits()).then(|| if go > 0.0 { self.ng } else { -self.ng })
+    }
+
     /// Whether scattering can be anything but a perfect mirror or refraction.
     pub fn has_non_delta(&self) -> bool {
         if let Some(l) = self.layered() {
@@ -420,8 +433,7 @@ impl<'a> Bsdf<'a> {
     /// one (otherwise light would leak through the surface).
     fn connectable(&self, wo: Vec3, wi: Vec3) -> Option<(Vec3, Vec3)> {
         let (go, gi) = (wo.dot(self.ng), wi.dot(self.ng));
-        let transmits = self.rough_transmission || self.kdt.max_element() > 0.0;
-        if go * gi == 0.0 || (go * gi < 0.0 && !transmits) {
+        if go * gi == 0.0 || (go * gi < 0.0 && !self.transmits()) {
             return None;
         }
         let (lo, li) = (self.local(wo), self.local(wi));

@@ -112,7 +112,7 @@ impl PathTracer {
         loop {
             let Some(sp) = ctx.intersect_at_depth(&ray, depth, stats) else {
                 // Without a background this is zero, and crediting zero changes nothing.
-                let c = escaped(ctx, &ray, prev_p, beta, (scatter_pdf, specular));
+                let c = escaped(ctx, &ray, (prev_p, None), beta, (scatter_pdf, specular));
                 radiance += c;
                 credit(&mut vertices, c);
                 break;

@@ -103,17 +103,21 @@ pub(crate) fn russian_roulette(beta: &mut Rgb, depth: u32, sampler: &mut Sampler
 }
 
 /// Next-event estimation at a non-specular vertex: one light sample, tested for shadow and
-/// weighted against BSDF sampling by the power heuristic; returns f·L·w / pdf.
+/// weighted against BSDF sampling by the power heuristic; returns f·L·w / pdf. `facing`:
+/// the BSDF's reflecting side (`Bsdf::reflecting_side`), to weigh the background's
+/// directions by their cosine; the path's [`escaped`] must be given the same.
+#[allow(clippy::too_many_arguments)]
 pub(crate) fn sample_direct(
     ctx: &Context,
     bsdf: &Bsdf,
     sp: &SurfacePoint,
     wo: Vec3,
+    facing: Option<Vec3>,
     u_choice: f32,
     u_light: Vec2,
     stats: &mut RayStats,
 ) -> Rgb {
-    let Some(ls) = ctx.lights.sample_li(sp.p, u_choice, u_light) else {
+    let Some(ls) = ctx.lights.sample_li_facing(sp.p, facing, u_choice, u_light) else {
         return Rgb::ZERO;
     };
     let (f, bsdf_pdf) = bsdf.eval_and_pdf(wo, ls.wi, Transport::Radiance);
@@ -132,13 +136,14 @@ pub(crate) fn sample_direct(
     f * ls.radiance * (w / ls.pdf)
 }
 
-/// What a path that left the scene along `ray` (from `prev_p`) brings back from the
-/// background with throughput `beta`, weighted against light sampling by the density the
-/// direction was drawn with (`pdf`, and `specular`: a delta lobe, no MIS).
+/// What a path that left the scene along `ray` (from `prev_p`, whose next-event estimation
+/// was given `prev_facing`) brings back from the background with throughput `beta`,
+/// weighted against light sampling by the density the direction was drawn with (`pdf`, and
+/// `specular`: a delta lobe, no MIS).
 pub(crate) fn escaped(
     ctx: &Context,
     ray: &Ray,
-    prev_p: Vec3,
+    (prev_p, prev_facing): (Vec3, Option<Vec3>),
     beta: Rgb,
     (pdf, specular): (f32, bool),
 ) -> Rgb {
@@ -150,7 +155,11 @@ pub(crate) fn escaped(
     let w = if specular {
         1.0
     } else {
-        power_heuristic(pdf, lights.pdf_li(bg, prev_p, prev_p + ray.dir, Vec3::ZERO))
+        let to = prev_p + ray.dir;
+        power_heuristic(
+            pdf,
+            lights.pdf_li_facing(bg, prev_p, prev_facing, to, Vec3::ZERO),
+        )
     };
     beta * le * w
 }
@@ -217,10 +226,12 @@ impl MonteCarlo for PathTracer {
         let mut bsdf_pdf = 0.0;
         let mut specular = true;
         let mut prev_p = ray.origin;
+        let mut prev_facing = None;
         let mut depth = 0;
         loop {
             let Some(sp) = ctx.intersect_at_depth(&ray, depth, stats) else {
-                radiance += escaped(ctx, &ray, prev_p, beta, (bsdf_pdf, specular));
+                let prev = (prev_p, prev_facing);
+                radiance += escaped(ctx, &ray, prev, beta, (bsdf_pdf, specular));
                 break;
             };
             let m = &ctx.scene.materials[sp.material];
@@ -235,8 +246,10 @@ impl MonteCarlo for PathTracer {
             let bsdf = m.bsdf(&sp, wo);
             let u_choice = sampler.next_2d();
             let u_light = sampler.next_2d();
+            let facing = bsdf.reflecting_side(wo);
             if bsdf.has_non_delta() {
-                radiance += beta * sample_direct(ctx, &bsdf, &sp, wo, u_choice.x, u_light, stats);
+                let (u, v) = (u_choice.x, u_light);
+                radiance += beta * sample_direct(ctx, &bsdf, &sp, wo, facing, u, v, stats);
             }
             let u_dir = sampler.next_2d();
             let Some(bs) = bsdf.sample(wo, u_choice.y, u_dir, Transport::Radiance) else {
@@ -246,6 +259,7 @@ impl MonteCarlo for PathTracer {
             bsdf_pdf = bs.pdf;
             specular = bs.delta;
             prev_p = sp.p;
+            prev_facing = facing;
             ray = sp.spawn(bs.wi);
             if !russian_roulette(&mut beta, depth, sampler) {
                 break;

@@ -632,7 +632,7 @@ impl Walk<'_> {
             let u_choice = rng.uniform();
             let u_light = Vec2::new(rng.uniform(), rng.uniform());
             if direct {
-                l += sample_direct(ctx, &bsdf, sp, wo, u_choice, u_light, self.stats);
+                l += sample_direct(ctx, &bsdf, sp, wo, None, u_choice, u_light, self.stats);
             }
             // Indirect diffuse: ρ/π · E, through a coat as for light arriving evenly.
             let diffuse = m.approximation();

@@ -18,6 +18,7 @@ mod area;
 mod background;
 mod bounds;
 mod directional;
+mod env_facing;
 mod goniometric;
 mod point;
 mod point_source;

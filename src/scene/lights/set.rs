@@ -205,10 +205,26 @@ impl LightSet {
 
     /// Samples light arriving at `p` (next-event estimation).
     pub fn sample_li(&self, p: Vec3, u_choose: f32, u: Vec2) -> Option<LightSample> {
+        self.sample_li_facing(p, None, u_choose, u)
+    }
+
+    /// [`sample_li`](Self::sample_li) for a receiver at `p` that only reflects, into the
+    /// hemisphere `facing` points to (`Bsdf::reflecting_side`): the background then weighs
+    /// its directions by their cosine with it. `None`: any receiver.
+    pub fn sample_li_facing(
+        &self,
+        p: Vec3,
+        facing: Option<Vec3>,
+        u_choose: f32,
+        u: Vec2,
+    ) -> Option<LightSample> {
         let (i, choice) = self.choose_at(p, u_choose)?;
-        self.emitters[i]
-            .model()
-            .sample_li(p, u, choice, &self.world)
+        match (&self.emitters[i], facing) {
+            (Emitter::Background(b), Some(_)) => {
+                b.sample_li_facing(p, facing, u, choice, &self.world)
+            }
+            (e, _) => e.model().sample_li(p, u, choice, &self.world),
+        }
     }
 
     /// Density (solid angle at `p`, with the choice of emitter) with which `sample_li` picks
@@ -216,6 +232,15 @@ impl LightSet {
     /// `q − p`).
     pub fn pdf_li(&self, i: usize, p: Vec3, q: Vec3, n: Vec3) -> f32 {
         self.emitters[i].model().pdf_li(p, q, n, self.pmf_at(p, i))
+    }
+
+    /// [`pdf_li`](Self::pdf_li) for the receiver of
+    /// [`sample_li_facing`](Self::sample_li_facing).
+    pub fn pdf_li_facing(&self, i: usize, p: Vec3, facing: Option<Vec3>, q: Vec3, n: Vec3) -> f32 {
+        match (&self.emitters[i], facing) {
+            (Emitter::Background(b), Some(_)) => b.pdf_li_facing(p, facing, q, self.pmf_at(p, i)),
+            _ => self.pdf_li(i, p, q, n),
+        }
     }
 
     /// Starts a light path.
