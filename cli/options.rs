@@ -240,7 +240,8 @@ pub struct RenderArgs {
     /// Also write auxiliary images of the first surface seen (albedo, normal, depth) as
     /// STEM.albedo.exr, STEM.normal.exr and STEM.depth.exr beside the first output, and
     /// store them, with position (P) and object and material indices (IndexOB, IndexMA),
-    /// as layers of each EXR output.
+    /// as layers of each EXR output; the path tracer adds each pixel's sample variance,
+    /// error estimate and sample count (variance, error, samples).
     #[arg(long, help_heading = OUTPUT)]
     pub aov: bool,
     /// Exposure in stops applied to 8-bit outputs (PNG, JPEG).
@@ -445,6 +446,8 @@ pub fn job(args: &RenderArgs, scene: &Scene, extra: Settings) -> Result<Job, Err
         seed: args.seed,
         threads: args.threads,
         accel: args.accel.backend(),
+        // The variance, error and sample-count layers of the EXR outputs.
+        statistics: args.aov,
         ..Job::new(scene, technique)
     })
 }

@@ -423,10 +423,11 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
                 image,
             })
             .collect();
-        // Adaptive sampling's own images: each pixel's error estimate, its samples'
-        // variance and its sample count.
+        // Each pixel's error estimate, its samples' variance and its sample count (with
+        // adaptive sampling, or kept for these layers by the techniques whose samples
+        // belong to a pixel).
         let adaptive = match &film {
-            Some(film) => film.adaptive_images()?,
+            Some(film) => film.statistics_images()?,
             None => None,
         };
         if let Some([error, variance, samples]) = &adaptive {
@@ -506,7 +507,8 @@ fn render_with_checkpoints(
             .into());
         };
         let blank = raylink::Film::new(width, height, mc.filter, mc.reconstruction)?
-            .with_adaptive(mc.adaptive)?;
+            .with_adaptive(mc.adaptive)?
+            .with_statistics(job.keeps_statistics())?;
         let resumed = checkpoint::load_within(&found, settings, blank, mc.spp, &allowance)?;
         resumed_samples = resumed.samples;
         Some(resumed.film)

@@ -160,6 +160,92 @@ fn aov_exr_holds_every_auxiliary_image_as_a_layer() {
     assert!(Path::new(&dir.path().join("out.albedo.exr")).exists());
 }
 
+/// With the path tracer, `--aov` adds each pixel's sample statistics as layers (`error.X`,
+/// `variance.R/G/B`, `samples.X`) though adaptive sampling is off: read back, they are the
+/// film's own statistics of the same job through the library, value for value, and the
+/// image is the same as without `--aov`. Light tracing, whose samples are no pixel's own,
+/// writes none.
+#[test]
+fn aov_exr_holds_the_path_tracers_variance_without_adaptive_sampling() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("quads.toml");
+    std::fs::write(&scene, TWO_QUADS).unwrap();
+    let run = |name: &str, extra: &[&str]| {
+        let exr = dir.path().join(name);
+        let mut args = vec![
+            "render",
+            scene.to_str().unwrap(),
+            "--spp",
+            "8",
+            "--seed",
+            "4",
+            "-o",
+            exr.to_str().unwrap(),
+            "--quiet",
+        ];
+        args.extend_from_slice(extra);
+        let out = raylink(&args);
+        assert!(out.status.success(), "{}", stderr(&out));
+        io::read(&exr).unwrap()
+    };
+    let raw = run("path.exr", &["--integrator", "path", "--aov"]);
+    for name in [
+        "error.X",
+        "variance.R",
+        "variance.G",
+        "variance.B",
+        "samples.X",
+    ] {
+        assert!(
+            raw.channels.iter().any(|c| c == name),
+            "{name} in {:?}",
+            raw.channels
+        );
+    }
+    assert!(channel(&raw, "samples.X").iter().all(|&n| n == 8.0));
+    let plain = run("plain.exr", &["--integrator", "path"]);
+    for c in ["R", "G", "B"] {
+        assert_eq!(channel(&raw, c), channel(&plain, c), "{c}");
+    }
+
+    // The same job through the library.
+    let loaded = raylink::Scene::load(&scene).unwrap();
+    let given = raylink::settings::Settings {
+        integrator: Some(raylink::settings::TechniqueKind::Path),
+        spp: Some(8),
+        ..Default::default()
+    };
+    let technique = raylink::job::technique_for(&loaded, &given).unwrap();
+    let job = raylink::Job {
+        seed: 4,
+        statistics: true,
+        ..raylink::Job::new(&loaded, technique)
+    };
+    let control = raylink::control::Control::default();
+    let mut renderer = raylink::Renderer::new(loaded, job, &control).unwrap();
+    let film = renderer.render(&control).unwrap().film.unwrap();
+    let [error, variance, _] = film.statistics_images().unwrap().unwrap();
+    assert_eq!(
+        channel(&raw, "error.X"),
+        error.pixels.iter().map(|p| p.x).collect::<Vec<_>>()
+    );
+    for (c, name) in ["variance.R", "variance.G", "variance.B"]
+        .iter()
+        .enumerate()
+    {
+        let own: Vec<f32> = variance.pixels.iter().map(|p| [p.x, p.y, p.z][c]).collect();
+        assert_eq!(channel(&raw, name), own, "{name}");
+    }
+    assert!(variance.pixels.iter().any(|p| p.x > 0.0), "some noise");
+
+    let light = run("light.exr", &["--integrator", "light", "--aov"]);
+    assert!(
+        !light.channels.iter().any(|c| c.starts_with("variance.")),
+        "{:?}",
+        light.channels
+    );
+}
+
 /// A small pbrt scene whose film names `film` (none if empty).
 fn pbrt_scene(film: &str) -> String {
     let filename = if film.is_empty() {

@@ -47,6 +47,12 @@ pub struct Job {
     /// Worker threads; `None` uses every core. The image does not depend on it.
     pub threads: Option<usize>,
     pub accel: Backend,
+    /// Keep each pixel's sample statistics for the variance, error and sample-count images
+    /// ([`Film::statistics_images`]) though adaptive sampling is off (it keeps them
+    /// anyway). Only the techniques whose samples belong to a pixel keep them (the path
+    /// tracer), over the whole image: see [`Job::keeps_statistics`]. The image does not
+    /// depend on it.
+    pub statistics: bool,
 }
 
 impl Job {
@@ -61,7 +67,21 @@ impl Job {
             seed: 0,
             threads: None,
             accel: Backend::default(),
+            statistics: false,
         }
+    }
+
+    /// Whether the render keeps each pixel's sample statistics ([`Job::statistics`]): a
+    /// progressive render of the whole image whose samples belong to their pixels. Light
+    /// and bidirectional tracing splat light paths onto every pixel, so a pixel has no
+    /// samples of its own; a part of an image keeps none.
+    pub fn keeps_statistics(&self) -> bool {
+        let per_pixel = self.technique.renders_parts() && self.technique.monte_carlo().is_some();
+        let adaptive = self
+            .technique
+            .monte_carlo()
+            .is_some_and(|m| m.adaptive.is_some());
+        self.region.is_none() && ((self.statistics && per_pixel) || adaptive)
     }
 
     /// Checks what can be checked before any work.
@@ -157,7 +177,9 @@ impl Job {
         } else {
             24
         };
-        film + 12 + 16 + 16
+        // Sample counts, sums of squares, which pixels go on, and own sums.
+        let statistics = if self.keeps_statistics() { 53 } else { 0 };
+        film + statistics + 12 + 16 + 16
     }
 }
 
@@ -431,7 +453,8 @@ impl Renderer {
                 }
             }
             Tiles::Samples(integrator, mc) => {
-                let options = job.view().progressive(&mc);
+                let mut options = job.view().progressive(&mc);
+                options.statistics = job.keeps_statistics();
                 if job.region.is_some() {
                     let (image, stats) =
                         render_region(&ctx, integrator, &options, &region, control)?;

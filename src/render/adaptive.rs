@@ -1,6 +1,9 @@
 //! Adaptive sampling: each pixel's own statistics (its sample count and the sums of its
 //! samples' squares beside the film's sums), an error estimate from them, and the rule that
-//! stops a pixel. The error is Cycles' noise measure, the absolute error of the pixel's
+//! stops a pixel. The same statistics, without the rule, give the variance and error layers
+//! of a render sampled uniformly (kept when the job asks for them); when samples are splatted
+//! over neighbouring pixels they keep the sums of each pixel's own samples too, as the
+//! film's sums then mix neighbours. The error is Cycles' noise measure, the absolute error of the pixel's
 //! mean summed over the channels over the square root of its summed value, here estimated
 //! from the samples' variance rather than from a buffer of half the samples (the same
 //! quantity in expectation, with less noise of its own). Pixels are stopped only between
@@ -14,28 +17,37 @@ use crate::transport::settings::AdaptiveSampling;
 /// mean's standard error times this is what Cycles' half-buffer difference averages.
 const MEAN_ABSOLUTE_NORMAL: f64 = 0.797_884_560_802_865_4;
 
-/// A checkpoint's statistics: sample counts, sums of squares and which pixels go on.
-pub(crate) type SavedStats = (Vec<u32>, Vec<[f64; 3]>, Vec<bool>);
+/// A checkpoint's statistics: sample counts, sums of squares, which pixels go on, and the
+/// sums of each pixel's own samples (empty when the film's sums are those).
+pub(crate) type SavedStats = (Vec<u32>, Vec<[f64; 3]>, Vec<bool>, Vec<[f64; 3]>);
 
-/// Per-pixel statistics of an adaptively sampled film.
+/// Per-pixel statistics of a film: of an adaptively sampled one, or of one that keeps them
+/// for the variance and error layers.
 #[derive(Clone, Debug, PartialEq)]
 pub(crate) struct PixelStats {
-    pub rule: AdaptiveSampling,
+    /// Adaptive sampling's rule; `None`: every pixel takes every pass's samples.
+    pub rule: Option<AdaptiveSampling>,
     /// Samples taken in each pixel (row-major).
     pub counts: Vec<u32>,
     /// Per pixel and channel: the sum of the squares of its samples' values.
     pub squares: Vec<[f64; 3]>,
     /// Whether each pixel takes the next pass's samples.
     pub active: Vec<bool>,
+    /// Per pixel and channel: the sum of its own samples' values, when samples are
+    /// splatted (the film's sums then mix neighbours); empty when each sample counts in its
+    /// own pixel alone and the film's sums are these.
+    pub sums: Vec<[f64; 3]>,
 }
 
 impl PixelStats {
-    /// No samples yet, every pixel active; [`Error::OutOfMemory`](crate::error::Error) if
-    /// the buffers cannot be allocated.
+    /// No samples yet, every pixel active, keeping the sums of each pixel's own samples if
+    /// `own_sums`; [`Error::OutOfMemory`](crate::error::Error) if the buffers cannot be
+    /// allocated.
     pub fn new(
-        rule: AdaptiveSampling,
+        rule: Option<AdaptiveSampling>,
         width: u32,
         height: u32,
+        own_sums: bool,
     ) -> crate::error::Result<PixelStats> {
         let pixels = width as usize * height as usize;
         let what = || format!("the sample statistics of a {width}x{height} image");
@@ -44,12 +56,30 @@ impl PixelStats {
             counts: crate::platform::try_vec(pixels, 0, what)?,
             squares: crate::platform::try_vec(pixels, [0.0; 3], what)?,
             active: crate::platform::try_vec(pixels, true, what)?,
+            sums: crate::platform::try_vec(if own_sums { pixels } else { 0 }, [0.0; 3], what)?,
         })
     }
 
-    /// Adds a tile's pass of `n` samples a pixel: `squares` row-major over `tile`'s pixels
-    /// (`width` the image's). Only the pixels that were active took samples.
-    pub fn add(&mut self, tile: &super::Tile, width: u32, n: u32, squares: &[[f64; 3]]) {
+    /// The sums of each pixel's own samples: its own, or the film's `film_sums`.
+    pub fn own_sums<'a>(&'a self, film_sums: &'a [[f64; 3]]) -> &'a [[f64; 3]] {
+        if self.sums.is_empty() {
+            film_sums
+        } else {
+            &self.sums
+        }
+    }
+
+    /// Adds a tile's pass of `n` samples a pixel: `squares` (and, if this keeps its own,
+    /// `sums`) row-major over `tile`'s pixels (`width` the image's). Only the pixels that
+    /// were active took samples.
+    pub fn add(
+        &mut self,
+        tile: &super::Tile,
+        width: u32,
+        n: u32,
+        (squares, sums): (&[[f64; 3]], &[[f64; 3]]),
+    ) {
+        let own = !self.sums.is_empty();
         let mut k = 0;
         for y in tile.y0..tile.y1 {
             for x in tile.x0..tile.x1 {
@@ -59,6 +89,11 @@ impl PixelStats {
                     for (sum, q) in self.squares[i].iter_mut().zip(squares[k]) {
                         *sum += q;
                     }
+                    if own {
+                        for (sum, v) in self.sums[i].iter_mut().zip(sums[k]) {
+                            *sum += v;
+                        }
+                    }
                 }
                 k += 1;
             }
@@ -67,10 +102,14 @@ impl PixelStats {
 
     /// After a whole pass that left every active pixel with `spp` samples: stops the
     /// pixels whose error is below the threshold and whose neighbours' (3×3) are too, once
-    /// every pixel has the minimum. Returns how many pixels remain active.
+    /// every pixel has the minimum. Returns how many pixels remain active (all of them
+    /// without adaptive sampling).
     pub fn end_pass(&mut self, sums: &[[f64; 3]], width: u32, height: u32, spp: u32) -> usize {
-        if spp >= self.rule.min_samples {
-            let threshold = self.rule.threshold as f64;
+        let Some(rule) = self.rule else {
+            return self.active.len();
+        };
+        if spp >= rule.min_samples {
+            let threshold = rule.threshold as f64;
             let unconverged: Vec<bool> = (0..self.active.len())
                 .map(|i| {
                     self.active[i] && error(sums[i], self.squares[i], self.counts[i]) >= threshold
@@ -103,17 +142,20 @@ impl PixelStats {
         self.counts.iter().map(|&n| n as u64).sum()
     }
 
-    /// Per pixel: the error estimate (infinite below two samples).
+    /// Per pixel: the error estimate (infinite below two samples); `sums` the film's.
     pub fn errors<'a>(&'a self, sums: &'a [[f64; 3]]) -> impl Iterator<Item = f64> + 'a {
-        sums.iter()
+        self.own_sums(sums)
+            .iter()
             .zip(&self.squares)
             .zip(&self.counts)
             .map(|((s, q), n)| error(*s, *q, *n))
     }
 
-    /// Per pixel: its samples' variance per channel (zero below two samples).
+    /// Per pixel: its samples' variance per channel (zero below two samples); `sums` the
+    /// film's.
     pub fn variances<'a>(&'a self, sums: &'a [[f64; 3]]) -> impl Iterator<Item = Rgb> + 'a {
-        sums.iter()
+        self.own_sums(sums)
+            .iter()
             .zip(&self.squares)
             .zip(&self.counts)
             .map(|((s, q), n)| {
@@ -188,7 +230,7 @@ mod tests {
             min_samples: 4,
         };
         let (w, h) = (5u32, 1u32);
-        let mut stats = PixelStats::new(rule, w, h).unwrap();
+        let mut stats = PixelStats::new(Some(rule), w, h, false).unwrap();
         // Pixel 0 noisy (samples 0 and 2), the rest constant 1.
         let n = 4;
         let mut sums = vec![[n as f64; 3]; 5];

@@ -11,10 +11,13 @@
 //! sums   width·height × 3 f64        per pixel: sum of its sample estimates (weighted)
 //! weights width·height × f64         per pixel: sum of its splatted samples' weights
 //! splats width·height × 3 f64        per pixel: filter-weighted light-path splats
-//! with adaptive sampling only:
+//! with per-pixel statistics only (adaptive sampling, or kept for the variance layers):
 //!   counts  width·height × u32       per pixel: samples taken
 //!   squares width·height × 3 f64     per pixel: sum of its samples' squares
 //!   active  width·height × u8        per pixel: 1 if it takes the next pass's samples
+//!   and when samples are splatted over neighbouring pixels (statistics without adaptive
+//!   sampling):
+//!   own     width·height × 3 f64     per pixel: sum of its own samples' values
 //! checksum u64
 //! ```
 //!
@@ -26,14 +29,19 @@ use crate::error::Result;
 use crate::input_file::{self, Allowance};
 use std::path::{Path, PathBuf};
 
-/// Bytes a pixel's film values take, and its adaptive sampling statistics.
+/// Bytes a pixel's film values take, its sample statistics, and the sums of its own
+/// samples.
 const FILM_BYTES: usize = 56;
 const STATS_BYTES: usize = 4 + 24 + 1;
+const OWN_BYTES: usize = 24;
 
 /// Bytes a pixel of `film` takes in a checkpoint: its values, and its statistics if the
-/// film is sampled adaptively.
+/// film keeps them.
 fn bytes_per_pixel(film: &Film) -> usize {
-    FILM_BYTES + film.statistics().map_or(0, |_| STATS_BYTES)
+    FILM_BYTES
+        + film.statistics().map_or(0, |s| {
+            STATS_BYTES + if s.sums.is_empty() { 0 } else { OWN_BYTES }
+        })
 }
 
 pub(crate) const FORMAT: Format = Format {
@@ -187,6 +195,9 @@ pub fn save(path: &Path, film: &Film, settings: &str, samples: u64) -> Result<()
             b.extend_from_slice(&c.to_le_bytes());
         }
         b.extend(stats.active.iter().map(|&a| a as u8));
+        for c in stats.sums.iter().flatten() {
+            b.extend_from_slice(&c.to_le_bytes());
+        }
     }
     FORMAT.save(path, b)
 }
@@ -253,31 +264,44 @@ pub fn load_within(
     let invalid = r.u64().ok_or_else(|| bad("truncated"))?;
     let samples = r.u64().ok_or_else(|| bad("truncated"))?;
     let pixels = width as usize * height as usize;
-    // The statistics follow the film when the render samples adaptively.
+    // The statistics follow the film when the render samples adaptively or keeps them.
     if r.rest.len() != per_pixel * pixels {
         return Err(bad(if r.rest.len() == FILM_BYTES * pixels {
-            "holds no adaptive sampling statistics, and this render needs them"
-        } else if r.rest.len() == (FILM_BYTES + STATS_BYTES) * pixels {
-            "holds adaptive sampling statistics, and this render has none"
+            "holds no per-pixel sample statistics, and this render needs them (resume with \
+             the options of the interrupted run)"
+        } else if blank.statistics().is_none()
+            && [STATS_BYTES, STATS_BYTES + OWN_BYTES]
+                .iter()
+                .any(|b| r.rest.len() == (FILM_BYTES + b) * pixels)
+        {
+            "holds per-pixel sample statistics, and this render has none"
         } else {
             "truncated or trailing data"
         }));
     }
     let (film_bytes, rest) = r.rest.split_at(FILM_BYTES * pixels);
-    let stats = blank.statistics().is_some().then(|| {
+    let stats = blank.statistics().map(|kept| {
         let (counts, rest) = rest.split_at(4 * pixels);
-        let (squares, active) = rest.split_at(24 * pixels);
+        let (squares, rest) = rest.split_at(24 * pixels);
+        let (active, own) = rest.split_at(pixels);
         let counts: Vec<u32> = counts
             .chunks_exact(4)
             .map(|c| u32::from_le_bytes(c.try_into().unwrap_or([0; 4])))
             .collect();
         let f64_at = |c: &[u8]| f64::from_le_bytes(c.try_into().unwrap_or([0; 8]));
-        let squares: Vec<[f64; 3]> = squares
-            .chunks_exact(24)
-            .map(|c| [f64_at(&c[..8]), f64_at(&c[8..16]), f64_at(&c[16..])])
-            .collect();
+        let triples = |bytes: &[u8]| -> Vec<[f64; 3]> {
+            bytes
+                .chunks_exact(24)
+                .map(|c| [f64_at(&c[..8]), f64_at(&c[8..16]), f64_at(&c[16..])])
+                .collect()
+        };
         let active: Vec<bool> = active.iter().map(|&a| a != 0).collect();
-        (counts, squares, active)
+        let own = if kept.sums.is_empty() {
+            Vec::new()
+        } else {
+            triples(own)
+        };
+        (counts, triples(squares), active, own)
     });
     let mut values = film_bytes
         .chunks_exact(8)

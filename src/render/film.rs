@@ -35,8 +35,9 @@ pub struct Film {
     pub(crate) tiles_done: u32,
     /// Samples that returned NaN or infinity and were dropped.
     pub invalid: u64,
-    /// With adaptive sampling: each pixel's sample count, sums of squares and whether it
-    /// goes on.
+    /// With adaptive sampling, or when kept for the variance and error layers: each
+    /// pixel's sample count, sums of squares (and of its own samples, when they are
+    /// splatted) and whether it goes on.
     pub(crate) stats: Option<PixelStats>,
 }
 
@@ -92,22 +93,49 @@ impl Film {
                     "adaptive sampling needs pixels that take their samples from the filter".into(),
                 ));
             }
-            self.stats = Some(PixelStats::new(rule, self.width, self.height)?);
+            self.stats = Some(PixelStats::new(Some(rule), self.width, self.height, false)?);
         }
         Ok(self)
     }
 
-    /// The per-pixel statistics of adaptive sampling, for checkpoints: sample counts, sums
-    /// of squares and which pixels go on.
+    /// This film, keeping each pixel's sample statistics (count, sums of squares, and the
+    /// sums of its own samples when they are splatted over its neighbours) if `keep`, for
+    /// [`Film::statistics_images`]; adaptive sampling keeps them already.
+    pub fn with_statistics(mut self, keep: bool) -> crate::error::Result<Film> {
+        if keep && self.stats.is_none() {
+            let own_sums = self.reconstruction == Reconstruction::Splat;
+            self.stats = Some(PixelStats::new(None, self.width, self.height, own_sums)?);
+        }
+        Ok(self)
+    }
+
+    /// Whether the film keeps each pixel's sample statistics.
+    pub fn has_statistics(&self) -> bool {
+        self.stats.is_some()
+    }
+
+    /// Adaptive sampling's rule, if the film is sampled adaptively.
+    pub(crate) fn adaptive(&self) -> Option<crate::transport::settings::AdaptiveSampling> {
+        self.stats.as_ref().and_then(|s| s.rule)
+    }
+
+    /// The per-pixel statistics, for checkpoints: sample counts, sums of squares, which
+    /// pixels go on and the sums of their own samples.
     pub(crate) fn statistics(&self) -> Option<&PixelStats> {
         self.stats.as_ref()
     }
 
-    /// Adds a tile's pass of `n` samples a pixel to the statistics (nothing without
-    /// adaptive sampling); `squares` row-major over the tile.
-    pub(crate) fn add_statistics(&mut self, tile: &Tile, n: u32, squares: &[[f64; 3]]) {
+    /// Adds a tile's pass of `n` samples a pixel to the statistics (nothing if the film
+    /// keeps none); `squares` and `sums` (each pixel's own samples, when they are splatted)
+    /// row-major over the tile.
+    pub(crate) fn add_statistics(
+        &mut self,
+        tile: &Tile,
+        n: u32,
+        (squares, sums): (&[[f64; 3]], &[[f64; 3]]),
+    ) {
         if let Some(stats) = &mut self.stats {
-            stats.add(tile, self.width, n, squares);
+            stats.add(tile, self.width, n, (squares, sums));
         }
     }
 
@@ -121,14 +149,20 @@ impl Film {
         }
     }
 
-    /// Which pixels take the next pass's samples (all, without adaptive sampling).
+    /// Which pixels take the next pass's samples (`None`: all, without adaptive sampling).
     pub(crate) fn active(&self) -> Option<&[bool]> {
-        self.stats.as_ref().map(|s| s.active.as_slice())
+        self.stats
+            .as_ref()
+            .filter(|s| s.rule.is_some())
+            .map(|s| s.active.as_slice())
     }
 
-    /// With adaptive sampling, per pixel: the error estimate, the samples' variance per
-    /// channel and the sample count, as images; `None` without.
-    pub fn adaptive_images(&self) -> crate::error::Result<Option<[Image; 3]>> {
+    /// Per pixel, with adaptive sampling or kept statistics ([`Film::with_statistics`]):
+    /// the error estimate adaptive sampling uses, the variance per channel of the samples
+    /// taken for the pixel (pbrt-v4's per-pixel variance; of the pixel's own samples, even
+    /// when they are splatted over its neighbours) and the sample count, as images; `None`
+    /// without statistics.
+    pub fn statistics_images(&self) -> crate::error::Result<Option<[Image; 3]>> {
         let Some(stats) = &self.stats else {
             return Ok(None);
         };
@@ -212,10 +246,17 @@ impl Film {
         }
         match (&mut self.stats, stats) {
             (None, None) => {}
-            (Some(mine), Some((counts, squares, active))) => {
+            (Some(mine), Some((counts, squares, active, own))) => {
                 let n = mine.active.len();
-                if counts.len() != n || squares.len() != n || active.len() != n {
+                if counts.len() != n
+                    || squares.len() != n
+                    || active.len() != n
+                    || own.len() != mine.sums.len()
+                {
                     return Err("wrong number of pixels".into());
+                }
+                if mine.rule.is_none() && active.iter().any(|a| !a) {
+                    return Err("a pixel stopped, and this render samples every pixel".into());
                 }
                 if counts.iter().any(|&c| c > spp + pass) {
                     return Err("a pixel counts more samples than its passes hold".into());
@@ -223,14 +264,20 @@ impl Film {
                 if squares.iter().flatten().any(|v| v.is_nan() || *v < 0.0) {
                     return Err("a pixel's sum of squares is negative or not a number".into());
                 }
-                (mine.counts, mine.squares, mine.active) = (counts, squares, active);
+                if own.iter().flatten().any(|v| v.is_nan() || *v < 0.0) {
+                    return Err(
+                        "a pixel's sum of its own samples is negative or not a number".into(),
+                    );
+                }
+                (mine.counts, mine.squares, mine.active, mine.sums) =
+                    (counts, squares, active, own);
             }
             (None, Some(_)) => {
-                return Err("holds adaptive sampling statistics, and this render has none".into())
+                return Err("holds per-pixel sample statistics, and this render has none".into())
             }
             (Some(_), None) => {
                 return Err(
-                    "holds no adaptive sampling statistics, and this render needs them".into(),
+                    "holds no per-pixel sample statistics, and this render needs them".into(),
                 )
             }
         }
@@ -260,7 +307,7 @@ impl Film {
     /// Mean samples per pixel so far.
     pub fn mean_spp(&self) -> f64 {
         let pixels = self.width as f64 * self.height as f64;
-        if let Some(stats) = &self.stats {
+        if let Some(stats) = self.stats.as_ref().filter(|s| s.rule.is_some()) {
             return stats.samples() as f64 / pixels;
         }
         self.spp as f64 + self.pass as f64 * self.tiles_done_pixels() as f64 / pixels
@@ -313,7 +360,7 @@ impl Film {
             }
             return Ok(image);
         }
-        if let Some(stats) = &self.stats {
+        if let Some(stats) = self.stats.as_ref().filter(|s| s.rule.is_some()) {
             // Adaptive sampling: each pixel by its own count (no light paths).
             for ((px, sum), n) in image.pixels.iter_mut().zip(&self.sums).zip(&stats.counts) {
                 let per_sample = if *n == 0 { 0.0 } else { 1.0 / *n as f64 };
@@ -468,7 +515,8 @@ impl std::fmt::Debug for Film {
             .field("pass", &self.pass)
             .field("tiles_done", &self.tiles_done)
             .field("invalid", &self.invalid)
-            .field("adaptive", &self.stats.as_ref().map(|s| s.rule))
+            .field("adaptive", &self.adaptive())
+            .field("statistics", &self.stats.is_some())
             .finish_non_exhaustive()
     }
 }

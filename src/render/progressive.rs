@@ -28,9 +28,11 @@ struct TileResult {
     /// they reach.
     camera: Footprint,
     splats: Vec<Splat>,
-    /// With adaptive sampling: per pixel of the tile (row-major), the sums of its samples'
-    /// squares.
+    /// With per-pixel statistics (adaptive sampling, or kept for the variance layers): per
+    /// pixel of the tile (row-major), the sums of its samples' squares, and when samples
+    /// are splatted, the sums of its own samples.
     squares: Vec<[f64; 3]>,
+    own_sums: Vec<[f64; 3]>,
     /// With path guiding, in a pass that learns: what its samples deposited, in order.
     deposits: Vec<Deposit>,
     rays: RayStats,
@@ -52,6 +54,7 @@ impl TileResult {
             camera,
             splats: Vec::new(),
             squares: Vec::new(),
+            own_sums: Vec::new(),
             deposits: Vec::new(),
             rays: RayStats::default(),
             invalid: 0,
@@ -70,6 +73,10 @@ struct Samples<'a> {
     moving: bool,
     /// Samples and splats are scaled down so that no channel exceeds this.
     max_component_value: Option<f32>,
+    /// Whether each pixel's sample statistics are kept (adaptive sampling, or the
+    /// variance layers): the sums of squares, and of the pixel's own samples when they are
+    /// splatted.
+    statistics: bool,
 }
 
 impl<'a> Samples<'a> {
@@ -86,6 +93,7 @@ impl<'a> Samples<'a> {
             jitter: PixelJitter::new(options.filter, options.reconstruction),
             moving: ctx.scene.moves(),
             max_component_value: options.max_component_value,
+            statistics: options.statistics || options.adaptive.is_some(),
         }
     }
 
@@ -98,9 +106,9 @@ impl<'a> Samples<'a> {
     }
 
     /// The sum of the estimates of samples `samples` of pixel `(x, y)`: what one pass adds
-    /// to the pixel (nothing when samples are splatted: they go to `result`'s footprint).
-    /// Splats, rays and dropped samples go to `result`; the sum of the estimates' squares
-    /// to `squares`. With `guidance`, samples are guided.
+    /// to the pixel (when samples are splatted they go to `result`'s footprint, and the sum
+    /// is only kept with statistics). Splats, rays and dropped samples go to `result`; the
+    /// sum of the estimates' squares to `squares`. With `guidance`, samples are guided.
     fn pixel_pass(
         &self,
         (x, y): (u32, u32),
@@ -157,7 +165,9 @@ impl<'a> Samples<'a> {
             }
             if let Some(s) = self.jitter.splatting() {
                 result.camera.add(&s.weights, at, Some(l));
-                continue;
+                if !self.statistics {
+                    continue;
+                }
             }
             let l = [l.x as f64, l.y as f64, l.z as f64];
             for c in 0..3 {
@@ -170,8 +180,9 @@ impl<'a> Samples<'a> {
 
     /// One pass of `samples` over a tile, whose splatted samples reach the pixels of
     /// `bounds` only. With adaptive sampling, only the pixels `active` (row-major over an
-    /// image `width` wide) take samples, and their sums of squares are kept. With a guide
-    /// the samples are guided, and deposit into it if the pass learns.
+    /// image `width` wide) take samples. With statistics, the pixels' sums of squares (and
+    /// of their own samples, when splatted) are kept. With a guide the samples are guided,
+    /// and deposit into it if the pass learns.
     fn tile_pass(
         &self,
         tile: &Tile,
@@ -201,8 +212,10 @@ impl<'a> Samples<'a> {
                 };
                 if splatting.is_none() {
                     result.camera.sums.push(sum);
+                } else if self.statistics {
+                    result.own_sums.push(sum);
                 }
-                if active.is_some() {
+                if self.statistics {
                     result.squares.push(squares);
                 }
             }
@@ -438,11 +451,17 @@ pub(crate) fn render_passes(
             options.filter,
             options.reconstruction,
         )?
-        .with_adaptive(options.adaptive)?,
+        .with_adaptive(options.adaptive)?
+        .with_statistics(options.statistics)?,
     };
-    if film.statistics().map(|s| s.rule) != options.adaptive {
+    if film.adaptive() != options.adaptive {
         return Err(Error::Invalid(
             "the film to resume was rendered with other adaptive sampling".into(),
+        ));
+    }
+    if film.has_statistics() != (options.statistics || options.adaptive.is_some()) {
+        return Err(Error::Invalid(
+            "the film to resume was rendered with other per-pixel sample statistics".into(),
         ));
     }
     let mut stats = RenderStats::default();
@@ -475,7 +494,7 @@ pub(crate) fn render_passes(
     });
     // As (first pass, passes): a pass ends its group when the next depends on it.
     let groups = group_passes(&passes, |end| {
-        film.statistics().is_some() || learning.as_ref().is_some_and(|l| l.builds_at(end))
+        film.adaptive().is_some() || learning.as_ref().is_some_and(|l| l.builds_at(end))
     });
     let whole = Tile::whole(options.view.width, options.view.height);
     let width = options.view.width;
@@ -519,7 +538,7 @@ pub(crate) fn render_passes(
                 let (tile, n) = (&tiles[t], passes[p].1);
                 film.pass = n;
                 film.add_camera(&r.camera);
-                film.add_statistics(tile, n, &r.squares);
+                film.add_statistics(tile, n, (&r.squares, &r.own_sums));
                 for splat in &r.splats {
                     film.add_splat(splat);
                 }

@@ -37,6 +37,7 @@ fn options(
         reconstruction: Reconstruction::Importance,
         adaptive,
         max_component_value: None,
+        statistics: false,
     }
 }
 

@@ -245,6 +245,7 @@ fn sequence_job(
         seed: 3,
         threads: Some(2),
         accel: Backend::Embree,
+        statistics: false,
     };
     let coherence = Coherence {
         mode: SequenceMode::Verify,

@@ -230,6 +230,7 @@ fn case(n: u64) -> (String, Job, Vec<i64>, Coherence) {
         seed: n,
         threads: Some(rng.int(1, 2) as usize),
         accel: Backend::Embree,
+        statistics: false,
     };
     let coherence = Coherence {
         mode: SequenceMode::Verify,

@@ -44,6 +44,7 @@ pub(super) fn options(w: u32, h: u32, spp: u32, threads: Option<usize>) -> Progr
         reconstruction: crate::image::filter::Reconstruction::Splat,
         adaptive: None,
         max_component_value: None,
+        statistics: false,
     }
 }
 

@@ -28,6 +28,7 @@ fn render(scene: &Scene, kind: SelectionKind, seed: u64) -> Image {
         reconstruction: crate::image::filter::Reconstruction::Splat,
         adaptive: None,
         max_component_value: None,
+        statistics: false,
     };
     let tracer = PathTracer::new(PathOptions { max_depth: 1 });
     let watch = crate::render::Watch::nobody();

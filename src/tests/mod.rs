@@ -23,6 +23,7 @@ mod normal_detail;
 #[cfg(feature = "oiio")]
 mod oiio;
 mod path_guiding;
+mod pixel_statistics;
 mod reproductions;
 mod robustness;
 mod rough_glass;

@@ -62,6 +62,7 @@ pub(crate) fn monte_carlo_image(
         reconstruction: crate::image::filter::Reconstruction::Splat,
         adaptive: None,
         max_component_value: None,
+        statistics: false,
     };
     let watch = crate::render::Watch::nobody();
     let (film, _) =

@@ -57,6 +57,7 @@ fn render(scene: &Scene, run: &Run, resume: Option<Film>) -> crate::error::Resul
         reconstruction: Reconstruction::Importance,
         adaptive: run.adaptive,
         max_component_value: None,
+        statistics: false,
     };
     let mut show = |_: &Film, _: Shown, _: &RenderStats| Ok(());
     let watch = Watch {

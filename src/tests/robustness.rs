@@ -58,6 +58,7 @@ fn non_finite_samples_are_dropped_and_counted() {
             reconstruction,
             adaptive: None,
             max_component_value: None,
+            statistics: false,
         };
         let (film, _) = render_passes(
             &ctx,

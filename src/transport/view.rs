@@ -129,6 +129,7 @@ impl View {
             reconstruction: mc.reconstruction,
             adaptive: mc.adaptive,
             max_component_value: mc.max_component_value,
+            statistics: false,
         }
     }
 }
@@ -147,4 +148,7 @@ pub(crate) struct ProgressiveOptions {
     pub adaptive: Option<crate::transport::settings::AdaptiveSampling>,
     /// Samples scaled down so that no channel exceeds this.
     pub max_component_value: Option<f32>,
+    /// Keep each pixel's sample statistics (count, sums of squares) for the variance and
+    /// error layers, without adaptive sampling (which keeps them anyway).
+    pub statistics: bool,
 }
