@@ -33,6 +33,13 @@ twins agree. The error of an unbiased estimator falls as 1/sqrt(samples), so a r
 seconds with error e reaches --target E in t (e/E)^2; the medians over the runs are
 compared. --reps must be at least 3.
 
+With --with-guiding, raylink guided (the best options and `--guiding true`) runs too.
+
+With --images DIR, each configuration (Mitsuba: its fastest sampler) then renders the room
+once more at --image-width x --image-height, all at equal time: raylink plain at
+--image-spp, every other at the samples that take the same time by the runs' median time
+per sample; the images are written to DIR as PNG (`window-room-raylink-plain.png`, ...).
+
 Setup: python3 -m venv /tmp/mi && /tmp/mi/bin/pip install mitsuba
 Run:   cargo build --release && /tmp/mi/bin/python benches/interiors_compare.py --reps 5
 """
@@ -83,24 +90,28 @@ class Room:
             f.write(text)
         self.plain_toml_differs = "portal" not in text and "portal" in open(self.toml).read()
 
-    def raylink(self, extra, spp, seed, out, plain=False):
+    def raylink(self, extra, spp, seed, out, plain=False, size=None):
         a = self.args
         toml = self.plain_toml if plain else self.toml
-        command = [a.raylink, "render", toml, "--width", str(a.width), "--height",
-                   str(a.height), "--spp", str(spp), "--filter", "box", "--filter-radius",
+        width, height = size or (a.width, a.height)
+        command = [a.raylink, "render", toml, "--width", str(width), "--height",
+                   str(height), "--spp", str(spp), "--filter", "box", "--filter-radius",
                    "0.5", "--seed", str(seed), "-o", out] + extra
         err = subprocess.run(command, check=True, capture_output=True, text=True).stderr
         return float(re.search(r"rendered in ([0-9.]+) s", err).group(1))
 
-    def mitsuba(self, sampler, spp, seed, out):
-        if (sampler, spp) not in self.loaded:
-            self.loaded[(sampler, spp)] = mi.load_file(
-                self.xml, width=self.args.width, height=self.args.height, spp=spp,
-                sampler=sampler)
+    def mitsuba(self, sampler, spp, seed, out, size=None):
+        width, height = size or (self.args.width, self.args.height)
+        if (sampler, spp, width) not in self.loaded:
+            self.loaded[(sampler, spp, width)] = mi.load_file(
+                self.xml, width=width, height=height, spp=spp, sampler=sampler)
         start = time.perf_counter()
-        image = mi.render(self.loaded[(sampler, spp)], seed=seed)
+        image = mi.render(self.loaded[(sampler, spp, width)], seed=seed)
         seconds = time.perf_counter() - start
-        mi.Bitmap(image).write(out)
+        bitmap = mi.Bitmap(image)
+        if out.endswith(".png"):
+            bitmap = bitmap.convert(mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.UInt8, True)
+        bitmap.write(out)
         return seconds
 
     def reference(self, renderer):
@@ -144,6 +155,12 @@ def main():
     ap.add_argument("--raylink-best-args", default="",
                     help="options added to the plain ones for raylink's best settings")
     ap.add_argument("--mitsuba-samplers", default="independent,multijitter,ldsampler")
+    ap.add_argument("--with-guiding", action="store_true",
+                    help="also raylink's best settings with --guiding true")
+    ap.add_argument("--images", metavar="DIR", help="write images at equal time into DIR")
+    ap.add_argument("--image-width", type=int, default=320)
+    ap.add_argument("--image-height", type=int, default=240)
+    ap.add_argument("--image-spp", type=int, default=64, help="raylink plain's samples")
     args = ap.parse_args()
     if args.reps < 3:
         sys.exit("--reps must be at least 3")
@@ -156,6 +173,8 @@ def main():
         room = Room(args, key)
         references = {r: room.reference(r) for r in ("raylink", "mitsuba")}
         configs = [("raylink plain", "raylink", plain), ("raylink best", "raylink", best)]
+        if args.with_guiding:
+            configs.append(("raylink guided", "raylink", best + ["--guiding", "true"]))
         plain_scene = {"raylink plain": True}
         configs += [(f"mitsuba {s}", "mitsuba", s) for s in samplers]
         runs = {name: [] for name, _, _ in configs}
@@ -202,6 +221,8 @@ def main():
               f"(standard errors under {100 * max(max(rse / rm), max(mse_ / mm)):.2f}%)")
         summary.append((room.label, to_target["raylink plain"], to_target["raylink best"],
                         fastest, to_target[f"mitsuba {fastest}"]))
+        if args.images:
+            write_images(args, room, key, configs, runs, fastest, plain_scene)
     print()
     print(f"time to relative RMSE {args.target:g} (s, medians of {args.reps}) at "
           f"{args.width}x{args.height}, Mitsuba {mi.__version__} scalar_rgb:")
@@ -210,6 +231,26 @@ def main():
     for label, p, b, s, m in summary:
         print(f"| {label} | {p:.2f} | {b:.2f} | {m:.2f} ({s}) | {b / m:.2f} | {b / p:.2f} |")
     return 0
+
+
+def write_images(args, room, key, configs, runs, fastest, plain_scene):
+    """Each configuration's image at the time raylink plain takes for --image-spp."""
+    os.makedirs(args.images, exist_ok=True)
+    per_sample = {name: statistics.median(t for t, _ in runs[name]) / args.spp
+                  for name, _, _ in configs}
+    budget = per_sample["raylink plain"] * args.image_spp
+    size = (args.image_width, args.image_height)
+    for name, renderer, what in configs:
+        if renderer == "mitsuba" and what != fastest:
+            continue
+        spp = max(1, round(budget / per_sample[name]))
+        slug = name.replace(" ", "-")
+        out = os.path.join(args.images, f"{key}-room-{slug}.png")
+        if renderer == "raylink":
+            room.raylink(what, spp, 7, out, plain=plain_scene.get(name, False), size=size)
+        else:
+            room.mitsuba(what, spp, 7, out, size=size)
+        print(f"  image at equal time: {out}, {name}, {spp} spp")
 
 
 if __name__ == "__main__":
