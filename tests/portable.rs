@@ -1,6 +1,6 @@
 //! The portable build (`--no-default-features --features portable`: the pure-Rust BVH and
 //! image codecs, no system library): it renders the Cornell box as the default build does,
-//! within noise, and reads and writes EXR and PNG. The tests run in any build; those that
+//! within noise, and reads and writes EXR, PNG, JPEG and HDR. The tests run in any build; those that
 //! are about a missing library run only without it, and the cross-check of the two image
 //! libraries only with OpenImageIO.
 
@@ -253,6 +253,82 @@ fn png_round_trip_is_within_quantisation() {
     }
 }
 
+/// A smooth RGB ramp, `width` x `height`, values in [0, 1.2].
+fn ramp(width: u32, height: u32) -> Vec<f32> {
+    (0..width * height * 3)
+        .map(|i| {
+            let (p, c) = (i / 3, i % 3);
+            let (x, y) = ((p % width) as f32, (p / width) as f32);
+            (0.1 + 0.3 * c as f32 + x / width as f32 * 0.5 + y / height as f32 * 0.3).min(1.2)
+        })
+        .collect()
+}
+
+/// The pure-Rust codecs write and read JPEG and Radiance HDR: HDR within RGBE's precision
+/// (8 bits of mantissa shared by the three channels: a relative error below 1/128 of the
+/// largest channel), JPEG at quality 95 within a few levels of 1/255 on a smooth image.
+#[test]
+fn jpeg_and_hdr_round_trip_within_their_precision() {
+    use raylink::image::codecs;
+    let dir = tempfile::tempdir().unwrap();
+    let allowance = raylink::input_file::Allowance::machine();
+    let (width, height) = (48, 32);
+    let data = ramp(width, height);
+    let image = ImageToWrite {
+        width,
+        height,
+        channels: &["R", "G", "B"],
+        data: &data,
+        pixel_type: PixelType::Float,
+        window: None,
+    };
+    let hdr = dir.path().join("ramp.hdr");
+    std::fs::write(&hdr, codecs::encode(&hdr, "hdr", image, &vec![]).unwrap()).unwrap();
+    let back = io::read(&hdr).unwrap();
+    assert_eq!((back.width, back.height), (width, height));
+    assert_eq!(back.channels, ["R", "G", "B"]);
+    assert_eq!(back.format, "hdr");
+    for (px, (w, r)) in data.chunks(3).zip(back.data.chunks(3)).enumerate() {
+        let largest = w.iter().copied().fold(0.0, f32::max);
+        for c in 0..3 {
+            assert!(
+                (w[c] - r[c]).abs() <= largest / 128.0,
+                "pixel {px}: {w:?} read as {r:?}"
+            );
+        }
+    }
+    let jpg = dir.path().join("ramp.jpg");
+    let image = ImageToWrite {
+        pixel_type: PixelType::U8,
+        ..image
+    };
+    std::fs::write(&jpg, codecs::encode(&jpg, "jpeg", image, &vec![]).unwrap()).unwrap();
+    let back = codecs::read_within(&jpg, &allowance).unwrap();
+    assert_eq!(
+        (back.width, back.height, back.format.as_str()),
+        (width, height, "jpeg")
+    );
+    let (mut sum, mut worst) = (0.0f64, 0.0f32);
+    for (w, r) in data.iter().zip(&back.data) {
+        let e = (w.clamp(0.0, 1.0) - r).abs();
+        sum += e as f64;
+        worst = worst.max(e);
+    }
+    let mean = sum / data.len() as f64;
+    assert!(
+        mean < 1.5 / 255.0 && worst < 8.0 / 255.0,
+        "mean {mean}, worst {worst}"
+    );
+    // A file that is neither is refused by name.
+    let bad = dir.path().join("bad.jpg");
+    std::fs::write(&bad, [0xff, 0xd8, 0xff, 0x00, 0x01]).unwrap();
+    let message = io::read(&bad).unwrap_err().to_string();
+    assert!(
+        message.contains("bad.jpg") && message.lines().count() == 1,
+        "{message}"
+    );
+}
+
 /// The auxiliary images of `--aov` go into the EXR as named layers and come back per name.
 #[test]
 fn exr_layers_of_the_output_come_back_by_name() {
@@ -326,23 +402,21 @@ fn bad_image_files_are_one_line_errors() {
     }
 }
 
-/// Without OpenImageIO, the formats only it writes are refused before rendering: one line,
-/// exit status 2, nothing written.
+/// Without OpenImageIO, the format only it writes (TIFF) is refused before rendering: one
+/// line, exit status 2, nothing written.
 #[cfg(not(feature = "oiio"))]
 #[test]
 fn formats_that_need_openimageio_are_refused() {
     let dir = tempfile::tempdir().unwrap();
-    for ext in ["jpg", "hdr", "tif"] {
-        let out = dir.path().join(format!("out.{ext}"));
-        let run = raylink(&[
-            "render",
-            "scenes/cornell-box.toml",
-            "-o",
-            out.to_str().unwrap(),
-        ]);
-        assert_clean_failure_of(ext, &run, &[&format!(".{ext}"), "OpenImageIO", ".png"]);
-        assert!(!out.exists(), "{ext}");
-    }
+    let out = dir.path().join("out.tif");
+    let run = raylink(&[
+        "render",
+        "scenes/cornell-box.toml",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_clean_failure_of("tif", &run, &[".tif", "OpenImageIO", ".png"]);
+    assert!(!out.exists());
 }
 
 /// Without Embree, `--accel embree` is refused with one line; the default is the BVH.
@@ -467,5 +541,52 @@ fn openimageio_and_the_rust_codecs_read_each_other() {
             &oiio::read(&by_rust).unwrap(),
             &oiio::read(&by_oiio).unwrap(),
         );
+    }
+    // JPEG and HDR: each library reads the other's file to within the format's precision
+    // (JPEG decoders round their transforms differently; RGBE decoders place a value at its
+    // step's bottom or middle).
+    let (width, height) = (24, 16);
+    let data = ramp(width, height);
+    for (ext, pixel_type, tolerance) in [
+        ("jpeg", PixelType::U8, 3.0 / 255.0),
+        ("hdr", PixelType::Float, 1.0 / 64.0),
+    ] {
+        let image = ImageToWrite {
+            width,
+            height,
+            channels: &["R", "G", "B"],
+            data: &data,
+            pixel_type,
+            window: None,
+        };
+        let by_rust = dir.path().join(format!("rust.{ext}"));
+        let by_oiio = dir.path().join(format!("oiio.{ext}"));
+        std::fs::write(
+            &by_rust,
+            codecs::encode(&by_rust, ext, image, &vec![]).unwrap(),
+        )
+        .unwrap();
+        oiio::write(&by_oiio, ext, image, &vec![]).unwrap();
+        for file in [&by_rust, &by_oiio] {
+            let (a, b) = (
+                oiio::read(file).unwrap(),
+                codecs::read_within(file, &allowance).unwrap(),
+            );
+            assert_eq!(
+                (a.width, a.height),
+                (b.width, b.height),
+                "{}",
+                file.display()
+            );
+            assert_eq!(a.channels, b.channels, "{}", file.display());
+            for (k, (x, y)) in a.data.iter().zip(&b.data).enumerate() {
+                let scale = if ext == "hdr" { x.abs().max(0.1) } else { 1.0 };
+                assert!(
+                    (x - y).abs() <= tolerance * scale,
+                    "{} {k}: {x} {y}",
+                    file.display()
+                );
+            }
+        }
     }
 }

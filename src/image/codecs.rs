@@ -1,11 +1,14 @@
-//! Image files in pure Rust: OpenEXR through `exr`, PNG through `png`. These read and write
+//! Image files in pure Rust: OpenEXR through `exr`, PNG through `png`, JPEG and Radiance HDR
+//! (RGBE) through `image`. These read and write
 //! images in a build without OpenImageIO (the portable build, see [`super::io`]); with
 //! OpenImageIO they are there too, so that each library can read what the other writes.
 //!
 //! EXR: any named float channels (so the extra layers of [`super::output::Layer`], as
 //! `albedo.R`), half or 32-bit float, ZIP-compressed scanlines, the data window inside the
 //! display window, string, integer and float header attributes. PNG: 1 to 4 channels (`Y`,
-//! `Y A`, `R G B`, `R G B A`), 8 or 16 bits, metadata as text chunks.
+//! `Y A`, `R G B`, `R G B A`), 8 or 16 bits, metadata as text chunks. JPEG: 8-bit `Y` or
+//! `R G B` read, `R G B` written at quality 95 (as OpenImageIO's `jpeg:95`), no metadata.
+//! HDR: `R G B` floats in RGBE, no metadata.
 
 use std::io::Cursor;
 use std::path::Path;
@@ -18,7 +21,7 @@ use crate::error::{Error, Result};
 use crate::input_file::{self, Allowance};
 
 /// The formats these codecs write, for messages.
-const WRITES: &str = "without OpenImageIO raylink writes .exr and .png";
+const WRITES: &str = "without OpenImageIO raylink writes .exr, .png, .jpg and .hdr";
 
 /// Encodes `image` as an EXR (`format` `"openexr"` or `"exr"`) or PNG (`"png"`) file in
 /// memory; `path` only names the file in messages.
@@ -46,15 +49,13 @@ pub fn encode(
     }
     match format {
         "openexr" | "exr" => encode_exr(path, image, metadata),
-        "png" => {
-            if image.window.is_some() {
-                return Err(Error::image(
-                    path,
-                    "a part of an image is written only as EXR",
-                ));
-            }
-            encode_png(path, image, metadata)
-        }
+        "png" | "jpeg" | "jpg" | "hdr" if image.window.is_some() => Err(Error::image(
+            path,
+            "a part of an image is written only as EXR",
+        )),
+        "png" => encode_png(path, image, metadata),
+        "jpeg" | "jpg" => encode_jpeg(path, image),
+        "hdr" => encode_hdr(path, image),
         other => Err(Error::image(
             path,
             format!("cannot write the {other} format: {WRITES}"),
@@ -215,6 +216,56 @@ fn encode_png(path: &Path, image: ImageToWrite, metadata: &Metadata) -> Result<V
     Ok(bytes)
 }
 
+/// The three channels `R G B` of `image`, or the refusal naming the format.
+fn rgb_only(path: &Path, image: &ImageToWrite, format: &str) -> Result<()> {
+    if image.channels != ["R", "G", "B"] {
+        return Err(Error::image(
+            path,
+            format!(
+                "{format} holds R, G and B, not {}",
+                image.channels.join(", ")
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn encode_jpeg(path: &Path, image: ImageToWrite) -> Result<Vec<u8>> {
+    rgb_only(path, &image, "JPEG")?;
+    // Floats to bytes as for PNG (and as OpenImageIO converts them).
+    let data: Vec<u8> = image
+        .data
+        .iter()
+        .map(|&v| (v * 255.0 + 0.5).clamp(0.0, 255.0) as u8)
+        .collect();
+    let mut bytes = Vec::new();
+    image::codecs::jpeg::JpegEncoder::new_with_quality(&mut bytes, 95)
+        .encode(
+            &data,
+            image.width,
+            image.height,
+            image::ExtendedColorType::Rgb8,
+        )
+        .map_err(|e| Error::image(path, format!("cannot encode as JPEG: {e}")))?;
+    Ok(bytes)
+}
+
+fn encode_hdr(path: &Path, image: ImageToWrite) -> Result<Vec<u8>> {
+    use image::ImageEncoder;
+    rgb_only(path, &image, "HDR")?;
+    let floats: Vec<u8> = image.data.iter().flat_map(|v| v.to_ne_bytes()).collect();
+    let mut bytes = Vec::new();
+    image::codecs::hdr::HdrEncoder::new(&mut bytes)
+        .write_image(
+            &floats,
+            image.width,
+            image.height,
+            image::ExtendedColorType::Rgb32F,
+        )
+        .map_err(|e| Error::image(path, format!("cannot encode as HDR: {e}")))?;
+    Ok(bytes)
+}
+
 /// Reads the EXR or PNG file at `path` (told apart by their first bytes) as
 /// [`super::io::read_within`] says: the file is bad input unless it is a regular file within
 /// the limit on images whose header declares a size within the limits and `allowance`.
@@ -233,10 +284,14 @@ pub fn read_within(path: &Path, allowance: &Allowance) -> Result<RawImage> {
         read_exr(path, &bytes, allowance)
     } else if bytes.starts_with(b"\x89PNG\r\n\x1a\n") {
         read_png(path, &bytes, allowance)
+    } else if bytes.starts_with(&[0xff, 0xd8, 0xff]) {
+        read_jpeg(path, &bytes, allowance)
+    } else if bytes.starts_with(b"#?") {
+        read_hdr(path, &bytes, allowance)
     } else {
         Err(Error::input(
             path,
-            "not an EXR or PNG file (without OpenImageIO raylink reads only these)",
+            "not an EXR, PNG, JPEG or HDR file (without OpenImageIO raylink reads only these)",
         ))
     }
 }
@@ -385,4 +440,67 @@ fn read_png(path: &Path, bytes: &[u8], allowance: &Allowance) -> Result<RawImage
             full_height: height,
         },
     })
+}
+
+/// A decoded JPEG or HDR file's values as floats, after checking its declared size.
+fn read_decoded(
+    path: &Path,
+    decoder: impl image::ImageDecoder,
+    format: &str,
+    allowance: &Allowance,
+) -> Result<RawImage> {
+    let (width, height) = decoder.dimensions();
+    let (channels, pixel_type): (&[&str], _) = match decoder.color_type() {
+        image::ColorType::L8 => (&["Y"], Some(PixelType::U8)),
+        image::ColorType::Rgb8 => (&["R", "G", "B"], Some(PixelType::U8)),
+        image::ColorType::Rgb32F => (&["R", "G", "B"], Some(PixelType::Float)),
+        other => {
+            return Err(Error::input(
+                path,
+                format!("a {format} file of {other:?} pixels, which raylink does not read"),
+            ))
+        }
+    };
+    check_declared(path, width, height, channels.len() as u32, allowance)?;
+    let mut buffer = vec![0u8; decoder.total_bytes() as usize];
+    decoder
+        .read_image(&mut buffer)
+        .map_err(|e| Error::input(path, format!("cannot read as {format}: {e}")))?;
+    let data: Vec<f32> = match pixel_type {
+        // Times the reciprocal, as OpenImageIO converts.
+        Some(PixelType::U8) => buffer.iter().map(|&b| b as f32 * (1.0 / 255.0)).collect(),
+        _ => buffer
+            .chunks_exact(4)
+            .map(|b| f32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
+            .collect(),
+    };
+    Ok(RawImage {
+        width,
+        height,
+        channels: channels.iter().map(|c| c.to_string()).collect(),
+        data,
+        metadata: Vec::new(),
+        format: format.to_ascii_lowercase(),
+        pixel_type,
+        window: Window {
+            x: 0,
+            y: 0,
+            full_x: 0,
+            full_y: 0,
+            full_width: width,
+            full_height: height,
+        },
+    })
+}
+
+fn read_jpeg(path: &Path, bytes: &[u8], allowance: &Allowance) -> Result<RawImage> {
+    let decoder = image::codecs::jpeg::JpegDecoder::new(Cursor::new(bytes))
+        .map_err(|e| Error::input(path, format!("cannot read as JPEG: {e}")))?;
+    read_decoded(path, decoder, "JPEG", allowance)
+}
+
+fn read_hdr(path: &Path, bytes: &[u8], allowance: &Allowance) -> Result<RawImage> {
+    let decoder = image::codecs::hdr::HdrDecoder::new(Cursor::new(bytes))
+        .map_err(|e| Error::input(path, format!("cannot read as HDR: {e}")))?;
+    read_decoded(path, decoder, "HDR", allowance)
 }

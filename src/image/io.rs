@@ -1,6 +1,6 @@
 //! Reading and writing image files, whichever library does it: OpenImageIO (the `oiio`
 //! feature, on by default: EXR, HDR, TIFF, PNG, JPEG and every format it reads), else the
-//! pure-Rust codecs of [`super::codecs`] (EXR and PNG). Callers see one interface.
+//! pure-Rust codecs of [`super::codecs`] (EXR, PNG, JPEG and HDR). Callers see one interface.
 
 use std::path::Path;
 
@@ -195,5 +195,5 @@ pub fn library() -> String {
     #[cfg(feature = "oiio")]
     return format!("OpenImageIO {}", super::oiio::built_with());
     #[cfg(not(feature = "oiio"))]
-    "no OpenImageIO: EXR and PNG in pure Rust".into()
+    "no OpenImageIO: EXR, PNG, JPEG and HDR in pure Rust".into()
 }

@@ -11,7 +11,7 @@
 //! | `.png` | `2^exposure`, sRGB-encoded, clamped to `[0, 1]`, 8 bits |
 //! | `.jpg`, `.jpeg` | as PNG, JPEG quality 95 |
 //!
-//! A build without OpenImageIO (the portable build) writes only `.exr` and `.png`.
+//! A build without OpenImageIO (the portable build) writes `.exr`, `.hdr`, `.png` and `.jpg`.
 
 use std::fs;
 use std::io;
@@ -58,12 +58,12 @@ impl Format {
                 ))
             }
         };
-        if !cfg!(feature = "oiio") && !matches!(format, Format::Exr | Format::Png) {
+        if !cfg!(feature = "oiio") && format == Format::Tiff {
             return Err(Error::image(
                 path,
                 format!(
                     "output format .{ext} needs OpenImageIO, and this raylink was built \
-                     without it (as the portable build is): use .exr or .png"
+                     without it (as the portable build is): use .exr, .hdr, .png or .jpg"
                 ),
             ));
         }
