@@ -159,6 +159,23 @@ impl MonteCarlo for LightTracer {
     }
 }
 
+/// The power a light path that starts with the emission sample `es` carries (radiance
+/// times the cosine at the light over the densities of its position and direction) and its
+/// first ray. A light at infinity starts on the scene's bounding disk, its cosine folded
+/// into the disk's density.
+pub(crate) fn emission_start(ctx: &Context, es: &EmissionSample, time: f32) -> (Rgb, Ray) {
+    let at_infinity = ctx.lights.is_infinite(es.light);
+    let cos0 = if es.delta_dir || es.delta_pos || at_infinity {
+        1.0
+    } else {
+        es.n.dot(es.dir).abs()
+    };
+    let beta = es.radiance * (cos0 / (es.pdf_pos * es.pdf_dir));
+    // Points off every surface (point lights, the disk of a distant light) have no error.
+    let ray = es.spot().spawn(es.dir).at_time(time);
+    (beta, ray)
+}
+
 /// Follows the light path that starts with the emission sample `es` over at most
 /// `max_depth` surfaces: at each surface it reaches, calls `vertex(surface, bsdf, wo,
 /// beta, stats, sampler)` with the power `beta` the path carries there (radiance over the
@@ -173,15 +190,7 @@ pub(crate) fn walk(
     stats: &mut RayStats,
     mut vertex: impl FnMut(&SurfacePoint, &Bsdf, Vec3, Rgb, &mut RayStats, &mut Sampler),
 ) {
-    let at_infinity = ctx.lights.is_infinite(es.light);
-    let cos0 = if es.delta_dir || es.delta_pos || at_infinity {
-        1.0
-    } else {
-        es.n.dot(es.dir).abs()
-    };
-    let mut beta = es.radiance * (cos0 / (es.pdf_pos * es.pdf_dir));
-    // Points off every surface (point lights, the disk of a distant light) have no error.
-    let mut ray = es.spot().spawn(es.dir).at_time(time);
+    let (mut beta, mut ray) = emission_start(ctx, es, time);
     let mut depth = 0;
     while depth < max_depth {
         let Some(sp) = ctx.intersect(&ray, stats) else {
