@@ -16,6 +16,7 @@ const MONTE_CARLO: &str = "Monte Carlo (path, light, bdpt, irradiance-cache)";
 const WHITTED: &str = "Whitted and network pixel sampling";
 const CACHE: &str = "Irradiance cache";
 const NETWORK: &str = "Illumination network";
+const SPPM: &str = "Stochastic progressive photon mapping (sppm)";
 const OUTPUT: &str = "Output";
 const FARM: &str = "Parts of an image (render farms)";
 
@@ -233,6 +234,15 @@ pub struct RenderArgs {
     /// Ward et al. 1988.
     #[arg(long, help_heading = CACHE)]
     show_cache_points: bool,
+    /// Photons shot per iteration (default: the image's pixel count); --spp gives the
+    /// iterations.
+    #[arg(long, value_name = "N", help_heading = SPPM)]
+    photons_per_iteration: Option<u32>,
+    /// Initial photon search radius in scene units (default: 1/200 of the scene's
+    /// bounding-box diagonal); it shrinks as photons arrive.
+    #[arg(long, value_parser = finite_f32, value_name = "RADIUS", allow_negative_numbers = true,
+        help_heading = SPPM)]
+    sppm_radius: Option<f32>,
     #[command(flatten)]
     pub network: NetworkArgs,
     #[command(flatten)]
@@ -391,6 +401,8 @@ pub fn given_settings(args: &RenderArgs, scene: &Scene) -> Settings {
         }),
         network_hybrid: n.network_hybrid.then_some(true),
         relight: None,
+        photons_per_iteration: args.photons_per_iteration,
+        sppm_radius: args.sppm_radius,
     }
 }
 

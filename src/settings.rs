@@ -26,16 +26,19 @@ pub enum TechniqueKind {
     IrradianceCache,
     /// Buckalew & Fussell's illumination networks.
     Network,
+    /// Stochastic progressive photon mapping (Hachisuka & Jensen).
+    Sppm,
 }
 
 impl TechniqueKind {
-    pub const ALL: [TechniqueKind; 6] = [
+    pub const ALL: [TechniqueKind; 7] = [
         TechniqueKind::Whitted,
         TechniqueKind::Path,
         TechniqueKind::Light,
         TechniqueKind::Bdpt,
         TechniqueKind::IrradianceCache,
         TechniqueKind::Network,
+        TechniqueKind::Sppm,
     ];
 
     /// The name in scene files and on the command line.
@@ -47,6 +50,7 @@ impl TechniqueKind {
             TechniqueKind::Bdpt => "bdpt",
             TechniqueKind::IrradianceCache => "irradiance-cache",
             TechniqueKind::Network => "network",
+            TechniqueKind::Sppm => "sppm",
         }
     }
 
@@ -181,6 +185,10 @@ pub struct Settings {
     pub network_order: Option<NetworkOrder>,
     pub network_hybrid: Option<bool>,
     pub relight: Option<Relight>,
+    /// Stochastic progressive photon mapping: photons per iteration.
+    pub photons_per_iteration: Option<u32>,
+    /// Stochastic progressive photon mapping: the initial search radius.
+    pub sppm_radius: Option<f32>,
 }
 
 /// Calls macro `$m` with the name of every field of [`Settings`]: the one list that
@@ -219,7 +227,9 @@ macro_rules! for_each_setting {
             light_scale,
             network_order,
             network_hybrid,
-            relight
+            relight,
+            photons_per_iteration,
+            sppm_radius
         )
     };
 }

@@ -46,6 +46,8 @@ pub const NAMES: &[&str] = &[
     "light_scale",
     "network_order",
     "network_hybrid",
+    "photons_per_iteration",
+    "sppm_radius",
 ];
 
 /// A value of the wrong type or form, named as the setting (a `raylink.RaylinkError`).
@@ -196,6 +198,8 @@ pub fn from_kwargs(scene: &Scene, kwargs: Option<&Bound<'_, PyDict>>) -> PyResul
                 )?)
             }
             "network_hybrid" => s.network_hybrid = Some(flag(n, v)?),
+            "photons_per_iteration" => s.photons_per_iteration = Some(count(n, v)?),
+            "sppm_radius" => s.sppm_radius = Some(finite32(n, v)?),
             _ => {
                 return Err(PyTypeError::new_err(format!(
                     "unexpected keyword argument '{key}' (the settings are: {})",

@@ -245,6 +245,12 @@ impl<'a> Bsdf<'a> {
         self.kd.max_element() > 0.0 || self.kdt.max_element() > 0.0 || self.has_glossy()
     }
 
+    /// Whether the BSDF has a diffuse lobe (reflection or transmission, under a coat too):
+    /// where photon mapping keeps a camera path's visible point.
+    pub fn has_diffuse(&self) -> bool {
+        self.kd.max_element() > 0.0 || self.kdt.max_element() > 0.0
+    }
+
     /// Whether a direction from anywhere (a path guide's) can be weighed by
     /// [`eval_and_pdf`](Self::eval_and_pdf) alone: no delta lobe, and no coat (whose value
     /// is itself an estimate).

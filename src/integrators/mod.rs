@@ -10,6 +10,7 @@ pub mod illumination_network;
 pub mod irradiance_cache;
 pub mod light;
 pub mod path;
+pub mod sppm;
 pub(crate) mod technique;
 mod volumetric;
 mod volumetric_light;

@@ -15,24 +15,28 @@
 
 use crate::error::{Error, Result};
 use crate::integrators::path::{DEFAULT_MAX_DEPTH, MAX_DEPTH_LIMIT};
-use crate::integrators::{bdpt, illumination_network, irradiance_cache, light, path, whitted};
+use crate::integrators::{
+    bdpt, illumination_network, irradiance_cache, light, path, sppm, whitted,
+};
 use crate::scene::Scene;
 use crate::settings::{Settings, TechniqueKind};
 use crate::transport::technique::Lifecycle;
 
 pub use crate::integrators::illumination_network::technique::NetworkSettings;
 pub use crate::integrators::irradiance_cache::technique::CacheSettings;
+pub use crate::integrators::sppm::SppmSettings;
 pub use crate::integrators::whitted::WhittedSettings;
 pub use crate::transport::settings::{MonteCarloSettings, Setting, TechniqueInfo};
 
 /// Every technique, in the order of [`TechniqueKind::ALL`].
-pub const TECHNIQUES: [&TechniqueInfo; 6] = [
+pub const TECHNIQUES: [&TechniqueInfo; 7] = [
     &whitted::TECHNIQUE,
     &path::TECHNIQUE,
     &light::TECHNIQUE,
     &bdpt::TECHNIQUE,
     &irradiance_cache::technique::TECHNIQUE,
     &illumination_network::technique::TECHNIQUE,
+    &sppm::TECHNIQUE,
 ];
 
 /// What the technique `kind` says of itself.
@@ -44,6 +48,7 @@ pub fn info(kind: TechniqueKind) -> &'static TechniqueInfo {
         TechniqueKind::Bdpt => &bdpt::TECHNIQUE,
         TechniqueKind::IrradianceCache => &irradiance_cache::technique::TECHNIQUE,
         TechniqueKind::Network => &illumination_network::technique::TECHNIQUE,
+        TechniqueKind::Sppm => &sppm::TECHNIQUE,
     }
 }
 
@@ -56,6 +61,7 @@ pub enum Technique {
     Bdpt(MonteCarloSettings),
     IrradianceCache(MonteCarloSettings, CacheSettings),
     Network(NetworkSettings),
+    Sppm(SppmSettings),
 }
 
 impl Technique {
@@ -87,6 +93,7 @@ impl Technique {
             TechniqueKind::Network => {
                 Technique::Network(NetworkSettings::from_settings(s, max_depth)?)
             }
+            TechniqueKind::Sppm => Technique::Sppm(SppmSettings::from_settings(s, max_depth)?),
         })
     }
 
@@ -98,6 +105,7 @@ impl Technique {
             Technique::Bdpt(_) => TechniqueKind::Bdpt,
             Technique::IrradianceCache(..) => TechniqueKind::IrradianceCache,
             Technique::Network(_) => TechniqueKind::Network,
+            Technique::Sppm(_) => TechniqueKind::Sppm,
         }
     }
 
@@ -111,7 +119,7 @@ impl Technique {
         match self {
             Technique::Path(s) | Technique::Light(s) | Technique::Bdpt(s) => Some(s),
             Technique::IrradianceCache(s, _) => Some(s),
-            Technique::Whitted(_) | Technique::Network(_) => None,
+            Technique::Whitted(_) | Technique::Network(_) | Technique::Sppm(_) => None,
         }
     }
 
@@ -121,6 +129,7 @@ impl Technique {
             Technique::Network(n) => n.max_depth,
             Technique::Path(m) | Technique::Light(m) | Technique::Bdpt(m) => m.max_depth,
             Technique::IrradianceCache(m, _) => m.max_depth,
+            Technique::Sppm(s) => s.max_depth,
         }
     }
 
@@ -137,6 +146,7 @@ impl Technique {
             Technique::Path(m) | Technique::Light(m) | Technique::Bdpt(m) => m.key(),
             Technique::IrradianceCache(m, c) => m.key() + &c.key(),
             Technique::Network(n) => n.key(),
+            Technique::Sppm(s) => s.key(),
         }
     }
 
@@ -149,7 +159,8 @@ impl Technique {
             Technique::Whitted(_)
             | Technique::Path(_)
             | Technique::Light(_)
-            | Technique::Bdpt(_) => Ok(()),
+            | Technique::Bdpt(_)
+            | Technique::Sppm(_) => Ok(()),
         }
     }
 
@@ -167,6 +178,7 @@ impl Technique {
             Technique::Network(n) => Box::new(
                 illumination_network::technique::NetworkTechnique::new(n.clone(), scene),
             ),
+            Technique::Sppm(s) => s.lifecycle(),
         })
     }
 }

@@ -11,8 +11,8 @@ pub use crate::control::{
     human_size, parse_size, CancelToken, Control, MemoryBudget, Phase, Progress, Silent,
 };
 pub use crate::integrators::technique::{
-    info as technique_info, CacheSettings, MonteCarloSettings, NetworkSettings, Setting, Technique,
-    TechniqueInfo, WhittedSettings, TECHNIQUES,
+    info as technique_info, CacheSettings, MonteCarloSettings, NetworkSettings, Setting,
+    SppmSettings, Technique, TechniqueInfo, WhittedSettings, TECHNIQUES,
 };
 pub use crate::settings::{
     AntiAliasing, NetworkBuilder, NetworkOrder, Relight, Settings, TechniqueKind,
@@ -174,6 +174,8 @@ impl Job {
         // splatted ones reach past their tiles).
         let film = if self.technique.monte_carlo().is_some() {
             56 + 32
+        } else if let Technique::Sppm(_) = self.technique {
+            24 + crate::integrators::sppm::BYTES_PER_PIXEL
         } else {
             24
         };
@@ -472,6 +474,32 @@ impl Renderer {
                         stats,
                         film: Some(film),
                     }
+                }
+            }
+            Tiles::Whole(technique) => {
+                if resume.is_some() {
+                    return Err(Error::setting(
+                        "resume",
+                        format!(
+                            "applies to progressive Monte Carlo renders, not the {} integrator",
+                            job.technique.kind()
+                        ),
+                    ));
+                }
+                let start = Instant::now();
+                let view = job.view();
+                let r = on_pool(&self.pool, || technique.render(&ctx, &view, control))?;
+                let stats = RenderStats {
+                    seconds: start.elapsed().as_secs_f64(),
+                    rays: r.rays,
+                    samples: r.samples,
+                    cancelled: r.cancelled,
+                    ..RenderStats::default()
+                };
+                Rendered {
+                    image: r.image,
+                    stats,
+                    film: None,
                 }
             }
         };

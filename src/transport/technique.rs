@@ -17,6 +17,25 @@ pub(crate) enum Tiles<'a> {
     Pixels(&'a dyn Integrator, PixelSampling),
     /// Progressive Monte Carlo sample passes.
     Samples(&'a dyn MonteCarlo, MonteCarloSettings),
+    /// The whole image at once, in the technique's own iterations (stochastic progressive
+    /// photon mapping, whose photons reach every pixel): no tiles, no part of an image.
+    Whole(&'a dyn WholeImage),
+}
+
+/// A technique that renders the whole image itself.
+pub(crate) trait WholeImage: Sync {
+    /// The image of `view` (its whole size), or what was finished when `control` cancels.
+    fn render(&self, ctx: &Context, view: &View, control: &Control) -> Result<WholeRender>;
+}
+
+/// What a [`WholeImage`] render gives back.
+pub(crate) struct WholeRender {
+    pub image: Image,
+    pub rays: crate::transport::RayStats,
+    /// Camera rays traced.
+    pub samples: u64,
+    /// Whether it stopped before the end (cancelled): the image holds what was finished.
+    pub cancelled: bool,
 }
 
 /// A technique's lifecycle.

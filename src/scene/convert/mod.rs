@@ -15,7 +15,7 @@ use super::toml::schema::{
     AlphaDesc, CacheDesc, CameraDesc, CheckerDesc, CoatingDesc, ConductorDesc, ConductorIndex,
     DiffuseDesc, DirectionMixDesc, EnvironmentDesc, FileDesc, FilterDesc, ImageDesc, InstanceDesc,
     LightDesc, LightKind, MaterialDesc, MixDesc, NetworkDesc, ObjectDesc, OneOrMany, Ordered,
-    RenderDesc, RoughnessDesc, ScaleDesc, ShapeDesc, ShapeKind, Splat3, TextureMixDesc,
+    RenderDesc, RoughnessDesc, ScaleDesc, ShapeDesc, ShapeKind, Splat3, SppmDesc, TextureMixDesc,
     TextureTable, TransformOp, UvCheckerDesc, WhittedDesc, WorldDesc, V3,
 };
 use super::{
@@ -327,6 +327,10 @@ fn render(s: &RenderSettings, output: Option<&std::path::Path>) -> Option<Render
         hybrid: s.network_hybrid,
         file: path(&s.network_file),
     };
+    let sppm = SppmDesc {
+        photons_per_iteration: s.photons_per_iteration,
+        radius: s.sppm_radius,
+    };
     Some(RenderDesc {
         integrator: s.integrator.map(|k| k.name().to_string()),
         spp: s.spp,
@@ -349,6 +353,7 @@ fn render(s: &RenderSettings, output: Option<&std::path::Path>) -> Option<Render
         whitted: (whitted != WhittedDesc::default()).then(|| spanned(whitted)),
         irradiance_cache: (cache != CacheDesc::default()).then(|| spanned(cache)),
         network: (network != NetworkDesc::default()).then(|| spanned(network)),
+        sppm: (sppm != SppmDesc::default()).then(|| spanned(sppm)),
         output: output.map(|p| spanned(p.display().to_string())),
     })
 }

@@ -33,6 +33,38 @@ impl Builder {
         });
     }
 
+    /// pbrt-v4's SPPM parameters: `photonsperiteration` (-1, pbrt's default, is the pixel
+    /// count) and `radius`.
+    fn sppm_options(&mut self, p: &Params, loc: &Loc) -> crate::error::Result<()> {
+        let pe = |e| loc.param_error(e);
+        if let Some(n) = p.int("photonsperiteration").map_err(pe)? {
+            if n != -1 {
+                if !(1..=u32::MAX as i64).contains(&n) {
+                    return Err(loc.error(format!(
+                        "Integrator \"sppm\": photonsperiteration must be positive (or -1 for \
+                         the pixel count), got {n}"
+                    )));
+                }
+                self.settings.photons_per_iteration = Some(n as u32);
+                self.given(
+                    "photons_per_iteration",
+                    "Integrator \"photonsperiteration\"",
+                    loc,
+                );
+            }
+        }
+        if let Some(r) = p.float("radius").map_err(pe)? {
+            if !(r.is_finite() && r > 0.0 && r <= f32::MAX as f64) {
+                return Err(loc.error(format!(
+                    "Integrator \"sppm\": radius must be a positive number, got {r}"
+                )));
+            }
+            self.settings.sppm_radius = Some(r as f32);
+            self.given("sppm_radius", "Integrator \"radius\"", loc);
+        }
+        Ok(())
+    }
+
     pub(super) fn set_option(
         &mut self,
         kw: &str,
@@ -221,6 +253,7 @@ impl Builder {
                     "volpath" | "path" | "simplepath" => TechniqueKind::Path,
                     "bdpt" => TechniqueKind::Bdpt,
                     "lighttracer" => TechniqueKind::Light,
+                    "sppm" => TechniqueKind::Sppm,
                     _ => {
                         self.warn(
                             loc,
@@ -241,6 +274,9 @@ impl Builder {
                     self.given("max_depth", "Integrator \"maxdepth\"", loc);
                 } else {
                     self.settings.max_depth = Some(5);
+                }
+                if ty == "sppm" {
+                    self.sppm_options(p, loc)?;
                 }
             }
             "Accelerator" => {

@@ -77,6 +77,8 @@ pub(crate) struct RenderDesc {
     pub(crate) irradiance_cache: Option<Spanned<CacheDesc>>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) network: Option<Spanned<NetworkDesc>>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) sppm: Option<Spanned<SppmDesc>>,
     /// The image `raylink render` writes when no `-o` is given (pbrt's `Film "filename"`),
     /// relative to the current directory.
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -111,6 +113,16 @@ pub(crate) struct CacheDesc {
     /// Relative to the scene file.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) cache_file: Option<String>,
+}
+
+/// `[render.sppm]`.
+#[derive(Default, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub(crate) struct SppmDesc {
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) photons_per_iteration: Option<u32>,
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) radius: Option<f32>,
 }
 
 /// `[render.network]`.

@@ -178,6 +178,19 @@ impl Builder<'_> {
             let file = n.file.map(|f| self.dir.join(f));
             take!(network_file, file, t, "file", &span);
         }
+        if let Some(p) = d.sppm {
+            let span = p.span();
+            let p = p.into_inner();
+            let t = "render.sppm";
+            take!(
+                photons_per_iteration,
+                p.photons_per_iteration,
+                t,
+                "photons_per_iteration",
+                &span
+            );
+            take!(sppm_radius, p.radius, t, "radius", &span);
+        }
         Ok((s, sources))
     }
 

@@ -1,0 +1,296 @@
+//! Stochastic progressive photon mapping (Hachisuka & Jensen 2009), as pbrt-v4's
+//! `SPPMIntegrator` renders it. Each iteration traces one camera path per pixel to its
+//! first diffuse surface (a visible point; emission and direct light are gathered on the
+//! way: `visible`), builds a hash grid over the visible points and their radii (`grid`),
+//! and shoots photons from the lights that add their power to the visible points whose
+//! radius holds the surfaces they reach after their first bounce (`photons`). Each pixel
+//! then keeps its photon count N, radius r and flux τ, with the radius shrinking as photons
+//! arrive (α = 2/3): the estimate is biased, and consistent: the bias goes to zero as the
+//! iterations go on. The pixel's radiance after k iterations of P photons is
+//! Ld / k + τ / (k · P · π r²).
+//!
+//! The render is a function of (scene, settings, seed): camera paths draw from the stream of
+//! (seed, pixel, iteration), photons from that of (seed, iteration, photon), and the
+//! photons' deposits are summed in a fixed order (see `photons`).
+
+mod grid;
+mod photons;
+mod visible;
+
+pub use grid::HashGrid;
+
+use crate::control::Control;
+use crate::error::{Error, Result};
+use crate::image::filter::{Filter, Reconstruction};
+use crate::image::Image;
+use crate::math::Rgb;
+use crate::scene::Scene;
+use crate::settings::{Settings, TechniqueKind, MAX_SPP};
+use crate::transport::camera_sample::PixelJitter;
+use crate::transport::settings::{Setting, TechniqueInfo, COMMON, FILTER};
+use crate::transport::technique::{Lifecycle, Tiles, WholeImage, WholeRender};
+use crate::transport::{Context, View};
+use photons::PhotonPass;
+use visible::CameraPass;
+
+/// The settings of stochastic progressive photon mapping besides the common ones.
+pub const SPPM: &[Setting] = &[
+    Setting {
+        name: "photons_per_iteration",
+        scene_key: Some(("render.sppm", "photons_per_iteration")),
+        example: "100000",
+        doc: "SPPM: photons shot per iteration (pbrt-v4's photonsperiteration; default: the \
+              image's pixel count).",
+    },
+    Setting {
+        name: "sppm_radius",
+        scene_key: Some(("render.sppm", "radius")),
+        example: "0.05",
+        doc: "SPPM: initial photon search radius in scene units (pbrt-v4's radius; default: \
+              1/200 of the scene's bounding-box diagonal).",
+    },
+];
+
+/// Stochastic progressive photon mapping, as the technique list shows it.
+pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
+    kind: TechniqueKind::Sppm,
+    summary: "Stochastic progressive photon mapping: caustics seen directly or through \
+              mirrors and glass (iterations = spp).",
+    settings: &[COMMON, &[FILTER], SPPM],
+    pbrt: &["sppm"],
+    progressive: false,
+    renders_parts: false,
+    follows_time: false,
+    media: false,
+};
+
+/// The most photons one iteration shoots.
+pub const MAX_PHOTONS_PER_ITERATION: u32 = 1 << 30;
+
+/// The initial radius where none is given: this fraction of the scene's bounding-box
+/// diagonal (pbrt-v4's default is 1 scene unit, which depends on the scene's scale).
+pub const DEFAULT_RADIUS_FRACTION: f32 = 1.0 / 200.0;
+
+/// The radius exponent α of Hachisuka & Jensen's update: the fraction of new photons kept.
+const ALPHA: f32 = 2.0 / 3.0;
+
+/// Bytes per pixel SPPM keeps besides the image: its state and a visible point.
+pub(crate) const BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelState>() as u64 + 256;
+
+/// SPPM's settings, checked.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SppmSettings {
+    pub max_depth: u32,
+    /// Iterations (the spp setting, as pbrt-v4 takes its sampler's pixel samples).
+    pub iterations: u32,
+    /// Photons per iteration; `None`: the image's pixel count.
+    pub photons_per_iteration: Option<u32>,
+    /// Initial search radius; `None`: 1/200 of the scene's bounding-box diagonal.
+    pub radius: Option<f32>,
+    /// The pixel filter camera samples are drawn from.
+    pub filter: Filter,
+}
+
+impl SppmSettings {
+    /// From the parameter set, with the defaults, every value checked.
+    pub(crate) fn from_settings(s: &Settings, max_depth: u32) -> Result<SppmSettings> {
+        let iterations = s.spp.unwrap_or(16);
+        if iterations == 0 || iterations > MAX_SPP {
+            return Err(Error::setting(
+                "spp",
+                format!("must be between 1 and {MAX_SPP} (SPPM's iterations), got {iterations}"),
+            ));
+        }
+        if let Some(p) = s.photons_per_iteration {
+            if p == 0 || p > MAX_PHOTONS_PER_ITERATION {
+                return Err(Error::setting(
+                    "photons_per_iteration",
+                    format!("must be between 1 and {MAX_PHOTONS_PER_ITERATION}, got {p}"),
+                ));
+            }
+        }
+        if let Some(r) = s.sppm_radius {
+            if !(r.is_finite() && r > 0.0) {
+                return Err(Error::setting(
+                    "sppm_radius",
+                    format!("must be a positive number, got {r}"),
+                ));
+            }
+        }
+        let filter = s.filter.unwrap_or_default();
+        filter
+            .validate()
+            .map_err(|e| Error::setting("filter", format!("is invalid: {e}")))?;
+        Ok(SppmSettings {
+            max_depth,
+            iterations,
+            photons_per_iteration: s.photons_per_iteration,
+            radius: s.sppm_radius,
+            filter,
+        })
+    }
+
+    /// What of them changes pixels, for a job's settings key.
+    pub(crate) fn key(&self) -> String {
+        let opt = |v: Option<String>| v.unwrap_or_else(|| "default".into());
+        format!(
+            " spp={} photons_per_iteration={} sppm_radius={} filter={}",
+            self.iterations,
+            opt(self.photons_per_iteration.map(|p| p.to_string())),
+            opt(self.radius.map(|r| r.to_string())),
+            self.filter
+        )
+    }
+
+    /// The technique, ready to render.
+    pub(crate) fn lifecycle(&self) -> Box<dyn Lifecycle> {
+        Box::new(Sppm { settings: *self })
+    }
+}
+
+/// The initial radius in `scene` where none is given.
+pub fn default_radius(scene: &Scene) -> f32 {
+    match scene.bounds() {
+        Some((lo, hi)) if (hi - lo).length() > 0.0 && (hi - lo).is_finite() => {
+            (hi - lo).length() * DEFAULT_RADIUS_FRACTION
+        }
+        _ => 1.0,
+    }
+}
+
+/// What a pixel keeps from iteration to iteration.
+#[derive(Clone, Copy, Debug)]
+struct PixelState {
+    /// Σ over iterations of the emission and direct light its camera paths gathered.
+    ld: [f64; 3],
+    /// Flux τ gathered within the current radius.
+    tau: [f64; 3],
+    /// Photon count N.
+    n: f32,
+    /// Search radius r.
+    r: f32,
+}
+
+struct Sppm {
+    settings: SppmSettings,
+}
+
+impl Lifecycle for Sppm {
+    fn tiles(&self) -> Tiles<'_> {
+        Tiles::Whole(self)
+    }
+}
+
+impl WholeImage for Sppm {
+    fn render(&self, ctx: &Context, view: &View, control: &Control) -> Result<WholeRender> {
+        let s = &self.settings;
+        let (width, height) = (view.width, view.height);
+        let pixels = width as u64 * height as u64;
+        control.budget.check(
+            &format!("SPPM's state for a {width}x{height} image"),
+            pixels * BYTES_PER_PIXEL,
+        )?;
+        let photons = s.photons_per_iteration.map_or(pixels, u64::from);
+        let r0 = s.radius.unwrap_or_else(|| default_radius(ctx.scene));
+        let mut state = vec![
+            PixelState {
+                ld: [0.0; 3],
+                tau: [0.0; 3],
+                n: 0.0,
+                r: r0,
+            };
+            pixels as usize
+        ];
+        let mut camera = ctx.scene.camera.clone();
+        camera.width = width;
+        camera.height = height;
+        let camera = camera.basis();
+        let jitter = PixelJitter::new(s.filter, Reconstruction::Importance);
+        let camera_pass = CameraPass {
+            camera: &camera,
+            jitter: &jitter,
+            seed: view.seed,
+            max_depth: s.max_depth,
+            size: (width, height),
+        };
+        let cancel = &control.cancel;
+        let phase = control.phase("render", Some(s.iterations as u64), "iterations");
+        let mut rays = crate::transport::RayStats::default();
+        let mut done = 0u32;
+        let mut cancelled = false;
+        for iteration in 0..s.iterations {
+            let Some((paths, camera_rays)) = camera_pass.run(ctx, iteration, cancel) else {
+                cancelled = true;
+                break;
+            };
+            let mut owners = Vec::new();
+            let mut points = Vec::new();
+            let mut balls = Vec::new();
+            for (k, path) in paths.iter().enumerate() {
+                if let Some(v) = path.visible {
+                    owners.push(k);
+                    points.push(v);
+                    balls.push((v.p, state[k].r));
+                }
+            }
+            let grid = HashGrid::build(&balls);
+            let pass = PhotonPass {
+                grid: &grid,
+                visible: &points,
+                seed: view.seed,
+                max_depth: s.max_depth,
+            };
+            let Some(arrivals) = pass.run(ctx, iteration, photons, cancel) else {
+                cancelled = true;
+                break;
+            };
+            // The iteration is whole: the pixels take it.
+            rays.add(&camera_rays);
+            rays.add(&arrivals.rays);
+            for (st, path) in state.iter_mut().zip(&paths) {
+                for c in 0..3 {
+                    st.ld[c] += path.ld[c] as f64;
+                }
+            }
+            for (j, &k) in owners.iter().enumerate() {
+                let m = arrivals.m[j];
+                if m == 0 {
+                    continue;
+                }
+                let st = &mut state[k];
+                let m = m as f32;
+                let n_new = st.n + ALPHA * m;
+                let r_new = st.r * (n_new / (st.n + m)).sqrt();
+                let shrink = (r_new as f64 / st.r as f64).powi(2);
+                for c in 0..3 {
+                    st.tau[c] = (st.tau[c] + arrivals.phi[j][c]) * shrink;
+                }
+                st.n = n_new;
+                st.r = r_new;
+            }
+            done += 1;
+            phase.advance(1);
+        }
+        let mut image = Image::try_new(width, height)?;
+        if done > 0 {
+            let k = done as f64;
+            let photons_total = k * photons as f64;
+            for (i, st) in state.iter().enumerate() {
+                let area = std::f64::consts::PI * (st.r as f64).powi(2);
+                let v = |c: usize| (st.ld[c] / k + st.tau[c] / (photons_total * area)) as f32;
+                let (x, y) = (i as u32 % width, i as u32 / width);
+                image.set(x, y, Rgb::new(v(0), v(1), v(2)));
+            }
+        }
+        phase.end(&format!(
+            "{done} iterations of {photons} photons, {} rays",
+            rays.total()
+        ));
+        Ok(WholeRender {
+            image,
+            rays,
+            samples: done as u64 * pixels,
+            cancelled,
+        })
+    }
+}
