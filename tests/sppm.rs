@@ -71,19 +71,6 @@ fn mean_error(a: &Image, reference: &Image) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// The root-mean-square pixel difference over the reference's mean luminance-free scale
-/// (the mean of its channels).
-fn rms_error(a: &Image, reference: &Image) -> f64 {
-    let mut sum = 0.0;
-    for (p, q) in a.pixels.iter().zip(&reference.pixels) {
-        for c in 0..3 {
-            sum += ((p[c] - q[c]) as f64).powi(2);
-        }
-    }
-    let r = mean(reference);
-    (sum / (3 * a.pixels.len()) as f64).sqrt() / ((r[0] + r[1] + r[2]) / 3.0)
-}
-
 /// The Cornell box (every surface diffuse): with the same bounces (a visible point at the
 /// first hit and photons after their first bounce make paths of at most max_depth bounces,
 /// as the path tracer's), the image means agree within 1% per channel. The reference's own
@@ -112,17 +99,43 @@ fn sppm_matches_the_path_tracer_with_glossy_mirror_and_glass_spheres() {
     assert!(e < 0.01, "mean error {:.3}%", e * 100.0);
 }
 
-/// The bias shrinks with the radius: from a large initial radius (0.3 in a box 2 wide),
-/// four times the iterations leave a smaller RMS pixel error against the path tracer, and
-/// at least a third less.
+/// The bias shrinks with the radius. Averaged over blocks of 8x8 pixels (which leaves
+/// little of the noise), SPPM's error from a large initial radius (0.3 in a box 2 wide,
+/// biased round the box's edges and corners) falls by 40% or more when sixteen times
+/// the iterations shrink the radius (by about 16^(-1/6), as α = 2/3 shrinks it; measured
+/// 3.0% -> 1.4%); a radius that did not shrink would keep it.
 #[test]
 fn the_error_falls_as_the_radius_shrinks() {
     let s = scene("cornell-box.toml");
     let reference = render(&s, path(8, 8192), 1, 2);
-    let few = rms_error(&render(&s, sppm(8, 16, 16384, 0.3), 1, 2), &reference);
-    let many = rms_error(&render(&s, sppm(8, 64, 16384, 0.3), 1, 2), &reference);
-    eprintln!("rms error: 16 iterations {few:.4}, 64 iterations {many:.4}");
-    assert!(many < few * 0.67, "{few} -> {many}");
+    let few = block_error(&render(&s, sppm(8, 16, 16384, 0.3), 1, 2), &reference);
+    let many = block_error(&render(&s, sppm(8, 256, 16384, 0.3), 1, 2), &reference);
+    eprintln!("block error: 16 iterations {few:.5}, 256 iterations {many:.5}");
+    assert!(many < few * 0.6, "{few} -> {many}");
+}
+
+/// The RMS difference of the means of 8x8 blocks of a 32x32 image, over the reference's
+/// mean (of its channels).
+fn block_error(a: &Image, reference: &Image) -> f64 {
+    let block = |img: &Image, bx: usize, by: usize, c: usize| -> f64 {
+        let mut sum = 0.0;
+        for y in by * 8..by * 8 + 8 {
+            for x in bx * 8..bx * 8 + 8 {
+                sum += img.pixels[y * 32 + x][c] as f64;
+            }
+        }
+        sum / 64.0
+    };
+    let mut sum = 0.0;
+    for by in 0..4 {
+        for bx in 0..4 {
+            for c in 0..3 {
+                sum += (block(a, bx, by, c) - block(reference, bx, by, c)).powi(2);
+            }
+        }
+    }
+    let r = mean(reference);
+    (sum / 48.0).sqrt() / ((r[0] + r[1] + r[2]) / 3.0)
 }
 
 /// Inside a closed sphere whose diffuse wall (albedo 0.5) emits 1 on both sides, the
