@@ -40,6 +40,7 @@ fn sppm(max_depth: u32, iterations: u32, photons: u32, radius: f32) -> Settings 
         max_depth: Some(max_depth),
         photons_per_iteration: Some(photons),
         sppm_radius: Some(radius),
+        filter: Some(raylink::image::filter::Filter::Box { radius: 0.5 }),
         ..Settings::default()
     }
 }
@@ -49,6 +50,7 @@ fn path(max_depth: u32, spp: u32) -> Settings {
         integrator: Some(TechniqueKind::Path),
         spp: Some(spp),
         max_depth: Some(max_depth),
+        filter: Some(raylink::image::filter::Filter::Box { radius: 0.5 }),
         ..Settings::default()
     }
 }
@@ -73,9 +75,10 @@ fn mean_error(a: &Image, reference: &Image) -> f64 {
 
 /// The Cornell box (every surface diffuse): with the same bounces (a visible point at the
 /// first hit and photons after their first bounce make paths of at most max_depth bounces,
-/// as the path tracer's), the image means agree within 1% per channel. The reference's own
-/// standard error over the image is about 0.2% and SPPM's bias (the radius reaching round
-/// the box's edges) shrinks to a few tenths of a percent at 256 iterations.
+/// as the path tracer's), the image means agree within 1% per channel (measured: 0.10%).
+/// Both take a box filter: with pbrt's Gaussian, SPPM's samples drawn from the filter reach
+/// 1.5 pixels past the image's border while the path tracer's splatted ones do not, which
+/// moves a 32x32 image's mean by 0.5%.
 #[test]
 fn sppm_matches_the_path_tracer_on_the_cornell_box() {
     let s = scene("cornell-box.toml");
@@ -88,7 +91,7 @@ fn sppm_matches_the_path_tracer_on_the_cornell_box() {
 
 /// Glossy gold, a mirror and glass (caustics seen directly and through the mirror): both
 /// with 16 bounces (what the two truncate differently is below 0.01% of the light), the
-/// means agree within 1% per channel.
+/// means agree within 1% per channel (measured: 0.48%).
 #[test]
 fn sppm_matches_the_path_tracer_with_glossy_mirror_and_glass_spheres() {
     let s = scene("cornell-spheres.toml");
@@ -101,9 +104,9 @@ fn sppm_matches_the_path_tracer_with_glossy_mirror_and_glass_spheres() {
 
 /// The bias shrinks with the radius. Averaged over blocks of 8x8 pixels (which leaves
 /// little of the noise), SPPM's error from a large initial radius (0.3 in a box 2 wide,
-/// biased round the box's edges and corners) falls by 40% or more when sixteen times
-/// the iterations shrink the radius (by about 16^(-1/6), as α = 2/3 shrinks it; measured
-/// 3.0% -> 1.4%); a radius that did not shrink would keep it.
+/// biased round the box's edges and corners) falls to less than 40% of itself when sixteen
+/// times the iterations shrink the radius (measured: 3.3% -> 0.7%); a radius that did not
+/// shrink (α = 1) would keep most of it.
 #[test]
 fn the_error_falls_as_the_radius_shrinks() {
     let s = scene("cornell-box.toml");
@@ -111,7 +114,7 @@ fn the_error_falls_as_the_radius_shrinks() {
     let few = block_error(&render(&s, sppm(8, 16, 16384, 0.3), 1, 2), &reference);
     let many = block_error(&render(&s, sppm(8, 256, 16384, 0.3), 1, 2), &reference);
     eprintln!("block error: 16 iterations {few:.5}, 256 iterations {many:.5}");
-    assert!(many < few * 0.6, "{few} -> {many}");
+    assert!(many < few * 0.4, "{few} -> {many}");
 }
 
 /// The RMS difference of the means of 8x8 blocks of a 32x32 image, over the reference's
