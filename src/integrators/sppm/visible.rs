@@ -120,10 +120,12 @@ fn trace<'a>(
     let mut bsdf_pdf = 0.0;
     let mut specular = true;
     let mut prev_p = ray.origin;
+    let mut prev_facing = None;
     let mut depth = 0;
     loop {
         let Some(sp) = ctx.intersect_at_depth(&ray, depth, stats) else {
-            ld += escaped(ctx, &ray, prev_p, beta, (bsdf_pdf, specular));
+            let prev = (prev_p, prev_facing);
+            ld += escaped(ctx, &ray, prev, beta, (bsdf_pdf, specular));
             break;
         };
         let m = &scene.materials[sp.material];
@@ -138,8 +140,10 @@ fn trace<'a>(
         let bsdf = m.bsdf(&sp, wo);
         let u_choice = sampler.next_2d();
         let u_light = sampler.next_2d();
+        let facing = bsdf.reflecting_side(wo);
         if bsdf.has_non_delta() {
-            ld += beta * sample_direct(ctx, &bsdf, &sp, wo, u_choice.x, u_light, stats);
+            let (u, v) = (u_choice.x, u_light);
+            ld += beta * sample_direct(ctx, &bsdf, &sp, wo, facing, u, v, stats);
         }
         if bsdf.has_diffuse() || (bsdf.has_non_delta() && depth == max_depth) {
             visible = Some(VisiblePoint {
@@ -157,6 +161,7 @@ fn trace<'a>(
         bsdf_pdf = bs.pdf;
         specular = bs.delta;
         prev_p = sp.p;
+        prev_facing = facing;
         ray = sp.spawn(bs.wi);
         // pbrt-v4's camera-path roulette: a throughput below 1 survives with probability
         // max(β), at least 0.05.
