@@ -176,11 +176,7 @@ fn encode_png(path: &Path, image: ImageToWrite, metadata: &Metadata) -> Result<V
             .flat_map(|&v| ((v * 65535.0 + 0.5).clamp(0.0, 65535.0) as u16).to_be_bytes())
             .collect()
     } else {
-        image
-            .data
-            .iter()
-            .map(|&v| (v * 255.0 + 0.5).clamp(0.0, 255.0) as u8)
-            .collect()
+        to_8_bit(image.data)
     };
     let failed = |e: png::EncodingError| Error::image(path, format!("cannot encode as PNG: {e}"));
     let mut bytes = Vec::new();
@@ -216,6 +212,21 @@ fn encode_png(path: &Path, image: ImageToWrite, metadata: &Metadata) -> Result<V
     Ok(bytes)
 }
 
+/// Floats to bytes as OpenImageIO converts them: [0, 1] scaled to the full range, rounded
+/// half up, clamped (NaN becomes 0).
+fn to_8_bit(values: &[f32]) -> Vec<u8> {
+    values
+        .iter()
+        .map(|&v| (v * 255.0 + 0.5).clamp(0.0, 255.0) as u8)
+        .collect()
+}
+
+/// Bytes to floats times the reciprocal, as OpenImageIO converts: the same floats from
+/// either library.
+fn from_8_bit(bytes: &[u8]) -> Vec<f32> {
+    bytes.iter().map(|&b| b as f32 * (1.0 / 255.0)).collect()
+}
+
 /// The three channels `R G B` of `image`, or the refusal naming the format.
 fn rgb_only(path: &Path, image: &ImageToWrite, format: &str) -> Result<()> {
     if image.channels != ["R", "G", "B"] {
@@ -232,12 +243,7 @@ fn rgb_only(path: &Path, image: &ImageToWrite, format: &str) -> Result<()> {
 
 fn encode_jpeg(path: &Path, image: ImageToWrite) -> Result<Vec<u8>> {
     rgb_only(path, &image, "JPEG")?;
-    // Floats to bytes as for PNG (and as OpenImageIO converts them).
-    let data: Vec<u8> = image
-        .data
-        .iter()
-        .map(|&v| (v * 255.0 + 0.5).clamp(0.0, 255.0) as u8)
-        .collect();
+    let data = to_8_bit(image.data);
     let mut bytes = Vec::new();
     image::codecs::jpeg::JpegEncoder::new_with_quality(&mut bytes, 95)
         .encode(
@@ -404,7 +410,7 @@ fn read_png(path: &Path, bytes: &[u8], allowance: &Allowance) -> Result<RawImage
             .map(|b| u16::from_be_bytes([b[0], b[1]]) as f32 * (1.0 / 65535.0))
             .collect()
     } else {
-        buffer.iter().map(|&b| b as f32 * (1.0 / 255.0)).collect()
+        from_8_bit(&buffer)
     };
     let expected = width as usize * height as usize * channels.len();
     if data.len() != expected {
@@ -431,14 +437,7 @@ fn read_png(path: &Path, bytes: &[u8], allowance: &Allowance) -> Result<RawImage
         } else {
             PixelType::U8
         }),
-        window: Window {
-            x: 0,
-            y: 0,
-            full_x: 0,
-            full_y: 0,
-            full_width: width,
-            full_height: height,
-        },
+        window: Window::whole(width, height),
     })
 }
 
@@ -467,8 +466,7 @@ fn read_decoded(
         .read_image(&mut buffer)
         .map_err(|e| Error::input(path, format!("cannot read as {format}: {e}")))?;
     let data: Vec<f32> = match pixel_type {
-        // Times the reciprocal, as OpenImageIO converts.
-        Some(PixelType::U8) => buffer.iter().map(|&b| b as f32 * (1.0 / 255.0)).collect(),
+        Some(PixelType::U8) => from_8_bit(&buffer),
         _ => buffer
             .chunks_exact(4)
             .map(|b| f32::from_ne_bytes([b[0], b[1], b[2], b[3]]))
@@ -482,14 +480,7 @@ fn read_decoded(
         metadata: Vec::new(),
         format: format.to_ascii_lowercase(),
         pixel_type,
-        window: Window {
-            x: 0,
-            y: 0,
-            full_x: 0,
-            full_y: 0,
-            full_width: width,
-            full_height: height,
-        },
+        window: Window::whole(width, height),
     })
 }
 

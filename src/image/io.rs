@@ -58,6 +58,20 @@ pub struct Window {
     pub full_height: u32,
 }
 
+impl Window {
+    /// The window of a whole `width` x `height` image: at (0, 0) in itself.
+    pub fn whole(width: u32, height: u32) -> Window {
+        Window {
+            x: 0,
+            y: 0,
+            full_x: 0,
+            full_y: 0,
+            full_width: width,
+            full_height: height,
+        }
+    }
+}
+
 impl RawImage {
     /// The value of metadata attribute `name`, if present.
     pub fn meta(&self, name: &str) -> Option<&MetaValue> {

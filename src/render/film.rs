@@ -119,6 +119,12 @@ impl Film {
         self.stats.as_ref().and_then(|s| s.rule)
     }
 
+    /// The per-pixel statistics when the film is sampled adaptively (kept ones stop no
+    /// pixel and count no differently from the film).
+    fn adaptive_stats(&self) -> Option<&PixelStats> {
+        self.stats.as_ref().filter(|s| s.rule.is_some())
+    }
+
     /// The per-pixel statistics, for checkpoints: sample counts, sums of squares, which
     /// pixels go on and the sums of their own samples.
     pub(crate) fn statistics(&self) -> Option<&PixelStats> {
@@ -151,10 +157,7 @@ impl Film {
 
     /// Which pixels take the next pass's samples (`None`: all, without adaptive sampling).
     pub(crate) fn active(&self) -> Option<&[bool]> {
-        self.stats
-            .as_ref()
-            .filter(|s| s.rule.is_some())
-            .map(|s| s.active.as_slice())
+        self.adaptive_stats().map(|s| s.active.as_slice())
     }
 
     /// Per pixel, with adaptive sampling or kept statistics ([`Film::with_statistics`]):
@@ -307,7 +310,7 @@ impl Film {
     /// Mean samples per pixel so far.
     pub fn mean_spp(&self) -> f64 {
         let pixels = self.width as f64 * self.height as f64;
-        if let Some(stats) = self.stats.as_ref().filter(|s| s.rule.is_some()) {
+        if let Some(stats) = self.adaptive_stats() {
             return stats.samples() as f64 / pixels;
         }
         self.spp as f64 + self.pass as f64 * self.tiles_done_pixels() as f64 / pixels
@@ -360,7 +363,7 @@ impl Film {
             }
             return Ok(image);
         }
-        if let Some(stats) = self.stats.as_ref().filter(|s| s.rule.is_some()) {
+        if let Some(stats) = self.adaptive_stats() {
             // Adaptive sampling: each pixel by its own count (no light paths).
             for ((px, sum), n) in image.pixels.iter_mut().zip(&self.sums).zip(&stats.counts) {
                 let per_sample = if *n == 0 { 0.0 } else { 1.0 / *n as f64 };
