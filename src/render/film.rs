@@ -8,7 +8,7 @@ use super::{tiles, Tile, TILE_SIZE};
 use crate::image::filter::{Filter, FilterWeights, Reconstruction};
 use crate::image::Image;
 use crate::math::{Rgb, Vec2};
-use crate::transport::passes::{next_pass, reachable, MAX_SPP};
+use crate::transport::passes::{next_pass, reachable, MAX_PASS, MAX_SPP};
 use crate::transport::Splat;
 
 /// The accumulated film.
@@ -39,6 +39,9 @@ pub struct Film {
     /// pixel's sample count, sums of squares (and of its own samples, when they are
     /// splatted) and whether it goes on.
     pub(crate) stats: Option<PixelStats>,
+    /// The largest pass its render takes ([`MAX_PASS`], or 1 for a technique whose every
+    /// sample index is an iteration over the whole image).
+    pub(crate) max_pass: u32,
 }
 
 impl Film {
@@ -78,6 +81,7 @@ impl Film {
             tiles_done: 0,
             invalid: 0,
             stats: None,
+            max_pass: MAX_PASS,
         })
     }
 
@@ -96,6 +100,14 @@ impl Film {
             self.stats = Some(PixelStats::new(Some(rule), self.width, self.height, false)?);
         }
         Ok(self)
+    }
+
+    /// This film, for a render that takes one sample a pass (`one`: a technique whose
+    /// every sample index is an iteration over the whole image, see
+    /// `Technique::one_sample_passes`).
+    pub fn with_one_sample_passes(mut self, one: bool) -> Film {
+        self.max_pass = if one { 1 } else { MAX_PASS };
+        self
     }
 
     /// This film, keeping each pixel's sample statistics (count, sums of squares, and the
@@ -222,7 +234,8 @@ impl Film {
                 "holds {spp} samples per pixel, and this render takes {target}: nothing to resume"
             ));
         }
-        if !reachable(spp, target) || (pass != 0 && pass != next_pass(spp, target)) {
+        let m = self.max_pass;
+        if !reachable(spp, target, m) || (pass != 0 && pass != next_pass(spp, target, m)) {
             return Err(format!(
                 "its sample counts ({spp} per pixel, a pass of {pass} under way) are not those \
                  of a render of {target} samples per pixel"

@@ -17,9 +17,9 @@ use crate::math::{Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::transport::camera_sample::{camera_sample, view_basis, PixelJitter, Splatting};
 use crate::transport::driver::{drive, drive_indexed, Merge};
-use crate::transport::passes::{next_pass, passes_between};
+use crate::transport::passes::{next_pass, passes_between, MAX_PASS};
 use crate::transport::ProgressiveOptions;
-use crate::transport::{Context, MonteCarlo, RayStats, Splat};
+use crate::transport::{Context, IterationStart, IterationWork, MonteCarlo, RayStats, Splat};
 use std::time::Instant;
 
 /// What one tile produced in one pass.
@@ -111,6 +111,7 @@ impl<'a> Samples<'a> {
     /// sum of the estimates' squares to `squares`. With `guidance`, samples are guided.
     fn pixel_pass(
         &self,
+        integrator: &dyn MonteCarlo,
         (x, y): (u32, u32),
         samples: std::ops::Range<u32>,
         result: &mut TileResult,
@@ -129,7 +130,7 @@ impl<'a> Samples<'a> {
             );
             let before = result.splats.len();
             let l = match guidance.as_deref_mut() {
-                Some(g) => self.integrator.sample_guided(
+                Some(g) => integrator.sample_guided(
                     self.ctx,
                     &self.camera,
                     &ray,
@@ -138,7 +139,7 @@ impl<'a> Samples<'a> {
                     &mut result.splats,
                     g,
                 ),
-                None => self.integrator.sample(
+                None => integrator.sample(
                     self.ctx,
                     &self.camera,
                     &ray,
@@ -185,6 +186,7 @@ impl<'a> Samples<'a> {
     /// and deposit into it if the pass learns.
     fn tile_pass(
         &self,
+        integrator: &dyn MonteCarlo,
         tile: &Tile,
         samples: std::ops::Range<u32>,
         bounds: &Tile,
@@ -203,6 +205,7 @@ impl<'a> Samples<'a> {
                 let sum = match active {
                     Some((a, width)) if !a[(y * width + x) as usize] => [0.0; 3],
                     _ => self.pixel_pass(
+                        integrator,
                         (x, y),
                         samples.clone(),
                         &mut result,
@@ -233,13 +236,19 @@ impl<'a> Samples<'a> {
         let per_sample = 1.0 / spp as f64;
         let per_path = per_sample / pixels_in_image;
         let mut result = TileResult::new(tile, None, tile);
-        let passes = passes_between(0, spp);
+        let passes = passes_between(0, spp, MAX_PASS);
         for y in tile.y0..tile.y1 {
             for x in tile.x0..tile.x1 {
                 let mut total = [0.0f64; 3];
                 for &(first, n) in &passes {
-                    let s =
-                        self.pixel_pass((x, y), first..first + n, &mut result, &mut [0.0; 3], None);
+                    let s = self.pixel_pass(
+                        self.integrator,
+                        (x, y),
+                        first..first + n,
+                        &mut result,
+                        &mut [0.0; 3],
+                        None,
+                    );
                     for c in 0..3 {
                         total[c] += s[c];
                     }
@@ -354,7 +363,7 @@ fn render_region_splatted(
         .iter()
         .filter_map(|t| t.intersection(&reaching))
         .collect();
-    let passes = passes_between(0, options.spp);
+    let passes = passes_between(0, options.spp, MAX_PASS);
     let phase = control.phase(
         "render",
         Some(region.pixels() * options.spp as u64),
@@ -372,6 +381,7 @@ fn render_region_splatted(
         |k| {
             let (first, n) = passes[k / tiles.len()];
             s.tile_pass(
+                s.integrator,
                 &tiles[k % tiles.len()],
                 first..first + n,
                 region,
@@ -429,6 +439,16 @@ pub(crate) fn render_passes(
     }
     let s = Samples::new(ctx, integrator, options);
     let tiles = tiles(options.view.width, options.view.height);
+    // A technique whose sample indices are iterations over the whole image takes them one
+    // a pass, each pass through its iteration.
+    let iterative = integrator.iterative();
+    let max_pass = if iterative { 1 } else { MAX_PASS };
+    if iterative && options.adaptive.is_some() {
+        return Err(Error::setting(
+            "adaptive",
+            "does not apply to techniques whose samples are iterations over the whole image",
+        ));
+    }
     let mut film = match resume {
         Some(film) => {
             if (film.width, film.height, film.filter, film.reconstruction)
@@ -452,8 +472,14 @@ pub(crate) fn render_passes(
             options.reconstruction,
         )?
         .with_adaptive(options.adaptive)?
-        .with_statistics(options.statistics)?,
+        .with_statistics(options.statistics)?
+        .with_one_sample_passes(iterative),
     };
+    if film.max_pass != max_pass {
+        return Err(Error::Invalid(
+            "the film to resume was rendered by a technique with other passes".into(),
+        ));
+    }
     if film.adaptive() != options.adaptive {
         return Err(Error::Invalid(
             "the film to resume was rendered with other adaptive sampling".into(),
@@ -485,7 +511,7 @@ pub(crate) fn render_passes(
         passes.push((done, film.pass));
         done += film.pass;
     }
-    passes.extend(passes_between(done, options.spp));
+    passes.extend(passes_between(done, options.spp, max_pass));
     // With path guiding, the guide is learned from the samples up to each of its builds
     // and sampled from by the next ones.
     let mut learning = integrator.guided().then(|| {
@@ -494,7 +520,9 @@ pub(crate) fn render_passes(
     });
     // As (first pass, passes): a pass ends its group when the next depends on it.
     let groups = group_passes(&passes, |end| {
-        film.adaptive().is_some() || learning.as_ref().is_some_and(|l| l.builds_at(end))
+        iterative
+            || film.adaptive().is_some()
+            || learning.as_ref().is_some_and(|l| l.builds_at(end))
     });
     let whole = Tile::whole(options.view.width, options.view.height);
     let width = options.view.width;
@@ -521,81 +549,111 @@ pub(crate) fn render_passes(
         let guide = learning
             .as_ref()
             .map(|l| (l.guide(), l.learns_at(passes[group_start].0)));
-        let driven = drive_indexed(
-            (group_len * tiles.len()).saturating_sub(skipped),
-            options.view.threads,
-            MERGE_WINDOW,
-            &control.cancel,
-            |k| {
-                let (p, t) = locate(k);
-                let (first, n) = passes[p];
-                let active = active.as_deref().map(|a| (a, width));
-                let guide = guide.as_ref().map(|(g, learns)| (&**g, *learns));
-                s.tile_pass(&tiles[t], first..first + n, &whole, active, guide)
-            },
-            |k, r| {
-                let (p, t) = locate(k);
-                let (tile, n) = (&tiles[t], passes[p].1);
-                film.pass = n;
-                film.add_camera(&r.camera);
-                film.add_statistics(tile, n, (&r.squares, &r.own_sums));
-                for splat in &r.splats {
-                    film.add_splat(splat);
-                }
-                stats.rays.add(&r.rays);
-                let sampled = match &active {
-                    Some(a) => n as u64 * count_active(a, width, tile),
-                    None => n as u64 * tile.pixels(),
-                };
-                stats.samples += sampled;
-                film.invalid += r.invalid;
-                film.tiles_done += 1;
-                if let Some(l) = learning.as_mut() {
-                    l.absorb(&r.deposits);
-                }
-                phase.advance(sampled);
-                if (film.tiles_done as usize) < tiles.len() {
-                    if watch.mid_pass.is_some_and(|d| shown.elapsed() >= d) {
-                        stats.seconds = start.elapsed().as_secs_f64();
-                        if let Err(e) = (watch.film)(&film, Shown::MidPass, &stats) {
-                            failure = Some(e);
-                            return Merge::Stop;
+        let mut run = |it: &dyn MonteCarlo, work: IterationWork| {
+            let mut work = Some(work);
+            drive_indexed(
+                (group_len * tiles.len()).saturating_sub(skipped),
+                options.view.threads,
+                MERGE_WINDOW,
+                &control.cancel,
+                |k| {
+                    let (p, t) = locate(k);
+                    let (first, n) = passes[p];
+                    let active = active.as_deref().map(|a| (a, width));
+                    let guide = guide.as_ref().map(|(g, learns)| (&**g, *learns));
+                    s.tile_pass(it, &tiles[t], first..first + n, &whole, active, guide)
+                },
+                |k, r| {
+                    let (p, t) = locate(k);
+                    let (tile, n) = (&tiles[t], passes[p].1);
+                    // An iteration's own splats come with its first tile (a pass resumed
+                    // after it has them already).
+                    if let Some(w) = work.take().filter(|_| t == 0) {
+                        for splat in &w.splats {
+                            film.add_splat(splat);
                         }
-                        shown = Instant::now();
+                        stats.rays.add(&w.rays);
+                        film.invalid += w.invalid;
                     }
-                    return Merge::Continue;
-                }
-                film.spp += n;
-                film.pass = 0;
-                film.tiles_done = 0;
-                // Adaptive sampling stops the pixels that have converged; when none is left
-                // the render is done.
-                let going_on = film.end_adaptive_pass();
-                stats.seconds = start.elapsed().as_secs_f64();
-                if let Err(e) = (watch.film)(&film, Shown::AfterPass, &stats) {
-                    failure = Some(e);
-                    return Merge::Stop;
-                }
-                shown = Instant::now();
-                if !going_on {
-                    ended = true;
-                    return Merge::Stop;
-                }
-                if let Some(limit) = options.time_limit {
-                    // Stop when another pass like the last one would overrun the limit.
-                    let elapsed = start.elapsed().as_secs_f64();
-                    let pass = pass_start.elapsed().as_secs_f64();
-                    let next = next_pass(film.spp, options.spp.max(film.spp + 1)) as f64 / n as f64;
-                    if elapsed + pass * next > limit {
+                    film.pass = n;
+                    film.add_camera(&r.camera);
+                    film.add_statistics(tile, n, (&r.squares, &r.own_sums));
+                    for splat in &r.splats {
+                        film.add_splat(splat);
+                    }
+                    stats.rays.add(&r.rays);
+                    let sampled = match &active {
+                        Some(a) => n as u64 * count_active(a, width, tile),
+                        None => n as u64 * tile.pixels(),
+                    };
+                    stats.samples += sampled;
+                    film.invalid += r.invalid;
+                    film.tiles_done += 1;
+                    if let Some(l) = learning.as_mut() {
+                        l.absorb(&r.deposits);
+                    }
+                    phase.advance(sampled);
+                    if (film.tiles_done as usize) < tiles.len() {
+                        if watch.mid_pass.is_some_and(|d| shown.elapsed() >= d) {
+                            stats.seconds = start.elapsed().as_secs_f64();
+                            if let Err(e) = (watch.film)(&film, Shown::MidPass, &stats) {
+                                failure = Some(e);
+                                return Merge::Stop;
+                            }
+                            shown = Instant::now();
+                        }
+                        return Merge::Continue;
+                    }
+                    film.spp += n;
+                    film.pass = 0;
+                    film.tiles_done = 0;
+                    // Adaptive sampling stops the pixels that have converged; when none is left
+                    // the render is done.
+                    let going_on = film.end_adaptive_pass();
+                    stats.seconds = start.elapsed().as_secs_f64();
+                    if let Err(e) = (watch.film)(&film, Shown::AfterPass, &stats) {
+                        failure = Some(e);
+                        return Merge::Stop;
+                    }
+                    shown = Instant::now();
+                    if !going_on {
                         ended = true;
                         return Merge::Stop;
                     }
-                }
-                pass_start = Instant::now();
-                Merge::Continue
-            },
-        );
-        if driven.cancelled {
+                    if let Some(limit) = options.time_limit {
+                        // Stop when another pass like the last one would overrun the limit.
+                        let elapsed = start.elapsed().as_secs_f64();
+                        let pass = pass_start.elapsed().as_secs_f64();
+                        let next = next_pass(film.spp, options.spp.max(film.spp + 1), max_pass)
+                            as f64
+                            / n as f64;
+                        if elapsed + pass * next > limit {
+                            ended = true;
+                            return Merge::Stop;
+                        }
+                    }
+                    pass_start = Instant::now();
+                    Merge::Continue
+                },
+            )
+            .cancelled
+        };
+        let driven_cancelled = if iterative {
+            let start = IterationStart {
+                camera: &s.camera,
+                seed: options.view.seed,
+                size: (options.view.width, options.view.height),
+                index: passes[group_start].0,
+                threads: options.view.threads,
+                cancel: &control.cancel,
+            };
+            let mut stopped = true;
+            let ran = integrator.iteration(ctx, &start, &mut |it, work| stopped = run(it, work));
+            !ran || stopped
+        } else {
+            run(integrator, IterationWork::default())
+        };
+        if driven_cancelled {
             cancelled = true;
         }
         if cancelled || ended || failure.is_some() {

@@ -223,4 +223,46 @@ pub trait MonteCarlo: Sync {
     ) -> Rgb {
         self.sample(ctx, camera, ray, sampler, stats, splats)
     }
+
+    /// Whether each sample index first needs work over the whole image (vertex connection
+    /// and merging's light subpaths and their photon grid): the render then takes one
+    /// sample a pass and renders each pass through [`iteration`](Self::iteration).
+    fn iterative(&self) -> bool {
+        false
+    }
+
+    /// Does the whole-image work of sample index `start.index` and calls `samples` once with
+    /// what takes that index's camera samples (an integrator sharing the work) and what the
+    /// work itself gave the image ([`IterationWork`]). Returns `false`, without calling it,
+    /// if cancelled. Called only when [`iterative`](Self::iterative).
+    fn iteration(
+        &self,
+        _ctx: &Context,
+        _start: &IterationStart,
+        _samples: &mut dyn FnMut(&dyn MonteCarlo, IterationWork),
+    ) -> bool {
+        false
+    }
+}
+
+/// What an iteration's whole-image work needs to know.
+pub struct IterationStart<'c> {
+    pub camera: &'c CameraBasis,
+    pub seed: u64,
+    /// The image's size: its pixel count is the number of light subpaths of an iteration.
+    pub size: (u32, u32),
+    /// The sample index (the iteration).
+    pub index: u32,
+    /// The threads the render runs on (`None`: all).
+    pub threads: Option<usize>,
+    pub cancel: &'c crate::control::CancelToken,
+}
+
+/// What an iteration's whole-image work adds to the image besides its camera samples: the
+/// light subpaths' splats (in a fixed order), its rays and its dropped paths.
+#[derive(Default)]
+pub struct IterationWork {
+    pub splats: Vec<Splat>,
+    pub rays: RayStats,
+    pub invalid: u64,
 }
