@@ -16,7 +16,7 @@ const MONTE_CARLO: &str = "Monte Carlo (path, light, bdpt, irradiance-cache)";
 const WHITTED: &str = "Whitted and network pixel sampling";
 const CACHE: &str = "Irradiance cache";
 const NETWORK: &str = "Illumination network";
-const SPPM: &str = "Stochastic progressive photon mapping (sppm)";
+const SPPM: &str = "Photon mapping (sppm, and vcm's merges)";
 const OUTPUT: &str = "Output";
 const FARM: &str = "Parts of an image (render farms)";
 
@@ -239,7 +239,8 @@ pub struct RenderArgs {
     #[arg(long, value_name = "N", help_heading = SPPM)]
     photons_per_iteration: Option<u32>,
     /// Initial photon search radius in scene units (default: 1/200 of the scene's
-    /// bounding-box diagonal); it shrinks as photons arrive.
+    /// bounding-box diagonal); it shrinks as photons arrive (sppm) or as iterations go on
+    /// (vcm's merge radius).
     #[arg(long, value_parser = finite_f32, value_name = "RADIUS", allow_negative_numbers = true,
         help_heading = SPPM)]
     sppm_radius: Option<f32>,

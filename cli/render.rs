@@ -508,7 +508,8 @@ fn render_with_checkpoints(
         };
         let blank = raylink::Film::new(width, height, mc.filter, mc.reconstruction)?
             .with_adaptive(mc.adaptive)?
-            .with_statistics(job.keeps_statistics())?;
+            .with_statistics(job.keeps_statistics())?
+            .with_one_sample_passes(job.technique.one_sample_passes());
         let resumed = checkpoint::load_within(&found, settings, blank, mc.spp, &allowance)?;
         resumed_samples = resumed.samples;
         Some(resumed.film)

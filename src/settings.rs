@@ -28,10 +28,12 @@ pub enum TechniqueKind {
     Network,
     /// Stochastic progressive photon mapping (Hachisuka & Jensen).
     Sppm,
+    /// Vertex connection and merging (Georgiev et al.).
+    Vcm,
 }
 
 impl TechniqueKind {
-    pub const ALL: [TechniqueKind; 7] = [
+    pub const ALL: [TechniqueKind; 8] = [
         TechniqueKind::Whitted,
         TechniqueKind::Path,
         TechniqueKind::Light,
@@ -39,6 +41,7 @@ impl TechniqueKind {
         TechniqueKind::IrradianceCache,
         TechniqueKind::Network,
         TechniqueKind::Sppm,
+        TechniqueKind::Vcm,
     ];
 
     /// The name in scene files and on the command line.
@@ -51,6 +54,7 @@ impl TechniqueKind {
             TechniqueKind::IrradianceCache => "irradiance-cache",
             TechniqueKind::Network => "network",
             TechniqueKind::Sppm => "sppm",
+            TechniqueKind::Vcm => "vcm",
         }
     }
 

@@ -74,3 +74,21 @@ pub(crate) fn lens_sample(camera: &CameraBasis, sampler: &mut Sampler) -> Vec3 {
         camera.origin
     }
 }
+
+/// Density in solid angle of the camera generating a ray along `w` from the lens point
+/// `lens`: uniform over the film at unit distance, 1 / (A_film cos³θ) (pbrt-v4's `PDF_We`;
+/// the lens point's own density is the same for every strategy and cancels). Zero outside
+/// the film.
+pub(crate) fn camera_pdf_dir(camera: &CameraBasis, lens: Vec3, w: Vec3) -> f32 {
+    match camera.raster_from(lens, lens + w) {
+        Some((x, y, cos)) => {
+            let (fw, fh) = camera.film_size();
+            let m = camera.margin;
+            if x < -m || y < -m || x >= fw + m || y >= fh + m {
+                return 0.0;
+            }
+            1.0 / (camera.pixel_area() * fw * fh * cos * cos * cos)
+        }
+        None => 0.0,
+    }
+}

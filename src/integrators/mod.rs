@@ -12,6 +12,7 @@ pub mod light;
 pub mod path;
 pub mod sppm;
 pub(crate) mod technique;
+pub mod vcm;
 mod volumetric;
 mod volumetric_light;
 pub mod whitted;

@@ -16,7 +16,7 @@
 use crate::error::{Error, Result};
 use crate::integrators::path::{DEFAULT_MAX_DEPTH, MAX_DEPTH_LIMIT};
 use crate::integrators::{
-    bdpt, illumination_network, irradiance_cache, light, path, sppm, whitted,
+    bdpt, illumination_network, irradiance_cache, light, path, sppm, vcm, whitted,
 };
 use crate::scene::Scene;
 use crate::settings::{Settings, TechniqueKind};
@@ -25,11 +25,12 @@ use crate::transport::technique::Lifecycle;
 pub use crate::integrators::illumination_network::technique::NetworkSettings;
 pub use crate::integrators::irradiance_cache::technique::CacheSettings;
 pub use crate::integrators::sppm::SppmSettings;
+pub use crate::integrators::vcm::VcmSettings;
 pub use crate::integrators::whitted::WhittedSettings;
 pub use crate::transport::settings::{MonteCarloSettings, Setting, TechniqueInfo};
 
 /// Every technique, in the order of [`TechniqueKind::ALL`].
-pub const TECHNIQUES: [&TechniqueInfo; 7] = [
+pub const TECHNIQUES: [&TechniqueInfo; 8] = [
     &whitted::TECHNIQUE,
     &path::TECHNIQUE,
     &light::TECHNIQUE,
@@ -37,6 +38,7 @@ pub const TECHNIQUES: [&TechniqueInfo; 7] = [
     &irradiance_cache::technique::TECHNIQUE,
     &illumination_network::technique::TECHNIQUE,
     &sppm::TECHNIQUE,
+    &vcm::TECHNIQUE,
 ];
 
 /// What the technique `kind` says of itself.
@@ -49,6 +51,7 @@ pub fn info(kind: TechniqueKind) -> &'static TechniqueInfo {
         TechniqueKind::IrradianceCache => &irradiance_cache::technique::TECHNIQUE,
         TechniqueKind::Network => &illumination_network::technique::TECHNIQUE,
         TechniqueKind::Sppm => &sppm::TECHNIQUE,
+        TechniqueKind::Vcm => &vcm::TECHNIQUE,
     }
 }
 
@@ -62,6 +65,7 @@ pub enum Technique {
     IrradianceCache(MonteCarloSettings, CacheSettings),
     Network(NetworkSettings),
     Sppm(SppmSettings),
+    Vcm(MonteCarloSettings, VcmSettings),
 }
 
 impl Technique {
@@ -94,6 +98,7 @@ impl Technique {
                 Technique::Network(NetworkSettings::from_settings(s, max_depth)?)
             }
             TechniqueKind::Sppm => Technique::Sppm(SppmSettings::from_settings(s, max_depth)?),
+            TechniqueKind::Vcm => Technique::Vcm(monte_carlo()?, VcmSettings::from_settings(s)?),
         })
     }
 
@@ -106,6 +111,7 @@ impl Technique {
             Technique::IrradianceCache(..) => TechniqueKind::IrradianceCache,
             Technique::Network(_) => TechniqueKind::Network,
             Technique::Sppm(_) => TechniqueKind::Sppm,
+            Technique::Vcm(..) => TechniqueKind::Vcm,
         }
     }
 
@@ -118,7 +124,7 @@ impl Technique {
     pub fn monte_carlo(&self) -> Option<&MonteCarloSettings> {
         match self {
             Technique::Path(s) | Technique::Light(s) | Technique::Bdpt(s) => Some(s),
-            Technique::IrradianceCache(s, _) => Some(s),
+            Technique::IrradianceCache(s, _) | Technique::Vcm(s, _) => Some(s),
             Technique::Whitted(_) | Technique::Network(_) | Technique::Sppm(_) => None,
         }
     }
@@ -130,7 +136,15 @@ impl Technique {
             Technique::Path(m) | Technique::Light(m) | Technique::Bdpt(m) => m.max_depth,
             Technique::IrradianceCache(m, _) => m.max_depth,
             Technique::Sppm(s) => s.max_depth,
+            Technique::Vcm(m, _) => m.max_depth,
         }
+    }
+
+    /// Whether its render takes one sample a pass: each sample index is an iteration over
+    /// the whole image (vertex connection and merging). A film to resume must say so
+    /// ([`Film::with_one_sample_passes`](crate::Film::with_one_sample_passes)).
+    pub fn one_sample_passes(&self) -> bool {
+        matches!(self, Technique::Vcm(..))
     }
 
     /// Whether a part of the image can be rendered alone, to the same pixels as the whole
@@ -147,6 +161,7 @@ impl Technique {
             Technique::IrradianceCache(m, c) => m.key() + &c.key(),
             Technique::Network(n) => n.key(),
             Technique::Sppm(s) => s.key(),
+            Technique::Vcm(m, v) => m.key() + &v.key(),
         }
     }
 
@@ -160,7 +175,8 @@ impl Technique {
             | Technique::Path(_)
             | Technique::Light(_)
             | Technique::Bdpt(_)
-            | Technique::Sppm(_) => Ok(()),
+            | Technique::Sppm(_)
+            | Technique::Vcm(..) => Ok(()),
         }
     }
 
@@ -179,6 +195,7 @@ impl Technique {
                 illumination_network::technique::NetworkTechnique::new(n.clone(), scene),
             ),
             Technique::Sppm(s) => s.lifecycle(),
+            Technique::Vcm(mc, v) => vcm::lifecycle(mc, v, scene)?,
         })
     }
 }

@@ -19,7 +19,7 @@ mod mis;
 mod vertex;
 mod walk;
 
-use super::camera_connection::{lens_sample, project_to_camera};
+use super::camera_connection::{camera_pdf_dir, lens_sample, project_to_camera};
 use super::light::refuse_orthographic;
 use super::volumetric::{
     average, hero_channel, positive, transmittance, transmittance_to_infinity, Throughput,
@@ -39,7 +39,7 @@ use crate::transport::technique::{Lifecycle, SampledTechnique};
 use crate::transport::{Context, MonteCarlo, RayStats, Splat};
 use mis::Connection;
 use std::f32::consts::PI;
-use vertex::{camera_pdf_dir, Kind, Vertex};
+use vertex::{Kind, Vertex};
 use walk::{random_walk, Media, WalkStart};
 
 /// Bidirectional path tracing, as the technique list shows it.

@@ -2,6 +2,7 @@
 //! them: surfaces, points in media, emitters (at infinity too) and the camera.
 
 use crate::bsdf::{phase, Bsdf, Transport};
+use crate::integrators::camera_connection::camera_pdf_dir;
 use crate::math::spawn::Spot;
 use crate::math::{Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
@@ -257,23 +258,5 @@ impl Vertex<'_> {
             (Kind::Medium { g }, _, Some(prev)) => Rgb::splat(phase::hg(self.dir_to(prev), w, g)),
             _ => Rgb::ZERO,
         }
-    }
-}
-
-/// Density in solid angle of the camera generating a ray along `w` from the lens point
-/// `lens`: uniform over the film at unit distance, 1 / (A_film cos³θ) (pbrt-v4's `PDF_We`;
-/// the lens point's own density is the same for every strategy and cancels). Zero outside
-/// the film.
-pub(super) fn camera_pdf_dir(camera: &CameraBasis, lens: Vec3, w: Vec3) -> f32 {
-    match camera.raster_from(lens, lens + w) {
-        Some((x, y, cos)) => {
-            let (fw, fh) = camera.film_size();
-            let m = camera.margin;
-            if x < -m || y < -m || x >= fw + m || y >= fh + m {
-                return 0.0;
-            }
-            1.0 / (camera.pixel_area() * fw * fh * cos * cos * cos)
-        }
-        None => 0.0,
     }
 }

@@ -101,22 +101,7 @@ impl SppmSettings {
                 format!("must be between 1 and {MAX_SPP} (SPPM's iterations), got {iterations}"),
             ));
         }
-        if let Some(p) = s.photons_per_iteration {
-            if p == 0 || p > MAX_PHOTONS_PER_ITERATION {
-                return Err(Error::setting(
-                    "photons_per_iteration",
-                    format!("must be between 1 and {MAX_PHOTONS_PER_ITERATION}, got {p}"),
-                ));
-            }
-        }
-        if let Some(r) = s.sppm_radius {
-            if !(r.is_finite() && r > 0.0) {
-                return Err(Error::setting(
-                    "sppm_radius",
-                    format!("must be a positive number, got {r}"),
-                ));
-            }
-        }
+        check_photon_settings(s)?;
         let filter = s.filter.unwrap_or_default();
         filter
             .validate()
@@ -146,6 +131,28 @@ impl SppmSettings {
     pub(crate) fn lifecycle(&self) -> Box<dyn Lifecycle> {
         Box::new(Sppm { settings: *self })
     }
+}
+
+/// Checks the photon settings SPPM and VCM share: photons (light subpaths) per iteration
+/// and the initial radius.
+pub(crate) fn check_photon_settings(s: &Settings) -> Result<()> {
+    if let Some(p) = s.photons_per_iteration {
+        if p == 0 || p > MAX_PHOTONS_PER_ITERATION {
+            return Err(Error::setting(
+                "photons_per_iteration",
+                format!("must be between 1 and {MAX_PHOTONS_PER_ITERATION}, got {p}"),
+            ));
+        }
+    }
+    if let Some(r) = s.sppm_radius {
+        if !(r.is_finite() && r > 0.0) {
+            return Err(Error::setting(
+                "sppm_radius",
+                format!("must be a positive number, got {r}"),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// The initial radius in `scene` where none is given.
