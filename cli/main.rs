@@ -91,6 +91,8 @@ enum Command {
         mut_arg("checkpoint_interval", |a| a.hide(true)),
         mut_arg("resume", |a| a.hide(true)),
         mut_arg("aov", |a| a.hide(true)),
+        mut_arg("light_passes", |a| a.hide(true)),
+        mut_arg("light_groups", |a| a.hide(true)),
         mut_arg("exposure", |a| a.hide(true)),
         mut_arg("half", |a| a.hide(true)),
         mut_arg("tile", |a| a.hide(true)),

@@ -255,6 +255,15 @@ pub struct RenderArgs {
     /// error estimate and sample count (variance, error, samples).
     #[arg(long, help_heading = OUTPUT)]
     pub aov: bool,
+    /// With --aov, the path tracer's light passes as further layers of each EXR output,
+    /// named as Blender Cycles names them: DiffDir, DiffInd, DiffCol, GlossDir, GlossInd,
+    /// GlossCol, TransDir, TransInd, TransCol, Emit, Env. Takes the image's samples again.
+    #[arg(long, requires = "aov", help_heading = OUTPUT)]
+    pub light_passes: bool,
+    /// With --light-passes, a layer for each light alone (Combined_light0, ...: emitting
+    /// shapes, then lights, then the background), at most 64.
+    #[arg(long, requires = "light_passes", help_heading = OUTPUT)]
+    pub light_groups: bool,
     /// Exposure in stops applied to 8-bit outputs (PNG, JPEG).
     #[arg(long, value_parser = finite_f32, allow_negative_numbers = true,
         help_heading = OUTPUT)]

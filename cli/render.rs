@@ -310,6 +310,9 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     let scene = Arc::new(scene);
     let mut renderer = Renderer::new(scene.clone(), job, &control)?;
     let job = renderer.job().clone();
+    if args.light_passes {
+        refuse_light_passes(&args, &renderer)?;
+    }
     if job.region.is_some() {
         renderer.prepare(&control)?;
         let rendered = renderer.render(&control)?;
@@ -447,6 +450,21 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
                 image: samples,
             });
         }
+        let passes = if args.light_passes {
+            renderer
+                .render_light_passes(args.light_groups, &control)?
+                .ok_or_else(|| cli.interrupted("the light passes", "the image was written"))?
+                .layers
+        } else {
+            Vec::new()
+        };
+        for (name, image) in &passes {
+            layers.push(Layer {
+                name,
+                channels: &["R", "G", "B"],
+                image,
+            });
+        }
         for out in args.outputs.iter().filter(|o| is_exr(o)) {
             write_image_layers(out, &image, &layers, &metadata, &out_options)?;
             crate::log::debug(|| {
@@ -456,6 +474,25 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
     }
     if crate::log::info(args.quiet) {
         eprintln!("{}", stats.summary());
+    }
+    Ok(())
+}
+
+/// Refuses --light-passes where they cannot be had, before the render: the technique's
+/// reasons, a part of an image, no EXR output to hold them.
+fn refuse_light_passes(args: &RenderArgs, renderer: &Renderer) -> Result<(), Error> {
+    renderer.check_light_passes(args.light_groups)?;
+    if renderer.job().region.is_some() {
+        return Err(Error::setting(
+            "light_passes",
+            "does not apply to a part of an image (--tile/--crop)",
+        ));
+    }
+    if !args.outputs.iter().any(|o| is_exr(o)) {
+        return Err(Error::setting(
+            "light_passes",
+            "needs an .exr output: the passes are layers of the EXR file",
+        ));
     }
     Ok(())
 }

@@ -34,6 +34,7 @@ mod layer;
 mod layered;
 mod microfacet;
 mod parameters;
+pub mod passes;
 pub mod phase;
 mod tabulated;
 

@@ -9,6 +9,7 @@ mod guided_path;
 pub mod illumination_network;
 pub mod irradiance_cache;
 pub mod light;
+pub(crate) mod light_passes;
 pub mod path;
 pub mod sppm;
 pub(crate) mod technique;

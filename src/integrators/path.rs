@@ -11,11 +11,14 @@ use crate::math::{Ray, Rgb, Vec2, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::SurfacePoint;
 use crate::settings::TechniqueKind;
+use crate::transport::light_passes::PassSample;
 use crate::transport::settings::{
     MonteCarloSettings, TechniqueInfo, ADAPTIVE, COMMON, GUIDING, MONTE_CARLO,
 };
 use crate::transport::technique::{Lifecycle, SampledTechnique};
 use crate::transport::{Context, MonteCarlo, RayStats, Splat};
+
+use super::light_passes::{NoPasses, Passes, Record};
 
 /// Default number of bounces (pbrt's convention: 1 is direct lighting only).
 pub const DEFAULT_MAX_DEPTH: u32 = 8;
@@ -117,23 +120,39 @@ pub(crate) fn sample_direct(
     u_light: Vec2,
     stats: &mut RayStats,
 ) -> Rgb {
+    sample_direct_towards(ctx, bsdf, sp, wo, facing, u_choice, u_light, stats).0
+}
+
+/// [`sample_direct`] and the direction of the light sample (zero if none was drawn).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn sample_direct_towards(
+    ctx: &Context,
+    bsdf: &Bsdf,
+    sp: &SurfacePoint,
+    wo: Vec3,
+    facing: Option<Vec3>,
+    u_choice: f32,
+    u_light: Vec2,
+    stats: &mut RayStats,
+) -> (Rgb, Vec3) {
     let Some(ls) = ctx.lights.sample_li_facing(sp.p, facing, u_choice, u_light) else {
-        return Rgb::ZERO;
+        return (Rgb::ZERO, Vec3::ZERO);
     };
     let (f, bsdf_pdf) = bsdf.eval_and_pdf(wo, ls.wi, Transport::Radiance);
     if f == Rgb::ZERO || ls.pdf <= 0.0 {
-        return Rgb::ZERO;
+        return (Rgb::ZERO, ls.wi);
     }
     let shadow = sp.spawn_to(&ls.spot());
     if ctx.occluded(&shadow, stats) {
-        return Rgb::ZERO;
+        return (Rgb::ZERO, ls.wi);
     }
     let w = if ls.delta {
         1.0
     } else {
         power_heuristic(ls.pdf, bsdf_pdf)
     };
-    f * ls.radiance * (w / ls.pdf)
+    (f * ls.radiance * (w / ls.pdf), ls.wi)
 }
 
 /// What a path that left the scene along `ray` (from `prev_p`, whose next-event estimation
@@ -219,6 +238,37 @@ impl MonteCarlo for PathTracer {
             };
             return super::volumetric::radiance(ctx, camera_ray, lengths, sampler, stats);
         }
+        self.trace(ctx, camera_ray, sampler, stats, &mut NoPasses)
+    }
+
+    fn sample_passes(
+        &self,
+        ctx: &Context,
+        _camera: &CameraBasis,
+        camera_ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+        passes: &mut PassSample,
+    ) -> Option<Rgb> {
+        // The light passes follow surfaces: the volumetric tracer has none.
+        if ctx.has_media() {
+            return None;
+        }
+        Some(self.trace(ctx, camera_ray, sampler, stats, &mut Passes::new(passes)))
+    }
+}
+
+impl PathTracer {
+    /// The path of one camera sample (surfaces only), telling `record` what it adds.
+    #[inline(always)]
+    fn trace<R: Record>(
+        &self,
+        ctx: &Context,
+        camera_ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+        record: &mut R,
+    ) -> Rgb {
         let mut radiance = Rgb::ZERO;
         let mut beta = Rgb::ONE;
         let mut ray = *camera_ray;
@@ -228,33 +278,51 @@ impl MonteCarlo for PathTracer {
         let mut prev_p = ray.origin;
         let mut prev_facing = None;
         let mut depth = 0;
+        let lights = &ctx.lights;
         loop {
             let Some(sp) = ctx.intersect_at_depth(&ray, depth, stats) else {
                 let prev = (prev_p, prev_facing);
-                radiance += escaped(ctx, &ray, prev, beta, (bsdf_pdf, specular));
+                let c = escaped(ctx, &ray, prev, beta, (bsdf_pdf, specular));
+                radiance += c;
+                record.emission(depth, true, c, || lights.background_light());
                 break;
             };
             let m = &ctx.scene.materials[sp.material];
             let wo = -ray.dir;
             if m.emits_towards(wo, sp.ng) {
-                radiance += emitted(ctx, &sp, prev_p, beta, (bsdf_pdf, specular));
+                let c = emitted(ctx, &sp, prev_p, beta, (bsdf_pdf, specular));
+                radiance += c;
+                let light = || sp.world_shape().and_then(|s| lights.light_of_shape(s));
+                record.emission(depth, false, c, light);
             }
             if depth == self.options.max_depth {
+                if R::ACTIVE && depth == 0 {
+                    record.first_surface(&m.bsdf(&sp, wo));
+                }
                 break;
             }
+            let vertex = depth;
             depth += 1;
             let bsdf = m.bsdf(&sp, wo);
+            if vertex == 0 {
+                record.first_surface(&bsdf);
+            }
             let u_choice = sampler.next_2d();
             let u_light = sampler.next_2d();
             let facing = bsdf.reflecting_side(wo);
             if bsdf.has_non_delta() {
                 let (u, v) = (u_choice.x, u_light);
-                radiance += beta * sample_direct(ctx, &bsdf, &sp, wo, facing, u, v, stats);
+                let (d, wi) = sample_direct_towards(ctx, &bsdf, &sp, wo, facing, u, v, stats);
+                let c = beta * d;
+                radiance += c;
+                let light = || lights.choose_at(sp.p, u).map(|(i, _)| i);
+                record.direct(vertex, c, &bsdf, (wo, wi), light);
             }
             let u_dir = sampler.next_2d();
             let Some(bs) = bsdf.sample(wo, u_choice.y, u_dir, Transport::Radiance) else {
                 break;
             };
+            record.scattered(vertex, &bsdf, wo, &bs);
             beta *= bs.weight;
             bsdf_pdf = bs.pdf;
             specular = bs.delta;

@@ -564,5 +564,114 @@ impl Renderer {
     }
 }
 
+/// Light groups a render keeps at most ([`Renderer::check_light_passes`]).
+pub const MAX_LIGHT_GROUPS: usize = 64;
+
+/// The light passes of a render ([`Renderer::render_light_passes`]): each layer's name and
+/// image, the lobe passes ([`LOBE_PASSES`]) first, then the light groups.
+#[derive(Debug)]
+pub struct LightPasses {
+    pub layers: Vec<(String, Image)>,
+}
+
+pub use crate::transport::light_passes::LOBE_PASSES;
+
+impl Renderer {
+    /// Whether the job can render its light passes (with a layer for each light if
+    /// `groups`): [`Error::Setting`] `light_passes` (or `light_groups`) naming why not, to be
+    /// asked before the render. They are the path tracer's (as Cycles' are its path
+    /// tracer's), on surfaces, with every pixel taking the same samples.
+    pub fn check_light_passes(&self, groups: bool) -> Result<()> {
+        let refuse = |why: String| Err(Error::setting("light_passes", why));
+        let t = &self.job.technique;
+        let Technique::Path(mc) = t else {
+            return refuse(format!(
+                "does not apply to the {} integrator: the light passes are the path tracer's",
+                t.kind()
+            ));
+        };
+        if mc.guiding {
+            return refuse(
+                "does not apply with path guiding: its samples follow a guide \
+                           learned during the render"
+                    .into(),
+            );
+        }
+        if mc.time_limit.is_some() || mc.adaptive.is_some() {
+            return refuse(
+                "needs a fixed number of samples per pixel (no time limit, no \
+                           adaptive sampling)"
+                    .into(),
+            );
+        }
+        if !self.scene.media.is_empty() {
+            return refuse("does not apply to a scene with participating media".into());
+        }
+        if groups {
+            let ctx = Context::new(&self.scene, self.accel.as_ref());
+            let n = ctx.lights.emitters.len();
+            if n > MAX_LIGHT_GROUPS {
+                return Err(Error::setting(
+                    "light_groups",
+                    format!(
+                        "the scene has {n} lights (emitting shapes, lights and the \
+                         background); at most {MAX_LIGHT_GROUPS} get layers of their own"
+                    ),
+                ));
+            }
+        }
+        Ok(())
+    }
+
+    /// The light passes of the job's pixels, from the image's own camera samples taken
+    /// again (as [`check_light_passes`](Self::check_light_passes) allows): Cycles' lobe
+    /// passes, and with `groups` the light of each light alone (`Combined_light0`, ...: the
+    /// emitting shapes in the scene's order, then the scene's lights, then the background;
+    /// `Combined_unlisted` for emitting instances). `None` if cancelled.
+    pub fn render_light_passes(
+        &mut self,
+        groups: bool,
+        control: &Control,
+    ) -> Result<Option<LightPasses>> {
+        self.check_light_passes(groups)?;
+        self.prepare(control)?;
+        let ctx = Context::new(&self.scene, self.accel.as_ref());
+        let Tiles::Samples(integrator, mc) = self.technique.tiles() else {
+            return Err(Error::Invalid(
+                "the light passes are the path tracer's".into(),
+            ));
+        };
+        let options = self.job.view().progressive(&mc);
+        let emitters = ctx.lights.emitters.len();
+        let count = if groups { emitters + 1 } else { 0 };
+        let Some(images) = crate::render::light_passes::render_light_passes(
+            &ctx,
+            integrator,
+            &options,
+            &self.job.pixels(),
+            count,
+            control,
+        )?
+        else {
+            return Ok(None);
+        };
+        let unlisted = !self.scene.instances.is_empty();
+        let layers = images
+            .into_iter()
+            .enumerate()
+            .filter_map(|(k, image)| {
+                let name = match k.checked_sub(LOBE_PASSES.len()) {
+                    None => LOBE_PASSES[k].to_string(),
+                    Some(g) if g < emitters => format!("Combined_light{g}"),
+                    Some(_) if unlisted => "Combined_unlisted".to_string(),
+                    Some(_) => return None,
+                };
+                Some((name, image))
+            })
+            .collect();
+        Ok(Some(LightPasses { layers }))
+    }
+}
+
 /// The auxiliary images: what each of [`Renderer::render_aovs`]' images holds.
 pub use crate::render::aov::Aov;

@@ -7,6 +7,7 @@ mod adaptive;
 pub(crate) mod aov;
 pub mod checkpoint;
 mod film;
+pub(crate) mod light_passes;
 pub(crate) mod pixels;
 pub(crate) mod progressive;
 mod sampling;

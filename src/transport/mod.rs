@@ -10,6 +10,7 @@
 
 pub(crate) mod camera_sample;
 pub(crate) mod driver;
+pub(crate) mod light_passes;
 pub(crate) mod passes;
 mod pixel_sampling;
 pub(crate) mod settings;
@@ -243,13 +244,28 @@ pub trait MonteCarlo: Sync {
     ) -> bool {
         false
     }
+
+    /// [`sample`](Self::sample) (the same value, from the same sample values) with the
+    /// sample's light passes added to `passes` (zeroed by the caller); `None` for a
+    /// technique that has no light passes.
+    fn sample_passes(
+        &self,
+        _ctx: &Context,
+        _camera: &CameraBasis,
+        _ray: &Ray,
+        _sampler: &mut Sampler,
+        _stats: &mut RayStats,
+        _passes: &mut light_passes::PassSample,
+    ) -> Option<Rgb> {
+        None
+    }
 }
 
 /// What an iteration's whole-image work needs to know.
 pub struct IterationStart<'c> {
     pub camera: &'c CameraBasis,
     pub seed: u64,
-    /// The image's size: its pixel count is the number of light subpaths of an iteration.
+    /// The image's size.
     pub size: (u32, u32),
     /// The sample index (the iteration).
     pub index: u32,
