@@ -9,7 +9,7 @@
 
 use crate::math::Rgb;
 
-/// The lobe passes, in the order of a [`PassSample`]'s values and of the EXR layers: per
+/// The lobe passes, in the order of a sample's values and of the EXR layers: per
 /// kind of lobe its direct light, indirect light and colour, then the directly seen emission
 /// and background. Their names are Cycles' pass names.
 pub const LOBE_PASSES: [&str; 11] = [
