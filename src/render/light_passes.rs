@@ -5,11 +5,11 @@
 //! (DiffDir + DiffInd)·DiffCol + (GlossDir + GlossInd)·GlossCol + (TransDir + TransInd)·
 //! TransCol + Emit + Env, and the light groups sum to the image less Emit and Env.
 
-use super::film::{weighted_value, Footprint};
+use super::film::weighted_value;
 use super::{tiles, tiles_in, Tile, MERGE_WINDOW};
 use crate::control::Control;
 use crate::error::{Error, Result};
-use crate::image::filter::Reconstruction;
+use crate::image::filter::{FilterWeights, Reconstruction};
 use crate::image::Image;
 use crate::math::Rgb;
 use crate::transport::camera_sample::{camera_sample, view_basis, PixelJitter};
@@ -17,8 +17,10 @@ use crate::transport::driver::drive;
 use crate::transport::light_passes::{PassSample, LOBE_PASSES};
 use crate::transport::{Context, MonteCarlo, ProgressiveOptions, RayStats};
 
-/// Bytes per pixel and pass the accumulation holds (a sum and a weight, in f64).
-pub(crate) const BYTES_PER_PASS: u64 = 32;
+/// Bytes per pixel and pass the accumulation holds (a sum in f64), and per pixel (the
+/// filter's weights).
+pub(crate) const BYTES_PER_PASS: u64 = 24;
+const BYTES_PER_PIXEL: u64 = 8;
 
 /// The light passes of `region` of the image `options` describe (all `options.spp`
 /// samples, no time limit nor adaptive sampling), with `groups` light groups: images in the
@@ -35,7 +37,7 @@ pub(crate) fn render_light_passes(
     let count = LOBE_PASSES.len() + groups;
     control.budget.check(
         &format!("{count} light passes"),
-        region.pixels() * count as u64 * BYTES_PER_PASS,
+        region.pixels() * (count as u64 * BYTES_PER_PASS + BYTES_PER_PIXEL),
     )?;
     let camera = view_basis(ctx.scene, options);
     let jitter = PixelJitter::new(options.filter, options.reconstruction);
@@ -52,10 +54,7 @@ pub(crate) fn render_light_passes(
                 .collect()
         }
     };
-    let mut film = Vec::with_capacity(count);
-    for _ in 0..count {
-        film.push(Footprint::try_over(*region)?);
-    }
+    let mut film = Sums::try_over(*region, count)?;
     let spp = options.spp;
     let clamp = options.max_component_value;
     let phase = control.phase(
@@ -70,16 +69,15 @@ pub(crate) fn render_light_passes(
         MERGE_WINDOW,
         &control.cancel,
         |t| {
-            let mut parts: Vec<Footprint> = (0..count)
-                .map(|_| match splatting {
-                    Some(s) => Footprint::new(t, s.reach, region),
-                    None => Footprint {
-                        rect: *t,
-                        sums: Vec::with_capacity(t.pixels() as usize),
-                        weights: Vec::new(),
-                    },
-                })
-                .collect();
+            let mut part = match splatting {
+                Some(s) => Sums::new(t.grown(s.reach, region), count),
+                None => Sums {
+                    rect: *t,
+                    count,
+                    sums: Vec::with_capacity(t.pixels() as usize * count),
+                    weights: Vec::new(),
+                },
+            };
             let mut stats = RayStats::default();
             let mut pass = PassSample::new(groups);
             let mut sums = vec![[0.0f64; 3]; count];
@@ -112,11 +110,7 @@ pub(crate) fn render_light_passes(
                             }
                         }
                         match splatting {
-                            Some(s) => {
-                                for (part, v) in parts.iter_mut().zip(&pass.values) {
-                                    part.add(&s.weights, at, valid.then_some(*v));
-                                }
-                            }
+                            Some(s) => part.add(&s.weights, at, valid.then_some(&pass.values)),
                             None if valid => {
                                 for (sum, v) in sums.iter_mut().zip(&pass.values) {
                                     sum[0] += v.x as f64;
@@ -128,22 +122,18 @@ pub(crate) fn render_light_passes(
                         }
                     }
                     if splatting.is_none() {
-                        for (part, sum) in parts.iter_mut().zip(&sums) {
-                            part.sums.push(*sum);
-                        }
+                        part.sums.extend_from_slice(&sums);
                     }
                 }
             }
-            Some(parts)
+            Some(part)
         },
-        |i, parts| {
-            let Some(parts) = parts else {
+        |i, part| {
+            let Some(part) = part else {
                 unsupported = true;
                 return;
             };
-            for (whole, part) in film.iter_mut().zip(&parts) {
-                whole.absorb(part);
-            }
+            film.absorb(&part);
             let t = &tiles[i];
             let inside = t.intersection(region).map_or(0, |r| r.pixels());
             phase.advance(spp as u64 * inside);
@@ -158,10 +148,12 @@ pub(crate) fn render_light_passes(
     if driven.cancelled {
         return Ok(None);
     }
-    let mean = |f: &Footprint, p: usize| match options.reconstruction {
-        Reconstruction::Splat => weighted_value(f.sums[p], f.weights[p], [0.0; 3], 0.0),
+    let mean = |k: usize, p: usize| match options.reconstruction {
+        Reconstruction::Splat => {
+            weighted_value(film.sums[p * count + k], film.weights[p], [0.0; 3], 0.0)
+        }
         Reconstruction::Importance => {
-            let s = f.sums[p];
+            let s = film.sums[p * count + k];
             let n = spp.max(1) as f64;
             Rgb::new((s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32)
         }
@@ -171,7 +163,7 @@ pub(crate) fn render_light_passes(
         images.push(Image::try_new(region.width(), region.height())?);
     }
     for p in 0..region.pixels() as usize {
-        let values: Vec<Rgb> = film.iter().map(|f| mean(f, p)).collect();
+        let values: Vec<Rgb> = (0..count).map(|k| mean(k, p)).collect();
         for (k, v) in values.iter().enumerate() {
             images[k].pixels[p] = *v;
         }
@@ -210,4 +202,107 @@ fn divided(dir: Rgb, ind: Rgb, col: Rgb) -> (Rgb, Rgb, Rgb) {
         Rgb::new(x.1, y.1, z.1),
         Rgb::new(x.2, y.2, z.2),
     )
+}
+
+/// Samples splatted into the pixels of `rect`, `count` values each: per pixel (row-major)
+/// the weighted sums of its values, one after the other, and one sum of weights; samples
+/// counted in their own pixel have no weights.
+struct Sums {
+    rect: Tile,
+    count: usize,
+    sums: Vec<[f64; 3]>,
+    weights: Vec<f64>,
+}
+
+impl Sums {
+    fn new(rect: Tile, count: usize) -> Sums {
+        let pixels = rect.pixels() as usize;
+        Sums {
+            rect,
+            count,
+            sums: vec![[0.0; 3]; pixels * count],
+            weights: vec![0.0; pixels],
+        }
+    }
+
+    /// [`Sums::new`], or [`Error::OutOfMemory`] if it cannot be allocated.
+    fn try_over(rect: Tile, count: usize) -> Result<Sums> {
+        let pixels = rect.pixels() as usize;
+        let what = || {
+            format!(
+                "the light passes of a {}x{} image",
+                rect.width(),
+                rect.height()
+            )
+        };
+        Ok(Sums {
+            rect,
+            count,
+            sums: crate::platform::try_vec(pixels * count, [0.0; 3], what)?,
+            weights: crate::platform::try_vec(pixels, 0.0, what)?,
+        })
+    }
+
+    /// Adds a sample at raster position `at` with `values` to every pixel of `rect` whose
+    /// centre its filter reaches, as the film's footprints add the image's samples; a
+    /// dropped sample (no values) adds its weights alone.
+    fn add(&mut self, filter: &FilterWeights, at: (f32, f32), values: Option<&[Rgb]>) {
+        let r = filter.radius();
+        let rect = self.rect;
+        let span = |s: f32, lo: u32, hi: u32| {
+            let a = (s - r - 0.5).ceil().max(lo as f32);
+            let b = (s + r - 0.5).floor().min(hi as f32 - 1.0);
+            (a as i64, b as i64)
+        };
+        let (x0, x1) = span(at.0, rect.x0, rect.x1);
+        let (y0, y1) = span(at.1, rect.y0, rect.y1);
+        // The radius is at most 16 pixels, so a sample reaches at most 33 columns.
+        let mut wx = [0.0f32; 34];
+        for (x, c) in (x0..=x1).zip(wx.iter_mut()) {
+            *c = filter.weight_1d(x as f32 + 0.5 - at.0);
+        }
+        let w = rect.width() as usize;
+        for y in y0..=y1 {
+            let wy = filter.weight_1d(y as f32 + 0.5 - at.1);
+            if wy <= 0.0 {
+                continue;
+            }
+            for (x, wx) in (x0..=x1).zip(wx) {
+                let wt = (wx * wy) as f64;
+                if wt <= 0.0 {
+                    continue;
+                }
+                let i = (y as u32 - rect.y0) as usize * w + (x as u32 - rect.x0) as usize;
+                self.weights[i] += wt;
+                if let Some(values) = values {
+                    let px = &mut self.sums[i * self.count..(i + 1) * self.count];
+                    for (sum, v) in px.iter_mut().zip(values) {
+                        sum[0] += wt * v.x as f64;
+                        sum[1] += wt * v.y as f64;
+                        sum[2] += wt * v.z as f64;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Adds `part`'s sums (and weights, if it has them) to the pixels they cover, which
+    /// must lie within `self.rect`.
+    fn absorb(&mut self, part: &Sums) {
+        let w = part.rect.width();
+        for k in 0..part.rect.pixels() as usize {
+            let (x, y) = (part.rect.x0 + k as u32 % w, part.rect.y0 + k as u32 / w);
+            let i = ((y - self.rect.y0) * self.rect.width() + x - self.rect.x0) as usize;
+            let (from, to) = (k * self.count, i * self.count);
+            for j in 0..self.count {
+                let (a, b) = (&mut self.sums[to + j], part.sums[from + j]);
+                a[0] += b[0];
+                a[1] += b[1];
+                a[2] += b[2];
+            }
+            if let Some(weight) = part.weights.get(k) {
+                self.weights[i] += weight;
+            }
+        }
+    }
 }
