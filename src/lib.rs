@@ -56,6 +56,7 @@ pub mod platform;
 pub(crate) mod render;
 pub mod scene;
 pub mod settings;
+pub mod spectrum;
 #[cfg(test)]
 mod tests;
 pub(crate) mod transport;
