@@ -458,39 +458,51 @@ impl Footprint {
     /// Adds a sample at raster position `at` with `value` to every pixel whose centre its
     /// filter reaches; a dropped sample (no value) adds its weights alone, as black.
     pub fn add(&mut self, filter: &FilterWeights, at: (f32, f32), value: Option<Rgb>) {
-        let r = filter.radius();
-        let rect = &self.rect;
-        let span = |s: f32, lo: u32, hi: u32| {
-            let a = (s - r - 0.5).ceil().max(lo as f32);
-            let b = (s + r - 0.5).floor().min(hi as f32 - 1.0);
-            (a as u32, b as i64)
-        };
-        let (x0, x1) = span(at.0, rect.x0, rect.x1);
-        let (y0, y1) = span(at.1, rect.y0, rect.y1);
         let v = value.map_or([0.0; 3], |l| [l.x as f64, l.y as f64, l.z as f64]);
-        // The radius is at most 16 pixels, so a sample reaches at most 33 columns.
-        let mut wx = [0.0f32; 34];
-        let columns = (x0 as i64..=x1).zip(wx.iter_mut());
-        for (x, c) in columns {
-            *c = filter.weight_1d(x as f32 + 0.5 - at.0);
+        for_each_reached(filter, at, &self.rect, |i, wt| {
+            let px = &mut self.sums[i];
+            px[0] += wt * v[0];
+            px[1] += wt * v[1];
+            px[2] += wt * v[2];
+            self.weights[i] += wt;
+        });
+    }
+}
+
+/// Calls `each(i, weight)` for every pixel of `rect` (`i` row-major over it) whose centre
+/// the filter of a sample at raster position `at` reaches with a positive weight, row by
+/// row: how a sample is splatted over the pixels around it.
+pub(super) fn for_each_reached(
+    filter: &FilterWeights,
+    at: (f32, f32),
+    rect: &Tile,
+    mut each: impl FnMut(usize, f64),
+) {
+    let r = filter.radius();
+    let span = |s: f32, lo: u32, hi: u32| {
+        let a = (s - r - 0.5).ceil().max(lo as f32);
+        let b = (s + r - 0.5).floor().min(hi as f32 - 1.0);
+        (a as u32, b as i64)
+    };
+    let (x0, x1) = span(at.0, rect.x0, rect.x1);
+    let (y0, y1) = span(at.1, rect.y0, rect.y1);
+    // The radius is at most 16 pixels, so a sample reaches at most 33 columns.
+    let mut wx = [0.0f32; 34];
+    let columns = (x0 as i64..=x1).zip(wx.iter_mut());
+    for (x, c) in columns {
+        *c = filter.weight_1d(x as f32 + 0.5 - at.0);
+    }
+    let w = rect.width() as usize;
+    for y in y0 as i64..=y1 {
+        let wy = filter.weight_1d(y as f32 + 0.5 - at.1);
+        if wy <= 0.0 {
+            continue;
         }
-        let w = rect.width() as usize;
-        for y in y0 as i64..=y1 {
-            let wy = filter.weight_1d(y as f32 + 0.5 - at.1);
-            if wy <= 0.0 {
-                continue;
-            }
-            let row = (y as u32 - rect.y0) as usize * w;
-            for (x, wx) in (x0 as i64..=x1).zip(wx) {
-                let wt = (wx * wy) as f64;
-                if wt > 0.0 {
-                    let i = row + (x as u32 - rect.x0) as usize;
-                    let px = &mut self.sums[i];
-                    px[0] += wt * v[0];
-                    px[1] += wt * v[1];
-                    px[2] += wt * v[2];
-                    self.weights[i] += wt;
-                }
+        let row = (y as u32 - rect.y0) as usize * w;
+        for (x, wx) in (x0 as i64..=x1).zip(wx) {
+            let wt = (wx * wy) as f64;
+            if wt > 0.0 {
+                each(row + (x as u32 - rect.x0) as usize, wt);
             }
         }
     }

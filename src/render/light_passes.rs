@@ -5,7 +5,7 @@
 //! (DiffDir + DiffInd)·DiffCol + (GlossDir + GlossInd)·GlossCol + (TransDir + TransInd)·
 //! TransCol + Emit + Env, and the light groups sum to the image less Emit and Env.
 
-use super::film::weighted_value;
+use super::film::{for_each_reached, weighted_value};
 use super::{tiles, tiles_in, Tile, MERGE_WINDOW};
 use crate::control::Control;
 use crate::error::{Error, Result};
@@ -247,43 +247,18 @@ impl Sums {
     /// centre its filter reaches, as the film's footprints add the image's samples; a
     /// dropped sample (no values) adds its weights alone.
     fn add(&mut self, filter: &FilterWeights, at: (f32, f32), values: Option<&[Rgb]>) {
-        let r = filter.radius();
-        let rect = self.rect;
-        let span = |s: f32, lo: u32, hi: u32| {
-            let a = (s - r - 0.5).ceil().max(lo as f32);
-            let b = (s + r - 0.5).floor().min(hi as f32 - 1.0);
-            (a as i64, b as i64)
-        };
-        let (x0, x1) = span(at.0, rect.x0, rect.x1);
-        let (y0, y1) = span(at.1, rect.y0, rect.y1);
-        // The radius is at most 16 pixels, so a sample reaches at most 33 columns.
-        let mut wx = [0.0f32; 34];
-        for (x, c) in (x0..=x1).zip(wx.iter_mut()) {
-            *c = filter.weight_1d(x as f32 + 0.5 - at.0);
-        }
-        let w = rect.width() as usize;
-        for y in y0..=y1 {
-            let wy = filter.weight_1d(y as f32 + 0.5 - at.1);
-            if wy <= 0.0 {
-                continue;
-            }
-            for (x, wx) in (x0..=x1).zip(wx) {
-                let wt = (wx * wy) as f64;
-                if wt <= 0.0 {
-                    continue;
-                }
-                let i = (y as u32 - rect.y0) as usize * w + (x as u32 - rect.x0) as usize;
-                self.weights[i] += wt;
-                if let Some(values) = values {
-                    let px = &mut self.sums[i * self.count..(i + 1) * self.count];
-                    for (sum, v) in px.iter_mut().zip(values) {
-                        sum[0] += wt * v.x as f64;
-                        sum[1] += wt * v.y as f64;
-                        sum[2] += wt * v.z as f64;
-                    }
+        let count = self.count;
+        for_each_reached(filter, at, &self.rect, |i, wt| {
+            self.weights[i] += wt;
+            if let Some(values) = values {
+                let px = &mut self.sums[i * count..(i + 1) * count];
+                for (sum, v) in px.iter_mut().zip(values) {
+                    sum[0] += wt * v.x as f64;
+                    sum[1] += wt * v.y as f64;
+                    sum[2] += wt * v.z as f64;
                 }
             }
-        }
+        });
     }
 
     /// Adds `part`'s sums (and weights, if it has them) to the pixels they cover, which
