@@ -20,6 +20,10 @@ use raylink::{Control, Image, Job, Renderer, Scene, Settings, Technique, Techniq
 use std::path::Path;
 use std::sync::Arc;
 
+#[path = "common/render.rs"]
+mod render;
+use render::mean;
+
 fn scene(path: &str) -> Arc<Scene> {
     Arc::new(Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(path)).unwrap())
 }
@@ -124,16 +128,6 @@ fn assert_close(case: &str, a: &Image, b: &Image, rel: f32) {
         b.pixels[i],
         worst.0
     );
-}
-
-fn mean(image: &Image) -> [f64; 3] {
-    let mut m = [0.0f64; 3];
-    for p in &image.pixels {
-        for c in 0..3 {
-            m[c] += p[c] as f64 / image.pixels.len() as f64;
-        }
-    }
-    m
 }
 
 #[test]

@@ -8,6 +8,10 @@ use raylink::{Control, Error, Image, Job, Renderer, Scene, Settings, Technique, 
 use std::path::Path;
 use std::sync::Arc;
 
+#[path = "common/render.rs"]
+mod render;
+use render::{mean, mean_error};
+
 fn scene(name: &str) -> Arc<Scene> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR"))
         .join("scenes")
@@ -53,24 +57,6 @@ fn path(max_depth: u32, spp: u32) -> Settings {
         filter: Some(raylink::image::filter::Filter::Box { radius: 0.5 }),
         ..Settings::default()
     }
-}
-
-fn mean(image: &Image) -> [f64; 3] {
-    let mut m = [0.0; 3];
-    for p in &image.pixels {
-        for c in 0..3 {
-            m[c] += p[c] as f64;
-        }
-    }
-    m.map(|v| v / image.pixels.len() as f64)
-}
-
-/// The largest relative difference of the image means, over the channels.
-fn mean_error(a: &Image, reference: &Image) -> f64 {
-    let (a, r) = (mean(a), mean(reference));
-    (0..3)
-        .map(|c| ((a[c] - r[c]) / r[c]).abs())
-        .fold(0.0, f64::max)
 }
 
 /// The Cornell box (every surface diffuse): with the same bounces (a visible point at the

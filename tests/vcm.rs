@@ -11,6 +11,10 @@ use raylink::{
 };
 use std::path::Path;
 use std::sync::Arc;
+
+#[path = "common/render.rs"]
+mod render;
+use render::{mean, mean_error};
 use std::time::Duration;
 
 fn scene(name: &str) -> Arc<Scene> {
@@ -54,24 +58,6 @@ fn technique(kind: TechniqueKind, max_depth: u32, spp: u32, radius: Option<f32>)
         sppm_radius: radius,
         ..Settings::default()
     }
-}
-
-fn mean(image: &Image) -> [f64; 3] {
-    let mut m = [0.0; 3];
-    for p in &image.pixels {
-        for c in 0..3 {
-            m[c] += p[c] as f64;
-        }
-    }
-    m.map(|v| v / image.pixels.len() as f64)
-}
-
-/// The largest relative difference of the image means, over the channels.
-fn mean_error(a: &Image, reference: &Image) -> f64 {
-    let (a, r) = (mean(a), mean(reference));
-    (0..3)
-        .map(|c| ((a[c] - r[c]) / r[c]).abs())
-        .fold(0.0, f64::max)
 }
 
 /// The RMS difference of the means of 8x8 blocks, over the reference's mean.

@@ -1,5 +1,5 @@
 //! What the tests that render through the library share: Monte Carlo settings with a box
-//! filter, and the image of a technique over a scene. Included with `#[path]`; each test
+//! filter, the image of a technique over a scene, and image means. Included with `#[path]`; each test
 //! uses a part.
 #![allow(dead_code)]
 
@@ -66,4 +66,23 @@ pub fn try_image(scene: &Scene, technique: Technique, view: View) -> raylink::Re
 /// [`try_image`], which must succeed.
 pub fn image(scene: &Scene, technique: Technique, view: View) -> Image {
     try_image(scene, technique, view).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The image's mean, per channel.
+pub fn mean(image: &Image) -> [f64; 3] {
+    let mut m = [0.0; 3];
+    for p in &image.pixels {
+        for c in 0..3 {
+            m[c] += p[c] as f64;
+        }
+    }
+    m.map(|v| v / image.pixels.len() as f64)
+}
+
+/// The largest relative difference of the image means, over the channels.
+pub fn mean_error(a: &Image, reference: &Image) -> f64 {
+    let (a, r) = (mean(a), mean(reference));
+    (0..3)
+        .map(|c| ((a[c] - r[c]) / r[c]).abs())
+        .fold(0.0, f64::max)
 }
