@@ -573,7 +573,6 @@ pub(crate) fn render_passes(
                             film.add_splat(splat);
                         }
                         stats.rays.add(&w.rays);
-                        film.invalid += w.invalid;
                     }
                     film.pass = n;
                     film.add_camera(&r.camera);

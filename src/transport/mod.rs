@@ -275,10 +275,9 @@ pub struct IterationStart<'c> {
 }
 
 /// What an iteration's whole-image work adds to the image besides its camera samples: the
-/// light subpaths' splats (in a fixed order), its rays and its dropped paths.
+/// light subpaths' splats (in a fixed order) and its rays.
 #[derive(Default)]
 pub struct IterationWork {
     pub splats: Vec<Splat>,
     pub rays: RayStats,
-    pub invalid: u64,
 }

@@ -75,15 +75,7 @@ pub(super) fn sample_towards(
         if es.pdf_dir.is_nan() || es.pdf_dir <= 0.0 {
             return None;
         }
-        let lp = LightPoint {
-            radiance: es.radiance,
-            direct_pdf_a: pmf * es.pdf_dir,
-            emission_pdf_w: es.pdf_pos * es.pdf_dir,
-            cos_at_light: 1.0,
-            delta: es.delta_dir,
-            finite: false,
-        };
-        return Some((lp, -es.dir, None));
+        return Some((of_emission(ctx, &es), -es.dir, None));
     }
     let to = es.p - p;
     let dist2 = to.length_squared();
