@@ -194,7 +194,7 @@ impl Technique {
             Technique::Network(n) => Box::new(
                 illumination_network::technique::NetworkTechnique::new(n.clone(), scene),
             ),
-            Technique::Sppm(s) => s.lifecycle(),
+            Technique::Sppm(s) => s.lifecycle(scene)?,
             Technique::Vcm(mc, v) => vcm::lifecycle(mc, v, scene)?,
         })
     }

@@ -373,7 +373,7 @@ pub(super) fn russian_roulette(beta: &mut Rgb, r_u: Rgb, on: bool, sampler: &mut
 /// path's channel densities. `start` gives the medium the shadow ray starts in, by its
 /// direction; `path` is the throughput, its density ratios and its hero channel.
 #[allow(clippy::too_many_arguments)]
-fn sample_light(
+pub(super) fn sample_light(
     ctx: &Context,
     scatterer: &Scatterer,
     wo: Vec3,
@@ -434,7 +434,51 @@ pub(super) fn transmittance(
     rng: &mut Rng,
     stats: &mut RayStats,
 ) -> Option<(Rgb, Rgb, Rgb)> {
-    track(ctx, from, medium, Towards::Spot(to), (hero, rng), stats)
+    track(
+        ctx,
+        from,
+        medium,
+        Towards::Spot(to),
+        (hero, rng),
+        stats,
+        None,
+    )
+}
+
+/// As [`transmittance`] (to `to`, or along `to`'s direction to infinity), with the
+/// segment's majorant optical depth averaged over the channels (see [`grey_depth`]) as a
+/// fourth value.
+pub(super) fn transmittance_and_depth(
+    ctx: &Context,
+    from: (Spot, f32),
+    medium: Option<u32>,
+    to: Result<&Spot, Vec3>,
+    hero: usize,
+    rng: &mut Rng,
+    stats: &mut RayStats,
+) -> Option<(Rgb, Rgb, Rgb, f32)> {
+    let to = match to {
+        Ok(spot) => Towards::Spot(spot),
+        Err(dir) => Towards::Infinity(dir),
+    };
+    let mut depth = 0.0;
+    let (t, r_u, r_l) = track(ctx, from, medium, to, (hero, rng), stats, Some(&mut depth))?;
+    Some((t, r_u, r_l, depth))
+}
+
+/// The optical depth of `medium`'s majorant along `ray` up to `t_end`, averaged over the
+/// channels: a function of the segment alone (no random numbers), the exact optical depth
+/// of a grey homogeneous medium.
+pub(super) fn grey_depth(medium: &dyn MediumModel, ray: &Ray, t_end: f32) -> f32 {
+    let mut depth = 0.0f32;
+    medium.segments(ray, t_end, &mut |s| {
+        let sigma = average(s.sigma_maj);
+        if sigma > 0.0 {
+            depth += sigma * (s.t1.min(t_end) - s.t0.max(0.0)).max(0.0);
+        }
+        true
+    });
+    depth
 }
 
 /// As [`transmittance`], from `from` along `dir` to infinity (what reaches a point of light
@@ -455,6 +499,7 @@ pub(super) fn transmittance_to_infinity(
         Towards::Infinity(dir),
         (hero, rng),
         stats,
+        None,
     )
 }
 
@@ -465,6 +510,7 @@ enum Towards<'a> {
     Infinity(Vec3),
 }
 
+#[allow(clippy::too_many_arguments)]
 fn track(
     ctx: &Context,
     (mut from, time): (Spot, f32),
@@ -472,6 +518,7 @@ fn track(
     to: Towards,
     (hero, rng): (usize, &mut Rng),
     stats: &mut RayStats,
+    mut depth: Option<&mut f32>,
 ) -> Option<(Rgb, Rgb, Rgb)> {
     let (mut t_ray, mut r_u, mut r_l) = (Rgb::ONE, Rgb::ONE, Rgb::ONE);
     for _ in 0..MAX_CROSSINGS {
@@ -490,6 +537,9 @@ fn track(
         if let Some(m) = medium {
             let model = ctx.scene.media[m as usize].model();
             let t_end = hit.as_ref().map_or(t_far, |sp| sp.t);
+            if let Some(depth) = depth.as_deref_mut() {
+                *depth += grey_depth(model, &ray, t_end);
+            }
             let t_maj = sample_majorant(model, &ray, t_end, hero, rng, &mut |c| {
                 let sigma_n = (c.sigma_maj - c.point.sigma_a - c.point.sigma_s).max(Rgb::ZERO);
                 let pdf = c.t_maj[hero] * c.sigma_maj[hero];

@@ -12,11 +12,12 @@ use super::volumetric::{
 use crate::bsdf::{phase, Transport};
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
-use crate::math::{Ray, Rgb, Vec3};
+use crate::math::{Ray, Rgb, Vec2, Vec3};
 use crate::scene::camera::CameraBasis;
+use crate::scene::lights::EmissionSample;
 use crate::scene::lights::Emitter;
 use crate::scene::media::tracking::Uniforms;
-use crate::scene::media::MediumModel;
+use crate::scene::media::{MediumInterface, MediumModel};
 use crate::scene::Scene;
 use crate::transport::{Context, RayStats, Splat};
 
@@ -26,7 +27,7 @@ pub(crate) fn check_scene(scene: &Scene) -> Result<(), String> {
     match scene.media.iter().find(|m| m.model().emits()) {
         Some(m) => Err(format!(
             "the light integrator does not render media that emit, and the medium \"{}\" \
-             does: render it with the path or bdpt integrator",
+             does: render it with the path, bdpt or vcm integrator",
             m.name
         )),
         None => Ok(()),
@@ -83,10 +84,54 @@ pub(super) fn medium_at(ctx: &Context, p: Vec3, time: f32, stats: &mut RayStats)
         let Some(sp) = ctx.intersect(&ray, stats) else {
             return medium;
         };
+        // The surface `p` lies on (an area light's) ends the segment: were it crossed, the
+        // next segment would find it again, to the last crossing allowed.
+        if (sp.p - p).abs().max_element() <= 1e-4 * p.abs().max_element().max(1.0) {
+            return medium;
+        }
         medium = medium_after(ctx, &sp, ray.dir, medium);
         from = sp.spot();
     }
     medium
+}
+
+/// The medium around a light's emission sample: on each side of an emitter that bounds
+/// media, its shape's interface (found with the surface's own normal: a two-sided light's
+/// sample gives the normal of the side it emits to); elsewhere the camera's medium carried
+/// to it.
+#[derive(Clone, Copy, Debug)]
+pub(super) struct LightMedium {
+    interface: Option<(MediumInterface, Vec3)>,
+    /// The medium around a light that bounds none.
+    pub around: Option<u32>,
+}
+
+impl LightMedium {
+    /// The media around the emission sample `es`, drawn with `u_pos`.
+    pub(super) fn of(
+        ctx: &Context,
+        es: &EmissionSample,
+        u_pos: Vec2,
+        time: f32,
+        stats: &mut RayStats,
+    ) -> LightMedium {
+        let interface = match &ctx.lights.emitters[es.light] {
+            Emitter::Area(a) => ctx.scene.shapes[a.shape]
+                .media
+                .map(|i| (i, a.sample(u_pos).n)),
+            _ => None,
+        };
+        let around = match interface {
+            Some(_) => None,
+            None => medium_at(ctx, es.p, time, stats),
+        };
+        LightMedium { interface, around }
+    }
+
+    /// The medium a ray leaving the light along `w` starts in.
+    pub(super) fn towards(&self, w: Vec3) -> Option<u32> {
+        self.interface.map_or(self.around, |(i, n)| i.towards(w, n))
+    }
 }
 
 /// What a scattering point gives the film: its connection to the camera, through media,
@@ -189,18 +234,9 @@ fn light_path(
         return;
     };
     let at_infinity = lights.is_infinite(es.light);
-    // The medium around the light: on each side of an emitter that bounds media, its
-    // shape's interface (found with the surface's own normal: a two-sided light's sample
-    // gives the normal of the side it emits to); elsewhere the camera's medium carried to it.
-    let interface = match &lights.emitters[es.light] {
-        Emitter::Area(a) => scene.shapes[a.shape].media.map(|i| (i, a.sample(u_pos).n)),
-        _ => None,
-    };
-    let around = match interface {
-        Some(_) => None,
-        None => medium_at(ctx, es.p, time, stats),
-    };
-    let medium_towards = |w: Vec3| interface.map_or(around, |(i, n)| i.towards(w, n));
+    let light_medium = LightMedium::of(ctx, &es, u_pos, time, stats);
+    let around = light_medium.around;
+    let medium_towards = |w: Vec3| light_medium.towards(w);
     let mut path = Throughput {
         beta: Rgb::ONE,
         r_u: Rgb::ONE,

@@ -9,11 +9,18 @@
 //! iterations go on. The pixel's radiance after k iterations of P photons is
 //! Ld / k + τ / (k · P · π r²).
 //!
+//! In a scene with participating media both passes take the volumetric walks of `media`:
+//! camera paths may leave their visible point in a medium, where it gathers the photons
+//! scattering within a ball. A pixel keeps separate statistics for its visible points on
+//! surfaces and in media; in media the ball's volume shrinks as the disk's area does, so the
+//! radius by the cube root, and the pixel adds τ / (k · P · 4/3 π r³).
+//!
 //! The render is a function of (scene, settings, seed): camera paths draw from the stream of
 //! (seed, pixel, iteration), photons from that of (seed, iteration, photon), and the
 //! photons' deposits are summed in a fixed order (see `photons`).
 
 mod grid;
+mod media;
 mod photons;
 mod visible;
 
@@ -30,6 +37,7 @@ use crate::transport::camera_sample::PixelJitter;
 use crate::transport::settings::{Setting, TechniqueInfo, COMMON, FILTER};
 use crate::transport::technique::{Lifecycle, Tiles, WholeImage, WholeRender};
 use crate::transport::{Context, View};
+use media::Targets;
 use photons::PhotonPass;
 use visible::CameraPass;
 
@@ -61,7 +69,7 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     progressive: false,
     renders_parts: false,
     follows_time: false,
-    media: false,
+    media: true,
 };
 
 /// The most photons one iteration shoots.
@@ -127,9 +135,20 @@ impl SppmSettings {
         )
     }
 
-    /// The technique, ready to render.
-    pub(crate) fn lifecycle(&self) -> Box<dyn Lifecycle> {
-        Box::new(Sppm { settings: *self })
+    /// The technique for `scene`, ready to render: not for media that emit (photons leave
+    /// only the lights).
+    pub(crate) fn lifecycle(&self, scene: &Scene) -> Result<Box<dyn Lifecycle>> {
+        if let Some(m) = scene.media.iter().find(|m| m.model().emits()) {
+            return Err(Error::input(
+                &scene.source,
+                format!(
+                    "the sppm integrator does not render media that emit, and the medium \
+                     \"{}\" does: render it with the path, bdpt or vcm integrator",
+                    m.name
+                ),
+            ));
+        }
+        Ok(Box::new(Sppm { settings: *self }))
     }
 }
 
@@ -170,12 +189,46 @@ pub fn default_radius(scene: &Scene) -> f32 {
 struct PixelState {
     /// Σ over iterations of the emission and direct light its camera paths gathered.
     ld: [f64; 3],
+    /// The photons gathered at its visible points on surfaces (a disk of radius r).
+    surface: Gathered,
+    /// The photons gathered at its visible points in media (a ball of radius r).
+    medium: Gathered,
+}
+
+/// A pixel's photon statistics for one kind of visible point.
+#[derive(Clone, Copy, Debug)]
+struct Gathered {
     /// Flux τ gathered within the current radius.
     tau: [f64; 3],
     /// Photon count N.
     n: f32,
     /// Search radius r.
     r: f32,
+}
+
+impl Gathered {
+    /// Takes an iteration's `m` photons of flux `phi` in a density estimate of dimension
+    /// `dim` (2: a disk, 3: a ball): the radius shrinks so that the disk's area or the
+    /// ball's volume falls by (N + αM)/(N + M), and τ with it.
+    fn take(&mut self, m: u32, phi: &[f64; 3], dim: i32) {
+        if m == 0 {
+            return;
+        }
+        let m = m as f32;
+        let n_new = self.n + ALPHA * m;
+        let ratio = n_new / (self.n + m);
+        let r_new = if dim == 2 {
+            self.r * ratio.sqrt()
+        } else {
+            self.r * ratio.cbrt()
+        };
+        let shrink = (r_new as f64 / self.r as f64).powi(dim);
+        for (tau, phi) in self.tau.iter_mut().zip(phi) {
+            *tau = (*tau + phi) * shrink;
+        }
+        self.n = n_new;
+        self.r = r_new;
+    }
 }
 
 struct Sppm {
@@ -202,9 +255,16 @@ impl WholeImage for Sppm {
         let mut state = vec![
             PixelState {
                 ld: [0.0; 3],
-                tau: [0.0; 3],
-                n: 0.0,
-                r: r0,
+                surface: Gathered {
+                    tau: [0.0; 3],
+                    n: 0.0,
+                    r: r0,
+                },
+                medium: Gathered {
+                    tau: [0.0; 3],
+                    n: 0.0,
+                    r: r0,
+                },
             };
             pixels as usize
         ];
@@ -233,17 +293,30 @@ impl WholeImage for Sppm {
             let mut owners = Vec::new();
             let mut points = Vec::new();
             let mut balls = Vec::new();
+            let mut medium_owners = Vec::new();
+            let mut medium_points = Vec::new();
+            let mut spheres = Vec::new();
             for (k, path) in paths.iter().enumerate() {
                 if let Some(v) = path.visible {
                     owners.push(k);
                     points.push(v);
-                    balls.push((v.p, state[k].r));
+                    balls.push((v.p, state[k].surface.r));
+                }
+                if let Some(v) = path.in_medium {
+                    medium_owners.push(k);
+                    medium_points.push(v);
+                    spheres.push((v.p, state[k].medium.r));
                 }
             }
             let grid = HashGrid::build(&balls);
+            let medium_grid = HashGrid::build(&spheres);
             let pass = PhotonPass {
-                grid: &grid,
-                visible: &points,
+                targets: Targets {
+                    surface_grid: &grid,
+                    surface: &points,
+                    medium_grid: &medium_grid,
+                    medium: &medium_points,
+                },
                 seed: view.seed,
                 max_depth: s.max_depth,
             };
@@ -260,20 +333,12 @@ impl WholeImage for Sppm {
                 }
             }
             for (j, &k) in owners.iter().enumerate() {
-                let m = arrivals.m[j];
-                if m == 0 {
-                    continue;
-                }
-                let st = &mut state[k];
-                let m = m as f32;
-                let n_new = st.n + ALPHA * m;
-                let r_new = st.r * (n_new / (st.n + m)).sqrt();
-                let shrink = (r_new as f64 / st.r as f64).powi(2);
-                for c in 0..3 {
-                    st.tau[c] = (st.tau[c] + arrivals.phi[j][c]) * shrink;
-                }
-                st.n = n_new;
-                st.r = r_new;
+                state[k].surface.take(arrivals.m[j], &arrivals.phi[j], 2);
+            }
+            let first = owners.len();
+            for (j, &k) in medium_owners.iter().enumerate() {
+                let j = first + j;
+                state[k].medium.take(arrivals.m[j], &arrivals.phi[j], 3);
             }
             done += 1;
             phase.advance(1);
@@ -283,8 +348,16 @@ impl WholeImage for Sppm {
             let k = done as f64;
             let photons_total = k * photons as f64;
             for (i, st) in state.iter().enumerate() {
-                let area = std::f64::consts::PI * (st.r as f64).powi(2);
-                let v = |c: usize| (st.ld[c] / k + st.tau[c] / (photons_total * area)) as f32;
+                let area = std::f64::consts::PI * (st.surface.r as f64).powi(2);
+                let volume = 4.0 / 3.0 * std::f64::consts::PI * (st.medium.r as f64).powi(3);
+                let v = |c: usize| {
+                    let l = st.ld[c] / k + st.surface.tau[c] / (photons_total * area);
+                    if st.medium.n > 0.0 {
+                        (l + st.medium.tau[c] / (photons_total * volume)) as f32
+                    } else {
+                        l as f32
+                    }
+                };
                 let (x, y) = (i as u32 % width, i as u32 / width);
                 image.set(x, y, Rgb::new(v(0), v(1), v(2)));
             }

@@ -9,8 +9,7 @@
 //! its deposits in photon order, and the lists are summed (in f64) in chunk order, so the
 //! sums are the same bits for any thread count or schedule.
 
-use super::grid::HashGrid;
-use super::visible::VisiblePoint;
+use super::media::{self, Targets};
 use crate::bsdf::Transport;
 use crate::control::CancelToken;
 use crate::integrators::light::emission_start;
@@ -31,7 +30,8 @@ type Chunk = (Vec<(u32, Rgb)>, RayStats);
 
 /// What the photons of one iteration brought to the visible points.
 pub(super) struct Arrivals {
-    /// Per visible point: Σ β_vp · f · power, per channel.
+    /// Per visible point (those on surfaces, then those in media): Σ β_vp · f · power, per
+    /// channel.
     pub phi: Vec<[f64; 3]>,
     /// Per visible point: the photons counted.
     pub m: Vec<u32>,
@@ -40,8 +40,8 @@ pub(super) struct Arrivals {
 
 /// The photon pass of one iteration.
 pub(super) struct PhotonPass<'p, 'a> {
-    pub grid: &'p HashGrid,
-    pub visible: &'p [VisiblePoint<'a>],
+    /// The visible points, on surfaces and in media, and their grids.
+    pub targets: Targets<'p, 'a>,
     pub seed: u64,
     pub max_depth: u32,
 }
@@ -55,9 +55,10 @@ impl PhotonPass<'_, '_> {
         photons: u64,
         cancel: &CancelToken,
     ) -> Option<Arrivals> {
+        let points = self.targets.surface.len() + self.targets.medium.len();
         let mut out = Arrivals {
-            phi: vec![[0.0; 3]; self.visible.len()],
-            m: vec![0; self.visible.len()],
+            phi: vec![[0.0; 3]; points],
+            m: vec![0; points],
             rays: RayStats::default(),
         };
         let chunks = photons.div_ceil(CHUNK);
@@ -100,7 +101,19 @@ impl PhotonPass<'_, '_> {
                 &[PHOTON_KEY, iteration as u64, i >> 32],
                 i as u32,
             );
-            self.photon(ctx, &mut sampler, &mut stats, &mut deposits);
+            if ctx.scene.media.is_empty() {
+                self.photon(ctx, &mut sampler, &mut stats, &mut deposits);
+            } else {
+                let to = &self.targets;
+                media::photon(
+                    ctx,
+                    to,
+                    self.max_depth,
+                    &mut sampler,
+                    &mut stats,
+                    &mut deposits,
+                );
+            }
         }
         (deposits, stats)
     }
@@ -129,8 +142,8 @@ impl PhotonPass<'_, '_> {
             };
             let wo = -ray.dir;
             if depth > 0 {
-                self.grid.query(sp.p, |k| {
-                    let v = self.visible[k].weigh(wo, beta);
+                self.targets.surface_grid.query(sp.p, |k| {
+                    let v = self.targets.surface[k].weigh(wo, beta);
                     if v.is_finite() && v != Rgb::ZERO {
                         deposits.push((k as u32, v));
                     }

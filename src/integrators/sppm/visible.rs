@@ -5,6 +5,7 @@
 //! light (next-event estimation with the BSDF-sampled direction, combined by multiple
 //! importance sampling as the path tracer combines them), as pbrt-v4's `SPPMIntegrator`.
 
+use super::media::{self, VolumePoint};
 use crate::bsdf::{Bsdf, Transport};
 use crate::control::CancelToken;
 use crate::integrators::path::{emitted, escaped, sample_direct};
@@ -45,6 +46,8 @@ pub(super) struct CameraPath<'a> {
     /// Emission and direct light gathered along it.
     pub ld: Rgb,
     pub visible: Option<VisiblePoint<'a>>,
+    /// Its visible point in a medium (scenes with media only; at most one of the two).
+    pub in_medium: Option<VolumePoint>,
 }
 
 /// What the camera pass needs besides the scene.
@@ -84,7 +87,11 @@ impl CameraPass<'_> {
                             (x, y),
                             iteration,
                         );
-                        trace(ctx, &ray, self.max_depth, &mut sampler, &mut stats)
+                        if ctx.scene.media.is_empty() {
+                            trace(ctx, &ray, self.max_depth, &mut sampler, &mut stats)
+                        } else {
+                            media::trace(ctx, &ray, self.max_depth, &mut sampler, &mut stats)
+                        }
                     })
                     .collect();
                 Some((row, stats))
@@ -178,5 +185,6 @@ fn trace<'a>(
     CameraPath {
         ld: if ld.is_finite() { ld } else { Rgb::ZERO },
         visible,
+        in_medium: None,
     }
 }

@@ -6,10 +6,12 @@
 
 use super::light_pass::{LightPaths, LightVertex};
 use super::lights::{area_densities, background_densities, sample_towards};
+use super::media::{advance, leave, link, Around, End, Leaving, Scatter, Spectral, Step};
 use super::mis::{abs_cos, Subpath, Weights};
-use crate::bsdf::{Bsdf, Transport};
+use crate::bsdf::Transport;
 use crate::integrators::camera_connection::camera_pdf_dir;
 use crate::integrators::sppm::HashGrid;
+use crate::integrators::volumetric::{average, hero_channel};
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
 use crate::math::{Ray, Rgb, Vec3};
@@ -31,8 +33,20 @@ pub(super) struct Iteration<'a> {
 struct CameraVertex<'v, 'a> {
     at: &'v Spot,
     wo: Vec3,
-    bsdf: &'v Bsdf<'a>,
+    scatter: &'v Scatter<'a>,
+    around: Around,
     path: &'v Subpath,
+}
+
+impl CameraVertex<'_, '_> {
+    /// The weights' merge factor at the vertex: η at a surface, 0 in a medium.
+    fn vm(&self, w: &Weights) -> f32 {
+        if self.scatter.mergeable() {
+            w.vm
+        } else {
+            0.0
+        }
+    }
 }
 
 impl MonteCarlo for Iteration<'_> {
@@ -52,6 +66,7 @@ impl MonteCarlo for Iteration<'_> {
         }
         let mut path = Subpath {
             beta: Rgb::ONE,
+            r_u: Rgb::ONE,
             len: 1,
             d_vcm: self.paths_per_pixel / pdf_cam,
             d_vc: 0.0,
@@ -61,50 +76,107 @@ impl MonteCarlo for Iteration<'_> {
         // uniformly.
         let count = self.paths.starts.len() - 1;
         let light = ((sampler.next_1d() * count as f32) as usize).min(count.saturating_sub(1));
+        let mut spectral = ctx.has_media().then(|| Spectral {
+            hero: hero_channel(sampler),
+            rng: sampler.stream(),
+        });
+        let media = spectral.is_some();
+        let mut medium = ctx.scene.camera_medium;
         let mut ray = *ray;
         let mut radiance = Rgb::ZERO;
         loop {
-            let Some(sp) = ctx.intersect(&ray, stats) else {
-                radiance += path.beta * self.background(ctx, ray.dir.normalize(), &path);
-                break;
-            };
+            let origin = ray.origin;
+            // The emission of media met on the way: its one strategy (no light subpath
+            // starts in a volume), up to the most bounces.
+            let mut glow = Rgb::ZERO;
+            let glows = path.len < self.max_len;
+            let step = advance(
+                ctx,
+                &ray,
+                &mut medium,
+                spectral.as_ref(),
+                &mut path,
+                (sampler, stats),
+                glows.then_some(&mut glow),
+            );
+            radiance += glow;
             let wo = -ray.dir.normalize();
-            let at = sp.spot();
-            let dist = (sp.p - ray.origin).length();
-            path.arrive(dist, abs_cos(at.n, wo), false);
-            let m = &ctx.scene.materials[sp.material];
-            if m.is_emissive() {
-                let light = sp.world_shape().and_then(|s| ctx.lights.light_of_shape(s));
-                if let Some(light) = light {
-                    let le = m.emission_at(sp.p, sp.uv, sp.ng);
-                    radiance += path.beta * self.emitted(ctx, light, le, &at, wo, &path);
+            let (sp, at, scatter, around) = match step {
+                (Step::Ended, _) => break,
+                (Step::Escaped, grey) => {
+                    path.d_vcm /= grey;
+                    let le = self.background(ctx, ray.dir.normalize(), &path);
+                    radiance += path.weighted() * le;
+                    break;
                 }
-            }
-            if path.len >= self.max_len {
-                break;
-            }
-            let bsdf = m.bsdf(&sp, wo);
-            if bsdf.has_non_delta() {
+                (Step::Surface(sp), grey) => {
+                    let at = sp.spot();
+                    let dist = (sp.p - origin).length();
+                    path.arrive(dist, abs_cos(at.n, wo), false, grey);
+                    let m = &ctx.scene.materials[sp.material];
+                    if m.is_emissive() {
+                        let light = sp.world_shape().and_then(|s| ctx.lights.light_of_shape(s));
+                        if let Some(light) = light {
+                            let le = m.emission_at(sp.p, sp.uv, sp.ng);
+                            let le = self.emitted(ctx, light, le, &at, wo, &path);
+                            radiance += path.weighted() * le;
+                        }
+                    }
+                    if path.len >= self.max_len {
+                        break;
+                    }
+                    let around = if media {
+                        Around::surface(ctx, &sp, medium)
+                    } else {
+                        Around::default()
+                    };
+                    (Some(sp), at, Scatter::Surface(m.bsdf(&sp, wo)), around)
+                }
+                (Step::Medium { p, g }, grey) => {
+                    path.arrive((p - origin).length(), 1.0, false, grey);
+                    if path.len >= self.max_len {
+                        break;
+                    }
+                    let around = Around {
+                        medium,
+                        interface: None,
+                    };
+                    (None, Spot::exact(p), Scatter::Medium { g }, around)
+                }
+            };
+            if scatter.connectible() {
                 let v = CameraVertex {
                     at: &at,
                     wo,
-                    bsdf: &bsdf,
+                    scatter: &scatter,
+                    around,
                     path: &path,
                 };
-                let mut gathered = self.direct(ctx, &v, sampler, stats);
+                let mut gathered = self.direct(ctx, &v, (sampler, spectral.as_mut()), stats);
                 for lv in self.paths.of(light) {
                     if lv.path.len + path.len + 1 > self.max_len {
                         break;
                     }
-                    gathered += lv.path.beta * self.connect(ctx, &v, lv, stats);
+                    let c = self.connect(ctx, &v, lv, spectral.as_mut(), stats);
+                    gathered += lv.path.weighted() * c;
                 }
-                gathered += self.merge(&v) * w.vm_normalization;
+                if scatter.mergeable() {
+                    gathered += self.merge(&v) * w.vm_normalization;
+                }
                 radiance += path.beta * gathered;
             }
-            let Some(wi) = path.bounce(w, (&bsdf, wo, at.n), Transport::Radiance, sampler) else {
+            let v = Leaving {
+                at,
+                scatter: &scatter,
+                sp: sp.as_ref(),
+                around,
+                wo,
+            };
+            let mode = (Transport::Radiance, media);
+            let Some(next) = leave(&mut path, w, v, mode, &mut medium, sampler) else {
                 break;
             };
-            ray = sp.spawn(wi);
+            ray = next;
         }
         radiance
     }
@@ -156,7 +228,7 @@ impl Iteration<'_> {
         &self,
         ctx: &Context,
         v: &CameraVertex,
-        sampler: &mut Sampler,
+        (sampler, spectral): (&mut Sampler, Option<&mut Spectral>),
         stats: &mut RayStats,
     ) -> Rgb {
         let u_choose = sampler.next_1d();
@@ -168,7 +240,7 @@ impl Iteration<'_> {
         let Some((lp, wi, to)) = sample_towards(ctx, v.at.p, u_choose, u_pos, u_dir) else {
             return Rgb::ZERO;
         };
-        let f = v.bsdf.eval(v.wo, wi, Transport::Radiance);
+        let f = v.scatter.eval(v.wo, wi, Transport::Radiance);
         if f == Rgb::ZERO || lp.radiance == Rgb::ZERO {
             return Rgb::ZERO;
         }
@@ -179,22 +251,28 @@ impl Iteration<'_> {
         if direct_pdf_w.is_nan() || direct_pdf_w <= 0.0 {
             return Rgb::ZERO;
         }
-        let pdf_dir = if lp.delta { 0.0 } else { v.bsdf.pdf(v.wo, wi) };
-        let pdf_rev = v.bsdf.pdf(wi, v.wo);
-        let cos_to_light = abs_cos(v.at.n, wi);
-        let p = v.path;
-        let w_light = pdf_dir / direct_pdf_w;
-        let w_camera = (lp.emission_pdf_w * cos_to_light / (direct_pdf_w * lp.cos_at_light))
-            * (self.weights.vm + p.d_vcm + p.d_vc * pdf_rev);
-        let weight = 1.0 / (w_light + 1.0 + w_camera);
-        let occluded = match to {
-            Some(q) => ctx.occluded(&v.at.spawn_to(&q), stats),
-            None => ctx.intersect(&v.at.spawn(wi), stats).is_some(),
+        let from = (v.at, v.around.towards(wi, v.at.n));
+        let end = match &to {
+            Some(q) => End::At(q),
+            None => End::Towards(wi),
         };
-        if occluded {
+        let Some((through, grey)) = link(ctx, from, end, v.path.r_u, spectral, stats) else {
             return Rgb::ZERO;
-        }
-        lp.radiance * f * (weight / direct_pdf_w)
+        };
+        let pdf_dir = if lp.delta {
+            0.0
+        } else {
+            v.scatter.pdf(v.wo, wi)
+        };
+        let pdf_rev = v.scatter.pdf(wi, v.wo);
+        let cos_to_light = v.scatter.cos(v.at.n, wi);
+        let p = v.path;
+        let w_light = pdf_dir * grey / direct_pdf_w;
+        let w_camera = (lp.emission_pdf_w * cos_to_light / (direct_pdf_w * lp.cos_at_light))
+            * grey
+            * (v.vm(&self.weights) + p.d_vcm + p.d_vc * pdf_rev);
+        let weight = 1.0 / (w_light + 1.0 + w_camera);
+        lp.radiance * f * (weight / direct_pdf_w) * through
     }
 
     /// Camera vertex `v` connected to light vertex `lv` (without `lv`'s throughput).
@@ -203,6 +281,7 @@ impl Iteration<'_> {
         ctx: &Context,
         v: &CameraVertex,
         lv: &LightVertex,
+        spectral: Option<&mut Spectral>,
         stats: &mut RayStats,
     ) -> Rgb {
         let d = lv.at.p - v.at.p;
@@ -211,37 +290,47 @@ impl Iteration<'_> {
             return Rgb::ZERO;
         }
         let dir = d / dist2.sqrt();
-        let f_cam = v.bsdf.eval(v.wo, dir, Transport::Radiance);
+        let f_cam = v.scatter.eval(v.wo, dir, Transport::Radiance);
         if f_cam == Rgb::ZERO {
             return Rgb::ZERO;
         }
-        let f_light = lv.bsdf.eval(lv.wo, -dir, Transport::Importance);
+        let f_light = lv.scatter.eval(lv.wo, -dir, Transport::Importance);
         if f_light == Rgb::ZERO {
             return Rgb::ZERO;
         }
-        let cam_pdf_a = v.bsdf.pdf(v.wo, dir) * abs_cos(lv.at.n, dir) / dist2;
-        let cam_rev = v.bsdf.pdf(dir, v.wo);
-        let light_pdf_a = lv.bsdf.pdf(lv.wo, -dir) * abs_cos(v.at.n, dir) / dist2;
-        let light_rev = lv.bsdf.pdf(-dir, lv.wo);
-        let (pl, pc, vm) = (&lv.path, v.path, self.weights.vm);
-        let w_light = cam_pdf_a * (vm + pl.d_vcm + pl.d_vc * light_rev);
-        let w_camera = light_pdf_a * (vm + pc.d_vcm + pc.d_vc * cam_rev);
-        let weight = 1.0 / (w_light + 1.0 + w_camera);
-        if ctx.occluded(&v.at.spawn_to(&lv.at), stats) {
+        let from = (v.at, v.around.towards(dir, v.at.n));
+        let end = End::At(&lv.at);
+        let Some((through, grey)) = link(ctx, from, end, v.path.r_u, spectral, stats) else {
             return Rgb::ZERO;
-        }
-        f_cam * f_light * (weight / dist2)
+        };
+        let cam_pdf_a = v.scatter.pdf(v.wo, dir) * lv.scatter.cos(lv.at.n, dir) / dist2 * grey;
+        let cam_rev = v.scatter.pdf(dir, v.wo);
+        let light_pdf_a = lv.scatter.pdf(lv.wo, -dir) * v.scatter.cos(v.at.n, dir) / dist2 * grey;
+        let light_rev = lv.scatter.pdf(-dir, lv.wo);
+        let (pl, pc) = (&lv.path, v.path);
+        let vm_light = if lv.scatter.mergeable() {
+            self.weights.vm
+        } else {
+            0.0
+        };
+        let w_light = cam_pdf_a * (vm_light + pl.d_vcm + pl.d_vc * light_rev);
+        let w_camera = light_pdf_a * (v.vm(&self.weights) + pc.d_vcm + pc.d_vc * cam_rev);
+        let weight = 1.0 / (w_light + 1.0 + w_camera);
+        f_cam * f_light * (weight / dist2) * through
     }
 
-    /// The merges at `v`: every light vertex within the radius, weighted (before the
-    /// kernel's normalisation).
+    /// The merges at surface vertex `v`: every light vertex at a surface within the radius,
+    /// weighted (before the kernel's normalisation).
     fn merge(&self, v: &CameraVertex) -> Rgb {
+        let Scatter::Surface(bsdf) = v.scatter else {
+            return Rgb::ZERO;
+        };
         let mut sum = Rgb::ZERO;
-        let n = v.bsdf.shading_normal();
+        let n = bsdf.shading_normal();
         let (pc, w) = (v.path, &self.weights);
         self.grid.query(v.at.p, |k| {
             let lv = &self.paths.vertices[k];
-            if lv.path.len + pc.len > self.max_len {
+            if lv.path.len + pc.len > self.max_len || !lv.scatter.mergeable() {
                 return;
             }
             let wi = lv.wo;
@@ -249,16 +338,16 @@ impl Iteration<'_> {
             if cos == 0.0 {
                 return;
             }
-            let f = v.bsdf.eval(v.wo, wi, Transport::Radiance) / cos;
+            let f = bsdf.eval(v.wo, wi, Transport::Radiance) / cos;
             if f == Rgb::ZERO {
                 return;
             }
-            let pdf_dir = v.bsdf.pdf(v.wo, wi);
-            let pdf_rev = v.bsdf.pdf(wi, v.wo);
+            let pdf_dir = bsdf.pdf(v.wo, wi);
+            let pdf_rev = bsdf.pdf(wi, v.wo);
             let w_light = lv.path.d_vcm * w.vc + lv.path.d_vm * pdf_dir;
             let w_camera = pc.d_vcm * w.vc + pc.d_vm * pdf_rev;
-            sum += f * lv.path.beta * (1.0 / (w_light + 1.0 + w_camera));
+            sum += f * lv.path.weighted() * (1.0 / (w_light + 1.0 + w_camera));
         });
-        sum
+        sum / average(pc.r_u)
     }
 }

@@ -8,15 +8,19 @@
 //! are concatenated in chunk order, so the iteration is the same bits for any thread count.
 
 use super::lights::of_emission;
+use super::media::{advance, leave, link, Around, End, Leaving, Scatter, Spectral, Step};
 use super::mis::{abs_cos, Subpath, Weights};
-use crate::bsdf::{Bsdf, Transport};
+use crate::bsdf::Transport;
 use crate::integrators::camera_connection::camera_pdf_dir;
 use crate::integrators::camera_connection::{lens_sample, project_to_camera};
 use crate::integrators::light::emission_start;
+use crate::integrators::volumetric::{hero_channel, Throughput};
+use crate::integrators::volumetric_light::{arrive_from_infinity, medium_at};
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
 use crate::math::{Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
+use crate::scene::lights::Emitter;
 use crate::transport::driver::{drive_indexed, Merge};
 use crate::transport::{Context, IterationStart, IterationWork, RayStats, Splat};
 
@@ -25,14 +29,15 @@ const CHUNK: usize = 1024;
 /// The key of the light subpaths' streams (apart from the camera samples').
 const LIGHT_KEY: u64 = 0x7663_6d6c;
 
-/// A light subpath's vertex kept for connections and merges.
+/// A light subpath's vertex kept for connections and merges: at a surface or in a medium.
 #[derive(Clone, Copy, Debug)]
 pub(super) struct LightVertex<'a> {
     pub at: Spot,
     /// Unit direction towards the vertex before it.
     pub wo: Vec3,
-    pub bsdf: Bsdf<'a>,
+    pub scatter: Scatter<'a>,
     pub path: Subpath,
+    pub around: Around,
 }
 
 /// An iteration's light subpaths: every kept vertex, subpath by subpath.
@@ -155,7 +160,41 @@ impl LightPass<'_> {
             return;
         }
         let lp = of_emission(ctx, &es);
-        let (beta, mut ray) = emission_start(ctx, &es, 0.0);
+        let (mut beta, mut ray) = emission_start(ctx, &es, 0.0);
+        let mut spectral = ctx.has_media().then(|| Spectral {
+            hero: hero_channel(sampler),
+            rng: sampler.stream(),
+        });
+        let mut r_u = Rgb::ONE;
+        let mut medium = None;
+        if let Some(Spectral { hero, .. }) = spectral {
+            // The medium around the light: on the side it emits to of an emitter that bounds
+            // media, else the camera's medium carried to it; light from infinity first
+            // crosses what of it lies beyond the scene.
+            let interface = match &ctx.lights.emitters[es.light] {
+                Emitter::Area(a) => ctx.scene.shapes[a.shape]
+                    .media
+                    .map(|i| (i, a.sample(u_pos).n)),
+                _ => None,
+            };
+            medium = match interface {
+                Some((i, n)) => i.towards(es.dir, n),
+                None => medium_at(ctx, es.p, 0.0, &mut out.rays),
+            };
+            if let (Some(m), false) = (medium, lp.finite) {
+                let model = ctx.scene.media[m as usize].model();
+                let mut tp = Throughput {
+                    beta,
+                    r_u,
+                    r_l: Rgb::ONE,
+                };
+                let Some(start) = arrive_from_infinity(model, es.p, es.dir, (hero, &mut tp)) else {
+                    return;
+                };
+                (beta, r_u) = (tp.beta, tp.r_u);
+                ray = Spot::exact(start).spawn(es.dir);
+            }
+        }
         let w = self.weights;
         let d_vc = if lp.delta {
             0.0
@@ -164,6 +203,7 @@ impl LightPass<'_> {
         };
         let mut path = Subpath {
             beta,
+            r_u,
             len: 1,
             d_vcm: lp.direct_pdf_a / lp.emission_pdf_w,
             d_vc,
@@ -172,26 +212,75 @@ impl LightPass<'_> {
         if !(path.beta.is_finite() && path.beta.max_element() > 0.0 && path.d_vcm.is_finite()) {
             return;
         }
-        while let Some(sp) = ctx.intersect(&ray, &mut out.rays) {
+        let media = spectral.is_some();
+        loop {
+            let from_infinity = path.len == 1 && !lp.finite;
+            let origin = ray.origin;
+            let step = advance(
+                ctx,
+                &ray,
+                &mut medium,
+                spectral.as_ref(),
+                &mut path,
+                (sampler, &mut out.rays),
+                None,
+            );
             let wo = -ray.dir.normalize();
-            let at = sp.spot();
-            let dist = (sp.p - ray.origin).length();
-            path.arrive(dist, abs_cos(at.n, wo), path.len == 1 && !lp.finite);
-            let bsdf = ctx.scene.materials[sp.material].bsdf(&sp, wo);
-            if bsdf.has_non_delta() {
-                let v = LightVertex { at, wo, bsdf, path };
+            let (sp, at, scatter, around) = match step {
+                (Step::Ended | Step::Escaped, _) => break,
+                (Step::Surface(sp), grey) => {
+                    let at = sp.spot();
+                    path.arrive(
+                        (sp.p - origin).length(),
+                        abs_cos(at.n, wo),
+                        from_infinity,
+                        grey,
+                    );
+                    let bsdf = ctx.scene.materials[sp.material].bsdf(&sp, wo);
+                    let around = if media {
+                        Around::surface(ctx, &sp, medium)
+                    } else {
+                        Around::default()
+                    };
+                    (Some(sp), at, Scatter::Surface(bsdf), around)
+                }
+                (Step::Medium { p, g }, grey) => {
+                    path.arrive((p - origin).length(), 1.0, from_infinity, grey);
+                    let around = Around {
+                        medium,
+                        interface: None,
+                    };
+                    (None, Spot::exact(p), Scatter::Medium { g }, around)
+                }
+            };
+            if scatter.connectible() {
+                let v = LightVertex {
+                    at,
+                    wo,
+                    scatter,
+                    path,
+                    around,
+                };
                 out.vertices.push(v);
                 if path.len < self.max_len {
-                    self.to_camera(ctx, camera, &v, sampler, out);
+                    self.to_camera(ctx, camera, &v, (sampler, spectral.as_mut()), out);
                 }
             }
             if path.len + 2 > self.max_len {
                 break;
             }
-            let Some(wi) = path.bounce(w, (&bsdf, wo, at.n), Transport::Importance, sampler) else {
+            let v = Leaving {
+                at,
+                scatter: &scatter,
+                sp: sp.as_ref(),
+                around,
+                wo,
+            };
+            let mode = (Transport::Importance, media);
+            let Some(next) = leave(&mut path, w, v, mode, &mut medium, sampler) else {
                 break;
             };
-            ray = sp.spawn(wi);
+            ray = next;
         }
     }
 
@@ -201,32 +290,45 @@ impl LightPass<'_> {
         ctx: &Context,
         camera: &CameraBasis,
         v: &LightVertex,
-        sampler: &mut Sampler,
+        (sampler, spectral): (&mut Sampler, Option<&mut Spectral>),
         out: &mut Chunk,
     ) {
         let lens = lens_sample(camera, sampler);
         let Some(c) = project_to_camera(camera, lens, v.at.p) else {
             return;
         };
-        let f = v.bsdf.eval(v.wo, c.dir, Transport::Importance);
+        let f = v.scatter.eval(v.wo, c.dir, Transport::Importance);
         if f == Rgb::ZERO {
             return;
         }
-        let dist2 = (lens - v.at.p).length_squared();
-        let camera_pdf_a = camera_pdf_dir(camera, lens, -c.dir) * abs_cos(v.at.n, c.dir) / dist2;
-        let pdf_rev = v.bsdf.pdf(c.dir, v.wo);
         let p = &v.path;
-        let w_light =
-            camera_pdf_a * self.pixels_per_path * (self.weights.vm + p.d_vcm + p.d_vc * pdf_rev);
-        let weight = 1.0 / (1.0 + w_light);
-        let shadow = v.at.spawn_to(&Spot::exact(lens));
-        if ctx.occluded(&shadow, &mut out.rays) {
+        let from = (&v.at, v.around.towards(c.dir, v.at.n));
+        let lens_spot = Spot::exact(lens);
+        let Some((through, grey)) = link(
+            ctx,
+            from,
+            End::At(&lens_spot),
+            p.r_u,
+            spectral,
+            &mut out.rays,
+        ) else {
             return;
-        }
+        };
+        let dist2 = (lens - v.at.p).length_squared();
+        let camera_pdf_a =
+            camera_pdf_dir(camera, lens, -c.dir) * v.scatter.cos(v.at.n, c.dir) / dist2 * grey;
+        let pdf_rev = v.scatter.pdf(c.dir, v.wo);
+        let vm = if v.scatter.mergeable() {
+            self.weights.vm
+        } else {
+            0.0
+        };
+        let w_light = camera_pdf_a * self.pixels_per_path * (vm + p.d_vcm + p.d_vc * pdf_rev);
+        let weight = 1.0 / (1.0 + w_light);
         out.splats.push(Splat {
             x: c.x,
             y: c.y,
-            value: p.beta * f * (c.importance * weight * self.pixels_per_path),
+            value: p.beta * f * (c.importance * weight * self.pixels_per_path) * through,
         });
     }
 }

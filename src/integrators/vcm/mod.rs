@@ -13,6 +13,31 @@
 //! while their variance stays bounded. The weights are SmallVCM's recursive ones with the
 //! balance heuristic (`mis`).
 //!
+//! In a scene with participating media (`media`) the subpaths fly through them as the
+//! bidirectional tracer's do: free flights by delta tracking with a hero channel drawn per
+//! subpath, medium boundaries crossed without a vertex, vertices at scattering points in
+//! media with the phase function in place of a BSDF, and every connection (to the camera,
+//! to a light point, between the subpaths) carrying its transmittance by ratio tracking.
+//! The emission of media has one strategy, the camera subpath meeting it (weight 1).
+//! Merges happen at surfaces only: a vertex in a medium connects but does not merge, and
+//! its merge terms drop out of the weights (UPBP's surface photon mapping).
+//!
+//! The weights include the distance sampling of every segment a strategy samples: the
+//! density of a vertex reached through media carries the segment's transmittance, which
+//! the recursive quantities take as they take the squared distance (`d_vcm` is divided by
+//! it on arrival, and a connection's reverse densities across its segment are multiplied
+//! by it; a medium's σs at a vertex appears in every strategy alike and cancels). That
+//! transmittance is *grey*, exp(−τ̄) with τ̄ the majorant's optical depth averaged over the
+//! channels: a function of the segment alone, the same for every strategy and every hero,
+//! so the weights sum to one over the strategies of any path (exactly the transmittance of
+//! a grey homogeneous medium, an approximation of it elsewhere that costs only variance).
+//! Weights from the hero's own densities would not do: they depend on the hero, and after
+//! the average over the channels no longer sum to one. The channels are weighted by
+//! spectral MIS per subpath: each subpath's estimate is divided by the average of its
+//! channel density ratios (`r_u`), a connection's with the segment's ratio-tracking ratios
+//! folded into the camera subpath's (light subpaths and camera subpaths draw their heroes
+//! independently, so the two averages stay separate).
+//!
 //! The render loop takes one sample a pass (`MonteCarlo::iterative`), so an image is
 //! progressive, resumable and the same bits for any thread count, as the other Monte Carlo
 //! techniques'.
@@ -20,6 +45,7 @@
 mod camera_path;
 mod light_pass;
 mod lights;
+mod media;
 mod mis;
 
 use crate::error::{Error, Result};
@@ -48,7 +74,7 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     progressive: true,
     renders_parts: false,
     follows_time: false,
-    media: false,
+    media: true,
 };
 
 /// The radius exponent α: each iteration's merge radius is r₀ · i^((α−1)/2).
