@@ -165,6 +165,11 @@ pub struct RenderArgs {
     /// the samples and draw directions from it as well as from the BSDF (off by default).
     #[arg(long, value_name = "BOOL", help_heading = MONTE_CARLO)]
     pub guiding: Option<bool>,
+    /// Spectral mode (path tracing): carry light at three sampled wavelengths instead of
+    /// red, green and blue, so glasses disperse and metals reflect by their measured index
+    /// (off by default).
+    #[arg(long, value_name = "BOOL", help_heading = MONTE_CARLO)]
+    pub spectral: Option<bool>,
     /// Scale every sample down so that no channel exceeds this value (pbrt-v4's
     /// maxcomponentvalue): fewer fireflies, but biased; the outputs' metadata says so.
     #[arg(long, value_parser = finite_f32, value_name = "VALUE", allow_negative_numbers = true,
@@ -376,6 +381,7 @@ pub fn given_settings(args: &RenderArgs, scene: &Scene) -> Settings {
         adaptive_threshold: args.adaptive_threshold,
         adaptive_min_samples: args.adaptive_min_samples,
         guiding: args.guiding,
+        spectral: args.spectral,
         max_component_value: args.max_component_value,
         filter,
         aa: args.aa.map(|a| match a {

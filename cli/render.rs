@@ -174,6 +174,12 @@ fn metadata(args: &RenderArgs, job: &Job) -> Metadata {
         if mc.guiding {
             m.push(("raylink:guiding".into(), MetaValue::Str("true".into())));
         }
+        if mc.spectral {
+            m.push((
+                "raylink:spectral".into(),
+                MetaValue::Str("true (three sampled wavelengths, output linear sRGB)".into()),
+            ));
+        }
         if let Some(v) = mc.max_component_value {
             m.push((
                 "raylink:max_component_value".into(),

@@ -155,6 +155,8 @@ pub struct Settings {
     pub adaptive_min_samples: Option<u32>,
     /// Path tracing: learn where light comes from and sample from it (path guiding).
     pub guiding: Option<bool>,
+    /// Path tracing: carry light at sampled wavelengths instead of RGB (spectral mode).
+    pub spectral: Option<bool>,
     /// Monte Carlo: scale samples down so that no channel exceeds this (biased).
     pub max_component_value: Option<f32>,
     /// Monte Carlo: the pixel filter (default pbrt's Gaussian).
@@ -207,6 +209,7 @@ macro_rules! for_each_setting {
             adaptive_threshold,
             adaptive_min_samples,
             guiding,
+            spectral,
             max_component_value,
             filter,
             aa,

@@ -86,6 +86,7 @@ fn cornell_box_against_tungsten_and_path_tracer() {
         adaptive: None,
         max_component_value: None,
         guiding: false,
+        spectral: false,
     });
     let (pt_image, _) = render(&scene, pt);
     let pt_seconds = start.elapsed().as_secs_f64();
@@ -151,6 +152,7 @@ fn assert_sphere_means_within(file: &str, names: [&str; 2], tolerance: f32) {
         adaptive: None,
         max_component_value: None,
         guiding: false,
+        spectral: false,
     });
     let (pt_image, _) = render(&scene, pt);
     eprintln!("{file}: {}", report.join("; "));

@@ -42,6 +42,7 @@ fn mc(technique: fn(MonteCarloSettings) -> Technique, spp: u32, max_depth: u32) 
         adaptive: None,
         max_component_value: None,
         guiding: false,
+        spectral: false,
     })
 }
 

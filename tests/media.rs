@@ -45,6 +45,7 @@ fn boxed(spp: u32, max_depth: u32) -> MonteCarloSettings {
         adaptive: None,
         max_component_value: None,
         guiding: false,
+        spectral: false,
     }
 }
 

@@ -65,6 +65,7 @@ fn render_with(scene: &Scene, kind: Kind, s: &Setup, reconstruction: Reconstruct
         adaptive: None,
         max_component_value: None,
         guiding: false,
+        spectral: false,
     };
     let job = Job {
         width: s.width,

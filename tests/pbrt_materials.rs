@@ -150,6 +150,30 @@ fn materials_map_to_raylink_fields() {
 }
 
 #[test]
+fn named_glasses_and_metals_keep_their_spectra() {
+    let s = world(&format!(
+        "Material \"dielectric\" \"spectrum eta\" \"glass-SF11\" {TRI}\
+         Material \"dielectric\" \"float eta\" 1.5 {TRI}\
+         Material \"conductor\" {TRI}\
+         Material \"conductor\" \"spectrum eta\" \"metal-Au-eta\" \"spectrum k\" \"metal-Au-k\" {TRI}\
+         Material \"conductor\" \"rgb eta\" [0.2 0.9 1.1] \"rgb k\" [3.9 2.4 2.1] {TRI}\
+         Material \"conductor\" \"rgb reflectance\" [0.9 0.6 0.5] {TRI}"
+    ));
+    let m = classics(&s);
+    let glass = m[0].spectral.dispersion.map(|n| n.name);
+    assert_eq!(glass, Some("SF11"));
+    // The RGB index is the glass's at 587.6 nm (SF11's n_d is 1.78472).
+    assert!((m[0].ior - 1.78472).abs() < 2e-4, "{}", m[0].ior);
+    assert!(m[1].spectral.dispersion.is_none());
+    let metal = |c: &Classic| c.spectral.metal.map(|(eta, k)| (eta.name, k.name));
+    // pbrt-v4's default conductor is copper's measured index.
+    assert_eq!(metal(m[2]), Some(("metal-Cu-eta", "metal-Cu-k")));
+    assert_eq!(metal(m[3]), Some(("metal-Au-eta", "metal-Au-k")));
+    assert_eq!(metal(m[4]), None);
+    assert_eq!(metal(m[5]), None);
+}
+
+#[test]
 fn lights_and_environment() {
     let s = world(&format!(
         "AttributeBegin Translate 0 1 0 LightSource \"point\" \"rgb I\" [1 2 3] \"float scale\" 2 \"point3 from\" [1 0 0] AttributeEnd\n\

@@ -131,6 +131,7 @@ pub fn measure(
         adaptive: None,
         max_component_value: None,
         guiding: false,
+        spectral: false,
     });
     let missing = format!(
         "no {} in the working directory or the source tree",

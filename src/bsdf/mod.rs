@@ -29,6 +29,7 @@
 //! by (ηi/ηt)², and in [`Transport::Importance`] the shading-normal correction
 //! |wo·ns||wi·ng| / (|wo·ng||wi·ns|) keeps the adjoint BSDF consistent.
 
+mod colours;
 mod dielectric;
 mod layer;
 mod layered;
@@ -38,8 +39,9 @@ pub mod passes;
 pub mod phase;
 mod tabulated;
 
+pub use colours::LobeColours;
 pub use microfacet::Ggx;
-pub use parameters::{Coating, Conductor, Lobes};
+pub use parameters::{interned, Coating, Conductor, Lobes, SpectralParts};
 #[cfg(test)]
 pub use tabulated::synthetic_merl;
 pub use tabulated::TabulatedBrdf;
@@ -105,6 +107,8 @@ pub struct Bsdf<'a> {
     /// A coat over the diffuse or conductor base (borrowed: the walk's state is built when
     /// it is needed, so that uncoated BSDFs stay small).
     coating: Option<&'a Coating>,
+    /// Dispersion and measured metals, for spectral renders.
+    spectral: SpectralParts,
 }
 
 /// The mirror image of a local direction about the normal.
@@ -173,6 +177,7 @@ impl<'a> Bsdf<'a> {
             lambertian: l.lambertian,
             table: None,
             coating: None,
+            spectral: l.spectral,
         }
     }
 
@@ -208,6 +213,7 @@ impl<'a> Bsdf<'a> {
             lambertian: false,
             table: Some(table),
             coating: None,
+            spectral: SpectralParts::default(),
         }
     }
 

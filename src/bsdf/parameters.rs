@@ -4,6 +4,9 @@
 //! scene.
 
 use crate::math::Rgb;
+use crate::spectrum::Named;
+use std::collections::HashMap;
+use std::sync::{Mutex, OnceLock};
 
 /// The lobes of the BSDF at one point: kd/π Lambertian reflection, kdt/π Lambertian
 /// transmission, ks reflection and kt transmission through an interface of index `ior`
@@ -28,6 +31,51 @@ pub struct Lobes {
     /// Only the Lambertian lobe anywhere on the material (decided from the material, not
     /// the point, so that a textured lobe that is zero here keeps the general path).
     pub lambertian: bool,
+    /// What the lobes vary with wavelength that RGB cannot say (read in spectral mode only).
+    pub spectral: SpectralParts,
+}
+
+/// The parts of a surface that a spectral render reads besides its colours: a glass's index
+/// of refraction as a function of wavelength, a metal's measured complex index. RGB renders
+/// use `ior` and the conductor's RGB values in their place.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct SpectralParts {
+    /// The interface's index of refraction by wavelength (a named dispersive glass).
+    pub dispersion: Option<&'static Named>,
+    /// The metal's η and k by wavelength.
+    pub metal: Option<(&'static Named, &'static Named)>,
+}
+
+/// The named spectrum `name`, kept for the process: BSDFs refer to it instead of carrying
+/// its tables, so that they stay small.
+pub fn interned(name: &str) -> Option<&'static Named> {
+    static KEPT: OnceLock<Mutex<HashMap<String, &'static Named>>> = OnceLock::new();
+    let mut kept = KEPT.get_or_init(Default::default).lock().ok()?;
+    if let Some(n) = kept.get(name) {
+        return Some(*n);
+    }
+    let n: &'static Named = Box::leak(Box::new(crate::spectrum::named(name)?));
+    kept.insert(name.to_owned(), n);
+    Some(n)
+}
+
+impl SpectralParts {
+    /// The measured η and k of the metal `name` (Ag, Al, Au, Cu, Cr, Ni, Ti), if known.
+    pub fn metal_named(name: &str) -> Option<(&'static Named, &'static Named)> {
+        let part = |p: &str| interned(&format!("metal-{name}-{p}"));
+        Some((part("eta")?, part("k")?))
+    }
+
+    /// The index by wavelength of the glass `name` (pbrt-v4's names without `glass-`: BK7,
+    /// BAF10, FK51A, LASF9, SF5, SF10, SF11, fused-silica), if known.
+    pub fn glass_named(name: &str) -> Option<&'static Named> {
+        interned(&format!("glass-{name}"))
+    }
+
+    /// The glass's name as [`SpectralParts::glass_named`] takes it.
+    pub fn glass_name(&self) -> Option<&'static str> {
+        self.dispersion.map(|n| n.name)
+    }
 }
 
 /// A dielectric coat over a base (pbrt-v4's `coateddiffuse` and `coatedconductor`): light

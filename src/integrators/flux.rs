@@ -24,6 +24,7 @@ use crate::math::{frame, Ray, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::lights::AreaLight;
 use crate::scene::Scene;
+use crate::transport::spectral::RgbColours;
 use crate::transport::{Context, MonteCarlo, RayStats};
 use rayon::prelude::*;
 
@@ -322,7 +323,8 @@ impl Paths<'_> {
             0.0,
             sampler,
             stats,
-            |sp, _, _, beta, _, _| {
+            &mut RgbColours,
+            |sp, _, _, beta, _, _, _| {
                 if sp.world_shape().is_some_and(|s| self.in_set[s]) {
                     arrived += beta;
                 }

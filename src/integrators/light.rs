@@ -15,7 +15,10 @@ use crate::scene::lights::{EmissionSample, Emitter};
 use crate::scene::Scene;
 use crate::scene::SurfacePoint;
 use crate::settings::TechniqueKind;
-use crate::transport::settings::{MonteCarloSettings, TechniqueInfo, COMMON, MONTE_CARLO};
+use crate::transport::settings::{
+    MonteCarloSettings, TechniqueInfo, COMMON, MONTE_CARLO, SPECTRAL,
+};
+use crate::transport::spectral::{Colours, RgbColours, Wavelengths};
 use crate::transport::technique::{Lifecycle, SampledTechnique};
 use crate::transport::{Context, MonteCarlo, RayStats, Splat};
 
@@ -23,7 +26,7 @@ use crate::transport::{Context, MonteCarlo, RayStats, Splat};
 pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     kind: TechniqueKind::Light,
     summary: "Light (particle) tracing: paths from the lights, connected to the camera.",
-    settings: &[COMMON, MONTE_CARLO],
+    settings: &[COMMON, MONTE_CARLO, SPECTRAL],
     pbrt: &["lighttracer"],
     progressive: true,
     renders_parts: false,
@@ -38,6 +41,7 @@ pub(crate) fn lifecycle(mc: &MonteCarloSettings, scene: &Scene) -> Result<Box<dy
     Ok(Box::new(SampledTechnique {
         integrator: LightTracer::new(LightOptions {
             max_depth: mc.max_depth,
+            spectral: mc.spectral,
         }),
         settings: *mc,
     }))
@@ -65,6 +69,8 @@ pub struct LightOptions {
     /// Maximum number of bounces, counted as for the path tracer (a path of the same length
     /// from the camera would bounce this often).
     pub max_depth: u32,
+    /// Light at sampled wavelengths, not RGB (surfaces only).
+    pub spectral: bool,
 }
 
 pub struct LightTracer {
@@ -96,19 +102,52 @@ impl MonteCarlo for LightTracer {
                 ctx, camera, camera_ray, lengths, sampler, stats, splats,
             );
         }
+        if self.options.spectral {
+            let mut lambda = Wavelengths::sample(sampler.next_1d());
+            return self.trace(ctx, camera, camera_ray, sampler, stats, splats, &mut lambda);
+        }
+        self.trace(
+            ctx,
+            camera,
+            camera_ray,
+            sampler,
+            stats,
+            splats,
+            &mut RgbColours,
+        )
+    }
+}
+
+impl LightTracer {
+    /// One light path (surfaces only) with the scene's colours as `colours` gives them; its
+    /// splats and the background the camera ray sees are in the film's RGB.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn trace<C: Colours>(
+        &self,
+        ctx: &Context,
+        camera: &CameraBasis,
+        camera_ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+        splats: &mut Vec<Splat>,
+        colours: &mut C,
+    ) -> Rgb {
         let lights = &ctx.lights;
         // The background seen directly cannot be reached from the lights' side: the camera
         // ray supplies it.
         let mut direct = Rgb::ZERO;
         if lights.background_light().is_some() && ctx.intersect(camera_ray, stats).is_none() {
-            direct = lights.background_radiance(camera_ray.dir);
+            let le = colours.emission(lights.background_radiance(camera_ray.dir));
+            direct = colours.output(le);
         }
         let u_choose = sampler.next_2d();
         let u_pos = sampler.next_2d();
         let u_dir = sampler.next_2d();
-        let Some(es) = lights.sample_le(u_choose.x, u_pos, u_dir) else {
+        let Some(mut es) = lights.sample_le(u_choose.x, u_pos, u_dir) else {
             return direct;
         };
+        es.radiance = colours.emission(es.radiance);
         // The light's own point seen by the camera (area lights only: points, directions and
         // the background cannot be hit by camera rays either).
         if !es.delta_pos && !es.delta_dir && es.n != Vec3::ZERO && !ctx.lights.is_infinite(es.light)
@@ -126,7 +165,7 @@ impl MonteCarlo for LightTracer {
                     splats.push(Splat {
                         x: c.x,
                         y: c.y,
-                        value: es.radiance * (cos_l * c.importance / es.pdf_pos),
+                        value: colours.output(es.radiance * (cos_l * c.importance / es.pdf_pos)),
                     });
                 }
             }
@@ -138,7 +177,8 @@ impl MonteCarlo for LightTracer {
             camera_ray.time,
             sampler,
             stats,
-            |sp, bsdf, wo, beta, stats, sampler| {
+            colours,
+            |sp, bsdf, wo, beta, stats, sampler, colours| {
                 if !bsdf.has_non_delta() {
                     return;
                 }
@@ -149,7 +189,7 @@ impl MonteCarlo for LightTracer {
                         splats.push(Splat {
                             x: c.x,
                             y: c.y,
-                            value: beta * f * c.importance,
+                            value: colours.output(beta * f * c.importance),
                         });
                     }
                 }
@@ -178,17 +218,20 @@ pub(crate) fn emission_start(ctx: &Context, es: &EmissionSample, time: f32) -> (
 
 /// Follows the light path that starts with the emission sample `es` over at most
 /// `max_depth` surfaces: at each surface it reaches, calls `vertex(surface, bsdf, wo,
-/// beta, stats, sampler)` with the power `beta` the path carries there (radiance over the
-/// densities of its start and bounces), then continues by sampling the BSDF for importance
-/// transport, with Russian roulette.
-pub(crate) fn walk(
+/// beta, stats, sampler, colours)` with the power `beta` the path carries there (radiance
+/// over the densities of its start and bounces), then continues by sampling the BSDF for
+/// importance transport, with Russian roulette. The BSDFs' colours are as `colours` gives
+/// them; `es` carries its radiance as the path does.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn walk<C: Colours>(
     ctx: &Context,
     es: &EmissionSample,
     max_depth: u32,
     time: f32,
     sampler: &mut Sampler,
     stats: &mut RayStats,
-    mut vertex: impl FnMut(&SurfacePoint, &Bsdf, Vec3, Rgb, &mut RayStats, &mut Sampler),
+    colours: &mut C,
+    mut vertex: impl FnMut(&SurfacePoint, &Bsdf, Vec3, Rgb, &mut RayStats, &mut Sampler, &C),
 ) {
     let (mut beta, mut ray) = emission_start(ctx, es, time);
     let mut depth = 0;
@@ -199,8 +242,8 @@ pub(crate) fn walk(
         depth += 1;
         let m = &ctx.scene.materials[sp.material];
         let wo = -ray.dir;
-        let bsdf = m.bsdf(&sp, wo);
-        vertex(&sp, &bsdf, wo, beta, stats, sampler);
+        let bsdf = colours.bsdf(m.bsdf(&sp, wo));
+        vertex(&sp, &bsdf, wo, beta, stats, sampler, colours);
         let u = sampler.next_1d();
         let Some(bs) = bsdf.sample(wo, u, sampler.next_2d(), Transport::Importance) else {
             break;

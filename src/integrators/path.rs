@@ -5,6 +5,7 @@
 //! Russian roulette ends paths whose throughput has become small.
 
 use crate::bsdf::{Bsdf, Transport};
+use crate::error::{Error, Result};
 use crate::math::sobol::Sampler;
 use crate::math::warp::power_heuristic;
 use crate::math::{Ray, Rgb, Vec2, Vec3};
@@ -13,8 +14,9 @@ use crate::scene::SurfacePoint;
 use crate::settings::TechniqueKind;
 use crate::transport::light_passes::PassSample;
 use crate::transport::settings::{
-    MonteCarloSettings, TechniqueInfo, ADAPTIVE, COMMON, GUIDING, MONTE_CARLO,
+    MonteCarloSettings, TechniqueInfo, ADAPTIVE, COMMON, GUIDING, MONTE_CARLO, SPECTRAL,
 };
+use crate::transport::spectral::{Colours, RgbColours, Wavelengths};
 use crate::transport::technique::{Lifecycle, SampledTechnique};
 use crate::transport::{Context, MonteCarlo, RayStats, Splat};
 
@@ -29,7 +31,7 @@ pub const MAX_DEPTH_LIMIT: u32 = 1024;
 pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     kind: TechniqueKind::Path,
     summary: "Path tracing with next-event estimation and multiple importance sampling.",
-    settings: &[COMMON, MONTE_CARLO, ADAPTIVE, GUIDING],
+    settings: &[COMMON, MONTE_CARLO, ADAPTIVE, GUIDING, SPECTRAL],
     pbrt: &["path", "volpath", "simplepath"],
     progressive: true,
     renders_parts: true,
@@ -38,14 +40,21 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
 };
 
 /// The technique: nothing to prepare, sample passes.
-pub(crate) fn lifecycle(mc: &MonteCarloSettings) -> Box<dyn Lifecycle> {
-    Box::new(SampledTechnique {
+pub(crate) fn lifecycle(mc: &MonteCarloSettings) -> Result<Box<dyn Lifecycle>> {
+    if mc.spectral && mc.guiding {
+        return Err(Error::setting(
+            "spectral",
+            "does not apply with path guiding",
+        ));
+    }
+    Ok(Box::new(SampledTechnique {
         integrator: PathTracer::new(PathOptions {
             max_depth: mc.max_depth,
         })
-        .with_guiding(mc.guiding),
+        .with_guiding(mc.guiding)
+        .with_spectral(mc.spectral),
         settings: *mc,
-    })
+    }))
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -66,6 +75,8 @@ pub struct PathTracer {
     options: PathOptions,
     /// Path guiding (surfaces only).
     guiding: bool,
+    /// Light at sampled wavelengths, not RGB (surfaces only).
+    spectral: bool,
 }
 
 impl PathTracer {
@@ -73,7 +84,13 @@ impl PathTracer {
         PathTracer {
             options,
             guiding: false,
+            spectral: false,
         }
+    }
+
+    /// The same tracer, in spectral mode or RGB.
+    pub fn with_spectral(self, spectral: bool) -> Self {
+        PathTracer { spectral, ..self }
     }
 
     /// The same tracer, with path guiding on or off.
@@ -120,7 +137,8 @@ pub(crate) fn sample_direct(
     u_light: Vec2,
     stats: &mut RayStats,
 ) -> Rgb {
-    sample_direct_towards(ctx, bsdf, sp, wo, facing, u_choice, u_light, stats).0
+    let u = (u_choice, u_light);
+    sample_direct_towards(ctx, bsdf, sp, wo, facing, u, stats, &RgbColours).0
 }
 
 /// [`sample_direct`] and the direction of the light sample (zero if none was drawn).
@@ -132,9 +150,9 @@ fn sample_direct_towards(
     sp: &SurfacePoint,
     wo: Vec3,
     facing: Option<Vec3>,
-    u_choice: f32,
-    u_light: Vec2,
+    (u_choice, u_light): (f32, Vec2),
     stats: &mut RayStats,
+    colours: &impl Colours,
 ) -> (Rgb, Vec3) {
     let Some(ls) = ctx.lights.sample_li_facing(sp.p, facing, u_choice, u_light) else {
         return (Rgb::ZERO, Vec3::ZERO);
@@ -152,7 +170,7 @@ fn sample_direct_towards(
     } else {
         power_heuristic(ls.pdf, bsdf_pdf)
     };
-    (f * ls.radiance * (w / ls.pdf), ls.wi)
+    (f * colours.emission(ls.radiance) * (w / ls.pdf), ls.wi)
 }
 
 /// What a path that left the scene along `ray` (from `prev_p`, whose next-event estimation
@@ -162,15 +180,28 @@ fn sample_direct_towards(
 pub(crate) fn escaped(
     ctx: &Context,
     ray: &Ray,
+    prev: (Vec3, Option<Vec3>),
+    beta: Rgb,
+    sampled: (f32, bool),
+) -> Rgb {
+    escaped_in(ctx, ray, prev, beta, sampled, &RgbColours)
+}
+
+/// [`escaped`] with the background's colour as `colours` gives it.
+#[inline(always)]
+fn escaped_in(
+    ctx: &Context,
+    ray: &Ray,
     (prev_p, prev_facing): (Vec3, Option<Vec3>),
     beta: Rgb,
     (pdf, specular): (f32, bool),
+    colours: &impl Colours,
 ) -> Rgb {
     let lights = &ctx.lights;
     let Some(bg) = lights.background_light() else {
         return Rgb::ZERO;
     };
-    let le = lights.background_radiance(ray.dir);
+    let le = colours.emission(lights.background_radiance(ray.dir));
     let w = if specular {
         1.0
     } else {
@@ -190,14 +221,28 @@ pub(crate) fn emitted(
     sp: &SurfacePoint,
     prev_p: Vec3,
     beta: Rgb,
+    sampled: (f32, bool),
+) -> Rgb {
+    emitted_in(ctx, sp, prev_p, beta, sampled, &RgbColours)
+}
+
+/// [`emitted`] with the emission's colour as `colours` gives it.
+#[inline(always)]
+fn emitted_in(
+    ctx: &Context,
+    sp: &SurfacePoint,
+    prev_p: Vec3,
+    beta: Rgb,
     (pdf, specular): (f32, bool),
+    colours: &impl Colours,
 ) -> Rgb {
     let lights = &ctx.lights;
     let w = match sp.world_shape().and_then(|s| lights.light_of_shape(s)) {
         Some(l) if !specular => power_heuristic(pdf, lights.pdf_li(l, prev_p, sp.p, sp.ng)),
         _ => 1.0,
     };
-    beta * ctx.scene.materials[sp.material].emission_at(sp.p, sp.uv, sp.ng) * w
+    let le = ctx.scene.materials[sp.material].emission_at(sp.p, sp.uv, sp.ng);
+    beta * colours.emission(le) * w
 }
 
 impl MonteCarlo for PathTracer {
@@ -238,7 +283,19 @@ impl MonteCarlo for PathTracer {
             };
             return super::volumetric::radiance(ctx, camera_ray, lengths, sampler, stats);
         }
-        self.trace(ctx, camera_ray, sampler, stats, &mut NoPasses)
+        if self.spectral {
+            let mut lambda = Wavelengths::sample(sampler.next_1d());
+            let v = self.trace(ctx, camera_ray, sampler, stats, &mut NoPasses, &mut lambda);
+            return lambda.output(v);
+        }
+        self.trace(
+            ctx,
+            camera_ray,
+            sampler,
+            stats,
+            &mut NoPasses,
+            &mut RgbColours,
+        )
     }
 
     fn sample_passes(
@@ -254,20 +311,30 @@ impl MonteCarlo for PathTracer {
         if ctx.has_media() {
             return None;
         }
-        Some(self.trace(ctx, camera_ray, sampler, stats, &mut Passes::new(passes)))
+        let mut passes = Passes::new(passes);
+        Some(self.trace(
+            ctx,
+            camera_ray,
+            sampler,
+            stats,
+            &mut passes,
+            &mut RgbColours,
+        ))
     }
 }
 
 impl PathTracer {
-    /// The path of one camera sample (surfaces only), telling `record` what it adds.
+    /// The path of one camera sample (surfaces only), telling `record` what it adds, with
+    /// the scene's colours as `colours` gives them.
     #[inline(always)]
-    fn trace<R: Record>(
+    fn trace<R: Record, C: Colours>(
         &self,
         ctx: &Context,
         camera_ray: &Ray,
         sampler: &mut Sampler,
         stats: &mut RayStats,
         record: &mut R,
+        colours: &mut C,
     ) -> Rgb {
         let mut radiance = Rgb::ZERO;
         let mut beta = Rgb::ONE;
@@ -282,7 +349,7 @@ impl PathTracer {
         loop {
             let Some(sp) = ctx.intersect_at_depth(&ray, depth, stats) else {
                 let prev = (prev_p, prev_facing);
-                let c = escaped(ctx, &ray, prev, beta, (bsdf_pdf, specular));
+                let c = escaped_in(ctx, &ray, prev, beta, (bsdf_pdf, specular), colours);
                 radiance += c;
                 record.emission(depth, true, c, || lights.background_light());
                 break;
@@ -290,7 +357,7 @@ impl PathTracer {
             let m = &ctx.scene.materials[sp.material];
             let wo = -ray.dir;
             if m.emits_towards(wo, sp.ng) {
-                let c = emitted(ctx, &sp, prev_p, beta, (bsdf_pdf, specular));
+                let c = emitted_in(ctx, &sp, prev_p, beta, (bsdf_pdf, specular), colours);
                 radiance += c;
                 let light = || sp.world_shape().and_then(|s| lights.light_of_shape(s));
                 record.emission(depth, false, c, light);
@@ -303,7 +370,7 @@ impl PathTracer {
             }
             let vertex = depth;
             depth += 1;
-            let bsdf = m.bsdf(&sp, wo);
+            let bsdf = colours.bsdf(m.bsdf(&sp, wo));
             if vertex == 0 {
                 record.first_surface(&bsdf);
             }
@@ -312,7 +379,8 @@ impl PathTracer {
             let facing = bsdf.reflecting_side(wo);
             if bsdf.has_non_delta() {
                 let (u, v) = (u_choice.x, u_light);
-                let (d, wi) = sample_direct_towards(ctx, &bsdf, &sp, wo, facing, u, v, stats);
+                let (d, wi) =
+                    sample_direct_towards(ctx, &bsdf, &sp, wo, facing, (u, v), stats, colours);
                 let c = beta * d;
                 radiance += c;
                 let light = || lights.choose_at(sp.p, u).map(|(i, _)| i);

@@ -183,9 +183,12 @@ impl Technique {
     /// The technique for `scene`, ready to prepare and render (pbrt's `Integrator::Create`).
     pub(crate) fn lifecycle(&self, scene: &Scene) -> Result<Box<dyn Lifecycle>> {
         refuse_media(scene, self.info())?;
+        if self.monte_carlo().is_some_and(|m| m.spectral) {
+            refuse_spectral(scene, self.info())?;
+        }
         Ok(match self {
             Technique::Whitted(w) => w.lifecycle(),
-            Technique::Path(mc) => path::lifecycle(mc),
+            Technique::Path(mc) => path::lifecycle(mc)?,
             Technique::Light(mc) => light::lifecycle(mc, scene)?,
             Technique::Bdpt(mc) => bdpt::lifecycle(mc, scene)?,
             Technique::IrradianceCache(mc, cache) => Box::new(
@@ -217,16 +220,37 @@ pub(crate) fn refuse_media(scene: &Scene, info: &TechniqueInfo) -> Result<()> {
              render: render it with {}",
             scene.media.len(),
             info.kind.name(),
-            one_of(&renders)
+            listed(&renders, "or")
         ),
     ))
 }
 
-/// "a", "a or b", "a, b or c".
-fn one_of(names: &[&str]) -> String {
+/// Refuses spectral mode for a technique that does not render it (one that does not read
+/// the `spectral` setting), and a scene with what spectral mode does not render.
+fn refuse_spectral(scene: &Scene, info: &TechniqueInfo) -> Result<()> {
+    if !info.reads("spectral") {
+        let renders: Vec<&str> = TECHNIQUES
+            .iter()
+            .filter(|t| t.reads("spectral"))
+            .map(|t| t.kind.name())
+            .collect();
+        return Err(Error::setting(
+            "spectral",
+            format!(
+                "does not apply to the {} integrator: spectral mode is the {} integrators'",
+                info.kind.name(),
+                listed(&renders, "and")
+            ),
+        ));
+    }
+    crate::transport::spectral::check_scene(scene)
+}
+
+/// "a", "a or b", "a, b or c" (with `conjunction` "or").
+fn listed(names: &[&str], conjunction: &str) -> String {
     match names.split_last() {
         Some((last, [])) => last.to_string(),
-        Some((last, rest)) => format!("{} or {last}", rest.join(", ")),
+        Some((last, rest)) => format!("{} {conjunction} {last}", rest.join(", ")),
         None => String::new(),
     }
 }

@@ -590,6 +590,9 @@ impl Renderer {
                 t.kind()
             ));
         };
+        if mc.spectral {
+            return refuse("does not apply in spectral mode: the passes are RGB".into());
+        }
         if mc.guiding {
             return refuse(
                 "does not apply with path guiding: its samples follow a guide \

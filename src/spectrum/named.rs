@@ -325,6 +325,11 @@ pub fn named(name: &str) -> Option<Named> {
     found(n, NamedKind::Illuminant(illuminant))
 }
 
+/// The glasses [`named`] knows as `glass-X`, in its table's order.
+pub fn glasses() -> impl Iterator<Item = &'static str> {
+    GLASSES.iter().map(|g| g.0)
+}
+
 /// The static name of a metal's part.
 fn static_name(metal: &str, part: Part) -> &'static str {
     const NAMES: &[(&str, &str, &str)] = &[

@@ -1,4 +1,4 @@
-//! Four wavelengths per path and a spectrum's values at them (pbrt-v4's
+//! Three wavelengths per path and a spectrum's values at them (pbrt-v4's
 //! `SampledWavelengths` and `SampledSpectrum`), and the Monte Carlo estimate of a sampled
 //! spectrum's colour.
 
@@ -7,8 +7,10 @@ use super::color_space::ColorSpace;
 use glam::{DVec3, Vec3};
 use std::ops::{Add, AddAssign, Div, DivAssign, Index, IndexMut, Mul, MulAssign, Neg, Sub};
 
-/// How many wavelengths a path carries.
-pub const N_SAMPLES: usize = 4;
+/// How many wavelengths a path carries: three, pbrt-v4 carries four. A path's values ride in
+/// the renderer's three-channel carrier (`math::Rgb`), so spectral mode costs no wider
+/// arithmetic anywhere in the transport.
+pub const N_SAMPLES: usize = 3;
 
 /// A spectrum's values at the [`SampledWavelengths`] of a path.
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
@@ -198,9 +200,14 @@ pub fn sample_visible_wavelength(u: f32) -> f32 {
     538.0 - 138.888_89 * (0.856_910_6 - 1.827_501_9 * u).atanh()
 }
 
+/// The u at which [`sample_visible_wavelength`] gives `lambda` nm (its inverse).
+pub fn visible_wavelengths_cdf(lambda: f32) -> f32 {
+    ((0.856_910_6 - ((538.0 - lambda) / 138.888_89).tanh()) / 1.827_501_9).clamp(0.0, 1.0)
+}
+
 impl SampledWavelengths {
-    /// Four wavelengths stratified uniformly over [`lambda_min`, `lambda_max`]: the first at
-    /// `u`, the others a quarter of the range apart, wrapping around.
+    /// [`N_SAMPLES`] wavelengths stratified uniformly over [`lambda_min`, `lambda_max`]: the
+    /// first at `u`, the others 1/[`N_SAMPLES`] of the range apart, wrapping around.
     pub fn sample_uniform_in(u: f32, lambda_min: f32, lambda_max: f32) -> Self {
         let mut lambda = [0.0; N_SAMPLES];
         lambda[0] = lambda_min + u * (lambda_max - lambda_min);
@@ -222,9 +229,9 @@ impl SampledWavelengths {
         Self::sample_uniform_in(u, LAMBDA_MIN, LAMBDA_MAX)
     }
 
-    /// Four wavelengths drawn from [`visible_wavelengths_pdf`] at `u`, `u + 1/4`, `u + 1/2`
-    /// and `u + 3/4` (wrapped): pbrt-v4's `SampleVisible`, which puts the samples where the
-    /// eye is sensitive.
+    /// [`N_SAMPLES`] wavelengths drawn from [`visible_wavelengths_pdf`] at `u`, `u + 1/n`,
+    /// … (wrapped): pbrt-v4's `SampleVisible`, which puts the samples where the eye is
+    /// sensitive.
     pub fn sample_visible(u: f32) -> Self {
         let mut lambda = [0.0; N_SAMPLES];
         let mut pdf = [0.0; N_SAMPLES];
@@ -244,7 +251,7 @@ impl SampledWavelengths {
         self.lambda[i]
     }
 
-    /// All four wavelengths (nm).
+    /// All the wavelengths (nm).
     pub fn lambdas(&self) -> [f32; N_SAMPLES] {
         self.lambda
     }
@@ -255,7 +262,7 @@ impl SampledWavelengths {
     }
 
     /// Keeps the hero wavelength alone (a dispersive event): the others get pdf 0 and the
-    /// hero's pdf is divided by four, so that estimates stay unbiased. Idempotent.
+    /// hero's pdf is divided by [`N_SAMPLES`], so that estimates stay unbiased. Idempotent.
     pub fn terminate_secondary(&mut self) {
         if self.secondary_terminated() {
             return;
@@ -303,36 +310,36 @@ mod tests {
         let w = SampledWavelengths::sample_uniform(0.9);
         let l = w.lambdas();
         assert!((l[0] - (360.0 + 0.9 * 470.0)).abs() < 1e-3);
-        for i in 1..4 {
+        for i in 1..N_SAMPLES {
             let d = (l[i] - l[i - 1]).rem_euclid(470.0);
-            assert!((d - 117.5).abs() < 1e-3, "{l:?}");
+            assert!((d - 470.0 / N_SAMPLES as f32).abs() < 1e-3, "{l:?}");
             assert!((360.0..=830.0).contains(&l[i]));
         }
         assert_eq!(w.pdf(), SampledSpectrum::splat(1.0 / 470.0));
     }
 
     #[test]
-    fn terminating_secondaries_keeps_the_hero_with_a_quarter_pdf() {
+    fn terminating_secondaries_keeps_the_hero_with_its_share_of_the_pdf() {
         let mut w = SampledWavelengths::sample_visible(0.3);
         let p0 = w.pdf()[0];
         assert!(!w.secondary_terminated());
         w.terminate_secondary();
         assert!(w.secondary_terminated());
-        assert_eq!(w.pdf().0, [p0 / 4.0, 0.0, 0.0, 0.0]);
+        assert_eq!(w.pdf().0, [p0 / 3.0, 0.0, 0.0]);
         w.terminate_secondary();
-        assert_eq!(w.pdf()[0], p0 / 4.0);
+        assert_eq!(w.pdf()[0], p0 / 3.0);
     }
 
     #[test]
     fn arithmetic_is_per_wavelength() {
-        let a = SampledSpectrum([1.0, 2.0, 3.0, 4.0]);
-        let b = SampledSpectrum([2.0, 2.0, 0.0, 8.0]);
-        assert_eq!((a + b).0, [3.0, 4.0, 3.0, 12.0]);
-        assert_eq!((a - b).0, [-1.0, 0.0, 3.0, -4.0]);
-        assert_eq!((a * b).0, [2.0, 4.0, 0.0, 32.0]);
-        assert_eq!(a.safe_div(b).0, [0.5, 1.0, 0.0, 0.5]);
+        let a = SampledSpectrum([1.0, 2.0, 4.0]);
+        let b = SampledSpectrum([2.0, 0.0, 8.0]);
+        assert_eq!((a + b).0, [3.0, 2.0, 12.0]);
+        assert_eq!((a - b).0, [-1.0, 2.0, -4.0]);
+        assert_eq!((a * b).0, [2.0, 0.0, 32.0]);
+        assert_eq!(a.safe_div(b).0, [0.5, 0.0, 0.5]);
         assert_eq!((2.0 * a / 2.0), a);
-        assert_eq!(a.average(), 2.5);
+        assert_eq!(a.average(), 7.0 / 3.0);
         assert_eq!((a.min_value(), a.max_value()), (1.0, 4.0));
         assert!(SampledSpectrum::ZERO.is_black() && !a.is_black());
     }

@@ -235,6 +235,7 @@ fn sequence_job(
             adaptive: None,
             max_component_value: None,
             guiding: false,
+            spectral: false,
         }),
     };
     let job = Job {

@@ -220,6 +220,7 @@ fn case(n: u64) -> (String, Job, Vec<i64>, Coherence) {
             adaptive: None,
             max_component_value: None,
             guiding: false,
+            spectral: false,
         })
     };
     let job = Job {

@@ -73,6 +73,7 @@ fn coated_diffuse_sphere_in_a_furnace_renders_its_albedo() {
         adaptive: None,
         max_component_value: None,
         guiding: false,
+        spectral: false,
     };
     let job = Job {
         width: SIZE,

@@ -72,7 +72,10 @@ fn lamp_box(place: Place, material: &str) -> Scene {
 fn reference_image(scene: &Scene) -> Image {
     monte_carlo_image(
         scene,
-        &Bdpt::new(BdptOptions { max_depth: 32 }),
+        &Bdpt::new(BdptOptions {
+            max_depth: 32,
+            spectral: false,
+        }),
         SIZE,
         2048,
         3,

@@ -305,7 +305,14 @@ fn path_tracing_and_bdpt_agree_on_a_glossy_table() {
         .unwrap();
     scene.materials[floor].surface = Surface::Measured(Measured::new(Arc::new(table)));
     let path = image_by(&scene, &PathTracer::new(PathOptions { max_depth: 8 }), 1024);
-    let bdpt = image_by(&scene, &Bdpt::new(BdptOptions { max_depth: 8 }), 1024);
+    let bdpt = image_by(
+        &scene,
+        &Bdpt::new(BdptOptions {
+            max_depth: 8,
+            spectral: false,
+        }),
+        1024,
+    );
     let mean = |img: &Image, quarter: Option<usize>| {
         let mut sum = 0.0f64;
         for (k, p) in img.pixels.iter().enumerate() {

@@ -14,6 +14,7 @@ pub(crate) mod light_passes;
 pub(crate) mod passes;
 mod pixel_sampling;
 pub(crate) mod settings;
+pub mod spectral;
 pub(crate) mod technique;
 mod view;
 

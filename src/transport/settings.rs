@@ -144,6 +144,16 @@ pub const GUIDING: &[Setting] = &[Setting {
           default).",
 }];
 
+/// Spectral mode: read by the path tracer.
+pub const SPECTRAL: &[Setting] = &[Setting {
+    name: "spectral",
+    scene_key: Some(("render", "spectral")),
+    example: "true",
+    doc: "Spectral mode: carry light at three sampled wavelengths instead of red, green and \
+          blue, so named glasses disperse and named metals reflect by their measured index \
+          (surfaces only; off by default).",
+}];
+
 /// Samples per pixel with an adaptive threshold and no sample count or time limit: the
 /// most a pixel that never converges takes (Cycles' default).
 pub const ADAPTIVE_DEFAULT_SPP: u32 = 4096;
@@ -184,6 +194,8 @@ pub struct MonteCarloSettings {
     pub max_component_value: Option<f32>,
     /// Path guiding (the path tracer).
     pub guiding: bool,
+    /// Spectral mode (the path tracer): light at sampled wavelengths, not RGB.
+    pub spectral: bool,
 }
 
 impl MonteCarloSettings {
@@ -274,6 +286,7 @@ impl MonteCarloSettings {
             adaptive,
             max_component_value: s.max_component_value,
             guiding: s.guiding.unwrap_or(false),
+            spectral: s.spectral.unwrap_or(false),
         })
     }
 
@@ -291,6 +304,9 @@ impl MonteCarloSettings {
         }
         if self.guiding {
             key += " guiding=true";
+        }
+        if self.spectral {
+            key += " spectral=true";
         }
         key
     }

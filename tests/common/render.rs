@@ -21,6 +21,7 @@ pub fn boxed(max_depth: u32, spp: u32) -> MonteCarloSettings {
         adaptive: None,
         max_component_value: None,
         guiding: false,
+        spectral: false,
     }
 }
 

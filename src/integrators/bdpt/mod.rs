@@ -34,7 +34,10 @@ use crate::scene::camera::CameraBasis;
 use crate::scene::lights::Emitter;
 use crate::scene::Scene;
 use crate::settings::TechniqueKind;
-use crate::transport::settings::{MonteCarloSettings, TechniqueInfo, COMMON, MONTE_CARLO};
+use crate::transport::settings::{
+    MonteCarloSettings, TechniqueInfo, COMMON, MONTE_CARLO, SPECTRAL,
+};
+use crate::transport::spectral::{Colours, RgbColours, Wavelengths};
 use crate::transport::technique::{Lifecycle, SampledTechnique};
 use crate::transport::{Context, MonteCarlo, RayStats, Splat};
 use mis::Connection;
@@ -47,7 +50,7 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
     kind: TechniqueKind::Bdpt,
     summary: "Bidirectional path tracing, all strategies combined by multiple importance \
               sampling.",
-    settings: &[COMMON, MONTE_CARLO],
+    settings: &[COMMON, MONTE_CARLO, SPECTRAL],
     pbrt: &["bdpt"],
     progressive: true,
     renders_parts: false,
@@ -64,6 +67,7 @@ pub(crate) fn lifecycle(
     Ok(Box::new(SampledTechnique {
         integrator: Bdpt::new(BdptOptions {
             max_depth: mc.max_depth,
+            spectral: mc.spectral,
         }),
         settings: *mc,
     }))
@@ -73,6 +77,8 @@ pub(crate) fn lifecycle(
 pub struct BdptOptions {
     /// Maximum number of bounces of a full path.
     pub max_depth: u32,
+    /// Light at sampled wavelengths, not RGB (surfaces only).
+    pub spectral: bool,
 }
 
 pub struct Bdpt {
@@ -148,6 +154,38 @@ impl MonteCarlo for Bdpt {
         stats: &mut RayStats,
         splats: &mut Vec<Splat>,
     ) -> Rgb {
+        if self.options.spectral {
+            let mut lambda = Wavelengths::sample(sampler.next_1d());
+            let v = self.trace(ctx, camera, camera_ray, sampler, stats, splats, &mut lambda);
+            return lambda.output(v);
+        }
+        self.trace(
+            ctx,
+            camera,
+            camera_ray,
+            sampler,
+            stats,
+            splats,
+            &mut RgbColours,
+        )
+    }
+}
+
+impl Bdpt {
+    /// One sample's subpaths and connections with the scene's colours as `colours` gives
+    /// them: the radiance the path carries, the splats in the film's RGB.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn trace<C: Colours>(
+        &self,
+        ctx: &Context,
+        camera: &CameraBasis,
+        camera_ray: &Ray,
+        sampler: &mut Sampler,
+        stats: &mut RayStats,
+        splats: &mut Vec<Splat>,
+        colours: &mut C,
+    ) -> Rgb {
         let max_depth = self.options.max_depth;
         let time = camera_ray.time;
         let hero = ctx.has_media().then(|| hero_channel(sampler));
@@ -179,10 +217,11 @@ impl MonteCarlo for Bdpt {
             sampler,
             stats,
             media.as_mut(),
+            colours,
         );
         // Emission inside media has the camera subpath as its only strategy.
         let mut radiance = media.as_ref().map_or(Rgb::ZERO, |m| m.emitted);
-        let light_path = light_subpath(ctx, time, max_depth, hero, sampler, stats);
+        let light_path = light_subpath(ctx, (time, max_depth), hero, sampler, stats, colours);
         let mut spectral = hero.map(|hero| Spectral {
             hero,
             rng: sampler.stream(),
@@ -276,7 +315,7 @@ impl MonteCarlo for Bdpt {
                         splats.push(Splat {
                             x: c.x,
                             y: c.y,
-                            value: value * through * w,
+                            value: colours.output(value * through * w),
                         });
                     }
                     (1, _) if light_path[0].is_infinite() => {
@@ -319,7 +358,8 @@ impl MonteCarlo for Bdpt {
                         let fq = if s == 1 {
                             // Emission of the light vertex towards pt.
                             if let Kind::Light { light, point: true } = qs.kind {
-                                ctx.lights.emitters[light].model().intensity_towards(-wdir)
+                                let model = ctx.lights.emitters[light].model();
+                                colours.emission(model.intensity_towards(-wdir))
                             } else {
                                 let cos_l = qs.emitting_cos(ctx, -wdir);
                                 if cos_l <= 0.0 {
@@ -363,11 +403,11 @@ impl MonteCarlo for Bdpt {
 /// walk from it (through media by the `hero` channel, in a scene with media).
 fn light_subpath<'a>(
     ctx: &Context<'a>,
-    time: f32,
-    max_depth: u32,
+    (time, max_depth): (f32, u32),
     hero: Option<usize>,
     sampler: &mut Sampler,
     stats: &mut RayStats,
+    colours: &mut impl Colours,
 ) -> Vec<Vertex<'a>> {
     let mut light_path: Vec<Vertex> = Vec::with_capacity(max_depth as usize + 1);
     let u_choose = sampler.next_2d();
@@ -386,12 +426,13 @@ fn light_subpath<'a>(
             max_depth,
             hero,
         };
-        infinite_light_subpath(ctx, start, &mut light_path, sampler, stats);
+        infinite_light_subpath(ctx, start, &mut light_path, (sampler, stats), colours);
         return light_path;
     }
     let Some((light, at, pdf_pos, point, le)) = sample_light_point(ctx, u_choose.x, u_pos) else {
         return light_path;
     };
+    let le = colours.emission(le);
     let n = at.n;
     let mut v0 = Vertex::new(Kind::Light { light, point }, at, le / pdf_pos);
     v0.pdf_fwd = pdf_pos;
@@ -433,7 +474,7 @@ fn light_subpath<'a>(
     if pdf_dir > 0.0 {
         // A spot light's intensity falls off towards the edge of its cone.
         let le_dir = if point {
-            ctx.lights.emitters[light].model().intensity_towards(dir)
+            colours.emission(ctx.lights.emitters[light].model().intensity_towards(dir))
         } else {
             le
         };
@@ -458,6 +499,7 @@ fn light_subpath<'a>(
             sampler,
             stats,
             media.as_mut(),
+            colours,
         );
     }
     light_path
@@ -482,8 +524,8 @@ fn infinite_light_subpath<'a>(
     ctx: &Context<'a>,
     start: InfiniteStart,
     light_path: &mut Vec<Vertex<'a>>,
-    sampler: &mut Sampler,
-    stats: &mut RayStats,
+    (sampler, stats): (&mut Sampler, &mut RayStats),
+    colours: &mut impl Colours,
 ) {
     let lights = &ctx.lights;
     let InfiniteStart {
@@ -496,9 +538,10 @@ fn infinite_light_subpath<'a>(
     } = start;
     let model = lights.emitters[light].model();
     let pmf = lights.pmf(light);
-    let Some(es) = model.sample_le(u_pos, u_dir, pmf, &lights.world, light) else {
+    let Some(mut es) = model.sample_le(u_pos, u_dir, pmf, &lights.world, light) else {
         return;
     };
+    es.radiance = colours.emission(es.radiance);
     if !(es.pdf_dir > 0.0 && es.pdf_pos > 0.0) {
         return;
     }
@@ -557,6 +600,7 @@ fn infinite_light_subpath<'a>(
         sampler,
         stats,
         media.as_mut(),
+        colours,
     );
 }
 

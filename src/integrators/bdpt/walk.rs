@@ -13,6 +13,7 @@ use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
 use crate::math::{Ray, Rgb, Vec3};
 use crate::scene::media::tracking::Uniforms;
+use crate::transport::spectral::Colours;
 use crate::transport::{Context, RayStats};
 
 /// Where a random walk starts: the ray leaving a subpath's last vertex, with throughput
@@ -41,6 +42,7 @@ pub(super) struct Media {
 }
 
 /// Extends `path` by a random walk from `start`; `media` is `None` in a scene without media.
+/// The vertices' BSDFs and emission are as `colours` gives them.
 pub(super) fn random_walk<'a>(
     ctx: &Context<'a>,
     start: WalkStart,
@@ -48,6 +50,7 @@ pub(super) fn random_walk<'a>(
     sampler: &mut Sampler,
     stats: &mut RayStats,
     mut media: Option<&mut Media>,
+    colours: &mut impl Colours,
 ) {
     let WalkStart {
         mut ray,
@@ -143,7 +146,7 @@ pub(super) fn random_walk<'a>(
                     delta: false,
                 };
                 let mut v = Vertex::new(kind, at, tp.beta);
-                v.emission = ctx.lights.background_radiance(dir);
+                v.emission = colours.emission(ctx.lights.background_radiance(dir));
                 v.r_u = tp.r_u;
                 v.medium = medium;
                 let prev = path.last().expect("a walk starts from a vertex");
@@ -163,7 +166,7 @@ pub(super) fn random_walk<'a>(
             continue;
         }
         let wo = -ray.dir;
-        let bsdf = m.bsdf(&sp, wo);
+        let bsdf = colours.bsdf(m.bsdf(&sp, wo));
         let mut v = Vertex::new(Kind::Surface, sp.spot(), tp.beta);
         v.bsdf = Some(bsdf);
         v.r_u = tp.r_u;
@@ -172,7 +175,7 @@ pub(super) fn random_walk<'a>(
             v.interface = ctx.scene.placed_shape(&sp).shape.media;
         }
         if m.is_emissive() {
-            v.emission = m.emission_at(sp.p, sp.uv, sp.ng);
+            v.emission = colours.emission(m.emission_at(sp.p, sp.uv, sp.ng));
             v.light = sp.world_shape().and_then(|s| ctx.lights.light_of_shape(s));
         }
         let prev = path.last().expect("a walk starts from a vertex");

@@ -339,6 +339,7 @@ fn render(s: &RenderSettings, output: Option<&std::path::Path>) -> Option<Render
         adaptive_threshold: s.adaptive_threshold,
         adaptive_min_samples: s.adaptive_min_samples,
         guiding: s.guiding,
+        spectral: s.spectral,
         max_component_value: s.max_component_value,
         filter,
         aa: s.aa.map(|a| {
@@ -402,7 +403,9 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
         diffuse_transmission: (c.diffuse_transmission
             != Texture::Constant(crate::math::Vec3::ZERO))
         .then(|| diffuse(&c.diffuse_transmission, refs)),
-        ior: Some(c.ior),
+        // A named glass writes its name, which gives the index and its dispersion.
+        ior: c.spectral.glass_name().is_none().then_some(c.ior),
+        glass: c.spectral.glass_name().map(str::to_owned),
         phong_exponent: Some(c.phong_exponent),
         roughness: Some(match (&c.roughness_map, c.roughness_v) {
             (Some(map), _) => match diffuse(&map.u, refs) {
@@ -483,6 +486,14 @@ fn bump(m: &Material, refs: Refs) -> Option<DiffuseDesc> {
 fn conductor(m: &Classic, refs: Refs) -> Option<ConductorDesc> {
     if let Some(r) = &m.reflectance_map {
         return Some(ConductorDesc::Reflectance(diffuse(r, refs)));
+    }
+    // A named metal writes its name, which gives its measured index in spectral renders.
+    let name = m.spectral.metal.and_then(|(eta, _)| {
+        let name = eta.name.strip_prefix("metal-")?.strip_suffix("-eta")?;
+        (crate::bsdf::Conductor::named(name) == m.conductor).then_some(name)
+    });
+    if let Some(name) = name {
+        return Some(ConductorDesc::Named(name.to_owned()));
     }
     m.conductor.map(|c| {
         ConductorDesc::Index(ConductorIndex {

@@ -10,7 +10,7 @@
 //! [`crate::bsdf`]: kd/π, kdt/π, ks mirror or GGX reflection, kt smooth or GGX refraction.
 
 use super::SurfaceModel;
-use crate::bsdf::{Bsdf, Coating, Conductor, Lobes};
+use crate::bsdf::{Bsdf, Coating, Conductor, Lobes, SpectralParts};
 use crate::math::{Rgb, Vec2, Vec3};
 use crate::scene::{SurfacePoint, Texture};
 use std::sync::Arc;
@@ -65,6 +65,8 @@ pub struct Classic {
     /// for the Monte Carlo integrators (the other techniques use those, set to the map's
     /// largest value).
     pub roughness_map: Option<Arc<RoughnessMap>>,
+    /// A glass's dispersion and a metal's measured index, for spectral renders.
+    pub spectral: SpectralParts,
 }
 
 /// A roughness given by textures (pbrt's textured `roughness`, `uroughness`, `vroughness`).
@@ -125,6 +127,7 @@ impl Default for Classic {
             conductor: None,
             reflectance_map: None,
             roughness_map: None,
+            spectral: SpectralParts::default(),
         }
     }
 }
@@ -217,6 +220,7 @@ impl Classic {
             thin: self.thin,
             conductor: self.conductor_at(sp.p, sp.uv, sp.ng),
             lambertian: self.is_lambertian(),
+            spectral: self.spectral,
         }
     }
 

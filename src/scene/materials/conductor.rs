@@ -5,6 +5,7 @@ use super::{Classic, RoughnessMap, SurfaceModel};
 use crate::bsdf::{Bsdf, Conductor};
 use crate::math::{Rgb, Vec3};
 use crate::scene::{SurfacePoint, Texture};
+use crate::spectrum::Named;
 use std::sync::Arc;
 
 /// A metal; the approximating techniques see ks = 1 weighted by its Fresnel reflectance
@@ -37,6 +38,12 @@ impl Metal {
                 ..Classic::blank()
             },
         }
+    }
+
+    /// The same metal, reflecting by the measured η and k `spectra` in spectral renders.
+    pub fn with_measured(mut self, spectra: Option<(&'static Named, &'static Named)>) -> Metal {
+        self.classic.spectral.metal = spectra;
+        self
     }
 
     /// The metal whose classic terms are `classic` (a native scene's plain keys with a

@@ -6,6 +6,7 @@ use crate::bsdf::Bsdf;
 use crate::math::{Rgb, Vec3};
 use crate::scene::SurfacePoint;
 use crate::scene::Texture;
+use crate::spectrum::Named;
 use std::sync::Arc;
 
 /// A dielectric interface of index `ior` inside (the side opposite the geometric normal);
@@ -32,6 +33,13 @@ impl Dielectric {
                 ..Classic::blank()
             },
         }
+    }
+
+    /// The same interface, its index varying with wavelength as `glass`'s in spectral
+    /// renders.
+    pub fn with_dispersion(mut self, glass: Option<&'static Named>) -> Dielectric {
+        self.classic.spectral.dispersion = glass;
+        self
     }
 
     pub fn ior(&self) -> f32 {

@@ -119,10 +119,12 @@ impl Builder {
     ) -> crate::error::Result<Metal> {
         let (alphas, map) = self.roughness_map(p, prefix, st, loc)?;
         let (conductor, reflectance_map) = self.conductor(p, prefix, st, loc)?;
-        Ok(Metal::new(conductor, reflectance_map, alphas, map))
+        let measured = measured_metal(p, prefix);
+        Ok(Metal::new(conductor, reflectance_map, alphas, map).with_measured(measured))
     }
 
-    /// An index of refraction ("float eta" or a spectrum).
+    /// An index of refraction ("float eta" or a spectrum; a named glass is read as its index
+    /// at 587.6 nm here, and by [`named_spectrum`] for spectral renders).
     fn eta(
         &mut self,
         p: &Params,
@@ -226,7 +228,9 @@ impl Builder {
             "dielectric" => {
                 let (alphas, map) = self.roughness_map(p, "", st, loc)?;
                 let ior = self.eta(p, "eta", 1.5, st, loc)?;
-                Surface::Dielectric(Dielectric::new(ior, alphas, map))
+                let glass = named_spectrum(p, "eta")
+                    .filter(|n| matches!(n.kind, crate::spectrum::named::NamedKind::Sellmeier(_)));
+                Surface::Dielectric(Dielectric::new(ior, alphas, map).with_dispersion(glass))
             }
             "diffusetransmission" => {
                 // pbrt-v4's DiffuseTransmissionBxDF: R/π on wo's side, T/π through, both
@@ -442,4 +446,31 @@ fn reflectance_conductor(r: Texture) -> (Conductor, Option<Texture>) {
         Texture::Constant(c) => (Conductor::from_reflectance(c), None),
         t => (Conductor::from_reflectance(t.max_value()), Some(t)),
     }
+}
+
+/// The named spectrum (`"spectrum NAME" "metal-Cu-eta"`, ...) parameter `name` gives, if any.
+fn named_spectrum(p: &Params, name: &str) -> Option<&'static crate::spectrum::Named> {
+    let q = p.find(name, &["spectrum"]).ok().flatten()?;
+    crate::bsdf::interned(q.strs().first()?)
+}
+
+/// The measured η and k of a conductor's named spectra (pbrt-v4's copper when neither is
+/// given, as its default), for spectral renders.
+fn measured_metal(
+    p: &Params,
+    prefix: &str,
+) -> Option<(
+    &'static crate::spectrum::Named,
+    &'static crate::spectrum::Named,
+)> {
+    let (eta, k) = (format!("{prefix}eta"), format!("{prefix}k"));
+    let kinds = ["spectrum", "rgb", "float", "blackbody", "texture"];
+    let given = |n: &str| p.find(n, &kinds).ok().flatten().is_some();
+    if given(&format!("{prefix}reflectance")) {
+        return None;
+    }
+    if !given(&eta) && !given(&k) {
+        return crate::bsdf::SpectralParts::metal_named("Cu");
+    }
+    Some((named_spectrum(p, &eta)?, named_spectrum(p, &k)?))
 }

@@ -18,7 +18,7 @@ use super::schema::{
     CameraDesc, ConductorDesc, DiffuseDesc, EnvironmentDesc, FileDesc, LightDesc, LightKind,
     MaterialDesc, MixDesc, OneOrMany, RoughnessDesc, Splat3, TransformOp,
 };
-use crate::bsdf::TabulatedBrdf;
+use crate::bsdf::{SpectralParts, TabulatedBrdf};
 use crate::error::Error;
 use crate::input_file::Allowance;
 use crate::math::{Mat3, Mat4, Rgb, Vec3};
@@ -302,6 +302,7 @@ impl<'a> Builder<'a> {
                 desc.transmission.is_some(),
                 desc.diffuse_transmission.is_some(),
                 desc.ior.is_some(),
+                desc.glass.is_some(),
                 desc.phong_exponent.is_some(),
                 desc.roughness.is_some(),
                 desc.fresnel.is_some(),
@@ -325,6 +326,7 @@ impl<'a> Builder<'a> {
                 ("transmission", desc.transmission.is_some()),
                 ("diffuse_transmission", desc.diffuse_transmission.is_some()),
                 ("ior", desc.ior.is_some()),
+                ("glass", desc.glass.is_some()),
                 ("phong_exponent", desc.phong_exponent.is_some()),
                 ("roughness", desc.roughness.is_some()),
                 ("fresnel", desc.fresnel.is_some()),
@@ -368,6 +370,13 @@ impl<'a> Builder<'a> {
         let ambient = match desc.ambient {
             None => None,
             Some(c) => Some(colour(c.0).map_err(fail("ambient"))?),
+        };
+        let mut spectral = SpectralParts {
+            metal: match &desc.conductor {
+                Some(ConductorDesc::Named(n)) => SpectralParts::metal_named(n),
+                _ => None,
+            },
+            ..SpectralParts::default()
         };
         let mut reflectance_map = None;
         let conductor = match desc.conductor {
@@ -445,6 +454,24 @@ impl<'a> Builder<'a> {
             },
         };
         let (emission, emission_map) = self.emission(site, desc.emission)?;
+        let mut ior = desc.ior.unwrap_or(d.ior);
+        if let Some(name) = &desc.glass {
+            if desc.ior.is_some() {
+                return Err(fail("glass")(
+                    "gives the index of refraction: drop `ior`".into(),
+                ));
+            }
+            let s = SpectralParts::glass_named(name).ok_or_else(|| {
+                let known: Vec<_> = crate::spectrum::named::glasses().collect();
+                fail("glass")(format!(
+                    "unknown glass \"{name}\"; known: {}",
+                    known.join(", ")
+                ))
+            })?;
+            // The index RGB renders use: at the helium d line, as glass catalogues give it.
+            ior = s.eval(587.56);
+            spectral.dispersion = Some(s);
+        }
         let classic = Classic {
             diffuse,
             ambient,
@@ -453,7 +480,7 @@ impl<'a> Builder<'a> {
             reflectance_map,
             transmission: col(desc.transmission, "transmission", d.transmission)?,
             diffuse_transmission,
-            ior: positive(desc.ior.unwrap_or(d.ior)).map_err(fail("ior"))?,
+            ior: positive(ior).map_err(fail("ior"))?,
             phong_exponent: non_negative(desc.phong_exponent.unwrap_or(d.phong_exponent))
                 .map_err(fail("phong_exponent"))?,
             roughness,
@@ -462,6 +489,7 @@ impl<'a> Builder<'a> {
             thin,
             conductor,
             roughness_map,
+            spectral,
         };
         let surface = match desc.coating {
             Some(c) => self.coated(site, c, classic)?,

@@ -60,6 +60,8 @@ pub(crate) struct RenderDesc {
     pub(crate) adaptive_min_samples: Option<u32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) guiding: Option<bool>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) spectral: Option<bool>,
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) max_component_value: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -228,6 +230,9 @@ pub(crate) struct MaterialDesc {
     pub(crate) diffuse_transmission: Option<DiffuseDesc>,
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) ior: Option<f32>,
+    /// A named glass: its index at 587.6 nm, and by wavelength in spectral renders.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) glass: Option<String>,
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) phong_exponent: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none")]

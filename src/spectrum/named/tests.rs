@@ -180,7 +180,7 @@ fn metal_rgb_sampled(metal: &str) -> DVec3 {
         let w = SampledWavelengths::sample_visible((i as f32 + 0.5) / n as f32);
         let (e, kk) = (eta.sample(&w), k.sample(&w));
         let mut r = SampledSpectrum::ZERO;
-        for j in 0..4 {
+        for j in 0..crate::spectrum::N_SAMPLES {
             r[j] = fresnel(e[j] as f64, kk[j] as f64) as f32;
         }
         sum += (r * d65.sample(&w))

@@ -139,6 +139,7 @@ impl Surface {
                 && o.specular.max_element() <= 0.0
                 && self.kt.max_element() <= 0.0
                 && self.kdt.max_element() <= 0.0,
+            spectral: Default::default(),
         };
         // Oriented as a material's BSDF is toward n: an opaque surface faces n's side.
         let face = if self.kt.max_element() <= 0.0 && n.dot(ng) < 0.0 {

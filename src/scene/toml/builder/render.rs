@@ -88,6 +88,7 @@ impl Builder<'_> {
             &span
         );
         take!(guiding, d.guiding, "render", "guiding", &span);
+        take!(spectral, d.spectral, "render", "spectral", &span);
         take!(
             max_component_value,
             d.max_component_value,
