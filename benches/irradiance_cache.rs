@@ -119,10 +119,7 @@ fn room_reference(scene: &Arc<Scene>) -> Image {
             );
             let (image, seconds) = path_trace(scene, (WIDTH, HEIGHT), REFERENCE_SPP, 99);
             eprintln!("reference rendered in {seconds:.0} s");
-            let options = OutputOptions {
-                exposure: 0.0,
-                half: false,
-            };
+            let options = OutputOptions::new(0.0, false);
             write_image(&path, &image, &[], &options).unwrap();
             image
         }

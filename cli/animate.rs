@@ -349,10 +349,7 @@ pub fn run(cli: &Cli, args: &AnimateArgs) -> std::result::Result<(), Failure> {
     // What the engine refuses (a technique it does not render), before any frame.
     Sequence::new(&job, &coherence).map_err(locate)?;
     drop(scene0);
-    let out_options = OutputOptions {
-        exposure: args.exposure.unwrap_or(0.0),
-        half: args.half,
-    };
+    let out_options = OutputOptions::new(args.exposure.unwrap_or(0.0), args.half);
     let mut written: Option<i64> = None;
     let result = render_frames(
         &anim,

@@ -188,10 +188,7 @@ pub fn run_merge(args: MergeArgs) -> Result<(), Failure> {
         .writes("-o", &args.outputs)
         .check()?;
     let merged = farm::merge::merge(&args.parts)?;
-    let options = OutputOptions {
-        exposure: args.exposure,
-        half: args.half,
-    };
+    let options = OutputOptions::new(args.exposure, args.half);
     for out in &args.outputs {
         write_image(out, &merged.image, &merged.metadata, &options)?;
     }

@@ -276,6 +276,12 @@ pub struct RenderArgs {
     /// Store EXR pixels as half floats instead of 32-bit floats.
     #[arg(long, help_heading = OUTPUT)]
     pub half: bool,
+    /// The RGB of the linear outputs (EXR, HDR, TIFF): srgb (linear sRGB, the default),
+    /// rec2020, dci-p3 or aces2065-1, converted from the render's linear sRGB (unclipped,
+    /// so spectral renders keep colours outside sRGB); EXR files record the primaries in
+    /// their chromaticities. PNG and JPEG outputs stay sRGB.
+    #[arg(long, value_name = "NAME", help_heading = OUTPUT)]
+    pub color_space: Option<String>,
     /// Show the image in the tev viewer as it renders (tev listens on 127.0.0.1:14158), as
     /// pbrt-v4's --display-server: progressive techniques update it a few times a second,
     /// the others show the final image. The render does not wait for the viewer.

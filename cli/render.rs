@@ -6,8 +6,9 @@ use crate::farm;
 use crate::options::{self, IntegratorName, RenderArgs};
 use crate::{Cli, Failure};
 use raylink::image::display::DisplayServer;
-use raylink::image::output::{check_output_path, write_image_layers, Layer};
+use raylink::image::output::{check_output_path, color_space_named, write_image_layers, Layer};
 use raylink::output_paths::FilePlan;
+use raylink::spectrum::ColorSpace;
 use raylink::{checkpoint, input_file};
 use raylink::{
     write_image, Aov, Control, Error, Job, MetaValue, Metadata, OutputOptions, Relight, Rendered,
@@ -72,9 +73,30 @@ fn output_options(args: &RenderArgs) -> Result<OutputOptions, Error> {
             "--exposure applies to 8-bit outputs (PNG, JPEG), and none is given".into(),
         ));
     }
+    let color_space = match &args.color_space {
+        None => ColorSpace::srgb(),
+        Some(name) => {
+            let space = color_space_named(name)
+                .map_err(|why| Error::Invalid(format!("--color-space: {why}")))?;
+            if space != ColorSpace::srgb()
+                && !args
+                    .outputs
+                    .iter()
+                    .any(|o| matches!(ext(o).as_str(), "exr" | "hdr" | "tif" | "tiff"))
+            {
+                return Err(Error::Invalid(
+                    "--color-space applies to linear outputs (EXR, HDR, TIFF), and none is \
+                     given"
+                        .into(),
+                ));
+            }
+            space
+        }
+    };
     Ok(OutputOptions {
         exposure: args.exposure.unwrap_or(0.0),
         half: args.half,
+        color_space,
     })
 }
 

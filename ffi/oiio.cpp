@@ -269,6 +269,16 @@ int encode_impl(RaylinkOiioEncoded *encoded, const char *path, const char *forma
         case RAYLINK_OIIO_ATTR_FLOAT:
             spec.attribute(a.name, a.float_value);
             break;
+        case RAYLINK_OIIO_ATTR_FLOATS:
+            if (a.float_values == nullptr || a.int_value <= 0) {
+                set_error(err, err_len,
+                          std::string("internal error: attribute \"") + a.name +
+                              "\" has no values");
+                return 1;
+            }
+            spec.attribute(a.name, OIIO::TypeDesc(OIIO::TypeDesc::FLOAT, a.int_value),
+                           a.float_values);
+            break;
         default:
             set_error(err, err_len,
                       std::string("internal error: attribute \"") + a.name +
@@ -623,6 +633,7 @@ extern "C" int raylink_oiio_image_attr(const RaylinkOiioImage *image, size_t ind
     attr->string_value = a.string_value.c_str();
     attr->int_value = a.int_value;
     attr->float_value = a.float_value;
+    attr->float_values = nullptr;
     return 0;
 }
 

@@ -29,17 +29,20 @@ enum {
 enum {
     RAYLINK_OIIO_ATTR_STRING = 0,
     RAYLINK_OIIO_ATTR_INT = 1,
-    RAYLINK_OIIO_ATTR_FLOAT = 2
+    RAYLINK_OIIO_ATTR_FLOAT = 2,
+    RAYLINK_OIIO_ATTR_FLOATS = 3
 };
 
 /* One metadata attribute to write: `name` and, depending on `type`, `string_value`,
- * `int_value` or `float_value`. */
+ * `int_value`, `float_value`, or (RAYLINK_OIIO_ATTR_FLOATS, written only) `int_value` floats
+ * at `float_values` (OpenEXR's `chromaticities`: 8). */
 typedef struct RaylinkOiioAttr {
     const char *name;
     int type;
     const char *string_value;
     int int_value;
     float float_value;
+    const float *float_values;
 } RaylinkOiioAttr;
 
 /* Where the pixels of a region lie in the full image: the region's top-left pixel is (x, y)
@@ -137,7 +140,7 @@ const char *raylink_oiio_version(void);
 
 /* The version of this interface, RAYLINK_OIIO_ABI: the program loads this library at run
  * time and checks it was built from the same header. Raise it with every change here. */
-#define RAYLINK_OIIO_ABI 2
+#define RAYLINK_OIIO_ABI 3
 int raylink_oiio_abi(void);
 
 #ifdef __cplusplus

@@ -63,10 +63,7 @@ fn meta_get<'a>(metadata: &'a Metadata, name: &str) -> Option<&'a MetaValue> {
 }
 
 fn no_options() -> OutputOptions {
-    OutputOptions {
-        exposure: 0.0,
-        half: false,
-    }
+    OutputOptions::new(0.0, false)
 }
 
 /// Values spanning the float range: both signs, exponents from 1e-38 to 1e38, subnormals,
@@ -147,10 +144,7 @@ fn exr_half_round_trip_within_half_precision() {
         values.push(sign * magnitude);
     }
     let image = image_from(32, 8, &values);
-    let options = OutputOptions {
-        exposure: 0.0,
-        half: true,
-    };
+    let options = OutputOptions::new(0.0, true);
     write_image(&path, &image, &Metadata::new(), &options).unwrap();
 
     let raw = oiio::read(&path).unwrap();
@@ -241,10 +235,7 @@ fn png_clamps_negatives_and_applies_exposure() {
     let values = [0.05, 0.1, 0.2, 0.4, -0.5, -1e9, 0.3, 0.01, 0.6];
     let image = image_from(3, 1, &values);
     write_image(&plain, &image, &Metadata::new(), &no_options()).unwrap();
-    let brighter = OutputOptions {
-        exposure: 1.0,
-        half: false,
-    };
+    let brighter = OutputOptions::new(1.0, false);
     write_image(&exposed, &image, &Metadata::new(), &brighter).unwrap();
 
     let (a, _) = read_image(&plain).unwrap();
@@ -342,10 +333,7 @@ fn tiff_is_float_and_hdr_is_linear() {
         }
     }
     // Exposure is not applied to linear formats.
-    let brighter = OutputOptions {
-        exposure: 3.0,
-        half: false,
-    };
+    let brighter = OutputOptions::new(3.0, false);
     write_image(&tif, &image, &Metadata::new(), &brighter).unwrap();
     let (back, _) = read_image(&tif).unwrap();
     let bits = |image: &Image| {
@@ -382,10 +370,7 @@ fn metadata_survives_in_exr() {
     for half in [false, true] {
         let path = dir.path().join(format!("meta-{half}.exr"));
         let image = image_from(4, 4, &[0.25, 0.5, 0.75]);
-        let options = OutputOptions {
-            exposure: 0.0,
-            half,
-        };
+        let options = OutputOptions::new(0.0, half);
         write_image(&path, &image, &metadata, &options).unwrap();
         let (_, read) = read_image(&path).unwrap();
         for (name, value) in &metadata {
@@ -622,6 +607,7 @@ fn read_image_maps_channels_to_rgb() {
             data: &[0.25, 4.0],
             pixel_type: PixelType::Float,
             window: None,
+            chromaticities: None,
         },
         &none,
     )
@@ -641,6 +627,7 @@ fn read_image_maps_channels_to_rgb() {
             data: &data,
             pixel_type: PixelType::Float,
             window: None,
+            chromaticities: None,
         },
         &none,
     )
@@ -665,6 +652,7 @@ fn read_image_maps_channels_to_rgb() {
             data: &[0.6, 1.0],
             pixel_type: PixelType::U8,
             window: None,
+            chromaticities: None,
         },
         &none,
     )
@@ -686,6 +674,7 @@ fn read_image_maps_channels_to_rgb() {
             data: &[0.0, 0.5, 1.0],
             pixel_type: PixelType::U16,
             window: None,
+            chromaticities: None,
         },
         &none,
     )

@@ -129,6 +129,7 @@ fn image_with(data: &[f32], channels: &[&str], width: u32, pixel_type: PixelType
         data,
         pixel_type,
         window: None,
+        chromaticities: None,
     };
     let metadata: Metadata = vec![
         ("raylink:seed".into(), MetaValue::Str("42".into())),
@@ -226,6 +227,7 @@ fn exr_region_keeps_its_window() {
         data: &data,
         pixel_type: PixelType::Float,
         window: Some(window),
+        chromaticities: None,
     };
     io::write(&path, "openexr", image, &Metadata::new()).unwrap();
     let back = io::read(&path).unwrap();
@@ -281,6 +283,7 @@ fn jpeg_and_hdr_round_trip_within_their_precision() {
         data: &data,
         pixel_type: PixelType::Float,
         window: None,
+        chromaticities: None,
     };
     let hdr = dir.path().join("ramp.hdr");
     std::fs::write(&hdr, codecs::encode(&hdr, "hdr", image, &vec![]).unwrap()).unwrap();
@@ -385,6 +388,7 @@ fn bad_image_files_are_one_line_errors() {
         data: &data,
         pixel_type: PixelType::Float,
         window: None,
+        chromaticities: None,
     };
     io::write(&exr, "exr", image, &Metadata::new()).unwrap();
     let bytes = std::fs::read(&exr).unwrap();
@@ -483,6 +487,7 @@ fn openimageio_and_the_rust_codecs_read_each_other() {
         data: &data,
         pixel_type: PixelType::Float,
         window,
+        chromaticities: None,
     };
     let pixels: Vec<f32> = (0..6 * 4 * 3).map(|i| (i % 17) as f32 / 16.0).collect();
     let png = ImageToWrite {
@@ -492,6 +497,7 @@ fn openimageio_and_the_rust_codecs_read_each_other() {
         data: &pixels,
         pixel_type: PixelType::U8,
         window: None,
+        chromaticities: None,
     };
     let same = |a: &RawImage, b: &RawImage| {
         assert_eq!((a.width, a.height, a.window), (b.width, b.height, b.window));
@@ -558,6 +564,7 @@ fn openimageio_and_the_rust_codecs_read_each_other() {
             data: &data,
             pixel_type,
             window: None,
+            chromaticities: None,
         };
         let by_rust = dir.path().join(format!("rust.{ext}"));
         let by_oiio = dir.path().join(format!("oiio.{ext}"));

@@ -362,10 +362,7 @@ impl Api {
         if partial {
             meta.push(("raylink:partial".into(), MetaValue::Int(1)));
         }
-        let options = OutputOptions {
-            exposure: if ext == "png" { exposure } else { 0.0 },
-            half: false,
-        };
+        let options = OutputOptions::new(if ext == "png" { exposure } else { 0.0 }, false);
         write_image(&path, &image, &meta, &options)
             .map_err(|e| (500, raylink::error::one_line(&e.to_string())))?;
         let name = path.file_name().unwrap_or_default().to_string_lossy();

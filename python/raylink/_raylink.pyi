@@ -76,9 +76,12 @@ class Rendered:
     """Seconds the technique's preparation took in this render."""
     summary: str
     """The statistics as the command line prints them."""
-    def write(self, path: _Path, *, exposure: float = 0.0, half: bool = False) -> None:
+    def write(
+        self, path: _Path, *, exposure: float = 0.0, half: bool = False, color_space: str = "srgb"
+    ) -> None:
         """Writes the image (EXR, HDR, TIFF, PNG, JPEG by extension) with its metadata, as
-        the command line's outputs."""
+        the command line's outputs; `color_space` ("srgb", "rec2020", "dci-p3",
+        "aces2065-1") is the linear formats' RGB."""
 
 class Renderer:
     """A render job and the engine that runs it: the intersection structure and the
@@ -129,8 +132,16 @@ class Renderer:
 def read_image(path: _Path) -> _Image:
     """Reads an image file as float32, height x width x 3."""
 
-def write_image(path: _Path, image: _Image, *, exposure: float = 0.0, half: bool = False) -> None:
-    """Writes a float32 height x width x 3 array through the command line's outputs."""
+def write_image(
+    path: _Path,
+    image: _Image,
+    *,
+    exposure: float = 0.0,
+    half: bool = False,
+    color_space: str = "srgb",
+) -> None:
+    """Writes a float32 height x width x 3 array (linear sRGB) through the command line's
+    outputs, the linear formats in `color_space`."""
 
 def check_output(path: _Path) -> None:
     """Checks that an image can be written at `path`, as the command line does first."""

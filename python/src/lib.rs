@@ -142,25 +142,38 @@ struct Rendered {
     metadata: Metadata,
 }
 
-/// The output options, as the command line's `--exposure` and `--half`.
-fn output_options(exposure: f32, half: bool) -> PyResult<OutputOptions> {
+/// The output options, as the command line's `--exposure`, `--half` and `--color-space`.
+fn output_options(exposure: f32, half: bool, color_space: &str) -> PyResult<OutputOptions> {
     if !exposure.is_finite() {
         return Err(to_py(raylink::Error::setting(
             "exposure",
             format!("must be a finite number of stops, got {exposure}"),
         )));
     }
-    Ok(OutputOptions { exposure, half })
+    let color_space = raylink::image::output::color_space_named(color_space)
+        .map_err(|why| to_py(raylink::Error::setting("color_space", why)))?;
+    Ok(OutputOptions {
+        exposure,
+        half,
+        color_space,
+    })
 }
 
 #[pymethods]
 impl Rendered {
     /// Writes the image through the command line's outputs (EXR, HDR, TIFF, PNG, JPEG by
     /// extension) with its metadata; `exposure` (stops) applies to PNG and JPEG, `half` to
-    /// EXR.
-    #[pyo3(signature = (path, *, exposure = 0.0, half = false))]
-    fn write(&self, py: Python<'_>, path: PathBuf, exposure: f32, half: bool) -> PyResult<()> {
-        let options = output_options(exposure, half)?;
+    /// EXR, `color_space` ("srgb", "rec2020", "dci-p3", "aces2065-1") to the linear formats.
+    #[pyo3(signature = (path, *, exposure = 0.0, half = false, color_space = "srgb"))]
+    fn write(
+        &self,
+        py: Python<'_>,
+        path: PathBuf,
+        exposure: f32,
+        half: bool,
+        color_space: &str,
+    ) -> PyResult<()> {
+        let options = output_options(exposure, half, color_space)?;
         py.detach(|| {
             check_output_path(&path)?;
             raylink::write_image(&path, &self.pixels, &self.metadata, &options)
@@ -532,15 +545,16 @@ fn read_image<'py>(py: Python<'py>, path: PathBuf) -> PyResult<Bound<'py, PyArra
 
 /// Writes a float32 height x width x 3 array through the command line's outputs.
 #[pyfunction]
-#[pyo3(signature = (path, image, *, exposure = 0.0, half = false))]
+#[pyo3(signature = (path, image, *, exposure = 0.0, half = false, color_space = "srgb"))]
 fn write_image(
     py: Python<'_>,
     path: PathBuf,
     image: PyReadonlyArray3<'_, f32>,
     exposure: f32,
     half: bool,
+    color_space: &str,
 ) -> PyResult<()> {
-    let options = output_options(exposure, half)?;
+    let options = output_options(exposure, half, color_space)?;
     let view = image.as_array();
     let (h, w, c) = view.dim();
     if c != 3 || h == 0 || w == 0 {

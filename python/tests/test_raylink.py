@@ -254,3 +254,17 @@ def test_images_written_and_read_back_are_the_same(tmp_path):
     image = rng.random((5, 7, 3), dtype=np.float32)
     raylink.write_image(tmp_path / "a.exr", image)
     assert np.array_equal(raylink.read_image(tmp_path / "a.exr"), image)
+
+
+def test_a_colour_space_is_the_command_lines(tmp_path):
+    # The same render written by Python and by the command line in Rec.2020: the same
+    # pixels; a colour space that does not exist is refused, naming the choices.
+    rendered = raylink.Renderer(CORNELL, integrator="path", spp=2, width=16, height=16).render()
+    rendered.write(tmp_path / "py.exr", color_space="rec2020")
+    cli = cli_render(tmp_path, "cli.exr", "render", CORNELL, "--integrator", "path", "--spp",
+                     "2", "--width", "16", "--height", "16", "--color-space", "rec2020")
+    py = raylink.read_image(tmp_path / "py.exr")
+    assert np.array_equal(py, raylink.read_image(cli))
+    assert not np.array_equal(py, rendered.image)
+    with pytest.raises(raylink.RaylinkError, match="rec2020, dci-p3 or aces2065-1"):
+        raylink.write_image(tmp_path / "x.exr", rendered.image, color_space="adobe")

@@ -145,6 +145,14 @@ fn encode_exr(path: &Path, image: ImageToWrite, metadata: &Metadata) -> Result<V
     );
     let mut exr_image = x::Image::from_layer(layer);
     exr_image.attributes.display_window = display;
+    if let Some(c) = image.chromaticities {
+        exr_image.attributes.chromaticities = Some(exr::meta::attribute::Chromaticities {
+            red: x::Vec2(c[0], c[1]),
+            green: x::Vec2(c[2], c[3]),
+            blue: x::Vec2(c[4], c[5]),
+            white: x::Vec2(c[6], c[7]),
+        });
+    }
     let mut bytes = Cursor::new(Vec::new());
     exr_image
         .write()

@@ -98,6 +98,10 @@ pub struct ImageToWrite<'a> {
     /// (`full_x` and `full_y` must be 0). OpenEXR keeps both windows; a region that does not
     /// fit in the full image is an error.
     pub window: Option<Window>,
+    /// The RGB primaries and white (x, y of red, green, blue, white) to record, where the
+    /// format has a place for them (OpenEXR's `chromaticities`); `None` for sRGB's, which
+    /// readers assume.
+    pub chromaticities: Option<[f32; 8]>,
 }
 
 /// The most values (width × height × channels) raylink reads from one image, 4 GiB as

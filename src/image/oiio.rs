@@ -91,6 +91,7 @@ pub fn encode(
         data,
         pixel_type: pixel,
         window,
+        chromaticities,
     } = image;
     let fail = |detail: String| Error::image(path, detail);
     let api = sys::api().map_err(fail)?;
@@ -152,8 +153,21 @@ pub fn encode(
                 MetaValue::Float(f) => *f,
                 _ => 0.0,
             },
+            float_values: std::ptr::null(),
         })
         .collect();
+    let mut attrs = attrs;
+    let chromaticities_name = c"chromaticities";
+    if let Some(values) = &chromaticities {
+        attrs.push(sys::RaylinkOiioAttr {
+            name: chromaticities_name.as_ptr(),
+            type_: sys::RAYLINK_OIIO_ATTR_FLOATS,
+            string_value: std::ptr::null(),
+            int_value: values.len() as c_int,
+            float_value: 0.0,
+            float_values: values.as_ptr(),
+        });
+    }
 
     let c_window = match window {
         None => None,
@@ -184,7 +198,8 @@ pub fn encode(
 
     let mut err = ErrorBuffer::new();
     // SAFETY: every pointer is valid for the duration of the call: `c_path`, `c_format` and
-    // the strings behind `channel_ptrs` and `attrs` are owned CStrings that outlive it;
+    // the strings behind `channel_ptrs` and `attrs` are owned CStrings (or a static one)
+    // that outlive it, as does `chromaticities`, whose 8 floats an attribute points to;
     // `channel_ptrs` holds exactly `nchannels` pointers, `attrs` `attrs.len()` structs, and
     // `data` exactly `w * h * nchannels` floats (checked above); `window_ptr` is null or
     // points to `c_window`, alive here (plain integers, which the C side checks against the
@@ -388,6 +403,7 @@ impl Handle {
                 string_value: std::ptr::null(),
                 int_value: 0,
                 float_value: 0.0,
+                float_values: std::ptr::null(),
             };
             // SAFETY: `index` < nattrs and `attr` is a valid struct to fill; on success its
             // string pointers are null or NUL-terminated strings owned by the image.

@@ -18,6 +18,7 @@ pub const RAYLINK_OIIO_UINT16: c_int = 3;
 pub const RAYLINK_OIIO_ATTR_STRING: c_int = 0;
 pub const RAYLINK_OIIO_ATTR_INT: c_int = 1;
 pub const RAYLINK_OIIO_ATTR_FLOAT: c_int = 2;
+pub const RAYLINK_OIIO_ATTR_FLOATS: c_int = 3;
 
 #[repr(C)]
 pub struct RaylinkOiioAttr {
@@ -26,6 +27,7 @@ pub struct RaylinkOiioAttr {
     pub string_value: *const c_char,
     pub int_value: c_int,
     pub float_value: c_float,
+    pub float_values: *const c_float,
 }
 
 #[repr(C)]
@@ -138,7 +140,7 @@ api! {
 }
 
 /// The version of the C API this program was built with: `RAYLINK_OIIO_ABI` in `ffi/oiio.h`.
-const ABI: c_int = 2;
+const ABI: c_int = 3;
 
 /// The loaded API, or why it could not be loaded (one line).
 pub fn api() -> Result<&'static Api, String> {

@@ -5,11 +5,14 @@
 //!
 //! | extension | stored as |
 //! |---|---|
-//! | `.exr` | linear RGB, half or float ([`OutputOptions::half`]), metadata as header attributes; optionally further [`Layer`]s (`albedo.R`, ...) |
+//! | `.exr` | linear RGB, half or float ([`OutputOptions::half`]), metadata as header attributes, the colour space's `chromaticities`; optionally further [`Layer`]s (`albedo.R`, ...) |
 //! | `.hdr` | linear RGB (RGBE: 8-bit mantissas, shared exponent; negatives and NaN become 0, values clamp at 1e38) |
 //! | `.tif`, `.tiff` | linear RGB, 32-bit float |
 //! | `.png` | `2^exposure`, sRGB-encoded, clamped to `[0, 1]`, 8 bits |
 //! | `.jpg`, `.jpeg` | as PNG, JPEG quality 95 |
+//!
+//! The linear formats hold RGB in the output colour space ([`OutputOptions::color_space`]:
+//! linear sRGB unless another is asked for); the 8-bit formats are always sRGB.
 //!
 //! A build without OpenImageIO (the portable build) writes `.exr`, `.hdr`, `.png` and `.jpg`.
 
@@ -22,6 +25,7 @@ use super::{Image, MetaValue, Metadata};
 use crate::error::{Error, Result};
 use crate::input_file::Allowance;
 use crate::math::Rgb;
+use crate::spectrum::ColorSpace;
 
 /// The supported output formats.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -95,16 +99,64 @@ pub struct OutputOptions {
     pub exposure: f32,
     /// Store EXR pixels as half floats instead of 32-bit floats.
     pub half: bool,
+    /// The RGB primaries and white of the linear formats (EXR, HDR, TIFF): images are
+    /// rendered in linear sRGB and converted on writing (pbrt-v4's film colour space; no
+    /// chromatic adaptation, so ACES2065-1's D60 white sees sRGB's white as slightly blue).
+    /// The 8-bit formats are always sRGB.
+    pub color_space: &'static ColorSpace,
 }
 
 impl Default for OutputOptions {
-    /// No exposure change, lossless 32-bit float EXR.
+    /// No exposure change, lossless 32-bit float EXR, linear sRGB.
     fn default() -> Self {
         OutputOptions {
             exposure: 0.0,
             half: false,
+            color_space: ColorSpace::srgb(),
         }
     }
+}
+
+impl OutputOptions {
+    /// The options of linear sRGB output with `exposure` and `half`.
+    pub fn new(exposure: f32, half: bool) -> Self {
+        OutputOptions {
+            exposure,
+            half,
+            ..OutputOptions::default()
+        }
+    }
+}
+
+/// The colour space of `name` (pbrt-v4's names: "srgb", "rec2020", "dci-p3", "aces2065-1"),
+/// or why not.
+pub fn color_space_named(name: &str) -> std::result::Result<&'static ColorSpace, String> {
+    ColorSpace::named(name).ok_or_else(|| {
+        format!("\"{name}\" is not a colour space: use srgb, rec2020, dci-p3 or aces2065-1")
+    })
+}
+
+/// The matrix taking linear sRGB to `space`'s linear RGB (through CIE XYZ), in f32.
+pub fn matrix_from_srgb(space: &ColorSpace) -> glam::Mat3 {
+    (space.rgb_from_xyz() * ColorSpace::srgb().xyz_from_rgb()).as_mat3()
+}
+
+/// `space`'s chromaticities as OpenEXR's `chromaticities` attribute holds them: red, green,
+/// blue and white, x then y.
+pub fn exr_chromaticities(space: &ColorSpace) -> [f32; 8] {
+    let [r, g, b] = space.primaries;
+    let w = space.white;
+    [r.x, r.y, g.x, g.y, b.x, b.y, w.x, w.y].map(|v| v as f32)
+}
+
+/// The values of `image` in `space` (linear sRGB in).
+fn in_color_space(image: &Image, space: &ColorSpace) -> Image {
+    let m = matrix_from_srgb(space);
+    let mut out = image.clone();
+    for p in &mut out.pixels {
+        *p = m * *p;
+    }
+    out
 }
 
 /// Checks, before rendering, that an image can be written to `path`: the extension is
@@ -242,6 +294,36 @@ fn write_image_impl(
     }
 
     let mut attributes = metadata.to_vec();
+    // The linear formats take the output colour space; colour layers (R, G, B: albedo,
+    // light passes) with the image, not the variance of its channels (which a change of
+    // primaries mixes) nor single channels.
+    let converted;
+    let converted_layers: Vec<Image>;
+    let mut layers = layers.to_vec();
+    let mut chromaticities = None;
+    let image = if !format.is_display() && options.color_space != ColorSpace::srgb() {
+        let space = options.color_space;
+        chromaticities = Some(exr_chromaticities(space));
+        attributes.push((
+            "raylink:color_space".into(),
+            MetaValue::Str(space.name.into()),
+        ));
+        converted = in_color_space(image, space);
+        let colour = |l: &Layer| l.channels == ["R", "G", "B"] && l.name != "variance";
+        converted_layers = layers
+            .iter()
+            .filter(|l| colour(l))
+            .map(|l| in_color_space(l.image, space))
+            .collect();
+        let mut next = converted_layers.iter();
+        for l in layers.iter_mut().filter(|l| colour(l)) {
+            l.image = next.next().expect("one converted image per colour layer");
+        }
+        &converted
+    } else {
+        image
+    };
+    let layers = &layers[..];
     let (data, pixel) = if format.is_display() {
         attributes.push(("oiio:ColorSpace".into(), MetaValue::Str("sRGB".into())));
         if format == Format::Jpeg {
@@ -288,6 +370,7 @@ fn write_image_impl(
             data: &data,
             pixel_type: pixel,
             window,
+            chromaticities,
         },
         &attributes,
     )?;

@@ -31,6 +31,7 @@ fn nul_bytes_are_errors_not_panics() {
                 data: &[0.0; 3],
                 pixel_type: PixelType::Float,
                 window: None,
+                chromaticities: None,
             },
             meta,
         );
@@ -72,6 +73,7 @@ fn bad_sizes_are_errors() {
             data: &[0.0; 11],
             pixel_type: PixelType::Float,
             window: None,
+            chromaticities: None,
         },
         &meta,
     );
@@ -86,6 +88,7 @@ fn bad_sizes_are_errors() {
             data: &[],
             pixel_type: PixelType::Float,
             window: None,
+            chromaticities: None,
         },
         &meta,
     );
@@ -100,6 +103,7 @@ fn bad_sizes_are_errors() {
             data: &[],
             pixel_type: PixelType::Float,
             window: None,
+            chromaticities: None,
         },
         &meta,
     );
@@ -115,6 +119,7 @@ fn bad_sizes_are_errors() {
             data: &[0.0; 3],
             pixel_type: PixelType::Float,
             window: None,
+            chromaticities: None,
         },
         &meta,
     );
@@ -136,6 +141,7 @@ fn unknown_format_reports_oiio_error() {
             data: &[0.5],
             pixel_type: PixelType::Float,
             window: None,
+            chromaticities: None,
         },
         &Metadata::new(),
     )
@@ -176,6 +182,7 @@ fn format_is_independent_of_the_extension() {
             data: &data,
             pixel_type: PixelType::U8,
             window: None,
+            chromaticities: None,
         },
         &meta,
     )
@@ -206,6 +213,7 @@ fn format_is_independent_of_the_extension() {
             data: &data,
             pixel_type: PixelType::Float,
             window: None,
+            chromaticities: None,
         },
         &meta,
     )
@@ -222,6 +230,7 @@ fn format_is_independent_of_the_extension() {
             data: &data,
             pixel_type: PixelType::U16,
             window: None,
+            chromaticities: None,
         },
         &meta,
     )
