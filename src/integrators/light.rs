@@ -138,7 +138,7 @@ impl LightTracer {
         // ray supplies it.
         let mut direct = Rgb::ZERO;
         if lights.background_light().is_some() && ctx.intersect(camera_ray, stats).is_none() {
-            let le = colours.emission(lights.background_radiance(camera_ray.dir));
+            let le = colours.emission(lights.background_radiance(camera_ray.dir), || None);
             direct = colours.output(le);
         }
         let u_choose = sampler.next_2d();
@@ -147,7 +147,7 @@ impl LightTracer {
         let Some(mut es) = lights.sample_le(u_choose.x, u_pos, u_dir) else {
             return direct;
         };
-        es.radiance = colours.emission(es.radiance);
+        es.radiance = colours.emission(es.radiance, || lights.spectrum(es.light));
         // The light's own point seen by the camera (area lights only: points, directions and
         // the background cannot be hit by camera rays either).
         if !es.delta_pos && !es.delta_dir && es.n != Vec3::ZERO && !ctx.lights.is_infinite(es.light)

@@ -170,7 +170,10 @@ fn sample_direct_towards(
     } else {
         power_heuristic(ls.pdf, bsdf_pdf)
     };
-    (f * colours.emission(ls.radiance) * (w / ls.pdf), ls.wi)
+    let le = colours.emission(ls.radiance, || {
+        ctx.lights.spectrum_chosen_at(sp.p, u_choice)
+    });
+    (f * le * (w / ls.pdf), ls.wi)
 }
 
 /// What a path that left the scene along `ray` (from `prev_p`, whose next-event estimation
@@ -201,7 +204,7 @@ fn escaped_in(
     let Some(bg) = lights.background_light() else {
         return Rgb::ZERO;
     };
-    let le = colours.emission(lights.background_radiance(ray.dir));
+    let le = colours.emission(lights.background_radiance(ray.dir), || None);
     let w = if specular {
         1.0
     } else {
@@ -241,8 +244,9 @@ fn emitted_in(
         Some(l) if !specular => power_heuristic(pdf, lights.pdf_li(l, prev_p, sp.p, sp.ng)),
         _ => 1.0,
     };
-    let le = ctx.scene.materials[sp.material].emission_at(sp.p, sp.uv, sp.ng);
-    beta * colours.emission(le) * w
+    let m = &ctx.scene.materials[sp.material];
+    let le = colours.emission(m.emission_at(sp.p, sp.uv, sp.ng), || m.emission_spectrum);
+    beta * le * w
 }
 
 impl MonteCarlo for PathTracer {

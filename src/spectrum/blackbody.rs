@@ -1,6 +1,9 @@
 //! Blackbody emission (Planck's law), normalised as pbrt-v4's `BlackbodySpectrum`: a peak of 1.
 
+use super::cie;
+use super::color_space::ColorSpace;
 use super::sampled::{SampledSpectrum, SampledWavelengths};
+use glam::Vec3;
 
 /// Planck's constant (J·s), exact in the SI since 2019.
 const H: f64 = 6.626_070_15e-34;
@@ -52,6 +55,62 @@ impl Blackbody {
     /// The values at the sampled wavelengths.
     pub fn sample(&self, lambda: &SampledWavelengths) -> SampledSpectrum {
         SampledSpectrum(lambda.lambdas().map(|l| self.eval(l)))
+    }
+}
+
+/// A blackbody emitter's spectrum scaled to luminance Y = 1, as pbrt-v4 scales a light's
+/// spectrum (`scale / SpectrumToPhotometric`): an emitter of this colour and luminance `s`
+/// emits `s` times it.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct BlackbodyEmission {
+    body: Blackbody,
+    /// 1 / Y of `body`, folded into its values.
+    per_luminance: f32,
+    /// The linear sRGB of the luminance-1 spectrum.
+    rgb: Vec3,
+}
+
+/// The temperatures a blackbody emitter may have (K): below, the visible part of its light
+/// underflows; above, it is bluish white whatever the temperature.
+pub const KELVIN_RANGE: (f64, f64) = (500.0, 1.0e6);
+
+impl BlackbodyEmission {
+    /// The emitter of temperature `kelvin`, within [`KELVIN_RANGE`], or why not.
+    pub fn new(kelvin: f64) -> Result<Self, String> {
+        let (lo, hi) = KELVIN_RANGE;
+        if !(lo..=hi).contains(&kelvin) {
+            return Err(format!(
+                "a blackbody's temperature must be from {lo} to {hi} K, got {kelvin}"
+            ));
+        }
+        let body = Blackbody::new(kelvin);
+        let xyz = cie::spectrum_to_xyz(|l| body.eval(l as f32) as f64);
+        let rgb = ColorSpace::srgb().xyz_to_rgb(xyz / xyz.y);
+        Ok(BlackbodyEmission {
+            body,
+            per_luminance: (1.0 / xyz.y) as f32,
+            rgb: rgb.as_vec3(),
+        })
+    }
+
+    /// Its temperature (K).
+    pub fn kelvin(&self) -> f64 {
+        self.body.kelvin()
+    }
+
+    /// The linear sRGB of its light at luminance 1 (what RGB renders emit; components may be
+    /// slightly negative for the hottest, outside sRGB's gamut, and are clamped to 0).
+    pub fn rgb(&self) -> Vec3 {
+        self.rgb.max(Vec3::ZERO)
+    }
+
+    /// The values at `lambda` of its light at luminance `luminance`.
+    pub fn sample(&self, lambda: &SampledWavelengths, luminance: f32) -> SampledSpectrum {
+        SampledSpectrum(
+            lambda
+                .lambdas()
+                .map(|l| self.body.eval(l) * self.per_luminance * luminance),
+        )
     }
 }
 
@@ -115,5 +174,38 @@ mod tests {
             assert!(b.eval(peak - 20.0) < 1.0 && b.eval(peak + 20.0) < 1.0);
         }
         assert_eq!(planck(500.0, 0.0), 0.0);
+    }
+
+    #[test]
+    fn an_emitter_has_luminance_one_and_the_locus_colour() {
+        for t in [2700.0, 6500.0] {
+            let e = BlackbodyEmission::new(t).unwrap();
+            let xyz = ColorSpace::srgb().rgb_to_xyz(e.rgb().as_dvec3());
+            assert!((xyz.y - 1.0).abs() < 1e-5, "{t} K: Y = {}", xyz.y);
+            let (x, y) = cie::chromaticity(xyz);
+            let (px, py) = xy(t);
+            assert!((x - px).hypot(y - py) < 1e-5, "{t} K");
+            // Sampled at wavelengths, its values estimate the luminance asked for (the Monte
+            // Carlo estimate over stratified wavelengths), and follow Planck's law.
+            let n = 4096;
+            let mean_y: f64 = (0..n)
+                .map(|i| {
+                    let lambda = SampledWavelengths::sample_visible((i as f32 + 0.5) / n as f32);
+                    e.sample(&lambda, 2.0).to_xyz(&lambda).y as f64
+                })
+                .sum::<f64>()
+                / n as f64;
+            assert!((mean_y - 2.0).abs() < 0.01, "{t} K: Y = {mean_y}");
+            let lambda = SampledWavelengths::sample_visible(0.3);
+            let v = e.sample(&lambda, 1.0);
+            let [a, b, _] = lambda.lambdas();
+            let ratio = planck(a as f64, t) / planck(b as f64, t);
+            assert!(
+                (v[0] as f64 / v[1] as f64 - ratio).abs() < 1e-4 * ratio,
+                "{t} K"
+            );
+        }
+        assert!(BlackbodyEmission::new(100.0).is_err());
+        assert!(BlackbodyEmission::new(f64::NAN).is_err());
     }
 }

@@ -15,7 +15,7 @@ mod parse;
 pub mod rgb_to_spectrum;
 pub mod sampled;
 
-pub use blackbody::Blackbody;
+pub use blackbody::{Blackbody, BlackbodyEmission};
 pub use cie::{Illuminant, LAMBDA_MAX, LAMBDA_MIN};
 pub use color_space::ColorSpace;
 pub use named::{named, Named};

@@ -17,7 +17,9 @@ use crate::math::Rgb;
 use crate::scene::materials::Surface;
 use crate::scene::Scene;
 use crate::spectrum::rgb_to_spectrum::{solve, SigmoidPolynomial};
-use crate::spectrum::{ColorSpace, SampledSpectrum, SampledWavelengths, N_SAMPLES};
+use crate::spectrum::{
+    BlackbodyEmission, ColorSpace, SampledSpectrum, SampledWavelengths, N_SAMPLES,
+};
 use std::collections::HashMap;
 use std::sync::{OnceLock, RwLock};
 
@@ -28,8 +30,9 @@ pub trait Colours {
     /// The BSDF at a vertex with its colours as the path carries them (a dispersive glass
     /// may terminate the path's secondary wavelengths).
     fn bsdf<'a>(&mut self, bsdf: Bsdf<'a>) -> Bsdf<'a>;
-    /// Emitted radiance given as RGB.
-    fn emission(&self, rgb: Rgb) -> Rgb;
+    /// Emitted radiance given as RGB, of the blackbody `shape` gives, if any (asked only in
+    /// spectral renders: RGB ones need no more than the RGB).
+    fn emission(&self, rgb: Rgb, shape: impl FnOnce() -> Option<BlackbodyEmission>) -> Rgb;
     /// The RGB a film takes of values the path carries.
     fn output(&self, v: Rgb) -> Rgb;
 }
@@ -45,7 +48,7 @@ impl Colours for RgbColours {
     }
 
     #[inline(always)]
-    fn emission(&self, rgb: Rgb) -> Rgb {
+    fn emission(&self, rgb: Rgb, _shape: impl FnOnce() -> Option<BlackbodyEmission>) -> Rgb {
         rgb
     }
 
@@ -161,8 +164,16 @@ impl Colours for Wavelengths {
         })
     }
 
-    fn emission(&self, rgb: Rgb) -> Rgb {
-        self.illuminant(rgb)
+    fn emission(&self, rgb: Rgb, shape: impl FnOnce() -> Option<BlackbodyEmission>) -> Rgb {
+        match shape() {
+            // Planck's law at the luminance of the RGB (the emitter's RGB is the
+            // blackbody's, times its luminance and whatever scales it on the way).
+            Some(body) => {
+                let y = ColorSpace::srgb().rgb_to_xyz(rgb.as_dvec3()).y as f32;
+                Rgb::from(body.sample(&self.lambda, y).0)
+            }
+            None => self.illuminant(rgb),
+        }
     }
 
     fn output(&self, v: Rgb) -> Rgb {

@@ -359,7 +359,9 @@ impl Bdpt {
                             // Emission of the light vertex towards pt.
                             if let Kind::Light { light, point: true } = qs.kind {
                                 let model = ctx.lights.emitters[light].model();
-                                colours.emission(model.intensity_towards(-wdir))
+                                colours.emission(model.intensity_towards(-wdir), || {
+                                    ctx.lights.spectrum(light)
+                                })
                             } else {
                                 let cos_l = qs.emitting_cos(ctx, -wdir);
                                 if cos_l <= 0.0 {
@@ -432,7 +434,7 @@ fn light_subpath<'a>(
     let Some((light, at, pdf_pos, point, le)) = sample_light_point(ctx, u_choose.x, u_pos) else {
         return light_path;
     };
-    let le = colours.emission(le);
+    let le = colours.emission(le, || ctx.lights.spectrum(light));
     let n = at.n;
     let mut v0 = Vertex::new(Kind::Light { light, point }, at, le / pdf_pos);
     v0.pdf_fwd = pdf_pos;
@@ -474,7 +476,10 @@ fn light_subpath<'a>(
     if pdf_dir > 0.0 {
         // A spot light's intensity falls off towards the edge of its cone.
         let le_dir = if point {
-            colours.emission(ctx.lights.emitters[light].model().intensity_towards(dir))
+            colours.emission(
+                ctx.lights.emitters[light].model().intensity_towards(dir),
+                || ctx.lights.spectrum(light),
+            )
         } else {
             le
         };
@@ -541,7 +546,7 @@ fn infinite_light_subpath<'a>(
     let Some(mut es) = model.sample_le(u_pos, u_dir, pmf, &lights.world, light) else {
         return;
     };
-    es.radiance = colours.emission(es.radiance);
+    es.radiance = colours.emission(es.radiance, || lights.spectrum(light));
     if !(es.pdf_dir > 0.0 && es.pdf_pos > 0.0) {
         return;
     }

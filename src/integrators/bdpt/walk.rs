@@ -146,7 +146,7 @@ pub(super) fn random_walk<'a>(
                     delta: false,
                 };
                 let mut v = Vertex::new(kind, at, tp.beta);
-                v.emission = colours.emission(ctx.lights.background_radiance(dir));
+                v.emission = colours.emission(ctx.lights.background_radiance(dir), || None);
                 v.r_u = tp.r_u;
                 v.medium = medium;
                 let prev = path.last().expect("a walk starts from a vertex");
@@ -175,7 +175,8 @@ pub(super) fn random_walk<'a>(
             v.interface = ctx.scene.placed_shape(&sp).shape.media;
         }
         if m.is_emissive() {
-            v.emission = colours.emission(m.emission_at(sp.p, sp.uv, sp.ng));
+            v.emission =
+                colours.emission(m.emission_at(sp.p, sp.uv, sp.ng), || m.emission_spectrum);
             v.light = sp.world_shape().and_then(|s| ctx.lights.light_of_shape(s));
         }
         let prev = path.last().expect("a walk starts from a vertex");

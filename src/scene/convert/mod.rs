@@ -377,7 +377,8 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
     if let Some(table) = m.model().table() {
         return MaterialDesc {
             brdf: Some(refs.to(&table.file)),
-            emission: Some(varying(&m.emission_map, m.emission, refs)),
+            emission: Some(emission(m, refs)),
+            emission_temperature: temperature(m),
             two_sided_emission: m.two_sided_emission.then_some(true),
             ..MaterialDesc::default()
         };
@@ -422,7 +423,8 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
         fresnel: Some(c.fresnel),
         thin: c.thin.then_some(true),
         conductor: conductor(c, refs),
-        emission: Some(varying(&m.emission_map, m.emission, refs)),
+        emission: Some(emission(m, refs)),
+        emission_temperature: temperature(m),
         two_sided_emission: m.two_sided_emission.then_some(true),
         mix: None,
         brdf: None,
@@ -431,6 +433,25 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
         coating: None,
         interface: None,
     }
+}
+
+/// A material's emission as written: a blackbody's by its luminance (with
+/// [`temperature`]), else its colour or map.
+fn emission(m: &Material, refs: Refs) -> DiffuseDesc {
+    match m.emission_spectrum {
+        Some(_) => {
+            let y = crate::spectrum::ColorSpace::srgb()
+                .rgb_to_xyz(m.emission.as_dvec3())
+                .y as f32;
+            DiffuseDesc::Colour(crate::math::Vec3::splat(y))
+        }
+        None => varying(&m.emission_map, m.emission, refs),
+    }
+}
+
+/// A blackbody emission's temperature.
+fn temperature(m: &Material) -> Option<f32> {
+    m.emission_spectrum.map(|b| b.kelvin() as f32)
 }
 
 /// A coated material: the base and the coat; the keys that follow from the coat (ior,
@@ -449,7 +470,8 @@ fn coated(m: &Material, base: &Classic, c: &Coating, refs: Refs) -> MaterialDesc
             .conductor
             .map(|_| roughness(base.roughness, base.roughness_v)),
         conductor: conductor(base, refs),
-        emission: Some(varying(&m.emission_map, m.emission, refs)),
+        emission: Some(emission(m, refs)),
+        emission_temperature: temperature(m),
         two_sided_emission: m.two_sided_emission.then_some(true),
         normal_map: normal_map(m, refs),
         bump: bump(m, refs),

@@ -9,6 +9,7 @@ use super::{
 };
 use crate::math::{Rgb, Vec2, Vec3};
 use crate::scene::Scene;
+use crate::spectrum::BlackbodyEmission;
 
 /// One emitter: an emissive shape, a light the scene names, or the background.
 #[derive(Clone, Debug)]
@@ -37,6 +38,8 @@ pub struct LightSet {
     cdf: Vec<f32>,
     /// For each scene shape, its emitter index if it is an area light.
     shape_light: Vec<Option<u32>>,
+    /// Each emitter's blackbody spectrum, for spectral renders (empty when none has one).
+    spectra: Vec<Option<BlackbodyEmission>>,
     background: Option<usize>,
     /// A sphere bounding the scene: infinite and directional lights emit from its disk.
     pub world: World,
@@ -111,6 +114,18 @@ impl LightSet {
                 shape_light[a.shape] = Some(i as u32);
             }
         }
+        let mut spectra: Vec<Option<BlackbodyEmission>> = emitters
+            .iter()
+            .map(|e| match e {
+                Emitter::Area(a) => {
+                    scene.materials[scene.shapes[a.shape].material].emission_spectrum
+                }
+                _ => None,
+            })
+            .collect();
+        if spectra.iter().all(Option::is_none) {
+            spectra.clear();
+        }
         let selection = match kind {
             SelectionKind::Power => Selection::Power,
             SelectionKind::Tree => {
@@ -134,6 +149,7 @@ impl LightSet {
             pmf,
             cdf,
             shape_light,
+            spectra,
             background,
             world,
             selection,
@@ -173,6 +189,22 @@ impl LightSet {
     /// Whether emitter `i` is infinitely far away (directional or background).
     pub fn is_infinite(&self, i: usize) -> bool {
         self.emitters[i].model().is_infinite()
+    }
+
+    /// The blackbody spectrum of emitter `i`'s light, if it has one (spectral renders).
+    #[inline]
+    pub fn spectrum(&self, i: usize) -> Option<BlackbodyEmission> {
+        self.spectra.get(i).copied().flatten()
+    }
+
+    /// The blackbody spectrum of the emitter [`sample_li`](Self::sample_li) picks at `p`
+    /// with `u_choose`, if it has one.
+    pub fn spectrum_chosen_at(&self, p: Vec3, u_choose: f32) -> Option<BlackbodyEmission> {
+        if self.spectra.is_empty() {
+            return None;
+        }
+        self.choose_at(p, u_choose)
+            .and_then(|(i, _)| self.spectrum(i))
     }
 
     pub fn background_light(&self) -> Option<usize> {

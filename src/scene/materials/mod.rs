@@ -43,6 +43,7 @@ pub use thin_dielectric::ThinDielectric;
 use super::{NormalDetail, SurfacePoint, Texture};
 use crate::bsdf::{Bsdf, TabulatedBrdf};
 use crate::math::{Rgb, Vec2, Vec3};
+use crate::spectrum::BlackbodyEmission;
 use std::sync::Arc;
 
 /// What every kind of surface answers.
@@ -136,6 +137,10 @@ pub struct Material {
     pub emission: Rgb,
     /// Emitted radiance varying over the surface, in place of `emission` at each point.
     pub emission_map: Option<Texture>,
+    /// The spectrum of the emission in spectral renders when it is a blackbody's (then
+    /// `emission` is its RGB times the luminance, and there is no map); `None`: the
+    /// spectrum of `emission`'s RGB.
+    pub emission_spectrum: Option<BlackbodyEmission>,
     /// Emit on both sides of the surface (pbrt's `twosided` area lights), not only on the
     /// side the geometric normal faces.
     pub two_sided_emission: bool,
@@ -158,6 +163,7 @@ impl Material {
             surface,
             emission: Rgb::ZERO,
             emission_map: None,
+            emission_spectrum: None,
             two_sided_emission: false,
             normal_detail: None,
         }

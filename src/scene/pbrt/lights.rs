@@ -74,6 +74,7 @@ impl Builder {
         self.state.area = (radiance.max_element() > 0.0).then_some(AreaEmission {
             radiance,
             two_sided,
+            spectrum: self.blackbody(p, "L", loc)?,
         });
         Ok(())
     }

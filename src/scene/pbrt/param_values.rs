@@ -7,6 +7,7 @@ use super::spectrum::{self, Kind};
 use super::Loc;
 use crate::math::Rgb;
 use crate::scene::Texture;
+use crate::spectrum::BlackbodyEmission;
 
 impl Builder {
     pub(super) fn pe(loc: &Loc) -> impl Fn(ParamError) -> crate::error::Error + '_ {
@@ -37,6 +38,10 @@ impl Builder {
                 }
                 Rgb::new(v[0] as f32, v[1] as f32, v[2] as f32)
             }
+            "blackbody" if kind == Kind::Illuminant => match self.blackbody(p, name, loc)? {
+                Some(body) => body.rgb(),
+                None => Rgb::ZERO,
+            },
             "blackbody" => spectrum::blackbody(q.nums()[0]),
             _ => {
                 match q.strs().first() {
@@ -71,6 +76,28 @@ impl Builder {
             )));
         }
         Ok(Some(rgb))
+    }
+
+    /// The blackbody a `blackbody` parameter `name` gives an emitter, if it is one.
+    pub(super) fn blackbody(
+        &self,
+        p: &Params,
+        name: &str,
+        loc: &Loc,
+    ) -> crate::error::Result<Option<BlackbodyEmission>> {
+        let Ok(Some(q)) = p.find(name, &["blackbody"]) else {
+            return Ok(None);
+        };
+        let qloc = loc.at(q.line, q.col);
+        match q.nums() {
+            [kelvin] => BlackbodyEmission::new(*kelvin)
+                .map(Some)
+                .map_err(|why| qloc.error(format!("parameter \"{name}\": {why}"))),
+            v => Err(qloc.error(format!(
+                "parameter \"{name}\": a blackbody takes one temperature, not {} numbers",
+                v.len()
+            ))),
+        }
     }
 
     /// A spectrum parameter that may also name a texture.

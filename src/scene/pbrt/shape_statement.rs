@@ -6,6 +6,7 @@ use super::builder::Builder;
 use super::cost::Cost;
 use super::params::Params;
 use super::shapes;
+use super::state::AreaEmission;
 use super::Loc;
 use crate::math::{Rgb, Vec2, Vec3};
 use crate::scene::loop_subdivision;
@@ -35,12 +36,13 @@ impl Builder {
             self.warn(loc, "area lights in object instances are not supported (nor by pbrt-v4); the shapes do not emit");
             return base;
         }
-        self.emissive_copy(base, area.radiance, area.two_sided)
+        self.emissive_copy(base, area)
     }
 
     /// The copy of material `base` that emits `radiance`; for a mix, a mix of its
     /// materials' emissive copies (whichever is chosen at a hit emits).
-    fn emissive_copy(&mut self, base: usize, radiance: Rgb, two_sided: bool) -> usize {
+    fn emissive_copy(&mut self, base: usize, area: AreaEmission) -> usize {
+        let (radiance, two_sided) = (area.radiance, area.two_sided);
         let key = (base, radiance.to_array().map(f32::to_bits), two_sided);
         if let Some(&i) = self.emissive.get(&key) {
             return i;
@@ -48,7 +50,7 @@ impl Builder {
         let mut m = self.materials[base].clone();
         if let Surface::Mix(mix) = &mut m.surface {
             for j in &mut mix.materials {
-                *j = self.emissive_copy(*j, radiance, two_sided);
+                *j = self.emissive_copy(*j, area);
             }
         }
         m.emission = radiance;
@@ -58,6 +60,7 @@ impl Builder {
             .cloned()
             .flatten();
         m.two_sided_emission = two_sided;
+        m.emission_spectrum = area.spectrum;
         m.name = if m.name.is_empty() {
             "emitter".into()
         } else {

@@ -4,6 +4,7 @@
 use super::builder::Builder;
 use super::Loc;
 use crate::math::Rgb;
+use crate::spectrum::BlackbodyEmission;
 use glam::{DMat4, DVec3};
 
 /// An area light attached to the shapes that follow (`AreaLightSource`).
@@ -11,6 +12,8 @@ use glam::{DMat4, DVec3};
 pub(super) struct AreaEmission {
     pub(super) radiance: Rgb,
     pub(super) two_sided: bool,
+    /// A `blackbody` emitter's spectrum (spectral renders).
+    pub(super) spectrum: Option<BlackbodyEmission>,
 }
 
 #[derive(Clone, Debug)]

@@ -31,6 +31,7 @@ use crate::scene::Portal;
 use crate::scene::{
     Camera, Conductor, Light, Material, Projection, RenderSettings, RoughnessMap, Scene, Texture,
 };
+use crate::spectrum::BlackbodyEmission;
 use std::collections::HashMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -342,11 +343,13 @@ impl<'a> Builder<'a> {
             let path = self.dir.join(file);
             self.inputs.borrow_mut().push(path.clone());
             let table = TabulatedBrdf::read(&path, file.into()).map_err(fail("brdf"))?;
-            let (emission, emission_map) = self.emission(site, desc.emission)?;
+            let (emission, emission_map, emission_spectrum) =
+                self.emission(site, desc.emission, desc.emission_temperature)?;
             let measured = Measured::new(std::sync::Arc::new(table));
             return Ok(Material {
                 emission,
                 emission_map,
+                emission_spectrum,
                 two_sided_emission: desc.two_sided_emission.unwrap_or(false),
                 ..Material::new(name, Surface::Measured(measured))
             });
@@ -453,7 +456,8 @@ impl<'a> Builder<'a> {
                 t => (t.max_value(), Some(t)),
             },
         };
-        let (emission, emission_map) = self.emission(site, desc.emission)?;
+        let (emission, emission_map, emission_spectrum) =
+            self.emission(site, desc.emission, desc.emission_temperature)?;
         let mut ior = desc.ior.unwrap_or(d.ior);
         if let Some(name) = &desc.glass {
             if desc.ior.is_some() {
@@ -498,6 +502,7 @@ impl<'a> Builder<'a> {
         Ok(Material {
             emission,
             emission_map,
+            emission_spectrum,
             two_sided_emission: desc.two_sided_emission.unwrap_or(false),
             normal_detail,
             ..Material::new(name, surface)
@@ -560,18 +565,32 @@ impl<'a> Builder<'a> {
 
     /// A material's emission: a colour, or a texture (then the colour is its mean, for the
     /// techniques that take one value per surface).
+    /// A material's emission: its RGB, its texture if it varies, and its blackbody spectrum
+    /// if it has a temperature (then `emission` is a number, the luminance).
     fn emission(
         &self,
         site: &Site,
         desc: Option<DiffuseDesc>,
-    ) -> crate::error::Result<(Rgb, Option<Texture>)> {
-        Ok(match desc {
+        temperature: Option<f32>,
+    ) -> crate::error::Result<(Rgb, Option<Texture>, Option<BlackbodyEmission>)> {
+        let emission = match desc {
             None => (Rgb::ZERO, None),
             Some(t) => match self.texture(site, "emission", t)? {
                 Texture::Constant(c) => (c, None),
                 t => (t.mean_value(), Some(t)),
             },
-        })
+        };
+        let Some(kelvin) = temperature else {
+            return Ok((emission.0, emission.1, None));
+        };
+        let fail = |m: String| self.ctx.fail(site, "emission_temperature", m);
+        let body = BlackbodyEmission::new(kelvin as f64).map_err(fail)?;
+        match emission {
+            (c, None) if c.x == c.y && c.y == c.z => Ok((c.x * body.rgb(), None, Some(body))),
+            _ => Err(fail(
+                "needs `emission` to be one number (the luminance), not a colour or texture".into(),
+            )),
+        }
     }
 
     fn environment(&self, site: &Site, desc: EnvironmentDesc) -> crate::error::Result<Environment> {

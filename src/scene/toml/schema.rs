@@ -248,6 +248,9 @@ pub(crate) struct MaterialDesc {
     pub(crate) conductor: Option<ConductorDesc>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) emission: Option<DiffuseDesc>,
+    /// Emission of a blackbody at this temperature (K): `emission` is then its luminance.
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) emission_temperature: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) two_sided_emission: Option<bool>,
     #[serde(skip_serializing_if = "Option::is_none")]
