@@ -375,6 +375,9 @@ fn outputs_that_alias_inputs_are_refused() {
             "8",
             "--height",
             "8",
+            // Quiet: a loaded machine may take over a second to read the scene, which
+            // prints a progress line before the refusal.
+            "-q",
         ];
         if !cache_args.is_empty() {
             args.extend(["--integrator", "irradiance-cache"]);
