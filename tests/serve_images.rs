@@ -53,6 +53,34 @@ fn the_served_image_is_the_render_commands_bit_for_bit() {
     }
 }
 
+/// A spectral render in the studio: the status says so, the image is the render command's
+/// bit for bit, and a saved EXR records the mode as the command's outputs do.
+#[test]
+fn the_studio_shows_and_saves_spectral_mode() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut args = PATH.to_vec();
+    args.extend(["--spectral", "true"]);
+    let expected = rendered(&args);
+    args.extend(["--save-dir", dir.path().to_str().unwrap()]);
+    let server = Server::start(&args);
+    let state = server.wait_done(1);
+    assert_eq!(state["spectral"], true, "{state}");
+    assert!(bits(&server.get("/api/image").floats()) == bits(&expected));
+    let json = "Content-Type: application/json\r\n";
+    let saved = server.request("POST", "/api/save", json, b"{\"format\":\"exr\"}");
+    assert_eq!(saved.status, 200, "{}", saved.text());
+    let (_, meta) = raylink::read_image(&dir.path().join("studio-0001.exr")).unwrap();
+    assert!(
+        meta.iter().any(|(n, _)| n == "raylink:spectral"),
+        "{meta:?}"
+    );
+    assert_eq!(server.stop().code(), Some(130));
+    // An RGB render says RGB.
+    let server = Server::start(&PATH);
+    assert_eq!(server.wait_done(1)["spectral"], false);
+    assert_eq!(server.stop().code(), Some(130));
+}
+
 #[test]
 fn saving_writes_the_image_under_generated_names_in_the_save_dir() {
     let dir = tempfile::tempdir().unwrap();

@@ -359,6 +359,12 @@ impl Api {
                 MetaValue::Float(spp as f32),
             ),
         ];
+        if job.technique.monte_carlo().is_some_and(|m| m.spectral) {
+            meta.push((
+                "raylink:spectral".into(),
+                MetaValue::Str("true (three sampled wavelengths, output linear sRGB)".into()),
+            ));
+        }
         if partial {
             meta.push(("raylink:partial".into(), MetaValue::Int(1)));
         }
@@ -521,6 +527,7 @@ fn state_json(session: &Session, s: &State) -> Value {
         "height": base.job.height,
         "integrator": base.job.technique.kind().to_string(),
         "progressive": base.job.technique.monte_carlo().is_some(),
+        "spectral": base.job.technique.monte_carlo().is_some_and(|m| m.spectral),
         "spp": s.spp,
         "target_spp": base.job.technique.monte_carlo().map(|m| m.spp),
         "status": status,

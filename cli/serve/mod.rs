@@ -55,6 +55,7 @@ fn refuse_render_only(a: &RenderArgs) -> Result<(), Error> {
         ("--aov", a.aov),
         ("--exposure", a.exposure.is_some()),
         ("--half", a.half),
+        ("--color-space", a.color_space.is_some()),
     ];
     match given.iter().find(|(_, g)| *g) {
         Some((name, _)) => Err(Error::Invalid(format!(

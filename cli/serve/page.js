@@ -172,7 +172,7 @@ const sppText = (v) => Number.isInteger(v) ? `${v}` : v.toFixed(1);
 
 function figures(s) {
   const rows = [
-    ['integrator', s.integrator],
+    ['integrator', s.integrator + (s.spectral ? ' (spectral)' : '')],
     ['samples', s.progressive ? `${sppText(s.spp)} / ${s.target_spp} spp`
       : s.status === 'done' ? 'done' : s.image_version ? 'preview: 1 a pixel' : '…'],
     ['elapsed', `${fmt(s.elapsed)} s`],
@@ -262,7 +262,8 @@ function relightBody(s) {
 }
 
 function setup(s) {
-  $('scene').textContent = `${s.integrator}, ${s.width}×${s.height}`;
+  const mode = s.spectral ? 'spectral' : 'RGB';
+  $('scene').textContent = `${s.integrator}, ${mode}, ${s.width}×${s.height}`;
   $('reference-controls').hidden = !s.reference;
   if (s.reference) {
     fetchImage('reference').then((r) => { studio.reference = r; draw(); });
