@@ -256,11 +256,16 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
             }
         })?;
     }
-    let out_options = output_options(&args)?;
+    let mut out_options = output_options(&args)?;
     let scene = match early_scene {
         Some(scene) => scene,
         None => load_scene(&args.scene, &control)?,
     };
+    // The scene's colour space (pbrt's `ColorSpace`, `[render] color_space`) unless the
+    // command line names one.
+    if let (None, Some(space)) = (&args.color_space, scene.color_space) {
+        out_options.color_space = space;
+    }
     // A relight may read only a network file's prefix; a render reads all of it.
     let whole_network = extra.relight.is_none();
     crate::log::debug(|| {

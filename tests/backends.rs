@@ -104,6 +104,7 @@ fn mixed_scene() -> Scene {
         settings: Default::default(),
         setting_sources: Vec::new(),
         output: None,
+        color_space: None,
         inputs: Vec::new(),
         environment: None,
         warnings: Vec::new(),

@@ -3,6 +3,8 @@
 //! command line refuses what it cannot write.
 
 mod common;
+#[path = "common/pbrt.rs"]
+mod pbrt_common;
 
 use std::path::Path;
 
@@ -10,6 +12,7 @@ use glam::Vec3;
 use raylink::image::output::{matrix_from_srgb, write_image, OutputOptions};
 use raylink::image::Image;
 use raylink::read_image;
+use raylink::scene::{Scene, Texture};
 use raylink::spectrum::ColorSpace;
 
 /// A few colours: white, the sRGB primaries, a grey and a dim orange.
@@ -152,4 +155,125 @@ fn the_command_line_writes_the_colour_space_asked_for() {
     assert!(meta.iter().any(
         |(n, v)| n == "raylink:color_space" && *v == raylink::MetaValue::Str("rec2020".into())
     ));
+}
+
+/// The diffuse colour of the material named `name`.
+fn diffuse_of(scene: &Scene, name: &str) -> Vec3 {
+    let m = scene.materials.iter().find(|m| m.name == name).unwrap();
+    match &m.approximation().diffuse {
+        Texture::Constant(c) => *c,
+        t => panic!("{t:?}"),
+    }
+}
+
+/// pbrt-v4's `ColorSpace`: RGB values after it are in that space (read as the same XYZ in
+/// linear sRGB, within 1e-5), an emitter's (1, 1, 1) is its space's white, colours outside
+/// sRGB are clipped with a warning, the space in effect at the `Film` becomes the scene's
+/// output space, and an unknown name is a one-line error naming the line.
+#[test]
+fn pbrt_colour_spaces_are_read_as_the_same_colours() {
+    let text = r#"ColorSpace "rec2020"
+Film "rgb" "string filename" "x.exr"
+LookAt 0 0 5  0 0 0  0 1 0
+Camera "perspective" "float fov" 40
+WorldBegin
+MakeNamedMaterial "warm" "string type" "diffuse" "rgb reflectance" [0.6 0.4 0.2]
+MakeNamedMaterial "green" "string type" "diffuse" "rgb reflectance" [0.1 0.8 0.1]
+NamedMaterial "warm"
+Shape "sphere" "float radius" 0.2
+NamedMaterial "green"
+Shape "sphere" "float radius" 0.3
+ColorSpace "aces2065-1"
+AttributeBegin
+AreaLightSource "diffuse" "rgb L" [1 1 1]
+Shape "sphere" "float radius" 0.5
+AttributeEnd
+ColorSpace "srgb"
+MakeNamedMaterial "plain" "string type" "diffuse" "rgb reflectance" [0.6 0.4 0.2]
+NamedMaterial "plain"
+Shape "sphere" "float radius" 0.4
+"#;
+    let scene = pbrt_common::load(text);
+    let rec2020 = ColorSpace::rec2020();
+    assert_eq!(scene.color_space, Some(rec2020));
+    let warm = diffuse_of(&scene, "warm");
+    let xyz = ColorSpace::srgb().rgb_to_xyz(warm.as_dvec3());
+    let want = rec2020.rgb_to_xyz(glam::DVec3::new(0.6, 0.4, 0.2));
+    assert!((xyz - want).abs().max_element() < 1e-5, "{warm}");
+    assert_eq!(diffuse_of(&scene, "plain"), Vec3::new(0.6, 0.4, 0.2));
+    // Rec.2020's saturated green has no sRGB reflectance: clipped, and said.
+    assert!(diffuse_of(&scene, "green").min_element() == 0.0);
+    assert!(
+        scene
+            .warnings
+            .iter()
+            .any(|w| w.contains("outside sRGB's gamut")),
+        "{:?}",
+        scene.warnings
+    );
+    // ACES' white light: the ACES white point's chromaticity, luminance 1.
+    let light = scene.materials.iter().find(|m| m.is_emissive()).unwrap();
+    let xyz = ColorSpace::srgb().rgb_to_xyz(light.emission.as_dvec3());
+    let (x, y) = raylink::spectrum::cie::chromaticity(xyz);
+    let white = ColorSpace::aces2065_1().white;
+    assert!(
+        (x - white.x).abs() < 1e-4 && (y - white.y).abs() < 1e-4,
+        "({x}, {y})"
+    );
+    assert!((xyz.y - 1.0).abs() < 1e-4);
+
+    let dir = tempfile::tempdir().unwrap();
+    let err = pbrt_common::load_in(dir.path(), "ColorSpace \"adobe\"\n", &[]).unwrap_err();
+    let message = err.to_string();
+    assert!(message.contains("line 1") && message.contains("\"adobe\" is not a colour space"));
+}
+
+/// A scene's colour space (`[render] color_space`) is the command line's default: the
+/// EXR is in it unless `--color-space` says otherwise; a TOML scene converted keeps it.
+#[test]
+fn a_scene_names_its_output_colour_space() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = std::fs::read_to_string("scenes/cornell-box.toml")
+        .unwrap()
+        .replacen("[render]", "[render]\ncolor_space = \"dci-p3\"", 1);
+    assert!(
+        text.contains("dci-p3"),
+        "the Cornell box has a [render] table"
+    );
+    let scene_path = dir.path().join("box.toml");
+    std::fs::write(&scene_path, text).unwrap();
+    let scene = Scene::load(&scene_path).unwrap();
+    assert_eq!(scene.color_space, Some(ColorSpace::dci_p3()));
+    let converted = dir.path().join("converted.toml");
+    raylink::scene::convert::write_toml(&scene, &converted).unwrap();
+    assert_eq!(
+        Scene::load(&converted).unwrap().color_space,
+        Some(ColorSpace::dci_p3())
+    );
+    for (name, extra) in [("scene.exr", None), ("srgb.exr", Some("srgb"))] {
+        let out = dir.path().join(name);
+        let mut args = vec![
+            "render",
+            scene_path.to_str().unwrap(),
+            "--spp",
+            "1",
+            "--width",
+            "8",
+            "--height",
+            "8",
+            "-q",
+            "-o",
+            out.to_str().unwrap(),
+        ];
+        if let Some(space) = extra {
+            args.extend(["--color-space", space]);
+        }
+        let run = common::raylink(&args);
+        assert!(run.status.success(), "{}", common::stderr(&run));
+        let recorded = exr_chromaticities(&out);
+        match extra {
+            None => assert_eq!(recorded.map(|c| c[0]), Some(0.68)),
+            Some(_) => assert_eq!(recorded, None),
+        }
+    }
 }

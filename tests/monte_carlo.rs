@@ -476,6 +476,7 @@ fn environment_map_lighting_matches_quadrature() {
         settings: Default::default(),
         setting_sources: Vec::new(),
         output: None,
+        color_space: None,
         inputs: Vec::new(),
         environment: Some(std::sync::Arc::new(env.clone())),
         warnings: vec![],

@@ -114,6 +114,7 @@ fn base_scene(name: String, camera: Camera, light: Vec3) -> Scene {
         settings: Default::default(),
         setting_sources: Vec::new(),
         output: None,
+        color_space: None,
         inputs: Vec::new(),
         environment: None,
         warnings: Vec::new(),

@@ -81,6 +81,9 @@ pub struct Scene {
     /// like pbrt-v4, the command line takes it relative to the current directory. `raylink
     /// render` writes it when no `-o` is given.
     pub output: Option<PathBuf>,
+    /// The colour space the scene asks its linear outputs in (pbrt-v4's `ColorSpace` in
+    /// effect at its `Film`); `None`: linear sRGB. The command line's `--color-space` wins.
+    pub color_space: Option<&'static crate::spectrum::ColorSpace>,
     /// Every file the scene was read from: the scene file, what it includes, its meshes,
     /// textures and environment map (so that no output overwrites one of them).
     pub inputs: Vec<PathBuf>,

@@ -33,6 +33,7 @@ pub(crate) fn empty_scene() -> Scene {
         settings: Default::default(),
         setting_sources: Vec::new(),
         output: None,
+        color_space: None,
         inputs: Vec::new(),
         environment: None,
         warnings: Vec::new(),

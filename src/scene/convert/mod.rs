@@ -25,6 +25,7 @@ use super::{
 use crate::error::Error;
 use crate::image::filter::Filter;
 use crate::settings::AntiAliasing;
+use crate::spectrum::ColorSpace;
 use std::path::{Path, PathBuf};
 use toml::Spanned;
 
@@ -157,7 +158,7 @@ pub fn write_toml_with(
             .iter()
             .map(|l| light(l, refs).map(spanned))
             .collect::<crate::error::Result<_>>()?,
-        render: render(&scene.settings, scene.output.as_deref()).map(spanned),
+        render: render(&scene.settings, scene.output.as_deref(), scene.color_space).map(spanned),
     };
     let mut meshes = MeshDir::new(scene, output, &out_dir, format!("{stem}.meshes"))?;
     meshes.cancel = Some(cancel.clone());
@@ -287,8 +288,12 @@ fn world(scene: &Scene, refs: Refs) -> WorldDesc {
 
 /// The `[render]` table; none for the default settings and no output. Files are written as
 /// given.
-fn render(s: &RenderSettings, output: Option<&std::path::Path>) -> Option<RenderDesc> {
-    if s == &RenderSettings::default() && output.is_none() {
+fn render(
+    s: &RenderSettings,
+    output: Option<&std::path::Path>,
+    color_space: Option<&ColorSpace>,
+) -> Option<RenderDesc> {
+    if s == &RenderSettings::default() && output.is_none() && color_space.is_none() {
         return None;
     }
     let filter = s.filter.map(|f| {
@@ -356,6 +361,7 @@ fn render(s: &RenderSettings, output: Option<&std::path::Path>) -> Option<Render
         network: (network != NetworkDesc::default()).then(|| spanned(network)),
         sppm: (sppm != SppmDesc::default()).then(|| spanned(sppm)),
         output: output.map(|p| spanned(p.display().to_string())),
+        color_space: color_space.map(|c| spanned(c.name.to_string())),
     })
 }
 

@@ -503,6 +503,7 @@ mod tests {
             settings: Default::default(),
             setting_sources: Vec::new(),
             output: None,
+            color_space: None,
             inputs: Vec::new(),
             environment: None,
             warnings: Vec::new(),

@@ -68,6 +68,8 @@ pub(super) struct Builder {
     pub(super) setting_sources: Vec<SettingSource>,
     /// `Film "filename"`, if given.
     pub(super) output: Option<std::path::PathBuf>,
+    /// The colour space in effect at the `Film` statement, when not sRGB.
+    pub(super) film_color_space: Option<&'static crate::spectrum::ColorSpace>,
     /// The reflection applied to the whole world when pbrt's camera mirrors the image (see
     /// [`Builder::begin_world`]); identity otherwise.
     pub(super) mirror: DMat4,
@@ -124,6 +126,7 @@ impl Builder {
             settings: RenderSettings::default(),
             setting_sources: Vec::new(),
             output: None,
+            film_color_space: None,
             mirror: DMat4::IDENTITY,
             warnings: Vec::new(),
             warned: HashSet::new(),
@@ -230,6 +233,7 @@ impl Builder {
             settings: self.settings,
             setting_sources: self.setting_sources,
             output: self.output,
+            color_space: self.film_color_space,
             inputs: std::iter::once(self.source.clone())
                 .chain(self.inputs)
                 .collect(),

@@ -7,6 +7,7 @@ use super::Loc;
 use crate::image::filter::Filter;
 use crate::scene::{Camera, Projection, SettingSource, MAX_RESOLUTION};
 use crate::settings::{TechniqueKind, MAX_SPP};
+use crate::spectrum::ColorSpace;
 use glam::{DMat3, DMat4, DVec3};
 
 pub(super) struct CameraDef {
@@ -168,6 +169,8 @@ impl Builder {
                 });
             }
             "Film" => {
+                let space = self.state.color_space;
+                self.film_color_space = (space != ColorSpace::srgb()).then_some(space);
                 if !matches!(ty, "rgb" | "gbuffer" | "spectral") {
                     self.warn(
                         loc,
@@ -284,11 +287,9 @@ impl Builder {
                     p.ignore(&q.name);
                 }
             }
-            "ColorSpace" if !ty.eq_ignore_ascii_case("srgb") => {
-                self.warn(
-                    loc,
-                    format!("ColorSpace \"{ty}\" is not supported; colours are read as sRGB"),
-                );
+            "ColorSpace" => {
+                self.state.color_space = crate::image::output::color_space_named(ty)
+                    .map_err(|why| loc.error(format!("ColorSpace: {why}")))?;
             }
             "Option" => {
                 self.warn(loc, format!("Option \"{ty}\" is not supported; ignored"));

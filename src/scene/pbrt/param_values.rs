@@ -7,7 +7,7 @@ use super::spectrum::{self, Kind};
 use super::Loc;
 use crate::math::Rgb;
 use crate::scene::Texture;
-use crate::spectrum::BlackbodyEmission;
+use crate::spectrum::{BlackbodyEmission, ColorSpace};
 
 impl Builder {
     pub(super) fn pe(loc: &Loc) -> impl Fn(ParamError) -> crate::error::Error + '_ {
@@ -36,7 +36,7 @@ impl Builder {
                 if v.len() != 3 {
                     return Err(qloc.error(format!("parameter \"{name}\" takes one rgb value")));
                 }
-                Rgb::new(v[0] as f32, v[1] as f32, v[2] as f32)
+                self.in_srgb(Rgb::new(v[0] as f32, v[1] as f32, v[2] as f32), &qloc)
             }
             "blackbody" if kind == Kind::Illuminant => match self.blackbody(p, name, loc)? {
                 Some(body) => body.rgb(),
@@ -76,6 +76,28 @@ impl Builder {
             )));
         }
         Ok(Some(rgb))
+    }
+
+    /// An RGB value of the current `ColorSpace` as linear sRGB, raylink's colours: through
+    /// CIE XYZ (an emitter's white is its space's white). A reflectance outside sRGB's gamut
+    /// (a negative component) is clipped to it, with a warning.
+    fn in_srgb(&mut self, rgb: Rgb, loc: &Loc) -> Rgb {
+        let space = self.state.color_space;
+        if space == ColorSpace::srgb() {
+            return rgb;
+        }
+        let srgb = crate::image::output::matrix_from_srgb(space).inverse() * rgb;
+        if srgb.min_element() < -1e-4 * srgb.max_element().abs().max(1e-6) {
+            self.warn(
+                loc,
+                format!(
+                    "rgb {rgb} in {} lies outside sRGB's gamut; clipped to {}",
+                    space.name,
+                    srgb.max(Rgb::ZERO)
+                ),
+            );
+        }
+        srgb.max(Rgb::ZERO)
     }
 
     /// The blackbody a `blackbody` parameter `name` gives an emitter, if it is one.

@@ -4,7 +4,7 @@
 use super::builder::Builder;
 use super::Loc;
 use crate::math::Rgb;
-use crate::spectrum::BlackbodyEmission;
+use crate::spectrum::{BlackbodyEmission, ColorSpace};
 use glam::{DMat4, DVec3};
 
 /// An area light attached to the shapes that follow (`AreaLightSource`).
@@ -31,6 +31,8 @@ pub(super) struct GraphicsState {
     pub(super) start_time_only: bool,
     /// `MediumInterface`: the inside and outside media's names ("" is vacuum).
     pub(super) media: (String, String),
+    /// `ColorSpace`: the space of the RGB values that follow.
+    pub(super) color_space: &'static ColorSpace,
 }
 
 impl Default for GraphicsState {
@@ -44,6 +46,7 @@ impl Default for GraphicsState {
             end_ctm: DMat4::IDENTITY,
             start_time_only: false,
             media: (String::new(), String::new()),
+            color_space: ColorSpace::srgb(),
         }
     }
 }

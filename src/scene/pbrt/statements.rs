@@ -183,8 +183,11 @@ impl Target for Builder {
         self.option_statement("Accelerator", &ty, None, &p, loc)
     }
 
+    /// `ColorSpace`: part of the graphics state (pbrt-v4), so allowed in the world too.
     fn color_space(&mut self, name: String, p: Params, loc: &Loc) -> crate::error::Result<()> {
-        self.option_statement("ColorSpace", &name, None, &p, loc)
+        self.set_option("ColorSpace", &name, None, &p, loc)?;
+        self.report_unused("ColorSpace", &name, &p, loc);
+        Ok(())
     }
 
     fn option(

@@ -107,13 +107,14 @@ impl<'a> Builder<'a> {
         let camera_medium = camera.get_ref().medium.clone();
         let camera = self.camera(camera)?;
 
-        let (settings, setting_sources, output) = match file.render {
+        let (settings, setting_sources, output, color_space) = match file.render {
             Some(mut r) => {
                 let output = self.output(r.get_mut().output.take())?;
+                let color_space = self.color_space(r.get_mut().color_space.take())?;
                 let (settings, sources) = self.render(r)?;
-                (settings, sources, output)
+                (settings, sources, output, color_space)
             }
-            None => (RenderSettings::default(), Vec::new(), None),
+            None => (RenderSettings::default(), Vec::new(), None, None),
         };
         let mut environment = None;
         let (ambient, background) = match file.world {
@@ -178,6 +179,7 @@ impl<'a> Builder<'a> {
             settings,
             setting_sources,
             output,
+            color_space,
             inputs: std::iter::once(ctx.path.to_path_buf())
                 .chain(self.inputs.take())
                 .collect(),

@@ -85,6 +85,9 @@ pub(crate) struct RenderDesc {
     /// relative to the current directory.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) output: Option<Spanned<String>>,
+    /// The colour space of the linear outputs (`srgb`, `rec2020`, `dci-p3`, `aces2065-1`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(crate) color_space: Option<Spanned<String>>,
 }
 
 /// `[render.whitted]`.

@@ -34,6 +34,20 @@ impl Builder<'_> {
         Ok(Some(name.into()))
     }
 
+    /// `[render] color_space`: the linear outputs' colour space; `None` for sRGB.
+    pub(super) fn color_space(
+        &self,
+        name: Option<Spanned<String>>,
+    ) -> crate::error::Result<Option<&'static crate::spectrum::ColorSpace>> {
+        let Some(name) = name else {
+            return Ok(None);
+        };
+        let site = self.site("render".into(), name.span());
+        let space = crate::image::output::color_space_named(name.get_ref())
+            .map_err(|why| self.ctx.fail(&site, "color_space", why))?;
+        Ok((space != crate::spectrum::ColorSpace::srgb()).then_some(space))
+    }
+
     pub(super) fn render(
         &self,
         desc: Spanned<RenderDesc>,
