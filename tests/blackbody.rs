@@ -179,3 +179,77 @@ AttributeEnd
     assert_eq!(b.emission_spectrum, m.emission_spectrum);
     assert!((b.emission - m.emission).abs().max_element() < 1e-5 * 3.0);
 }
+
+/// The orange floor of [`room`] lit by a point light 1.9 above it and by a directional light
+/// from above (no lamp), each a blackbody of `kelvin` given by `temperature`.
+fn lit_by_lights(kelvin: f32, floor: [f32; 3]) -> Scene {
+    let text = format!(
+        r#"
+[camera]
+position = [0, 1.5, 0]
+look_at = [0.001, 0, 0]
+fov = 70
+width = 24
+height = 24
+
+[materials.floor]
+diffuse = [{}, {}, {}]
+
+[[shapes]]
+type = "quad"
+material = "floor"
+vertices = [[-1, 0, -1], [1, 0, -1], [1, 0, 1], [-1, 0, 1]]
+
+[[lights]]
+type = "point"
+position = [0, 1.9, 0]
+intensity = 3
+temperature = {kelvin}
+
+[[lights]]
+type = "directional"
+direction = [0.2, -1, 0.1]
+irradiance = 2
+temperature = {kelvin}
+"#,
+        floor[0], floor[1], floor[2]
+    );
+    raylink::scene::toml::from_str(&text, Path::new("lights.toml"))
+        .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Point and directional lights given a temperature emit Planck's law in spectral mode:
+/// the floor has the product of spectra's chromaticity (within Δxy 0.002) for the three
+/// techniques; the lights keep their temperature and luminance through conversion, as a
+/// pbrt-v4 `"blackbody I"` point light does through the reader.
+#[test]
+fn point_and_directional_lights_can_be_blackbodies() {
+    let (kelvin, floor) = (2700.0, [0.9, 0.35, 0.05]);
+    let want = reflected_xy(kelvin as f64, floor);
+    let scene = lit_by_lights(kelvin, floor);
+    let techniques: [(&str, Make, u32); 3] = [
+        ("path", Technique::Path, 64),
+        ("light", Technique::Light, 64),
+        ("bdpt", Technique::Bdpt, 32),
+    ];
+    for (name, technique, spp) in techniques {
+        let seen = chromaticity_of(&render(&scene, technique(settings(spp, true))));
+        let d = distance(seen, want);
+        eprintln!("{name}: {seen:?} against {want:?}: {d:.5}");
+        assert!(d < 0.002, "{name}: {seen:?} against {want:?}");
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("lights.toml");
+    raylink::scene::convert::write_toml(&scene, &out).unwrap();
+    let back = Scene::load(&out).unwrap_or_else(|e| panic!("{e}"));
+    for (a, b) in scene.lights.iter().zip(&back.lights) {
+        assert_eq!(a.model().spectrum(), b.model().spectrum());
+        assert!(a.model().spectrum().is_some());
+    }
+    let pbrt = pbrt_common::world(
+        "LightSource \"point\" \"blackbody I\" [ 4000 ] \"float scale\" [ 2 ]\n\
+         Shape \"sphere\" \"float radius\" [ 1 ]\n",
+    );
+    let light = &pbrt.lights[0];
+    assert_eq!(light.model().spectrum().map(|b| b.kelvin()), Some(4000.0));
+}

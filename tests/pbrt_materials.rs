@@ -184,7 +184,8 @@ fn lights_and_environment() {
         s.lights[0],
         raylink::scene::Light::Point(raylink::scene::lights::PointLight {
             position: Vec3::new(1.0, 1.0, 0.0),
-            intensity: Rgb::new(2.0, 4.0, 6.0)
+            intensity: Rgb::new(2.0, 4.0, 6.0),
+            spectrum: None,
         })
     );
     let raylink::scene::Light::Directional(ref l) = s.lights[1] else {

@@ -77,6 +77,7 @@ fn diffuse_plane_under_point_light_matches_lambert() {
         .push(Light::Point(raylink::scene::lights::PointLight {
             position: light_pos,
             intensity,
+            spectrum: None,
         }));
     scene.ambient = Rgb::splat(0.1);
     let (image, _) = render(&scene, whitted(1, 16), (64, 48), 1, Some(2));
@@ -184,6 +185,7 @@ fn busy_scene() -> Scene {
         .push(Light::Point(raylink::scene::lights::PointLight {
             position: Vec3::new(3.0, 4.0, 3.0),
             intensity: Rgb::splat(10.0),
+            spectrum: None,
         }));
     scene.ambient = Rgb::splat(0.05);
     scene.background = Rgb::new(0.1, 0.2, 0.4);

@@ -108,6 +108,7 @@ fn base_scene(name: String, camera: Camera, light: Vec3) -> Scene {
         lights: vec![Light::Point(crate::scene::lights::PointLight {
             position: light,
             intensity: Rgb::splat(100.0),
+            spectrum: None,
         })],
         ambient: Rgb::splat(0.05),
         background: Rgb::splat(0.2),

@@ -119,6 +119,7 @@ fn shadow_scene(blocker: Material) -> (Scene, Vec3) {
         .push(Light::Point(crate::scene::lights::PointLight {
             position: light,
             intensity: Rgb::splat(30.0),
+            spectrum: None,
         }));
     scene.ambient = Rgb::splat(0.5);
     (scene, light)
@@ -259,6 +260,7 @@ fn a_translucent_sheet_passes_the_light_behind_it() {
             .push(Light::Point(crate::scene::lights::PointLight {
                 position: light,
                 intensity: Rgb::splat(20.0),
+                spectrum: None,
             }));
         scene
     };

@@ -609,22 +609,30 @@ fn light(l: &Light, refs: Refs) -> crate::error::Result<LightDesc> {
         cone_delta: None,
         image: None,
         transform: None,
+        temperature: l.model().spectrum().map(|b| b.kelvin() as f32),
+    };
+    // A blackbody's colour is written as its luminance (with its temperature).
+    let colour = |rgb: crate::math::Rgb| match l.model().spectrum() {
+        Some(_) => Splat3(crate::math::Rgb::splat(
+            ColorSpace::srgb().rgb_to_xyz(rgb.as_dvec3()).y as f32,
+        )),
+        None => Splat3(rgb),
     };
     match l {
         Light::Point(l) => {
             d.position = Some(V3(l.position));
-            d.intensity = Some(Splat3(l.intensity));
+            d.intensity = Some(colour(l.intensity));
         }
         Light::Directional(l) => {
             d.kind = LightKind::Directional;
             d.direction = Some(V3(l.direction));
-            d.irradiance = Some(Splat3(l.irradiance));
+            d.irradiance = Some(colour(l.irradiance));
         }
         Light::Spot(l) => {
             d.kind = LightKind::Spot;
             d.position = Some(V3(l.position));
             d.direction = Some(V3(l.direction));
-            d.intensity = Some(Splat3(l.intensity));
+            d.intensity = Some(colour(l.intensity));
             d.cone_angle = Some(l.cone_angle);
             d.cone_delta = Some(l.cone_delta);
         }

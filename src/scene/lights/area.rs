@@ -9,6 +9,7 @@ use crate::scene::alpha::Alpha;
 use crate::scene::shapes::sphere_uv;
 use crate::scene::texture::Texture;
 use crate::scene::{Material, Primitives, Scene, Shape, UvMap};
+use crate::spectrum::BlackbodyEmission;
 use std::f32::consts::PI;
 use std::sync::Arc;
 
@@ -24,6 +25,8 @@ pub struct AreaLight {
     kind: AreaKind,
     /// What makes the emission vary over the surface, if anything.
     varying: Option<Arc<Varying>>,
+    /// The material's blackbody spectrum, if it has one.
+    spectrum: Option<BlackbodyEmission>,
 }
 
 /// An emission texture and the shape's cut-out, with what finds a sampled point's uv.
@@ -147,6 +150,7 @@ impl AreaLight {
             two_sided: material.two_sided_emission,
             kind,
             varying,
+            spectrum: material.emission_spectrum,
         })
     }
 
@@ -288,6 +292,10 @@ impl AreaLight {
 const ONE_MINUS_EPS: f32 = 1.0 - f32::EPSILON / 2.0;
 
 impl LightModel for AreaLight {
+    fn spectrum(&self) -> Option<BlackbodyEmission> {
+        self.spectrum
+    }
+
     fn power(&self, _world: &World) -> f32 {
         let sides = if self.two_sided { 2.0 } else { 1.0 };
         sides * PI * self.area * luminance(self.mean_radiance())

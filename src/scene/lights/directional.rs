@@ -4,6 +4,7 @@
 use super::{EmissionSample, Illumination, LightModel, LightSample, World};
 use crate::math::warp::concentric_disk;
 use crate::math::{frame, luminance, Rgb, Vec2, Vec3};
+use crate::spectrum::BlackbodyEmission;
 use std::f32::consts::PI;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -11,6 +12,8 @@ pub struct DirectionalLight {
     /// The direction light travels, as the scene gives it.
     pub direction: Vec3,
     pub irradiance: Rgb,
+    /// A blackbody's spectrum, when `irradiance` is its colour times the luminance.
+    pub spectrum: Option<BlackbodyEmission>,
     /// `direction`, unit length.
     unit: Vec3,
 }
@@ -20,6 +23,7 @@ impl DirectionalLight {
         DirectionalLight {
             direction,
             irradiance,
+            spectrum: None,
             unit: direction.normalize(),
         }
     }
@@ -34,6 +38,10 @@ pub(super) fn world_disk(world: &World, dir: Vec3, u: Vec2) -> Vec3 {
 }
 
 impl LightModel for DirectionalLight {
+    fn spectrum(&self) -> Option<BlackbodyEmission> {
+        self.spectrum
+    }
+
     fn power(&self, world: &World) -> f32 {
         PI * world.radius * world.radius * luminance(self.irradiance)
     }

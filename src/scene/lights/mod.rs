@@ -42,6 +42,7 @@ pub use tree::LightTree;
 
 use crate::math::spawn::Spot;
 use crate::math::{Rgb, Vec2, Vec3};
+use crate::spectrum::BlackbodyEmission;
 
 /// The sphere bounding the scene (and the camera): infinite and directional lights emit
 /// from its disk, and their shadow rays end beyond it.
@@ -94,6 +95,12 @@ pub trait LightModel {
     /// A point source's intensity towards unit `w` (zero for other lights).
     fn intensity_towards(&self, _w: Vec3) -> Rgb {
         Rgb::ZERO
+    }
+
+    /// The blackbody spectrum of its light, if it is one (spectral renders emit Planck's
+    /// law at its RGB's luminance); `None`: the spectrum of its RGB.
+    fn spectrum(&self) -> Option<BlackbodyEmission> {
+        None
     }
 
     /// A point source's direction of emission and its solid-angle density, from `u`.

@@ -4,6 +4,7 @@
 use super::PointSource;
 use crate::math::warp::{uniform_sphere, UNIFORM_SPHERE_PDF};
 use crate::math::{luminance, Rgb, Vec2, Vec3};
+use crate::spectrum::BlackbodyEmission;
 use std::f32::consts::PI;
 
 #[derive(Clone, Debug, PartialEq)]
@@ -11,11 +12,17 @@ pub struct PointLight {
     pub position: Vec3,
     /// Radiant intensity (W/sr).
     pub intensity: Rgb,
+    /// A blackbody's spectrum, when `intensity` is its colour times the luminance.
+    pub spectrum: Option<BlackbodyEmission>,
 }
 
 impl PointSource for PointLight {
     fn position(&self) -> Vec3 {
         self.position
+    }
+
+    fn blackbody(&self) -> Option<BlackbodyEmission> {
+        self.spectrum
     }
 
     fn intensity(&self, _w: Vec3) -> Rgb {

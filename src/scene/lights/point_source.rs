@@ -6,10 +6,16 @@ use super::{
     DirectionCone, EmissionSample, Illumination, LightBounds, LightModel, LightSample, World,
 };
 use crate::math::{Rgb, Vec2, Vec3};
+use crate::spectrum::BlackbodyEmission;
 
 /// What a point source is made of.
 pub trait PointSource {
     fn position(&self) -> Vec3;
+
+    /// Its blackbody spectrum, if it has one ([`LightModel::spectrum`]).
+    fn blackbody(&self) -> Option<BlackbodyEmission> {
+        None
+    }
 
     /// Radiant intensity (W/sr) towards unit `w`, pointing away from the light.
     fn intensity(&self, w: Vec3) -> Rgb;
@@ -102,6 +108,10 @@ impl<T: PointSource> LightModel for T {
 
     fn intensity_towards(&self, w: Vec3) -> Rgb {
         self.intensity(w)
+    }
+
+    fn spectrum(&self) -> Option<BlackbodyEmission> {
+        self.blackbody()
     }
 
     fn emission_direction(&self, u: Vec2) -> (Vec3, f32) {

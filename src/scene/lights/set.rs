@@ -114,15 +114,8 @@ impl LightSet {
                 shape_light[a.shape] = Some(i as u32);
             }
         }
-        let mut spectra: Vec<Option<BlackbodyEmission>> = emitters
-            .iter()
-            .map(|e| match e {
-                Emitter::Area(a) => {
-                    scene.materials[scene.shapes[a.shape].material].emission_spectrum
-                }
-                _ => None,
-            })
-            .collect();
+        let mut spectra: Vec<Option<BlackbodyEmission>> =
+            emitters.iter().map(|e| e.model().spectrum()).collect();
         if spectra.iter().all(Option::is_none) {
             spectra.clear();
         }

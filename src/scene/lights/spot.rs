@@ -5,6 +5,7 @@
 use super::{DirectionCone, PointSource};
 use crate::math::warp::{uniform_cone, uniform_cone_pdf};
 use crate::math::{frame, luminance, Rgb, Vec2, Vec3};
+use crate::spectrum::BlackbodyEmission;
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct SpotLight {
@@ -12,6 +13,8 @@ pub struct SpotLight {
     /// The axis, as the scene gives it.
     pub direction: Vec3,
     pub intensity: Rgb,
+    /// A blackbody's spectrum, when `intensity` is its colour times the luminance.
+    pub spectrum: Option<BlackbodyEmission>,
     /// Degrees from the axis to the cone's edge.
     pub cone_angle: f32,
     /// Degrees over which the falloff runs, inside the edge.
@@ -36,6 +39,7 @@ impl SpotLight {
             position,
             direction,
             intensity,
+            spectrum: None,
             cone_angle,
             cone_delta,
             axis: direction.normalize(),
@@ -48,6 +52,10 @@ impl SpotLight {
 impl PointSource for SpotLight {
     fn position(&self) -> Vec3 {
         self.position
+    }
+
+    fn blackbody(&self) -> Option<BlackbodyEmission> {
+        self.spectrum
     }
 
     fn intensity(&self, w: Vec3) -> Rgb {

@@ -256,6 +256,7 @@ impl Builder {
                 self.lights.push(Light::Point(PointLight {
                     position: place("\"from\"", from)?,
                     intensity: emitted("\"I\" × \"scale\" × \"power\"", i * scale * k)?,
+                    spectrum: self.blackbody(p, "I", loc)?,
                 }));
             }
             "spot" => {
@@ -287,13 +288,15 @@ impl Builder {
                 } else {
                     1.0
                 };
-                self.lights.push(Light::Spot(SpotLight::new(
+                let mut spot = SpotLight::new(
                     position,
                     dir,
                     emitted("\"I\" × \"scale\" × \"power\"", i * scale * k)?,
                     cone_angle,
                     cone_delta,
-                )));
+                );
+                spot.spectrum = self.blackbody(p, "I", loc)?;
+                self.lights.push(Light::Spot(spot));
             }
             "distant" => {
                 let from = point3("from", DVec3::ZERO)?;
@@ -302,10 +305,10 @@ impl Builder {
                 let l = self
                     .spectrum(p, "L", Kind::Illuminant, st, loc)?
                     .unwrap_or(Rgb::ONE);
-                self.lights.push(Light::Directional(DirectionalLight::new(
-                    dir,
-                    emitted("\"L\" × \"scale\"", l * scale)?,
-                )));
+                let mut distant =
+                    DirectionalLight::new(dir, emitted("\"L\" × \"scale\"", l * scale)?);
+                distant.spectrum = self.blackbody(p, "L", loc)?;
+                self.lights.push(Light::Directional(distant));
             }
             "infinite" => {
                 let file = p.string("filename").map_err(&pe)?;

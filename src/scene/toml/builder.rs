@@ -3,6 +3,7 @@
 //! material names, meshes, textures and environment maps relative to the file.
 
 mod coating;
+mod emitters;
 mod instances;
 mod media;
 mod motion;
@@ -31,7 +32,6 @@ use crate::scene::Portal;
 use crate::scene::{
     Camera, Conductor, Light, Material, Projection, RenderSettings, RoughnessMap, Scene, Texture,
 };
-use crate::spectrum::BlackbodyEmission;
 use std::collections::HashMap;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
@@ -567,34 +567,6 @@ impl<'a> Builder<'a> {
 
     /// A material's emission: a colour, or a texture (then the colour is its mean, for the
     /// techniques that take one value per surface).
-    /// A material's emission: its RGB, its texture if it varies, and its blackbody spectrum
-    /// if it has a temperature (then `emission` is a number, the luminance).
-    fn emission(
-        &self,
-        site: &Site,
-        desc: Option<DiffuseDesc>,
-        temperature: Option<f32>,
-    ) -> crate::error::Result<(Rgb, Option<Texture>, Option<BlackbodyEmission>)> {
-        let emission = match desc {
-            None => (Rgb::ZERO, None),
-            Some(t) => match self.texture(site, "emission", t)? {
-                Texture::Constant(c) => (c, None),
-                t => (t.mean_value(), Some(t)),
-            },
-        };
-        let Some(kelvin) = temperature else {
-            return Ok((emission.0, emission.1, None));
-        };
-        let fail = |m: String| self.ctx.fail(site, "emission_temperature", m);
-        let body = BlackbodyEmission::new(kelvin as f64).map_err(fail)?;
-        match emission {
-            (c, None) if c.x == c.y && c.y == c.z => Ok((c.x * body.rgb(), None, Some(body))),
-            _ => Err(fail(
-                "needs `emission` to be one number (the luminance), not a colour or texture".into(),
-            )),
-        }
-    }
-
     fn environment(&self, site: &Site, desc: EnvironmentDesc) -> crate::error::Result<Environment> {
         let ctx = self.ctx;
         let xf = self.transform(site, desc.transform)?;
@@ -697,7 +669,13 @@ impl<'a> Builder<'a> {
         Xform::new(m).map_err(|e| ctx.fail(site, key, e))
     }
 
-    fn light(&self, site: &Site, desc: LightDesc) -> crate::error::Result<Light> {
+    fn light(&self, site: &Site, mut desc: LightDesc) -> crate::error::Result<Light> {
+        let temperature = desc.temperature.take();
+        let light = self.light_of(site, desc)?;
+        self.with_temperature(site, light, temperature)
+    }
+
+    fn light_of(&self, site: &Site, desc: LightDesc) -> crate::error::Result<Light> {
         let ctx = self.ctx;
         let (name, takes, allowed): (&str, &str, &[&str]) = match desc.kind {
             LightKind::Point => ("point", "position, intensity", &["position", "intensity"]),
@@ -750,6 +728,7 @@ impl<'a> Builder<'a> {
                     .map_err(fail("position"))?,
                 intensity: colour(desc.intensity.ok_or_else(|| need("intensity"))?.0)
                     .map_err(fail("intensity"))?,
+                spectrum: None,
             }),
             LightKind::Directional => Light::Directional(DirectionalLight::new(
                 direction(desc.direction.ok_or_else(|| need("direction"))?.0)

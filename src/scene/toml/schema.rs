@@ -450,6 +450,9 @@ pub(crate) struct LightDesc {
     pub(crate) cone_angle: Option<f32>,
     #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
     pub(crate) cone_delta: Option<f32>,
+    /// A blackbody's temperature (K): `intensity` or `irradiance` is then its luminance.
+    #[serde(skip_serializing_if = "Option::is_none", serialize_with = "opt_f32")]
+    pub(crate) temperature: Option<f32>,
     /// A goniometric light's image (square, equal-area).
     #[serde(skip_serializing_if = "Option::is_none")]
     pub(crate) image: Option<String>,
