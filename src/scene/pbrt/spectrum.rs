@@ -1,11 +1,13 @@
 //! Spectra as RGB. pbrt-v4 renders spectrally; raylink renders linear sRGB. RGB values pass
 //! through unchanged (pbrt-v4 normalises an RGB illuminant so that RGB (1, 1, 1) is the
 //! colour space's white of luminance 1). Named spectra come from small tables of RGB
-//! approximations; sampled spectra and blackbodies are integrated against an analytic fit of
-//! the CIE 1931 matching functions (Wyman, Sloan and Shirley 2013).
+//! approximations; sampled spectra and blackbodies are integrated against the CIE 1931
+//! matching functions' tables.
 
 use crate::math::Rgb;
 use crate::scene::Conductor;
+use crate::spectrum::{cie, ColorSpace};
+use glam::DVec3;
 
 /// What a spectrum stands for, which decides how it becomes RGB.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -93,54 +95,19 @@ pub fn sampled(pairs: &[f64], kind: Kind) -> Rgb {
 pub fn blackbody(kelvin: f64) -> Rgb {
     let t = kelvin.max(1.0);
     integrate(
-        |l| {
-            let l = l * 1e-9;
-            const C: f64 = 299_792_458.0;
-            const H: f64 = 6.626_070_15e-34;
-            const KB: f64 = 1.380_649e-23;
-            2.0 * H * C * C / (l.powi(5) * ((H * C / (l * KB * t)).exp() - 1.0))
-        },
+        |l| crate::spectrum::blackbody::planck(l, t),
         Kind::Illuminant,
     )
 }
 
-fn lobe(l: f64, mu: f64, s1: f64, s2: f64) -> f64 {
-    let s = if l < mu { s1 } else { s2 };
-    (-0.5 * ((l - mu) / s).powi(2)).exp()
+fn xyz_to_srgb(xyz: DVec3) -> [f64; 3] {
+    ColorSpace::srgb().xyz_to_rgb(xyz).to_array()
 }
 
-fn cie_xyz(l: f64) -> [f64; 3] {
-    [
-        1.056 * lobe(l, 599.8, 37.9, 31.0) + 0.362 * lobe(l, 442.0, 16.0, 26.7)
-            - 0.065 * lobe(l, 501.1, 20.4, 26.2),
-        0.821 * lobe(l, 568.8, 46.9, 40.5) + 0.286 * lobe(l, 530.9, 16.3, 31.1),
-        1.217 * lobe(l, 437.0, 11.8, 36.0) + 0.681 * lobe(l, 459.0, 26.0, 13.8),
-    ]
-}
-
-fn xyz_to_srgb([x, y, z]: [f64; 3]) -> [f64; 3] {
-    [
-        3.240_454_2 * x - 1.537_138_5 * y - 0.498_531_4 * z,
-        -0.969_266_0 * x + 1.876_010_8 * y + 0.041_556_0 * z,
-        0.055_643_4 * x - 0.204_025_9 * y + 1.057_225_2 * z,
-    ]
-}
-
-/// XYZ of `f` over 360–830 nm, scaled so that a constant 1 has Y = 1.
-fn xyz_of(f: impl Fn(f64) -> f64) -> [f64; 3] {
-    let mut xyz = [0.0; 3];
-    let mut norm = 0.0;
-    let mut l = 360.0;
-    while l <= 830.0 {
-        let c = cie_xyz(l);
-        let v = f(l);
-        for i in 0..3 {
-            xyz[i] += v * c[i];
-        }
-        norm += c[1];
-        l += 2.0;
-    }
-    xyz.map(|v| v / norm)
+/// XYZ of `f` over 360–830 nm (the CIE 1931 tables, every nanometre), scaled so that a
+/// constant 1 has Y = 1.
+fn xyz_of(f: impl Fn(f64) -> f64) -> DVec3 {
+    cie::spectrum_to_xyz(f)
 }
 
 fn integrate(f: impl Fn(f64) -> f64, kind: Kind) -> Rgb {
@@ -148,7 +115,7 @@ fn integrate(f: impl Fn(f64) -> f64, kind: Kind) -> Rgb {
     let rgb = xyz_to_srgb(xyz);
     let out = match kind {
         Kind::Illuminant => {
-            let y = xyz[1].max(1e-30);
+            let y = xyz.y.max(1e-30);
             rgb.map(|c| c / y)
         }
         _ => {
@@ -175,6 +142,11 @@ mod tests {
             let c = blackbody(t);
             let y = crate::math::luminance(c);
             assert!((y - 1.0).abs() < 0.03, "{t} K: {c} (Y {y})");
+        }
+        // The CIE tables, as the spectral renderer's blackbody emitters integrate them.
+        for t in [2700.0, 6500.0] {
+            let exact = crate::spectrum::BlackbodyEmission::new(t).unwrap().rgb();
+            assert!((blackbody(t) - exact).abs().max_element() < 1e-5, "{t} K");
         }
         // Warm light is red-heavy, a hot one blue-heavy.
         assert!(blackbody(2000.0).x > blackbody(2000.0).z);
