@@ -11,6 +11,8 @@
 # Any failed step exits non-zero. Needs debootstrap, cargo-deb, dpkg-dev and idiff
 # (openimageio-tools). Set RAYLINK_DEB to test an existing .deb instead of building one.
 set -euo pipefail
+# Pipes into grep read all their input (no -q): with pipefail, a producer still writing
+# when grep -q has exited would die of SIGPIPE and fail the test.
 cd "$(dirname "$0")/.."
 [ "$(id -u)" -eq 0 ] || { echo "test-deb.sh: run as root (debootstrap and chroot)" >&2; exit 1; }
 export DEBIAN_FRONTEND=noninteractive LC_ALL=C
@@ -24,7 +26,7 @@ test -s "$deb"
 dpkg-deb --info "$deb" | sed -n '/Package:/,$p'
 # OpenImageIO is loaded at run time through /usr/lib/raylink/libraylink_oiio.so, whose
 # libraries dpkg-shlibdeps must have turned into dependencies.
-dpkg-deb --field "$deb" Depends | grep -q libopenimageio ||
+dpkg-deb --field "$deb" Depends | grep libopenimageio >/dev/null ||
   { echo "the package does not depend on OpenImageIO" >&2; exit 1; }
 echo "size: $(stat -c %s "$deb") bytes"
 
@@ -60,7 +62,7 @@ in_root raylink --version
 # Installed, the program loads its interface to OpenImageIO from /usr/lib/raylink.
 in_root env LD_DEBUG=files raylink render /usr/share/raylink/scenes/cornell-box.toml \
   --width 8 --height 8 --spp 1 --quiet -o /tmp/probe.png 2>&1 |
-  grep -q "file=/usr/lib/raylink/libraylink_oiio.so" ||
+  grep "file=/usr/lib/raylink/libraylink_oiio.so" >/dev/null ||
   { echo "the installed libraylink_oiio.so was not loaded" >&2; exit 1; }
 in_root raylink render /usr/share/raylink/scenes/cornell-box.toml "${render_opts[@]}" -o /tmp/out.exr -o /tmp/out.png
 echo "install to first render: $(( $(date +%s) - t_install ))s"
@@ -69,7 +71,7 @@ step "check the outputs"
 test -s "$root/tmp/out.exr" && test -s "$root/tmp/out.png"
 file_type=$(head -c 8 "$root/tmp/out.png" | od -An -tx1 | tr -d ' \n')
 [ "$file_type" = "89504e470d0a1a0a" ] || { echo "out.png is not a PNG" >&2; exit 1; }
-iinfo "$root/tmp/out.exr" | grep -q "64 x   64" || { iinfo "$root/tmp/out.exr"; echo "out.exr: wrong size" >&2; exit 1; }
+iinfo "$root/tmp/out.exr" | grep "64 x   64" >/dev/null || { iinfo "$root/tmp/out.exr"; echo "out.exr: wrong size" >&2; exit 1; }
 # The same binary, scene, options and fixed seed, and the image does not depend on the
 # thread count: the EXRs are expected to be identical. The 1e-6 tolerance only absorbs
 # last-bit differences should the math libraries of the two systems ever differ.
@@ -90,12 +92,12 @@ in_root bash -c 'set -e; source /usr/share/bash-completion/bash_completion; sour
 in_root bash -c 'source /usr/share/bash-completion/completions/raylink
   COMP_WORDS=(raylink re); COMP_CWORD=1; COMP_LINE="raylink re"; COMP_POINT=${#COMP_LINE}
   f=$(complete -p raylink | sed -E "s/.*-F ([^ ]+).*/\1/"); "$f" raylink re raylink
-  printf "%s\n" "${COMPREPLY[@]}"' | grep -qx render
+  printf "%s\n" "${COMPREPLY[@]}"' | grep -x render >/dev/null
 # zsh: compinit finds _raylink on the default fpath and binds it to raylink.
 in_root apt-get install -y -q --no-install-recommends zsh fish
-in_root zsh -fc 'autoload -Uz compinit && compinit -u && print -r -- "$_comps[raylink]"' | grep -qx _raylink
+in_root zsh -fc 'autoload -Uz compinit && compinit -u && print -r -- "$_comps[raylink]"' | grep -x _raylink >/dev/null
 # fish: completing `raylink re` from the vendor completions offers `render`.
-in_root fish -c 'complete --do-complete "raylink re"' | grep -q "^render"
+in_root fish -c 'complete --do-complete "raylink re"' | grep "^render" >/dev/null
 # The documents the man page names are installed.
 grep -q "/usr/share/doc/raylink" "$work/man.txt"
 test -s "$root/usr/share/doc/raylink/scene-format.md"
@@ -114,6 +116,6 @@ while IFS= read -r f; do
   fi
 done < "$work/files.txt"
 [ "$left" -eq 0 ]
-if in_root dpkg -s raylink 2>/dev/null | grep -q "^Status: install"; then echo "raylink still installed" >&2; exit 1; fi
+if in_root dpkg -s raylink 2>/dev/null | grep "^Status: install" >/dev/null; then echo "raylink still installed" >&2; exit 1; fi
 in_root sh -c '! command -v raylink'
 step "all checks passed"
