@@ -65,6 +65,11 @@ impl ColorSpace {
         self.xyz_from_rgb * rgb
     }
 
+    /// The luminance (Y) of a linear RGB colour.
+    pub fn luminance(&self, rgb: glam::Vec3) -> f32 {
+        self.rgb_to_xyz(rgb.as_dvec3()).y as f32
+    }
+
     /// Linear RGB of an XYZ colour.
     pub fn xyz_to_rgb(&self, xyz: DVec3) -> DVec3 {
         self.rgb_from_xyz * xyz

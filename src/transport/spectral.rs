@@ -169,7 +169,7 @@ impl Colours for Wavelengths {
             // Planck's law at the luminance of the RGB (the emitter's RGB is the
             // blackbody's, times its luminance and whatever scales it on the way).
             Some(body) => {
-                let y = ColorSpace::srgb().rgb_to_xyz(rgb.as_dvec3()).y as f32;
+                let y = ColorSpace::srgb().luminance(rgb);
                 Rgb::from(body.sample(&self.lambda, y).0)
             }
             None => self.illuminant(rgb),

@@ -446,9 +446,7 @@ fn material(m: &Material, keys: &[String], refs: Refs) -> MaterialDesc {
 fn emission(m: &Material, refs: Refs) -> DiffuseDesc {
     match m.emission_spectrum {
         Some(_) => {
-            let y = crate::spectrum::ColorSpace::srgb()
-                .rgb_to_xyz(m.emission.as_dvec3())
-                .y as f32;
+            let y = ColorSpace::srgb().luminance(m.emission);
             DiffuseDesc::Colour(crate::math::Vec3::splat(y))
         }
         None => varying(&m.emission_map, m.emission, refs),
@@ -613,9 +611,7 @@ fn light(l: &Light, refs: Refs) -> crate::error::Result<LightDesc> {
     };
     // A blackbody's colour is written as its luminance (with its temperature).
     let colour = |rgb: crate::math::Rgb| match l.model().spectrum() {
-        Some(_) => Splat3(crate::math::Rgb::splat(
-            ColorSpace::srgb().rgb_to_xyz(rgb.as_dvec3()).y as f32,
-        )),
+        Some(_) => Splat3(crate::math::Rgb::splat(ColorSpace::srgb().luminance(rgb))),
         None => Splat3(rgb),
     };
     match l {

@@ -38,8 +38,8 @@ pub struct LightSet {
     cdf: Vec<f32>,
     /// For each scene shape, its emitter index if it is an area light.
     shape_light: Vec<Option<u32>>,
-    /// Each emitter's blackbody spectrum, for spectral renders (empty when none has one).
-    spectra: Vec<Option<BlackbodyEmission>>,
+    /// Whether some emitter's light is a blackbody's (spectral renders then ask which).
+    any_blackbody: bool,
     background: Option<usize>,
     /// A sphere bounding the scene: infinite and directional lights emit from its disk.
     pub world: World,
@@ -114,11 +114,7 @@ impl LightSet {
                 shape_light[a.shape] = Some(i as u32);
             }
         }
-        let mut spectra: Vec<Option<BlackbodyEmission>> =
-            emitters.iter().map(|e| e.model().spectrum()).collect();
-        if spectra.iter().all(Option::is_none) {
-            spectra.clear();
-        }
+        let any_blackbody = emitters.iter().any(|e| e.model().spectrum().is_some());
         let selection = match kind {
             SelectionKind::Power => Selection::Power,
             SelectionKind::Tree => {
@@ -142,7 +138,7 @@ impl LightSet {
             pmf,
             cdf,
             shape_light,
-            spectra,
+            any_blackbody,
             background,
             world,
             selection,
@@ -187,13 +183,13 @@ impl LightSet {
     /// The blackbody spectrum of emitter `i`'s light, if it has one (spectral renders).
     #[inline]
     pub fn spectrum(&self, i: usize) -> Option<BlackbodyEmission> {
-        self.spectra.get(i).copied().flatten()
+        self.emitters[i].model().spectrum()
     }
 
     /// The blackbody spectrum of the emitter [`sample_li`](Self::sample_li) picks at `p`
     /// with `u_choose`, if it has one.
     pub fn spectrum_chosen_at(&self, p: Vec3, u_choose: f32) -> Option<BlackbodyEmission> {
-        if self.spectra.is_empty() {
+        if !self.any_blackbody {
             return None;
         }
         self.choose_at(p, u_choose)
