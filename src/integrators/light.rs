@@ -98,9 +98,14 @@ impl MonteCarlo for LightTracer {
                 max_depth: self.options.max_depth,
                 rr_start: super::path::RR_START_DEPTH,
             };
-            return super::volumetric_light::trace(
-                ctx, camera, camera_ray, lengths, sampler, stats, splats,
-            );
+            use super::volumetric_light::trace;
+            if self.options.spectral {
+                let mut lambda = Wavelengths::sample(sampler.next_1d());
+                let c = &mut lambda;
+                return trace(ctx, camera, camera_ray, lengths, sampler, stats, splats, c);
+            }
+            let c = &mut RgbColours;
+            return trace(ctx, camera, camera_ray, lengths, sampler, stats, splats, c);
         }
         if self.options.spectral {
             let mut lambda = Wavelengths::sample(sampler.next_1d());

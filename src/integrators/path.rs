@@ -285,7 +285,13 @@ impl MonteCarlo for PathTracer {
                 max_depth: self.options.max_depth,
                 rr_start: RR_START_DEPTH,
             };
-            return super::volumetric::radiance(ctx, camera_ray, lengths, sampler, stats);
+            use super::volumetric::radiance;
+            if self.spectral {
+                let mut lambda = Wavelengths::sample(sampler.next_1d());
+                let v = radiance(ctx, camera_ray, lengths, sampler, stats, &mut lambda);
+                return lambda.output(v);
+            }
+            return radiance(ctx, camera_ray, lengths, sampler, stats, &mut RgbColours);
         }
         if self.spectral {
             let mut lambda = Wavelengths::sample(sampler.next_1d());

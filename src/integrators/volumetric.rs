@@ -17,6 +17,7 @@ use crate::math::{Ray, Rgb, Rng, Vec3};
 use crate::scene::media::tracking::{sample_majorant, sample_majorant_from, Collision, Uniforms};
 use crate::scene::media::MediumModel;
 use crate::scene::SurfacePoint;
+use crate::transport::spectral::Colours;
 use crate::transport::{Context, RayStats};
 
 /// Surfaces a ray may cross without scattering (medium boundaries) before it is given up:
@@ -87,8 +88,9 @@ pub(crate) struct Lengths {
     pub rr_start: u32,
 }
 
-/// One path's estimate of the radiance along `camera_ray`.
-pub(crate) fn radiance(
+/// One path's estimate of the radiance along `camera_ray`, with the scene's colours (and
+/// its media's) as `colours` gives them.
+pub(crate) fn radiance<C: Colours>(
     ctx: &Context,
     camera_ray: &Ray,
     Lengths {
@@ -97,6 +99,7 @@ pub(crate) fn radiance(
     }: Lengths,
     sampler: &mut Sampler,
     stats: &mut RayStats,
+    colours: &mut C,
 ) -> Rgb {
     let scene = ctx.scene;
     let lights = &ctx.lights;
@@ -127,24 +130,26 @@ pub(crate) fn radiance(
             let u = sampler.next_2d();
             let mut rng = sampler.stream();
             let mut path = Throughput { beta, r_u, r_l };
-            let flight = fly(
-                model,
-                &ray,
-                t_max,
-                (
-                    hero,
-                    &mut Uniforms {
-                        given: &[u.x, u.y],
-                        rng: &mut rng,
+            let flight = colours.medium(model, |model| {
+                fly(
+                    model,
+                    &ray,
+                    t_max,
+                    (
+                        hero,
+                        &mut Uniforms {
+                            given: &[u.x, u.y],
+                            rng: &mut rng,
+                        },
+                    ),
+                    &mut path,
+                    &mut |c, path| {
+                        if emits {
+                            radiance += emission_at(c, path, hero);
+                        }
                     },
-                ),
-                &mut path,
-                &mut |c, path| {
-                    if emits {
-                        radiance += emission_at(c, path, hero);
-                    }
-                },
-            );
+                )
+            });
             Throughput { beta, r_u, r_l } = path;
             let scatter = match flight {
                 Flight::Ended => break,
@@ -167,7 +172,7 @@ pub(crate) fn radiance(
                     &|_| medium,
                     ray.time,
                     (beta, r_u, hero),
-                    sampler,
+                    (sampler, &*colours),
                     stats,
                 );
                 let (wi, pdf) = phase::sample_hg(wo, g, sampler.next_2d());
@@ -188,7 +193,7 @@ pub(crate) fn radiance(
 
         let Some(sp) = hit else {
             if let Some(bg) = lights.background_light() {
-                let le = lights.background_radiance(ray.dir);
+                let le = colours.emission(lights.background_radiance(ray.dir), || None);
                 radiance += if specular {
                     beta * le / average(r_u)
                 } else {
@@ -201,7 +206,7 @@ pub(crate) fn radiance(
         let m = &scene.materials[sp.material];
         let wo = -ray.dir;
         if m.emits_towards(wo, sp.ng) {
-            let le = m.emission_at(sp.p, sp.uv, sp.ng);
+            let le = colours.emission(m.emission_at(sp.p, sp.uv, sp.ng), || m.emission_spectrum);
             radiance += match sp.world_shape().and_then(|s| lights.light_of_shape(s)) {
                 Some(l) if !specular => {
                     let p_l = lights.pdf_li(l, prev_p, sp.p, sp.ng);
@@ -223,7 +228,7 @@ pub(crate) fn radiance(
             break;
         }
         depth += 1;
-        let bsdf = m.bsdf(&sp, wo);
+        let bsdf = colours.bsdf(m.bsdf(&sp, wo));
         let wo = wo.normalize();
         if bsdf.has_non_delta() {
             let current = medium;
@@ -235,7 +240,7 @@ pub(crate) fn radiance(
                 &|w| medium_after(ctx, &sp, w, current),
                 sp.time,
                 (beta, r_u, hero),
-                sampler,
+                (sampler, &*colours),
                 stats,
             );
         } else {
@@ -371,7 +376,8 @@ pub(super) fn russian_roulette(beta: &mut Rgb, r_u: Rgb, on: bool, sampler: &mut
 /// one light sample, its transmittance through media and medium boundaries by ratio
 /// tracking, weighted against sampling the scatterer by the balance heuristic over the
 /// path's channel densities. `start` gives the medium the shadow ray starts in, by its
-/// direction; `path` is the throughput, its density ratios and its hero channel.
+/// direction; `path` is the throughput, its density ratios and its hero channel; the
+/// light's colour and the media's are as `colours` gives them.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn sample_light(
     ctx: &Context,
@@ -381,7 +387,7 @@ pub(super) fn sample_light(
     start: &dyn Fn(Vec3) -> Option<u32>,
     time: f32,
     (beta, r_path, hero): (Rgb, Rgb, usize),
-    sampler: &mut Sampler,
+    (sampler, colours): (&mut Sampler, &impl Colours),
     stats: &mut RayStats,
 ) -> Rgb {
     let u_choice = sampler.next_1d();
@@ -402,12 +408,15 @@ pub(super) fn sample_light(
         (*at, time),
         start(ls.wi),
         &ls.spot(),
-        hero,
+        (hero, colours),
         &mut rng,
         stats,
     ) else {
         return Rgb::ZERO;
     };
+    let le = colours.emission(ls.radiance, || {
+        ctx.lights.spectrum_chosen_at(at.p, u_choice)
+    });
     let r_l = r_path * r_l * ls.pdf;
     let r_u = r_path * r_u * scatter_pdf;
     let denominator = if ls.delta {
@@ -418,7 +427,7 @@ pub(super) fn sample_light(
     if !positive(denominator) {
         return Rgb::ZERO;
     }
-    beta * f * t_ray * ls.radiance / denominator
+    beta * f * t_ray * le / denominator
 }
 
 /// The transmittance from `from` (in `medium`) to `to`, through medium boundaries, by
@@ -430,7 +439,7 @@ pub(super) fn transmittance(
     from: (Spot, f32),
     medium: Option<u32>,
     to: &Spot,
-    hero: usize,
+    hero: (usize, &impl Colours),
     rng: &mut Rng,
     stats: &mut RayStats,
 ) -> Option<(Rgb, Rgb, Rgb)> {
@@ -453,7 +462,7 @@ pub(super) fn transmittance_and_depth(
     from: (Spot, f32),
     medium: Option<u32>,
     to: Result<&Spot, Vec3>,
-    hero: usize,
+    hero: (usize, &impl Colours),
     rng: &mut Rng,
     stats: &mut RayStats,
 ) -> Option<(Rgb, Rgb, Rgb, f32)> {
@@ -488,7 +497,7 @@ pub(super) fn transmittance_to_infinity(
     from: (Spot, f32),
     medium: Option<u32>,
     dir: Vec3,
-    hero: usize,
+    hero: (usize, &impl Colours),
     rng: &mut Rng,
     stats: &mut RayStats,
 ) -> Option<(Rgb, Rgb, Rgb)> {
@@ -516,7 +525,7 @@ fn track(
     (mut from, time): (Spot, f32),
     mut medium: Option<u32>,
     to: Towards,
-    (hero, rng): (usize, &mut Rng),
+    ((hero, colours), rng): ((usize, &impl Colours), &mut Rng),
     stats: &mut RayStats,
     mut depth: Option<&mut f32>,
 ) -> Option<(Rgb, Rgb, Rgb)> {
@@ -535,26 +544,28 @@ fn track(
             }
         }
         if let Some(m) = medium {
-            let model = ctx.scene.media[m as usize].model();
             let t_end = hit.as_ref().map_or(t_far, |sp| sp.t);
-            if let Some(depth) = depth.as_deref_mut() {
-                *depth += grey_depth(model, &ray, t_end);
-            }
-            let t_maj = sample_majorant(model, &ray, t_end, hero, rng, &mut |c| {
-                let sigma_n = (c.sigma_maj - c.point.sigma_a - c.point.sigma_s).max(Rgb::ZERO);
-                let pdf = c.t_maj[hero] * c.sigma_maj[hero];
-                t_ray *= c.t_maj * sigma_n / pdf;
-                r_l *= c.t_maj * c.sigma_maj / pdf;
-                r_u *= c.t_maj * sigma_n / pdf;
-                let estimate = t_ray / average(r_l + r_u);
-                if estimate.max_element() < 0.05 {
-                    if c.u < 0.75 {
-                        t_ray = Rgb::ZERO;
-                    } else {
-                        t_ray /= 0.25;
-                    }
+            let model = ctx.scene.media[m as usize].model();
+            let t_maj = colours.medium(model, |model| {
+                if let Some(depth) = depth.as_deref_mut() {
+                    *depth += grey_depth(model, &ray, t_end);
                 }
-                t_ray != Rgb::ZERO
+                sample_majorant(model, &ray, t_end, hero, rng, &mut |c| {
+                    let sigma_n = (c.sigma_maj - c.point.sigma_a - c.point.sigma_s).max(Rgb::ZERO);
+                    let pdf = c.t_maj[hero] * c.sigma_maj[hero];
+                    t_ray *= c.t_maj * sigma_n / pdf;
+                    r_l *= c.t_maj * c.sigma_maj / pdf;
+                    r_u *= c.t_maj * sigma_n / pdf;
+                    let estimate = t_ray / average(r_l + r_u);
+                    if estimate.max_element() < 0.05 {
+                        if c.u < 0.75 {
+                            t_ray = Rgb::ZERO;
+                        } else {
+                            t_ray /= 0.25;
+                        }
+                    }
+                    t_ray != Rgb::ZERO
+                })
             });
             let t = t_maj[hero];
             if t_ray == Rgb::ZERO || !positive(t) {

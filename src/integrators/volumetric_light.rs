@@ -19,6 +19,7 @@ use crate::scene::lights::Emitter;
 use crate::scene::media::tracking::Uniforms;
 use crate::scene::media::{MediumInterface, MediumModel};
 use crate::scene::Scene;
+use crate::transport::spectral::Colours;
 use crate::transport::{Context, RayStats, Splat};
 
 /// Whether light tracing renders `scene`'s media: not media that emit (light paths do not
@@ -136,7 +137,8 @@ impl LightMedium {
 
 /// What a scattering point gives the film: its connection to the camera, through media,
 /// splatted with the path's throughput `path` (over the channels' densities) times `f`,
-/// which gives the scattering towards the camera's direction.
+/// which gives the scattering towards the camera's direction; the values the path carries
+/// are as `colours` gives them.
 #[allow(clippy::too_many_arguments)]
 fn splat_to_camera(
     ctx: &Context,
@@ -144,7 +146,7 @@ fn splat_to_camera(
     (at, time): (&Spot, f32),
     medium_towards: &dyn Fn(Vec3) -> Option<u32>,
     f: &dyn Fn(Vec3) -> Rgb,
-    (path, hero): (&Throughput, usize),
+    (path, hero, colours): (&Throughput, usize, &impl Colours),
     sampler: &mut Sampler,
     stats: &mut RayStats,
     splats: &mut Vec<Splat>,
@@ -160,8 +162,8 @@ fn splat_to_camera(
     }
     let lens = Spot::exact(lens);
     let medium = medium_towards(c.dir);
-    let Some((t, _, r_l)) = transmittance(ctx, (*at, time), medium, &lens, hero, &mut rng, stats)
-    else {
+    let (from, hero) = ((*at, time), (hero, colours));
+    let Some((t, _, r_l)) = transmittance(ctx, from, medium, &lens, hero, &mut rng, stats) else {
         return;
     };
     // One strategy: the connection's collisions drawn by the majorant (as a light sample's).
@@ -170,15 +172,17 @@ fn splat_to_camera(
         splats.push(Splat {
             x: c.x,
             y: c.y,
-            value: path.beta * f * t * (c.importance / density),
+            value: colours.output(path.beta * f * t * (c.importance / density)),
         });
     }
 }
 
 /// One light path through a scene with media, splatted where its vertices land on the film;
 /// returns what the camera ray itself gives its pixel (the background it sees through the
-/// media on its way, which light paths cannot reach).
-pub(crate) fn trace(
+/// media on its way, which light paths cannot reach), in the film's RGB; the scene's colours
+/// (and its media's) are as `colours` gives them.
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn trace<C: Colours>(
     ctx: &Context,
     camera: &CameraBasis,
     camera_ray: &Ray,
@@ -186,6 +190,7 @@ pub(crate) fn trace(
     sampler: &mut Sampler,
     stats: &mut RayStats,
     splats: &mut Vec<Splat>,
+    colours: &mut C,
 ) -> Rgb {
     let scene = ctx.scene;
     let lights = &ctx.lights;
@@ -197,16 +202,20 @@ pub(crate) fn trace(
         let from = (Spot::exact(camera_ray.origin), time);
         let medium = scene.camera_medium;
         let (dir, stats) = (camera_ray.dir, &mut *stats);
+        let hero = (hero, &*colours);
         if let Some((t, _, r_l)) =
             transmittance_to_infinity(ctx, from, medium, dir, hero, &mut rng, stats)
         {
             // One strategy: the camera ray, its collisions drawn by the majorant.
             if positive(average(r_l)) {
-                direct = lights.background_radiance(dir) * t / average(r_l);
+                let le = colours.emission(lights.background_radiance(dir), || None);
+                direct = colours.output(le * t / average(r_l));
             }
         }
     }
-    light_path(ctx, camera, time, hero, lengths, sampler, stats, splats);
+    light_path(
+        ctx, camera, time, hero, lengths, sampler, stats, splats, colours,
+    );
     direct
 }
 
@@ -224,15 +233,17 @@ fn light_path(
     sampler: &mut Sampler,
     stats: &mut RayStats,
     splats: &mut Vec<Splat>,
+    colours: &mut impl Colours,
 ) {
     let scene = ctx.scene;
     let lights = &ctx.lights;
     let u_choose = sampler.next_2d();
     let u_pos = sampler.next_2d();
     let u_dir = sampler.next_2d();
-    let Some(es) = lights.sample_le(u_choose.x, u_pos, u_dir) else {
+    let Some(mut es) = lights.sample_le(u_choose.x, u_pos, u_dir) else {
         return;
     };
+    es.radiance = colours.emission(es.radiance, || lights.spectrum(es.light));
     let at_infinity = lights.is_infinite(es.light);
     let light_medium = LightMedium::of(ctx, &es, u_pos, time, stats);
     let around = light_medium.around;
@@ -245,7 +256,10 @@ fn light_path(
     let mut from = es.spot();
     if let (Some(m), true) = (around, at_infinity) {
         let model = scene.media[m as usize].model();
-        let Some(start) = arrive_from_infinity(model, es.p, es.dir, (hero, &mut path)) else {
+        let arrived = colours.medium(model, |model| {
+            arrive_from_infinity(model, es.p, es.dir, (hero, &mut path))
+        });
+        let Some(start) = arrived else {
             return;
         };
         from = Spot::exact(start);
@@ -260,7 +274,7 @@ fn light_path(
             (&es.spot(), time),
             &medium_towards,
             &emission,
-            (&path, hero),
+            (&path, hero, &*colours),
             sampler,
             stats,
             splats,
@@ -284,20 +298,23 @@ fn light_path(
             // The flight's first collision stratified over the pixel's samples.
             let u = sampler.next_2d();
             let mut rng = sampler.stream();
-            match fly(
-                model,
-                &ray,
-                t_max,
-                (
-                    hero,
-                    &mut Uniforms {
-                        given: &[u.x, u.y],
-                        rng: &mut rng,
-                    },
-                ),
-                &mut path,
-                &mut |_, _| {},
-            ) {
+            let flight = colours.medium(model, |model| {
+                fly(
+                    model,
+                    &ray,
+                    t_max,
+                    (
+                        hero,
+                        &mut Uniforms {
+                            given: &[u.x, u.y],
+                            rng: &mut rng,
+                        },
+                    ),
+                    &mut path,
+                    &mut |_, _| {},
+                )
+            });
+            match flight {
                 Flight::Ended => return,
                 Flight::Crossed => {}
                 Flight::Scattered { p, g } => {
@@ -313,7 +330,7 @@ fn light_path(
                         (&at, time),
                         &|_| medium,
                         &|wi| Rgb::splat(phase::hg(wo, wi, g)),
-                        (&path, hero),
+                        (&path, hero, &*colours),
                         sampler,
                         stats,
                         splats,
@@ -347,7 +364,7 @@ fn light_path(
         }
         depth += 1;
         let wo = -ray.dir;
-        let bsdf = m.bsdf(&sp, wo);
+        let bsdf = colours.bsdf(m.bsdf(&sp, wo));
         if bsdf.has_non_delta() {
             let current = medium;
             splat_to_camera(
@@ -356,7 +373,7 @@ fn light_path(
                 (&sp.spot(), sp.time),
                 &|w| medium_after(ctx, &sp, w, current),
                 &|wi| bsdf.eval(wo, wi, Transport::Importance),
-                (&path, hero),
+                (&path, hero, &*colours),
                 sampler,
                 stats,
                 splats,

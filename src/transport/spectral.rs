@@ -13,8 +13,9 @@
 
 use crate::bsdf::{Bsdf, Conductor, LobeColours};
 use crate::error::{Error, Result};
-use crate::math::Rgb;
+use crate::math::{Ray, Rgb, Vec3};
 use crate::scene::materials::Surface;
+use crate::scene::media::{MediumKind, MediumModel, MediumPoint, Segment};
 use crate::scene::Scene;
 use crate::spectrum::rgb_to_spectrum::{solve, SigmoidPolynomial};
 use crate::spectrum::{
@@ -35,6 +36,8 @@ pub trait Colours {
     fn emission(&self, rgb: Rgb, shape: impl FnOnce() -> Option<BlackbodyEmission>) -> Rgb;
     /// The RGB a film takes of values the path carries.
     fn output(&self, v: Rgb) -> Rgb;
+    /// Calls `f` with the medium `model` whose coefficients are as the path carries them.
+    fn medium<R>(&self, model: &dyn MediumModel, f: impl FnOnce(&dyn MediumModel) -> R) -> R;
 }
 
 /// RGB rendering: colours are what the path carries.
@@ -55,6 +58,11 @@ impl Colours for RgbColours {
     #[inline(always)]
     fn output(&self, v: Rgb) -> Rgb {
         v
+    }
+
+    #[inline(always)]
+    fn medium<R>(&self, model: &dyn MediumModel, f: impl FnOnce(&dyn MediumModel) -> R) -> R {
+        f(model)
     }
 }
 
@@ -179,15 +187,113 @@ impl Colours for Wavelengths {
     fn output(&self, v: Rgb) -> Rgb {
         self.rgb_of(v)
     }
+
+    fn medium<R>(&self, model: &dyn MediumModel, f: impl FnOnce(&dyn MediumModel) -> R) -> R {
+        match model.colours() {
+            Some(unit) if !is_grey_absorber(unit) => f(&MediumAt::new(model, unit, self)),
+            // Grey coefficients are the same at every wavelength; other media are refused
+            // by `check_scene`.
+            _ => f(model),
+        }
+    }
+}
+
+/// Whether a medium of coefficients `unit` is the same at every wavelength: grey σa and σs,
+/// and no emission (an emitter's white is the colour space's illuminant, not a constant).
+fn is_grey_absorber(unit: &MediumPoint) -> bool {
+    let grey = |v: Rgb| v.x == v.y && v.y == v.z;
+    grey(unit.sigma_a) && grey(unit.sigma_s) && unit.le * unit.sigma_a == Rgb::ZERO
+}
+
+/// A medium of one set of colours scaled by a density ([`MediumModel::colours`]) at a
+/// path's wavelengths: the colours become spectra once, and each point's density (and
+/// emission scale) is read back from the RGB medium as the ratio to its colours. Its
+/// majorants are the densities' bounds times the spectra.
+struct MediumAt<'a> {
+    model: &'a dyn MediumModel,
+    /// The largest channel of σt and of Le at density 1 (RGB).
+    sigma_t_max: f32,
+    le_max: f32,
+    /// The coefficients at density 1 at the path's wavelengths.
+    values: MediumPoint,
+}
+
+impl<'a> MediumAt<'a> {
+    fn new(model: &'a dyn MediumModel, unit: &MediumPoint, lambda: &Wavelengths) -> Self {
+        MediumAt {
+            model,
+            sigma_t_max: (unit.sigma_a + unit.sigma_s).max_element(),
+            le_max: unit.le.max_element(),
+            values: MediumPoint {
+                sigma_a: lambda.unbounded(unit.sigma_a),
+                sigma_s: lambda.unbounded(unit.sigma_s),
+                le: lambda.illuminant(unit.le),
+                g: unit.g,
+            },
+        }
+    }
+
+    fn ratio(x: f32, unit: f32) -> f32 {
+        if unit > 0.0 {
+            x / unit
+        } else {
+            0.0
+        }
+    }
+}
+
+/// Headroom on a majorant for the rounding of a density read back as a ratio.
+const MAJORANT_HEADROOM: f32 = 1.0 + 1e-5;
+
+impl MediumModel for MediumAt<'_> {
+    fn kind(&self) -> &'static str {
+        self.model.kind()
+    }
+
+    fn at(&self, p: Vec3) -> MediumPoint {
+        let rgb = self.model.at(p);
+        let density = Self::ratio((rgb.sigma_a + rgb.sigma_s).max_element(), self.sigma_t_max);
+        let le_scale = Self::ratio(rgb.le.max_element(), self.le_max);
+        MediumPoint {
+            sigma_a: self.values.sigma_a * density,
+            sigma_s: self.values.sigma_s * density,
+            le: self.values.le * le_scale,
+            g: rgb.g,
+        }
+    }
+
+    fn segments(&self, ray: &Ray, t_max: f32, visit: &mut dyn FnMut(Segment) -> bool) {
+        let sigma_t = self.values.sigma_a + self.values.sigma_s;
+        self.model.segments(ray, t_max, &mut |s| {
+            let bound = Self::ratio(s.sigma_maj.max_element(), self.sigma_t_max);
+            visit(Segment {
+                sigma_maj: sigma_t * (bound * MAJORANT_HEADROOM),
+                ..s
+            })
+        });
+    }
+
+    fn emits(&self) -> bool {
+        self.model.emits()
+    }
 }
 
 /// Refuses what spectral mode does not render yet (for every technique that renders
-/// spectrally, by `Technique::lifecycle`): media, measured reflectances (RGB
-/// tables) and coats whose medium is coloured.
+/// spectrally, by `Technique::lifecycle`): RGB grid media whose colours vary (or emit),
+/// measured reflectances (RGB tables) and coats whose medium is coloured.
 pub(crate) fn check_scene(scene: &Scene) -> Result<()> {
     let refuse = |why: String| Err(Error::setting("spectral", why));
-    if !scene.media.is_empty() {
-        return refuse("does not render participating media yet".into());
+    for m in &scene.media {
+        if let MediumKind::RgbGrid(grid) = &m.kind {
+            if !grey_rgb_grid(grid) {
+                return refuse(format!(
+                    "medium \"{}\" is an rgbgrid with colours or emission, which spectral \
+                     mode does not render (grey grids, homogeneous media and density grids \
+                     it does)",
+                    m.name
+                ));
+            }
+        }
     }
     for m in scene.materials.iter() {
         let coat = match &m.surface {
@@ -212,6 +318,12 @@ pub(crate) fn check_scene(scene: &Scene) -> Result<()> {
         }
     }
     Ok(())
+}
+
+/// Whether an RGB grid is grey everywhere and emits nothing: the same at every wavelength.
+fn grey_rgb_grid(grid: &crate::scene::media::RgbGrid) -> bool {
+    let grey = |v: &[Rgb]| v.iter().all(|c| c.x == c.y && c.y == c.z);
+    grid.sigma_a().is_none_or(grey) && grid.sigma_s().is_none_or(grey) && !grid.emits()
 }
 
 /// The spectrum of the sRGB reflectance `rgb`, solved once per colour for the whole

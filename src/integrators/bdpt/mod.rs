@@ -119,7 +119,7 @@ fn link(
     to: End,
     r_path: Rgb,
     time: f32,
-    spectral: &mut Option<Spectral>,
+    (spectral, colours): (&mut Option<Spectral>, &impl Colours),
     stats: &mut RayStats,
 ) -> Option<Rgb> {
     match (spectral, to) {
@@ -133,9 +133,10 @@ fn link(
         (Some(Spectral { hero, rng }), to) => {
             let from = (*from, time);
             let (t, _, r_l) = match to {
-                End::At(to) => transmittance(ctx, from, medium, to, *hero, rng, stats),
+                End::At(to) => transmittance(ctx, from, medium, to, (*hero, colours), rng, stats),
                 End::Towards(dir) => {
-                    transmittance_to_infinity(ctx, from, medium, dir, *hero, rng, stats)
+                    let hero = (*hero, colours);
+                    transmittance_to_infinity(ctx, from, medium, dir, hero, rng, stats)
                 }
             }?;
             let density = average(r_path * r_l);
@@ -281,7 +282,7 @@ impl Bdpt {
                             End::At(&Spot::exact(lens)),
                             qs.r_u,
                             time,
-                            &mut spectral,
+                            (&mut spectral, &*colours),
                             stats,
                         ) else {
                             continue;
@@ -335,7 +336,7 @@ impl Bdpt {
                             End::Towards(wdir),
                             qs.r_u * pt.r_u,
                             time,
-                            &mut spectral,
+                            (&mut spectral, &*colours),
                             stats,
                         ) else {
                             continue;
@@ -387,7 +388,7 @@ impl Bdpt {
                             End::At(&qs.spot()),
                             qs.r_u * pt.r_u,
                             time,
-                            &mut spectral,
+                            (&mut spectral, &*colours),
                             stats,
                         ) else {
                             continue;
@@ -575,7 +576,10 @@ fn infinite_light_subpath<'a>(
                 r_u,
                 r_l: Rgb::ONE,
             };
-            let Some(p) = arrive_from_infinity(model, es.p, es.dir, (hero, &mut tp)) else {
+            let arrived = colours.medium(model, |model| {
+                arrive_from_infinity(model, es.p, es.dir, (hero, &mut tp))
+            });
+            let Some(p) = arrived else {
                 light_path.push(v0);
                 return;
             };

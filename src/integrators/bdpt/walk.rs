@@ -79,24 +79,26 @@ pub(super) fn random_walk<'a>(
             let u = sampler.next_2d();
             let mut rng = sampler.stream();
             let mut emitted = Rgb::ZERO;
-            let flight = fly(
-                model,
-                &ray,
-                t_max,
-                (
-                    hero,
-                    &mut Uniforms {
-                        given: &[u.x, u.y],
-                        rng: &mut rng,
+            let flight = colours.medium(model, |model| {
+                fly(
+                    model,
+                    &ray,
+                    t_max,
+                    (
+                        hero,
+                        &mut Uniforms {
+                            given: &[u.x, u.y],
+                            rng: &mut rng,
+                        },
+                    ),
+                    &mut tp,
+                    &mut |c, path| {
+                        if emits {
+                            emitted += emission_at(c, path, hero);
+                        }
                     },
-                ),
-                &mut tp,
-                &mut |c, path| {
-                    if emits {
-                        emitted += emission_at(c, path, hero);
-                    }
-                },
-            );
+                )
+            });
             media.emitted += emitted;
             match flight {
                 Flight::Ended => break,

@@ -30,6 +30,7 @@ use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
 use crate::math::{Ray, Rgb, Vec3};
 use crate::scene::media::tracking::Uniforms;
+use crate::transport::spectral::RgbColours;
 use crate::transport::{Context, RayStats};
 
 /// Where a camera path scattered in a medium: the photons scattering within the pixel's
@@ -137,7 +138,7 @@ pub(super) fn trace<'a>(
                         &|_| medium,
                         ray.time,
                         (path.beta, path.r_u, hero),
-                        sampler,
+                        (sampler, &RgbColours),
                         stats,
                     );
                     let sigma_s = scene.media[m as usize].model().at(p).sigma_s;
@@ -212,7 +213,7 @@ pub(super) fn trace<'a>(
                 &|w| medium_after(ctx, &sp, w, current),
                 sp.time,
                 (path.beta, path.r_u, hero),
-                sampler,
+                (sampler, &RgbColours),
                 stats,
             );
         }

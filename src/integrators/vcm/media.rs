@@ -22,6 +22,7 @@ use crate::math::{Ray, Rgb, Rng, Vec3};
 use crate::scene::media::tracking::Uniforms;
 use crate::scene::media::MediumInterface;
 use crate::scene::SurfacePoint;
+use crate::transport::spectral::RgbColours;
 use crate::transport::{Context, RayStats};
 
 /// A grey transmittance from an optical depth, kept above a floor so that the weights'
@@ -274,8 +275,15 @@ pub(super) fn link(
         End::At(to) => Ok(to),
         End::Towards(dir) => Err(dir),
     };
-    let (t, _, r_l, depth) =
-        transmittance_and_depth(ctx, (*from, 0.0), medium, to, *hero, rng, stats)?;
+    let (t, _, r_l, depth) = transmittance_and_depth(
+        ctx,
+        (*from, 0.0),
+        medium,
+        to,
+        (*hero, &RgbColours),
+        rng,
+        stats,
+    )?;
     let density = average(r_u * r_l);
     positive(density).then(|| (t / density, grey(depth)))
 }

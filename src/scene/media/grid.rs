@@ -147,6 +147,10 @@ impl MediumModel for UniformGrid {
     fn emits(&self) -> bool {
         (self.unit.le * self.unit.sigma_a).max_element() > 0.0
     }
+
+    fn colours(&self) -> Option<&MediumPoint> {
+        Some(&self.unit)
+    }
 }
 
 #[cfg(test)]

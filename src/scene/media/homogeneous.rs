@@ -57,4 +57,8 @@ impl MediumModel for Homogeneous {
     fn emits(&self) -> bool {
         (self.point.le * self.point.sigma_a).max_element() > 0.0
     }
+
+    fn colours(&self) -> Option<&MediumPoint> {
+        Some(&self.point)
+    }
 }

@@ -60,6 +60,13 @@ pub trait MediumModel {
 
     /// Whether the medium emits anywhere (techniques skip the emission term otherwise).
     fn emits(&self) -> bool;
+
+    /// The coefficients at density 1, when the medium is one set of colours scaled at each
+    /// point by a density (σa, σs) and an emission scale (Le): homogeneous media and
+    /// density grids. Spectral renders turn these colours into spectra once a path.
+    fn colours(&self) -> Option<&MediumPoint> {
+        None
+    }
 }
 
 /// The kinds of medium, each a type of its own in a file of this folder.

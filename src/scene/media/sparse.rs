@@ -240,4 +240,8 @@ impl MediumModel for SparseGrid {
     fn emits(&self) -> bool {
         (self.unit.le * self.unit.sigma_a).max_element() > 0.0
     }
+
+    fn colours(&self) -> Option<&MediumPoint> {
+        Some(&self.unit)
+    }
 }
