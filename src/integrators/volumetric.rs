@@ -126,22 +126,13 @@ pub(crate) fn radiance<C: Colours>(
             let model = scene.media[m as usize].model();
             let emits = model.emits() && depth < max_depth;
             let t_max = hit.as_ref().map_or(f32::INFINITY, |sp| sp.t);
-            // The flight's first collision stratified over the pixel's samples.
-            let u = sampler.next_2d();
-            let mut rng = sampler.stream();
             let mut path = Throughput { beta, r_u, r_l };
             let flight = colours.medium(model, |model| {
                 fly(
                     model,
                     &ray,
                     t_max,
-                    (
-                        hero,
-                        &mut Uniforms {
-                            given: &[u.x, u.y],
-                            rng: &mut rng,
-                        },
-                    ),
+                    (hero, &mut *sampler),
                     &mut path,
                     &mut |c, path| {
                         if emits {
@@ -302,15 +293,23 @@ pub(super) enum Flight {
 /// One free flight along `ray` up to `t_max` in `medium` by delta tracking, sampled by the
 /// `hero` channel: at each tentative collision, absorption, scattering or a null collision
 /// by the hero's coefficients; `path` takes the weights, and `at` sees each collision first
-/// (with the path as it arrives there), for the emission of the medium.
+/// (with the path as it arrives there), for the emission of the medium. The first collision
+/// is stratified over the pixel's samples (the next two dimensions of `sampler`), the rest
+/// drawn from the sample's stream.
 pub(super) fn fly(
     medium: &dyn MediumModel,
     ray: &Ray,
     t_max: f32,
-    (hero, rng): (usize, &mut Uniforms),
+    (hero, sampler): (usize, &mut Sampler),
     path: &mut Throughput,
     at: &mut dyn FnMut(&Collision, &Throughput),
 ) -> Flight {
+    let u = sampler.next_2d();
+    let mut rng = sampler.stream();
+    let rng = &mut Uniforms {
+        given: &[u.x, u.y],
+        rng: &mut rng,
+    };
     let mut flight = Flight::Crossed;
     let t_maj = sample_majorant_from(medium, ray, t_max, hero, rng, &mut |c| {
         at(c, path);

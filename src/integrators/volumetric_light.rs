@@ -16,7 +16,6 @@ use crate::math::{Ray, Rgb, Vec2, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::lights::EmissionSample;
 use crate::scene::lights::Emitter;
-use crate::scene::media::tracking::Uniforms;
 use crate::scene::media::{MediumInterface, MediumModel};
 use crate::scene::Scene;
 use crate::transport::spectral::Colours;
@@ -295,21 +294,12 @@ fn light_path(
         if let Some(m) = medium {
             let model = scene.media[m as usize].model();
             let t_max = hit.as_ref().map_or(f32::INFINITY, |sp| sp.t);
-            // The flight's first collision stratified over the pixel's samples.
-            let u = sampler.next_2d();
-            let mut rng = sampler.stream();
             let flight = colours.medium(model, |model| {
                 fly(
                     model,
                     &ray,
                     t_max,
-                    (
-                        hero,
-                        &mut Uniforms {
-                            given: &[u.x, u.y],
-                            rng: &mut rng,
-                        },
-                    ),
+                    (hero, &mut *sampler),
                     &mut path,
                     &mut |_, _| {},
                 )

@@ -12,7 +12,6 @@ use crate::integrators::volumetric::{
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
 use crate::math::{Ray, Rgb, Vec3};
-use crate::scene::media::tracking::Uniforms;
 use crate::transport::spectral::Colours;
 use crate::transport::{Context, RayStats};
 
@@ -75,22 +74,13 @@ pub(super) fn random_walk<'a>(
             let model = ctx.scene.media[m as usize].model();
             let emits = media.gather_emission && model.emits() && bounces < media.max_depth;
             let t_max = hit.as_ref().map_or(f32::INFINITY, |sp| sp.t);
-            // The flight's first collision stratified over the pixel's samples.
-            let u = sampler.next_2d();
-            let mut rng = sampler.stream();
             let mut emitted = Rgb::ZERO;
             let flight = colours.medium(model, |model| {
                 fly(
                     model,
                     &ray,
                     t_max,
-                    (
-                        hero,
-                        &mut Uniforms {
-                            given: &[u.x, u.y],
-                            rng: &mut rng,
-                        },
-                    ),
+                    (hero, &mut *sampler),
                     &mut tp,
                     &mut |c, path| {
                         if emits {

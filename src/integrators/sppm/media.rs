@@ -29,7 +29,6 @@ use crate::integrators::volumetric_light::{arrive_from_infinity, LightMedium};
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
 use crate::math::{Ray, Rgb, Vec3};
-use crate::scene::media::tracking::Uniforms;
 use crate::transport::spectral::RgbColours;
 use crate::transport::{Context, RayStats};
 
@@ -65,21 +64,7 @@ fn flight(
     sampler: &mut Sampler,
 ) -> Flight {
     let model = ctx.scene.media[medium as usize].model();
-    let u = sampler.next_2d();
-    let mut rng = sampler.stream();
-    let given = [u.x, u.y];
-    let mut uniforms = Uniforms {
-        given: &given,
-        rng: &mut rng,
-    };
-    fly(
-        model,
-        ray,
-        t_max,
-        (hero, &mut uniforms),
-        path,
-        &mut |_, _| {},
-    )
+    fly(model, ray, t_max, (hero, sampler), path, &mut |_, _| {})
 }
 
 /// The camera path along `camera_ray` through media: emission and direct light gathered on

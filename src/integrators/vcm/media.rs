@@ -19,7 +19,6 @@ use crate::integrators::volumetric::{
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
 use crate::math::{Ray, Rgb, Rng, Vec3};
-use crate::scene::media::tracking::Uniforms;
 use crate::scene::media::MediumInterface;
 use crate::scene::SurfacePoint;
 use crate::transport::spectral::RgbColours;
@@ -192,9 +191,6 @@ pub(super) fn advance(
             let model = ctx.scene.media[m as usize].model();
             let emits = glow.is_some() && model.emits();
             let t_max = hit.as_ref().map_or(f32::INFINITY, |sp| sp.t);
-            // The flight's first collision stratified over the pixel's samples.
-            let u = sampler.next_2d();
-            let mut rng = sampler.stream();
             let mut tp = Throughput {
                 beta: path.beta,
                 r_u: path.r_u,
@@ -205,13 +201,7 @@ pub(super) fn advance(
                 model,
                 &ray,
                 t_max,
-                (
-                    hero,
-                    &mut Uniforms {
-                        given: &[u.x, u.y],
-                        rng: &mut rng,
-                    },
-                ),
+                (hero, &mut *sampler),
                 &mut tp,
                 &mut |c, tp| {
                     if emits {
