@@ -380,6 +380,28 @@ fn bad_settings_are_refused_naming_the_setting() {
     assert!(e.contains("part") || e.contains("region"), "{e}");
 }
 
+/// A memory budget too small for an iteration's light vertices is refused before the
+/// render, in one line naming them and their count: by default one in sixteen pixels in
+/// a scene without smooth surfaces (the Cornell box), one per pixel in a scene with a
+/// mirror and glass.
+#[test]
+fn a_budget_too_small_for_the_light_vertices_is_refused() {
+    let control = Control {
+        budget: raylink::MemoryBudget::bytes(180 << 10),
+        ..Control::default()
+    };
+    let settings = technique(TechniqueKind::Vcm, 8, 1, None);
+    for (name, count) in [("cornell-box.toml", 64), ("cornell-spheres.toml", 1024)] {
+        let s = scene(name);
+        let e = Renderer::new(s.clone(), job(&s, &settings, 32, 1, 1), &control)
+            .err()
+            .map(|e| e.to_string())
+            .unwrap_or_default();
+        let named = format!("light vertices ({count} light subpaths");
+        assert!(e.contains(&named) && !e.contains('\n'), "{name}: {e}");
+    }
+}
+
 /// The command line takes `--integrator vcm`, and the technique list names it.
 #[test]
 fn the_command_line_renders_with_vcm() {

@@ -409,6 +409,19 @@ impl<'a> Bsdf<'a> {
         }
     }
 
+    /// [`eval_and_pdf`](Self::eval_and_pdf) with the reverse density too (of sampling `wo`
+    /// from `wi`), as bidirectional weights need them: f, pdf(wo → wi), pdf(wi → wo).
+    pub fn eval_and_pdfs(&self, wo: Vec3, wi: Vec3, mode: Transport) -> (Rgb, f32, f32) {
+        match self.connectable(wo, wi) {
+            Some((lo, li)) => (
+                self.eval_connected(wo, wi, lo, li, mode),
+                self.pdf_connected(lo, li),
+                self.pdf_connected(li, lo),
+            ),
+            None => (Rgb::ZERO, 0.0, 0.0),
+        }
+    }
+
     /// [`eval`](Self::eval) of directions that [`connectable`](Self::connectable) took to
     /// the shading frame as `lo`, `li`.
     fn eval_connected(&self, wo: Vec3, wi: Vec3, lo: Vec3, li: Vec3, mode: Transport) -> Rgb {

@@ -312,6 +312,11 @@ impl Renderer {
         }
         // Created for the scene as given: a relight keeps its emissions as the file's.
         let technique = job.technique.lifecycle(&scene)?;
+        if let Some((what, bytes)) = technique.memory(job.width, job.height) {
+            control
+                .budget
+                .check(&what, bytes.saturating_add(job.image_bytes()))?;
+        }
         if let Technique::Network(n) = &job.technique {
             // The network's patches are world-space shapes.
             if scene.has_instances() {

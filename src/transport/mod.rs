@@ -233,6 +233,12 @@ pub trait MonteCarlo: Sync {
         false
     }
 
+    /// What an iteration's whole-image work holds for an image of `size`, and its bytes
+    /// (estimated), for the memory budget; `None`: nothing worth counting.
+    fn iteration_memory(&self, _size: (u32, u32)) -> Option<(String, u64)> {
+        None
+    }
+
     /// Does the whole-image work of sample index `start.index` and calls `samples` once with
     /// what takes that index's camera samples (an integrator sharing the work) and what the
     /// work itself gave the image ([`IterationWork`]). Returns `false`, without calling it,

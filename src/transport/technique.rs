@@ -74,6 +74,13 @@ pub(crate) trait Lifecycle: Send + Sync {
     fn report(&self) -> Vec<String> {
         Vec::new()
     }
+
+    /// What the technique holds besides the film while it renders a `width` x `height`
+    /// image, and its bytes (estimated), for the memory budget; `None`: nothing worth
+    /// counting.
+    fn memory(&self, _width: u32, _height: u32) -> Option<(String, u64)> {
+        None
+    }
 }
 
 /// A progressive Monte Carlo technique (path, light and bidirectional tracing): nothing to
@@ -86,5 +93,9 @@ pub(crate) struct SampledTechnique<T> {
 impl<T: MonteCarlo + Send> Lifecycle for SampledTechnique<T> {
     fn tiles(&self) -> Tiles<'_> {
         Tiles::Samples(&self.integrator, self.settings)
+    }
+
+    fn memory(&self, width: u32, height: u32) -> Option<(String, u64)> {
+        self.integrator.iteration_memory((width, height))
     }
 }

@@ -240,7 +240,7 @@ impl Iteration<'_> {
         let Some((lp, wi, to)) = sample_towards(ctx, v.at.p, u_choose, u_pos, u_dir) else {
             return Rgb::ZERO;
         };
-        let f = v.scatter.eval(v.wo, wi, Transport::Radiance);
+        let (f, pdf_fwd, pdf_rev) = v.scatter.eval_and_pdfs(v.wo, wi, Transport::Radiance);
         if f == Rgb::ZERO || lp.radiance == Rgb::ZERO {
             return Rgb::ZERO;
         }
@@ -259,12 +259,7 @@ impl Iteration<'_> {
         let Some((through, grey)) = link(ctx, from, end, v.path.r_u, spectral, stats) else {
             return Rgb::ZERO;
         };
-        let pdf_dir = if lp.delta {
-            0.0
-        } else {
-            v.scatter.pdf(v.wo, wi)
-        };
-        let pdf_rev = v.scatter.pdf(wi, v.wo);
+        let pdf_dir = if lp.delta { 0.0 } else { pdf_fwd };
         let cos_to_light = v.scatter.cos(v.at.n, wi);
         let p = v.path;
         let w_light = pdf_dir * grey / direct_pdf_w;
@@ -290,11 +285,12 @@ impl Iteration<'_> {
             return Rgb::ZERO;
         }
         let dir = d / dist2.sqrt();
-        let f_cam = v.scatter.eval(v.wo, dir, Transport::Radiance);
+        let (f_cam, cam_pdf_w, cam_rev) = v.scatter.eval_and_pdfs(v.wo, dir, Transport::Radiance);
         if f_cam == Rgb::ZERO {
             return Rgb::ZERO;
         }
-        let f_light = lv.scatter.eval(lv.wo, -dir, Transport::Importance);
+        let (f_light, light_pdf_w, light_rev) =
+            lv.scatter.eval_and_pdfs(lv.wo, -dir, Transport::Importance);
         if f_light == Rgb::ZERO {
             return Rgb::ZERO;
         }
@@ -303,10 +299,8 @@ impl Iteration<'_> {
         let Some((through, grey)) = link(ctx, from, end, v.path.r_u, spectral, stats) else {
             return Rgb::ZERO;
         };
-        let cam_pdf_a = v.scatter.pdf(v.wo, dir) * lv.scatter.cos(lv.at.n, dir) / dist2 * grey;
-        let cam_rev = v.scatter.pdf(dir, v.wo);
-        let light_pdf_a = lv.scatter.pdf(lv.wo, -dir) * v.scatter.cos(v.at.n, dir) / dist2 * grey;
-        let light_rev = lv.scatter.pdf(-dir, lv.wo);
+        let cam_pdf_a = cam_pdf_w * lv.scatter.cos(lv.at.n, dir) / dist2 * grey;
+        let light_pdf_a = light_pdf_w * v.scatter.cos(v.at.n, dir) / dist2 * grey;
         let (pl, pc) = (&lv.path, v.path);
         let vm_light = if lv.scatter.mergeable() {
             self.weights.vm
@@ -338,12 +332,11 @@ impl Iteration<'_> {
             if cos == 0.0 {
                 return;
             }
-            let f = bsdf.eval(v.wo, wi, Transport::Radiance) / cos;
+            let (f, pdf_dir, pdf_rev) = bsdf.eval_and_pdfs(v.wo, wi, Transport::Radiance);
             if f == Rgb::ZERO {
                 return;
             }
-            let pdf_dir = bsdf.pdf(v.wo, wi);
-            let pdf_rev = bsdf.pdf(wi, v.wo);
+            let f = f / cos;
             let w_light = lv.path.d_vcm * w.vc + lv.path.d_vm * pdf_dir;
             let w_camera = pc.d_vcm * w.vc + pc.d_vm * pdf_rev;
             sum += f * lv.path.weighted() * (1.0 / (w_light + 1.0 + w_camera));

@@ -1,5 +1,6 @@
-//! An iteration's light subpaths (one per pixel unless set otherwise), each from a light chosen by power and
-//! continued by BSDF sampling for importance transport. Every vertex where the BSDF is not
+//! An iteration's light subpaths (one per pixel, or one in sixteen pixels in a scene
+//! without smooth surfaces or media, unless set otherwise), each from a light chosen by
+//! power and continued by BSDF sampling for importance transport. Every vertex where the BSDF is not
 //! purely specular is kept (for connections and merges) and connected to the camera (the
 //! light tracing technique, splatted).
 //!
@@ -297,7 +298,7 @@ impl LightPass<'_> {
         let Some(c) = project_to_camera(camera, lens, v.at.p) else {
             return;
         };
-        let f = v.scatter.eval(v.wo, c.dir, Transport::Importance);
+        let (f, _, pdf_rev) = v.scatter.eval_and_pdfs(v.wo, c.dir, Transport::Importance);
         if f == Rgb::ZERO {
             return;
         }
@@ -317,7 +318,6 @@ impl LightPass<'_> {
         let dist2 = (lens - v.at.p).length_squared();
         let camera_pdf_a =
             camera_pdf_dir(camera, lens, -c.dir) * v.scatter.cos(v.at.n, c.dir) / dist2 * grey;
-        let pdf_rev = v.scatter.pdf(c.dir, v.wo);
         let vm = if v.scatter.mergeable() {
             self.weights.vm
         } else {

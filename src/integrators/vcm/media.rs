@@ -48,19 +48,16 @@ pub(super) enum Scatter<'a> {
 }
 
 impl Scatter<'_> {
-    /// f·|cos| from `wo` to `wi` (a phase function's value, which has no cosine).
-    pub fn eval(&self, wo: Vec3, wi: Vec3, mode: Transport) -> Rgb {
+    /// f·|cos| from `wo` to `wi` (a phase function's value, which has no cosine), the
+    /// solid-angle density of sampling `wi` from `wo` and the reverse one (of `wo` from
+    /// `wi`), the directions taken to the shading frame once.
+    pub fn eval_and_pdfs(&self, wo: Vec3, wi: Vec3, mode: Transport) -> (Rgb, f32, f32) {
         match self {
-            Scatter::Surface(b) => b.eval(wo, wi, mode),
-            Scatter::Medium { g } => Rgb::splat(phase::hg(wo, wi, *g)),
-        }
-    }
-
-    /// The solid-angle density of sampling `wi` from `wo`.
-    pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
-        match self {
-            Scatter::Surface(b) => b.pdf(wo, wi),
-            Scatter::Medium { g } => phase::hg(wo, wi, *g),
+            Scatter::Surface(b) => b.eval_and_pdfs(wo, wi, mode),
+            Scatter::Medium { g } => {
+                let p = phase::hg(wo, wi, *g);
+                (Rgb::splat(p), p, p)
+            }
         }
     }
 

@@ -6,12 +6,13 @@
 //! directly or through glass converge as photon mapping makes them, and everything else as
 //! bidirectional tracing does.
 //!
-//! Each sample index is an iteration: light subpaths (one per pixel, or the
-//! `photons_per_iteration` setting), traced first over the whole image (`light_pass`), a hash grid over their vertices, then one camera subpath
-//! per pixel (`camera_path`). The merge radius shrinks from iteration to iteration,
-//! r_i = r₀ · i^((α−1)/2) with α = 3/4, so the merges' bias vanishes as the iterations go on
-//! while their variance stays bounded. The weights are SmallVCM's recursive ones with the
-//! balance heuristic (`mis`).
+//! Each sample index is an iteration: light subpaths (one per pixel, one in sixteen pixels
+//! in a scene without smooth surfaces or media, or the `photons_per_iteration` setting),
+//! traced first over the whole image (`light_pass`), a hash grid over their vertices, then
+//! one camera subpath per pixel (`camera_path`). The merge radius shrinks from iteration
+//! to iteration, r_i = r₀ · i^((α−1)/2) with α = 3/4, so the merges' bias vanishes as the
+//! iterations go on while their variance stays bounded. The weights are SmallVCM's
+//! recursive ones with the balance heuristic (`mis`).
 //!
 //! In a scene with participating media (`media`) the subpaths fly through them as the
 //! bidirectional tracer's do: free flights by delta tracking with a hero channel drawn per
@@ -80,6 +81,50 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
 /// The radius exponent α: each iteration's merge radius is r₀ · i^((α−1)/2).
 const ALPHA: f32 = 0.75;
 
+/// The kept vertices of a light subpath the memory estimate assumes (on a diffuse box
+/// with eight bounces they average about three).
+const VERTICES_PER_PATH: u64 = 3;
+
+/// Bytes a light vertex takes while an iteration holds it: the vertex, its ball and its
+/// entries in the hash grid (up to eight cells), and its splat to the camera.
+const BYTES_PER_VERTEX: u64 = (std::mem::size_of::<light_pass::LightVertex>()
+    + std::mem::size_of::<(crate::math::Vec3, f32)>() * 2
+    + 8 * std::mem::size_of::<(u64, u32)>()
+    + std::mem::size_of::<Splat>()) as u64;
+
+/// Light subpaths a pixel by default in a scene without smooth surfaces or media: one in
+/// sixteen pixels.
+const DIFFUSE_PATHS_PER_PIXEL: f32 = 1.0 / 16.0;
+
+/// GGX roughness below which a specular or transmitting surface counts as smooth: light
+/// it reflects or refracts onto a diffuse surface forms caustics that only merges find.
+const SMOOTH_ROUGHNESS: f32 = 0.3;
+
+/// Light subpaths a pixel when the setting is left out: one where the scene has a smooth
+/// surface (a mirror, glass, water, polished metal: caustics, which the merges find and
+/// which need many light vertices) or participating media; one in sixteen pixels
+/// elsewhere. There the light subpaths serve connections and light tracing alone, every
+/// camera vertex still connects to a whole light subpath, and tracing one per pixel costs
+/// more than it gives (on the Cornell box one in sixteen reaches a given error in about a
+/// third of the time).
+fn default_paths_per_pixel(scene: &Scene) -> f32 {
+    let smooth = scene
+        .materials
+        .iter()
+        .filter(|m| !m.is_interface())
+        .any(|m| {
+            let c = m.approximation();
+            let reflects = c.specular.max_element() > 0.0 || c.specular_map.is_some();
+            let transmits = c.transmission.max_element() > 0.0;
+            (reflects || transmits) && (c.thin || c.roughness < SMOOTH_ROUGHNESS)
+        });
+    if smooth || !scene.media.is_empty() {
+        1.0
+    } else {
+        DIFFUSE_PATHS_PER_PIXEL
+    }
+}
+
 /// VCM's settings besides the Monte Carlo ones, checked.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct VcmSettings {
@@ -136,6 +181,7 @@ pub(crate) fn lifecycle(
             max_depth: mc.max_depth,
             radius: vcm.radius.unwrap_or_else(|| default_radius(scene)),
             light_paths: vcm.light_paths,
+            default_paths_per_pixel: default_paths_per_pixel(scene),
         },
         settings: *mc,
     }))
@@ -146,11 +192,21 @@ pub struct Vcm {
     max_depth: u32,
     /// The first iteration's merge radius.
     radius: f32,
-    /// Light subpaths an iteration (`None`: one per pixel).
+    /// Light subpaths an iteration (`None`: `default_paths_per_pixel` of the pixels).
     light_paths: Option<u32>,
+    /// Light subpaths a pixel when `light_paths` is not set.
+    default_paths_per_pixel: f32,
 }
 
 impl Vcm {
+    /// Light subpaths an iteration for an image of `pixels`.
+    fn light_paths_for(&self, pixels: u64) -> u64 {
+        match self.light_paths {
+            Some(n) => u64::from(n),
+            None => ((pixels as f64 * self.default_paths_per_pixel as f64).ceil() as u64).max(1),
+        }
+    }
+
     /// The merge radius of iteration `index` (from 0).
     fn radius_at(&self, index: u32) -> f32 {
         let i = index as f32 + 1.0;
@@ -176,6 +232,21 @@ impl MonteCarlo for Vcm {
         true
     }
 
+    /// The light vertices of an iteration, with their grid and splats: estimated at
+    /// [`VERTICES_PER_PATH`] a light subpath (fewer where the paths are shorter).
+    fn iteration_memory(&self, (width, height): (u32, u32)) -> Option<(String, u64)> {
+        let pixels = width as u64 * height as u64;
+        let count = self.light_paths_for(pixels);
+        let per_path = (self.max_depth as u64).clamp(1, VERTICES_PER_PATH);
+        let vertices = count.saturating_mul(per_path);
+        Some((
+            format!("VCM's light vertices ({count} light subpaths an iteration)"),
+            vertices
+                .saturating_mul(BYTES_PER_VERTEX)
+                .saturating_add(count.saturating_mul(4)),
+        ))
+    }
+
     fn iteration(
         &self,
         ctx: &Context,
@@ -183,7 +254,7 @@ impl MonteCarlo for Vcm {
         samples: &mut dyn FnMut(&dyn MonteCarlo, IterationWork),
     ) -> bool {
         let pixels = start.size.0 as usize * start.size.1 as usize;
-        let count = self.light_paths.map_or(pixels, |n| n as usize);
+        let count = self.light_paths_for(pixels as u64) as usize;
         let radius = self.radius_at(start.index);
         let weights = Weights::new(radius, count as f32);
         // Full paths have at most max_depth bounces: max_depth + 1 segments.
