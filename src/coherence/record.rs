@@ -11,10 +11,13 @@
 //!   task needed; the block takes the lists when the task ends, shrunk in place (no copy:
 //!   frame 0 writes every record once).
 //!
-//! Camera rays are also kept with their hits ([`CameraHit`]): when the block is retraced, a
-//! camera ray that crosses no changed voxel up to its hit gets that hit again without a
-//! query (section 3.3.3 of the paper: no intersection work in unchanged voxels before the
-//! stored hit; with Embree, which cannot start a traversal part-way, the whole query goes).
+//! Every query of a retraced block is also kept with its answer ([`Query`]): when the block
+//! is retraced again, a ray that is the same as one of its last trace and crosses no changed
+//! voxel up to its hit gets that answer again without a query (section 3.3.3 of the paper
+//! for camera rays: no intersection work in unchanged voxels before the stored hit; with
+//! Embree, which cannot start a traversal part-way, the whole query goes). Reflection,
+//! refraction and shadow rays are answered the same way: a pixel is retraced because one
+//! of its rays crossed a changed voxel, and the others of its ray tree come out the same.
 
 use super::grid::ActiveVoxels;
 use super::segments::{BlockSegments, Point16, Quantiser, Segment};
@@ -40,13 +43,27 @@ thread_local! {
     static LOCAL: RefCell<(u64, Recorded)> = const { RefCell::new((0, Recorded::new())) };
 }
 
-/// A camera ray and its answer, as recorded: `shape` is the fingerprint of the shape hit
+/// A query and its answer, as recorded: `shape` is the fingerprint of the shape hit
 /// (`FrameSummary::keys`), which must still be at that index for the hit to be reused.
+/// For a shadow ray, `hit` is its nearest blocker, if it looked for one.
 #[derive(Clone, Copy, Debug)]
-pub struct CameraHit {
+pub struct Query {
     ray: Ray,
     hit: Option<Hit>,
     shape: u64,
+    kind: Kind,
+}
+
+/// Which query a [`Query`] answered.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Kind {
+    /// A camera ray's closest hit.
+    Camera,
+    /// Another ray's closest hit.
+    Surface,
+    /// A shadow ray, blocked or not.
+    Blocked,
+    Clear,
 }
 
 /// What a recorder's task recorded.
@@ -54,13 +71,15 @@ pub struct CameraHit {
 pub struct Recorded {
     /// Segment records (empty with tables).
     pub segments: BlockSegments,
-    /// Camera rays and their hits, in the order traced.
-    pub camera: Vec<CameraHit>,
+    /// The queries and their answers, in the order traced.
+    pub camera: Vec<Query>,
     /// Whether any ray found a surface.
     pub hit: bool,
     /// Camera rays answered from an earlier hit, and camera rays.
     pub camera_reused: u64,
     pub camera_rays: u64,
+    /// Other queries (reflection, refraction, shadow rays) answered from an earlier trace.
+    pub others_reused: u64,
     /// The point lights the shadow rays went to: bit `i` for the scene's light `i`, the top
     /// bit for every light from 63 on.
     pub lights: u64,
@@ -74,6 +93,7 @@ impl Recorded {
             hit: false,
             camera_reused: 0,
             camera_rays: 0,
+            others_reused: 0,
             lights: 0,
         }
     }
@@ -105,17 +125,21 @@ impl Recorded {
     }
 }
 
-/// How a retraced block's camera rays may reuse the hits of its last trace.
-pub struct CameraReuse<'a> {
-    /// The block's camera rays of its last trace, in the order traced.
-    pub previous: &'a [CameraHit],
+/// How a retraced block's rays may reuse the answers of its last trace.
+pub struct Reuse<'a> {
+    /// The block's queries of its last trace, in the order traced.
+    pub previous: &'a [Query],
     /// The voxels where a surface changed in this frame.
     pub changed: &'a ActiveVoxels,
 }
 
-/// How many stored camera rays a query looks ahead of the last one matched (the rays of a
-/// retraced block come in the same order, but for pixels whose sampling changed).
+/// How many stored camera rays a camera ray looks ahead of the last one matched (the rays
+/// of a retraced block come in the same order, but for pixels whose sampling changed), and
+/// how many stored queries another ray looks ahead of the last one matched, within the
+/// ray tree of the last camera ray matched (a ray that changed leaves its old subtree
+/// unmatched behind it).
 const LOOKAHEAD: usize = 16;
+const TREE_LOOKAHEAD: usize = 32;
 
 /// The cursor before a task's first camera ray.
 const UNSYNCED: usize = usize::MAX;
@@ -151,11 +175,17 @@ pub struct RecordingAccel<'a> {
     /// The shapes' fingerprints in this frame, if camera hits are recorded (each records
     /// the one hit).
     shape_keys: Option<&'a [u64]>,
-    /// Stored camera hits to reuse, with the next one expected.
-    reuse: Option<CameraReuse<'a>>,
+    /// Stored answers to reuse, where their camera rays are among them, the next camera
+    /// ray expected (in `cameras`), the next query expected and the end of its camera ray's
+    /// tree (in `reuse.previous`).
+    reuse: Option<Reuse<'a>>,
+    cameras: Vec<u32>,
     cursor: AtomicUsize,
+    tree: AtomicUsize,
+    tree_end: AtomicUsize,
     camera_reused: AtomicU64,
     camera_rays: AtomicU64,
+    others_reused: AtomicU64,
     hit: AtomicBool,
     /// Whether a blocked shadow ray is recorded only up to its nearest blocker, which takes
     /// one more query (the Whitted integrator asks for that hit anyway) instead of up to
@@ -242,9 +272,13 @@ impl<'a> RecordingAccel<'a> {
             spill: Mutex::new(Recorded::new()),
             shape_keys: None,
             reuse: None,
+            cameras: Vec::new(),
             cursor: AtomicUsize::new(UNSYNCED),
+            tree: AtomicUsize::new(UNSYNCED),
+            tree_end: AtomicUsize::new(0),
             camera_reused: AtomicU64::new(0),
             camera_rays: AtomicU64::new(0),
+            others_reused: AtomicU64::new(0),
             hit: AtomicBool::new(false),
             nearest_blocker,
             lights: AtomicU64::new(0),
@@ -254,10 +288,16 @@ impl<'a> RecordingAccel<'a> {
         }
     }
 
-    /// Also records camera rays with their hits (`shape_keys`: the shapes' fingerprints in
+    /// Also records every query with its answer (`shape_keys`: the shapes' fingerprints in
     /// this frame), and answers them from `reuse` where nothing changed along them.
-    pub fn with_camera(mut self, shape_keys: &'a [u64], reuse: Option<CameraReuse<'a>>) -> Self {
+    pub fn with_camera(mut self, shape_keys: &'a [u64], reuse: Option<Reuse<'a>>) -> Self {
         self.shape_keys = Some(shape_keys);
+        if let Some(r) = &reuse {
+            self.cameras = (r.previous.iter().enumerate())
+                .filter(|(_, q)| q.kind == Kind::Camera)
+                .map(|(i, _)| i as u32)
+                .collect();
+        }
         self.reuse = reuse;
         self
     }
@@ -276,37 +316,92 @@ impl<'a> RecordingAccel<'a> {
         }
     }
 
-    /// The stored hit of camera ray `ray`, if it can be reused: the same ray was traced in
-    /// the block's last trace, its hit is on the same shape (by fingerprint) and it crosses
-    /// no voxel where a surface changed up to that hit (or to its end, if it hit nothing).
-    fn stored_hit(&self, ray: &Ray) -> Option<Option<Hit>> {
+    /// The stored query of camera ray `ray`: the same ray traced in the block's last trace
+    /// (its tree's queries are looked for next).
+    fn stored_camera(&self, ray: &Ray) -> Option<&Query> {
         let reuse = self.reuse.as_ref()?;
         let start = self.cursor.load(Ordering::Relaxed);
         // The task's first camera ray is looked for in the whole list: a block traced in
         // several tiles (one task each) has them one after the other in it.
         let range = match start {
-            UNSYNCED => 0..reuse.previous.len(),
-            _ => start..(start + LOOKAHEAD).min(reuse.previous.len()),
+            UNSYNCED => 0..self.cameras.len(),
+            _ => start..(start + LOOKAHEAD).min(self.cameras.len()),
         };
         let found = range
             .into_iter()
-            .find(|&i| same_ray(&reuse.previous[i].ray, ray));
-        let Some(i) = found else {
+            .find(|&j| same_ray(&reuse.previous[self.cameras[j] as usize].ray, ray));
+        let Some(j) = found else {
             if start == UNSYNCED {
                 self.cursor.store(0, Ordering::Relaxed);
             }
+            // This camera ray is new: its tree too.
+            self.tree.store(UNSYNCED, Ordering::Relaxed);
             return None;
         };
-        self.cursor.store(i + 1, Ordering::Relaxed);
-        let stored = &reuse.previous[i];
-        let keys = self.shape_keys?;
+        self.cursor.store(j + 1, Ordering::Relaxed);
+        let at = self.cameras[j] as usize;
+        let end = self
+            .cameras
+            .get(j + 1)
+            .map_or(reuse.previous.len(), |&p| p as usize);
+        self.tree.store(at + 1, Ordering::Relaxed);
+        self.tree_end.store(end, Ordering::Relaxed);
+        Some(&reuse.previous[at])
+    }
+
+    /// The stored query of a ray of the current camera ray's tree, of one of `kinds`.
+    fn stored_in_tree(&self, ray: &Ray, kinds: [Kind; 2]) -> Option<&Query> {
+        let reuse = self.reuse.as_ref()?;
+        let start = self.tree.load(Ordering::Relaxed);
+        if start == UNSYNCED {
+            return None;
+        }
+        let end = (start + TREE_LOOKAHEAD).min(self.tree_end.load(Ordering::Relaxed));
+        let i = (start..end).find(|&i| {
+            let q = &reuse.previous[i];
+            kinds.contains(&q.kind) && same_ray(&q.ray, ray)
+        })?;
+        self.tree.store(i + 1, Ordering::Relaxed);
+        Some(&reuse.previous[i])
+    }
+
+    /// Whether `stored`'s answer holds for its ray in this frame: its hit is on the same
+    /// shape (by fingerprint) and it crosses no voxel where a surface changed up to that hit
+    /// (or to its end, if it hit nothing).
+    fn holds(&self, stored: &Query) -> bool {
+        let (Some(reuse), Some(keys)) = (self.reuse.as_ref(), self.shape_keys) else {
+            return false;
+        };
+        let ray = &stored.ray;
         let t1 = match stored.hit {
-            Some(h) if keys.get(h.geom_id as usize) != Some(&stored.shape) => return None,
+            Some(h) if keys.get(h.geom_id as usize) != Some(&stored.shape) => return false,
             Some(h) => h.t,
             None => ray.tmax,
         };
-        let crossed = reuse.changed.crossed_by(ray.origin, ray.dir, ray.tmin, t1);
-        (!crossed).then_some(stored.hit)
+        !reuse.changed.crossed_by(ray.origin, ray.dir, ray.tmin, t1)
+    }
+
+    /// The stored hit of camera ray `ray`, if it can be reused.
+    fn stored_hit(&self, ray: &Ray) -> Option<Option<Hit>> {
+        let stored = self.stored_camera(ray)?;
+        self.holds(stored).then_some(stored.hit)
+    }
+
+    /// Keeps a query with its answer, if queries are kept.
+    #[inline]
+    fn keep_query(&self, ray: &Ray, hit: Option<Hit>, kind: Kind) {
+        let Some(keys) = self.shape_keys else {
+            return;
+        };
+        let shape = hit.map_or(0, |h| keys[h.geom_id as usize]);
+        self.with_lists(|list| {
+            list.camera.push(Query {
+                ray: *ray,
+                hit,
+                shape,
+                kind,
+            })
+        });
     }
 
     /// Notes a ray looking for a surface that got `hit`, and records its segment (to the hit,
@@ -418,6 +513,7 @@ impl<'a> RecordingAccel<'a> {
         recorded.hit = self.hit.load(Ordering::Relaxed);
         recorded.camera_reused = self.camera_reused.load(Ordering::Relaxed);
         recorded.camera_rays = self.camera_rays.load(Ordering::Relaxed);
+        recorded.others_reused = self.others_reused.load(Ordering::Relaxed);
         recorded.lights = self.lights.load(Ordering::Relaxed);
         recorded
     }
@@ -473,6 +569,7 @@ fn same_ray(a: &Ray, b: &Ray) -> bool {
             r.dir.to_array().map(f32::to_bits),
             r.tmin.to_bits(),
             r.tmax.to_bits(),
+            r.time.to_bits(),
         )
     };
     bits(a) == bits(b)
@@ -494,17 +591,25 @@ impl Accel for RecordingAccel<'_> {
                 }
             }
         }
-        let hit = self.inner.intersect(ray);
+        let stored = self.stored_in_tree(ray, [Kind::Surface; 2]);
+        let hit = match stored.filter(|q| self.holds(q)) {
+            Some(q) => {
+                bump(&self.others_reused);
+                q.hit
+            }
+            None => self.inner.intersect(ray),
+        };
         self.record_surface(ray, hit);
+        self.keep_query(ray, hit, Kind::Surface);
         hit
     }
 
     fn intersect_camera(&self, ray: &Ray) -> Option<Hit> {
-        let Some(keys) = self.shape_keys else {
+        if self.shape_keys.is_none() {
             let hit = self.inner.intersect(ray);
             self.keep_camera(ray, hit);
             return hit;
-        };
+        }
         bump(&self.camera_rays);
         let hit = match self.stored_hit(ray) {
             Some(hit) => {
@@ -515,19 +620,22 @@ impl Accel for RecordingAccel<'_> {
         };
         // Recorded as any ray looking for a surface, and kept with its hit for next time.
         self.keep_camera(ray, hit);
-        let shape = hit.map_or(0, |h| keys[h.geom_id as usize]);
-        self.with_lists(|list| {
-            list.camera.push(CameraHit {
-                ray: *ray,
-                hit,
-                shape,
-            })
-        });
+        self.keep_query(ray, hit, Kind::Camera);
         hit
     }
 
     fn occluded(&self, ray: &Ray) -> bool {
-        let blocked = self.inner.occluded(ray);
+        // A stored blocked ray holds while its nearest blocker is there and nothing changed
+        // before it (or along the whole ray, without one); a clear one while nothing changed
+        // along it.
+        let stored = self.stored_in_tree(ray, [Kind::Blocked, Kind::Clear]);
+        let (blocked, nearest) = match stored.filter(|q| self.holds(q)) {
+            Some(q) => {
+                bump(&self.others_reused);
+                (q.kind == Kind::Blocked, Some(q.hit))
+            }
+            None => (self.inner.occluded(ray), None),
+        };
         if !self.point_lights.is_empty() {
             self.note_light(ray);
         }
@@ -537,8 +645,10 @@ impl Accel for RecordingAccel<'_> {
         // voxels change). Behind a transmissive blocker the light still counts, so the
         // whole segment is kept; without `nearest_blocker`, it always is.
         let mut end = ray.tmax;
+        let mut kept = None;
         if blocked && self.nearest_blocker {
-            let hit = self.inner.intersect(ray);
+            let hit = nearest.unwrap_or_else(|| self.inner.intersect(ray));
+            kept = hit;
             if let Some(h) = hit {
                 let shape = &self.scene.shapes[h.geom_id as usize];
                 if !self.scene.may_transmit(shape.material) {
@@ -550,6 +660,8 @@ impl Accel for RecordingAccel<'_> {
             LAST_OWNER.set(self.serial);
         }
         self.keep_shadow(ray.origin, ray.dir, ray.tmin, end, end == ray.tmax);
+        let kind = if blocked { Kind::Blocked } else { Kind::Clear };
+        self.keep_query(ray, kept, kind);
         blocked
     }
 }

@@ -7,7 +7,7 @@
 
 use super::changes::{Changes, FrameSummary};
 use super::grid::{ActiveVoxels, Grid};
-use super::record::{CameraHit, CameraReuse, Recorded, RecordingAccel, Records};
+use super::record::{Query, Recorded, RecordingAccel, Records, Reuse};
 use super::segments::{Changed, Quantiser, SegmentRecords};
 use super::tables::{BlockLayout, BlockSet, Table, VoxelTables};
 use super::LIGHT_SELECTION;
@@ -132,6 +132,8 @@ pub struct FrameStats {
     /// (section 3.3.3).
     pub camera_rays: u64,
     pub camera_reused: u64,
+    /// Reflection, refraction and shadow rays answered from the block's last trace.
+    pub others_reused: u64,
 }
 
 /// The incremental renderer's state between frames.
@@ -152,9 +154,9 @@ pub struct CoherentRenderer {
     /// Records that grow past this many bytes are cut down: segment records become voxel
     /// tables, and camera hits are no longer kept.
     segment_budget: usize,
-    /// Per block, its camera rays and their hits in its last trace (section 3.3.3), while
+    /// Per block, its queries and their answers in its last trace (section 3.3.3), while
     /// `camera_on`.
-    camera: Vec<Vec<CameraHit>>,
+    camera: Vec<Vec<Query>>,
     /// Per block, the point lights its shadow rays went to in its last trace
     /// ([`Recorded::lights`]).
     lights: Vec<u64>,
@@ -469,10 +471,10 @@ impl CoherentRenderer {
             Store::Tables(tables) => tables.clear(&blocks),
             Store::Segments(segments) => segments.clear(&blocks),
         }
-        // The retraced blocks' camera hits, to reuse where nothing changed along them (only
+        // The retraced blocks' queries, to reuse where nothing changed along them (only
         // when the frame's changed voxels are known: not after a change that reaches every
         // pixel, whose geometry changes are not worked out).
-        let mut previous_camera: Vec<Vec<CameraHit>> = vec![Vec::new(); self.layout.len()];
+        let mut previous_camera: Vec<Vec<Query>> = vec![Vec::new(); self.layout.len()];
         for b in blocks.iter() {
             previous_camera[b] = std::mem::take(&mut self.camera[b]);
         }
@@ -543,7 +545,7 @@ impl CoherentRenderer {
         let trace = |(b, tile): &(usize, Tile)| {
             let mut recorder = RecordingAccel::new(accel, scene, voxels, nearest_blocker, records);
             if camera_on {
-                let reuse = changed.as_ref().map(|changed| CameraReuse {
+                let reuse = changed.as_ref().map(|changed| Reuse {
                     previous: &previous_camera[*b],
                     changed,
                 });
@@ -586,6 +588,7 @@ impl CoherentRenderer {
             }
             stats.camera_rays += recorded.camera_rays;
             stats.camera_reused += recorded.camera_reused;
+            stats.others_reused += recorded.others_reused;
             crate::render::place(&mut image, (0, 0), t, pixels);
             stats.rays.add(&rays);
             stats.pixels_retraced += t.pixels();

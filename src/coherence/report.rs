@@ -251,6 +251,14 @@ pub fn summary(report: &Report) -> String {
             report.camera_bytes as f64 / 1024.0
         );
     }
+    let others: u64 = report.rows.iter().map(|r| r.coherent.others_reused).sum();
+    if others > 0 {
+        let _ = writeln!(
+            s,
+            "reflection, refraction and shadow rays answered from the block's last trace: \
+             {others}"
+        );
+    }
     s
 }
 

@@ -373,6 +373,8 @@ fn check_camera_reuse(frames: &[(FrameStats, Image)]) {
         reused > 0 && reused < rays,
         "{reused} of {rays} camera rays reused"
     );
+    // So are some shadow rays (frame 1's are new).
+    assert!(frames[1].0.others_reused == 0 && frames[2].0.others_reused > 0);
 }
 
 /// A shape that vanishes from the front of the shape list renumbers the others: a stored
