@@ -198,12 +198,16 @@ fn spectral_media_render_the_same_for_any_thread_count() {
 
 #[test]
 fn a_coloured_rgb_grid_is_refused_in_one_line() {
-    let scene = toml(&format!(
-        "{CAMERA}\n[world]\nbackground = 1\n\n[media.colours]\ntype = \"rgbgrid\"\n\
-         resolution = [2, 1, 1]\nsigma_a_grid = [0.1, 0.2, 0.3, 1, 2, 3]\n\
-         bounds = [[-1, -1, -1], [1, 1, 1]]\n{}",
-        slab("colours")
-    ));
+    // A two-sample rgbgrid of absorption `sigma_a` filling the slab, against a white sky.
+    let grid = |sigma_a: &str| {
+        toml(&format!(
+            "{CAMERA}\n[world]\nbackground = 1\n\n[media.colours]\ntype = \"rgbgrid\"\n\
+             resolution = [2, 1, 1]\nsigma_a_grid = {sigma_a}\n\
+             bounds = [[-1, -1, -1], [1, 1, 1]]\n{}",
+            slab("colours")
+        ))
+    };
+    let scene = grid("[0.1, 0.2, 0.3, 1, 2, 3]");
     let view = View::of(&scene, 1, Some(1), Backend::Bvh);
     let e = try_image(&scene, Technique::Path(spectral(1, 4)), view)
         .unwrap_err()
@@ -214,12 +218,7 @@ fn a_coloured_rgb_grid_is_refused_in_one_line() {
     );
     assert!(!e.contains('\n'), "{e}");
     // The same grid in grey renders.
-    let grey = toml(&format!(
-        "{CAMERA}\n[world]\nbackground = 1\n\n[media.colours]\ntype = \"rgbgrid\"\n\
-         resolution = [2, 1, 1]\nsigma_a_grid = [0.2, 0.2, 0.2, 2, 2, 2]\n\
-         bounds = [[-1, -1, -1], [1, 1, 1]]\n{}",
-        slab("colours")
-    ));
+    let grey = grid("[0.2, 0.2, 0.2, 2, 2, 2]");
     let view = View::of(&grey, 1, Some(1), Backend::Bvh);
     assert!(try_image(&grey, Technique::Path(spectral(1, 4)), view).is_ok());
 }

@@ -86,7 +86,7 @@ impl Wavelengths {
         if rgb.max_element() > 1.0 {
             return self.unbounded(rgb);
         }
-        if rgb.x == rgb.y && rgb.y == rgb.z {
+        if grey(rgb) {
             return rgb;
         }
         self.at(&polynomial(rgb), 1.0)
@@ -98,7 +98,7 @@ impl Wavelengths {
         if m <= 0.0 {
             return Rgb::ZERO;
         }
-        if rgb.x == rgb.y && rgb.y == rgb.z {
+        if grey(rgb) {
             return rgb;
         }
         let scale = 2.0 * m;
@@ -201,7 +201,6 @@ impl Colours for Wavelengths {
 /// Whether a medium of coefficients `unit` is the same at every wavelength: grey σa and σs,
 /// and no emission (an emitter's white is the colour space's illuminant, not a constant).
 fn is_grey_absorber(unit: &MediumPoint) -> bool {
-    let grey = |v: Rgb| v.x == v.y && v.y == v.z;
     grey(unit.sigma_a) && grey(unit.sigma_s) && unit.le * unit.sigma_a == Rgb::ZERO
 }
 
@@ -308,8 +307,7 @@ pub(crate) fn check_scene(scene: &Scene) -> Result<()> {
             Surface::CoatedConductor(s) => s.coating(),
             _ => continue,
         };
-        let a = coat.albedo;
-        if a.x != a.y || a.y != a.z {
+        if !grey(coat.albedo) {
             return refuse(format!(
                 "material \"{}\" has a coloured coat albedo, which spectral mode does not \
                  render",
@@ -322,8 +320,13 @@ pub(crate) fn check_scene(scene: &Scene) -> Result<()> {
 
 /// Whether an RGB grid is grey everywhere and emits nothing: the same at every wavelength.
 fn grey_rgb_grid(grid: &crate::scene::media::RgbGrid) -> bool {
-    let grey = |v: &[Rgb]| v.iter().all(|c| c.x == c.y && c.y == c.z);
-    grid.sigma_a().is_none_or(grey) && grid.sigma_s().is_none_or(grey) && !grid.emits()
+    let all_grey = |v: &[Rgb]| v.iter().copied().all(grey);
+    grid.sigma_a().is_none_or(all_grey) && grid.sigma_s().is_none_or(all_grey) && !grid.emits()
+}
+
+/// Whether `rgb`'s channels are equal: a grey is the same number at every wavelength.
+fn grey(rgb: Rgb) -> bool {
+    rgb.x == rgb.y && rgb.y == rgb.z
 }
 
 /// The spectrum of the sRGB reflectance `rgb`, solved once per colour for the whole

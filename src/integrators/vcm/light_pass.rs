@@ -1,8 +1,8 @@
 //! An iteration's light subpaths (one per pixel, or one in sixteen pixels in a scene
 //! without smooth surfaces or media, unless set otherwise), each from a light chosen by
-//! power and continued by BSDF sampling for importance transport. Every vertex where the BSDF is not
-//! purely specular is kept (for connections and merges) and connected to the camera (the
-//! light tracing technique, splatted).
+//! power and continued by BSDF sampling for importance transport. Every vertex where the
+//! BSDF is not purely specular is kept (for connections and merges) and connected to the
+//! camera (the light tracing technique, splatted).
 //!
 //! Determinism: subpath `i` of an iteration draws from the stream of (seed, iteration, i)
 //! alone; subpaths are traced in fixed chunks, in parallel, and their vertices and splats
