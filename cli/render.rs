@@ -293,7 +293,7 @@ pub fn run_render(cli: &Cli, mut args: RenderArgs, extra: Settings) -> Result<()
         raylink::VERSION,
         raylink::farm::scene_hash(&scene)
     );
-    let progressive = job.technique.monte_carlo().is_some() && job.region.is_none();
+    let progressive = job.technique.passes().is_some() && job.region.is_none();
     // The inputs first (a cache or network file that is there is read), then the outputs.
     // A cache or network file is read whole into memory, where it counts against the
     // budget as the scene's files do.
@@ -553,12 +553,10 @@ fn render_with_checkpoints(
 ) -> Result<(Rendered, String, Option<Error>), Failure> {
     let job = renderer.job().clone();
     let (width, height) = (job.width, job.height);
-    let mc = *job
-        .technique
-        .monte_carlo()
-        .expect("a progressive technique");
+    let passes = job.technique.passes().unwrap_or(1);
+    let mc = job.technique.monte_carlo();
     let mut resumed_samples = 0;
-    if args.resume && mc.guiding {
+    if args.resume && mc.is_some_and(|m| m.guiding) {
         return Err(Error::setting(
             "guiding",
             "cannot be used with --resume: a checkpoint does not keep the guide",
@@ -576,11 +574,10 @@ fn render_with_checkpoints(
             ))
             .into());
         };
-        let blank = raylink::Film::new(width, height, mc.filter, mc.reconstruction)?
-            .with_adaptive(mc.adaptive)?
-            .with_statistics(job.keeps_statistics())?
-            .with_one_sample_passes(job.technique.one_sample_passes());
-        let resumed = checkpoint::load_within(&found, settings, blank, mc.spp, &allowance)?;
+        let blank = job
+            .blank_film()?
+            .ok_or_else(|| Error::Invalid("a progressive render without a film".into()))?;
+        let resumed = checkpoint::load_within(&found, settings, blank, passes, &allowance)?;
         resumed_samples = resumed.samples;
         Some(resumed.film)
     } else {
@@ -599,7 +596,7 @@ fn render_with_checkpoints(
         if args
             .checkpoint_interval
             .is_some_and(|t| last_checkpoint.elapsed().as_secs_f64() >= t)
-            && film.spp < mc.spp
+            && film.spp < passes
         {
             // Samples so far are only an estimate here; the image does not use them.
             let samples = (film.mean_spp() * width as f64 * height as f64) as u64;
@@ -609,7 +606,7 @@ fn render_with_checkpoints(
         let due = args
             .write_interval
             .is_some_and(|t| last_write.elapsed().as_secs_f64() >= t);
-        if due && film.spp < mc.spp {
+        if due && film.spp < passes {
             let mut meta = metadata.clone();
             meta.push((
                 "raylink:samples_per_pixel".into(),
@@ -639,15 +636,16 @@ fn render_with_checkpoints(
         if let Err(e) = checkpoint::save(checkpoint, film, settings, rendered.stats.samples) {
             return Ok((rendered, note, Some(e)));
         }
-        let taken = if mc.adaptive.is_some() {
+        let taken = if mc.is_some_and(|m| m.adaptive.is_some()) {
             // Adaptive sampling: pixels take different counts, up to spp.
             format!(
-                "{:.2} samples per pixel on average, at most {}",
+                "{:.2} samples per pixel on average, at most {passes}",
                 film.mean_spp(),
-                mc.spp
             )
+        } else if mc.is_none() {
+            format!("{} of {passes} iterations", film.spp)
         } else {
-            format!("{:.2} of {} samples per pixel", film.mean_spp(), mc.spp)
+            format!("{:.2} of {passes} samples per pixel", film.mean_spp())
         };
         note = format!(
             "{taken}; the film is in {} for --resume",

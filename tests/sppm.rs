@@ -4,7 +4,8 @@
 //! its error falls as iterations shrink the radius; through participating media (grey fog,
 //! chromatic media, a volume caustic) it converges to the volumetric path tracer's and
 //! bidirectional tracing's means, its bias falling as the spheres shrink; its image does
-//! not depend on the thread count; bad settings are refused, naming the setting.
+//! not depend on the thread count; bad settings, and a memory budget too small for an
+//! iteration, are refused, naming the setting or what does not fit.
 
 use raylink::{Control, Error, Image, Job, Renderer, Scene, Settings, Technique, TechniqueKind};
 use std::path::Path;
@@ -323,11 +324,6 @@ fn the_command_line_refuses_in_one_line() {
             vec!["--photons-per-iteration", "0"],
             vec!["--photons-per-iteration"],
         ),
-        (vec!["--resume"], vec!["--resume", "sppm"]),
-        (
-            vec!["--checkpoint-interval", "5"],
-            vec!["--checkpoint-interval", "sppm"],
-        ),
         (vec!["--time-limit", "5"], vec!["--time-limit", "sppm"]),
         (vec!["--crop", "0,0,4,4"], vec!["--tile/--crop", "sppm"]),
     ];
@@ -487,4 +483,30 @@ fn media_render_the_same_for_any_thread_count() {
     assert!(one == two, "1 and 2 threads differ");
     let other = bits(&render(&s, settings, 8, 2));
     assert!(one != other, "the seed changes nothing");
+}
+
+/// A memory budget that holds the image and its film but not an iteration's camera paths
+/// and visible points (32x32: about 240 KiB and 350 KiB) is refused before the render, in
+/// one line naming them; twice the budget renders.
+#[test]
+fn a_budget_too_small_for_an_iteration_is_refused() {
+    let s = scene("cornell-box.toml");
+    let with = |bytes: u64| Control {
+        budget: raylink::MemoryBudget::bytes(bytes),
+        ..Control::default()
+    };
+    let job = || Job {
+        width: 32,
+        height: 32,
+        ..Job::new(&s, Technique::create(&sppm(2, 1, 100, 0.05)).unwrap())
+    };
+    let e = Renderer::new(s.clone(), job(), &with(400 << 10))
+        .err()
+        .map(|e| e.to_string())
+        .unwrap_or_default();
+    assert!(
+        e.contains("SPPM's camera paths and visible points") && !e.contains('\n'),
+        "{e}"
+    );
+    assert!(Renderer::new(s.clone(), job(), &with(800 << 10)).is_ok());
 }

@@ -516,12 +516,7 @@ fn render_frame(
     };
     match frames.render(frame, &camera, control) {
         Ok(f) => {
-            let spp = session
-                .base
-                .job
-                .technique
-                .monte_carlo()
-                .map_or(1, |m| m.spp);
+            let spp = session.base.job.technique.passes().unwrap_or(1);
             session.publish_image_with(f.image, spp as f64, |s| {
                 if let Some(t) = asked {
                     s.view_ms = Some(t.elapsed().as_secs_f64() * 1e3);
@@ -623,7 +618,7 @@ fn render(
         });
     };
     let mut first = true;
-    let progressive = renderer.job().technique.monte_carlo().is_some();
+    let progressive = renderer.job().technique.passes().is_some();
     if !progressive {
         // One sample a pixel first: what a camera being dragged needs to follow it.
         match renderer.render_preview(control) {

@@ -129,6 +129,16 @@ impl Technique {
         }
     }
 
+    /// The passes a progressive render takes (samples per pixel; SPPM's iterations): what
+    /// its film counts, a checkpoint resumes and a live view shows converging. `None` for
+    /// the techniques that render in one pass.
+    pub fn passes(&self) -> Option<u32> {
+        match self {
+            Technique::Sppm(s) => Some(s.iterations),
+            t => t.monte_carlo().map(|m| m.spp),
+        }
+    }
+
     pub fn max_depth(&self) -> u32 {
         match self {
             Technique::Whitted(w) => w.max_depth,
@@ -388,7 +398,7 @@ mod tests {
                 ..Settings::default()
             })
             .unwrap()
-            .monte_carlo()
+            .passes()
             .is_some();
             assert_eq!(progressive, info(k).progressive, "{k}");
         }

@@ -20,10 +20,12 @@ pub use crate::settings::{
 
 use crate::accel::{self, Accel, Backend};
 use crate::error::{Error, Result};
+use crate::image::filter::Reconstruction;
 use crate::image::Image;
 use crate::render::aov::render_aovs;
 use crate::render::pixels::{render_pixels, PixelView};
 use crate::render::progressive::{render_passes, render_region};
+use crate::render::whole::render_whole;
 use crate::render::PixelSampling;
 use crate::render::{Film, RenderStats, Tile, Watch};
 use crate::scene::{Scene, MAX_RESOLUTION};
@@ -126,6 +128,27 @@ impl Job {
         Ok(())
     }
 
+    /// An empty film of the job's whole image, as its progressive render fills it (what a
+    /// checkpoint is restored into; [`Technique::passes`] says how many passes it takes);
+    /// `None` for the techniques that render in one pass.
+    pub fn blank_film(&self) -> Result<Option<Film>> {
+        let (width, height) = (self.width, self.height);
+        if let Technique::Sppm(s) = &self.technique {
+            let film = Film::new(width, height, s.filter, Reconstruction::Importance)?
+                .with_one_sample_passes(true)
+                .with_state(crate::integrators::sppm::STATE_LEN)?;
+            return Ok(Some(film));
+        }
+        let Some(mc) = self.technique.monte_carlo() else {
+            return Ok(None);
+        };
+        let film = Film::new(width, height, mc.filter, mc.reconstruction)?
+            .with_adaptive(mc.adaptive)?
+            .with_statistics(self.keeps_statistics())?
+            .with_one_sample_passes(self.technique.one_sample_passes());
+        Ok(Some(film))
+    }
+
     /// The pixels the job renders.
     pub fn pixels(&self) -> Tile {
         self.region.unwrap_or(Tile::whole(self.width, self.height))
@@ -175,7 +198,9 @@ impl Job {
         let film = if self.technique.monte_carlo().is_some() {
             56 + 32
         } else if let Technique::Sppm(_) = self.technique {
-            24 + crate::integrators::sppm::BYTES_PER_PIXEL
+            // Its film with each pixel's photon statistics; an iteration's camera paths
+            // and visible points are checked when the render starts.
+            56 + 8 * crate::integrators::sppm::STATE_LEN as u64 + 32
         } else {
             24
         };
@@ -482,29 +507,26 @@ impl Renderer {
                 }
             }
             Tiles::Whole(technique) => {
-                if resume.is_some() {
-                    return Err(Error::setting(
-                        "resume",
-                        format!(
-                            "applies to progressive Monte Carlo renders, not the {} integrator",
-                            job.technique.kind()
-                        ),
-                    ));
-                }
-                let start = Instant::now();
-                let view = job.view();
-                let r = on_pool(&self.pool, || technique.render(&ctx, &view, control))?;
-                let stats = RenderStats {
-                    seconds: start.elapsed().as_secs_f64(),
-                    rays: r.rays,
-                    samples: r.samples,
-                    cancelled: r.cancelled,
-                    ..RenderStats::default()
+                let passes = job.technique.passes().unwrap_or(1);
+                let film = match resume {
+                    Some(film) => film,
+                    None => job.blank_film()?.ok_or_else(|| {
+                        Error::Invalid("a whole-image technique without a film".into())
+                    })?,
                 };
+                let (film, stats) = render_whole(
+                    &ctx,
+                    (technique, passes),
+                    &job.view(),
+                    film,
+                    self.pool.as_deref(),
+                    watch,
+                    control,
+                )?;
                 Rendered {
-                    image: r.image,
+                    image: film.image()?,
                     stats,
-                    film: None,
+                    film: Some(film),
                 }
             }
         };

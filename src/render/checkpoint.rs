@@ -18,6 +18,8 @@
 //!   and when samples are splatted over neighbouring pixels (statistics without adaptive
 //!   sampling):
 //!   own     width·height × 3 f64     per pixel: sum of its own samples' values
+//! with a technique's own per-pixel state (stochastic progressive photon mapping):
+//!   state   width·height × n f64     per pixel: its n values
 //! checksum u64
 //! ```
 //!
@@ -39,6 +41,7 @@ const OWN_BYTES: usize = 24;
 /// film keeps them.
 fn bytes_per_pixel(film: &Film) -> usize {
     FILM_BYTES
+        + 8 * film.state_len
         + film.statistics().map_or(0, |s| {
             STATS_BYTES + if s.sums.is_empty() { 0 } else { OWN_BYTES }
         })
@@ -199,6 +202,9 @@ pub fn save(path: &Path, film: &Film, settings: &str, samples: u64) -> Result<()
             b.extend_from_slice(&c.to_le_bytes());
         }
     }
+    for v in &film.state {
+        b.extend_from_slice(&v.to_le_bytes());
+    }
     FORMAT.save(path, b)
 }
 
@@ -266,20 +272,28 @@ pub fn load_within(
     let pixels = width as usize * height as usize;
     // The statistics follow the film when the render samples adaptively or keeps them.
     if r.rest.len() != per_pixel * pixels {
-        return Err(bad(if r.rest.len() == FILM_BYTES * pixels {
-            "holds no per-pixel sample statistics, and this render needs them (resume with \
+        return Err(bad(
+            if blank.state_len == 0 && r.rest.len() == FILM_BYTES * pixels {
+                "holds no per-pixel sample statistics, and this render needs them (resume with \
              the options of the interrupted run)"
-        } else if blank.statistics().is_none()
-            && [STATS_BYTES, STATS_BYTES + OWN_BYTES]
-                .iter()
-                .any(|b| r.rest.len() == (FILM_BYTES + b) * pixels)
-        {
-            "holds per-pixel sample statistics, and this render has none"
-        } else {
-            "truncated or trailing data"
-        }));
+            } else if blank.statistics().is_none()
+                && [STATS_BYTES, STATS_BYTES + OWN_BYTES]
+                    .iter()
+                    .any(|b| r.rest.len() == (FILM_BYTES + b) * pixels)
+            {
+                "holds per-pixel sample statistics, and this render has none"
+            } else {
+                "truncated or trailing data"
+            },
+        ));
     }
     let (film_bytes, rest) = r.rest.split_at(FILM_BYTES * pixels);
+    // The technique's state comes last.
+    let (rest, state) = rest.split_at(rest.len() - 8 * blank.state_len * pixels);
+    let state: Vec<f64> = state
+        .chunks_exact(8)
+        .map(|c| f64::from_le_bytes(c.try_into().unwrap_or([0; 8])))
+        .collect();
     let stats = blank.statistics().map(|kept| {
         let (counts, rest) = rest.split_at(4 * pixels);
         let (squares, rest) = rest.split_at(24 * pixels);
@@ -327,6 +341,7 @@ pub fn load_within(
             (sums, weights, splats),
             (spp, pass, tiles_done, invalid),
             stats,
+            state,
             target,
         )
         .map_err(|e| bad(&e))?;

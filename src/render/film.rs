@@ -42,6 +42,12 @@ pub struct Film {
     /// The largest pass its render takes ([`MAX_PASS`], or 1 for a technique whose every
     /// sample index is an iteration over the whole image).
     pub(crate) max_pass: u32,
+    /// A technique's own per-pixel state, when its image is not a mean of samples
+    /// (stochastic progressive photon mapping's photon statistics): `state_len` values a
+    /// pixel, row-major, saved and restored by checkpoints as they are. The sums then hold
+    /// each pixel's estimate times the passes taken, so that the image is still their mean.
+    pub(crate) state: Vec<f64>,
+    pub(crate) state_len: usize,
 }
 
 impl Film {
@@ -82,6 +88,8 @@ impl Film {
             invalid: 0,
             stats: None,
             max_pass: MAX_PASS,
+            state: Vec::new(),
+            state_len: 0,
         })
     }
 
@@ -108,6 +116,18 @@ impl Film {
     pub fn with_one_sample_passes(mut self, one: bool) -> Film {
         self.max_pass = if one { 1 } else { MAX_PASS };
         self
+    }
+
+    /// This film, keeping `per_pixel` values of a technique's own state for each pixel
+    /// (zero at first), or [`Error::OutOfMemory`](crate::error::Error::OutOfMemory).
+    pub(crate) fn with_state(mut self, per_pixel: usize) -> crate::error::Result<Film> {
+        let values = self.width as usize * self.height as usize * per_pixel;
+        let (w, h) = (self.width, self.height);
+        self.state = crate::platform::try_vec(values, 0.0, || {
+            format!("the per-pixel state of a {w}x{h} image")
+        })?;
+        self.state_len = per_pixel;
+        Ok(self)
     }
 
     /// This film, keeping each pixel's sample statistics (count, sums of squares, and the
@@ -219,6 +239,7 @@ impl Film {
         (sums, weights, splats): (Vec<[f64; 3]>, Vec<f64>, Vec<[f64; 3]>),
         (spp, pass, tiles_done, invalid): (u32, u32, u32, u64),
         stats: Option<super::adaptive::SavedStats>,
+        state: Vec<f64>,
         target: u32,
     ) -> std::result::Result<Film, String> {
         let tile_count = tiles(self.width, self.height).len() as u32;
@@ -297,9 +318,16 @@ impl Film {
                 )
             }
         }
+        if state.len() != self.state.len() {
+            return Err("wrong number of pixels".into());
+        }
+        if state.iter().any(|v| !v.is_finite() || *v < 0.0) {
+            return Err("a pixel's state is negative or not finite".into());
+        }
         self.sums = sums;
         self.weights = weights;
         self.splats = splats;
+        self.state = state;
         self.spp = spp;
         self.pass = pass;
         self.tiles_done = tiles_done;

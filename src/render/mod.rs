@@ -13,6 +13,7 @@ pub(crate) mod progressive;
 mod sampling;
 pub(crate) mod small_objects;
 mod watch;
+pub(crate) mod whole;
 
 pub use film::Film;
 pub use watch::{Shown, Watch};

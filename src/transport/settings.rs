@@ -20,8 +20,8 @@ pub struct TechniqueInfo {
     pub settings: &'static [&'static [Setting]],
     /// The pbrt-v4 `Integrator` types the pbrt reader renders with it.
     pub pbrt: &'static [&'static str],
-    /// Whether it renders progressive Monte Carlo passes (and so takes a time limit,
-    /// written-out intermediate images, checkpoints and resume).
+    /// Whether it renders in passes over the whole image (Monte Carlo sample passes, SPPM's
+    /// iterations), and so takes written-out intermediate images, checkpoints and resume.
     pub progressive: bool,
     /// Whether a part of the image can be rendered alone, to the same pixels as the whole
     /// render (not for light paths, which splat onto every pixel).

@@ -4,7 +4,7 @@
 //! of the two tile kernels. The job's renderer (`crate::job::Renderer`) drives every
 //! technique the same way.
 
-use crate::control::Control;
+use crate::control::{CancelToken, Control};
 use crate::error::Result;
 use crate::image::Image;
 pub use crate::transport::settings::MonteCarloSettings;
@@ -22,20 +22,44 @@ pub(crate) enum Tiles<'a> {
     Whole(&'a dyn WholeImage),
 }
 
-/// A technique that renders the whole image itself.
+/// A technique that renders the whole image itself, in passes over every pixel whose
+/// results are not a mean of samples (stochastic progressive photon mapping: a pixel's
+/// photon count, radius and flux change from pass to pass). Each pixel keeps
+/// [`state_len`](Self::state_len) values of its own between passes; the render keeps them
+/// (in its film, which a checkpoint saves), so that a render resumes exactly where it
+/// stopped.
 pub(crate) trait WholeImage: Sync {
-    /// The image of `view` (its whole size), or what was finished when `control` cancels.
-    fn render(&self, ctx: &Context, view: &View, control: &Control) -> Result<WholeRender>;
+    /// Values of state each pixel keeps.
+    fn state_len(&self) -> usize;
+
+    /// Each pixel's state before the first pass of a render of `view`, into `state`
+    /// (row-major, [`state_len`](Self::state_len) values a pixel).
+    fn start(&self, ctx: &Context, view: &View, state: &mut [f64]);
+
+    /// Pass `index` over the image of `view`: updates every pixel's state, or returns
+    /// `None`, the state unchanged, when `cancel` stops it before the end.
+    fn pass(
+        &self,
+        ctx: &Context,
+        view: &View,
+        index: u32,
+        state: &mut [f64],
+        cancel: &CancelToken,
+    ) -> Option<WholePass>;
+
+    /// A pixel's value in the image of `view` from its state, times the passes taken (the
+    /// film's image divides by them).
+    fn value(&self, view: &View, pixel: &[f64]) -> [f64; 3];
+
+    /// What a pass is, for people ("iterations of 100000 photons").
+    fn unit(&self, view: &View) -> String;
 }
 
-/// What a [`WholeImage`] render gives back.
-pub(crate) struct WholeRender {
-    pub image: Image,
+/// What a [`WholeImage`] pass traced.
+pub(crate) struct WholePass {
     pub rays: crate::transport::RayStats,
     /// Camera rays traced.
     pub samples: u64,
-    /// Whether it stopped before the end (cancelled): the image holds what was finished.
-    pub cancelled: bool,
 }
 
 /// A technique's lifecycle.

@@ -15,6 +15,10 @@
 //! surfaces and in media; in media the ball's volume shrinks as the disk's area does, so the
 //! radius by the cube root, and the pixel adds τ / (k · P · 4/3 π r³).
 //!
+//! The pixels' statistics live in the render's film between iterations (`WholeImage`): a
+//! viewer sees the image after each iteration, and a checkpoint saves them, so that a
+//! resumed render ends as the uninterrupted one.
+//!
 //! The render is a function of (scene, settings, seed): camera paths draw from the stream of
 //! (seed, pixel, iteration), photons from that of (seed, iteration, photon), and the
 //! photons' deposits are summed in a fixed order (see `photons`).
@@ -26,16 +30,14 @@ mod visible;
 
 pub use grid::HashGrid;
 
-use crate::control::Control;
+use crate::control::CancelToken;
 use crate::error::{Error, Result};
 use crate::image::filter::{Filter, Reconstruction};
-use crate::image::Image;
-use crate::math::Rgb;
 use crate::scene::Scene;
 use crate::settings::{Settings, TechniqueKind, MAX_SPP};
 use crate::transport::camera_sample::PixelJitter;
 use crate::transport::settings::{Setting, TechniqueInfo, COMMON, FILTER};
-use crate::transport::technique::{Lifecycle, Tiles, WholeImage, WholeRender};
+use crate::transport::technique::{Lifecycle, Tiles, WholeImage, WholePass};
 use crate::transport::{Context, View};
 use media::Targets;
 use photons::PhotonPass;
@@ -66,7 +68,7 @@ pub(crate) const TECHNIQUE: TechniqueInfo = TechniqueInfo {
               mirrors and glass (iterations = spp).",
     settings: &[COMMON, &[FILTER], SPPM],
     pbrt: &["sppm"],
-    progressive: false,
+    progressive: true,
     renders_parts: false,
     follows_time: false,
     media: true,
@@ -82,8 +84,9 @@ pub const DEFAULT_RADIUS_FRACTION: f32 = 1.0 / 200.0;
 /// The radius exponent α of Hachisuka & Jensen's update: the fraction of new photons kept.
 const ALPHA: f32 = 2.0 / 3.0;
 
-/// Bytes per pixel SPPM keeps besides the image: its state and a visible point.
-pub(crate) const BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelState>() as u64 + 256;
+/// Bytes per pixel an iteration holds besides the film: the pixel's state while it is
+/// updated, its camera path and its visible point.
+const PASS_BYTES_PER_PIXEL: u64 = std::mem::size_of::<PixelState>() as u64 + 256;
 
 /// SPPM's settings, checked.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -195,6 +198,35 @@ struct PixelState {
     medium: Gathered,
 }
 
+/// Values a pixel's state takes in the film: Ld, then τ, N and r on surfaces and in media.
+pub(crate) const STATE_LEN: usize = 13;
+
+impl PixelState {
+    fn load(v: &[f64]) -> PixelState {
+        let gathered = |g: &[f64]| Gathered {
+            tau: [g[0], g[1], g[2]],
+            // Stored from f32s: exact.
+            n: g[3] as f32,
+            r: g[4] as f32,
+        };
+        PixelState {
+            ld: [v[0], v[1], v[2]],
+            surface: gathered(&v[3..8]),
+            medium: gathered(&v[8..13]),
+        }
+    }
+
+    fn store(&self, v: &mut [f64]) {
+        v[..3].copy_from_slice(&self.ld);
+        let (surface, medium) = v[3..STATE_LEN].split_at_mut(5);
+        for (g, out) in [(&self.surface, surface), (&self.medium, medium)] {
+            out[..3].copy_from_slice(&g.tau);
+            out[3] = g.n as f64;
+            out[4] = g.r as f64;
+        }
+    }
+}
+
 /// A pixel's photon statistics for one kind of visible point.
 #[derive(Clone, Copy, Debug)]
 struct Gathered {
@@ -239,35 +271,59 @@ impl Lifecycle for Sppm {
     fn tiles(&self) -> Tiles<'_> {
         Tiles::Whole(self)
     }
+
+    fn memory(&self, width: u32, height: u32) -> Option<(String, u64)> {
+        Some((
+            format!("SPPM's camera paths and visible points for a {width}x{height} image"),
+            width as u64 * height as u64 * PASS_BYTES_PER_PIXEL,
+        ))
+    }
+}
+
+impl Sppm {
+    /// Photons an iteration of a `pixels`-pixel image shoots.
+    fn photons(&self, pixels: u64) -> u64 {
+        self.settings
+            .photons_per_iteration
+            .map_or(pixels, u64::from)
+    }
 }
 
 impl WholeImage for Sppm {
-    fn render(&self, ctx: &Context, view: &View, control: &Control) -> Result<WholeRender> {
+    fn state_len(&self) -> usize {
+        STATE_LEN
+    }
+
+    fn start(&self, ctx: &Context, _view: &View, state: &mut [f64]) {
+        let r0 = self
+            .settings
+            .radius
+            .unwrap_or_else(|| default_radius(ctx.scene));
+        let fresh = Gathered {
+            tau: [0.0; 3],
+            n: 0.0,
+            r: r0,
+        };
+        let pixel = PixelState {
+            ld: [0.0; 3],
+            surface: fresh,
+            medium: fresh,
+        };
+        for v in state.chunks_exact_mut(STATE_LEN) {
+            pixel.store(v);
+        }
+    }
+
+    fn pass(
+        &self,
+        ctx: &Context,
+        view: &View,
+        iteration: u32,
+        saved: &mut [f64],
+        cancel: &CancelToken,
+    ) -> Option<WholePass> {
         let s = &self.settings;
         let (width, height) = (view.width, view.height);
-        let pixels = width as u64 * height as u64;
-        control.budget.check(
-            &format!("SPPM's state for a {width}x{height} image"),
-            pixels * BYTES_PER_PIXEL,
-        )?;
-        let photons = s.photons_per_iteration.map_or(pixels, u64::from);
-        let r0 = s.radius.unwrap_or_else(|| default_radius(ctx.scene));
-        let mut state = vec![
-            PixelState {
-                ld: [0.0; 3],
-                surface: Gathered {
-                    tau: [0.0; 3],
-                    n: 0.0,
-                    r: r0,
-                },
-                medium: Gathered {
-                    tau: [0.0; 3],
-                    n: 0.0,
-                    r: r0,
-                },
-            };
-            pixels as usize
-        ];
         let mut camera = ctx.scene.camera.clone();
         camera.width = width;
         camera.height = height;
@@ -280,97 +336,86 @@ impl WholeImage for Sppm {
             max_depth: s.max_depth,
             size: (width, height),
         };
-        let cancel = &control.cancel;
-        let phase = control.phase("render", Some(s.iterations as u64), "iterations");
-        let mut rays = crate::transport::RayStats::default();
-        let mut done = 0u32;
-        let mut cancelled = false;
-        for iteration in 0..s.iterations {
-            let Some((paths, camera_rays)) = camera_pass.run(ctx, iteration, cancel) else {
-                cancelled = true;
-                break;
-            };
-            let mut owners = Vec::new();
-            let mut points = Vec::new();
-            let mut balls = Vec::new();
-            let mut medium_owners = Vec::new();
-            let mut medium_points = Vec::new();
-            let mut spheres = Vec::new();
-            for (k, path) in paths.iter().enumerate() {
-                if let Some(v) = path.visible {
-                    owners.push(k);
-                    points.push(v);
-                    balls.push((v.p, state[k].surface.r));
-                }
-                if let Some(v) = path.in_medium {
-                    medium_owners.push(k);
-                    medium_points.push(v);
-                    spheres.push((v.p, state[k].medium.r));
-                }
+        let mut state: Vec<PixelState> = saved
+            .chunks_exact(STATE_LEN)
+            .map(PixelState::load)
+            .collect();
+        let (paths, camera_rays) = camera_pass.run(ctx, iteration, cancel)?;
+        let mut owners = Vec::new();
+        let mut points = Vec::new();
+        let mut balls = Vec::new();
+        let mut medium_owners = Vec::new();
+        let mut medium_points = Vec::new();
+        let mut spheres = Vec::new();
+        for (k, path) in paths.iter().enumerate() {
+            if let Some(v) = path.visible {
+                owners.push(k);
+                points.push(v);
+                balls.push((v.p, state[k].surface.r));
             }
-            let grid = HashGrid::build(&balls);
-            let medium_grid = HashGrid::build(&spheres);
-            let pass = PhotonPass {
-                targets: Targets {
-                    surface_grid: &grid,
-                    surface: &points,
-                    medium_grid: &medium_grid,
-                    medium: &medium_points,
-                },
-                seed: view.seed,
-                max_depth: s.max_depth,
-            };
-            let Some(arrivals) = pass.run(ctx, iteration, photons, cancel) else {
-                cancelled = true;
-                break;
-            };
-            // The iteration is whole: the pixels take it.
-            rays.add(&camera_rays);
-            rays.add(&arrivals.rays);
-            for (st, path) in state.iter_mut().zip(&paths) {
-                for c in 0..3 {
-                    st.ld[c] += path.ld[c] as f64;
-                }
-            }
-            for (j, &k) in owners.iter().enumerate() {
-                state[k].surface.take(arrivals.m[j], &arrivals.phi[j], 2);
-            }
-            let first = owners.len();
-            for (j, &k) in medium_owners.iter().enumerate() {
-                let j = first + j;
-                state[k].medium.take(arrivals.m[j], &arrivals.phi[j], 3);
-            }
-            done += 1;
-            phase.advance(1);
-        }
-        let mut image = Image::try_new(width, height)?;
-        if done > 0 {
-            let k = done as f64;
-            let photons_total = k * photons as f64;
-            for (i, st) in state.iter().enumerate() {
-                let area = std::f64::consts::PI * (st.surface.r as f64).powi(2);
-                let volume = 4.0 / 3.0 * std::f64::consts::PI * (st.medium.r as f64).powi(3);
-                let v = |c: usize| {
-                    let l = st.ld[c] / k + st.surface.tau[c] / (photons_total * area);
-                    if st.medium.n > 0.0 {
-                        (l + st.medium.tau[c] / (photons_total * volume)) as f32
-                    } else {
-                        l as f32
-                    }
-                };
-                let (x, y) = (i as u32 % width, i as u32 / width);
-                image.set(x, y, Rgb::new(v(0), v(1), v(2)));
+            if let Some(v) = path.in_medium {
+                medium_owners.push(k);
+                medium_points.push(v);
+                spheres.push((v.p, state[k].medium.r));
             }
         }
-        phase.end(&format!(
-            "{done} iterations of {photons} photons, {} rays",
-            rays.total()
-        ));
-        Ok(WholeRender {
-            image,
+        let grid = HashGrid::build(&balls);
+        let medium_grid = HashGrid::build(&spheres);
+        let pass = PhotonPass {
+            targets: Targets {
+                surface_grid: &grid,
+                surface: &points,
+                medium_grid: &medium_grid,
+                medium: &medium_points,
+            },
+            seed: view.seed,
+            max_depth: s.max_depth,
+        };
+        let photons = self.photons(width as u64 * height as u64);
+        let arrivals = pass.run(ctx, iteration, photons, cancel)?;
+        // The iteration is whole: the pixels take it.
+        let mut rays = camera_rays;
+        rays.add(&arrivals.rays);
+        for (st, path) in state.iter_mut().zip(&paths) {
+            for c in 0..3 {
+                st.ld[c] += path.ld[c] as f64;
+            }
+        }
+        for (j, &k) in owners.iter().enumerate() {
+            state[k].surface.take(arrivals.m[j], &arrivals.phi[j], 2);
+        }
+        let first = owners.len();
+        for (j, &k) in medium_owners.iter().enumerate() {
+            let j = first + j;
+            state[k].medium.take(arrivals.m[j], &arrivals.phi[j], 3);
+        }
+        for (st, v) in state.iter().zip(saved.chunks_exact_mut(STATE_LEN)) {
+            st.store(v);
+        }
+        Some(WholePass {
             rays,
-            samples: done as u64 * pixels,
-            cancelled,
+            samples: paths.len() as u64,
         })
+    }
+
+    fn value(&self, view: &View, pixel: &[f64]) -> [f64; 3] {
+        // Ld / k + τ / (k · P · π r²) (+ τ / (k · P · 4/3 π r³) in media), times k.
+        let st = PixelState::load(pixel);
+        let photons = self.photons(view.width as u64 * view.height as u64) as f64;
+        let area = std::f64::consts::PI * (st.surface.r as f64).powi(2);
+        let volume = 4.0 / 3.0 * std::f64::consts::PI * (st.medium.r as f64).powi(3);
+        std::array::from_fn(|c| {
+            let l = st.ld[c] + st.surface.tau[c] / (photons * area);
+            if st.medium.n > 0.0 {
+                l + st.medium.tau[c] / (photons * volume)
+            } else {
+                l
+            }
+        })
+    }
+
+    fn unit(&self, view: &View) -> String {
+        let photons = self.photons(view.width as u64 * view.height as u64);
+        format!("iterations of {photons} photons")
     }
 }
