@@ -489,6 +489,7 @@ fn conductors_read_named_or_explicit_with_anisotropic_roughness() {
     let text = format!(
         "{CAMERA}[materials.cu]\nconductor = \"Cu\"\nroughness = [0.1, 0.3]\n\
          [materials.custom]\nconductor = {{ eta = [1.5, 1, 0.5], k = 3 }}\nspecular = 0.5\nroughness = 0.2\n\
+         diffuse = 0.25\n\
          [[shapes]]\ntype = \"sphere\"\nmaterial = \"cu\"\n\
          [[shapes]]\ntype = \"sphere\"\nmaterial = \"custom\"\n"
     );
@@ -500,11 +501,14 @@ fn conductors_read_named_or_explicit_with_anisotropic_roughness() {
     let cu = m("cu");
     assert_eq!(cu.conductor, raylink::scene::Conductor::named("Cu"));
     assert_eq!(cu.specular, Vec3::ONE);
+    // A metal has no diffuse lobe unless it is given one.
+    assert_eq!(cu.diffuse, Texture::Constant(Vec3::ZERO));
     assert_eq!((cu.roughness, cu.roughness_v), (0.1, Some(0.3)));
     let custom = m("custom");
     let c = custom.conductor.unwrap();
     assert_eq!((c.eta, c.k), (Vec3::new(1.5, 1.0, 0.5), Vec3::splat(3.0)));
     assert_eq!(custom.specular, Vec3::splat(0.5));
+    assert_eq!(custom.diffuse, Texture::Constant(Vec3::splat(0.25)));
     assert_eq!((custom.roughness, custom.roughness_v), (0.2, None));
     let dir = std::env::temp_dir().join(format!("raylink-conductors-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();

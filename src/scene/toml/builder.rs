@@ -365,6 +365,9 @@ impl<'a> Builder<'a> {
                 v.map_or(Ok(default), |c| colour(c.0).map_err(fail(key)))
             };
         let diffuse = match desc.diffuse {
+            // A metal has no diffuse lobe unless one is given (pbrt-v4's conductor has
+            // none): 0.5 beside a Fresnel reflectance near 1 would reflect more than it takes.
+            None if desc.conductor.is_some() => Texture::Constant(Rgb::ZERO),
             None => d.diffuse,
             Some(t) => self.texture(site, "diffuse", t)?,
         };
