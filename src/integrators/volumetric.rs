@@ -88,19 +88,52 @@ pub(crate) struct Lengths {
     pub rr_start: u32,
 }
 
+/// What light a path estimate gathers.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Gathered {
+    /// All of it: lights, emitting surfaces, the background and emitting media.
+    All,
+    /// Only what emitting media send (the rest found by other means: SPPM's photons leave
+    /// the lights alone, so it traces the media's light as paths).
+    MediaEmission,
+}
+
 /// One path's estimate of the radiance along `camera_ray`, with the scene's colours (and
 /// its media's) as `colours` gives them.
 pub(crate) fn radiance<C: Colours>(
     ctx: &Context,
     camera_ray: &Ray,
-    Lengths {
-        max_depth,
-        rr_start,
-    }: Lengths,
+    lengths: Lengths,
     sampler: &mut Sampler,
     stats: &mut RayStats,
     colours: &mut C,
 ) -> Rgb {
+    gathering(
+        ctx,
+        camera_ray,
+        (lengths, Gathered::All),
+        sampler,
+        stats,
+        colours,
+    )
+}
+
+/// [`radiance`], gathering what `gathered` says.
+pub(crate) fn gathering<C: Colours>(
+    ctx: &Context,
+    camera_ray: &Ray,
+    (
+        Lengths {
+            max_depth,
+            rr_start,
+        },
+        gathered,
+    ): (Lengths, Gathered),
+    sampler: &mut Sampler,
+    stats: &mut RayStats,
+    colours: &mut C,
+) -> Rgb {
+    let all = gathered == Gathered::All;
     let scene = ctx.scene;
     let lights = &ctx.lights;
     let hero = hero_channel(sampler);
@@ -155,17 +188,21 @@ pub(crate) fn radiance<C: Colours>(
                 let wo = -ray.dir.normalize();
                 let at = Spot::exact(p);
                 let scatterer = Scatterer::Medium { g };
-                radiance += sample_light(
-                    ctx,
-                    &scatterer,
-                    wo,
-                    &at,
-                    &|_| medium,
-                    ray.time,
-                    (beta, r_u, hero),
-                    (sampler, &*colours),
-                    stats,
-                );
+                radiance += if !all {
+                    Rgb::ZERO
+                } else {
+                    sample_light(
+                        ctx,
+                        &scatterer,
+                        wo,
+                        &at,
+                        &|_| medium,
+                        ray.time,
+                        (beta, r_u, hero),
+                        (sampler, &*colours),
+                        stats,
+                    )
+                };
                 let (wi, pdf) = phase::sample_hg(wo, g, sampler.next_2d());
                 if !positive(pdf) {
                     break;
@@ -183,7 +220,7 @@ pub(crate) fn radiance<C: Colours>(
         }
 
         let Some(sp) = hit else {
-            if let Some(bg) = lights.background_light() {
+            if let Some(bg) = lights.background_light().filter(|_| all) {
                 let le = colours.emission(lights.background_radiance(ray.dir), || None);
                 radiance += if specular {
                     beta * le / average(r_u)
@@ -196,7 +233,7 @@ pub(crate) fn radiance<C: Colours>(
         };
         let m = &scene.materials[sp.material];
         let wo = -ray.dir;
-        if m.emits_towards(wo, sp.ng) {
+        if all && m.emits_towards(wo, sp.ng) {
             let le = colours.emission(m.emission_at(sp.p, sp.uv, sp.ng), || m.emission_spectrum);
             radiance += match sp.world_shape().and_then(|s| lights.light_of_shape(s)) {
                 Some(l) if !specular => {
@@ -221,7 +258,7 @@ pub(crate) fn radiance<C: Colours>(
         depth += 1;
         let bsdf = colours.bsdf(m.bsdf(&sp, wo));
         let wo = wo.normalize();
-        if bsdf.has_non_delta() {
+        if all && bsdf.has_non_delta() {
             let current = medium;
             radiance += sample_light(
                 ctx,

@@ -27,7 +27,7 @@ pub(crate) fn check_scene(scene: &Scene) -> Result<(), String> {
     match scene.media.iter().find(|m| m.model().emits()) {
         Some(m) => Err(format!(
             "the light integrator does not render media that emit, and the medium \"{}\" \
-             does: render it with the path, bdpt or vcm integrator",
+             does: render it with the path, bdpt, vcm or sppm integrator",
             m.name
         )),
         None => Ok(()),

@@ -14,8 +14,8 @@
 //! the camera path's throughput is β / avg(r_u), and a photon's power β / avg(r_u) of its
 //! own hero channel's ratios.
 //!
-//! Media that emit are refused (see `SppmSettings::lifecycle`): photons leave only the
-//! lights, so their light would reach the visible points only directly.
+//! Neither walk gathers the emission of media: photons leave only the lights, so the
+//! camera pass traces the media's light as paths of its own (`visible::CameraPass`).
 
 use super::grid::HashGrid;
 use super::visible::{CameraPath, VisiblePoint};

@@ -13,7 +13,9 @@
 //! camera paths may leave their visible point in a medium, where it gathers the photons
 //! scattering within a ball. A pixel keeps separate statistics for its visible points on
 //! surfaces and in media; in media the ball's volume shrinks as the disk's area does, so the
-//! radius by the cube root, and the pixel adds τ / (k · P · 4/3 π r³).
+//! radius by the cube root, and the pixel adds τ / (k · P · 4/3 π r³). Photons leave only
+//! the lights; the light media emit is traced as one more path a pixel from the camera,
+//! gathering only that emission (radiance is linear in the emitters: the two parts add).
 //!
 //! The pixels' statistics live in the render's film between iterations (`WholeImage`): a
 //! viewer sees the image after each iteration, and a checkpoint saves them, so that a
@@ -138,19 +140,8 @@ impl SppmSettings {
         )
     }
 
-    /// The technique for `scene`, ready to render: not for media that emit (photons leave
-    /// only the lights).
-    pub(crate) fn lifecycle(&self, scene: &Scene) -> Result<Box<dyn Lifecycle>> {
-        if let Some(m) = scene.media.iter().find(|m| m.model().emits()) {
-            return Err(Error::input(
-                &scene.source,
-                format!(
-                    "the sppm integrator does not render media that emit, and the medium \
-                     \"{}\" does: render it with the path, bdpt or vcm integrator",
-                    m.name
-                ),
-            ));
-        }
+    /// The technique for `scene`, ready to render.
+    pub(crate) fn lifecycle(&self, _scene: &Scene) -> Result<Box<dyn Lifecycle>> {
         Ok(Box::new(Sppm { settings: *self }))
     }
 }
@@ -335,6 +326,7 @@ impl WholeImage for Sppm {
             seed: view.seed,
             max_depth: s.max_depth,
             size: (width, height),
+            media_glow: ctx.scene.media.iter().any(|m| m.model().emits()),
         };
         let mut state: Vec<PixelState> = saved
             .chunks_exact(STATE_LEN)

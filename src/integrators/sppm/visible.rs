@@ -8,12 +8,14 @@
 use super::media::{self, VolumePoint};
 use crate::bsdf::{Bsdf, Transport};
 use crate::control::CancelToken;
-use crate::integrators::path::{emitted, escaped, sample_direct};
+use crate::integrators::path::{emitted, escaped, sample_direct, RR_START_DEPTH};
+use crate::integrators::volumetric::{gathering, Gathered, Lengths};
 use crate::math::sobol::Sampler;
 use crate::math::{Ray, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::Scene;
 use crate::transport::camera_sample::{camera_sample, PixelJitter};
+use crate::transport::spectral::RgbColours;
 use crate::transport::{Context, RayStats};
 use rayon::prelude::*;
 
@@ -57,6 +59,9 @@ pub(super) struct CameraPass<'c> {
     pub seed: u64,
     pub max_depth: u32,
     pub size: (u32, u32),
+    /// Whether a medium emits: photons leave the lights alone, so the light media emit is
+    /// traced as paths from the camera (its own estimate, added to what the pixel gathers).
+    pub media_glow: bool,
 }
 
 impl CameraPass<'_> {
@@ -87,11 +92,29 @@ impl CameraPass<'_> {
                             (x, y),
                             iteration,
                         );
-                        if ctx.scene.media.is_empty() {
+                        let mut path = if ctx.scene.media.is_empty() {
                             trace(ctx, &ray, self.max_depth, &mut sampler, &mut stats)
                         } else {
                             media::trace(ctx, &ray, self.max_depth, &mut sampler, &mut stats)
+                        };
+                        if self.media_glow {
+                            let lengths = Lengths {
+                                max_depth: self.max_depth,
+                                rr_start: RR_START_DEPTH,
+                            };
+                            let glow = gathering(
+                                ctx,
+                                &ray,
+                                (lengths, Gathered::MediaEmission),
+                                &mut sampler,
+                                &mut stats,
+                                &mut RgbColours,
+                            );
+                            if glow.is_finite() {
+                                path.ld += glow;
+                            }
                         }
+                        path
                     })
                     .collect();
                 Some((row, stats))
