@@ -133,7 +133,7 @@ def mode_rows(mode, result, pixels):
         f"{mode}: all rays (with reflection, refraction and shadow rays) {coh_rays} of "
         f"{full_rays} ({coh_rays / full_rays:.4f}), CPU per ray "
         f"{(coh_cpu / coh_rays) / (full_cpu / full_rays):.2f}x a full render's",
-        f"{mode}: records at most {result['records']} KiB, camera hits at most "
+        f"{mode}: records at most {result['records']} KiB, stored answers at most "
         f"{result['camera']} KiB",
     ]
     return out, notes

@@ -72,7 +72,10 @@ fn cli_writes_frames_and_statistics() {
         .map(|c| c.parse().unwrap())
         .collect();
     assert!(camera[1] > 0 && camera[1] < camera[0], "{text}");
-    assert!(stdout.contains("camera hits (section 3.3.3): "), "{stdout}");
+    assert!(
+        stdout.contains("stored answers (section 3.3.3): "),
+        "{stdout}"
+    );
     assert!(
         stdout.contains("first frame rendered 3 times both ways: median"),
         "{stdout}"

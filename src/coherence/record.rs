@@ -18,13 +18,20 @@
 //! Embree, which cannot start a traversal part-way, the whole query goes). Reflection,
 //! refraction and shadow rays are answered the same way: a pixel is retraced because one
 //! of its rays crossed a changed voxel, and the others of its ray tree come out the same.
+//! A sample whose every query holds is not even shaded again (answers.rs).
+
+mod answers;
 
 use super::grid::ActiveVoxels;
-use super::segments::{BlockSegments, Point16, Quantiser, Segment};
+use super::segments::{Point16, Quantiser, Segment};
 use super::tables::{Table, VoxelTables};
 use crate::accel::{Accel, Hit};
+use crate::math::Rng;
 use crate::math::{Ray, Vec3};
 use crate::scene::{Light, Scene};
+use crate::transport::{Context, Integrator, RayStats, Sample};
+use answers::{Kind, Query};
+pub use answers::{Recorded, Reuse};
 use glam::Vec3A;
 use std::cell::{Cell, RefCell};
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
@@ -41,96 +48,6 @@ thread_local! {
     /// none): a push without a lock. A recorder used on another thread, or while another
     /// owns the buffer, falls back to its own locked list.
     static LOCAL: RefCell<(u64, Recorded)> = const { RefCell::new((0, Recorded::new())) };
-}
-
-/// A query and its answer, as recorded: `shape` is the fingerprint of the shape hit
-/// (`FrameSummary::keys`), which must still be at that index for the hit to be reused.
-/// For a shadow ray, `hit` is its nearest blocker, if it looked for one.
-#[derive(Clone, Copy, Debug)]
-pub struct Query {
-    ray: Ray,
-    hit: Option<Hit>,
-    shape: u64,
-    kind: Kind,
-}
-
-/// Which query a [`Query`] answered.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-enum Kind {
-    /// A camera ray's closest hit.
-    Camera,
-    /// Another ray's closest hit.
-    Surface,
-    /// A shadow ray, blocked or not.
-    Blocked,
-    Clear,
-}
-
-/// What a recorder's task recorded.
-#[derive(Clone, Debug, Default)]
-pub struct Recorded {
-    /// Segment records (empty with tables).
-    pub segments: BlockSegments,
-    /// The queries and their answers, in the order traced.
-    pub camera: Vec<Query>,
-    /// Whether any ray found a surface.
-    pub hit: bool,
-    /// Camera rays answered from an earlier hit, and camera rays.
-    pub camera_reused: u64,
-    pub camera_rays: u64,
-    /// Other queries (reflection, refraction, shadow rays) answered from an earlier trace.
-    pub others_reused: u64,
-    /// The point lights the shadow rays went to: bit `i` for the scene's light `i`, the top
-    /// bit for every light from 63 on.
-    pub lights: u64,
-}
-
-impl Recorded {
-    const fn new() -> Recorded {
-        Recorded {
-            segments: BlockSegments::new(),
-            camera: Vec::new(),
-            hit: false,
-            camera_reused: 0,
-            camera_rays: 0,
-            others_reused: 0,
-            lights: 0,
-        }
-    }
-
-    fn clear(&mut self) {
-        self.segments.clear();
-        self.camera.clear();
-    }
-
-    /// The lists (segments sealed), shrunk to their length; in their place, empty lists
-    /// with room for a quarter more than these held (the next task's blocks are alike).
-    fn take(&mut self) -> Recorded {
-        let room = |n: usize| n + n / 4;
-        let next = Recorded {
-            segments: BlockSegments::with_room_of(&self.segments),
-            camera: Vec::with_capacity(room(self.camera.len())),
-            ..Recorded::new()
-        };
-        let mut taken = std::mem::replace(self, next);
-        taken.segments.seal();
-        taken.segments.shrink_to_fit();
-        taken.camera.shrink_to_fit();
-        taken
-    }
-
-    fn append(&mut self, other: Recorded) {
-        self.segments.append(other.segments);
-        self.camera.extend_from_slice(&other.camera);
-    }
-}
-
-/// How a retraced block's rays may reuse the answers of its last trace.
-pub struct Reuse<'a> {
-    /// The block's queries of its last trace, in the order traced.
-    pub previous: &'a [Query],
-    /// The voxels where a surface changed in this frame.
-    pub changed: &'a ActiveVoxels,
 }
 
 /// How many stored camera rays a camera ray looks ahead of the last one matched (the rays
@@ -172,14 +89,19 @@ pub struct RecordingAccel<'a> {
     /// This recorder's serial number, and its lists when the thread's are taken.
     serial: u64,
     spill: Mutex<Recorded>,
-    /// The shapes' fingerprints in this frame, if camera hits are recorded (each records
-    /// the one hit).
+    /// The shapes' fingerprints in this frame, if queries are kept with their answers (a
+    /// kept hit names its shape by fingerprint).
     shape_keys: Option<&'a [u64]>,
     /// Stored answers to reuse, where their camera rays are among them, the next camera
     /// ray expected (in `cameras`), the next query expected and the end of its camera ray's
     /// tree (in `reuse.previous`).
     reuse: Option<Reuse<'a>>,
     cameras: Vec<u32>,
+    /// Per entry of `cameras`, its sample in `reuse.shaded` (`u32::MAX`: none).
+    samples: Vec<u32>,
+    /// The last camera query kept, in the lists (`usize::MAX`: none since its sample).
+    last_camera: AtomicUsize,
+    samples_reused: AtomicU64,
     cursor: AtomicUsize,
     tree: AtomicUsize,
     tree_end: AtomicUsize,
@@ -273,6 +195,9 @@ impl<'a> RecordingAccel<'a> {
             shape_keys: None,
             reuse: None,
             cameras: Vec::new(),
+            samples: Vec::new(),
+            last_camera: AtomicUsize::new(usize::MAX),
+            samples_reused: AtomicU64::new(0),
             cursor: AtomicUsize::new(UNSYNCED),
             tree: AtomicUsize::new(UNSYNCED),
             tree_end: AtomicUsize::new(0),
@@ -297,6 +222,16 @@ impl<'a> RecordingAccel<'a> {
                 .filter(|(_, q)| q.kind == Kind::Camera)
                 .map(|(i, _)| i as u32)
                 .collect();
+            let mut shaded = r.shaded.iter().enumerate().peekable();
+            self.samples = (self.cameras.iter())
+                .map(|&at| {
+                    while shaded.next_if(|(_, s)| s.at < at).is_some() {}
+                    match shaded.peek() {
+                        Some((k, s)) if s.at == at && r.shading => *k as u32,
+                        _ => u32::MAX,
+                    }
+                })
+                .collect();
         }
         self.reuse = reuse;
         self
@@ -319,6 +254,13 @@ impl<'a> RecordingAccel<'a> {
     /// The stored query of camera ray `ray`: the same ray traced in the block's last trace
     /// (its tree's queries are looked for next).
     fn stored_camera(&self, ray: &Ray) -> Option<&Query> {
+        let j = self.find_camera(ray)?;
+        Some(self.sync_camera(j))
+    }
+
+    /// Where camera ray `ray` is in `cameras`, if it is among them (the cursor moved on
+    /// only if not: [`sync_camera`](Self::sync_camera) moves it to a ray found).
+    fn find_camera(&self, ray: &Ray) -> Option<usize> {
         let reuse = self.reuse.as_ref()?;
         let start = self.cursor.load(Ordering::Relaxed);
         // The task's first camera ray is looked for in the whole list: a block traced in
@@ -338,6 +280,13 @@ impl<'a> RecordingAccel<'a> {
             self.tree.store(UNSYNCED, Ordering::Relaxed);
             return None;
         };
+        Some(j)
+    }
+
+    /// Moves past camera ray `j` (of `cameras`), whose tree's queries are looked for next;
+    /// its stored query.
+    fn sync_camera(&self, j: usize) -> &Query {
+        let reuse = self.reuse.as_ref().expect("found among the stored queries");
         self.cursor.store(j + 1, Ordering::Relaxed);
         let at = self.cameras[j] as usize;
         let end = self
@@ -346,7 +295,14 @@ impl<'a> RecordingAccel<'a> {
             .map_or(reuse.previous.len(), |&p| p as usize);
         self.tree.store(at + 1, Ordering::Relaxed);
         self.tree_end.store(end, Ordering::Relaxed);
-        Some(&reuse.previous[at])
+        &reuse.previous[at]
+    }
+
+    /// The range of camera ray `j`'s tree in the stored queries (the ray's own first).
+    fn tree_of(&self, j: usize) -> std::ops::Range<usize> {
+        let reuse = self.reuse.as_ref().expect("found among the stored queries");
+        let end = (self.cameras.get(j + 1)).map_or(reuse.previous.len(), |&p| p as usize);
+        self.cameras[j] as usize..end
     }
 
     /// The stored query of a ray of the current camera ray's tree, of one of `kinds`.
@@ -395,6 +351,9 @@ impl<'a> RecordingAccel<'a> {
         };
         let shape = hit.map_or(0, |h| keys[h.geom_id as usize]);
         self.with_lists(|list| {
+            if kind == Kind::Camera {
+                self.last_camera.store(list.camera.len(), Ordering::Relaxed);
+            }
             list.camera.push(Query {
                 ray: *ray,
                 hit,
@@ -492,7 +451,7 @@ impl<'a> RecordingAccel<'a> {
         }
     }
 
-    /// What was recorded: the segments (sealed), the camera hits, whether any ray found a
+    /// What was recorded: the segments (sealed), the stored answers, whether any ray found a
     /// surface, and the camera rays answered from stored hits.
     pub fn finish(self) -> Recorded {
         // The block takes the thread's lists, and their box is made while they are in this
@@ -506,7 +465,7 @@ impl<'a> RecordingAccel<'a> {
             }
         });
         let spill = self.spill.into_inner().unwrap_or_else(|e| e.into_inner());
-        if !spill.segments.is_empty() || !spill.camera.is_empty() {
+        if !spill.segments.is_empty() || !spill.camera.is_empty() || !spill.shaded.is_empty() {
             recorded.append(spill);
             recorded.segments.seal();
         }
@@ -514,6 +473,7 @@ impl<'a> RecordingAccel<'a> {
         recorded.camera_reused = self.camera_reused.load(Ordering::Relaxed);
         recorded.camera_rays = self.camera_rays.load(Ordering::Relaxed);
         recorded.others_reused = self.others_reused.load(Ordering::Relaxed);
+        recorded.samples_reused = self.samples_reused.load(Ordering::Relaxed);
         recorded.lights = self.lights.load(Ordering::Relaxed);
         recorded
     }
@@ -573,6 +533,55 @@ fn same_ray(a: &Ray, b: &Ray) -> bool {
         )
     };
     bits(a) == bits(b)
+}
+
+impl RecordingAccel<'_> {
+    /// Whether the recorder keeps camera samples ([`Replaying`] asks it for them).
+    pub(super) fn keeps_samples(&self) -> bool {
+        self.shape_keys.is_some()
+    }
+
+    /// The whole sample of camera ray `ray` and the rays its tree traced, from the block's
+    /// last trace, when every query of its tree holds (the same answers, shapes and lights).
+    fn stored_sample(&self, ray: &Ray) -> Option<(Sample, RayStats)> {
+        self.shape_keys?;
+        self.sample_of(ray)
+    }
+
+    /// Keeps the sample computed for camera ray `ray` and the rays its tree traced.
+    fn keep_sample(&self, ray: &Ray, sample: &Sample, rays: &RayStats) {
+        if self.shape_keys.is_some() {
+            let count = |n: u64| n.min(u32::MAX as u64) as u32;
+            let (closest, shadow) = (count(rays.closest), count(rays.shadow));
+            self.keep_shaded(ray, sample.object, sample.radiance, closest, shadow);
+        }
+    }
+}
+
+/// A block's integrator over its recorder: a camera sample whose every query holds is
+/// given back from the block's last trace instead of being shaded again; the others are
+/// shaded by `inner` and kept for the next frame. The sample is the same either way
+/// (same answers, shapes, lights and random stream), so frames stay bit-identical.
+pub(super) struct Replaying<'a> {
+    pub inner: &'a dyn Integrator,
+    pub recorder: &'a RecordingAccel<'a>,
+}
+
+impl Integrator for Replaying<'_> {
+    fn radiance(&self, ctx: &Context, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Sample {
+        if let Some((sample, rays)) = self.recorder.stored_sample(ray) {
+            stats.add(&rays);
+            return sample;
+        }
+        let before = *stats;
+        let sample = self.inner.radiance(ctx, ray, rng, stats);
+        let rays = RayStats {
+            closest: stats.closest - before.closest,
+            shadow: stats.shadow - before.shadow,
+        };
+        self.recorder.keep_sample(ray, &sample, &rays);
+        sample
+    }
 }
 
 impl Accel for RecordingAccel<'_> {
@@ -636,6 +645,27 @@ impl Accel for RecordingAccel<'_> {
             }
             None => (self.inner.occluded(ray), None),
         };
+        let kept = self.record_occlusion(ray, blocked, nearest);
+        // The Whitted integrator asks for the nearest blocker next: keep it.
+        if blocked && self.nearest_blocker {
+            LAST.set(Some((*ray, kept)));
+            LAST_OWNER.set(self.serial);
+        }
+        let kind = if blocked { Kind::Blocked } else { Kind::Clear };
+        self.keep_query(ray, kept, kind);
+        blocked
+    }
+}
+
+impl RecordingAccel<'_> {
+    /// Records shadow ray `ray`, `blocked` or not, whose nearest blocker is `nearest` if
+    /// known (else found here when needed); returns the nearest blocker kept with it.
+    fn record_occlusion(
+        &self,
+        ray: &Ray,
+        blocked: bool,
+        nearest: Option<Option<Hit>>,
+    ) -> Option<Hit> {
         if !self.point_lights.is_empty() {
             self.note_light(ray);
         }
@@ -655,14 +685,9 @@ impl Accel for RecordingAccel<'_> {
                     end = h.t;
                 }
             }
-            // The Whitted integrator asks for this hit next: keep it.
-            LAST.set(Some((*ray, hit)));
-            LAST_OWNER.set(self.serial);
         }
         self.keep_shadow(ray.origin, ray.dir, ray.tmin, end, end == ray.tmax);
-        let kind = if blocked { Kind::Blocked } else { Kind::Clear };
-        self.keep_query(ray, kept, kind);
-        blocked
+        kept
     }
 }
 

@@ -7,7 +7,7 @@
 
 use super::changes::{Changes, FrameSummary};
 use super::grid::{ActiveVoxels, Grid};
-use super::record::{Query, Recorded, RecordingAccel, Records, Reuse};
+use super::record::{Recorded, RecordingAccel, Records, Replaying, Reuse};
 use super::segments::{Changed, Quantiser, SegmentRecords};
 use super::tables::{BlockLayout, BlockSet, Table, VoxelTables};
 use super::LIGHT_SELECTION;
@@ -62,11 +62,27 @@ impl Engine<'_> {
         }
     }
 
-    /// Renders one block; returns its pixels and the rays traced.
-    fn region(&self, ctx: &Context, small: &SmallObjects, tile: &Tile) -> (Vec<Rgb>, RayStats) {
+    /// Renders one block through its recorder; returns its pixels and the rays traced.
+    fn region(
+        &self,
+        ctx: &Context,
+        recorder: &RecordingAccel,
+        small: &SmallObjects,
+        tile: &Tile,
+    ) -> (Vec<Rgb>, RayStats) {
+        let ctx = &ctx.with_accel(recorder);
         match self {
             Engine::Whitted { integrator, view } => {
-                let out = crate::render::pixels::render_tile(ctx, *integrator, view, small, tile);
+                let replaying = Replaying {
+                    inner: *integrator,
+                    recorder,
+                };
+                let integrator: &dyn Integrator = if recorder.keeps_samples() {
+                    &replaying
+                } else {
+                    *integrator
+                };
+                let out = crate::render::pixels::render_tile(ctx, integrator, view, small, tile);
                 (out.pixels, out.rays)
             }
             Engine::MonteCarlo {
@@ -134,6 +150,9 @@ pub struct FrameStats {
     pub camera_reused: u64,
     /// Reflection, refraction and shadow rays answered from the block's last trace.
     pub others_reused: u64,
+    /// Samples not shaded again: every ray of their tree was answered from the block's
+    /// last trace, and no light changed.
+    pub samples_reused: u64,
 }
 
 /// The incremental renderer's state between frames.
@@ -152,11 +171,11 @@ pub struct CoherentRenderer {
     /// The position in the sequence of the next frame (0 after [`reset`](Self::reset)).
     position: u32,
     /// Records that grow past this many bytes are cut down: segment records become voxel
-    /// tables, and camera hits are no longer kept.
+    /// tables, and stored answers are no longer kept.
     segment_budget: usize,
-    /// Per block, its queries and their answers in its last trace (section 3.3.3), while
-    /// `camera_on`.
-    camera: Vec<Vec<Query>>,
+    /// Per block, its queries and their answers, and its samples, in its last trace
+    /// (section 3.3.3), while `camera_on`.
+    camera: Vec<Recorded>,
     /// Per block, the point lights its shadow rays went to in its last trace
     /// ([`Recorded::lights`]).
     lights: Vec<u64>,
@@ -207,14 +226,14 @@ impl CoherentRenderer {
             last_change: None,
             position: 0,
             segment_budget: (MemoryBudget::default().limit() / 4).min(usize::MAX as u64) as usize,
-            camera: vec![Vec::new(); layout.len()],
+            camera: vec![Recorded::default(); layout.len()],
             lights: vec![0; layout.len()],
             camera_on: true,
         }
     }
 
     /// Records that grow past `bytes` are cut down: segment records are turned into voxel
-    /// tables (which take a fixed, small amount of memory), camera hits are dropped, and the
+    /// tables (which take a fixed, small amount of memory), stored answers are dropped, and the
     /// sequence goes on without them. By default a quarter of the memory limit
     /// (`--max-memory`).
     pub fn set_segment_budget(&mut self, bytes: usize) {
@@ -293,7 +312,7 @@ impl CoherentRenderer {
         }
     }
 
-    /// Bytes the records take: the voxel tables or the segments held (the camera hits
+    /// Bytes the records take: the voxel tables or the segments held (the stored answers
     /// apart: [`camera_bytes`](Self::camera_bytes)).
     pub fn record_bytes(&self) -> usize {
         match &self.store {
@@ -302,15 +321,17 @@ impl CoherentRenderer {
         }
     }
 
-    /// Bytes the stored camera hits take.
+    /// Bytes the stored answers take.
     pub fn camera_bytes(&self) -> usize {
-        self.camera
-            .iter()
-            .map(|c| std::mem::size_of_val(c.as_slice()))
+        (self.camera.iter())
+            .map(|c| {
+                std::mem::size_of_val(c.camera.as_slice())
+                    + std::mem::size_of_val(c.shaded.as_slice())
+            })
             .sum()
     }
 
-    /// Whether camera hits are kept for reuse (until the records pass their budget).
+    /// Whether stored answers are kept for reuse (until the records pass their budget).
     pub fn keeps_camera_hits(&self) -> bool {
         self.camera_on
     }
@@ -330,7 +351,7 @@ impl CoherentRenderer {
     /// Forgets the previous frame: the next frame is traced in full.
     pub fn reset(&mut self) {
         self.previous = None;
-        self.camera = vec![Vec::new(); self.layout.len()];
+        self.camera = vec![Recorded::default(); self.layout.len()];
         self.lights = vec![0; self.layout.len()];
         self.store = Store::new(self.store.records(), &self.grid, &self.layout);
         self.position = 0;
@@ -339,7 +360,7 @@ impl CoherentRenderer {
 
     /// The blocks to retrace for `changes`, how many voxels were marked changed, and why
     /// every block is retraced, if so; else the voxels where a surface changed (what a
-    /// stored camera hit must not be behind).
+    /// stored answer must not be behind).
     pub fn blocks_for(&self, changes: &Changes) -> (BlockSet, usize, Result<Vec<bool>, String>) {
         let mut blocks = BlockSet::new(&self.layout);
         if let Some(reason) = &changes.everything {
@@ -451,6 +472,8 @@ impl CoherentRenderer {
             .num_threads(engine.threads().unwrap_or(0))
             .build()
             .map_err(|e| crate::error::Error::Invalid(format!("cannot start threads: {e}")))?;
+        // Samples are reused only while every light stays as it was (shading reads them).
+        let mut lights_same = false;
         let (blocks, mut image, changed) = match self.previous.take() {
             None => {
                 stats.full_reason = Some("first frame".into());
@@ -458,6 +481,8 @@ impl CoherentRenderer {
             }
             Some((previous, image)) => {
                 let changes = previous.diff(&summary);
+                lights_same =
+                    !changes.light_moved && changes.shadows.is_empty() && changes.dimmed.is_empty();
                 let (mut blocks, voxels, changed) = pool.install(|| self.blocks_for(&changes));
                 for disc in small.differences(&self.small) {
                     self.layout.insert_pixels(&disc.pixels(), &mut blocks);
@@ -474,7 +499,7 @@ impl CoherentRenderer {
         // The retraced blocks' queries, to reuse where nothing changed along them (only
         // when the frame's changed voxels are known: not after a change that reaches every
         // pixel, whose geometry changes are not worked out).
-        let mut previous_camera: Vec<Vec<Query>> = vec![Vec::new(); self.layout.len()];
+        let mut previous_camera: Vec<Recorded> = vec![Recorded::default(); self.layout.len()];
         for b in blocks.iter() {
             previous_camera[b] = std::mem::take(&mut self.camera[b]);
         }
@@ -546,12 +571,14 @@ impl CoherentRenderer {
             let mut recorder = RecordingAccel::new(accel, scene, voxels, nearest_blocker, records);
             if camera_on {
                 let reuse = changed.as_ref().map(|changed| Reuse {
-                    previous: &previous_camera[*b],
+                    previous: &previous_camera[*b].camera,
+                    shaded: &previous_camera[*b].shaded,
+                    shading: lights_same,
                     changed,
                 });
                 recorder = recorder.with_camera(&summary.keys, reuse);
             }
-            let (pixels, rays) = engine.region(&ctx.with_accel(&recorder), &small, tile);
+            let (pixels, rays) = engine.region(&ctx, &recorder, &small, tile);
             if let Store::Tables(tables) = store {
                 recorder.flush(tables, *b);
             }
@@ -581,10 +608,16 @@ impl CoherentRenderer {
                 store.add(*b, recorded.segments, recorded.hit);
             }
             // (A block traced in several tiles: the parts in order.)
-            if self.camera[*b].is_empty() {
-                self.camera[*b] = recorded.camera;
+            stats.samples_reused += recorded.samples_reused;
+            let kept = Recorded {
+                camera: recorded.camera,
+                shaded: recorded.shaded,
+                ..Recorded::default()
+            };
+            if self.camera[*b].camera.is_empty() {
+                self.camera[*b] = kept;
             } else {
-                self.camera[*b].extend_from_slice(&recorded.camera);
+                self.camera[*b].append(kept);
             }
             stats.camera_rays += recorded.camera_rays;
             stats.camera_reused += recorded.camera_reused;
@@ -597,10 +630,10 @@ impl CoherentRenderer {
         stats.blocks_total = self.layout.len();
         stats.blocks = list;
         if self.record_bytes() + self.camera_bytes() > self.segment_budget {
-            // Over the budget: segment records become tables, and camera hits are no longer
+            // Over the budget: segment records become tables, and stored answers are no longer
             // kept (the frames stay the same; retraced camera rays are queried again).
             self.camera_on = false;
-            self.camera = vec![Vec::new(); self.layout.len()];
+            self.camera = vec![Recorded::default(); self.layout.len()];
             if let Store::Segments(segments) = &self.store {
                 let tables = pool.install(|| segments.to_tables(&self.voxels, &self.layout));
                 self.store = Store::Tables(tables);

@@ -245,10 +245,18 @@ pub fn summary(report: &Report) -> String {
     if kept > 0 {
         let _ = writeln!(
             s,
-            "camera hits (section 3.3.3): {reused} of {kept} camera rays in retraced blocks \
+            "stored answers (section 3.3.3): {reused} of {kept} camera rays in retraced blocks \
              ({:.1}%) answered from the block's last trace; at most {:.1} KiB kept",
             100.0 * reused as f64 / kept as f64,
             report.camera_bytes as f64 / 1024.0
+        );
+    }
+    let shaded: u64 = report.rows.iter().map(|r| r.coherent.samples_reused).sum();
+    if shaded > 0 {
+        let _ = writeln!(
+            s,
+            "samples not shaded again (every ray of their tree answered from the block's last \
+             trace, no light changed): {shaded}"
         );
     }
     let others: u64 = report.rows.iter().map(|r| r.coherent.others_reused).sum();

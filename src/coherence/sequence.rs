@@ -241,7 +241,7 @@ pub struct Sequence {
     /// sequence that changes it, foreseen.
     foreseen: Option<(Grid, Vec<u32>)>,
     full_notice: bool,
-    /// The most the records held after a frame: bytes, segments, bytes of camera hits.
+    /// The most the records held after a frame: bytes, segments, bytes of stored answers.
     peaks: (usize, usize, usize),
     /// How many times the grid grew to hold the scene.
     regrids: usize,
@@ -423,7 +423,7 @@ impl Sequence {
         if before != (coherent.records(), coherent.keeps_camera_hits()) {
             outer.note(&format!(
                 "notice: frame {frame}: the records grew past a quarter of the memory budget; \
-                 going on with voxel tables and without keeping camera hits (same frames)"
+                 going on with voxel tables and without keeping stored answers (same frames)"
             ));
         }
         let p = &mut self.peaks;
@@ -613,7 +613,7 @@ pub struct Report {
     pub record_bytes: usize,
     /// The most segments held after a frame (segment records).
     pub segments: usize,
-    /// The most memory the kept camera hits took after a frame.
+    /// The most memory the stored answers took after a frame.
     pub camera_bytes: usize,
     pub voxels: usize,
     /// Voxels where a change can happen (the only ones recorded).

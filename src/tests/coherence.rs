@@ -359,6 +359,9 @@ fn whitted_moving_object_matches_full_renders() {
     // Section 3.3.3: some retraced camera rays, not all, get their stored hit (`run` has
     // checked that the frames are still those of full renders).
     check_camera_reuse(&frames);
+    // Some samples, not all, keep their value without being shaded again.
+    let (shaded, rays) = (frames[2].0.samples_reused, frames[2].0.camera_rays);
+    assert!(frames[1].0.samples_reused == 0 && shaded > 0 && shaded < rays);
 }
 
 /// Frame 2 answers some camera rays of the blocks it retraces from the hits stored when
@@ -405,7 +408,7 @@ visible = false
         let frames = run(&no_sky(&text), kind, (8, 6));
         let n: Vec<usize> = frames.iter().map(|f| f.0.blocks_retraced).collect();
         assert!(n[1] > 0 && n[1] < 48 && n[2] > 0 && n[3] == 0, "{n:?}");
-        // Frame 2 retraces blocks that frame 1 retraced and kept the camera hits of.
+        // Frame 2 retraces blocks that frame 1 retraced and kept the answers of.
         assert!(frames[2].0.camera_reused > 0);
     }
 }
@@ -753,9 +756,9 @@ fn hidden_small_object_moving_matches_full_renders() {
     check_moving(&frames, 16 * 12);
 }
 
-/// The records' budget counts the camera hits kept, not the segments alone: a renderer whose
-/// budget lies between a frame's segments and its segments with its camera hits turns to
-/// voxel tables and stops keeping camera hits; one with room for both keeps both.
+/// The records' budget counts the stored answers, not the segments alone: a renderer whose
+/// budget lies between a frame's segments and its segments with its stored answers turns to
+/// voxel tables and stops keeping answers; one with room for both keeps both.
 #[test]
 fn camera_hits_count_in_the_records_budget() {
     let anim = Animation::from_str(&animated("", MOVING), Path::new("t.toml")).unwrap();
