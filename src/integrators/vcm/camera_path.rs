@@ -27,6 +27,8 @@ pub(super) struct Iteration<'a> {
     pub max_len: u32,
     /// The light subpaths over the image's pixels.
     pub paths_per_pixel: f32,
+    /// Whether camera vertices merge (the grid is empty if not).
+    pub merges: bool,
 }
 
 /// A camera subpath's vertex, as the techniques at it see it.
@@ -160,7 +162,7 @@ impl MonteCarlo for Iteration<'_> {
                     let c = self.connect(ctx, &v, lv, spectral.as_mut(), stats);
                     gathered += lv.path.weighted() * c;
                 }
-                if scatter.mergeable() {
+                if self.merges && scatter.mergeable() {
                     gathered += self.merge(&v) * w.vm_normalization;
                 }
                 radiance += path.beta * gathered;

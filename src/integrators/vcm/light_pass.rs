@@ -26,7 +26,7 @@ use crate::transport::driver::{drive_indexed, Merge};
 use crate::transport::{Context, IterationStart, IterationWork, RayStats, Splat};
 
 /// Subpaths a chunk traces.
-const CHUNK: usize = 1024;
+const CHUNK: usize = 128;
 /// The key of the light subpaths' streams (apart from the camera samples').
 const LIGHT_KEY: u64 = 0x7663_6d6c;
 

@@ -11,7 +11,8 @@ use crate::math::sobol::Sampler;
 use crate::math::{Rgb, Vec3};
 
 /// The iteration's constants of the weights: η = π r² N (the merge radius's disk times the
-/// light subpaths of the iteration), a merge's density relative to a connection's.
+/// light subpaths of the iteration), a merge's density relative to a connection's; 0 when
+/// the render does not merge (the weights are then bidirectional tracing's).
 #[derive(Clone, Copy, Debug)]
 pub(super) struct Weights {
     /// η: what a merge counts relative to a connection.
@@ -24,11 +25,12 @@ pub(super) struct Weights {
 }
 
 impl Weights {
-    /// For merge radius `radius` and `light_paths` light subpaths an iteration.
-    pub fn new(radius: f32, light_paths: f32) -> Weights {
+    /// For merge radius `radius` and `light_paths` light subpaths an iteration; `merges`:
+    /// whether the camera subpaths merge.
+    pub fn new(radius: f32, light_paths: f32, merges: bool) -> Weights {
         let eta = std::f32::consts::PI * radius * radius * light_paths;
         Weights {
-            vm: eta,
+            vm: if merges { eta } else { 0.0 },
             vc: 1.0 / eta,
             vm_normalization: 1.0 / eta,
         }

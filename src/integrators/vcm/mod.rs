@@ -108,6 +108,18 @@ const SMOOTH_ROUGHNESS: f32 = 0.3;
 /// more than it gives (on the Cornell box one in sixteen reaches a given error in about a
 /// third of the time).
 fn default_paths_per_pixel(scene: &Scene) -> f32 {
+    if caustics_possible(scene) {
+        1.0
+    } else {
+        DIFFUSE_PATHS_PER_PIXEL
+    }
+}
+
+/// Whether some path of `scene` may escape connections: a smooth surface (specular or
+/// transmitting below [`SMOOTH_ROUGHNESS`], or thin) or participating media. Elsewhere
+/// every path has two neighbouring vertices a connection joins, merges add work and no
+/// light, and VCM leaves them out unless a merge radius is given.
+fn caustics_possible(scene: &Scene) -> bool {
     let smooth = scene
         .materials
         .iter()
@@ -118,11 +130,7 @@ fn default_paths_per_pixel(scene: &Scene) -> f32 {
             let transmits = c.transmission.max_element() > 0.0;
             (reflects || transmits) && (c.thin || c.roughness < SMOOTH_ROUGHNESS)
         });
-    if smooth || !scene.media.is_empty() {
-        1.0
-    } else {
-        DIFFUSE_PATHS_PER_PIXEL
-    }
+    smooth || !scene.media.is_empty()
 }
 
 /// VCM's settings besides the Monte Carlo ones, checked.
@@ -182,6 +190,7 @@ pub(crate) fn lifecycle(
             radius: vcm.radius.unwrap_or_else(|| default_radius(scene)),
             light_paths: vcm.light_paths,
             default_paths_per_pixel: default_paths_per_pixel(scene),
+            merges: vcm.radius.is_some() || caustics_possible(scene),
         },
         settings: *mc,
     }))
@@ -196,6 +205,9 @@ pub struct Vcm {
     light_paths: Option<u32>,
     /// Light subpaths a pixel when `light_paths` is not set.
     default_paths_per_pixel: f32,
+    /// Whether camera vertices merge with light vertices ([`caustics_possible`], or a
+    /// radius given).
+    merges: bool,
 }
 
 impl Vcm {
@@ -256,7 +268,7 @@ impl MonteCarlo for Vcm {
         let pixels = start.size.0 as usize * start.size.1 as usize;
         let count = self.light_paths_for(pixels as u64) as usize;
         let radius = self.radius_at(start.index);
-        let weights = Weights::new(radius, count as f32);
+        let weights = Weights::new(radius, count as f32, self.merges);
         // Full paths have at most max_depth bounces: max_depth + 1 segments.
         let max_len = self.max_depth + 1;
         let pass = LightPass {
@@ -268,7 +280,10 @@ impl MonteCarlo for Vcm {
         let Some((paths, work)) = pass.run(ctx, start, start.threads) else {
             return false;
         };
-        let balls: Vec<_> = paths.vertices.iter().map(|v| (v.at.p, radius)).collect();
+        let balls: Vec<_> = match self.merges {
+            true => paths.vertices.iter().map(|v| (v.at.p, radius)).collect(),
+            false => Vec::new(),
+        };
         let grid = HashGrid::build(&balls);
         drop(balls);
         let iteration = Iteration {
@@ -277,8 +292,40 @@ impl MonteCarlo for Vcm {
             weights,
             max_len,
             paths_per_pixel: count as f32 / pixels as f32,
+            merges: self.merges,
         };
         samples(&iteration, work);
         true
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    fn scene(path: &str) -> Scene {
+        Scene::load(&Path::new(env!("CARGO_MANIFEST_DIR")).join(path)).unwrap()
+    }
+
+    /// Merges are left out where every surface is diffuse or rough and there are no media;
+    /// a mirror, glass, water or a medium brings them back.
+    #[test]
+    fn merges_only_where_a_path_may_escape_connections() {
+        assert!(!caustics_possible(&scene("scenes/cornell-box.toml")));
+        assert!(caustics_possible(&scene("scenes/cornell-spheres.toml")));
+        assert!(caustics_possible(&scene("scenes/pool-caustics.toml")));
+        assert!(caustics_possible(&scene("tests/scenes/media-box.toml")));
+    }
+
+    /// Without merges the weights are bidirectional tracing's: no merge term anywhere.
+    #[test]
+    fn without_merges_no_weight_goes_to_them() {
+        let (with, without) = (
+            Weights::new(0.1, 576.0, true),
+            Weights::new(0.1, 576.0, false),
+        );
+        assert!(with.vm > 0.0 && without.vm == 0.0);
+        assert_eq!(with.vc, without.vc);
     }
 }
