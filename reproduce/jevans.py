@@ -43,8 +43,9 @@ Audition's 6,000 polygons and 4 lights), not from its data, and its act never co
 paper's does (its frames 200 and 350 retrace 3% of the pixels). As in the paper: 640×480,
 one ray per pixel (Whitted's model), 16×16 pixel blocks, a still camera, online placement.
 Unlike it: intersection by Embree's BVH (the paper's ray tracer walked its adaptive voxels),
-records in a uniform grid of 65,536 voxels over the whole set (the paper: its adaptive
-octree), CPU time as user + system seconds of 2 threads on a machine shared with other work
+records in a uniform grid of 65,536 voxels over the whole set whose voxels a frame's changed
+surfaces pass through are cut in 2×2×2 twice to find the blocks to retrace (the paper: its
+adaptive octree), CPU time as user + system seconds of 2 threads on a machine shared with other work
 (the paper: one SGI Personal Iris 4D/25). Look-ahead placement (every frame read first, its
 CPU time counted in the entire sequence) is raylink's own."""
 

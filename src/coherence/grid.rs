@@ -2,8 +2,20 @@
 //! 1987) that walks a ray segment through it. The grid is independent of the intersection
 //! backend: it only has to cover every place geometry or lights occupy during the sequence.
 
+use super::adaptive::AdaptiveGrid;
 use crate::math::Vec3;
 use glam::Vec3A;
+
+/// A grid's box (what the records' lattice is laid over).
+pub trait Extent {
+    fn extent(&self) -> (Vec3, Vec3);
+}
+
+impl Extent for Grid {
+    fn extent(&self) -> (Vec3, Vec3) {
+        (self.lo, self.hi)
+    }
+}
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Grid {
@@ -129,7 +141,7 @@ impl Grid {
     /// The walk of a segment already clipped to `[tin, tout]` inside the grid's box
     /// (`inv` = 1 / `dir`).
     #[inline(always)]
-    fn walk_clipped(
+    pub(super) fn walk_clipped(
         &self,
         origin: Vec3,
         dir: Vec3,
@@ -240,7 +252,7 @@ fn ends_beyond_one_face(lo: Vec3, hi: Vec3, origin: Vec3, dir: Vec3, t0: f32, t1
 /// The part `[tin, tout]` of `[max(t0, 0), t1]` where `origin + t·dir` is inside the box
 /// `[lo, hi]` (`inv` = 1 / `dir`); `None` if it misses.
 #[inline(always)]
-fn clip(
+pub(super) fn clip(
     lo: Vec3,
     hi: Vec3,
     origin: Vec3,
@@ -277,7 +289,9 @@ fn clip(
 /// to skip what needs no records).
 #[derive(Clone, Debug)]
 pub struct ActiveVoxels {
-    pub fine: Grid,
+    /// The voxels: a uniform grid, or one cut finer where a frame's changes lie.
+    pub fine: AdaptiveGrid,
+    /// Over the top grid of `fine`.
     coarse: Grid,
     /// One bit per fine voxel.
     active: Vec<u64>,
@@ -288,18 +302,24 @@ pub struct ActiveVoxels {
     bounds: Option<(Vec3, Vec3)>,
 }
 
-/// Fine voxels per coarse cell along each axis.
+/// Top voxels per coarse cell along each axis.
 const COARSE: u32 = 4;
 
 impl ActiveVoxels {
     /// Every voxel of `fine` is worth recording.
-    pub fn all(fine: Grid) -> ActiveVoxels {
+    pub fn all(fine: impl Into<AdaptiveGrid>) -> ActiveVoxels {
+        let fine = fine.into();
         let n = fine.len();
         ActiveVoxels::from_mask(fine, &vec![true; n])
     }
 
     /// Only the voxels overlapping one of `boxes` (grown by `margin`).
-    pub fn boxes(fine: Grid, boxes: &[(Vec3, Vec3)], margin: f32) -> ActiveVoxels {
+    pub fn boxes(
+        fine: impl Into<AdaptiveGrid>,
+        boxes: &[(Vec3, Vec3)],
+        margin: f32,
+    ) -> ActiveVoxels {
+        let fine = fine.into();
         let mut mask = vec![false; fine.len()];
         for (lo, hi) in boxes {
             fine.voxels_in_box(*lo - margin, *hi + margin, |v| mask[v] = true);
@@ -308,34 +328,32 @@ impl ActiveVoxels {
     }
 
     /// The voxels `v` with `mask[v]`.
-    pub(crate) fn from_mask(fine: Grid, mask: &[bool]) -> ActiveVoxels {
-        let res = fine.res.map(|r| r.div_ceil(COARSE));
+    pub(crate) fn from_mask(fine: impl Into<AdaptiveGrid>, mask: &[bool]) -> ActiveVoxels {
+        let fine = fine.into();
+        let top = &fine.top;
+        let res = top.res.map(|r| r.div_ceil(COARSE));
         let scale = Vec3::new(
-            (res[0] * COARSE) as f32 / fine.res[0] as f32,
-            (res[1] * COARSE) as f32 / fine.res[1] as f32,
-            (res[2] * COARSE) as f32 / fine.res[2] as f32,
+            (res[0] * COARSE) as f32 / top.res[0] as f32,
+            (res[1] * COARSE) as f32 / top.res[1] as f32,
+            (res[2] * COARSE) as f32 / top.res[2] as f32,
         );
-        let coarse = Grid::new(fine.lo, fine.lo + (fine.hi - fine.lo) * scale, res);
+        let coarse = Grid::new(top.lo, top.lo + (top.hi - top.lo) * scale, res);
         let mut active = vec![0u64; fine.len().div_ceil(64)];
         let mut coarse_active = vec![false; coarse.len()];
-        let (mut lo, mut hi) = ([u32::MAX; 3], [0u32; 3]);
+        let (mut lo, mut hi) = (Vec3::INFINITY, Vec3::NEG_INFINITY);
         for (v, _) in mask.iter().enumerate().filter(|(_, &m)| m) {
             active[v / 64] |= 1 << (v % 64);
-            let c = fine.coords(v);
+            let c = top.coords(fine.top_cell(v));
             coarse_active[coarse.index(c.map(|x| x / COARSE))] = true;
-            for k in 0..3 {
-                lo[k] = lo[k].min(c[k]);
-                hi[k] = hi[k].max(c[k]);
-            }
+            let (a, b) = fine.voxel_box(v);
+            lo = lo.min(a);
+            hi = hi.max(b);
         }
-        let bounds = (lo[0] <= hi[0]).then(|| {
+        let bounds = (lo.x <= hi.x).then(|| {
             // Grown by a hair, so that rounding in the clip cannot cut off a crossing that
             // the walk over the whole grid would have found.
-            let eps = (fine.hi - fine.lo).length() * 1e-5;
-            (
-                fine.voxel_box(fine.index(lo)).0 - eps,
-                fine.voxel_box(fine.index(hi)).1 + eps,
-            )
+            let eps = (top.hi - top.lo).length() * 1e-5;
+            (lo - eps, hi + eps)
         });
         ActiveVoxels {
             active,
@@ -441,23 +459,34 @@ impl ActiveVoxels {
         self.crossed_by(a, b - a, 0.0, 1.0)
     }
 
-    /// Whether the segment `origin + t·dir`, `t ∈ [t0, t1]`, crosses an active voxel.
+    /// Whether the segment `origin + t·dir`, `t ∈ [t0, t1]`, crosses an active voxel (the
+    /// walk stops at the first).
     #[inline]
     pub(crate) fn crossed_by(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32) -> bool {
-        let mut crossed = false;
-        self.walk(origin, dir, t0, t1, |_| crossed = true);
-        crossed
+        self.stretch(origin, dir, t0, t1)
+            .is_some_and(|(inv, a, b)| {
+                (self.fine).find_clipped(origin, dir, inv, a, b, |v| self.is_active(v))
+            })
     }
 
     /// Calls `f` on every active voxel the segment crosses (and possibly on an active
     /// neighbour of a coarse cell's boundary, where rounding puts the crossing).
     #[inline]
     pub fn walk(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32, mut f: impl FnMut(usize)) {
-        let Some((inv, tin, tout)) = self.clip_to_bounds(origin, dir, t0, t1) else {
-            return;
-        };
-        // The coarse walk finds the stretch of the segment over active coarse cells; one fine
-        // walk then covers that stretch.
+        if let Some((inv, a, b)) = self.stretch(origin, dir, t0, t1) {
+            self.fine.walk_clipped(origin, dir, inv, a, b, |v, _, _| {
+                if self.is_active(v) {
+                    f(v)
+                }
+            });
+        }
+    }
+
+    /// The stretch `[a, b]` of the segment over active coarse cells, with 1 / `dir`: one
+    /// fine walk then covers it.
+    #[inline(always)]
+    fn stretch(&self, origin: Vec3, dir: Vec3, t0: f32, t1: f32) -> Option<(Vec3, f32, f32)> {
+        let (inv, tin, tout) = self.clip_to_bounds(origin, dir, t0, t1)?;
         let (mut a, mut b) = (f32::INFINITY, f32::NEG_INFINITY);
         self.coarse
             .walk_clipped(origin, dir, inv, tin, tout, |c, ta, tb| {
@@ -466,13 +495,7 @@ impl ActiveVoxels {
                     b = b.max(tb);
                 }
             });
-        if a <= b {
-            self.fine.walk_clipped(origin, dir, inv, a, b, |v, _, _| {
-                if self.is_active(v) {
-                    f(v)
-                }
-            });
-        }
+        (a <= b).then_some((inv, a, b))
     }
 }
 

@@ -3,6 +3,7 @@
 //! and a frame retraces only the blocks whose rays crossed voxels where something changed.
 //!
 //! - `grid`: the voxel grid and the 3-D DDA.
+//! - `adaptive`: the grid with cells cut finer where a frame's changes lie.
 //! - `tables`: pixel-block bit tables (surface and shadow) per voxel.
 //! - `segments`: the other form of the records: each block's segments, walked through
 //!   the voxels that changed when a frame asks.
@@ -16,6 +17,9 @@
 //! size, seed, threads, backend) and [`Coherence`], the engine's own settings:
 //! [`render_frames`] for an animation's frames, [`Sequence`] for frames fed one at a time.
 
+/// The adaptive grid, public only as `grid::ActiveVoxels` shows it: not an API.
+#[doc(hidden)]
+pub mod adaptive;
 pub(crate) mod changes;
 /// The voxel grid and its walk, public only for `benches/coherence.rs`: not an API.
 #[doc(hidden)]

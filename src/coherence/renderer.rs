@@ -5,6 +5,7 @@
 //! copies every other pixel from the previous frame. A pixel's value depends only on the
 //! scene of its frame and its own random stream, so every frame equals a full render.
 
+use super::adaptive::AdaptiveGrid;
 use super::changes::{Changes, FrameSummary};
 use super::grid::{ActiveVoxels, Grid};
 use super::record::{Recorded, RecordingAccel, Records, Replaying, Reuse};
@@ -208,6 +209,13 @@ impl Store {
 /// a segment that meets a changed object always has a bit in a changed voxel.
 const MARGIN: f32 = 1e-4;
 
+/// How a voxel a changed surface passes through is cut for the segment walks
+/// ([`CoherentRenderer::cut_changes`]): in `CUT_SPLIT`³ cells, `CUT_DEPTH` times.
+const CUT_SPLIT: u32 = 2;
+const CUT_DEPTH: u32 = 2;
+/// At most this many surface pieces for the cut voxels: fewer levels of cuts otherwise.
+const MAX_PIECES: usize = 1 << 16;
+
 impl CoherentRenderer {
     /// A renderer keeping segment records (the faster form; `with_records` chooses).
     #[cfg(test)]
@@ -361,7 +369,7 @@ impl CoherentRenderer {
     /// The blocks to retrace for `changes`, how many voxels were marked changed, and why
     /// every block is retraced, if so; else the voxels where a surface changed (what a
     /// stored answer must not be behind).
-    pub fn blocks_for(&self, changes: &Changes) -> (BlockSet, usize, Result<Vec<bool>, String>) {
+    pub fn blocks_for(&self, changes: &Changes) -> (BlockSet, usize, Result<ActiveVoxels, String>) {
         let mut blocks = BlockSet::new(&self.layout);
         if let Some(reason) = &changes.everything {
             return (BlockSet::all(&self.layout), 0, Err(reason.clone()));
@@ -380,10 +388,12 @@ impl CoherentRenderer {
         // which stays within the margin of `restrict_to_sequence`.
         let margin = margin + Quantiser::new(&self.grid).error();
         let mut changed = vec![false; self.grid.len()];
-        for (lo, hi) in self.surface_boxes(&Changes {
+        let surfaces = self.surface_boxes(&Changes {
             shadows: Vec::new(),
             ..changes.clone()
-        }) {
+        });
+        let pieces = surfaces.len();
+        for (lo, hi) in surfaces {
             self.grid
                 .voxels_in_box(lo - margin, hi + margin, |v| changed[v] = true);
         }
@@ -400,6 +410,7 @@ impl CoherentRenderer {
         let count = (0..self.grid.len())
             .filter(|&v| changed[v] || shadow_only[v])
             .count();
+        let mut changed_voxels = None;
         match &self.store {
             Store::Tables(tables) => {
                 for v in 0..self.grid.len() {
@@ -419,17 +430,17 @@ impl CoherentRenderer {
                     segments.collect_hits(&mut blocks);
                 }
                 // Shadow segments answer to every changed voxel, surface ones only to those
-                // where a surface changed (as the two tables are read above).
-                let any: Vec<bool> = changed
-                    .iter()
-                    .zip(&shadow_only)
+                // where a surface changed (as the two tables are read above), over the
+                // voxels cut finer around the changed surfaces.
+                let any: Vec<bool> = (changed.iter().zip(&shadow_only))
                     .map(|(a, b)| a | b)
                     .collect();
-                let voxels = |mask: &[bool]| {
-                    let voxels = ActiveVoxels::from_mask(self.grid.clone(), mask);
-                    Changed::new(voxels, segments.quantiser())
-                };
-                segments.collect(&voxels(&changed), &voxels(&any), &mut blocks);
+                let (surface, any) = self.cut_changes(changes, margin, pieces, &changed, &any);
+                let q = segments.quantiser();
+                let (surface, any) = (Changed::new(surface, q), Changed::new(any, q));
+                segments.collect(&surface, &any, &mut blocks);
+                // Stored answers hold against the same, finer, changed voxels.
+                changed_voxels = Some(surface.voxels);
             }
         }
         // A light whose intensity alone changed: every block that sent it a shadow ray.
@@ -444,7 +455,57 @@ impl CoherentRenderer {
                 }
             }
         }
+        let changed =
+            changed_voxels.unwrap_or_else(|| ActiveVoxels::from_mask(self.grid.clone(), &changed));
         (blocks, count, Ok(changed))
+    }
+
+    /// The voxels where a surface changed, and those where anything changed (`surface` and
+    /// `any` over the uniform grid), over this renderer's grid with every voxel a changed
+    /// surface passes through cut [`CUT_DEPTH`] times in [`CUT_SPLIT`]³ (the adaptive
+    /// subdivision of Jevans's grid): the changed voxels then hug the surfaces, and fewer
+    /// recorded segments merely pass near them. `pieces`: how many surface pieces the
+    /// uniform voxels took; a cut makes [`CUT_SPLIT`]² as many, so the cuts stop short of
+    /// [`MAX_PIECES`] (a large changed surface keeps the uniform voxels). (`margin` as for
+    /// the uniform voxels: the leaves are finer, the rounding the same.)
+    fn cut_changes(
+        &self,
+        changes: &Changes,
+        margin: f32,
+        pieces: usize,
+        surface: &[bool],
+        any: &[bool],
+    ) -> (ActiveVoxels, ActiveVoxels) {
+        let mut depth = CUT_DEPTH;
+        while depth > 0 && pieces * (CUT_SPLIT as usize).pow(2 * depth) > MAX_PIECES {
+            depth -= 1;
+        }
+        if depth == 0 {
+            let uniform = |mask: &[bool]| ActiveVoxels::from_mask(self.grid.clone(), mask);
+            return (uniform(surface), uniform(any));
+        }
+        let leaf = self.grid.cell_size().min_element() / CUT_SPLIT.pow(depth) as f32;
+        let geometry = Changes {
+            shadows: Vec::new(),
+            ..changes.clone()
+        };
+        let grown: Vec<(Vec3, Vec3)> = (geometry.surface_boxes(0.5 * leaf).iter())
+            .map(|(lo, hi)| (*lo - margin, *hi + margin))
+            .collect();
+        let max_leaves = 8 * self.grid.len();
+        let grid = AdaptiveGrid::refined(self.grid.clone(), &grown, CUT_SPLIT, depth, max_leaves);
+        let mut surface = vec![false; grid.len()];
+        for (lo, hi) in &grown {
+            grid.voxels_in_box(*lo, *hi, |v| surface[v] = true);
+        }
+        let mut any = surface.clone();
+        for (lo, hi) in &changes.shadows {
+            grid.voxels_in_box(*lo - margin, *hi + margin, |v| any[v] = true);
+        }
+        (
+            ActiveVoxels::from_mask(grid.clone(), &surface),
+            ActiveVoxels::from_mask(grid, &any),
+        )
     }
 
     /// Renders the next frame of the sequence (the first call traces every pixel).
@@ -503,9 +564,7 @@ impl CoherentRenderer {
         for b in blocks.iter() {
             previous_camera[b] = std::mem::take(&mut self.camera[b]);
         }
-        let changed = changed
-            .filter(|_| self.camera_on)
-            .map(|mask| ActiveVoxels::from_mask(self.grid.clone(), &mask));
+        let changed = changed.filter(|_| self.camera_on);
         // From here on, record only where a later frame changes something (the check
         // above used the previous frame's set, under which its records were made).
         if self.position > 0 && self.last_change.is_some() {

@@ -5,7 +5,8 @@
 //! read only when its voxel changes, and a block retraced before that drops it unread). Here
 //! each block keeps the segments themselves instead, clipped to the box around the voxels
 //! where a later frame changes something, and a frame walks them, with the same 3-D DDA,
-//! through the voxels that changed in it. Recording a ray costs the clip and a copy of two
+//! through the voxels that changed in it (the voxels a changed surface passes through cut
+//! finer: `super::adaptive`; the segments do not depend on the grid). Recording a ray costs the clip and a copy of two
 //! points instead of a walk (docs/animation.md, "Segment records", has the measurements).
 //!
 //! The points are kept in 16 bits an axis over the grid's box ([`Quantiser`]): 12 bytes a
@@ -17,7 +18,7 @@
 //! grows the changed boxes by that step ([`Quantiser::error`]): a segment that met a changed
 //! object still crosses a voxel marked changed, and the frames stay the same.
 
-use super::grid::{ActiveVoxels, Grid};
+use super::grid::{ActiveVoxels, Extent, Grid};
 use super::tables::{BlockLayout, BlockSet, Table, VoxelTables};
 use crate::math::Vec3;
 use glam::Vec3A;
@@ -42,10 +43,11 @@ pub struct Quantiser {
 const TOP: f32 = u16::MAX as f32;
 
 impl Quantiser {
-    pub fn new(grid: &Grid) -> Quantiser {
+    pub fn new(grid: &impl Extent) -> Quantiser {
+        let (lo, hi) = grid.extent();
         // Twice the growth of the box around the active voxels (`ActiveVoxels::bounds`).
-        let pad = (grid.hi - grid.lo).length() * 2e-5;
-        let (lo, hi) = (grid.lo - pad, grid.hi + pad);
+        let pad = (hi - lo).length() * 2e-5;
+        let (lo, hi) = (lo - pad, hi + pad);
         let step = (hi - lo) / TOP;
         Quantiser {
             lo: lo.into(),
