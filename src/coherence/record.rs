@@ -122,6 +122,17 @@ pub struct RecordingAccel<'a> {
     /// shadow segment that ends at one's lattice point is kept by its start in its list),
     /// then the camera's, whose segments start at the camera's exact position.
     slots: Vec<(Table, bool, Vec3, Point16)>,
+    /// The box around the recording voxels (`None`: none record).
+    bounds: Option<(Vec3A, Vec3A)>,
+    /// The point lights' keys on the lattice, in the order of their slots, packed (a shadow
+    /// segment's end is looked for among them).
+    light_keys: Vec<u64>,
+}
+
+/// A lattice point in one word, to compare at once.
+#[inline(always)]
+fn packed(p: Point16) -> u64 {
+    p[0] as u64 | (p[1] as u64) << 16 | (p[2] as u64) << 32
 }
 
 fn mark(set: &[AtomicU64], v: usize) {
@@ -172,7 +183,7 @@ impl<'a> RecordingAccel<'a> {
             .collect();
         let quantiser = Quantiser::new(&voxels.fine);
         let camera = scene.camera.position;
-        let slots = (point_lights.iter())
+        let slots: Vec<_> = (point_lights.iter())
             .map(|&(_, p)| quantiser.encode(p))
             .map(|e| (Table::Shadow, false, quantiser.decode(e), e))
             .chain([(
@@ -209,6 +220,11 @@ impl<'a> RecordingAccel<'a> {
             lights: AtomicU64::new(0),
             point_bits: point_lights.iter().fold(0, |m, l| m | l.0),
             point_lights,
+            bounds: (voxels.bounds()).map(|(lo, hi)| (lo.into(), hi.into())),
+            light_keys: slots[..slots.len() - 1]
+                .iter()
+                .map(|l| packed(l.3))
+                .collect(),
             slots,
         }
     }
@@ -426,8 +442,8 @@ impl<'a> RecordingAccel<'a> {
         let Some(s) = self.on_lattice(origin, dir, t0, 1.0) else {
             return;
         };
-        let lights = &self.slots[..self.slots.len() - 1];
-        let light = lights.iter().position(|&(_, _, _, key)| key == s[1]);
+        let end = packed(s[1]);
+        let light = self.light_keys.iter().position(|&key| key == end);
         self.with_lists(|list| match light {
             Some(slot) => list.segments.push_shared(slot, self.slots[slot], s[0]),
             None => list.segments.push(Table::Shadow, s),
@@ -446,7 +462,15 @@ impl<'a> RecordingAccel<'a> {
         if self.records == Records::Tables || !from_camera {
             return self.record(Table::Surface, ray.origin, ray.dir, ray.tmin, t1);
         }
-        if let Some([_, end]) = self.on_lattice(ray.origin, ray.dir, 0.0, t1) {
+        // Only the end is kept: a hit inside the recording box is its own clip (the camera
+        // is often outside it, where the clip would take a slab test per ray).
+        let end = Vec3A::from(ray.origin) + Vec3A::from(ray.dir) * t1;
+        let inside = (self.bounds).is_some_and(|(lo, hi)| (end.cmpge(lo) & end.cmple(hi)).all());
+        let end = match inside {
+            true => Some(self.quantiser.encode(end)),
+            false => (self.on_lattice(ray.origin, ray.dir, 0.0, t1)).map(|[_, end]| end),
+        };
+        if let Some(end) = end {
             self.with_lists(|list| list.segments.push_shared(slot, self.slots[slot], end));
         }
     }

@@ -153,16 +153,20 @@ impl BlockSegments {
         }
     }
 
-    /// Empty lists with room for as many segments as `like` holds in each, and a quarter
-    /// more (the next task's blocks are alike).
+    /// Empty lists with room for as many segments as `like` had room for, or a quarter
+    /// more than it holds (the next task's blocks are alike; a list that has to grow is
+    /// copied, where room not used is given back in place when the block takes its lists).
     pub fn with_room_of(like: &BlockSegments) -> BlockSegments {
-        let room = |n: usize| n + n / 4;
+        fn room<T, U>(list: &Vec<T>) -> Vec<U> {
+            let n = list.len();
+            Vec::with_capacity(list.capacity().max(n + n / 4))
+        }
         BlockSegments {
-            surface: Vec::with_capacity(room(like.surface.len())),
-            shadow: Vec::with_capacity(room(like.shadow.len())),
+            surface: room(&like.surface),
+            shadow: room(&like.shadow),
             shared: (like.shared.iter())
                 .map(|l| Shared {
-                    others: Vec::with_capacity(room(l.others.len())),
+                    others: room(&l.others),
                     ..*l
                 })
                 .collect(),
@@ -183,6 +187,16 @@ impl BlockSegments {
     /// (`key` on the lattice). The recorder gives each shared point a slot of its own.
     #[inline]
     pub fn push_shared(&mut self, slot: usize, list: (Table, bool, Vec3, Point16), other: Point16) {
+        // Every push but a list's first: the list's own point is not even read.
+        match self.shared.get_mut(slot) {
+            Some(l) if !l.others.is_empty() => l.others.push(other),
+            _ => self.open_shared(slot, list, other),
+        }
+    }
+
+    #[cold]
+    #[inline(never)]
+    fn open_shared(&mut self, slot: usize, list: (Table, bool, Vec3, Point16), other: Point16) {
         let (table, start, point, key) = list;
         let fresh = || Shared {
             table,
@@ -252,12 +266,14 @@ impl BlockSegments {
     pub fn seal(&mut self) {
         let (mut lo, mut hi) = ([u16::MAX; 3], [0u16; 3]);
         let lists = (self.shared.iter()).filter(|l| !l.others.is_empty());
-        let points = (self.surface.iter().chain(&self.shadow).flatten())
-            .chain(lists.flat_map(|l| l.others.iter().chain([&l.key])));
-        for p in points {
+        let flat = [self.surface.as_flattened(), self.shadow.as_flattened()];
+        let flat = (flat.into_iter()).chain(lists.map(|l| std::slice::from_ref(&l.key)));
+        let others = (self.shared.iter()).map(|l| l.others.as_slice());
+        for points in flat.chain(others) {
+            let (a, b) = point_box(points);
             for k in 0..3 {
-                lo[k] = lo[k].min(p[k]);
-                hi[k] = hi[k].max(p[k]);
+                lo[k] = lo[k].min(a[k]);
+                hi[k] = hi[k].max(b[k]);
             }
         }
         (self.lo, self.hi) = (lo, hi);
@@ -318,6 +334,35 @@ impl BlockSegments {
         };
         test(changed, Table::Surface, &self.surface) || test(shadows, Table::Shadow, &self.shadow)
     }
+}
+
+/// The box around `points` (empty: lo > hi). Eight points (24 coordinates) at a time, each
+/// lane keeping one axis, so that the loop runs in vector lanes (sealing reads every record
+/// of frame 0); as signed numbers (the top bit flipped: the same order), whose minimum and
+/// maximum the baseline x86-64 lanes have.
+fn point_box(points: &[Point16]) -> (Point16, Point16) {
+    const LANES: usize = 24;
+    let signed = |x: u16| (x ^ 0x8000) as i16;
+    let flat = points.as_flattened();
+    let chunks = flat.chunks_exact(LANES);
+    let rest = chunks.remainder();
+    let (mut lo, mut hi) = ([i16::MAX; LANES], [i16::MIN; LANES]);
+    for c in chunks {
+        for i in 0..LANES {
+            lo[i] = lo[i].min(signed(c[i]));
+            hi[i] = hi[i].max(signed(c[i]));
+        }
+    }
+    for (i, &x) in rest.iter().enumerate() {
+        lo[i] = lo[i].min(signed(x));
+        hi[i] = hi[i].max(signed(x));
+    }
+    let (mut a, mut b) = ([u16::MAX; 3], [0u16; 3]);
+    for i in 0..LANES {
+        a[i % 3] = a[i % 3].min(lo[i] as u16 ^ 0x8000);
+        b[i % 3] = b[i % 3].max(hi[i] as u16 ^ 0x8000);
+    }
+    (a, b)
 }
 
 /// The voxels that changed in a frame, and the box around them on the records' lattice.
@@ -456,6 +501,32 @@ mod tests {
     use super::*;
     use crate::coherence::grid::Grid;
     use crate::math::Rng;
+
+    /// The box made in vector lanes is the box of the points, for every count (whole groups
+    /// of eight and the rest), with coordinates across the whole 16-bit range.
+    #[test]
+    fn point_box_is_the_box_of_the_points() {
+        let mut rng = Rng::for_key(7, &[2]);
+        let mut coordinate = || (rng.uniform() * 65535.0) as u16;
+        let points: Vec<Point16> = (0..200)
+            .map(|_| [coordinate(), coordinate(), coordinate()])
+            .chain([[0, u16::MAX, 0x8000], [0x7fff, 1, u16::MAX]])
+            .collect();
+        for n in (0..40).chain([200, 201, 202]) {
+            let (mut lo, mut hi) = ([u16::MAX; 3], [0u16; 3]);
+            for p in &points[points.len() - n..] {
+                for k in 0..3 {
+                    lo[k] = lo[k].min(p[k]);
+                    hi[k] = hi[k].max(p[k]);
+                }
+            }
+            assert_eq!(
+                point_box(&points[points.len() - n..]),
+                (lo, hi),
+                "{n} points"
+            );
+        }
+    }
 
     /// The segment kept for `o + t·d`, `t ∈ [t0, t1]` (clipped to `recording`, quantised),
     /// as the shadow or surface list of a block.
