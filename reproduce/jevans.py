@@ -6,7 +6,7 @@ render in the same run, which also gives the traditional algorithm's CPU time), 
 pixel as in the paper.
 
   python3 reproduce/jevans.py [--raylink PATH] [--width 640 --height 480] [--frames A..B]
-                            [--overhead-reps 9]
+                            [--overhead-reps 21]
 
 The paper counted primary rays (one per pixel): its "# Rays" columns compare with the
 pixels columns here, and its CPU ratio against its ray ratio (1.38) with the CPU per
@@ -147,7 +147,7 @@ def main():
     ap.add_argument("--width", type=int, default=640)
     ap.add_argument("--height", type=int, default=480)
     ap.add_argument("--frames")
-    ap.add_argument("--overhead-reps", type=int, default=9)
+    ap.add_argument("--overhead-reps", type=int, default=21)
     args = ap.parse_args()
     if not os.access(args.raylink, os.X_OK):
         sys.exit(f"no {args.raylink}: cargo build --release first (or give --raylink)")
