@@ -26,10 +26,9 @@ use super::grid::ActiveVoxels;
 use super::segments::{Point16, Quantiser, Segment};
 use super::tables::{Table, VoxelTables};
 use crate::accel::{Accel, Hit};
-use crate::math::Rng;
 use crate::math::{Ray, Vec3};
 use crate::scene::{Light, Scene};
-use crate::transport::{Context, Integrator, RayStats, Sample};
+pub(super) use answers::Replaying;
 use answers::{Kind, Query};
 pub use answers::{Recorded, Reuse};
 use glam::Vec3A;
@@ -557,55 +556,6 @@ fn same_ray(a: &Ray, b: &Ray) -> bool {
         )
     };
     bits(a) == bits(b)
-}
-
-impl RecordingAccel<'_> {
-    /// Whether the recorder keeps camera samples ([`Replaying`] asks it for them).
-    pub(super) fn keeps_samples(&self) -> bool {
-        self.shape_keys.is_some()
-    }
-
-    /// The whole sample of camera ray `ray` and the rays its tree traced, from the block's
-    /// last trace, when every query of its tree holds (the same answers, shapes and lights).
-    fn stored_sample(&self, ray: &Ray) -> Option<(Sample, RayStats)> {
-        self.shape_keys?;
-        self.sample_of(ray)
-    }
-
-    /// Keeps the sample computed for camera ray `ray` and the rays its tree traced.
-    fn keep_sample(&self, ray: &Ray, sample: &Sample, rays: &RayStats) {
-        if self.shape_keys.is_some() {
-            let count = |n: u64| n.min(u32::MAX as u64) as u32;
-            let (closest, shadow) = (count(rays.closest), count(rays.shadow));
-            self.keep_shaded(ray, sample.object, sample.radiance, closest, shadow);
-        }
-    }
-}
-
-/// A block's integrator over its recorder: a camera sample whose every query holds is
-/// given back from the block's last trace instead of being shaded again; the others are
-/// shaded by `inner` and kept for the next frame. The sample is the same either way
-/// (same answers, shapes, lights and random stream), so frames stay bit-identical.
-pub(super) struct Replaying<'a> {
-    pub inner: &'a dyn Integrator,
-    pub recorder: &'a RecordingAccel<'a>,
-}
-
-impl Integrator for Replaying<'_> {
-    fn radiance(&self, ctx: &Context, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Sample {
-        if let Some((sample, rays)) = self.recorder.stored_sample(ray) {
-            stats.add(&rays);
-            return sample;
-        }
-        let before = *stats;
-        let sample = self.inner.radiance(ctx, ray, rng, stats);
-        let rays = RayStats {
-            closest: stats.closest - before.closest,
-            shadow: stats.shadow - before.shadow,
-        };
-        self.recorder.keep_sample(ray, &sample, &rays);
-        sample
-    }
 }
 
 impl Accel for RecordingAccel<'_> {

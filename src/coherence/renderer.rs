@@ -388,10 +388,12 @@ impl CoherentRenderer {
         // which stays within the margin of `restrict_to_sequence`.
         let margin = margin + Quantiser::new(&self.grid).error();
         let mut changed = vec![false; self.grid.len()];
-        let surfaces = self.surface_boxes(&Changes {
+        // The changes of geometry alone (what a surface record answers to).
+        let geometry = Changes {
             shadows: Vec::new(),
             ..changes.clone()
-        });
+        };
+        let surfaces = self.surface_boxes(&geometry);
         let pieces = surfaces.len();
         for (lo, hi) in surfaces {
             self.grid
@@ -431,11 +433,15 @@ impl CoherentRenderer {
                 }
                 // Shadow segments answer to every changed voxel, surface ones only to those
                 // where a surface changed (as the two tables are read above), over the
-                // voxels cut finer around the changed surfaces.
-                let any: Vec<bool> = (changed.iter().zip(&shadow_only))
-                    .map(|(a, b)| a | b)
-                    .collect();
-                let (surface, any) = self.cut_changes(changes, margin, pieces, &changed, &any);
+                // voxels cut finer around the changed surfaces where the cuts are affordable.
+                let cut = self.cut_changes(&geometry, &changes.shadows, margin, pieces);
+                let (surface, any) = cut.unwrap_or_else(|| {
+                    let any: Vec<bool> = (changed.iter().zip(&shadow_only))
+                        .map(|(a, b)| a | b)
+                        .collect();
+                    let uniform = |mask: &[bool]| ActiveVoxels::from_mask(self.grid.clone(), mask);
+                    (uniform(&changed), uniform(&any))
+                });
                 let q = segments.quantiser();
                 let (surface, any) = (Changed::new(surface, q), Changed::new(any, q));
                 segments.collect(&surface, &any, &mut blocks);
@@ -460,35 +466,30 @@ impl CoherentRenderer {
         (blocks, count, Ok(changed))
     }
 
-    /// The voxels where a surface changed, and those where anything changed (`surface` and
-    /// `any` over the uniform grid), over this renderer's grid with every voxel a changed
+    /// The voxels where a surface of `geometry` changed, and those where anything changed
+    /// (also the `shadows` boxes), over this renderer's grid with every voxel a changed
     /// surface passes through cut [`CUT_DEPTH`] times in [`CUT_SPLIT`]³ (the adaptive
     /// subdivision of Jevans's grid): the changed voxels then hug the surfaces, and fewer
     /// recorded segments merely pass near them. `pieces`: how many surface pieces the
     /// uniform voxels took; a cut makes [`CUT_SPLIT`]² as many, so the cuts stop short of
-    /// [`MAX_PIECES`] (a large changed surface keeps the uniform voxels). (`margin` as for
-    /// the uniform voxels: the leaves are finer, the rounding the same.)
+    /// [`MAX_PIECES`]; `None` if no level of cuts fits (a large changed surface keeps the
+    /// uniform voxels). (`margin` as for the uniform voxels: the leaves are finer, the
+    /// rounding the same.)
     fn cut_changes(
         &self,
-        changes: &Changes,
+        geometry: &Changes,
+        shadows: &[(Vec3, Vec3)],
         margin: f32,
         pieces: usize,
-        surface: &[bool],
-        any: &[bool],
-    ) -> (ActiveVoxels, ActiveVoxels) {
+    ) -> Option<(ActiveVoxels, ActiveVoxels)> {
         let mut depth = CUT_DEPTH;
         while depth > 0 && pieces * (CUT_SPLIT as usize).pow(2 * depth) > MAX_PIECES {
             depth -= 1;
         }
         if depth == 0 {
-            let uniform = |mask: &[bool]| ActiveVoxels::from_mask(self.grid.clone(), mask);
-            return (uniform(surface), uniform(any));
+            return None;
         }
         let leaf = self.grid.cell_size().min_element() / CUT_SPLIT.pow(depth) as f32;
-        let geometry = Changes {
-            shadows: Vec::new(),
-            ..changes.clone()
-        };
         let grown: Vec<(Vec3, Vec3)> = (geometry.surface_boxes(0.5 * leaf).iter())
             .map(|(lo, hi)| (*lo - margin, *hi + margin))
             .collect();
@@ -499,13 +500,13 @@ impl CoherentRenderer {
             grid.voxels_in_box(*lo, *hi, |v| surface[v] = true);
         }
         let mut any = surface.clone();
-        for (lo, hi) in &changes.shadows {
+        for (lo, hi) in shadows {
             grid.voxels_in_box(*lo - margin, *hi + margin, |v| any[v] = true);
         }
-        (
+        Some((
             ActiveVoxels::from_mask(grid.clone(), &surface),
             ActiveVoxels::from_mask(grid, &any),
-        )
+        ))
     }
 
     /// Renders the next frame of the sequence (the first call traces every pixel).

@@ -6,8 +6,9 @@
 //! each block keeps the segments themselves instead, clipped to the box around the voxels
 //! where a later frame changes something, and a frame walks them, with the same 3-D DDA,
 //! through the voxels that changed in it (the voxels a changed surface passes through cut
-//! finer: `super::adaptive`; the segments do not depend on the grid). Recording a ray costs the clip and a copy of two
-//! points instead of a walk (docs/animation.md, "Segment records", has the measurements).
+//! finer: `super::adaptive`; the segments do not depend on the grid). Recording a ray costs
+//! the clip and a copy of two points instead of a walk (docs/animation.md, "Segment
+//! records", has the measurements).
 //!
 //! The points are kept in 16 bits an axis over the grid's box ([`Quantiser`]): 12 bytes a
 //! segment, half the memory (and the memory traffic of frame 0) of two `Vec3`. Most

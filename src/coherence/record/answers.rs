@@ -7,8 +7,8 @@ use super::{bump, same_ray, RecordingAccel, UNSYNCED};
 use crate::accel::Hit;
 use crate::coherence::grid::ActiveVoxels;
 use crate::coherence::segments::BlockSegments;
-use crate::math::{Ray, Rgb};
-use crate::transport::{RayStats, Sample};
+use crate::math::{Ray, Rgb, Rng};
+use crate::transport::{Context, Integrator, RayStats, Sample};
 use std::sync::atomic::Ordering;
 
 /// A query and its answer, as recorded: `shape` is the fingerprint of the shape hit
@@ -137,7 +137,7 @@ impl RecordingAccel<'_> {
     /// The sample of camera ray `ray` in the block's last trace, with the rays its tree
     /// traced, if every query of that tree holds in this frame: its queries are then
     /// recorded and kept again as if traced, and the sample is not shaded.
-    pub(super) fn sample_of(&self, ray: &Ray) -> Option<(Sample, RayStats)> {
+    fn sample_of(&self, ray: &Ray) -> Option<(Sample, RayStats)> {
         let reuse = self.reuse.as_ref().filter(|r| r.shading)?;
         let j = self.find_camera(ray)?;
         let k = *self.samples.get(j).filter(|&&k| k != u32::MAX)?;
@@ -163,14 +163,7 @@ impl RecordingAccel<'_> {
     }
 
     /// Keeps the sample of the last camera ray kept (`ray`), with the rays its tree traced.
-    pub(super) fn keep_shaded(
-        &self,
-        ray: &Ray,
-        object: u32,
-        radiance: Rgb,
-        closest: u32,
-        shadow: u32,
-    ) {
+    fn keep_shaded(&self, ray: &Ray, object: u32, radiance: Rgb, closest: u32, shadow: u32) {
         let at = self.last_camera.swap(usize::MAX, Ordering::Relaxed);
         if at == usize::MAX {
             return;
@@ -218,5 +211,38 @@ impl RecordingAccel<'_> {
             list.camera.extend_from_slice(tree);
             self.last_camera.store(at, Ordering::Relaxed);
         });
+    }
+}
+
+impl RecordingAccel<'_> {
+    /// Whether the recorder keeps camera samples ([`Replaying`] asks it for them).
+    pub(in crate::coherence) fn keeps_samples(&self) -> bool {
+        self.shape_keys.is_some()
+    }
+}
+
+/// A block's integrator over its recorder, which keeps samples: a camera sample whose
+/// every query holds is given back from the block's last trace instead of being shaded
+/// again; the others are shaded by `inner` and kept for the next frame. The sample is the
+/// same either way (same answers, shapes, lights and random stream), so frames stay
+/// bit-identical.
+pub(in crate::coherence) struct Replaying<'a> {
+    pub inner: &'a dyn Integrator,
+    pub recorder: &'a RecordingAccel<'a>,
+}
+
+impl Integrator for Replaying<'_> {
+    fn radiance(&self, ctx: &Context, ray: &Ray, rng: &mut Rng, stats: &mut RayStats) -> Sample {
+        if let Some((sample, rays)) = self.recorder.sample_of(ray) {
+            stats.add(&rays);
+            return sample;
+        }
+        let before = *stats;
+        let sample = self.inner.radiance(ctx, ray, rng, stats);
+        let count = |n: u64| n.min(u32::MAX as u64) as u32;
+        let closest = count(stats.closest - before.closest);
+        let shadow = count(stats.shadow - before.shadow);
+        (self.recorder).keep_shaded(ray, sample.object, sample.radiance, closest, shadow);
+        sample
     }
 }
