@@ -489,6 +489,11 @@ impl<'a> Bsdf<'a> {
             let adjoint = self.adjoint(wo, wi, lo, li, mode);
             return Some((Rgb::ZERO, f, li.z, adjoint));
         }
+        if self.lambertian {
+            // The common case: `connectable` put both directions on one side.
+            let adjoint = self.adjoint(wo, wi, lo, li, mode);
+            return Some((self.kd * FRAC_1_PI, Rgb::ZERO, li.z.abs(), adjoint));
+        }
         let eta = self.eta_leaving(lo);
         let interface = self.interface(lo);
         if lo.z < 0.0 {
