@@ -68,6 +68,36 @@ pub(super) fn sample_towards(
     let (i, _) = lights.choose(u_choose)?;
     let pmf = lights.pmf(i);
     let emitter = &lights.emitters[i];
+    if let Emitter::Area(a) = emitter {
+        // Only the point: a light subpath's direction from it is not needed here.
+        let q = a.sample(u_pos);
+        let to = q.p - p;
+        let dist2 = to.length_squared();
+        if dist2.is_nan() || dist2 <= 0.0 {
+            return None;
+        }
+        let wi = to / dist2.sqrt();
+        let cos = a.emitting_cos(q.n.dot(-wi));
+        if cos <= 0.0 {
+            return None;
+        }
+        let side = if a.two_sided { 0.5 } else { 1.0 };
+        let pdf_pos = pmf / a.area;
+        let lp = LightPoint {
+            radiance: a.radiance_at(&q),
+            direct_pdf_a: pdf_pos,
+            emission_pdf_w: pdf_pos * side * cos / PI,
+            cos_at_light: cos,
+            delta: false,
+            finite: true,
+        };
+        let spot = crate::math::spawn::Spot {
+            p: q.p,
+            error: q.error,
+            n: q.n,
+        };
+        return Some((lp, wi, Some(spot)));
+    }
     let es = emitter
         .model()
         .sample_le(u_pos, u_dir, pmf, &lights.world, i)?;
@@ -83,30 +113,14 @@ pub(super) fn sample_towards(
         return None;
     }
     let wi = to / dist2.sqrt();
-    let lp = match emitter {
-        Emitter::Area(a) => {
-            let cos = a.emitting_cos(es.n.dot(-wi));
-            if cos <= 0.0 {
-                return None;
-            }
-            let side = if a.two_sided { 0.5 } else { 1.0 };
-            LightPoint {
-                radiance: es.radiance,
-                direct_pdf_a: es.pdf_pos,
-                emission_pdf_w: es.pdf_pos * side * cos / PI,
-                cos_at_light: cos,
-                delta: false,
-                finite: true,
-            }
-        }
-        e => LightPoint {
-            radiance: e.model().intensity_towards(-wi),
-            direct_pdf_a: es.pdf_pos,
-            emission_pdf_w: es.pdf_pos * e.model().pdf_emission_direction(-wi),
-            cos_at_light: 1.0,
-            delta: true,
-            finite: true,
-        },
+    let e = emitter.model();
+    let lp = LightPoint {
+        radiance: e.intensity_towards(-wi),
+        direct_pdf_a: es.pdf_pos,
+        emission_pdf_w: es.pdf_pos * e.pdf_emission_direction(-wi),
+        cos_at_light: 1.0,
+        delta: true,
+        finite: true,
     };
     Some((lp, wi, Some(es.spot())))
 }
