@@ -1,4 +1,4 @@
-//! An iteration's light subpaths (one per pixel, or one in sixteen pixels in a scene
+//! An iteration's light subpaths (one per pixel, or one in 32 pixels in a scene
 //! without smooth surfaces or media, unless set otherwise), each from a light chosen by
 //! power and continued by BSDF sampling for importance transport. Every vertex where the
 //! BSDF is not purely specular is kept (for connections and merges) and connected to the
@@ -19,14 +19,20 @@ use crate::integrators::volumetric::{hero_channel, Throughput};
 use crate::integrators::volumetric_light::{arrive_from_infinity, medium_at};
 use crate::math::sobol::Sampler;
 use crate::math::spawn::Spot;
-use crate::math::{Rgb, Vec3};
+use crate::math::{luminance, Rgb, Vec3};
 use crate::scene::camera::CameraBasis;
 use crate::scene::lights::Emitter;
 use crate::transport::driver::{drive_indexed, Merge};
 use crate::transport::{Context, IterationStart, IterationWork, RayStats, Splat};
 
-/// Subpaths a chunk traces.
+/// The most subpaths a chunk traces.
 const CHUNK: usize = 128;
+/// The fewest chunks an iteration's subpaths are split into (while a chunk keeps at least
+/// [`MIN_CHUNK`]): a few hundred light subpaths, as a diffuse scene's small image has,
+/// would otherwise leave a thread idle.
+const MIN_CHUNKS: usize = 16;
+/// The fewest subpaths a chunk traces.
+const MIN_CHUNK: usize = 16;
 /// The key of the light subpaths' streams (apart from the camera samples').
 const LIGHT_KEY: u64 = 0x7663_6d6c;
 
@@ -46,6 +52,10 @@ pub(super) struct LightPaths<'a> {
     pub vertices: Vec<LightVertex<'a>>,
     /// Where each subpath's vertices start in `vertices` (one more than the subpaths).
     pub starts: Vec<u32>,
+    /// The image's mean luminance as the subpaths' connections to the camera estimate it
+    /// alone (unweighted light tracing, blind to light seen through glass): the scale
+    /// against which a camera vertex's connections are judged small.
+    pub image_mean: f32,
 }
 
 impl<'a> LightPaths<'a> {
@@ -67,12 +77,14 @@ pub(super) struct LightPass<'w> {
     pub pixels_per_path: f32,
 }
 
-/// A chunk's output: its subpaths' vertices and their lengths, splats, rays, dropped.
+/// A chunk's output: its subpaths' vertices and their lengths, splats, rays, and the sum
+/// of its splats' luminance before their weights.
 struct Chunk<'a> {
     vertices: Vec<LightVertex<'a>>,
     counts: Vec<u32>,
     splats: Vec<Splat>,
     rays: RayStats,
+    unweighted: f64,
 }
 
 impl LightPass<'_> {
@@ -85,18 +97,22 @@ impl LightPass<'_> {
         threads: Option<usize>,
     ) -> Option<(LightPaths<'a>, IterationWork)> {
         let n = self.count;
-        let chunks = n.div_ceil(CHUNK);
+        // A function of the count alone, not of the threads: the sums are the same bits.
+        let size = (n / MIN_CHUNKS).clamp(MIN_CHUNK, CHUNK);
+        let chunks = n.div_ceil(size);
         let mut paths = LightPaths {
             vertices: Vec::new(),
             starts: vec![0],
+            image_mean: 0.0,
         };
+        let mut unweighted = 0.0;
         let mut work = IterationWork::default();
         let driven = drive_indexed(
             chunks,
             threads,
             64,
             start.cancel,
-            |c| self.chunk(ctx, start, c * CHUNK..((c + 1) * CHUNK).min(n)),
+            |c| self.chunk(ctx, start, c * size..((c + 1) * size).min(n)),
             |_, chunk: Chunk<'a>| {
                 let mut at = paths.vertices.len() as u32;
                 for count in chunk.counts {
@@ -111,9 +127,13 @@ impl LightPass<'_> {
                         .filter(|s| s.value.is_finite() && s.x.is_finite() && s.y.is_finite()),
                 );
                 work.rays.add(&chunk.rays);
+                unweighted += chunk.unweighted;
                 Merge::Continue
             },
         );
+        // Each splat adds value / pixels to its pixel.
+        let pixels = f64::from(self.pixels_per_path) * n as f64;
+        paths.image_mean = (unweighted / (pixels * pixels)) as f32;
         (!driven.cancelled).then_some((paths, work))
     }
 
@@ -128,6 +148,7 @@ impl LightPass<'_> {
             counts: Vec::with_capacity(range.len()),
             splats: Vec::new(),
             rays: RayStats::default(),
+            unweighted: 0.0,
         };
         for i in range {
             let i = i as u64;
@@ -325,10 +346,14 @@ impl LightPass<'_> {
         };
         let w_light = camera_pdf_a * self.pixels_per_path * (vm + p.d_vcm + p.d_vc * pdf_rev);
         let weight = 1.0 / (1.0 + w_light);
+        let value = p.beta * f * (c.importance * self.pixels_per_path) * through;
+        if value.is_finite() {
+            out.unweighted += f64::from(luminance(value));
+        }
         out.splats.push(Splat {
             x: c.x,
             y: c.y,
-            value: p.beta * f * (c.importance * weight * self.pixels_per_path) * through,
+            value: value * weight,
         });
     }
 }
