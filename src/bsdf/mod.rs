@@ -411,6 +411,7 @@ impl<'a> Bsdf<'a> {
 
     /// [`eval_and_pdf`](Self::eval_and_pdf) with the reverse density too (of sampling `wo`
     /// from `wi`), as bidirectional weights need them: f, pdf(wo → wi), pdf(wi → wo).
+    #[inline(always)]
     pub fn eval_and_pdfs(&self, wo: Vec3, wi: Vec3, mode: Transport) -> (Rgb, f32, f32) {
         match self.connectable(wo, wi) {
             Some((lo, li)) => (
@@ -457,6 +458,7 @@ impl<'a> Bsdf<'a> {
     /// reflection, on opposite sides only through a rough refraction or a diffuse
     /// transmission, and each on the same side of the shading normal as of the geometric
     /// one (otherwise light would leak through the surface).
+    #[inline(always)]
     fn connectable(&self, wo: Vec3, wi: Vec3) -> Option<(Vec3, Vec3)> {
         let (go, gi) = (wo.dot(self.ng), wi.dot(self.ng));
         if go * gi == 0.0 || (go * gi < 0.0 && !self.transmits()) {

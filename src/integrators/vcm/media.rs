@@ -51,6 +51,7 @@ impl Scatter<'_> {
     /// f·|cos| from `wo` to `wi` (a phase function's value, which has no cosine), the
     /// solid-angle density of sampling `wi` from `wo` and the reverse one (of `wo` from
     /// `wi`), the directions taken to the shading frame once.
+    #[inline(always)]
     pub fn eval_and_pdfs(&self, wo: Vec3, wi: Vec3, mode: Transport) -> (Rgb, f32, f32) {
         match self {
             Scatter::Surface(b) => b.eval_and_pdfs(wo, wi, mode),
