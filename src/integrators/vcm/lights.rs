@@ -81,22 +81,16 @@ pub(super) fn sample_towards(
         if cos <= 0.0 {
             return None;
         }
-        let side = if a.two_sided { 0.5 } else { 1.0 };
-        let pdf_pos = pmf / a.area;
+        let (direct_pdf_a, emission_pdf_w) = area_densities(ctx, i, cos)?;
         let lp = LightPoint {
             radiance: a.radiance_at(&q),
-            direct_pdf_a: pdf_pos,
-            emission_pdf_w: pdf_pos * side * cos / PI,
+            direct_pdf_a,
+            emission_pdf_w,
             cos_at_light: cos,
             delta: false,
             finite: true,
         };
-        let spot = crate::math::spawn::Spot {
-            p: q.p,
-            error: q.error,
-            n: q.n,
-        };
-        return Some((lp, wi, Some(spot)));
+        return Some((lp, wi, Some(q.spot())));
     }
     let es = emitter
         .model()
