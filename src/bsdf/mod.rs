@@ -31,6 +31,7 @@
 
 mod colours;
 mod dielectric;
+mod lambertian;
 mod layer;
 mod layered;
 mod microfacet;
@@ -40,6 +41,7 @@ pub mod phase;
 mod tabulated;
 
 pub use colours::LobeColours;
+pub use lambertian::LambertianFrom;
 pub use microfacet::Ggx;
 pub use parameters::{interned, Coating, Conductor, Lobes, SpectralParts};
 #[cfg(test)]
@@ -413,6 +415,9 @@ impl<'a> Bsdf<'a> {
     /// from `wi`), as bidirectional weights need them: f, pdf(wo → wi), pdf(wi → wo).
     #[inline(always)]
     pub fn eval_and_pdfs(&self, wo: Vec3, wi: Vec3, mode: Transport) -> (Rgb, f32, f32) {
+        if let Some(l) = LambertianFrom::of(self, wo) {
+            return l.eval_and_pdfs(wi, mode);
+        }
         match self.connectable(wo, wi) {
             Some((lo, li)) => (
                 self.eval_connected(wo, wi, lo, li, mode),
