@@ -8,7 +8,7 @@ use super::light_pass::{LightPaths, LightVertex};
 use super::lights::{area_densities, background_densities, sample_towards};
 use super::media::{advance, leave, link, Around, End, Leaving, Scatter, Spectral, Step};
 use super::mis::{abs_cos, Subpath, Weights};
-use crate::bsdf::Transport;
+use crate::bsdf::{LambertianFrom, Transport};
 use crate::integrators::camera_connection::camera_pdf_dir;
 use crate::integrators::sppm::HashGrid;
 use crate::integrators::volumetric::{average, hero_channel};
@@ -41,9 +41,21 @@ struct CameraVertex<'v, 'a> {
     scatter: &'v Scatter<'a>,
     around: Around,
     path: &'v Subpath,
+    /// The scatterer seen from `wo` when it is a Lambertian surface.
+    lambertian: Option<LambertianFrom>,
 }
 
 impl CameraVertex<'_, '_> {
+    /// The scatterer's f·|cos| towards unit `wi` and its densities (forward, reverse), for
+    /// radiance.
+    #[inline(always)]
+    fn eval_and_pdfs(&self, wi: Vec3) -> (Rgb, f32, f32) {
+        match &self.lambertian {
+            Some(l) => l.eval_and_pdfs(wi, Transport::Radiance),
+            None => self.scatter.eval_and_pdfs(self.wo, wi, Transport::Radiance),
+        }
+    }
+
     /// The weights' merge factor at the vertex: η at a surface, 0 in a medium.
     fn vm(&self, w: &Weights) -> f32 {
         if self.scatter.mergeable() {
@@ -156,6 +168,7 @@ impl MonteCarlo for Iteration<'_> {
                     scatter: &scatter,
                     around,
                     path: &path,
+                    lambertian: scatter.lambertian_from(wo),
                 };
                 let mut gathered = self.direct(ctx, &v, (sampler, spectral.as_mut()), stats);
                 let mut rng = sampler.stream();
@@ -246,7 +259,7 @@ impl Iteration<'_> {
         let Some((lp, wi, to)) = sample_towards(ctx, v.at.p, u_choose, u_pos, u_dir) else {
             return Rgb::ZERO;
         };
-        let (f, pdf_fwd, pdf_rev) = v.scatter.eval_and_pdfs(v.wo, wi, Transport::Radiance);
+        let (f, pdf_fwd, pdf_rev) = v.eval_and_pdfs(wi);
         if f == Rgb::ZERO || lp.radiance == Rgb::ZERO {
             return Rgb::ZERO;
         }
@@ -294,12 +307,11 @@ impl Iteration<'_> {
             return Rgb::ZERO;
         }
         let dir = d / dist2.sqrt();
-        let (f_cam, cam_pdf_w, cam_rev) = v.scatter.eval_and_pdfs(v.wo, dir, Transport::Radiance);
+        let (f_cam, cam_pdf_w, cam_rev) = v.eval_and_pdfs(dir);
         if f_cam == Rgb::ZERO {
             return Rgb::ZERO;
         }
-        let (f_light, light_pdf_w, light_rev) =
-            lv.scatter.eval_and_pdfs(lv.wo, -dir, Transport::Importance);
+        let (f_light, light_pdf_w, light_rev) = lv.eval_and_pdfs(-dir);
         if f_light == Rgb::ZERO {
             return Rgb::ZERO;
         }

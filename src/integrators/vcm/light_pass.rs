@@ -11,7 +11,7 @@
 use super::lights::of_emission;
 use super::media::{advance, leave, link, Around, End, Leaving, Scatter, Spectral, Step};
 use super::mis::{abs_cos, Subpath, Weights};
-use crate::bsdf::Transport;
+use crate::bsdf::{LambertianFrom, Transport};
 use crate::integrators::camera_connection::camera_pdf_dir;
 use crate::integrators::camera_connection::{lens_sample, project_to_camera};
 use crate::integrators::light::emission_start;
@@ -45,6 +45,9 @@ pub(super) struct LightVertex<'a> {
     pub scatter: Scatter<'a>,
     pub path: Subpath,
     pub around: Around,
+    /// The scatterer seen from `wo` when it is a Lambertian surface (connections evaluate
+    /// it from the few numbers this keeps).
+    pub lambertian: Option<LambertianFrom>,
 }
 
 /// An iteration's light subpaths: every kept vertex, subpath by subpath.
@@ -56,6 +59,20 @@ pub(super) struct LightPaths<'a> {
     /// alone (unweighted light tracing, blind to light seen through glass): the scale
     /// against which a camera vertex's connections are judged small.
     pub image_mean: f32,
+}
+
+impl LightVertex<'_> {
+    /// The scatterer's f·|cos| towards unit `wi` and its densities (forward, reverse), for
+    /// importance.
+    #[inline(always)]
+    pub fn eval_and_pdfs(&self, wi: Vec3) -> (Rgb, f32, f32) {
+        match &self.lambertian {
+            Some(l) => l.eval_and_pdfs(wi, Transport::Importance),
+            None => self
+                .scatter
+                .eval_and_pdfs(self.wo, wi, Transport::Importance),
+        }
+    }
 }
 
 impl<'a> LightPaths<'a> {
@@ -282,6 +299,7 @@ impl LightPass<'_> {
                     scatter,
                     path,
                     around,
+                    lambertian: scatter.lambertian_from(wo),
                 };
                 out.vertices.push(v);
                 if path.len < self.max_len {
@@ -319,7 +337,7 @@ impl LightPass<'_> {
         let Some(c) = project_to_camera(camera, lens, v.at.p) else {
             return;
         };
-        let (f, _, pdf_rev) = v.scatter.eval_and_pdfs(v.wo, c.dir, Transport::Importance);
+        let (f, _, pdf_rev) = v.eval_and_pdfs(c.dir);
         if f == Rgb::ZERO {
             return;
         }

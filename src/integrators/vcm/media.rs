@@ -11,7 +11,7 @@
 //! segment alone, the same whichever subpath sampled the segment or connected across it.
 
 use super::mis::{Subpath, Weights};
-use crate::bsdf::{phase, Bsdf, Transport};
+use crate::bsdf::{phase, Bsdf, LambertianFrom, Transport};
 use crate::integrators::volumetric::{
     average, cross, emission_at, fly, grey_depth, positive, transmittance_and_depth, Flight,
     Throughput, MAX_CROSSINGS,
@@ -48,6 +48,15 @@ pub(super) enum Scatter<'a> {
 }
 
 impl Scatter<'_> {
+    /// The scatterer seen from `wo` if it is a Lambertian surface.
+    #[inline(always)]
+    pub fn lambertian_from(&self, wo: Vec3) -> Option<LambertianFrom> {
+        match self {
+            Scatter::Surface(b) => LambertianFrom::of(b, wo),
+            Scatter::Medium { .. } => None,
+        }
+    }
+
     /// f·|cos| from `wo` to `wi` (a phase function's value, which has no cosine), the
     /// solid-angle density of sampling `wi` from `wo` and the reverse one (of `wo` from
     /// `wi`), the directions taken to the shading frame once.
