@@ -67,6 +67,18 @@ impl LambertianFrom {
         )
     }
 
+    /// [`Bsdf::pdf`] of `wi`: pdf(wo → wi).
+    #[inline(always)]
+    pub fn pdf(&self, wi: Vec3) -> f32 {
+        let (go, so) = (self.go, self.so);
+        let gi = wi.dot(self.ng);
+        let si = wi.dot(self.n);
+        if go * gi <= 0.0 || so * go <= 0.0 || si * gi <= 0.0 {
+            return 0.0;
+        }
+        cosine_hemisphere_pdf(si.abs())
+    }
+
     /// pdf(wi → wo), the same for every `wi` it connects to.
     #[inline(always)]
     pub fn reverse_pdf(&self) -> f32 {
@@ -126,6 +138,7 @@ mod tests {
                     None => (Rgb::ZERO, 0.0, 0.0),
                 };
                 let short = fast.eval_and_pdfs(wi, mode);
+                assert_eq!(fast.pdf(wi).to_bits(), general.1.to_bits());
                 assert_eq!(
                     (bits(short.0), short.1.to_bits(), short.2.to_bits()),
                     (bits(general.0), general.1.to_bits(), general.2.to_bits()),

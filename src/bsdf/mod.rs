@@ -546,6 +546,9 @@ impl<'a> Bsdf<'a> {
     /// Density (solid angle) with which [`Bsdf::sample`] produces `wi` from `wo` through a
     /// non-delta lobe.
     pub fn pdf(&self, wo: Vec3, wi: Vec3) -> f32 {
+        if let Some(l) = LambertianFrom::of(self, wo) {
+            return l.pdf(wi);
+        }
         match self.connectable(wo, wi) {
             Some((lo, li)) => self.pdf_connected(lo, li),
             None => 0.0,
