@@ -252,11 +252,11 @@ impl Iteration<'_> {
     ) -> Rgb {
         let u_choose = sampler.next_1d();
         let u_pos = sampler.next_2d();
-        let u_dir = sampler.next_2d();
         if v.path.len + 1 > self.max_len {
             return Rgb::ZERO;
         }
-        let Some((lp, wi, to)) = sample_towards(ctx, v.at.p, u_choose, u_pos, u_dir) else {
+        let Some((lp, wi, to)) = sample_towards(ctx, v.at.p, u_choose, u_pos, || sampler.next_2d())
+        else {
             return Rgb::ZERO;
         };
         let (f, pdf_fwd, pdf_rev) = v.eval_and_pdfs(wi);

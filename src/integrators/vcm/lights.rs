@@ -56,13 +56,14 @@ pub(super) fn of_emission(ctx: &Context, es: &EmissionSample) -> LightPoint {
 /// A light point for next-event estimation at `p`: an emitter chosen by power and a point
 /// of it as a light subpath would start, with the radiance and densities towards `p`.
 /// Returns it with the unit direction from `p` to it, and its position (`None` at
-/// infinity).
+/// infinity). `u_dir` is asked for an emission direction's numbers only by lights that
+/// need one (not area lights), so that the sampler's dimensions are not spent for nothing.
 pub(super) fn sample_towards(
     ctx: &Context,
     p: Vec3,
     u_choose: f32,
     u_pos: Vec2,
-    u_dir: Vec2,
+    u_dir: impl FnOnce() -> Vec2,
 ) -> Option<(LightPoint, Vec3, Option<crate::math::spawn::Spot>)> {
     let lights = &ctx.lights;
     let (i, _) = lights.choose(u_choose)?;
@@ -94,7 +95,7 @@ pub(super) fn sample_towards(
     }
     let es = emitter
         .model()
-        .sample_le(u_pos, u_dir, pmf, &lights.world, i)?;
+        .sample_le(u_pos, u_dir(), pmf, &lights.world, i)?;
     if lights.is_infinite(i) {
         if es.pdf_dir.is_nan() || es.pdf_dir <= 0.0 {
             return None;
