@@ -218,10 +218,11 @@ fn the_image_is_the_same_for_any_thread_count_and_changes_with_the_seed() {
     assert!(one.pixels != other.pixels, "the seed changed nothing");
 }
 
-/// A render cancelled after its third iteration, and one cancelled in the middle of its
-/// fourth (after a few of its tiles), saved to a checkpoint file, read back and resumed,
-/// end as the same bits as the uninterrupted render; the film shown after each pass holds
-/// one more sample per pixel than the last.
+/// A render cancelled after its third iteration (the fourth's tiles under way may be kept:
+/// iterations held together run as one stream of tiles), and one cancelled in the middle of
+/// its fourth (after a few of its tiles), saved to a checkpoint file, read back and
+/// resumed, end as the same bits as the uninterrupted render; the film shown after each
+/// pass holds one more sample per pixel than the last.
 #[test]
 fn a_stopped_render_resumes_through_a_checkpoint_to_the_same_image() {
     let s = scene("cornell-spheres.toml");
@@ -258,7 +259,7 @@ fn a_stopped_render_resumes_through_a_checkpoint_to_the_same_image() {
         assert!(stopped.is_partial());
         let film = stopped.film.unwrap();
         assert_eq!(film.spp, 3);
-        assert_eq!(film.is_partial_pass(), mid_pass);
+        assert!(film.is_partial_pass() || !mid_pass);
         let after: Vec<u32> = seen
             .windows(2)
             .filter(|w| w[1] != w[0])

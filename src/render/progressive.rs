@@ -518,9 +518,13 @@ pub(crate) fn render_passes(
         let bounds = ctx.scene.bounds().unwrap_or((Vec3::ZERO, Vec3::ONE));
         Learning::new(bounds, options.spp)
     });
-    // As (first pass, passes): a pass ends its group when the next depends on it.
+    // As (first pass, passes): a pass ends its group when the next depends on it. An
+    // iterative technique's passes go in groups of the iterations it may hold at once.
+    let together = integrator
+        .iterations_together((options.view.width, options.view.height))
+        .max(1);
     let groups = group_passes(&passes, |end| {
-        iterative
+        (iterative && end % together == 0)
             || film.adaptive().is_some()
             || learning.as_ref().is_some_and(|l| l.builds_at(end))
     });
@@ -549,8 +553,10 @@ pub(crate) fn render_passes(
         let guide = learning
             .as_ref()
             .map(|l| (l.guide(), l.learns_at(passes[group_start].0)));
-        let mut run = |it: &dyn MonteCarlo, work: IterationWork| {
-            let mut work = Some(work);
+        // The integrators taking each pass's samples (one for every pass of the group, or
+        // the same for all) and what their iterations gave the image besides.
+        let mut run = |its: &[&dyn MonteCarlo], works: Vec<IterationWork>| {
+            let mut works: Vec<Option<IterationWork>> = works.into_iter().map(Some).collect();
             drive_indexed(
                 (group_len * tiles.len()).saturating_sub(skipped),
                 options.view.threads,
@@ -561,6 +567,7 @@ pub(crate) fn render_passes(
                     let (first, n) = passes[p];
                     let active = active.as_deref().map(|a| (a, width));
                     let guide = guide.as_ref().map(|(g, learns)| (&**g, *learns));
+                    let it = its[(p - group_start).min(its.len() - 1)];
                     s.tile_pass(it, &tiles[t], first..first + n, &whole, active, guide)
                 },
                 |k, r| {
@@ -568,7 +575,8 @@ pub(crate) fn render_passes(
                     let (tile, n) = (&tiles[t], passes[p].1);
                     // An iteration's own splats come with its first tile (a pass resumed
                     // after it has them already).
-                    if let Some(w) = work.take().filter(|_| t == 0) {
+                    let work = works.get_mut(p - group_start).and_then(Option::take);
+                    if let Some(w) = work.filter(|_| t == 0) {
                         for splat in &w.splats {
                             film.add_splat(splat);
                         }
@@ -647,10 +655,13 @@ pub(crate) fn render_passes(
                 cancel: &control.cancel,
             };
             let mut stopped = true;
-            let ran = integrator.iteration(ctx, &start, &mut |it, work| stopped = run(it, work));
+            let count = group_len as u32;
+            let ran = integrator.iterations(ctx, &start, count, &mut |its, works| {
+                stopped = run(its, works)
+            });
             !ran || stopped
         } else {
-            run(integrator, IterationWork::default())
+            run(&[integrator], Vec::new())
         };
         if driven_cancelled {
             cancelled = true;

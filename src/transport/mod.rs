@@ -228,26 +228,37 @@ pub trait MonteCarlo: Sync {
 
     /// Whether each sample index first needs work over the whole image (vertex connection
     /// and merging's light subpaths and their photon grid): the render then takes one
-    /// sample a pass and renders each pass through [`iteration`](Self::iteration).
+    /// sample a pass and renders the passes through [`iterations`](Self::iterations).
     fn iterative(&self) -> bool {
         false
     }
 
-    /// What an iteration's whole-image work holds for an image of `size`, and its bytes
-    /// (estimated), for the memory budget; `None`: nothing worth counting.
+    /// How many iterations' whole-image work may be held at once for an image of `size`:
+    /// their camera samples then run as one stream of tiles, with no pause between the
+    /// iterations (the passes and their pixels are the same).
+    fn iterations_together(&self, _size: (u32, u32)) -> u32 {
+        1
+    }
+
+    /// What the whole-image work held at once holds for an image of `size` (all of
+    /// [`iterations_together`](Self::iterations_together)), and its bytes (estimated), for
+    /// the memory budget; `None`: nothing worth counting.
     fn iteration_memory(&self, _size: (u32, u32)) -> Option<(String, u64)> {
         None
     }
 
-    /// Does the whole-image work of sample index `start.index` and calls `samples` once with
-    /// what takes that index's camera samples (an integrator sharing the work) and what the
-    /// work itself gave the image ([`IterationWork`]). Returns `false`, without calling it,
-    /// if cancelled. Called only when [`iterative`](Self::iterative).
-    fn iteration(
+    /// Does the whole-image work of sample indices `start.index..start.index + count` and
+    /// calls `samples` once with what takes each index's camera samples (integrators sharing
+    /// the work, in index order) and what each index's work itself gave the image
+    /// ([`IterationWork`]). Returns `false`, without calling it, if cancelled. Called only
+    /// when [`iterative`](Self::iterative), with `count` at most
+    /// [`iterations_together`](Self::iterations_together).
+    fn iterations(
         &self,
         _ctx: &Context,
         _start: &IterationStart,
-        _samples: &mut dyn FnMut(&dyn MonteCarlo, IterationWork),
+        _count: u32,
+        _samples: &mut IterationSamples,
     ) -> bool {
         false
     }
@@ -268,13 +279,17 @@ pub trait MonteCarlo: Sync {
     }
 }
 
+/// What takes the camera samples of iterations prepared together: the integrators taking
+/// each one's samples, in index order, and what each one's own work gave the image.
+pub type IterationSamples<'s> = dyn FnMut(&[&dyn MonteCarlo], Vec<IterationWork>) + 's;
+
 /// What an iteration's whole-image work needs to know.
 pub struct IterationStart<'c> {
     pub camera: &'c CameraBasis,
     pub seed: u64,
     /// The image's size.
     pub size: (u32, u32),
-    /// The sample index (the iteration).
+    /// The sample index (the iteration; the first, for several together).
     pub index: u32,
     /// The threads the render runs on (`None`: all).
     pub threads: Option<usize>,

@@ -12,7 +12,10 @@
 //! one camera subpath per pixel (`camera_path`). The merge radius shrinks from iteration
 //! to iteration, r_i = r₀ · i^((α−1)/2) with α = 3/4, so the merges' bias vanishes as the
 //! iterations go on while their variance stays bounded. The weights are SmallVCM's
-//! recursive ones with the balance heuristic (`mis`).
+//! recursive ones with the balance heuristic (`mis`). Up to four iterations whose light
+//! vertices take little are prepared together, and their camera samples run as one stream
+//! of tiles (the threads do not wait for each other at every iteration's end; the passes
+//! and pixels are the same).
 //!
 //! In a scene with participating media (`media`) the subpaths fly through them as the
 //! bidirectional tracer's do: free flights by delta tracking with a hero channel drawn per
@@ -60,7 +63,9 @@ use crate::scene::Scene;
 use crate::settings::{Settings, TechniqueKind};
 use crate::transport::settings::{MonteCarloSettings, TechniqueInfo, COMMON, MONTE_CARLO};
 use crate::transport::technique::{Lifecycle, SampledTechnique};
-use crate::transport::{Context, IterationStart, IterationWork, MonteCarlo, RayStats, Splat};
+use crate::transport::{
+    Context, IterationSamples, IterationStart, IterationWork, MonteCarlo, RayStats, Splat,
+};
 use camera_path::Iteration;
 use light_pass::LightPass;
 use mis::Weights;
@@ -101,6 +106,13 @@ const DIFFUSE_PATHS_PER_PIXEL: f32 = 1.0 / 32.0;
 /// Cornell box it leaves about a third of the rays untraced for 5% more squared error
 /// (a sixteenth did as well at equal time, a quarter worse).
 const CONNECTION_SHARE: f32 = 1.0 / 8.0;
+
+/// The most iterations whose light subpaths are held at once (their camera samples run as
+/// one stream of tiles).
+const MOST_TOGETHER: u32 = 4;
+
+/// The bytes of light vertices below which iterations are held together.
+const TOGETHER_BYTES: u64 = 64 << 20;
 
 /// GGX roughness below which a specular or transmitting surface counts as smooth: light
 /// it reflects or refracts onto a diffuse surface forms caustics that only merges find.
@@ -250,27 +262,75 @@ impl MonteCarlo for Vcm {
         true
     }
 
-    /// The light vertices of an iteration, with their grid and splats: estimated at
-    /// [`VERTICES_PER_PATH`] a light subpath (fewer where the paths are shorter).
-    fn iteration_memory(&self, (width, height): (u32, u32)) -> Option<(String, u64)> {
-        let pixels = width as u64 * height as u64;
-        let count = self.light_paths_for(pixels);
-        let per_path = (self.max_depth as u64).clamp(1, VERTICES_PER_PATH);
-        let vertices = count.saturating_mul(per_path);
+    /// Iterations whose light vertices together stay within [`TOGETHER_BYTES`], up to
+    /// [`MOST_TOGETHER`]: a small image's iterations are too short for the threads to end
+    /// each at once.
+    fn iterations_together(&self, size: (u32, u32)) -> u32 {
+        let one = self.iteration_bytes(size).max(1);
+        (TOGETHER_BYTES / one).clamp(1, u64::from(MOST_TOGETHER)) as u32
+    }
+
+    /// The light vertices of the iterations held at once, with their grids and splats:
+    /// estimated at [`VERTICES_PER_PATH`] a light subpath (fewer where the paths are
+    /// shorter).
+    fn iteration_memory(&self, size: (u32, u32)) -> Option<(String, u64)> {
+        let count = self.light_paths_for(size.0 as u64 * size.1 as u64);
+        let together = self.iterations_together(size);
+        let what = match together {
+            1 => format!("VCM's light vertices ({count} light subpaths an iteration)"),
+            n => format!(
+                "VCM's light vertices ({count} light subpaths an iteration, {n} iterations \
+                 at once)"
+            ),
+        };
         Some((
-            format!("VCM's light vertices ({count} light subpaths an iteration)"),
-            vertices
-                .saturating_mul(BYTES_PER_VERTEX)
-                .saturating_add(count.saturating_mul(4)),
+            what,
+            self.iteration_bytes(size)
+                .saturating_mul(u64::from(together)),
         ))
     }
 
-    fn iteration(
+    fn iterations(
         &self,
         ctx: &Context,
         start: &IterationStart,
-        samples: &mut dyn FnMut(&dyn MonteCarlo, IterationWork),
+        count: u32,
+        samples: &mut IterationSamples,
     ) -> bool {
+        let mut iterations = Vec::with_capacity(count as usize);
+        let mut works = Vec::with_capacity(count as usize);
+        for index in start.index..start.index + count {
+            let start = IterationStart { index, ..*start };
+            let Some((iteration, work)) = self.iteration(ctx, &start) else {
+                return false;
+            };
+            iterations.push(iteration);
+            works.push(work);
+        }
+        let its: Vec<&dyn MonteCarlo> = iterations.iter().map(|i| i as &dyn MonteCarlo).collect();
+        samples(&its, works);
+        true
+    }
+}
+
+impl Vcm {
+    /// The bytes one iteration's light vertices take (estimated).
+    fn iteration_bytes(&self, (width, height): (u32, u32)) -> u64 {
+        let count = self.light_paths_for(width as u64 * height as u64);
+        let per_path = (self.max_depth as u64).clamp(1, VERTICES_PER_PATH);
+        count
+            .saturating_mul(per_path)
+            .saturating_mul(BYTES_PER_VERTEX)
+            .saturating_add(count.saturating_mul(4))
+    }
+
+    /// The light subpaths of iteration `start.index`, the grid over their vertices, and what
+    /// the subpaths splat; `None` if cancelled.
+    fn iteration<'a>(
+        &self,
+        ctx: &Context<'a>,
+        start: &IterationStart,
+    ) -> Option<(Iteration<'a>, IterationWork)> {
         let pixels = start.size.0 as usize * start.size.1 as usize;
         let count = self.light_paths_for(pixels as u64) as usize;
         let radius = self.radius_at(start.index);
@@ -283,9 +343,7 @@ impl MonteCarlo for Vcm {
             count,
             pixels_per_path: pixels as f32 / count as f32,
         };
-        let Some((paths, work)) = pass.run(ctx, start, start.threads) else {
-            return false;
-        };
+        let (paths, work) = pass.run(ctx, start, start.threads)?;
         let balls: Vec<_> = match self.merges {
             true => paths.vertices.iter().map(|v| (v.at.p, radius)).collect(),
             false => Vec::new(),
@@ -302,8 +360,7 @@ impl MonteCarlo for Vcm {
             paths_per_pixel: count as f32 / pixels as f32,
             merges: self.merges,
         };
-        samples(&iteration, work);
-        true
+        Some((iteration, work))
     }
 }
 
