@@ -111,8 +111,9 @@ const CONNECTION_SHARE: f32 = 1.0 / 8.0;
 /// one stream of tiles).
 const MOST_TOGETHER: u32 = 4;
 
-/// The bytes of light vertices below which iterations are held together.
-const TOGETHER_BYTES: u64 = 64 << 20;
+/// The bytes of light vertices below which iterations are held together: small beside any
+/// budget a render is given, since the memory budget counts them all.
+const TOGETHER_BYTES: u64 = 16 << 20;
 
 /// GGX roughness below which a specular or transmitting surface counts as smooth: light
 /// it reflects or refracts onto a diffuse surface forms caustics that only merges find.
