@@ -33,30 +33,36 @@ impl LambertianFrom {
         })
     }
 
+    /// wi·ng and wi·n if the lobe connects `wo` to `wi`, as `Bsdf::connectable` decides:
+    /// both directions on one side of ng (the lobe does not transmit), and on the same side
+    /// of the shading normal as of ng.
+    #[inline(always)]
+    fn cosines(&self, wi: Vec3) -> Option<(f32, f32)> {
+        let (go, so) = (self.go, self.so);
+        let (gi, si) = (wi.dot(self.ng), wi.dot(self.n));
+        // Written as the refusals, so that a NaN passes as it does there.
+        if go * gi <= 0.0 || so * go <= 0.0 || si * gi <= 0.0 {
+            return None;
+        }
+        Some((gi, si))
+    }
+
     /// [`Bsdf::eval_and_pdfs`] towards `wi`: f(wo, wi)·|cos θi|, pdf(wo → wi), pdf(wi → wo),
     /// the same numbers as the general way.
     #[inline(always)]
     pub fn eval_and_pdfs(&self, wi: Vec3, mode: Transport) -> (Rgb, f32, f32) {
-        // As `Bsdf::connectable`: both directions on one side of ng (the lobe does not
-        // transmit), and on the same side of the shading normal as of ng.
-        let (go, so) = (self.go, self.so);
-        let gi = wi.dot(self.ng);
-        if go * gi <= 0.0 {
+        let Some((gi, si)) = self.cosines(wi) else {
             return (Rgb::ZERO, 0.0, 0.0);
-        }
-        let si = wi.dot(self.n);
-        if so * go <= 0.0 || si * gi <= 0.0 {
-            return (Rgb::ZERO, 0.0, 0.0);
-        }
+        };
         // As `Bsdf::adjoint`, from the same cosines.
         let adjoint = match mode {
             Transport::Radiance => 1.0,
             Transport::Importance => {
-                let den = go.abs() * si.abs();
+                let den = self.go.abs() * si.abs();
                 if den == 0.0 {
                     0.0
                 } else {
-                    so.abs() * gi.abs() / den
+                    self.so.abs() * gi.abs() / den
                 }
             }
         };
@@ -70,13 +76,8 @@ impl LambertianFrom {
     /// [`Bsdf::pdf`] of `wi`: pdf(wo → wi).
     #[inline(always)]
     pub fn pdf(&self, wi: Vec3) -> f32 {
-        let (go, so) = (self.go, self.so);
-        let gi = wi.dot(self.ng);
-        let si = wi.dot(self.n);
-        if go * gi <= 0.0 || so * go <= 0.0 || si * gi <= 0.0 {
-            return 0.0;
-        }
-        cosine_hemisphere_pdf(si.abs())
+        self.cosines(wi)
+            .map_or(0.0, |(_, si)| cosine_hemisphere_pdf(si.abs()))
     }
 
     /// pdf(wi → wo), the same for every `wi` it connects to.
